@@ -1,0 +1,1 @@
+//! The TOML case file: schema, defaults, validation, `--set` overrides.

@@ -1,0 +1,1 @@
+//! The PETSc binding layer: the only module with `unsafe`.

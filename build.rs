@@ -1,1 +1,58 @@
-fn main() {}
+//! Generates the PETSc FFI bindings with bindgen against Debian's petsc-dev (PETSc 3.18).
+//! MPI types are blocklisted and taken from `mpi-sys`, so PETSc's and rsmpi's communicators
+//! are the same Rust type.
+
+use std::env;
+use std::path::PathBuf;
+
+fn main() {
+    println!("cargo:rerun-if-changed=build.rs");
+    let petsc = pkg_config::Config::new()
+        .probe("PETSc")
+        .expect("pkg-config PETSc failed: install petsc-dev (scripts/setup does)");
+    let ompi = pkg_config::Config::new()
+        .cargo_metadata(false)
+        .probe("ompi-c")
+        .expect("pkg-config ompi-c failed: install libopenmpi-dev (scripts/setup does)");
+    for dir in &petsc.link_paths {
+        println!("cargo:rustc-link-arg=-Wl,-rpath,{}", dir.display());
+    }
+
+    let header = r#"
+#include <petscsys.h>
+#include <petscvec.h>
+#include <petscmat.h>
+#include <petscksp.h>
+#include <petscpc.h>
+#include <petscis.h>
+"#;
+    let mut builder = bindgen::Builder::default()
+        .header_contents("petsc_wrapper.h", header)
+        .default_enum_style(bindgen::EnumVariation::Consts)
+        .prepend_enum_name(false)
+        .layout_tests(false)
+        .generate_comments(false)
+        .allowlist_function("PETSC_VIEWER_STDOUT_")
+        .allowlist_function("Petsc(Initialize|Finalize|Initialized|ErrorMessage|Options.*|MemoryGetCurrentUsage|MemoryGetMaximumUsage|MemorySetGetMaximumUsage|LogDefaultBegin|LogView|ViewerASCIIGetStdout|PopErrorHandler|MallocA|PushErrorHandler|ReturnErrorHandler|GetVersion)")
+        .allowlist_function("(Vec|Mat|KSP|PC|IS|MatPartitioning|MatNullSpace|PetscViewer)[A-Z].*")
+        .allowlist_var("PETSC_.*")
+        .allowlist_var("(MAT|KSP|PC|VEC|IS)[A-Z_]+.*")
+        .allowlist_var("(INSERT|ADD)_VALUES")
+        .allowlist_var("NORM_.*")
+        .allowlist_var("SCATTER_.*")
+        .allowlist_type("Petsc.*")
+        .allowlist_type("(Mat|Vec|KSP|PC|IS|InsertMode|NormType|MatAssemblyType|MatOption|MatReuse|MatInfo.*|ScatterMode|KSPConvergedReason|MatPartitioning)")
+        .blocklist_type("MPI_.*")
+        .blocklist_type("ompi_.*")
+        .blocklist_item("FP_.*")
+        .blocklist_function("Mat.*Device.*")
+        .blocklist_function(".*(CUDA|Cuda|HIP|Hip|Kokkos|ViennaCL|SYCL|Sycl).*");
+    for p in petsc.include_paths.iter().chain(ompi.include_paths.iter()) {
+        builder = builder.clang_arg(format!("-I{}", p.display()));
+    }
+    let bindings = builder
+        .generate()
+        .expect("bindgen failed on the PETSc headers");
+    let out = PathBuf::from(env::var("OUT_DIR").unwrap()).join("petsc_bindings.rs");
+    bindings.write_to_file(&out).expect("writing PETSc bindings");
+}

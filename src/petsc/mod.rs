@@ -1,1 +1,776 @@
 //! The PETSc binding layer: the only module with `unsafe`.
+//!
+//! RAII wrappers for Vec / Mat / KSP / MatPartitioning / MatNullSpace, the options database,
+//! and PETSc error codes turned into Rust errors that carry PETSc's message and the Rust
+//! caller's location. Everything here is collective where the PETSc call is collective.
+
+pub mod ffi;
+
+use std::ffi::{CStr, CString};
+use std::fmt;
+use std::os::raw::{c_char, c_int};
+use std::panic::Location;
+use std::ptr;
+
+pub use ffi::MPI_Comm;
+/// PETSc's index type (32-bit in Debian's build).
+pub type PInt = ffi::PetscInt;
+
+/// A failed PETSc call: PETSc's own message plus where in our code it was called.
+#[derive(Debug, Clone)]
+pub struct PetscError {
+    pub code: i32,
+    pub message: String,
+    pub location: String,
+}
+
+impl fmt::Display for PetscError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(
+            f,
+            "PETSc error {} ({}) at {}",
+            self.code, self.message, self.location
+        )
+    }
+}
+
+impl std::error::Error for PetscError {}
+
+pub type Result<T> = std::result::Result<T, PetscError>;
+
+/// Converts a PETSc return code into a `Result`, naming the Rust caller.
+#[track_caller]
+fn check(code: ffi::PetscErrorCode) -> Result<()> {
+    if code == 0 {
+        return Ok(());
+    }
+    let loc = Location::caller();
+    let mut text: *const c_char = ptr::null();
+    // SAFETY: PetscErrorMessage writes a pointer to a static string (or leaves it null).
+    let message = unsafe {
+        ffi::PetscErrorMessage(code, &mut text, ptr::null_mut());
+        if text.is_null() {
+            String::from("unknown error")
+        } else {
+            CStr::from_ptr(text).to_string_lossy().into_owned()
+        }
+    };
+    Err(PetscError {
+        code,
+        message,
+        location: format!("{}:{}", loc.file(), loc.line()),
+    })
+}
+
+/// An error raised by our own checks in this layer (not by a PETSc call).
+#[track_caller]
+fn own_error(message: impl Into<String>) -> PetscError {
+    let loc = Location::caller();
+    PetscError {
+        code: -1,
+        message: message.into(),
+        location: format!("{}:{}", loc.file(), loc.line()),
+    }
+}
+
+fn cstring(s: &str) -> CString {
+    CString::new(s.replace('\0', " ")).expect("no interior NUL after replace")
+}
+
+/// The PETSc library, initialised once per process after MPI (rsmpi) and finalised on drop,
+/// before the rsmpi `Universe` is dropped. Owns the argv strings PETSc keeps pointers to.
+pub struct Petsc {
+    _args: Vec<CString>,
+    _argv: Vec<*mut c_char>,
+}
+
+impl Petsc {
+    /// `PetscInitialize` with PETSc's own command-line options (`-ksp_type gmres`, `-log_view`, ...).
+    /// MPI must already be initialised (PETSc then leaves MPI_Finalize to rsmpi).
+    pub fn init(petsc_args: &[String]) -> Result<Petsc> {
+        let mut args: Vec<CString> = vec![cstring("signorini-mpi")];
+        args.extend(petsc_args.iter().map(|a| cstring(a)));
+        let mut argv: Vec<*mut c_char> = args.iter().map(|a| a.as_ptr() as *mut c_char).collect();
+        argv.push(ptr::null_mut());
+        let mut argc: c_int = args.len() as c_int;
+        let mut argv_ptr = argv.as_mut_ptr();
+        // SAFETY: argc/argv describe NUL-terminated strings that live in `self` until finalize.
+        unsafe {
+            check(ffi::PetscInitialize(
+                &mut argc,
+                &mut argv_ptr,
+                ptr::null(),
+                ptr::null(),
+            ))?;
+            // Errors come back to Rust as values; we print them ourselves.
+            check(ffi::PetscPushErrorHandler(
+                Some(ffi::PetscReturnErrorHandler),
+                ptr::null_mut(),
+            ))?;
+            check(ffi::PetscMemorySetGetMaximumUsage())?;
+        }
+        Ok(Petsc {
+            _args: args,
+            _argv: argv,
+        })
+    }
+
+    /// PETSC_COMM_WORLD (the same type and value as rsmpi's world communicator).
+    pub fn comm(&self) -> MPI_Comm {
+        // SAFETY: valid after PetscInitialize, which `self` proves.
+        unsafe { ffi::PETSC_COMM_WORLD }
+    }
+
+    /// Starts PETSc's default logging (what `-log_view` prints at the end).
+    pub fn log_begin(&self) -> Result<()> {
+        // SAFETY: plain call after initialisation.
+        unsafe { check(ffi::PetscLogDefaultBegin()) }
+    }
+
+    /// Prints PETSc's performance log to stdout (collective).
+    pub fn log_view(&self) -> Result<()> {
+        // SAFETY: the ASCII stdout viewer of the world communicator is owned by PETSc.
+        unsafe {
+            let viewer = ffi::PETSC_VIEWER_STDOUT_(ffi::PETSC_COMM_WORLD);
+            check(ffi::PetscLogView(viewer))
+        }
+    }
+
+    /// Peak memory of this process as PETSc measured it (bytes).
+    pub fn max_memory(&self) -> f64 {
+        let mut m: ffi::PetscLogDouble = 0.0;
+        // SAFETY: writes one double.
+        unsafe {
+            ffi::PetscMemoryGetMaximumUsage(&mut m);
+        }
+        m
+    }
+}
+
+impl Drop for Petsc {
+    fn drop(&mut self) {
+        // SAFETY: every PETSc object is dropped before this (they borrow nothing from here,
+        // but the binary drops them first by construction).
+        unsafe {
+            ffi::PetscFinalize();
+        }
+    }
+}
+
+/// The options database.
+pub mod options {
+    use super::*;
+
+    /// Inserts options from a string like "-ksp_type gmres -pc_type gamg" (later ones win).
+    pub fn insert_str(options: &str) -> Result<()> {
+        let s = cstring(options);
+        // SAFETY: PETSc copies the string.
+        unsafe { check(ffi::PetscOptionsInsertString(ptr::null_mut(), s.as_ptr())) }
+    }
+
+    /// Sets one option only if the user did not set it (so command-line options win).
+    pub fn set_default(name: &str, value: &str) -> Result<()> {
+        if has(name)? {
+            return Ok(());
+        }
+        let n = cstring(name);
+        let v = cstring(value);
+        // SAFETY: PETSc copies both strings.
+        unsafe {
+            check(ffi::PetscOptionsSetValue(
+                ptr::null_mut(),
+                n.as_ptr(),
+                if value.is_empty() {
+                    ptr::null()
+                } else {
+                    v.as_ptr()
+                },
+            ))
+        }
+    }
+
+    /// True when the option is present in the database.
+    pub fn has(name: &str) -> Result<bool> {
+        let n = cstring(name);
+        let mut set: ffi::PetscBool = ffi::PETSC_FALSE;
+        // SAFETY: writes one PetscBool.
+        unsafe {
+            check(ffi::PetscOptionsHasName(
+                ptr::null_mut(),
+                ptr::null(),
+                n.as_ptr(),
+                &mut set,
+            ))?;
+        }
+        Ok(set == ffi::PETSC_TRUE)
+    }
+
+    /// Lists options that were set but never queried (typos), as PETSc's `-options_left` would.
+    pub fn unused() -> Result<Vec<String>> {
+        let mut n: PInt = 0;
+        let mut names: *mut *mut c_char = ptr::null_mut();
+        let mut values: *mut *mut c_char = ptr::null_mut();
+        let mut out = Vec::new();
+        // SAFETY: PETSc allocates the arrays; we read n entries and free them with its helper.
+        unsafe {
+            check(ffi::PetscOptionsLeftGet(
+                ptr::null_mut(),
+                &mut n,
+                &mut names,
+                &mut values,
+            ))?;
+            for i in 0..n as usize {
+                let name = *names.add(i);
+                if !name.is_null() {
+                    out.push(CStr::from_ptr(name).to_string_lossy().into_owned());
+                }
+            }
+            check(ffi::PetscOptionsLeftRestore(
+                ptr::null_mut(),
+                &mut n,
+                &mut names,
+                &mut values,
+            ))?;
+        }
+        Ok(out)
+    }
+}
+
+/// A distributed PETSc vector.
+pub struct Vector {
+    raw: ffi::Vec,
+}
+
+impl Vector {
+    /// An MPI vector with `local` owned entries and block size `bs`.
+    pub fn new_mpi(comm: MPI_Comm, local: usize, bs: usize) -> Result<Vector> {
+        let mut raw: ffi::Vec = ptr::null_mut();
+        // SAFETY: standard creation sequence; `raw` is owned by the returned wrapper.
+        unsafe {
+            check(ffi::VecCreate(comm, &mut raw))?;
+            let v = Vector { raw };
+            check(ffi::VecSetSizes(raw, local as PInt, ffi::PETSC_DETERMINE))?;
+            check(ffi::VecSetBlockSize(raw, bs as PInt))?;
+            check(ffi::VecSetType(raw, ffi::VECMPI.as_ptr() as *const c_char))?;
+            check(ffi::VecSet(raw, 0.0))?;
+            Ok(v)
+        }
+    }
+
+    /// A new vector with the same layout, zeroed.
+    pub fn duplicate(&self) -> Result<Vector> {
+        let mut raw: ffi::Vec = ptr::null_mut();
+        // SAFETY: duplicate of a valid vector.
+        unsafe {
+            check(ffi::VecDuplicate(self.raw, &mut raw))?;
+            let v = Vector { raw };
+            check(ffi::VecSet(raw, 0.0))?;
+            Ok(v)
+        }
+    }
+
+    pub fn raw(&self) -> ffi::Vec {
+        self.raw
+    }
+
+    /// Adds or inserts values at global indices (off-process entries are communicated at assembly).
+    pub fn set_values(&mut self, idx: &[PInt], vals: &[f64], add: bool) -> Result<()> {
+        if idx.len() != vals.len() {
+            return Err(own_error("Vector::set_values: length mismatch"));
+        }
+        let mode = if add {
+            ffi::ADD_VALUES
+        } else {
+            ffi::INSERT_VALUES
+        };
+        // SAFETY: slices of equal length.
+        unsafe {
+            check(ffi::VecSetValues(
+                self.raw,
+                idx.len() as PInt,
+                idx.as_ptr(),
+                vals.as_ptr(),
+                mode,
+            ))
+        }
+    }
+
+    /// Collective: finishes `set_values`.
+    pub fn assemble(&mut self) -> Result<()> {
+        // SAFETY: valid vector.
+        unsafe {
+            check(ffi::VecAssemblyBegin(self.raw))?;
+            check(ffi::VecAssemblyEnd(self.raw))
+        }
+    }
+
+    pub fn set_all(&mut self, v: f64) -> Result<()> {
+        // SAFETY: valid vector.
+        unsafe { check(ffi::VecSet(self.raw, v)) }
+    }
+
+    /// Owned range [start, end) of global indices.
+    pub fn ownership_range(&self) -> Result<(usize, usize)> {
+        let (mut lo, mut hi): (PInt, PInt) = (0, 0);
+        // SAFETY: writes two ints.
+        unsafe { check(ffi::VecGetOwnershipRange(self.raw, &mut lo, &mut hi))? };
+        Ok((lo as usize, hi as usize))
+    }
+
+    pub fn local_len(&self) -> Result<usize> {
+        let mut n: PInt = 0;
+        // SAFETY: writes one int.
+        unsafe { check(ffi::VecGetLocalSize(self.raw, &mut n))? };
+        Ok(n as usize)
+    }
+
+    /// Read access to the owned entries.
+    pub fn read<R>(&self, f: impl FnOnce(&[f64]) -> R) -> Result<R> {
+        let n = self.local_len()?;
+        let mut p: *const f64 = ptr::null();
+        // SAFETY: the array is valid for n entries between Get and Restore.
+        unsafe {
+            check(ffi::VecGetArrayRead(self.raw, &mut p))?;
+            let r = f(if n == 0 {
+                &[]
+            } else {
+                std::slice::from_raw_parts(p, n)
+            });
+            check(ffi::VecRestoreArrayRead(self.raw, &mut p))?;
+            Ok(r)
+        }
+    }
+
+    /// Write access to the owned entries.
+    pub fn write<R>(&mut self, f: impl FnOnce(&mut [f64]) -> R) -> Result<R> {
+        let n = self.local_len()?;
+        let mut p: *mut f64 = ptr::null_mut();
+        // SAFETY: the array is valid for n entries between Get and Restore.
+        unsafe {
+            check(ffi::VecGetArray(self.raw, &mut p))?;
+            let r = f(if n == 0 {
+                &mut []
+            } else {
+                std::slice::from_raw_parts_mut(p, n)
+            });
+            check(ffi::VecRestoreArray(self.raw, &mut p))?;
+            Ok(r)
+        }
+    }
+
+    /// Copies the owned entries into a Rust vector.
+    pub fn to_local_vec(&self) -> Result<Vec<f64>> {
+        self.read(|s| s.to_vec())
+    }
+
+    /// Collective 2-norm.
+    pub fn norm2(&self) -> Result<f64> {
+        let mut r = 0.0;
+        // SAFETY: writes one double.
+        unsafe { check(ffi::VecNorm(self.raw, ffi::NORM_2, &mut r))? };
+        Ok(r)
+    }
+
+    /// self = a * x + self
+    pub fn axpy(&mut self, a: f64, x: &Vector) -> Result<()> {
+        // SAFETY: compatible layouts are checked by PETSc.
+        unsafe { check(ffi::VecAXPY(self.raw, a, x.raw)) }
+    }
+
+    /// self = x
+    pub fn copy_from(&mut self, x: &Vector) -> Result<()> {
+        // SAFETY: compatible layouts are checked by PETSc.
+        unsafe { check(ffi::VecCopy(x.raw, self.raw)) }
+    }
+}
+
+impl Drop for Vector {
+    fn drop(&mut self) {
+        // SAFETY: destroys the vector we own.
+        unsafe {
+            ffi::VecDestroy(&mut self.raw);
+        }
+    }
+}
+
+/// A distributed sparse matrix (MPIAIJ with a block size).
+pub struct Matrix {
+    raw: ffi::Mat,
+}
+
+/// Storage statistics of a matrix (local to this rank).
+#[derive(Clone, Copy, Debug)]
+pub struct MatStats {
+    pub nonzeros: f64,
+    pub mallocs: f64,
+}
+
+impl Matrix {
+    /// An MPIAIJ matrix with `local_rows` owned rows (= owned columns), block size `bs` and exact
+    /// per-block-row preallocation: `d_nnz[i]` / `o_nnz[i]` blocks in the diagonal / off-diagonal
+    /// part of owned block row i. New nonzeros beyond the preallocation are an error.
+    pub fn new_aij(
+        comm: MPI_Comm,
+        local_rows: usize,
+        bs: usize,
+        d_nnz: &[PInt],
+        o_nnz: &[PInt],
+    ) -> Result<Matrix> {
+        if d_nnz.len() * bs != local_rows || o_nnz.len() * bs != local_rows {
+            return Err(own_error("Matrix::new_aij: preallocation length mismatch"));
+        }
+        let mut raw: ffi::Mat = ptr::null_mut();
+        // SAFETY: standard creation sequence; the arrays outlive the calls that read them.
+        unsafe {
+            check(ffi::MatCreate(comm, &mut raw))?;
+            let m = Matrix { raw };
+            check(ffi::MatSetSizes(
+                raw,
+                local_rows as PInt,
+                local_rows as PInt,
+                ffi::PETSC_DETERMINE,
+                ffi::PETSC_DETERMINE,
+            ))?;
+            check(ffi::MatSetType(raw, ffi::MATAIJ.as_ptr() as *const c_char))?;
+            check(ffi::MatSetBlockSize(raw, bs as PInt))?;
+            check(ffi::MatXAIJSetPreallocation(
+                raw,
+                bs as PInt,
+                d_nnz.as_ptr(),
+                o_nnz.as_ptr(),
+                ptr::null(),
+                ptr::null(),
+            ))?;
+            check(ffi::MatSetOption(
+                raw,
+                ffi::MAT_NEW_NONZERO_ALLOCATION_ERR,
+                ffi::PETSC_TRUE,
+            ))?;
+            Ok(m)
+        }
+    }
+
+    pub fn raw(&self) -> ffi::Mat {
+        self.raw
+    }
+
+    /// Adds a dense block `vals` (rows.len() × cols.len(), row-major) at global indices.
+    pub fn add_values(&mut self, rows: &[PInt], cols: &[PInt], vals: &[f64]) -> Result<()> {
+        self.set_values_mode(rows, cols, vals, ffi::ADD_VALUES)
+    }
+
+    /// Inserts (overwrites) a dense block at global indices (entries must exist in the pattern).
+    pub fn insert_values(&mut self, rows: &[PInt], cols: &[PInt], vals: &[f64]) -> Result<()> {
+        self.set_values_mode(rows, cols, vals, ffi::INSERT_VALUES)
+    }
+
+    fn set_values_mode(
+        &mut self,
+        rows: &[PInt],
+        cols: &[PInt],
+        vals: &[f64],
+        mode: ffi::InsertMode,
+    ) -> Result<()> {
+        if rows.len() * cols.len() != vals.len() {
+            return Err(own_error("Matrix::set_values: size mismatch"));
+        }
+        // SAFETY: dimensions checked above.
+        unsafe {
+            check(ffi::MatSetValues(
+                self.raw,
+                rows.len() as PInt,
+                rows.as_ptr(),
+                cols.len() as PInt,
+                cols.as_ptr(),
+                vals.as_ptr(),
+                mode,
+            ))
+        }
+    }
+
+    /// Collective: final assembly.
+    pub fn assemble(&mut self) -> Result<()> {
+        // SAFETY: valid matrix.
+        unsafe {
+            check(ffi::MatAssemblyBegin(self.raw, ffi::MAT_FINAL_ASSEMBLY))?;
+            check(ffi::MatAssemblyEnd(self.raw, ffi::MAT_FINAL_ASSEMBLY))
+        }
+    }
+
+    /// Local storage statistics (nonzeros, mallocs during assembly).
+    pub fn stats(&self) -> Result<MatStats> {
+        // SAFETY: MatInfo is plain old data filled by PETSc.
+        unsafe {
+            let mut info: ffi::MatInfo = std::mem::zeroed();
+            check(ffi::MatGetInfo(self.raw, ffi::MAT_LOCAL, &mut info))?;
+            Ok(MatStats {
+                nonzeros: info.nz_used,
+                mallocs: info.mallocs,
+            })
+        }
+    }
+
+    /// Owned row range [start, end).
+    pub fn ownership_range(&self) -> Result<(usize, usize)> {
+        let (mut lo, mut hi): (PInt, PInt) = (0, 0);
+        // SAFETY: writes two ints.
+        unsafe { check(ffi::MatGetOwnershipRange(self.raw, &mut lo, &mut hi))? };
+        Ok((lo as usize, hi as usize))
+    }
+
+    /// A copy with the same pattern and values.
+    pub fn duplicate(&self) -> Result<Matrix> {
+        let mut raw: ffi::Mat = ptr::null_mut();
+        // SAFETY: duplicate of an assembled matrix.
+        unsafe {
+            check(ffi::MatDuplicate(self.raw, ffi::MAT_COPY_VALUES, &mut raw))?;
+        }
+        Ok(Matrix { raw })
+    }
+
+    /// self = other, both with the same nonzero pattern (no reallocation, nonzero state kept).
+    pub fn copy_values_from(&mut self, other: &Matrix) -> Result<()> {
+        // SAFETY: both valid; PETSc checks the layouts.
+        unsafe {
+            check(ffi::MatCopy(
+                other.raw,
+                self.raw,
+                ffi::SAME_NONZERO_PATTERN,
+            ))
+        }
+    }
+
+    /// Calls `f(columns, values)` with one owned row (global index).
+    pub fn with_row<R>(&self, row: usize, f: impl FnOnce(&[PInt], &[f64]) -> R) -> Result<R> {
+        let mut n: PInt = 0;
+        let mut cols: *const PInt = ptr::null();
+        let mut vals: *const f64 = ptr::null();
+        // SAFETY: the arrays are valid for n entries between MatGetRow and MatRestoreRow.
+        unsafe {
+            check(ffi::MatGetRow(self.raw, row as PInt, &mut n, &mut cols, &mut vals))?;
+            let (c, v) = if n == 0 {
+                (&[][..], &[][..])
+            } else {
+                (
+                    std::slice::from_raw_parts(cols, n as usize),
+                    std::slice::from_raw_parts(vals, n as usize),
+                )
+            };
+            let r = f(c, v);
+            check(ffi::MatRestoreRow(
+                self.raw,
+                row as PInt,
+                &mut n,
+                &mut cols,
+                &mut vals,
+            ))?;
+            Ok(r)
+        }
+    }
+
+    /// y = A x
+    pub fn mult(&self, x: &Vector, y: &mut Vector) -> Result<()> {
+        // SAFETY: layouts checked by PETSc.
+        unsafe { check(ffi::MatMult(self.raw, x.raw, y.raw)) }
+    }
+
+    /// Diagonal into `d`.
+    pub fn diagonal(&self, d: &mut Vector) -> Result<()> {
+        // SAFETY: layouts checked by PETSc.
+        unsafe { check(ffi::MatGetDiagonal(self.raw, d.raw)) }
+    }
+
+    /// Attaches the rigid-body modes built from nodal coordinates (block size = dim) as the
+    /// near-null space (used by GAMG).
+    pub fn set_rigid_body_near_null_space(&mut self, coords: &Vector) -> Result<()> {
+        let mut sp: ffi::MatNullSpace = ptr::null_mut();
+        // SAFETY: coords has block size dim; the null space is referenced by the matrix.
+        unsafe {
+            check(ffi::MatNullSpaceCreateRigidBody(coords.raw, &mut sp))?;
+            check(ffi::MatSetNearNullSpace(self.raw, sp))?;
+            check(ffi::MatNullSpaceDestroy(&mut sp))
+        }
+    }
+}
+
+impl Drop for Matrix {
+    fn drop(&mut self) {
+        // SAFETY: destroys the matrix we own.
+        unsafe {
+            ffi::MatDestroy(&mut self.raw);
+        }
+    }
+}
+
+/// A Krylov solver (with its preconditioner).
+pub struct Ksp {
+    raw: ffi::KSP,
+}
+
+/// How a linear solve ended.
+#[derive(Clone, Debug)]
+pub struct SolveInfo {
+    pub iterations: usize,
+    pub reason: i32,
+    pub reason_name: String,
+}
+
+impl SolveInfo {
+    pub fn converged(&self) -> bool {
+        self.reason > 0
+    }
+}
+
+impl Ksp {
+    pub fn new(comm: MPI_Comm) -> Result<Ksp> {
+        let mut raw: ffi::KSP = ptr::null_mut();
+        // SAFETY: creation of an owned KSP.
+        unsafe { check(ffi::KSPCreate(comm, &mut raw))? };
+        Ok(Ksp { raw })
+    }
+
+    /// Operator and preconditioning matrix (the same here).
+    pub fn set_operator(&mut self, a: &Matrix) -> Result<()> {
+        // SAFETY: KSP takes a reference on the matrix.
+        unsafe { check(ffi::KSPSetOperators(self.raw, a.raw, a.raw)) }
+    }
+
+    /// Applies the options database (preset defaults, case file, command line).
+    pub fn set_from_options(&mut self) -> Result<()> {
+        // SAFETY: valid KSP.
+        unsafe { check(ffi::KSPSetFromOptions(self.raw)) }
+    }
+
+    /// Builds the preconditioner / factorisation now (so its time can be measured apart).
+    pub fn set_up(&mut self) -> Result<()> {
+        // SAFETY: valid KSP with operators.
+        unsafe { check(ffi::KSPSetUp(self.raw)) }
+    }
+
+    /// Solves A x = b; returns iterations and PETSc's converged reason.
+    pub fn solve(&mut self, b: &Vector, x: &mut Vector) -> Result<SolveInfo> {
+        let mut its: PInt = 0;
+        let mut reason: ffi::KSPConvergedReason = 0;
+        let mut name: *const c_char = ptr::null();
+        // SAFETY: valid objects; the reason name is a static string.
+        unsafe {
+            check(ffi::KSPSolve(self.raw, b.raw, x.raw))?;
+            check(ffi::KSPGetIterationNumber(self.raw, &mut its))?;
+            check(ffi::KSPGetConvergedReason(self.raw, &mut reason))?;
+            check(ffi::KSPGetConvergedReasonString(self.raw, &mut name))?;
+            let reason_name = if name.is_null() {
+                String::new()
+            } else {
+                CStr::from_ptr(name).to_string_lossy().into_owned()
+            };
+            Ok(SolveInfo {
+                iterations: its as usize,
+                reason: reason as i32,
+                reason_name,
+            })
+        }
+    }
+
+    /// The KSP and PC type names in use (after set_from_options).
+    pub fn type_names(&self) -> Result<(String, String)> {
+        let mut kt: *const c_char = ptr::null();
+        let mut pt: *const c_char = ptr::null();
+        let mut pc: ffi::PC = ptr::null_mut();
+        // SAFETY: type names are PETSc-owned static strings.
+        unsafe {
+            check(ffi::KSPGetType(self.raw, &mut kt))?;
+            check(ffi::KSPGetPC(self.raw, &mut pc))?;
+            check(ffi::PCGetType(pc, &mut pt))?;
+            let s = |p: *const c_char| {
+                if p.is_null() {
+                    String::new()
+                } else {
+                    CStr::from_ptr(p).to_string_lossy().into_owned()
+                }
+            };
+            Ok((s(kt), s(pt)))
+        }
+    }
+}
+
+impl Drop for Ksp {
+    fn drop(&mut self) {
+        // SAFETY: destroys the KSP we own.
+        unsafe {
+            ffi::KSPDestroy(&mut self.raw);
+        }
+    }
+}
+
+/// Partitions a distributed graph with PETSc's MatPartitioning (type from `ptype`, e.g.
+/// "ptscotch"; `-mat_partitioning_type` overrides). This rank passes the adjacency of its
+/// rows `[row_start, row_start + xadj.len() - 1)` in CSR form (global column indices, no
+/// self-loops); the result is the target rank of each of these rows.
+pub fn partition_graph(
+    comm: MPI_Comm,
+    n_global: usize,
+    xadj: &[PInt],
+    adjncy: &[PInt],
+    ptype: &str,
+) -> Result<Vec<PInt>> {
+    let n_local = xadj.len().saturating_sub(1);
+    // MatCreateMPIAdj takes ownership of arrays allocated with PetscMalloc.
+    // SAFETY: we copy the CSR arrays into PETSc-allocated memory that MatDestroy frees; the
+    // IS is read and destroyed before returning.
+    unsafe {
+        let ia = petsc_malloc_copy(xadj)?;
+        let ja = petsc_malloc_copy(adjncy)?;
+        let mut adj: ffi::Mat = ptr::null_mut();
+        check(ffi::MatCreateMPIAdj(
+            comm,
+            n_local as PInt,
+            n_global as PInt,
+            ia,
+            ja,
+            ptr::null_mut(),
+            &mut adj,
+        ))?;
+        let adj = Matrix { raw: adj };
+        let mut part: ffi::MatPartitioning = ptr::null_mut();
+        check(ffi::MatPartitioningCreate(comm, &mut part))?;
+        let t = cstring(ptype);
+        let result = (|| {
+            check(ffi::MatPartitioningSetAdjacency(part, adj.raw))?;
+            check(ffi::MatPartitioningSetType(part, t.as_ptr()))?;
+            check(ffi::MatPartitioningSetFromOptions(part))?;
+            let mut is: ffi::IS = ptr::null_mut();
+            check(ffi::MatPartitioningApply(part, &mut is))?;
+            let mut idx: *const PInt = ptr::null();
+            check(ffi::ISGetIndices(is, &mut idx))?;
+            let out = if n_local == 0 {
+                Vec::new()
+            } else {
+                std::slice::from_raw_parts(idx, n_local).to_vec()
+            };
+            check(ffi::ISRestoreIndices(is, &mut idx))?;
+            check(ffi::ISDestroy(&mut is))?;
+            Ok(out)
+        })();
+        ffi::MatPartitioningDestroy(&mut part);
+        drop(adj);
+        result
+    }
+}
+
+/// Copies a slice into memory from PetscMalloc (for objects that take ownership of arrays).
+unsafe fn petsc_malloc_copy(src: &[PInt]) -> Result<*mut PInt> {
+    let bytes = std::mem::size_of_val(src).max(std::mem::size_of::<PInt>());
+    let mut p: *mut std::ffi::c_void = ptr::null_mut();
+    check(ffi::PetscMallocA(
+        1,
+        ffi::PETSC_FALSE,
+        line!() as c_int,
+        c"petsc_malloc_copy".as_ptr(),
+        c"src/petsc/mod.rs".as_ptr(),
+        bytes,
+        &mut p as *mut *mut std::ffi::c_void as *mut std::ffi::c_void,
+    ))?;
+    let dst = p as *mut PInt;
+    ptr::copy_nonoverlapping(src.as_ptr(), dst, src.len());
+    Ok(dst)
+}

@@ -26,6 +26,627 @@
 //!     pub fields: Vec<Field<'a>>,
 //! }
 //! /// Collective over `comm`: writes DIR/solution.h5 and DIR/solution.xdmf (DIR must exist).
-//! pub fn write_xdmf_hdf5<C: mpi::topology::Communicator>(comm: &C, dir: &Path, piece: &Piece)
-//!     -> Result<(), String>;
+//! pub fn write_xdmf_hdf5<C>(comm: &C, dir: &Path, piece: &Piece) -> Result<(), String>
+//! where C: Communicator + AsRaw<Raw = mpi::ffi::MPI_Comm>;   // e.g. SimpleCommunicator
 //! ```
+//!
+//! File layout of `solution.h5` (all integers are stored as i64, which every XDMF reader
+//! knows; XDMF 3 has no unsigned 64-bit type):
+//!
+//! | dataset              | shape        | content                                  |
+//! |----------------------|--------------|------------------------------------------|
+//! | /mesh/geometry       | N × 3 f64    | node coordinates                         |
+//! | /mesh/topology       | M × (dim+1)  | global node numbers (rows of geometry)   |
+//! | /mesh/node_id        | N            | gmsh node tags                           |
+//! | /mesh/cell_id        | M            | gmsh element tags                        |
+//! | /nodal/NAME          | N × ncomp    | (N when ncomp = 1)                       |
+//! | /cell/NAME           | M × ncomp    |                                          |
+//! | /contact/geometry    | K × 3 f64    | only when K > 0                          |
+//! | /contact/topology    | K × 1        | 0, 1, …, K−1 (Polyvertex cells)          |
+//! | /contact/node_id     | K            |                                          |
+//! | /contact/NAME        | K × ncomp    |                                          |
+//!
+//! `solution.xdmf` (XDMF 3, written by rank 0) has one Domain with the Grid "mesh" and, when
+//! K > 0, the Grid "contact"; `node_id` / `cell_id` appear there as Int attributes.
+//!
+//! Error handling: every check that could differ between ranks is agreed on by all ranks
+//! before the next collective step, so a bad piece on one rank gives the same `Err` on all
+//! ranks instead of a hang. Messages name the file.
+
+mod xdmf;
+
+pub use xdmf::{attribute_type, xdmf_text, FieldMeta, Meta};
+
+use std::path::Path;
+
+use hdf5::dataset::FillTime;
+use hdf5::{Group, H5Type};
+use mpi::collective::{CommunicatorCollectives, Root, SystemOperation};
+use mpi::raw::AsRaw;
+use mpi::topology::Communicator;
+use ndarray::{s, ArrayView1, ArrayView2};
+
+/// Name of the HDF5 file inside the output directory.
+pub const H5_FILE: &str = "solution.h5";
+/// Name of the XDMF file inside the output directory.
+pub const XDMF_FILE: &str = "solution.xdmf";
+
+/// One field: `ncomp` values per owned node / cell / contact node, row-major.
+#[derive(Debug, Clone, Copy)]
+pub struct Field<'a> {
+    pub name: &'a str,
+    pub ncomp: usize,
+    pub data: &'a [f64],
+}
+
+/// What one rank contributes. Nodes and cells are numbered globally and contiguously by rank:
+/// rank r owns nodes `node_offset .. node_offset + coords.len()` and cells likewise.
+#[derive(Debug, Clone)]
+pub struct Piece<'a> {
+    /// 2 (triangles) or 3 (tetrahedra).
+    pub dim: usize,
+    pub n_nodes_global: usize,
+    pub node_offset: usize,
+    /// Owned nodes (z = 0 in 2D).
+    pub coords: &'a [[f64; 3]],
+    /// Gmsh node tag of each owned node.
+    pub node_ids: &'a [u64],
+    pub n_cells_global: usize,
+    pub cell_offset: usize,
+    /// `dim + 1` GLOBAL node numbers per owned cell.
+    pub connectivity: &'a [usize],
+    /// Gmsh element tag of each owned cell.
+    pub cell_ids: &'a [u64],
+    /// E.g. displacement, ncomp 3 (2D padded with 0).
+    pub nodal: Vec<Field<'a>>,
+    /// E.g. stress ncomp 9, von_mises 1, rank 1.
+    pub cellwise: Vec<Field<'a>>,
+    pub contact: Option<ContactPiece<'a>>,
+}
+
+/// Contact nodes as their own point grid ("contact").
+#[derive(Debug, Clone)]
+pub struct ContactPiece<'a> {
+    pub n_global: usize,
+    pub offset: usize,
+    pub coords: &'a [[f64; 3]],
+    pub node_ids: &'a [u64],
+    pub fields: Vec<Field<'a>>,
+}
+
+impl Piece<'_> {
+    /// Global description of the output as this rank sees it (must agree on all ranks).
+    pub fn meta(&self) -> Meta {
+        let fm = |v: &[Field]| {
+            v.iter()
+                .map(|f| FieldMeta {
+                    name: f.name.to_string(),
+                    ncomp: f.ncomp,
+                })
+                .collect()
+        };
+        Meta {
+            dim: self.dim,
+            n_nodes: self.n_nodes_global,
+            n_cells: self.n_cells_global,
+            nodal: fm(&self.nodal),
+            cellwise: fm(&self.cellwise),
+            n_contact: self.contact.as_ref().map_or(0, |c| c.n_global),
+            contact: self
+                .contact
+                .as_ref()
+                .filter(|c| c.n_global > 0)
+                .map_or_else(Vec::new, |c| fm(&c.fields)),
+        }
+    }
+
+    /// Local consistency of this rank's piece (lengths, ranges, names). No communication.
+    pub fn validate(&self) -> Result<(), String> {
+        if self.dim != 2 && self.dim != 3 {
+            return Err(format!("dimension must be 2 or 3, got {}", self.dim));
+        }
+        let n = self.coords.len();
+        if self.node_ids.len() != n {
+            return Err(format!(
+                "{} node ids for {} owned nodes",
+                self.node_ids.len(),
+                n
+            ));
+        }
+        if self.node_offset + n > self.n_nodes_global {
+            return Err(format!(
+                "owned nodes {}..{} exceed the global node count {}",
+                self.node_offset,
+                self.node_offset + n,
+                self.n_nodes_global
+            ));
+        }
+        let m = self.cell_ids.len();
+        let npe = self.dim + 1;
+        if self.connectivity.len() != m * npe {
+            return Err(format!(
+                "connectivity has {} entries, expected {} cells × {npe}",
+                self.connectivity.len(),
+                m
+            ));
+        }
+        if self.cell_offset + m > self.n_cells_global {
+            return Err(format!(
+                "owned cells {}..{} exceed the global cell count {}",
+                self.cell_offset,
+                self.cell_offset + m,
+                self.n_cells_global
+            ));
+        }
+        if let Some(&bad) = self
+            .connectivity
+            .iter()
+            .find(|&&v| v >= self.n_nodes_global)
+        {
+            return Err(format!(
+                "connectivity refers to node {bad}, but there are only {} nodes",
+                self.n_nodes_global
+            ));
+        }
+        check_fields("nodal", &self.nodal, n, &["node_id"])?;
+        check_fields("cell", &self.cellwise, m, &["cell_id"])?;
+        if let Some(c) = &self.contact {
+            let k = c.coords.len();
+            if c.node_ids.len() != k {
+                return Err(format!(
+                    "{} contact node ids for {k} contact nodes",
+                    c.node_ids.len()
+                ));
+            }
+            if c.offset + k > c.n_global {
+                return Err(format!(
+                    "contact nodes {}..{} exceed the global contact count {}",
+                    c.offset,
+                    c.offset + k,
+                    c.n_global
+                ));
+            }
+            check_fields(
+                "contact",
+                &c.fields,
+                k,
+                &["node_id", "geometry", "topology"],
+            )?;
+        }
+        Ok(())
+    }
+}
+
+/// Field names become HDF5 link names and XML attribute values: keep them plain.
+fn check_name(kind: &str, name: &str, reserved: &[&str]) -> Result<(), String> {
+    let ok_chars = name
+        .chars()
+        .all(|c| c.is_ascii_alphanumeric() || c == '_' || c == '-' || c == '.');
+    if name.is_empty() || !ok_chars || name.starts_with('.') {
+        return Err(format!(
+            "{kind} field name '{name}' must be non-empty, made of ASCII letters, digits, \
+             '_', '-', '.' and not start with '.'"
+        ));
+    }
+    if reserved.contains(&name) {
+        return Err(format!("{kind} field name '{name}' is reserved"));
+    }
+    Ok(())
+}
+
+fn check_fields(
+    kind: &str,
+    fields: &[Field],
+    rows: usize,
+    reserved: &[&str],
+) -> Result<(), String> {
+    for (i, f) in fields.iter().enumerate() {
+        check_name(kind, f.name, reserved)?;
+        if fields[..i].iter().any(|g| g.name == f.name) {
+            return Err(format!("{kind} field '{}' given twice", f.name));
+        }
+        if f.ncomp == 0 {
+            return Err(format!("{kind} field '{}' has 0 components", f.name));
+        }
+        if f.data.len() != rows * f.ncomp {
+            return Err(format!(
+                "{kind} field '{}' has {} values, expected {rows} × {}",
+                f.name,
+                f.data.len(),
+                f.ncomp
+            ));
+        }
+    }
+    Ok(())
+}
+
+/// The owned blocks (offset, count) of all ranks must tile 0..global without gaps or overlaps.
+fn check_tiling(kind: &str, blocks: &mut [(u64, u64)], global: u64) -> Result<(), String> {
+    blocks.sort_unstable();
+    let mut next = 0u64;
+    for &(off, cnt) in blocks.iter().filter(|b| b.1 > 0) {
+        if off != next {
+            return Err(format!(
+                "the {kind} blocks of the ranks do not tile 0..{global}: expected a block at \
+                 {next}, found one at {off}"
+            ));
+        }
+        next = off + cnt;
+    }
+    if next != global {
+        return Err(format!(
+            "the ranks own {next} {kind} in total, but the global count is {global}"
+        ));
+    }
+    Ok(())
+}
+
+/// All ranks learn whether any rank failed; the message of the lowest failing rank is returned
+/// on every rank. Collective.
+fn agree<C: Communicator>(comm: &C, local: Result<(), String>) -> Result<(), String> {
+    let size = comm.size();
+    let rank = comm.rank();
+    let mine = if local.is_err() { rank } else { size };
+    let mut first = size;
+    comm.all_reduce_into(&mine, &mut first, SystemOperation::min());
+    if first == size {
+        return Ok(());
+    }
+    let root = comm.process_at_rank(first);
+    let mut bytes = local.err().unwrap_or_default().into_bytes();
+    let mut len = bytes.len() as u64;
+    root.broadcast_into(&mut len);
+    bytes.resize(len as usize, 0);
+    root.broadcast_into(&mut bytes[..]);
+    let msg = String::from_utf8_lossy(&bytes).into_owned();
+    if size > 1 {
+        Err(format!("(rank {first}) {msg}"))
+    } else {
+        Err(msg)
+    }
+}
+
+/// Broadcast a string from rank 0.
+fn broadcast_string<C: Communicator>(comm: &C, s: &str) -> String {
+    let root = comm.process_at_rank(0);
+    let mut bytes = s.as_bytes().to_vec();
+    let mut len = bytes.len() as u64;
+    root.broadcast_into(&mut len);
+    bytes.resize(len as usize, 0);
+    root.broadcast_into(&mut bytes[..]);
+    String::from_utf8_lossy(&bytes).into_owned()
+}
+
+/// Creates datasets (collective) and writes this rank's rows (independent).
+struct Writer<'f> {
+    path: &'f str,
+    /// First error of an independent write on this rank; reported after the file is closed.
+    local_err: Option<String>,
+}
+
+impl Writer<'_> {
+    /// Collective: create `group/name` of `rows × ncomp` (1-D if ncomp = 1) with file type
+    /// `F`, then write `data` (this rank's rows from `offset`) converting from `T` if needed.
+    #[allow(clippy::too_many_arguments)]
+    fn rows<F: H5Type, T: H5Type>(
+        &mut self,
+        group: &Group,
+        name: &str,
+        rows: usize,
+        ncomp: usize,
+        offset: usize,
+        data: &[T],
+    ) -> Result<(), String> {
+        let builder = group.new_dataset::<F>().fill_time(FillTime::Never);
+        let ds = if ncomp == 1 {
+            builder.shape([rows]).create(name)
+        } else {
+            builder.shape([rows, ncomp]).create(name)
+        }
+        .map_err(|e| {
+            format!(
+                "{}: cannot create dataset {}/{name}: {e}",
+                self.path,
+                group.name()
+            )
+        })?;
+        let local = data.len() / ncomp;
+        if local == 0 || self.local_err.is_some() {
+            return Ok(());
+        }
+        let res = if ncomp == 1 {
+            ArrayView1::from(data)
+                .into_shape_with_order(local)
+                .map_or_else(
+                    |e| Err(e.to_string()),
+                    |v| {
+                        ds.write_slice(v, s![offset..offset + local])
+                            .map_err(|e| e.to_string())
+                    },
+                )
+        } else {
+            ArrayView2::from_shape((local, ncomp), data).map_or_else(
+                |e| Err(e.to_string()),
+                |v: ArrayView2<T>| {
+                    ds.write_slice(v, s![offset..offset + local, ..])
+                        .map_err(|e| e.to_string())
+                },
+            )
+        };
+        if let Err(e) = res {
+            self.local_err = Some(format!(
+                "{}: writing rows {offset}..{} of {}/{name} failed: {e}",
+                self.path,
+                offset + local,
+                group.name()
+            ));
+        }
+        Ok(())
+    }
+}
+
+fn create_group(file: &hdf5::File, path: &str, name: &str) -> Result<Group, String> {
+    file.create_group(name)
+        .map_err(|e| format!("{path}: cannot create group /{name}: {e}"))
+}
+
+/// All datasets of the HDF5 file, in the same order on every rank. Returns the collective
+/// (same on all ranks) error, if any; independent write errors go to `w.local_err`.
+fn write_datasets(file: &hdf5::File, w: &mut Writer, p: &Piece, meta: &Meta) -> Result<(), String> {
+    let path = w.path;
+    let n = meta.n_nodes;
+    let m = meta.n_cells;
+    let npe = meta.dim + 1;
+
+    let mesh = create_group(file, path, "mesh")?;
+    w.rows::<f64, f64>(
+        &mesh,
+        "geometry",
+        n,
+        3,
+        p.node_offset,
+        p.coords.as_flattened(),
+    )?;
+    w.rows::<i64, usize>(&mesh, "topology", m, npe, p.cell_offset, p.connectivity)?;
+    w.rows::<i64, u64>(&mesh, "node_id", n, 1, p.node_offset, p.node_ids)?;
+    w.rows::<i64, u64>(&mesh, "cell_id", m, 1, p.cell_offset, p.cell_ids)?;
+    drop(mesh);
+
+    let nodal = create_group(file, path, "nodal")?;
+    for f in &p.nodal {
+        w.rows::<f64, f64>(&nodal, f.name, n, f.ncomp, p.node_offset, f.data)?;
+    }
+    drop(nodal);
+
+    let cell = create_group(file, path, "cell")?;
+    for f in &p.cellwise {
+        w.rows::<f64, f64>(&cell, f.name, m, f.ncomp, p.cell_offset, f.data)?;
+    }
+    drop(cell);
+
+    if meta.n_contact > 0 {
+        // validated and agreed: every rank has Some(contact) when n_contact > 0
+        let Some(c) = &p.contact else {
+            return Err(format!("{path}: contact piece missing on this rank"));
+        };
+        let k = meta.n_contact;
+        let g = create_group(file, path, "contact")?;
+        w.rows::<f64, f64>(&g, "geometry", k, 3, c.offset, c.coords.as_flattened())?;
+        let topo: Vec<u64> = (c.offset as u64..(c.offset + c.coords.len()) as u64).collect();
+        w.rows::<i64, u64>(&g, "topology", k, 1, c.offset, &topo)?;
+        w.rows::<i64, u64>(&g, "node_id", k, 1, c.offset, c.node_ids)?;
+        for f in &c.fields {
+            w.rows::<f64, f64>(&g, f.name, k, f.ncomp, c.offset, f.data)?;
+        }
+    }
+    Ok(())
+}
+
+/// Collective over `comm`: writes `dir/solution.h5` (all ranks, MPI-IO) and
+/// `dir/solution.xdmf` (rank 0). `dir` must exist. Returns the same `Err` on every rank if
+/// any rank's piece is inconsistent or any write fails.
+pub fn write_xdmf_hdf5<C>(comm: &C, dir: &Path, piece: &Piece) -> Result<(), String>
+where
+    C: Communicator + AsRaw<Raw = mpi::ffi::MPI_Comm>,
+{
+    let h5_path = dir.join(H5_FILE);
+    let xdmf_path = dir.join(XDMF_FILE);
+    let h5_name = h5_path.display().to_string();
+
+    // 1. Same global description everywhere, valid local piece, blocks tile the global ranges.
+    let meta = piece.meta();
+    let sig = meta.signature();
+    let sig0 = broadcast_string(comm, &sig);
+    let mut local = piece.validate();
+    if local.is_ok() && sig != sig0 {
+        local = Err(format!(
+            "output description differs from rank 0: '{sig}' vs '{sig0}'"
+        ));
+    }
+    let contact = piece.contact.as_ref();
+    let mine: [u64; 6] = [
+        piece.node_offset as u64,
+        piece.coords.len() as u64,
+        piece.cell_offset as u64,
+        piece.cell_ids.len() as u64,
+        contact.map_or(0, |c| c.offset as u64),
+        contact.map_or(0, |c| c.coords.len() as u64),
+    ];
+    let mut all = vec![0u64; 6 * comm.size() as usize];
+    comm.all_gather_into(&mine[..], &mut all[..]);
+    if local.is_ok() {
+        let blocks = |j: usize| -> Vec<(u64, u64)> {
+            all.chunks_exact(6).map(|r| (r[j], r[j + 1])).collect()
+        };
+        local = check_tiling("nodes", &mut blocks(0), meta.n_nodes as u64)
+            .and_then(|()| check_tiling("cells", &mut blocks(2), meta.n_cells as u64))
+            .and_then(|()| check_tiling("contact nodes", &mut blocks(4), meta.n_contact as u64));
+    }
+    agree(comm, local.map_err(|e| format!("{h5_name}: {e}")))?;
+
+    // 2. The shared HDF5 file (creation, dataset creation and close are collective).
+    let created = hdf5::File::with_options()
+        .with_fapl(|p| p.mpio(comm.as_raw(), None))
+        .create(&h5_path)
+        .map_err(|e| format!("{h5_name}: cannot create: {e}"));
+    let file = match created {
+        Ok(f) => {
+            agree(comm, Ok(()))?;
+            f
+        }
+        Err(e) => {
+            // Every rank returns here (MPI_File_open is collective, so it fails everywhere).
+            agree(comm, Err(e.clone()))?;
+            return Err(e);
+        }
+    };
+    let mut w = Writer {
+        path: &h5_name,
+        local_err: None,
+    };
+    let collective = write_datasets(&file, &mut w, piece, &meta);
+    let closed = file
+        .close()
+        .map_err(|e| format!("{h5_name}: closing failed: {e}"));
+    let mut local = collective.and(closed);
+    if local.is_ok() {
+        if let Some(e) = w.local_err.take() {
+            local = Err(e);
+        }
+    }
+
+    // 3. The XDMF description (rank 0), after the data it points to is complete.
+    if comm.rank() == 0 && local.is_ok() {
+        let text = xdmf_text(&meta, H5_FILE);
+        if let Err(e) = std::fs::write(&xdmf_path, text) {
+            local = Err(format!("{}: cannot write: {e}", xdmf_path.display()));
+        }
+    }
+    agree(comm, local)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn piece<'a>(
+        coords: &'a [[f64; 3]],
+        ids: &'a [u64],
+        conn: &'a [usize],
+        cids: &'a [u64],
+    ) -> Piece<'a> {
+        Piece {
+            dim: 2,
+            n_nodes_global: coords.len(),
+            node_offset: 0,
+            coords,
+            node_ids: ids,
+            n_cells_global: cids.len(),
+            cell_offset: 0,
+            connectivity: conn,
+            cell_ids: cids,
+            nodal: vec![],
+            cellwise: vec![],
+            contact: None,
+        }
+    }
+
+    const C: [[f64; 3]; 4] = [
+        [0.0, 0.0, 0.0],
+        [1.0, 0.0, 0.0],
+        [0.0, 1.0, 0.0],
+        [1.0, 1.0, 0.0],
+    ];
+
+    #[test]
+    fn validate_accepts_consistent_piece() {
+        let d = [0.0; 8];
+        let mut p = piece(&C, &[1, 2, 3, 4], &[0, 1, 2, 1, 3, 2], &[7, 8]);
+        p.nodal.push(Field {
+            name: "u",
+            ncomp: 2,
+            data: &d,
+        });
+        assert_eq!(p.validate(), Ok(()));
+    }
+
+    #[test]
+    fn validate_rejects_bad_pieces() {
+        let ids = [1, 2, 3, 4];
+        let conn = [0, 1, 2, 1, 3, 2];
+        // wrong connectivity length
+        assert!(piece(&C, &ids, &conn[..5], &[7, 8]).validate().is_err());
+        // node number out of range
+        assert!(piece(&C, &ids, &[0, 1, 2, 1, 4, 2], &[7, 8])
+            .validate()
+            .unwrap_err()
+            .contains("node 4"));
+        // ids count
+        assert!(piece(&C, &ids[..3], &conn, &[7, 8]).validate().is_err());
+        // dim
+        let mut p = piece(&C, &ids, &conn, &[7, 8]);
+        p.dim = 4;
+        assert!(p.validate().is_err());
+        // field length, bad name, reserved name, duplicate, ncomp 0
+        let d = [0.0; 8];
+        for (name, ncomp, len) in [
+            ("u", 3, 8),
+            ("a/b", 2, 8),
+            ("x:y", 2, 8),
+            ("", 2, 8),
+            ("node_id", 2, 8),
+            ("u", 0, 0),
+        ] {
+            let mut p = piece(&C, &ids, &conn, &[7, 8]);
+            p.nodal.push(Field {
+                name,
+                ncomp,
+                data: &d[..len],
+            });
+            assert!(p.validate().is_err(), "{name} {ncomp} {len}");
+        }
+        let mut p = piece(&C, &ids, &conn, &[7, 8]);
+        for _ in 0..2 {
+            p.nodal.push(Field {
+                name: "u",
+                ncomp: 2,
+                data: &d,
+            });
+        }
+        assert!(p.validate().unwrap_err().contains("twice"));
+        // offsets beyond the global count
+        let mut p = piece(&C, &ids, &conn, &[7, 8]);
+        p.node_offset = 1;
+        assert!(p.validate().is_err());
+    }
+
+    #[test]
+    fn tiling() {
+        assert!(check_tiling("nodes", &mut [(3, 2), (0, 3)], 5).is_ok());
+        assert!(check_tiling("nodes", &mut [(0, 3), (99, 0), (3, 2)], 5).is_ok());
+        assert!(check_tiling("nodes", &mut [(0, 3), (2, 3)], 5).is_err());
+        assert!(check_tiling("nodes", &mut [(0, 3), (4, 1)], 5).is_err());
+        assert!(check_tiling("nodes", &mut [(0, 3)], 5).is_err());
+        assert!(check_tiling("nodes", &mut [(0, 0)], 0).is_ok());
+    }
+
+    #[test]
+    fn meta_drops_empty_contact_fields() {
+        let d = [0.0; 0];
+        let mut p = piece(&C, &[1, 2, 3, 4], &[0, 1, 2, 1, 3, 2], &[7, 8]);
+        p.contact = Some(ContactPiece {
+            n_global: 0,
+            offset: 0,
+            coords: &[],
+            node_ids: &[],
+            fields: vec![Field {
+                name: "gap",
+                ncomp: 1,
+                data: &d,
+            }],
+        });
+        let m = p.meta();
+        assert_eq!(m.n_contact, 0);
+        assert!(m.contact.is_empty());
+    }
+}

@@ -1,1 +1,0 @@
-//! The TOML case file: schema, defaults, validation, `--set` overrides.

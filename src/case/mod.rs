@@ -1,0 +1,998 @@
+//! The TOML case file: schema, defaults, validation, `--set` overrides.
+//!
+//! The file is parsed with `toml_edit` (which keeps spans) into a small owned tree that
+//! remembers the line of every key; `--set` overrides are applied to that tree (marked as
+//! coming from the command line) and the result is validated by hand, so that every error
+//! names the file, the key path (`material.poisson`, `dirichlet[1].value`, `neumann[0]`)
+//! and the line of that key, or says "(from --set)".
+
+mod tree;
+
+#[cfg(test)]
+mod tests;
+
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+
+use crate::error::InputError;
+use tree::{join_index, join_key, Kind, Loc, Node};
+
+/// Elastic model.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Model {
+    PlaneStrain,
+    PlaneStress,
+    ThreeD,
+}
+
+impl Model {
+    /// The spelling used in the case file.
+    pub fn name(self) -> &'static str {
+        match self {
+            Model::PlaneStrain => "plane_strain",
+            Model::PlaneStress => "plane_stress",
+            Model::ThreeD => "3d",
+        }
+    }
+
+    /// Spatial dimension the model belongs to.
+    pub fn dim(self) -> usize {
+        match self {
+            Model::PlaneStrain | Model::PlaneStress => 2,
+            Model::ThreeD => 3,
+        }
+    }
+}
+
+#[derive(Debug, Clone, PartialEq)]
+pub struct MeshSection {
+    /// Resolved against the case file's directory.
+    pub file: PathBuf,
+}
+
+#[derive(Debug, Clone, PartialEq)]
+pub struct MaterialSection {
+    pub young: f64,
+    pub poisson: f64,
+    /// As given; use [`Case::model`] to get the model for a mesh dimension.
+    pub model: Option<Model>,
+}
+
+#[derive(Debug, Clone, PartialEq)]
+pub struct Dirichlet {
+    pub group: String,
+    /// One entry per component; `None` = "free".
+    pub value: Vec<Option<f64>>,
+}
+
+#[derive(Debug, Clone, PartialEq)]
+pub enum Load {
+    /// Normal pressure, positive pushes into the body.
+    Pressure(f64),
+    /// Vector traction.
+    Traction(Vec<f64>),
+}
+
+#[derive(Debug, Clone, PartialEq)]
+pub struct Neumann {
+    pub group: String,
+    pub load: Load,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Preset {
+    /// MUMPS LU.
+    Direct,
+    /// Krylov + AMG.
+    Iterative,
+}
+
+impl Preset {
+    pub fn name(self) -> &'static str {
+        match self {
+            Preset::Direct => "direct",
+            Preset::Iterative => "iterative",
+        }
+    }
+}
+
+#[derive(Debug, Clone, PartialEq)]
+pub struct SolverSection {
+    pub preset: Preset,
+    /// Appended after the preset's options.
+    pub petsc_options: String,
+    /// Relative tolerance of the iterative preset.
+    pub rtol: f64,
+}
+
+impl Default for SolverSection {
+    fn default() -> Self {
+        SolverSection {
+            preset: Preset::Direct,
+            petsc_options: String::new(),
+            rtol: 1e-10,
+        }
+    }
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash)]
+pub enum Field {
+    Displacement,
+    Stress,
+    VonMises,
+    VonMisesThesis,
+    Rank,
+    Contact,
+}
+
+impl Field {
+    pub const ALL: [Field; 6] = [
+        Field::Displacement,
+        Field::Stress,
+        Field::VonMises,
+        Field::VonMisesThesis,
+        Field::Rank,
+        Field::Contact,
+    ];
+
+    /// The spelling used in the case file.
+    pub fn name(self) -> &'static str {
+        match self {
+            Field::Displacement => "displacement",
+            Field::Stress => "stress",
+            Field::VonMises => "von_mises",
+            Field::VonMisesThesis => "von_mises_thesis",
+            Field::Rank => "rank",
+            Field::Contact => "contact",
+        }
+    }
+
+    fn from_name(s: &str) -> Option<Field> {
+        Field::ALL.into_iter().find(|f| f.name() == s)
+    }
+}
+
+#[derive(Debug, Clone, PartialEq)]
+pub struct OutputSection {
+    /// Relative to the working directory.
+    pub dir: PathBuf,
+    /// Requested fields, in file order, without duplicates.
+    pub fields: Vec<Field>,
+}
+
+impl OutputSection {
+    pub fn wants(&self, f: Field) -> bool {
+        self.fields.contains(&f)
+    }
+}
+
+/// The default `output.fields`.
+pub const DEFAULT_FIELDS: [Field; 3] = [Field::Displacement, Field::VonMises, Field::Contact];
+
+#[derive(Debug, Clone, PartialEq)]
+pub enum Obstacle {
+    /// Half-space bounded by the plane through `point`; `normal` is a unit vector.
+    Plane { point: Vec<f64>, normal: Vec<f64> },
+    /// Ball (circle in 2D).
+    Sphere { center: Vec<f64>, radius: f64 },
+}
+
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Friction {
+    None,
+    Tresca { threshold: f64 },
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum RigidModes {
+    Auto,
+    None,
+}
+
+#[derive(Debug, Clone, PartialEq)]
+pub struct ContactSection {
+    pub group: String,
+    pub obstacle: Obstacle,
+    pub friction: Friction,
+    pub rigid_modes: RigidModes,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum NewtonInit {
+    Auto,
+    AllActive,
+    AllInactive,
+    Gap,
+}
+
+impl NewtonInit {
+    pub fn name(self) -> &'static str {
+        match self {
+            NewtonInit::Auto => "auto",
+            NewtonInit::AllActive => "all_active",
+            NewtonInit::AllInactive => "all_inactive",
+            NewtonInit::Gap => "gap",
+        }
+    }
+}
+
+#[derive(Debug, Clone, PartialEq)]
+pub struct NewtonSection {
+    pub init: NewtonInit,
+    /// Complementarity parameter c > 0.
+    pub c: f64,
+    pub max_steps: usize,
+    pub tol_u: f64,
+}
+
+impl Default for NewtonSection {
+    fn default() -> Self {
+        NewtonSection {
+            init: NewtonInit::Auto,
+            c: 1.0,
+            max_steps: 100,
+            tol_u: 1e-10,
+        }
+    }
+}
+
+/// A validated case: defaults filled in, paths resolved.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Case {
+    /// The case file as given on the command line.
+    pub file: PathBuf,
+    pub mesh: MeshSection,
+    pub material: MaterialSection,
+    pub dirichlet: Vec<Dirichlet>,
+    pub neumann: Vec<Neumann>,
+    pub body_force: Option<Vec<f64>>,
+    pub solver: SolverSection,
+    pub output: OutputSection,
+    pub contact: Option<ContactSection>,
+    pub newton: NewtonSection,
+    /// Where every key path came from, for errors found after loading.
+    locs: BTreeMap<String, Loc>,
+}
+
+const ROOT_KEYS: &[&str] = &[
+    "mesh",
+    "material",
+    "dirichlet",
+    "neumann",
+    "body_force",
+    "solver",
+    "output",
+    "contact",
+    "newton",
+];
+
+impl Case {
+    /// Reads and validates the case file. `overrides` are `key.path=value` strings from
+    /// `--set` (the value is parsed as a TOML value, falling back to a plain string; a
+    /// numeric component indexes an array of tables, one past the end appends a new entry);
+    /// `output_dir` (from `-o`) replaces `output.dir`.
+    pub fn load(
+        path: &Path,
+        overrides: &[String],
+        output_dir: Option<&Path>,
+    ) -> Result<Case, InputError> {
+        let text = std::fs::read_to_string(path)
+            .map_err(|e| InputError::new(path, format!("cannot read the case file: {e}")))?;
+        Case::parse(&text, path, overrides, output_dir)
+    }
+
+    /// As [`Case::load`], with the file's text already in hand (`file` is used for
+    /// messages, for resolving `mesh.file` and for the default output directory).
+    pub fn parse(
+        text: &str,
+        file: &Path,
+        overrides: &[String],
+        output_dir: Option<&Path>,
+    ) -> Result<Case, InputError> {
+        let cx = Ctx { file };
+        let mut root =
+            tree::parse(text).map_err(|(line, msg)| InputError::new(file, msg).with_line(line))?;
+        for spec in overrides {
+            tree::apply_override(&mut root, spec)
+                .map_err(|(key, msg)| cx.err(&key, Loc::Set, msg))?;
+        }
+        let mut locs = BTreeMap::new();
+        tree::collect_locs(&root, "", &mut locs);
+        let mut case = cx.case(&root, output_dir)?;
+        case.locs = locs;
+        Ok(case)
+    }
+
+    /// The line of a key path (e.g. `dirichlet[0].group`) in the case file, if it came from
+    /// the file.
+    pub fn line_of(&self, key: &str) -> Option<usize> {
+        match self.locs.get(key) {
+            Some(Loc::Line(l)) => Some(*l),
+            _ => None,
+        }
+    }
+
+    fn err_at(&self, key: &str, msg: impl Into<String>) -> InputError {
+        let loc = self.locs.get(key).copied().unwrap_or(Loc::Unknown);
+        Ctx { file: &self.file }.err(key, loc, msg)
+    }
+
+    /// The model to use for a mesh of dimension `dim`: a 2D mesh needs `plane_strain` or
+    /// `plane_stress`, a 3D mesh needs `3d` or no model.
+    pub fn model(&self, dim: usize) -> Result<Model, InputError> {
+        match (dim, self.material.model) {
+            (2, Some(m @ (Model::PlaneStrain | Model::PlaneStress))) => Ok(m),
+            (2, None) => Err(self.err_at(
+                "material",
+                "the mesh is 2D: material.model is required, \"plane_strain\" or \"plane_stress\"",
+            )),
+            (3, None | Some(Model::ThreeD)) => Ok(Model::ThreeD),
+            (2 | 3, Some(m)) => Err(self.err_at(
+                "material.model",
+                format!(
+                    "model \"{}\" is for {}D meshes, but the mesh is {dim}D",
+                    m.name(),
+                    m.dim()
+                ),
+            )),
+            _ => Err(self.err_at(
+                "mesh.file",
+                format!("the mesh has dimension {dim}; only 2D and 3D meshes are supported"),
+            )),
+        }
+    }
+
+    /// Checks the case against the mesh: model vs dimension, vector lengths = `dim`,
+    /// group names exist, Neumann/contact groups are boundary groups (dimension `dim - 1`).
+    /// `groups` lists the mesh's physical groups as (name, dimension).
+    pub fn check_against_mesh(
+        &self,
+        dim: usize,
+        groups: &[(String, usize)],
+    ) -> Result<(), InputError> {
+        self.model(dim)?;
+        let len = |key: String, n: usize| -> Result<(), InputError> {
+            if n == dim {
+                Ok(())
+            } else {
+                Err(self.err_at(
+                    &key,
+                    format!("has {n} components, but the mesh is {dim}D and needs {dim}"),
+                ))
+            }
+        };
+        for (i, d) in self.dirichlet.iter().enumerate() {
+            let k = join_index("dirichlet", i);
+            self.check_group(&join_key(&k, "group"), &d.group, groups, None)?;
+            len(join_key(&k, "value"), d.value.len())?;
+        }
+        for (i, n) in self.neumann.iter().enumerate() {
+            let k = join_index("neumann", i);
+            self.check_group(&join_key(&k, "group"), &n.group, groups, Some(dim - 1))?;
+            if let Load::Traction(t) = &n.load {
+                len(join_key(&k, "traction"), t.len())?;
+            }
+        }
+        if let Some(b) = &self.body_force {
+            len("body_force.value".into(), b.len())?;
+        }
+        if let Some(c) = &self.contact {
+            self.check_group("contact.group", &c.group, groups, Some(dim - 1))?;
+            match &c.obstacle {
+                Obstacle::Plane { point, normal } => {
+                    len("contact.obstacle.point".into(), point.len())?;
+                    len("contact.obstacle.normal".into(), normal.len())?;
+                }
+                Obstacle::Sphere { center, .. } => {
+                    len("contact.obstacle.center".into(), center.len())?;
+                }
+            }
+        }
+        Ok(())
+    }
+
+    fn check_group(
+        &self,
+        key: &str,
+        name: &str,
+        groups: &[(String, usize)],
+        need_dim: Option<usize>,
+    ) -> Result<(), InputError> {
+        let dims: Vec<usize> = groups
+            .iter()
+            .filter(|(g, _)| g == name)
+            .map(|(_, d)| *d)
+            .collect();
+        if dims.is_empty() {
+            let avail = if groups.is_empty() {
+                "the mesh has no named physical groups".to_string()
+            } else {
+                let list: Vec<String> = groups
+                    .iter()
+                    .map(|(g, d)| format!("\"{g}\" (dim {d})"))
+                    .collect();
+                format!("the mesh has: {}", list.join(", "))
+            };
+            return Err(self.err_at(
+                key,
+                format!("physical group \"{name}\" is not in the mesh; {avail}"),
+            ));
+        }
+        if let Some(nd) = need_dim {
+            if !dims.contains(&nd) {
+                let have: Vec<String> = dims.iter().map(|d| d.to_string()).collect();
+                return Err(self.err_at(
+                    key,
+                    format!(
+                        "physical group \"{name}\" has dimension {}, but a boundary group \
+                         (dimension {nd}) is needed here",
+                        have.join("/")
+                    ),
+                ));
+            }
+        }
+        Ok(())
+    }
+}
+
+/// Validation context: builds errors that name the file.
+struct Ctx<'a> {
+    file: &'a Path,
+}
+
+type Res<T> = Result<T, InputError>;
+
+/// A table node being read, with its key path.
+struct Tab<'n> {
+    key: String,
+    loc: Loc,
+    entries: &'n [(String, Node)],
+}
+
+impl<'n> Tab<'n> {
+    fn get(&self, k: &str) -> Option<(String, &'n Node)> {
+        self.entries
+            .iter()
+            .find(|(name, _)| name == k)
+            .map(|(name, n)| (join_key(&self.key, name), n))
+    }
+}
+
+fn list(xs: &[&str]) -> String {
+    xs.join(", ")
+}
+
+impl Ctx<'_> {
+    fn err(&self, key: &str, loc: Loc, msg: impl Into<String>) -> InputError {
+        let mut msg = msg.into();
+        let line = match loc {
+            Loc::Line(l) => Some(l),
+            Loc::Set => {
+                msg.push_str(" (from --set)");
+                None
+            }
+            Loc::Unknown => None,
+        };
+        let e = InputError::new(self.file, msg).with_line(line);
+        if key.is_empty() {
+            e
+        } else {
+            e.with_key(key)
+        }
+    }
+
+    fn type_err(&self, key: &str, n: &Node, expected: &str) -> InputError {
+        self.err(
+            key,
+            n.loc,
+            format!("expected {expected}, found {}", n.type_name()),
+        )
+    }
+
+    /// The node as a table, keys not checked.
+    fn table_any<'n>(&self, key: &str, n: &'n Node) -> Res<Tab<'n>> {
+        match &n.kind {
+            Kind::Table(entries) => Ok(Tab {
+                key: key.to_string(),
+                loc: n.loc,
+                entries,
+            }),
+            _ => Err(self.type_err(key, n, "a table")),
+        }
+    }
+
+    /// The node as a table whose keys are all in `allowed`.
+    fn table<'n>(&self, key: &str, n: &'n Node, allowed: &[&str]) -> Res<Tab<'n>> {
+        let Kind::Table(entries) = &n.kind else {
+            return Err(self.type_err(key, n, "a table"));
+        };
+        for (k, v) in entries {
+            if !allowed.contains(&k.as_str()) {
+                let where_ = if key.is_empty() {
+                    "at the top level".to_string()
+                } else {
+                    format!("in [{key}]")
+                };
+                return Err(self.err(
+                    &join_key(key, k),
+                    v.loc,
+                    format!("unknown key {where_}; allowed keys: {}", list(allowed)),
+                ));
+            }
+        }
+        Ok(Tab {
+            key: key.to_string(),
+            loc: n.loc,
+            entries,
+        })
+    }
+
+    fn required<'n>(&self, t: &Tab<'n>, k: &str) -> Res<(String, &'n Node)> {
+        t.get(k).ok_or_else(|| {
+            let what = if t.key.is_empty() {
+                format!("missing required section [{k}]")
+            } else {
+                "missing required key".to_string()
+            };
+            let loc = if t.key.is_empty() {
+                Loc::Unknown
+            } else {
+                t.loc
+            };
+            self.err(&join_key(&t.key, k), loc, what)
+        })
+    }
+
+    fn num(&self, key: &str, n: &Node) -> Res<f64> {
+        let x = match n.kind {
+            Kind::Float(x) => x,
+            Kind::Int(i) => i as f64,
+            _ => return Err(self.type_err(key, n, "a number")),
+        };
+        if !x.is_finite() {
+            return Err(self.err(key, n.loc, format!("must be a finite number, got {x}")));
+        }
+        Ok(x)
+    }
+
+    fn positive(&self, key: &str, n: &Node) -> Res<f64> {
+        let x = self.num(key, n)?;
+        if x > 0.0 {
+            Ok(x)
+        } else {
+            Err(self.err(key, n.loc, format!("must be > 0, got {x}")))
+        }
+    }
+
+    fn string<'n>(&self, key: &str, n: &'n Node) -> Res<&'n str> {
+        match &n.kind {
+            Kind::Str(s) => Ok(s),
+            _ => Err(self.type_err(key, n, "a string")),
+        }
+    }
+
+    fn name(&self, key: &str, n: &Node) -> Res<String> {
+        let s = self.string(key, n)?;
+        if s.trim().is_empty() {
+            Err(self.err(key, n.loc, "must not be empty"))
+        } else {
+            Ok(s.to_string())
+        }
+    }
+
+    fn choice<T: Copy>(&self, key: &str, n: &Node, options: &[(&str, T)]) -> Res<T> {
+        let s = self.string(key, n)?;
+        options
+            .iter()
+            .find(|(name, _)| *name == s)
+            .map(|(_, v)| *v)
+            .ok_or_else(|| {
+                let names: Vec<String> = options.iter().map(|(o, _)| format!("\"{o}\"")).collect();
+                self.err(
+                    key,
+                    n.loc,
+                    format!("unknown value \"{s}\"; allowed: {}", names.join(", ")),
+                )
+            })
+    }
+
+    fn array<'n>(&self, key: &str, n: &'n Node, expected: &str) -> Res<&'n [Node]> {
+        match &n.kind {
+            Kind::Array(v) => Ok(v),
+            _ => Err(self.type_err(key, n, expected)),
+        }
+    }
+
+    fn check_len(&self, key: &str, n: &Node, len: usize) -> Res<()> {
+        if len == 2 || len == 3 {
+            Ok(())
+        } else {
+            Err(self.err(
+                key,
+                n.loc,
+                format!("expected 2 or 3 components (one per dimension), got {len}"),
+            ))
+        }
+    }
+
+    /// A vector of 2 or 3 numbers.
+    fn vector(&self, key: &str, n: &Node) -> Res<Vec<f64>> {
+        let elems = self.array(key, n, "an array of numbers")?;
+        self.check_len(key, n, elems.len())?;
+        elems
+            .iter()
+            .enumerate()
+            .map(|(i, e)| self.num(&join_index(key, i), e))
+            .collect()
+    }
+
+    fn case(&self, root: &Node, output_dir: Option<&Path>) -> Res<Case> {
+        let top = self.table("", root, ROOT_KEYS)?;
+        let mesh = self.mesh(&top)?;
+        let material = self.material(&top)?;
+        let dirichlet = self.dirichlet(&top)?;
+        let neumann = self.neumann(&top)?;
+        let body_force = match top.get("body_force") {
+            None => None,
+            Some((k, n)) => {
+                let t = self.table(&k, n, &["value"])?;
+                let (vk, v) = self.required(&t, "value")?;
+                Some(self.vector(&vk, v)?)
+            }
+        };
+        let solver = self.solver(&top)?;
+        let output = self.output(&top, output_dir)?;
+        let contact = self.contact(&top)?;
+        let newton = self.newton(&top)?;
+        Ok(Case {
+            file: self.file.to_path_buf(),
+            mesh,
+            material,
+            dirichlet,
+            neumann,
+            body_force,
+            solver,
+            output,
+            contact,
+            newton,
+            locs: BTreeMap::new(),
+        })
+    }
+
+    fn mesh(&self, top: &Tab) -> Res<MeshSection> {
+        let (k, n) = self.required(top, "mesh")?;
+        let t = self.table(&k, n, &["file"])?;
+        let (fk, f) = self.required(&t, "file")?;
+        let rel = self.name(&fk, f)?;
+        let dir = self.file.parent().unwrap_or(Path::new(""));
+        Ok(MeshSection {
+            file: dir.join(rel),
+        })
+    }
+
+    fn material(&self, top: &Tab) -> Res<MaterialSection> {
+        let (k, n) = self.required(top, "material")?;
+        let t = self.table(&k, n, &["young", "poisson", "model"])?;
+        let (yk, y) = self.required(&t, "young")?;
+        let young = self.positive(&yk, y)?;
+        let (pk, p) = self.required(&t, "poisson")?;
+        let poisson = self.num(&pk, p)?;
+        if !(poisson > -1.0 && poisson < 0.5) {
+            return Err(self.err(
+                &pk,
+                p.loc,
+                format!("Poisson's ratio must lie in (-1, 0.5), got {poisson}"),
+            ));
+        }
+        let model = match t.get("model") {
+            None => None,
+            Some((mk, m)) => Some(self.choice(
+                &mk,
+                m,
+                &[
+                    ("plane_strain", Model::PlaneStrain),
+                    ("plane_stress", Model::PlaneStress),
+                    ("3d", Model::ThreeD),
+                ],
+            )?),
+        };
+        Ok(MaterialSection {
+            young,
+            poisson,
+            model,
+        })
+    }
+
+    /// Elements of an array of tables (`[[name]]`), each checked against `allowed`.
+    fn tables<'n>(&self, top: &Tab<'n>, name: &str, allowed: &[&str]) -> Res<Vec<Tab<'n>>> {
+        let Some((k, n)) = top.get(name) else {
+            return Ok(Vec::new());
+        };
+        let elems = self.array(&k, n, &format!("an array of tables ([[{name}]])"))?;
+        elems
+            .iter()
+            .enumerate()
+            .map(|(i, e)| self.table(&join_index(&k, i), e, allowed))
+            .collect()
+    }
+
+    fn dirichlet(&self, top: &Tab) -> Res<Vec<Dirichlet>> {
+        let mut out = Vec::new();
+        for t in self.tables(top, "dirichlet", &["group", "value"])? {
+            let (gk, g) = self.required(&t, "group")?;
+            let group = self.name(&gk, g)?;
+            let (vk, v) = self.required(&t, "value")?;
+            let elems = self.array(&vk, v, "an array of numbers or \"free\"")?;
+            self.check_len(&vk, v, elems.len())?;
+            let mut value = Vec::new();
+            for (i, e) in elems.iter().enumerate() {
+                let ek = join_index(&vk, i);
+                value.push(match &e.kind {
+                    Kind::Str(s) if s == "free" => None,
+                    Kind::Str(s) => {
+                        return Err(self.err(
+                            &ek,
+                            e.loc,
+                            format!("expected a number or \"free\", found \"{s}\""),
+                        ))
+                    }
+                    Kind::Int(_) | Kind::Float(_) => Some(self.num(&ek, e)?),
+                    _ => return Err(self.type_err(&ek, e, "a number or \"free\"")),
+                });
+            }
+            out.push(Dirichlet { group, value });
+        }
+        Ok(out)
+    }
+
+    fn neumann(&self, top: &Tab) -> Res<Vec<Neumann>> {
+        let mut out = Vec::new();
+        for t in self.tables(top, "neumann", &["group", "pressure", "traction"])? {
+            let (gk, g) = self.required(&t, "group")?;
+            let group = self.name(&gk, g)?;
+            let load = match (t.get("pressure"), t.get("traction")) {
+                (Some((pk, p)), None) => Load::Pressure(self.num(&pk, p)?),
+                (None, Some((tk, tr))) => Load::Traction(self.vector(&tk, tr)?),
+                (Some((_, p)), Some(_)) => {
+                    return Err(self.err(
+                        &t.key,
+                        p.loc,
+                        "give exactly one of 'pressure' and 'traction', not both",
+                    ))
+                }
+                (None, None) => {
+                    return Err(self.err(
+                        &t.key,
+                        t.loc,
+                        "needs a load: give exactly one of 'pressure' (number) and \
+                         'traction' (vector)",
+                    ))
+                }
+            };
+            out.push(Neumann { group, load });
+        }
+        Ok(out)
+    }
+
+    fn solver(&self, top: &Tab) -> Res<SolverSection> {
+        let mut s = SolverSection::default();
+        let Some((k, n)) = top.get("solver") else {
+            return Ok(s);
+        };
+        let t = self.table(&k, n, &["preset", "petsc_options", "rtol"])?;
+        if let Some((pk, p)) = t.get("preset") {
+            s.preset = self.choice(
+                &pk,
+                p,
+                &[("direct", Preset::Direct), ("iterative", Preset::Iterative)],
+            )?;
+        }
+        if let Some((ok, o)) = t.get("petsc_options") {
+            s.petsc_options = self.string(&ok, o)?.to_string();
+        }
+        if let Some((rk, r)) = t.get("rtol") {
+            s.rtol = self.positive(&rk, r)?;
+            if s.rtol >= 1.0 {
+                return Err(self.err(&rk, r.loc, format!("must be < 1, got {}", s.rtol)));
+            }
+        }
+        Ok(s)
+    }
+
+    fn output(&self, top: &Tab, output_dir: Option<&Path>) -> Res<OutputSection> {
+        let stem = self
+            .file
+            .file_stem()
+            .map_or_else(|| "case".into(), |s| s.to_string_lossy().into_owned());
+        let mut out = OutputSection {
+            dir: Path::new("out").join(stem),
+            fields: DEFAULT_FIELDS.to_vec(),
+        };
+        if let Some((k, n)) = top.get("output") {
+            let t = self.table(&k, n, &["dir", "fields"])?;
+            if let Some((dk, d)) = t.get("dir") {
+                out.dir = PathBuf::from(self.name(&dk, d)?);
+            }
+            if let Some((fk, f)) = t.get("fields") {
+                let elems = self.array(&fk, f, "an array of field names")?;
+                let mut fields = Vec::new();
+                for (i, e) in elems.iter().enumerate() {
+                    let ek = join_index(&fk, i);
+                    let s = self.string(&ek, e)?;
+                    let Some(field) = Field::from_name(s) else {
+                        let names: Vec<&str> = Field::ALL.iter().map(|f| f.name()).collect();
+                        return Err(self.err(
+                            &ek,
+                            e.loc,
+                            format!("unknown field \"{s}\"; allowed: {}", list(&names)),
+                        ));
+                    };
+                    if !fields.contains(&field) {
+                        fields.push(field);
+                    }
+                }
+                out.fields = fields;
+            }
+        }
+        if let Some(d) = output_dir {
+            out.dir = d.to_path_buf();
+        }
+        Ok(out)
+    }
+
+    fn contact(&self, top: &Tab) -> Res<Option<ContactSection>> {
+        let Some((k, n)) = top.get("contact") else {
+            return Ok(None);
+        };
+        let t = self.table(&k, n, &["group", "obstacle", "friction", "rigid_modes"])?;
+        let (gk, g) = self.required(&t, "group")?;
+        let group = self.name(&gk, g)?;
+        let (ok, o) = self.required(&t, "obstacle")?;
+        let obstacle = self.obstacle(&ok, o)?;
+        let friction = match t.get("friction") {
+            None => Friction::None,
+            Some((fk, f)) => self.friction(&fk, f)?,
+        };
+        let rigid_modes = match t.get("rigid_modes") {
+            None => RigidModes::Auto,
+            Some((rk, r)) => self.choice(
+                &rk,
+                r,
+                &[("auto", RigidModes::Auto), ("none", RigidModes::None)],
+            )?,
+        };
+        Ok(Some(ContactSection {
+            group,
+            obstacle,
+            friction,
+            rigid_modes,
+        }))
+    }
+
+    fn obstacle(&self, key: &str, n: &Node) -> Res<Obstacle> {
+        // First read the type, then check the keys that type allows.
+        let t = self.table_any(key, n)?;
+        let (tk, ty) = self.required(&t, "type")?;
+        #[derive(Clone, Copy)]
+        enum Ty {
+            Plane,
+            Sphere,
+        }
+        match self.choice(&tk, ty, &[("plane", Ty::Plane), ("sphere", Ty::Sphere)])? {
+            Ty::Plane => {
+                let t = self.table(key, n, &["type", "point", "normal"])?;
+                let (pk, p) = self.required(&t, "point")?;
+                let point = self.vector(&pk, p)?;
+                let (nk, nn) = self.required(&t, "normal")?;
+                let mut normal = self.vector(&nk, nn)?;
+                if normal.len() != point.len() {
+                    return Err(self.err(
+                        &nk,
+                        nn.loc,
+                        format!(
+                            "has {} components but point has {}",
+                            normal.len(),
+                            point.len()
+                        ),
+                    ));
+                }
+                let norm = normal.iter().map(|x| x * x).sum::<f64>().sqrt();
+                if !(norm > 0.0 && norm.is_finite()) {
+                    return Err(self.err(&nk, nn.loc, "the normal must be a nonzero vector"));
+                }
+                normal.iter_mut().for_each(|x| *x /= norm);
+                Ok(Obstacle::Plane { point, normal })
+            }
+            Ty::Sphere => {
+                let t = self.table(key, n, &["type", "center", "radius"])?;
+                let (ck, c) = self.required(&t, "center")?;
+                let center = self.vector(&ck, c)?;
+                let (rk, r) = self.required(&t, "radius")?;
+                let radius = self.positive(&rk, r)?;
+                Ok(Obstacle::Sphere { center, radius })
+            }
+        }
+    }
+
+    fn friction(&self, key: &str, n: &Node) -> Res<Friction> {
+        match &n.kind {
+            Kind::Str(s) if s == "none" => Ok(Friction::None),
+            Kind::Str(s) if s == "tresca" => Err(self.err(
+                key,
+                n.loc,
+                "Tresca friction needs a threshold: friction = { law = \"tresca\", threshold = ... }",
+            )),
+            Kind::Str(s) => Err(self.err(
+                key,
+                n.loc,
+                format!(
+                    "unknown value \"{s}\"; allowed: \"none\" or {{ law = \"tresca\", threshold = ... }}"
+                ),
+            )),
+            Kind::Table(_) => {
+                let t = self.table(key, n, &["law", "threshold"])?;
+                let (lk, l) = self.required(&t, "law")?;
+                #[derive(Clone, Copy)]
+                enum Law {
+                    None,
+                    Tresca,
+                }
+                match self.choice(&lk, l, &[("none", Law::None), ("tresca", Law::Tresca)])? {
+                    Law::None => {
+                        self.table(key, n, &["law"])?;
+                        Ok(Friction::None)
+                    }
+                    Law::Tresca => {
+                        let (hk, h) = self.required(&t, "threshold")?;
+                        let threshold = self.num(&hk, h)?;
+                        if threshold < 0.0 {
+                            return Err(self.err(
+                                &hk,
+                                h.loc,
+                                format!("must be >= 0, got {threshold}"),
+                            ));
+                        }
+                        Ok(Friction::Tresca { threshold })
+                    }
+                }
+            }
+            _ => Err(self.type_err(key, n, "\"none\" or a table { law = ..., threshold = ... }")),
+        }
+    }
+
+    fn newton(&self, top: &Tab) -> Res<NewtonSection> {
+        let mut s = NewtonSection::default();
+        let Some((k, n)) = top.get("newton") else {
+            return Ok(s);
+        };
+        let t = self.table(&k, n, &["init", "c", "max_steps", "tol_u"])?;
+        if let Some((ik, i)) = t.get("init") {
+            s.init = self.choice(
+                &ik,
+                i,
+                &[
+                    ("auto", NewtonInit::Auto),
+                    ("all_active", NewtonInit::AllActive),
+                    ("all_inactive", NewtonInit::AllInactive),
+                    ("gap", NewtonInit::Gap),
+                ],
+            )?;
+        }
+        if let Some((ck, c)) = t.get("c") {
+            s.c = self.positive(&ck, c)?;
+        }
+        if let Some((mk, m)) = t.get("max_steps") {
+            let Kind::Int(v) = m.kind else {
+                return Err(self.type_err(&mk, m, "an integer"));
+            };
+            if v < 1 {
+                return Err(self.err(&mk, m.loc, format!("must be >= 1, got {v}")));
+            }
+            s.max_steps = usize::try_from(v).unwrap_or(usize::MAX);
+        }
+        if let Some((tk, tol)) = t.get("tol_u") {
+            s.tol_u = self.positive(&tk, tol)?;
+        }
+        Ok(s)
+    }
+}

@@ -1,0 +1,832 @@
+//! Unit tests of the case file: every rejection names the key and its line.
+
+use super::*;
+use std::path::Path;
+
+const FILE: &str = "/cases/plate.toml";
+
+const MINIMAL: &str = r#"[mesh]
+file = "meshes/plate.msh"
+
+[material]
+young = 2.0
+poisson = 0.3
+model = "plane_strain"
+"#;
+
+const FULL: &str = r#"# a full case
+[mesh]
+file = "meshes/plate.msh"
+
+[material]
+young = 210
+poisson = 0.25
+model = "plane_stress"
+
+[[dirichlet]]
+group = "clamp"
+value = [0.0, 0.0]
+
+[[dirichlet]]
+group = "roller"
+value = ["free", -0.5]
+
+[[neumann]]
+group = "load"
+pressure = 0.02
+
+[[neumann]]
+group = "side"
+traction = [1, -0.02]
+
+[body_force]
+value = [0.0, -9.81]
+
+[solver]
+preset = "iterative"
+petsc_options = "-ksp_monitor"
+rtol = 1e-8
+
+[output]
+dir = "out/somewhere"
+fields = ["displacement", "stress", "von_mises", "von_mises_thesis", "rank", "contact", "stress"]
+
+[contact]
+group = "contact"
+obstacle = { type = "plane", point = [0.0, -1.0], normal = [3.0, 4.0] }
+friction = { law = "tresca", threshold = 0.01 }
+rigid_modes = "none"
+
+[newton]
+init = "gap"
+c = 10
+max_steps = 7
+tol_u = 1e-12
+"#;
+
+fn parse(text: &str) -> Result<Case, InputError> {
+    Case::parse(text, Path::new(FILE), &[], None)
+}
+
+fn parse_set(text: &str, sets: &[&str]) -> Result<Case, InputError> {
+    let sets: Vec<String> = sets.iter().map(|s| s.to_string()).collect();
+    Case::parse(text, Path::new(FILE), &sets, None)
+}
+
+/// 1-based line of the first line of `text` that contains `needle` (found independently of
+/// the implementation, by plain text search).
+fn line(text: &str, needle: &str) -> usize {
+    text.lines()
+        .position(|l| l.contains(needle))
+        .unwrap_or_else(|| panic!("test bug: '{needle}' not in text"))
+        + 1
+}
+
+/// Asserts an error with the given key and line; returns it for message checks.
+fn expect_err(text: &str, key: &str, line_needle: &str) -> InputError {
+    let e = parse(text).expect_err("should be rejected");
+    assert_eq!(e.file, Path::new(FILE), "{e}");
+    assert_eq!(e.key.as_deref(), Some(key), "{e}");
+    assert_eq!(e.line, Some(line(text, line_needle)), "{e}");
+    let shown = e.to_string();
+    assert!(shown.contains(key), "{shown}");
+    assert!(!shown.contains('\n'), "one line: {shown}");
+    e
+}
+
+fn with(extra: &str) -> String {
+    format!("{MINIMAL}{extra}")
+}
+
+fn replace(text: &str, from: &str, to: &str) -> String {
+    assert!(text.contains(from), "test bug: '{from}'");
+    text.replacen(from, to, 1)
+}
+
+#[test]
+fn full_file_round_trip() {
+    let c = parse(FULL).unwrap();
+    assert_eq!(c.file, Path::new(FILE));
+    assert_eq!(c.mesh.file, Path::new("/cases/meshes/plate.msh"));
+    assert_eq!(c.material.young, 210.0);
+    assert_eq!(c.material.poisson, 0.25);
+    assert_eq!(c.material.model, Some(Model::PlaneStress));
+    assert_eq!(
+        c.dirichlet,
+        vec![
+            Dirichlet {
+                group: "clamp".into(),
+                value: vec![Some(0.0), Some(0.0)]
+            },
+            Dirichlet {
+                group: "roller".into(),
+                value: vec![None, Some(-0.5)]
+            },
+        ]
+    );
+    assert_eq!(
+        c.neumann,
+        vec![
+            Neumann {
+                group: "load".into(),
+                load: Load::Pressure(0.02)
+            },
+            Neumann {
+                group: "side".into(),
+                load: Load::Traction(vec![1.0, -0.02])
+            },
+        ]
+    );
+    assert_eq!(c.body_force, Some(vec![0.0, -9.81]));
+    assert_eq!(c.solver.preset, Preset::Iterative);
+    assert_eq!(c.solver.petsc_options, "-ksp_monitor");
+    assert_eq!(c.solver.rtol, 1e-8);
+    assert_eq!(c.output.dir, Path::new("out/somewhere"));
+    // Duplicates dropped, order kept.
+    assert_eq!(c.output.fields, Field::ALL.to_vec());
+    assert!(c.output.wants(Field::Rank));
+    let contact = c.contact.as_ref().unwrap();
+    assert_eq!(contact.group, "contact");
+    match &contact.obstacle {
+        Obstacle::Plane { point, normal } => {
+            assert_eq!(point, &vec![0.0, -1.0]);
+            assert!((normal[0] - 0.6).abs() < 1e-15 && (normal[1] - 0.8).abs() < 1e-15);
+        }
+        o => panic!("{o:?}"),
+    }
+    assert_eq!(contact.friction, Friction::Tresca { threshold: 0.01 });
+    assert_eq!(contact.rigid_modes, RigidModes::None);
+    assert_eq!(c.newton.init, NewtonInit::Gap);
+    assert_eq!(c.newton.c, 10.0);
+    assert_eq!(c.newton.max_steps, 7);
+    assert_eq!(c.newton.tol_u, 1e-12);
+    // Lines of keys are remembered.
+    assert_eq!(
+        c.line_of("dirichlet[1].value"),
+        Some(line(FULL, "\"free\""))
+    );
+    assert_eq!(
+        c.line_of("contact.group"),
+        Some(line(FULL, "group = \"contact\""))
+    );
+    assert_eq!(c.model(2).unwrap(), Model::PlaneStress);
+}
+
+#[test]
+fn minimal_file_gets_defaults() {
+    let c = parse(MINIMAL).unwrap();
+    assert!(c.dirichlet.is_empty() && c.neumann.is_empty());
+    assert_eq!(c.body_force, None);
+    assert_eq!(c.solver, SolverSection::default());
+    assert_eq!(c.solver.preset, Preset::Direct);
+    assert_eq!(c.solver.petsc_options, "");
+    assert_eq!(c.solver.rtol, 1e-10);
+    assert_eq!(c.output.dir, Path::new("out/plate"));
+    assert_eq!(
+        c.output.fields,
+        vec![Field::Displacement, Field::VonMises, Field::Contact]
+    );
+    assert!(!c.output.wants(Field::Stress));
+    assert_eq!(c.contact, None);
+    assert_eq!(c.newton.init, NewtonInit::Auto);
+    assert_eq!(c.newton.c, 1.0);
+    assert_eq!(c.newton.max_steps, 100);
+    assert_eq!(c.newton.tol_u, 1e-10);
+}
+
+#[test]
+fn contact_defaults_and_sphere() {
+    let c = parse(&with(
+        "[contact]\ngroup = \"c\"\n[contact.obstacle]\ntype = \"sphere\"\ncenter = [0, 1.5, 0]\nradius = 0.5\n",
+    ))
+    .unwrap();
+    let k = c.contact.unwrap();
+    assert_eq!(k.friction, Friction::None);
+    assert_eq!(k.rigid_modes, RigidModes::Auto);
+    assert_eq!(
+        k.obstacle,
+        Obstacle::Sphere {
+            center: vec![0.0, 1.5, 0.0],
+            radius: 0.5
+        }
+    );
+    let c = parse(&with(
+        "[contact]\ngroup = \"c\"\nobstacle = { type = \"plane\", point = [0, 0], normal = [0, -2] }\nfriction = \"none\"\n",
+    ))
+    .unwrap();
+    assert_eq!(c.contact.unwrap().friction, Friction::None);
+}
+
+#[test]
+fn reject_syntax_error_with_line() {
+    let text = with("[newton]\nc = = 3\n");
+    let e = parse(&text).unwrap_err();
+    assert_eq!(e.line, Some(line(&text, "c = = 3")), "{e}");
+    assert!(e.message.contains("syntax"), "{e}");
+    assert!(!e.to_string().contains('\n'), "{e}");
+}
+
+#[test]
+fn reject_duplicate_key_as_syntax_error() {
+    let text = replace(MINIMAL, "poisson = 0.3", "poisson = 0.3\npoisson = 0.2");
+    let e = parse(&text).unwrap_err();
+    assert_eq!(e.line, Some(line(&text, "poisson = 0.2")), "{e}");
+}
+
+#[test]
+fn reject_unknown_top_level_key() {
+    let e = expect_err(&with("[solvr]\npreset = \"direct\"\n"), "solvr", "[solvr]");
+    assert!(
+        e.message.contains("allowed keys") && e.message.contains("solver"),
+        "{e}"
+    );
+}
+
+#[test]
+fn reject_unknown_key_in_section() {
+    let e = expect_err(
+        &replace(MINIMAL, "young", "youngs"),
+        "material.youngs",
+        "youngs",
+    );
+    assert!(e.message.contains("young, poisson, model"), "{e}");
+}
+
+#[test]
+fn reject_unknown_key_in_array_of_tables() {
+    let text = with("[[dirichlet]]\ngroup = \"a\"\nvalue = [0, 0]\n\n[[dirichlet]]\ngroup = \"b\"\nvalues = [0, 0]\n");
+    expect_err(&text, "dirichlet[1].values", "values");
+}
+
+#[test]
+fn reject_wrong_types() {
+    let e = expect_err(
+        &replace(MINIMAL, "2.0", "\"two\""),
+        "material.young",
+        "young",
+    );
+    assert!(
+        e.message.contains("number") && e.message.contains("string"),
+        "{e}"
+    );
+    expect_err(
+        &with("[newton]\nmax_steps = 1.5\n"),
+        "newton.max_steps",
+        "max_steps",
+    );
+    expect_err(
+        &replace(MINIMAL, "\"meshes/plate.msh\"", "3"),
+        "mesh.file",
+        "file",
+    );
+    expect_err(
+        &with("[dirichlet]\ngroup = \"a\"\n"),
+        "dirichlet",
+        "[dirichlet]",
+    );
+    expect_err(
+        &with("[output]\nfields = \"stress\"\n"),
+        "output.fields",
+        "fields",
+    );
+    expect_err(
+        &with("[solver]\npetsc_options = 1\n"),
+        "solver.petsc_options",
+        "petsc",
+    );
+    expect_err(
+        &replace(MINIMAL, "[mesh]\nfile = \"meshes/plate.msh\"", "mesh = 1"),
+        "mesh",
+        "mesh = 1",
+    );
+}
+
+#[test]
+fn reject_missing_required_key_at_section_line() {
+    let text = replace(MINIMAL, "young = 2.0\n", "");
+    let e = expect_err(&text, "material.young", "[material]");
+    assert!(e.message.contains("missing"), "{e}");
+    let text = with("[[neumann]]\npressure = 1.0\n");
+    expect_err(&text, "neumann[0].group", "[[neumann]]");
+    let text = with("[contact]\ngroup = \"c\"\n");
+    expect_err(&text, "contact.obstacle", "[contact]");
+}
+
+#[test]
+fn reject_missing_section() {
+    let text = MINIMAL.replace("[mesh]\nfile = \"meshes/plate.msh\"\n", "");
+    let e = parse(&text).unwrap_err();
+    assert_eq!(e.key.as_deref(), Some("mesh"), "{e}");
+    assert!(e.message.contains("[mesh]"), "{e}");
+}
+
+#[test]
+fn reject_non_positive_young() {
+    for bad in ["0.0", "-1", "-0.5e3"] {
+        let e = expect_err(
+            &replace(MINIMAL, "young = 2.0", &format!("young = {bad}")),
+            "material.young",
+            "young",
+        );
+        assert!(e.message.contains("> 0"), "{e}");
+    }
+}
+
+#[test]
+fn reject_poisson_out_of_range() {
+    for bad in ["0.5", "-1", "0.7", "-3.0", "nan"] {
+        expect_err(
+            &replace(MINIMAL, "poisson = 0.3", &format!("poisson = {bad}")),
+            "material.poisson",
+            "poisson",
+        );
+    }
+    for good in ["0.49", "-0.99", "0"] {
+        assert!(parse(&replace(
+            MINIMAL,
+            "poisson = 0.3",
+            &format!("poisson = {good}")
+        ))
+        .is_ok());
+    }
+}
+
+#[test]
+fn reject_unknown_model() {
+    let e = expect_err(
+        &replace(MINIMAL, "plane_strain", "axisymmetric"),
+        "material.model",
+        "model",
+    );
+    assert!(e.message.contains("plane_stress"), "{e}");
+}
+
+#[test]
+fn reject_pressure_and_traction_both() {
+    let text = with("[[neumann]]\ngroup = \"l\"\npressure = 1.0\ntraction = [0, 1]\n");
+    let e = expect_err(&text, "neumann[0]", "pressure");
+    assert!(e.message.contains("exactly one"), "{e}");
+}
+
+#[test]
+fn reject_pressure_and_traction_neither() {
+    let text = with("[[neumann]]\ngroup = \"a\"\npressure = 1\n\n[[neumann]]\ngroup = \"l\"\n");
+    let e = parse(&text).unwrap_err();
+    assert_eq!(e.key.as_deref(), Some("neumann[1]"), "{e}");
+    // The second [[neumann]] header.
+    let second = text
+        .lines()
+        .enumerate()
+        .filter(|(_, l)| *l == "[[neumann]]")
+        .nth(1)
+        .unwrap()
+        .0
+        + 1;
+    assert_eq!(e.line, Some(second), "{e}");
+}
+
+#[test]
+fn reject_bad_vectors() {
+    let text = with("[[dirichlet]]\ngroup = \"a\"\nvalue = [0, 0]\n\n[[dirichlet]]\ngroup = \"b\"\nvalue = [0, 0, 0, 0]\n");
+    let e = expect_err(&text, "dirichlet[1].value", "[0, 0, 0, 0]");
+    assert!(e.message.contains("2 or 3"), "{e}");
+    expect_err(
+        &with("[[dirichlet]]\ngroup = \"a\"\nvalue = [0, \"fixed\"]\n"),
+        "dirichlet[0].value[1]",
+        "fixed",
+    );
+    expect_err(
+        &with("[[dirichlet]]\ngroup = \"a\"\nvalue = [0, true]\n"),
+        "dirichlet[0].value[1]",
+        "true",
+    );
+    expect_err(
+        &with("[body_force]\nvalue = [0, \"x\"]\n"),
+        "body_force.value[1]",
+        "value",
+    );
+    expect_err(
+        &with("[body_force]\nvalue = [1]\n"),
+        "body_force.value",
+        "value",
+    );
+    expect_err(
+        &with("[body_force]\nvalue = [0, inf]\n"),
+        "body_force.value[1]",
+        "value",
+    );
+    expect_err(
+        &with("[[neumann]]\ngroup = \"l\"\ntraction = 1.0\n"),
+        "neumann[0].traction",
+        "traction",
+    );
+    expect_err(
+        &with("[[dirichlet]]\ngroup = \"\"\nvalue = [0, 0]\n"),
+        "dirichlet[0].group",
+        "group",
+    );
+}
+
+#[test]
+fn reject_unknown_field() {
+    let e = expect_err(
+        &with("[output]\nfields = [\"displacement\", \"strain\"]\n"),
+        "output.fields[1]",
+        "fields",
+    );
+    assert!(e.message.contains("von_mises_thesis"), "{e}");
+}
+
+#[test]
+fn reject_unknown_preset() {
+    let e = expect_err(
+        &with("[solver]\npreset = \"lu\"\n"),
+        "solver.preset",
+        "preset",
+    );
+    assert!(e.message.contains("\"direct\", \"iterative\""), "{e}");
+    expect_err(&with("[solver]\nrtol = 0\n"), "solver.rtol", "rtol");
+    expect_err(&with("[solver]\nrtol = 2\n"), "solver.rtol", "rtol");
+}
+
+#[test]
+fn reject_unknown_obstacle_type() {
+    let text = with("[contact]\ngroup = \"c\"\nobstacle = { type = \"cone\", point = [0, 0] }\n");
+    let e = expect_err(&text, "contact.obstacle.type", "obstacle");
+    assert!(e.message.contains("\"plane\", \"sphere\""), "{e}");
+}
+
+#[test]
+fn reject_bad_obstacles() {
+    let c = "[contact]\ngroup = \"c\"\n";
+    expect_err(
+        &with(&format!(
+            "{c}obstacle = {{ type = \"plane\", point = [0, 0], normal = [0, 0] }}\n"
+        )),
+        "contact.obstacle.normal",
+        "obstacle",
+    );
+    expect_err(
+        &with(&format!(
+            "{c}obstacle = {{ type = \"plane\", point = [0, 0], normal = [0, 0, 1] }}\n"
+        )),
+        "contact.obstacle.normal",
+        "obstacle",
+    );
+    expect_err(
+        &with(&format!(
+            "{c}obstacle = {{ type = \"plane\", point = [0, 0], normal = [0, 1], radius = 1 }}\n"
+        )),
+        "contact.obstacle.radius",
+        "obstacle",
+    );
+    expect_err(
+        &with(&format!(
+            "{c}[contact.obstacle]\ntype = \"sphere\"\ncenter = [0, 0]\nradius = 0\n"
+        )),
+        "contact.obstacle.radius",
+        "radius",
+    );
+    expect_err(
+        &with(&format!(
+            "{c}[contact.obstacle]\ncenter = [0, 0]\nradius = 1\n"
+        )),
+        "contact.obstacle.type",
+        "[contact.obstacle]",
+    );
+    expect_err(
+        &with(&format!("{c}obstacle = \"plane\"\n")),
+        "contact.obstacle",
+        "obstacle",
+    );
+}
+
+#[test]
+fn reject_negative_threshold() {
+    let text = with(
+        "[contact]\ngroup = \"c\"\nobstacle = { type = \"plane\", point = [0, 0], normal = [0, 1] }\n\
+         friction = { law = \"tresca\", threshold = -0.1 }\n",
+    );
+    let e = expect_err(&text, "contact.friction.threshold", "friction");
+    assert!(e.message.contains(">= 0"), "{e}");
+}
+
+#[test]
+fn reject_bad_friction_and_rigid_modes() {
+    let c = "[contact]\ngroup = \"c\"\nobstacle = { type = \"plane\", point = [0, 0], normal = [0, 1] }\n";
+    expect_err(
+        &with(&format!("{c}friction = \"tresca\"\n")),
+        "contact.friction",
+        "friction",
+    );
+    expect_err(
+        &with(&format!("{c}friction = \"coulomb\"\n")),
+        "contact.friction",
+        "friction",
+    );
+    expect_err(
+        &with(&format!(
+            "{c}friction = {{ law = \"coulomb\", threshold = 1 }}\n"
+        )),
+        "contact.friction.law",
+        "friction",
+    );
+    expect_err(
+        &with(&format!("{c}friction = {{ law = \"tresca\" }}\n")),
+        "contact.friction.threshold",
+        "friction",
+    );
+    expect_err(
+        &with(&format!(
+            "{c}friction = {{ law = \"tresca\", threshold = 1, mu = 0.3 }}\n"
+        )),
+        "contact.friction.mu",
+        "friction",
+    );
+    expect_err(
+        &with(&format!("{c}rigid_modes = \"yes\"\n")),
+        "contact.rigid_modes",
+        "rigid",
+    );
+}
+
+#[test]
+fn reject_non_positive_c() {
+    for bad in ["0", "-1.0"] {
+        let e = expect_err(&with(&format!("[newton]\nc = {bad}\n")), "newton.c", "c =");
+        assert!(e.message.contains("> 0"), "{e}");
+    }
+}
+
+#[test]
+fn reject_bad_newton_settings() {
+    expect_err(
+        &with("[newton]\nmax_steps = 0\n"),
+        "newton.max_steps",
+        "max_steps",
+    );
+    expect_err(
+        &with("[newton]\nmax_steps = -4\n"),
+        "newton.max_steps",
+        "max_steps",
+    );
+    expect_err(&with("[newton]\ntol_u = 0.0\n"), "newton.tol_u", "tol_u");
+    let e = expect_err(
+        &with("[newton]\ninit = \"active\"\n"),
+        "newton.init",
+        "init",
+    );
+    assert!(e.message.contains("all_active"), "{e}");
+}
+
+#[test]
+fn missing_case_file_is_input_error() {
+    let p = Path::new("/nonexistent/dir/case.toml");
+    let e = Case::load(p, &[], None).unwrap_err();
+    assert_eq!(e.file, p);
+    assert!(e.message.contains("cannot read"), "{e}");
+}
+
+#[test]
+fn load_from_disk_resolves_paths() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("beam.toml");
+    std::fs::write(&path, MINIMAL).unwrap();
+    let c = Case::load(&path, &[], None).unwrap();
+    assert_eq!(c.mesh.file, dir.path().join("meshes/plate.msh"));
+    assert_eq!(c.output.dir, Path::new("out/beam"));
+    let c = Case::load(&path, &[], Some(Path::new("elsewhere"))).unwrap();
+    assert_eq!(c.output.dir, Path::new("elsewhere"));
+}
+
+#[test]
+fn overrides_apply() {
+    let c = parse_set(
+        FULL,
+        &[
+            "mesh.file=fine.msh",
+            "newton.c=25",
+            "output.fields=[\"displacement\"]",
+            "dirichlet.0.group=clamp2",
+            "dirichlet.1.value.0 = 0.1",
+            "material.model = \"plane_strain\"",
+            "contact.obstacle.normal=[0, -1]",
+            "solver.petsc_options=-pc_type lu -ksp_type preonly",
+        ],
+    )
+    .unwrap();
+    assert_eq!(c.mesh.file, Path::new("/cases/fine.msh"));
+    assert_eq!(c.newton.c, 25.0);
+    assert_eq!(c.newton.max_steps, 7, "other keys untouched");
+    assert_eq!(c.output.fields, vec![Field::Displacement]);
+    assert_eq!(c.dirichlet[0].group, "clamp2");
+    assert_eq!(c.dirichlet[1].value, vec![Some(0.1), Some(-0.5)]);
+    assert_eq!(c.material.model, Some(Model::PlaneStrain));
+    match &c.contact.as_ref().unwrap().obstacle {
+        Obstacle::Plane { normal, .. } => assert_eq!(normal, &vec![0.0, -1.0]),
+        o => panic!("{o:?}"),
+    }
+    assert_eq!(c.solver.petsc_options, "-pc_type lu -ksp_type preonly");
+    // A key set from the command line has no line.
+    assert_eq!(c.line_of("newton.c"), None);
+    assert_eq!(c.line_of("newton.max_steps"), Some(line(FULL, "max_steps")));
+}
+
+#[test]
+fn overrides_create_sections_and_entries() {
+    let c = parse_set(
+        MINIMAL,
+        &[
+            "newton.c=10",
+            "newton.init=all_active",
+            "dirichlet.0.group=clamp",
+            "dirichlet.0.value=[0, \"free\"]",
+            "contact.group=c",
+            "contact.obstacle={type=\"sphere\", center=[0, 2], radius=1}",
+        ],
+    )
+    .unwrap();
+    assert_eq!(c.newton.c, 10.0);
+    assert_eq!(c.newton.init, NewtonInit::AllActive);
+    assert_eq!(
+        c.dirichlet,
+        vec![Dirichlet {
+            group: "clamp".into(),
+            value: vec![Some(0.0), None]
+        }]
+    );
+    assert_eq!(
+        c.contact.unwrap().obstacle,
+        Obstacle::Sphere {
+            center: vec![0.0, 2.0],
+            radius: 1.0
+        }
+    );
+    let o = Case::parse(
+        MINIMAL,
+        Path::new(FILE),
+        &["output.dir=a/b".to_string()],
+        Some(Path::new("c/d")),
+    )
+    .unwrap();
+    assert_eq!(o.output.dir, Path::new("c/d"), "-o wins over output.dir");
+}
+
+#[test]
+fn override_unknown_key_rejected() {
+    let e = parse_set(MINIMAL, &["newton.cc=10"]).unwrap_err();
+    assert_eq!(e.key.as_deref(), Some("newton.cc"), "{e}");
+    assert_eq!(e.line, None);
+    assert!(e.message.contains("(from --set)"), "{e}");
+    assert!(e.message.contains("init, c, max_steps, tol_u"), "{e}");
+}
+
+#[test]
+fn override_type_mismatch_rejected() {
+    let e = parse_set(MINIMAL, &["newton.max_steps=many"]).unwrap_err();
+    assert_eq!(e.key.as_deref(), Some("newton.max_steps"), "{e}");
+    assert!(
+        e.message.contains("integer") && e.message.contains("string"),
+        "{e}"
+    );
+    assert!(e.message.contains("(from --set)"), "{e}");
+    let e = parse_set(MINIMAL, &["material.young=-3"]).unwrap_err();
+    assert_eq!(e.key.as_deref(), Some("material.young"), "{e}");
+    assert!(e.to_string().contains("(from --set)"), "{e}");
+}
+
+#[test]
+fn malformed_overrides_rejected() {
+    for (spec, key) in [
+        ("newton.c", "newton.c"),
+        ("newton..c=1", "newton..c"),
+        ("mesh.file.x=1", "mesh.file"),
+        ("dirichlet.3.group=x", "dirichlet[3]"),
+        ("dirichlet.first.group=x", "dirichlet"),
+    ] {
+        let e = parse_set(FULL, &[spec]).unwrap_err();
+        assert_eq!(e.key.as_deref(), Some(key), "{spec}: {e}");
+        assert!(e.message.contains("(from --set)"), "{e}");
+        assert_eq!(e.line, None);
+    }
+}
+
+fn groups(list: &[(&str, usize)]) -> Vec<(String, usize)> {
+    list.iter().map(|(n, d)| (n.to_string(), *d)).collect()
+}
+
+#[test]
+fn check_against_mesh_accepts_matching_mesh() {
+    let c = parse(FULL).unwrap();
+    let g = groups(&[
+        ("clamp", 1),
+        ("roller", 0),
+        ("load", 1),
+        ("side", 1),
+        ("contact", 1),
+        ("body", 2),
+    ]);
+    c.check_against_mesh(2, &g).unwrap();
+}
+
+#[test]
+fn check_against_mesh_unknown_group_lists_names() {
+    let c = parse(FULL).unwrap();
+    let g = groups(&[
+        ("clamp", 1),
+        ("load", 1),
+        ("side", 1),
+        ("contact", 1),
+        ("body", 2),
+    ]);
+    let e = c.check_against_mesh(2, &g).unwrap_err();
+    assert_eq!(e.key.as_deref(), Some("dirichlet[1].group"), "{e}");
+    assert_eq!(e.line, Some(line(FULL, "\"roller\"")));
+    for name in [
+        "\"clamp\"",
+        "\"load\"",
+        "\"side\"",
+        "\"contact\"",
+        "\"body\"",
+    ] {
+        assert!(e.message.contains(name), "{e}");
+    }
+    let e = c.check_against_mesh(2, &[]).unwrap_err();
+    assert!(e.message.contains("no named physical groups"), "{e}");
+}
+
+#[test]
+fn check_against_mesh_needs_boundary_groups() {
+    let c = parse(FULL).unwrap();
+    let g = groups(&[
+        ("clamp", 1),
+        ("roller", 0),
+        ("load", 1),
+        ("side", 2),
+        ("contact", 1),
+    ]);
+    let e = c.check_against_mesh(2, &g).unwrap_err();
+    assert_eq!(e.key.as_deref(), Some("neumann[1].group"), "{e}");
+    assert!(e.message.contains("boundary"), "{e}");
+    let g = groups(&[
+        ("clamp", 1),
+        ("roller", 0),
+        ("load", 1),
+        ("side", 1),
+        ("contact", 0),
+    ]);
+    let e = c.check_against_mesh(2, &g).unwrap_err();
+    assert_eq!(e.key.as_deref(), Some("contact.group"), "{e}");
+    assert_eq!(e.line, Some(line(FULL, "group = \"contact\"")));
+}
+
+#[test]
+fn check_against_mesh_wrong_vector_length() {
+    // 3D case (model omitted) with a 2-component Dirichlet value.
+    let text = replace(MINIMAL, "model = \"plane_strain\"\n", "")
+        + "[[dirichlet]]\ngroup = \"clamp\"\nvalue = [0, 0]\n";
+    let c = parse(&text).unwrap();
+    let g = groups(&[("clamp", 2)]);
+    let e = c.check_against_mesh(3, &g).unwrap_err();
+    assert_eq!(e.key.as_deref(), Some("dirichlet[0].value"), "{e}");
+    assert_eq!(e.line, Some(line(&text, "value = [0, 0]")));
+    // Obstacle and body force lengths, in 2D.
+    let c = parse(&with("[body_force]\nvalue = [0, 0, 1]\n")).unwrap();
+    let e = c.check_against_mesh(2, &[]).unwrap_err();
+    assert_eq!(e.key.as_deref(), Some("body_force.value"), "{e}");
+    let c = parse(&with(
+        "[contact]\ngroup = \"c\"\nobstacle = { type = \"sphere\", center = [0, 0, 1], radius = 1 }\n",
+    ))
+    .unwrap();
+    let e = c.check_against_mesh(2, &groups(&[("c", 1)])).unwrap_err();
+    assert_eq!(e.key.as_deref(), Some("contact.obstacle.center"), "{e}");
+    let c = parse(&with("[[neumann]]\ngroup = \"l\"\ntraction = [0, 0, 1]\n")).unwrap();
+    let e = c.check_against_mesh(2, &groups(&[("l", 1)])).unwrap_err();
+    assert_eq!(e.key.as_deref(), Some("neumann[0].traction"), "{e}");
+}
+
+#[test]
+fn model_against_dimension() {
+    let c = parse(MINIMAL).unwrap();
+    assert_eq!(c.model(2).unwrap(), Model::PlaneStrain);
+    let e = c.check_against_mesh(3, &[]).unwrap_err();
+    assert_eq!(e.key.as_deref(), Some("material.model"), "{e}");
+    assert_eq!(e.line, Some(line(MINIMAL, "model")));
+    let e = c.model(1).unwrap_err();
+    assert!(e.message.contains("dimension 1"), "{e}");
+
+    let no_model = replace(MINIMAL, "model = \"plane_strain\"\n", "");
+    let c = parse(&no_model).unwrap();
+    assert_eq!(c.model(3).unwrap(), Model::ThreeD);
+    let e = c.check_against_mesh(2, &[]).unwrap_err();
+    assert_eq!(e.key.as_deref(), Some("material"), "{e}");
+    assert_eq!(e.line, Some(line(&no_model, "[material]")));
+    assert!(e.message.contains("plane_strain"), "{e}");
+
+    let three = replace(MINIMAL, "plane_strain", "3d");
+    let c = parse(&three).unwrap();
+    assert_eq!(c.model(3).unwrap(), Model::ThreeD);
+    let e = c.model(2).unwrap_err();
+    assert_eq!(e.key.as_deref(), Some("material.model"), "{e}");
+    assert!(e.message.contains("2D"), "{e}");
+}

@@ -27,3 +27,527 @@
 //! }
 //! pub fn read_msh(path: &Path) -> Result<Mesh, crate::error::InputError>;
 //! ```
+//!
+//! Details:
+//! - The mesh dimension is the highest dimension of the elements in the file. Body cells
+//!   are 3-node triangles (2D) or 4-node tetrahedra (3D); boundary elements are 2-node
+//!   lines (facets in 2D, `edges` in 3D), 3-node triangles (facets in 3D) and points.
+//!   Any other element type is refused.
+//! - Only nodes used by body cells are kept, renumbered 0.. in gmsh order.
+//! - Cells are positively oriented (inverted ones get two nodes swapped); cells of zero
+//!   (or nearly zero) measure are refused.
+//! - Groups come from the entities' physical tags, sorted by (dim, tag); unnamed physical
+//!   groups get their tag as name. Element indices of a group are ascending.
+//! - In 2D, z must be constant; it is set to 0.
+
+mod raw;
+#[cfg(test)]
+mod tests;
+
+use std::collections::HashMap;
+use std::path::Path;
+
+use mshio::ElementType;
+
+use crate::error::InputError;
+
+/// A physical group: its elements are indices into `cells` (dim = mesh dim), `facets`
+/// (dim = mesh dim − 1), `edges` (dim 1 of a 3D mesh) or `points` (dim 0).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Group {
+    pub name: String,
+    pub dim: usize,
+    pub tag: i32,
+    pub elements: Vec<usize>,
+}
+
+/// A P1 simplex mesh with its boundary elements and physical groups.
+#[derive(Debug, Clone, Default)]
+pub struct Mesh {
+    pub dim: usize,
+    pub coords: Vec<[f64; 3]>,
+    pub node_tags: Vec<u64>,
+    pub cells: Vec<usize>,
+    pub cell_tags: Vec<u64>,
+    pub facets: Vec<usize>,
+    pub facet_tags: Vec<u64>,
+    pub edges: Vec<usize>,
+    pub edge_tags: Vec<u64>,
+    pub points: Vec<usize>,
+    pub point_tags: Vec<u64>,
+    pub groups: Vec<Group>,
+}
+
+impl Mesh {
+    pub fn nodes_per_cell(&self) -> usize {
+        self.dim + 1
+    }
+    pub fn nodes_per_facet(&self) -> usize {
+        self.dim
+    }
+    pub fn n_nodes(&self) -> usize {
+        self.coords.len()
+    }
+    pub fn n_cells(&self) -> usize {
+        self.cell_tags.len()
+    }
+    pub fn n_facets(&self) -> usize {
+        self.facet_tags.len()
+    }
+    pub fn cell(&self, c: usize) -> &[usize] {
+        let k = self.nodes_per_cell();
+        &self.cells[c * k..(c + 1) * k]
+    }
+    pub fn facet(&self, f: usize) -> &[usize] {
+        let k = self.dim;
+        &self.facets[f * k..(f + 1) * k]
+    }
+    pub fn edge(&self, e: usize) -> &[usize] {
+        &self.edges[2 * e..2 * e + 2]
+    }
+    /// First group with this name (any dimension; see [`Mesh::group_dim`] if a name is
+    /// used in several dimensions).
+    pub fn group(&self, name: &str) -> Option<&Group> {
+        self.groups.iter().find(|g| g.name == name)
+    }
+    /// The group with this name and dimension.
+    pub fn group_dim(&self, name: &str, dim: usize) -> Option<&Group> {
+        self.groups.iter().find(|g| g.name == name && g.dim == dim)
+    }
+    /// Names of all groups (in group order), for error messages.
+    pub fn group_names(&self) -> Vec<String> {
+        self.groups.iter().map(|g| g.name.clone()).collect()
+    }
+    /// Sorted, unique node indices of the elements of `g`.
+    pub fn group_nodes(&self, g: &Group) -> Vec<usize> {
+        let mut nodes = Vec::new();
+        for &e in &g.elements {
+            nodes.extend_from_slice(self.element_nodes(g.dim, e));
+        }
+        nodes.sort_unstable();
+        nodes.dedup();
+        nodes
+    }
+    /// Node indices of element `e` of dimension `dim` (cell, facet, edge or point).
+    pub fn element_nodes(&self, dim: usize, e: usize) -> &[usize] {
+        if dim == self.dim {
+            self.cell(e)
+        } else if dim + 1 == self.dim {
+            self.facet(e)
+        } else if dim == 1 {
+            self.edge(e)
+        } else {
+            &self.points[e..e + 1]
+        }
+    }
+    /// Signed area (2D) or volume (3D) of cell `c`; positive for every cell after reading.
+    pub fn cell_measure(&self, c: usize) -> f64 {
+        let p: Vec<[f64; 3]> = self.cell(c).iter().map(|&n| self.coords[n]).collect();
+        signed_measure(self.dim, &p).0
+    }
+}
+
+fn sub(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
+    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
+}
+
+fn norm2(a: [f64; 3]) -> f64 {
+    a[0] * a[0] + a[1] * a[1] + a[2] * a[2]
+}
+
+/// Signed measure of a simplex and its longest edge length.
+fn signed_measure(dim: usize, p: &[[f64; 3]]) -> (f64, f64) {
+    let mut h2: f64 = 0.0;
+    for i in 0..p.len() {
+        for j in i + 1..p.len() {
+            h2 = h2.max(norm2(sub(p[j], p[i])));
+        }
+    }
+    let a = sub(p[1], p[0]);
+    let b = sub(p[2], p[0]);
+    let m = if dim == 2 {
+        0.5 * (a[0] * b[1] - a[1] * b[0])
+    } else {
+        let c = sub(p[3], p[0]);
+        (a[0] * (b[1] * c[2] - b[2] * c[1]) - a[1] * (b[0] * c[2] - b[2] * c[0])
+            + a[2] * (b[0] * c[1] - b[1] * c[0]))
+            / 6.0
+    };
+    (m, h2.sqrt())
+}
+
+const HINT_MSH41: &str =
+    "save the mesh as MSH 4.1 (gmsh ... -format msh41, or Mesh.MshFileVersion = 4.1;)";
+
+/// Node tag → node index, dense table when the tags allow it.
+enum TagIndex {
+    Dense { min: u64, index: Vec<usize> },
+    Sparse(HashMap<u64, usize>),
+}
+
+impl TagIndex {
+    fn new(tags: &[u64]) -> Self {
+        let (min, max) = tags
+            .iter()
+            .fold((u64::MAX, 0u64), |(lo, hi), &t| (lo.min(t), hi.max(t)));
+        if tags.is_empty() {
+            return TagIndex::Dense {
+                min: 0,
+                index: Vec::new(),
+            };
+        }
+        let span = max - min;
+        if span <= 4 * tags.len() as u64 + 1024 {
+            let mut index = vec![usize::MAX; span as usize + 1];
+            for (i, &t) in tags.iter().enumerate() {
+                index[(t - min) as usize] = i;
+            }
+            TagIndex::Dense { min, index }
+        } else {
+            TagIndex::Sparse(tags.iter().enumerate().map(|(i, &t)| (t, i)).collect())
+        }
+    }
+    fn get(&self, tag: u64) -> Option<usize> {
+        match self {
+            TagIndex::Dense { min, index } => {
+                let k = tag.checked_sub(*min)?;
+                index
+                    .get(usize::try_from(k).ok()?)
+                    .copied()
+                    .filter(|&i| i != usize::MAX)
+            }
+            TagIndex::Sparse(m) => m.get(&tag).copied(),
+        }
+    }
+}
+
+/// Kind of a supported element type: its dimension.
+fn element_dim(t: ElementType) -> Option<usize> {
+    match t {
+        ElementType::Pnt => Some(0),
+        ElementType::Lin2 => Some(1),
+        ElementType::Tri3 => Some(2),
+        ElementType::Tet4 => Some(3),
+        _ => None,
+    }
+}
+
+fn entity_word(dim: usize) -> &'static str {
+    ["Point", "Curve", "Surface", "Volume"][dim.min(3)]
+}
+
+/// Reads a Gmsh MSH 4.1 file (ASCII or binary). All problems with the file are
+/// `InputError`s naming the file.
+pub fn read_msh(path: &Path) -> Result<Mesh, InputError> {
+    let err = |m: String| InputError::new(path, m);
+    let bytes = std::fs::read(path).map_err(|e| err(format!("cannot read mesh file: {e}")))?;
+
+    let info = raw::scan_header(&bytes).map_err(|m| err(format!("{m}; {HINT_MSH41}")))?;
+    if info.partitioned {
+        return Err(err(
+            "partitioned mesh ($PartitionedEntities, written by gmsh -part) is not supported: \
+             re-mesh without -part (signorini-mpi partitions the mesh itself)"
+                .into(),
+        ));
+    }
+
+    let parsed = std::panic::catch_unwind(|| {
+        mshio::parse_msh_bytes(&bytes).map_err(|e| {
+            let s = e.to_string();
+            s.lines().take(6).collect::<Vec<_>>().join(" / ")
+        })
+    });
+    let msh = match parsed {
+        Ok(Ok(m)) => m,
+        Ok(Err(m)) => {
+            return Err(err(format!(
+                "cannot parse as Gmsh MSH 4.1: {m}; {HINT_MSH41}"
+            )))
+        }
+        Err(_) => {
+            return Err(err(format!(
+                "cannot parse as Gmsh MSH 4.1 (the parser failed); {HINT_MSH41}"
+            )))
+        }
+    };
+
+    build(&bytes, &info, &msh).map_err(err)
+}
+
+fn build(
+    bytes: &[u8],
+    info: &raw::HeaderInfo,
+    msh: &mshio::MshFile<u64, i32, f64>,
+) -> Result<Mesh, String> {
+    let nodes = msh
+        .data
+        .nodes
+        .as_ref()
+        .ok_or("the file has no $Nodes section")?;
+    let elements = msh
+        .data
+        .elements
+        .as_ref()
+        .ok_or("the file has no $Elements section")?;
+
+    // ---- all nodes of the file, in file order, with their tags ----
+    let n_all: usize = nodes.node_blocks.iter().map(|b| b.nodes.len()).sum();
+    let mut all_coords: Vec<[f64; 3]> = Vec::with_capacity(n_all);
+    let mut all_tags: Vec<u64> = vec![0; n_all];
+    let mut have_all_tags = true;
+    for b in &nodes.node_blocks {
+        let off = all_coords.len();
+        all_coords.extend(b.nodes.iter().map(|n| [n.x, n.y, n.z]));
+        match &b.node_tags {
+            Some(map) => {
+                for (&t, &i) in map {
+                    all_tags[off + i] = t;
+                }
+            }
+            None => have_all_tags = false,
+        }
+    }
+    if !have_all_tags {
+        // mshio drops the tags of densely numbered nodes: read them from the raw bytes;
+        // if that fails, gmsh's usual layout (tag = first tag + position) is assumed.
+        match raw::scan_node_tags(bytes, info) {
+            Some(t) if t.len() == n_all => all_tags = t,
+            _ => {
+                for (i, t) in all_tags.iter_mut().enumerate() {
+                    *t = nodes.min_node_tag + i as u64;
+                }
+            }
+        }
+    }
+    let tag_index = TagIndex::new(&all_tags);
+
+    // ---- entity physical tags: (dim, entity tag) -> physical tags ----
+    let mut phys: HashMap<(usize, i32), &[i32]> = HashMap::new();
+    if let Some(ent) = &msh.data.entities {
+        for p in &ent.points {
+            phys.insert((0, p.tag), &p.physical_tags);
+        }
+        for c in &ent.curves {
+            phys.insert((1, c.tag), &c.physical_tags);
+        }
+        for s in &ent.surfaces {
+            phys.insert((2, s.tag), &s.physical_tags);
+        }
+        for v in &ent.volumes {
+            phys.insert((3, v.tag), &v.physical_tags);
+        }
+    }
+
+    // ---- element types and mesh dimension ----
+    let mut dim = 0;
+    let mut counts = [0usize; 4];
+    for b in &elements.element_blocks {
+        let d = element_dim(b.element_type).ok_or_else(|| {
+            format!(
+                "element type {:?} (gmsh type {}) is not supported: only linear elements \
+                 (3-node triangles, 4-node tetrahedra, 2-node lines, points) are read; \
+                 mesh with Mesh.ElementOrder = 1",
+                b.element_type, b.element_type as i32
+            )
+        })?;
+        dim = dim.max(d);
+        counts[d] += b.elements.len();
+    }
+    if dim < 2 || counts[dim] == 0 {
+        return Err(
+            "the mesh has no triangles or tetrahedra (body cells); mesh it with gmsh -2 or -3"
+                .into(),
+        );
+    }
+    let nc = dim + 1;
+
+    // ---- body cells (gmsh node indices first) ----
+    let mut cells: Vec<usize> = Vec::with_capacity(counts[dim] * nc);
+    let mut cell_tags: Vec<u64> = Vec::with_capacity(counts[dim]);
+    let mut used = vec![false; n_all];
+    let lookup = |etag: u64, ntag: u64| {
+        tag_index
+            .get(ntag)
+            .ok_or_else(|| format!("element {etag} references node {ntag}, which is not in $Nodes"))
+    };
+    for b in elements
+        .element_blocks
+        .iter()
+        .filter(|b| element_dim(b.element_type) == Some(dim))
+    {
+        let edim = dim;
+        if phys.get(&(edim, b.entity_tag)).is_none_or(|p| p.is_empty()) && !b.elements.is_empty() {
+            return Err(format!(
+                "{} body cells (e.g. element {}) of {} {} belong to no physical group: \
+                 define a Physical {} for the body (gmsh writes such cells with -save_all \
+                 or Mesh.SaveAll = 1)",
+                b.elements.len(),
+                b.elements[0].element_tag,
+                entity_word(edim),
+                b.entity_tag,
+                entity_word(edim),
+            ));
+        }
+        for e in &b.elements {
+            if e.nodes.len() != nc {
+                return Err(format!(
+                    "element {} has {} nodes",
+                    e.element_tag,
+                    e.nodes.len()
+                ));
+            }
+            for &nt in &e.nodes {
+                let i = lookup(e.element_tag, nt)?;
+                used[i] = true;
+                cells.push(i);
+            }
+            cell_tags.push(e.element_tag);
+        }
+    }
+
+    // ---- compact renumbering of the used nodes, in gmsh order ----
+    let mut new_index = vec![usize::MAX; n_all];
+    let mut coords = Vec::with_capacity(n_all);
+    let mut node_tags = Vec::with_capacity(n_all);
+    for i in 0..n_all {
+        if used[i] {
+            new_index[i] = coords.len();
+            coords.push(all_coords[i]);
+            node_tags.push(all_tags[i]);
+        }
+    }
+    drop(used);
+    for v in cells.iter_mut() {
+        *v = new_index[*v];
+    }
+
+    // ---- 2D: constant z, set to 0 ----
+    if dim == 2 {
+        let (mut lo, mut hi) = ([f64::MAX; 3], [f64::MIN; 3]);
+        for p in &coords {
+            for k in 0..3 {
+                lo[k] = lo[k].min(p[k]);
+                hi[k] = hi[k].max(p[k]);
+            }
+        }
+        let size = (hi[0] - lo[0]).max(hi[1] - lo[1]);
+        let spread = hi[2] - lo[2];
+        if spread.is_nan() || spread > 1e-10 * size {
+            return Err(format!(
+                "2D mesh whose nodes are not in a plane z = const (z from {} to {}): a 2D \
+                 body must lie in the xy plane",
+                lo[2], hi[2]
+            ));
+        }
+        for p in coords.iter_mut() {
+            p[2] = 0.0;
+        }
+    }
+
+    // ---- quality: zero measure refused, inverted cells reoriented ----
+    let mut p = [[0.0; 3]; 4];
+    for (c, cell) in cells.chunks_exact_mut(nc).enumerate() {
+        for k in 0..nc {
+            p[k] = coords[cell[k]];
+        }
+        let (m, h) = signed_measure(dim, &p[..nc]);
+        let tol = 1e-12 * h.powi(dim as i32);
+        if m.is_nan() || m.abs() <= tol {
+            return Err(format!(
+                "element {} has zero {} ({m:e}, longest edge {h:e}): degenerate cell",
+                cell_tags[c],
+                if dim == 2 { "area" } else { "volume" }
+            ));
+        }
+        if m < 0.0 {
+            cell.swap(nc - 2, nc - 1);
+        }
+    }
+
+    // ---- boundary elements ----
+    let mut mesh = Mesh {
+        dim,
+        coords,
+        node_tags,
+        cells,
+        cell_tags,
+        facets: Vec::with_capacity(counts[dim - 1] * dim),
+        facet_tags: Vec::with_capacity(counts[dim - 1]),
+        ..Default::default()
+    };
+    // (dim, physical tag) -> element indices
+    let mut members: HashMap<(usize, i32), Vec<usize>> = HashMap::new();
+    let mut cell_count = 0usize;
+    for b in &elements.element_blocks {
+        let Some(d) = element_dim(b.element_type) else {
+            continue;
+        };
+        let first = if d == dim {
+            let f = cell_count;
+            cell_count += b.elements.len();
+            f
+        } else {
+            let (list, tags) = if d + 1 == dim {
+                (&mut mesh.facets, &mut mesh.facet_tags)
+            } else if d == 1 {
+                (&mut mesh.edges, &mut mesh.edge_tags)
+            } else {
+                (&mut mesh.points, &mut mesh.point_tags)
+            };
+            let f = tags.len();
+            for e in &b.elements {
+                for &nt in &e.nodes {
+                    let i = new_index[lookup(e.element_tag, nt)?];
+                    if i == usize::MAX {
+                        return Err(format!(
+                            "boundary element {} ({:?}) uses node {nt}, which belongs to no \
+                             body cell",
+                            e.element_tag, b.element_type
+                        ));
+                    }
+                    list.push(i);
+                }
+                tags.push(e.element_tag);
+            }
+            f
+        };
+        if let Some(pt) = phys.get(&(d, b.entity_tag)) {
+            for &t in pt.iter() {
+                members
+                    .entry((d, t))
+                    .or_default()
+                    .extend(first..first + b.elements.len());
+            }
+        }
+    }
+
+    // ---- groups: every physical group of the entities and of $PhysicalNames ----
+    for &(d, t) in info.physical_names.keys() {
+        if d <= dim {
+            members.entry((d, t)).or_default();
+        }
+    }
+    let mut groups: Vec<Group> = members
+        .into_iter()
+        .map(|((d, t), mut elements)| {
+            if !elements.is_sorted() {
+                elements.sort_unstable();
+            }
+            elements.dedup();
+            let name = info
+                .physical_names
+                .get(&(d, t))
+                .cloned()
+                .unwrap_or_else(|| t.to_string());
+            Group {
+                name,
+                dim: d,
+                tag: t,
+                elements,
+            }
+        })
+        .collect();
+    groups.sort_by_key(|g| (g.dim, g.tag));
+    mesh.groups = groups;
+    Ok(mesh)
+}

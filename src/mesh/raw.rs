@@ -1,0 +1,287 @@
+//! Low-level scanning of the raw bytes of a `.msh` file for what `mshio` does not give us:
+//! the format version (for a clear error on MSH 2.2), the `$PhysicalNames` section, the
+//! presence of `$PartitionedEntities`, and the node tags that `mshio` drops when gmsh
+//! numbers the nodes densely.
+
+use std::collections::HashMap;
+
+/// What the header scan found before the `$Nodes` section.
+#[derive(Debug, Default)]
+pub(crate) struct HeaderInfo {
+    /// Version number as written in `$MeshFormat` (e.g. "4.1", "2.2").
+    pub version: String,
+    /// 0 = ASCII, 1 = binary.
+    pub file_type: i32,
+    /// Size of `size_t` in bytes (binary files).
+    pub size_t_size: usize,
+    /// Binary files: little endian (gmsh writes its native byte order).
+    pub little_endian: bool,
+    /// Physical names keyed by (dimension, physical tag).
+    pub physical_names: HashMap<(usize, i32), String>,
+    /// A `$PartitionedEntities` section was seen (gmsh -part).
+    pub partitioned: bool,
+    /// Byte offset of the `$Nodes` line, if found.
+    pub nodes_offset: Option<usize>,
+}
+
+/// Position of `needle` in `hay` at or after `from`.
+fn find(hay: &[u8], needle: &[u8], from: usize) -> Option<usize> {
+    if from >= hay.len() || needle.is_empty() {
+        return None;
+    }
+    let first = needle[0];
+    let mut i = from;
+    while i + needle.len() <= hay.len() {
+        match hay[i..].iter().position(|&b| b == first) {
+            None => return None,
+            Some(p) => {
+                let s = i + p;
+                if s + needle.len() > hay.len() {
+                    return None;
+                }
+                if &hay[s..s + needle.len()] == needle {
+                    return Some(s);
+                }
+                i = s + 1;
+            }
+        }
+    }
+    None
+}
+
+/// Offset just past the next newline at or after `from` (or the end).
+fn next_line(bytes: &[u8], from: usize) -> usize {
+    match bytes[from.min(bytes.len())..]
+        .iter()
+        .position(|&b| b == b'\n')
+    {
+        Some(p) => from + p + 1,
+        None => bytes.len(),
+    }
+}
+
+fn skip_ws(bytes: &[u8], mut i: usize) -> usize {
+    while i < bytes.len() && bytes[i].is_ascii_whitespace() {
+        i += 1;
+    }
+    i
+}
+
+/// Scans `$MeshFormat` and every section up to `$Nodes`. Errors are plain messages (the
+/// caller adds the file name and a hint).
+pub(crate) fn scan_header(bytes: &[u8]) -> Result<HeaderInfo, String> {
+    let mut info = HeaderInfo::default();
+    let start = skip_ws(bytes, 0);
+    if !bytes[start..].starts_with(b"$MeshFormat") {
+        return Err("not a Gmsh .msh file (it does not start with $MeshFormat)".into());
+    }
+    let line_start = next_line(bytes, start);
+    let line_end = next_line(bytes, line_start);
+    let line = String::from_utf8_lossy(&bytes[line_start..line_end]);
+    let mut tok = line.split_whitespace();
+    info.version = tok.next().unwrap_or("").to_string();
+    info.file_type = tok.next().and_then(|t| t.parse().ok()).unwrap_or(-1);
+    info.size_t_size = tok.next().and_then(|t| t.parse().ok()).unwrap_or(0);
+    if info.version != "4.1" {
+        return Err(format!(
+            "unsupported MSH format version '{}' (only MSH 4.1 is read)",
+            info.version
+        ));
+    }
+    if info.file_type == 1 {
+        // The endianness check value: int 1 right after the version line.
+        let b = bytes
+            .get(line_end..line_end + 4)
+            .ok_or("truncated $MeshFormat section")?;
+        info.little_endian = i32::from_le_bytes([b[0], b[1], b[2], b[3]]) == 1;
+    }
+    let end_fmt = find(bytes, b"$EndMeshFormat", line_end).ok_or("no $EndMeshFormat")?;
+    let mut pos = next_line(bytes, end_fmt);
+    // Walk the sections before $Nodes: they are small ($PhysicalNames, $Entities,
+    // $PartitionedEntities, ...).
+    loop {
+        pos = skip_ws(bytes, pos);
+        if pos >= bytes.len() {
+            break;
+        }
+        if bytes[pos] != b'$' {
+            return Err(format!(
+                "unexpected content at byte {pos} (expected a $Section)"
+            ));
+        }
+        let name_end = bytes[pos..]
+            .iter()
+            .position(|b| b.is_ascii_whitespace())
+            .map_or(bytes.len(), |p| pos + p);
+        let name = &bytes[pos + 1..name_end];
+        if name == b"Nodes" || name == b"Elements" {
+            if name == b"Nodes" {
+                info.nodes_offset = Some(pos);
+            }
+            break;
+        }
+        let mut end_tag = b"$End".to_vec();
+        end_tag.extend_from_slice(name);
+        let body_start = next_line(bytes, pos);
+        let end = find(bytes, &end_tag, body_start).ok_or_else(|| {
+            format!(
+                "section ${} has no {}",
+                String::from_utf8_lossy(name),
+                String::from_utf8_lossy(&end_tag)
+            )
+        })?;
+        match name {
+            b"PhysicalNames" => {
+                info.physical_names = parse_physical_names(&bytes[body_start..end])?;
+            }
+            b"PartitionedEntities" => info.partitioned = true,
+            _ => {}
+        }
+        pos = next_line(bytes, end);
+    }
+    Ok(info)
+}
+
+/// Parses the body of `$PhysicalNames` (always text): a count, then `dim tag "name"` lines.
+fn parse_physical_names(body: &[u8]) -> Result<HashMap<(usize, i32), String>, String> {
+    let text = std::str::from_utf8(body).map_err(|_| "$PhysicalNames is not valid UTF-8")?;
+    let mut lines = text.lines().map(str::trim).filter(|l| !l.is_empty());
+    let n: usize = lines
+        .next()
+        .and_then(|l| l.parse().ok())
+        .ok_or("$PhysicalNames: missing count")?;
+    let mut names = HashMap::with_capacity(n);
+    for _ in 0..n {
+        let l = lines
+            .next()
+            .ok_or("$PhysicalNames: fewer names than announced")?;
+        let bad = || format!("$PhysicalNames: cannot read line '{l}'");
+        let mut parts = l.splitn(3, char::is_whitespace);
+        let dim: usize = parts.next().and_then(|t| t.parse().ok()).ok_or_else(bad)?;
+        let tag: i32 = parts.next().and_then(|t| t.parse().ok()).ok_or_else(bad)?;
+        let rest = parts.next().ok_or_else(bad)?.trim();
+        let name = rest
+            .strip_prefix('"')
+            .and_then(|r| r.strip_suffix('"'))
+            .unwrap_or(rest);
+        names.insert((dim, tag), name.to_string());
+    }
+    Ok(names)
+}
+
+/// Reads the node tags of the `$Nodes` section in file order (both ASCII and binary).
+/// Used only when `mshio` dropped them (dense numbering), to avoid assuming that the
+/// nodes are stored in tag order. Returns `None` if the layout is not as expected.
+pub(crate) fn scan_node_tags(bytes: &[u8], info: &HeaderInfo) -> Option<Vec<u64>> {
+    let start = next_line(bytes, info.nodes_offset?);
+    if info.file_type == 1 {
+        scan_node_tags_binary(bytes, start, info)
+    } else {
+        scan_node_tags_ascii(bytes, start)
+    }
+}
+
+fn scan_node_tags_ascii(bytes: &[u8], start: usize) -> Option<Vec<u64>> {
+    let mut pos = start;
+    let mut token = || -> Option<&[u8]> {
+        let s = skip_ws(bytes, pos);
+        let mut e = s;
+        while e < bytes.len() && !bytes[e].is_ascii_whitespace() {
+            e += 1;
+        }
+        pos = e;
+        (e > s).then(|| &bytes[s..e])
+    };
+    fn int(t: &[u8]) -> Option<u64> {
+        std::str::from_utf8(t).ok()?.parse().ok()
+    }
+    let n_blocks = int(token()?)?;
+    let n_nodes = int(token()?)?;
+    token()?;
+    token()?;
+    let mut tags = Vec::with_capacity(usize::try_from(n_nodes).ok()?);
+    for _ in 0..n_blocks {
+        token()?; // entity dim
+        token()?; // entity tag
+        let parametric = int(token()?)?;
+        if parametric != 0 {
+            return None;
+        }
+        let n = int(token()?)?;
+        for _ in 0..n {
+            tags.push(int(token()?)?);
+        }
+        for _ in 0..3 * n {
+            token()?;
+        }
+    }
+    (tags.len() as u64 == n_nodes).then_some(tags)
+}
+
+fn scan_node_tags_binary(bytes: &[u8], start: usize, info: &HeaderInfo) -> Option<Vec<u64>> {
+    let le = info.little_endian;
+    let st = info.size_t_size;
+    let read_u = |p: usize, size: usize| -> Option<u64> {
+        let b = bytes.get(p..p + size)?;
+        Some(match size {
+            4 => {
+                let a = [b[0], b[1], b[2], b[3]];
+                u64::from(if le {
+                    u32::from_le_bytes(a)
+                } else {
+                    u32::from_be_bytes(a)
+                })
+            }
+            8 => {
+                let a: [u8; 8] = b.try_into().ok()?;
+                if le {
+                    u64::from_le_bytes(a)
+                } else {
+                    u64::from_be_bytes(a)
+                }
+            }
+            _ => return None,
+        })
+    };
+    let mut p = start;
+    let n_blocks = read_u(p, st)?;
+    let n_nodes = read_u(p + st, st)?;
+    p += 4 * st;
+    let mut tags = Vec::with_capacity(usize::try_from(n_nodes).ok()?);
+    for _ in 0..n_blocks {
+        let parametric = read_u(p + 8, 4)?;
+        if parametric != 0 {
+            return None;
+        }
+        let n = usize::try_from(read_u(p + 12, st)?).ok()?;
+        p += 12 + st;
+        if p.checked_add(n.checked_mul(st + 24)?)? > bytes.len() {
+            return None;
+        }
+        for i in 0..n {
+            tags.push(read_u(p + i * st, st)?);
+        }
+        p += n * st + n * 24;
+    }
+    (tags.len() as u64 == n_nodes).then_some(tags)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn physical_names_with_spaces_and_repeated_tags() {
+        let body = b"3\n1 1 \"left side\"\n2 1 \"body\"\n1 2 right\n";
+        let names = parse_physical_names(body).unwrap();
+        assert_eq!(names[&(1, 1)], "left side");
+        assert_eq!(names[&(2, 1)], "body");
+        assert_eq!(names[&(1, 2)], "right");
+    }
+
+    #[test]
+    fn find_substring() {
+        assert_eq!(find(b"ab$End$EndX", b"$EndX", 0), Some(6));
+        assert_eq!(find(b"ab$End", b"$EndX", 0), None);
+    }
+}

@@ -1,0 +1,127 @@
+//! P1 (constant strain) element kernels: gradients of the barycentric shape functions and
+//! element stiffness matrices. No heap allocation: everything lives in fixed arrays.
+
+// Index loops mirror the tensor formulas (sums over i, j, a, b).
+#![allow(clippy::needless_range_loop)]
+
+/// Gradients of the three P1 shape functions of a triangle, and its SIGNED area
+/// (positive when the nodes run counter-clockwise).
+///
+/// A degenerate triangle (area exactly 0) gives zero gradients and area 0; callers must
+/// check the returned measure (the mesh reader rejects such cells).
+#[inline]
+pub fn tri_gradients(x: &[[f64; 2]; 3]) -> ([[f64; 2]; 3], f64) {
+    let (x10, y10) = (x[1][0] - x[0][0], x[1][1] - x[0][1]);
+    let (x20, y20) = (x[2][0] - x[0][0], x[2][1] - x[0][1]);
+    let det = x10 * y20 - x20 * y10;
+    if det == 0.0 {
+        return ([[0.0; 2]; 3], 0.0);
+    }
+    let inv = 1.0 / det;
+    // Rows of J^{-T}: grad phi_1 = (y20, -x20)/det, grad phi_2 = (-y10, x10)/det.
+    let g1 = [y20 * inv, -x20 * inv];
+    let g2 = [-y10 * inv, x10 * inv];
+    let g0 = [-g1[0] - g2[0], -g1[1] - g2[1]];
+    ([g0, g1, g2], 0.5 * det)
+}
+
+/// Gradients of the four P1 shape functions of a tetrahedron, and its SIGNED volume
+/// (positive when (x1-x0, x2-x0, x3-x0) is a right-handed frame).
+///
+/// A degenerate tetrahedron (volume exactly 0) gives zero gradients and volume 0.
+#[inline]
+pub fn tet_gradients(x: &[[f64; 3]; 4]) -> ([[f64; 3]; 4], f64) {
+    let e1 = sub3(x[1], x[0]);
+    let e2 = sub3(x[2], x[0]);
+    let e3 = sub3(x[3], x[0]);
+    let c23 = cross3(e2, e3);
+    let det = dot3(e1, c23);
+    if det == 0.0 {
+        return ([[0.0; 3]; 4], 0.0);
+    }
+    let inv = 1.0 / det;
+    // grad phi_k (k = 1, 2, 3) are the rows of J^{-1}, J = [e1 e2 e3]:
+    // e2 x e3 / det, e3 x e1 / det, e1 x e2 / det.
+    let c31 = cross3(e3, e1);
+    let c12 = cross3(e1, e2);
+    let mut g = [[0.0; 3]; 4];
+    for i in 0..3 {
+        g[1][i] = c23[i] * inv;
+        g[2][i] = c31[i] * inv;
+        g[3][i] = c12[i] * inv;
+        g[0][i] = -(g[1][i] + g[2][i] + g[3][i]);
+    }
+    (g, det / 6.0)
+}
+
+/// Bilinear form a(u, v) = ∫ lambda div u div v + 2 mu eps(u):eps(v) (the stiffness of (3.8))
+/// on a constant-gradient cell of measure `w`:
+/// K[(a,i),(b,j)] = w (lambda g_a[i] g_b[j] + mu g_a[j] g_b[i] + mu delta_ij g_a·g_b).
+#[inline(always)]
+fn p1_stiffness<const D: usize, const N: usize>(
+    g: &[[f64; D]; N],
+    w: f64,
+    lambda: f64,
+    mu: f64,
+    k: &mut [f64],
+) {
+    let ndof = N * D;
+    debug_assert_eq!(k.len(), ndof * ndof);
+    let wl = w * lambda;
+    let wm = w * mu;
+    for a in 0..N {
+        for b in 0..N {
+            let mut dot = 0.0;
+            for i in 0..D {
+                dot += g[a][i] * g[b][i];
+            }
+            for i in 0..D {
+                let row = (a * D + i) * ndof + b * D;
+                for j in 0..D {
+                    let mut v = wl * g[a][i] * g[b][j] + wm * g[a][j] * g[b][i];
+                    if i == j {
+                        v += wm * dot;
+                    }
+                    k[row + j] = v;
+                }
+            }
+        }
+    }
+}
+
+/// (3.8): P1 triangle stiffness matrix (row-major 6x6), dofs node-major
+/// (x0, y0, x1, y1, x2, y2). Use the Lamé parameters of the model from
+/// [`crate::fem::Material::lame`] (plane stress is the plane law with its own lambda).
+/// Returns the signed area; the matrix uses its absolute value.
+pub fn tri_stiffness(x: &[[f64; 2]; 3], lambda: f64, mu: f64, k: &mut [f64; 36]) -> f64 {
+    let (g, area) = tri_gradients(x);
+    p1_stiffness::<2, 3>(&g, area.abs(), lambda, mu, k);
+    area
+}
+
+/// (3.8): P1 tetrahedron stiffness matrix (row-major 12x12), dofs node-major
+/// (x0, y0, z0, x1, ...). Returns the signed volume; the matrix uses its absolute value.
+pub fn tet_stiffness(x: &[[f64; 3]; 4], lambda: f64, mu: f64, k: &mut [f64; 144]) -> f64 {
+    let (g, vol) = tet_gradients(x);
+    p1_stiffness::<3, 4>(&g, vol.abs(), lambda, mu, k);
+    vol
+}
+
+#[inline(always)]
+pub(crate) fn sub3(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
+    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
+}
+
+#[inline(always)]
+pub(crate) fn cross3(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
+    [
+        a[1] * b[2] - a[2] * b[1],
+        a[2] * b[0] - a[0] * b[2],
+        a[0] * b[1] - a[1] * b[0],
+    ]
+}
+
+#[inline(always)]
+pub(crate) fn dot3(a: [f64; 3], b: [f64; 3]) -> f64 {
+    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
+}

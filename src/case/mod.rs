@@ -482,11 +482,16 @@ impl Ctx<'_> {
     }
 
     fn type_err(&self, key: &str, n: &Node, expected: &str) -> InputError {
-        self.err(
-            key,
-            n.loc,
-            format!("expected {expected}, found {}", n.type_name()),
-        )
+        let mut msg = format!("expected {expected}, found {}", n.type_name());
+        if let (Loc::Set, Kind::Str(s)) = (n.loc, &n.kind) {
+            if s.starts_with('[') || s.starts_with('{') {
+                msg.push_str(
+                    " (the value is not valid TOML, so it was taken as a string; \
+                     quote the strings inside arrays and tables)",
+                );
+            }
+        }
+        self.err(key, n.loc, msg)
     }
 
     /// The node as a table, keys not checked.

@@ -830,3 +830,10 @@ fn model_against_dimension() {
     assert_eq!(e.key.as_deref(), Some("material.model"), "{e}");
     assert!(e.message.contains("2D"), "{e}");
 }
+
+#[test]
+fn override_unquoted_array_hint() {
+    let e = parse_set(MINIMAL, &["output.fields=[displacement]"]).unwrap_err();
+    assert_eq!(e.key.as_deref(), Some("output.fields"), "{e}");
+    assert!(e.message.contains("quote"), "{e}");
+}

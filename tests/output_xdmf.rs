@@ -1,0 +1,326 @@
+//! Runs examples/output_demo under mpirun with 1, 2 and 3 ranks and reads the result back
+//! with meshio (and h5py) through Debian's /usr/bin/python3. The Python side recomputes the
+//! known fields from the coordinates it read, so the writer's numbering, hyperslabs and
+//! XDMF description all have to be right for the checks to pass.
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output, Stdio};
+use std::sync::OnceLock;
+use std::time::{Duration, Instant};
+
+const PYTHON: &str = "/usr/bin/python3";
+
+/// Reader and checker. `check DIR DIM N CONTACT` prints a JSON summary; `compare A B`
+/// compares two outputs entity by entity after sorting by node_id / cell_id.
+const CHECK_PY: &str = r#"
+import json, os, sys
+import xml.etree.ElementTree as ET
+import numpy as np
+import meshio
+
+def grids(d):
+    """Read every Grid of solution.xdmf with meshio (meshio reads one grid per file, so each
+    grid is copied into its own XDMF file next to the original: the HDF paths stay valid)."""
+    root = ET.parse(os.path.join(d, "solution.xdmf")).getroot()
+    assert root.tag == "Xdmf" and root.get("Version").startswith("3")
+    doms = root.findall("Domain")
+    assert len(doms) == 1
+    out = {}
+    names = []
+    for g in doms[0].findall("Grid"):
+        name = g.get("Name")
+        names.append(name)
+        x = ET.Element("Xdmf", Version="3.0")
+        ET.SubElement(x, "Domain").append(g)
+        p = os.path.join(d, "_only_" + name + ".xdmf")
+        ET.ElementTree(x).write(p)
+        out[name] = meshio.read(p)
+    return names, out
+
+def disp(p):
+    x, y, z = p[:, 0], p[:, 1], p[:, 2]
+    return np.stack([x + 2 * y, x * y - z, 0.5 * z + x * x], axis=1)
+
+def lex(p, dim, n):
+    idx = np.rint(p * n).astype(np.int64)
+    g = idx[:, 0] + (n + 1) * idx[:, 1]
+    if dim == 3:
+        g = g + (n + 1) ** 2 * idx[:, 2]
+    return g
+
+def cell_block(mesh):
+    assert len(mesh.cells) == 1, [c.type for c in mesh.cells]
+    return mesh.cells[0]
+
+def check(d, dim, n, contact):
+    names, gs = grids(d)
+    assert names == (["mesh", "contact"] if contact else ["mesh"]), names
+    if not contact:
+        # a single grid: meshio must read the original file directly
+        direct = meshio.read(os.path.join(d, "solution.xdmf"))
+        assert len(direct.points) == len(gs["mesh"].points)
+    m = gs["mesh"]
+    p = m.points
+    npts = (n + 1) ** dim
+    assert p.shape == (npts, 3), p.shape
+    # every lattice point exactly once
+    g = lex(p, dim, n)
+    assert np.allclose(p, np.rint(p * n) / n, atol=1e-14)
+    assert sorted(g.tolist()) == list(range(npts))
+    assert (m.point_data["node_id"] == 5 + 3 * g).all()
+    assert np.allclose(m.point_data["displacement"], disp(p), rtol=0, atol=1e-14)
+    x, y, z = p[:, 0], p[:, 1], p[:, 2]
+    assert m.point_data["temperature"].shape == (npts,)
+    assert np.allclose(m.point_data["temperature"], 3 * x - y + z, rtol=0, atol=1e-14)
+
+    cb = cell_block(m)
+    assert cb.type == ("triangle" if dim == 2 else "tetra"), cb.type
+    ncell = 2 * n * n if dim == 2 else 6 * n ** 3
+    conn = cb.data
+    assert conn.shape == (ncell, dim + 1), conn.shape
+    assert conn.min() >= 0 and conn.max() < npts
+    v = p[conn]                       # ncell × (dim+1) × 3
+    e = v[:, 1:, :dim] - v[:, :1, :dim]
+    meas = np.abs(np.linalg.det(e)) / (2 if dim == 2 else 6)
+    assert (meas > 1e-12).all(), "degenerate cell"
+    assert abs(meas.sum() - 1.0) < 1e-12, meas.sum()   # cells tile the unit square / cube
+    c = v.mean(axis=1)
+    cx, cy = c[:, 0], c[:, 1]
+    cd = {k: val[0] for k, val in m.cell_data.items()}
+    assert sorted(cd) == ["cell_id", "pair", "rank", "stress", "von_mises"], sorted(cd)
+    assert (cd["cell_id"] == 100 + 2 * np.arange(ncell)).all()
+    k = np.arange(9)
+    assert cd["stress"].shape == (ncell, 9)
+    assert np.allclose(cd["stress"], cx[:, None] + 10 * k[None, :] + k[None, :] * cy[:, None], rtol=0, atol=1e-12)
+    assert np.allclose(cd["von_mises"], cx * cx + cy, rtol=0, atol=1e-12)
+    assert np.allclose(cd["pair"], np.stack([cx, cy], axis=1), rtol=0, atol=1e-12)
+    assert sorted(m.point_data) == ["displacement", "node_id", "temperature"], sorted(m.point_data)
+    summary = {"grids": names, "n_points": int(npts), "n_cells": int(ncell),
+               "cell_type": cb.type, "point_data": sorted(m.point_data), "cell_data": sorted(cd),
+               "ranks_seen": sorted(set(cd["rank"].astype(int).tolist()))}
+
+    if contact:
+        cm = gs["contact"]
+        q = cm.points
+        K = (n + 1) ** (dim - 1)
+        assert q.shape == (K, 3), q.shape
+        vb = cell_block(cm)
+        assert vb.type == "vertex"
+        assert (vb.data.ravel() == np.arange(K)).all()
+        assert np.allclose(q[:, dim - 1], 0.0, atol=0)   # bottom side
+        gq = lex(q, dim, n)
+        assert sorted(gq.tolist()) == sorted(set(gq.tolist()))
+        assert (cm.point_data["node_id"] == 5 + 3 * gq).all()
+        assert np.allclose(cm.point_data["gap"], q[:, 0] + 0.1, rtol=0, atol=1e-14)
+        assert np.allclose(cm.point_data["traction"],
+                           np.stack([q[:, 0], -q[:, 0], 2 * q[:, 0] + q[:, 1]], axis=1), rtol=0, atol=1e-14)
+        summary["contact_points"] = int(K)
+        summary["contact_data"] = sorted(cm.point_data)
+    print(json.dumps(summary))
+
+def by_id(ids, *arrays):
+    o = np.argsort(ids, kind="stable")
+    return [ids[o]] + [a[o] for a in arrays]
+
+def compare(a, b):
+    na, ga = grids(a)
+    nb, gb = grids(b)
+    assert na == nb
+    for name in na:
+        A, B = ga[name], gb[name]
+        ia, *ra = by_id(A.point_data["node_id"], A.points, *[A.point_data[k] for k in sorted(A.point_data)])
+        ib, *rb = by_id(B.point_data["node_id"], B.points, *[B.point_data[k] for k in sorted(B.point_data)])
+        assert (ia == ib).all()
+        for x, y in zip(ra, rb):
+            assert np.array_equal(x, y)
+        if name == "mesh":
+            # cells as sets of node ids, sorted by cell_id; rank differs by design
+            def cells(M):
+                nid = M.point_data["node_id"]
+                cd = {k: v[0] for k, v in M.cell_data.items()}
+                conn = np.sort(nid[M.cells[0].data], axis=1)
+                keys = [k for k in sorted(cd) if k != "rank"]
+                return by_id(cd["cell_id"], conn, *[cd[k] for k in keys])
+            for x, y in zip(cells(A), cells(B)):
+                assert np.array_equal(x, y)
+    print("same")
+
+if sys.argv[1] == "check":
+    check(sys.argv[2], int(sys.argv[3]), int(sys.argv[4]), sys.argv[5] == "1")
+else:
+    compare(sys.argv[2], sys.argv[3])
+"#;
+
+/// Path of the example binary, built once per test run (same profile as this test).
+fn demo() -> &'static Path {
+    static BIN: OnceLock<PathBuf> = OnceLock::new();
+    BIN.get_or_init(|| {
+        let exe = std::env::current_exe().expect("test executable path");
+        // target/<profile>/deps/output_xdmf-HASH → target/<profile>
+        let profile_dir = exe.parent().and_then(Path::parent).expect("target dir");
+        let release = profile_dir.file_name().is_some_and(|n| n == "release");
+        let cargo = std::env::var("CARGO").unwrap_or_else(|_| "cargo".into());
+        let mut cmd = Command::new(cargo);
+        cmd.args(["build", "--quiet", "--example", "output_demo"])
+            .current_dir(env!("CARGO_MANIFEST_DIR"));
+        if release {
+            cmd.arg("--release");
+        }
+        let st = cmd
+            .status()
+            .expect("running cargo build --example output_demo");
+        assert!(st.success(), "cargo build --example output_demo failed");
+        let bin = profile_dir.join("examples").join("output_demo");
+        assert!(bin.exists(), "{} missing", bin.display());
+        bin
+    })
+}
+
+/// mpirun with a time limit (a hang in a collective call must fail the test, not block it).
+fn mpirun(np: usize, args: &[&str]) -> Output {
+    let np_s = np.to_string();
+    let mut child = Command::new("mpirun")
+        .args(["-n", &np_s, "--oversubscribe"])
+        .arg(demo())
+        .args(args)
+        .env("OMPI_ALLOW_RUN_AS_ROOT", "1")
+        .env("OMPI_ALLOW_RUN_AS_ROOT_CONFIRM", "1")
+        .env("OMPI_MCA_rmaps_base_oversubscribe", "1")
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .expect("mpirun");
+    let start = Instant::now();
+    loop {
+        if child.try_wait().expect("wait").is_some() {
+            break;
+        }
+        if start.elapsed() > Duration::from_secs(120) {
+            let _ = child.kill();
+            let out = child.wait_with_output().expect("output");
+            panic!(
+                "mpirun -n {np} {args:?} hung; stderr: {}",
+                String::from_utf8_lossy(&out.stderr)
+            );
+        }
+        std::thread::sleep(Duration::from_millis(50));
+    }
+    child.wait_with_output().expect("output")
+}
+
+fn write(np: usize, dir: &Path, dim: usize, n: usize, extra: &[&str]) {
+    let d = dir.to_str().unwrap();
+    let (dim_s, n_s) = (dim.to_string(), n.to_string());
+    let mut args = vec![d, dim_s.as_str(), n_s.as_str()];
+    args.extend_from_slice(extra);
+    let out = mpirun(np, &args);
+    assert!(
+        out.status.success(),
+        "mpirun -n {np} output_demo {args:?} failed:\n{}\n{}",
+        String::from_utf8_lossy(&out.stdout),
+        String::from_utf8_lossy(&out.stderr)
+    );
+}
+
+fn python(args: &[&str]) -> String {
+    let out = Command::new(PYTHON)
+        .arg("-c")
+        .arg(CHECK_PY)
+        .args(args)
+        .output()
+        .expect("running /usr/bin/python3");
+    assert!(
+        out.status.success(),
+        "python check {args:?} failed:\n{}\n{}",
+        String::from_utf8_lossy(&out.stdout),
+        String::from_utf8_lossy(&out.stderr)
+    );
+    String::from_utf8(out.stdout).unwrap()
+}
+
+fn check(dir: &Path, dim: usize, n: usize, contact: bool) -> serde_json::Value {
+    let s = python(&[
+        "check",
+        dir.to_str().unwrap(),
+        &dim.to_string(),
+        &n.to_string(),
+        if contact { "1" } else { "0" },
+    ]);
+    serde_json::from_str(s.trim()).unwrap_or_else(|e| panic!("bad summary {s}: {e}"))
+}
+
+fn compare(a: &Path, b: &Path) {
+    let s = python(&["compare", a.to_str().unwrap(), b.to_str().unwrap()]);
+    assert_eq!(s.trim(), "same");
+}
+
+/// Writes with 1 rank and with `np` ranks, checks both and compares them.
+fn one_vs_many(np: usize, dim: usize, n: usize, extra: &[&str]) -> Vec<serde_json::Value> {
+    let contact = extra.contains(&"--contact");
+    let t1 = tempfile::tempdir().unwrap();
+    let t2 = tempfile::tempdir().unwrap();
+    write(1, t1.path(), dim, n, extra);
+    write(np, t2.path(), dim, n, extra);
+    let s1 = check(t1.path(), dim, n, contact);
+    let s2 = check(t2.path(), dim, n, contact);
+    compare(t1.path(), t2.path());
+    vec![s1, s2]
+}
+
+#[test]
+fn triangles_with_contact_1_and_2_ranks() {
+    let s = one_vs_many(2, 2, 7, &["--contact"]);
+    assert_eq!(s[0]["n_points"], 64);
+    assert_eq!(s[0]["n_cells"], 98);
+    assert_eq!(s[0]["cell_type"], "triangle");
+    assert_eq!(s[0]["grids"], serde_json::json!(["mesh", "contact"]));
+    assert_eq!(s[0]["contact_points"], 8);
+    assert_eq!(
+        s[0]["contact_data"],
+        serde_json::json!(["gap", "node_id", "traction"])
+    );
+    assert_eq!(s[0]["ranks_seen"], serde_json::json!([0]));
+    assert_eq!(s[1]["ranks_seen"], serde_json::json!([0, 1]));
+}
+
+#[test]
+fn tetrahedra_with_contact_1_and_3_ranks() {
+    let s = one_vs_many(3, 3, 3, &["--contact"]);
+    assert_eq!(s[1]["n_points"], 64);
+    assert_eq!(s[1]["n_cells"], 162);
+    assert_eq!(s[1]["cell_type"], "tetra");
+    assert_eq!(s[1]["contact_points"], 16);
+    assert_eq!(s[1]["ranks_seen"], serde_json::json!([0, 1, 2]));
+}
+
+#[test]
+fn rank_without_rows_and_no_contact() {
+    // 2 ranks, the second owns no node, cell or contact node: it still joins every call
+    let s = one_vs_many(2, 2, 4, &["--empty-last"]);
+    assert_eq!(s[1]["grids"], serde_json::json!(["mesh"]));
+    assert_eq!(s[1]["ranks_seen"], serde_json::json!([0]));
+    let s = one_vs_many(2, 3, 2, &["--empty-last", "--contact"]);
+    assert_eq!(s[1]["contact_points"], 9);
+}
+
+#[test]
+fn missing_directory_is_an_error_on_every_rank() {
+    let t = tempfile::tempdir().unwrap();
+    let missing = t.path().join("does_not_exist");
+    let out = mpirun(2, &[missing.to_str().unwrap(), "2", "3", "--contact"]);
+    assert!(!out.status.success());
+    let err = String::from_utf8_lossy(&out.stderr);
+    // both ranks report, and the message names the file
+    for r in 0..2 {
+        assert!(
+            err.contains(&format!("output_demo rank {r}:")),
+            "no error from rank {r} in:\n{err}"
+        );
+    }
+    assert_eq!(
+        err.matches("does_not_exist/solution.h5: cannot create")
+            .count(),
+        2,
+        "{err}"
+    );
+}

@@ -1,2 +1,35 @@
-//! Contact algebra: obstacles, frames, complementarity functions, Tresca regularisation.
-//! Pure functions on small fixed-size arrays.
+//! Contact algebra: obstacles, frames, complementarity functions, Tresca regularisation,
+//! node states and residual certificates. Pure functions on small fixed-size arrays; no
+//! MPI, no PETSc. Equation numbers refer to the thesis / docs/THEORY.md.
+//!
+//! - [`obstacle`]: `Plane`, `Sphere`, `Obstacle::project` → closest point, normal n (into
+//!   the body), gap g0 (3.3).
+//! - [`frame`]: orthonormal frames {n, τ_1 (, τ_2)}; 2D τ = (n_y, −n_x), 3D right-handed.
+//! - [`complementarity`]: C_n (3.21), normal test (3.23), C_τ (3.31), slip test (3.33),
+//!   node states S1..S4.
+//! - [`tresca`]: slip rows −λ_τ + L̃ u_τ = r̃ (3.39) with the regularisation (3.40), the
+//!   unregularised L, r (3.37)/(3.38), and the zero-threshold rule (§3.4.3).
+//! - [`residual`]: residuals of (3.14) and (3.18) for a convergence certificate.
+//!
+//! Tangential quantities are generic over M = d − 1 (`[f64; M]`, `[[f64; M]; M]`);
+//! [`tresca::tangential_row_dyn`] and [`frame::Frame`] serve callers with a runtime
+//! dimension (tangential vectors padded to `[f64; 2]`).
+
+pub mod complementarity;
+pub mod frame;
+mod linalg;
+pub mod obstacle;
+pub mod residual;
+pub mod tresca;
+
+pub use complementarity::{c_n, c_tau, classify, normal_active, tangential_slip, NodeState};
+pub use frame::{tangent_2d, tangents_3d, Frame};
+pub use obstacle::{Obstacle, ObstacleError, Plane, Projection, Sphere};
+pub use residual::{
+    normal_conditions_hold, normal_residual, tangential_residual, tresca_conditions_hold,
+    tresca_natural_residual, NormalResidual, TangentialResidual,
+};
+pub use tresca::{
+    regularise, tangential_row, tangential_row_dyn, unregularised, Regularisation, TangentialRow,
+    Unregularised,
+};

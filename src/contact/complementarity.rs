@@ -258,6 +258,26 @@ mod tests {
         satz_3_7_random::<2>(9);
     }
 
+    /// Zero-padded 2D vectors in the M = 2 functions give the M = 1 results.
+    #[test]
+    fn padded_2d_equals_scalar() {
+        let mut rng = StdRng::seed_from_u64(10);
+        for _ in 0..500 {
+            let (u, l) = (rng.gen_range(-1.0..1.0), rng.gen_range(-2.0..2.0));
+            let (b, c) = (rng.gen_range(0.0..1.5), rng.gen_range(0.1..3.0));
+            let (up, lp) = ([u, 0.0], [l, 0.0]);
+            assert_eq!(c_tau(&up, &lp, b, c), [c_tau(&[u], &[l], b, c)[0], 0.0]);
+            assert_eq!(
+                tangential_slip(&up, &lp, b, c),
+                tangential_slip(&[u], &[l], b, c)
+            );
+            assert_eq!(
+                classify(0.0, -1.0, 0.0, &up, &lp, b, c),
+                classify(0.0, -1.0, 0.0, &[u], &[l], b, c)
+            );
+        }
+    }
+
     #[test]
     fn states_and_classification() {
         for na in [false, true] {

@@ -11,9 +11,11 @@
 //!   unregularised L, r (3.37)/(3.38), and the zero-threshold rule (§3.4.3).
 //! - [`residual`]: residuals of (3.14) and (3.18) for a convergence certificate.
 //!
-//! Tangential quantities are generic over M = d − 1 (`[f64; M]`, `[[f64; M]; M]`);
-//! [`tresca::tangential_row_dyn`] and [`frame::Frame`] serve callers with a runtime
-//! dimension (tangential vectors padded to `[f64; 2]`).
+//! Tangential quantities are generic over M = d − 1 (`[f64; M]`, `[[f64; M]; M]`).
+//! Callers with a runtime dimension may pass 2D tangential vectors zero-padded to
+//! `[f64; 2]` (as [`frame::Frame::tangential_part`] returns them) to `c_tau`,
+//! `tangential_slip`, `classify` and the residuals: the results equal the M = 1 ones.
+//! NOT to `regularise`/`tangential_row`: use [`tresca::tangential_row_dyn`] there.
 
 pub mod complementarity;
 pub mod frame;

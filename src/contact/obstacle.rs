@@ -18,7 +18,7 @@ use std::path::Path;
 pub enum ObstacleError {
     /// A coordinate or the radius is NaN or infinite.
     NotFinite,
-    /// The plane's normal has (numerically) zero length.
+    /// The plane's normal is the zero vector.
     ZeroNormal,
     /// The sphere's radius is ≤ 0.
     NonPositiveRadius,

@@ -236,7 +236,7 @@ pub fn tangential_row_dyn(
 mod tests {
     use super::super::complementarity::c_tau;
     use super::super::linalg::{eig2, matmul, max_abs, scale};
-    use super::super::residual::{project_ball, tangential_residual};
+    use super::super::residual::tangential_residual;
     use super::*;
     use rand::rngs::StdRng;
     use rand::{Rng, SeedableRng};
@@ -671,14 +671,16 @@ mod tests {
             assert!(res.excess <= 1e-10 && res.stick_motion <= 1e-12);
             assert!(res.slip_alignment <= 1e-9, "{res:?}");
             assert_eq!(norm(&u) > 0.0, slip);
-            // compare with the closed form in the isotropic direction of the residual
+            // (3.18) holds (the certificate above) and the problem is strictly convex, so
+            // this is the solution. In 2D compare with the closed form as well.
             if !slip {
                 assert_eq!(lam, f);
-            } else {
-                assert!(norm(&axpy(&project_ball(&lam, b), -1.0, &lam)) <= 1e-10);
+            } else if M == 1 {
+                let want = (f[0] - b * f[0].signum()) / k[0][0];
+                assert!((u[0] - want).abs() <= 1e-12 * (1.0 + want.abs()));
             }
         }
-        assert!(steps_max <= 40, "max steps {steps_max}");
+        assert!(steps_max <= 25, "max steps {steps_max}");
     }
 
     #[test]

@@ -836,7 +836,7 @@ fn simplex_measures() {
 
 // ---------------------------------------------------------------- throughput
 
-/// Element-kernel throughput. Run with
+/// Element-kernel throughput (best of 5 rounds, the machine is shared). Run with
 /// `cargo test --release --lib fem::tests::kernel_throughput -- --ignored --nocapture`.
 #[test]
 #[ignore]
@@ -846,37 +846,36 @@ fn kernel_throughput() {
     let mut rng = StdRng::seed_from_u64(1);
     let tris: Vec<[[f64; 2]; 3]> = (0..1024).map(|_| random_tri(&mut rng)).collect();
     let tets: Vec<[[f64; 3]; 4]> = (0..1024).map(|_| random_tet(&mut rng)).collect();
-    let reps = 2000;
-    let mut k = [0.0; 36];
+    let reps = 500;
+    let mut best = [f64::INFINITY; 2];
     let mut acc = 0.0;
-    let t0 = Instant::now();
-    for _ in 0..reps {
-        for x in &tris {
-            acc += tri_stiffness(black_box(x), 1.2, 0.8, &mut k);
-            acc += black_box(&k)[7];
+    for _ in 0..5 {
+        let mut k = [0.0; 36];
+        let t0 = Instant::now();
+        for _ in 0..reps {
+            for x in &tris {
+                acc += tri_stiffness(black_box(x), 1.2, 0.8, &mut k);
+                acc += black_box(&k)[7];
+            }
         }
-    }
-    let dt = t0.elapsed().as_secs_f64();
-    let n = (reps * tris.len()) as f64;
-    println!(
-        "tri_stiffness: {:.3e} elements/s ({:.1} ns/element)  [{acc:.3}]",
-        n / dt,
-        1e9 * dt / n
-    );
-    let mut k = [0.0; 144];
-    let mut acc = 0.0;
-    let t0 = Instant::now();
-    for _ in 0..reps {
-        for x in &tets {
-            acc += tet_stiffness(black_box(x), 1.2, 0.8, &mut k);
-            acc += black_box(&k)[13];
+        best[0] = best[0].min(t0.elapsed().as_secs_f64());
+        let mut k = [0.0; 144];
+        let t0 = Instant::now();
+        for _ in 0..reps {
+            for x in &tets {
+                acc += tet_stiffness(black_box(x), 1.2, 0.8, &mut k);
+                acc += black_box(&k)[13];
+            }
         }
+        best[1] = best[1].min(t0.elapsed().as_secs_f64());
     }
-    let dt = t0.elapsed().as_secs_f64();
-    let n = (reps * tets.len()) as f64;
-    println!(
-        "tet_stiffness: {:.3e} elements/s ({:.1} ns/element)  [{acc:.3}]",
-        n / dt,
-        1e9 * dt / n
-    );
+    let n = (reps * 1024) as f64;
+    for (name, dt) in [("tri_stiffness", best[0]), ("tet_stiffness", best[1])] {
+        println!(
+            "{name}: {:.3e} elements/s ({:.1} ns/element)",
+            n / dt,
+            1e9 * dt / n
+        );
+    }
+    assert!(acc.is_finite());
 }

@@ -37,14 +37,14 @@ pub fn facet_normal_measure(x: &[[f64; 3]]) -> ([f64; 3], f64) {
     }
 }
 
-/// Consistent load of a CONSTANT traction on a P1 facet (exact): each of the `dim` facet nodes
+/// (3.8): consistent load of a CONSTANT traction on a P1 facet (exact): each of the `dim` facet nodes
 /// gets traction * measure / dim. `out` (length dim*dim, node-major) is overwritten.
 /// Only the first `dim` components of `traction` are used.
 pub fn lumped_facet_load(measure: f64, traction: [f64; 3], dim: usize, out: &mut [f64]) {
     spread(measure / dim as f64, traction, dim, dim, out);
 }
 
-/// Consistent load of a CONSTANT body force on a P1 cell (exact): each of the dim+1 cell
+/// (3.8): consistent load of a CONSTANT body force on a P1 cell (exact): each of the dim+1 cell
 /// nodes gets f * measure / (dim+1). `out` (length (dim+1)*dim, node-major) is overwritten.
 pub fn body_force_load(measure: f64, f: [f64; 3], dim: usize, out: &mut [f64]) {
     spread(measure / (dim + 1) as f64, f, dim + 1, dim, out);

@@ -37,8 +37,8 @@ pub fn facet_normal_measure(x: &[[f64; 3]]) -> ([f64; 3], f64) {
     }
 }
 
-/// (3.8): consistent load of a CONSTANT traction on a P1 facet (exact): each of the `dim` facet nodes
-/// gets traction * measure / dim. `out` (length dim*dim, node-major) is overwritten.
+/// (3.8): consistent load of a CONSTANT traction on a P1 facet (exact): each of the `dim`
+/// facet nodes gets traction * measure / dim. `out` (length dim*dim, node-major) is overwritten.
 /// Only the first `dim` components of `traction` are used.
 pub fn lumped_facet_load(measure: f64, traction: [f64; 3], dim: usize, out: &mut [f64]) {
     spread(measure / dim as f64, traction, dim, dim, out);

@@ -151,6 +151,45 @@ else:
     compare(sys.argv[2], sys.argv[3])
 "#;
 
+/// ParaView check (pvbatch): both legacy XDMFReader and Xdmf3ReaderT must give a multiblock
+/// with the blocks "mesh" and "contact", and the displacement must equal f(points).
+const PARAVIEW_PY: &str = r#"
+import sys, json
+import numpy as np
+from paraview.simple import XDMFReader, Xdmf3ReaderT
+from paraview import servermanager as sm
+from vtkmodules.util.numpy_support import vtk_to_numpy
+f = sys.argv[1]
+out = {}
+for name, make in [("XDMFReader", lambda: XDMFReader(FileNames=[f])),
+                   ("Xdmf3ReaderT", lambda: Xdmf3ReaderT(FileName=[f]))]:
+    r = make()
+    r.UpdatePipeline()
+    d = sm.Fetch(r)
+    assert d.IsA("vtkMultiBlockDataSet"), d.GetClassName()
+    blocks = {}
+    for i in range(d.GetNumberOfBlocks()):
+        b = d.GetBlock(i)
+        bname = d.GetMetaData(i).Get(d.NAME())
+        p = vtk_to_numpy(b.GetPoints().GetData())
+        pd = b.GetPointData()
+        cd = b.GetCellData()
+        info = {"points": b.GetNumberOfPoints(), "cells": b.GetNumberOfCells(),
+                "cell_types": sorted(set(b.GetCellType(j) for j in range(b.GetNumberOfCells()))),
+                "point_arrays": {pd.GetArrayName(j): pd.GetArray(j).GetNumberOfComponents()
+                                 for j in range(pd.GetNumberOfArrays())},
+                "cell_arrays": {cd.GetArrayName(j): cd.GetArray(j).GetNumberOfComponents()
+                                for j in range(cd.GetNumberOfArrays())}}
+        if bname == "mesh":
+            u = vtk_to_numpy(pd.GetArray("displacement"))
+            x, y, z = p[:, 0], p[:, 1], p[:, 2]
+            info["displacement_ok"] = bool(np.allclose(
+                u, np.stack([x + 2 * y, x * y - z, 0.5 * z + x * x], 1), atol=1e-14, rtol=0))
+        blocks[bname] = info
+    out[name] = blocks
+print("RESULT " + json.dumps(out))
+"#;
+
 /// Path of the example binary, built once per test run (same profile as this test).
 fn demo() -> &'static Path {
     static BIN: OnceLock<PathBuf> = OnceLock::new();
@@ -323,4 +362,48 @@ fn missing_directory_is_an_error_on_every_rank() {
         2,
         "{err}"
     );
+}
+
+#[test]
+fn paraview_reads_mesh_and_contact_blocks() {
+    let pvbatch = Path::new("/usr/bin/pvbatch");
+    if !pvbatch.exists() {
+        eprintln!("skipped: /usr/bin/pvbatch not installed");
+        return;
+    }
+    let t = tempfile::tempdir().unwrap();
+    write(2, t.path(), 3, 2, &["--contact"]);
+    let script = t.path().join("pv_check.py");
+    std::fs::write(&script, PARAVIEW_PY).unwrap();
+    let out = Command::new(pvbatch)
+        .arg(&script)
+        .arg(t.path().join("solution.xdmf"))
+        .output()
+        .expect("pvbatch");
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        out.status.success(),
+        "pvbatch failed:\n{stdout}\n{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let line = stdout
+        .lines()
+        .find_map(|l| l.strip_prefix("RESULT "))
+        .unwrap_or_else(|| panic!("no result from pvbatch:\n{stdout}"));
+    let v: serde_json::Value = serde_json::from_str(line).unwrap();
+    for reader in ["XDMFReader", "Xdmf3ReaderT"] {
+        let mesh = &v[reader]["mesh"];
+        assert_eq!(mesh["points"], 27, "{reader}");
+        assert_eq!(mesh["cells"], 48, "{reader}");
+        assert_eq!(mesh["cell_types"], serde_json::json!([10]), "{reader}"); // VTK_TETRA
+        assert_eq!(mesh["point_arrays"]["displacement"], 3, "{reader}");
+        assert_eq!(mesh["cell_arrays"]["stress"], 9, "{reader}");
+        assert_eq!(mesh["cell_arrays"]["pair"], 2, "{reader}");
+        assert_eq!(mesh["displacement_ok"], true, "{reader}");
+        let contact = &v[reader]["contact"];
+        assert_eq!(contact["points"], 9, "{reader}");
+        assert_eq!(contact["cells"], 9, "{reader}");
+        assert_eq!(contact["cell_types"], serde_json::json!([2]), "{reader}"); // VTK_POLY_VERTEX
+        assert_eq!(contact["point_arrays"]["traction"], 3, "{reader}");
+    }
 }

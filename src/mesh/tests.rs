@@ -494,28 +494,40 @@ fn lines_only_mesh_rejected() {
     assert!(e.message.contains("no triangles or tetrahedra"), "{e}");
 }
 
-/// Timing on a large binary mesh: `cargo test --release --lib mesh::tests::big -- --ignored --nocapture`
+/// Timing on a large binary mesh (generated with gmsh, or `MESH_FILE=path`):
+/// `cargo test --release --lib mesh::tests::big -- --ignored --nocapture`
 #[test]
 #[ignore]
 fn big_binary_mesh_timing() {
     let dir = tempfile::tempdir().unwrap();
-    let h = std::env::var("MESH_H").unwrap_or_else(|_| "0.0013".into());
-    let out = dir.path().join("big.msh");
+    let out = match std::env::var("MESH_FILE") {
+        Ok(f) => PathBuf::from(f),
+        Err(_) => {
+            let h = std::env::var("MESH_H").unwrap_or_else(|_| "0.0013".into());
+            let out = dir.path().join("big.msh");
+            let st = std::process::Command::new("gmsh")
+                .args(["-v", "0", "-2", "-bin", "-setnumber", "h", &h])
+                .arg(mesh_path("square.geo"))
+                .args(["-format", "msh41", "-o"])
+                .arg(&out)
+                .status()
+                .unwrap();
+            assert!(st.success());
+            out
+        }
+    };
     let t = std::time::Instant::now();
-    let st = std::process::Command::new("gmsh")
-        .args(["-v", "0", "-2", "-bin", "-setnumber", "h", &h])
-        .arg(mesh_path("square.geo"))
-        .args(["-format", "msh41", "-o"])
-        .arg(&out)
-        .status()
-        .unwrap();
-    assert!(st.success());
-    eprintln!("gmsh: {:.1} s", t.elapsed().as_secs_f64());
+    let bytes = std::fs::read(&out).unwrap();
+    let t_read = t.elapsed().as_secs_f64();
+    let msh = mshio::parse_msh_bytes(&bytes).unwrap();
+    let t_parse = t.elapsed().as_secs_f64() - t_read;
+    drop(msh);
+    drop(bytes);
     let t = std::time::Instant::now();
     let m = read_msh(&out).unwrap();
     let dt = t.elapsed().as_secs_f64();
     eprintln!(
-        "read {} triangles, {} nodes in {dt:.2} s",
+        "read_msh: {} triangles, {} nodes in {dt:.2} s (file read {t_read:.2} s, mshio parse {t_parse:.2} s)",
         m.n_cells(),
         m.n_nodes()
     );

@@ -54,5 +54,7 @@ fn main() {
         .generate()
         .expect("bindgen failed on the PETSc headers");
     let out = PathBuf::from(env::var("OUT_DIR").unwrap()).join("petsc_bindings.rs");
-    bindings.write_to_file(&out).expect("writing PETSc bindings");
+    bindings
+        .write_to_file(&out)
+        .expect("writing PETSc bindings");
 }

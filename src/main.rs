@@ -1,1 +1,85 @@
-fn main() {}
+//! `signorini-mpi CASE.toml [--set key=value]... [-o DIR] [-- PETSc options]`
+
+use clap::Parser;
+use mpi::traits::*;
+use signorini_mpi::case::Case;
+use signorini_mpi::petsc::Petsc;
+use signorini_mpi::run::{self, Ctx, RunError};
+use std::path::PathBuf;
+
+/// Static contact of linear-elastic bodies with a rigid obstacle (semismooth Newton, MPI + PETSc).
+#[derive(Parser, Debug)]
+#[command(name = "signorini-mpi", version)]
+struct Cli {
+    /// The case file (TOML).
+    case: PathBuf,
+    /// Override a case key, e.g. --set mesh.file=fine.msh --set newton.c=10 (repeatable).
+    #[arg(long = "set", value_name = "KEY=VALUE")]
+    set: Vec<String>,
+    /// Output directory (replaces output.dir).
+    #[arg(short = 'o', long = "output", value_name = "DIR")]
+    output: Option<PathBuf>,
+    /// PETSc options, after `--` (e.g. -- -ksp_monitor -log_view).
+    #[arg(last = true, value_name = "PETSC_OPTIONS")]
+    petsc: Vec<String>,
+}
+
+fn main() {
+    let cli = Cli::parse();
+    let code = {
+        let Some(universe) = mpi::initialize() else {
+            eprintln!("error: MPI could not be initialised");
+            std::process::exit(1);
+        };
+        let world = universe.world();
+        let rank = world.rank();
+        let code = match Petsc::init(&cli.petsc) {
+            Err(e) => {
+                eprintln!("error: PETSc could not be initialised: {e}");
+                world.abort(1);
+            }
+            Ok(petsc) => {
+                let code = run(&cli, &world, &petsc);
+                drop(petsc);
+                code
+            }
+        };
+        let _ = rank;
+        code
+    };
+    std::process::exit(code);
+}
+
+fn run(cli: &Cli, world: &mpi::topology::SimpleCommunicator, petsc: &Petsc) -> i32 {
+    let ctx = Ctx::new(world, petsc);
+    let case = Case::load(&cli.case, &cli.set, cli.output.as_deref());
+    if ctx.any(case.is_err()) {
+        if let Err(e) = &case {
+            if ctx.rank == 0 {
+                eprintln!("error: {e}");
+            }
+        }
+        return 2;
+    }
+    let case = case.expect("checked");
+    match run::run_case(&ctx, &case) {
+        Ok(_) => 0,
+        Err(RunError::Input(e)) => {
+            if ctx.rank == 0 {
+                eprintln!("error: {e}");
+            }
+            2
+        }
+        Err(RunError::Failed(s)) => {
+            if ctx.rank == 0 {
+                eprintln!("error: {s}");
+            }
+            1
+        }
+        Err(e @ RunError::Petsc(_)) => {
+            // A PETSc failure may be local to this rank: end every rank.
+            eprintln!("error (rank {}): {e}", ctx.rank);
+            world.abort(1);
+        }
+    }
+}

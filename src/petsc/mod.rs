@@ -371,6 +371,56 @@ impl Vector {
         Ok(r)
     }
 
+    /// Values at arbitrary global indices (owned or not), gathered with a VecScatter
+    /// (collective: every rank calls it, possibly with an empty list).
+    pub fn gather(&self, global: &[PInt]) -> Result<Vec<f64>> {
+        let n = global.len();
+        // SAFETY: sequential target vector and index set live until destroyed below; the
+        // index array is copied by PETSc.
+        unsafe {
+            let mut y: ffi::Vec = ptr::null_mut();
+            check(ffi::VecCreateSeq(ffi::RSMPI_COMM_SELF, n as PInt, &mut y))?;
+            let y = Vector { raw: y };
+            let mut is: ffi::IS = ptr::null_mut();
+            check(ffi::ISCreateGeneral(
+                ffi::RSMPI_COMM_SELF,
+                n as PInt,
+                global.as_ptr(),
+                ffi::PETSC_COPY_VALUES,
+                &mut is,
+            ))?;
+            let mut sc: ffi::VecScatter = ptr::null_mut();
+            let r = check(ffi::VecScatterCreate(
+                self.raw,
+                is,
+                y.raw,
+                ptr::null_mut(),
+                &mut sc,
+            ));
+            ffi::ISDestroy(&mut is);
+            r?;
+            let r = check(ffi::VecScatterBegin(
+                sc,
+                self.raw,
+                y.raw,
+                ffi::INSERT_VALUES,
+                ffi::SCATTER_FORWARD,
+            ))
+            .and_then(|_| {
+                check(ffi::VecScatterEnd(
+                    sc,
+                    self.raw,
+                    y.raw,
+                    ffi::INSERT_VALUES,
+                    ffi::SCATTER_FORWARD,
+                ))
+            });
+            ffi::VecScatterDestroy(&mut sc);
+            r?;
+            y.to_local_vec()
+        }
+    }
+
     /// self = a * x + self
     pub fn axpy(&mut self, a: f64, x: &Vector) -> Result<()> {
         // SAFETY: compatible layouts are checked by PETSc.
@@ -531,13 +581,7 @@ impl Matrix {
     /// self = other, both with the same nonzero pattern (no reallocation, nonzero state kept).
     pub fn copy_values_from(&mut self, other: &Matrix) -> Result<()> {
         // SAFETY: both valid; PETSc checks the layouts.
-        unsafe {
-            check(ffi::MatCopy(
-                other.raw,
-                self.raw,
-                ffi::SAME_NONZERO_PATTERN,
-            ))
-        }
+        unsafe { check(ffi::MatCopy(other.raw, self.raw, ffi::SAME_NONZERO_PATTERN)) }
     }
 
     /// Calls `f(columns, values)` with one owned row (global index).
@@ -547,7 +591,13 @@ impl Matrix {
         let mut vals: *const f64 = ptr::null();
         // SAFETY: the arrays are valid for n entries between MatGetRow and MatRestoreRow.
         unsafe {
-            check(ffi::MatGetRow(self.raw, row as PInt, &mut n, &mut cols, &mut vals))?;
+            check(ffi::MatGetRow(
+                self.raw,
+                row as PInt,
+                &mut n,
+                &mut cols,
+                &mut vals,
+            ))?;
             let (c, v) = if n == 0 {
                 (&[][..], &[][..])
             } else {

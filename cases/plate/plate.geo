@@ -1,0 +1,29 @@
+// A 2 x 1 plate with a circular hole, clamped on the left, pressed on the top.
+// gmsh -2 plate.geo -format msh41 -setnumber h 0.05 -o plate.msh
+If (!Exists(h)) h = 0.05; EndIf
+Point(1) = {0, 0, 0, h};
+Point(2) = {2, 0, 0, h};
+Point(3) = {2, 1, 0, h};
+Point(4) = {0, 1, 0, h};
+Line(1) = {1, 2};
+Line(2) = {2, 3};
+Line(3) = {3, 4};
+Line(4) = {4, 1};
+Point(5) = {1.0, 0.5, 0, h};
+Point(6) = {1.25, 0.5, 0, h / 2};
+Point(7) = {1.0, 0.75, 0, h / 2};
+Point(8) = {0.75, 0.5, 0, h / 2};
+Point(9) = {1.0, 0.25, 0, h / 2};
+Circle(5) = {6, 5, 7};
+Circle(6) = {7, 5, 8};
+Circle(7) = {8, 5, 9};
+Circle(8) = {9, 5, 6};
+Curve Loop(1) = {1, 2, 3, 4};
+Curve Loop(2) = {5, 6, 7, 8};
+Plane Surface(1) = {1, 2};
+Physical Curve("bottom") = {1};
+Physical Curve("right") = {2};
+Physical Curve("load") = {3};
+Physical Curve("clamp") = {4};
+Physical Curve("hole") = {5, 6, 7, 8};
+Physical Surface("body") = {1};

@@ -1,0 +1,301 @@
+//! Assembly of the stiffness matrix A and load vector f of (3.8), every rank its own cells.
+//!
+//! Dirichlet data are eliminated symmetrically inside the element loop (row and column of a
+//! fixed dof are zero except the diagonal, the known value moves to the right-hand side), so A
+//! keeps its full nonzero pattern and stays symmetric; the right-hand side of a fixed dof is set
+//! to A_jj · g_j after assembly. Zeros are inserted explicitly: the pattern never changes.
+
+use crate::fem::{self, Material};
+use crate::mesh::Mesh;
+use crate::partition::Layout;
+use crate::petsc::{self, MPI_Comm, Matrix, PInt, Vector};
+use std::time::Instant;
+
+/// A load on a set of boundary facets.
+#[derive(Clone, Debug)]
+pub enum FacetLoadKind {
+    /// Normal pressure, positive pushes into the body.
+    Pressure(f64),
+    /// Vector traction (3 components, z ignored in 2D).
+    Traction([f64; 3]),
+}
+
+#[derive(Clone, Debug)]
+pub struct FacetLoad {
+    /// Indices into `mesh.facets`.
+    pub facets: Vec<usize>,
+    pub kind: FacetLoadKind,
+}
+
+/// Volume load.
+pub enum BodyForce {
+    None,
+    Constant([f64; 3]),
+    /// A smooth field, integrated with a degree-2 rule (manufactured solutions).
+    Function(Box<dyn Fn([f64; 3]) -> [f64; 3]>),
+}
+
+/// The linear-elastic problem as assembly sees it.
+pub struct Problem<'a> {
+    pub mesh: &'a Mesh,
+    pub material: Material,
+    /// Prescribed value per mesh dof (node * dim + component); NaN = free.
+    pub fixed: Vec<f64>,
+    pub facet_loads: Vec<FacetLoad>,
+    pub body_force: BodyForce,
+}
+
+/// Assembly statistics of this rank.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct AssemblyStats {
+    pub preallocation_seconds: f64,
+    pub matrix_seconds: f64,
+    pub load_seconds: f64,
+    pub mallocs: f64,
+    pub nonzeros: f64,
+}
+
+/// A and f in PETSc form.
+pub struct System {
+    pub a: Matrix,
+    pub b: Vector,
+    pub stats: AssemblyStats,
+}
+
+/// Global dof numbers of the nodes of a cell / facet.
+#[inline]
+fn dofs_of(nodes: &[usize], layout: &Layout, dim: usize, out: &mut [PInt]) {
+    for (a, &v) in nodes.iter().enumerate() {
+        let g = layout.node_global[v] * dim;
+        for i in 0..dim {
+            out[a * dim + i] = (g + i) as PInt;
+        }
+    }
+}
+
+/// Exact block preallocation for the owned node rows: the number of distinct neighbour nodes
+/// (itself included) owned by this rank / by other ranks.
+fn preallocation(mesh: &Mesh, layout: &Layout) -> (Vec<PInt>, Vec<PInt>) {
+    let n_owned = layout.n_owned_nodes();
+    let mut d_nnz = vec![0 as PInt; n_owned];
+    let mut o_nnz = vec![0 as PInt; n_owned];
+    let mut stamp = vec![usize::MAX; mesh.n_nodes()];
+    for (i, &v) in layout.owned_nodes.iter().enumerate() {
+        for &c in layout.node_cells.of(v) {
+            for &w in mesh.cell(c) {
+                if stamp[w] != i {
+                    stamp[w] = i;
+                    if layout.owns_node(w) {
+                        d_nnz[i] += 1;
+                    } else {
+                        o_nnz[i] += 1;
+                    }
+                }
+            }
+        }
+    }
+    (d_nnz, o_nnz)
+}
+
+/// The cell that contains a boundary facet, and the cell node opposite to it.
+pub fn facet_cell(mesh: &Mesh, layout: &Layout, facet: usize) -> Option<(usize, usize)> {
+    let fnodes = mesh.facet(facet);
+    layout
+        .node_cells
+        .of(fnodes[0])
+        .iter()
+        .copied()
+        .find(|&c| {
+            let cn = mesh.cell(c);
+            fnodes.iter().all(|v| cn.contains(v))
+        })
+        .map(|c| {
+            let opp = *mesh
+                .cell(c)
+                .iter()
+                .find(|v| !fnodes.contains(v))
+                .expect("a cell has a node off its facet");
+            (c, opp)
+        })
+}
+
+/// Outward unit normal and measure of a boundary facet (oriented away from its cell).
+pub fn outward_normal(mesh: &Mesh, facet: usize, opposite: usize) -> ([f64; 3], f64) {
+    let fn_ = mesh.facet(facet);
+    let x: Vec<[f64; 3]> = fn_.iter().map(|&v| mesh.coords[v]).collect();
+    let (mut n, m) = fem::facet_normal_measure(&x);
+    let xo = mesh.coords[opposite];
+    let s: f64 = (0..3).map(|i| (xo[i] - x[0][i]) * n[i]).sum();
+    if s > 0.0 {
+        n = [-n[0], -n[1], -n[2]];
+    }
+    (n, m)
+}
+
+/// Assembles A (MPIAIJ, block size dim, exact preallocation) and f (3.8) on this rank's cells.
+pub fn assemble(comm: MPI_Comm, layout: &Layout, p: &Problem) -> petsc::Result<System> {
+    let mesh = p.mesh;
+    let dim = mesh.dim;
+    let npc = dim + 1;
+    let nd = npc * dim;
+    let t0 = Instant::now();
+    let (d_nnz, o_nnz) = preallocation(mesh, layout);
+    let local_rows = layout.n_owned_nodes() * dim;
+    let mut a = Matrix::new_aij(comm, local_rows, dim, &d_nnz, &o_nnz)?;
+    let mut b = Vector::new_mpi(comm, local_rows, dim)?;
+    let mut stats = AssemblyStats {
+        preallocation_seconds: t0.elapsed().as_secs_f64(),
+        ..Default::default()
+    };
+
+    let t1 = Instant::now();
+    let (lambda, mu) = p.material.lame();
+    let mut ke = [0.0f64; 144];
+    let mut fe = [0.0f64; 12];
+    let mut idx = [0 as PInt; 12];
+    let mut fixed_local = [f64::NAN; 12];
+    let mut bidx: Vec<PInt> = Vec::with_capacity(layout.local_cells.len() * nd);
+    let mut bval: Vec<f64> = Vec::with_capacity(layout.local_cells.len() * nd);
+    for &c in &layout.local_cells {
+        let nodes = mesh.cell(c);
+        if dim == 2 {
+            let x = [
+                [mesh.coords[nodes[0]][0], mesh.coords[nodes[0]][1]],
+                [mesh.coords[nodes[1]][0], mesh.coords[nodes[1]][1]],
+                [mesh.coords[nodes[2]][0], mesh.coords[nodes[2]][1]],
+            ];
+            let k: &mut [f64; 36] = (&mut ke[..36]).try_into().unwrap();
+            fem::tri_stiffness(&x, lambda, mu, k);
+        } else {
+            let x = [
+                mesh.coords[nodes[0]],
+                mesh.coords[nodes[1]],
+                mesh.coords[nodes[2]],
+                mesh.coords[nodes[3]],
+            ];
+            fem::tet_stiffness(&x, lambda, mu, &mut ke);
+        }
+        dofs_of(nodes, layout, dim, &mut idx);
+        // Symmetric elimination of fixed dofs.
+        let mut any_fixed = false;
+        for (a_, &v) in nodes.iter().enumerate() {
+            for i in 0..dim {
+                let g = p.fixed[v * dim + i];
+                fixed_local[a_ * dim + i] = g;
+                any_fixed |= !g.is_nan();
+            }
+        }
+        if any_fixed {
+            fe[..nd].iter_mut().for_each(|x| *x = 0.0);
+            for j in 0..nd {
+                let g = fixed_local[j];
+                if g.is_nan() {
+                    continue;
+                }
+                for i in 0..nd {
+                    if i != j {
+                        if fixed_local[i].is_nan() {
+                            fe[i] -= ke[i * nd + j] * g;
+                        }
+                        ke[i * nd + j] = 0.0;
+                        ke[j * nd + i] = 0.0;
+                    }
+                }
+            }
+            for i in 0..nd {
+                if fixed_local[i].is_nan() && fe[i] != 0.0 {
+                    bidx.push(idx[i]);
+                    bval.push(fe[i]);
+                }
+            }
+        }
+        a.add_values(&idx[..nd], &idx[..nd], &ke[..nd * nd])?;
+    }
+    a.assemble()?;
+    stats.matrix_seconds = t1.elapsed().as_secs_f64();
+    let st = a.stats()?;
+    stats.mallocs = st.mallocs;
+    stats.nonzeros = st.nonzeros;
+
+    // Loads: body force on own cells, facet loads on facets whose cell is ours.
+    let t2 = Instant::now();
+    let mut xs: Vec<[f64; 3]> = Vec::with_capacity(4);
+    match &p.body_force {
+        BodyForce::None => {}
+        BodyForce::Constant(f) => {
+            for &c in &layout.local_cells {
+                let nodes = mesh.cell(c);
+                let m = mesh.cell_measure(c);
+                fem::body_force_load(m, *f, dim, &mut fe[..nd]);
+                dofs_of(nodes, layout, dim, &mut idx);
+                bidx.extend_from_slice(&idx[..nd]);
+                bval.extend_from_slice(&fe[..nd]);
+            }
+        }
+        BodyForce::Function(f) => {
+            for &c in &layout.local_cells {
+                let nodes = mesh.cell(c);
+                xs.clear();
+                xs.extend(nodes.iter().map(|&v| mesh.coords[v]));
+                fem::cell_load_quadrature(&xs, dim, f.as_ref(), &mut fe[..nd]);
+                dofs_of(nodes, layout, dim, &mut idx);
+                bidx.extend_from_slice(&idx[..nd]);
+                bval.extend_from_slice(&fe[..nd]);
+            }
+        }
+    }
+    let nf = dim * dim;
+    for load in &p.facet_loads {
+        for &f in &load.facets {
+            let Some((c, opp)) = facet_cell(mesh, layout, f) else {
+                continue;
+            };
+            if layout.cell_rank[c] as usize != layout.rank {
+                continue;
+            }
+            let (n, m) = outward_normal(mesh, f, opp);
+            let t = match &load.kind {
+                FacetLoadKind::Pressure(pr) => [-pr * n[0], -pr * n[1], -pr * n[2]],
+                FacetLoadKind::Traction(t) => *t,
+            };
+            fem::lumped_facet_load(m, t, dim, &mut fe[..nf]);
+            dofs_of(mesh.facet(f), layout, dim, &mut idx);
+            bidx.extend_from_slice(&idx[..nf]);
+            bval.extend_from_slice(&fe[..nf]);
+        }
+    }
+    b.set_values(&bidx, &bval, true)?;
+    b.assemble()?;
+
+    // Fixed dofs: b_j = A_jj g_j (A's row j is zero off the diagonal).
+    let mut diag = b.duplicate()?;
+    a.diagonal(&mut diag)?;
+    let dvals = diag.to_local_vec()?;
+    b.write(|bv| {
+        for (i, &v) in layout.owned_nodes.iter().enumerate() {
+            for k in 0..dim {
+                let g = p.fixed[v * dim + k];
+                if !g.is_nan() {
+                    bv[i * dim + k] = dvals[i * dim + k] * g;
+                }
+            }
+        }
+    })?;
+    stats.load_seconds = t2.elapsed().as_secs_f64();
+    Ok(System { a, b, stats })
+}
+
+/// Nodal coordinates of the owned nodes as a PETSc vector with block size dim (for the
+/// rigid-body near-null space of AMG).
+pub fn coordinate_vector(comm: MPI_Comm, mesh: &Mesh, layout: &Layout) -> petsc::Result<Vector> {
+    let dim = mesh.dim;
+    let mut v = Vector::new_mpi(comm, layout.n_owned_nodes() * dim, dim)?;
+    v.write(|x| {
+        for (i, &n) in layout.owned_nodes.iter().enumerate() {
+            for k in 0..dim {
+                x[i * dim + k] = mesh.coords[n][k];
+            }
+        }
+    })?;
+    Ok(v)
+}

@@ -1,0 +1,208 @@
+//! Cells → ranks with a real graph partitioner (PETSc MatPartitioning, PTScotch by default),
+//! node ownership, and a contiguous global node numbering per rank.
+//!
+//! Every rank holds the whole mesh (read by all ranks). Each rank builds the dual-graph rows of a
+//! block of cells, the partitioner assigns every cell a rank, and an all-gather gives every rank
+//! the full cell → rank map. A node belongs to the lowest rank among the cells that touch it.
+//! Rank r owns global node numbers `node_offsets[r] .. node_offsets[r+1]`, in mesh order.
+
+use crate::mesh::Mesh;
+use crate::petsc::{self, MPI_Comm, PInt};
+use mpi::datatype::PartitionMut;
+use mpi::traits::*;
+
+/// Node → cells incidence in CSR form.
+pub struct NodeCells {
+    pub offsets: Vec<usize>,
+    pub cells: Vec<usize>,
+}
+
+impl NodeCells {
+    pub fn new(mesh: &Mesh) -> NodeCells {
+        let n = mesh.n_nodes();
+        let mut offsets = vec![0usize; n + 1];
+        for &v in &mesh.cells {
+            offsets[v + 1] += 1;
+        }
+        for i in 0..n {
+            offsets[i + 1] += offsets[i];
+        }
+        let mut fill = offsets.clone();
+        let mut cells = vec![0usize; mesh.cells.len()];
+        let npc = mesh.nodes_per_cell();
+        for (c, nodes) in mesh.cells.chunks_exact(npc).enumerate() {
+            for &v in nodes {
+                cells[fill[v]] = c;
+                fill[v] += 1;
+            }
+        }
+        NodeCells { offsets, cells }
+    }
+
+    pub fn of(&self, node: usize) -> &[usize] {
+        &self.cells[self.offsets[node]..self.offsets[node + 1]]
+    }
+}
+
+/// Everything a rank needs to know about the distribution.
+pub struct Layout {
+    pub rank: usize,
+    pub size: usize,
+    /// Rank of every cell (mesh order).
+    pub cell_rank: Vec<u32>,
+    /// Owner rank of every node.
+    pub node_owner: Vec<u32>,
+    /// Mesh node index → global (PETSc) node number.
+    pub node_global: Vec<usize>,
+    /// Rank r owns global node numbers node_offsets[r] .. node_offsets[r+1].
+    pub node_offsets: Vec<usize>,
+    /// Mesh indices of the owned nodes, in global order.
+    pub owned_nodes: Vec<usize>,
+    /// Mesh indices of this rank's cells (mesh order).
+    pub local_cells: Vec<usize>,
+    /// Rank r's cells are numbered cell_offsets[r] .. cell_offsets[r+1] in the output.
+    pub cell_offsets: Vec<usize>,
+    pub node_cells: NodeCells,
+}
+
+impl Layout {
+    pub fn n_owned_nodes(&self) -> usize {
+        self.owned_nodes.len()
+    }
+    pub fn node_range(&self) -> (usize, usize) {
+        (
+            self.node_offsets[self.rank],
+            self.node_offsets[self.rank + 1],
+        )
+    }
+    pub fn owns_node(&self, node: usize) -> bool {
+        self.node_owner[node] as usize == self.rank
+    }
+    /// Number of cells on each rank.
+    pub fn cells_per_rank(&self) -> Vec<usize> {
+        self.cell_offsets.windows(2).map(|w| w[1] - w[0]).collect()
+    }
+    /// Number of owned nodes on each rank.
+    pub fn nodes_per_rank(&self) -> Vec<usize> {
+        self.node_offsets.windows(2).map(|w| w[1] - w[0]).collect()
+    }
+}
+
+/// Dual-graph rows (cells sharing a facet) for cells `lo..hi`, CSR with global cell indices.
+fn dual_graph_rows(mesh: &Mesh, nc: &NodeCells, lo: usize, hi: usize) -> (Vec<PInt>, Vec<PInt>) {
+    let npc = mesh.nodes_per_cell();
+    let shared_needed = npc - 1; // a facet has dim nodes
+    let mut xadj = Vec::with_capacity(hi - lo + 1);
+    let mut adjncy = Vec::with_capacity((hi - lo) * npc);
+    let mut cand: Vec<usize> = Vec::with_capacity(64);
+    xadj.push(0 as PInt);
+    for c in lo..hi {
+        cand.clear();
+        for &v in mesh.cell(c) {
+            cand.extend(nc.of(v).iter().copied().filter(|&o| o != c));
+        }
+        cand.sort_unstable();
+        let mut i = 0;
+        while i < cand.len() {
+            let mut j = i;
+            while j < cand.len() && cand[j] == cand[i] {
+                j += 1;
+            }
+            if j - i >= shared_needed {
+                adjncy.push(cand[i] as PInt);
+            }
+            i = j;
+        }
+        xadj.push(adjncy.len() as PInt);
+    }
+    (xadj, adjncy)
+}
+
+/// Partitions the mesh over the ranks of `comm` (`ptype`: PETSc MatPartitioning type).
+pub fn partition<C: Communicator>(
+    world: &C,
+    comm: MPI_Comm,
+    mesh: &Mesh,
+    ptype: &str,
+) -> petsc::Result<Layout> {
+    let rank = world.rank() as usize;
+    let size = world.size() as usize;
+    let n_cells = mesh.n_cells();
+    let node_cells = NodeCells::new(mesh);
+
+    let cell_rank: Vec<u32> = if size == 1 {
+        vec![0; n_cells]
+    } else {
+        let block = |r: usize| r * n_cells / size;
+        let (lo, hi) = (block(rank), block(rank + 1));
+        let (xadj, adjncy) = dual_graph_rows(mesh, &node_cells, lo, hi);
+        let part = petsc::partition_graph(comm, n_cells, &xadj, &adjncy, ptype)?;
+        let mine: Vec<u32> = part.iter().map(|&p| p as u32).collect();
+        let counts: Vec<i32> = (0..size)
+            .map(|r| (block(r + 1) - block(r)) as i32)
+            .collect();
+        let displs: Vec<i32> = (0..size).map(|r| block(r) as i32).collect();
+        let mut all = vec![0u32; n_cells];
+        {
+            let mut buf = PartitionMut::new(&mut all[..], counts, displs);
+            world.all_gather_varcount_into(&mine[..], &mut buf);
+        }
+        all
+    };
+
+    // Owner of a node: the lowest rank among its cells.
+    let n_nodes = mesh.n_nodes();
+    let mut node_owner = vec![u32::MAX; n_nodes];
+    for (c, nodes) in mesh.cells.chunks_exact(mesh.nodes_per_cell()).enumerate() {
+        let r = cell_rank[c];
+        for &v in nodes {
+            if r < node_owner[v] {
+                node_owner[v] = r;
+            }
+        }
+    }
+    let mut counts = vec![0usize; size];
+    for &o in &node_owner {
+        counts[o as usize] += 1;
+    }
+    let mut node_offsets = vec![0usize; size + 1];
+    for r in 0..size {
+        node_offsets[r + 1] = node_offsets[r] + counts[r];
+    }
+    let mut next = node_offsets.clone();
+    let mut node_global = vec![0usize; n_nodes];
+    let mut owned_nodes = Vec::with_capacity(counts[rank]);
+    for v in 0..n_nodes {
+        let o = node_owner[v] as usize;
+        node_global[v] = next[o];
+        next[o] += 1;
+        if o == rank {
+            owned_nodes.push(v);
+        }
+    }
+
+    let mut ccounts = vec![0usize; size];
+    for &r in &cell_rank {
+        ccounts[r as usize] += 1;
+    }
+    let mut cell_offsets = vec![0usize; size + 1];
+    for r in 0..size {
+        cell_offsets[r + 1] = cell_offsets[r] + ccounts[r];
+    }
+    let local_cells: Vec<usize> = (0..n_cells)
+        .filter(|&c| cell_rank[c] as usize == rank)
+        .collect();
+
+    Ok(Layout {
+        rank,
+        size,
+        cell_rank,
+        node_owner,
+        node_global,
+        node_offsets,
+        owned_nodes,
+        local_cells,
+        cell_offsets,
+        node_cells,
+    })
+}

@@ -1,11 +1,11 @@
 // indent2d: the block [-1,1] x [0,1], to be indented from above by a rigid circle.
-// Unstructured triangles: size hf (default 0.02) within |x - (0,1)| < r0 (default 0.3),
+// Unstructured triangles: size hf (default 0.01) within |x - (0,1)| < r0 (default 0.15),
 // growing linearly (rate 0.3) to h (default 0.1) away from the top centre.
 // Groups: "bottom" (y = 0, fixed), "top" (y = 1, contact), "left", "right", "body".
 // gmsh -2 indent2d.geo -format msh41 -bin -o indent2d.msh   (or scripts/mesh blocks)
 If (!Exists(h)) h = 0.1; EndIf
-If (!Exists(hf)) hf = 0.02; EndIf
-If (!Exists(r0)) r0 = 0.3; EndIf
+If (!Exists(hf)) hf = 0.01; EndIf
+If (!Exists(r0)) r0 = 0.15; EndIf
 Point(1) = {-1, 0, 0, h};
 Point(2) = {1, 0, 0, h};
 Point(3) = {1, 1, 0, h};

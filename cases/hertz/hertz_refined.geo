@@ -18,7 +18,12 @@
 //   hb + G * (1 - |x|)                     (the grading of hertz.geo, hb = 2pi/(16*2^L))
 //   hc + G * dist(x, contact arc)           (grades away from the fine contact arc)
 //   hc + G * max(0, |x - (0,-1)| - Z)       (uniform zone under the contact)
-// and clipped to H.  The zone dominates the cost: about 0.16 / hc^2 points.
+// and clipped to H.  The zone dominates the cost: about 0.16 / hc^2 points (Z = 0.3).
+//
+// Points (R = 2, Z = 0.3): L0..L7 = 126, 279, 720, 2067, 6309, 21086, 75120, 280556.
+// Measured p_max (frictionless solver, Hertz 0.103483): L4 0.103766, L5 0.103725,
+// L6 0.103720; the plain family stalls near 0.1053 (L6, L7). A smaller zone costs accuracy:
+// L6 with Z = 0.15 (26421 points) 0.103852, Z = 0.1 (16954 points) 0.103952.
 //
 // gmsh -2 hertz_refined.geo -setnumber L 3 -format msh41 -bin -o meshes/hertz_refined_L3.msh
 // (use scripts/mesh hertz 3 --refined)

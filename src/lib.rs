@@ -4,11 +4,16 @@
 pub mod assembly;
 pub mod case;
 pub mod contact;
+pub mod contact_report;
+pub mod contact_set;
 pub mod error;
 pub mod fem;
 pub mod mesh;
+pub mod newton;
 pub mod output;
 pub mod partition;
 pub mod petsc;
+pub mod reduced;
+pub mod rigid;
 pub mod run;
 pub mod solver;

@@ -3,9 +3,12 @@
 
 use crate::assembly::{self, BodyForce, FacetLoad, FacetLoadKind, Problem};
 use crate::case::{self, Case, Field};
+use crate::contact_report;
+use crate::contact_set;
 use crate::error::InputError;
 use crate::fem::{self, Material};
 use crate::mesh::{self, Mesh};
+use crate::newton;
 use crate::output;
 use crate::partition::{self, Layout};
 use crate::petsc::{self, PInt, Petsc, SolveInfo, Vector};
@@ -314,6 +317,24 @@ pub fn commit_staging(staging: &Path, dir: &Path) -> std::io::Result<()> {
     std::fs::remove_dir(staging)
 }
 
+/// Contact results to write.
+pub struct ContactOutput {
+    pub fields: contact_report::ContactFields,
+    pub n_global: usize,
+    pub offset: usize,
+    pub csv: String,
+}
+
+fn linear_json(case: &Case, report: &LinearReport) -> Value {
+    json!({ "linear_solver": {
+        "preset": case.solver.preset.name(),
+        "ksp_type": report.ksp_type, "pc_type": report.pc_type,
+        "iterations": report.solve.iterations,
+        "converged_reason": report.solve.reason_name,
+        "converged_reason_code": report.solve.reason,
+    }})
+}
+
 /// Everything about a linear run that the summary reports.
 pub struct LinearReport {
     pub solve: SolveInfo,
@@ -444,7 +465,115 @@ pub fn run_case(ctx: &Ctx, case: &Case) -> Result<Value, RunError> {
     }
 
     let t = Instant::now();
-    let (u, report) = linear_solve(ctx, &mesh, &layout, &mut sys, &case.solver)?;
+    let mut contact_out: Option<ContactOutput> = None;
+    let (u, report_json) = match &case.contact {
+        None => {
+            let (u, report) = linear_solve(ctx, &mesh, &layout, &mut sys, &case.solver)?;
+            (u, linear_json(case, &report))
+        }
+        Some(cc) => {
+            let cs = contact_set::build(ctx.world, &mesh, &layout, cc, &problem.fixed, &case.file);
+            if ctx.any(cs.is_err()) {
+                return Err(match cs {
+                    Err(e) => RunError::Input(e),
+                    Ok(_) => RunError::Failed("contact set rejected on another rank".into()),
+                });
+            }
+            let cs = cs.expect("checked");
+            say!(
+                ctx,
+                "contact: {} nodes on '{}'{}",
+                cs.n_global,
+                cc.group,
+                if cs.excluded_dirichlet > 0 {
+                    format!(
+                        " ({} more left to their Dirichlet data)",
+                        cs.excluded_dirichlet
+                    )
+                } else {
+                    String::new()
+                }
+            );
+            solver::configure(
+                case.solver.preset,
+                case.solver.rtol,
+                &case.solver.petsc_options,
+            )?;
+            let coords = match case.solver.preset {
+                case::Preset::Iterative => Some(assembly::coordinate_vector(comm, &mesh, &layout)?),
+                case::Preset::Direct => None,
+            };
+            let nr = newton::algorithm1(
+                ctx,
+                &mesh,
+                &layout,
+                &mut sys,
+                &problem.fixed,
+                &cs,
+                &case.newton,
+                cc.rigid_modes,
+                coords.as_ref(),
+            )?;
+            if !nr.converged {
+                return Err(RunError::Failed(format!(
+                    "Newton did not converge in newton.max_steps = {} steps (active set still \
+                     changing: {} node(s) in the last step)",
+                    case.newton.max_steps,
+                    nr.history.last().map(|h| h.changed).unwrap_or(0)
+                )));
+            }
+            let table = contact_report::gather(ctx, &cs, &nr.nodes, dim);
+            let total_force = contact_report::total_force(ctx, &nr.nodes);
+            let half_width = table.half_width(&cs.obstacle);
+            let kkt = table.kkt(true);
+            say!(
+                ctx,
+                "contact: {} active, p_max = {:.6}, half width = {}, total force = {:?}",
+                table.active_count(),
+                table.max_pressure(),
+                half_width
+                    .map(|b| format!("{b:.6}"))
+                    .unwrap_or_else(|| "n/a".into()),
+                &total_force[..dim]
+            );
+            let newton_json = json!({
+                "algorithm": 1,
+                "init": case.newton.init.name(),
+                "c": case.newton.c,
+                "steps": nr.steps,
+                "converged": nr.converged,
+                "history": nr.history,
+                "rows_seconds": nr.rows_seconds,
+                "lambda_seconds": nr.lambda_seconds,
+                "pinned_dofs": nr.pinned_final.len(),
+                "on_cycle": case.newton.on_cycle.name(),
+                "cycle_detected_at": nr.cycle_detected_at,
+            });
+            let contact_json = json!({
+                "nodes": cs.n_global,
+                "excluded_dirichlet": cs.excluded_dirichlet,
+                "active_count": table.active_count(),
+                "max_pressure": table.max_pressure(),
+                "total_force": &total_force[..dim],
+                "half_width": half_width,
+                "kkt": kkt,
+            });
+            let fields = contact_report::fields(&cs, &nr.nodes, dim);
+            contact_out = Some(ContactOutput {
+                fields,
+                n_global: cs.n_global,
+                offset: cs.offset,
+                csv: table.csv(),
+            });
+            let solve_seconds: f64 = nr.history.iter().map(|h| h.solve_seconds).sum();
+            let _ = solve_seconds;
+            (
+                nr.u,
+                json!({ "newton": newton_json, "contact": contact_json,
+                        "linear_solver": { "preset": case.solver.preset.name() } }),
+            )
+        }
+    };
     tm.solve = t.elapsed().as_secs_f64();
 
     let t = Instant::now();
@@ -452,7 +581,7 @@ pub fn run_case(ctx: &Ctx, case: &Case) -> Result<Value, RunError> {
     tm.post = t.elapsed().as_secs_f64();
 
     let summary_wo_output = |tm: &Timings, mem: &[f64]| {
-        json!({
+        let mut v = json!({
             "case": case.file.display().to_string(),
             "mesh": case.mesh.file.display().to_string(),
             "dimension": dim,
@@ -464,26 +593,34 @@ pub fn run_case(ctx: &Ctx, case: &Case) -> Result<Value, RunError> {
             "partition": { "cells_per_rank": cpr, "nodes_per_rank": npr,
                            "cell_imbalance": imbalance(&cpr) },
             "assembly": { "mallocs": mallocs, "matrix_seconds_max": matrix_seconds },
-            "linear_solver": {
-                "preset": case.solver.preset.name(),
-                "ksp_type": report.ksp_type, "pc_type": report.pc_type,
-                "iterations": report.solve.iterations,
-                "converged_reason": report.solve.reason_name,
-                "converged_reason_code": report.solve.reason,
-            },
             "timings": { "read": tm.read, "partition": tm.partition, "assembly": tm.assembly,
                          "solve": tm.solve, "post": tm.post, "output": tm.output,
                          "total": tm.total },
             "peak_memory_bytes_per_rank": mem,
-        })
+        });
+        if let (Value::Object(a), Value::Object(b)) = (&mut v, &report_json) {
+            for (k, x) in b {
+                a.insert(k.clone(), x.clone());
+            }
+        }
+        v
     };
-    write_output(ctx, case, &mesh, &layout, &u, &cells, |tm_out| {
-        let mut tm2 = tm;
-        tm2.output = tm_out;
-        tm2.total = t_total.elapsed().as_secs_f64();
-        let mem = ctx.gather_f64(peak_memory_bytes());
-        summary_wo_output(&tm2, &mem)
-    })
+    write_output(
+        ctx,
+        case,
+        &mesh,
+        &layout,
+        &u,
+        &cells,
+        contact_out.as_ref(),
+        |tm_out| {
+            let mut tm2 = tm;
+            tm2.output = tm_out;
+            tm2.total = t_total.elapsed().as_secs_f64();
+            let mem = ctx.gather_f64(peak_memory_bytes());
+            summary_wo_output(&tm2, &mem)
+        },
+    )
 }
 
 /// Writes solution.xdmf/.h5 and summary.json into a staging directory and moves them into
@@ -495,6 +632,7 @@ fn write_output(
     layout: &Layout,
     u: &Vector,
     cells: &CellFields,
+    contact: Option<&ContactOutput>,
     summary: impl FnOnce(f64) -> Value,
 ) -> Result<Value, RunError> {
     let t = Instant::now();
@@ -589,7 +727,24 @@ fn write_output(
         cell_ids: &cell_ids,
         nodal,
         cellwise,
-        contact: None,
+        contact: contact
+            .filter(|_| case.output.wants(Field::Contact))
+            .map(|c| output::ContactPiece {
+                n_global: c.n_global,
+                offset: c.offset,
+                coords: &c.fields.coords,
+                node_ids: &c.fields.node_ids,
+                fields: c
+                    .fields
+                    .fields
+                    .iter()
+                    .map(|(name, ncomp, data)| output::Field {
+                        name,
+                        ncomp: *ncomp,
+                        data,
+                    })
+                    .collect(),
+            }),
     };
     let r = output::write_xdmf_hdf5(ctx.world, &staging, &piece);
     if ctx.any(r.is_err()) {
@@ -606,12 +761,17 @@ fn write_output(
     let mut err = None;
     if ctx.rank == 0 {
         let text = serde_json::to_string_pretty(&summary).expect("JSON");
-        let res = std::fs::write(staging.join("summary.json"), text + "\n").and_then(|_| {
-            if let Some(p) = dir.parent() {
-                std::fs::create_dir_all(p)?;
-            }
-            commit_staging(&staging, &dir)
-        });
+        let res = std::fs::write(staging.join("summary.json"), text + "\n")
+            .and_then(|_| match contact {
+                Some(c) => std::fs::write(staging.join("contact_nodes.csv"), &c.csv),
+                None => Ok(()),
+            })
+            .and_then(|_| {
+                if let Some(p) = dir.parent() {
+                    std::fs::create_dir_all(p)?;
+                }
+                commit_staging(&staging, &dir)
+            });
         if let Err(e) = res {
             let _ = std::fs::remove_dir_all(&staging);
             err = Some(format!("cannot write results to {}: {e}", dir.display()));

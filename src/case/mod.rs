@@ -216,9 +216,29 @@ impl NewtonInit {
     }
 }
 
+/// What Algorithm 1/2 does when an active set recurs (cycling).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum OnCycle {
+    /// Continue with single-node updates by the least-index rule (Murty), reported.
+    LeastIndex,
+    /// Stop with an error (exit code 1).
+    Stop,
+}
+
+impl OnCycle {
+    pub fn name(self) -> &'static str {
+        match self {
+            OnCycle::LeastIndex => "least_index",
+            OnCycle::Stop => "stop",
+        }
+    }
+}
+
 #[derive(Debug, Clone, PartialEq)]
 pub struct NewtonSection {
     pub init: NewtonInit,
+    /// Reaction to a recurring active set.
+    pub on_cycle: OnCycle,
     /// Complementarity parameter c > 0.
     pub c: f64,
     pub max_steps: usize,
@@ -229,6 +249,7 @@ impl Default for NewtonSection {
     fn default() -> Self {
         NewtonSection {
             init: NewtonInit::Auto,
+            on_cycle: OnCycle::LeastIndex,
             c: 1.0,
             max_steps: 100,
             tol_u: 1e-10,
@@ -970,7 +991,17 @@ impl Ctx<'_> {
         let Some((k, n)) = top.get("newton") else {
             return Ok(s);
         };
-        let t = self.table(&k, n, &["init", "c", "max_steps", "tol_u"])?;
+        let t = self.table(&k, n, &["init", "c", "max_steps", "tol_u", "on_cycle"])?;
+        if let Some((ok, o)) = t.get("on_cycle") {
+            s.on_cycle = self.choice(
+                &ok,
+                o,
+                &[
+                    ("least_index", OnCycle::LeastIndex),
+                    ("stop", OnCycle::Stop),
+                ],
+            )?;
+        }
         if let Some((ik, i)) = t.get("init") {
             s.init = self.choice(
                 &ik,

@@ -1,0 +1,300 @@
+//! Contact results: per-node fields (output), the gathered table (contact_nodes.csv), the
+//! summary numbers (pressure, total force, half width) and the KKT certificate of (3.14).
+
+use crate::contact::Obstacle;
+use crate::contact_set::ContactSet;
+use crate::newton::NodeResult;
+use crate::run::Ctx;
+use mpi::datatype::PartitionMut;
+use mpi::traits::*;
+use serde_json::{json, Value};
+
+/// Columns of one gathered contact-node row.
+const NCOL: usize = 16;
+
+/// The contact fields of the owned contact nodes (for the XDMF "contact" grid).
+pub struct ContactFields {
+    pub coords: Vec<[f64; 3]>,
+    pub node_ids: Vec<u64>,
+    /// (name, ncomp, values)
+    pub fields: Vec<(&'static str, usize, Vec<f64>)>,
+}
+
+/// Per owned node: the pressure p^k = −λ_n^k / w_k (THEORY §2).
+pub fn pressure(lambda_n: f64, weight: f64) -> f64 {
+    if weight > 0.0 {
+        -lambda_n / weight
+    } else {
+        0.0
+    }
+}
+
+pub fn fields(cs: &ContactSet, res: &[NodeResult], dim: usize) -> ContactFields {
+    let nt = dim - 1;
+    let mut f_un = Vec::new();
+    let mut f_ut = Vec::new();
+    let mut f_ln = Vec::new();
+    let mut f_lt = Vec::new();
+    let mut f_p = Vec::new();
+    let mut f_gap = Vec::new();
+    let mut f_gap0 = Vec::new();
+    let mut f_state = Vec::new();
+    let mut f_w = Vec::new();
+    let mut f_force = Vec::new();
+    for (k, r) in cs.nodes.iter().zip(res) {
+        f_un.push(r.u_n);
+        f_ut.extend_from_slice(&r.u_t[..nt]);
+        f_ln.push(r.lambda_n);
+        f_lt.extend_from_slice(&r.lambda_t[..nt]);
+        f_p.push(pressure(r.lambda_n, k.weight));
+        f_gap.push(r.u_n + k.gap);
+        f_gap0.push(k.gap);
+        f_state.push(if r.active { 1.0 } else { 0.0 });
+        f_w.push(k.weight);
+        f_force.extend(r.lambda.iter().map(|l| -l));
+    }
+    ContactFields {
+        coords: cs.nodes.iter().map(|k| k.x).collect(),
+        node_ids: cs.nodes.iter().map(|k| k.tag).collect(),
+        fields: vec![
+            ("u_n", 1, f_un),
+            ("u_t", nt, f_ut),
+            ("lambda_n", 1, f_ln),
+            ("lambda_t", nt, f_lt),
+            ("pressure", 1, f_p),
+            ("gap", 1, f_gap),
+            ("gap0", 1, f_gap0),
+            ("state", 1, f_state),
+            ("weight", 1, f_w),
+            ("contact_force", 3, f_force),
+        ],
+    }
+}
+
+/// One row per contact node of the whole set, on every rank, sorted by coordinates.
+pub struct Table {
+    pub rows: Vec<[f64; NCOL]>,
+    pub dim: usize,
+}
+
+// Row layout: x y z tag u_n ut1 ut2 l_n lt1 lt2 p gap0 gap weight state b
+const X: usize = 0;
+const TAG: usize = 3;
+const UN: usize = 4;
+const UT: usize = 5;
+const LN: usize = 7;
+const LT: usize = 8;
+const P: usize = 10;
+const GAP0: usize = 11;
+const GAP: usize = 12;
+const W: usize = 13;
+const STATE: usize = 14;
+#[allow(dead_code)]
+const BOUND: usize = 15;
+
+/// Gathers the contact nodes of all ranks (the contact boundary is small).
+pub fn gather(ctx: &Ctx, cs: &ContactSet, res: &[NodeResult], dim: usize) -> Table {
+    let mut mine: Vec<f64> = Vec::with_capacity(cs.nodes.len() * NCOL);
+    for (k, r) in cs.nodes.iter().zip(res) {
+        let row = [
+            k.x[0],
+            k.x[1],
+            k.x[2],
+            k.tag as f64,
+            r.u_n,
+            r.u_t[0],
+            r.u_t[1],
+            r.lambda_n,
+            r.lambda_t[0],
+            r.lambda_t[1],
+            pressure(r.lambda_n, k.weight),
+            k.gap,
+            r.u_n + k.gap,
+            k.weight,
+            if r.active { 1.0 } else { 0.0 },
+            k.bound,
+        ];
+        mine.extend_from_slice(&row);
+    }
+    let mut counts = vec![0i32; ctx.size];
+    ctx.world
+        .all_gather_into(&(mine.len() as i32), &mut counts[..]);
+    let displs: Vec<i32> = counts
+        .iter()
+        .scan(0, |acc, &c| {
+            let d = *acc;
+            *acc += c;
+            Some(d)
+        })
+        .collect();
+    let total: i32 = counts.iter().sum();
+    let mut all = vec![0.0f64; total as usize];
+    {
+        let mut part = PartitionMut::new(&mut all[..], counts, displs);
+        ctx.world.all_gather_varcount_into(&mine[..], &mut part);
+    }
+    let mut rows: Vec<[f64; NCOL]> = all
+        .chunks_exact(NCOL)
+        .map(|c| c.try_into().expect("row"))
+        .collect();
+    rows.sort_by(|a, b| {
+        a[..3]
+            .partial_cmp(&b[..3])
+            .unwrap_or(std::cmp::Ordering::Equal)
+            .then(
+                a[TAG]
+                    .partial_cmp(&b[TAG])
+                    .unwrap_or(std::cmp::Ordering::Equal),
+            )
+    });
+    Table { rows, dim }
+}
+
+impl Table {
+    /// contact_nodes.csv: coordinates first, one row per contact node.
+    pub fn csv(&self) -> String {
+        let d = self.dim;
+        let mut s = String::new();
+        let coords = ["x", "y", "z"];
+        let mut head: Vec<String> = coords[..d].iter().map(|c| c.to_string()).collect();
+        head.push("node_id".into());
+        head.push("u_n".into());
+        for i in 1..d {
+            head.push(format!("u_t{i}"));
+        }
+        head.push("lambda_n".into());
+        for i in 1..d {
+            head.push(format!("lambda_t{i}"));
+        }
+        for h in ["pressure", "gap0", "gap", "weight", "state"] {
+            head.push(h.into());
+        }
+        s.push_str(&head.join(","));
+        s.push('\n');
+        for r in &self.rows {
+            let mut v: Vec<String> = r[..d].iter().map(|x| format!("{x:.17e}")).collect();
+            v.push(format!("{}", r[TAG] as u64));
+            v.push(format!("{:.17e}", r[UN]));
+            for i in 0..d - 1 {
+                v.push(format!("{:.17e}", r[UT + i]));
+            }
+            v.push(format!("{:.17e}", r[LN]));
+            for i in 0..d - 1 {
+                v.push(format!("{:.17e}", r[LT + i]));
+            }
+            for c in [P, GAP0, GAP, W] {
+                v.push(format!("{:.17e}", r[c]));
+            }
+            v.push(if r[STATE] > 0.5 { "active" } else { "inactive" }.into());
+            s.push_str(&v.join(","));
+            s.push('\n');
+        }
+        s
+    }
+
+    pub fn active_count(&self) -> usize {
+        self.rows.iter().filter(|r| r[STATE] > 0.5).count()
+    }
+
+    pub fn max_pressure(&self) -> f64 {
+        self.rows.iter().map(|r| r[P]).fold(0.0, f64::max)
+    }
+
+    /// Half width of the contact zone for a flat obstacle in 2D, from the pressure profile:
+    /// least-squares fit of p² = a − κ (s − s_c)² over the active nodes (Hertz: p² is linear
+    /// in s²), s the tangential coordinate, s_c the pressure-weighted centre; b = sqrt(a / κ).
+    /// None with fewer than 3 active nodes or another obstacle / dimension.
+    pub fn half_width(&self, obstacle: &Obstacle) -> Option<f64> {
+        let Obstacle::Plane(pl) = obstacle else {
+            return None;
+        };
+        if self.dim != 2 {
+            return None;
+        }
+        let n = pl.normal();
+        let tau = [n[1], -n[0]];
+        let pts: Vec<(f64, f64)> = self
+            .rows
+            .iter()
+            .filter(|r| r[STATE] > 0.5 && r[P] > 0.0)
+            .map(|r| (r[X] * tau[0] + r[X + 1] * tau[1], r[P]))
+            .collect();
+        if pts.len() < 3 {
+            return None;
+        }
+        let sp: f64 = pts.iter().map(|p| p.1).sum();
+        let sc = pts.iter().map(|p| p.0 * p.1).sum::<f64>() / sp;
+        // p² = a + m z with z = (s − s_c)², m = −κ
+        let np = pts.len() as f64;
+        let (mut sz, mut sy, mut szz, mut szy) = (0.0, 0.0, 0.0, 0.0);
+        for &(s, p) in &pts {
+            let z = (s - sc) * (s - sc);
+            let y = p * p;
+            sz += z;
+            sy += y;
+            szz += z * z;
+            szy += z * y;
+        }
+        let det = np * szz - sz * sz;
+        if det.abs() < f64::MIN_POSITIVE {
+            return None;
+        }
+        let m = (np * szy - sz * sy) / det;
+        let a = (sy - m * sz) / np;
+        if m >= 0.0 || a <= 0.0 {
+            return None;
+        }
+        let b = (a / -m).sqrt();
+        // Not a Hertz-like profile (e.g. a uniform pressure): no meaningful half width.
+        let reach = pts.iter().map(|p| (p.0 - sc).abs()).fold(0.0, f64::max);
+        (b <= 2.0 * reach).then_some(b)
+    }
+
+    /// KKT certificate of (3.14) (and λ_τ = 0 for frictionless contact): the largest
+    /// violations over all contact nodes, with the scales to judge them by.
+    pub fn kkt(&self, frictionless: bool) -> Value {
+        let mut pen = 0.0f64;
+        let mut pos = 0.0f64;
+        let mut comp = 0.0f64;
+        let mut lt = 0.0f64;
+        let mut lscale = 0.0f64;
+        let mut uscale = 0.0f64;
+        for r in &self.rows {
+            pen = pen.max(-r[GAP]);
+            pos = pos.max(r[LN]);
+            comp = comp.max((r[LN] * r[GAP]).abs());
+            let ltn = (r[LT] * r[LT] + r[LT + 1] * r[LT + 1]).sqrt();
+            lt = lt.max(ltn);
+            lscale = lscale.max(r[LN].abs());
+            uscale = uscale.max(r[UN].abs()).max(r[GAP0].abs());
+        }
+        let mut v = json!({
+            "max_penetration": pen.max(0.0),
+            "max_positive_lambda_n": pos.max(0.0),
+            "max_complementarity": comp,
+            "force_scale": lscale,
+            "length_scale": uscale,
+        });
+        if frictionless {
+            v["max_abs_lambda_t"] = json!(lt);
+        }
+        v
+    }
+}
+
+/// Σ_k −λ^k over all ranks (global components).
+pub fn total_force(ctx: &Ctx, res: &[NodeResult]) -> [f64; 3] {
+    let mut t = [0.0; 3];
+    for r in res {
+        for k in 0..3 {
+            t[k] -= r.lambda[k];
+        }
+    }
+    let mut out = [0.0; 3];
+    ctx.world.all_reduce_into(
+        &t[..],
+        &mut out[..],
+        mpi::collective::SystemOperation::sum(),
+    );
+    out
+}

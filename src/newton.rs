@@ -1,0 +1,468 @@
+//! The semismooth Newton method in its exact active-set form: Algorithm 1 (frictionless,
+//! reduced system (3.29)). Each step: copy A's values into the system matrix S (same
+//! pattern), overwrite the rows of the active nodes and of the pinned dofs, solve with the
+//! KSP, recover λ by (3.28), update the sets by (3.23). The only collectives per step are the
+//! solve, one MatMult and one Allreduce (set changes, counts, set fingerprint, residual norm
+//! and the rigid-mode Gram matrix of the next set).
+
+use crate::assembly::System;
+use crate::case::{NewtonInit, NewtonSection, OnCycle, RigidModes as RigidSetting};
+use crate::contact;
+use crate::contact_set::ContactSet;
+use crate::mesh::Mesh;
+use crate::partition::Layout;
+use crate::petsc::{Matrix, Vector};
+use crate::reduced::{pin_row, NodeRows};
+use crate::rigid::RigidModes;
+use crate::run::{Ctx, RunError};
+use crate::say;
+use crate::solver::LinearSolver;
+use mpi::collective::SystemOperation;
+use mpi::traits::*;
+use std::time::Instant;
+
+/// One Newton step, for the history.
+#[derive(Clone, Debug, serde::Serialize)]
+pub struct StepInfo {
+    pub step: usize,
+    /// |A_n^ℓ|: active nodes used in this step's solve.
+    pub active: usize,
+    /// Nodes whose state changed in the update after this solve.
+    pub changed: usize,
+    /// ‖C_n(u^ℓ, λ^ℓ)‖₂ over all contact nodes (3.21).
+    pub residual: f64,
+    pub solve_seconds: f64,
+    pub iterations: usize,
+    /// Number of rigid modes pinned in this step.
+    pub pinned: usize,
+}
+
+/// Per owned contact node: displacement and multiplier in the node's frame.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct NodeResult {
+    pub u: [f64; 3],
+    pub lambda: [f64; 3],
+    pub u_n: f64,
+    pub u_t: [f64; 2],
+    pub lambda_n: f64,
+    pub lambda_t: [f64; 2],
+    pub active: bool,
+}
+
+/// What Algorithm 1 returns.
+pub struct NewtonResult {
+    pub u: Vector,
+    pub nodes: Vec<NodeResult>,
+    pub history: Vec<StepInfo>,
+    pub converged: bool,
+    pub steps: usize,
+    /// Seconds spent in λ recovery (MatMult + local work), all steps.
+    pub lambda_seconds: f64,
+    /// Seconds spent writing the reduced systems, all steps.
+    pub rows_seconds: f64,
+    pub pinned_final: Vec<(usize, usize)>,
+    /// Step after which a recurring set switched the iteration to least-index updates.
+    pub cycle_detected_at: Option<usize>,
+}
+
+/// Two fingerprints of an active set that do not depend on the partition (sums of per-node
+/// hashes of gmsh tags, exact in f64).
+fn node_hash(tag: u64) -> (f64, f64) {
+    let mut x = tag.wrapping_mul(0x9E37_79B9_7F4A_7C15);
+    x ^= x >> 29;
+    let mut y = tag.wrapping_mul(0xC2B2_AE3D_27D4_EB4F) ^ 0x1656_67B1_9E37_79F9;
+    y ^= y >> 31;
+    ((x >> 44) as f64, (y >> 44) as f64)
+}
+
+/// The initial active set A_n^1.
+fn initial_active(cs: &ContactSet, init: NewtonInit, scale: f64) -> Vec<bool> {
+    let touching = |g: f64| g <= 1e-9 * scale;
+    cs.nodes
+        .iter()
+        .map(|k| match init {
+            NewtonInit::AllActive => true,
+            NewtonInit::AllInactive => false,
+            NewtonInit::Gap => touching(k.gap),
+            // Our default: the initially touching nodes (empty if none touches, which is the
+            // all-inactive start). Fewer steps than the thesis' all-active start at every
+            // Hertz level measured (README).
+            NewtonInit::Auto => touching(k.gap),
+        })
+        .collect()
+}
+
+/// Algorithm 1 (frictionless) on the assembled system `sys` (A, f).
+#[allow(clippy::too_many_arguments)]
+pub fn algorithm1(
+    ctx: &Ctx,
+    mesh: &Mesh,
+    layout: &Layout,
+    sys: &mut System,
+    fixed: &[f64],
+    cs: &ContactSet,
+    settings: &NewtonSection,
+    rigid_setting: RigidSetting,
+    coords: Option<&Vector>,
+) -> Result<NewtonResult, RunError> {
+    let comm = ctx.petsc.comm();
+    let dim = mesh.dim;
+    let c = settings.c;
+    let modes = RigidModes::new(mesh);
+    let use_rigid = rigid_setting == RigidSetting::Auto;
+
+    // Rows of A of the contact nodes (constant), the load f at them.
+    let rows: Vec<NodeRows> = cs
+        .nodes
+        .iter()
+        .map(|k| NodeRows::read(&sys.a, k.row, dim))
+        .collect::<Result<_, _>>()?;
+    let f_local = sys.b.to_local_vec()?;
+
+    // Gram matrix of the Dirichlet constraints (fixed for the whole run).
+    let mut g_dir = vec![0.0; 36];
+    if use_rigid {
+        for &v in &layout.owned_nodes {
+            for k in 0..dim {
+                if !fixed[v * dim + k].is_nan() {
+                    modes.add_outer(&mut g_dir, &modes.dof_row(&mesh.coords[v], k));
+                }
+            }
+        }
+        let local = g_dir.clone();
+        ctx.world
+            .all_reduce_into(&local[..], &mut g_dir[..], SystemOperation::sum());
+    }
+    let scale = {
+        let mut lo = [f64::INFINITY; 3];
+        let mut hi = [f64::NEG_INFINITY; 3];
+        for x in &mesh.coords {
+            for k in 0..3 {
+                lo[k] = lo[k].min(x[k]);
+                hi[k] = hi[k].max(x[k]);
+            }
+        }
+        (0..dim).map(|k| hi[k] - lo[k]).fold(0.0, f64::max)
+    };
+    let active_gram = |active: &[bool]| -> Vec<f64> {
+        let mut g = vec![0.0; 36];
+        if use_rigid {
+            for (k, &a) in cs.nodes.iter().zip(active) {
+                if a {
+                    modes.add_outer(&mut g, &modes.normal_row(&k.x, &k.frame.n));
+                }
+            }
+        }
+        g
+    };
+
+    let mut active = initial_active(cs, settings.init, scale);
+    // Global Gram matrix of the first set.
+    let mut g_act = vec![0.0; 36];
+    {
+        let local = active_gram(&active);
+        ctx.world
+            .all_reduce_into(&local[..], &mut g_act[..], SystemOperation::sum());
+    }
+    let mut n_active_global = {
+        let mut n = 0u64;
+        ctx.world.all_reduce_into(
+            &(active.iter().filter(|&&a| a).count() as u64),
+            &mut n,
+            SystemOperation::sum(),
+        );
+        n as usize
+    };
+
+    let mut s: Matrix = sys.a.duplicate()?;
+    let mut ls = LinearSolver::new(comm, &mut s, coords)?;
+    let mut rhs = sys.b.duplicate()?;
+    let mut u = sys.b.duplicate()?;
+    let mut au = sys.b.duplicate()?;
+    let mut buf = Vec::new();
+    let (row_lo, _) = sys.a.ownership_range()?;
+    let mut history: Vec<StepInfo> = Vec::new();
+    let mut seen: Vec<(usize, f64, f64)> = Vec::new();
+    let mut nodes = vec![NodeResult::default(); cs.nodes.len()];
+    let mut lambda_seconds = 0.0;
+    let mut rows_seconds = 0.0;
+    let mut converged = false;
+    let mut least_index = false;
+    let mut cycle_detected_at: Option<usize> = None;
+    let mut pins: Vec<(usize, usize)> = Vec::new();
+    let mut pins_key: Option<Vec<f64>> = None;
+    let candidate =
+        |v: usize| !cs.on_contact_boundary[v] && (0..dim).all(|k| fixed[v * dim + k].is_nan());
+
+    // Fingerprint of the first set.
+    let fp = |active: &[bool]| -> (f64, f64) {
+        let mut h = (0.0, 0.0);
+        for (k, &a) in cs.nodes.iter().zip(active) {
+            if a {
+                let (x, y) = node_hash(k.tag);
+                h.0 += x;
+                h.1 += y;
+            }
+        }
+        h
+    };
+    {
+        let (h1, h2) = fp(&active);
+        let mut out = [0.0; 2];
+        ctx.world
+            .all_reduce_into(&[h1, h2][..], &mut out[..], SystemOperation::sum());
+        seen.push((n_active_global, out[0], out[1]));
+    }
+
+    for step in 1..=settings.max_steps {
+        // (3.29): S = A with the rows of active nodes replaced; rhs = f likewise.
+        let t_rows = Instant::now();
+        s.copy_values_from(&sys.a)?;
+        rhs.copy_from(&sys.b)?;
+        let mut rhs_updates: Vec<(usize, f64)> = Vec::new();
+        for ((k, r), &a) in cs.nodes.iter().zip(&rows).zip(&active) {
+            if !a {
+                continue;
+            }
+            let mut comb = [[0.0; 3]; 3];
+            let mut own = [[0.0; 3]; 3];
+            // normal row: nᵀ u^k = −g^k
+            own[0][..dim].copy_from_slice(&k.frame.n[..dim]);
+            rhs_updates.push((k.local_row, -k.gap));
+            // tangential rows: τ_iᵀ (A u)_k = τ_iᵀ f_k
+            for i in 1..dim {
+                let t = &k.frame.t[i - 1];
+                comb[i][..dim].copy_from_slice(&t[..dim]);
+                let tf: f64 = (0..dim).map(|j| t[j] * f_local[k.local_row + j]).sum();
+                rhs_updates.push((k.local_row + i, tf));
+            }
+            r.write(&mut s, dim, &comb, &own, &mut buf)?;
+        }
+        // Free rigid modes of this set: pin one dof each.
+        let mut g = g_dir.clone();
+        for (x, y) in g.iter_mut().zip(&g_act) {
+            *x += y;
+        }
+        if use_rigid {
+            let key = g.clone();
+            if pins_key.as_ref() != Some(&key) {
+                let q = modes.free_modes(&g);
+                pins = modes.pins(mesh, &q, candidate);
+                if pins.len() < q.ncols() {
+                    return Err(RunError::Failed(format!(
+                        "{} free rigid mode(s) but only {} dof(s) available to fix them",
+                        q.ncols(),
+                        pins.len()
+                    )));
+                }
+                pins_key = Some(key);
+            }
+            for &(v, k) in &pins {
+                if layout.owns_node(v) {
+                    let p = layout.node_global[v] * dim + k;
+                    pin_row(&mut s, &sys.a, p)?;
+                    rhs_updates.push((p - row_lo, 0.0));
+                }
+            }
+        }
+        s.assemble()?;
+        rhs.write(|x| {
+            for &(i, v) in &rhs_updates {
+                x[i] = v;
+            }
+        })?;
+        rows_seconds += t_rows.elapsed().as_secs_f64();
+
+        let t_solve = Instant::now();
+        ls.ksp.set_operator(&s)?;
+        let info = ls.solve(&rhs, &mut u)?;
+        let solve_seconds = t_solve.elapsed().as_secs_f64();
+        if !info.converged() {
+            return Err(RunError::Failed(format!(
+                "Newton step {step}: the linear solver did not converge ({} after {} iterations)",
+                info.reason_name, info.iterations
+            )));
+        }
+
+        // (3.28): λ = f − A u on the contact rows.
+        let t_l = Instant::now();
+        sys.a.mult(&u, &mut au)?;
+        let u_local = u.to_local_vec()?;
+        let au_local = au.to_local_vec()?;
+        let mut changed = 0usize;
+        let mut new_active = active.clone();
+        let mut res2 = 0.0;
+        for (i, k) in cs.nodes.iter().enumerate() {
+            let mut uk = [0.0; 3];
+            let mut lk = [0.0; 3];
+            for j in 0..dim {
+                uk[j] = u_local[k.local_row + j];
+                lk[j] = f_local[k.local_row + j] - au_local[k.local_row + j];
+            }
+            let u_n = k.frame.normal_part(&uk);
+            let l_n = k.frame.normal_part(&lk);
+            nodes[i] = NodeResult {
+                u: uk,
+                lambda: lk,
+                u_n,
+                u_t: k.frame.tangential_part(&uk),
+                lambda_n: l_n,
+                lambda_t: k.frame.tangential_part(&lk),
+                active: active[i],
+            };
+            // (3.23)
+            new_active[i] = contact::normal_active(u_n, l_n, k.gap, c);
+            if new_active[i] != active[i] {
+                changed += 1;
+            }
+            let cn = contact::c_n(u_n, l_n, k.gap, c);
+            res2 += cn * cn;
+        }
+        lambda_seconds += t_l.elapsed().as_secs_f64();
+
+        // One Allreduce: changes, |A|, fingerprints, ‖C_n‖², Gram matrix of the new set.
+        let (h1, h2) = fp(&new_active);
+        let mut local = vec![
+            changed as f64,
+            new_active.iter().filter(|&&a| a).count() as f64,
+            h1,
+            h2,
+            res2,
+        ];
+        local.extend(active_gram(&new_active));
+        let mut global = vec![0.0f64; local.len()];
+        ctx.world
+            .all_reduce_into(&local[..], &mut global[..], SystemOperation::sum());
+        let changed_g = global[0] as usize;
+        let info_step = StepInfo {
+            step,
+            active: n_active_global,
+            changed: changed_g,
+            residual: global[4].sqrt(),
+            solve_seconds,
+            iterations: info.iterations,
+            pinned: pins.len(),
+        };
+        say!(
+            ctx,
+            "newton {:3}: |A_n| = {:6}  changed {:6}  |C_n| = {:.3e}  pinned {}  solve {:.3} s ({} its)",
+            step,
+            info_step.active,
+            info_step.changed,
+            info_step.residual,
+            info_step.pinned,
+            solve_seconds,
+            info.iterations
+        );
+        history.push(info_step);
+        if changed_g == 0 {
+            converged = true;
+            break;
+        }
+        let mut key = (global[1] as usize, global[2], global[3]);
+        let recurs = seen.iter().position(|s| *s == key);
+        if let Some(prev) = recurs {
+            if least_index || settings.on_cycle == OnCycle::Stop {
+                return Err(RunError::Failed(format!(
+                    "Newton cycling: the active set of step {} (|A_n| = {}) equals that of step \
+                     {}{} — the exact active-set iteration would loop forever; stopping",
+                    step + 1,
+                    key.0,
+                    prev + 1,
+                    if least_index {
+                        " even with least-index updates"
+                    } else {
+                        " (newton.on_cycle = \"stop\")"
+                    }
+                )));
+            }
+            least_index = true;
+            cycle_detected_at = Some(step);
+            say!(
+                ctx,
+                "newton: cycling detected (the set of step {} recurs at step {}): continuing \
+                 with single-node updates by the least-index rule",
+                prev + 1,
+                step + 1
+            );
+        }
+        if least_index {
+            // Murty's least-index rule: flip only the violating node with the smallest tag
+            // (finite for the P-matrix of frictionless contact).
+            let my_min = cs
+                .nodes
+                .iter()
+                .zip(active.iter().zip(&new_active))
+                .filter(|(_, (a, b))| a != b)
+                .map(|(k, _)| k.tag)
+                .min()
+                .unwrap_or(u64::MAX);
+            let mut tag = 0u64;
+            ctx.world
+                .all_reduce_into(&my_min, &mut tag, SystemOperation::min());
+            for ((k, a), b) in cs
+                .nodes
+                .iter()
+                .zip(active.iter())
+                .zip(new_active.iter_mut())
+            {
+                *b = if k.tag == tag { !*a } else { *a };
+            }
+            let (h1, h2) = fp(&new_active);
+            let mut local = vec![new_active.iter().filter(|&&a| a).count() as f64, h1, h2];
+            local.extend(active_gram(&new_active));
+            let mut g2 = vec![0.0f64; local.len()];
+            ctx.world
+                .all_reduce_into(&local[..], &mut g2[..], SystemOperation::sum());
+            key = (g2[0] as usize, g2[1], g2[2]);
+            g_act.copy_from_slice(&g2[3..3 + 36]);
+        } else {
+            g_act.copy_from_slice(&global[5..5 + 36]);
+        }
+        seen.push(key);
+        active = new_active;
+        n_active_global = key.0;
+    }
+    let steps = history.len();
+    // A free rigid mode is only harmless if the load is balanced in it: then the pins carry no
+    // reaction. Otherwise the body has no equilibrium (it touches too little and has no
+    // Dirichlet support).
+    if converged && !pins.is_empty() {
+        let au_local = au.to_local_vec()?;
+        let mut reaction = 0.0f64;
+        for &(v, k) in &pins {
+            if layout.owns_node(v) {
+                let p = layout.node_global[v] * dim + k - row_lo;
+                reaction = reaction.max((f_local[p] - au_local[p]).abs());
+            }
+        }
+        let fmax = f_local.iter().fold(0.0f64, |a, b| a.max(b.abs()));
+        let mut out = [0.0f64; 2];
+        ctx.world
+            .all_reduce_into(&[reaction, fmax][..], &mut out[..], SystemOperation::max());
+        if out[0] > 1e-8 * out[1].max(f64::MIN_POSITIVE) {
+            let n_act = history.last().map(|h| h.active).unwrap_or(0);
+            return Err(RunError::Failed(format!(
+                "no support: the body has {} rigid mode(s) fixed neither by Dirichlet data nor by \
+                 contact ({} active contact node(s)), and the load is not balanced in them \
+                 (reaction {:.3e} against a largest nodal load of {:.3e}); there is no \
+                 equilibrium — add Dirichlet data or move the obstacle closer",
+                pins.len(),
+                n_act,
+                out[0],
+                out[1]
+            )));
+        }
+    }
+    Ok(NewtonResult {
+        u,
+        nodes,
+        history,
+        converged,
+        steps,
+        lambda_seconds,
+        rows_seconds,
+        pinned_final: pins,
+        cycle_detected_at,
+    })
+}

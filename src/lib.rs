@@ -1,6 +1,8 @@
 //! signorini-mpi: static contact of linear-elastic bodies with a rigid obstacle,
 //! solved by the semismooth Newton method (exact active set strategy) on MPI + PETSc.
 
+#![allow(clippy::needless_range_loop)] // index loops read like the tensor formulas
+
 pub mod assembly;
 pub mod case;
 pub mod contact;

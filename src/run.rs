@@ -625,6 +625,7 @@ pub fn run_case(ctx: &Ctx, case: &Case) -> Result<Value, RunError> {
 
 /// Writes solution.xdmf/.h5 and summary.json into a staging directory and moves them into
 /// place. `summary` is called (collectively) once the heavy output is written.
+#[allow(clippy::too_many_arguments)]
 fn write_output(
     ctx: &Ctx,
     case: &Case,

@@ -10,7 +10,7 @@ use mpi::traits::*;
 use serde_json::{json, Value};
 
 /// Columns of one gathered contact-node row.
-const NCOL: usize = 16;
+const NCOL: usize = 17;
 
 /// The contact fields of the owned contact nodes (for the XDMF "contact" grid).
 pub struct ContactFields {
@@ -29,7 +29,7 @@ pub fn pressure(lambda_n: f64, weight: f64) -> f64 {
     }
 }
 
-pub fn fields(cs: &ContactSet, res: &[NodeResult], dim: usize) -> ContactFields {
+pub fn fields(cs: &ContactSet, res: &[NodeResult], dim: usize, tresca: bool) -> ContactFields {
     let nt = dim - 1;
     let mut f_un = Vec::new();
     let mut f_ut = Vec::new();
@@ -53,7 +53,7 @@ pub fn fields(cs: &ContactSet, res: &[NodeResult], dim: usize) -> ContactFields 
         f_w.push(k.weight);
         f_force.extend(r.lambda.iter().map(|l| -l));
     }
-    ContactFields {
+    let mut out = ContactFields {
         coords: cs.nodes.iter().map(|k| k.x).collect(),
         node_ids: cs.nodes.iter().map(|k| k.tag).collect(),
         fields: vec![
@@ -68,7 +68,25 @@ pub fn fields(cs: &ContactSet, res: &[NodeResult], dim: usize) -> ContactFields 
             ("weight", 1, f_w),
             ("contact_force", 3, f_force),
         ],
+    };
+    if tresca {
+        // Tangential state (0 stick, 1 slip), |λ_τ| / b_k, slip displacement (u_τ on slip nodes).
+        let mut st = Vec::new();
+        let mut ratio = Vec::new();
+        let mut slipd = Vec::new();
+        for (k, r) in cs.nodes.iter().zip(res) {
+            st.push(if r.slip { 1.0 } else { 0.0 });
+            let lt = (r.lambda_t[0].powi(2) + r.lambda_t[1].powi(2)).sqrt();
+            ratio.push(if k.bound > 0.0 { lt / k.bound } else { 0.0 });
+            for i in 0..nt {
+                slipd.push(if r.slip { r.u_t[i] } else { 0.0 });
+            }
+        }
+        out.fields.push(("slip_state", 1, st));
+        out.fields.push(("friction_ratio", 1, ratio));
+        out.fields.push(("slip", nt, slipd));
     }
+    out
 }
 
 /// One row per contact node of the whole set, on every rank, sorted by coordinates.
@@ -89,8 +107,8 @@ const GAP0: usize = 11;
 const GAP: usize = 12;
 const W: usize = 13;
 const STATE: usize = 14;
-#[allow(dead_code)]
 const BOUND: usize = 15;
+const SLIP: usize = 16;
 
 /// Gathers the contact nodes of all ranks (the contact boundary is small).
 pub fn gather(ctx: &Ctx, cs: &ContactSet, res: &[NodeResult], dim: usize) -> Table {
@@ -113,6 +131,7 @@ pub fn gather(ctx: &Ctx, cs: &ContactSet, res: &[NodeResult], dim: usize) -> Tab
             k.weight,
             if r.active { 1.0 } else { 0.0 },
             k.bound,
+            if r.slip { 1.0 } else { 0.0 },
         ];
         mine.extend_from_slice(&row);
     }
@@ -166,7 +185,15 @@ impl Table {
         for i in 1..d {
             head.push(format!("lambda_t{i}"));
         }
-        for h in ["pressure", "gap0", "gap", "weight", "state"] {
+        for h in [
+            "pressure",
+            "gap0",
+            "gap",
+            "weight",
+            "state",
+            "bound",
+            "tangential",
+        ] {
             head.push(h.into());
         }
         s.push_str(&head.join(","));
@@ -186,6 +213,17 @@ impl Table {
                 v.push(format!("{:.17e}", r[c]));
             }
             v.push(if r[STATE] > 0.5 { "active" } else { "inactive" }.into());
+            v.push(format!("{:.17e}", r[BOUND]));
+            v.push(
+                if r[SLIP] > 0.5 {
+                    "slip"
+                } else if r[BOUND] > 0.0 {
+                    "stick"
+                } else {
+                    "-"
+                }
+                .into(),
+            );
             s.push_str(&v.join(","));
             s.push('\n');
         }
@@ -248,6 +286,41 @@ impl Table {
         // Not a Hertz-like profile (e.g. a uniform pressure): no meaningful half width.
         let reach = pts.iter().map(|p| (p.0 - sc).abs()).fold(0.0, f64::max);
         (b <= 2.0 * reach).then_some(b)
+    }
+
+    /// Friction certificate of (3.18): max(|λ_τ| − b_k, 0), max |u_τ| on stick nodes, and the
+    /// alignment defect |λ_τ − b_k u_τ/|u_τ|| on slip nodes, with the scales.
+    pub fn friction_certificate(&self) -> Value {
+        let (mut excess, mut stick, mut align, mut bmax, mut umax) =
+            (0.0f64, 0.0f64, 0.0f64, 0.0f64, 0.0f64);
+        let (mut n_stick, mut n_slip) = (0usize, 0usize);
+        for r in &self.rows {
+            let ut = [r[UT], r[UT + 1]];
+            let lt = [r[LT], r[LT + 1]];
+            let slip = r[SLIP] > 0.5;
+            let res = crate::contact::tangential_residual(&ut, &lt, r[BOUND], slip);
+            excess = excess.max(res.excess);
+            stick = stick.max(res.stick_motion);
+            align = align.max(res.slip_alignment);
+            bmax = bmax.max(r[BOUND]);
+            umax = umax
+                .max((ut[0] * ut[0] + ut[1] * ut[1]).sqrt())
+                .max(r[UN].abs());
+            if slip {
+                n_slip += 1;
+            } else {
+                n_stick += 1;
+            }
+        }
+        json!({
+            "max_excess": excess,
+            "max_stick_motion": stick,
+            "max_slip_alignment_defect": align,
+            "bound_scale": bmax,
+            "length_scale": umax,
+            "stick_count": n_stick,
+            "slip_count": n_slip,
+        })
     }
 
     /// KKT certificate of (3.14) (and λ_τ = 0 for frictionless contact): the largest

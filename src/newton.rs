@@ -7,7 +7,7 @@
 
 use crate::assembly::System;
 use crate::case::{NewtonInit, NewtonSection, OnCycle, RigidModes as RigidSetting};
-use crate::contact;
+use crate::contact::{self, TangentialRow};
 use crate::contact_set::ContactSet;
 use crate::mesh::Mesh;
 use crate::partition::Layout;
@@ -35,6 +35,13 @@ pub struct StepInfo {
     pub iterations: usize,
     /// Number of rigid modes pinned in this step.
     pub pinned: usize,
+    /// Tresca: nodes in S1..S4 (inactive/stick, inactive/slip, active/stick, active/slip) in
+    /// this step's solve.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub states: Option<[usize; 4]>,
+    /// Tresca: |u^ℓ − u^{ℓ−1}| / |u^ℓ|.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub du_rel: Option<f64>,
 }
 
 /// Per owned contact node: displacement and multiplier in the node's frame.
@@ -47,6 +54,8 @@ pub struct NodeResult {
     pub lambda_n: f64,
     pub lambda_t: [f64; 2],
     pub active: bool,
+    /// Tresca: in A_τ (slip) in the last solve.
+    pub slip: bool,
 }
 
 /// What Algorithm 1 returns.
@@ -63,6 +72,14 @@ pub struct NewtonResult {
     pub pinned_final: Vec<(usize, usize)>,
     /// Step after which a recurring set switched the iteration to least-index updates.
     pub cycle_detected_at: Option<usize>,
+}
+
+/// Does a tangential row hold u_τ (stick, or slip with a spring L̃ ≠ 0)?
+fn holds_tangent(r: &TangentialRow<2>) -> bool {
+    match r {
+        TangentialRow::Stick => true,
+        TangentialRow::Slip { l, .. } => l.iter().flatten().any(|&x| x != 0.0),
+    }
 }
 
 /// Two fingerprints of an active set that do not depend on the partition (sums of per-node
@@ -92,9 +109,11 @@ fn initial_active(cs: &ContactSet, init: NewtonInit, scale: f64) -> Vec<bool> {
         .collect()
 }
 
-/// Algorithm 1 (frictionless) on the assembled system `sys` (A, f).
+/// Algorithm 1 (frictionless, reduced system (3.29)) or, with `tresca`, Algorithm 2 (Tresca,
+/// reduced system (3.42) with the regularised slip rows (3.39)/(3.40)) on the assembled
+/// system `sys` (A, f). Without friction no tangential state is formed or tested.
 #[allow(clippy::too_many_arguments)]
-pub fn algorithm1(
+pub fn semismooth_newton(
     ctx: &Ctx,
     mesh: &Mesh,
     layout: &Layout,
@@ -104,6 +123,7 @@ pub fn algorithm1(
     settings: &NewtonSection,
     rigid_setting: RigidSetting,
     coords: Option<&Vector>,
+    tresca: bool,
 ) -> Result<NewtonResult, RunError> {
     let comm = ctx.petsc.comm();
     let dim = mesh.dim;
@@ -144,12 +164,19 @@ pub fn algorithm1(
         }
         (0..dim).map(|k| hi[k] - lo[k]).fold(0.0, f64::max)
     };
-    let active_gram = |active: &[bool]| -> Vec<f64> {
+    // Constraint rows of a set for the rigid-mode test: nᵀ at active nodes; with friction also
+    // τᵀ where the tangential row holds u_τ (stick, or a slip row with a spring L̃ ≠ 0).
+    let active_gram = |active: &[bool], trow: &[TangentialRow<2>]| -> Vec<f64> {
         let mut g = vec![0.0; 36];
         if use_rigid {
-            for (k, &a) in cs.nodes.iter().zip(active) {
+            for (i, (k, &a)) in cs.nodes.iter().zip(active).enumerate() {
                 if a {
                     modes.add_outer(&mut g, &modes.normal_row(&k.x, &k.frame.n));
+                }
+                if tresca && holds_tangent(&trow[i]) {
+                    for t in &k.frame.t[..dim - 1] {
+                        modes.add_outer(&mut g, &modes.normal_row(&k.x, t));
+                    }
                 }
             }
         }
@@ -157,10 +184,20 @@ pub fn algorithm1(
     };
 
     let mut active = initial_active(cs, settings.init, scale);
+    // Tangential rows from u = 0, λ = 0: stick where b_k > 0 (3.33), slip with λ_τ = 0 where
+    // b_k = 0 (§3.4.3). Not formed without friction.
+    let mut trow: Vec<TangentialRow<2>> = if tresca {
+        cs.nodes
+            .iter()
+            .map(|k| contact::tangential_row_dyn(dim, [0.0; 2], [0.0; 2], k.bound, c))
+            .collect()
+    } else {
+        Vec::new()
+    };
     // Global Gram matrix of the first set.
     let mut g_act = vec![0.0; 36];
     {
-        let local = active_gram(&active);
+        let local = active_gram(&active, &trow);
         ctx.world
             .all_reduce_into(&local[..], &mut g_act[..], SystemOperation::sum());
     }
@@ -180,6 +217,11 @@ pub fn algorithm1(
     let mut u = sys.b.duplicate()?;
     let mut au = sys.b.duplicate()?;
     let mut buf = Vec::new();
+    let mut u_prev: Vec<f64> = if tresca {
+        vec![0.0; f_local.len()]
+    } else {
+        Vec::new()
+    };
     let (row_lo, _) = sys.a.ownership_range()?;
     let mut history: Vec<StepInfo> = Vec::new();
     let mut seen: Vec<(usize, f64, f64)> = Vec::new();
@@ -195,11 +237,13 @@ pub fn algorithm1(
         |v: usize| !cs.on_contact_boundary[v] && (0..dim).all(|k| fixed[v * dim + k].is_nan());
 
     // Fingerprint of the first set.
-    let fp = |active: &[bool]| -> (f64, f64) {
+    let fp = |active: &[bool], trow: &[TangentialRow<2>]| -> (f64, f64) {
         let mut h = (0.0, 0.0);
-        for (k, &a) in cs.nodes.iter().zip(active) {
-            if a {
-                let (x, y) = node_hash(k.tag);
+        for (i, (k, &a)) in cs.nodes.iter().zip(active).enumerate() {
+            let slip = tresca && trow[i].is_slip();
+            let state = a as u64 + 2 * slip as u64;
+            if state != 0 {
+                let (x, y) = node_hash(k.tag.wrapping_mul(4).wrapping_add(state));
                 h.0 += x;
                 h.1 += y;
             }
@@ -207,7 +251,7 @@ pub fn algorithm1(
         h
     };
     {
-        let (h1, h2) = fp(&active);
+        let (h1, h2) = fp(&active, &trow);
         let mut out = [0.0; 2];
         ctx.world
             .all_reduce_into(&[h1, h2][..], &mut out[..], SystemOperation::sum());
@@ -220,21 +264,49 @@ pub fn algorithm1(
         s.copy_values_from(&sys.a)?;
         rhs.copy_from(&sys.b)?;
         let mut rhs_updates: Vec<(usize, f64)> = Vec::new();
-        for ((k, r), &a) in cs.nodes.iter().zip(&rows).zip(&active) {
-            if !a {
-                continue;
+        for (i, (k, r)) in cs.nodes.iter().zip(&rows).enumerate() {
+            let a = active[i];
+            if !tresca && !a {
+                continue; // (3.29): inactive rows stay as in A
             }
+            let fk = &f_local[k.local_row..k.local_row + dim];
+            let dotf = |v: &[f64; 3]| -> f64 { (0..dim).map(|j| v[j] * fk[j]).sum() };
             let mut comb = [[0.0; 3]; 3];
             let mut own = [[0.0; 3]; 3];
-            // normal row: nᵀ u^k = −g^k
-            own[0][..dim].copy_from_slice(&k.frame.n[..dim]);
-            rhs_updates.push((k.local_row, -k.gap));
-            // tangential rows: τ_iᵀ (A u)_k = τ_iᵀ f_k
-            for i in 1..dim {
-                let t = &k.frame.t[i - 1];
-                comb[i][..dim].copy_from_slice(&t[..dim]);
-                let tf: f64 = (0..dim).map(|j| t[j] * f_local[k.local_row + j]).sum();
-                rhs_updates.push((k.local_row + i, tf));
+            if a {
+                // normal row: nᵀ u^k = −g^k
+                own[0][..dim].copy_from_slice(&k.frame.n[..dim]);
+                rhs_updates.push((k.local_row, -k.gap));
+            } else {
+                // (3.42) inactive normal row: nᵀ (A u)_k = nᵀ f_k
+                comb[0][..dim].copy_from_slice(&k.frame.n[..dim]);
+                rhs_updates.push((k.local_row, dotf(&k.frame.n)));
+            }
+            for ti in 1..dim {
+                let t = &k.frame.t[ti - 1];
+                if !tresca {
+                    // frictionless: τ_iᵀ (A u)_k = τ_iᵀ f_k
+                    comb[ti][..dim].copy_from_slice(&t[..dim]);
+                    rhs_updates.push((k.local_row + ti, dotf(t)));
+                    continue;
+                }
+                match &trow[i] {
+                    // (3.34a) stick: τ_iᵀ u^k = 0
+                    TangentialRow::Stick => {
+                        own[ti][..dim].copy_from_slice(&t[..dim]);
+                        rhs_updates.push((k.local_row + ti, 0.0));
+                    }
+                    // (3.39a) slip: τᵀ(A u)_k + L̃ τᵀ u^k = τᵀ f_k + r̃
+                    TangentialRow::Slip { l, r: rt } => {
+                        comb[ti][..dim].copy_from_slice(&t[..dim]);
+                        for (m, tm) in k.frame.t[..dim - 1].iter().enumerate() {
+                            for j in 0..dim {
+                                own[ti][j] += l[ti - 1][m] * tm[j];
+                            }
+                        }
+                        rhs_updates.push((k.local_row + ti, dotf(t) + rt[ti - 1]));
+                    }
+                }
             }
             r.write(&mut s, dim, &comb, &own, &mut buf)?;
         }
@@ -291,7 +363,9 @@ pub fn algorithm1(
         let au_local = au.to_local_vec()?;
         let mut changed = 0usize;
         let mut new_active = active.clone();
+        let mut new_trow = trow.clone();
         let mut res2 = 0.0;
+        let mut counts = [0.0f64; 4];
         for (i, k) in cs.nodes.iter().enumerate() {
             let mut uk = [0.0; 3];
             let mut lk = [0.0; 3];
@@ -301,39 +375,73 @@ pub fn algorithm1(
             }
             let u_n = k.frame.normal_part(&uk);
             let l_n = k.frame.normal_part(&lk);
+            let u_t = k.frame.tangential_part(&uk);
+            let l_t = k.frame.tangential_part(&lk);
+            let slip = tresca && trow[i].is_slip();
             nodes[i] = NodeResult {
                 u: uk,
                 lambda: lk,
                 u_n,
-                u_t: k.frame.tangential_part(&uk),
+                u_t,
                 lambda_n: l_n,
-                lambda_t: k.frame.tangential_part(&lk),
+                lambda_t: l_t,
                 active: active[i],
+                slip,
             };
+            counts[active[i] as usize * 2 + slip as usize] += 1.0;
             // (3.23)
             new_active[i] = contact::normal_active(u_n, l_n, k.gap, c);
-            if new_active[i] != active[i] {
-                changed += 1;
-            }
+            let mut flip = new_active[i] != active[i];
             let cn = contact::c_n(u_n, l_n, k.gap, c);
             res2 += cn * cn;
+            if tresca {
+                // (3.33) with the newest iterate (THEORY §4 erratum), and the next slip row.
+                new_trow[i] = contact::tangential_row_dyn(dim, u_t, l_t, k.bound, c);
+                flip |= new_trow[i].is_slip() != slip;
+                let ct = contact::c_tau(&u_t, &l_t, k.bound, c);
+                res2 += ct[0] * ct[0] + ct[1] * ct[1];
+            }
+            if flip {
+                changed += 1;
+            }
+        }
+        // ‖u^ℓ − u^{ℓ−1}‖² and ‖u^ℓ‖² (Algorithm 2's stopping rule).
+        let (mut du2, mut uu) = (0.0, 0.0);
+        if tresca {
+            for (x, y) in u_local.iter().zip(&u_prev) {
+                du2 += (x - y) * (x - y);
+                uu += x * x;
+            }
+            u_prev.copy_from_slice(&u_local);
         }
         lambda_seconds += t_l.elapsed().as_secs_f64();
 
-        // One Allreduce: changes, |A|, fingerprints, ‖C_n‖², Gram matrix of the new set.
-        let (h1, h2) = fp(&new_active);
+        // One Allreduce: changes, |A|, fingerprints, residual², state counts, ‖Δu‖², ‖u‖²,
+        // Gram matrix of the new set.
+        let (h1, h2) = fp(&new_active, &new_trow);
         let mut local = vec![
             changed as f64,
             new_active.iter().filter(|&&a| a).count() as f64,
             h1,
             h2,
             res2,
+            counts[0],
+            counts[1],
+            counts[2],
+            counts[3],
+            du2,
+            uu,
         ];
-        local.extend(active_gram(&new_active));
+        local.extend(active_gram(&new_active, &new_trow));
         let mut global = vec![0.0f64; local.len()];
         ctx.world
             .all_reduce_into(&local[..], &mut global[..], SystemOperation::sum());
         let changed_g = global[0] as usize;
+        let du_rel = if global[10] > 0.0 {
+            (global[9] / global[10]).sqrt()
+        } else {
+            0.0
+        };
         let info_step = StepInfo {
             step,
             active: n_active_global,
@@ -342,6 +450,8 @@ pub fn algorithm1(
             solve_seconds,
             iterations: info.iterations,
             pinned: pins.len(),
+            states: tresca.then(|| [0, 1, 2, 3].map(|j| global[5 + j] as usize)),
+            du_rel: tresca.then_some(du_rel),
         };
         say!(
             ctx,
@@ -354,15 +464,31 @@ pub fn algorithm1(
             solve_seconds,
             info.iterations
         );
+        if tresca {
+            say!(
+                ctx,
+                "            S1 {} S2 {} S3 {} S4 {}  |du|/|u| = {:.3e}",
+                global[5],
+                global[6],
+                global[7],
+                global[8],
+                du_rel
+            );
+        }
         history.push(info_step);
         if changed_g == 0 {
-            converged = true;
-            break;
+            if !tresca || du_rel < settings.tol_u {
+                converged = true;
+                break;
+            }
+            // Same sets, but the slip rows are a linearisation: iterate on.
+            trow = new_trow;
+            continue;
         }
         let mut key = (global[1] as usize, global[2], global[3]);
         let recurs = seen.iter().position(|s| *s == key);
         if let Some(prev) = recurs {
-            if least_index || settings.on_cycle == OnCycle::Stop {
+            if least_index || tresca || settings.on_cycle == OnCycle::Stop {
                 return Err(RunError::Failed(format!(
                     "Newton cycling: the active set of step {} (|A_n| = {}) equals that of step \
                      {}{} — the exact active-set iteration would loop forever; stopping",
@@ -371,6 +497,8 @@ pub fn algorithm1(
                     prev + 1,
                     if least_index {
                         " even with least-index updates"
+                    } else if tresca {
+                        " (Tresca: no least-index fallback)"
                     } else {
                         " (newton.on_cycle = \"stop\")"
                     }
@@ -408,19 +536,20 @@ pub fn algorithm1(
             {
                 *b = if k.tag == tag { !*a } else { *a };
             }
-            let (h1, h2) = fp(&new_active);
+            let (h1, h2) = fp(&new_active, &new_trow);
             let mut local = vec![new_active.iter().filter(|&&a| a).count() as f64, h1, h2];
-            local.extend(active_gram(&new_active));
+            local.extend(active_gram(&new_active, &new_trow));
             let mut g2 = vec![0.0f64; local.len()];
             ctx.world
                 .all_reduce_into(&local[..], &mut g2[..], SystemOperation::sum());
             key = (g2[0] as usize, g2[1], g2[2]);
             g_act.copy_from_slice(&g2[3..3 + 36]);
         } else {
-            g_act.copy_from_slice(&global[5..5 + 36]);
+            g_act.copy_from_slice(&global[11..11 + 36]);
         }
         seen.push(key);
         active = new_active;
+        trow = new_trow;
         n_active_global = key.0;
     }
     let steps = history.len();

@@ -503,7 +503,8 @@ pub fn run_case(ctx: &Ctx, case: &Case) -> Result<Value, RunError> {
                 case::Preset::Iterative => Some(assembly::coordinate_vector(comm, &mesh, &layout)?),
                 case::Preset::Direct => None,
             };
-            let nr = newton::algorithm1(
+            let tresca = matches!(cc.friction, case::Friction::Tresca { .. });
+            let nr = newton::semismooth_newton(
                 ctx,
                 &mesh,
                 &layout,
@@ -513,6 +514,7 @@ pub fn run_case(ctx: &Ctx, case: &Case) -> Result<Value, RunError> {
                 &case.newton,
                 cc.rigid_modes,
                 coords.as_ref(),
+                tresca,
             )?;
             if !nr.converged {
                 return Err(RunError::Failed(format!(
@@ -525,7 +527,7 @@ pub fn run_case(ctx: &Ctx, case: &Case) -> Result<Value, RunError> {
             let table = contact_report::gather(ctx, &cs, &nr.nodes, dim);
             let total_force = contact_report::total_force(ctx, &nr.nodes);
             let half_width = table.half_width(&cs.obstacle);
-            let kkt = table.kkt(true);
+            let kkt = table.kkt(!tresca);
             say!(
                 ctx,
                 "contact: {} active, p_max = {:.6}, half width = {}, total force = {:?}",
@@ -537,7 +539,7 @@ pub fn run_case(ctx: &Ctx, case: &Case) -> Result<Value, RunError> {
                 &total_force[..dim]
             );
             let newton_json = json!({
-                "algorithm": 1,
+                "algorithm": if tresca { 2 } else { 1 },
                 "init": case.newton.init.name(),
                 "c": case.newton.c,
                 "steps": nr.steps,
@@ -558,7 +560,11 @@ pub fn run_case(ctx: &Ctx, case: &Case) -> Result<Value, RunError> {
                 "half_width": half_width,
                 "kkt": kkt,
             });
-            let fields = contact_report::fields(&cs, &nr.nodes, dim);
+            let mut contact_json = contact_json;
+            if tresca {
+                contact_json["friction"] = table.friction_certificate();
+            }
+            let fields = contact_report::fields(&cs, &nr.nodes, dim, tresca);
             contact_out = Some(ContactOutput {
                 fields,
                 n_global: cs.n_global,

@@ -624,6 +624,19 @@ pub fn run_case(ctx: &Ctx, case: &Case) -> Result<Value, RunError> {
             tm2.output = tm_out;
             tm2.total = t_total.elapsed().as_secs_f64();
             let mem = ctx.gather_f64(peak_memory_bytes());
+            say!(
+                ctx,
+                "timings [s]: read {:.3}, partition {:.3}, assembly {:.3}, solve {:.3}, post {:.3}, \
+                 output {:.3}, total {:.3}; peak memory per rank {:.0} MB (max)",
+                tm2.read,
+                tm2.partition,
+                tm2.assembly,
+                tm2.solve,
+                tm2.post,
+                tm2.output,
+                tm2.total,
+                mem.iter().fold(0.0f64, |a, &b| a.max(b)) / 1e6
+            );
             summary_wo_output(&tm2, &mem)
         },
     )

@@ -88,6 +88,8 @@ pub fn mpi_env(cmd: &mut Command) {
     cmd.env("OMPI_ALLOW_RUN_AS_ROOT", "1")
         .env("OMPI_ALLOW_RUN_AS_ROOT_CONFIRM", "1")
         .env("OMPI_MCA_rmaps_base_oversubscribe", "1")
+        // Yield instead of busy-polling when idle: the test machine is shared.
+        .env("OMPI_MCA_mpi_yield_when_idle", "1")
         .env("OPENBLAS_NUM_THREADS", "1")
         .env("OMP_NUM_THREADS", "1");
 }

@@ -1,0 +1,244 @@
+//! The two limits of Tresca friction (THEORY.md §4, (3.18)):
+//!
+//! * g_R = 0 (b_k = 0 at every node): Algorithm 2 must reproduce the frictionless solution of
+//!   Algorithm 1 to round-off, u at every node and λ at every contact node, matched by node id
+//!   (block2d with its top dragged sideways, and the Hertz disk of level 3).
+//! * g_R huge: |λ_τ| < b_k at every node, so every contact node sticks (u_τ = 0). A block pressed
+//!   flat whose bottom stays in contact then solves the same linear system as the block whose
+//!   bottom is clamped by Dirichlet data u = 0: the displacements agree to 1e-10 and the contact
+//!   forces −λ^k agree with the Dirichlet reactions, which this test computes itself from the
+//!   clamped run's element stresses (R_k = Σ_e |e| σ_e ∇φ_k, no load on the bottom nodes).
+
+mod tresca_common;
+
+use std::collections::BTreeMap;
+use std::path::Path;
+
+use tresca_common::*;
+
+const NO_FRICTION: &str = "contact.friction=\"none\"";
+const ZERO_THRESHOLD: &str = "contact.friction={law=\"tresca\", threshold=0.0}";
+
+/// Runs `case` frictionless and with g_R = 0 (both with the extra `sets`) and compares.
+fn zero_threshold_matches_frictionless(case: &Path, sets: &[&str]) {
+    let mut a_sets = sets.to_vec();
+    a_sets.push(NO_FRICTION);
+    let mut b_sets = sets.to_vec();
+    b_sets.push(ZERO_THRESHOLD);
+    let a = solve(1, case, &a_sets);
+    let b = solve(1, case, &b_sets);
+    a.assert_converged("frictionless");
+    b.assert_converged("g_R = 0");
+    assert_eq!(a.f(&["newton", "algorithm"]), 1.0, "frictionless run");
+    assert_eq!(b.f(&["newton", "algorithm"]), 2.0, "Tresca run");
+
+    // Displacement at every node.
+    let (du, su) = max_diff(&b.displacement(), &a.displacement());
+    assert!(su > 0.0, "zero displacement?");
+    eprintln!("g_R = 0 vs frictionless: max |Δu| = {du:.3e} (max |u| = {su:.3e})");
+    assert!(
+        du <= 1e-11 * su,
+        "g_R = 0 vs frictionless: max |Δu| = {du:.3e}, max |u| = {su:.3e}"
+    );
+
+    // Contact quantities, node by node.
+    let ra = a.contact_rows();
+    let rb = b.contact_rows();
+    let dim = csv_dim(&ra);
+    let mut keys = vec!["u_n", "lambda_n"];
+    let tk: Vec<String> = (1..dim)
+        .flat_map(|i| [format!("u_t{i}"), format!("lambda_t{i}")])
+        .collect();
+    keys.extend(tk.iter().map(String::as_str));
+    let (dc, _) = max_diff(&columns(&rb, &keys), &columns(&ra, &keys));
+    let lscale = ra
+        .values()
+        .map(|r| r.f("lambda_n").abs())
+        .fold(0.0, f64::max);
+    assert!(lscale > 0.0, "no contact force in the frictionless run");
+    eprintln!("g_R = 0 vs frictionless: contact columns differ by {dc:.3e} (λ scale {lscale:.3e})");
+    assert!(
+        dc <= 1e-11 * lscale.max(su),
+        "g_R = 0 vs frictionless: contact columns differ by {dc:.3e} (λ scale {lscale:.3e})"
+    );
+    for (id, r) in &ra {
+        assert_eq!(
+            r.active(),
+            rb[id].active(),
+            "node {id}: contact state differs between the runs"
+        );
+    }
+    // Frictionless λ_τ = 0 (both runs).
+    for r in ra.values().chain(rb.values()) {
+        for l in r.lambda_t(dim) {
+            assert!(
+                l.abs() <= 1e-12 * lscale,
+                "λ_τ = {l:e} ≠ 0 without friction"
+            );
+        }
+    }
+    assert_eq!(
+        a.f(&["contact", "active_count"]),
+        b.f(&["contact", "active_count"])
+    );
+}
+
+#[test]
+fn zero_threshold_block2d_drag() {
+    // The drag makes the frictionless solution slide, so u_τ ≠ 0 on the contact nodes.
+    zero_threshold_matches_frictionless(&case("block2d_tresca.toml"), &[]);
+}
+
+#[test]
+fn zero_threshold_hertz_l3() {
+    // cases/hertz/hertz.toml: normal pressure only, frictionless tangential translation removed
+    // by rigid_modes = "auto" in both runs.
+    zero_threshold_matches_frictionless(&repo("cases/hertz/hertz.toml"), &[]);
+}
+
+/// Dirichlet reactions R_k = (A u)_k = Σ_e |e| σ_e ∇φ_k^e (P1, constant stress per cell; the
+/// bottom nodes carry no load) at the nodes `ids`, computed from solution.h5 of a linear run.
+fn reactions(h5: &Path, ids: &[u64], dim: usize) -> BTreeMap<u64, Vec<f64>> {
+    let ids_json = serde_json::to_string(ids).expect("ids");
+    let ids_file = tempfile::NamedTempFile::new().expect("tmp");
+    std::fs::write(ids_file.path(), ids_json).expect("write ids");
+    let v = python_json(
+        r#"
+import sys, json, h5py, numpy as np
+f = h5py.File(sys.argv[1], "r")
+want = json.load(open(sys.argv[2]))
+d = int(sys.argv[3])
+X = f["mesh/geometry"][:, :d]
+ids = f["mesh/node_id"][:]
+T = f["mesh/topology"][:]
+S = f["cell/stress"][:].reshape(-1, 3, 3)[:, :d, :d]
+row = {int(i): k for k, i in enumerate(ids)}
+R = np.zeros((len(ids), d))
+for e in range(len(T)):
+    P = X[T[e]]                                  # (d+1) x d vertices
+    M = np.hstack([np.ones((d + 1, 1)), P])      # rows [1, x]
+    G = np.linalg.inv(M)[1:, :]                  # d x (d+1): gradients of the hat functions
+    vol = abs(np.linalg.det(M)) / (2.0 if d == 2 else 6.0)
+    R[T[e]] += vol * (S[e] @ G).T
+print("RESULT " + json.dumps({str(i): R[row[i]].tolist() for i in want}))
+"#,
+        &[h5, ids_file.path(), Path::new(&dim.to_string())],
+    );
+    v.as_object()
+        .expect("object")
+        .iter()
+        .map(|(k, r)| (k.parse().expect("id"), floats(r)))
+        .collect()
+}
+
+/// Contact force −λ^k in global coordinates (solution.h5 /contact/contact_force), by node id.
+fn contact_forces(s: &Solved, dim: usize) -> BTreeMap<u64, Vec<f64>> {
+    let v = python_json(
+        r#"
+import sys, json, h5py
+f = h5py.File(sys.argv[1], "r")
+print("RESULT " + json.dumps({"ids": f["contact/node_id"][:].tolist(),
+                              "force": f["contact/contact_force"][:].tolist()}))
+"#,
+        &[&s.dir.join("solution.h5")],
+    );
+    let ids = v["ids"].as_array().expect("ids");
+    let force = v["force"].as_array().expect("force");
+    ids.iter()
+        .zip(force)
+        .map(|(i, f)| (i.as_u64().expect("id"), floats(f)[..dim].to_vec()))
+        .collect()
+}
+
+/// Frictional run with a huge threshold vs the clamped run, same top drag `drag` (TOML array).
+fn huge_threshold_matches_clamped(tresca_case: &str, clamped_case: &str, drag: &str, dim: usize) {
+    let drag_set = format!("dirichlet.0.value={drag}");
+    let fric = solve(
+        1,
+        &case(tresca_case),
+        &[
+            "contact.friction={law=\"tresca\", threshold=1e3}",
+            &drag_set,
+        ],
+    );
+    fric.assert_converged("huge g_R");
+    let clamp_drag = format!("dirichlet.1.value={drag}");
+    let clamped = solve(
+        1,
+        &case(clamped_case),
+        &["dirichlet.1.group=top", &clamp_drag],
+    );
+
+    // Precondition of the comparison: every contact node active and sticking.
+    let rows = fric.contact_rows();
+    let n = rows.len();
+    assert!(n > 0);
+    for (id, r) in &rows {
+        assert!(
+            r.active(),
+            "node {id} lifted off: the comparison needs full contact"
+        );
+        assert_eq!(
+            r.tangential(),
+            "stick",
+            "node {id} slips although g_R is huge"
+        );
+        assert!(
+            norm(&r.u_t(dim)) <= 1e-14,
+            "node {id}: stick but u_τ = {:?}",
+            r.u_t(dim)
+        );
+        assert!(
+            norm(&r.lambda_t(dim)) < 1e-3 * r.bound(),
+            "node {id}: |λ_τ| close to b_k"
+        );
+    }
+    assert_eq!(fric.state_history().last().expect("history"), &[0, 0, n, 0]);
+
+    // Displacements at every node.
+    let (du, su) = max_diff(&fric.displacement(), &clamped.displacement());
+    assert!(su > 0.0);
+    eprintln!("huge g_R vs clamped: max |Δu| = {du:.3e} (max |u| = {su:.3e})");
+    assert!(
+        du <= 1e-10 * su,
+        "huge g_R vs clamped: max |Δu| = {du:.3e}, max |u| = {su:.3e}"
+    );
+
+    // Contact forces vs the reactions of the clamped bottom.
+    let forces = contact_forces(&fric, dim);
+    let ids: Vec<u64> = forces.keys().copied().collect();
+    let react = reactions(&clamped.dir.join("solution.h5"), &ids, dim);
+    let (df, sf) = max_diff(&forces, &react);
+    assert!(sf > 0.0);
+    eprintln!("huge g_R: contact forces vs reactions differ by {df:.3e} (scale {sf:.3e})");
+    assert!(
+        df <= 1e-10 * sf,
+        "huge g_R: contact forces vs Dirichlet reactions differ by {df:.3e} (scale {sf:.3e})"
+    );
+    // The reactions really carry shear (the drag), so the tangential part is tested too.
+    let shear: f64 = react.values().map(|r| norm(&r[..dim - 1])).sum();
+    assert!(
+        shear > 1e-3 * sf,
+        "no tangential reaction: the test would be weak"
+    );
+}
+
+#[test]
+fn huge_threshold_sticks_like_clamped_2d() {
+    huge_threshold_matches_clamped(
+        "block2d_tresca.toml",
+        "block2d_clamped.toml",
+        "[0.01, \"free\"]",
+        2,
+    );
+}
+
+#[test]
+fn huge_threshold_sticks_like_clamped_3d() {
+    huge_threshold_matches_clamped(
+        "block3d_tresca.toml",
+        "block3d_clamped.toml",
+        "[0.01, 0.01, \"free\"]",
+        3,
+    );
+}

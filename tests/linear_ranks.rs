@@ -159,18 +159,20 @@ fn cube_1_2_3_ranks_same_displacement() {
 }
 
 /// The iterative preset (GMRES + GAMG, rtol 1e-10 by default) on 2 ranks agrees with the
-/// direct solver on 1 rank to the accuracy its tolerance allows.
+/// direct solver on 1 rank to the accuracy its tolerance allows (measured by hand with
+/// `-mg_levels_pc_type jacobi -mg_levels_ksp_type chebyshev`, which works around the bug:
+/// 8e-11 relative in 2D).
 #[test]
-#[ignore = "bug: solver.preset=iterative ends DIVERGED_PC_FAILED (GAMG: zero diagonal on a coarse level), even on cases/plate on 1 rank"]
+#[ignore = "bug: solver.preset=iterative ends DIVERGED_PC_FAILED even on cases/plate on 1 rank (GAMG coarse levels get zero diagonals; the preset's SOR smoother fails on them)"]
 fn iterative_preset_2_ranks_matches_direct_1_rank() {
     ranks_agree(
         2,
         0.05,
-        &[(1, "", 0.0), (2, "solver.preset=iterative", 1e-6)],
+        &[(1, "", 0.0), (2, "solver.preset=iterative", 1e-7)],
     );
     ranks_agree(
         3,
         0.2,
-        &[(1, "", 0.0), (2, "solver.preset=iterative", 1e-6)],
+        &[(1, "", 0.0), (2, "solver.preset=iterative", 1e-7)],
     );
 }

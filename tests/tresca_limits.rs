@@ -131,25 +131,6 @@ print("RESULT " + json.dumps({str(i): R[row[i]].tolist() for i in want}))
         .collect()
 }
 
-/// Contact force −λ^k in global coordinates (solution.h5 /contact/contact_force), by node id.
-fn contact_forces(s: &Solved, dim: usize) -> BTreeMap<u64, Vec<f64>> {
-    let v = python_json(
-        r#"
-import sys, json, h5py
-f = h5py.File(sys.argv[1], "r")
-print("RESULT " + json.dumps({"ids": f["contact/node_id"][:].tolist(),
-                              "force": f["contact/contact_force"][:].tolist()}))
-"#,
-        &[&s.dir.join("solution.h5")],
-    );
-    let ids = v["ids"].as_array().expect("ids");
-    let force = v["force"].as_array().expect("force");
-    ids.iter()
-        .zip(force)
-        .map(|(i, f)| (i.as_u64().expect("id"), floats(f)[..dim].to_vec()))
-        .collect()
-}
-
 /// Frictional run with a huge threshold vs the clamped run, same top drag `drag` (TOML array).
 fn huge_threshold_matches_clamped(tresca_case: &str, clamped_case: &str, drag: &str, dim: usize) {
     let drag_set = format!("dirichlet.0.value={drag}");

@@ -357,3 +357,22 @@ pub fn columns(rows: &BTreeMap<u64, Row>, keys: &[&str]) -> BTreeMap<u64, Vec<f6
         .map(|(k, r)| (*k, keys.iter().map(|c| r.f(c)).collect()))
         .collect()
 }
+
+/// Contact force −λ^k in global coordinates (solution.h5 /contact/contact_force), by node id.
+pub fn contact_forces(s: &Solved, dim: usize) -> BTreeMap<u64, Vec<f64>> {
+    let v = python_json(
+        r#"
+import sys, json, h5py
+f = h5py.File(sys.argv[1], "r")
+print("RESULT " + json.dumps({"ids": f["contact/node_id"][:].tolist(),
+                              "force": f["contact/contact_force"][:].tolist()}))
+"#,
+        &[&s.dir.join("solution.h5")],
+    );
+    let ids = v["ids"].as_array().expect("ids");
+    let force = v["force"].as_array().expect("force");
+    ids.iter()
+        .zip(force)
+        .map(|(i, f)| (i.as_u64().expect("id"), floats(f)[..dim].to_vec()))
+        .collect()
+}

@@ -268,64 +268,101 @@ fn hertz_without_support_fails_cleanly() {
     }
 }
 
+/// Sorted node ids of the active contact nodes.
+fn active_ids(s: &Solved) -> Vec<u64> {
+    let mut v: Vec<u64> = s
+        .contact_rows()
+        .iter()
+        .filter(|r| r.active())
+        .map(Row::node_id)
+        .collect();
+    v.sort();
+    v
+}
+
+/// Attempts per mode in the cycling test (each is under a second).
+const CYCLE_ATTEMPTS: usize = 8;
+
 #[test]
 fn hertz_l2_cycles_on_three_ranks() {
     // On 3 ranks the partitioned round-off makes Algorithm 1 from all_active revisit the active
-    // set of step 6 at step 8 (a tie between two symmetric nodes; 1 and 2 ranks do not cycle).
-    // Reproduced 5/5 times when this test was written: if the partitioner or the solver's
-    // round-off change, the cycle may go away — then this test has to find a new trigger.
+    // set of step 6 at step 8 (a near-tie between two nodes; 1 and 2 ranks do not cycle). The
+    // 3-rank runs are not bit-reproducible (the PTScotch partition and the parallel round-off
+    // vary from run to run), so the cycle appeared in about 7 of 10 runs when this test was
+    // written: each mode gets CYCLE_ATTEMPTS runs, every run must be correct whether it cycles
+    // or not, and at least one must cycle (miss probability about 0.3^8 ≈ 1e-4). No
+    // deterministic trigger was found (1 rank, Hertz L0–L5 / refined L0–L3, indent2d, thin
+    // beams; the exact active-set step does not depend on newton.c).
     let mesh = mesh_set("hertz_L2");
-    let tmp = tempfile::tempdir().expect("tempdir");
-    let out = tmp.path().join("out");
-    let r = run_solver(
-        3,
-        &case(),
-        &[&mesh, "newton.init=all_active", "newton.on_cycle=stop"],
-        &out,
-    );
+    let one = solve(1, &case(), &[&mesh, "newton.init=all_active"]);
+    assert!(one.converged(), "L2 on 1 rank:\n{}", one.run.output());
+    let matches_one_rank = |s: &Solved, what: &str| {
+        assert_eq!(
+            active_ids(s),
+            active_ids(&one),
+            "{what}: final active set ≠ 1 rank"
+        );
+        let (p, p1) = (
+            s.f(&["contact", "max_pressure"]),
+            one.f(&["contact", "max_pressure"]),
+        );
+        assert!(rel(p, p1) < 1e-10, "{what}: p_max {p} vs {p1} on 1 rank");
+        check_equilibrium_and_kkt(s, what);
+    };
+
+    // on_cycle = "stop": a cycle is an error (non-zero exit, message, no output).
+    let mut stopped = 0;
+    for attempt in 1..=CYCLE_ATTEMPTS {
+        let tmp = tempfile::tempdir().expect("tempdir");
+        let out = tmp.path().join("out");
+        let sets = [
+            mesh.as_str(),
+            "newton.init=all_active",
+            "newton.on_cycle=stop",
+        ];
+        let r = run_solver(3, &case(), &sets, &out);
+        if r.code == Some(0) {
+            // no cycle this time: the run must have converged to the 1-rank solution
+            assert!(
+                !r.stderr.contains("Newton cycling"),
+                "exit 0 after a cycle\n{}",
+                r.output()
+            );
+            let s = solved(r, tmp, out);
+            matches_one_rank(
+                &s,
+                &format!("L2 on 3 ranks, on_cycle = stop, attempt {attempt}"),
+            );
+            continue;
+        }
+        assert!(
+            r.stderr.contains("Newton cycling"),
+            "on_cycle = stop, attempt {attempt}: failed without 'Newton cycling'\n{}",
+            r.output()
+        );
+        assert!(!out.exists(), "on_cycle = stop left an output directory");
+        stopped += 1;
+        break;
+    }
     assert!(
-        r.code.is_some_and(|c| c != 0),
-        "on_cycle = stop: exit 0\n{}",
-        r.output()
+        stopped > 0,
+        "hertz_L2 on 3 ranks did not cycle in {CYCLE_ATTEMPTS} runs: the trigger is gone"
     );
-    assert!(
-        r.stderr.contains("Newton cycling"),
-        "no 'Newton cycling' message\n{}",
-        r.output()
-    );
-    assert!(!out.exists(), "on_cycle = stop left an output directory");
 
     // The default least-index fallback gets out of the cycle and reaches the 1-rank solution.
-    let cyc = solve(3, &case(), &[&mesh, "newton.init=all_active"]);
+    let mut recovered = 0;
+    for attempt in 1..=CYCLE_ATTEMPTS {
+        let s = solve(3, &case(), &[&mesh, "newton.init=all_active"]);
+        let what = format!("L2 on 3 ranks, least_index, attempt {attempt}");
+        assert!(s.converged(), "{what}:\n{}", s.run.output());
+        matches_one_rank(&s, &what);
+        if !get(&s.summary, &["newton", "cycle_detected_at"]).is_null() {
+            recovered += 1;
+            break;
+        }
+    }
     assert!(
-        cyc.converged(),
-        "least_index on 3 ranks:\n{}",
-        cyc.run.output()
+        recovered > 0,
+        "hertz_L2 on 3 ranks (least_index) did not cycle in {CYCLE_ATTEMPTS} runs"
     );
-    assert!(
-        !get(&cyc.summary, &["newton", "cycle_detected_at"]).is_null(),
-        "least_index run on 3 ranks reports no cycle"
-    );
-    let one = solve(1, &case(), &[&mesh, "newton.init=all_active"]);
-    let active = |s: &Solved| -> Vec<u64> {
-        let mut v: Vec<u64> = s
-            .contact_rows()
-            .iter()
-            .filter(|r| r.active())
-            .map(Row::node_id)
-            .collect();
-        v.sort();
-        v
-    };
-    assert_eq!(
-        active(&cyc),
-        active(&one),
-        "final active sets differ (3 ranks vs 1)"
-    );
-    let (p3, p1) = (
-        cyc.f(&["contact", "max_pressure"]),
-        one.f(&["contact", "max_pressure"]),
-    );
-    assert!(rel(p3, p1) < 1e-10, "p_max {p3} on 3 ranks vs {p1} on 1");
-    check_equilibrium_and_kkt(&cyc, "L2 on 3 ranks after the least-index fallback");
 }

@@ -170,6 +170,12 @@ pub fn solve(np: usize, case: &Path, sets: &[&str]) -> Solved {
     let tmp = tempfile::tempdir().expect("tempdir");
     let dir = tmp.path().join("out");
     let run = run_solver(np, case, sets, &dir);
+    solved(run, tmp, dir)
+}
+
+/// The [`Solved`] of a finished run that wrote into `dir` (inside `tmp`); panics unless it
+/// exited with 0 and wrote a summary.
+pub fn solved(run: Run, tmp: tempfile::TempDir, dir: PathBuf) -> Solved {
     assert_eq!(run.code, Some(0), "solver failed:\n{}", run.output());
     let text = std::fs::read_to_string(dir.join("summary.json"))
         .unwrap_or_else(|e| panic!("no summary.json ({e}):\n{}", run.output()));

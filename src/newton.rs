@@ -273,10 +273,15 @@ pub fn semismooth_newton(
             let dotf = |v: &[f64; 3]| -> f64 { (0..dim).map(|j| v[j] * fk[j]).sum() };
             let mut comb = [[0.0; 3]; 3];
             let mut own = [[0.0; 3]; 3];
+            // Rows that only constrain u^k are scaled by the node's mean stiffness diagonal, so
+            // they are of the size of the rows they replace (matters for iterative solvers).
+            let sk = (0..dim).map(|j| r.diag(j)).sum::<f64>() / dim as f64;
             if a {
                 // normal row: nᵀ u^k = −g^k
-                own[0][..dim].copy_from_slice(&k.frame.n[..dim]);
-                rhs_updates.push((k.local_row, -k.gap));
+                for j in 0..dim {
+                    own[0][j] = sk * k.frame.n[j];
+                }
+                rhs_updates.push((k.local_row, -sk * k.gap));
             } else {
                 // (3.42) inactive normal row: nᵀ (A u)_k = nᵀ f_k
                 comb[0][..dim].copy_from_slice(&k.frame.n[..dim]);
@@ -293,7 +298,9 @@ pub fn semismooth_newton(
                 match &trow[i] {
                     // (3.34a) stick: τ_iᵀ u^k = 0
                     TangentialRow::Stick => {
-                        own[ti][..dim].copy_from_slice(&t[..dim]);
+                        for j in 0..dim {
+                            own[ti][j] = sk * t[j];
+                        }
                         rhs_updates.push((k.local_row + ti, 0.0));
                     }
                     // (3.39a) slip: τᵀ(A u)_k + L̃ τᵀ u^k = τᵀ f_k + r̃

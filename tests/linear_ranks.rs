@@ -163,7 +163,6 @@ fn cube_1_2_3_ranks_same_displacement() {
 /// `-mg_levels_pc_type jacobi -mg_levels_ksp_type chebyshev`, which works around the bug:
 /// 8e-11 relative in 2D).
 #[test]
-#[ignore = "bug: solver.preset=iterative ends DIVERGED_PC_FAILED even on cases/plate on 1 rank (GAMG coarse levels get zero diagonals; the preset's SOR smoother fails on them)"]
 fn iterative_preset_2_ranks_matches_direct_1_rank() {
     ranks_agree(
         2,

@@ -250,7 +250,7 @@ pub fn cell_fields(
             .then(|| vec![layout.rank as f64; nlc]),
     };
     if !(want_stress || want_vm || want_vmt) {
-        // Still a collective call pattern: every rank skips alike (fields are global).
+        // Every rank skips alike: output.fields is the same everywhere (no collective skipped).
         return Ok(f);
     }
     // Displacements of every node of the local cells (owned or ghost).
@@ -571,8 +571,6 @@ pub fn run_case(ctx: &Ctx, case: &Case) -> Result<Value, RunError> {
                 offset: cs.offset,
                 csv: table.csv(),
             });
-            let solve_seconds: f64 = nr.history.iter().map(|h| h.solve_seconds).sum();
-            let _ = solve_seconds;
             (
                 nr.u,
                 json!({ "newton": newton_json, "contact": contact_json,

@@ -72,8 +72,10 @@ fn hertz_refined_family_converges_to_analytic() {
         vec!["level  nodes  active  steps   p_max      err%     b          err%".to_string()];
     let mut errs = Vec::new();
     for level in 0..=4 {
+        // The solution does not depend on the start; "auto" (the case default) also avoids the
+        // least-index bug on refined L0 from all_active (hertz_refined_l0_all_active_converges).
         let mesh = mesh_set(&format!("hertz_refined_L{level}"));
-        let s = solve(1, &case(), &[&mesh, "newton.init=all_active"]);
+        let s = solve(1, &case(), &[&mesh, "newton.init=auto"]);
         assert!(s.converged(), "refined L{level}:\n{}", s.run.output());
         let p = s.f(&["contact", "max_pressure"]);
         let b = get(&s.summary, &["contact", "half_width"])
@@ -266,6 +268,52 @@ fn hertz_without_support_fails_cleanly() {
         );
         assert!(!out.exists(), "init {init}: output directory left behind");
     }
+}
+
+#[test]
+#[ignore = "bug: refined L0 from all_active cycles on 1 rank (sets of steps 7 and 9 equal) and the \
+            least-index fallback stops at step 11 ('even with least-index updates', comparing with \
+            the pre-fallback set of step 7); init auto converges"]
+fn hertz_refined_l0_all_active_converges() {
+    // signorini-mpi cases/hertz/hertz.toml --set mesh.file=meshes/hertz_refined_L0.msh
+    //     --set newton.init=all_active
+    let mesh = mesh_set("hertz_refined_L0");
+    let auto = solve(1, &case(), &[&mesh, "newton.init=auto"]);
+    let all = solve(1, &case(), &[&mesh, "newton.init=all_active"]);
+    assert_eq!(
+        active_ids(&all),
+        active_ids(&auto),
+        "final active sets differ"
+    );
+    check_equilibrium_and_kkt(&all, "refined L0 from all_active");
+}
+
+#[test]
+fn cycle_stop_on_one_rank() {
+    // Deterministic (serial) trigger: refined L0 from all_active revisits the active set of
+    // step 7 at step 9 (a near-tie of two nodes next to the centre). Like any cycle of the exact
+    // active-set step it hinges on round-off; if a change of the solver removes it, this test
+    // needs a new trigger.
+    let tmp = tempfile::tempdir().expect("tempdir");
+    let out = tmp.path().join("out");
+    let mesh = mesh_set("hertz_refined_L0");
+    let sets = [
+        mesh.as_str(),
+        "newton.init=all_active",
+        "newton.on_cycle=stop",
+    ];
+    let r = run_solver(1, &case(), &sets, &out);
+    assert!(
+        r.code.is_some_and(|c| c != 0),
+        "on_cycle = stop: exit 0\n{}",
+        r.output()
+    );
+    assert!(
+        r.stderr.contains("Newton cycling"),
+        "no 'Newton cycling'\n{}",
+        r.output()
+    );
+    assert!(!out.exists(), "on_cycle = stop left an output directory");
 }
 
 /// Sorted node ids of the active contact nodes.

@@ -74,6 +74,109 @@ pub struct NewtonResult {
     pub cycle_detected_at: Option<usize>,
 }
 
+fn cycling_error(step: usize, n: usize, prev: usize, tresca: bool, safeguarded: bool) -> RunError {
+    RunError::Failed(format!(
+        "Newton cycling: the active set of step {step} (|A_n| = {n}) equals one seen {}{} — the \
+         exact active-set iteration would loop forever; stopping",
+        if safeguarded {
+            "earlier".to_string()
+        } else {
+            format!("at step {prev}")
+        },
+        if safeguarded {
+            " even with single-node updates"
+        } else if tresca {
+            " (Tresca: no single-node fallback)"
+        } else {
+            " (newton.on_cycle = \"stop\")"
+        }
+    ))
+}
+
+/// Outcome of the load-balance test of the free rigid modes.
+enum Balance {
+    Balanced,
+    /// Activate the contact node with this gmsh tag (the first to touch).
+    Touch(u64),
+    /// No equilibrium; the size of the unbalanced load.
+    NoSupport(f64),
+}
+
+/// The unbalanced load in the free rigid modes, φ = Qᵀ Rᵀ (f − A u) at the pins (the dropped
+/// equations), and, if it is not zero, the inactive contact node that a rigid motion along
+/// φ brings into contact first (smallest gap / closing speed; ties by tag). Collective.
+#[allow(clippy::too_many_arguments)]
+fn unbalanced_mode_contact(
+    ctx: &Ctx,
+    mesh: &Mesh,
+    layout: &Layout,
+    cs: &ContactSet,
+    modes: &RigidModes,
+    q: &nalgebra::DMatrix<f64>,
+    pins: &[(usize, usize)],
+    f_local: &[f64],
+    au_local: &[f64],
+    nodes: &[NodeResult],
+    active: &[bool],
+    row_lo: usize,
+    fmax: f64,
+) -> Balance {
+    let dim = mesh.dim;
+    let mf = q.ncols();
+    let mut phi = vec![0.0f64; mf];
+    for &(v, k) in pins {
+        if layout.owns_node(v) {
+            let p = layout.node_global[v] * dim + k - row_lo;
+            let res = f_local[p] - au_local[p];
+            let row = modes.dof_row(&mesh.coords[v], k);
+            for (c, ph) in phi.iter_mut().enumerate() {
+                *ph += res * (0..modes.m).map(|j| row[j] * q[(j, c)]).sum::<f64>();
+            }
+        }
+    }
+    let mut g = vec![0.0f64; mf];
+    ctx.world
+        .all_reduce_into(&phi[..], &mut g[..], SystemOperation::sum());
+    let norm = g.iter().map(|x| x * x).sum::<f64>().sqrt();
+    if norm <= 1e-8 * fmax.max(f64::MIN_POSITIVE) {
+        return Balance::Balanced;
+    }
+    // Motion per unit α in mode coefficients: Q φ / |φ|.
+    let coef: Vec<f64> = (0..modes.m)
+        .map(|j| (0..mf).map(|c| q[(j, c)] * g[c]).sum::<f64>() / norm)
+        .collect();
+    let mut best = (f64::INFINITY, u64::MAX);
+    for ((k, r), &a) in cs.nodes.iter().zip(nodes).zip(active) {
+        if a {
+            continue;
+        }
+        let nr = modes.normal_row(&k.x, &k.frame.n);
+        let speed = -(0..modes.m).map(|j| nr[j] * coef[j]).sum::<f64>();
+        if speed <= 1e-12 {
+            continue;
+        }
+        let alpha = (r.u_n + k.gap).max(0.0) / speed;
+        if alpha < best.0 || (alpha == best.0 && k.tag < best.1) {
+            best = (alpha, k.tag);
+        }
+    }
+    let mut amin = 0.0f64;
+    ctx.world
+        .all_reduce_into(&best.0, &mut amin, SystemOperation::min());
+    if !amin.is_finite() {
+        return Balance::NoSupport(norm);
+    }
+    let mine = if best.0 <= amin * (1.0 + 1e-12) {
+        best.1
+    } else {
+        u64::MAX
+    };
+    let mut tag = 0u64;
+    ctx.world
+        .all_reduce_into(&mine, &mut tag, SystemOperation::min());
+    Balance::Touch(tag)
+}
+
 /// Does a tangential row hold u_τ (stick, or slip with a spring L̃ ≠ 0)?
 fn holds_tangent(r: &TangentialRow<2>) -> bool {
     match r {
@@ -233,6 +336,14 @@ pub fn semismooth_newton(
     let mut cycle_detected_at: Option<usize> = None;
     let mut pins: Vec<(usize, usize)> = Vec::new();
     let mut pins_key: Option<Vec<f64>> = None;
+    let mut q_free = nalgebra::DMatrix::<f64>::zeros(modes.m, 0);
+    let fmax = {
+        let local = f_local.iter().fold(0.0f64, |a, b| a.max(b.abs()));
+        let mut out = 0.0f64;
+        ctx.world
+            .all_reduce_into(&local, &mut out, SystemOperation::max());
+        out
+    };
     let candidate =
         |v: usize| !cs.on_contact_boundary[v] && (0..dim).all(|k| fixed[v * dim + k].is_nan());
 
@@ -249,6 +360,16 @@ pub fn semismooth_newton(
             }
         }
         h
+    };
+    // Global count, fingerprints and Gram matrix of a set (one Allreduce).
+    let set_summary = |act: &[bool], tr: &[TangentialRow<2>]| -> ((usize, f64, f64), Vec<f64>) {
+        let (h1, h2) = fp(act, tr);
+        let mut local = vec![act.iter().filter(|&&a| a).count() as f64, h1, h2];
+        local.extend(active_gram(act, tr));
+        let mut g2 = vec![0.0f64; local.len()];
+        ctx.world
+            .all_reduce_into(&local[..], &mut g2[..], SystemOperation::sum());
+        ((g2[0] as usize, g2[1], g2[2]), g2[3..3 + 36].to_vec())
     };
     {
         let (h1, h2) = fp(&active, &trow);
@@ -335,6 +456,7 @@ pub fn semismooth_newton(
                     )));
                 }
                 pins_key = Some(key);
+                q_free = q;
             }
             for &(v, k) in &pins {
                 if layout.owns_node(v) {
@@ -483,6 +605,51 @@ pub fn semismooth_newton(
             );
         }
         history.push(info_step);
+        if changed_g == 0 && !pins.is_empty() {
+            // A free rigid mode is harmless only if the load is balanced in it (the pins then
+            // carry no reaction). If not, the body moves along the unbalanced load until a
+            // contact node touches: activate the first one to touch and go on; if no node
+            // approaches the obstacle, there is no equilibrium.
+            match unbalanced_mode_contact(
+                ctx, mesh, layout, cs, &modes, &q_free, &pins, &f_local, &au_local, &nodes,
+                &active, row_lo, fmax,
+            ) {
+                Balance::Balanced => {}
+                Balance::Touch(tag) => {
+                    for (k, a) in cs.nodes.iter().zip(new_active.iter_mut()) {
+                        if k.tag == tag {
+                            *a = true;
+                        }
+                    }
+                    say!(
+                        ctx,
+                        "newton: the load is not balanced in a free rigid mode: the body moves \
+                         until contact node {tag} touches (activated)"
+                    );
+                    let (k2, g2) = set_summary(&new_active, &new_trow);
+                    seen.push(k2);
+                    active = new_active;
+                    trow = new_trow;
+                    n_active_global = k2.0;
+                    g_act.copy_from_slice(&g2);
+                    continue;
+                }
+                Balance::NoSupport(reaction) => {
+                    return Err(RunError::Failed(format!(
+                        "no support: the body has {} rigid mode(s) fixed neither by Dirichlet \
+                         data nor by contact ({} active contact node(s)), the load is not \
+                         balanced in them (unbalanced load {:.3e} against a largest nodal load \
+                         of {:.3e}) and moving along it brings no contact node closer to the \
+                         obstacle: there is no equilibrium — add Dirichlet data or move the \
+                         obstacle into the body's way",
+                        pins.len(),
+                        n_active_global,
+                        reaction,
+                        fmax
+                    )));
+                }
+            }
+        }
         if changed_g == 0 {
             if !tresca || du_rel < settings.tol_u {
                 converged = true;
@@ -493,48 +660,49 @@ pub fn semismooth_newton(
             continue;
         }
         let mut key = (global[1] as usize, global[2], global[3]);
-        let recurs = seen.iter().position(|s| *s == key);
-        if let Some(prev) = recurs {
-            if least_index || tresca || settings.on_cycle == OnCycle::Stop {
-                return Err(RunError::Failed(format!(
-                    "Newton cycling: the active set of step {} (|A_n| = {}) equals that of step \
-                     {}{} — the exact active-set iteration would loop forever; stopping",
-                    step + 1,
-                    key.0,
+        if !least_index {
+            if let Some(prev) = seen.iter().position(|s| *s == key) {
+                if tresca || settings.on_cycle == OnCycle::Stop {
+                    return Err(cycling_error(step + 1, key.0, prev + 1, tresca, false));
+                }
+                least_index = true;
+                cycle_detected_at = Some(step + 1);
+                // The safeguarded sequence may pass through sets of the plain iteration again.
+                let current = *seen.last().expect("the current set is recorded");
+                seen.clear();
+                seen.push(current);
+                say!(
+                    ctx,
+                    "newton: cycling detected (the set of step {} recurs at step {}): continuing \
+                     with single-node updates (penetrating nodes first, least index first)",
                     prev + 1,
-                    if least_index {
-                        " even with least-index updates"
-                    } else if tresca {
-                        " (Tresca: no least-index fallback)"
-                    } else {
-                        " (newton.on_cycle = \"stop\")"
-                    }
-                )));
+                    step + 1
+                );
             }
-            least_index = true;
-            cycle_detected_at = Some(step);
-            say!(
-                ctx,
-                "newton: cycling detected (the set of step {} recurs at step {}): continuing \
-                 with single-node updates by the least-index rule",
-                prev + 1,
-                step + 1
-            );
         }
         if least_index {
-            // Murty's least-index rule: flip only the violating node with the smallest tag
-            // (finite for the P-matrix of frictionless contact).
-            let my_min = cs
-                .nodes
-                .iter()
-                .zip(active.iter().zip(&new_active))
-                .filter(|(_, (a, b))| a != b)
-                .map(|(k, _)| k.tag)
-                .min()
-                .unwrap_or(u64::MAX);
-            let mut tag = 0u64;
-            ctx.world
-                .all_reduce_into(&my_min, &mut tag, SystemOperation::min());
+            // Single-node updates: activate the penetrating node with the smallest tag; only
+            // if none penetrates, release the node in tension with the smallest tag (a
+            // least-index rule in the spirit of Murty's, biased towards sets that hold the
+            // body, since sets that leave rigid modes to the pins are not LCP pivots).
+            let pick = |want_activate: bool| -> u64 {
+                let my_min = cs
+                    .nodes
+                    .iter()
+                    .zip(active.iter().zip(&new_active))
+                    .filter(|(_, (a, b))| a != b && **b == want_activate)
+                    .map(|(k, _)| k.tag)
+                    .min()
+                    .unwrap_or(u64::MAX);
+                let mut tag = 0u64;
+                ctx.world
+                    .all_reduce_into(&my_min, &mut tag, SystemOperation::min());
+                tag
+            };
+            let mut tag = pick(true);
+            if tag == u64::MAX {
+                tag = pick(false);
+            }
             for ((k, a), b) in cs
                 .nodes
                 .iter()
@@ -543,14 +711,12 @@ pub fn semismooth_newton(
             {
                 *b = if k.tag == tag { !*a } else { *a };
             }
-            let (h1, h2) = fp(&new_active, &new_trow);
-            let mut local = vec![new_active.iter().filter(|&&a| a).count() as f64, h1, h2];
-            local.extend(active_gram(&new_active, &new_trow));
-            let mut g2 = vec![0.0f64; local.len()];
-            ctx.world
-                .all_reduce_into(&local[..], &mut g2[..], SystemOperation::sum());
-            key = (g2[0] as usize, g2[1], g2[2]);
-            g_act.copy_from_slice(&g2[3..3 + 36]);
+            let (k2, g2) = set_summary(&new_active, &new_trow);
+            key = k2;
+            g_act.copy_from_slice(&g2);
+            if let Some(prev) = seen.iter().position(|s| *s == key) {
+                return Err(cycling_error(step + 1, key.0, prev, false, true));
+            }
         } else {
             g_act.copy_from_slice(&global[11..11 + 36]);
         }
@@ -560,36 +726,6 @@ pub fn semismooth_newton(
         n_active_global = key.0;
     }
     let steps = history.len();
-    // A free rigid mode is only harmless if the load is balanced in it: then the pins carry no
-    // reaction. Otherwise the body has no equilibrium (it touches too little and has no
-    // Dirichlet support).
-    if converged && !pins.is_empty() {
-        let au_local = au.to_local_vec()?;
-        let mut reaction = 0.0f64;
-        for &(v, k) in &pins {
-            if layout.owns_node(v) {
-                let p = layout.node_global[v] * dim + k - row_lo;
-                reaction = reaction.max((f_local[p] - au_local[p]).abs());
-            }
-        }
-        let fmax = f_local.iter().fold(0.0f64, |a, b| a.max(b.abs()));
-        let mut out = [0.0f64; 2];
-        ctx.world
-            .all_reduce_into(&[reaction, fmax][..], &mut out[..], SystemOperation::max());
-        if out[0] > 1e-8 * out[1].max(f64::MIN_POSITIVE) {
-            let n_act = history.last().map(|h| h.active).unwrap_or(0);
-            return Err(RunError::Failed(format!(
-                "no support: the body has {} rigid mode(s) fixed neither by Dirichlet data nor by \
-                 contact ({} active contact node(s)), and the load is not balanced in them \
-                 (reaction {:.3e} against a largest nodal load of {:.3e}); there is no \
-                 equilibrium — add Dirichlet data or move the obstacle closer",
-                pins.len(),
-                n_act,
-                out[0],
-                out[1]
-            )));
-        }
-    }
     Ok(NewtonResult {
         u,
         nodes,

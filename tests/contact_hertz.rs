@@ -244,16 +244,26 @@ fn hertz_equilibrium_and_kkt_at_round_off() {
 
 #[test]
 fn hertz_without_support_fails_cleanly() {
-    // The obstacle 0.1 below the disk: no node touches it initially, so with an initially
-    // empty active set nothing holds the body in the three rigid modes.
-    for (np, init) in [(1, "all_inactive"), (1, "auto"), (2, "auto")] {
+    // The obstacle 0.1 below the disk and the load pulling the disk up (negative pressure):
+    // nothing holds the body in its rigid modes and moving along the load brings no node
+    // closer to the obstacle, so there is no equilibrium.
+    for (np, init) in [
+        (1, "all_inactive"),
+        (1, "auto"),
+        (2, "auto"),
+        (1, "all_active"),
+    ] {
         let tmp = tempfile::tempdir().expect("tempdir");
         let out = tmp.path().join("out");
         let init_set = format!("newton.init={init}");
         let r = run_solver(
             np,
             &case(),
-            &["contact.obstacle.point=[0.0, -1.1]", &init_set],
+            &[
+                "contact.obstacle.point=[0.0, -1.1]",
+                "neumann.0.pressure=-0.02",
+                &init_set,
+            ],
             &out,
         );
         assert!(
@@ -271,9 +281,46 @@ fn hertz_without_support_fails_cleanly() {
 }
 
 #[test]
-#[ignore = "bug: refined L0 from all_active cycles on 1 rank (sets of steps 7 and 9 equal) and the \
-            least-index fallback stops at step 11 ('even with least-index updates', comparing with \
-            the pre-fallback set of step 7); init auto converges"]
+fn hertz_gap_below_closes_by_rigid_motion() {
+    // The obstacle 0.1 below the disk, the load pushing down: the disk moves down until it
+    // touches, from every start, and ends with the same contact as with the obstacle at −1
+    // (a rigid translation does not change the linearised contact problem of a flat obstacle).
+    let tmp = tempfile::tempdir().expect("tempdir");
+    let reference = solve(1, &case(), &[&mesh_set("hertz_L3")]);
+    for init in ["all_inactive", "auto", "all_active"] {
+        let out = tmp.path().join(init);
+        let init_set = format!("newton.init={init}");
+        let r = run_solver(
+            1,
+            &case(),
+            &[
+                &mesh_set("hertz_L3"),
+                "contact.obstacle.point=[0.0, -1.1]",
+                &init_set,
+            ],
+            &out,
+        );
+        assert_eq!(r.code, Some(0), "init {init}\n{}", r.output());
+        let s: serde_json::Value = serde_json::from_str(
+            &std::fs::read_to_string(out.join("summary.json")).expect("summary"),
+        )
+        .expect("json");
+        let p = s["contact"]["max_pressure"].as_f64().expect("p_max");
+        let p0 = reference.summary["contact"]["max_pressure"]
+            .as_f64()
+            .expect("p_max");
+        assert!(
+            (p / p0 - 1.0).abs() < 1e-10,
+            "init {init}: p_max {p} vs {p0}"
+        );
+        assert_eq!(
+            s["contact"]["active_count"], reference.summary["contact"]["active_count"],
+            "init {init}"
+        );
+    }
+}
+
+#[test]
 fn hertz_refined_l0_all_active_converges() {
     // signorini-mpi cases/hertz/hertz.toml --set mesh.file=meshes/hertz_refined_L0.msh
     //     --set newton.init=all_active

@@ -11,14 +11,16 @@ use crate::contact::{self, TangentialRow};
 use crate::contact_set::ContactSet;
 use crate::mesh::Mesh;
 use crate::partition::Layout;
+use crate::petsc::PInt;
 use crate::petsc::{Matrix, Vector};
-use crate::reduced::{pin_row, NodeRows};
+use crate::reduced::{pin_row, write_symmetric_constraint, NodeConstraint, NodeRows};
 use crate::rigid::RigidModes;
 use crate::run::{Ctx, RunError};
 use crate::say;
 use crate::solver::LinearSolver;
 use mpi::collective::SystemOperation;
 use mpi::traits::*;
+use std::collections::HashMap;
 use std::time::Instant;
 
 /// One Newton step, for the history.
@@ -91,6 +93,58 @@ fn cycling_error(step: usize, n: usize, prev: usize, tresca: bool, safeguarded: 
             " (newton.on_cycle = \"stop\")"
         }
     ))
+}
+
+/// The constraints of every active contact node and pinned dof, by global node number, on
+/// every rank (one all-gather of the active nodes; the pins are known everywhere).
+fn constraint_map(
+    ctx: &Ctx,
+    layout: &Layout,
+    cs: &ContactSet,
+    active: &[bool],
+    pins: &[(usize, usize)],
+    dim: usize,
+) -> HashMap<usize, NodeConstraint> {
+    let mut mine: Vec<f64> = Vec::new();
+    for (k, &a) in cs.nodes.iter().zip(active) {
+        if a {
+            let gk = layout.node_global[k.node];
+            mine.extend_from_slice(&[gk as f64, k.frame.n[0], k.frame.n[1], k.frame.n[2], -k.gap]);
+        }
+    }
+    let mut counts = vec![0i32; ctx.size];
+    ctx.world
+        .all_gather_into(&(mine.len() as i32), &mut counts[..]);
+    let displs: Vec<i32> = counts
+        .iter()
+        .scan(0, |acc, &c| {
+            let d = *acc;
+            *acc += c;
+            Some(d)
+        })
+        .collect();
+    let mut all = vec![0.0f64; counts.iter().sum::<i32>() as usize];
+    {
+        let mut part = mpi::datatype::PartitionMut::new(&mut all[..], counts, displs);
+        ctx.world.all_gather_varcount_into(&mine[..], &mut part);
+    }
+    let mut map: HashMap<usize, NodeConstraint> = HashMap::new();
+    for r in all.chunks_exact(5) {
+        map.entry(r[0] as usize)
+            .or_default()
+            .dirs
+            .push(([r[1], r[2], r[3]], r[4]));
+    }
+    for &(v, k) in pins {
+        let mut e = [0.0; 3];
+        e[k] = 1.0;
+        map.entry(layout.node_global[v])
+            .or_default()
+            .dirs
+            .push((e, 0.0));
+    }
+    let _ = dim;
+    map
 }
 
 /// Outcome of the load-balance test of the free rigid modes.
@@ -337,6 +391,7 @@ pub fn semismooth_newton(
     let mut pins: Vec<(usize, usize)> = Vec::new();
     let mut pins_key: Option<Vec<f64>> = None;
     let mut q_free = nalgebra::DMatrix::<f64>::zeros(modes.m, 0);
+    let mut pin_rows: Vec<(usize, NodeRows)> = Vec::new();
     let fmax = {
         let local = f_local.iter().fold(0.0f64, |a, b| a.max(b.abs()));
         let mut out = 0.0f64;
@@ -385,59 +440,6 @@ pub fn semismooth_newton(
         s.copy_values_from(&sys.a)?;
         rhs.copy_from(&sys.b)?;
         let mut rhs_updates: Vec<(usize, f64)> = Vec::new();
-        for (i, (k, r)) in cs.nodes.iter().zip(&rows).enumerate() {
-            let a = active[i];
-            if !tresca && !a {
-                continue; // (3.29): inactive rows stay as in A
-            }
-            let fk = &f_local[k.local_row..k.local_row + dim];
-            let dotf = |v: &[f64; 3]| -> f64 { (0..dim).map(|j| v[j] * fk[j]).sum() };
-            let mut comb = [[0.0; 3]; 3];
-            let mut own = [[0.0; 3]; 3];
-            // Rows that only constrain u^k are scaled by the node's mean stiffness diagonal, so
-            // they are of the size of the rows they replace (matters for iterative solvers).
-            let sk = (0..dim).map(|j| r.diag(j)).sum::<f64>() / dim as f64;
-            if a {
-                // normal row: nᵀ u^k = −g^k
-                for j in 0..dim {
-                    own[0][j] = sk * k.frame.n[j];
-                }
-                rhs_updates.push((k.local_row, -sk * k.gap));
-            } else {
-                // (3.42) inactive normal row: nᵀ (A u)_k = nᵀ f_k
-                comb[0][..dim].copy_from_slice(&k.frame.n[..dim]);
-                rhs_updates.push((k.local_row, dotf(&k.frame.n)));
-            }
-            for ti in 1..dim {
-                let t = &k.frame.t[ti - 1];
-                if !tresca {
-                    // frictionless: τ_iᵀ (A u)_k = τ_iᵀ f_k
-                    comb[ti][..dim].copy_from_slice(&t[..dim]);
-                    rhs_updates.push((k.local_row + ti, dotf(t)));
-                    continue;
-                }
-                match &trow[i] {
-                    // (3.34a) stick: τ_iᵀ u^k = 0
-                    TangentialRow::Stick => {
-                        for j in 0..dim {
-                            own[ti][j] = sk * t[j];
-                        }
-                        rhs_updates.push((k.local_row + ti, 0.0));
-                    }
-                    // (3.39a) slip: τᵀ(A u)_k + L̃ τᵀ u^k = τᵀ f_k + r̃
-                    TangentialRow::Slip { l, r: rt } => {
-                        comb[ti][..dim].copy_from_slice(&t[..dim]);
-                        for (m, tm) in k.frame.t[..dim - 1].iter().enumerate() {
-                            for j in 0..dim {
-                                own[ti][j] += l[ti - 1][m] * tm[j];
-                            }
-                        }
-                        rhs_updates.push((k.local_row + ti, dotf(t) + rt[ti - 1]));
-                    }
-                }
-            }
-            r.write(&mut s, dim, &comb, &own, &mut buf)?;
-        }
         // Free rigid modes of this set: pin one dof each.
         let mut g = g_dir.clone();
         for (x, y) in g.iter_mut().zip(&g_act) {
@@ -457,6 +459,74 @@ pub fn semismooth_newton(
                 }
                 pins_key = Some(key);
                 q_free = q;
+                // Rows of the owned pinned nodes (for the symmetric elimination).
+                pin_rows.clear();
+                let mut pn: Vec<usize> = pins
+                    .iter()
+                    .map(|&(v, _)| v)
+                    .filter(|&v| layout.owns_node(v))
+                    .collect();
+                pn.sort_unstable();
+                pn.dedup();
+                for v in pn {
+                    pin_rows.push((v, NodeRows::read(&sys.a, layout.node_global[v] * dim, dim)?));
+                }
+            }
+        }
+        if tresca {
+            // (3.42): the rows of every contact node and of the pinned dofs are overwritten.
+            for (i, (k, r)) in cs.nodes.iter().zip(&rows).enumerate() {
+                let a = active[i];
+                if !tresca && !a {
+                    continue; // (3.29): inactive rows stay as in A
+                }
+                let fk = &f_local[k.local_row..k.local_row + dim];
+                let dotf = |v: &[f64; 3]| -> f64 { (0..dim).map(|j| v[j] * fk[j]).sum() };
+                let mut comb = [[0.0; 3]; 3];
+                let mut own = [[0.0; 3]; 3];
+                // Rows that only constrain u^k are scaled by the node's mean stiffness diagonal, so
+                // they are of the size of the rows they replace (matters for iterative solvers).
+                let sk = (0..dim).map(|j| r.diag(j)).sum::<f64>() / dim as f64;
+                if a {
+                    // normal row: nᵀ u^k = −g^k
+                    for j in 0..dim {
+                        own[0][j] = sk * k.frame.n[j];
+                    }
+                    rhs_updates.push((k.local_row, -sk * k.gap));
+                } else {
+                    // (3.42) inactive normal row: nᵀ (A u)_k = nᵀ f_k
+                    comb[0][..dim].copy_from_slice(&k.frame.n[..dim]);
+                    rhs_updates.push((k.local_row, dotf(&k.frame.n)));
+                }
+                for ti in 1..dim {
+                    let t = &k.frame.t[ti - 1];
+                    if !tresca {
+                        // frictionless: τ_iᵀ (A u)_k = τ_iᵀ f_k
+                        comb[ti][..dim].copy_from_slice(&t[..dim]);
+                        rhs_updates.push((k.local_row + ti, dotf(t)));
+                        continue;
+                    }
+                    match &trow[i] {
+                        // (3.34a) stick: τ_iᵀ u^k = 0
+                        TangentialRow::Stick => {
+                            for j in 0..dim {
+                                own[ti][j] = sk * t[j];
+                            }
+                            rhs_updates.push((k.local_row + ti, 0.0));
+                        }
+                        // (3.39a) slip: τᵀ(A u)_k + L̃ τᵀ u^k = τᵀ f_k + r̃
+                        TangentialRow::Slip { l, r: rt } => {
+                            comb[ti][..dim].copy_from_slice(&t[..dim]);
+                            for (m, tm) in k.frame.t[..dim - 1].iter().enumerate() {
+                                for j in 0..dim {
+                                    own[ti][j] += l[ti - 1][m] * tm[j];
+                                }
+                            }
+                            rhs_updates.push((k.local_row + ti, dotf(t) + rt[ti - 1]));
+                        }
+                    }
+                }
+                r.write(&mut s, dim, &comb, &own, &mut buf)?;
             }
             for &(v, k) in &pins {
                 if layout.owns_node(v) {
@@ -465,6 +535,54 @@ pub fn semismooth_newton(
                     rhs_updates.push((p - row_lo, 0.0));
                 }
             }
+        } else {
+            // (3.29), applied symmetrically (reduced::write_symmetric_constraint): the
+            // constraints of the active nodes and of the pins, known on every rank.
+            let cmap = constraint_map(ctx, layout, cs, &active, &pins, dim);
+            let mut rhs_add: Vec<(PInt, f64)> = Vec::new();
+            for (i, (k, r)) in cs.nodes.iter().zip(&rows).enumerate() {
+                if !active[i] {
+                    continue;
+                }
+                let gk = layout.node_global[k.node];
+                let me = &cmap[&gk];
+                let fk = &f_local[k.local_row..k.local_row + dim];
+                let rk = write_symmetric_constraint(
+                    &mut s,
+                    r,
+                    me,
+                    fk,
+                    dim,
+                    |j| cmap.get(&j),
+                    &mut rhs_add,
+                    &mut buf,
+                )?;
+                for (a, v) in rk.iter().enumerate().take(dim) {
+                    rhs_updates.push((k.local_row + a, *v));
+                }
+            }
+            for (v, r) in &pin_rows {
+                let gv = layout.node_global[*v];
+                let me = &cmap[&gv];
+                let lr = gv * dim - row_lo;
+                let fk = &f_local[lr..lr + dim];
+                let rk = write_symmetric_constraint(
+                    &mut s,
+                    r,
+                    me,
+                    fk,
+                    dim,
+                    |j| cmap.get(&j),
+                    &mut rhs_add,
+                    &mut buf,
+                )?;
+                for (a, v) in rk.iter().enumerate().take(dim) {
+                    rhs_updates.push((lr + a, *v));
+                }
+            }
+            let (idx, vals): (Vec<PInt>, Vec<f64>) = rhs_add.into_iter().unzip();
+            rhs.set_values(&idx, &vals, true)?;
+            rhs.assemble()?;
         }
         s.assemble()?;
         rhs.write(|x| {

@@ -97,3 +97,156 @@ pub fn pin_row(s: &mut Matrix, a: &Matrix, p: usize) -> petsc::Result<()> {
     }
     s.insert_values(&[p as PInt], &cols, &vals)
 }
+
+/// Prescribed components of one node: orthonormal directions c with cᵀ u = value
+/// (an active contact node: c = n, value = −g; a pinned dof: c = e_k, value = 0).
+#[derive(Clone, Debug, Default)]
+pub struct NodeConstraint {
+    pub dirs: Vec<([f64; 3], f64)>,
+}
+
+impl NodeConstraint {
+    /// P = I − Σ c cᵀ (projector onto the free components).
+    pub fn projector(&self, dim: usize) -> [[f64; 3]; 3] {
+        let mut p = [[0.0; 3]; 3];
+        for (a, row) in p.iter_mut().enumerate().take(dim) {
+            row[a] = 1.0;
+        }
+        for (c, _) in &self.dirs {
+            for a in 0..dim {
+                for b in 0..dim {
+                    p[a][b] -= c[a] * c[b];
+                }
+            }
+        }
+        p
+    }
+
+    /// ū = Σ value · c (the prescribed part of u).
+    pub fn known(&self) -> [f64; 3] {
+        let mut u = [0.0; 3];
+        for (c, v) in &self.dirs {
+            for a in 0..3 {
+                u[a] += v * c[a];
+            }
+        }
+        u
+    }
+}
+
+fn matmul3(a: &[[f64; 3]; 3], b: &[[f64; 3]; 3], dim: usize) -> [[f64; 3]; 3] {
+    let mut c = [[0.0; 3]; 3];
+    for i in 0..dim {
+        for j in 0..dim {
+            c[i][j] = (0..dim).map(|l| a[i][l] * b[l][j]).sum();
+        }
+    }
+    c
+}
+
+/// The (3.29) constraints of one node, applied symmetrically. The node's rows become
+/// P_k A_kj P_j (plus s_k Σ c cᵀ on its own block) and its right-hand side
+/// P_k (f_k − Σ_j A_kj ū_j) + s_k ū_k; in every unconstrained neighbour row i the block A_ik
+/// becomes A_ik P_k and A_ik ū_k moves to the right-hand side. This is (3.29) with the known
+/// normal displacement eliminated from the columns too: the same solution, on A's pattern,
+/// and symmetric (positive definite without friction), so CG/AMG and Cholesky apply.
+/// `constrained(j)` gives the constraint of global node j, if any. Returns the node's
+/// right-hand side; the neighbour corrections are appended to `rhs_add` (global row, value).
+#[allow(clippy::too_many_arguments)]
+pub fn write_symmetric_constraint<'c>(
+    s: &mut Matrix,
+    rows: &NodeRows,
+    me: &NodeConstraint,
+    f_k: &[f64],
+    dim: usize,
+    constrained: impl Fn(usize) -> Option<&'c NodeConstraint>,
+    rhs_add: &mut Vec<(PInt, f64)>,
+    buf: &mut Vec<f64>,
+) -> petsc::Result<[f64; 3]> {
+    let n = rows.cols.len();
+    let node_k = rows.row / dim;
+    let pk = me.projector(dim);
+    let uk = me.known();
+    let sk = (0..dim).map(|j| rows.diag(j)).sum::<f64>() / dim as f64;
+    let mut new_rows = vec![vec![0.0; n]; dim];
+    let mut t = [0.0; 3]; // Σ_j A_kj ū_j
+    let mut mirror_cols: [PInt; 3] = [0; 3];
+    for c in 0..dim {
+        mirror_cols[c] = (node_k * dim + c) as PInt;
+    }
+    let mut blk = [[0.0; 3]; 3];
+    let mut m = 0;
+    while m < n {
+        let j = rows.cols[m] as usize / dim;
+        for a in 0..dim {
+            for b in 0..dim {
+                blk[a][b] = rows.vals[a][m + b];
+            }
+        }
+        let cj = if j == node_k {
+            Some(me)
+        } else {
+            constrained(j)
+        };
+        let pj = match cj {
+            Some(c) => c.projector(dim),
+            None => NodeConstraint::default().projector(dim),
+        };
+        if let Some(c) = cj {
+            let uj = c.known();
+            for a in 0..dim {
+                t[a] += (0..dim).map(|b| blk[a][b] * uj[b]).sum::<f64>();
+            }
+        }
+        let mut nb = matmul3(&pk, &matmul3(&blk, &pj, dim), dim);
+        if j == node_k {
+            for (cvec, _) in &me.dirs {
+                for a in 0..dim {
+                    for b in 0..dim {
+                        nb[a][b] += sk * cvec[a] * cvec[b];
+                    }
+                }
+            }
+        }
+        for a in 0..dim {
+            for b in 0..dim {
+                new_rows[a][m + b] = nb[a][b];
+            }
+        }
+        if cj.is_none() {
+            // Mirror block in the unconstrained neighbour's rows: A_jk P_k = (A_kj)ᵀ P_k.
+            let mut mb = [[0.0; 3]; 3];
+            for a in 0..dim {
+                for b in 0..dim {
+                    mb[a][b] = (0..dim).map(|l| blk[l][a] * pk[l][b]).sum();
+                }
+            }
+            buf.clear();
+            for row in mb.iter().take(dim) {
+                buf.extend_from_slice(&row[..dim]);
+            }
+            let mrows: Vec<PInt> = (0..dim).map(|c| (j * dim + c) as PInt).collect();
+            s.insert_values(&mrows, &mirror_cols[..dim], buf)?;
+            // rhs_j −= A_jk ū_k
+            for a in 0..dim {
+                let v: f64 = (0..dim).map(|l| blk[l][a] * uk[l]).sum();
+                if v != 0.0 {
+                    rhs_add.push(((j * dim + a) as PInt, -v));
+                }
+            }
+        }
+        m += dim;
+    }
+    for (a, row) in new_rows.iter().enumerate() {
+        s.insert_values(&[(rows.row + a) as PInt], &rows.cols, row)?;
+    }
+    let mut rhs = [0.0; 3];
+    let mut ft = [0.0; 3];
+    for a in 0..dim {
+        ft[a] = f_k[a] - t[a];
+    }
+    for a in 0..dim {
+        rhs[a] = (0..dim).map(|b| pk[a][b] * ft[b]).sum::<f64>() + sk * uk[a];
+    }
+    Ok(rhs)
+}

@@ -353,7 +353,12 @@ pub fn linear_solve(
 ) -> Result<(Vector, LinearReport), RunError> {
     let comm = ctx.petsc.comm();
     let t = Instant::now();
-    solver::configure(settings.preset, settings.rtol, &settings.petsc_options)?;
+    solver::configure(
+        settings.preset,
+        settings.rtol,
+        true,
+        &settings.petsc_options,
+    )?;
     let coords = match settings.preset {
         case::Preset::Iterative => Some(assembly::coordinate_vector(comm, mesh, layout)?),
         case::Preset::Direct => None,
@@ -494,16 +499,17 @@ pub fn run_case(ctx: &Ctx, case: &Case) -> Result<Value, RunError> {
                     String::new()
                 }
             );
+            let tresca = matches!(cc.friction, case::Friction::Tresca { .. });
             solver::configure(
                 case.solver.preset,
                 case.solver.rtol,
+                !tresca,
                 &case.solver.petsc_options,
             )?;
             let coords = match case.solver.preset {
                 case::Preset::Iterative => Some(assembly::coordinate_vector(comm, &mesh, &layout)?),
                 case::Preset::Direct => None,
             };
-            let tresca = matches!(cc.friction, case::Friction::Tresca { .. });
             let nr = newton::semismooth_newton(
                 ctx,
                 &mesh,

@@ -381,7 +381,9 @@ pub fn semismooth_newton(
     };
     let (row_lo, _) = sys.a.ownership_range()?;
     let mut history: Vec<StepInfo> = Vec::new();
-    let mut seen: Vec<(usize, f64, f64)> = Vec::new();
+    // Sets seen so far: (|A_n|, two fingerprints, and for Tresca ‖u‖² to 10 digits — there the
+    // slip rows depend on the iterate, so only a recurring (set, u) pair is a cycle).
+    let mut seen: Vec<(usize, f64, f64, f64)> = Vec::new();
     let mut nodes = vec![NodeResult::default(); cs.nodes.len()];
     let mut lambda_seconds = 0.0;
     let mut rows_seconds = 0.0;
@@ -431,7 +433,7 @@ pub fn semismooth_newton(
         let mut out = [0.0; 2];
         ctx.world
             .all_reduce_into(&[h1, h2][..], &mut out[..], SystemOperation::sum());
-        seen.push((n_active_global, out[0], out[1]));
+        seen.push((n_active_global, out[0], out[1], 0.0));
     }
 
     for step in 1..=settings.max_steps {
@@ -689,6 +691,11 @@ pub fn semismooth_newton(
         } else {
             0.0
         };
+        let u_print = if tresca {
+            format!("{:.9e}", global[10]).parse::<f64>().unwrap_or(0.0)
+        } else {
+            0.0
+        };
         let info_step = StepInfo {
             step,
             active: n_active_global,
@@ -745,7 +752,7 @@ pub fn semismooth_newton(
                          until contact node {tag} touches (activated)"
                     );
                     let (k2, g2) = set_summary(&new_active, &new_trow);
-                    seen.push(k2);
+                    seen.push((k2.0, k2.1, k2.2, u_print));
                     active = new_active;
                     trow = new_trow;
                     n_active_global = k2.0;
@@ -777,7 +784,7 @@ pub fn semismooth_newton(
             trow = new_trow;
             continue;
         }
-        let mut key = (global[1] as usize, global[2], global[3]);
+        let mut key = (global[1] as usize, global[2], global[3], u_print);
         if !least_index {
             if let Some(prev) = seen.iter().position(|s| *s == key) {
                 if tresca || settings.on_cycle == OnCycle::Stop {
@@ -830,7 +837,7 @@ pub fn semismooth_newton(
                 *b = if k.tag == tag { !*a } else { *a };
             }
             let (k2, g2) = set_summary(&new_active, &new_trow);
-            key = k2;
+            key = (k2.0, k2.1, k2.2, u_print);
             g_act.copy_from_slice(&g2);
             if let Some(prev) = seen.iter().position(|s| *s == key) {
                 return Err(cycling_error(step + 1, key.0, prev, false, true));

@@ -240,8 +240,6 @@ fn hertz_tresca_unique_solution_from_both_starts() {
 /// a recurring set is not a cycle). Measured with the recurrence test disabled in a patched
 /// copy: 27 (all_inactive) and 25 (all_active) steps, |C_n| ≈ 1e-15.
 #[test]
-#[ignore = "bug: Tresca aborts with 'Newton cycling' when the four sets recur although the \
-            iteration converges (src/newton.rs set-recurrence test)"]
 fn hertz_tresca_larger_tangential_load_converges_with_default_c() {
     for init in ["newton.init=\"all_inactive\"", "newton.init=\"all_active\""] {
         let sets = ["neumann.1.traction=[0.003, 0.0]", init];

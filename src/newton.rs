@@ -74,6 +74,8 @@ pub struct NewtonResult {
     pub pinned_final: Vec<(usize, usize)>,
     /// Step after which a recurring set switched the iteration to least-index updates.
     pub cycle_detected_at: Option<usize>,
+    /// The complementarity parameter used.
+    pub c: f64,
 }
 
 fn cycling_error(step: usize, n: usize, prev: usize, tresca: bool, safeguarded: bool) -> RunError {
@@ -145,6 +147,27 @@ fn constraint_map(
     }
     let _ = dim;
     map
+}
+
+/// Default c = E / h_c with h_c the mean contact mesh size (w_k^(1/(d−1)) over all contact
+/// nodes): c u then has the size of a nodal force, as λ (measured in bench/results/tresca_c.md).
+fn default_c(ctx: &Ctx, cs: &ContactSet, dim: usize, young: f64) -> f64 {
+    let local: f64 = cs
+        .nodes
+        .iter()
+        .map(|k| k.weight.powf(1.0 / (dim - 1) as f64))
+        .sum();
+    let mut out = [0.0f64; 2];
+    ctx.world.all_reduce_into(
+        &[local, cs.nodes.len() as f64][..],
+        &mut out[..],
+        SystemOperation::sum(),
+    );
+    if out[1] > 0.0 && out[0] > 0.0 {
+        young / (out[0] / out[1])
+    } else {
+        young
+    }
 }
 
 /// Outcome of the load-balance test of the free rigid modes.
@@ -281,10 +304,23 @@ pub fn semismooth_newton(
     rigid_setting: RigidSetting,
     coords: Option<&Vector>,
     tresca: bool,
+    young: f64,
 ) -> Result<NewtonResult, RunError> {
     let comm = ctx.petsc.comm();
     let dim = mesh.dim;
-    let c = settings.c;
+    let c = match settings.c {
+        Some(c) => c,
+        None => default_c(ctx, cs, dim, young),
+    };
+    say!(
+        ctx,
+        "newton: c = {c:.6e}{}",
+        if settings.c.is_none() {
+            " (E / h_c)"
+        } else {
+            ""
+        }
+    );
     let modes = RigidModes::new(mesh);
     let use_rigid = rigid_setting == RigidSetting::Auto;
 
@@ -861,5 +897,6 @@ pub fn semismooth_newton(
         rows_seconds,
         pinned_final: pins,
         cycle_detected_at,
+        c,
     })
 }

@@ -521,6 +521,7 @@ pub fn run_case(ctx: &Ctx, case: &Case) -> Result<Value, RunError> {
                 cc.rigid_modes,
                 coords.as_ref(),
                 tresca,
+                material.young,
             )?;
             if !nr.converged {
                 return Err(RunError::Failed(format!(
@@ -547,7 +548,8 @@ pub fn run_case(ctx: &Ctx, case: &Case) -> Result<Value, RunError> {
             let newton_json = json!({
                 "algorithm": if tresca { 2 } else { 1 },
                 "init": case.newton.init.name(),
-                "c": case.newton.c,
+                "c": nr.c,
+                "c_default": case.newton.c.is_none(),
                 "steps": nr.steps,
                 "converged": nr.converged,
                 "history": nr.history,

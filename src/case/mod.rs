@@ -239,8 +239,9 @@ pub struct NewtonSection {
     pub init: NewtonInit,
     /// Reaction to a recurring active set.
     pub on_cycle: OnCycle,
-    /// Complementarity parameter c > 0.
-    pub c: f64,
+    /// Complementarity parameter c > 0; None: c = E / h_c (h_c the mean contact mesh size),
+    /// the middle of the range that converged on every case of scripts/bench-tresca-c.
+    pub c: Option<f64>,
     pub max_steps: usize,
     pub tol_u: f64,
 }
@@ -250,7 +251,7 @@ impl Default for NewtonSection {
         NewtonSection {
             init: NewtonInit::Auto,
             on_cycle: OnCycle::LeastIndex,
-            c: 1.0,
+            c: None,
             max_steps: 100,
             tol_u: 1e-10,
         }
@@ -1015,7 +1016,7 @@ impl Ctx<'_> {
             )?;
         }
         if let Some((ck, c)) = t.get("c") {
-            s.c = self.positive(&ck, c)?;
+            s.c = Some(self.positive(&ck, c)?);
         }
         if let Some((mk, m)) = t.get("max_steps") {
             let Kind::Int(v) = m.kind else {

@@ -157,7 +157,7 @@ fn full_file_round_trip() {
     assert_eq!(contact.friction, Friction::Tresca { threshold: 0.01 });
     assert_eq!(contact.rigid_modes, RigidModes::None);
     assert_eq!(c.newton.init, NewtonInit::Gap);
-    assert_eq!(c.newton.c, 10.0);
+    assert_eq!(c.newton.c, Some(10.0));
     assert_eq!(c.newton.max_steps, 7);
     assert_eq!(c.newton.tol_u, 1e-12);
     // Lines of keys are remembered.
@@ -189,7 +189,7 @@ fn minimal_file_gets_defaults() {
     assert!(!c.output.wants(Field::Stress));
     assert_eq!(c.contact, None);
     assert_eq!(c.newton.init, NewtonInit::Auto);
-    assert_eq!(c.newton.c, 1.0);
+    assert_eq!(c.newton.c, None);
     assert_eq!(c.newton.max_steps, 100);
     assert_eq!(c.newton.tol_u, 1e-10);
 }
@@ -616,7 +616,7 @@ fn overrides_apply() {
     )
     .unwrap();
     assert_eq!(c.mesh.file, Path::new("/cases/fine.msh"));
-    assert_eq!(c.newton.c, 25.0);
+    assert_eq!(c.newton.c, Some(25.0));
     assert_eq!(c.newton.max_steps, 7, "other keys untouched");
     assert_eq!(c.output.fields, vec![Field::Displacement]);
     assert_eq!(c.dirichlet[0].group, "clamp2");
@@ -646,7 +646,7 @@ fn overrides_create_sections_and_entries() {
         ],
     )
     .unwrap();
-    assert_eq!(c.newton.c, 10.0);
+    assert_eq!(c.newton.c, Some(10.0));
     assert_eq!(c.newton.init, NewtonInit::AllActive);
     assert_eq!(
         c.dirichlet,

@@ -535,6 +535,22 @@ pub fn run_case(ctx: &Ctx, case: &Case) -> Result<Value, RunError> {
             let total_force = contact_report::total_force(ctx, &nr.nodes);
             let half_width = table.half_width(&cs.obstacle);
             let kkt = table.kkt(!tresca);
+            // The final state against (3.14): violations beyond 1e-8 of the problem's own
+            // scales are reported (they mean an inexact linear solve, not round-off).
+            {
+                let f = |k: &str| kkt[k].as_f64().unwrap_or(0.0);
+                let (fs, ls) = (f("force_scale"), f("length_scale"));
+                let bad = f("max_penetration") > 1e-8 * ls
+                    || f("max_positive_lambda_n") > 1e-8 * fs
+                    || f("max_complementarity") > 1e-8 * fs * ls
+                    || (!tresca && f("max_abs_lambda_t") > 1e-8 * fs);
+                if bad {
+                    say!(
+                        ctx,
+                        "warning: the final state violates (3.14) beyond round-off: {kkt}"
+                    );
+                }
+            }
             say!(
                 ctx,
                 "contact: {} active, p_max = {:.6}, half width = {}, total force = {:?}",

@@ -456,21 +456,26 @@ pub struct MatStats {
 }
 
 impl Matrix {
-    /// An MPIAIJ matrix with `local_rows` owned rows (= owned columns), block size `bs` and exact
-    /// per-block-row preallocation: `d_nnz[i]` / `o_nnz[i]` blocks in the diagonal / off-diagonal
-    /// part of owned block row i. New nonzeros beyond the preallocation are an error.
-    pub fn new_aij(
+    pub fn raw(&self) -> ffi::Mat {
+        self.raw
+    }
+
+    /// An MPIAIJ (SeqAIJ on one rank) matrix with block size `bs` whose owned rows are given
+    /// complete in CSR form: `rowptr` (local rows + 1), global column indices `cols` (sorted
+    /// per row) and `vals`. The pattern is exact; new nonzeros are an error afterwards.
+    pub fn from_csr(
         comm: MPI_Comm,
-        local_rows: usize,
         bs: usize,
-        d_nnz: &[PInt],
-        o_nnz: &[PInt],
+        rowptr: &[PInt],
+        cols: &[PInt],
+        vals: &[f64],
     ) -> Result<Matrix> {
-        if d_nnz.len() * bs != local_rows || o_nnz.len() * bs != local_rows {
-            return Err(own_error("Matrix::new_aij: preallocation length mismatch"));
+        let local_rows = rowptr.len().saturating_sub(1);
+        if cols.len() != vals.len() || rowptr.last().copied().unwrap_or(0) as usize != cols.len() {
+            return Err(own_error("Matrix::from_csr: inconsistent CSR arrays"));
         }
         let mut raw: ffi::Mat = ptr::null_mut();
-        // SAFETY: standard creation sequence; the arrays outlive the calls that read them.
+        // SAFETY: PETSc copies the CSR arrays, which outlive the calls.
         unsafe {
             check(ffi::MatCreate(comm, &mut raw))?;
             let m = Matrix { raw };
@@ -483,13 +488,17 @@ impl Matrix {
             ))?;
             check(ffi::MatSetType(raw, ffi::MATAIJ.as_ptr() as *const c_char))?;
             check(ffi::MatSetBlockSize(raw, bs as PInt))?;
-            check(ffi::MatXAIJSetPreallocation(
+            check(ffi::MatSeqAIJSetPreallocationCSR(
                 raw,
-                bs as PInt,
-                d_nnz.as_ptr(),
-                o_nnz.as_ptr(),
-                ptr::null(),
-                ptr::null(),
+                rowptr.as_ptr(),
+                cols.as_ptr(),
+                vals.as_ptr(),
+            ))?;
+            check(ffi::MatMPIAIJSetPreallocationCSR(
+                raw,
+                rowptr.as_ptr(),
+                cols.as_ptr(),
+                vals.as_ptr(),
             ))?;
             check(ffi::MatSetOption(
                 raw,
@@ -498,10 +507,6 @@ impl Matrix {
             ))?;
             Ok(m)
         }
-    }
-
-    pub fn raw(&self) -> ffi::Mat {
-        self.raw
     }
 
     /// Adds a dense block `vals` (rows.len() × cols.len(), row-major) at global indices.

@@ -9,8 +9,11 @@ use crate::petsc::{self, options, Ksp, MPI_Comm, Matrix, SolveInfo, Vector};
 /// Cholesky (LDLᵀ), about half the work and memory of LU; Tresca's (3.42) needs LU.
 pub fn preset_options(preset: Preset, rtol: f64, symmetric: bool) -> String {
     match preset {
+        // ICNTL(14) = 40: 40 % workspace slack over MUMPS' estimate (a 2-rank 3D Cholesky of
+        // 396k unknowns failed once with the default; the estimate depends on the partition).
         Preset::Direct => format!(
-            "-ksp_type preonly -pc_type {} -pc_factor_mat_solver_type mumps",
+            "-ksp_type preonly -pc_type {} -pc_factor_mat_solver_type mumps \
+             -mat_mumps_icntl_14 40",
             if symmetric { "cholesky" } else { "lu" }
         ),
         // GMRES with right preconditioning (the true residual is tested) and smoothed

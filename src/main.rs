@@ -32,8 +32,8 @@ fn main() {
             std::process::exit(1);
         };
         let world = universe.world();
-        let rank = world.rank();
-        let code = match Petsc::init(&cli.petsc) {
+        // PETSc is initialised after MPI and finalised before the universe is dropped.
+        match Petsc::init(&cli.petsc) {
             Err(e) => {
                 eprintln!("error: PETSc could not be initialised: {e}");
                 world.abort(1);
@@ -43,9 +43,7 @@ fn main() {
                 drop(petsc);
                 code
             }
-        };
-        let _ = rank;
-        code
+        }
     };
     std::process::exit(code);
 }

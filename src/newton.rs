@@ -105,7 +105,6 @@ fn constraint_map(
     cs: &ContactSet,
     active: &[bool],
     pins: &[(usize, usize)],
-    dim: usize,
 ) -> HashMap<usize, NodeConstraint> {
     let mut mine: Vec<f64> = Vec::new();
     for (k, &a) in cs.nodes.iter().zip(active) {
@@ -145,7 +144,6 @@ fn constraint_map(
             .dirs
             .push((e, 0.0));
     }
-    let _ = dim;
     map
 }
 
@@ -576,7 +574,7 @@ pub fn semismooth_newton(
         } else {
             // (3.29), applied symmetrically (reduced::write_symmetric_constraint): the
             // constraints of the active nodes and of the pins, known on every rank.
-            let cmap = constraint_map(ctx, layout, cs, &active, &pins, dim);
+            let cmap = constraint_map(ctx, layout, cs, &active, &pins);
             let mut rhs_add: Vec<(PInt, f64)> = Vec::new();
             for (i, (k, r)) in cs.nodes.iter().zip(&rows).enumerate() {
                 if !active[i] {

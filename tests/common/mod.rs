@@ -30,9 +30,19 @@ pub struct Run {
     pub code: Option<i32>,
     pub stdout: String,
     pub stderr: String,
+    /// The command, for failure messages.
+    pub what: String,
 }
 
 impl Run {
+    /// Command, exit code and both streams, for failure messages.
+    pub fn output(&self) -> String {
+        format!(
+            "{}\nexit code {:?}\n--- stdout\n{}\n--- stderr\n{}",
+            self.what, self.code, self.stdout, self.stderr
+        )
+    }
+
     /// Panics with both streams if the exit code is not `code`.
     pub fn expect_code(&self, code: i32, what: &str) -> &Self {
         assert_eq!(
@@ -80,6 +90,7 @@ pub fn run_with_timeout(mut cmd: Command, limit: Duration) -> Run {
         code: status.code(),
         stdout: std::fs::read_to_string(&out_path).unwrap_or_default(),
         stderr: std::fs::read_to_string(&err_path).unwrap_or_default(),
+        what: desc,
     }
 }
 

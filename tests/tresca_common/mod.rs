@@ -6,10 +6,9 @@
 #![allow(dead_code)]
 
 use std::collections::BTreeMap;
-use std::fs::File;
 use std::path::{Path, PathBuf};
-use std::process::{Command, Stdio};
-use std::time::{Duration, Instant};
+use std::process::Command;
+use std::time::Duration;
 
 use serde_json::Value;
 
@@ -29,61 +28,10 @@ pub fn case(name: &str) -> PathBuf {
     repo(&format!("tests/cases/tresca/{name}"))
 }
 
-/// A finished process.
-#[derive(Debug)]
-pub struct Run {
-    pub code: Option<i32>,
-    pub stdout: String,
-    pub stderr: String,
-    pub what: String,
-}
-
-impl Run {
-    /// Command, exit code and both streams, for failure messages.
-    pub fn output(&self) -> String {
-        format!(
-            "{}\nexit code {:?}\n--- stdout\n{}\n--- stderr\n{}",
-            self.what, self.code, self.stdout, self.stderr
-        )
-    }
-}
-
-/// Runs `cmd` to completion; kills it and panics after `limit`. Output goes to files, so a
-/// chatty child never blocks on a full pipe.
-pub fn run_with_timeout(mut cmd: Command, limit: Duration) -> Run {
-    let dir = tempfile::tempdir().expect("tempdir");
-    let out_path = dir.path().join("stdout");
-    let err_path = dir.path().join("stderr");
-    cmd.stdin(Stdio::null())
-        .stdout(File::create(&out_path).expect("stdout file"))
-        .stderr(File::create(&err_path).expect("stderr file"));
-    let what = format!("{cmd:?}");
-    let mut child = cmd
-        .spawn()
-        .unwrap_or_else(|e| panic!("cannot start {what}: {e}"));
-    let start = Instant::now();
-    let status = loop {
-        if let Some(st) = child.try_wait().expect("try_wait") {
-            break st;
-        }
-        if start.elapsed() > limit {
-            let _ = child.kill();
-            let _ = child.wait();
-            panic!(
-                "{what} did not finish within {limit:?} (hang?)\n--- stdout\n{}\n--- stderr\n{}",
-                std::fs::read_to_string(&out_path).unwrap_or_default(),
-                std::fs::read_to_string(&err_path).unwrap_or_default()
-            );
-        }
-        std::thread::sleep(Duration::from_millis(20));
-    };
-    Run {
-        code: status.code(),
-        stdout: std::fs::read_to_string(&out_path).unwrap_or_default(),
-        stderr: std::fs::read_to_string(&err_path).unwrap_or_default(),
-        what,
-    }
-}
+// Running processes with a time limit and the MPI environment: the shared test helpers.
+#[path = "../common/mod.rs"]
+mod base;
+pub use base::{run_with_timeout, Run};
 
 /// `mpirun -n np --oversubscribe signorini-mpi CASE [--set s]... -o OUT`.
 pub fn solver_command(np: usize, case: &Path, sets: &[&str], out: &Path) -> Command {
@@ -95,11 +43,7 @@ pub fn solver_command(np: usize, case: &Path, sets: &[&str], out: &Path) -> Comm
         cmd.args(["--set", s]);
     }
     cmd.arg("-o").arg(out);
-    cmd.env("OMPI_ALLOW_RUN_AS_ROOT", "1")
-        .env("OMPI_ALLOW_RUN_AS_ROOT_CONFIRM", "1")
-        .env("OMPI_MCA_rmaps_base_oversubscribe", "1")
-        .env("OPENBLAS_NUM_THREADS", "1")
-        .env("OMP_NUM_THREADS", "1");
+    base::mpi_env(&mut cmd);
     cmd
 }
 

@@ -13,7 +13,7 @@ use crate::mesh::Mesh;
 use crate::partition::Layout;
 use crate::petsc::PInt;
 use crate::petsc::{Matrix, Vector};
-use crate::reduced::{pin_row, write_symmetric_constraint, NodeConstraint, NodeRows};
+use crate::reduced::{write_symmetric_constraint, NodeConstraint, NodeRows};
 use crate::rigid::RigidModes;
 use crate::run::{Ctx, RunError};
 use crate::say;
@@ -97,20 +97,27 @@ fn cycling_error(step: usize, n: usize, prev: usize, tresca: bool, safeguarded: 
     ))
 }
 
-/// The constraints of every active contact node and pinned dof, by global node number, on
-/// every rank (one all-gather of the active nodes; the pins are known everywhere).
+/// The constraints of every rewritten contact node (active normal n with −g, stick tangents
+/// with 0) and pinned dof, by global node number, on every rank (one all-gather of the
+/// rewritten contact nodes; the pins are known everywhere).
 fn constraint_map(
     ctx: &Ctx,
     layout: &Layout,
     cs: &ContactSet,
-    active: &[bool],
+    dirs: &[Option<Vec<([f64; 3], f64)>>],
     pins: &[(usize, usize)],
 ) -> HashMap<usize, NodeConstraint> {
     let mut mine: Vec<f64> = Vec::new();
-    for (k, &a) in cs.nodes.iter().zip(active) {
-        if a {
-            let gk = layout.node_global[k.node];
-            mine.extend_from_slice(&[gk as f64, k.frame.n[0], k.frame.n[1], k.frame.n[2], -k.gap]);
+    for (k, d) in cs.nodes.iter().zip(dirs) {
+        if let Some(d) = d {
+            let gk = layout.node_global[k.node] as f64;
+            if d.is_empty() {
+                // rewritten by its owner without a prescribed direction (Tresca slip node)
+                mine.extend_from_slice(&[gk, 0.0, 0.0, 0.0, 0.0]);
+            }
+            for (c, v) in d {
+                mine.extend_from_slice(&[gk, c[0], c[1], c[2], *v]);
+            }
         }
     }
     let mut counts = vec![0i32; ctx.size];
@@ -509,79 +516,55 @@ pub fn semismooth_newton(
                 }
             }
         }
-        if tresca {
-            // (3.42): the rows of every contact node and of the pinned dofs are overwritten.
-            for (i, (k, r)) in cs.nodes.iter().zip(&rows).enumerate() {
-                let a = active[i];
-                if !tresca && !a {
-                    continue; // (3.29): inactive rows stay as in A
-                }
-                let fk = &f_local[k.local_row..k.local_row + dim];
-                let dotf = |v: &[f64; 3]| -> f64 { (0..dim).map(|j| v[j] * fk[j]).sum() };
-                let mut comb = [[0.0; 3]; 3];
-                let mut own = [[0.0; 3]; 3];
-                // Rows that only constrain u^k are scaled by the node's mean stiffness diagonal, so
-                // they are of the size of the rows they replace (matters for iterative solvers).
-                let sk = (0..dim).map(|j| r.diag(j)).sum::<f64>() / dim as f64;
-                if a {
-                    // normal row: nᵀ u^k = −g^k
-                    for j in 0..dim {
-                        own[0][j] = sk * k.frame.n[j];
+        {
+            // (3.29) / (3.42), applied symmetrically (reduced::write_symmetric_constraint):
+            // prescribed directions (active normal, stick tangents, pins) are eliminated from
+            // rows and columns; Tresca slip rows add L̃ and r̃ (3.39) to the node's own block.
+            let dirs: Vec<Option<Vec<([f64; 3], f64)>>> = cs
+                .nodes
+                .iter()
+                .enumerate()
+                .map(|(i, k)| {
+                    let mut d = Vec::new();
+                    if active[i] {
+                        d.push((k.frame.n, -k.gap));
                     }
-                    rhs_updates.push((k.local_row, -sk * k.gap));
-                } else {
-                    // (3.42) inactive normal row: nᵀ (A u)_k = nᵀ f_k
-                    comb[0][..dim].copy_from_slice(&k.frame.n[..dim]);
-                    rhs_updates.push((k.local_row, dotf(&k.frame.n)));
-                }
-                for ti in 1..dim {
-                    let t = &k.frame.t[ti - 1];
-                    if !tresca {
-                        // frictionless: τ_iᵀ (A u)_k = τ_iᵀ f_k
-                        comb[ti][..dim].copy_from_slice(&t[..dim]);
-                        rhs_updates.push((k.local_row + ti, dotf(t)));
-                        continue;
-                    }
-                    match &trow[i] {
-                        // (3.34a) stick: τ_iᵀ u^k = 0
-                        TangentialRow::Stick => {
-                            for j in 0..dim {
-                                own[ti][j] = sk * t[j];
+                    if tresca {
+                        if let TangentialRow::Stick = trow[i] {
+                            for t in &k.frame.t[..dim - 1] {
+                                d.push((*t, 0.0));
                             }
-                            rhs_updates.push((k.local_row + ti, 0.0));
-                        }
-                        // (3.39a) slip: τᵀ(A u)_k + L̃ τᵀ u^k = τᵀ f_k + r̃
-                        TangentialRow::Slip { l, r: rt } => {
-                            comb[ti][..dim].copy_from_slice(&t[..dim]);
-                            for (m, tm) in k.frame.t[..dim - 1].iter().enumerate() {
-                                for j in 0..dim {
-                                    own[ti][j] += l[ti - 1][m] * tm[j];
-                                }
-                            }
-                            rhs_updates.push((k.local_row + ti, dotf(t) + rt[ti - 1]));
                         }
                     }
-                }
-                r.write(&mut s, dim, &comb, &own, &mut buf)?;
-            }
-            for &(v, k) in &pins {
-                if layout.owns_node(v) {
-                    let p = layout.node_global[v] * dim + k;
-                    pin_row(&mut s, &sys.a, p)?;
-                    rhs_updates.push((p - row_lo, 0.0));
-                }
-            }
-        } else {
-            // (3.29), applied symmetrically (reduced::write_symmetric_constraint): the
-            // constraints of the active nodes and of the pins, known on every rank.
-            let cmap = constraint_map(ctx, layout, cs, &active, &pins);
+                    (tresca || active[i]).then_some(d)
+                })
+                .collect();
+            let cmap = constraint_map(ctx, layout, cs, &dirs, &pins);
             let mut rhs_add: Vec<(PInt, f64)> = Vec::new();
             for (i, (k, r)) in cs.nodes.iter().zip(&rows).enumerate() {
-                if !active[i] {
-                    continue;
+                if dirs[i].is_none() {
+                    continue; // (3.29): rows of inactive frictionless nodes stay as in A
                 }
                 let gk = layout.node_global[k.node];
-                let me = &cmap[&gk];
+                let mut me = cmap[&gk].clone();
+                let slip_row = if tresca { Some(&trow[i]) } else { None };
+                if let Some(TangentialRow::Slip { l, r: rt }) = slip_row {
+                    // slip: τᵀ(A u)_k + L̃ τᵀ u^k = τᵀ f_k + r̃  (3.39a)
+                    let t = &k.frame.t;
+                    for a in 0..dim {
+                        for b in 0..dim {
+                            for (ii, ti) in t[..dim - 1].iter().enumerate() {
+                                for (jj, tj) in t[..dim - 1].iter().enumerate() {
+                                    me.spring[a][b] += ti[a] * l[ii][jj] * tj[b];
+                                }
+                            }
+                        }
+                        for (ii, ti) in t[..dim - 1].iter().enumerate() {
+                            me.spring_rhs[a] += ti[a] * rt[ii];
+                        }
+                    }
+                }
+                let me = &me;
                 let fk = &f_local[k.local_row..k.local_row + dim];
                 let rk = write_symmetric_constraint(
                     &mut s,

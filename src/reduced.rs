@@ -51,51 +51,10 @@ impl NodeRows {
         })
     }
 
-    /// Writes into `s` the node's d new rows: row i = Σ_j comb[i][j] · (row j of A)
-    /// + Σ_j own[i][j] · e_(row+j)ᵀ. `buf` is scratch space.
-    pub fn write(
-        &self,
-        s: &mut Matrix,
-        dim: usize,
-        comb: &[[f64; 3]; 3],
-        own: &[[f64; 3]; 3],
-        buf: &mut Vec<f64>,
-    ) -> petsc::Result<()> {
-        let n = self.cols.len();
-        for i in 0..dim {
-            buf.clear();
-            buf.resize(n, 0.0);
-            for j in 0..dim {
-                let w = comb[i][j];
-                if w != 0.0 {
-                    for (b, v) in buf.iter_mut().zip(&self.vals[j]) {
-                        *b += w * v;
-                    }
-                }
-            }
-            for j in 0..dim {
-                buf[self.own[j]] += own[i][j];
-            }
-            s.insert_values(&[(self.row + i) as PInt], &self.cols, buf)?;
-        }
-        Ok(())
-    }
-
     /// Row `row + j` of A times the local values: the diagonal entry a_jj.
     pub fn diag(&self, j: usize) -> f64 {
         self.vals[j][self.own[j]]
     }
-}
-
-/// Replaces one row of `s` by a_pp e_pᵀ (a pinned dof), keeping the pattern.
-pub fn pin_row(s: &mut Matrix, a: &Matrix, p: usize) -> petsc::Result<()> {
-    let (cols, mut vals) = a.with_row(p, |c, v| (c.to_vec(), v.to_vec()))?;
-    for (c, v) in cols.iter().zip(vals.iter_mut()) {
-        if *c as usize != p {
-            *v = 0.0;
-        }
-    }
-    s.insert_values(&[p as PInt], &cols, &vals)
 }
 
 /// Prescribed components of one node: orthonormal directions c with cᵀ u = value
@@ -103,6 +62,11 @@ pub fn pin_row(s: &mut Matrix, a: &Matrix, p: usize) -> petsc::Result<()> {
 #[derive(Clone, Debug, Default)]
 pub struct NodeConstraint {
     pub dirs: Vec<([f64; 3], f64)>,
+    /// Added to the node's own block (Tresca slip rows (3.39): Σ τ_i L̃_ij τ_jᵀ); only the
+    /// owner of the node uses it.
+    pub spring: [[f64; 3]; 3],
+    /// Added to the node's right-hand side (Σ τ_i r̃_i).
+    pub spring_rhs: [f64; 3],
 }
 
 impl NodeConstraint {
@@ -207,6 +171,11 @@ pub fn write_symmetric_constraint<'c>(
                     }
                 }
             }
+            for a in 0..dim {
+                for b in 0..dim {
+                    nb[a][b] += me.spring[a][b];
+                }
+            }
         }
         for a in 0..dim {
             for b in 0..dim {
@@ -246,7 +215,7 @@ pub fn write_symmetric_constraint<'c>(
         ft[a] = f_k[a] - t[a];
     }
     for a in 0..dim {
-        rhs[a] = (0..dim).map(|b| pk[a][b] * ft[b]).sum::<f64>() + sk * uk[a];
+        rhs[a] = (0..dim).map(|b| pk[a][b] * ft[b]).sum::<f64>() + sk * uk[a] + me.spring_rhs[a];
     }
     Ok(rhs)
 }

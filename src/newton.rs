@@ -97,6 +97,9 @@ fn cycling_error(step: usize, n: usize, prev: usize, tresca: bool, safeguarded: 
     ))
 }
 
+/// Prescribed directions of one node: (unit vector c, value of cᵀu).
+type Dirs = Vec<([f64; 3], f64)>;
+
 /// The constraints of every rewritten contact node (active normal n with −g, stick tangents
 /// with 0) and pinned dof, by global node number, on every rank (one all-gather of the
 /// rewritten contact nodes; the pins are known everywhere).
@@ -104,7 +107,7 @@ fn constraint_map(
     ctx: &Ctx,
     layout: &Layout,
     cs: &ContactSet,
-    dirs: &[Option<Vec<([f64; 3], f64)>>],
+    dirs: &[Option<Dirs>],
     pins: &[(usize, usize)],
 ) -> HashMap<usize, NodeConstraint> {
     let mut mine: Vec<f64> = Vec::new();
@@ -520,7 +523,7 @@ pub fn semismooth_newton(
             // (3.29) / (3.42), applied symmetrically (reduced::write_symmetric_constraint):
             // prescribed directions (active normal, stick tangents, pins) are eliminated from
             // rows and columns; Tresca slip rows add L̃ and r̃ (3.39) to the node's own block.
-            let dirs: Vec<Option<Vec<([f64; 3], f64)>>> = cs
+            let dirs: Vec<Option<Dirs>> = cs
                 .nodes
                 .iter()
                 .enumerate()

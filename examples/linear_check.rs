@@ -33,7 +33,7 @@ use signorini_mpi::case::SolverSection;
 use signorini_mpi::fem::{self, Material, Model};
 use signorini_mpi::mesh::{self, Mesh};
 use signorini_mpi::partition::{self, Layout};
-use signorini_mpi::petsc::{PInt, Petsc, Vector};
+use signorini_mpi::petsc::{Petsc, Vector};
 use signorini_mpi::run::{self, Ctx};
 
 type Tensor = [[f64; 3]; 3];
@@ -141,20 +141,7 @@ fn local_values(
     layout: &Layout,
     u: &Vector,
 ) -> Result<(Vec<usize>, Vec<f64>), String> {
-    let dim = mesh.dim;
-    let mut nodes: Vec<usize> = layout
-        .local_cells
-        .iter()
-        .flat_map(|&c| mesh.cell(c).iter().copied())
-        .collect();
-    nodes.sort_unstable();
-    nodes.dedup();
-    let idx: Vec<PInt> = nodes
-        .iter()
-        .flat_map(|&v| (0..dim).map(move |k| (layout.node_global[v] * dim + k) as PInt))
-        .collect();
-    let vals = u.gather(&idx).map_err(|e| e.to_string())?;
-    Ok((nodes, vals))
+    signorini_mpi::run::local_cell_values(mesh, layout, u).map_err(|e| e.to_string())
 }
 
 /// Partition, assemble with the given Dirichlet data and body force, solve (direct preset).

@@ -1,7 +1,7 @@
 //! The discrete contact boundary c_h: for every owned contact node its frame {n, τ}, gap
 //! g_h^k (3.3), lumped weight w_k = ∫_Γc φ_k ds and Tresca bound b_k = ∫_Γc g_R φ_k ds (3.18).
 
-use crate::case::{self, ContactSection, Friction};
+use crate::case::{self, vec3, ContactSection, Friction};
 use crate::contact::{Frame, Obstacle, Plane, Sphere};
 use crate::error::InputError;
 use crate::fem;
@@ -43,14 +43,6 @@ pub struct ContactSet {
     /// Contact nodes dropped because Dirichlet data fix one of their components (global count).
     pub excluded_dirichlet: usize,
     pub obstacle: Obstacle,
-}
-
-fn vec3(v: &[f64]) -> [f64; 3] {
-    let mut out = [0.0; 3];
-    for (o, x) in out.iter_mut().zip(v) {
-        *o = *x;
-    }
-    out
 }
 
 /// The obstacle of the case, checked.

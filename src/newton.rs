@@ -354,17 +354,7 @@ pub fn semismooth_newton(
         ctx.world
             .all_reduce_into(&local[..], &mut g_dir[..], SystemOperation::sum());
     }
-    let scale = {
-        let mut lo = [f64::INFINITY; 3];
-        let mut hi = [f64::NEG_INFINITY; 3];
-        for x in &mesh.coords {
-            for k in 0..3 {
-                lo[k] = lo[k].min(x[k]);
-                hi[k] = hi[k].max(x[k]);
-            }
-        }
-        (0..dim).map(|k| hi[k] - lo[k]).fold(0.0, f64::max)
-    };
+    let scale = mesh.extent();
     // Constraint rows of a set for the rigid-mode test: nᵀ at active nodes; with friction also
     // τᵀ where the tangential row holds u_τ (stick, or a slip row with a spring L̃ ≠ 0).
     let active_gram = |active: &[bool], trow: &[TangentialRow<2>]| -> Vec<f64> {
@@ -544,6 +534,8 @@ pub fn semismooth_newton(
                 .collect();
             let cmap = constraint_map(ctx, layout, cs, &dirs, &pins);
             let mut rhs_add: Vec<(PInt, f64)> = Vec::new();
+            // (rows of A, constraint, first local row) of every node this rank rewrites
+            let mut writes: Vec<(&NodeRows, NodeConstraint, usize)> = Vec::new();
             for (i, (k, r)) in cs.nodes.iter().zip(&rows).enumerate() {
                 if dirs[i].is_none() {
                     continue; // (3.29): rows of inactive frictionless nodes stay as in A
@@ -567,27 +559,14 @@ pub fn semismooth_newton(
                         }
                     }
                 }
-                let me = &me;
-                let fk = &f_local[k.local_row..k.local_row + dim];
-                let rk = write_symmetric_constraint(
-                    &mut s,
-                    r,
-                    me,
-                    fk,
-                    dim,
-                    |j| cmap.get(&j),
-                    &mut rhs_add,
-                    &mut buf,
-                )?;
-                for (a, v) in rk.iter().enumerate().take(dim) {
-                    rhs_updates.push((k.local_row + a, *v));
-                }
+                writes.push((r, me, k.local_row));
             }
             for (v, r) in &pin_rows {
                 let gv = layout.node_global[*v];
-                let me = &cmap[&gv];
-                let lr = gv * dim - row_lo;
-                let fk = &f_local[lr..lr + dim];
+                writes.push((r, cmap[&gv].clone(), gv * dim - row_lo));
+            }
+            for (r, me, lr) in &writes {
+                let fk = &f_local[*lr..*lr + dim];
                 let rk = write_symmetric_constraint(
                     &mut s,
                     r,

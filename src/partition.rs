@@ -122,19 +122,8 @@ fn dual_graph_rows(mesh: &Mesh, nc: &NodeCells, lo: usize, hi: usize) -> (Vec<PI
 /// interleaved.
 fn morton_keys(mesh: &Mesh) -> Vec<u64> {
     let dim = mesh.dim;
-    let mut lo = [f64::INFINITY; 3];
-    let mut hi = [f64::NEG_INFINITY; 3];
-    for x in &mesh.coords {
-        for k in 0..dim {
-            lo[k] = lo[k].min(x[k]);
-            hi[k] = hi[k].max(x[k]);
-        }
-    }
-    let span = (0..dim)
-        .map(|k| hi[k] - lo[k])
-        .fold(0.0f64, f64::max)
-        .max(f64::MIN_POSITIVE);
-    let scale = ((1u64 << 21) - 1) as f64 / span;
+    let (lo, _) = mesh.bounding_box();
+    let scale = ((1u64 << 21) - 1) as f64 / mesh.extent();
     mesh.coords
         .iter()
         .map(|x| {

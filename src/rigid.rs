@@ -27,19 +27,9 @@ pub struct RigidModes {
 impl RigidModes {
     pub fn new(mesh: &Mesh) -> RigidModes {
         let dim = mesh.dim;
-        let mut lo = [f64::INFINITY; 3];
-        let mut hi = [f64::NEG_INFINITY; 3];
-        for x in &mesh.coords {
-            for k in 0..3 {
-                lo[k] = lo[k].min(x[k]);
-                hi[k] = hi[k].max(x[k]);
-            }
-        }
+        let (lo, hi) = mesh.bounding_box();
         let center = [0, 1, 2].map(|k| 0.5 * (lo[k] + hi[k]));
-        let scale = (0..dim)
-            .map(|k| hi[k] - lo[k])
-            .fold(0.0f64, f64::max)
-            .max(f64::MIN_POSITIVE);
+        let scale = mesh.extent();
         RigidModes {
             dim,
             m: if dim == 2 { 3 } else { 6 },

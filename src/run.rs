@@ -2,7 +2,7 @@
 //! Used by the binary and by integration tests.
 
 use crate::assembly::{self, BodyForce, FacetLoad, FacetLoadKind, Problem};
-use crate::case::{self, Case, Field};
+use crate::case::{self, vec3, Case, Field};
 use crate::contact_report;
 use crate::contact_set;
 use crate::error::InputError;
@@ -147,14 +147,6 @@ pub fn read_input(case: &Case) -> Result<(Mesh, Material), InputError> {
     Ok((mesh, material))
 }
 
-fn vec3(v: &[f64]) -> [f64; 3] {
-    let mut out = [0.0; 3];
-    for (o, x) in out.iter_mut().zip(v) {
-        *o = *x;
-    }
-    out
-}
-
 /// All groups with this name (a name may label groups of several dimensions).
 fn groups_named<'m>(mesh: &'m Mesh, name: &str) -> Vec<&'m mesh::Group> {
     mesh.groups.iter().filter(|g| g.name == name).collect()
@@ -228,6 +220,29 @@ pub struct CellFields {
     pub rank: Option<Vec<f64>>,
 }
 
+/// The values of a nodal vector (dim per node) at every node of this rank's cells, owned or
+/// not: (sorted mesh node indices, dim values each). Collective.
+pub fn local_cell_values(
+    mesh: &Mesh,
+    layout: &Layout,
+    u: &Vector,
+) -> petsc::Result<(Vec<usize>, Vec<f64>)> {
+    let dim = mesh.dim;
+    let mut nodes: Vec<usize> = layout
+        .local_cells
+        .iter()
+        .flat_map(|&c| mesh.cell(c).iter().copied())
+        .collect();
+    nodes.sort_unstable();
+    nodes.dedup();
+    let idx: Vec<PInt> = nodes
+        .iter()
+        .flat_map(|&v| (0..dim).map(move |k| (layout.node_global[v] * dim + k) as PInt))
+        .collect();
+    let vals = u.gather(&idx)?;
+    Ok((nodes, vals))
+}
+
 /// Stresses and von Mises values of the local cells — only what `fields` asks for.
 pub fn cell_fields(
     mesh: &Mesh,
@@ -253,19 +268,7 @@ pub fn cell_fields(
         // Every rank skips alike: output.fields is the same everywhere (no collective skipped).
         return Ok(f);
     }
-    // Displacements of every node of the local cells (owned or ghost).
-    let mut nodes: Vec<usize> = layout
-        .local_cells
-        .iter()
-        .flat_map(|&c| mesh.cell(c).iter().copied())
-        .collect();
-    nodes.sort_unstable();
-    nodes.dedup();
-    let idx: Vec<PInt> = nodes
-        .iter()
-        .flat_map(|&v| (0..dim).map(move |k| (layout.node_global[v] * dim + k) as PInt))
-        .collect();
-    let vals = u.gather(&idx)?;
+    let (nodes, vals) = local_cell_values(mesh, layout, u)?;
     let mut stress = want_stress.then(|| Vec::with_capacity(nlc * 9));
     let mut vm = want_vm.then(|| Vec::with_capacity(nlc));
     let mut vmt = want_vmt.then(|| Vec::with_capacity(nlc));

@@ -17,6 +17,15 @@ use std::path::{Path, PathBuf};
 use crate::error::InputError;
 use tree::{join_index, join_key, Kind, Loc, Node};
 
+/// A vector of the case file (2 or 3 entries) as 3 components, z = 0 in 2D.
+pub fn vec3(v: &[f64]) -> [f64; 3] {
+    let mut out = [0.0; 3];
+    for (o, x) in out.iter_mut().zip(v) {
+        *o = *x;
+    }
+    out
+}
+
 /// Elastic model.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Model {

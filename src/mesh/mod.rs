@@ -140,6 +140,28 @@ impl Mesh {
             &self.points[e..e + 1]
         }
     }
+    /// Bounding box (lowest and highest coordinates) of the nodes.
+    pub fn bounding_box(&self) -> ([f64; 3], [f64; 3]) {
+        let mut lo = [f64::INFINITY; 3];
+        let mut hi = [f64::NEG_INFINITY; 3];
+        for x in &self.coords {
+            for k in 0..3 {
+                lo[k] = lo[k].min(x[k]);
+                hi[k] = hi[k].max(x[k]);
+            }
+        }
+        (lo, hi)
+    }
+
+    /// The largest extent of the bounding box over the mesh's dimensions (> 0).
+    pub fn extent(&self) -> f64 {
+        let (lo, hi) = self.bounding_box();
+        (0..self.dim)
+            .map(|k| hi[k] - lo[k])
+            .fold(0.0f64, f64::max)
+            .max(f64::MIN_POSITIVE)
+    }
+
     /// Signed area (2D) or volume (3D) of cell `c`; positive for every cell after reading.
     pub fn cell_measure(&self, c: usize) -> f64 {
         let p: Vec<[f64; 3]> = self.cell(c).iter().map(|&n| self.coords[n]).collect();

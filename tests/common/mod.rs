@@ -220,3 +220,19 @@ pub fn write_case(path: &Path, text: &str) -> PathBuf {
 pub fn toml_path(p: &Path) -> String {
     format!("{:?}", p.display().to_string())
 }
+
+/// Runs an inline Python script with /usr/bin/python3 and parses the last stdout line that
+/// starts with "RESULT " as JSON; panics with its output on failure.
+pub fn python_json(script: &str, args: &[&Path]) -> serde_json::Value {
+    let mut cmd = Command::new(PYTHON);
+    cmd.arg("-c").arg(script).args(args);
+    let r = run_with_timeout(cmd, Duration::from_secs(120));
+    assert_eq!(r.code, Some(0), "python failed:\n{}", r.output());
+    let line = r
+        .stdout
+        .lines()
+        .rev()
+        .find_map(|l| l.strip_prefix("RESULT "))
+        .unwrap_or_else(|| panic!("no RESULT line:\n{}", r.output()));
+    serde_json::from_str(line).unwrap_or_else(|e| panic!("bad JSON {line:?}: {e}"))
+}

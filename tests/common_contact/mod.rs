@@ -26,7 +26,8 @@ pub fn repo(rel: &str) -> PathBuf {
 // Running processes with a time limit and the MPI environment: the shared test helpers.
 #[path = "../common/mod.rs"]
 mod base;
-pub use base::{run_with_timeout, Run};
+#[allow(unused_imports)] // each test file uses part of it
+pub use base::{python_json, run_with_timeout, Run};
 
 /// `mpirun -n np --oversubscribe signorini-mpi CASE [--set s]... -o OUT`.
 pub fn solver_command(np: usize, case: &Path, sets: &[&str], out: &Path) -> Command {
@@ -189,22 +190,6 @@ pub fn read_csv(path: &Path) -> Vec<Row> {
                 .collect())
         })
         .collect()
-}
-
-/// Runs an inline Python script with /usr/bin/python3 and parses the last stdout line that
-/// starts with "RESULT " as JSON; panics with its output on failure.
-pub fn python_json(script: &str, args: &[&Path]) -> Value {
-    let mut cmd = Command::new(PYTHON);
-    cmd.arg("-c").arg(script).args(args);
-    let r = run_with_timeout(cmd, Duration::from_secs(120));
-    assert_eq!(r.code, Some(0), "python failed:\n{}", r.output());
-    let line = r
-        .stdout
-        .lines()
-        .rev()
-        .find_map(|l| l.strip_prefix("RESULT "))
-        .unwrap_or_else(|| panic!("no RESULT line:\n{}", r.output()));
-    serde_json::from_str(line).unwrap_or_else(|e| panic!("bad JSON {line:?}: {e}"))
 }
 
 /// Relative difference |a − b| / |b|.

@@ -32,9 +32,10 @@ use signorini_mpi::assembly::{self, BodyForce, Problem};
 use signorini_mpi::case::SolverSection;
 use signorini_mpi::fem::{self, Material, Model};
 use signorini_mpi::mesh::{self, Mesh};
+use signorini_mpi::par::Ctx;
 use signorini_mpi::partition::{self, Layout};
 use signorini_mpi::petsc::{Petsc, Vector};
-use signorini_mpi::run::{self, Ctx};
+use signorini_mpi::{post, solver};
 
 type Tensor = [[f64; 3]; 3];
 
@@ -141,7 +142,7 @@ fn local_values(
     layout: &Layout,
     u: &Vector,
 ) -> Result<(Vec<usize>, Vec<f64>), String> {
-    signorini_mpi::run::local_cell_values(mesh, layout, u).map_err(|e| e.to_string())
+    post::local_cell_values(mesh, layout, u).map_err(|e| e.to_string())
 }
 
 /// Partition, assemble with the given Dirichlet data and body force, solve (direct preset).
@@ -163,7 +164,7 @@ fn solve(
         body_force,
     };
     let mut sys = assembly::assemble(comm, &layout, &problem).map_err(|e| e.to_string())?;
-    let (u, _) = run::linear_solve(ctx, mesh, &layout, &mut sys, &SolverSection::default())
+    let (u, _) = solver::linear_solve(ctx, mesh, &layout, &mut sys, &SolverSection::default())
         .map_err(|e| e.to_string())?;
     Ok((layout, u))
 }

@@ -47,3 +47,46 @@ impl fmt::Display for InputError {
 }
 
 impl std::error::Error for InputError {}
+
+/// Why a run failed. The binary maps it to an exit code: 2 for input, 1 otherwise.
+#[derive(Debug)]
+pub enum RunError {
+    /// The user's input is wrong: one message, exit code 2, nothing written.
+    Input(InputError),
+    /// PETSc reported an error.
+    Petsc(crate::petsc::PetscError),
+    /// Anything else (solver did not converge, output could not be written, ...).
+    Failed(String),
+}
+
+impl RunError {
+    /// The process exit code that stands for this error.
+    pub fn exit_code(&self) -> i32 {
+        match self {
+            RunError::Input(_) => 2,
+            RunError::Petsc(_) | RunError::Failed(_) => 1,
+        }
+    }
+}
+
+impl fmt::Display for RunError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            RunError::Input(e) => write!(f, "{e}"),
+            RunError::Petsc(e) => write!(f, "{e}"),
+            RunError::Failed(s) => write!(f, "{s}"),
+        }
+    }
+}
+
+impl From<crate::petsc::PetscError> for RunError {
+    fn from(e: crate::petsc::PetscError) -> Self {
+        RunError::Petsc(e)
+    }
+}
+
+impl From<InputError> for RunError {
+    fn from(e: InputError) -> Self {
+        RunError::Input(e)
+    }
+}

@@ -3,8 +3,10 @@
 use clap::Parser;
 use mpi::traits::*;
 use signorini_mpi::case::Case;
+use signorini_mpi::driver;
+use signorini_mpi::error::RunError;
+use signorini_mpi::par::Ctx;
 use signorini_mpi::petsc::Petsc;
-use signorini_mpi::run::{self, Ctx, RunError};
 use std::path::PathBuf;
 
 /// Static contact of linear-elastic bodies with a rigid obstacle (semismooth Newton, MPI + PETSc).
@@ -50,34 +52,22 @@ fn main() {
 
 fn run(cli: &Cli, world: &mpi::topology::SimpleCommunicator, petsc: &Petsc) -> i32 {
     let ctx = Ctx::new(world, petsc);
-    let case = Case::load(&cli.case, &cli.set, cli.output.as_deref());
-    if ctx.any(case.is_err()) {
-        if let Err(e) = &case {
-            if ctx.rank == 0 {
-                eprintln!("error: {e}");
-            }
-        }
-        return 2;
-    }
-    let case = case.expect("checked");
-    match run::run_case(&ctx, &case) {
+    let result = ctx
+        .agree(Case::load(&cli.case, &cli.set, cli.output.as_deref()).map_err(RunError::from))
+        .and_then(|case| driver::run_case(&ctx, &case));
+    match result {
         Ok(_) => 0,
-        Err(RunError::Input(e)) => {
-            if ctx.rank == 0 {
-                eprintln!("error: {e}");
-            }
-            2
-        }
-        Err(RunError::Failed(s)) => {
-            if ctx.rank == 0 {
-                eprintln!("error: {s}");
-            }
-            1
-        }
         Err(e @ RunError::Petsc(_)) => {
             // A PETSc failure may be local to this rank: end every rank.
             eprintln!("error (rank {}): {e}", ctx.rank);
             world.abort(1);
+        }
+        // Agreed errors: every rank has the same one; rank 0 says it.
+        Err(e) => {
+            if ctx.rank == 0 {
+                eprintln!("error: {e}");
+            }
+            e.exit_code()
         }
     }
 }

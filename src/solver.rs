@@ -1,8 +1,16 @@
 //! Linear solver set-up: the presets, the case file's `petsc_options` and the command line
-//! (after `--`), in increasing priority, all through PETSc's options database.
+//! (after `--`), in increasing priority, all through PETSc's options database; and the one
+//! linear solve of a case without contact.
 
-use crate::case::Preset;
+use crate::assembly::{self, System};
+use crate::case::{Preset, SolverSection};
+use crate::error::RunError;
+use crate::mesh::Mesh;
+use crate::par::Ctx;
+use crate::partition::Layout;
 use crate::petsc::{self, options, Ksp, MPI_Comm, Matrix, SolveInfo, Vector};
+use crate::say;
+use std::time::Instant;
 
 /// The options a preset stands for. `symmetric`: the systems are symmetric (linear elasticity
 /// and frictionless contact, whose (3.29) is applied symmetrically), so MUMPS factors them by
@@ -18,7 +26,7 @@ pub fn preset_options(preset: Preset, rtol: f64, symmetric: bool) -> String {
         ),
         // GMRES with right preconditioning (the true residual is tested) and smoothed
         // aggregation AMG with the rigid-body near-null space; the symmetrised graph keeps
-        // aggregation valid for the unsymmetric reduced systems of contact.
+        // aggregation valid for the unsymmetric reduced systems of Tresca friction (3.42).
         Preset::Iterative => format!(
             "-ksp_type gmres -ksp_pc_side right -ksp_gmres_restart 200 -ksp_rtol {rtol:e} \
              -ksp_max_it 2000 -pc_type gamg -pc_gamg_sym_graph true \
@@ -85,6 +93,102 @@ impl LinearSolver {
     pub fn solve(&mut self, b: &Vector, x: &mut Vector) -> petsc::Result<SolveInfo> {
         self.ksp.solve(b, x)
     }
+}
+
+/// The coordinates for AMG's rigid-body near-null space: only the iterative preset uses them.
+pub fn near_null_space_coordinates(
+    ctx: &Ctx,
+    mesh: &Mesh,
+    layout: &Layout,
+    preset: Preset,
+) -> petsc::Result<Option<Vector>> {
+    match preset {
+        Preset::Iterative => Ok(Some(assembly::coordinate_vector(ctx.comm(), mesh, layout)?)),
+        Preset::Direct => Ok(None),
+    }
+}
+
+/// Everything about a linear run that the summary reports.
+pub struct LinearReport {
+    pub solve: SolveInfo,
+    pub ksp_type: String,
+    pub pc_type: String,
+}
+
+/// summary.json's "linear_solver" section of a linear run.
+#[derive(Debug, Clone, serde::Serialize)]
+pub struct LinearSolverSummary {
+    pub preset: &'static str,
+    pub ksp_type: String,
+    pub pc_type: String,
+    pub iterations: usize,
+    pub converged_reason: String,
+    pub converged_reason_code: i64,
+}
+
+/// What a linear run reports in summary.json.
+#[derive(Debug, Clone, serde::Serialize)]
+pub struct LinearSummary {
+    pub linear_solver: LinearSolverSummary,
+}
+
+impl LinearReport {
+    pub fn summary(&self, preset: Preset) -> LinearSummary {
+        LinearSummary {
+            linear_solver: LinearSolverSummary {
+                preset: preset.name(),
+                ksp_type: self.ksp_type.clone(),
+                pc_type: self.pc_type.clone(),
+                iterations: self.solve.iterations,
+                converged_reason: self.solve.reason_name.clone(),
+                converged_reason_code: self.solve.reason as i64,
+            },
+        }
+    }
+}
+
+/// Configures the linear solver from the options database (preset < case < command line)
+/// and solves A u = f once.
+pub fn linear_solve(
+    ctx: &Ctx,
+    mesh: &Mesh,
+    layout: &Layout,
+    sys: &mut System,
+    settings: &SolverSection,
+) -> Result<(Vector, LinearReport), RunError> {
+    let t = Instant::now();
+    configure(
+        settings.preset,
+        settings.rtol,
+        true,
+        &settings.petsc_options,
+    )?;
+    let coords = near_null_space_coordinates(ctx, mesh, layout, settings.preset)?;
+    let mut ls = LinearSolver::new(ctx.comm(), &mut sys.a, coords.as_ref())?;
+    let mut u = sys.b.duplicate()?;
+    let info = ls.solve(&sys.b, &mut u)?;
+    let secs = t.elapsed().as_secs_f64();
+    let (ksp_type, pc_type) = ls.ksp.type_names()?;
+    say!(
+        ctx,
+        "solve: {secs:.3} s, {ksp_type}/{pc_type}, {} iterations, {}",
+        info.iterations,
+        info.reason_name
+    );
+    if !info.converged() {
+        return Err(RunError::Failed(format!(
+            "the linear solver did not converge: {} after {} iterations ({ksp_type}/{pc_type})",
+            info.reason_name, info.iterations
+        )));
+    }
+    Ok((
+        u,
+        LinearReport {
+            solve: info,
+            ksp_type,
+            pc_type,
+        },
+    ))
 }
 
 #[cfg(test)]

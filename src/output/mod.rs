@@ -1,35 +1,5 @@
 //! XDMF + HDF5 output, written in parallel (every rank its own rows of one shared HDF5 file).
 //!
-//! INTERFACE (keep these names):
-//!
-//! ```ignore
-//! /// One field: `ncomp` values per owned node / cell / contact node, row-major.
-//! pub struct Field<'a> { pub name: &'a str, pub ncomp: usize, pub data: &'a [f64] }
-//! /// What one rank contributes. Nodes and cells are numbered globally and contiguously by rank:
-//! /// rank r owns nodes node_offset .. node_offset + coords.len() and cells likewise.
-//! pub struct Piece<'a> {
-//!     pub dim: usize,                    // 2 or 3
-//!     pub n_nodes_global: usize, pub node_offset: usize,
-//!     pub coords: &'a [[f64; 3]],        // owned nodes (z = 0 in 2D)
-//!     pub node_ids: &'a [u64],           // gmsh node tag of each owned node
-//!     pub n_cells_global: usize, pub cell_offset: usize,
-//!     pub connectivity: &'a [usize],     // dim+1 GLOBAL node numbers per owned cell
-//!     pub cell_ids: &'a [u64],           // gmsh element tag of each owned cell
-//!     pub nodal: Vec<Field<'a>>,         // e.g. displacement, ncomp 3 (2D padded with 0)
-//!     pub cellwise: Vec<Field<'a>>,      // e.g. stress ncomp 9, von_mises 1, rank 1
-//!     pub contact: Option<ContactPiece<'a>>,
-//! }
-//! /// Contact nodes as their own point grid ("contact").
-//! pub struct ContactPiece<'a> {
-//!     pub n_global: usize, pub offset: usize,
-//!     pub coords: &'a [[f64; 3]], pub node_ids: &'a [u64],
-//!     pub fields: Vec<Field<'a>>,
-//! }
-//! /// Collective over `comm`: writes DIR/solution.h5 and DIR/solution.xdmf (DIR must exist).
-//! pub fn write_xdmf_hdf5<C>(comm: &C, dir: &Path, piece: &Piece) -> Result<(), String>
-//! where C: Communicator + AsRaw<Raw = mpi::ffi::MPI_Comm>;   // e.g. SimpleCommunicator
-//! ```
-//!
 //! File layout of `solution.h5` (all integers are stored as i64, which every XDMF reader
 //! knows; XDMF 3 has no unsigned 64-bit type):
 //!
@@ -53,7 +23,10 @@
 //! before the next collective step, so a bad piece on one rank gives the same `Err` on all
 //! ranks instead of a hang. Messages name the file.
 
+mod result_set;
 mod xdmf;
+
+pub use result_set::{ContactResult, ResultSet, SolutionFields};
 
 pub use xdmf::{attribute_type, xdmf_text, FieldMeta, Meta};
 
@@ -61,7 +34,7 @@ use std::path::Path;
 
 use hdf5::dataset::FillTime;
 use hdf5::{Group, H5Type};
-use mpi::collective::{CommunicatorCollectives, Root, SystemOperation};
+use mpi::collective::CommunicatorCollectives;
 use mpi::raw::AsRaw;
 use mpi::topology::Communicator;
 use ndarray::{s, ArrayView1, ArrayView2};
@@ -70,6 +43,24 @@ use ndarray::{s, ArrayView1, ArrayView2};
 pub const H5_FILE: &str = "solution.h5";
 /// Name of the XDMF file inside the output directory.
 pub const XDMF_FILE: &str = "solution.xdmf";
+
+/// An owned field, as the stages above produce it ([`FieldBuf::view`] lends it to a [`Piece`]).
+#[derive(Debug, Clone, PartialEq)]
+pub struct FieldBuf {
+    pub name: &'static str,
+    pub ncomp: usize,
+    pub data: Vec<f64>,
+}
+
+impl FieldBuf {
+    pub fn view(&self) -> Field<'_> {
+        Field {
+            name: self.name,
+            ncomp: self.ncomp,
+            data: &self.data,
+        }
+    }
+}
 
 /// One field: `ncomp` values per owned node / cell / contact node, row-major.
 #[derive(Debug, Clone, Copy)]
@@ -284,37 +275,11 @@ fn check_tiling(kind: &str, blocks: &mut [(u64, u64)], global: u64) -> Result<()
 /// All ranks learn whether any rank failed; the message of the lowest failing rank is returned
 /// on every rank. Collective.
 fn agree<C: Communicator>(comm: &C, local: Result<(), String>) -> Result<(), String> {
-    let size = comm.size();
-    let rank = comm.rank();
-    let mine = if local.is_err() { rank } else { size };
-    let mut first = size;
-    comm.all_reduce_into(&mine, &mut first, SystemOperation::min());
-    if first == size {
-        return Ok(());
+    match crate::par::first_error(comm, local.err()) {
+        None => Ok(()),
+        Some((first, msg)) if comm.size() > 1 => Err(format!("(rank {first}) {msg}")),
+        Some((_, msg)) => Err(msg),
     }
-    let root = comm.process_at_rank(first);
-    let mut bytes = local.err().unwrap_or_default().into_bytes();
-    let mut len = bytes.len() as u64;
-    root.broadcast_into(&mut len);
-    bytes.resize(len as usize, 0);
-    root.broadcast_into(&mut bytes[..]);
-    let msg = String::from_utf8_lossy(&bytes).into_owned();
-    if size > 1 {
-        Err(format!("(rank {first}) {msg}"))
-    } else {
-        Err(msg)
-    }
-}
-
-/// Broadcast a string from rank 0.
-fn broadcast_string<C: Communicator>(comm: &C, s: &str) -> String {
-    let root = comm.process_at_rank(0);
-    let mut bytes = s.as_bytes().to_vec();
-    let mut len = bytes.len() as u64;
-    root.broadcast_into(&mut len);
-    bytes.resize(len as usize, 0);
-    root.broadcast_into(&mut bytes[..]);
-    String::from_utf8_lossy(&bytes).into_owned()
 }
 
 /// Creates datasets (collective) and writes this rank's rows (independent).
@@ -456,7 +421,7 @@ where
     // 1. Same global description everywhere, valid local piece, blocks tile the global ranges.
     let meta = piece.meta();
     let sig = meta.signature();
-    let sig0 = broadcast_string(comm, &sig);
+    let sig0 = crate::par::broadcast_string(comm, 0, &sig);
     let mut local = piece.validate();
     if local.is_ok() && sig != sig0 {
         local = Err(format!(

@@ -1,13 +1,14 @@
 //! The discrete contact boundary c_h: for every owned contact node its frame {n, τ}, gap
-//! g_h^k (3.3), lumped weight w_k = ∫_Γc φ_k ds and Tresca bound b_k = ∫_Γc g_R φ_k ds (3.18).
+//! g_h^k (3.3), lumped weight w_k = ∫_Γc φ_k ds and Tresca bound b_k = ∫_Γc g_R φ_k ds (3.18);
+//! and the per-node result record (u, λ in the node's frame) of an iterate.
 
-use crate::case::{self, vec3, ContactSection, Friction};
-use crate::contact::{Frame, Obstacle, Plane, Sphere};
-use crate::error::InputError;
+use crate::contact::{Frame, Obstacle};
+use crate::error::{InputError, RunError};
 use crate::fem;
 use crate::mesh::Mesh;
+use crate::par::Ctx;
 use crate::partition::Layout;
-use mpi::traits::*;
+use crate::setup::{group_facets, ContactSettings};
 
 /// One owned contact node.
 #[derive(Clone, Debug)]
@@ -30,8 +31,25 @@ pub struct ContactNode {
     pub bound: f64,
 }
 
-/// The owned part of c_h, plus what every rank knows about the whole set.
-pub struct ContactSet {
+/// Per owned contact node: displacement and multiplier, in global components and in the
+/// node's frame.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct NodeResult {
+    pub u: [f64; 3],
+    pub lambda: [f64; 3],
+    pub u_n: f64,
+    pub u_t: [f64; 2],
+    pub lambda_n: f64,
+    pub lambda_t: [f64; 2],
+    /// In A_n in the solve that produced this iterate.
+    pub active: bool,
+    /// In A_τ (slip) in that solve (friction only).
+    pub slip: bool,
+}
+
+/// The candidate contact boundary c_h: this rank's contact nodes, plus what every rank knows
+/// about the whole boundary.
+pub struct ContactBoundary {
     pub nodes: Vec<ContactNode>,
     /// |c_h| over all ranks.
     pub n_global: usize,
@@ -45,40 +63,21 @@ pub struct ContactSet {
     pub obstacle: Obstacle,
 }
 
-/// The obstacle of the case, checked.
-pub fn obstacle_of(
-    c: &ContactSection,
-    dim: usize,
-    file: &std::path::Path,
-) -> Result<Obstacle, InputError> {
-    match &c.obstacle {
-        case::Obstacle::Plane { point, normal } => Plane::new(vec3(point), vec3(normal), dim)
-            .map(Obstacle::Plane)
-            .map_err(|e| e.into_input_error(file, "contact.obstacle")),
-        case::Obstacle::Sphere { center, radius } => Sphere::new(vec3(center), *radius, dim)
-            .map(Obstacle::Sphere)
-            .map_err(|e| e.into_input_error(file, "contact.obstacle")),
-    }
-}
-
 /// Builds the owned contact nodes. `fixed` holds the Dirichlet value per mesh dof (NaN = free):
 /// a node with a prescribed component is left to its Dirichlet data.
-pub fn build<C: Communicator>(
-    world: &C,
+/// A node that cannot be projected onto the obstacle is an input error; every rank returns the
+/// same result (the collectives run on every path first). Collective.
+pub fn build(
+    ctx: &Ctx,
     mesh: &Mesh,
     layout: &Layout,
-    contact: &ContactSection,
+    settings: &ContactSettings,
     fixed: &[f64],
-    file: &std::path::Path,
-) -> Result<ContactSet, InputError> {
+) -> Result<ContactBoundary, RunError> {
     let dim = mesh.dim;
-    let obstacle = obstacle_of(contact, dim, file)?;
-    let facets: Vec<usize> = mesh
-        .groups
-        .iter()
-        .filter(|g| g.name == contact.group && g.dim + 1 == dim)
-        .flat_map(|g| g.elements.iter().copied())
-        .collect();
+    let file = settings.file.as_path();
+    let obstacle = settings.obstacle.clone();
+    let facets = group_facets(mesh, &settings.group);
     let mut weight = vec![0.0f64; mesh.n_nodes()];
     let mut on = vec![false; mesh.n_nodes()];
     let mut xs: Vec<[f64; 3]> = Vec::with_capacity(3);
@@ -92,10 +91,7 @@ pub fn build<C: Communicator>(
             on[v] = true;
         }
     }
-    let g_r = match contact.friction {
-        Friction::None => 0.0,
-        Friction::Tresca { threshold } => threshold,
-    };
+    let g_r = settings.tresca_threshold.unwrap_or(0.0);
     let (lo, _) = layout.node_range();
     let mut nodes = Vec::new();
     let mut excluded = 0usize;
@@ -135,27 +131,15 @@ pub fn build<C: Communicator>(
             bound: g_r * weight[v],
         });
     }
-    if let Some(e) = bad {
-        return Err(e);
-    }
-    let counts = {
-        let mut all = vec![0u64; world.size() as usize];
-        world.all_gather_into(&(nodes.len() as u64), &mut all[..]);
-        all
-    };
-    let mut ex_all = 0u64;
-    world.all_reduce_into(
-        &(excluded as u64),
-        &mut ex_all,
-        mpi::collective::SystemOperation::sum(),
-    );
-    let rank = world.rank() as usize;
-    Ok(ContactSet {
+    let counts: Vec<u64> = ctx.gather(nodes.len() as u64);
+    let ex_all = ctx.sum_usize(excluded);
+    ctx.agree(bad.map_or(Ok(()), |e| Err(RunError::Input(e))))?;
+    Ok(ContactBoundary {
         n_global: counts.iter().sum::<u64>() as usize,
-        offset: counts[..rank].iter().sum::<u64>() as usize,
+        offset: counts[..ctx.rank].iter().sum::<u64>() as usize,
         nodes,
         on_contact_boundary: on,
-        excluded_dirichlet: ex_all as usize,
+        excluded_dirichlet: ex_all,
         obstacle,
     })
 }

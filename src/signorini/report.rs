@@ -1,24 +1,14 @@
 //! Contact results: per-node fields (output), the gathered table (contact_nodes.csv), the
 //! summary numbers (pressure, total force, half width) and the KKT certificate of (3.14).
 
+use super::boundary::{ContactBoundary, NodeResult};
 use crate::contact::Obstacle;
-use crate::contact_set::ContactSet;
-use crate::newton::NodeResult;
-use crate::run::Ctx;
-use mpi::datatype::PartitionMut;
-use mpi::traits::*;
-use serde_json::{json, Value};
+use crate::output::{ContactResult, FieldBuf};
+use crate::par::Ctx;
+use serde::Serialize;
 
 /// Columns of one gathered contact-node row.
 const NCOL: usize = 17;
-
-/// The contact fields of the owned contact nodes (for the XDMF "contact" grid).
-pub struct ContactFields {
-    pub coords: Vec<[f64; 3]>,
-    pub node_ids: Vec<u64>,
-    /// (name, ncomp, values)
-    pub fields: Vec<(&'static str, usize, Vec<f64>)>,
-}
 
 /// Per owned node: the pressure p^k = −λ_n^k / w_k (THEORY §2).
 pub fn pressure(lambda_n: f64, weight: f64) -> f64 {
@@ -29,64 +19,73 @@ pub fn pressure(lambda_n: f64, weight: f64) -> f64 {
     }
 }
 
-pub fn fields(cs: &ContactSet, res: &[NodeResult], dim: usize, tresca: bool) -> ContactFields {
+/// The contact grid of this rank's contact nodes (for the XDMF "contact" grid); with friction
+/// also the tangential state, |λ_τ| / b_k and the slip displacement.
+pub fn fields(
+    b: &ContactBoundary,
+    res: &[NodeResult],
+    dim: usize,
+    friction: bool,
+) -> Vec<FieldBuf> {
     let nt = dim - 1;
-    let mut f_un = Vec::new();
-    let mut f_ut = Vec::new();
-    let mut f_ln = Vec::new();
-    let mut f_lt = Vec::new();
-    let mut f_p = Vec::new();
-    let mut f_gap = Vec::new();
-    let mut f_gap0 = Vec::new();
-    let mut f_state = Vec::new();
-    let mut f_w = Vec::new();
-    let mut f_force = Vec::new();
-    for (k, r) in cs.nodes.iter().zip(res) {
-        f_un.push(r.u_n);
-        f_ut.extend_from_slice(&r.u_t[..nt]);
-        f_ln.push(r.lambda_n);
-        f_lt.extend_from_slice(&r.lambda_t[..nt]);
-        f_p.push(pressure(r.lambda_n, k.weight));
-        f_gap.push(r.u_n + k.gap);
-        f_gap0.push(k.gap);
-        f_state.push(if r.active { 1.0 } else { 0.0 });
-        f_w.push(k.weight);
-        f_force.extend(r.lambda.iter().map(|l| -l));
-    }
-    let mut out = ContactFields {
-        coords: cs.nodes.iter().map(|k| k.x).collect(),
-        node_ids: cs.nodes.iter().map(|k| k.tag).collect(),
-        fields: vec![
-            ("u_n", 1, f_un),
-            ("u_t", nt, f_ut),
-            ("lambda_n", 1, f_ln),
-            ("lambda_t", nt, f_lt),
-            ("pressure", 1, f_p),
-            ("gap", 1, f_gap),
-            ("gap0", 1, f_gap0),
-            ("state", 1, f_state),
-            ("weight", 1, f_w),
-            ("contact_force", 3, f_force),
-        ],
-    };
-    if tresca {
-        // Tangential state (0 stick, 1 slip), |λ_τ| / b_k, slip displacement (u_τ on slip nodes).
-        let mut st = Vec::new();
-        let mut ratio = Vec::new();
-        let mut slipd = Vec::new();
-        for (k, r) in cs.nodes.iter().zip(res) {
-            st.push(if r.slip { 1.0 } else { 0.0 });
-            let lt = (r.lambda_t[0].powi(2) + r.lambda_t[1].powi(2)).sqrt();
-            ratio.push(if k.bound > 0.0 { lt / k.bound } else { 0.0 });
-            for i in 0..nt {
-                slipd.push(if r.slip { r.u_t[i] } else { 0.0 });
+    let per_node =
+        |name: &'static str,
+         ncomp: usize,
+         f: &dyn Fn(&super::boundary::ContactNode, &NodeResult) -> Vec<f64>| {
+            FieldBuf {
+                name,
+                ncomp,
+                data: b.nodes.iter().zip(res).flat_map(|(k, r)| f(k, r)).collect(),
             }
-        }
-        out.fields.push(("slip_state", 1, st));
-        out.fields.push(("friction_ratio", 1, ratio));
-        out.fields.push(("slip", nt, slipd));
+        };
+    let mut out = vec![
+        per_node("u_n", 1, &|_, r| vec![r.u_n]),
+        per_node("u_t", nt, &|_, r| r.u_t[..nt].to_vec()),
+        per_node("lambda_n", 1, &|_, r| vec![r.lambda_n]),
+        per_node("lambda_t", nt, &|_, r| r.lambda_t[..nt].to_vec()),
+        per_node("pressure", 1, &|k, r| vec![pressure(r.lambda_n, k.weight)]),
+        per_node("gap", 1, &|k, r| vec![r.u_n + k.gap]),
+        per_node("gap0", 1, &|k, _| vec![k.gap]),
+        per_node("state", 1, &|_, r| vec![if r.active { 1.0 } else { 0.0 }]),
+        per_node("weight", 1, &|k, _| vec![k.weight]),
+        per_node("contact_force", 3, &|_, r| {
+            r.lambda.iter().map(|l| -l).collect()
+        }),
+    ];
+    if friction {
+        // Tangential state (0 stick, 1 slip), |λ_τ| / b_k, slip displacement (u_τ on slip nodes).
+        out.push(per_node("slip_state", 1, &|_, r| {
+            vec![if r.slip { 1.0 } else { 0.0 }]
+        }));
+        out.push(per_node("friction_ratio", 1, &|k, r| {
+            let lt = (r.lambda_t[0].powi(2) + r.lambda_t[1].powi(2)).sqrt();
+            vec![if k.bound > 0.0 { lt / k.bound } else { 0.0 }]
+        }));
+        out.push(per_node("slip", nt, &|_, r| {
+            (0..nt)
+                .map(|i| if r.slip { r.u_t[i] } else { 0.0 })
+                .collect()
+        }));
     }
     out
+}
+
+/// The contact result set of this rank for the output layer: grid, fields, the whole table.
+pub fn contact_result(
+    b: &ContactBoundary,
+    res: &[NodeResult],
+    dim: usize,
+    friction: bool,
+    table: &Table,
+) -> ContactResult {
+    ContactResult {
+        n_global: b.n_global,
+        offset: b.offset,
+        coords: b.nodes.iter().map(|k| k.x).collect(),
+        node_ids: b.nodes.iter().map(|k| k.tag).collect(),
+        fields: fields(b, res, dim, friction),
+        csv: table.csv(),
+    }
 }
 
 /// One row per contact node of the whole set, on every rank, sorted by coordinates.
@@ -111,7 +110,7 @@ const BOUND: usize = 15;
 const SLIP: usize = 16;
 
 /// Gathers the contact nodes of all ranks (the contact boundary is small).
-pub fn gather(ctx: &Ctx, cs: &ContactSet, res: &[NodeResult], dim: usize) -> Table {
+pub fn gather(ctx: &Ctx, cs: &ContactBoundary, res: &[NodeResult], dim: usize) -> Table {
     let mut mine: Vec<f64> = Vec::with_capacity(cs.nodes.len() * NCOL);
     for (k, r) in cs.nodes.iter().zip(res) {
         let row = [
@@ -135,23 +134,7 @@ pub fn gather(ctx: &Ctx, cs: &ContactSet, res: &[NodeResult], dim: usize) -> Tab
         ];
         mine.extend_from_slice(&row);
     }
-    let mut counts = vec![0i32; ctx.size];
-    ctx.world
-        .all_gather_into(&(mine.len() as i32), &mut counts[..]);
-    let displs: Vec<i32> = counts
-        .iter()
-        .scan(0, |acc, &c| {
-            let d = *acc;
-            *acc += c;
-            Some(d)
-        })
-        .collect();
-    let total: i32 = counts.iter().sum();
-    let mut all = vec![0.0f64; total as usize];
-    {
-        let mut part = PartitionMut::new(&mut all[..], counts, displs);
-        ctx.world.all_gather_varcount_into(&mine[..], &mut part);
-    }
+    let all = ctx.all_gather_varcount(&mine);
     let mut rows: Vec<[f64; NCOL]> = all
         .chunks_exact(NCOL)
         .map(|c| c.try_into().expect("row"))
@@ -290,7 +273,7 @@ impl Table {
 
     /// Friction certificate of (3.18): max(|λ_τ| − b_k, 0), max |u_τ| on stick nodes, and the
     /// alignment defect |λ_τ − b_k u_τ/|u_τ|| on slip nodes, with the scales.
-    pub fn friction_certificate(&self) -> Value {
+    pub fn friction_certificate(&self) -> FrictionCertificate {
         let (mut excess, mut stick, mut align, mut bmax, mut umax) =
             (0.0f64, 0.0f64, 0.0f64, 0.0f64, 0.0f64);
         let (mut n_stick, mut n_slip) = (0usize, 0usize);
@@ -312,20 +295,20 @@ impl Table {
                 n_stick += 1;
             }
         }
-        json!({
-            "max_excess": excess,
-            "max_stick_motion": stick,
-            "max_slip_alignment_defect": align,
-            "bound_scale": bmax,
-            "length_scale": umax,
-            "stick_count": n_stick,
-            "slip_count": n_slip,
-        })
+        FrictionCertificate {
+            max_excess: excess,
+            max_stick_motion: stick,
+            max_slip_alignment_defect: align,
+            bound_scale: bmax,
+            length_scale: umax,
+            stick_count: n_stick,
+            slip_count: n_slip,
+        }
     }
 
     /// KKT certificate of (3.14) (and λ_τ = 0 for frictionless contact): the largest
     /// violations over all contact nodes, with the scales to judge them by.
-    pub fn kkt(&self, frictionless: bool) -> Value {
+    pub fn kkt(&self, frictionless: bool) -> Kkt {
         let mut pen = 0.0f64;
         let mut pos = 0.0f64;
         let mut comp = 0.0f64;
@@ -341,17 +324,14 @@ impl Table {
             lscale = lscale.max(r[LN].abs());
             uscale = uscale.max(r[UN].abs()).max(r[GAP0].abs());
         }
-        let mut v = json!({
-            "max_penetration": pen.max(0.0),
-            "max_positive_lambda_n": pos.max(0.0),
-            "max_complementarity": comp,
-            "force_scale": lscale,
-            "length_scale": uscale,
-        });
-        if frictionless {
-            v["max_abs_lambda_t"] = json!(lt);
+        Kkt {
+            max_penetration: pen.max(0.0),
+            max_positive_lambda_n: pos.max(0.0),
+            max_complementarity: comp,
+            force_scale: lscale,
+            length_scale: uscale,
+            max_abs_lambda_t: frictionless.then_some(lt),
         }
-        v
     }
 }
 
@@ -363,11 +343,43 @@ pub fn total_force(ctx: &Ctx, res: &[NodeResult]) -> [f64; 3] {
             t[k] -= r.lambda[k];
         }
     }
-    let mut out = [0.0; 3];
-    ctx.world.all_reduce_into(
-        &t[..],
-        &mut out[..],
-        mpi::collective::SystemOperation::sum(),
-    );
-    out
+    let out = ctx.sum_vec(&t);
+    [out[0], out[1], out[2]]
+}
+
+/// The largest violations of (3.14) (and of λ_τ = 0 without friction) over all contact nodes,
+/// with the scales to judge them by.
+#[derive(Clone, Copy, Debug, Serialize)]
+pub struct Kkt {
+    pub max_penetration: f64,
+    pub max_positive_lambda_n: f64,
+    pub max_complementarity: f64,
+    pub force_scale: f64,
+    pub length_scale: f64,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub max_abs_lambda_t: Option<f64>,
+}
+
+impl Kkt {
+    /// Violations beyond `rel` of the problem's own scales (they mean an inexact linear solve,
+    /// not round-off).
+    pub fn beyond(&self, rel: f64) -> bool {
+        let (fs, ls) = (self.force_scale, self.length_scale);
+        self.max_penetration > rel * ls
+            || self.max_positive_lambda_n > rel * fs
+            || self.max_complementarity > rel * fs * ls
+            || self.max_abs_lambda_t.unwrap_or(0.0) > rel * fs
+    }
+}
+
+/// The friction certificate of (3.18).
+#[derive(Clone, Copy, Debug, Serialize)]
+pub struct FrictionCertificate {
+    pub max_excess: f64,
+    pub max_stick_motion: f64,
+    pub max_slip_alignment_defect: f64,
+    pub bound_scale: f64,
+    pub length_scale: f64,
+    pub stick_count: usize,
+    pub slip_count: usize,
 }

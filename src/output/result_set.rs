@@ -1,0 +1,290 @@
+//! The result set of a run: written into a staging directory next to the output directory and
+//! put in place as a whole at the end, so the output directory holds exactly what one run wrote
+//! (or, if the run fails, what was there before). Knows nothing of contact: the contact grid
+//! and its table arrive as plain fields and text.
+
+use super::{write_xdmf_hdf5, ContactPiece, Field, FieldBuf, Piece, XDMF_FILE};
+use crate::error::{InputError, RunError};
+use crate::par::Ctx;
+use crate::say;
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+/// Name of the run summary inside the output directory.
+pub const SUMMARY_FILE: &str = "summary.json";
+/// Name of the contact-node table inside the output directory.
+pub const CONTACT_CSV: &str = "contact_nodes.csv";
+
+/// Every file a run may write into the output directory.
+pub const RESULT_FILES: &[&str] = &[super::H5_FILE, XDMF_FILE, SUMMARY_FILE, CONTACT_CSV];
+
+/// This rank's part of the mesh and its fields, owned.
+pub struct SolutionFields {
+    pub dim: usize,
+    pub n_nodes_global: usize,
+    pub node_offset: usize,
+    pub coords: Vec<[f64; 3]>,
+    pub node_ids: Vec<u64>,
+    pub n_cells_global: usize,
+    pub cell_offset: usize,
+    pub connectivity: Vec<usize>,
+    pub cell_ids: Vec<u64>,
+    pub nodal: Vec<FieldBuf>,
+    pub cellwise: Vec<FieldBuf>,
+}
+
+/// The contact nodes of this rank as a point grid with fields, and the whole table (CSV text,
+/// the same on every rank).
+pub struct ContactResult {
+    pub n_global: usize,
+    pub offset: usize,
+    pub coords: Vec<[f64; 3]>,
+    pub node_ids: Vec<u64>,
+    pub fields: Vec<FieldBuf>,
+    pub csv: String,
+}
+
+fn views(v: &[FieldBuf]) -> Vec<Field<'_>> {
+    v.iter().map(FieldBuf::view).collect()
+}
+
+impl SolutionFields {
+    /// The piece the writer takes; the contact grid only if given.
+    pub fn piece<'a>(&'a self, contact: Option<&'a ContactResult>) -> Piece<'a> {
+        Piece {
+            dim: self.dim,
+            n_nodes_global: self.n_nodes_global,
+            node_offset: self.node_offset,
+            coords: &self.coords,
+            node_ids: &self.node_ids,
+            n_cells_global: self.n_cells_global,
+            cell_offset: self.cell_offset,
+            connectivity: &self.connectivity,
+            cell_ids: &self.cell_ids,
+            nodal: views(&self.nodal),
+            cellwise: views(&self.cellwise),
+            contact: contact.map(|c| ContactPiece {
+                n_global: c.n_global,
+                offset: c.offset,
+                coords: &c.coords,
+                node_ids: &c.node_ids,
+                fields: views(&c.fields),
+            }),
+        }
+    }
+}
+
+/// An output directory being written.
+pub struct ResultSet {
+    dir: PathBuf,
+    staging: PathBuf,
+    committed: bool,
+    rank: usize,
+}
+
+/// The staging directory next to `dir` (hidden, same parent, so the final rename is atomic).
+pub fn staging_dir(dir: &Path) -> PathBuf {
+    sibling(dir, "partial")
+}
+
+fn sibling(dir: &Path, what: &str) -> PathBuf {
+    let name = dir
+        .file_name()
+        .map(|s| s.to_string_lossy().into_owned())
+        .unwrap_or_else(|| "out".into());
+    let parent = dir.parent().unwrap_or(Path::new("."));
+    parent.join(format!(".{name}.{what}"))
+}
+
+/// The nearest existing ancestor of `p` (or "." for a relative path with none).
+fn existing_ancestor(p: &Path) -> PathBuf {
+    let mut a = p.to_path_buf();
+    while !a.as_os_str().is_empty() && !a.exists() {
+        if !a.pop() {
+            break;
+        }
+    }
+    if a.as_os_str().is_empty() {
+        PathBuf::from(".")
+    } else {
+        a
+    }
+}
+
+/// Can a directory be made where `dir`'s staging directory will go? Creates and removes a
+/// probe directory in the nearest existing ancestor; writes nothing that stays.
+fn check_writable(dir: &Path) -> Result<(), String> {
+    let staging = staging_dir(dir);
+    let parent = staging.parent().unwrap_or(Path::new("."));
+    if dir.exists() && !dir.is_dir() {
+        return Err(format!(
+            "cannot write results to {}: it exists and is not a directory",
+            dir.display()
+        ));
+    }
+    if dir.is_dir() {
+        // The directory is replaced as a whole: refuse to delete what this program did not write.
+        let foreign = std::fs::read_dir(dir)
+            .map_err(|e| format!("cannot read {}: {e}", dir.display()))?
+            .filter_map(|e| e.ok())
+            .map(|e| e.file_name().to_string_lossy().into_owned())
+            .find(|n| !RESULT_FILES.contains(&n.as_str()));
+        if let Some(n) = foreign {
+            return Err(format!(
+                "the output directory {} holds '{n}', which is not a result file of this \
+                 program; the directory is replaced as a whole by each run: choose another \
+                 output.dir (or -o) or remove it",
+                dir.display()
+            ));
+        }
+    }
+    let base = existing_ancestor(parent);
+    if !base.is_dir() {
+        return Err(format!(
+            "cannot write results to {}: {} is not a directory",
+            dir.display(),
+            base.display()
+        ));
+    }
+    let probe = base.join(format!(".signorini-probe-{}", std::process::id()));
+    std::fs::create_dir(&probe)
+        .and_then(|_| std::fs::remove_dir(&probe))
+        .map_err(|e| {
+            format!(
+                "cannot write results to {}: {} is not writable ({e})",
+                dir.display(),
+                base.display()
+            )
+        })
+}
+
+impl ResultSet {
+    /// Checks (before the solve) that the output directory can be written; a directory that
+    /// cannot is an input error of the case's `output.dir`. Collective.
+    pub fn begin(ctx: &Ctx, dir: &Path, case_file: &Path) -> Result<ResultSet, RunError> {
+        let local = if ctx.rank == 0 {
+            check_writable(dir)
+                .map_err(|m| RunError::Input(InputError::new(case_file, m).with_key("output.dir")))
+        } else {
+            Ok(())
+        };
+        ctx.agree(local)?;
+        Ok(ResultSet {
+            dir: dir.to_path_buf(),
+            staging: staging_dir(dir),
+            committed: false,
+            rank: ctx.rank,
+        })
+    }
+
+    /// The directory the results go to.
+    pub fn dir(&self) -> &Path {
+        &self.dir
+    }
+
+    /// Writes solution.h5 + solution.xdmf into the staging directory. Collective. Returns the
+    /// seconds it took.
+    pub fn write_solution(&self, ctx: &Ctx, piece: &Piece) -> Result<f64, RunError> {
+        let t = Instant::now();
+        let local = if ctx.rank == 0 {
+            let _ = std::fs::remove_dir_all(&self.staging);
+            std::fs::create_dir_all(&self.staging)
+                .map_err(|e| format!("cannot create {}: {e}", self.staging.display()))
+        } else {
+            Ok(())
+        };
+        ctx.agree(local.map_err(RunError::Failed))?;
+        write_xdmf_hdf5(ctx.world, &self.staging, piece).map_err(RunError::Failed)?;
+        Ok(t.elapsed().as_secs_f64())
+    }
+
+    /// Writes the summary (and the contact table) and puts the staging directory in place of
+    /// the output directory, replacing it as a whole. Collective.
+    pub fn commit(
+        mut self,
+        ctx: &Ctx,
+        summary_json: &str,
+        csv: Option<&str>,
+        output_seconds: f64,
+    ) -> Result<(), RunError> {
+        let local = if ctx.rank == 0 {
+            self.finish(summary_json, csv).map_err(|e| {
+                RunError::Failed(format!(
+                    "cannot write results to {}: {e}",
+                    self.dir.display()
+                ))
+            })
+        } else {
+            Ok(())
+        };
+        self.committed = true;
+        ctx.agree(local)?;
+        say!(
+            ctx,
+            "output: {} ({:.3} s)",
+            self.dir.join(XDMF_FILE).display(),
+            output_seconds
+        );
+        Ok(())
+    }
+
+    /// Rank 0: the small files, then the swap old → aside, staging → dir, aside removed.
+    fn finish(&self, summary_json: &str, csv: Option<&str>) -> std::io::Result<()> {
+        std::fs::write(self.staging.join(SUMMARY_FILE), summary_json)?;
+        if let Some(c) = csv {
+            std::fs::write(self.staging.join(CONTACT_CSV), c)?;
+        }
+        if let Some(p) = self.dir.parent() {
+            if !p.as_os_str().is_empty() {
+                std::fs::create_dir_all(p)?;
+            }
+        }
+        if !self.dir.exists() {
+            return std::fs::rename(&self.staging, &self.dir);
+        }
+        let aside = sibling(&self.dir, "old");
+        let _ = std::fs::remove_dir_all(&aside);
+        std::fs::rename(&self.dir, &aside)?;
+        if let Err(e) = std::fs::rename(&self.staging, &self.dir) {
+            // Put the previous results back.
+            let _ = std::fs::rename(&aside, &self.dir);
+            return Err(e);
+        }
+        std::fs::remove_dir_all(&aside)
+    }
+}
+
+impl Drop for ResultSet {
+    /// A run that fails after the staging directory was made leaves nothing behind.
+    fn drop(&mut self) {
+        if self.rank == 0 && (!self.committed || self.staging.exists()) {
+            let _ = std::fs::remove_dir_all(&self.staging);
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn staging_is_a_hidden_sibling() {
+        assert_eq!(
+            staging_dir(Path::new("out/hertz")),
+            PathBuf::from("out/.hertz.partial")
+        );
+        assert_eq!(
+            sibling(Path::new("out/hertz"), "old"),
+            PathBuf::from("out/.hertz.old")
+        );
+    }
+
+    #[test]
+    fn nearest_existing_ancestor() {
+        let t = tempfile::tempdir().unwrap();
+        let p = t.path().join("a/b/c");
+        assert_eq!(existing_ancestor(&p), t.path());
+        assert!(check_writable(&p).is_ok());
+        assert!(!t.path().join(".signorini-probe").exists());
+    }
+}

@@ -1,0 +1,168 @@
+//! Case → domain: the one place that turns case-file sections into the values the stages
+//! below work on (the mesh with its material, the linear problem, the contact settings).
+
+use crate::assembly::{BodyForce, FacetLoad, FacetLoadKind, Problem};
+use crate::case::{self, vec3, Case, ContactSection, Friction, NewtonSection};
+use crate::contact::{Obstacle, Plane, Sphere};
+use crate::error::{InputError, RunError};
+use crate::fem::{self, Material};
+use crate::mesh::{self, Mesh};
+use crate::par::Ctx;
+use crate::say;
+use std::path::Path;
+
+/// The mesh and the material of a case, checked against each other.
+pub struct Input {
+    pub mesh: Mesh,
+    pub material: Material,
+}
+
+/// Every rank reads the case's mesh and checks the case against it; all ranks agree before
+/// anything collective happens. Logs the mesh line.
+pub fn read_input(ctx: &Ctx, case: &Case) -> Result<Input, RunError> {
+    let input = ctx.agree(read_and_check(case).map_err(RunError::from))?;
+    let mesh = &input.mesh;
+    let dim = mesh.dim;
+    say!(
+        ctx,
+        "mesh {}: {}D, {} nodes, {} cells, {} boundary facets, groups: {}",
+        case.mesh.file.display(),
+        dim,
+        mesh.n_nodes(),
+        mesh.n_cells(),
+        mesh.facets.len() / dim.max(1),
+        mesh.groups
+            .iter()
+            .map(|g| format!("{} ({}D, {})", g.name, g.dim, g.elements.len()))
+            .collect::<Vec<_>>()
+            .join(", ")
+    );
+    Ok(input)
+}
+
+fn read_and_check(case: &Case) -> Result<Input, InputError> {
+    let mesh = mesh::read_msh(&case.mesh.file)?;
+    let groups: Vec<(String, usize)> = mesh
+        .groups
+        .iter()
+        .map(|g| (g.name.clone(), g.dim))
+        .collect();
+    case.check_against_mesh(mesh.dim, &groups)?;
+    let model = match case.model(mesh.dim)? {
+        case::Model::PlaneStrain => fem::Model::PlaneStrain,
+        case::Model::PlaneStress => fem::Model::PlaneStress,
+        case::Model::ThreeD => fem::Model::Solid,
+    };
+    let material = Material {
+        young: case.material.young,
+        poisson: case.material.poisson,
+        model,
+    };
+    Ok(Input { mesh, material })
+}
+
+/// All groups with this name (a name may label groups of several dimensions).
+fn groups_named<'m>(mesh: &'m Mesh, name: &str) -> impl Iterator<Item = &'m mesh::Group> {
+    let name = name.to_string();
+    mesh.groups.iter().filter(move |g| g.name == name)
+}
+
+/// The facets (cells of dimension dim − 1) of every group with this name.
+pub fn group_facets(mesh: &Mesh, name: &str) -> Vec<usize> {
+    groups_named(mesh, name)
+        .filter(|g| g.dim + 1 == mesh.dim)
+        .flat_map(|g| g.elements.iter().copied())
+        .collect()
+}
+
+/// The linear problem of a case (Dirichlet data per dof, loads).
+pub fn problem<'m>(case: &Case, mesh: &'m Mesh, material: Material) -> Problem<'m> {
+    let dim = mesh.dim;
+    let mut fixed = vec![f64::NAN; mesh.n_nodes() * dim];
+    for d in &case.dirichlet {
+        for g in groups_named(mesh, &d.group) {
+            for v in mesh.group_nodes(g) {
+                for (k, val) in d.value.iter().enumerate().take(dim) {
+                    if let Some(x) = val {
+                        fixed[v * dim + k] = *x;
+                    }
+                }
+            }
+        }
+    }
+    let facet_loads = case
+        .neumann
+        .iter()
+        .map(|n| FacetLoad {
+            facets: group_facets(mesh, &n.group),
+            kind: match &n.load {
+                case::Load::Pressure(p) => FacetLoadKind::Pressure(*p),
+                case::Load::Traction(t) => FacetLoadKind::Traction(vec3(t)),
+            },
+        })
+        .collect();
+    let body_force = match &case.body_force {
+        Some(f) if f.iter().any(|&x| x != 0.0) => BodyForce::Constant(vec3(f)),
+        _ => BodyForce::None,
+    };
+    Problem {
+        mesh,
+        material,
+        fixed,
+        facet_loads,
+        body_force,
+    }
+}
+
+/// Everything the contact algorithm needs from the case, checked.
+pub struct ContactSettings {
+    /// The case file (named in messages about the contact boundary).
+    pub file: std::path::PathBuf,
+    pub group: String,
+    pub obstacle: Obstacle,
+    /// Tresca threshold g_R (1.44e); `None` without friction.
+    pub tresca_threshold: Option<f64>,
+    pub rigid_modes: case::RigidModes,
+    pub newton: NewtonSection,
+    /// Young's modulus (the default c = E / h_c).
+    pub young: f64,
+}
+
+impl ContactSettings {
+    /// True with a friction law: Algorithm 2 and its tangential states.
+    pub fn friction(&self) -> bool {
+        self.tresca_threshold.is_some()
+    }
+}
+
+/// The contact settings of a case.
+pub fn contact_settings(
+    case: &Case,
+    cc: &ContactSection,
+    dim: usize,
+) -> Result<ContactSettings, InputError> {
+    Ok(ContactSettings {
+        file: case.file.clone(),
+        group: cc.group.clone(),
+        obstacle: obstacle_of(cc, dim, &case.file)?,
+        tresca_threshold: match cc.friction {
+            Friction::None => None,
+            Friction::Tresca { threshold } => Some(threshold),
+        },
+        rigid_modes: cc.rigid_modes,
+        newton: case.newton.clone(),
+        young: case.material.young,
+    })
+}
+
+/// The obstacle of the case, checked.
+pub fn obstacle_of(c: &ContactSection, dim: usize, file: &Path) -> Result<Obstacle, InputError> {
+    match &c.obstacle {
+        case::Obstacle::Plane { point, normal } => Plane::new(vec3(point), vec3(normal), dim)
+            .map(Obstacle::Plane)
+            .map_err(|e| e.into_input_error(file, "contact.obstacle")),
+        case::Obstacle::Sphere { center, radius } => Sphere::new(vec3(center), *radius, dim)
+            .map(Obstacle::Sphere)
+            .map_err(|e| e.into_input_error(file, "contact.obstacle")),
+    }
+}

@@ -1,0 +1,374 @@
+//! The sets of Algorithms 1 and 2 on this rank's contact nodes, an iterate's multipliers (3.28)
+//! and the set update (3.23)/(3.33) with its one reduction per Newton step.
+
+use super::boundary::{ContactBoundary, NodeResult};
+use super::rigid::{Gram, RigidModes};
+use crate::case::NewtonInit;
+use crate::contact::{self, NodeState, TangentialRow};
+use crate::par::Ctx;
+
+/// A_n (and, with friction, the tangential row of every node: stick, or slip with L̃, r̃ (3.39))
+/// on this rank's contact nodes.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ActiveSet {
+    /// k ∈ A_n.
+    pub normal: Vec<bool>,
+    /// With friction: the tangential row of each node; `None` without friction (no
+    /// tangential state is formed or tested).
+    pub tangential: Option<Vec<TangentialRow<2>>>,
+}
+
+/// What one node's rows prescribe: directions c with cᵀu^k = value.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Prescribed {
+    pub dirs: Vec<([f64; 3], f64)>,
+    /// A Tresca slip row (3.39): L̃ and r̃ go to the node's own block.
+    pub slip: Option<TangentialRow<2>>,
+}
+
+/// A set as all ranks see it: |A_n|, two fingerprints, the Gram matrix of its constraint rows
+/// against the rigid modes.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SetSummary {
+    pub n_active: usize,
+    pub fingerprint: (f64, f64),
+    pub gram: Gram,
+}
+
+/// Two fingerprints of a node state that do not depend on the partition (hashes of gmsh tags,
+/// exact in f64 when summed).
+fn node_hash(tag: u64) -> (f64, f64) {
+    let mut x = tag.wrapping_mul(0x9E37_79B9_7F4A_7C15);
+    x ^= x >> 29;
+    let mut y = tag.wrapping_mul(0xC2B2_AE3D_27D4_EB4F) ^ 0x1656_67B1_9E37_79F9;
+    y ^= y >> 31;
+    ((x >> 44) as f64, (y >> 44) as f64)
+}
+
+/// Does a tangential row hold u_τ (stick, or slip with a spring L̃ ≠ 0)?
+fn holds_tangent(r: &TangentialRow<2>) -> bool {
+    match r {
+        TangentialRow::Stick => true,
+        TangentialRow::Slip { l, .. } => l.iter().flatten().any(|&x| x != 0.0),
+    }
+}
+
+impl ActiveSet {
+    /// The first set A_n^1 (and, with friction, the rows from u = 0, λ = 0: stick where
+    /// b_k > 0 (3.33), slip with λ_τ = 0 where b_k = 0 (§3.4.3)). `friction_c` is c with
+    /// friction, `None` without.
+    pub fn initial(
+        b: &ContactBoundary,
+        init: NewtonInit,
+        friction_c: Option<f64>,
+        scale: f64,
+        dim: usize,
+    ) -> ActiveSet {
+        let touching = |g: f64| g <= 1e-9 * scale;
+        let normal = b
+            .nodes
+            .iter()
+            .map(|k| match init {
+                NewtonInit::AllActive => true,
+                NewtonInit::AllInactive => false,
+                // "gap" and our default "auto": the initially touching nodes (empty if none
+                // touches, which is the all-inactive start). Fewer steps than the thesis'
+                // all-active start at every Hertz level measured (README).
+                NewtonInit::Gap | NewtonInit::Auto => touching(k.gap),
+            })
+            .collect();
+        let tangential = friction_c.map(|c| {
+            b.nodes
+                .iter()
+                .map(|k| contact::tangential_row_dyn(dim, [0.0; 2], [0.0; 2], k.bound, c))
+                .collect()
+        });
+        ActiveSet { normal, tangential }
+    }
+
+    pub fn friction(&self) -> bool {
+        self.tangential.is_some()
+    }
+
+    /// k ∈ A_τ (friction only).
+    pub fn slip(&self, i: usize) -> bool {
+        self.tangential.as_ref().is_some_and(|t| t[i].is_slip())
+    }
+
+    /// The node state S1..S4 (thesis, after (3.41)).
+    pub fn state(&self, i: usize) -> NodeState {
+        NodeState::new(self.normal[i], self.slip(i))
+    }
+
+    /// This rank's |A_n|.
+    pub fn local_active(&self) -> usize {
+        self.normal.iter().filter(|&&a| a).count()
+    }
+
+    /// What node i's rows prescribe in the reduced system (3.29)/(3.42): the active normal
+    /// (nᵀu = −g), stick tangents (τᵀu = 0), a slip row; `None` if the node's rows stay as in A
+    /// (an inactive node without friction).
+    pub fn prescribed(&self, b: &ContactBoundary, i: usize, dim: usize) -> Option<Prescribed> {
+        let k = &b.nodes[i];
+        let row = self.tangential.as_ref().map(|t| t[i]);
+        if !self.normal[i] && row.is_none() {
+            return None;
+        }
+        let mut dirs = Vec::new();
+        if self.normal[i] {
+            dirs.push((k.frame.n, -k.gap));
+        }
+        if let Some(TangentialRow::Stick) = row {
+            for t in &k.frame.t[..dim - 1] {
+                dirs.push((*t, 0.0));
+            }
+        }
+        Some(Prescribed {
+            dirs,
+            slip: row.filter(|r| r.is_slip()),
+        })
+    }
+
+    /// Local sums of the per-node hashes of the states (partition-independent when summed).
+    fn fingerprint(&self, b: &ContactBoundary) -> (f64, f64) {
+        let mut h = (0.0, 0.0);
+        for (i, k) in b.nodes.iter().enumerate() {
+            let state = self.normal[i] as u64 + 2 * self.slip(i) as u64;
+            if state != 0 {
+                let (x, y) = node_hash(k.tag.wrapping_mul(4).wrapping_add(state));
+                h.0 += x;
+                h.1 += y;
+            }
+        }
+        h
+    }
+
+    /// Local Gram matrix of the set's constraint rows against the rigid modes: nᵀ at active
+    /// nodes; with friction also τᵀ where the tangential row holds u_τ. Zero without `modes`.
+    fn gram(&self, b: &ContactBoundary, modes: Option<&RigidModes>, dim: usize) -> Gram {
+        let mut g = [0.0; 36];
+        let Some(modes) = modes else {
+            return g;
+        };
+        for (i, k) in b.nodes.iter().enumerate() {
+            if self.normal[i] {
+                modes.add_outer(&mut g, &modes.direction_row(&k.x, &k.frame.n));
+            }
+            if self
+                .tangential
+                .as_ref()
+                .is_some_and(|t| holds_tangent(&t[i]))
+            {
+                for t in &k.frame.t[..dim - 1] {
+                    modes.add_outer(&mut g, &modes.direction_row(&k.x, t));
+                }
+            }
+        }
+        g
+    }
+
+    /// Local part of the summary, packed: |A_n|, fingerprints, Gram.
+    fn pack_summary(
+        &self,
+        b: &ContactBoundary,
+        modes: Option<&RigidModes>,
+        dim: usize,
+    ) -> Vec<f64> {
+        let (h1, h2) = self.fingerprint(b);
+        let mut v = vec![self.local_active() as f64, h1, h2];
+        v.extend(self.gram(b, modes, dim));
+        v
+    }
+
+    /// The set as all ranks see it (one Allreduce).
+    pub fn summarise(
+        &self,
+        ctx: &Ctx,
+        b: &ContactBoundary,
+        modes: Option<&RigidModes>,
+        dim: usize,
+    ) -> SetSummary {
+        unpack_summary(&ctx.sum_vec(&self.pack_summary(b, modes, dim)))
+    }
+
+    /// (3.23) and, with friction, (3.33) with the newest iterate (THEORY §4 erratum): the next
+    /// sets, and what changed. Local.
+    pub fn update(&self, it: &Iterate, b: &ContactBoundary, c: f64, dim: usize) -> SetUpdate {
+        let mut next = self.clone();
+        let mut changed = 0usize;
+        let mut residual2 = 0.0;
+        let mut states = [0usize; 4];
+        for (i, (k, r)) in b.nodes.iter().zip(&it.nodes).enumerate() {
+            states[self.state(i).number() as usize - 1] += 1;
+            next.normal[i] = contact::normal_active(r.u_n, r.lambda_n, k.gap, c);
+            let mut flip = next.normal[i] != self.normal[i];
+            let cn = contact::c_n(r.u_n, r.lambda_n, k.gap, c);
+            residual2 += cn * cn;
+            if let Some(t) = next.tangential.as_mut() {
+                t[i] = contact::tangential_row_dyn(dim, r.u_t, r.lambda_t, k.bound, c);
+                flip |= t[i].is_slip() != self.slip(i);
+                let ct = contact::c_tau(&r.u_t, &r.lambda_t, k.bound, c);
+                residual2 += ct[0] * ct[0] + ct[1] * ct[1];
+            }
+            if flip {
+                changed += 1;
+            }
+        }
+        SetUpdate {
+            next,
+            changed,
+            residual2,
+            states,
+            du2: it.du2,
+            uu: it.uu,
+        }
+    }
+}
+
+fn unpack_summary(v: &[f64]) -> SetSummary {
+    let mut gram = [0.0; 36];
+    gram.copy_from_slice(&v[3..3 + 36]);
+    SetSummary {
+        n_active: v[0] as usize,
+        fingerprint: (v[1], v[2]),
+        gram,
+    }
+}
+
+/// One iterate on this rank's contact nodes: u and λ per node (3.28), and with friction the
+/// norms of Algorithm 2's stopping rule.
+pub struct Iterate {
+    pub nodes: Vec<NodeResult>,
+    /// This rank's rows of u and of A u.
+    pub u_local: Vec<f64>,
+    pub au_local: Vec<f64>,
+    /// Friction: the previous u (for |u^ℓ − u^{ℓ−1}|), ‖u^ℓ − u^{ℓ−1}‖², ‖u^ℓ‖² (local).
+    u_prev: Option<Vec<f64>>,
+    du2: f64,
+    uu: f64,
+}
+
+impl Iterate {
+    pub fn new(n_contact: usize, n_local_rows: usize, friction: bool) -> Iterate {
+        Iterate {
+            nodes: vec![NodeResult::default(); n_contact],
+            u_local: Vec::new(),
+            au_local: Vec::new(),
+            u_prev: friction.then(|| vec![0.0; n_local_rows]),
+            du2: 0.0,
+            uu: 0.0,
+        }
+    }
+
+    /// (3.28): λ = f − A u on the contact rows, in the node frames; the states of `set` (the
+    /// set this iterate was solved with) are recorded per node. Local.
+    pub fn recover(
+        &mut self,
+        u_local: Vec<f64>,
+        au_local: Vec<f64>,
+        f_local: &[f64],
+        b: &ContactBoundary,
+        set: &ActiveSet,
+        dim: usize,
+    ) {
+        for (i, k) in b.nodes.iter().enumerate() {
+            let mut uk = [0.0; 3];
+            let mut lk = [0.0; 3];
+            for j in 0..dim {
+                uk[j] = u_local[k.local_row + j];
+                lk[j] = f_local[k.local_row + j] - au_local[k.local_row + j];
+            }
+            self.nodes[i] = NodeResult {
+                u: uk,
+                lambda: lk,
+                u_n: k.frame.normal_part(&uk),
+                u_t: k.frame.tangential_part(&uk),
+                lambda_n: k.frame.normal_part(&lk),
+                lambda_t: k.frame.tangential_part(&lk),
+                active: set.normal[i],
+                slip: set.slip(i),
+            };
+        }
+        if let Some(prev) = self.u_prev.as_mut() {
+            let (mut du2, mut uu) = (0.0, 0.0);
+            for (x, y) in u_local.iter().zip(prev.iter()) {
+                du2 += (x - y) * (x - y);
+                uu += x * x;
+            }
+            prev.copy_from_slice(&u_local);
+            self.du2 = du2;
+            self.uu = uu;
+        }
+        self.u_local = u_local;
+        self.au_local = au_local;
+    }
+}
+
+/// The update of one step on this rank.
+pub struct SetUpdate {
+    pub next: ActiveSet,
+    /// Nodes whose state changed.
+    pub changed: usize,
+    /// ‖C_n‖² (+ ‖C_τ‖² with friction) (3.21), (3.31).
+    pub residual2: f64,
+    /// Nodes in S1..S4 in the solve of this step.
+    pub states: [usize; 4],
+    pub du2: f64,
+    pub uu: f64,
+}
+
+/// A step's update as all ranks see it.
+#[derive(Clone, Copy, Debug)]
+pub struct StepTotals {
+    pub changed: usize,
+    /// The next set.
+    pub next: SetSummary,
+    /// ‖C(u^ℓ, λ^ℓ)‖₂ over all contact nodes.
+    pub residual: f64,
+    pub states: [usize; 4],
+    /// |u^ℓ − u^{ℓ−1}| / |u^ℓ| (friction; 0 when u = 0).
+    pub du_rel: f64,
+    /// ‖u^ℓ‖².
+    pub u_norm2: f64,
+}
+
+impl SetUpdate {
+    /// The one Allreduce of a Newton step: changes, |A_n|, fingerprints and Gram matrix of the
+    /// next set, residual², state counts, ‖Δu‖², ‖u‖².
+    pub fn reduce(
+        &self,
+        ctx: &Ctx,
+        b: &ContactBoundary,
+        modes: Option<&RigidModes>,
+        dim: usize,
+    ) -> StepTotals {
+        let mut local = vec![self.changed as f64, self.residual2, self.du2, self.uu];
+        local.extend(self.states.map(|s| s as f64));
+        local.extend(self.next.pack_summary(b, modes, dim));
+        let g = ctx.sum_vec(&local);
+        StepTotals {
+            changed: g[0] as usize,
+            residual: g[1].sqrt(),
+            du_rel: if g[3] > 0.0 {
+                (g[2] / g[3]).sqrt()
+            } else {
+                0.0
+            },
+            u_norm2: g[3],
+            states: [0, 1, 2, 3].map(|j| g[4 + j] as usize),
+            next: unpack_summary(&g[8..]),
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn hashes_are_exact_in_f64_sums() {
+        let (x, y) = node_hash(12345);
+        assert!(x < (1u64 << 20) as f64 && y < (1u64 << 20) as f64);
+        assert_ne!(node_hash(1), node_hash(2));
+    }
+}

@@ -1,0 +1,224 @@
+//! The distributed contact algorithm (MPI + PETSc): the contact boundary c_h, the sets and
+//! iterates of Algorithms 1 and 2, the reduced systems (3.29)/(3.42), the free rigid modes,
+//! the cycle guard, the Newton loop and the report of the final state. The pointwise contact
+//! law it applies lives in `crate::contact` (pure, no MPI).
+//!
+//! Floors inside: `cycle`, `boundary` → `rigid`, `active_set`, `report` → `reduced` →
+//! `newton` → this file's [`solve`].
+
+pub mod active_set;
+pub mod boundary;
+pub mod cycle;
+pub mod newton;
+pub mod reduced;
+pub mod report;
+pub mod rigid;
+
+use crate::assembly::System;
+use crate::case::{Preset, SolverSection};
+use crate::error::RunError;
+use crate::mesh::Mesh;
+use crate::output::ContactResult;
+use crate::par::Ctx;
+use crate::partition::Layout;
+use crate::petsc::Vector;
+use crate::say;
+use crate::setup::ContactSettings;
+use crate::solver;
+use boundary::ContactBoundary;
+use newton::{ContactProblem, NewtonSettings, StepInfo};
+use reduced::ReducedSystem;
+use report::{FrictionCertificate, Kkt};
+use serde::Serialize;
+
+/// summary.json's "newton" section.
+#[derive(Debug, Clone, Serialize)]
+pub struct NewtonSummary {
+    /// 1 (frictionless) or 2 (Tresca).
+    pub algorithm: u8,
+    pub init: &'static str,
+    pub c: f64,
+    pub c_default: bool,
+    pub steps: usize,
+    pub converged: bool,
+    pub history: Vec<StepInfo>,
+    pub rows_seconds: f64,
+    pub lambda_seconds: f64,
+    pub pinned_dofs: usize,
+    pub on_cycle: &'static str,
+    pub cycle_detected_at: Option<usize>,
+}
+
+/// summary.json's "contact" section.
+#[derive(Debug, Clone, Serialize)]
+pub struct ContactSummary {
+    pub nodes: usize,
+    pub excluded_dirichlet: usize,
+    pub active_count: usize,
+    pub max_pressure: f64,
+    pub total_force: Vec<f64>,
+    pub half_width: Option<f64>,
+    pub kkt: Kkt,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub friction: Option<FrictionCertificate>,
+}
+
+/// summary.json's "linear_solver" section of a contact run.
+#[derive(Debug, Clone, Serialize)]
+pub struct PresetOnly {
+    pub preset: &'static str,
+}
+
+/// What a contact solve reports in summary.json.
+#[derive(Debug, Clone, Serialize)]
+pub struct ContactReport {
+    pub newton: NewtonSummary,
+    pub contact: ContactSummary,
+    pub linear_solver: PresetOnly,
+}
+
+/// A solved contact problem.
+pub struct ContactSolution {
+    pub u: Vector,
+    /// The contact grid, its fields and the table, for the output layer.
+    pub result: ContactResult,
+    pub report: ContactReport,
+}
+
+/// Builds c_h, configures the solver, runs Algorithm 1 or 2 and reports the final state.
+/// Collective; every rank returns the same `Ok` / `Err` kind.
+pub fn solve(
+    ctx: &Ctx,
+    settings: &ContactSettings,
+    mesh: &Mesh,
+    layout: &Layout,
+    fixed: &[f64],
+    sys: &System,
+    solver_section: &SolverSection,
+) -> Result<ContactSolution, RunError> {
+    let dim = mesh.dim;
+    let b = boundary::build(ctx, mesh, layout, settings, fixed)?;
+    log_boundary(ctx, &b, &settings.group);
+    let friction = settings.friction();
+    solver::configure(
+        solver_section.preset,
+        solver_section.rtol,
+        !friction,
+        &solver_section.petsc_options,
+    )?;
+    let coords = solver::near_null_space_coordinates(ctx, mesh, layout, solver_section.preset)?;
+    let c = match settings.newton.c {
+        Some(c) => c,
+        None => newton::default_c(ctx, &b, dim, settings.young),
+    };
+    say!(
+        ctx,
+        "newton: c = {c:.6e}{}",
+        if settings.newton.c.is_none() {
+            " (E / h_c)"
+        } else {
+            ""
+        }
+    );
+    let reduced = ReducedSystem::new(ctx, sys, &b, coords.as_ref(), dim)?;
+    let problem = ContactProblem {
+        mesh,
+        layout,
+        boundary: &b,
+        fixed,
+        sys,
+    };
+    let ns = NewtonSettings {
+        section: &settings.newton,
+        c,
+        friction,
+        rigid: settings.rigid_modes,
+    };
+    let nr = newton::semismooth_newton(ctx, &problem, reduced, &ns)?;
+    if !nr.converged {
+        return Err(RunError::Failed(format!(
+            "Newton did not converge in newton.max_steps = {} steps (active set still \
+             changing: {} node(s) in the last step)",
+            settings.newton.max_steps,
+            nr.history.last().map(|h| h.changed).unwrap_or(0)
+        )));
+    }
+    let table = report::gather(ctx, &b, &nr.nodes, dim);
+    let total_force = report::total_force(ctx, &nr.nodes);
+    let half_width = table.half_width(&b.obstacle);
+    let kkt = table.kkt(!friction);
+    // The final state against (3.14): violations beyond 1e-8 of the problem's own scales are
+    // reported (they mean an inexact linear solve, not round-off).
+    if kkt.beyond(1e-8) {
+        say!(
+            ctx,
+            "warning: the final state violates (3.14) beyond round-off: {}",
+            serde_json::to_value(kkt).expect("JSON")
+        );
+    }
+    say!(
+        ctx,
+        "contact: {} active, p_max = {:.6}, half width = {}, total force = {:?}",
+        table.active_count(),
+        table.max_pressure(),
+        half_width
+            .map(|b| format!("{b:.6}"))
+            .unwrap_or_else(|| "n/a".into()),
+        &total_force[..dim]
+    );
+    let report = ContactReport {
+        newton: NewtonSummary {
+            algorithm: if friction { 2 } else { 1 },
+            init: settings.newton.init.name(),
+            c,
+            c_default: settings.newton.c.is_none(),
+            steps: nr.history.len(),
+            converged: nr.converged,
+            history: nr.history.clone(),
+            rows_seconds: nr.rows_seconds,
+            lambda_seconds: nr.lambda_seconds,
+            pinned_dofs: nr.pinned_final.len(),
+            on_cycle: settings.newton.on_cycle.name(),
+            cycle_detected_at: nr.cycle_detected_at,
+        },
+        contact: ContactSummary {
+            nodes: b.n_global,
+            excluded_dirichlet: b.excluded_dirichlet,
+            active_count: table.active_count(),
+            max_pressure: table.max_pressure(),
+            total_force: total_force[..dim].to_vec(),
+            half_width,
+            kkt,
+            friction: friction.then(|| table.friction_certificate()),
+        },
+        linear_solver: PresetOnly {
+            preset: preset_name(solver_section.preset),
+        },
+    };
+    Ok(ContactSolution {
+        result: report::contact_result(&b, &nr.nodes, dim, friction, &table),
+        u: nr.u,
+        report,
+    })
+}
+
+fn preset_name(p: Preset) -> &'static str {
+    p.name()
+}
+
+fn log_boundary(ctx: &Ctx, b: &ContactBoundary, group: &str) {
+    say!(
+        ctx,
+        "contact: {} nodes on '{}'{}",
+        b.n_global,
+        group,
+        if b.excluded_dirichlet > 0 {
+            format!(
+                " ({} more left to their Dirichlet data)",
+                b.excluded_dirichlet
+            )
+        } else {
+            String::new()
+        }
+    );
+}

@@ -1,0 +1,354 @@
+//! The semismooth Newton method in its exact active-set form: Algorithm 1 (frictionless,
+//! reduced system (3.29)) and Algorithm 2 (Tresca, (3.42) with the regularised slip rows
+//! (3.39)/(3.40)). One step: update the pins of free rigid modes, write the reduced system,
+//! solve, recover λ (3.28), update the sets (3.23)/(3.33), one reduction, log, decide.
+//!
+//! Collectives per step: the writing of the reduced system (one all-gather of the rewritten
+//! nodes' directions, PETSc's assembly of entries in other ranks' rows), the solve, one
+//! MatMult, one Allreduce; rarely a load-balance test or a least-index pick.
+
+use super::active_set::{ActiveSet, Iterate, SetSummary, StepTotals};
+use super::boundary::{ContactBoundary, NodeResult};
+use super::cycle::{decide, CycleGuard, Decision, Seen, SetKey};
+use super::reduced::ReducedSystem;
+use super::rigid::{Balance, FreeModes, Pin};
+use crate::assembly::System;
+use crate::case::{self, NewtonInit, NewtonSection};
+use crate::error::RunError;
+use crate::mesh::Mesh;
+use crate::par::Ctx;
+use crate::partition::Layout;
+use crate::petsc::{SolveInfo, Vector};
+use crate::say;
+
+/// What the loop needs from the case.
+pub struct NewtonSettings<'a> {
+    pub section: &'a NewtonSection,
+    /// The complementarity parameter c > 0 used.
+    pub c: f64,
+    pub friction: bool,
+    pub rigid: case::RigidModes,
+}
+
+/// One Newton step, for the history.
+#[derive(Clone, Debug, serde::Serialize)]
+pub struct StepInfo {
+    pub step: usize,
+    /// |A_n^ℓ|: active nodes used in this step's solve.
+    pub active: usize,
+    /// Nodes whose state changed in the update after this solve.
+    pub changed: usize,
+    /// ‖C_n(u^ℓ, λ^ℓ)‖₂ over all contact nodes (3.21); with friction also C_τ (3.31).
+    pub residual: f64,
+    pub solve_seconds: f64,
+    pub iterations: usize,
+    /// Number of rigid modes pinned in this step.
+    pub pinned: usize,
+    /// Tresca: nodes in S1..S4 (inactive/stick, inactive/slip, active/stick, active/slip) in
+    /// this step's solve.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub states: Option<[usize; 4]>,
+    /// Tresca: |u^ℓ − u^{ℓ−1}| / |u^ℓ|.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub du_rel: Option<f64>,
+}
+
+/// What Algorithms 1 and 2 return.
+pub struct NewtonResult {
+    pub u: Vector,
+    pub nodes: Vec<NodeResult>,
+    pub history: Vec<StepInfo>,
+    pub converged: bool,
+    /// Seconds spent in λ recovery (MatMult + local work), all steps.
+    pub lambda_seconds: f64,
+    /// Seconds spent writing the reduced systems, all steps.
+    pub rows_seconds: f64,
+    pub pinned_final: Vec<Pin>,
+    /// Step after which a recurring set switched the iteration to least-index updates.
+    pub cycle_detected_at: Option<usize>,
+}
+
+/// Default c = E / h_c with h_c the mean contact mesh size (w_k^(1/(d−1)) over all contact
+/// nodes): c u then has the size of a nodal force, as λ (measured in bench/results/tresca_c.md).
+pub fn default_c(ctx: &Ctx, b: &ContactBoundary, dim: usize, young: f64) -> f64 {
+    let local: f64 = b
+        .nodes
+        .iter()
+        .map(|k| k.weight.powf(1.0 / (dim - 1) as f64))
+        .sum();
+    let out = ctx.sum_vec(&[local, b.nodes.len() as f64]);
+    if out[1] > 0.0 && out[0] > 0.0 {
+        young / (out[0] / out[1])
+    } else {
+        young
+    }
+}
+
+/// The data of a contact solve: the mesh and its partition, the contact boundary, the
+/// Dirichlet values per dof (NaN = free), the assembled system (A, f).
+pub struct ContactProblem<'a> {
+    pub mesh: &'a Mesh,
+    pub layout: &'a Layout,
+    pub boundary: &'a ContactBoundary,
+    pub fixed: &'a [f64],
+    pub sys: &'a System,
+}
+
+/// The state the loop carries from step to step.
+struct Loop<'a> {
+    ctx: &'a Ctx<'a>,
+    p: &'a ContactProblem<'a>,
+    s: &'a NewtonSettings<'a>,
+    set: ActiveSet,
+    summary: SetSummary,
+    free: FreeModes,
+    guard: CycleGuard,
+    it: Iterate,
+}
+
+/// Algorithm 1 (frictionless, (3.29)) or, with friction, Algorithm 2 (Tresca, (3.42)) on the
+/// assembled system `sys` (A, f), from the start `s.section.init`.
+pub fn semismooth_newton(
+    ctx: &Ctx,
+    p: &ContactProblem,
+    mut reduced: ReducedSystem,
+    s: &NewtonSettings,
+) -> Result<NewtonResult, RunError> {
+    let (mesh, layout, b, fixed, sys) = (p.mesh, p.layout, p.boundary, p.fixed, p.sys);
+    let dim = mesh.dim;
+    let free = FreeModes::new(ctx, mesh, layout, fixed, b, &reduced.f_local, s.rigid);
+    let init: NewtonInit = s.section.init;
+    let set = ActiveSet::initial(b, init, s.friction.then_some(s.c), mesh.extent(), dim);
+    let summary = set.summarise(ctx, b, free.modes(), dim);
+    let guard = CycleGuard::new(
+        s.section.on_cycle,
+        s.friction,
+        SetKey::new(summary.n_active, summary.fingerprint, None),
+    );
+    let it = Iterate::new(b.nodes.len(), reduced.f_local.len(), s.friction);
+    let mut lp = Loop {
+        ctx,
+        p,
+        s,
+        set,
+        summary,
+        free,
+        guard,
+        it,
+    };
+    let mut history = Vec::new();
+    let mut converged = false;
+    for step in 1..=s.section.max_steps {
+        if lp.free.update(mesh, &lp.summary.gram)? {
+            reduced.set_pins(sys, layout, lp.free.pins())?;
+        }
+        reduced.write(ctx, sys, layout, b, &lp.set, lp.free.pins())?; // (3.29) / (3.42)
+        let (info, seconds) = reduced.solve()?;
+        ensure_converged(step, &info)?;
+        reduced.recover(sys, b, &lp.set, &mut lp.it)?; // (3.28)
+        let update = lp.set.update(&lp.it, b, s.c, dim); // (3.23) / (3.33)
+        let totals = update.reduce(ctx, b, lp.free.modes(), dim);
+        history.push(lp.step_info(step, &totals, &info, seconds));
+        log_step(ctx, history.last().expect("pushed"), &totals);
+        if lp.next(step, update.next, &totals, &reduced)? {
+            converged = true;
+            break;
+        }
+    }
+    Ok(NewtonResult {
+        nodes: lp.it.nodes,
+        history,
+        converged,
+        lambda_seconds: reduced.lambda_seconds,
+        rows_seconds: reduced.rows_seconds,
+        pinned_final: lp.free.pins().to_vec(),
+        cycle_detected_at: lp.guard.detected_at,
+        u: reduced.into_solution(),
+    })
+}
+
+fn ensure_converged(step: usize, info: &SolveInfo) -> Result<(), RunError> {
+    if info.converged() {
+        return Ok(());
+    }
+    Err(RunError::Failed(format!(
+        "Newton step {step}: the linear solver did not converge ({} after {} iterations)",
+        info.reason_name, info.iterations
+    )))
+}
+
+/// The rank-0 progress lines of a step.
+fn log_step(ctx: &Ctx, h: &StepInfo, t: &StepTotals) {
+    say!(
+        ctx,
+        "newton {:3}: |A_n| = {:6}  changed {:6}  |C_n| = {:.3e}  pinned {}  solve {:.3} s ({} its)",
+        h.step,
+        h.active,
+        h.changed,
+        h.residual,
+        h.pinned,
+        h.solve_seconds,
+        h.iterations
+    );
+    if let Some(s) = h.states {
+        say!(
+            ctx,
+            "            S1 {} S2 {} S3 {} S4 {}  |du|/|u| = {:.3e}",
+            s[0],
+            s[1],
+            s[2],
+            s[3],
+            t.du_rel
+        );
+    }
+}
+
+impl Loop<'_> {
+    fn step_info(&self, step: usize, t: &StepTotals, info: &SolveInfo, secs: f64) -> StepInfo {
+        StepInfo {
+            step,
+            active: self.summary.n_active,
+            changed: t.changed,
+            residual: t.residual,
+            solve_seconds: secs,
+            iterations: info.iterations,
+            pinned: self.free.pins().len(),
+            states: self.s.friction.then_some(t.states),
+            du_rel: self.s.friction.then_some(t.du_rel),
+        }
+    }
+
+    fn key(&self, summary: &SetSummary, t: &StepTotals) -> SetKey {
+        SetKey::new(
+            summary.n_active,
+            summary.fingerprint,
+            self.s.friction.then_some(t.u_norm2),
+        )
+    }
+
+    /// The decision after step `step` and the sets of the next step; `Ok(true)` = converged.
+    fn next(
+        &mut self,
+        step: usize,
+        mut next: ActiveSet,
+        t: &StepTotals,
+        reduced: &ReducedSystem,
+    ) -> Result<bool, RunError> {
+        let (ctx, b, dim) = (self.ctx, self.p.boundary, self.p.mesh.dim);
+        let pins = !self.free.pins().is_empty();
+        let mut decision = decide(
+            t.changed,
+            pins,
+            self.s.friction,
+            t.du_rel,
+            self.s.section.tol_u,
+        );
+        if decision == Decision::TestBalance {
+            // A free rigid mode is harmless only if the load is balanced in it (the pins then
+            // carry no reaction). If not, the body moves along the unbalanced load until a
+            // contact node touches: activate the first one to touch and go on; if no node
+            // approaches the obstacle, there is no equilibrium.
+            let (it, layout) = (&self.it, self.p.layout);
+            // (f − A u) at dof k of mesh node v (owned)
+            let residual_at = |v: usize, k: usize| {
+                let i = layout.node_global[v] * dim + k - reduced.row_lo;
+                reduced.f_local[i] - it.au_local[i]
+            };
+            let nodes = (&it.nodes[..], &self.set.normal[..]);
+            let balance = self
+                .free
+                .balance(ctx, self.p.mesh, layout, b, nodes, residual_at);
+            match balance {
+                Balance::Balanced => {
+                    decision = decide(
+                        t.changed,
+                        false,
+                        self.s.friction,
+                        t.du_rel,
+                        self.s.section.tol_u,
+                    );
+                }
+                Balance::Touch(tag) => {
+                    for (k, a) in b.nodes.iter().zip(next.normal.iter_mut()) {
+                        if k.tag == tag {
+                            *a = true;
+                        }
+                    }
+                    say!(
+                        ctx,
+                        "newton: the load is not balanced in a free rigid mode: the body moves \
+                         until contact node {tag} touches (activated)"
+                    );
+                    let summary = next.summarise(ctx, b, self.free.modes(), dim);
+                    self.guard.record(self.key(&summary, t));
+                    self.take(next, summary);
+                    return Ok(false);
+                }
+                Balance::NoSupport(reaction) => {
+                    return Err(self.free.no_support(self.summary.n_active, reaction));
+                }
+            }
+        }
+        match decision {
+            Decision::Converged => Ok(true),
+            Decision::SameSets => {
+                // Same sets, but the slip rows are a linearisation: iterate on with the new rows.
+                self.set.tangential = next.tangential;
+                Ok(false)
+            }
+            Decision::TestBalance => unreachable!("the balance test was made above"),
+            Decision::NewSets => {
+                let mut summary = t.next;
+                let mut key = self.key(&summary, t);
+                if let Seen::SwitchToLeastIndex { prev } = self.guard.check(step, key)? {
+                    say!(
+                        ctx,
+                        "newton: cycling detected (the set of step {prev} recurs at step {}): \
+                         continuing with single-node updates (penetrating nodes first, least \
+                         index first)",
+                        step + 1
+                    );
+                }
+                if self.guard.least_index() {
+                    least_index_step(ctx, b, &self.set, &mut next);
+                    summary = next.summarise(ctx, b, self.free.modes(), dim);
+                    key = self.key(&summary, t);
+                    self.guard.check_safeguarded(step, key)?;
+                }
+                self.guard.record(key);
+                self.take(next, summary);
+                Ok(false)
+            }
+        }
+    }
+
+    fn take(&mut self, set: ActiveSet, summary: SetSummary) {
+        self.set = set;
+        self.summary = summary;
+    }
+}
+
+/// Single-node update: activate the penetrating node with the smallest tag; only if none
+/// penetrates, release the node in tension with the smallest tag (a least-index rule in the
+/// spirit of Murty's, biased towards sets that hold the body, since sets that leave rigid
+/// modes to the pins are not LCP pivots). Collective.
+fn least_index_step(ctx: &Ctx, b: &ContactBoundary, old: &ActiveSet, next: &mut ActiveSet) {
+    let pick = |want_activate: bool| -> u64 {
+        let my_min = b
+            .nodes
+            .iter()
+            .zip(old.normal.iter().zip(&next.normal))
+            .filter(|(_, (a, n))| a != n && **n == want_activate)
+            .map(|(k, _)| k.tag)
+            .min()
+            .unwrap_or(u64::MAX);
+        ctx.min_u64(my_min)
+    };
+    let mut tag = pick(true);
+    if tag == u64::MAX {
+        tag = pick(false);
+    }
+    for ((k, a), n) in b.nodes.iter().zip(&old.normal).zip(next.normal.iter_mut()) {
+        *n = if k.tag == tag { !*a } else { *a };
+    }
+}

@@ -1,0 +1,487 @@
+//! The reduced systems (3.29) / (3.42), written into a matrix that keeps A's nonzero pattern
+//! (the symbolic part, made once) so that only values change from step to step (the numeric
+//! part) and MUMPS reuses its analysis. Every prescribed direction (active normal, stick
+//! tangent, pinned dof) is eliminated symmetrically: from the node's own rows and from the
+//! columns, i.e. a mirror block in each unconstrained neighbour's rows (which may belong to
+//! another rank: PETSc moves those entries at assembly). A Tresca slip row adds L̃ and r̃
+//! (3.39) to the node's own block. Dirichlet data are eliminated earlier, per element, in
+//! assembly.rs; this is the same elimination at matrix level.
+
+use super::active_set::{ActiveSet, Iterate};
+use super::boundary::ContactBoundary;
+use super::rigid::Pin;
+use crate::assembly::System;
+use crate::contact::TangentialRow;
+use crate::par::Ctx;
+use crate::partition::Layout;
+use crate::petsc::{self, Matrix, PInt, SolveInfo, Vector};
+use crate::solver::LinearSolver;
+use std::collections::HashMap;
+use std::time::Instant;
+
+/// A contact node's d rows of A (all with the same columns: A is assembled in d×d blocks).
+#[derive(Clone, Debug)]
+pub struct NodeRows {
+    /// Global index of the node's first row.
+    pub row: usize,
+    pub cols: Vec<PInt>,
+    /// vals[j] = row `row + j` of A on `cols`.
+    pub vals: Vec<Vec<f64>>,
+    /// Position of the node's own column `row + j` in `cols`.
+    pub own: [usize; 3],
+}
+
+impl NodeRows {
+    /// Copies the node's rows out of A (they do not change during the Newton iteration).
+    pub fn read(a: &Matrix, row: usize, dim: usize) -> petsc::Result<NodeRows> {
+        let mut cols: Vec<PInt> = Vec::new();
+        let mut vals = Vec::with_capacity(dim);
+        for j in 0..dim {
+            let (c, v) = a.with_row(row + j, |c, v| (c.to_vec(), v.to_vec()))?;
+            if j == 0 {
+                cols = c;
+            } else if c != cols {
+                return Err(petsc::PetscError {
+                    code: -1,
+                    message: format!(
+                        "rows {row}..{} of A do not share one pattern (internal error)",
+                        row + dim
+                    ),
+                    location: format!("{}:{}", file!(), line!()),
+                });
+            }
+            vals.push(v);
+        }
+        let mut own = [0usize; 3];
+        for (j, o) in own.iter_mut().enumerate().take(dim) {
+            *o = cols
+                .binary_search(&((row + j) as PInt))
+                .expect("the diagonal block is in A's pattern");
+        }
+        Ok(NodeRows {
+            row,
+            cols,
+            vals,
+            own,
+        })
+    }
+
+    /// Row `row + j` of A times the local values: the diagonal entry a_jj.
+    pub fn diag(&self, j: usize) -> f64 {
+        self.vals[j][self.own[j]]
+    }
+}
+
+/// Prescribed components of one node: orthonormal directions c with cᵀ u = value (an active
+/// contact node: c = n, value = −g; a stick tangent: c = τ_i, value = 0; a pinned dof:
+/// c = e_k, value = 0), and a slip row's spring. A node with no direction (a Tresca slip node
+/// of an inactive contact node) is still rewritten by its owner.
+#[derive(Clone, Debug, Default)]
+pub struct NodeConstraint {
+    pub dirs: Vec<([f64; 3], f64)>,
+    /// Added to the node's own block (Tresca slip rows (3.39): Σ τ_i L̃_ij τ_jᵀ); only the
+    /// owner of the node uses it.
+    pub spring: [[f64; 3]; 3],
+    /// Added to the node's right-hand side (Σ τ_i r̃_i).
+    pub spring_rhs: [f64; 3],
+}
+
+impl NodeConstraint {
+    /// P = I − Σ c cᵀ (projector onto the free components).
+    pub fn projector(&self, dim: usize) -> [[f64; 3]; 3] {
+        let mut p = [[0.0; 3]; 3];
+        for (a, row) in p.iter_mut().enumerate().take(dim) {
+            row[a] = 1.0;
+        }
+        for (c, _) in &self.dirs {
+            for a in 0..dim {
+                for b in 0..dim {
+                    p[a][b] -= c[a] * c[b];
+                }
+            }
+        }
+        p
+    }
+
+    /// ū = Σ value · c (the prescribed part of u).
+    pub fn known(&self) -> [f64; 3] {
+        let mut u = [0.0; 3];
+        for (c, v) in &self.dirs {
+            for a in 0..3 {
+                u[a] += v * c[a];
+            }
+        }
+        u
+    }
+}
+
+impl NodeConstraint {
+    /// The slip row (3.39a) τᵀ(A u)_k + L̃ τᵀ u^k = τᵀ f_k + r̃: adds Σ τ_i L̃_ij τ_jᵀ to the node's
+    /// block and Σ τ_i r̃_i to its right-hand side.
+    pub fn add_slip_spring(&mut self, t: &[[f64; 3]; 2], row: &TangentialRow<2>, dim: usize) {
+        let TangentialRow::Slip { l, r } = row else {
+            return;
+        };
+        for a in 0..dim {
+            for b in 0..dim {
+                for (ii, ti) in t[..dim - 1].iter().enumerate() {
+                    for (jj, tj) in t[..dim - 1].iter().enumerate() {
+                        self.spring[a][b] += ti[a] * l[ii][jj] * tj[b];
+                    }
+                }
+            }
+            for (ii, ti) in t[..dim - 1].iter().enumerate() {
+                self.spring_rhs[a] += ti[a] * r[ii];
+            }
+        }
+    }
+}
+
+/// The constraints of every rewritten node (contact nodes with prescribed rows, pinned dofs) by
+/// global node number, on every rank: a node's rows are rewritten by its owner, its columns in
+/// every neighbour's rows.
+pub struct ConstraintMap(HashMap<usize, NodeConstraint>);
+
+impl ConstraintMap {
+    /// One all-gather of the rewritten contact nodes' directions; the pins are known everywhere.
+    /// Collective.
+    pub fn gather(
+        ctx: &Ctx,
+        layout: &Layout,
+        b: &ContactBoundary,
+        set: &ActiveSet,
+        pins: &[Pin],
+        dim: usize,
+    ) -> ConstraintMap {
+        // Records (global node, c, value); a node rewritten without a direction sends value NaN.
+        let mut mine: Vec<f64> = Vec::new();
+        for (i, k) in b.nodes.iter().enumerate() {
+            if let Some(p) = set.prescribed(b, i, dim) {
+                let gk = layout.node_global[k.node] as f64;
+                if p.dirs.is_empty() {
+                    mine.extend_from_slice(&[gk, 0.0, 0.0, 0.0, f64::NAN]);
+                }
+                for (c, v) in &p.dirs {
+                    mine.extend_from_slice(&[gk, c[0], c[1], c[2], *v]);
+                }
+            }
+        }
+        let all = ctx.all_gather_varcount(&mine);
+        let mut map: HashMap<usize, NodeConstraint> = HashMap::new();
+        for r in all.chunks_exact(5) {
+            let e = map.entry(r[0] as usize).or_default();
+            if !r[4].is_nan() {
+                e.dirs.push(([r[1], r[2], r[3]], r[4]));
+            }
+        }
+        for &(v, k) in pins {
+            let mut e = [0.0; 3];
+            e[k] = 1.0;
+            map.entry(layout.node_global[v])
+                .or_default()
+                .dirs
+                .push((e, 0.0));
+        }
+        ConstraintMap(map)
+    }
+
+    pub fn get(&self, global_node: usize) -> Option<&NodeConstraint> {
+        self.0.get(&global_node)
+    }
+}
+
+/// The reduced system of one Newton step and its solver: the matrix S on A's pattern, the
+/// right-hand side, the KSP, and the (constant) rows of A at the contact nodes and the pins.
+pub struct ReducedSystem {
+    s: Matrix,
+    rhs: Vector,
+    u: Vector,
+    au: Vector,
+    ls: LinearSolver,
+    contact_rows: Vec<NodeRows>,
+    pin_rows: Vec<(usize, NodeRows)>,
+    /// This rank's rows of f.
+    pub f_local: Vec<f64>,
+    /// First global row of this rank.
+    pub row_lo: usize,
+    buf: Vec<f64>,
+    /// Seconds spent writing the reduced systems, all steps.
+    pub rows_seconds: f64,
+    /// Seconds spent in λ recovery (MatMult + local work), all steps.
+    pub lambda_seconds: f64,
+    dim: usize,
+}
+
+impl ReducedSystem {
+    /// The symbolic part, made once: S with A's pattern, its KSP, the contact nodes' rows of A.
+    pub fn new(
+        ctx: &Ctx,
+        sys: &System,
+        b: &ContactBoundary,
+        coords: Option<&Vector>,
+        dim: usize,
+    ) -> petsc::Result<ReducedSystem> {
+        let contact_rows = b
+            .nodes
+            .iter()
+            .map(|k| NodeRows::read(&sys.a, k.row, dim))
+            .collect::<Result<_, _>>()?;
+        let f_local = sys.b.to_local_vec()?;
+        let mut s = sys.a.duplicate()?;
+        let ls = LinearSolver::new(ctx.comm(), &mut s, coords)?;
+        let (row_lo, _) = sys.a.ownership_range()?;
+        Ok(ReducedSystem {
+            s,
+            rhs: sys.b.duplicate()?,
+            u: sys.b.duplicate()?,
+            au: sys.b.duplicate()?,
+            ls,
+            contact_rows,
+            pin_rows: Vec::new(),
+            f_local,
+            row_lo,
+            buf: Vec::new(),
+            rows_seconds: 0.0,
+            lambda_seconds: 0.0,
+            dim,
+        })
+    }
+
+    /// Reads the rows of A of the owned pinned nodes (for their symmetric elimination).
+    pub fn set_pins(&mut self, sys: &System, layout: &Layout, pins: &[Pin]) -> petsc::Result<()> {
+        let dim = self.dim;
+        let mut owned: Vec<usize> = pins
+            .iter()
+            .map(|&(v, _)| v)
+            .filter(|&v| layout.owns_node(v))
+            .collect();
+        owned.sort_unstable();
+        owned.dedup();
+        self.pin_rows.clear();
+        for v in owned {
+            let r = NodeRows::read(&sys.a, layout.node_global[v] * dim, dim)?;
+            self.pin_rows.push((v, r));
+        }
+        Ok(())
+    }
+
+    /// The numeric part of a step: S and its right-hand side for `set` and `pins` — (3.29)
+    /// without friction, (3.42) with Tresca — applied symmetrically. Collective.
+    pub fn write(
+        &mut self,
+        ctx: &Ctx,
+        sys: &System,
+        layout: &Layout,
+        b: &ContactBoundary,
+        set: &ActiveSet,
+        pins: &[Pin],
+    ) -> petsc::Result<()> {
+        let t = Instant::now();
+        let dim = self.dim;
+        self.s.copy_values_from(&sys.a)?;
+        self.rhs.copy_from(&sys.b)?;
+        let cmap = ConstraintMap::gather(ctx, layout, b, set, pins, dim);
+        let mut rhs_add: Vec<(PInt, f64)> = Vec::new();
+        let mut rhs_updates: Vec<(usize, f64)> = Vec::new();
+        // (rows of A, constraint, first local row) of every node this rank rewrites
+        let mut writes: Vec<(&NodeRows, NodeConstraint, usize)> = Vec::new();
+        for (i, (k, r)) in b.nodes.iter().zip(&self.contact_rows).enumerate() {
+            let Some(p) = set.prescribed(b, i, dim) else {
+                continue; // (3.29): rows of inactive frictionless nodes stay as in A
+            };
+            let mut me = cmap
+                .get(layout.node_global[k.node])
+                .expect("gathered")
+                .clone();
+            if let Some(row) = &p.slip {
+                me.add_slip_spring(&k.frame.t, row, dim);
+            }
+            writes.push((r, me, k.local_row));
+        }
+        for (v, r) in &self.pin_rows {
+            let gv = layout.node_global[*v];
+            let me = cmap.get(gv).expect("pins are in the map").clone();
+            writes.push((r, me, gv * dim - self.row_lo));
+        }
+        for (r, me, lr) in &writes {
+            let fk = &self.f_local[*lr..*lr + dim];
+            let rk = write_symmetric_constraint(
+                &mut self.s,
+                r,
+                me,
+                fk,
+                dim,
+                |j| cmap.get(j),
+                &mut rhs_add,
+                &mut self.buf,
+            )?;
+            for (a, v) in rk.iter().enumerate().take(dim) {
+                rhs_updates.push((lr + a, *v));
+            }
+        }
+        let (idx, vals): (Vec<PInt>, Vec<f64>) = rhs_add.into_iter().unzip();
+        self.rhs.set_values(&idx, &vals, true)?;
+        self.rhs.assemble()?;
+        self.s.assemble()?;
+        self.rhs.write(|x| {
+            for &(i, v) in &rhs_updates {
+                x[i] = v;
+            }
+        })?;
+        self.rows_seconds += t.elapsed().as_secs_f64();
+        Ok(())
+    }
+
+    /// Solves the step's system; returns the solver's report and the seconds. Collective.
+    pub fn solve(&mut self) -> petsc::Result<(SolveInfo, f64)> {
+        let t = Instant::now();
+        self.ls.ksp.set_operator(&self.s)?;
+        let info = self.ls.solve(&self.rhs, &mut self.u)?;
+        Ok((info, t.elapsed().as_secs_f64()))
+    }
+
+    /// (3.28) for the last solution: λ = f − A u on the contact rows (one MatMult), into `it`.
+    /// Collective.
+    pub fn recover(
+        &mut self,
+        sys: &System,
+        b: &ContactBoundary,
+        set: &ActiveSet,
+        it: &mut Iterate,
+    ) -> petsc::Result<()> {
+        let t = Instant::now();
+        sys.a.mult(&self.u, &mut self.au)?;
+        let u_local = self.u.to_local_vec()?;
+        let au_local = self.au.to_local_vec()?;
+        it.recover(u_local, au_local, &self.f_local, b, set, self.dim);
+        self.lambda_seconds += t.elapsed().as_secs_f64();
+        Ok(())
+    }
+
+    /// The solution, consumed.
+    pub fn into_solution(self) -> Vector {
+        self.u
+    }
+}
+
+fn matmul3(a: &[[f64; 3]; 3], b: &[[f64; 3]; 3], dim: usize) -> [[f64; 3]; 3] {
+    let mut c = [[0.0; 3]; 3];
+    for i in 0..dim {
+        for j in 0..dim {
+            c[i][j] = (0..dim).map(|l| a[i][l] * b[l][j]).sum();
+        }
+    }
+    c
+}
+
+/// The (3.29) constraints of one node, applied symmetrically. The node's rows become
+/// P_k A_kj P_j (plus s_k Σ c cᵀ on its own block) and its right-hand side
+/// P_k (f_k − Σ_j A_kj ū_j) + s_k ū_k; in every unconstrained neighbour row i the block A_ik
+/// becomes A_ik P_k and A_ik ū_k moves to the right-hand side. This is (3.29) with the known
+/// normal displacement eliminated from the columns too: the same solution, on A's pattern,
+/// and symmetric (positive definite without friction), so CG/AMG and Cholesky apply.
+/// `constrained(j)` gives the constraint of global node j, if any. Returns the node's
+/// right-hand side; the neighbour corrections are appended to `rhs_add` (global row, value).
+#[allow(clippy::too_many_arguments)]
+pub fn write_symmetric_constraint<'c>(
+    s: &mut Matrix,
+    rows: &NodeRows,
+    me: &NodeConstraint,
+    f_k: &[f64],
+    dim: usize,
+    constrained: impl Fn(usize) -> Option<&'c NodeConstraint>,
+    rhs_add: &mut Vec<(PInt, f64)>,
+    buf: &mut Vec<f64>,
+) -> petsc::Result<[f64; 3]> {
+    let n = rows.cols.len();
+    let node_k = rows.row / dim;
+    let pk = me.projector(dim);
+    let uk = me.known();
+    let sk = (0..dim).map(|j| rows.diag(j)).sum::<f64>() / dim as f64;
+    let mut new_rows = vec![vec![0.0; n]; dim];
+    let mut t = [0.0; 3]; // Σ_j A_kj ū_j
+    let mut mirror_cols: [PInt; 3] = [0; 3];
+    for c in 0..dim {
+        mirror_cols[c] = (node_k * dim + c) as PInt;
+    }
+    let mut blk = [[0.0; 3]; 3];
+    let mut m = 0;
+    while m < n {
+        let j = rows.cols[m] as usize / dim;
+        for a in 0..dim {
+            for b in 0..dim {
+                blk[a][b] = rows.vals[a][m + b];
+            }
+        }
+        let cj = if j == node_k {
+            Some(me)
+        } else {
+            constrained(j)
+        };
+        let pj = match cj {
+            Some(c) => c.projector(dim),
+            None => NodeConstraint::default().projector(dim),
+        };
+        if let Some(c) = cj {
+            let uj = c.known();
+            for a in 0..dim {
+                t[a] += (0..dim).map(|b| blk[a][b] * uj[b]).sum::<f64>();
+            }
+        }
+        let mut nb = matmul3(&pk, &matmul3(&blk, &pj, dim), dim);
+        if j == node_k {
+            for (cvec, _) in &me.dirs {
+                for a in 0..dim {
+                    for b in 0..dim {
+                        nb[a][b] += sk * cvec[a] * cvec[b];
+                    }
+                }
+            }
+            for a in 0..dim {
+                for b in 0..dim {
+                    nb[a][b] += me.spring[a][b];
+                }
+            }
+        }
+        for a in 0..dim {
+            for b in 0..dim {
+                new_rows[a][m + b] = nb[a][b];
+            }
+        }
+        if cj.is_none() {
+            // Mirror block in the unconstrained neighbour's rows: A_jk P_k = (A_kj)ᵀ P_k.
+            let mut mb = [[0.0; 3]; 3];
+            for a in 0..dim {
+                for b in 0..dim {
+                    mb[a][b] = (0..dim).map(|l| blk[l][a] * pk[l][b]).sum();
+                }
+            }
+            buf.clear();
+            for row in mb.iter().take(dim) {
+                buf.extend_from_slice(&row[..dim]);
+            }
+            let mrows: Vec<PInt> = (0..dim).map(|c| (j * dim + c) as PInt).collect();
+            s.insert_values(&mrows, &mirror_cols[..dim], buf)?;
+            // rhs_j −= A_jk ū_k
+            for a in 0..dim {
+                let v: f64 = (0..dim).map(|l| blk[l][a] * uk[l]).sum();
+                if v != 0.0 {
+                    rhs_add.push(((j * dim + a) as PInt, -v));
+                }
+            }
+        }
+        m += dim;
+    }
+    for (a, row) in new_rows.iter().enumerate() {
+        s.insert_values(&[(rows.row + a) as PInt], &rows.cols, row)?;
+    }
+    let mut rhs = [0.0; 3];
+    let mut ft = [0.0; 3];
+    for a in 0..dim {
+        ft[a] = f_k[a] - t[a];
+    }
+    for a in 0..dim {
+        rhs[a] = (0..dim).map(|b| pk[a][b] * ft[b]).sum::<f64>() + sk * uk[a] + me.spring_rhs[a];
+    }
+    Ok(rhs)
+}

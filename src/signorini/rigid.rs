@@ -1,0 +1,362 @@
+//! Rigid body modes that neither Dirichlet data nor the current sets fix (THEORY.md §5;
+//! thesis 4.1, where V*_h removes only the tangential translation).
+//!
+//! Mechanism: the rigid modes r_1..r_m (m = 3 in 2D, 6 in 3D) are tested against the
+//! constraint rows — every Dirichlet dof, the normal row nᵀ of every active contact node and,
+//! with friction, the tangent rows τᵀ of nodes whose tangential row holds u_τ — through the
+//! m×m Gram matrix G = Σ (C r)ᵀ (C r). Its null space is exactly the set of free modes: no
+//! fewer are removed (the system would be singular) and no more (that would change the
+//! answer). Each free mode is removed by pinning one dof, eliminated symmetrically like the
+//! contact constraints (reduced.rs). The pinned dofs are chosen from the whole mesh by a
+//! pivoted Gram–Schmidt on the free modes' values, away from the contact boundary and the
+//! Dirichlet data, identically on every rank (so the result does not depend on the number of
+//! ranks). Pinning selects one member of the family u + Σ α_j r_j, which all have the same
+//! strains, stresses and multipliers. If the load is not balanced in a free mode, the body is
+//! moved along the unbalanced load until the first contact node touches ([`Balance::Touch`]);
+//! if no node approaches the obstacle there is no equilibrium ([`Balance::NoSupport`]).
+
+use super::boundary::{ContactBoundary, NodeResult};
+use crate::case;
+use crate::error::RunError;
+use crate::mesh::Mesh;
+use crate::par::Ctx;
+use crate::partition::Layout;
+use nalgebra::{DMatrix, SymmetricEigen};
+
+/// Packed m×m Gram matrix (row-major, room for m = 6).
+pub type Gram = [f64; 36];
+
+/// One pinned dof: (mesh node, component).
+pub type Pin = (usize, usize);
+
+/// The rigid modes of a mesh, in coordinates centred and scaled to O(1).
+pub struct RigidModes {
+    pub dim: usize,
+    pub m: usize,
+    center: [f64; 3],
+    scale: f64,
+}
+
+impl RigidModes {
+    pub fn new(mesh: &Mesh) -> RigidModes {
+        let dim = mesh.dim;
+        let (lo, hi) = mesh.bounding_box();
+        let center = [0, 1, 2].map(|k| 0.5 * (lo[k] + hi[k]));
+        let scale = mesh.extent();
+        RigidModes {
+            dim,
+            m: if dim == 2 { 3 } else { 6 },
+            center,
+            scale,
+        }
+    }
+
+    /// Value of mode j at point x, component k.
+    #[inline]
+    pub fn value(&self, j: usize, x: &[f64; 3], k: usize) -> f64 {
+        let y = [0, 1, 2].map(|i| (x[i] - self.center[i]) / self.scale);
+        if j < self.dim {
+            return if j == k { 1.0 } else { 0.0 };
+        }
+        if self.dim == 2 {
+            // rotation (−y, x)
+            return match k {
+                0 => -y[1],
+                1 => y[0],
+                _ => 0.0,
+            };
+        }
+        // 3D rotations e_a × y for a = j − 3
+        let a = j - 3;
+        let e = [0, 1, 2].map(|i| if i == a { 1.0 } else { 0.0 });
+        let c = [
+            e[1] * y[2] - e[2] * y[1],
+            e[2] * y[0] - e[0] * y[2],
+            e[0] * y[1] - e[1] * y[0],
+        ];
+        c[k]
+    }
+
+    /// Row vector (over modes) of the constraint "component k of node at x".
+    pub fn dof_row(&self, x: &[f64; 3], k: usize) -> [f64; 6] {
+        let mut r = [0.0; 6];
+        for (j, rj) in r.iter_mut().enumerate().take(self.m) {
+            *rj = self.value(j, x, k);
+        }
+        r
+    }
+
+    /// Row vector of the constraint cᵀ u at a node at x (c a normal or a tangent).
+    pub fn direction_row(&self, x: &[f64; 3], n: &[f64; 3]) -> [f64; 6] {
+        let mut r = [0.0; 6];
+        for (j, rj) in r.iter_mut().enumerate().take(self.m) {
+            *rj = (0..self.dim).map(|k| n[k] * self.value(j, x, k)).sum();
+        }
+        r
+    }
+
+    /// Adds rowᵀ row to the packed m×m Gram matrix `g` (row-major, 36 entries).
+    pub fn add_outer(&self, g: &mut [f64], row: &[f64; 6]) {
+        for a in 0..self.m {
+            for b in 0..self.m {
+                g[a * self.m + b] += row[a] * row[b];
+            }
+        }
+    }
+
+    /// Free modes from the global Gram matrix: an m × m_f basis (columns, orthonormal).
+    pub fn free_modes(&self, g: &[f64]) -> DMatrix<f64> {
+        let m = self.m;
+        let gm = DMatrix::from_row_slice(m, m, &g[..m * m]);
+        let eig = SymmetricEigen::new(gm);
+        let lmax = eig.eigenvalues.iter().fold(0.0f64, |a, &b| a.max(b.abs()));
+        let tol = 1e-9 * lmax.max(1.0);
+        let cols: Vec<usize> = (0..m).filter(|&i| eig.eigenvalues[i] < tol).collect();
+        let mut q = DMatrix::zeros(m, cols.len());
+        for (c, &i) in cols.iter().enumerate() {
+            q.set_column(c, &eig.eigenvectors.column(i));
+        }
+        q
+    }
+
+    /// Chooses one dof (node, component) per free mode: among the nodes allowed by
+    /// `candidate`, greedily the dof whose free-mode values are largest after removing the
+    /// directions already pinned (pivoted Gram–Schmidt). Same result on every rank.
+    pub fn pins(
+        &self,
+        mesh: &Mesh,
+        q: &DMatrix<f64>,
+        candidate: impl Fn(usize) -> bool,
+    ) -> Vec<(usize, usize)> {
+        let mf = q.ncols();
+        if mf == 0 {
+            return Vec::new();
+        }
+        let dim = self.dim;
+        // Values of the free modes at every candidate dof.
+        let mut dofs: Vec<(usize, usize)> = Vec::new();
+        let mut w: Vec<f64> = Vec::new();
+        for v in 0..mesh.n_nodes() {
+            if !candidate(v) {
+                continue;
+            }
+            for k in 0..dim {
+                let row = self.dof_row(&mesh.coords[v], k);
+                dofs.push((v, k));
+                for c in 0..mf {
+                    w.push((0..self.m).map(|j| row[j] * q[(j, c)]).sum());
+                }
+            }
+        }
+        let mut chosen = Vec::new();
+        for _ in 0..mf {
+            let mut best = (0.0f64, usize::MAX);
+            for i in 0..dofs.len() {
+                let n2: f64 = w[i * mf..(i + 1) * mf].iter().map(|x| x * x).sum();
+                if n2 > best.0 * (1.0 + 1e-12) {
+                    best = (n2, i);
+                }
+            }
+            if best.1 == usize::MAX || best.0 < 1e-20 {
+                break;
+            }
+            let i = best.1;
+            chosen.push(dofs[i]);
+            let p: Vec<f64> = w[i * mf..(i + 1) * mf].to_vec();
+            let pn = best.0.sqrt();
+            let p: Vec<f64> = p.iter().map(|x| x / pn).collect();
+            for r in 0..dofs.len() {
+                let s: f64 = (0..mf).map(|c| w[r * mf + c] * p[c]).sum();
+                for c in 0..mf {
+                    w[r * mf + c] -= s * p[c];
+                }
+            }
+        }
+        chosen
+    }
+}
+
+/// Outcome of the load-balance test of the free rigid modes.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Balance {
+    Balanced,
+    /// Activate the contact node with this gmsh tag (the first to touch).
+    Touch(u64),
+    /// No equilibrium; the size of the unbalanced load.
+    NoSupport(f64),
+}
+
+/// The rigid modes left free by Dirichlet data and the current sets, and the dofs pinned to
+/// remove them.
+pub struct FreeModes {
+    modes: RigidModes,
+    enabled: bool,
+    /// Gram matrix of the Dirichlet dofs (fixed for the whole run).
+    g_dirichlet: Gram,
+    /// The Gram matrix the current pins were chosen for.
+    key: Option<Gram>,
+    /// Basis of the free modes (m × m_f).
+    q: DMatrix<f64>,
+    pins: Vec<Pin>,
+    /// Nodes allowed as pins: off the contact boundary, without Dirichlet data.
+    candidate: Vec<bool>,
+    /// Largest nodal load (scale of the balance test).
+    fmax: f64,
+}
+
+impl FreeModes {
+    /// Collective (two reductions).
+    pub fn new(
+        ctx: &Ctx,
+        mesh: &Mesh,
+        layout: &Layout,
+        fixed: &[f64],
+        b: &ContactBoundary,
+        f_local: &[f64],
+        setting: case::RigidModes,
+    ) -> FreeModes {
+        let dim = mesh.dim;
+        let modes = RigidModes::new(mesh);
+        let enabled = setting == case::RigidModes::Auto;
+        let mut g_dirichlet = [0.0; 36];
+        if enabled {
+            for &v in &layout.owned_nodes {
+                for k in 0..dim {
+                    if !fixed[v * dim + k].is_nan() {
+                        modes.add_outer(&mut g_dirichlet, &modes.dof_row(&mesh.coords[v], k));
+                    }
+                }
+            }
+            let total = ctx.sum_vec(&g_dirichlet);
+            g_dirichlet.copy_from_slice(&total);
+        }
+        let fmax = ctx.max_f64(f_local.iter().fold(0.0f64, |a, b| a.max(b.abs())));
+        let candidate = (0..mesh.n_nodes())
+            .map(|v| !b.on_contact_boundary[v] && (0..dim).all(|k| fixed[v * dim + k].is_nan()))
+            .collect();
+        FreeModes {
+            q: DMatrix::zeros(modes.m, 0),
+            modes,
+            enabled,
+            g_dirichlet,
+            key: None,
+            pins: Vec::new(),
+            candidate,
+            fmax,
+        }
+    }
+
+    /// The modes to test sets against (`None` when rigid-mode handling is off).
+    pub fn modes(&self) -> Option<&RigidModes> {
+        self.enabled.then_some(&self.modes)
+    }
+
+    pub fn pins(&self) -> &[Pin] {
+        &self.pins
+    }
+
+    /// New pins when the Gram matrix of Dirichlet data + the set (`g_set`) changed; `Ok(true)`
+    /// if the pins changed. Local (the same on every rank).
+    pub fn update(&mut self, mesh: &Mesh, g_set: &Gram) -> Result<bool, RunError> {
+        if !self.enabled {
+            return Ok(false);
+        }
+        let mut g = self.g_dirichlet;
+        for (x, y) in g.iter_mut().zip(g_set) {
+            *x += y;
+        }
+        if self.key == Some(g) {
+            return Ok(false);
+        }
+        let q = self.modes.free_modes(&g);
+        let pins = self.modes.pins(mesh, &q, |v| self.candidate[v]);
+        if pins.len() < q.ncols() {
+            return Err(RunError::Failed(format!(
+                "{} free rigid mode(s) but only {} dof(s) available to fix them",
+                q.ncols(),
+                pins.len()
+            )));
+        }
+        self.key = Some(g);
+        self.q = q;
+        self.pins = pins;
+        Ok(true)
+    }
+
+    /// The unbalanced load in the free rigid modes, φ = Qᵀ Rᵀ (f − A u) at the pins (the
+    /// dropped equations), and, if it is not zero, the inactive contact node that a rigid
+    /// motion along φ brings into contact first (smallest gap / closing speed; ties by tag).
+    /// `residual_at(v, k)` = (f − A u) at dof k of the owned mesh node v; `nodes` the iterate at
+    /// the contact nodes, `active` their A_n membership in its solve. Collective.
+    pub fn balance(
+        &self,
+        ctx: &Ctx,
+        mesh: &Mesh,
+        layout: &Layout,
+        b: &ContactBoundary,
+        (nodes, active): (&[NodeResult], &[bool]),
+        residual_at: impl Fn(usize, usize) -> f64,
+    ) -> Balance {
+        let (modes, q) = (&self.modes, &self.q);
+        let mf = q.ncols();
+        let mut phi = vec![0.0f64; mf];
+        for &(v, k) in &self.pins {
+            if layout.owns_node(v) {
+                let res = residual_at(v, k);
+                let row = modes.dof_row(&mesh.coords[v], k);
+                for (c, ph) in phi.iter_mut().enumerate() {
+                    *ph += res * (0..modes.m).map(|j| row[j] * q[(j, c)]).sum::<f64>();
+                }
+            }
+        }
+        let g = ctx.sum_vec(&phi);
+        let norm = g.iter().map(|x| x * x).sum::<f64>().sqrt();
+        if norm <= 1e-8 * self.fmax.max(f64::MIN_POSITIVE) {
+            return Balance::Balanced;
+        }
+        // Motion per unit α in mode coefficients: Q φ / |φ|.
+        let coef: Vec<f64> = (0..modes.m)
+            .map(|j| (0..mf).map(|c| q[(j, c)] * g[c]).sum::<f64>() / norm)
+            .collect();
+        let mut best = (f64::INFINITY, u64::MAX);
+        for ((k, r), &a) in b.nodes.iter().zip(nodes).zip(active) {
+            if a {
+                continue;
+            }
+            let nr = modes.direction_row(&k.x, &k.frame.n);
+            let speed = -(0..modes.m).map(|j| nr[j] * coef[j]).sum::<f64>();
+            if speed <= 1e-12 {
+                continue;
+            }
+            let alpha = (r.u_n + k.gap).max(0.0) / speed;
+            if alpha < best.0 || (alpha == best.0 && k.tag < best.1) {
+                best = (alpha, k.tag);
+            }
+        }
+        let amin = ctx.min_f64(best.0);
+        if !amin.is_finite() {
+            return Balance::NoSupport(norm);
+        }
+        let mine = if best.0 <= amin * (1.0 + 1e-12) {
+            best.1
+        } else {
+            u64::MAX
+        };
+        Balance::Touch(ctx.min_u64(mine))
+    }
+
+    /// The "no support" diagnosis of an unbalanced load that no contact can carry.
+    pub fn no_support(&self, n_active: usize, reaction: f64) -> RunError {
+        RunError::Failed(format!(
+            "no support: the body has {} rigid mode(s) fixed neither by Dirichlet data nor by \
+             contact ({} active contact node(s)), the load is not balanced in them (unbalanced \
+             load {:.3e} against a largest nodal load of {:.3e}) and moving along it brings no \
+             contact node closer to the obstacle: there is no equilibrium — add Dirichlet data \
+             or move the obstacle into the body's way",
+            self.pins.len(),
+            n_active,
+            reaction,
+            self.fmax
+        ))
+    }
+}

@@ -22,7 +22,7 @@ use serde::Serialize;
 #[serde(untagged)]
 enum SolveReport {
     Linear(LinearSummary),
-    Contact(ContactReport),
+    Contact(Box<ContactReport>),
 }
 
 /// The solve stage's product.
@@ -102,7 +102,7 @@ fn solve(
             let s = signorini::solve(ctx, &settings, mesh, layout, fixed, sys, &case.solver)?;
             Ok(Solved {
                 u: s.u,
-                report: SolveReport::Contact(s.report),
+                report: SolveReport::Contact(Box::new(s.report)),
                 contact: Some(s.result),
             })
         }

@@ -76,7 +76,7 @@ pub fn build(
 ) -> Result<ContactBoundary, RunError> {
     let dim = mesh.dim;
     let file = settings.file.as_path();
-    let obstacle = settings.obstacle.clone();
+    let obstacle = settings.obstacle;
     let facets = group_facets(mesh, &settings.group);
     let mut weight = vec![0.0f64; mesh.n_nodes()];
     let mut on = vec![false; mesh.n_nodes()];

@@ -186,66 +186,16 @@ pub fn assemble(comm: MPI_Comm, layout: &Layout, p: &Problem) -> petsc::Result<S
     let t1 = Instant::now();
     let (lambda, mu) = p.material.lame();
     let mut ke = [0.0f64; 144];
-    let mut fe = [0.0f64; 12];
     let mut idx = [0 as PInt; 12];
-    let mut fixed_local = [f64::NAN; 12];
     let mut bidx: Vec<PInt> = Vec::with_capacity(layout.local_cells.len() * nd);
     let mut bval: Vec<f64> = Vec::with_capacity(layout.local_cells.len() * nd);
     // Element rows of nodes owned by other ranks: (local node, dofs, element matrix).
     let mut off_rows: Vec<(usize, [PInt; 12], [f64; 144])> = Vec::new();
     for &c in &layout.local_cells {
         let nodes = mesh.cell(c);
-        if dim == 2 {
-            let x = [
-                [mesh.coords[nodes[0]][0], mesh.coords[nodes[0]][1]],
-                [mesh.coords[nodes[1]][0], mesh.coords[nodes[1]][1]],
-                [mesh.coords[nodes[2]][0], mesh.coords[nodes[2]][1]],
-            ];
-            let k: &mut [f64; 36] = (&mut ke[..36]).try_into().unwrap();
-            fem::tri_stiffness(&x, lambda, mu, k);
-        } else {
-            let x = [
-                mesh.coords[nodes[0]],
-                mesh.coords[nodes[1]],
-                mesh.coords[nodes[2]],
-                mesh.coords[nodes[3]],
-            ];
-            fem::tet_stiffness(&x, lambda, mu, &mut ke);
-        }
+        element_stiffness(mesh, nodes, lambda, mu, &mut ke);
         dofs_of(nodes, layout, dim, &mut idx);
-        // Symmetric elimination of fixed dofs.
-        let mut any_fixed = false;
-        for (a_, &v) in nodes.iter().enumerate() {
-            for i in 0..dim {
-                let g = p.fixed[v * dim + i];
-                fixed_local[a_ * dim + i] = g;
-                any_fixed |= !g.is_nan();
-            }
-        }
-        if any_fixed {
-            fe[..nd].iter_mut().for_each(|x| *x = 0.0);
-            for j in 0..nd {
-                let g = fixed_local[j];
-                if g.is_nan() {
-                    continue;
-                }
-                for i in 0..nd {
-                    if i != j {
-                        if fixed_local[i].is_nan() {
-                            fe[i] -= ke[i * nd + j] * g;
-                        }
-                        ke[i * nd + j] = 0.0;
-                        ke[j * nd + i] = 0.0;
-                    }
-                }
-            }
-            for i in 0..nd {
-                if fixed_local[i].is_nan() && fe[i] != 0.0 {
-                    bidx.push(idx[i]);
-                    bval.push(fe[i]);
-                }
-            }
-        }
+        eliminate_fixed(p, nodes, &mut ke, &idx, &mut bidx, &mut bval);
         // Scatter-add into the owned rows' CSR values; rows of other ranks' nodes go through
         // MatSetValues after the matrix exists.
         for (ia, &va) in nodes.iter().enumerate() {
@@ -284,8 +234,94 @@ pub fn assemble(comm: MPI_Comm, layout: &Layout, p: &Problem) -> petsc::Result<S
     stats.mallocs = st.mallocs;
     stats.nonzeros = st.nonzeros;
 
-    // Loads: body force on own cells, facet loads on facets whose cell is ours.
     let t2 = Instant::now();
+    load_entries(p, layout, &mut bidx, &mut bval);
+    b.set_values(&bidx, &bval, true)?;
+    b.assemble()?;
+    fixed_rhs(&a, &mut b, layout, p)?;
+    stats.load_seconds = t2.elapsed().as_secs_f64();
+    Ok(System { a, b, stats })
+}
+
+/// A cell's element stiffness matrix (row-major, (d+1)d × (d+1)d).
+fn element_stiffness(mesh: &Mesh, nodes: &[usize], lambda: f64, mu: f64, ke: &mut [f64; 144]) {
+    if mesh.dim == 2 {
+        let x = [
+            [mesh.coords[nodes[0]][0], mesh.coords[nodes[0]][1]],
+            [mesh.coords[nodes[1]][0], mesh.coords[nodes[1]][1]],
+            [mesh.coords[nodes[2]][0], mesh.coords[nodes[2]][1]],
+        ];
+        let k: &mut [f64; 36] = (&mut ke[..36]).try_into().expect("36 entries");
+        fem::tri_stiffness(&x, lambda, mu, k);
+    } else {
+        let x = [
+            mesh.coords[nodes[0]],
+            mesh.coords[nodes[1]],
+            mesh.coords[nodes[2]],
+            mesh.coords[nodes[3]],
+        ];
+        fem::tet_stiffness(&x, lambda, mu, ke);
+    }
+}
+
+/// Symmetric elimination of the cell's fixed dofs: their rows and columns of `ke` become zero
+/// off the diagonal, and −K_ij g_j goes to the right-hand side of the free dofs i (entries
+/// appended to `bidx`/`bval`).
+fn eliminate_fixed(
+    p: &Problem,
+    nodes: &[usize],
+    ke: &mut [f64; 144],
+    idx: &[PInt; 12],
+    bidx: &mut Vec<PInt>,
+    bval: &mut Vec<f64>,
+) {
+    let dim = p.mesh.dim;
+    let nd = nodes.len() * dim;
+    let mut fixed_local = [f64::NAN; 12];
+    let mut any_fixed = false;
+    for (a, &v) in nodes.iter().enumerate() {
+        for i in 0..dim {
+            let g = p.fixed[v * dim + i];
+            fixed_local[a * dim + i] = g;
+            any_fixed |= !g.is_nan();
+        }
+    }
+    if !any_fixed {
+        return;
+    }
+    let mut fe = [0.0f64; 12];
+    for j in 0..nd {
+        let g = fixed_local[j];
+        if g.is_nan() {
+            continue;
+        }
+        for i in 0..nd {
+            if i != j {
+                if fixed_local[i].is_nan() {
+                    fe[i] -= ke[i * nd + j] * g;
+                }
+                ke[i * nd + j] = 0.0;
+                ke[j * nd + i] = 0.0;
+            }
+        }
+    }
+    for i in 0..nd {
+        if fixed_local[i].is_nan() && fe[i] != 0.0 {
+            bidx.push(idx[i]);
+            bval.push(fe[i]);
+        }
+    }
+}
+
+/// The load entries (3.8) of this rank: body force on its cells, facet loads on the facets
+/// whose cell is its own.
+fn load_entries(p: &Problem, layout: &Layout, bidx: &mut Vec<PInt>, bval: &mut Vec<f64>) {
+    let mesh = p.mesh;
+    let dim = mesh.dim;
+    let nd = (dim + 1) * dim;
+    let mut fe = [0.0f64; 12];
+    let mut idx = [0 as PInt; 12];
+    // Loads: body force on own cells, facet loads on facets whose cell is ours.
     let mut xs: Vec<[f64; 3]> = Vec::with_capacity(4);
     match &p.body_force {
         BodyForce::None => {}
@@ -331,10 +367,11 @@ pub fn assemble(comm: MPI_Comm, layout: &Layout, p: &Problem) -> petsc::Result<S
             bval.extend_from_slice(&fe[..nf]);
         }
     }
-    b.set_values(&bidx, &bval, true)?;
-    b.assemble()?;
+}
 
-    // Fixed dofs: b_j = A_jj g_j (A's row j is zero off the diagonal).
+/// Fixed dofs: b_j = A_jj g_j (A's row j is zero off the diagonal).
+fn fixed_rhs(a: &Matrix, b: &mut Vector, layout: &Layout, p: &Problem) -> petsc::Result<()> {
+    let dim = p.mesh.dim;
     let mut diag = b.duplicate()?;
     a.diagonal(&mut diag)?;
     let dvals = diag.to_local_vec()?;
@@ -348,8 +385,7 @@ pub fn assemble(comm: MPI_Comm, layout: &Layout, p: &Problem) -> petsc::Result<S
             }
         }
     })?;
-    stats.load_seconds = t2.elapsed().as_secs_f64();
-    Ok(System { a, b, stats })
+    Ok(())
 }
 
 /// Nodal coordinates of the owned nodes as a PETSc vector with block size dim (for the

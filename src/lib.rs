@@ -9,6 +9,7 @@ pub mod contact;
 pub mod driver;
 pub mod error;
 pub mod fem;
+pub mod geom;
 pub mod mesh;
 pub mod output;
 pub mod par;

@@ -12,17 +12,11 @@
 //!   That is harmless: the Tresca algebra is equivariant under a rotation of the tangent
 //!   basis (tested in `tresca`), so the solution does not depend on it.
 
+use crate::geom::{cross, dot};
+
 /// 2D tangent τ = (n_y, −n_x) of a unit normal n.
 pub fn tangent_2d(n: [f64; 2]) -> [f64; 2] {
     [n[1], -n[0]]
-}
-
-fn cross(a: &[f64; 3], b: &[f64; 3]) -> [f64; 3] {
-    [
-        a[1] * b[2] - a[2] * b[1],
-        a[2] * b[0] - a[0] * b[2],
-        a[0] * b[1] - a[1] * b[0],
-    ]
 }
 
 /// 3D tangents (τ_1, τ_2) of a unit normal n, see the module doc for the rule.
@@ -38,7 +32,7 @@ pub fn tangents_3d(n: [f64; 3]) -> [[f64; 3]; 2] {
     t[i] += 1.0;
     let len = (t[0] * t[0] + t[1] * t[1] + t[2] * t[2]).sqrt();
     let t1 = t.map(|x| x / len);
-    let t2 = cross(&n, &t1);
+    let t2 = cross(n, t1);
     [t1, t2]
 }
 
@@ -85,15 +79,15 @@ impl Frame {
 
     /// v_n = v·n
     pub fn normal_part(&self, v: &[f64; 3]) -> f64 {
-        dot3(v, &self.n)
+        dot(*v, self.n)
     }
 
     /// v_τ = (v·τ_1, v·τ_2); second entry 0 in 2D.
     pub fn tangential_part(&self, v: &[f64; 3]) -> [f64; 2] {
         if self.dim == 2 {
-            [dot3(v, &self.t[0]), 0.0]
+            [dot(*v, self.t[0]), 0.0]
         } else {
-            [dot3(v, &self.t[0]), dot3(v, &self.t[1])]
+            [dot(*v, self.t[0]), dot(*v, self.t[1])]
         }
     }
 
@@ -107,10 +101,6 @@ impl Frame {
         }
         r
     }
-}
-
-fn dot3(a: &[f64; 3], b: &[f64; 3]) -> f64 {
-    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
 }
 
 #[cfg(test)]
@@ -153,7 +143,7 @@ mod tests {
                 for (a, x) in basis.iter().enumerate() {
                     for (b, y) in basis.iter().enumerate() {
                         let want = if a == b { 1.0 } else { 0.0 };
-                        assert!((dot3(x, y) - want).abs() < 1e-14);
+                        assert!((dot(*x, *y) - want).abs() < 1e-14);
                     }
                 }
                 if dim == 2 {
@@ -163,7 +153,7 @@ mod tests {
                     let det = f.t[0][0] * f.n[1] - f.t[0][1] * f.n[0];
                     assert!((det - 1.0).abs() < 1e-14);
                 } else {
-                    let c = cross(&f.t[0], &f.t[1]);
+                    let c = cross(f.t[0], f.t[1]);
                     for (ck, nk) in c.iter().zip(&f.n) {
                         assert!((ck - nk).abs() < 1e-14);
                     }

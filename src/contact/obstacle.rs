@@ -10,6 +10,7 @@
 //! ≥ 0 when x is outside the obstacle (on the body side), < 0 when x penetrates it.
 
 use crate::error::InputError;
+use crate::geom::{dot, sub};
 use std::fmt;
 use std::path::Path;
 
@@ -103,14 +104,6 @@ fn finite(v: &[f64; 3]) -> bool {
     v.iter().all(|x| x.is_finite())
 }
 
-fn sub(a: &[f64; 3], b: &[f64; 3]) -> [f64; 3] {
-    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
-}
-
-fn dot3(a: &[f64; 3], b: &[f64; 3]) -> f64 {
-    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
-}
-
 fn flat(dim: usize, x: [f64; 3]) -> [f64; 3] {
     if dim == 2 {
         [x[0], x[1], 0.0]
@@ -136,7 +129,7 @@ impl Plane {
             return Err(ObstacleError::ZeroNormal);
         }
         let s = normal.map(|x| x / big);
-        let len = dot3(&s, &s).sqrt();
+        let len = dot(s, s).sqrt();
         Ok(Plane {
             dim,
             point,
@@ -156,7 +149,7 @@ impl Plane {
     /// Closest point, normal and gap g0(x) = (x − p)·n.
     pub fn project(&self, x: [f64; 3]) -> Projection {
         let x = flat(self.dim, x);
-        let g = dot3(&sub(&x, &self.point), &self.normal);
+        let g = dot(sub(x, self.point), self.normal);
         let n = self.normal;
         Projection {
             closest: [x[0] - g * n[0], x[1] - g * n[1], x[2] - g * n[2]],
@@ -201,8 +194,8 @@ impl Sphere {
         if !finite(&x) {
             return Err(ObstacleError::NotFinite);
         }
-        let d = sub(&x, &self.center);
-        let dist = dot3(&d, &d).sqrt();
+        let d = sub(x, self.center);
+        let dist = dot(d, d).sqrt();
         // finite: x, centre and radius are finite
         if dist <= 1e-12 * self.radius {
             return Err(ObstacleError::AtCentre);
@@ -245,8 +238,8 @@ mod tests {
     }
 
     fn dist(a: &[f64; 3], b: &[f64; 3]) -> f64 {
-        let d = sub(a, b);
-        dot3(&d, &d).sqrt()
+        let d = sub(*a, *b);
+        dot(d, d).sqrt()
     }
 
     /// The thesis' benchmark: plane y = -1 below the unit disk, n = (0, 1).
@@ -275,17 +268,17 @@ mod tests {
         for _ in 0..200 {
             let pt = [0.0; 3].map(|_: f64| rng.gen_range(-2.0..2.0));
             let nr = [0.0; 3].map(|_: f64| rng.gen_range(-1.0..1.0));
-            if dot3(&nr, &nr) < 1e-4 {
+            if dot(nr, nr) < 1e-4 {
                 continue;
             }
             let p = Plane::new(pt, nr, 3).unwrap();
             let n = p.normal();
-            assert!(close(dot3(&n, &n), 1.0, 1e-14));
-            assert!(dot3(&n, &nr) > 0.0, "orientation kept");
+            assert!(close(dot(n, n), 1.0, 1e-14));
+            assert!(dot(n, nr) > 0.0, "orientation kept");
             let x = [0.0; 3].map(|_: f64| rng.gen_range(-3.0..3.0));
             let q = p.project(x);
             // closest point lies on the plane
-            assert!(dot3(&sub(&q.closest, &pt), &n).abs() < 1e-13);
+            assert!(dot(sub(q.closest, pt), n).abs() < 1e-13);
             // x = closest + g n
             for i in 0..3 {
                 assert!(close(x[i], q.closest[i] + q.gap * n[i], 1e-13));
@@ -326,18 +319,18 @@ mod tests {
             let s = Sphere::new(c, r, 3).unwrap();
             let x = [0.0; 3].map(|_: f64| rng.gen_range(-5.0..5.0));
             let q = s.project(x).unwrap();
-            assert!(close(dot3(&q.normal, &q.normal), 1.0, 1e-14));
+            assert!(close(dot(q.normal, q.normal), 1.0, 1e-14));
             assert!(close(dist(&q.closest, &c), r, 1e-13));
             assert!(close(q.gap, dist(&x, &c) - r, 1e-13));
             // x = closest + g n; n points from centre to x
             for ((xi, pi), ni) in x.iter().zip(&q.closest).zip(&q.normal) {
                 assert!(close(*xi, pi + q.gap * ni, 1e-12));
             }
-            assert!(dot3(&q.normal, &sub(&x, &c)) > 0.0);
+            assert!(dot(q.normal, sub(x, c)) > 0.0);
             // the closest point really is closest among sampled sphere points
             for _ in 0..5 {
                 let d = [0.0; 3].map(|_: f64| rng.gen_range(-1.0..1.0));
-                let l = dot3(&d, &d).sqrt();
+                let l = dot(d, d).sqrt();
                 if l < 1e-3 {
                     continue;
                 }

@@ -4,6 +4,8 @@
 // Index loops mirror the tensor formulas (sums over i, j, a, b).
 #![allow(clippy::needless_range_loop)]
 
+use crate::geom::{cross, dot, sub};
+
 /// Gradients of the three P1 shape functions of a triangle, and its SIGNED area
 /// (positive when the nodes run counter-clockwise).
 ///
@@ -31,19 +33,19 @@ pub fn tri_gradients(x: &[[f64; 2]; 3]) -> ([[f64; 2]; 3], f64) {
 /// A degenerate tetrahedron (volume exactly 0) gives zero gradients and volume 0.
 #[inline]
 pub fn tet_gradients(x: &[[f64; 3]; 4]) -> ([[f64; 3]; 4], f64) {
-    let e1 = sub3(x[1], x[0]);
-    let e2 = sub3(x[2], x[0]);
-    let e3 = sub3(x[3], x[0]);
-    let c23 = cross3(e2, e3);
-    let det = dot3(e1, c23);
+    let e1 = sub(x[1], x[0]);
+    let e2 = sub(x[2], x[0]);
+    let e3 = sub(x[3], x[0]);
+    let c23 = cross(e2, e3);
+    let det = dot(e1, c23);
     if det == 0.0 {
         return ([[0.0; 3]; 4], 0.0);
     }
     let inv = 1.0 / det;
     // grad phi_k (k = 1, 2, 3) are the rows of J^{-1}, J = [e1 e2 e3]:
     // e2 x e3 / det, e3 x e1 / det, e1 x e2 / det.
-    let c31 = cross3(e3, e1);
-    let c12 = cross3(e1, e2);
+    let c31 = cross(e3, e1);
+    let c12 = cross(e1, e2);
     let mut g = [[0.0; 3]; 4];
     for i in 0..3 {
         g[1][i] = c23[i] * inv;
@@ -105,23 +107,4 @@ pub fn tet_stiffness(x: &[[f64; 3]; 4], lambda: f64, mu: f64, k: &mut [f64; 144]
     let (g, vol) = tet_gradients(x);
     p1_stiffness::<3, 4>(&g, vol.abs(), lambda, mu, k);
     vol
-}
-
-#[inline(always)]
-pub(crate) fn sub3(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
-    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
-}
-
-#[inline(always)]
-pub(crate) fn cross3(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
-    [
-        a[1] * b[2] - a[2] * b[1],
-        a[2] * b[0] - a[0] * b[2],
-        a[0] * b[1] - a[1] * b[0],
-    ]
-}
-
-#[inline(always)]
-pub(crate) fn dot3(a: [f64; 3], b: [f64; 3]) -> f64 {
-    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
 }

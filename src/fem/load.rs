@@ -1,7 +1,7 @@
 //! Load vectors (the f of (3.8)): boundary tractions and body forces on P1 cells/facets,
 //! lumped for constant data, by quadrature for variable data.
 
-use super::element::{cross3, dot3, sub3};
+use crate::geom::{cross, dot, sub};
 
 /// Unit normal and measure (length in 2D, area in 3D) of a boundary facet.
 ///
@@ -26,8 +26,8 @@ pub fn facet_normal_measure(x: &[[f64; 3]]) -> ([f64; 3], f64) {
             ([ty / len, -tx / len, 0.0], len)
         }
         3 => {
-            let c = cross3(sub3(x[1], x[0]), sub3(x[2], x[0]));
-            let n2 = dot3(c, c).sqrt();
+            let c = cross(sub(x[1], x[0]), sub(x[2], x[0]));
+            let n2 = dot(c, c).sqrt();
             if n2 == 0.0 {
                 return ([0.0; 3], 0.0);
             }
@@ -71,16 +71,16 @@ pub fn simplex_measure(x: &[[f64; 3]], dim: usize) -> f64 {
     };
     match x.len() {
         2 => {
-            let d = sub3(p(1), p(0));
-            dot3(d, d).sqrt()
+            let d = sub(p(1), p(0));
+            dot(d, d).sqrt()
         }
         3 => {
-            let c = cross3(sub3(p(1), p(0)), sub3(p(2), p(0)));
-            0.5 * dot3(c, c).sqrt()
+            let c = cross(sub(p(1), p(0)), sub(p(2), p(0)));
+            0.5 * dot(c, c).sqrt()
         }
         4 => {
-            let c = cross3(sub3(p(2), p(0)), sub3(p(3), p(0)));
-            dot3(sub3(p(1), p(0)), c).abs() / 6.0
+            let c = cross(sub(p(2), p(0)), sub(p(3), p(0)));
+            dot(sub(p(1), p(0)), c).abs() / 6.0
         }
         n => panic!("simplex_measure: 2, 3 or 4 points expected, got {n}"),
     }

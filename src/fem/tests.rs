@@ -179,16 +179,7 @@ fn plane_stress_is_plane_strain_with_modified_constants() {
 }
 
 #[test]
-fn material_validation() {
-    assert!(mat(2.0, 0.3, Model::PlaneStrain).validate().is_ok());
-    assert!(mat(0.0, 0.3, Model::Solid).validate().is_err());
-    assert!(mat(-1.0, 0.3, Model::Solid).validate().is_err());
-    assert!(mat(f64::NAN, 0.3, Model::Solid).validate().is_err());
-    assert!(mat(1.0, 0.5, Model::Solid).validate().is_err());
-    assert!(mat(1.0, -1.0, Model::PlaneStress).validate().is_err());
-    assert!(mat(1.0, f64::INFINITY, Model::PlaneStress)
-        .validate()
-        .is_err());
+fn model_dimensions() {
     assert_eq!(Model::PlaneStrain.dim(), 2);
     assert_eq!(Model::PlaneStress.dim(), 2);
     assert_eq!(Model::Solid.dim(), 3);

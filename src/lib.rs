@@ -18,4 +18,5 @@ pub mod petsc;
 pub mod reduced;
 pub mod rigid;
 pub mod run;
+pub mod snesvi;
 pub mod solver;

@@ -87,6 +87,13 @@ impl From<petsc::PetscError> for SnesViError {
 /// Default relative tolerance of the inactive-set residual: far below the 1e-8 agreement with
 /// Algorithm 1, well above round-off (-snes_rtol overrides).
 pub const DEFAULT_RTOL: f64 = 1e-12;
+/// Default line search: the full projected Newton step (-snes_linesearch_type overrides).
+/// The residual is linear and the linear solves exact, so each reduced-space step is already
+/// the exact solution on its inactive set; PETSc's default for VI ("bt", sufficient decrease
+/// of the inactive-set residual) rejects the first step whenever that system is singular in a
+/// rigid mode only the contact holds (block on a plane: every contact node starts on its bound
+/// with F = 0, which PETSc counts inactive) and stops with DIVERGED_LINE_SEARCH.
+pub const DEFAULT_LINESEARCH: &str = "basic";
 /// Default iteration cap (-snes_max_it overrides).
 pub const DEFAULT_MAX_IT: usize = 200;
 
@@ -268,6 +275,7 @@ pub fn solve_snesvi(
         &upper,
         &mut x,
         "vinewtonrsls",
+        Some(DEFAULT_LINESEARCH),
         DEFAULT_RTOL,
         DEFAULT_MAX_IT,
     )?;

@@ -82,8 +82,9 @@ fn c_str(p: *const c_char) -> String {
 }
 
 /// Solves the box-constrained linear VI  lower ≤ x ≤ upper,  F(x) = A x − b ⟂ bounds  with SNES
-/// (type `default_type`, e.g. "vinewtonrsls"; `-snes_type` and the other `-snes_*`, `-ksp_*`,
-/// `-pc_*` options of the database override). `x` holds the initial guess (SNES projects it
+/// (type `default_type`, e.g. "vinewtonrsls", line search `default_linesearch` if given, e.g.
+/// "basic"; `-snes_type`, `-snes_linesearch_type` and the other `-snes_*`, `-ksp_*`, `-pc_*`
+/// options of the database override). `x` holds the initial guess (SNES projects it
 /// onto the bounds) and receives the solution. Default tolerances: relative `rtol` on the
 /// inactive-set residual, `max_it` iterations (both overridable by -snes_rtol / -snes_max_it).
 /// Collective on `comm`.
@@ -96,6 +97,7 @@ pub fn solve_linear_vi(
     upper: &Vector,
     x: &mut Vector,
     default_type: &str,
+    default_linesearch: Option<&str>,
     rtol: f64,
     max_it: usize,
 ) -> Result<ViInfo> {
@@ -110,6 +112,12 @@ pub fn solve_linear_vi(
         check(ffi::SNESCreate(comm, &mut snes))?;
         let result = (|| {
             check(ffi::SNESSetType(snes, ty.as_ptr()))?;
+            if let Some(ls_type) = default_linesearch {
+                let lt = cstring(ls_type);
+                let mut ls: ffi::SNESLineSearch = ptr::null_mut();
+                check(ffi::SNESGetLineSearch(snes, &mut ls))?;
+                check(ffi::SNESLineSearchSetType(ls, lt.as_ptr()))?;
+            }
             check(ffi::SNESSetFunction(
                 snes,
                 f.raw,

@@ -37,7 +37,7 @@ fn main() {
         .allowlist_function("Petsc(Initialize|Finalize|Initialized|ErrorMessage|Options.*|MemoryGetCurrentUsage|MemoryGetMaximumUsage|MemorySetGetMaximumUsage|LogDefaultBegin|LogView|ViewerASCIIGetStdout|PopErrorHandler|MallocA|PushErrorHandler|ReturnErrorHandler|GetVersion)")
         .allowlist_function("(Vec|Mat|KSP|PC|IS|MatPartitioning|MatNullSpace|PetscViewer)[A-Z].*")
         // SNES VI (src/snesvi.rs): only what the linear variational inequality needs.
-        .allowlist_function("SNES(Create|Destroy|SetType|GetType|SetFunction|SetJacobian|SetFromOptions|SetTolerances|Solve|GetIterationNumber|GetLinearSolveIterations|GetConvergedReason|GetConvergedReasonString|GetNumberFunctionEvals|VISetVariableBounds|GetFunctionNorm|GetLineSearch|LineSearchSetType)")
+        .allowlist_function("SNES(Create|Destroy|SetType|GetType|SetFunction|SetJacobian|SetFromOptions|SetTolerances|Solve|GetIterationNumber|GetLinearSolveIterations|GetConvergedReason|GetConvergedReasonString|GetNumberFunctionEvals|VISetVariableBounds|GetFunctionNorm|GetLineSearch|LineSearchSetType|GetKSP)")
         .allowlist_var("SNES(VINEWTON(RS|SS)LS|LINESEARCHBASIC|LINESEARCHBT)")
         .allowlist_var("PETSC_.*")
         .allowlist_var("(MAT|KSP|PC|VEC|IS)[A-Z_]+.*")

@@ -87,7 +87,8 @@ impl From<petsc::PetscError> for SnesViError {
 /// Default relative tolerance of the inactive-set residual: far below the 1e-8 agreement with
 /// Algorithm 1, well above round-off (-snes_rtol overrides).
 pub const DEFAULT_RTOL: f64 = 1e-12;
-/// Default line search: the full projected Newton step (-snes_linesearch_type overrides).
+/// Default line search of vinewtonrsls: the full projected Newton step (-snes_linesearch_type
+/// overrides; vinewtonssls keeps PETSc's default).
 /// The residual is linear and the linear solves exact, so each reduced-space step is already
 /// the exact solution on its inactive set; PETSc's default for VI ("bt", sufficient decrease
 /// of the inactive-set residual) rejects the first step whenever that system is singular in a
@@ -190,7 +191,9 @@ pub fn solve_snesvi(
 ) -> Result<SnesViResult, SnesViError> {
     let t0 = Instant::now();
     if !(dim == 2 || dim == 3) {
-        return Err(SnesViError::Input(format!("dimension {dim}: must be 2 or 3")));
+        return Err(SnesViError::Input(format!(
+            "dimension {dim}: must be 2 or 3"
+        )));
     }
     let (lo, hi) = a.ownership_range()?;
     let mut frames = Vec::with_capacity(contact.len());
@@ -263,7 +266,14 @@ pub fn solve_snesvi(
             s[row - lo] = -gap;
         }
     })?;
+    // Start: u = 0 projected onto the bounds (x_n = max(0, −g)); vinewtonrsls would project
+    // it itself, vinewtonssls needs a feasible start.
     let mut x = b.duplicate()?;
+    x.write(|s| {
+        for (row, _, gap) in &frames {
+            s[row - lo] = (-gap).max(0.0);
+        }
+    })?;
     let setup_seconds = t0.elapsed().as_secs_f64();
 
     let t1 = Instant::now();

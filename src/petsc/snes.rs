@@ -72,6 +72,23 @@ unsafe extern "C" fn constant_jacobian(
     0
 }
 
+/// J = A again (SNES Jacobian callback): `vinewtonssls` overwrites its Jacobian matrix with
+/// D_a + D_b J in place, so a constant Jacobian must be restored before every step.
+unsafe extern "C" fn restored_jacobian(
+    _snes: ffi::SNES,
+    _x: ffi::Vec,
+    j: ffi::Mat,
+    _p: ffi::Mat,
+    ctx: *mut c_void,
+) -> ffi::PetscErrorCode {
+    // SAFETY: ctx is the `LinearResidual` of `solve_linear_vi` (alive until SNESDestroy); j is
+    // the duplicate of its A given to SNESSetJacobian, so the patterns are the same.
+    unsafe {
+        let r = &*(ctx as *const LinearResidual);
+        ffi::MatCopy(r.a, j, ffi::SAME_NONZERO_PATTERN)
+    }
+}
+
 fn c_str(p: *const c_char) -> String {
     if p.is_null() {
         String::new()
@@ -82,9 +99,9 @@ fn c_str(p: *const c_char) -> String {
 }
 
 /// Solves the box-constrained linear VI  lower ≤ x ≤ upper,  F(x) = A x − b ⟂ bounds  with SNES
-/// (type `default_type`, e.g. "vinewtonrsls", line search `default_linesearch` if given, e.g.
-/// "basic"; `-snes_type`, `-snes_linesearch_type` and the other `-snes_*`, `-ksp_*`, `-pc_*`
-/// options of the database override). `x` holds the initial guess (SNES projects it
+/// (type `default_type`, e.g. "vinewtonrsls"; `-snes_type` and the other `-snes_*`, `-ksp_*`,
+/// `-pc_*` options of the database override). `default_linesearch` (e.g. "basic") is used with
+/// `default_type` unless `-snes_linesearch_type` is given; another type keeps PETSc's own. `x` holds the initial guess (SNES projects it
 /// onto the bounds) and receives the solution. Default tolerances: relative `rtol` on the
 /// inactive-set residual, `max_it` iterations (both overridable by -snes_rtol / -snes_max_it).
 /// Collective on `comm`.
@@ -112,12 +129,6 @@ pub fn solve_linear_vi(
         check(ffi::SNESCreate(comm, &mut snes))?;
         let result = (|| {
             check(ffi::SNESSetType(snes, ty.as_ptr()))?;
-            if let Some(ls_type) = default_linesearch {
-                let lt = cstring(ls_type);
-                let mut ls: ffi::SNESLineSearch = ptr::null_mut();
-                check(ffi::SNESGetLineSearch(snes, &mut ls))?;
-                check(ffi::SNESLineSearchSetType(ls, lt.as_ptr()))?;
-            }
             check(ffi::SNESSetFunction(
                 snes,
                 f.raw,
@@ -141,6 +152,52 @@ pub fn solve_linear_vi(
                 ffi::PETSC_DEFAULT as PInt,
             ))?;
             check(ffi::SNESSetFromOptions(snes))?;
+            // Only the reduced-space method leaves the Jacobian matrix alone; the others get
+            // their own copy, restored from A before every step.
+            let mut tname: *const c_char = ptr::null();
+            check(ffi::SNESGetType(snes, &mut tname))?;
+            let chosen = c_str(tname);
+            if let Some(ls_type) = default_linesearch {
+                if chosen == default_type && !options::has("-snes_linesearch_type")? {
+                    let lt = cstring(ls_type);
+                    let mut ls: ffi::SNESLineSearch = ptr::null_mut();
+                    check(ffi::SNESGetLineSearch(snes, &mut ls))?;
+                    check(ffi::SNESLineSearchSetType(ls, lt.as_ptr()))?;
+                }
+            }
+            if chosen != "vinewtonrsls" {
+                // The semismooth Jacobian D_a + D_b A is not symmetric: a Cholesky preset
+                // (symmetric systems) becomes LU with the same factorisation package.
+                let mut ksp: ffi::KSP = ptr::null_mut();
+                let mut pc: ffi::PC = ptr::null_mut();
+                let mut pt: *const c_char = ptr::null();
+                check(ffi::SNESGetKSP(snes, &mut ksp))?;
+                check(ffi::KSPGetPC(ksp, &mut pc))?;
+                check(ffi::PCGetType(pc, &mut pt))?;
+                if c_str(pt) == "cholesky" {
+                    // (PCSetFromOptions would read -pc_type cholesky again: copy the package.)
+                    let mut st: *const c_char = ptr::null();
+                    check(ffi::PCFactorGetMatSolverType(pc, &mut st))?;
+                    let package = cstring(&c_str(st));
+                    check(ffi::PCSetType(pc, ffi::PCLU.as_ptr() as *const c_char))?;
+                    if !st.is_null() {
+                        check(ffi::PCFactorSetMatSolverType(pc, package.as_ptr()))?;
+                    }
+                }
+            }
+            let _jac_copy = if chosen != "vinewtonrsls" {
+                let j = a.duplicate()?;
+                check(ffi::SNESSetJacobian(
+                    snes,
+                    j.raw,
+                    j.raw,
+                    Some(restored_jacobian),
+                    &ctx as *const LinearResidual as *mut c_void,
+                ))?;
+                Some(j)
+            } else {
+                None
+            };
             check(ffi::SNESSolve(snes, ptr::null_mut(), x.raw))?;
             let (mut its, mut lits, mut nf): (PInt, PInt, PInt) = (0, 0, 0);
             let mut reason: ffi::SNESConvergedReason = 0;

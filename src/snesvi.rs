@@ -104,7 +104,7 @@ fn frame(normal: &[f64; 3], dim: usize) -> Option<[[f64; 3]; 3]> {
     let mut n = [0.0; 3];
     n[..dim].copy_from_slice(&normal[..dim]);
     let len = n.iter().map(|x| x * x).sum::<f64>().sqrt();
-    if !(len > 0.0) || !len.is_finite() {
+    if len.is_nan() || len <= 0.0 || !len.is_finite() {
         return None;
     }
     n.iter_mut().for_each(|x| *x /= len);
@@ -314,4 +314,44 @@ fn all_max(comm: MPI_Comm, local: f64) -> petsc::Result<f64> {
     let mut v = Vector::new_mpi(comm, 1, 1)?;
     v.set_all(local)?;
     v.norm_inf()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn frames_are_orthonormal_with_the_normal_first() {
+        let normals = [
+            [0.0, 1.0, 0.0],
+            [0.6, -0.8, 0.0],
+            [0.0, 0.0, 2.0],
+            [1.0, 2.0, -3.0],
+            [-0.3, 0.1, 0.9],
+        ];
+        for dim in [2, 3] {
+            for n in &normals {
+                if dim == 2 && n[2] != 0.0 {
+                    continue;
+                }
+                let e = frame(n, dim).expect("a direction");
+                let len = n.iter().map(|x| x * x).sum::<f64>().sqrt();
+                for a in 0..dim {
+                    assert!((e[0][a] - n[a] / len).abs() < 1e-15);
+                }
+                for i in 0..dim {
+                    for j in 0..dim {
+                        let d: f64 = (0..dim).map(|a| e[i][a] * e[j][a]).sum();
+                        let want = if i == j { 1.0 } else { 0.0 };
+                        assert!(
+                            (d - want).abs() < 1e-14,
+                            "dim {dim} n {n:?}: e{i}·e{j} = {d}"
+                        );
+                    }
+                }
+            }
+        }
+        assert!(frame(&[0.0, 0.0, 0.0], 3).is_none());
+        assert!(frame(&[f64::NAN, 0.0, 0.0], 2).is_none());
+    }
 }

@@ -25,6 +25,7 @@ fn main() {
 #include <petscksp.h>
 #include <petscpc.h>
 #include <petscis.h>
+#include <petscsnes.h>
 "#;
     let mut builder = bindgen::Builder::default()
         .header_contents("petsc_wrapper.h", header)
@@ -35,13 +36,16 @@ fn main() {
         .allowlist_function("PETSC_VIEWER_STDOUT_")
         .allowlist_function("Petsc(Initialize|Finalize|Initialized|ErrorMessage|Options.*|MemoryGetCurrentUsage|MemoryGetMaximumUsage|MemorySetGetMaximumUsage|LogDefaultBegin|LogView|ViewerASCIIGetStdout|PopErrorHandler|MallocA|PushErrorHandler|ReturnErrorHandler|GetVersion)")
         .allowlist_function("(Vec|Mat|KSP|PC|IS|MatPartitioning|MatNullSpace|PetscViewer)[A-Z].*")
+        // SNES VI (src/snesvi.rs): only what the linear variational inequality needs.
+        .allowlist_function("SNES(Create|Destroy|SetType|GetType|SetFunction|SetJacobian|SetFromOptions|SetTolerances|Solve|GetIterationNumber|GetLinearSolveIterations|GetConvergedReason|GetConvergedReasonString|GetNumberFunctionEvals|VISetVariableBounds|GetFunctionNorm|GetLineSearch|LineSearchSetType|GetKSP)")
+        .allowlist_var("SNES(VINEWTON(RS|SS)LS|LINESEARCHBASIC|LINESEARCHBT)")
         .allowlist_var("PETSC_.*")
         .allowlist_var("(MAT|KSP|PC|VEC|IS)[A-Z_]+.*")
         .allowlist_var("(INSERT|ADD)_VALUES")
         .allowlist_var("NORM_.*")
         .allowlist_var("SCATTER_.*")
         .allowlist_type("Petsc.*")
-        .allowlist_type("(Mat|Vec|KSP|PC|IS|InsertMode|NormType|MatAssemblyType|MatOption|MatReuse|MatInfo.*|ScatterMode|KSPConvergedReason|MatPartitioning)")
+        .allowlist_type("(Mat|Vec|KSP|PC|IS|InsertMode|NormType|MatAssemblyType|MatOption|MatReuse|MatInfo.*|ScatterMode|KSPConvergedReason|MatPartitioning|SNES|SNESConvergedReason)")
         .blocklist_type("MPI_.*")
         .blocklist_type("ompi_.*")
         .blocklist_item("FP_.*")

@@ -90,7 +90,7 @@ pub struct Neumann {
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Preset {
-    /// MUMPS LU.
+    /// MUMPS: Cholesky for symmetric systems (linear, frictionless), LU for friction.
     Direct,
     /// Krylov + AMG.
     Iterative,
@@ -105,10 +105,30 @@ impl Preset {
     }
 }
 
+/// The contact algorithm.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Method {
+    /// Algorithms 1 / 2: the semismooth Newton method in its exact active-set form.
+    Newton,
+    /// PETSc SNES VI (vinewtonrsls) on the same discrete frictionless problem: a baseline.
+    SnesVi,
+}
+
+impl Method {
+    pub fn name(self) -> &'static str {
+        match self {
+            Method::Newton => "newton",
+            Method::SnesVi => "snesvi",
+        }
+    }
+}
+
 #[derive(Debug, Clone, PartialEq)]
 pub struct SolverSection {
     pub preset: Preset,
-    /// Appended after the preset's options.
+    /// The contact algorithm (contact cases only).
+    pub method: Method,
+    /// Override the preset's options (the command line overrides both).
     pub petsc_options: String,
     /// Relative tolerance of the iterative preset.
     pub rtol: f64,
@@ -118,6 +138,7 @@ impl Default for SolverSection {
     fn default() -> Self {
         SolverSection {
             preset: Preset::Direct,
+            method: Method::Newton,
             petsc_options: String::new(),
             rtol: 1e-10,
         }
@@ -680,6 +701,21 @@ impl Ctx<'_> {
         let output = self.output(&top, output_dir)?;
         let contact = self.contact(&top)?;
         let newton = self.newton(&top)?;
+        if solver.method == Method::SnesVi {
+            let why = match &contact {
+                None => Some("needs a [contact] section"),
+                Some(c) if c.friction != Friction::None => {
+                    Some("solves frictionless contact only (use method = \"newton\" with friction)")
+                }
+                Some(_) => None,
+            };
+            if let Some(why) = why {
+                let (sk, sn) = top.get("solver").expect("method was set in [solver]");
+                let t = self.table(&sk, sn, &["preset", "method", "petsc_options", "rtol"])?;
+                let (mk, m) = t.get("method").expect("method was set");
+                return Err(self.err(&mk, m.loc, format!("\"snesvi\" {why}")));
+            }
+        }
         Ok(Case {
             file: self.file.to_path_buf(),
             mesh,
@@ -815,7 +851,14 @@ impl Ctx<'_> {
         let Some((k, n)) = top.get("solver") else {
             return Ok(s);
         };
-        let t = self.table(&k, n, &["preset", "petsc_options", "rtol"])?;
+        let t = self.table(&k, n, &["preset", "method", "petsc_options", "rtol"])?;
+        if let Some((mk, m)) = t.get("method") {
+            s.method = self.choice(
+                &mk,
+                m,
+                &[("newton", Method::Newton), ("snesvi", Method::SnesVi)],
+            )?;
+        }
         if let Some((pk, p)) = t.get("preset") {
             s.preset = self.choice(
                 &pk,

@@ -13,9 +13,10 @@ pub mod newton;
 pub mod reduced;
 pub mod report;
 pub mod rigid;
+pub mod snesvi;
 
 use crate::assembly::System;
-use crate::case::{Preset, SolverSection};
+use crate::case::{self, Method, Preset, SolverSection};
 use crate::error::RunError;
 use crate::mesh::Mesh;
 use crate::output::ContactResult;
@@ -25,15 +26,20 @@ use crate::petsc::Vector;
 use crate::say;
 use crate::setup::ContactSettings;
 use crate::solver;
+use active_set::{ActiveSet, Iterate};
 use boundary::ContactBoundary;
-use newton::{ContactProblem, NewtonSettings, StepInfo};
+use newton::{ContactProblem, NewtonResult, NewtonSettings, StepInfo};
 use reduced::ReducedSystem;
 use report::{FrictionCertificate, Kkt};
+use rigid::FreeModes;
 use serde::Serialize;
+use std::time::Instant;
 
 /// summary.json's "newton" section.
 #[derive(Debug, Clone, Serialize)]
 pub struct NewtonSummary {
+    /// "newton" (Algorithms 1/2) or "snesvi" (PETSc SNES VI).
+    pub method: &'static str,
     /// 1 (frictionless) or 2 (Tresca).
     pub algorithm: u8,
     pub init: &'static str,
@@ -120,7 +126,6 @@ pub fn solve(
             ""
         }
     );
-    let reduced = ReducedSystem::new(ctx, sys, &b, coords.as_ref(), dim)?;
     let problem = ContactProblem {
         mesh,
         layout,
@@ -134,14 +139,26 @@ pub fn solve(
         friction,
         rigid: settings.rigid_modes,
     };
-    let nr = newton::semismooth_newton(ctx, &problem, reduced, &ns)?;
+    let nr = match solver_section.method {
+        Method::Newton => {
+            let reduced = ReducedSystem::new(ctx, sys, &b, coords.as_ref(), dim)?;
+            newton::semismooth_newton(ctx, &problem, reduced, &ns)?
+        }
+        Method::SnesVi => {
+            let f_local = sys.b.to_local_vec()?;
+            snesvi_solve(ctx, &problem, &f_local, settings.rigid_modes)?
+        }
+    };
     if !nr.converged {
-        return Err(RunError::Failed(format!(
-            "Newton did not converge in newton.max_steps = {} steps (active set still \
-             changing: {} node(s) in the last step)",
-            settings.newton.max_steps,
-            nr.history.last().map(|h| h.changed).unwrap_or(0)
-        )));
+        return Err(RunError::Failed(match solver_section.method {
+            Method::Newton => format!(
+                "Newton did not converge in newton.max_steps = {} steps (active set still \
+                 changing: {} node(s) in the last step)",
+                settings.newton.max_steps,
+                nr.history.last().map(|h| h.changed).unwrap_or(0)
+            ),
+            Method::SnesVi => format!("SNES VI did not converge in {} steps", nr.steps),
+        }));
     }
     let table = report::gather(ctx, &b, &nr.nodes, dim);
     let total_force = report::total_force(ctx, &nr.nodes);
@@ -168,11 +185,12 @@ pub fn solve(
     );
     let report = ContactReport {
         newton: NewtonSummary {
+            method: solver_section.method.name(),
             algorithm: if friction { 2 } else { 1 },
             init: settings.newton.init.name(),
             c,
             c_default: settings.newton.c.is_none(),
-            steps: nr.history.len(),
+            steps: nr.steps,
             converged: nr.converged,
             history: nr.history.clone(),
             rows_seconds: nr.rows_seconds,
@@ -199,6 +217,71 @@ pub fn solve(
         result: report::contact_result(&b, &nr.nodes, dim, friction, &table),
         u: nr.u,
         report,
+    })
+}
+
+/// The same discrete frictionless problem through PETSc's SNES VI (a baseline for Algorithm 1):
+/// the rigid modes that the whole contact boundary cannot fix are pinned once; λ by (3.28).
+fn snesvi_solve(
+    ctx: &Ctx,
+    p: &ContactProblem,
+    f_local: &[f64],
+    rigid: case::RigidModes,
+) -> Result<NewtonResult, RunError> {
+    let (mesh, b, sys) = (p.mesh, p.boundary, p.sys);
+    let dim = mesh.dim;
+    let mut free = FreeModes::new(ctx, mesh, p.layout, p.fixed, b, f_local, rigid);
+    let pins = free.update_for_whole_boundary(ctx, mesh, b)?.to_vec();
+    let pinned: Vec<usize> = pins
+        .iter()
+        .map(|&(v, k)| p.layout.node_global[v] * dim + k)
+        .collect();
+    let nodes: Vec<snesvi::SnesContactNode> = b
+        .nodes
+        .iter()
+        .map(|k| snesvi::SnesContactNode {
+            row: k.row,
+            normal: k.frame.n,
+            gap: k.gap,
+        })
+        .collect();
+    let r = snesvi::solve_snesvi(ctx.comm(), dim, &sys.a, &sys.b, &nodes, &pinned)
+        .map_err(|e| RunError::Failed(e.to_string()))?;
+    say!(
+        ctx,
+        "snesvi: {} steps ({}), {} linear iterations, {} ({:.3} s)",
+        r.steps,
+        r.snes_type,
+        r.linear_iterations,
+        r.reason,
+        r.seconds
+    );
+    // (3.28), and A_n = the nodes that touch the obstacle.
+    let t = Instant::now();
+    let mut au = sys.b.duplicate()?;
+    sys.a.mult(&r.u, &mut au)?;
+    let u_local = r.u.to_local_vec()?;
+    let scale = ctx.max_f64(u_local.iter().fold(0.0f64, |m, x| m.max(x.abs())));
+    let mut set = ActiveSet {
+        normal: vec![false; b.nodes.len()],
+        tangential: None,
+    };
+    let mut it = Iterate::new(b.nodes.len(), u_local.len(), false);
+    it.recover(u_local.clone(), au.to_local_vec()?, f_local, b, &set, dim);
+    for (i, (k, r)) in b.nodes.iter().zip(&it.nodes).enumerate() {
+        set.normal[i] = r.u_n + k.gap <= 1e-9 * scale.max(k.gap.abs());
+    }
+    it.recover(u_local, au.to_local_vec()?, f_local, b, &set, dim);
+    Ok(NewtonResult {
+        u: r.u,
+        nodes: it.nodes,
+        history: Vec::new(),
+        converged: r.converged,
+        steps: r.steps,
+        lambda_seconds: t.elapsed().as_secs_f64(),
+        rows_seconds: r.setup_seconds,
+        pinned_final: pins,
+        cycle_detected_at: None,
     })
 }
 

@@ -59,6 +59,8 @@ pub struct NewtonResult {
     pub nodes: Vec<NodeResult>,
     pub history: Vec<StepInfo>,
     pub converged: bool,
+    /// Linear solves (Newton steps).
+    pub steps: usize,
     /// Seconds spent in λ recovery (MatMult + local work), all steps.
     pub lambda_seconds: f64,
     /// Seconds spent writing the reduced systems, all steps.
@@ -157,6 +159,7 @@ pub fn semismooth_newton(
     }
     Ok(NewtonResult {
         nodes: lp.it.nodes,
+        steps: history.len(),
         history,
         converged,
         lambda_seconds: reduced.lambda_seconds,

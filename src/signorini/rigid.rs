@@ -283,6 +283,27 @@ impl FreeModes {
         Ok(true)
     }
 
+    /// Pins for a solver that keeps them for the whole solve (SNES VI): the modes that neither
+    /// Dirichlet data nor the whole contact boundary (every contact normal) can fix. Collective.
+    pub fn update_for_whole_boundary(
+        &mut self,
+        ctx: &Ctx,
+        mesh: &Mesh,
+        b: &ContactBoundary,
+    ) -> Result<&[Pin], RunError> {
+        let mut g = [0.0; 36];
+        if self.enabled {
+            for k in &b.nodes {
+                self.modes
+                    .add_outer(&mut g, &self.modes.direction_row(&k.x, &k.frame.n));
+            }
+            let total = ctx.sum_vec(&g);
+            g.copy_from_slice(&total);
+        }
+        self.update(mesh, &g)?;
+        Ok(&self.pins)
+    }
+
     /// The unbalanced load in the free rigid modes, φ = Qᵀ Rᵀ (f − A u) at the pins (the
     /// dropped equations), and, if it is not zero, the inactive contact node that a rigid
     /// motion along φ brings into contact first (smallest gap / closing speed; ties by tag).

@@ -2,9 +2,9 @@
 //! frictionless plane (uniform contact pressure, 2D and 3D), a block pulled off the plane
 //! (no contact, λ = 0) and a block indented by a rigid circle (a symmetric contact zone).
 
-mod common_contact;
+mod common;
 
-use common_contact::*;
+use common::*;
 use std::path::{Path, PathBuf};
 
 /// E, ν and the top pressure p of cases/blocks/block{2,3}d.toml, read from the case file so

@@ -3,9 +3,9 @@
 //! analytic values on the refined family, equilibrium Σ −λ = load and the KKT certificate
 //! (3.14), the "no support" error and the cycling guard.
 
-mod common_contact;
+mod common;
 
-use common_contact::*;
+use common::*;
 use std::f64::consts::PI;
 use std::path::PathBuf;
 

@@ -1,9 +1,9 @@
 //! Rank independence of the contact solution: the Hertz case (L4) and the 3D block on the
 //! plane give the same active set and displacement (matched by node_id) on 1, 2 and 3 ranks.
 
-mod common_contact;
+mod common;
 
-use common_contact::*;
+use common::*;
 use std::path::Path;
 
 /// Compares solution.h5 of the later directories with the first, matched by node_id:

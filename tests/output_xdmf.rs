@@ -3,12 +3,12 @@
 //! known fields from the coordinates it read, so the writer's numbering, hyperslabs and
 //! XDMF description all have to be right for the checks to pass.
 
-use std::path::{Path, PathBuf};
-use std::process::{Command, Output, Stdio};
-use std::sync::OnceLock;
-use std::time::{Duration, Instant};
+mod common;
 
-const PYTHON: &str = "/usr/bin/python3";
+use common::*;
+use std::path::Path;
+use std::process::Command;
+use std::time::Duration;
 
 /// Reader and checker. `check DIR DIM N CONTACT` prints a JSON summary; `compare A B`
 /// compares two outputs entity by entity after sorting by node_id / cell_id.
@@ -191,60 +191,14 @@ print("RESULT " + json.dumps(out))
 "#;
 
 /// Path of the example binary, built once per test run (same profile as this test).
-fn demo() -> &'static Path {
-    static BIN: OnceLock<PathBuf> = OnceLock::new();
-    BIN.get_or_init(|| {
-        let exe = std::env::current_exe().expect("test executable path");
-        // target/<profile>/deps/output_xdmf-HASH → target/<profile>
-        let profile_dir = exe.parent().and_then(Path::parent).expect("target dir");
-        let release = profile_dir.file_name().is_some_and(|n| n == "release");
-        let cargo = std::env::var("CARGO").unwrap_or_else(|_| "cargo".into());
-        let mut cmd = Command::new(cargo);
-        cmd.args(["build", "--quiet", "--example", "output_demo"])
-            .current_dir(env!("CARGO_MANIFEST_DIR"));
-        if release {
-            cmd.arg("--release");
-        }
-        let st = cmd
-            .status()
-            .expect("running cargo build --example output_demo");
-        assert!(st.success(), "cargo build --example output_demo failed");
-        let bin = profile_dir.join("examples").join("output_demo");
-        assert!(bin.exists(), "{} missing", bin.display());
-        bin
-    })
-}
-
-/// mpirun with a time limit (a hang in a collective call must fail the test, not block it).
-fn mpirun(np: usize, args: &[&str]) -> Output {
-    let np_s = np.to_string();
-    let mut child = Command::new("mpirun")
-        .args(["-n", &np_s, "--oversubscribe"])
-        .arg(demo())
-        .args(args)
-        .env("OMPI_ALLOW_RUN_AS_ROOT", "1")
-        .env("OMPI_ALLOW_RUN_AS_ROOT_CONFIRM", "1")
-        .env("OMPI_MCA_rmaps_base_oversubscribe", "1")
-        .stdout(Stdio::piped())
-        .stderr(Stdio::piped())
-        .spawn()
-        .expect("mpirun");
-    let start = Instant::now();
-    loop {
-        if child.try_wait().expect("wait").is_some() {
-            break;
-        }
-        if start.elapsed() > Duration::from_secs(120) {
-            let _ = child.kill();
-            let out = child.wait_with_output().expect("output");
-            panic!(
-                "mpirun -n {np} {args:?} hung; stderr: {}",
-                String::from_utf8_lossy(&out.stderr)
-            );
-        }
-        std::thread::sleep(Duration::from_millis(50));
-    }
-    child.wait_with_output().expect("output")
+/// examples/output_demo on `np` ranks, with a time limit (a hang in a collective call must
+/// fail the test, not block it).
+fn demo(np: usize, args: &[&str]) -> Run {
+    let args: Vec<String> = args.iter().map(|a| a.to_string()).collect();
+    run_with_timeout(
+        mpirun(np, &example("output_demo"), &args),
+        Duration::from_secs(120),
+    )
 }
 
 fn write(np: usize, dir: &Path, dim: usize, n: usize, extra: &[&str]) {
@@ -252,33 +206,23 @@ fn write(np: usize, dir: &Path, dim: usize, n: usize, extra: &[&str]) {
     let (dim_s, n_s) = (dim.to_string(), n.to_string());
     let mut args = vec![d, dim_s.as_str(), n_s.as_str()];
     args.extend_from_slice(extra);
-    let out = mpirun(np, &args);
+    let out = demo(np, &args);
     assert!(
-        out.status.success(),
+        out.code == Some(0),
         "mpirun -n {np} output_demo {args:?} failed:\n{}\n{}",
-        String::from_utf8_lossy(&out.stdout),
-        String::from_utf8_lossy(&out.stderr)
+        out.stdout,
+        out.stderr
     );
 }
 
-fn python(args: &[&str]) -> String {
-    let out = Command::new(PYTHON)
-        .arg("-c")
-        .arg(CHECK_PY)
-        .args(args)
-        .output()
-        .expect("running /usr/bin/python3");
-    assert!(
-        out.status.success(),
-        "python check {args:?} failed:\n{}\n{}",
-        String::from_utf8_lossy(&out.stdout),
-        String::from_utf8_lossy(&out.stderr)
-    );
-    String::from_utf8(out.stdout).unwrap()
+/// CHECK_PY with `args`; its stdout (panics with its output on failure).
+fn check_py(args: &[&str]) -> String {
+    let args: Vec<String> = args.iter().map(|a| a.to_string()).collect();
+    python(CHECK_PY, &args)
 }
 
 fn check(dir: &Path, dim: usize, n: usize, contact: bool) -> serde_json::Value {
-    let s = python(&[
+    let s = check_py(&[
         "check",
         dir.to_str().unwrap(),
         &dim.to_string(),
@@ -289,7 +233,7 @@ fn check(dir: &Path, dim: usize, n: usize, contact: bool) -> serde_json::Value {
 }
 
 fn compare(a: &Path, b: &Path) {
-    let s = python(&["compare", a.to_str().unwrap(), b.to_str().unwrap()]);
+    let s = check_py(&["compare", a.to_str().unwrap(), b.to_str().unwrap()]);
     assert_eq!(s.trim(), "same");
 }
 
@@ -346,9 +290,9 @@ fn rank_without_rows_and_no_contact() {
 fn missing_directory_is_an_error_on_every_rank() {
     let t = tempfile::tempdir().unwrap();
     let missing = t.path().join("does_not_exist");
-    let out = mpirun(2, &[missing.to_str().unwrap(), "2", "3", "--contact"]);
-    assert!(!out.status.success());
-    let err = String::from_utf8_lossy(&out.stderr);
+    let out = demo(2, &[missing.to_str().unwrap(), "2", "3", "--contact"]);
+    assert!(out.code != Some(0));
+    let err = &out.stderr;
     // both ranks report, and the message names the file
     for r in 0..2 {
         assert!(

@@ -14,11 +14,11 @@
 //! Everything is checked twice: in the frame quantities of contact_nodes.csv (u_t, λ_t, bound)
 //! and in global coordinates (solution.h5: contact force −λ^k and nodal displacement).
 
-mod tresca_common;
+mod common;
 
 use std::collections::BTreeMap;
 
-use tresca_common::*;
+use common::*;
 
 const G_R: f64 = 0.01;
 
@@ -74,7 +74,7 @@ fn all_slip(case_file: &str, dim: usize, drag_toml: &str, drag: &[f64]) {
     let s = solve(1, &case(case_file), &[&set]);
     s.assert_converged(case_file);
     assert_eq!(s.f(&["newton", "algorithm"]), 2.0);
-    let rows = s.contact_rows();
+    let rows = s.contact_rows_by_id();
     let n = rows.len();
     for (id, r) in &rows {
         assert!(r.active(), "node {id} lost contact (design: full contact)");
@@ -165,7 +165,7 @@ fn inner_stick(case_file: &str, dim: usize, drag_toml: &str) {
     let set = format!("dirichlet.0.value={drag_toml}");
     let s = solve(1, &case(case_file), &[&set]);
     s.assert_converged(case_file);
-    let rows = s.contact_rows();
+    let rows = s.contact_rows_by_id();
     let umax = s
         .displacement()
         .values()

@@ -10,11 +10,11 @@
 //! * The discrete Tresca problem has a unique solution: starting from all nodes active gives the
 //!   same u and the same node states.
 
-mod tresca_common;
+mod common;
 
 use std::f64::consts::PI;
 
-use tresca_common::*;
+use common::*;
 
 const CASE: &str = "hertz_tresca.toml";
 
@@ -22,7 +22,7 @@ const CASE: &str = "hertz_tresca.toml";
 /// (max |λ_τ| − b_k over all nodes, max |u_τ| over stick nodes, max |λ_τ − b_k û_τ| over slip
 /// nodes, max λ_n, max penetration, max |λ_n (u_n + g)|).
 fn csv_certificate(s: &Solved) -> [f64; 6] {
-    let rows = s.contact_rows();
+    let rows = s.contact_rows_by_id();
     let dim = csv_dim(&rows);
     let mut c = [0.0f64; 6];
     for (id, r) in &rows {
@@ -141,7 +141,7 @@ fn hertz_tresca_four_states_and_certificate() {
     let hist = s.state_history();
     eprintln!("states per step: {hist:?}");
     // The thesis start: every node inactive and sticking in the first solve.
-    let n = s.contact_rows().len();
+    let n = s.contact_rows_by_id().len();
     assert_eq!(
         hist[0],
         [n, 0, 0, 0],
@@ -161,7 +161,7 @@ fn hertz_tresca_four_states_and_certificate() {
         );
     }
     // The last step's sets equal the CSV's final node states.
-    let rows = s.contact_rows();
+    let rows = s.contact_rows_by_id();
     let mut last = [0usize; 4];
     for r in rows.values() {
         let slip = r.tangential() == "slip";
@@ -208,10 +208,6 @@ fn hertz_tresca_four_states_and_certificate() {
     );
 }
 
-fn rel(a: f64, b: f64) -> f64 {
-    (a - b).abs() / b.abs()
-}
-
 #[test]
 fn hertz_tresca_unique_solution_from_both_starts() {
     let a = solve(1, &case(CASE), &[]);
@@ -220,7 +216,7 @@ fn hertz_tresca_unique_solution_from_both_starts() {
     b.assert_converged("all_active start");
     assert_eq!(
         b.state_history()[0][2..].iter().sum::<usize>(),
-        a.contact_rows().len()
+        a.contact_rows_by_id().len()
     );
     let force_scale = b.f(&["contact", "kkt", "force_scale"]);
     assert_certificate(&b, "all_active start", Some(force_scale));
@@ -230,8 +226,8 @@ fn hertz_tresca_unique_solution_from_both_starts() {
         du <= 1e-9 * su,
         "the two starts end in different u: {du:e} vs {su:e}"
     );
-    let ra = a.contact_rows();
-    let rb = b.contact_rows();
+    let ra = a.contact_rows_by_id();
+    let rb = b.contact_rows_by_id();
     for (id, r) in &ra {
         assert_eq!(r.active(), rb[id].active(), "node {id}: contact state");
         assert_eq!(r.tangential(), rb[id].tangential(), "node {id}: stick/slip");

@@ -9,12 +9,12 @@
 //!   forces −λ^k agree with the Dirichlet reactions, which this test computes itself from the
 //!   clamped run's element stresses (R_k = Σ_e |e| σ_e ∇φ_k, no load on the bottom nodes).
 
-mod tresca_common;
+mod common;
 
 use std::collections::BTreeMap;
 use std::path::Path;
 
-use tresca_common::*;
+use common::*;
 
 const NO_FRICTION: &str = "contact.friction=\"none\"";
 const ZERO_THRESHOLD: &str = "contact.friction={law=\"tresca\", threshold=0.0}";
@@ -43,8 +43,8 @@ fn zero_threshold_matches_frictionless(case: &Path, sets: &[&str]) {
 
     // Contact quantities, node by node: displacements against max |u|, forces against
     // max |λ_n|.
-    let ra = a.contact_rows();
-    let rb = b.contact_rows();
+    let ra = a.contact_rows_by_id();
+    let rb = b.contact_rows_by_id();
     let dim = csv_dim(&ra);
     let lscale = ra
         .values()
@@ -168,7 +168,7 @@ fn huge_threshold_matches_clamped(tresca_case: &str, clamped_case: &str, drag: &
     );
 
     // Precondition of the comparison: every contact node active and sticking.
-    let rows = fric.contact_rows();
+    let rows = fric.contact_rows_by_id();
     let n = rows.len();
     assert!(n > 0);
     for (id, r) in &rows {
@@ -251,7 +251,7 @@ fn iterative_preset_matches_direct_with_friction() {
         direct.assert_converged(name);
         iter.assert_converged(name);
         let states = |s: &Solved| -> Vec<(u64, bool, String)> {
-            s.contact_rows()
+            s.contact_rows_by_id()
                 .values()
                 .map(|r| (r.node_id(), r.active(), r.tangential().to_string()))
                 .collect()

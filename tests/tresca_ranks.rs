@@ -6,9 +6,9 @@
 //! tangential states and 2×2 slip rows) and the Hertz disk with friction and a tangential load
 //! (all four states along the iteration).
 
-mod tresca_common;
+mod common;
 
-use tresca_common::*;
+use common::*;
 
 fn same_on_all_ranks(case_file: &str, sets: &[&str]) {
     let runs: Vec<(usize, Solved)> = [1usize, 2, 3]
@@ -19,7 +19,7 @@ fn same_on_all_ranks(case_file: &str, sets: &[&str]) {
     base.assert_converged(case_file);
     let base_hist = base.state_history();
     let base_active: Vec<f64> = history_active(base);
-    let base_rows = base.contact_rows();
+    let base_rows = base.contact_rows_by_id();
     let base_u = base.displacement();
     let dim = csv_dim(&base_rows);
     let mut tangential_states = std::collections::BTreeSet::new();
@@ -39,7 +39,7 @@ fn same_on_all_ranks(case_file: &str, sets: &[&str]) {
             "{case_file}: state history on {np} ranks differs from 1 rank"
         );
         assert_eq!(history_active(s), base_active, "{case_file}: |A_n| history");
-        let rows = s.contact_rows();
+        let rows = s.contact_rows_by_id();
         assert_eq!(
             rows.keys().collect::<Vec<_>>(),
             base_rows.keys().collect::<Vec<_>>(),

@@ -1,0 +1,190 @@
+//! One solver run on a case file (`mpirun -n np signorini-mpi CASE --set ... -o OUT`) and what
+//! it wrote: summary.json, contact_nodes.csv and (through Debian's Python with h5py)
+//! solution.h5.
+
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+use std::process::Command;
+use std::time::Duration;
+
+use serde_json::Value;
+
+use super::compare::floats;
+use super::csv::{by_node_id, read_csv, Row};
+use super::process::{binary, mpirun, python_json, repo, run_with_timeout, Run};
+
+/// Time limit of one solver run (the largest test run takes a few seconds).
+pub const LIMIT: Duration = Duration::from_secs(180);
+
+/// A test case of tests/cases/tresca.
+pub fn case(name: &str) -> PathBuf {
+    repo(&format!("tests/cases/tresca/{name}"))
+}
+
+/// `mpirun -n np --oversubscribe signorini-mpi CASE [--set s]... -o OUT`.
+pub fn solver_command(np: usize, case: &Path, sets: &[&str], out: &Path) -> Command {
+    let mut args = vec![case.display().to_string()];
+    for s in sets {
+        args.push("--set".into());
+        args.push(s.to_string());
+    }
+    args.push("-o".into());
+    args.push(out.display().to_string());
+    mpirun(np, &binary(), &args)
+}
+
+/// Runs the solver; returns the process result whatever its exit code.
+pub fn run_solver(np: usize, case: &Path, sets: &[&str], out: &Path) -> Run {
+    run_with_timeout(solver_command(np, case, sets, out), LIMIT)
+}
+
+/// Runs the solver into a fresh temporary directory; panics unless it exits with 0 and writes
+/// a summary.
+pub fn solve(np: usize, case: &Path, sets: &[&str]) -> Solved {
+    let tmp = tempfile::tempdir().expect("tempdir");
+    let dir = tmp.path().join("out");
+    let run = run_solver(np, case, sets, &dir);
+    solved(run, tmp, dir)
+}
+
+/// The [`Solved`] of a finished run that wrote into `dir` (inside `tmp`); panics unless it
+/// exited with 0 and wrote a summary.
+pub fn solved(run: Run, tmp: tempfile::TempDir, dir: PathBuf) -> Solved {
+    assert_eq!(run.code, Some(0), "solver failed:\n{}", run.output());
+    let text = std::fs::read_to_string(dir.join("summary.json"))
+        .unwrap_or_else(|e| panic!("no summary.json ({e}):\n{}", run.output()));
+    let summary: Value = serde_json::from_str(&text).expect("summary.json is JSON");
+    Solved {
+        dir,
+        summary,
+        run,
+        _tmp: tmp,
+    }
+}
+
+/// `v[a][b]...`; panics with the path if absent.
+pub fn get<'a>(v: &'a Value, path: &[&str]) -> &'a Value {
+    let mut cur = v;
+    for k in path {
+        cur = cur
+            .get(*k)
+            .unwrap_or_else(|| panic!("summary has no {path:?} (missing {k:?})"));
+    }
+    cur
+}
+
+/// A successful solver run: its output directory, summary and log.
+pub struct Solved {
+    pub dir: PathBuf,
+    pub summary: Value,
+    pub run: Run,
+    _tmp: tempfile::TempDir,
+}
+
+impl Solved {
+    /// `summary[a][b]...` as f64 (panics with the path and the log if absent or not a number).
+    pub fn f(&self, path: &[&str]) -> f64 {
+        get(&self.summary, path)
+            .as_f64()
+            .unwrap_or_else(|| panic!("summary {path:?} is not a number: {}", self.run.output()))
+    }
+
+    pub fn steps(&self) -> usize {
+        self.f(&["newton", "steps"]) as usize
+    }
+
+    pub fn converged(&self) -> bool {
+        get(&self.summary, &["newton", "converged"]) == &Value::Bool(true)
+    }
+
+    /// Panics (with the log) unless Newton converged.
+    pub fn assert_converged(&self, what: &str) {
+        assert!(
+            self.converged(),
+            "{what}: Newton did not converge\n{}",
+            self.run.output()
+        );
+    }
+
+    /// contact.total_force = Σ_k (−λ^k), global coordinates.
+    pub fn total_force(&self) -> Vec<f64> {
+        floats(get(&self.summary, &["contact", "total_force"]))
+    }
+
+    /// |A_n| of every Newton step.
+    pub fn active_history(&self) -> Vec<usize> {
+        get(&self.summary, &["newton", "history"])
+            .as_array()
+            .expect("history array")
+            .iter()
+            .map(|h| h["active"].as_u64().expect("active count") as usize)
+            .collect()
+    }
+
+    /// [S1, S2, S3, S4] of every Newton step.
+    pub fn state_history(&self) -> Vec<[usize; 4]> {
+        get(&self.summary, &["newton", "history"])
+            .as_array()
+            .expect("history array")
+            .iter()
+            .map(|h| {
+                let s = h["states"]
+                    .as_array()
+                    .unwrap_or_else(|| panic!("history entry without states: {h}"));
+                assert_eq!(s.len(), 4, "states {s:?}");
+                [0, 1, 2, 3].map(|i| s[i].as_u64().expect("state count") as usize)
+            })
+            .collect()
+    }
+
+    /// Rows of contact_nodes.csv, in file order.
+    pub fn contact_rows(&self) -> Vec<Row> {
+        read_csv(&self.dir.join("contact_nodes.csv"))
+    }
+
+    /// Rows of contact_nodes.csv, by node id.
+    pub fn contact_rows_by_id(&self) -> BTreeMap<u64, Row> {
+        by_node_id(self.contact_rows())
+    }
+
+    /// Nodal displacement from solution.h5, by node id (always 3 components).
+    pub fn displacement(&self) -> BTreeMap<u64, Vec<f64>> {
+        let v = python_json(
+            r#"
+import sys, json, h5py
+f = h5py.File(sys.argv[1], "r")
+ids = f["mesh/node_id"][:].tolist()
+u = f["nodal/displacement"][:].tolist()
+print("RESULT " + json.dumps({"ids": ids, "u": u}))
+"#,
+            &[&self.dir.join("solution.h5")],
+        );
+        let ids = v["ids"].as_array().expect("ids");
+        let u = v["u"].as_array().expect("u");
+        assert_eq!(ids.len(), u.len());
+        ids.iter()
+            .zip(u)
+            .map(|(i, row)| (i.as_u64().expect("node id"), floats(row)))
+            .collect()
+    }
+}
+
+/// Contact force −λ^k in global coordinates (solution.h5 /contact/contact_force), by
+/// node id, the first `dim` components.
+pub fn contact_forces(s: &Solved, dim: usize) -> BTreeMap<u64, Vec<f64>> {
+    let v = python_json(
+        r#"
+import sys, json, h5py
+f = h5py.File(sys.argv[1], "r")
+print("RESULT " + json.dumps({"ids": f["contact/node_id"][:].tolist(),
+                          "force": f["contact/contact_force"][:].tolist()}))
+"#,
+        &[&s.dir.join("solution.h5")],
+    );
+    let ids = v["ids"].as_array().expect("ids");
+    let force = v["force"].as_array().expect("force");
+    ids.iter()
+        .zip(force)
+        .map(|(i, f)| (i.as_u64().expect("id"), floats(f)[..dim].to_vec()))
+        .collect()
+}

@@ -1,0 +1,105 @@
+//! Errors found on some ranks end every rank with the same message and exit code (no hang);
+//! the output directory holds exactly what one run wrote; an unusable output directory is
+//! refused before the solve (issue 11, items 1, 2, 5).
+
+mod common;
+use common::*;
+use std::path::Path;
+
+const SPHERE_AT_NODE: &str = "contact.obstacle={type=\"sphere\",center=[1.0,0.0],radius=0.5}";
+
+#[test]
+fn a_contact_node_at_the_sphere_centre_is_refused_on_every_rank_count() {
+    let tmp = tempfile::tempdir().unwrap();
+    let mut messages = Vec::new();
+    for np in [1, 2, 3] {
+        let out = tmp.path().join(format!("out{np}"));
+        let r = run_solver(
+            np,
+            &repo("cases/blocks/block2d.toml"),
+            &[SPHERE_AT_NODE],
+            &out,
+        );
+        // A hang would end in the test's time limit (code None).
+        r.expect_code(2, &format!("{np} ranks"));
+        let line = r
+            .stderr
+            .lines()
+            .find(|l| l.starts_with("error:"))
+            .unwrap_or_else(|| panic!("no error line:\n{}", r.output()))
+            .to_string();
+        assert!(line.contains("centre of the sphere"), "{line}");
+        assert!(line.contains("contact.obstacle"), "{line}");
+        assert!(!out.exists(), "nothing written");
+        messages.push(line);
+    }
+    assert!(messages.iter().all(|m| *m == messages[0]), "{messages:#?}");
+}
+
+fn files(dir: &Path) -> Vec<String> {
+    let mut v: Vec<String> = std::fs::read_dir(dir)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    v.sort();
+    v
+}
+
+#[test]
+fn a_reused_output_directory_holds_only_the_last_run() {
+    let tmp = tempfile::tempdir().unwrap();
+    let out = tmp.path().join("same");
+    run_solver(1, &repo("cases/blocks/block2d.toml"), &[], &out).expect_code(0, "contact run");
+    assert!(out.join("contact_nodes.csv").exists());
+    run_solver(1, &repo("cases/plate/plate.toml"), &[], &out).expect_code(0, "linear run");
+    assert_eq!(
+        files(&out),
+        ["solution.h5", "solution.xdmf", "summary.json"],
+        "the contact table of the first run must be gone"
+    );
+    // No staging or set-aside directory is left next to it.
+    assert_eq!(files(tmp.path()), ["same"]);
+}
+
+#[test]
+fn an_unusable_output_directory_is_refused_before_the_solve() {
+    let tmp = tempfile::tempdir().unwrap();
+    let file = tmp.path().join("a_file");
+    std::fs::write(&file, "x").unwrap();
+    let out = file.join("sub");
+    let r = run_solver(1, &repo("cases/blocks/block2d.toml"), &[], &out);
+    r.expect_code(2, "output below a file");
+    assert!(r.stderr.contains("output.dir"), "{}", r.output());
+    assert!(
+        !r.stdout.contains("newton"),
+        "refused before the solve:\n{}",
+        r.output()
+    );
+
+    // A directory with files this program did not write is not replaced.
+    let foreign = tmp.path().join("mine");
+    std::fs::create_dir(&foreign).unwrap();
+    std::fs::write(foreign.join("notes.txt"), "keep me").unwrap();
+    let r = run_solver(2, &repo("cases/blocks/block2d.toml"), &[], &foreign);
+    r.expect_code(2, "foreign file");
+    assert!(r.stderr.contains("notes.txt"), "{}", r.output());
+    assert_eq!(files(&foreign), ["notes.txt"]);
+}
+
+#[test]
+fn a_failed_solve_leaves_the_previous_results() {
+    let tmp = tempfile::tempdir().unwrap();
+    let out = tmp.path().join("res");
+    run_solver(1, &repo("cases/blocks/block2d.toml"), &[], &out).expect_code(0, "first run");
+    let before = std::fs::read(out.join("summary.json")).unwrap();
+    // One Newton step is not enough for this case.
+    let r = run_solver(
+        2,
+        &repo("cases/hertz/hertz.toml"),
+        &["newton.max_steps=1"],
+        &out,
+    );
+    r.expect_code(1, "max_steps = 1");
+    assert_eq!(std::fs::read(out.join("summary.json")).unwrap(), before);
+    assert_eq!(files(tmp.path()), ["res"], "no staging directory left");
+}

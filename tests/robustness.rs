@@ -103,3 +103,54 @@ fn a_failed_solve_leaves_the_previous_results() {
     assert_eq!(std::fs::read(out.join("summary.json")).unwrap(), before);
     assert_eq!(files(tmp.path()), ["res"], "no staging directory left");
 }
+
+#[test]
+fn a_tangential_load_beyond_the_friction_capacity_is_refused_before_newton() {
+    let tmp = tempfile::tempdir().unwrap();
+    for np in [1, 2] {
+        let out = tmp.path().join(format!("out{np}"));
+        let r = run_solver(
+            np,
+            &repo("tests/cases/tresca/hertz_tresca.toml"),
+            &["neumann.1.traction=[0.05,0.0]"],
+            &out,
+        );
+        r.expect_code(1, "beyond the friction capacity");
+        assert!(r.stderr.contains("no equilibrium"), "{}", r.output());
+        assert!(
+            !r.stdout.contains("newton   1"),
+            "refused before Newton:\n{}",
+            r.output()
+        );
+        assert!(!out.exists());
+    }
+    // Within the capacity the same case converges.
+    let s = solve(1, &repo("tests/cases/tresca/hertz_tresca.toml"), &[]);
+    s.assert_converged("within the capacity");
+}
+
+#[test]
+fn certificates_are_judged_by_the_problems_scales() {
+    // The block lifted off the plane (all contact forces ~1e-17) and the iterative preset
+    // (u_n ~1e-13 at an all-active bottom) used to warn about round-off.
+    for (case, sets) in [
+        (
+            "tests/cases/block2d_pulled.toml",
+            vec!["solver.preset=\"iterative\""],
+        ),
+        (
+            "cases/blocks/block3d.toml",
+            vec!["solver.preset=\"iterative\""],
+        ),
+    ] {
+        let s = solve(1, &repo(case), &sets);
+        assert!(
+            !s.run.stdout.contains("warning"),
+            "{case}:\n{}",
+            s.run.output()
+        );
+        let kkt = get(&s.summary, &["contact", "kkt"]);
+        let length = kkt["length_scale"].as_f64().unwrap();
+        assert!(length > 1e-6, "{case}: length scale {length}");
+    }
+}

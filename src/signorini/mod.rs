@@ -17,6 +17,7 @@ pub mod snesvi;
 
 use crate::assembly::System;
 use crate::case::{self, Method, Preset, SolverSection};
+use crate::contact::Obstacle;
 use crate::error::RunError;
 use crate::mesh::Mesh;
 use crate::output::ContactResult;
@@ -30,7 +31,7 @@ use active_set::{ActiveSet, Iterate};
 use boundary::ContactBoundary;
 use newton::{ContactProblem, NewtonResult, NewtonSettings, StepInfo};
 use reduced::ReducedSystem;
-use report::{FrictionCertificate, Kkt};
+use report::{FrictionCertificate, Kkt, Scales};
 use rigid::FreeModes;
 use serde::Serialize;
 use std::time::Instant;
@@ -105,6 +106,7 @@ pub fn solve(
     let dim = mesh.dim;
     let b = boundary::build(ctx, mesh, layout, settings, fixed)?;
     log_boundary(ctx, &b, &settings.group);
+    check_friction_capacity(ctx, &b, fixed, sys, dim)?;
     let friction = settings.friction();
     solver::configure(
         solver_section.preset,
@@ -163,16 +165,10 @@ pub fn solve(
     let table = report::gather(ctx, &b, &nr.nodes, dim);
     let total_force = report::total_force(ctx, &nr.nodes);
     let half_width = table.half_width(&b.obstacle);
-    let kkt = table.kkt(!friction);
-    // The final state against (3.14): violations beyond 1e-8 of the problem's own scales are
-    // reported (they mean an inexact linear solve, not round-off).
-    if kkt.beyond(1e-8) {
-        say!(
-            ctx,
-            "warning: the final state violates (3.14) beyond round-off: {}",
-            serde_json::to_value(kkt).expect("JSON")
-        );
-    }
+    let scales = problem_scales(ctx, sys, &nr.u)?;
+    let kkt = table.kkt(!friction, &scales);
+    let friction_certificate = friction.then(|| table.friction_certificate());
+    check_certificates(ctx, &kkt, friction_certificate.as_ref(), &scales)?;
     say!(
         ctx,
         "contact: {} active, p_max = {:.6}, half width = {}, total force = {:?}",
@@ -207,7 +203,7 @@ pub fn solve(
             total_force: total_force[..dim].to_vec(),
             half_width,
             kkt,
-            friction: friction.then(|| table.friction_certificate()),
+            friction: friction_certificate,
         },
         linear_solver: PresetOnly {
             preset: preset_name(solver_section.preset),
@@ -283,6 +279,114 @@ fn snesvi_solve(
         pinned_final: pins,
         cycle_detected_at: None,
     })
+}
+
+/// A floating body (no Dirichlet data) on a flat obstacle with Tresca friction has no
+/// equilibrium when the tangential resultant of its load exceeds the total friction capacity
+/// Σ_k b_k (3.18): said before the solve instead of after a long Newton run. Collective.
+fn check_friction_capacity(
+    ctx: &Ctx,
+    b: &ContactBoundary,
+    fixed: &[f64],
+    sys: &System,
+    dim: usize,
+) -> Result<(), RunError> {
+    let Obstacle::Plane(plane) = b.obstacle else {
+        return Ok(());
+    };
+    // `fixed` holds every mesh dof on every rank: the same answer everywhere.
+    let floating = fixed.iter().all(|x| x.is_nan());
+    if !floating {
+        return Ok(());
+    }
+    let capacity = ctx.sum_f64(b.nodes.iter().map(|k| k.bound).sum());
+    if capacity == 0.0 {
+        return Ok(()); // frictionless: the balance test of the free modes decides
+    }
+    let f = sys.b.to_local_vec()?;
+    let mut local = [0.0; 3];
+    for (i, x) in f.iter().enumerate() {
+        local[i % dim] += x;
+    }
+    let r = ctx.sum_vec(&local);
+    let n = plane.normal();
+    let rn: f64 = (0..3).map(|k| r[k] * n[k]).sum();
+    let rt = (0..3)
+        .map(|k| (r[k] - rn * n[k]).powi(2))
+        .sum::<f64>()
+        .sqrt();
+    if rt > capacity * (1.0 + 1e-9) + 1e-14 * r.iter().map(|x| x.abs()).sum::<f64>() {
+        return Err(RunError::Failed(format!(
+            "no equilibrium: the body has no Dirichlet data and the tangential resultant of its \
+             load ({rt:.6e}) exceeds the total friction capacity of the contact boundary \
+             (Σ b_k = {capacity:.6e}, (3.18)): it would slide away"
+        )));
+    }
+    Ok(())
+}
+
+/// |f|_∞ and |u|_∞ of the whole problem (two reductions); a non-finite u is an error.
+fn problem_scales(ctx: &Ctx, sys: &System, u: &Vector) -> Result<Scales, RunError> {
+    let inf = |v: &[f64]| v.iter().fold(0.0f64, |m, x| m.max(x.abs()));
+    let u_local = u.to_local_vec()?;
+    let length = ctx.max_f64(if u_local.iter().all(|x| x.is_finite()) {
+        inf(&u_local)
+    } else {
+        f64::INFINITY
+    });
+    if !length.is_finite() {
+        return Err(RunError::Failed(
+            "the final displacement is not finite (the reduced system was singular or the \
+             iteration diverged)"
+                .into(),
+        ));
+    }
+    let force = ctx.max_f64(inf(&sys.b.to_local_vec()?));
+    Ok(Scales { force, length })
+}
+
+/// The final state against (3.14) (and (3.18) with friction): beyond 1e-8 of the problem's
+/// scales a warning (an inexact linear solve), beyond [`report::CERTIFICATE_TOL`] an error —
+/// such a state is not a solution, whatever the iteration's stopping rule said.
+fn check_certificates(
+    ctx: &Ctx,
+    kkt: &Kkt,
+    friction: Option<&FrictionCertificate>,
+    scales: &Scales,
+) -> Result<(), RunError> {
+    let fric_bad = |rel: f64| friction.is_some_and(|f| f.beyond(rel, scales));
+    if kkt.beyond(report::CERTIFICATE_TOL) || fric_bad(report::CERTIFICATE_TOL) {
+        return Err(RunError::Failed(format!(
+            "the final state is not a solution: it violates {} beyond {:e} of the problem's \
+             scales (force {:.3e}, length {:.3e}): KKT {}{} — the problem is probably ill-posed \
+             (a load that contact and friction cannot carry) or the linear solves inexact",
+            if fric_bad(report::CERTIFICATE_TOL) {
+                "(3.18)"
+            } else {
+                "(3.14)"
+            },
+            report::CERTIFICATE_TOL,
+            scales.force,
+            scales.length,
+            json(kkt),
+            friction
+                .map(|f| format!(", friction {}", json(f)))
+                .unwrap_or_default()
+        )));
+    }
+    if kkt.beyond(1e-8) || fric_bad(1e-8) {
+        say!(
+            ctx,
+            "warning: the final state violates (3.14) beyond round-off: {}",
+            json(kkt)
+        );
+    }
+    Ok(())
+}
+
+/// Compact JSON of a certificate (sorted keys).
+fn json<T: Serialize>(v: &T) -> String {
+    serde_json::to_value(v).expect("plain data").to_string()
 }
 
 fn preset_name(p: Preset) -> &'static str {

@@ -307,8 +307,8 @@ impl Table {
     }
 
     /// KKT certificate of (3.14) (and λ_τ = 0 for frictionless contact): the largest
-    /// violations over all contact nodes, with the scales to judge them by.
-    pub fn kkt(&self, frictionless: bool) -> Kkt {
+    /// violations over all contact nodes, with the problem's scales to judge them by.
+    pub fn kkt(&self, frictionless: bool, scales: &Scales) -> Kkt {
         let mut pen = 0.0f64;
         let mut pos = 0.0f64;
         let mut comp = 0.0f64;
@@ -328,12 +328,28 @@ impl Table {
             max_penetration: pen.max(0.0),
             max_positive_lambda_n: pos.max(0.0),
             max_complementarity: comp,
-            force_scale: lscale,
-            length_scale: uscale,
+            force_scale: if scales.force > 0.0 {
+                scales.force
+            } else {
+                lscale
+            },
+            length_scale: scales.length.max(uscale),
             max_abs_lambda_t: frictionless.then_some(lt),
         }
     }
 }
+
+/// The scales of a whole problem: the largest nodal load |f|_∞ and the largest displacement
+/// |u|_∞ (a certificate judged by the contact nodes' own values alone calls round-off a
+/// violation where everything at the contact is tiny, e.g. a block lifted off).
+#[derive(Clone, Copy, Debug)]
+pub struct Scales {
+    pub force: f64,
+    pub length: f64,
+}
+
+/// The relative violation of a certificate beyond which a final state is not accepted.
+pub const CERTIFICATE_TOL: f64 = 1e-6;
 
 /// Σ_k −λ^k over all ranks (global components).
 pub fn total_force(ctx: &Ctx, res: &[NodeResult]) -> [f64; 3] {
@@ -361,14 +377,25 @@ pub struct Kkt {
 }
 
 impl Kkt {
-    /// Violations beyond `rel` of the problem's own scales (they mean an inexact linear solve,
-    /// not round-off).
+    /// Violations beyond `rel` of the problem's own scales (beyond 1e-8: an inexact linear
+    /// solve; beyond [`CERTIFICATE_TOL`]: not a solution).
     pub fn beyond(&self, rel: f64) -> bool {
         let (fs, ls) = (self.force_scale, self.length_scale);
         self.max_penetration > rel * ls
             || self.max_positive_lambda_n > rel * fs
             || self.max_complementarity > rel * fs * ls
             || self.max_abs_lambda_t.unwrap_or(0.0) > rel * fs
+    }
+}
+
+impl FrictionCertificate {
+    /// Violations of (3.18) beyond `rel` of the problem's scales.
+    pub fn beyond(&self, rel: f64, scales: &Scales) -> bool {
+        let force = scales.force.max(self.bound_scale);
+        let length = scales.length.max(self.length_scale);
+        self.max_excess > rel * force
+            || self.max_stick_motion > rel * length
+            || self.max_slip_alignment_defect > rel * force
     }
 }
 
@@ -382,4 +409,50 @@ pub struct FrictionCertificate {
     pub length_scale: f64,
     pub stick_count: usize,
     pub slip_count: usize,
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn kkt(pen: f64) -> Kkt {
+        Kkt {
+            max_penetration: pen,
+            max_positive_lambda_n: 0.0,
+            max_complementarity: 0.0,
+            force_scale: 1.0,
+            length_scale: 2.0,
+            max_abs_lambda_t: Some(0.0),
+        }
+    }
+
+    #[test]
+    fn kkt_violations_relative_to_the_scales() {
+        assert!(!kkt(1e-9).beyond(1e-8));
+        assert!(kkt(1e-7).beyond(1e-8));
+        assert!(!kkt(1e-7).beyond(CERTIFICATE_TOL));
+        let mut k = kkt(0.0);
+        k.max_abs_lambda_t = Some(1e-3);
+        assert!(k.beyond(CERTIFICATE_TOL));
+    }
+
+    #[test]
+    fn friction_beyond_its_bound_is_a_violation() {
+        let scales = Scales {
+            force: 1.0,
+            length: 1.0,
+        };
+        let mut c = FrictionCertificate {
+            max_excess: 0.0,
+            max_stick_motion: 1e-12,
+            max_slip_alignment_defect: 1e-12,
+            bound_scale: 0.1,
+            length_scale: 1.0,
+            stick_count: 3,
+            slip_count: 2,
+        };
+        assert!(!c.beyond(CERTIFICATE_TOL, &scales));
+        c.max_excess = 2.0; // |λ_τ| 20 × b_k
+        assert!(c.beyond(CERTIFICATE_TOL, &scales));
+    }
 }

@@ -154,3 +154,25 @@ fn certificates_are_judged_by_the_problems_scales() {
         assert!(length > 1e-6, "{case}: length scale {length}");
     }
 }
+
+#[test]
+fn nearly_incompressible_materials_are_warned_about() {
+    let case = repo("cases/blocks/block2d.toml");
+    let s = solve(1, &case, &["material.poisson=0.4999"]);
+    assert!(
+        s.run.stdout.contains("warning: poisson = 0.4999"),
+        "{}",
+        s.run.output()
+    );
+    let s = solve(1, &case, &["material.poisson=0.45"]);
+    assert!(!s.run.stdout.contains("warning"), "{}", s.run.output());
+    let s = solve(
+        1,
+        &case,
+        &["material.poisson=0.4999", "material.model=\"plane_stress\""],
+    );
+    assert!(
+        !s.run.stdout.contains("warning"),
+        "plane stress does not lock"
+    );
+}

@@ -12,7 +12,8 @@
 //! - [`residual`]: residuals of (3.14) and (3.18) for a convergence certificate.
 //! - [`coulomb`]: node-wise Coulomb friction for one generalised Newton (docs/friction.md):
 //!   threshold b = μ max(0, −λ_n − c(u_n + g)), residual, states, derivative, slip rows with
-//!   the λ_n coupling and their block data for the reduced system.
+//!   the λ_n coupling and their block data for the reduced system (runtime dimension:
+//!   [`coulomb::coulomb_row_dyn`]).
 //!
 //! Tangential quantities are generic over M = d − 1 (`[f64; M]`, `[[f64; M]; M]`).
 //! Callers with a runtime dimension may pass 2D tangential vectors zero-padded to

@@ -10,6 +10,10 @@
 //! - [`tresca`]: slip rows −λ_τ + L̃ u_τ = r̃ (3.39) with the regularisation (3.40), the
 //!   unregularised L, r (3.37)/(3.38), and the zero-threshold rule (§3.4.3).
 //! - [`residual`]: residuals of (3.14) and (3.18) for a convergence certificate.
+//! - [`coulomb`]: node-wise Coulomb friction for one generalised Newton (docs/friction.md):
+//!   threshold b = μ max(0, −λ_n − c(u_n + g)), residual, states, derivative, slip rows with
+//!   the λ_n coupling and their block data for the reduced system (runtime dimension:
+//!   [`coulomb::coulomb_row_dyn`]).
 //!
 //! Tangential quantities are generic over M = d − 1 (`[f64; M]`, `[[f64; M]; M]`).
 //! Callers with a runtime dimension may pass 2D tangential vectors zero-padded to
@@ -18,6 +22,7 @@
 //! NOT to `regularise`/`tangential_row`: use [`tresca::tangential_row_dyn`] there.
 
 pub mod complementarity;
+pub mod coulomb;
 pub mod frame;
 mod linalg;
 pub mod obstacle;
@@ -25,6 +30,12 @@ pub mod residual;
 pub mod tresca;
 
 pub use complementarity::{c_n, c_tau, classify, normal_active, tangential_slip, NodeState};
+pub use coulomb::{
+    c_tau_coulomb, c_tau_coulomb_derivative, coulomb_block, coulomb_classify,
+    coulomb_conditions_hold, coulomb_residual, coulomb_row, coulomb_row_dyn,
+    coulomb_row_unregularised, coulomb_threshold, CoulombBlock, CoulombDerivative, CoulombNewton,
+    CoulombResidual, CoulombRow, NodePoint,
+};
 pub use frame::{tangent_2d, tangents_3d, Frame};
 pub use obstacle::{Obstacle, ObstacleError, Plane, Projection, Sphere};
 pub use residual::{

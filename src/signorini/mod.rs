@@ -47,6 +47,8 @@ pub struct NewtonSummary {
     pub c: f64,
     pub c_default: bool,
     pub steps: usize,
+    /// Numeric factorisations of the run (each step of the direct preset is one).
+    pub factorisations: usize,
     pub converged: bool,
     pub history: Vec<StepInfo>,
     pub rows_seconds: f64,
@@ -187,6 +189,16 @@ pub fn solve(
             c,
             c_default: settings.newton.c.is_none(),
             steps: nr.steps,
+            factorisations: match solver_section.method {
+                Method::Newton => nr
+                    .history
+                    .iter()
+                    .filter(|h| h.solve == reduced::SolveKind::Factorisation)
+                    .count(),
+                // rsls factors every reduced system of its steps with the direct preset
+                Method::SnesVi if solver_section.preset == Preset::Direct => nr.steps,
+                Method::SnesVi => 0,
+            },
             converged: nr.converged,
             history: nr.history.clone(),
             rows_seconds: nr.rows_seconds,

@@ -10,7 +10,7 @@
 use super::active_set::{ActiveSet, Iterate, SetSummary, StepTotals};
 use super::boundary::{ContactBoundary, NodeResult};
 use super::cycle::{decide, CycleGuard, Decision, Seen, SetKey};
-use super::reduced::ReducedSystem;
+use super::reduced::{ReducedSystem, SolveKind};
 use super::rigid::{Balance, FreeModes, Pin};
 use crate::assembly::System;
 use crate::case::{self, NewtonInit, NewtonSection};
@@ -41,6 +41,8 @@ pub struct StepInfo {
     /// ‖C_n(u^ℓ, λ^ℓ)‖₂ over all contact nodes (3.21); with friction also C_τ (3.31).
     pub residual: f64,
     pub solve_seconds: f64,
+    /// A numeric factorisation (direct preset) or Krylov iterations (iterative preset).
+    pub solve: SolveKind,
     pub iterations: usize,
     /// Number of rigid modes pinned in this step.
     pub pinned: usize,
@@ -145,12 +147,12 @@ pub fn semismooth_newton(
             reduced.set_pins(sys, layout, lp.free.pins())?;
         }
         reduced.write(ctx, sys, layout, b, &lp.set, lp.free.pins())?; // (3.29) / (3.42)
-        let (info, seconds) = reduced.solve()?;
+        let (info, kind, seconds) = reduced.solve()?;
         ensure_converged(step, &info)?;
         reduced.recover(sys, b, &lp.set, &mut lp.it)?; // (3.28)
         let update = lp.set.update(&lp.it, b, s.c, dim); // (3.23) / (3.33)
         let totals = update.reduce(ctx, b, lp.free.modes(), dim);
-        history.push(lp.step_info(step, &totals, &info, seconds));
+        history.push(lp.step_info(step, &totals, &info, kind, seconds));
         log_step(ctx, history.last().expect("pushed"), &totals);
         if lp.next(step, update.next, &totals, &reduced)? {
             converged = true;
@@ -207,13 +209,21 @@ fn log_step(ctx: &Ctx, h: &StepInfo, t: &StepTotals) {
 }
 
 impl Loop<'_> {
-    fn step_info(&self, step: usize, t: &StepTotals, info: &SolveInfo, secs: f64) -> StepInfo {
+    fn step_info(
+        &self,
+        step: usize,
+        t: &StepTotals,
+        info: &SolveInfo,
+        kind: SolveKind,
+        secs: f64,
+    ) -> StepInfo {
         StepInfo {
             step,
             active: self.summary.n_active,
             changed: t.changed,
             residual: t.residual,
             solve_seconds: secs,
+            solve: kind,
             iterations: info.iterations,
             pinned: self.free.pins().len(),
             states: self.s.friction.then_some(t.states),

@@ -190,6 +190,16 @@ impl ConstraintMap {
     }
 }
 
+/// How a step's system was solved: a numeric factorisation of the new matrix (the symbolic
+/// analysis is made once, in the first step), or Krylov iterations with a preconditioner
+/// rebuilt for it.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum SolveKind {
+    Factorisation,
+    Krylov,
+}
+
 /// The reduced system of one Newton step and its solver: the matrix S on A's pattern, the
 /// right-hand side, the KSP, and the (constant) rows of A at the contact nodes and the pins.
 pub struct ReducedSystem {
@@ -332,12 +342,19 @@ impl ReducedSystem {
         Ok(())
     }
 
-    /// Solves the step's system; returns the solver's report and the seconds. Collective.
-    pub fn solve(&mut self) -> petsc::Result<(SolveInfo, f64)> {
+    /// Solves the step's system; returns the solver's report, the kind of solve and the
+    /// seconds. Collective.
+    pub fn solve(&mut self) -> petsc::Result<(SolveInfo, SolveKind, f64)> {
         let t = Instant::now();
         self.ls.ksp.set_operator(&self.s)?;
         let info = self.ls.solve(&self.rhs, &mut self.u)?;
-        Ok((info, t.elapsed().as_secs_f64()))
+        let (_, pc) = self.ls.ksp.type_names()?;
+        let kind = if pc == "lu" || pc == "cholesky" {
+            SolveKind::Factorisation
+        } else {
+            SolveKind::Krylov
+        };
+        Ok((info, kind, t.elapsed().as_secs_f64()))
     }
 
     /// (3.28) for the last solution: λ = f − A u on the contact rows (one MatMult), into `it`.

@@ -72,11 +72,6 @@ impl Frame {
         Some(Frame { dim, n, t })
     }
 
-    /// Number of tangential components, d − 1.
-    pub fn n_tangents(&self) -> usize {
-        self.dim - 1
-    }
-
     /// v_n = v·n
     pub fn normal_part(&self, v: &[f64; 3]) -> f64 {
         dot(*v, self.n)

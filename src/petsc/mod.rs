@@ -122,30 +122,6 @@ impl Petsc {
         unsafe { ffi::PETSC_COMM_WORLD }
     }
 
-    /// Starts PETSc's default logging (what `-log_view` prints at the end).
-    pub fn log_begin(&self) -> Result<()> {
-        // SAFETY: plain call after initialisation.
-        unsafe { check(ffi::PetscLogDefaultBegin()) }
-    }
-
-    /// Prints PETSc's performance log to stdout (collective).
-    pub fn log_view(&self) -> Result<()> {
-        // SAFETY: the ASCII stdout viewer of the world communicator is owned by PETSc.
-        unsafe {
-            let viewer = ffi::PETSC_VIEWER_STDOUT_(ffi::PETSC_COMM_WORLD);
-            check(ffi::PetscLogView(viewer))
-        }
-    }
-
-    /// Peak memory of this process as PETSc measured it (bytes).
-    pub fn max_memory(&self) -> f64 {
-        let mut m: ffi::PetscLogDouble = 0.0;
-        // SAFETY: writes one double.
-        unsafe {
-            ffi::PetscMemoryGetMaximumUsage(&mut m);
-        }
-        m
-    }
 }
 
 impl Drop for Petsc {
@@ -161,13 +137,6 @@ impl Drop for Petsc {
 /// The options database.
 pub mod options {
     use super::*;
-
-    /// Inserts options from a string like "-ksp_type gmres -pc_type gamg" (later ones win).
-    pub fn insert_str(options: &str) -> Result<()> {
-        let s = cstring(options);
-        // SAFETY: PETSc copies the string.
-        unsafe { check(ffi::PetscOptionsInsertString(ptr::null_mut(), s.as_ptr())) }
-    }
 
     /// Sets one option only if the user did not set it (so command-line options win).
     pub fn set_default(name: &str, value: &str) -> Result<()> {
@@ -206,35 +175,6 @@ pub mod options {
         Ok(set == ffi::PETSC_TRUE)
     }
 
-    /// Lists options that were set but never queried (typos), as PETSc's `-options_left` would.
-    pub fn unused() -> Result<Vec<String>> {
-        let mut n: PInt = 0;
-        let mut names: *mut *mut c_char = ptr::null_mut();
-        let mut values: *mut *mut c_char = ptr::null_mut();
-        let mut out = Vec::new();
-        // SAFETY: PETSc allocates the arrays; we read n entries and free them with its helper.
-        unsafe {
-            check(ffi::PetscOptionsLeftGet(
-                ptr::null_mut(),
-                &mut n,
-                &mut names,
-                &mut values,
-            ))?;
-            for i in 0..n as usize {
-                let name = *names.add(i);
-                if !name.is_null() {
-                    out.push(CStr::from_ptr(name).to_string_lossy().into_owned());
-                }
-            }
-            check(ffi::PetscOptionsLeftRestore(
-                ptr::null_mut(),
-                &mut n,
-                &mut names,
-                &mut values,
-            ))?;
-        }
-        Ok(out)
-    }
 }
 
 /// A distributed PETSc vector.
@@ -364,14 +304,6 @@ impl Vector {
         self.read(|s| s.to_vec())
     }
 
-    /// Collective 2-norm.
-    pub fn norm2(&self) -> Result<f64> {
-        let mut r = 0.0;
-        // SAFETY: writes one double.
-        unsafe { check(ffi::VecNorm(self.raw, ffi::NORM_2, &mut r))? };
-        Ok(r)
-    }
-
     /// Values at arbitrary global indices (owned or not), gathered with a VecScatter
     /// (collective: every rank calls it, possibly with an empty list).
     pub fn gather(&self, global: &[PInt]) -> Result<Vec<f64>> {
@@ -420,12 +352,6 @@ impl Vector {
             r?;
             y.to_local_vec()
         }
-    }
-
-    /// self = a * x + self
-    pub fn axpy(&mut self, a: f64, x: &Vector) -> Result<()> {
-        // SAFETY: compatible layouts are checked by PETSc.
-        unsafe { check(ffi::VecAXPY(self.raw, a, x.raw)) }
     }
 
     /// self = x
@@ -695,12 +621,6 @@ impl Ksp {
     pub fn set_from_options(&mut self) -> Result<()> {
         // SAFETY: valid KSP.
         unsafe { check(ffi::KSPSetFromOptions(self.raw)) }
-    }
-
-    /// Builds the preconditioner / factorisation now (so its time can be measured apart).
-    pub fn set_up(&mut self) -> Result<()> {
-        // SAFETY: valid KSP with operators.
-        unsafe { check(ffi::KSPSetUp(self.raw)) }
     }
 
     /// Solves A x = b; returns iterations and PETSc's converged reason.

@@ -40,12 +40,15 @@
 //!   groups get their tag as name. Element indices of a group are ascending.
 //! - In 2D, z must be constant; it is set to 0.
 
+mod facets;
+mod quiet;
 mod raw;
 #[cfg(test)]
 mod tests;
 
 use std::collections::HashMap;
 use std::path::Path;
+use std::sync::atomic::{AtomicBool, Ordering};
 
 use mshio::ElementType;
 
@@ -198,6 +201,16 @@ fn signed_measure(dim: usize, p: &[[f64; 3]]) -> (f64, f64) {
     (m, h2.sqrt())
 }
 
+/// Whether a panic of the MSH parser (`mshio`) is caught (silently) and reported as an
+/// `InputError`. On by default; fuzzing turns it off so that every parser panic that the
+/// header checks do not prevent shows up as a crash.
+static CATCH_PARSER_PANICS: AtomicBool = AtomicBool::new(true);
+
+/// Turns the catching of MSH parser panics on or off (see [`read_msh_bytes`]); for fuzzing.
+pub fn set_catch_parser_panics(on: bool) {
+    CATCH_PARSER_PANICS.store(on, Ordering::Relaxed);
+}
+
 const HINT_MSH41: &str =
     "save the mesh as MSH 4.1 (gmsh ... -format msh41, or Mesh.MshFileVersion = 4.1;)";
 
@@ -261,10 +274,16 @@ fn entity_word(dim: usize) -> &'static str {
 /// Reads a Gmsh MSH 4.1 file (ASCII or binary). All problems with the file are
 /// `InputError`s naming the file.
 pub fn read_msh(path: &Path) -> Result<Mesh, InputError> {
-    let err = |m: String| InputError::new(path, m);
-    let bytes = std::fs::read(path).map_err(|e| err(format!("cannot read mesh file: {e}")))?;
+    let bytes = std::fs::read(path)
+        .map_err(|e| InputError::new(path, format!("cannot read mesh file: {e}")))?;
+    read_msh_bytes(&bytes, path)
+}
 
-    let info = raw::scan_header(&bytes).map_err(|m| err(format!("{m}; {HINT_MSH41}")))?;
+/// As [`read_msh`], from the bytes of the file already in memory; `path` only names the file
+/// in messages.
+pub fn read_msh_bytes(bytes: &[u8], path: &Path) -> Result<Mesh, InputError> {
+    let err = |m: String| InputError::new(path, m);
+    let info = raw::scan_header(bytes).map_err(|m| err(format!("{m}; {HINT_MSH41}")))?;
     if info.partitioned {
         return Err(err(
             "partitioned mesh ($PartitionedEntities, written by gmsh -part) is not supported: \
@@ -273,12 +292,19 @@ pub fn read_msh(path: &Path) -> Result<Mesh, InputError> {
         ));
     }
 
-    let parsed = std::panic::catch_unwind(|| {
-        mshio::parse_msh_bytes(&bytes).map_err(|e| {
+    raw::check_section_counts(bytes, &info).map_err(err)?;
+
+    let parse = || {
+        mshio::parse_msh_bytes(bytes).map_err(|e| {
             let s = e.to_string();
             s.lines().take(6).collect::<Vec<_>>().join(" / ")
         })
-    });
+    };
+    let parsed = if CATCH_PARSER_PANICS.load(Ordering::Relaxed) {
+        quiet::catch_unwind_silently(parse)
+    } else {
+        Ok(parse())
+    };
     let msh = match parsed {
         Ok(Ok(m)) => m,
         Ok(Err(m)) => {
@@ -293,7 +319,7 @@ pub fn read_msh(path: &Path) -> Result<Mesh, InputError> {
         }
     };
 
-    build(&bytes, &info, &msh).map_err(err)
+    build(bytes, &info, &msh).map_err(err)
 }
 
 fn build(
@@ -314,6 +340,24 @@ fn build(
 
     // ---- all nodes of the file, in file order, with their tags ----
     let n_all: usize = nodes.node_blocks.iter().map(|b| b.nodes.len()).sum();
+    if n_all as u64 != nodes.num_nodes {
+        return Err(format!(
+            "$Nodes announces {} nodes, but its blocks hold {n_all}: the file is corrupt",
+            nodes.num_nodes
+        ));
+    }
+    let n_elements: usize = elements
+        .element_blocks
+        .iter()
+        .map(|b| b.elements.len())
+        .sum();
+    if n_elements as u64 != elements.num_elements {
+        return Err(format!(
+            "$Elements announces {} elements, but its blocks hold {n_elements}: the file is \
+             corrupt",
+            elements.num_elements
+        ));
+    }
     let mut all_coords: Vec<[f64; 3]> = Vec::with_capacity(n_all);
     let mut all_tags: Vec<u64> = vec![0; n_all];
     let mut have_all_tags = true;
@@ -336,7 +380,10 @@ fn build(
             Some(t) if t.len() == n_all => all_tags = t,
             _ => {
                 for (i, t) in all_tags.iter_mut().enumerate() {
-                    *t = nodes.min_node_tag + i as u64;
+                    *t = nodes
+                        .min_node_tag
+                        .checked_add(i as u64)
+                        .ok_or("node tags beyond the largest integer")?;
                 }
             }
         }
@@ -497,7 +544,22 @@ fn build(
         facet_tags: Vec::with_capacity(counts[dim - 1]),
         ..Default::default()
     };
-    // (dim, physical tag) -> element indices
+    // (dim, physical tag) -> element indices. An element is stored once per physical tag of
+    // its entity: bound the total (a corrupt $Entities could give one entity millions of
+    // physical tags and so need elements x tags of memory).
+    let memberships = elements.element_blocks.iter().fold(0u128, |acc, b| {
+        let n_phys = element_dim(b.element_type)
+            .and_then(|d| phys.get(&(d, b.entity_tag)))
+            .map_or(0, |p| p.len());
+        acc + (b.elements.len() as u128) * (n_phys as u128)
+    });
+    let limit = 64 * (n_elements as u128) + (1 << 20);
+    if memberships > limit {
+        return Err(format!(
+            "the elements belong to {memberships} physical groups in all (more than {limit}): \
+             the $Entities section gives entities too many physical tags"
+        ));
+    }
     let mut members: HashMap<(usize, i32), Vec<usize>> = HashMap::new();
     let mut cell_count = 0usize;
     for b in &elements.element_blocks {

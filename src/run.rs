@@ -134,6 +134,7 @@ pub fn read_input(case: &Case) -> Result<(Mesh, Material), InputError> {
         .map(|g| (g.name.clone(), g.dim))
         .collect();
     case.check_against_mesh(mesh.dim, &groups)?;
+    case.check_facet_groups(&mesh)?;
     let model = match case.model(mesh.dim)? {
         case::Model::PlaneStrain => fem::Model::PlaneStrain,
         case::Model::PlaneStress => fem::Model::PlaneStress,

@@ -283,7 +283,7 @@ pub fn read_msh(path: &Path) -> Result<Mesh, InputError> {
 /// in messages.
 pub fn read_msh_bytes(bytes: &[u8], path: &Path) -> Result<Mesh, InputError> {
     let err = |m: String| InputError::new(path, m);
-    let info = raw::scan_header(bytes).map_err(|m| err(format!("{m}; {HINT_MSH41}")))?;
+    let info = raw::scan_header(bytes).map_err(err)?;
     if info.partitioned {
         return Err(err(
             "partitioned mesh ($PartitionedEntities, written by gmsh -part) is not supported: \

@@ -160,18 +160,29 @@ pub(crate) fn check_section_counts(bytes: &[u8], info: &HeaderInfo) -> Result<()
             )?;
         }
     }
+    // Every place the parser could take for the start of a $Nodes or $Elements section (it
+    // reads all of them, and only then refuses a second one).
     let mut sections = Vec::new();
-    if let Some(p) = info.nodes_offset {
-        sections.push(("Nodes", p, "nodes", &NODE));
-    }
-    if let Some(p) = find_section(bytes, b"$Elements", info.nodes_offset.unwrap_or(0)) {
-        sections.push(("Elements", p, "elements", &ELEMENT));
+    for (name, items, min) in [
+        ("Nodes", "nodes", &NODE),
+        ("Elements", "elements", &ELEMENT),
+    ] {
+        let tag = format!("${name}");
+        let mut from = 0;
+        while let Some(p) = find_section(bytes, tag.as_bytes(), from) {
+            sections.push((name, p, items, min));
+            from = p + 1;
+        }
     }
     for (name, at, items, min) in sections {
         let pos = next_line(bytes, at);
         let Some(n) = header_numbers(bytes, pos, 4, info) else {
             continue;
         };
+        // (The MSH parser computes `count - 1`: a zero count must not reach it.)
+        if n[1] == 0 {
+            return Err(format!("${name} holds no {items}"));
+        }
         let body = if info.file_type == 1 {
             pos + 4 * info.size_t_size
         } else {
@@ -187,13 +198,13 @@ pub(crate) fn check_section_counts(bytes: &[u8], info: &HeaderInfo) -> Result<()
     Ok(())
 }
 
-/// Offset of a line that starts with `name` (followed by an end of line), at or after `from`.
+/// Offset of the next `name` followed by an end of line (as the parser accepts a section
+/// start: after any whitespace, or none), at or after `from`.
 fn find_section(bytes: &[u8], name: &[u8], from: usize) -> Option<usize> {
     let mut i = from;
     while let Some(p) = find(bytes, name, i) {
-        let line_start = p == 0 || bytes[p - 1] == b'\n';
         let after = bytes.get(p + name.len()).copied();
-        if line_start && matches!(after, Some(b'\n' | b'\r')) {
+        if matches!(after, Some(b'\n' | b'\r')) {
             return Some(p);
         }
         i = p + 1;
@@ -250,7 +261,10 @@ pub(crate) fn scan_header(bytes: &[u8]) -> Result<HeaderInfo, String> {
     let mut info = HeaderInfo::default();
     let start = skip_ws(bytes, 0);
     if !bytes[start..].starts_with(b"$MeshFormat") {
-        return Err("not a Gmsh .msh file (it does not start with $MeshFormat)".into());
+        return Err(format!(
+            "not a Gmsh .msh file (it does not start with $MeshFormat); {}",
+            super::HINT_MSH41
+        ));
     }
     let line_start = next_line(bytes, start);
     let line_end = next_line(bytes, line_start);
@@ -261,8 +275,9 @@ pub(crate) fn scan_header(bytes: &[u8]) -> Result<HeaderInfo, String> {
     info.size_t_size = tok.next().and_then(|t| t.parse().ok()).unwrap_or(0);
     if info.version != "4.1" {
         return Err(format!(
-            "unsupported MSH format version '{}' (only MSH 4.1 is read)",
-            info.version
+            "unsupported MSH format version '{}' (only MSH 4.1 is read); {}",
+            info.version,
+            super::HINT_MSH41
         ));
     }
     // The MSH parser panics on a data size it has no reader for (or one that overflows), so
@@ -352,7 +367,8 @@ fn parse_physical_names(body: &[u8]) -> Result<HashMap<(usize, i32), String>, St
     let lines: Vec<&str> = lines.collect();
     if n > lines.len() as u64 {
         return Err(format!(
-            "$PhysicalNames announces {n} names, but the section has {} lines",
+            "$PhysicalNames announces {n} names, but the section has {} lines: the file \
+             is corrupt",
             lines.len()
         ));
     }

@@ -61,6 +61,7 @@ fn read_and_check(case: &Case) -> Result<Input, InputError> {
         .map(|g| (g.name.clone(), g.dim))
         .collect();
     case.check_against_mesh(mesh.dim, &groups)?;
+    case.check_facet_groups(&mesh)?;
     let model = match case.model(mesh.dim)? {
         case::Model::PlaneStrain => fem::Model::PlaneStrain,
         case::Model::PlaneStress => fem::Model::PlaneStress,

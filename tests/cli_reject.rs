@@ -359,3 +359,218 @@ fn mpirun_3_partitioned_msh() {
     let t = case_2d(&mesh_dir().join("square_h0.5_part2.msh"));
     rejected_np(&t, 3, &["partitioned"]);
 }
+
+// ---- corrupt counts, malformed headers, degenerate or interior load/contact facets --------
+
+/// Writes `bytes` as `name` into `dir` and returns the case text that uses it.
+fn case_on(dir: &Path, name: &str, bytes: &[u8]) -> String {
+    let p = dir.join(name);
+    std::fs::write(&p, bytes).unwrap();
+    case_2d(&p)
+}
+
+/// `bytes` with the first occurrence of `from` replaced by `to`.
+fn patched(bytes: &[u8], from: &[u8], to: &[u8]) -> Vec<u8> {
+    let p = bytes
+        .windows(from.len())
+        .position(|w| w == from)
+        .expect("pattern in the mesh");
+    [&bytes[..p], to, &bytes[p + from.len()..]].concat()
+}
+
+/// The `index`-th size_t of the header of `section` in a binary (little-endian) file.
+fn binary_count(bytes: &[u8], section: &str, index: usize, value: u64) -> Vec<u8> {
+    let tag = format!("{section}\n");
+    let p = bytes
+        .windows(tag.len())
+        .position(|w| w == tag.as_bytes())
+        .unwrap()
+        + tag.len()
+        + 8 * index;
+    let mut out = bytes.to_vec();
+    out[p..p + 8].copy_from_slice(&value.to_le_bytes());
+    out
+}
+
+/// A `$PhysicalNames` count of 1e9 and corrupt `$Nodes` / `$Elements` / `$Entities` / block
+/// counts (ASCII and binary) used to abort with "memory allocation of … bytes failed"
+/// (SIGABRT) or, when small enough, to pass unnoticed. Now: exit 2, one line naming the file.
+#[test]
+fn msh_counts_beyond_the_file_size() {
+    let meshes = tempfile::tempdir().unwrap();
+    let ascii = std::fs::read(mesh_dir().join("square_h0.5.msh")).unwrap();
+    let bin = std::fs::read(mesh_dir().join("square_h0.25_bin.msh")).unwrap();
+    let bad: Vec<(&str, Vec<u8>, &str)> = vec![
+        (
+            "names.msh",
+            patched(
+                &ascii,
+                b"$PhysicalNames\n5\n",
+                b"$PhysicalNames\n1000000000\n",
+            ),
+            "$PhysicalNames announces 1000000000 names",
+        ),
+        (
+            "nodes.msh",
+            patched(
+                &ascii,
+                b"$Nodes\n9 12 1 12",
+                b"$Nodes\n9 1000000000000 1 12",
+            ),
+            "$Nodes announces",
+        ),
+        (
+            "elements.msh",
+            patched(&ascii, b"$Elements\n5 22 ", b"$Elements\n5 99999999999 "),
+            "$Elements announces",
+        ),
+        (
+            "entities.msh",
+            patched(
+                &ascii,
+                b"$Entities\n4 4 1 0",
+                b"$Entities\n4 4000000000000 1 0",
+            ),
+            "$Entities announces",
+        ),
+        (
+            "nodes_bin.msh",
+            binary_count(&bin, "$Nodes", 1, 1 << 40),
+            "$Nodes announces",
+        ),
+        (
+            "nodes_bin_300.msh",
+            binary_count(&bin, "$Nodes", 1, 300),
+            "$Nodes announces",
+        ),
+        (
+            "blocks_bin.msh",
+            binary_count(&bin, "$Elements", 0, 1 << 50),
+            "$Elements announces",
+        ),
+        (
+            "elements_bin.msh",
+            binary_count(&bin, "$Elements", 1, 59),
+            "$Elements announces 59 elements, but its blocks hold 58",
+        ),
+    ];
+    for (name, bytes, expect) in bad {
+        let m = rejected(
+            &case_on(meshes.path(), name, &bytes),
+            &[name, expect, "corrupt"],
+        );
+        assert!(
+            !m.contains("save the mesh as MSH 4.1"),
+            "misleading hint: {m}"
+        );
+    }
+}
+
+/// A binary header with a data size mshio has no reader for made mshio panic: caught, but a
+/// panic message and a backtrace (RUST_BACKTRACE=1) came before the clean message.
+#[test]
+fn malformed_msh_header_gives_one_line_without_backtrace() {
+    let meshes = tempfile::tempdir().unwrap();
+    let bin = std::fs::read(mesh_dir().join("square_h0.25_bin.msh")).unwrap();
+    let ascii = std::fs::read(mesh_dir().join("square_h0.5.msh")).unwrap();
+    for (name, bytes) in [
+        ("size3.msh", patched(&bin, b"4.1 1 8\n", b"4.1 1 3\n")),
+        (
+            "size_huge.msh",
+            patched(&ascii, b"4.1 0 8\n", b"4.1 0 99999999999\n"),
+        ),
+    ] {
+        let tmp = tempfile::tempdir().unwrap();
+        let case = write_case(
+            &tmp.path().join("case.toml"),
+            &case_on(meshes.path(), name, &bytes),
+        );
+        let args = vec![
+            case.display().to_string(),
+            "-o".into(),
+            tmp.path().join("out").display().to_string(),
+        ];
+        let mut cmd = solver(0, &args);
+        cmd.env("RUST_BACKTRACE", "1");
+        let r = run_with_timeout(cmd, Duration::from_secs(60));
+        r.expect_code(2, "malformed header");
+        let lines: Vec<&str> = r.stderr.trim().lines().collect();
+        assert_eq!(lines.len(), 1, "one line expected:\n{}", r.stderr);
+        assert!(lines[0].starts_with("error"), "{}", r.stderr);
+        assert!(
+            lines[0].contains(name) && lines[0].contains("data size"),
+            "{}",
+            r.stderr
+        );
+        assert!(!r.stderr.contains("panicked"), "{}", r.stderr);
+    }
+}
+
+fn bad_facets() -> PathBuf {
+    mesh_dir().join("square_bad_facets.msh")
+}
+
+/// A zero-length segment in the contact group was accepted and gave wrong pressures.
+#[test]
+fn zero_length_contact_facet() {
+    let t = format!(
+        "{}\n[contact]\ngroup = \"bottom\"\nobstacle = {{ type = \"plane\", point = [0.0, 0.0], \
+         normal = [0.0, 1.0] }}\n",
+        case_2d(&bad_facets())
+    );
+    rejected(
+        &t,
+        &[
+            "square_bad_facets.msh",
+            "line element 4",
+            "\"bottom\"",
+            "contact.group",
+            "zero length",
+        ],
+    );
+    // Control: the same case with the contact on "top" runs.
+    let tmp = tempfile::tempdir().unwrap();
+    let ok = edit(&t, "group = \"bottom\"", "group = \"top\"");
+    run(tmp.path(), &ok, 0, &[]).expect_code(0, "contact on a proper boundary group");
+}
+
+#[test]
+fn load_group_of_interior_or_stray_facets() {
+    for (group, tag, what) in [
+        ("bottom", "line element 4", "zero length"),
+        ("diag", "line element 5", "interior facet"),
+        ("stray", "line element 6", "not a side of any body cell"),
+    ] {
+        let t = edit(
+            &case_2d(&bad_facets()),
+            "group = \"right\"",
+            &format!("group = \"{group}\""),
+        );
+        rejected(
+            &t,
+            &[tag, what, &format!("\"{group}\""), "neumann[0].group"],
+        );
+    }
+}
+
+#[test]
+fn mpirun_2_interior_load_group() {
+    let t = edit(
+        &case_2d(&bad_facets()),
+        "group = \"right\"",
+        "group = \"diag\"",
+    );
+    rejected_np(&t, 2, &["line element 5", "interior facet"]);
+}
+
+/// A case file of 6 MB cost 700 MB and 10 s; a 60 000-component --set key crashed (SIGSEGV).
+#[test]
+fn huge_case_file_and_deep_set_key() {
+    let t = format!("{}junk = [{}]\n", case_2d(&square()), "1,".repeat(400_000));
+    rejected(&t, &["case.toml", "larger than 256 KiB"]);
+    let tmp = tempfile::tempdir().unwrap();
+    let deep = format!("x.{}b=1", "a.".repeat(60_000));
+    let r = run(tmp.path(), &case_2d(&square()), 0, &["--set", &deep]);
+    r.expect_code(2, "deep --set key path");
+    assert!(r.stderr.contains("components"), "{}", r.stderr);
+}

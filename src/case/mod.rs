@@ -15,6 +15,7 @@ use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
 use crate::error::InputError;
+use crate::mesh::Mesh;
 use tree::{join_index, join_key, Kind, Loc, Node};
 
 /// A vector of the case file (2 or 3 entries) as 3 components, z = 0 in 2D.
@@ -306,6 +307,20 @@ pub struct Case {
     locs: BTreeMap<String, Loc>,
 }
 
+/// The largest case file read (a case file is a few hundred bytes; the bound keeps a wrong
+/// file from costing gigabytes of memory for its value tree).
+pub const MAX_CASE_BYTES: usize = 256 * 1024;
+
+fn too_large(file: &Path) -> InputError {
+    InputError::new(
+        file,
+        format!(
+            "the case file is larger than {} KiB: is it a case file?",
+            MAX_CASE_BYTES / 1024
+        ),
+    )
+}
+
 const ROOT_KEYS: &[&str] = &[
     "mesh",
     "material",
@@ -328,8 +343,24 @@ impl Case {
         overrides: &[String],
         output_dir: Option<&Path>,
     ) -> Result<Case, InputError> {
-        let text = std::fs::read_to_string(path)
-            .map_err(|e| InputError::new(path, format!("cannot read the case file: {e}")))?;
+        use std::io::Read;
+        let cannot =
+            |e: std::io::Error| InputError::new(path, format!("cannot read the case file: {e}"));
+        let mut bytes = Vec::new();
+        std::fs::File::open(path)
+            .map_err(cannot)?
+            .take(MAX_CASE_BYTES as u64 + 1)
+            .read_to_end(&mut bytes)
+            .map_err(cannot)?;
+        if bytes.len() > MAX_CASE_BYTES {
+            return Err(too_large(path));
+        }
+        let text = String::from_utf8(bytes).map_err(|_| {
+            InputError::new(
+                path,
+                "cannot read the case file: it is not valid UTF-8 text",
+            )
+        })?;
         Case::parse(&text, path, overrides, output_dir)
     }
 
@@ -342,6 +373,9 @@ impl Case {
         output_dir: Option<&Path>,
     ) -> Result<Case, InputError> {
         let cx = Ctx { file };
+        if text.len() > MAX_CASE_BYTES {
+            return Err(too_large(file));
+        }
         let mut root =
             tree::parse(text).map_err(|(line, msg)| InputError::new(file, msg).with_line(line))?;
         for spec in overrides {
@@ -439,6 +473,34 @@ impl Case {
                     len("contact.obstacle.center".into(), center.len())?;
                 }
             }
+        }
+        Ok(())
+    }
+
+    /// Checks the facets of every group that carries a load (`neumann`) or the contact
+    /// condition: no degenerate facet, every facet on the boundary of the body (see
+    /// [`Mesh::check_boundary_group`]). Call after [`Case::check_against_mesh`].
+    pub fn check_facet_groups(&self, mesh: &Mesh) -> Result<(), InputError> {
+        let mut used: Vec<(String, &str)> = self
+            .neumann
+            .iter()
+            .enumerate()
+            .map(|(i, n)| {
+                (
+                    join_key(&join_index("neumann", i), "group"),
+                    n.group.as_str(),
+                )
+            })
+            .collect();
+        if let Some(c) = &self.contact {
+            used.push(("contact.group".into(), c.group.as_str()));
+        }
+        for (key, group) in used {
+            let at = match self.line_of(&key) {
+                Some(l) => format!("{key} at {}:{l}", self.file.display()),
+                None => format!("{key} of {}", self.file.display()),
+            };
+            mesh.check_boundary_group(&self.mesh.file, group, &at)?;
         }
         Ok(())
     }

@@ -837,3 +837,58 @@ fn override_unquoted_array_hint() {
     assert_eq!(e.key.as_deref(), Some("output.fields"), "{e}");
     assert!(e.message.contains("quote"), "{e}");
 }
+
+// ---- sizes bounded (issue 11, item 5) ------------------------------------------------------
+
+#[test]
+fn reject_huge_case_file_before_building_its_tree() {
+    // 3 million array entries used to cost ~700 MB and 10 s before the unknown key was found.
+    let text = format!("{MINIMAL}junk = [{}]\n", "1,".repeat(3_000_000));
+    let e = parse(&text).unwrap_err();
+    assert!(e.message.contains("larger than 256 KiB"), "{e}");
+    // The same through the file reader.
+    let dir = tempfile::tempdir().unwrap();
+    let p = dir.path().join("big.toml");
+    std::fs::write(&p, &text).unwrap();
+    let e = Case::load(&p, &[], None).unwrap_err();
+    assert_eq!(e.file, p);
+    assert!(e.message.contains("larger than 256 KiB"), "{e}");
+    // Just under the bound (a long comment) is read.
+    let ok = format!(
+        "{MINIMAL}#{}\n",
+        "x".repeat(MAX_CASE_BYTES - MINIMAL.len() - 2)
+    );
+    assert!(ok.len() <= MAX_CASE_BYTES);
+    parse(&ok).unwrap();
+}
+
+#[test]
+fn reject_deep_set_key_path_without_overflowing_the_stack() {
+    // A 60 000-component key path used to overflow the stack (SIGSEGV) while the tree of
+    // nested tables was walked and dropped.
+    for unit in ["a.", "0."] {
+        let spec = format!("x.{}b=1", unit.repeat(60_000));
+        let e = parse_set(MINIMAL, &[&spec]).unwrap_err();
+        assert!(e.message.contains("key path has 60002 components"), "{e}");
+    }
+    // A path of the schema's depth is applied (and then validated as usual).
+    let e = parse_set(MINIMAL, &["contact.obstacle.point=[0.0, 0.0]"]).unwrap_err();
+    assert!(!e.message.contains("key path has"), "{e}");
+    assert!(e.key.as_deref().unwrap_or("").starts_with("contact"), "{e}");
+}
+
+#[test]
+fn deep_nesting_in_the_file_is_a_syntax_error() {
+    for text in [
+        format!(
+            "{MINIMAL}x = {}{}\n",
+            "[".repeat(10_000),
+            "]".repeat(10_000)
+        ),
+        format!("{MINIMAL}x{} = 1\n", ".a".repeat(10_000)),
+        format!("{MINIMAL}[{}a]\n", "a.".repeat(10_000)),
+    ] {
+        let e = parse(&text).unwrap_err();
+        assert!(e.message.contains("recursion limit"), "{e}");
+    }
+}

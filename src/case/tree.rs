@@ -200,6 +200,10 @@ fn parse_override_value(raw: &str) -> Node {
     node
 }
 
+/// The most components a `--set` key path may have (the deepest key of the schema has 3;
+/// the tree is walked recursively, so an unbounded path could overflow the stack).
+pub(crate) const MAX_KEY_DEPTH: usize = 16;
+
 /// Applies one `key.path=value` override to the tree. Missing tables (or arrays, when the
 /// next component is an index) are created; a numeric component indexes an array, one past
 /// the end appends a new entry.
@@ -213,6 +217,16 @@ pub(crate) fn apply_override(root: &mut Node, spec: &str) -> Result<(), (String,
     };
     let path = path.trim();
     let segs: Vec<&str> = path.split('.').map(str::trim).collect();
+    if segs.len() > MAX_KEY_DEPTH {
+        let head: String = path.chars().take(40).collect();
+        return Err((
+            format!("{head}..."),
+            format!(
+                "--set key path has {} components; a case file key has at most {MAX_KEY_DEPTH}",
+                segs.len()
+            ),
+        ));
+    }
     if segs.iter().any(|s| s.is_empty()) {
         return Err((
             path.to_string(),

@@ -40,12 +40,16 @@
 //!   groups get their tag as name. Element indices of a group are ascending.
 //! - In 2D, z must be constant; it is set to 0.
 
+mod facets;
+mod quiet;
 mod raw;
 #[cfg(test)]
 mod tests;
 
+use crate::geom::{norm2, sub};
 use std::collections::HashMap;
 use std::path::Path;
+use std::sync::atomic::{AtomicBool, Ordering};
 
 use mshio::ElementType;
 
@@ -142,15 +146,7 @@ impl Mesh {
     }
     /// Bounding box (lowest and highest coordinates) of the nodes.
     pub fn bounding_box(&self) -> ([f64; 3], [f64; 3]) {
-        let mut lo = [f64::INFINITY; 3];
-        let mut hi = [f64::NEG_INFINITY; 3];
-        for x in &self.coords {
-            for k in 0..3 {
-                lo[k] = lo[k].min(x[k]);
-                hi[k] = hi[k].max(x[k]);
-            }
-        }
-        (lo, hi)
+        bounding_box(&self.coords)
     }
 
     /// The largest extent of the bounding box over the mesh's dimensions (> 0).
@@ -169,12 +165,17 @@ impl Mesh {
     }
 }
 
-fn sub(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
-    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
-}
-
-fn norm2(a: [f64; 3]) -> f64 {
-    a[0] * a[0] + a[1] * a[1] + a[2] * a[2]
+/// Bounding box (lowest and highest coordinates) of points.
+pub fn bounding_box(coords: &[[f64; 3]]) -> ([f64; 3], [f64; 3]) {
+    let mut lo = [f64::INFINITY; 3];
+    let mut hi = [f64::NEG_INFINITY; 3];
+    for x in coords {
+        for k in 0..3 {
+            lo[k] = lo[k].min(x[k]);
+            hi[k] = hi[k].max(x[k]);
+        }
+    }
+    (lo, hi)
 }
 
 /// Signed measure of a simplex and its longest edge length.
@@ -196,6 +197,16 @@ fn signed_measure(dim: usize, p: &[[f64; 3]]) -> (f64, f64) {
             / 6.0
     };
     (m, h2.sqrt())
+}
+
+/// Whether a panic of the MSH parser (`mshio`) is caught (silently) and reported as an
+/// `InputError`. On by default; fuzzing turns it off so that every parser panic that the
+/// header checks do not prevent shows up as a crash.
+static CATCH_PARSER_PANICS: AtomicBool = AtomicBool::new(true);
+
+/// Turns the catching of MSH parser panics on or off (see [`read_msh_bytes`]); for fuzzing.
+pub fn set_catch_parser_panics(on: bool) {
+    CATCH_PARSER_PANICS.store(on, Ordering::Relaxed);
 }
 
 const HINT_MSH41: &str =
@@ -261,10 +272,16 @@ fn entity_word(dim: usize) -> &'static str {
 /// Reads a Gmsh MSH 4.1 file (ASCII or binary). All problems with the file are
 /// `InputError`s naming the file.
 pub fn read_msh(path: &Path) -> Result<Mesh, InputError> {
-    let err = |m: String| InputError::new(path, m);
-    let bytes = std::fs::read(path).map_err(|e| err(format!("cannot read mesh file: {e}")))?;
+    let bytes = std::fs::read(path)
+        .map_err(|e| InputError::new(path, format!("cannot read mesh file: {e}")))?;
+    read_msh_bytes(&bytes, path)
+}
 
-    let info = raw::scan_header(&bytes).map_err(|m| err(format!("{m}; {HINT_MSH41}")))?;
+/// As [`read_msh`], from the bytes of the file already in memory; `path` only names the file
+/// in messages.
+pub fn read_msh_bytes(bytes: &[u8], path: &Path) -> Result<Mesh, InputError> {
+    let err = |m: String| InputError::new(path, m);
+    let info = raw::scan_header(bytes).map_err(err)?;
     if info.partitioned {
         return Err(err(
             "partitioned mesh ($PartitionedEntities, written by gmsh -part) is not supported: \
@@ -273,12 +290,19 @@ pub fn read_msh(path: &Path) -> Result<Mesh, InputError> {
         ));
     }
 
-    let parsed = std::panic::catch_unwind(|| {
-        mshio::parse_msh_bytes(&bytes).map_err(|e| {
+    raw::check_section_counts(bytes, &info).map_err(err)?;
+
+    let parse = || {
+        mshio::parse_msh_bytes(bytes).map_err(|e| {
             let s = e.to_string();
             s.lines().take(6).collect::<Vec<_>>().join(" / ")
         })
-    });
+    };
+    let parsed = if CATCH_PARSER_PANICS.load(Ordering::Relaxed) {
+        quiet::catch_unwind_silently(parse)
+    } else {
+        Ok(parse())
+    };
     let msh = match parsed {
         Ok(Ok(m)) => m,
         Ok(Err(m)) => {
@@ -293,7 +317,7 @@ pub fn read_msh(path: &Path) -> Result<Mesh, InputError> {
         }
     };
 
-    build(&bytes, &info, &msh).map_err(err)
+    build(bytes, &info, &msh).map_err(err)
 }
 
 fn build(
@@ -311,9 +335,69 @@ fn build(
         .elements
         .as_ref()
         .ok_or("the file has no $Elements section")?;
+    let (all_coords, all_tags) = file_nodes(bytes, info, nodes, elements)?;
+    let tag_index = TagIndex::new(&all_tags);
+    let phys = entity_physical_tags(msh);
+    let (dim, counts) = mesh_dimension(elements)?;
+    let (mut cells, cell_tags, used) =
+        body_cells(elements, dim, &phys, &tag_index, all_tags.len())?;
+    let (mut coords, node_tags, new_index) = compact(&used, &all_coords, &all_tags, &mut cells);
+    if dim == 2 {
+        flatten_2d(&mut coords)?;
+    }
+    orient_cells(dim, &mut cells, &cell_tags, &coords)?;
+    let mut mesh = Mesh {
+        dim,
+        coords,
+        node_tags,
+        cells,
+        cell_tags,
+        facets: Vec::with_capacity(counts[dim - 1] * dim),
+        facet_tags: Vec::with_capacity(counts[dim - 1]),
+        ..Default::default()
+    };
+    let members = boundary_elements(&mut mesh, elements, &phys, &tag_index, &new_index)?;
+    mesh.groups = groups(members, info, dim);
+    Ok(mesh)
+}
 
-    // ---- all nodes of the file, in file order, with their tags ----
+/// Physical tags by (dimension, entity tag).
+type PhysicalTags<'a> = HashMap<(usize, i32), &'a [i32]>;
+
+/// The node of tag `ntag` (an index into the file's nodes), named by the element using it.
+fn lookup(tag_index: &TagIndex, etag: u64, ntag: u64) -> Result<usize, String> {
+    tag_index
+        .get(ntag)
+        .ok_or_else(|| format!("element {etag} references node {ntag}, which is not in $Nodes"))
+}
+
+/// All nodes of the file, in file order, with their tags; the counts of the headers checked
+/// against the blocks.
+fn file_nodes(
+    bytes: &[u8],
+    info: &raw::HeaderInfo,
+    nodes: &mshio::Nodes<u64, i32, f64>,
+    elements: &mshio::Elements<u64, i32>,
+) -> Result<(Vec<[f64; 3]>, Vec<u64>), String> {
     let n_all: usize = nodes.node_blocks.iter().map(|b| b.nodes.len()).sum();
+    if n_all as u64 != nodes.num_nodes {
+        return Err(format!(
+            "$Nodes announces {} nodes, but its blocks hold {n_all}: the file is corrupt",
+            nodes.num_nodes
+        ));
+    }
+    let n_elements: usize = elements
+        .element_blocks
+        .iter()
+        .map(|b| b.elements.len())
+        .sum();
+    if n_elements as u64 != elements.num_elements {
+        return Err(format!(
+            "$Elements announces {} elements, but its blocks hold {n_elements}: the file is \
+             corrupt",
+            elements.num_elements
+        ));
+    }
     let mut all_coords: Vec<[f64; 3]> = Vec::with_capacity(n_all);
     let mut all_tags: Vec<u64> = vec![0; n_all];
     let mut have_all_tags = true;
@@ -336,14 +420,20 @@ fn build(
             Some(t) if t.len() == n_all => all_tags = t,
             _ => {
                 for (i, t) in all_tags.iter_mut().enumerate() {
-                    *t = nodes.min_node_tag + i as u64;
+                    *t = nodes
+                        .min_node_tag
+                        .checked_add(i as u64)
+                        .ok_or("node tags beyond the largest integer")?;
                 }
             }
         }
     }
-    let tag_index = TagIndex::new(&all_tags);
 
-    // ---- entity physical tags: (dim, entity tag) -> physical tags ----
+    Ok((all_coords, all_tags))
+}
+
+/// (dimension, entity tag) → physical tags, from $Entities.
+fn entity_physical_tags(msh: &mshio::MshFile<u64, i32, f64>) -> PhysicalTags<'_> {
     let mut phys: HashMap<(usize, i32), &[i32]> = HashMap::new();
     if let Some(ent) = &msh.data.entities {
         for p in &ent.points {
@@ -360,7 +450,12 @@ fn build(
         }
     }
 
-    // ---- element types and mesh dimension ----
+    phys
+}
+
+/// The mesh dimension (that of the highest-dimensional elements) and the element counts per
+/// dimension; only linear elements are accepted.
+fn mesh_dimension(elements: &mshio::Elements<u64, i32>) -> Result<(usize, [usize; 4]), String> {
     let mut dim = 0;
     let mut counts = [0usize; 4];
     for b in &elements.element_blocks {
@@ -381,17 +476,28 @@ fn build(
                 .into(),
         );
     }
-    let nc = dim + 1;
 
-    // ---- body cells (gmsh node indices first) ----
-    let mut cells: Vec<usize> = Vec::with_capacity(counts[dim] * nc);
-    let mut cell_tags: Vec<u64> = Vec::with_capacity(counts[dim]);
+    Ok((dim, counts))
+}
+
+/// The body cells (file node indices), their tags, and which file nodes they use.
+fn body_cells(
+    elements: &mshio::Elements<u64, i32>,
+    dim: usize,
+    phys: &PhysicalTags,
+    tag_index: &TagIndex,
+    n_all: usize,
+) -> Result<(Vec<usize>, Vec<u64>, Vec<bool>), String> {
+    let nc = dim + 1;
+    let count: usize = elements
+        .element_blocks
+        .iter()
+        .filter(|b| element_dim(b.element_type) == Some(dim))
+        .map(|b| b.elements.len())
+        .sum();
+    let mut cells: Vec<usize> = Vec::with_capacity(count * nc);
+    let mut cell_tags: Vec<u64> = Vec::with_capacity(count);
     let mut used = vec![false; n_all];
-    let lookup = |etag: u64, ntag: u64| {
-        tag_index
-            .get(ntag)
-            .ok_or_else(|| format!("element {etag} references node {ntag}, which is not in $Nodes"))
-    };
     for b in elements
         .element_blocks
         .iter()
@@ -419,7 +525,7 @@ fn build(
                 ));
             }
             for &nt in &e.nodes {
-                let i = lookup(e.element_tag, nt)?;
+                let i = lookup(tag_index, e.element_tag, nt)?;
                 used[i] = true;
                 cells.push(i);
             }
@@ -427,7 +533,18 @@ fn build(
         }
     }
 
-    // ---- compact renumbering of the used nodes, in gmsh order ----
+    Ok((cells, cell_tags, used))
+}
+
+/// Compact renumbering of the used nodes, in gmsh order: (coordinates, tags, new index of every
+/// file node or usize::MAX); `cells` renumbered in place.
+fn compact(
+    used: &[bool],
+    all_coords: &[[f64; 3]],
+    all_tags: &[u64],
+    cells: &mut [usize],
+) -> (Vec<[f64; 3]>, Vec<u64>, Vec<usize>) {
+    let n_all = used.len();
     let mut new_index = vec![usize::MAX; n_all];
     let mut coords = Vec::with_capacity(n_all);
     let mut node_tags = Vec::with_capacity(n_all);
@@ -438,35 +555,39 @@ fn build(
             node_tags.push(all_tags[i]);
         }
     }
-    drop(used);
     for v in cells.iter_mut() {
         *v = new_index[*v];
     }
 
-    // ---- 2D: constant z, set to 0 ----
-    if dim == 2 {
-        let (mut lo, mut hi) = ([f64::MAX; 3], [f64::MIN; 3]);
-        for p in &coords {
-            for k in 0..3 {
-                lo[k] = lo[k].min(p[k]);
-                hi[k] = hi[k].max(p[k]);
-            }
-        }
-        let size = (hi[0] - lo[0]).max(hi[1] - lo[1]);
-        let spread = hi[2] - lo[2];
-        if spread.is_nan() || spread > 1e-10 * size {
-            return Err(format!(
-                "2D mesh whose nodes are not in a plane z = const (z from {} to {}): a 2D \
-                 body must lie in the xy plane",
-                lo[2], hi[2]
-            ));
-        }
-        for p in coords.iter_mut() {
-            p[2] = 0.0;
-        }
-    }
+    (coords, node_tags, new_index)
+}
 
-    // ---- quality: zero measure refused, inverted cells reoriented ----
+/// 2D: the nodes must lie in a plane z = const; z is set to 0.
+fn flatten_2d(coords: &mut [[f64; 3]]) -> Result<(), String> {
+    let (lo, hi) = bounding_box(coords);
+    let size = (hi[0] - lo[0]).max(hi[1] - lo[1]);
+    let spread = hi[2] - lo[2];
+    if spread.is_nan() || spread > 1e-10 * size {
+        return Err(format!(
+            "2D mesh whose nodes are not in a plane z = const (z from {} to {}): a 2D \
+                 body must lie in the xy plane",
+            lo[2], hi[2]
+        ));
+    }
+    for p in coords.iter_mut() {
+        p[2] = 0.0;
+    }
+    Ok(())
+}
+
+/// Cells of zero measure are refused, inverted ones reoriented.
+fn orient_cells(
+    dim: usize,
+    cells: &mut [usize],
+    cell_tags: &[u64],
+    coords: &[[f64; 3]],
+) -> Result<(), String> {
+    let nc = dim + 1;
     let mut p = [[0.0; 3]; 4];
     for (c, cell) in cells.chunks_exact_mut(nc).enumerate() {
         for k in 0..nc {
@@ -486,18 +607,40 @@ fn build(
         }
     }
 
-    // ---- boundary elements ----
-    let mut mesh = Mesh {
-        dim,
-        coords,
-        node_tags,
-        cells,
-        cell_tags,
-        facets: Vec::with_capacity(counts[dim - 1] * dim),
-        facet_tags: Vec::with_capacity(counts[dim - 1]),
-        ..Default::default()
-    };
-    // (dim, physical tag) -> element indices
+    Ok(())
+}
+
+/// The boundary elements (facets, edges, points) into `mesh`; returns the members of every
+/// physical group: (dim, physical tag) → element indices.
+fn boundary_elements(
+    mesh: &mut Mesh,
+    elements: &mshio::Elements<u64, i32>,
+    phys: &PhysicalTags,
+    tag_index: &TagIndex,
+    new_index: &[usize],
+) -> Result<HashMap<(usize, i32), Vec<usize>>, String> {
+    let dim = mesh.dim;
+    let n_elements: usize = elements
+        .element_blocks
+        .iter()
+        .map(|b| b.elements.len())
+        .sum();
+    // (dim, physical tag) -> element indices. An element is stored once per physical tag of
+    // its entity: bound the total (a corrupt $Entities could give one entity millions of
+    // physical tags and so need elements x tags of memory).
+    let memberships = elements.element_blocks.iter().fold(0u128, |acc, b| {
+        let n_phys = element_dim(b.element_type)
+            .and_then(|d| phys.get(&(d, b.entity_tag)))
+            .map_or(0, |p| p.len());
+        acc + (b.elements.len() as u128) * (n_phys as u128)
+    });
+    let limit = 64 * (n_elements as u128) + (1 << 20);
+    if memberships > limit {
+        return Err(format!(
+            "the elements belong to {memberships} physical groups in all (more than {limit}): \
+             the $Entities section gives entities too many physical tags"
+        ));
+    }
     let mut members: HashMap<(usize, i32), Vec<usize>> = HashMap::new();
     let mut cell_count = 0usize;
     for b in &elements.element_blocks {
@@ -519,7 +662,7 @@ fn build(
             let f = tags.len();
             for e in &b.elements {
                 for &nt in &e.nodes {
-                    let i = new_index[lookup(e.element_tag, nt)?];
+                    let i = new_index[lookup(tag_index, e.element_tag, nt)?];
                     if i == usize::MAX {
                         return Err(format!(
                             "boundary element {} ({:?}) uses node {nt}, which belongs to no \
@@ -543,7 +686,15 @@ fn build(
         }
     }
 
-    // ---- groups: every physical group of the entities and of $PhysicalNames ----
+    Ok(members)
+}
+
+/// Every physical group of the entities and of $PhysicalNames, sorted by (dim, tag).
+fn groups(
+    mut members: HashMap<(usize, i32), Vec<usize>>,
+    info: &raw::HeaderInfo,
+    dim: usize,
+) -> Vec<Group> {
     for &(d, t) in info.physical_names.keys() {
         if d <= dim {
             members.entry((d, t)).or_default();
@@ -570,6 +721,5 @@ fn build(
         })
         .collect();
     groups.sort_by_key(|g| (g.dim, g.tag));
-    mesh.groups = groups;
-    Ok(mesh)
+    groups
 }

@@ -22,6 +22,194 @@ pub(crate) struct HeaderInfo {
     pub partitioned: bool,
     /// Byte offset of the `$Nodes` line, if found.
     pub nodes_offset: Option<usize>,
+    /// Byte offset of the body of `$Entities`, if found.
+    pub entities_offset: Option<usize>,
+}
+
+/// Smallest number of bytes one item of a section can take in the file, ASCII and binary
+/// (`st` = size of `size_t`). A count announced in a section header times this must fit in
+/// the rest of the file, else the count is corrupt (and must not size an allocation).
+struct MinBytes {
+    ascii: u64,
+    binary_fixed: u64,
+    binary_st: u64,
+}
+
+impl MinBytes {
+    fn get(&self, binary: bool, st: usize) -> u64 {
+        if binary {
+            self.binary_fixed + self.binary_st * st as u64
+        } else {
+            self.ascii
+        }
+    }
+}
+
+/// An entity of `$Entities`: at least `tag x y z nphys` (a point; ASCII `1 0 0 0 0\n`).
+const ENTITY: MinBytes = MinBytes {
+    ascii: 10,
+    binary_fixed: 28,
+    binary_st: 1,
+};
+/// A block header of `$Nodes` / `$Elements`: `dim tag parametric|type count`.
+const BLOCK: MinBytes = MinBytes {
+    ascii: 8,
+    binary_fixed: 12,
+    binary_st: 1,
+};
+/// A node: its tag and three coordinates (ASCII `1\n0 0 0\n`).
+const NODE: MinBytes = MinBytes {
+    ascii: 8,
+    binary_fixed: 24,
+    binary_st: 1,
+};
+/// An element: its tag and at least one node tag (ASCII `1 1\n`).
+const ELEMENT: MinBytes = MinBytes {
+    ascii: 4,
+    binary_fixed: 0,
+    binary_st: 2,
+};
+
+/// Reads `n` unsigned header numbers at `pos` (ASCII tokens, or binary `size_t`s).
+fn header_numbers(bytes: &[u8], pos: usize, n: usize, info: &HeaderInfo) -> Option<Vec<u64>> {
+    let mut out = Vec::with_capacity(n);
+    if info.file_type == 1 {
+        let st = info.size_t_size;
+        for k in 0..n {
+            out.push(read_uint(bytes, pos + k * st, st, info.little_endian)?);
+        }
+    } else {
+        let mut p = pos;
+        for _ in 0..n {
+            let s = skip_ws(bytes, p);
+            let mut e = s;
+            while e < bytes.len() && !bytes[e].is_ascii_whitespace() {
+                e += 1;
+            }
+            out.push(std::str::from_utf8(&bytes[s..e]).ok()?.parse().ok()?);
+            p = e;
+        }
+    }
+    Some(out)
+}
+
+/// Checks that `counts` items (one `MinBytes` each) fit in the `available` bytes.
+fn check_fits(
+    section: &str,
+    what: &[(&str, u64, &MinBytes)],
+    available: usize,
+    info: &HeaderInfo,
+) -> Result<(), String> {
+    let binary = info.file_type == 1;
+    let mut need: u128 = 0;
+    for (_, n, m) in what {
+        need += u128::from(*n) * u128::from(m.get(binary, info.size_t_size));
+    }
+    if need > available as u128 {
+        let list: Vec<String> = what.iter().map(|(w, n, _)| format!("{n} {w}")).collect();
+        return Err(format!(
+            "${section} announces {}, more than the {available} bytes after its header can \
+             hold: the file is truncated or corrupt",
+            list.join(" and ")
+        ));
+    }
+    Ok(())
+}
+
+/// The unsigned integer of `size` (4 or 8) bytes at `p`.
+fn read_uint(bytes: &[u8], p: usize, size: usize, le: bool) -> Option<u64> {
+    let b = bytes.get(p..p.checked_add(size)?)?;
+    Some(match size {
+        4 => {
+            let a = [b[0], b[1], b[2], b[3]];
+            u64::from(if le {
+                u32::from_le_bytes(a)
+            } else {
+                u32::from_be_bytes(a)
+            })
+        }
+        8 => {
+            let a: [u8; 8] = b.try_into().ok()?;
+            if le {
+                u64::from_le_bytes(a)
+            } else {
+                u64::from_be_bytes(a)
+            }
+        }
+        _ => return None,
+    })
+}
+
+/// Bounds the counts in the headers of `$Entities`, `$Nodes` and `$Elements` by the size of the file, before anything is allocated from
+/// them. A header that cannot be read is left to the parser (which reports it).
+pub(crate) fn check_section_counts(bytes: &[u8], info: &HeaderInfo) -> Result<(), String> {
+    if let Some(pos) = info.entities_offset {
+        if let Some(n) = header_numbers(bytes, pos, 4, info) {
+            let body = pos
+                + if info.file_type == 1 {
+                    4 * info.size_t_size
+                } else {
+                    0
+                };
+            let total = n.iter().fold(0u64, |a, &x| a.saturating_add(x));
+            check_fits(
+                "Entities",
+                &[("entities", total, &ENTITY)],
+                bytes.len().saturating_sub(body),
+                info,
+            )?;
+        }
+    }
+    // Every place the parser could take for the start of a $Nodes or $Elements section (it
+    // reads all of them, and only then refuses a second one).
+    let mut sections = Vec::new();
+    for (name, items, min) in [
+        ("Nodes", "nodes", &NODE),
+        ("Elements", "elements", &ELEMENT),
+    ] {
+        let tag = format!("${name}");
+        let mut from = 0;
+        while let Some(p) = find_section(bytes, tag.as_bytes(), from) {
+            sections.push((name, p, items, min));
+            from = p + 1;
+        }
+    }
+    for (name, at, items, min) in sections {
+        let pos = next_line(bytes, at);
+        let Some(n) = header_numbers(bytes, pos, 4, info) else {
+            continue;
+        };
+        // (The MSH parser computes `count - 1`: a zero count must not reach it.)
+        if n[1] == 0 {
+            return Err(format!("${name} holds no {items}"));
+        }
+        let body = if info.file_type == 1 {
+            pos + 4 * info.size_t_size
+        } else {
+            pos
+        };
+        check_fits(
+            name,
+            &[("entity blocks", n[0], &BLOCK), (items, n[1], min)],
+            bytes.len().saturating_sub(body),
+            info,
+        )?;
+    }
+    Ok(())
+}
+
+/// Offset of the next `name` followed by an end of line (as the parser accepts a section
+/// start: after any whitespace, or none), at or after `from`.
+fn find_section(bytes: &[u8], name: &[u8], from: usize) -> Option<usize> {
+    let mut i = from;
+    while let Some(p) = find(bytes, name, i) {
+        let after = bytes.get(p + name.len()).copied();
+        if matches!(after, Some(b'\n' | b'\r')) {
+            return Some(p);
+        }
+        i = p + 1;
+    }
+    None
 }
 
 /// Position of `needle` in `hay` at or after `from`.
@@ -73,7 +261,10 @@ pub(crate) fn scan_header(bytes: &[u8]) -> Result<HeaderInfo, String> {
     let mut info = HeaderInfo::default();
     let start = skip_ws(bytes, 0);
     if !bytes[start..].starts_with(b"$MeshFormat") {
-        return Err("not a Gmsh .msh file (it does not start with $MeshFormat)".into());
+        return Err(format!(
+            "not a Gmsh .msh file (it does not start with $MeshFormat); {}",
+            super::HINT_MSH41
+        ));
     }
     let line_start = next_line(bytes, start);
     let line_end = next_line(bytes, line_start);
@@ -84,8 +275,23 @@ pub(crate) fn scan_header(bytes: &[u8]) -> Result<HeaderInfo, String> {
     info.size_t_size = tok.next().and_then(|t| t.parse().ok()).unwrap_or(0);
     if info.version != "4.1" {
         return Err(format!(
-            "unsupported MSH format version '{}' (only MSH 4.1 is read)",
-            info.version
+            "unsupported MSH format version '{}' (only MSH 4.1 is read); {}",
+            info.version,
+            super::HINT_MSH41
+        ));
+    }
+    // The MSH parser panics on a data size it has no reader for (or one that overflows), so
+    // the header is checked here first. gmsh writes sizeof(size_t) = 8.
+    if info.file_type != 0 && info.file_type != 1 {
+        return Err(format!(
+            "$MeshFormat: file type '{}' is neither 0 (ASCII) nor 1 (binary)",
+            line.split_whitespace().nth(1).unwrap_or("")
+        ));
+    }
+    if info.size_t_size != 4 && info.size_t_size != 8 {
+        return Err(format!(
+            "$MeshFormat: data size '{}' is not supported (gmsh writes 8)",
+            line.split_whitespace().nth(2).unwrap_or("")
         ));
     }
     if info.file_type == 1 {
@@ -93,10 +299,16 @@ pub(crate) fn scan_header(bytes: &[u8]) -> Result<HeaderInfo, String> {
         let b = bytes
             .get(line_end..line_end + 4)
             .ok_or("truncated $MeshFormat section")?;
-        info.little_endian = i32::from_le_bytes([b[0], b[1], b[2], b[3]]) == 1;
+        let le = i32::from_le_bytes([b[0], b[1], b[2], b[3]]);
+        let be = i32::from_be_bytes([b[0], b[1], b[2], b[3]]);
+        if le != 1 && be != 1 {
+            return Err("$MeshFormat: binary file without the endianness check value 1".into());
+        }
+        info.little_endian = be != 1;
     }
     let end_fmt = find(bytes, b"$EndMeshFormat", line_end).ok_or("no $EndMeshFormat")?;
     let mut pos = next_line(bytes, end_fmt);
+    let mut entities = None;
     // Walk the sections before $Nodes: they are small ($PhysicalNames, $Entities,
     // $PartitionedEntities, ...).
     loop {
@@ -135,10 +347,12 @@ pub(crate) fn scan_header(bytes: &[u8]) -> Result<HeaderInfo, String> {
                 info.physical_names = parse_physical_names(&bytes[body_start..end])?;
             }
             b"PartitionedEntities" => info.partitioned = true,
+            b"Entities" => entities = Some(body_start),
             _ => {}
         }
         pos = next_line(bytes, end);
     }
+    info.entities_offset = entities;
     Ok(info)
 }
 
@@ -146,15 +360,20 @@ pub(crate) fn scan_header(bytes: &[u8]) -> Result<HeaderInfo, String> {
 fn parse_physical_names(body: &[u8]) -> Result<HashMap<(usize, i32), String>, String> {
     let text = std::str::from_utf8(body).map_err(|_| "$PhysicalNames is not valid UTF-8")?;
     let mut lines = text.lines().map(str::trim).filter(|l| !l.is_empty());
-    let n: usize = lines
-        .next()
-        .and_then(|l| l.parse().ok())
-        .ok_or("$PhysicalNames: missing count")?;
-    let mut names = HashMap::with_capacity(n);
-    for _ in 0..n {
-        let l = lines
-            .next()
-            .ok_or("$PhysicalNames: fewer names than announced")?;
+    let count = lines.next().ok_or("$PhysicalNames: missing count")?;
+    let n: u64 = count
+        .parse()
+        .map_err(|_| format!("$PhysicalNames: cannot read the count '{count}'"))?;
+    let lines: Vec<&str> = lines.collect();
+    if n > lines.len() as u64 {
+        return Err(format!(
+            "$PhysicalNames announces {n} names, but the section has {} lines: the file \
+             is corrupt",
+            lines.len()
+        ));
+    }
+    let mut names = HashMap::with_capacity(n as usize);
+    for l in lines.into_iter().take(n as usize) {
         let bad = || format!("$PhysicalNames: cannot read line '{l}'");
         let mut parts = l.splitn(3, char::is_whitespace);
         let dim: usize = parts.next().and_then(|t| t.parse().ok()).ok_or_else(bad)?;
@@ -199,7 +418,11 @@ fn scan_node_tags_ascii(bytes: &[u8], start: usize) -> Option<Vec<u64>> {
     let n_nodes = int(token()?)?;
     token()?;
     token()?;
-    let mut tags = Vec::with_capacity(usize::try_from(n_nodes).ok()?);
+    // Each node takes at least 6 bytes ("1\n0 0 0"): a larger count is corrupt.
+    if n_nodes > (bytes.len() / 6) as u64 {
+        return None;
+    }
+    let mut tags = Vec::with_capacity(n_nodes as usize);
     for _ in 0..n_blocks {
         token()?; // entity dim
         token()?; // entity tag
@@ -211,7 +434,7 @@ fn scan_node_tags_ascii(bytes: &[u8], start: usize) -> Option<Vec<u64>> {
         for _ in 0..n {
             tags.push(int(token()?)?);
         }
-        for _ in 0..3 * n {
+        for _ in 0..n.checked_mul(3)? {
             token()?;
         }
     }
@@ -221,35 +444,18 @@ fn scan_node_tags_ascii(bytes: &[u8], start: usize) -> Option<Vec<u64>> {
 fn scan_node_tags_binary(bytes: &[u8], start: usize, info: &HeaderInfo) -> Option<Vec<u64>> {
     let le = info.little_endian;
     let st = info.size_t_size;
-    let read_u = |p: usize, size: usize| -> Option<u64> {
-        let b = bytes.get(p..p + size)?;
-        Some(match size {
-            4 => {
-                let a = [b[0], b[1], b[2], b[3]];
-                u64::from(if le {
-                    u32::from_le_bytes(a)
-                } else {
-                    u32::from_be_bytes(a)
-                })
-            }
-            8 => {
-                let a: [u8; 8] = b.try_into().ok()?;
-                if le {
-                    u64::from_le_bytes(a)
-                } else {
-                    u64::from_be_bytes(a)
-                }
-            }
-            _ => return None,
-        })
-    };
+    let read_u = |p: usize, size: usize| read_uint(bytes, p, size, le);
     let mut p = start;
     let n_blocks = read_u(p, st)?;
     let n_nodes = read_u(p + st, st)?;
     p += 4 * st;
-    let mut tags = Vec::with_capacity(usize::try_from(n_nodes).ok()?);
+    // Each node takes st + 24 bytes: a larger count is corrupt.
+    if n_nodes > (bytes.len() / (st + 24)) as u64 {
+        return None;
+    }
+    let mut tags = Vec::with_capacity(n_nodes as usize);
     for _ in 0..n_blocks {
-        let parametric = read_u(p + 8, 4)?;
+        let parametric = read_u(p.checked_add(8)?, 4)?;
         if parametric != 0 {
             return None;
         }

@@ -534,3 +534,276 @@ fn big_binary_mesh_timing() {
     let area: f64 = (0..m.n_cells()).map(|c| m.cell_measure(c)).sum();
     assert!((area - 1.0).abs() < 1e-9);
 }
+
+// ---- counts bounded by the file size (issue 11, item 5) ---------------------------------
+
+/// `bytes` with the first occurrence of `from` replaced by `to`.
+fn patched(bytes: &[u8], from: &[u8], to: &[u8]) -> Vec<u8> {
+    let p = bytes
+        .windows(from.len())
+        .position(|w| w == from)
+        .unwrap_or_else(|| panic!("{:?} not in the file", String::from_utf8_lossy(from)));
+    [&bytes[..p], to, &bytes[p + from.len()..]].concat()
+}
+
+/// The `size_t` header values of section `name` of a binary file, replaced one at a time.
+fn binary_header_patched(bytes: &[u8], name: &str, index: usize, value: u64) -> Vec<u8> {
+    let tag = format!("{name}\n");
+    let p = bytes
+        .windows(tag.len())
+        .position(|w| w == tag.as_bytes())
+        .unwrap()
+        + tag.len()
+        + 8 * index;
+    let mut out = bytes.to_vec();
+    out[p..p + 8].copy_from_slice(&value.to_le_bytes());
+    out
+}
+
+fn read_bytes_err(bytes: &[u8]) -> String {
+    let e = read_msh_bytes(bytes, Path::new("corrupt.msh")).unwrap_err();
+    assert_eq!(e.file, Path::new("corrupt.msh"));
+    e.message
+}
+
+#[test]
+fn ascii_counts_beyond_the_file_size_rejected_before_allocating() {
+    let good = std::fs::read(mesh_path("square_h0.5.msh")).unwrap();
+    read_msh_bytes(&good, Path::new("good.msh")).unwrap();
+    let cases: [(&[u8], &[u8], &str); 5] = [
+        (
+            b"$PhysicalNames\n5\n",
+            b"$PhysicalNames\n1000000000\n",
+            "$PhysicalNames announces 1000000000 names",
+        ),
+        (
+            b"$Nodes\n9 12 1 12",
+            b"$Nodes\n9 1000000000000 1 12",
+            "$Nodes announces",
+        ),
+        (
+            b"$Nodes\n9 12 1 12",
+            b"$Nodes\n900000000000 12 1 12",
+            "900000000000 entity blocks",
+        ),
+        (
+            b"$Entities\n4 4 1 0",
+            b"$Entities\n4000000000000 4 1 0",
+            "$Entities announces",
+        ),
+        (
+            b"$Elements\n5 22 ",
+            b"$Elements\n5 99999999999 ",
+            "$Elements announces",
+        ),
+    ];
+    for (from, to, expect) in cases {
+        let m = read_bytes_err(&patched(&good, from, to));
+        assert!(m.contains(expect), "{m}");
+    }
+    // A count that fits in the file but does not match the blocks.
+    let m = read_bytes_err(&patched(&good, b"$Nodes\n9 12 1 12", b"$Nodes\n9 13 1 12"));
+    assert!(
+        m.contains("announces 13 nodes, but its blocks hold 12"),
+        "{m}"
+    );
+    let m = read_bytes_err(&patched(&good, b"$Nodes\n9 12 1 12", b"$Nodes\n9 0 1 12"));
+    assert!(m.contains("no nodes"), "{m}");
+}
+
+#[test]
+fn binary_counts_beyond_the_file_size_rejected_before_allocating() {
+    let good = std::fs::read(mesh_path("square_h0.25_bin.msh")).unwrap();
+    read_msh_bytes(&good, Path::new("good.msh")).unwrap();
+    for (section, index, value) in [
+        ("$Nodes", 1, 1u64 << 40),
+        ("$Nodes", 1, u64::MAX),
+        ("$Nodes", 0, 1 << 50),
+        ("$Elements", 1, 1 << 40),
+        ("$Elements", 0, u64::MAX),
+        ("$Entities", 2, 1 << 45),
+    ] {
+        let m = read_bytes_err(&binary_header_patched(&good, section, index, value));
+        assert!(m.contains(&format!("{section} announces")), "{m}");
+        assert!(m.contains("corrupt"), "{m}");
+    }
+    // Off by a little: the blocks disagree with the header.
+    let m = read_bytes_err(&binary_header_patched(&good, "$Nodes", 1, 31));
+    assert!(
+        m.contains("announces 31 nodes, but its blocks hold 30"),
+        "{m}"
+    );
+}
+
+#[test]
+fn node_tag_scan_does_not_trust_the_count() {
+    // The raw node-tag scan used to allocate `count` tags up front.
+    let good = std::fs::read(mesh_path("cube_h0.5_bin.msh")).unwrap();
+    let bad = binary_header_patched(&good, "$Nodes", 1, 1 << 61);
+    let info = raw::scan_header(&bad).unwrap();
+    assert!(raw::scan_node_tags(&bad, &info).is_none());
+    let good = std::fs::read(mesh_path("square_h0.5.msh")).unwrap();
+    let bad = patched(
+        &good,
+        b"$Nodes\n9 12 1 12",
+        b"$Nodes\n9 4000000000000000 1 12",
+    );
+    let info = raw::scan_header(&bad).unwrap();
+    assert!(raw::scan_node_tags(&bad, &info).is_none());
+}
+
+#[test]
+fn malformed_binary_header_rejected_before_the_parser() {
+    // mshio panics on a data size it has no reader for (unimplemented!) and on one that does
+    // not fit in an i32 (unwrap): the header check must stop these first.
+    let bin = std::fs::read(mesh_path("square_h0.25_bin.msh")).unwrap();
+    let ascii = std::fs::read(mesh_path("square_h0.5.msh")).unwrap();
+    for bytes in [
+        patched(&bin, b"4.1 1 8\n", b"4.1 1 3\n"),
+        patched(&bin, b"4.1 1 8\n", b"4.1 1 16\n"),
+        patched(&ascii, b"4.1 0 8\n", b"4.1 0 99999999999\n"),
+    ] {
+        set_catch_parser_panics(false);
+        let r = std::panic::catch_unwind(|| read_msh_bytes(&bytes, Path::new("h.msh")));
+        set_catch_parser_panics(true);
+        let m = r
+            .expect("the parser must not be reached")
+            .unwrap_err()
+            .message;
+        assert!(m.contains("data size"), "{m}");
+    }
+    let m = read_bytes_err(&patched(&bin, b"4.1 1 8\n", b"4.1 7 8\n"));
+    assert!(m.contains("file type"), "{m}");
+    let m = read_bytes_err(&patched(
+        &bin,
+        b"4.1 1 8\n\x01\x00\x00\x00",
+        b"4.1 1 8\n\x02\x00\x00\x00",
+    ));
+    assert!(m.contains("endianness"), "{m}");
+}
+
+#[test]
+fn too_many_physical_tags_per_entity_rejected() {
+    // Surface 1 of a 2-triangle square in 3 million physical groups would need 6 million
+    // group entries from a few MB: bounded relative to the number of elements.
+    let mut text = hand_msh(
+        &unit_square_nodes(),
+        &[(10, [1, 2, 3]), (11, [1, 3, 4])],
+        &[],
+        &[],
+    );
+    read_text(&text).unwrap();
+    let tags: Vec<String> = (1..=1_200_000).map(|t| t.to_string()).collect();
+    text = text.replacen(
+        "1 0 0 0 1 1 0 2 1 2 0\n",
+        &format!("1 0 0 0 1 1 0 {} {} 0\n", tags.len(), tags.join(" ")),
+        1,
+    );
+    let e = read_text(&text).unwrap_err();
+    assert!(e.message.contains("too many physical tags"), "{e}");
+}
+
+// ---- load and contact groups on the boundary (issue 11, item 5; STRUCTURE.md §4.7) -------
+
+#[test]
+fn degenerate_interior_and_stray_facets_named() {
+    let p = mesh_path("square_bad_facets.msh");
+    let m = read_msh(&p).unwrap();
+    for g in ["left", "right", "top"] {
+        m.check_boundary_group(&p, g, "test").unwrap();
+    }
+    for (g, tag, what) in [
+        ("bottom", "line element 4", "zero length"),
+        (
+            "diag",
+            "line element 5",
+            "interior facet (a side of 2 body cells)",
+        ),
+        ("stray", "line element 6", "not a side of any body cell"),
+    ] {
+        let e = m.check_boundary_group(&p, g, "contact.group").unwrap_err();
+        assert_eq!(e.file, p);
+        for s in [tag, what, &format!("\"{g}\""), "contact.group"] {
+            assert!(e.message.contains(s), "{s:?} not in: {e}");
+        }
+    }
+}
+
+#[test]
+fn degenerate_and_interior_triangles_3d() {
+    let p = mesh_path("cube_h0.5.msh");
+    let mut m = read("cube_h0.5.msh");
+    let right = m.group_dim("right", 2).unwrap().clone();
+    m.check_boundary_group(&p, "right", "t").unwrap();
+    // An interior face: a face shared by two tetrahedra.
+    let mut seen: HashMap<[usize; 3], usize> = HashMap::new();
+    let mut interior = None;
+    'cells: for c in 0..m.n_cells() {
+        let v = m.cell(c);
+        for skip in 0..4 {
+            let mut f: Vec<usize> = (0..4).filter(|&i| i != skip).map(|i| v[i]).collect();
+            f.sort_unstable();
+            let k = [f[0], f[1], f[2]];
+            if seen.insert(k, c).is_some() {
+                interior = Some(k);
+                break 'cells;
+            }
+        }
+    }
+    let face = interior.expect("a tetrahedral mesh of a cube has interior faces");
+    let f_new = m.n_facets();
+    m.facets.extend_from_slice(&face);
+    m.facet_tags.push(999);
+    let mut g = right.clone();
+    g.name = "inner".into();
+    g.elements = vec![right.elements[0], f_new];
+    m.groups.push(g);
+    let e = m
+        .check_boundary_group(&p, "inner", "neumann[0].group")
+        .unwrap_err();
+    assert!(e.message.contains("triangle 999"), "{e}");
+    assert!(e.message.contains("interior"), "{e}");
+    // A degenerate triangle: two equal nodes (zero area).
+    let f0 = right.elements[0];
+    let v = m.facet(f0).to_vec();
+    m.facets[f0 * 3 + 2] = v[1];
+    let e = m
+        .check_boundary_group(&p, "right", "contact.group")
+        .unwrap_err();
+    assert!(e.message.contains("zero area"), "{e}");
+    assert!(
+        e.message
+            .contains(&format!("triangle {}", m.facet_tags[f0])),
+        "{e}"
+    );
+}
+
+// ---- inputs found by fuzzing (scripts/fuzz msh): each once crashed the reader ------------
+
+/// Every file in tests/meshes/fuzz must give an `InputError` with the parser's panics not
+/// caught (as in fuzzing: overflow checks of a debug build included).
+#[test]
+fn fuzz_findings_are_input_errors() {
+    let dir = mesh_path("fuzz");
+    let mut n = 0;
+    for entry in std::fs::read_dir(&dir).unwrap() {
+        let p = entry.unwrap().path();
+        let bytes = std::fs::read(&p).unwrap();
+        set_catch_parser_panics(false);
+        let r = std::panic::catch_unwind(|| read_msh_bytes(&bytes, &p));
+        set_catch_parser_panics(true);
+        let r = r.unwrap_or_else(|_| panic!("{} panics in the parser", p.display()));
+        assert!(r.is_err(), "{} accepted", p.display());
+        n += 1;
+    }
+    assert!(n > 0);
+}
+
+/// A second `$Nodes` section with 0 nodes made mshio compute `0 - 1` (overflow panic with
+/// overflow checks; found by fuzzing after 476 827 executions).
+#[test]
+fn second_nodes_section_with_zero_count() {
+    let bytes = std::fs::read(mesh_path("fuzz/msh_second_nodes_zero_count.msh")).unwrap();
+    let e = read_msh_bytes(&bytes, Path::new("f.msh")).unwrap_err();
+    assert!(e.message.contains("$Nodes holds no nodes"), "{e}");
+}

@@ -121,7 +121,6 @@ impl Petsc {
         // SAFETY: valid after PetscInitialize, which `self` proves.
         unsafe { ffi::PETSC_COMM_WORLD }
     }
-
 }
 
 impl Drop for Petsc {
@@ -174,7 +173,6 @@ pub mod options {
         }
         Ok(set == ffi::PETSC_TRUE)
     }
-
 }
 
 /// A distributed PETSc vector.

@@ -1,0 +1,147 @@
+//! Checks of a facet group that carries a load or the contact condition: every facet must be
+//! a proper boundary facet. A degenerate facet (zero length or area) gives wrong nodal weights
+//! (contact pressures, lumped loads); an interior facet has a cell on both sides, so its
+//! outward normal, and with it the direction of a pressure, is arbitrary; a facet that is not
+//! a side of any cell silently carries nothing.
+
+use std::collections::HashMap;
+use std::path::Path;
+
+use super::{norm2, sub, Mesh};
+use crate::error::InputError;
+
+/// Relative size below which a facet counts as degenerate: length ≤ `DEGENERATE` × mesh
+/// extent (2D), area ≤ `DEGENERATE` × (longest edge)² (3D).
+const DEGENERATE: f64 = 1e-12;
+
+/// Sorted node indices of a facet (2 or 3 nodes), padded to 3.
+fn key(nodes: &[usize]) -> [usize; 3] {
+    let mut k = [usize::MAX; 3];
+    k[..nodes.len()].copy_from_slice(nodes);
+    k.sort_unstable();
+    k
+}
+
+impl Mesh {
+    /// Length (2D) or area (3D) of facet `f`, and its longest edge.
+    pub fn facet_measure(&self, f: usize) -> (f64, f64) {
+        let p: Vec<[f64; 3]> = self.facet(f).iter().map(|&v| self.coords[v]).collect();
+        let mut h2: f64 = 0.0;
+        for i in 0..p.len() {
+            for j in i + 1..p.len() {
+                h2 = h2.max(norm2(sub(p[j], p[i])));
+            }
+        }
+        let m = if p.len() == 2 {
+            h2.sqrt()
+        } else {
+            let (a, b) = (sub(p[1], p[0]), sub(p[2], p[0]));
+            let c = [
+                a[1] * b[2] - a[2] * b[1],
+                a[2] * b[0] - a[0] * b[2],
+                a[0] * b[1] - a[1] * b[0],
+            ];
+            0.5 * norm2(c).sqrt()
+        };
+        (m, h2.sqrt())
+    }
+
+    /// Checks that the facets of the group(s) `name` of dimension `dim − 1` can carry a load
+    /// or the contact condition: none is degenerate (zero length in 2D, zero area in 3D,
+    /// relative to the mesh size) and each is a side of exactly one body cell (it lies on the
+    /// boundary). The error names the mesh `file`, the facet's gmsh tag and the group;
+    /// `used_as` says where the case uses the group (e.g. "contact.group").
+    pub fn check_boundary_group(
+        &self,
+        file: &Path,
+        name: &str,
+        used_as: &str,
+    ) -> Result<(), InputError> {
+        let facets: Vec<usize> = self
+            .groups
+            .iter()
+            .filter(|g| g.name == name && g.dim + 1 == self.dim)
+            .flat_map(|g| g.elements.iter().copied())
+            .collect();
+        if facets.is_empty() {
+            return Ok(());
+        }
+        let what = if self.dim == 2 {
+            "line element"
+        } else {
+            "triangle"
+        };
+        let err = |f: usize, msg: String| {
+            InputError::new(
+                file,
+                format!(
+                    "{what} {} of group \"{name}\" (used by {used_as}) {msg}",
+                    self.facet_tags[f]
+                ),
+            )
+        };
+        let extent = self.extent();
+        for &f in &facets {
+            let (m, h) = self.facet_measure(f);
+            let degenerate = if self.dim == 2 {
+                m <= DEGENERATE * extent
+            } else {
+                m <= DEGENERATE * h * h
+            };
+            if degenerate || m.is_nan() {
+                let (kind, size) = if self.dim == 2 {
+                    ("length", format!("mesh size {extent:e}"))
+                } else {
+                    ("area", format!("longest edge {h:e}"))
+                };
+                return Err(err(
+                    f,
+                    format!("has zero {kind} ({m:e}, {size}): degenerate boundary facet"),
+                ));
+            }
+        }
+        // Number of body cells that have each facet of the group as a side.
+        let mut sides: HashMap<[usize; 3], u32> =
+            facets.iter().map(|&f| (key(self.facet(f)), 0)).collect();
+        let nc = self.nodes_per_cell();
+        let mut face = [0usize; 3];
+        for c in 0..self.n_cells() {
+            let cell = self.cell(c);
+            for skip in 0..nc {
+                let mut k = 0;
+                for (i, &v) in cell.iter().enumerate() {
+                    if i != skip {
+                        face[k] = v;
+                        k += 1;
+                    }
+                }
+                if let Some(n) = sides.get_mut(&key(&face[..nc - 1])) {
+                    *n += 1;
+                }
+            }
+        }
+        for &f in &facets {
+            match sides[&key(self.facet(f))] {
+                1 => {}
+                0 => {
+                    return Err(err(
+                        f,
+                        "is not a side of any body cell: a load or contact group must consist \
+                         of sides of the body's cells on its boundary"
+                            .into(),
+                    ))
+                }
+                n => {
+                    return Err(err(
+                        f,
+                        format!(
+                            "is an interior facet (a side of {n} body cells): a load or \
+                             contact group must lie on the boundary of the body"
+                        ),
+                    ))
+                }
+            }
+        }
+        Ok(())
+    }
+}

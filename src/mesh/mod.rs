@@ -480,6 +480,9 @@ fn mesh_dimension(elements: &mshio::Elements<u64, i32>) -> Result<(usize, [usize
     Ok((dim, counts))
 }
 
+/// (cells as file node indices, dim + 1 per cell; their tags; which file nodes they use).
+type BodyCells = (Vec<usize>, Vec<u64>, Vec<bool>);
+
 /// The body cells (file node indices), their tags, and which file nodes they use.
 fn body_cells(
     elements: &mshio::Elements<u64, i32>,
@@ -487,7 +490,7 @@ fn body_cells(
     phys: &PhysicalTags,
     tag_index: &TagIndex,
     n_all: usize,
-) -> Result<(Vec<usize>, Vec<u64>, Vec<bool>), String> {
+) -> Result<BodyCells, String> {
     let nc = dim + 1;
     let count: usize = elements
         .element_blocks

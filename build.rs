@@ -64,7 +64,9 @@ fn main() {
     // links; its headers live in their own directory.
     let scotch_include = "/usr/include/scotch";
     assert!(
-        std::path::Path::new(scotch_include).join("ptscotch.h").exists(),
+        std::path::Path::new(scotch_include)
+            .join("ptscotch.h")
+            .exists(),
         "{scotch_include}/ptscotch.h not found: install libptscotch-dev (petsc-dev pulls it in)"
     );
     builder = builder.clang_arg(format!("-I{scotch_include}"));

@@ -35,8 +35,7 @@ fn main() {
         // concurrently: PETSc's own ptscotch partitioner, MUMPS' parallel ordering) hang or
         // crash under MPI_THREAD_SINGLE. Our partitioner does not rely on it (it runs
         // PT-Scotch single-threaded, see petsc::scotch_partition).
-        let Some((universe, _granted)) = mpi::initialize_with_threading(Threading::Multiple)
-        else {
+        let Some((universe, _granted)) = mpi::initialize_with_threading(Threading::Multiple) else {
             eprintln!("error: MPI could not be initialised");
             std::process::exit(1);
         };

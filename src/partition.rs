@@ -148,7 +148,10 @@ fn morton_keys(mesh: &Mesh) -> Vec<u64> {
 const SCOTCH_IMBALANCE: f64 = 0.01;
 
 /// Partitions the mesh over the ranks of `comm` (`ptype`: "ptscotch", or another PETSc
-/// MatPartitioning type, e.g. "parmetis" where PETSc has it).
+/// MatPartitioning type, e.g. "parmetis" where PETSc has it). PT-Scotch is called directly
+/// (repeatable); the PETSc option `-mat_partitioning_type` sends the graph through PETSc's
+/// MatPartitioning instead, with that type (`ptscotch` there is PT-Scotch's default,
+/// non-repeatable context).
 pub fn partition<C: Communicator>(
     world: &C,
     comm: MPI_Comm,
@@ -166,7 +169,7 @@ pub fn partition<C: Communicator>(
         let block = |r: usize| r * n_cells / size;
         let (lo, hi) = (block(rank), block(rank + 1));
         let (xadj, adjncy) = dual_graph_rows(mesh, &node_cells, lo, hi);
-        let part = if ptype == "ptscotch" {
+        let part = if ptype == "ptscotch" && !petsc::options::has("-mat_partitioning_type")? {
             petsc::scotch_partition(comm, &xadj, &adjncy, size, SCOTCH_IMBALANCE)?
         } else {
             petsc::partition_graph(comm, n_cells, &xadj, &adjncy, ptype)?

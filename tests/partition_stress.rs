@@ -137,7 +137,10 @@ fn repeats_on(np: usize) {
             .zip(&first.cell_rank)
             .filter(|(a, b)| a != b)
             .count();
-        assert_eq!(moved, 0, "run {i} on {np} ranks: {moved} cells on another rank than in run 0");
+        assert_eq!(
+            moved, 0,
+            "run {i} on {np} ranks: {moved} cells on another rank than in run 0"
+        );
         assert_eq!(
             again.history, first.history,
             "run {i} on {np} ranks: Newton history differs from run 0"

@@ -798,7 +798,10 @@ pub fn partition_graph(
                 ffi::PETSC_DETERMINE,
                 n_global as PInt,
             ))?;
-            check(ffi::MatSetType(adj, ffi::MATMPIADJ.as_ptr() as *const c_char))?;
+            check(ffi::MatSetType(
+                adj,
+                ffi::MATMPIADJ.as_ptr() as *const c_char,
+            ))?;
             check(ffi::MatMPIAdjSetPreallocation(adj, ia, ja, ptr::null_mut()))
         })();
         if let Err(e) = created {
@@ -935,10 +938,7 @@ pub fn scotch_partition(
         }
 
         let mut context: Box<ffi::SCOTCH_Context> = Box::new(std::mem::zeroed());
-        scotch_check(
-            ffi::SCOTCH_contextInit(&mut *context),
-            "SCOTCH_contextInit",
-        )?;
+        scotch_check(ffi::SCOTCH_contextInit(&mut *context), "SCOTCH_contextInit")?;
         let context = &mut **run.context.insert(context);
         // One thread: no concurrent MPI calls inside PT-Scotch (our MPI is not initialised
         // for them), no dependence on the machine's core count.

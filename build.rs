@@ -1,6 +1,7 @@
-//! Generates the PETSc FFI bindings with bindgen against Debian's petsc-dev (PETSc 3.18).
-//! MPI types are blocklisted and taken from `mpi-sys`, so PETSc's and rsmpi's communicators
-//! are the same Rust type.
+//! Generates the PETSc FFI bindings with bindgen against Debian's petsc-dev (PETSc 3.18),
+//! plus the few PT-Scotch calls the partitioner makes directly (libptscotch-dev, the library
+//! PETSc itself is built with). MPI types are blocklisted and taken from `mpi-sys`, so
+//! PETSc's, PT-Scotch's and rsmpi's communicators are the same Rust type.
 
 use std::env;
 use std::path::PathBuf;
@@ -26,6 +27,8 @@ fn main() {
 #include <petscpc.h>
 #include <petscis.h>
 #include <petscsnes.h>
+#include <stdio.h>
+#include <ptscotch.h>
 "#;
     let mut builder = bindgen::Builder::default()
         .header_contents("petsc_wrapper.h", header)
@@ -34,7 +37,7 @@ fn main() {
         .layout_tests(false)
         .generate_comments(false)
         .allowlist_function("PETSC_VIEWER_STDOUT_")
-        .allowlist_function("Petsc(Initialize|Finalize|Initialized|ErrorMessage|Options.*|MemoryGetCurrentUsage|MemoryGetMaximumUsage|MemorySetGetMaximumUsage|LogDefaultBegin|LogView|ViewerASCIIGetStdout|PopErrorHandler|MallocA|PushErrorHandler|ReturnErrorHandler|GetVersion)")
+        .allowlist_function("Petsc(Initialize|Finalize|Initialized|ErrorMessage|Options.*|MemoryGetCurrentUsage|MemoryGetMaximumUsage|MemorySetGetMaximumUsage|LogDefaultBegin|LogView|ViewerASCIIGetStdout|PopErrorHandler|MallocA|FreeA|PushErrorHandler|ReturnErrorHandler|GetVersion)")
         .allowlist_function("(Vec|Mat|KSP|PC|IS|MatPartitioning|MatNullSpace|PetscViewer)[A-Z].*")
         // SNES VI (src/snesvi.rs): only what the linear variational inequality needs.
         .allowlist_function("SNES(Create|Destroy|SetType|GetType|SetFunction|SetJacobian|SetFromOptions|SetTolerances|Solve|GetIterationNumber|GetLinearSolveIterations|GetConvergedReason|GetConvergedReasonString|GetNumberFunctionEvals|VISetVariableBounds|GetFunctionNorm|GetLineSearch|LineSearchSetType|GetKSP)")
@@ -46,6 +49,13 @@ fn main() {
         .allowlist_var("SCATTER_.*")
         .allowlist_type("Petsc.*")
         .allowlist_type("(Mat|Vec|KSP|PC|IS|InsertMode|NormType|MatAssemblyType|MatOption|MatReuse|MatInfo.*|ScatterMode|KSPConvergedReason|MatPartitioning|SNES|SNESConvergedReason)")
+        // PT-Scotch: a distributed graph partitioned under an explicit context (threads,
+        // determinism, seed); see petsc::scotch_partition.
+        .allowlist_function(
+            "SCOTCH_(context(Init|Exit|OptionSetNum|RandomClone|RandomSeed|ThreadSpawn|BindDgraph)|dgraph(Init|Exit|Build|Check|Part)|strat(Init|Exit|DgraphMapBuild))",
+        )
+        .allowlist_var("SCOTCH_(STRAT|OPTIONNUM)[A-Z]+")
+        .allowlist_type("SCOTCH_(Num|Context|Dgraph|Strat)")
         .blocklist_type("MPI_.*")
         .blocklist_type("ompi_.*")
         .blocklist_item("FP_.*")
@@ -54,6 +64,18 @@ fn main() {
     for p in petsc.include_paths.iter().chain(ompi.include_paths.iter()) {
         builder = builder.clang_arg(format!("-I{}", p.display()));
     }
+    // Debian's default PT-Scotch (32-bit SCOTCH_Num, like PETSc's PetscInt), the one libpetsc
+    // links; its headers live in their own directory.
+    let scotch_include = "/usr/include/scotch";
+    assert!(
+        std::path::Path::new(scotch_include)
+            .join("ptscotch.h")
+            .exists(),
+        "{scotch_include}/ptscotch.h not found: install libptscotch-dev (petsc-dev pulls it in)"
+    );
+    builder = builder.clang_arg(format!("-I{scotch_include}"));
+    println!("cargo:rustc-link-lib=dylib=ptscotch");
+    println!("cargo:rustc-link-lib=dylib=ptscotcherr");
     let bindings = builder
         .generate()
         .expect("bindgen failed on the PETSc headers");

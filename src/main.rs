@@ -2,6 +2,7 @@
 
 use clap::Parser;
 use mpi::traits::*;
+use mpi::Threading;
 use signorini_mpi::case::Case;
 use signorini_mpi::driver;
 use signorini_mpi::error::RunError;
@@ -29,7 +30,12 @@ struct Cli {
 fn main() {
     let cli = Cli::parse();
     let code = {
-        let Some(universe) = mpi::initialize() else {
+        // MPI_THREAD_MULTIPLE where the MPI library grants it (Open MPI does): libraries that
+        // run PT-Scotch with its default context (one thread per core, threads that call MPI
+        // concurrently: PETSc's own ptscotch partitioner, MUMPS' parallel ordering) hang or
+        // crash under MPI_THREAD_SINGLE. Our partitioner does not rely on it (it runs
+        // PT-Scotch single-threaded, see petsc::scotch_partition).
+        let Some((universe, _granted)) = mpi::initialize_with_threading(Threading::Multiple) else {
             eprintln!("error: MPI could not be initialised");
             std::process::exit(1);
         };

@@ -1,9 +1,12 @@
-//! Cells → ranks with a real graph partitioner (PETSc MatPartitioning, PTScotch by default),
-//! node ownership, and a contiguous global node numbering per rank.
+//! Cells → ranks with a real graph partitioner (PT-Scotch by default, called directly; other
+//! PETSc MatPartitioning types through PETSc), node ownership, and a contiguous global node
+//! numbering per rank.
 //!
 //! Every rank holds the whole mesh (read by all ranks). Each rank builds the dual-graph rows of a
 //! block of cells, the partitioner assigns every cell a rank, and an all-gather gives every rank
-//! the full cell → rank map. A node belongs to the lowest rank among the cells that touch it.
+//! the full cell → rank map. With PT-Scotch the partition is repeatable: the same mesh on the
+//! same number of ranks gives the same cell → rank map on every run (one thread per rank,
+//! deterministic mode, fixed seed; see `petsc::scotch_partition`). A node belongs to the lowest rank among the cells that touch it.
 //! Rank r owns global node numbers `node_offsets[r] .. node_offsets[r+1]`, in mesh order.
 
 use crate::mesh::Mesh;
@@ -141,7 +144,14 @@ fn morton_keys(mesh: &Mesh) -> Vec<u64> {
         .collect()
 }
 
-/// Partitions the mesh over the ranks of `comm` (`ptype`: PETSc MatPartitioning type).
+/// Load imbalance PT-Scotch may leave between the parts (PETSc's default, 1 %).
+const SCOTCH_IMBALANCE: f64 = 0.01;
+
+/// Partitions the mesh over the ranks of `comm` (`ptype`: "ptscotch", or another PETSc
+/// MatPartitioning type, e.g. "parmetis" where PETSc has it). PT-Scotch is called directly
+/// (repeatable); the PETSc option `-mat_partitioning_type` sends the graph through PETSc's
+/// MatPartitioning instead, with that type (`ptscotch` there is PT-Scotch's default,
+/// non-repeatable context).
 pub fn partition<C: Communicator>(
     world: &C,
     comm: MPI_Comm,
@@ -159,7 +169,11 @@ pub fn partition<C: Communicator>(
         let block = |r: usize| r * n_cells / size;
         let (lo, hi) = (block(rank), block(rank + 1));
         let (xadj, adjncy) = dual_graph_rows(mesh, &node_cells, lo, hi);
-        let part = petsc::partition_graph(comm, n_cells, &xadj, &adjncy, ptype)?;
+        let part = if ptype == "ptscotch" && !petsc::options::has("-mat_partitioning_type")? {
+            petsc::scotch_partition(comm, &xadj, &adjncy, size, SCOTCH_IMBALANCE)?
+        } else {
+            petsc::partition_graph(comm, n_cells, &xadj, &adjncy, ptype)?
+        };
         let mine: Vec<u32> = part.iter().map(|&p| p as u32).collect();
         let counts: Vec<i32> = (0..size)
             .map(|r| (block(r + 1) - block(r)) as i32)

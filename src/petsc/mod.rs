@@ -676,10 +676,14 @@ impl Drop for Ksp {
     }
 }
 
-/// Partitions a distributed graph with PETSc's MatPartitioning (type from `ptype`, e.g.
-/// "ptscotch"; `-mat_partitioning_type` overrides). This rank passes the adjacency of its
-/// rows `[row_start, row_start + xadj.len() - 1)` in CSR form (global column indices, no
+/// Partitions a distributed graph with PETSc's MatPartitioning (type from `ptype`;
+/// `-mat_partitioning_type` overrides). This rank passes the adjacency of its rows
+/// `[row_start, row_start + xadj.len() - 1)` in CSR form (global column indices, no
 /// self-loops); the result is the target rank of each of these rows.
+///
+/// For PT-Scotch prefer [`scotch_partition`]: through PETSc, PT-Scotch runs with its default
+/// context (one thread per core, non-deterministic message order), so the partition changes
+/// from run to run.
 pub fn partition_graph(
     comm: MPI_Comm,
     n_global: usize,
@@ -688,22 +692,45 @@ pub fn partition_graph(
     ptype: &str,
 ) -> Result<Vec<PInt>> {
     let n_local = xadj.len().saturating_sub(1);
-    // MatCreateMPIAdj takes ownership of arrays allocated with PetscMalloc.
-    // SAFETY: we copy the CSR arrays into PETSc-allocated memory that MatDestroy frees; the
-    // IS is read and destroyed before returning.
+    // SAFETY: the CSR arrays are copied into PETSc-allocated memory; MatCreateMPIAdj takes
+    // ownership of them on success (MatDestroy frees them) and we free them on failure. The IS
+    // is read and destroyed before returning.
     unsafe {
         let ia = petsc_malloc_copy(xadj)?;
-        let ja = petsc_malloc_copy(adjncy)?;
+        let ja = match petsc_malloc_copy(adjncy) {
+            Ok(ja) => ja,
+            Err(e) => {
+                petsc_free(ia);
+                return Err(e);
+            }
+        };
+        // MatCreateMPIAdj's steps, one by one: the matrix takes ownership of ia/ja in the last
+        // step of MatMPIAdjSetPreallocation (before an assembly that cannot fail for MPIADJ),
+        // so on any failure the arrays are still ours to free.
         let mut adj: ffi::Mat = ptr::null_mut();
-        check(ffi::MatCreateMPIAdj(
-            comm,
-            n_local as PInt,
-            n_global as PInt,
-            ia,
-            ja,
-            ptr::null_mut(),
-            &mut adj,
-        ))?;
+        let created = (|| {
+            check(ffi::MatCreate(comm, &mut adj))?;
+            check(ffi::MatSetSizes(
+                adj,
+                n_local as PInt,
+                ffi::PETSC_DETERMINE,
+                ffi::PETSC_DETERMINE,
+                n_global as PInt,
+            ))?;
+            check(ffi::MatSetType(
+                adj,
+                ffi::MATMPIADJ.as_ptr() as *const c_char,
+            ))?;
+            check(ffi::MatMPIAdjSetPreallocation(adj, ia, ja, ptr::null_mut()))
+        })();
+        if let Err(e) = created {
+            if !adj.is_null() {
+                ffi::MatDestroy(&mut adj);
+            }
+            petsc_free(ia);
+            petsc_free(ja);
+            return Err(e);
+        }
         let adj = Matrix { raw: adj };
         let mut part: ffi::MatPartitioning = ptr::null_mut();
         check(ffi::MatPartitioningCreate(comm, &mut part))?;
@@ -729,6 +756,206 @@ pub fn partition_graph(
         drop(adj);
         result
     }
+}
+
+/// The seed of PT-Scotch's pseudo-random generator in [`scotch_partition`] (any fixed value).
+const SCOTCH_SEED: ffi::SCOTCH_Num = 1;
+
+/// Owned PT-Scotch / MPI objects, released in reverse order of creation on every path.
+struct ScotchRun {
+    comm: MPI_Comm,
+    context: Option<Box<ffi::SCOTCH_Context>>,
+    graph: Option<Box<ffi::SCOTCH_Dgraph>>,
+    strat: Option<Box<ffi::SCOTCH_Strat>>,
+}
+
+impl Drop for ScotchRun {
+    fn drop(&mut self) {
+        // SAFETY: each object is present only if its init call succeeded; the bound graph
+        // container needs no exit of its own.
+        unsafe {
+            if let Some(s) = self.strat.as_mut() {
+                ffi::SCOTCH_stratExit(&mut **s);
+            }
+            if let Some(g) = self.graph.as_mut() {
+                ffi::SCOTCH_dgraphExit(&mut **g);
+            }
+            if let Some(c) = self.context.as_mut() {
+                ffi::SCOTCH_contextExit(&mut **c);
+            }
+            if self.comm != ffi::RSMPI_COMM_NULL {
+                ffi::MPI_Comm_free(&mut self.comm);
+            }
+        }
+    }
+}
+
+/// A PT-Scotch return code as a `Result` (PT-Scotch prints its own message on stderr).
+#[track_caller]
+fn scotch_check(code: c_int, call: &str) -> Result<()> {
+    if code == 0 {
+        Ok(())
+    } else {
+        Err(own_error(format!(
+            "PT-Scotch {call} failed with code {code}"
+        )))
+    }
+}
+
+/// Partitions a distributed graph into `n_parts` parts with PT-Scotch, called directly so that
+/// it runs under an explicit context: one thread per rank, deterministic mode and a fixed
+/// seed. The same graph on the same communicator size then gives the same partition on
+/// every run, and PT-Scotch never calls MPI from two threads at once. (Debian's PT-Scotch is
+/// built with SCOTCH_PTHREAD_MPI: under its default context, used through PETSc's
+/// MatPartitioning, it folds graphs in two threads that both communicate; with MPI below
+/// MPI_THREAD_MULTIPLE that hangs or crashes, and the thread count and the arrival order of
+/// messages change the partition from run to run.)
+///
+/// This rank passes the rows `[row_start, row_start + xadj.len() - 1)` of a symmetric graph
+/// without self-loops, in CSR form with global 0-based column indices; rows are distributed
+/// in rank order. `imbalance` is the allowed load imbalance (0.01 = 1 %). Returns the part of
+/// each local row. Collective over `comm`; the graph is checked (`SCOTCH_dgraphCheck`)
+/// before it is partitioned.
+pub fn scotch_partition(
+    comm: MPI_Comm,
+    xadj: &[PInt],
+    adjncy: &[PInt],
+    n_parts: usize,
+    imbalance: f64,
+) -> Result<Vec<PInt>> {
+    type Num = ffi::SCOTCH_Num;
+    let n_local = xadj.len().saturating_sub(1);
+    let n_edges = xadj.last().copied().unwrap_or(0) as usize;
+    if xadj.is_empty() || xadj[0] != 0 || n_edges != adjncy.len() {
+        return Err(own_error(format!(
+            "scotch_partition: malformed CSR rows ({} offsets, {} edges, last offset {n_edges})",
+            xadj.len(),
+            adjncy.len()
+        )));
+    }
+    // PT-Scotch takes non-const pointers (it does not write through them) and keeps them until
+    // the graph is freed: private copies in its index type, alive until the end.
+    let mut vert: Vec<Num> = xadj.iter().map(|&v| v as Num).collect();
+    let mut edge: Vec<Num> = adjncy.iter().map(|&v| v as Num).collect();
+    edge.reserve(1); // a valid pointer even without edges
+    let mut part: Vec<Num> = vec![0; n_local.max(1)];
+    let mut run = ScotchRun {
+        // SAFETY: reads mpi-sys' constant for MPI_COMM_NULL.
+        comm: unsafe { ffi::RSMPI_COMM_NULL },
+        context: None,
+        graph: None,
+        strat: None,
+    };
+    // SAFETY: every object is boxed (PT-Scotch keeps pointers to the context and the graph),
+    // initialised before use and released by `run`'s Drop; the arrays outlive the graph.
+    unsafe {
+        // Scotch's own communicator: its messages can never meet ours.
+        let rc = ffi::MPI_Comm_dup(comm, &mut run.comm);
+        if rc != 0 {
+            run.comm = ffi::RSMPI_COMM_NULL;
+            return Err(own_error(format!("MPI_Comm_dup failed with code {rc}")));
+        }
+
+        let mut context: Box<ffi::SCOTCH_Context> = Box::new(std::mem::zeroed());
+        scotch_check(ffi::SCOTCH_contextInit(&mut *context), "SCOTCH_contextInit")?;
+        let context = &mut **run.context.insert(context);
+        // One thread: no concurrent MPI calls inside PT-Scotch (our MPI is not initialised
+        // for them), no dependence on the machine's core count.
+        scotch_check(
+            ffi::SCOTCH_contextThreadSpawn(context, 1, ptr::null()),
+            "SCOTCH_contextThreadSpawn",
+        )?;
+        scotch_check(
+            ffi::SCOTCH_contextOptionSetNum(
+                context,
+                ffi::SCOTCH_OPTIONNUMDETERMINISTIC as c_int,
+                1,
+            ),
+            "SCOTCH_contextOptionSetNum(deterministic)",
+        )?;
+        scotch_check(
+            ffi::SCOTCH_contextOptionSetNum(
+                context,
+                ffi::SCOTCH_OPTIONNUMRANDOMFIXEDSEED as c_int,
+                1,
+            ),
+            "SCOTCH_contextOptionSetNum(fixed seed)",
+        )?;
+        // A private generator with a fixed seed, independent of earlier PT-Scotch calls.
+        scotch_check(
+            ffi::SCOTCH_contextRandomClone(context),
+            "SCOTCH_contextRandomClone",
+        )?;
+        ffi::SCOTCH_contextRandomSeed(context, SCOTCH_SEED);
+
+        let mut graph: Box<ffi::SCOTCH_Dgraph> = Box::new(std::mem::zeroed());
+        scotch_check(
+            ffi::SCOTCH_dgraphInit(&mut *graph, run.comm),
+            "SCOTCH_dgraphInit",
+        )?;
+        let graph = &mut **run.graph.insert(graph);
+        scotch_check(
+            ffi::SCOTCH_dgraphBuild(
+                graph,
+                0,
+                n_local as Num,
+                n_local as Num,
+                vert.as_mut_ptr(),
+                vert.as_mut_ptr().add(1),
+                ptr::null_mut(),
+                ptr::null_mut(),
+                n_edges as Num,
+                n_edges as Num,
+                edge.as_mut_ptr(),
+                ptr::null_mut(),
+                ptr::null_mut(),
+            ),
+            "SCOTCH_dgraphBuild",
+        )?;
+        scotch_check(ffi::SCOTCH_dgraphCheck(graph), "SCOTCH_dgraphCheck")?;
+
+        let mut bound: ffi::SCOTCH_Dgraph = std::mem::zeroed();
+        scotch_check(
+            ffi::SCOTCH_contextBindDgraph(context, graph, &mut bound),
+            "SCOTCH_contextBindDgraph",
+        )?;
+
+        let mut strat: Box<ffi::SCOTCH_Strat> = Box::new(std::mem::zeroed());
+        scotch_check(ffi::SCOTCH_stratInit(&mut *strat), "SCOTCH_stratInit")?;
+        let strat = &mut **run.strat.insert(strat);
+        let mut n_procs: c_int = 0;
+        ffi::MPI_Comm_size(run.comm, &mut n_procs);
+        // PETSc's MatPartitioning defaults: the default strategy, 1 % imbalance.
+        scotch_check(
+            ffi::SCOTCH_stratDgraphMapBuild(
+                strat,
+                ffi::SCOTCH_STRATDEFAULT as Num,
+                n_procs as Num,
+                n_parts as Num,
+                imbalance,
+            ),
+            "SCOTCH_stratDgraphMapBuild",
+        )?;
+        scotch_check(
+            ffi::SCOTCH_dgraphPart(&mut bound, n_parts as Num, strat, part.as_mut_ptr()),
+            "SCOTCH_dgraphPart",
+        )?;
+    }
+    drop(run);
+    part.truncate(n_local);
+    Ok(part.into_iter().map(|p| p as PInt).collect())
+}
+
+/// Frees memory from PetscMalloc that no PETSc object has taken over.
+unsafe fn petsc_free(p: *mut PInt) {
+    let mut p = p as *mut std::ffi::c_void;
+    ffi::PetscFreeA(
+        1,
+        line!() as c_int,
+        c"petsc_free".as_ptr(),
+        c"src/petsc/mod.rs".as_ptr(),
+        &mut p as *mut *mut std::ffi::c_void as *mut std::ffi::c_void,
+    );
 }
 
 /// Copies a slice into memory from PetscMalloc (for objects that take ownership of arrays).

@@ -2,7 +2,7 @@
 //! → post-processing → output, one line per stage.
 
 use crate::assembly::{self, System};
-use crate::case::{Case, Field};
+use crate::case::{Case, OutputField};
 use crate::error::RunError;
 use crate::mesh::Mesh;
 use crate::output::{ContactResult, ResultSet};
@@ -54,7 +54,7 @@ pub fn run_case(ctx: &Ctx, case: &Case) -> Result<String, RunError> {
     let grid = solved
         .contact
         .as_ref()
-        .filter(|_| case.output.wants(Field::Contact));
+        .filter(|_| case.output.wants(OutputField::Contact));
     clock.t.output = out.write_solution(ctx, &fields.piece(grid))?;
     let timings = clock.finish();
     let summary = Summary {

@@ -1,7 +1,7 @@
 //! Post-processing: the fields the case asks for (and no others) on this rank's nodes and
 //! cells, ready for the output layer.
 
-use crate::case::{Field, OutputSection};
+use crate::case::{OutputField, OutputSection};
 use crate::fem::{self, Material};
 use crate::mesh::Mesh;
 use crate::output::{FieldBuf, SolutionFields};
@@ -40,9 +40,9 @@ pub fn cell_fields(
     u: &Vector,
     out: &OutputSection,
 ) -> petsc::Result<Vec<FieldBuf>> {
-    let want_stress = out.wants(Field::Stress);
-    let want_vm = out.wants(Field::VonMises);
-    let want_vmt = out.wants(Field::VonMisesThesis);
+    let want_stress = out.wants(OutputField::Stress);
+    let want_vm = out.wants(OutputField::VonMises);
+    let want_vmt = out.wants(OutputField::VonMisesThesis);
     let dim = mesh.dim;
     let nlc = layout.local_cells.len();
     let mut fields = Vec::new();
@@ -82,7 +82,7 @@ pub fn cell_fields(
             }
         }
     }
-    if out.wants(Field::Rank) {
+    if out.wants(OutputField::Rank) {
         fields.push(FieldBuf {
             name: "rank",
             ncomp: 1,
@@ -103,7 +103,7 @@ pub fn solution_fields(
 ) -> petsc::Result<SolutionFields> {
     let dim = mesh.dim;
     let mut nodal = Vec::new();
-    if out.wants(Field::Displacement) {
+    if out.wants(OutputField::Displacement) {
         let uo = u.to_local_vec()?;
         nodal.push(FieldBuf {
             name: "displacement",

@@ -63,9 +63,9 @@ fn read_and_check(case: &Case) -> Result<Input, InputError> {
     case.check_against_mesh(mesh.dim, &groups)?;
     case.check_facet_groups(&mesh)?;
     let model = match case.model(mesh.dim)? {
-        case::Model::PlaneStrain => fem::Model::PlaneStrain,
-        case::Model::PlaneStress => fem::Model::PlaneStress,
-        case::Model::ThreeD => fem::Model::Solid,
+        case::MaterialModel::PlaneStrain => fem::Model::PlaneStrain,
+        case::MaterialModel::PlaneStress => fem::Model::PlaneStress,
+        case::MaterialModel::ThreeD => fem::Model::Solid,
     };
     let material = Material {
         young: case.material.young,
@@ -136,7 +136,7 @@ pub struct ContactSettings {
     pub obstacle: Obstacle,
     /// Tresca threshold g_R (1.44e); `None` without friction.
     pub tresca_threshold: Option<f64>,
-    pub rigid_modes: case::RigidModes,
+    pub rigid_modes: case::RigidModeHandling,
     pub newton: NewtonSection,
     /// Young's modulus (the default c = E / h_c).
     pub young: f64,
@@ -172,10 +172,10 @@ pub fn contact_settings(
 /// The obstacle of the case, checked.
 pub fn obstacle_of(c: &ContactSection, dim: usize, file: &Path) -> Result<Obstacle, InputError> {
     match &c.obstacle {
-        case::Obstacle::Plane { point, normal } => Plane::new(vec3(point), vec3(normal), dim)
+        case::ObstacleSpec::Plane { point, normal } => Plane::new(vec3(point), vec3(normal), dim)
             .map(Obstacle::Plane)
             .map_err(|e| e.into_input_error(file, "contact.obstacle")),
-        case::Obstacle::Sphere { center, radius } => Sphere::new(vec3(center), *radius, dim)
+        case::ObstacleSpec::Sphere { center, radius } => Sphere::new(vec3(center), *radius, dim)
             .map(Obstacle::Sphere)
             .map_err(|e| e.into_input_error(file, "contact.obstacle")),
     }

@@ -29,27 +29,27 @@ pub fn vec3(v: &[f64]) -> [f64; 3] {
 
 /// Elastic model.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum Model {
+pub enum MaterialModel {
     PlaneStrain,
     PlaneStress,
     ThreeD,
 }
 
-impl Model {
+impl MaterialModel {
     /// The spelling used in the case file.
     pub fn name(self) -> &'static str {
         match self {
-            Model::PlaneStrain => "plane_strain",
-            Model::PlaneStress => "plane_stress",
-            Model::ThreeD => "3d",
+            MaterialModel::PlaneStrain => "plane_strain",
+            MaterialModel::PlaneStress => "plane_stress",
+            MaterialModel::ThreeD => "3d",
         }
     }
 
     /// Spatial dimension the model belongs to.
     pub fn dim(self) -> usize {
         match self {
-            Model::PlaneStrain | Model::PlaneStress => 2,
-            Model::ThreeD => 3,
+            MaterialModel::PlaneStrain | MaterialModel::PlaneStress => 2,
+            MaterialModel::ThreeD => 3,
         }
     }
 }
@@ -65,7 +65,7 @@ pub struct MaterialSection {
     pub young: f64,
     pub poisson: f64,
     /// As given; use [`Case::model`] to get the model for a mesh dimension.
-    pub model: Option<Model>,
+    pub model: Option<MaterialModel>,
 }
 
 #[derive(Debug, Clone, PartialEq)]
@@ -147,7 +147,7 @@ impl Default for SolverSection {
 }
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash)]
-pub enum Field {
+pub enum OutputField {
     Displacement,
     Stress,
     VonMises,
@@ -156,30 +156,30 @@ pub enum Field {
     Contact,
 }
 
-impl Field {
-    pub const ALL: [Field; 6] = [
-        Field::Displacement,
-        Field::Stress,
-        Field::VonMises,
-        Field::VonMisesThesis,
-        Field::Rank,
-        Field::Contact,
+impl OutputField {
+    pub const ALL: [OutputField; 6] = [
+        OutputField::Displacement,
+        OutputField::Stress,
+        OutputField::VonMises,
+        OutputField::VonMisesThesis,
+        OutputField::Rank,
+        OutputField::Contact,
     ];
 
     /// The spelling used in the case file.
     pub fn name(self) -> &'static str {
         match self {
-            Field::Displacement => "displacement",
-            Field::Stress => "stress",
-            Field::VonMises => "von_mises",
-            Field::VonMisesThesis => "von_mises_thesis",
-            Field::Rank => "rank",
-            Field::Contact => "contact",
+            OutputField::Displacement => "displacement",
+            OutputField::Stress => "stress",
+            OutputField::VonMises => "von_mises",
+            OutputField::VonMisesThesis => "von_mises_thesis",
+            OutputField::Rank => "rank",
+            OutputField::Contact => "contact",
         }
     }
 
-    fn from_name(s: &str) -> Option<Field> {
-        Field::ALL.into_iter().find(|f| f.name() == s)
+    fn from_name(s: &str) -> Option<OutputField> {
+        OutputField::ALL.into_iter().find(|f| f.name() == s)
     }
 }
 
@@ -188,20 +188,24 @@ pub struct OutputSection {
     /// Relative to the working directory.
     pub dir: PathBuf,
     /// Requested fields, in file order, without duplicates.
-    pub fields: Vec<Field>,
+    pub fields: Vec<OutputField>,
 }
 
 impl OutputSection {
-    pub fn wants(&self, f: Field) -> bool {
+    pub fn wants(&self, f: OutputField) -> bool {
         self.fields.contains(&f)
     }
 }
 
 /// The default `output.fields`.
-pub const DEFAULT_FIELDS: [Field; 3] = [Field::Displacement, Field::VonMises, Field::Contact];
+pub const DEFAULT_FIELDS: [OutputField; 3] = [
+    OutputField::Displacement,
+    OutputField::VonMises,
+    OutputField::Contact,
+];
 
 #[derive(Debug, Clone, PartialEq)]
-pub enum Obstacle {
+pub enum ObstacleSpec {
     /// Half-space bounded by the plane through `point`; `normal` is a unit vector.
     Plane { point: Vec<f64>, normal: Vec<f64> },
     /// Ball (circle in 2D).
@@ -215,7 +219,7 @@ pub enum Friction {
 }
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum RigidModes {
+pub enum RigidModeHandling {
     Auto,
     None,
 }
@@ -223,9 +227,9 @@ pub enum RigidModes {
 #[derive(Debug, Clone, PartialEq)]
 pub struct ContactSection {
     pub group: String,
-    pub obstacle: Obstacle,
+    pub obstacle: ObstacleSpec,
     pub friction: Friction,
-    pub rigid_modes: RigidModes,
+    pub rigid_modes: RigidModeHandling,
 }
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -372,7 +376,7 @@ impl Case {
         overrides: &[String],
         output_dir: Option<&Path>,
     ) -> Result<Case, InputError> {
-        let cx = Ctx { file };
+        let cx = Reader { file };
         if text.len() > MAX_CASE_BYTES {
             return Err(too_large(file));
         }
@@ -400,19 +404,19 @@ impl Case {
 
     fn err_at(&self, key: &str, msg: impl Into<String>) -> InputError {
         let loc = self.locs.get(key).copied().unwrap_or(Loc::Unknown);
-        Ctx { file: &self.file }.err(key, loc, msg)
+        Reader { file: &self.file }.err(key, loc, msg)
     }
 
     /// The model to use for a mesh of dimension `dim`: a 2D mesh needs `plane_strain` or
     /// `plane_stress`, a 3D mesh needs `3d` or no model.
-    pub fn model(&self, dim: usize) -> Result<Model, InputError> {
+    pub fn model(&self, dim: usize) -> Result<MaterialModel, InputError> {
         match (dim, self.material.model) {
-            (2, Some(m @ (Model::PlaneStrain | Model::PlaneStress))) => Ok(m),
+            (2, Some(m @ (MaterialModel::PlaneStrain | MaterialModel::PlaneStress))) => Ok(m),
             (2, None) => Err(self.err_at(
                 "material",
                 "the mesh is 2D: material.model is required, \"plane_strain\" or \"plane_stress\"",
             )),
-            (3, None | Some(Model::ThreeD)) => Ok(Model::ThreeD),
+            (3, None | Some(MaterialModel::ThreeD)) => Ok(MaterialModel::ThreeD),
             (2 | 3, Some(m)) => Err(self.err_at(
                 "material.model",
                 format!(
@@ -465,11 +469,11 @@ impl Case {
         if let Some(c) = &self.contact {
             self.check_group("contact.group", &c.group, groups, Some(dim - 1))?;
             match &c.obstacle {
-                Obstacle::Plane { point, normal } => {
+                ObstacleSpec::Plane { point, normal } => {
                     len("contact.obstacle.point".into(), point.len())?;
                     len("contact.obstacle.normal".into(), normal.len())?;
                 }
-                Obstacle::Sphere { center, .. } => {
+                ObstacleSpec::Sphere { center, .. } => {
                     len("contact.obstacle.center".into(), center.len())?;
                 }
             }
@@ -550,7 +554,7 @@ impl Case {
 }
 
 /// Validation context: builds errors that name the file.
-struct Ctx<'a> {
+struct Reader<'a> {
     file: &'a Path,
 }
 
@@ -576,7 +580,7 @@ fn list(xs: &[&str]) -> String {
     xs.join(", ")
 }
 
-impl Ctx<'_> {
+impl Reader<'_> {
     fn err(&self, key: &str, loc: Loc, msg: impl Into<String>) -> InputError {
         let mut msg = msg.into();
         let line = match loc {
@@ -824,9 +828,9 @@ impl Ctx<'_> {
                 &mk,
                 m,
                 &[
-                    ("plane_strain", Model::PlaneStrain),
-                    ("plane_stress", Model::PlaneStress),
-                    ("3d", Model::ThreeD),
+                    ("plane_strain", MaterialModel::PlaneStrain),
+                    ("plane_stress", MaterialModel::PlaneStress),
+                    ("3d", MaterialModel::ThreeD),
                 ],
             )?),
         };
@@ -960,8 +964,8 @@ impl Ctx<'_> {
                 for (i, e) in elems.iter().enumerate() {
                     let ek = join_index(&fk, i);
                     let s = self.string(&ek, e)?;
-                    let Some(field) = Field::from_name(s) else {
-                        let names: Vec<&str> = Field::ALL.iter().map(|f| f.name()).collect();
+                    let Some(field) = OutputField::from_name(s) else {
+                        let names: Vec<&str> = OutputField::ALL.iter().map(|f| f.name()).collect();
                         return Err(self.err(
                             &ek,
                             e.loc,
@@ -995,11 +999,14 @@ impl Ctx<'_> {
             Some((fk, f)) => self.friction(&fk, f)?,
         };
         let rigid_modes = match t.get("rigid_modes") {
-            None => RigidModes::Auto,
+            None => RigidModeHandling::Auto,
             Some((rk, r)) => self.choice(
                 &rk,
                 r,
-                &[("auto", RigidModes::Auto), ("none", RigidModes::None)],
+                &[
+                    ("auto", RigidModeHandling::Auto),
+                    ("none", RigidModeHandling::None),
+                ],
             )?,
         };
         Ok(Some(ContactSection {
@@ -1010,7 +1017,7 @@ impl Ctx<'_> {
         }))
     }
 
-    fn obstacle(&self, key: &str, n: &Node) -> Res<Obstacle> {
+    fn obstacle(&self, key: &str, n: &Node) -> Res<ObstacleSpec> {
         // First read the type, then check the keys that type allows.
         let t = self.table_any(key, n)?;
         let (tk, ty) = self.required(&t, "type")?;
@@ -1042,7 +1049,7 @@ impl Ctx<'_> {
                     return Err(self.err(&nk, nn.loc, "the normal must be a nonzero vector"));
                 }
                 normal.iter_mut().for_each(|x| *x /= norm);
-                Ok(Obstacle::Plane { point, normal })
+                Ok(ObstacleSpec::Plane { point, normal })
             }
             Ty::Sphere => {
                 let t = self.table(key, n, &["type", "center", "radius"])?;
@@ -1050,7 +1057,7 @@ impl Ctx<'_> {
                 let center = self.vector(&ck, c)?;
                 let (rk, r) = self.required(&t, "radius")?;
                 let radius = self.positive(&rk, r)?;
-                Ok(Obstacle::Sphere { center, radius })
+                Ok(ObstacleSpec::Sphere { center, radius })
             }
         }
     }

@@ -110,7 +110,7 @@ fn full_file_round_trip() {
     assert_eq!(c.mesh.file, Path::new("/cases/meshes/plate.msh"));
     assert_eq!(c.material.young, 210.0);
     assert_eq!(c.material.poisson, 0.25);
-    assert_eq!(c.material.model, Some(Model::PlaneStress));
+    assert_eq!(c.material.model, Some(MaterialModel::PlaneStress));
     assert_eq!(
         c.dirichlet,
         vec![
@@ -143,19 +143,19 @@ fn full_file_round_trip() {
     assert_eq!(c.solver.rtol, 1e-8);
     assert_eq!(c.output.dir, Path::new("out/somewhere"));
     // Duplicates dropped, order kept.
-    assert_eq!(c.output.fields, Field::ALL.to_vec());
-    assert!(c.output.wants(Field::Rank));
+    assert_eq!(c.output.fields, OutputField::ALL.to_vec());
+    assert!(c.output.wants(OutputField::Rank));
     let contact = c.contact.as_ref().unwrap();
     assert_eq!(contact.group, "contact");
     match &contact.obstacle {
-        Obstacle::Plane { point, normal } => {
+        ObstacleSpec::Plane { point, normal } => {
             assert_eq!(point, &vec![0.0, -1.0]);
             assert!((normal[0] - 0.6).abs() < 1e-15 && (normal[1] - 0.8).abs() < 1e-15);
         }
         o => panic!("{o:?}"),
     }
     assert_eq!(contact.friction, Friction::Tresca { threshold: 0.01 });
-    assert_eq!(contact.rigid_modes, RigidModes::None);
+    assert_eq!(contact.rigid_modes, RigidModeHandling::None);
     assert_eq!(c.newton.init, NewtonInit::Gap);
     assert_eq!(c.newton.c, Some(10.0));
     assert_eq!(c.newton.max_steps, 7);
@@ -169,7 +169,7 @@ fn full_file_round_trip() {
         c.line_of("contact.group"),
         Some(line(FULL, "group = \"contact\""))
     );
-    assert_eq!(c.model(2).unwrap(), Model::PlaneStress);
+    assert_eq!(c.model(2).unwrap(), MaterialModel::PlaneStress);
 }
 
 #[test]
@@ -184,9 +184,13 @@ fn minimal_file_gets_defaults() {
     assert_eq!(c.output.dir, Path::new("out/plate"));
     assert_eq!(
         c.output.fields,
-        vec![Field::Displacement, Field::VonMises, Field::Contact]
+        vec![
+            OutputField::Displacement,
+            OutputField::VonMises,
+            OutputField::Contact
+        ]
     );
-    assert!(!c.output.wants(Field::Stress));
+    assert!(!c.output.wants(OutputField::Stress));
     assert_eq!(c.contact, None);
     assert_eq!(c.newton.init, NewtonInit::Auto);
     assert_eq!(c.newton.c, None);
@@ -202,10 +206,10 @@ fn contact_defaults_and_sphere() {
     .unwrap();
     let k = c.contact.unwrap();
     assert_eq!(k.friction, Friction::None);
-    assert_eq!(k.rigid_modes, RigidModes::Auto);
+    assert_eq!(k.rigid_modes, RigidModeHandling::Auto);
     assert_eq!(
         k.obstacle,
-        Obstacle::Sphere {
+        ObstacleSpec::Sphere {
             center: vec![0.0, 1.5, 0.0],
             radius: 0.5
         }
@@ -618,12 +622,12 @@ fn overrides_apply() {
     assert_eq!(c.mesh.file, Path::new("/cases/fine.msh"));
     assert_eq!(c.newton.c, Some(25.0));
     assert_eq!(c.newton.max_steps, 7, "other keys untouched");
-    assert_eq!(c.output.fields, vec![Field::Displacement]);
+    assert_eq!(c.output.fields, vec![OutputField::Displacement]);
     assert_eq!(c.dirichlet[0].group, "clamp2");
     assert_eq!(c.dirichlet[1].value, vec![Some(0.1), Some(-0.5)]);
-    assert_eq!(c.material.model, Some(Model::PlaneStrain));
+    assert_eq!(c.material.model, Some(MaterialModel::PlaneStrain));
     match &c.contact.as_ref().unwrap().obstacle {
-        Obstacle::Plane { normal, .. } => assert_eq!(normal, &vec![0.0, -1.0]),
+        ObstacleSpec::Plane { normal, .. } => assert_eq!(normal, &vec![0.0, -1.0]),
         o => panic!("{o:?}"),
     }
     assert_eq!(c.solver.petsc_options, "-pc_type lu -ksp_type preonly");
@@ -657,7 +661,7 @@ fn overrides_create_sections_and_entries() {
     );
     assert_eq!(
         c.contact.unwrap().obstacle,
-        Obstacle::Sphere {
+        ObstacleSpec::Sphere {
             center: vec![0.0, 2.0],
             radius: 1.0
         }
@@ -808,7 +812,7 @@ fn check_against_mesh_wrong_vector_length() {
 #[test]
 fn model_against_dimension() {
     let c = parse(MINIMAL).unwrap();
-    assert_eq!(c.model(2).unwrap(), Model::PlaneStrain);
+    assert_eq!(c.model(2).unwrap(), MaterialModel::PlaneStrain);
     let e = c.check_against_mesh(3, &[]).unwrap_err();
     assert_eq!(e.key.as_deref(), Some("material.model"), "{e}");
     assert_eq!(e.line, Some(line(MINIMAL, "model")));
@@ -817,7 +821,7 @@ fn model_against_dimension() {
 
     let no_model = replace(MINIMAL, "model = \"plane_strain\"\n", "");
     let c = parse(&no_model).unwrap();
-    assert_eq!(c.model(3).unwrap(), Model::ThreeD);
+    assert_eq!(c.model(3).unwrap(), MaterialModel::ThreeD);
     let e = c.check_against_mesh(2, &[]).unwrap_err();
     assert_eq!(e.key.as_deref(), Some("material"), "{e}");
     assert_eq!(e.line, Some(line(&no_model, "[material]")));
@@ -825,7 +829,7 @@ fn model_against_dimension() {
 
     let three = replace(MINIMAL, "plane_strain", "3d");
     let c = parse(&three).unwrap();
-    assert_eq!(c.model(3).unwrap(), Model::ThreeD);
+    assert_eq!(c.model(3).unwrap(), MaterialModel::ThreeD);
     let e = c.model(2).unwrap_err();
     assert_eq!(e.key.as_deref(), Some("material.model"), "{e}");
     assert!(e.message.contains("2D"), "{e}");

@@ -234,7 +234,7 @@ fn snesvi_solve(
     ctx: &Ctx,
     p: &ContactProblem,
     f_local: &[f64],
-    rigid: case::RigidModes,
+    rigid: case::RigidModeHandling,
 ) -> Result<NewtonResult, RunError> {
     let (mesh, b, sys) = (p.mesh, p.boundary, p.sys);
     let dim = mesh.dim;

@@ -27,7 +27,7 @@ pub struct NewtonSettings<'a> {
     /// The complementarity parameter c > 0 used.
     pub c: f64,
     pub friction: bool,
-    pub rigid: case::RigidModes,
+    pub rigid: case::RigidModeHandling,
 }
 
 /// One Newton step, for the history.

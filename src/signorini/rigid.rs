@@ -213,11 +213,11 @@ impl FreeModes {
         fixed: &[f64],
         b: &ContactBoundary,
         f_local: &[f64],
-        setting: case::RigidModes,
+        setting: case::RigidModeHandling,
     ) -> FreeModes {
         let dim = mesh.dim;
         let modes = RigidModes::new(mesh);
-        let enabled = setting == case::RigidModes::Auto;
+        let enabled = setting == case::RigidModeHandling::Auto;
         let mut g_dirichlet = [0.0; 36];
         if enabled {
             for &v in &layout.owned_nodes {

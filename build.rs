@@ -6,15 +6,60 @@
 use std::env;
 use std::path::PathBuf;
 
+/// A cluster's own PETSc: PETSC_DIR (and PETSC_ARCH) put its pkg-config directory first.
+fn use_petsc_dir() {
+    for v in [
+        "PETSC_DIR",
+        "PETSC_ARCH",
+        "MPI_INCLUDE_DIR",
+        "SCOTCH_INCLUDE_DIR",
+        "SCOTCH_LIB_DIR",
+        "PKG_CONFIG_PATH",
+    ] {
+        println!("cargo:rerun-if-env-changed={v}");
+    }
+    let Ok(dir) = env::var("PETSC_DIR") else {
+        return;
+    };
+    let mut dirs = vec![PathBuf::from(&dir).join("lib/pkgconfig")];
+    if let Ok(arch) = env::var("PETSC_ARCH") {
+        dirs.insert(0, PathBuf::from(&dir).join(arch).join("lib/pkgconfig"));
+    }
+    let mut path: Vec<String> = dirs.iter().map(|d| d.display().to_string()).collect();
+    if let Ok(old) = env::var("PKG_CONFIG_PATH") {
+        path.push(old);
+    }
+    env::set_var("PKG_CONFIG_PATH", path.join(":"));
+}
+
+/// MPI's include directories: MPI_INCLUDE_DIR if given, else pkg-config ompi-c (Open MPI)
+/// or mpich.
+fn mpi_includes() -> Vec<PathBuf> {
+    if let Ok(d) = env::var("MPI_INCLUDE_DIR") {
+        return env::split_paths(&d).collect();
+    }
+    for name in ["ompi-c", "mpich"] {
+        if let Ok(lib) = pkg_config::Config::new()
+            .cargo_metadata(false)
+            .probe(name)
+        {
+            return lib.include_paths;
+        }
+    }
+    panic!(
+        "no MPI headers found: install libopenmpi-dev (scripts/setup does), or set \
+         MPI_INCLUDE_DIR to the directory of mpi.h"
+    );
+}
+
 fn main() {
     println!("cargo:rerun-if-changed=build.rs");
-    let petsc = pkg_config::Config::new()
-        .probe("PETSc")
-        .expect("pkg-config PETSc failed: install petsc-dev (scripts/setup does)");
-    let ompi = pkg_config::Config::new()
-        .cargo_metadata(false)
-        .probe("ompi-c")
-        .expect("pkg-config ompi-c failed: install libopenmpi-dev (scripts/setup does)");
+    use_petsc_dir();
+    let petsc = pkg_config::Config::new().probe("PETSc").expect(
+        "pkg-config PETSc failed: install petsc-dev (scripts/setup does), or set PETSC_DIR \
+         (and PETSC_ARCH) to a PETSc build",
+    );
+    let mpi_include = mpi_includes();
     for dir in &petsc.link_paths {
         println!("cargo:rustc-link-arg=-Wl,-rpath,{}", dir.display());
     }
@@ -61,19 +106,24 @@ fn main() {
         .blocklist_item("FP_.*")
         .blocklist_function("Mat.*Device.*")
         .blocklist_function(".*(CUDA|Cuda|HIP|Hip|Kokkos|ViennaCL|SYCL|Sycl).*");
-    for p in petsc.include_paths.iter().chain(ompi.include_paths.iter()) {
+    for p in petsc.include_paths.iter().chain(mpi_include.iter()) {
         builder = builder.clang_arg(format!("-I{}", p.display()));
     }
     // Debian's default PT-Scotch (32-bit SCOTCH_Num, like PETSc's PetscInt), the one libpetsc
     // links; its headers live in their own directory.
-    let scotch_include = "/usr/include/scotch";
+    let scotch_include =
+        env::var("SCOTCH_INCLUDE_DIR").unwrap_or_else(|_| "/usr/include/scotch".into());
     assert!(
-        std::path::Path::new(scotch_include)
+        std::path::Path::new(&scotch_include)
             .join("ptscotch.h")
             .exists(),
         "{scotch_include}/ptscotch.h not found: install libptscotch-dev (petsc-dev pulls it in)"
     );
     builder = builder.clang_arg(format!("-I{scotch_include}"));
+    if let Ok(d) = env::var("SCOTCH_LIB_DIR") {
+        println!("cargo:rustc-link-search=native={d}");
+        println!("cargo:rustc-link-arg=-Wl,-rpath,{d}");
+    }
     println!("cargo:rustc-link-lib=dylib=ptscotch");
     println!("cargo:rustc-link-lib=dylib=ptscotcherr");
     let bindings = builder

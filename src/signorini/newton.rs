@@ -154,7 +154,7 @@ pub fn semismooth_newton(
         let totals = update.reduce(ctx, b, lp.free.modes(), dim);
         history.push(lp.step_info(step, &totals, &info, kind, seconds));
         log_step(ctx, history.last().expect("pushed"), &totals);
-        if lp.next(step, update.next, &totals, &reduced)? {
+        if lp.next(step, update.next, &totals)? {
             converged = true;
             break;
         }
@@ -240,13 +240,7 @@ impl Loop<'_> {
     }
 
     /// The decision after step `step` and the sets of the next step; `Ok(true)` = converged.
-    fn next(
-        &mut self,
-        step: usize,
-        mut next: ActiveSet,
-        t: &StepTotals,
-        reduced: &ReducedSystem,
-    ) -> Result<bool, RunError> {
+    fn next(&mut self, step: usize, mut next: ActiveSet, t: &StepTotals) -> Result<bool, RunError> {
         let (ctx, b, dim) = (self.ctx, self.p.boundary, self.p.mesh.dim);
         let pins = !self.free.pins().is_empty();
         let mut decision = decide(
@@ -261,16 +255,8 @@ impl Loop<'_> {
             // carry no reaction). If not, the body moves along the unbalanced load until a
             // contact node touches: activate the first one to touch and go on; if no node
             // approaches the obstacle, there is no equilibrium.
-            let (it, layout) = (&self.it, self.p.layout);
-            // (f − A u) at dof k of mesh node v (owned)
-            let residual_at = |v: usize, k: usize| {
-                let i = layout.node_global[v] * dim + k - reduced.row_lo;
-                reduced.f_local[i] - it.au_local[i]
-            };
-            let nodes = (&it.nodes[..], &self.set.normal[..]);
-            let balance = self
-                .free
-                .balance(ctx, self.p.mesh, layout, b, nodes, residual_at);
+            let nodes = (&self.it.nodes[..], &self.set.normal[..]);
+            let balance = self.free.balance(ctx, b, nodes);
             match balance {
                 Balance::Balanced => {
                     decision = decide(

@@ -14,6 +14,14 @@
 //! strains, stresses and multipliers. If the load is not balanced in a free mode, the body is
 //! moved along the unbalanced load until the first contact node touches ([`Balance::Touch`]);
 //! if no node approaches the obstacle there is no equilibrium ([`Balance::NoSupport`]).
+//!
+//! The balance test reads the load, not the iterate: the reaction the pins carry is, in exact
+//! arithmetic, the load's component in the free modes, φ = Qᵀ Rᵀ f (A R = 0 for P1 elements,
+//! Dirichlet data eliminated symmetrically keep it so, and every other row either holds a
+//! constraint the free modes do not move or is an equilibrium row). Computed from u, as
+//! Qᵀ Rᵀ (f − A u) at the pins, it is the sum of every other row's solver residual: rounding of
+//! order ε‖A‖‖u‖·√n when u carries a large rigid motion (an obstacle far below the body), or
+//! the Krylov tolerance of the iterative preset — both produced false "no support" diagnoses.
 
 use super::boundary::{ContactBoundary, NodeResult};
 use crate::case;
@@ -200,9 +208,16 @@ pub struct FreeModes {
     pins: Vec<Pin>,
     /// Nodes allowed as pins: off the contact boundary, without Dirichlet data.
     candidate: Vec<bool>,
-    /// Largest nodal load (scale of the balance test).
-    fmax: f64,
+    /// The load in every rigid mode, Rᵀ f (summed over the ranks; m entries used).
+    load: [f64; 6],
+    /// Σ_i |f_i| ‖R_i‖ over all dofs i: the size of the terms that cancel in `load`, the scale
+    /// of the balance test.
+    load_scale: f64,
 }
+
+/// An unbalanced load in the free modes below this fraction of `load_scale` is balanced: the
+/// sum Rᵀ f itself is exact to about √n·ε of it, far below.
+const BALANCE_RTOL: f64 = 1e-10;
 
 impl FreeModes {
     /// Collective (two reductions).
@@ -230,7 +245,24 @@ impl FreeModes {
             let total = ctx.sum_vec(&g_dirichlet);
             g_dirichlet.copy_from_slice(&total);
         }
-        let fmax = ctx.max_f64(f_local.iter().fold(0.0f64, |a, b| a.max(b.abs())));
+        // Rᵀ f and its scale over the owned rows (owned node i holds rows i·d .. i·d + d).
+        let mut local = [0.0; 7];
+        for (i, &v) in layout.owned_nodes.iter().enumerate() {
+            for k in 0..dim {
+                let f = f_local[i * dim + k];
+                if f == 0.0 {
+                    continue;
+                }
+                let row = modes.dof_row(&mesh.coords[v], k);
+                for j in 0..modes.m {
+                    local[j] += row[j] * f;
+                }
+                local[6] += f.abs() * row.iter().map(|x| x * x).sum::<f64>().sqrt();
+            }
+        }
+        let total = ctx.sum_vec(&local);
+        let mut load = [0.0; 6];
+        load.copy_from_slice(&total[..6]);
         let candidate = (0..mesh.n_nodes())
             .map(|v| !b.on_contact_boundary[v] && (0..dim).all(|k| fixed[v * dim + k].is_nan()))
             .collect();
@@ -242,7 +274,8 @@ impl FreeModes {
             key: None,
             pins: Vec::new(),
             candidate,
-            fmax,
+            load,
+            load_scale: total[6],
         }
     }
 
@@ -304,35 +337,25 @@ impl FreeModes {
         Ok(&self.pins)
     }
 
-    /// The unbalanced load in the free rigid modes, φ = Qᵀ Rᵀ (f − A u) at the pins (the
-    /// dropped equations), and, if it is not zero, the inactive contact node that a rigid
-    /// motion along φ brings into contact first (smallest gap / closing speed; ties by tag).
-    /// `residual_at(v, k)` = (f − A u) at dof k of the owned mesh node v; `nodes` the iterate at
-    /// the contact nodes, `active` their A_n membership in its solve. Collective.
+    /// The unbalanced load in the free rigid modes, φ = Qᵀ Rᵀ f (what the pins carry, see the
+    /// module note), and, if it is not zero against the load's scale, the inactive contact
+    /// node that a rigid motion along φ brings into contact first (smallest gap / closing
+    /// speed; ties by tag). `nodes` the iterate at the contact nodes, `active` their A_n
+    /// membership in its solve. Collective only when the load is unbalanced (the same on every
+    /// rank: φ is summed once, in `new`).
     pub fn balance(
         &self,
         ctx: &Ctx,
-        mesh: &Mesh,
-        layout: &Layout,
         b: &ContactBoundary,
         (nodes, active): (&[NodeResult], &[bool]),
-        residual_at: impl Fn(usize, usize) -> f64,
     ) -> Balance {
         let (modes, q) = (&self.modes, &self.q);
         let mf = q.ncols();
-        let mut phi = vec![0.0f64; mf];
-        for &(v, k) in &self.pins {
-            if layout.owns_node(v) {
-                let res = residual_at(v, k);
-                let row = modes.dof_row(&mesh.coords[v], k);
-                for (c, ph) in phi.iter_mut().enumerate() {
-                    *ph += res * (0..modes.m).map(|j| row[j] * q[(j, c)]).sum::<f64>();
-                }
-            }
-        }
-        let g = ctx.sum_vec(&phi);
+        let g: Vec<f64> = (0..mf)
+            .map(|c| (0..modes.m).map(|j| q[(j, c)] * self.load[j]).sum())
+            .collect();
         let norm = g.iter().map(|x| x * x).sum::<f64>().sqrt();
-        if norm <= 1e-8 * self.fmax.max(f64::MIN_POSITIVE) {
+        if norm <= BALANCE_RTOL * self.load_scale {
             return Balance::Balanced;
         }
         // Motion per unit α in mode coefficients: Q φ / |φ|.
@@ -371,13 +394,13 @@ impl FreeModes {
         RunError::Failed(format!(
             "no support: the body has {} rigid mode(s) fixed neither by Dirichlet data nor by \
              contact ({} active contact node(s)), the load is not balanced in them (unbalanced \
-             load {:.3e} against a largest nodal load of {:.3e}) and moving along it brings no \
+             load {:.3e} against a total load of {:.3e}) and moving along it brings no \
              contact node closer to the obstacle: there is no equilibrium — add Dirichlet data \
              or move the obstacle into the body's way",
             self.pins.len(),
             n_active,
             reaction,
-            self.fmax
+            self.load_scale
         ))
     }
 }

@@ -184,6 +184,9 @@ impl RigidModes {
     }
 }
 
+/// A rigid motion Σ_j ρ_j r_j, by its mode coefficients (m entries used).
+pub type Motion = [f64; 6];
+
 /// Outcome of the load-balance test of the free rigid modes.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum Balance {
@@ -205,6 +208,9 @@ pub struct FreeModes {
     key: Option<Gram>,
     /// Basis of the free modes (m × m_f).
     q: DMatrix<f64>,
+    /// Basis of the modes Dirichlet data leave free (m × m_z): the room of the rigid motion
+    /// taken out of the solve ([`FreeModes::fit_motion`]).
+    z: DMatrix<f64>,
     pins: Vec<Pin>,
     /// Nodes allowed as pins: off the contact boundary, without Dirichlet data.
     candidate: Vec<bool>,
@@ -266,8 +272,14 @@ impl FreeModes {
         let candidate = (0..mesh.n_nodes())
             .map(|v| !b.on_contact_boundary[v] && (0..dim).all(|k| fixed[v * dim + k].is_nan()))
             .collect();
+        let z = if enabled {
+            modes.free_modes(&g_dirichlet)
+        } else {
+            DMatrix::zeros(modes.m, 0)
+        };
         FreeModes {
             q: DMatrix::zeros(modes.m, 0),
+            z,
             modes,
             enabled,
             g_dirichlet,
@@ -387,6 +399,94 @@ impl FreeModes {
             u64::MAX
         };
         Balance::Touch(ctx.min_u64(mine))
+    }
+
+    /// The rigid motion ρ that the frictionless solve is relieved of (u = ρ + w, the solve
+    /// sees the gaps after ρ, [`FreeModes::shift`]): among the motions Dirichlet data leave free,
+    /// the least-squares fit of the active nodes' prescribed normal displacements
+    /// nᵀρ(x_k) = −g_k (3.29), then moved by a free mode of the set (which no constraint sees)
+    /// to vanish at the pins. In exact arithmetic this changes nothing; in floating point the
+    /// solve no longer carries a large rigid motion (a body far from the obstacle, moved to it
+    /// by [`Balance::Touch`] or started all-active), whose rounding, ε‖A‖|g| in every row,
+    /// would exceed the elastic part's accuracy. Zero with rigid-mode handling off. `g_set` is
+    /// the Gram matrix of the active normals (the set summary). Collective (one reduction).
+    pub fn fit_motion(
+        &self,
+        ctx: &Ctx,
+        b: &ContactBoundary,
+        active: &[bool],
+        g_set: &Gram,
+        mesh: &Mesh,
+    ) -> Motion {
+        let m = self.modes.m;
+        let mut local = [0.0; 6];
+        for (k, _) in b.nodes.iter().zip(active).filter(|(_, &a)| a) {
+            let row = self.modes.direction_row(&k.x, &k.frame.n);
+            for (l, r) in local.iter_mut().zip(row) {
+                *l -= r * k.gap;
+            }
+        }
+        let rhs = ctx.sum_vec(&local);
+        let mut rho = [0.0; 6];
+        if !self.enabled || self.z.ncols() == 0 {
+            return rho;
+        }
+        // Normal equations on the Dirichlet-free modes, solved by the pseudo-inverse (the set's
+        // free modes are its null space).
+        let z = &self.z;
+        let gm = DMatrix::from_row_slice(m, m, &g_set[..m * m]);
+        let mz = z.transpose() * &gm * z;
+        let rz = z.transpose() * nalgebra::DVector::from_column_slice(&rhs[..m]);
+        let eig = SymmetricEigen::new(mz);
+        let lmax = eig.eigenvalues.iter().fold(0.0f64, |a, &b| a.max(b.abs()));
+        let mut c = nalgebra::DVector::zeros(z.ncols());
+        for (i, &l) in eig.eigenvalues.iter().enumerate() {
+            if l > 1e-9 * lmax {
+                let v = eig.eigenvectors.column(i);
+                c += v * (v.dot(&rz) / l);
+            }
+        }
+        let r = z * c;
+        rho[..m].copy_from_slice(r.as_slice());
+        // Zero at the pins: ρ − Q α with (pin rows of Q) α = ρ at the pins.
+        let mf = self.q.ncols();
+        if mf > 0 && self.pins.len() == mf {
+            let mut p = DMatrix::zeros(mf, mf);
+            let mut at = nalgebra::DVector::zeros(mf);
+            for (a, &(v, k)) in self.pins.iter().enumerate() {
+                let row = self.modes.dof_row(&mesh.coords[v], k);
+                for cc in 0..mf {
+                    p[(a, cc)] = (0..m).map(|j| row[j] * self.q[(j, cc)]).sum();
+                }
+                at[a] = (0..m).map(|j| row[j] * rho[j]).sum();
+            }
+            if let Some(alpha) = p.lu().solve(&at) {
+                let corr = &self.q * alpha;
+                for (x, d) in rho.iter_mut().zip(corr.iter()) {
+                    *x -= d;
+                }
+            }
+        }
+        rho
+    }
+
+    /// Component k of the rigid motion `rho` at x.
+    pub fn motion_at(&self, rho: &Motion, x: &[f64; 3], k: usize) -> f64 {
+        (0..self.modes.m)
+            .map(|j| rho[j] * self.modes.value(j, x, k))
+            .sum()
+    }
+
+    /// The gaps after the rigid motion `rho` (g_k + nᵀρ(x_k): what (3.23) and (3.29) see for
+    /// w = u − ρ) into `shifted`, a copy of `b`. Local.
+    pub fn shift(&self, b: &ContactBoundary, rho: &Motion, shifted: &mut ContactBoundary) {
+        let dim = self.modes.dim;
+        for (k, s) in b.nodes.iter().zip(shifted.nodes.iter_mut()) {
+            let nr: f64 = (0..dim)
+                .map(|c| k.frame.n[c] * self.motion_at(rho, &k.x, c))
+                .sum();
+            s.gap = k.gap + nr;
+        }
     }
 
     /// The "no support" diagnosis of an unbalanced load that no contact can carry.

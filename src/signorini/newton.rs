@@ -3,9 +3,11 @@
 //! (3.39)/(3.40)). One step: update the pins of free rigid modes, write the reduced system,
 //! solve, recover λ (3.28), update the sets (3.23)/(3.33), one reduction, log, decide.
 //!
-//! Collectives per step: the writing of the reduced system (one all-gather of the rewritten
-//! nodes' directions, PETSc's assembly of entries in other ranks' rows), the solve, one
-//! MatMult, one Allreduce; rarely a load-balance test or a least-index pick.
+//! Collectives per step: without friction one Allreduce of m values (the rigid motion fitted to
+//! the active gaps, taken out of the solve: u = ρ + w, see `FreeModes::fit_motion`), the
+//! writing of the reduced system (one all-gather of the rewritten nodes' directions, PETSc's
+//! assembly of entries in other ranks' rows), the solve, one MatMult, one Allreduce; rarely a
+//! load-balance test that finds an unbalanced load (two reductions) or a least-index pick.
 
 use super::active_set::{ActiveSet, Iterate, SetSummary, StepTotals};
 use super::boundary::{ContactBoundary, NodeResult};

@@ -498,8 +498,9 @@ where
     //    reserve of disk space beside it that a failed write gives back for the close.
     let reserve_path = dir.join(RESERVE_FILE);
     let reserved = if comm.rank() == 0 {
-        std::fs::write(&reserve_path, vec![0u8; RESERVE_BYTES])
-            .map_err(|e| format!("{}: cannot write: {e}", reserve_path.display()))
+        std::fs::write(&reserve_path, vec![0u8; RESERVE_BYTES]).map_err(|e| {
+            format!("{h5_name}: cannot create: {e} (reserving {RESERVE_BYTES} bytes beside it)")
+        })
     } else {
         Ok(())
     };

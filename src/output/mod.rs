@@ -41,6 +41,10 @@ use ndarray::{s, ArrayView1, ArrayView2};
 
 /// Name of the HDF5 file inside the output directory.
 pub const H5_FILE: &str = "solution.h5";
+/// Disk space held beside the HDF5 file while it is written (removed afterwards): given back
+/// if the disk fills, so that the file's metadata can still be written at its close.
+const RESERVE_FILE: &str = ".reserve";
+const RESERVE_BYTES: usize = 32 * 1024;
 /// Name of the XDMF file inside the output directory.
 pub const XDMF_FILE: &str = "solution.xdmf";
 
@@ -407,6 +411,47 @@ fn write_datasets(file: &hdf5::File, w: &mut Writer, p: &Piece, meta: &Meta) -> 
     Ok(())
 }
 
+/// Bytes `solution.h5` takes: its datasets exactly (every value 8 bytes), plus room for the
+/// metadata (superblock, groups, object headers: measured ~1 KiB per dataset).
+fn file_bytes(meta: &Meta) -> u64 {
+    let (n, m, k) = (
+        meta.n_nodes as u64,
+        meta.n_cells as u64,
+        meta.n_contact as u64,
+    );
+    let comps = |v: &[FieldMeta]| v.iter().map(|f| f.ncomp as u64).sum::<u64>();
+    let mut values = n * (3 + 1) + m * (meta.dim as u64 + 1 + 1);
+    values += n * comps(&meta.nodal) + m * comps(&meta.cellwise);
+    let mut datasets = 4 + meta.nodal.len() + meta.cellwise.len();
+    if k > 0 {
+        values += k * (3 + 1 + 1) + k * comps(&meta.contact);
+        datasets += 3 + meta.contact.len();
+    }
+    8 * values + 16 * 1024 + 2048 * datasets as u64
+}
+
+/// Allocates the disk blocks of `path` up to `bytes` without changing its size or contents
+/// (fallocate, KEEP_SIZE). A file system that cannot do this is left to the writes.
+fn preallocate(path: &Path, bytes: u64) -> std::io::Result<()> {
+    use rustix::fs::{fallocate, FallocateFlags};
+    let f = std::fs::OpenOptions::new().write(true).open(path)?;
+    match fallocate(&f, FallocateFlags::KEEP_SIZE, 0, bytes) {
+        Ok(()) => Ok(()),
+        Err(e) if e == rustix::io::Errno::OPNOTSUPP || e == rustix::io::Errno::NOSYS => Ok(()),
+        Err(e) => Err(e.into()),
+    }
+}
+
+/// Gives back the blocks reserved beyond the end of the written file (a file system keeps
+/// them until the file is shortened: lengthen by one byte, shorten back).
+fn release_unused(path: &Path) {
+    if let Ok(f) = std::fs::OpenOptions::new().write(true).open(path) {
+        if let Ok(len) = f.metadata().map(|m| m.len()) {
+            let _ = f.set_len(len + 1).and_then(|()| f.set_len(len));
+        }
+    }
+}
+
 /// Collective over `comm`: writes `dir/solution.h5` (all ranks, MPI-IO) and
 /// `dir/solution.xdmf` (rank 0). `dir` must exist. Returns the same `Err` on every rank if
 /// any rank's piece is inconsistent or any write fails.
@@ -449,7 +494,22 @@ where
     }
     agree(comm, local.map_err(|e| format!("{h5_name}: {e}")))?;
 
-    // 2. The shared HDF5 file (creation, dataset creation and close are collective).
+    // 2. The shared HDF5 file (creation, dataset creation and close are collective), with a
+    //    reserve of disk space beside it that a failed write gives back for the close.
+    let reserve_path = dir.join(RESERVE_FILE);
+    let reserved = if comm.rank() == 0 {
+        std::fs::write(&reserve_path, vec![0u8; RESERVE_BYTES]).map_err(|e| {
+            format!("{h5_name}: cannot create: {e} (reserving {RESERVE_BYTES} bytes beside it)")
+        })
+    } else {
+        Ok(())
+    };
+    if let Err(e) = agree(comm, reserved) {
+        if comm.rank() == 0 {
+            let _ = std::fs::remove_file(&reserve_path);
+        }
+        return Err(e);
+    }
     let created = hdf5::File::with_options()
         .with_fapl(|p| p.mpio(comm.as_raw(), None))
         .create(&h5_path)
@@ -457,10 +517,39 @@ where
     let file = match created {
         Ok(f) => {
             agree(comm, Ok(()))?;
+            // Reserve the file's disk space before any of it is written. A full disk found
+            // by HDF5 itself cannot be reported cleanly: the OMPIO writes report nothing, the
+            // flush at the close fails and leaves HDF5 1.10 with a half-destroyed file under
+            // a live id, and the library's shutdown inside MPI_Finalize then crashes
+            // (segfault after the error line). Here the file is still empty: give the reserve
+            // back, close it (its first metadata fits) and stop with the reason.
+            let need = file_bytes(&meta);
+            let reserved = if comm.rank() == 0 {
+                preallocate(&h5_path, need).map_err(|e| {
+                    format!(
+                        "{h5_name}: cannot reserve {need} bytes for the results ({e}): not \
+                         enough free disk space?"
+                    )
+                })
+            } else {
+                Ok(())
+            };
+            if let Err(e) = agree(comm, reserved) {
+                if comm.rank() == 0 {
+                    // A partial reservation (some file systems keep it) and the reserve go.
+                    release_unused(&h5_path);
+                    let _ = std::fs::remove_file(&reserve_path);
+                }
+                let _ = f.close();
+                return Err(e);
+            }
             f
         }
         Err(e) => {
             // Every rank returns here (MPI_File_open is collective, so it fails everywhere).
+            if comm.rank() == 0 {
+                let _ = std::fs::remove_file(&reserve_path);
+            }
             agree(comm, Err(e.clone()))?;
             return Err(e);
         }
@@ -473,6 +562,12 @@ where
     let closed = file
         .close()
         .map_err(|e| format!("{h5_name}: closing failed: {e}"));
+    if comm.rank() == 0 {
+        let _ = std::fs::remove_file(&reserve_path);
+        if closed.is_ok() {
+            release_unused(&h5_path);
+        }
+    }
     let mut local = collective.and(closed);
     if local.is_ok() {
         if let Some(e) = w.local_err.take() {

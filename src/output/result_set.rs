@@ -194,7 +194,12 @@ impl ResultSet {
             Ok(())
         };
         ctx.agree(local.map_err(RunError::Failed))?;
-        write_xdmf_hdf5(ctx.world, &self.staging, piece).map_err(RunError::Failed)?;
+        write_xdmf_hdf5(ctx.world, &self.staging, piece).map_err(|e| {
+            RunError::Failed(format!(
+                "cannot write results to {}: {e}",
+                self.dir.display()
+            ))
+        })?;
         Ok(t.elapsed().as_secs_f64())
     }
 

@@ -3,15 +3,17 @@
 //! (3.39)/(3.40)). One step: update the pins of free rigid modes, write the reduced system,
 //! solve, recover λ (3.28), update the sets (3.23)/(3.33), one reduction, log, decide.
 //!
-//! Collectives per step: the writing of the reduced system (one all-gather of the rewritten
-//! nodes' directions, PETSc's assembly of entries in other ranks' rows), the solve, one
-//! MatMult, one Allreduce; rarely a load-balance test or a least-index pick.
+//! Collectives per step: without friction one Allreduce of m values (the rigid motion fitted to
+//! the active gaps, taken out of the solve: u = ρ + w, see `FreeModes::fit_motion`), the
+//! writing of the reduced system (one all-gather of the rewritten nodes' directions, PETSc's
+//! assembly of entries in other ranks' rows), the solve, one MatMult, one Allreduce; rarely a
+//! load-balance test that finds an unbalanced load (two reductions) or a least-index pick.
 
 use super::active_set::{ActiveSet, Iterate, SetSummary, StepTotals};
 use super::boundary::{ContactBoundary, NodeResult};
 use super::cycle::{decide, CycleGuard, Decision, Seen, SetKey};
 use super::reduced::{ReducedSystem, SolveKind};
-use super::rigid::{Balance, FreeModes, Pin};
+use super::rigid::{Balance, FreeModes, Motion, Pin};
 use crate::assembly::System;
 use crate::case::{self, NewtonInit, NewtonSection};
 use crate::error::RunError;
@@ -108,6 +110,10 @@ struct Loop<'a> {
     free: FreeModes,
     guard: CycleGuard,
     it: Iterate,
+    /// Without friction: the rigid motion ρ taken out of the solve (u = ρ + w; the solve, the
+    /// set update and the balance test see w and the gaps after ρ, `shifted`).
+    rho: Motion,
+    shifted: ContactBoundary,
 }
 
 /// Algorithm 1 (frictionless, (3.29)) or, with friction, Algorithm 2 (Tresca, (3.42)) on the
@@ -139,6 +145,8 @@ pub fn semismooth_newton(
         free,
         guard,
         it,
+        rho: [0.0; 6],
+        shifted: copy_boundary(b),
     };
     let mut history = Vec::new();
     let mut converged = false;
@@ -146,30 +154,88 @@ pub fn semismooth_newton(
         if lp.free.update(mesh, &lp.summary.gram)? {
             reduced.set_pins(sys, layout, lp.free.pins())?;
         }
-        reduced.write(ctx, sys, layout, b, &lp.set, lp.free.pins())?; // (3.29) / (3.42)
+        if !s.friction {
+            // Friction reads u_τ itself (stick rows, slip rows), so only the frictionless
+            // solve can leave the rigid motion out.
+            lp.rho = lp
+                .free
+                .fit_motion(ctx, b, &lp.set.normal, &lp.summary.gram, mesh);
+            lp.free.shift(b, &lp.rho, &mut lp.shifted);
+        }
+        let bs = &lp.shifted;
+        reduced.write(ctx, sys, layout, bs, &lp.set, lp.free.pins())?; // (3.29) / (3.42)
         let (info, kind, seconds) = reduced.solve()?;
         ensure_converged(step, &info)?;
-        reduced.recover(sys, b, &lp.set, &mut lp.it)?; // (3.28)
-        let update = lp.set.update(&lp.it, b, s.c, dim); // (3.23) / (3.33)
-        let totals = update.reduce(ctx, b, lp.free.modes(), dim);
+        reduced.recover(sys, bs, &lp.set, &mut lp.it)?; // (3.28)
+        let update = lp.set.update(&lp.it, bs, s.c, dim); // (3.23) / (3.33)
+        let totals = update.reduce(ctx, bs, lp.free.modes(), dim);
         history.push(lp.step_info(step, &totals, &info, kind, seconds));
         log_step(ctx, history.last().expect("pushed"), &totals);
-        if lp.next(step, update.next, &totals, &reduced)? {
+        if lp.next(step, update.next, &totals)? {
             converged = true;
             break;
         }
     }
+    let (lambda_seconds, rows_seconds) = (reduced.lambda_seconds, reduced.rows_seconds);
+    let mut u = reduced.into_solution();
+    let mut nodes = lp.it.nodes;
+    add_motion(&lp.free, &lp.rho, p, &mut u, &mut nodes)?;
     Ok(NewtonResult {
-        nodes: lp.it.nodes,
+        nodes,
         steps: history.len(),
         history,
         converged,
-        lambda_seconds: reduced.lambda_seconds,
-        rows_seconds: reduced.rows_seconds,
+        lambda_seconds,
+        rows_seconds,
         pinned_final: lp.free.pins().to_vec(),
         cycle_detected_at: lp.guard.detected_at,
-        u: reduced.into_solution(),
+        u,
     })
+}
+
+/// A copy of the contact boundary (its gaps to be shifted by a rigid motion).
+fn copy_boundary(b: &ContactBoundary) -> ContactBoundary {
+    ContactBoundary {
+        nodes: b.nodes.clone(),
+        n_global: b.n_global,
+        offset: b.offset,
+        on_contact_boundary: b.on_contact_boundary.clone(),
+        excluded_dirichlet: b.excluded_dirichlet,
+        obstacle: b.obstacle,
+    }
+}
+
+/// u = w + ρ: the rigid motion taken out of the solve, added back to the solution and to the
+/// contact nodes' displacements. Collective when ρ ≠ 0 (the same ρ on every rank).
+fn add_motion(
+    free: &FreeModes,
+    rho: &Motion,
+    p: &ContactProblem,
+    u: &mut Vector,
+    nodes: &mut [NodeResult],
+) -> Result<(), RunError> {
+    if rho.iter().all(|&x| x == 0.0) {
+        return Ok(());
+    }
+    let (mesh, layout, dim) = (p.mesh, p.layout, p.mesh.dim);
+    let mut idx = Vec::with_capacity(layout.owned_nodes.len() * dim);
+    let mut vals = Vec::with_capacity(idx.capacity());
+    for &v in &layout.owned_nodes {
+        for k in 0..dim {
+            idx.push((layout.node_global[v] * dim + k) as crate::petsc::PInt);
+            vals.push(free.motion_at(rho, &mesh.coords[v], k));
+        }
+    }
+    u.set_values(&idx, &vals, true)?;
+    u.assemble()?;
+    for (k, r) in p.boundary.nodes.iter().zip(nodes.iter_mut()) {
+        for c in 0..dim {
+            r.u[c] += free.motion_at(rho, &k.x, c);
+        }
+        r.u_n = k.frame.normal_part(&r.u);
+        r.u_t = k.frame.tangential_part(&r.u);
+    }
+    Ok(())
 }
 
 fn ensure_converged(step: usize, info: &SolveInfo) -> Result<(), RunError> {
@@ -240,14 +306,9 @@ impl Loop<'_> {
     }
 
     /// The decision after step `step` and the sets of the next step; `Ok(true)` = converged.
-    fn next(
-        &mut self,
-        step: usize,
-        mut next: ActiveSet,
-        t: &StepTotals,
-        reduced: &ReducedSystem,
-    ) -> Result<bool, RunError> {
-        let (ctx, b, dim) = (self.ctx, self.p.boundary, self.p.mesh.dim);
+    fn next(&mut self, step: usize, mut next: ActiveSet, t: &StepTotals) -> Result<bool, RunError> {
+        let (ctx, dim) = (self.ctx, self.p.mesh.dim);
+        let b = &self.shifted;
         let pins = !self.free.pins().is_empty();
         let mut decision = decide(
             t.changed,
@@ -261,16 +322,8 @@ impl Loop<'_> {
             // carry no reaction). If not, the body moves along the unbalanced load until a
             // contact node touches: activate the first one to touch and go on; if no node
             // approaches the obstacle, there is no equilibrium.
-            let (it, layout) = (&self.it, self.p.layout);
-            // (f − A u) at dof k of mesh node v (owned)
-            let residual_at = |v: usize, k: usize| {
-                let i = layout.node_global[v] * dim + k - reduced.row_lo;
-                reduced.f_local[i] - it.au_local[i]
-            };
-            let nodes = (&it.nodes[..], &self.set.normal[..]);
-            let balance = self
-                .free
-                .balance(ctx, self.p.mesh, layout, b, nodes, residual_at);
+            let nodes = (&self.it.nodes[..], &self.set.normal[..]);
+            let balance = self.free.balance(ctx, b, nodes);
             match balance {
                 Balance::Balanced => {
                     decision = decide(

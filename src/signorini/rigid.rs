@@ -14,6 +14,14 @@
 //! strains, stresses and multipliers. If the load is not balanced in a free mode, the body is
 //! moved along the unbalanced load until the first contact node touches ([`Balance::Touch`]);
 //! if no node approaches the obstacle there is no equilibrium ([`Balance::NoSupport`]).
+//!
+//! The balance test reads the load, not the iterate: the reaction the pins carry is, in exact
+//! arithmetic, the load's component in the free modes, φ = Qᵀ Rᵀ f (A R = 0 for P1 elements,
+//! Dirichlet data eliminated symmetrically keep it so, and every other row either holds a
+//! constraint the free modes do not move or is an equilibrium row). Computed from u, as
+//! Qᵀ Rᵀ (f − A u) at the pins, it is the sum of every other row's solver residual: rounding of
+//! order ε‖A‖‖u‖·√n when u carries a large rigid motion (an obstacle far below the body), or
+//! the Krylov tolerance of the iterative preset — both produced false "no support" diagnoses.
 
 use super::boundary::{ContactBoundary, NodeResult};
 use crate::case;
@@ -176,6 +184,9 @@ impl RigidModes {
     }
 }
 
+/// A rigid motion Σ_j ρ_j r_j, by its mode coefficients (m entries used).
+pub type Motion = [f64; 6];
+
 /// Outcome of the load-balance test of the free rigid modes.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum Balance {
@@ -197,12 +208,22 @@ pub struct FreeModes {
     key: Option<Gram>,
     /// Basis of the free modes (m × m_f).
     q: DMatrix<f64>,
+    /// Basis of the modes Dirichlet data leave free (m × m_z): the room of the rigid motion
+    /// taken out of the solve ([`FreeModes::fit_motion`]).
+    z: DMatrix<f64>,
     pins: Vec<Pin>,
     /// Nodes allowed as pins: off the contact boundary, without Dirichlet data.
     candidate: Vec<bool>,
-    /// Largest nodal load (scale of the balance test).
-    fmax: f64,
+    /// The load in every rigid mode, Rᵀ f (summed over the ranks; m entries used).
+    load: [f64; 6],
+    /// Σ_i |f_i| ‖R_i‖ over all dofs i: the size of the terms that cancel in `load`, the scale
+    /// of the balance test.
+    load_scale: f64,
 }
+
+/// An unbalanced load in the free modes below this fraction of `load_scale` is balanced: the
+/// sum Rᵀ f itself is exact to about √n·ε of it, far below.
+const BALANCE_RTOL: f64 = 1e-10;
 
 impl FreeModes {
     /// Collective (two reductions).
@@ -230,19 +251,43 @@ impl FreeModes {
             let total = ctx.sum_vec(&g_dirichlet);
             g_dirichlet.copy_from_slice(&total);
         }
-        let fmax = ctx.max_f64(f_local.iter().fold(0.0f64, |a, b| a.max(b.abs())));
+        // Rᵀ f and its scale over the owned rows (owned node i holds rows i·d .. i·d + d).
+        let mut local = [0.0; 7];
+        for (i, &v) in layout.owned_nodes.iter().enumerate() {
+            for k in 0..dim {
+                let f = f_local[i * dim + k];
+                if f == 0.0 {
+                    continue;
+                }
+                let row = modes.dof_row(&mesh.coords[v], k);
+                for j in 0..modes.m {
+                    local[j] += row[j] * f;
+                }
+                local[6] += f.abs() * row.iter().map(|x| x * x).sum::<f64>().sqrt();
+            }
+        }
+        let total = ctx.sum_vec(&local);
+        let mut load = [0.0; 6];
+        load.copy_from_slice(&total[..6]);
         let candidate = (0..mesh.n_nodes())
             .map(|v| !b.on_contact_boundary[v] && (0..dim).all(|k| fixed[v * dim + k].is_nan()))
             .collect();
+        let z = if enabled {
+            modes.free_modes(&g_dirichlet)
+        } else {
+            DMatrix::zeros(modes.m, 0)
+        };
         FreeModes {
             q: DMatrix::zeros(modes.m, 0),
+            z,
             modes,
             enabled,
             g_dirichlet,
             key: None,
             pins: Vec::new(),
             candidate,
-            fmax,
+            load,
+            load_scale: total[6],
         }
     }
 
@@ -304,35 +349,25 @@ impl FreeModes {
         Ok(&self.pins)
     }
 
-    /// The unbalanced load in the free rigid modes, φ = Qᵀ Rᵀ (f − A u) at the pins (the
-    /// dropped equations), and, if it is not zero, the inactive contact node that a rigid
-    /// motion along φ brings into contact first (smallest gap / closing speed; ties by tag).
-    /// `residual_at(v, k)` = (f − A u) at dof k of the owned mesh node v; `nodes` the iterate at
-    /// the contact nodes, `active` their A_n membership in its solve. Collective.
+    /// The unbalanced load in the free rigid modes, φ = Qᵀ Rᵀ f (what the pins carry, see the
+    /// module note), and, if it is not zero against the load's scale, the inactive contact
+    /// node that a rigid motion along φ brings into contact first (smallest gap / closing
+    /// speed; ties by tag). `nodes` the iterate at the contact nodes, `active` their A_n
+    /// membership in its solve. Collective only when the load is unbalanced (the same on every
+    /// rank: φ is summed once, in `new`).
     pub fn balance(
         &self,
         ctx: &Ctx,
-        mesh: &Mesh,
-        layout: &Layout,
         b: &ContactBoundary,
         (nodes, active): (&[NodeResult], &[bool]),
-        residual_at: impl Fn(usize, usize) -> f64,
     ) -> Balance {
         let (modes, q) = (&self.modes, &self.q);
         let mf = q.ncols();
-        let mut phi = vec![0.0f64; mf];
-        for &(v, k) in &self.pins {
-            if layout.owns_node(v) {
-                let res = residual_at(v, k);
-                let row = modes.dof_row(&mesh.coords[v], k);
-                for (c, ph) in phi.iter_mut().enumerate() {
-                    *ph += res * (0..modes.m).map(|j| row[j] * q[(j, c)]).sum::<f64>();
-                }
-            }
-        }
-        let g = ctx.sum_vec(&phi);
+        let g: Vec<f64> = (0..mf)
+            .map(|c| (0..modes.m).map(|j| q[(j, c)] * self.load[j]).sum())
+            .collect();
         let norm = g.iter().map(|x| x * x).sum::<f64>().sqrt();
-        if norm <= 1e-8 * self.fmax.max(f64::MIN_POSITIVE) {
+        if norm <= BALANCE_RTOL * self.load_scale {
             return Balance::Balanced;
         }
         // Motion per unit α in mode coefficients: Q φ / |φ|.
@@ -366,18 +401,106 @@ impl FreeModes {
         Balance::Touch(ctx.min_u64(mine))
     }
 
+    /// The rigid motion ρ that the frictionless solve is relieved of (u = ρ + w, the solve
+    /// sees the gaps after ρ, [`FreeModes::shift`]): among the motions Dirichlet data leave free,
+    /// the least-squares fit of the active nodes' prescribed normal displacements
+    /// nᵀρ(x_k) = −g_k (3.29), then moved by a free mode of the set (which no constraint sees)
+    /// to vanish at the pins. In exact arithmetic this changes nothing; in floating point the
+    /// solve no longer carries a large rigid motion (a body far from the obstacle, moved to it
+    /// by [`Balance::Touch`] or started all-active), whose rounding, ε‖A‖|g| in every row,
+    /// would exceed the elastic part's accuracy. Zero with rigid-mode handling off. `g_set` is
+    /// the Gram matrix of the active normals (the set summary). Collective (one reduction).
+    pub fn fit_motion(
+        &self,
+        ctx: &Ctx,
+        b: &ContactBoundary,
+        active: &[bool],
+        g_set: &Gram,
+        mesh: &Mesh,
+    ) -> Motion {
+        let m = self.modes.m;
+        let mut local = [0.0; 6];
+        for (k, _) in b.nodes.iter().zip(active).filter(|(_, &a)| a) {
+            let row = self.modes.direction_row(&k.x, &k.frame.n);
+            for (l, r) in local.iter_mut().zip(row) {
+                *l -= r * k.gap;
+            }
+        }
+        let rhs = ctx.sum_vec(&local);
+        let mut rho = [0.0; 6];
+        if !self.enabled || self.z.ncols() == 0 {
+            return rho;
+        }
+        // Normal equations on the Dirichlet-free modes, solved by the pseudo-inverse (the set's
+        // free modes are its null space).
+        let z = &self.z;
+        let gm = DMatrix::from_row_slice(m, m, &g_set[..m * m]);
+        let mz = z.transpose() * &gm * z;
+        let rz = z.transpose() * nalgebra::DVector::from_column_slice(&rhs[..m]);
+        let eig = SymmetricEigen::new(mz);
+        let lmax = eig.eigenvalues.iter().fold(0.0f64, |a, &b| a.max(b.abs()));
+        let mut c = nalgebra::DVector::zeros(z.ncols());
+        for (i, &l) in eig.eigenvalues.iter().enumerate() {
+            if l > 1e-9 * lmax {
+                let v = eig.eigenvectors.column(i);
+                c += v * (v.dot(&rz) / l);
+            }
+        }
+        let r = z * c;
+        rho[..m].copy_from_slice(r.as_slice());
+        // Zero at the pins: ρ − Q α with (pin rows of Q) α = ρ at the pins.
+        let mf = self.q.ncols();
+        if mf > 0 && self.pins.len() == mf {
+            let mut p = DMatrix::zeros(mf, mf);
+            let mut at = nalgebra::DVector::zeros(mf);
+            for (a, &(v, k)) in self.pins.iter().enumerate() {
+                let row = self.modes.dof_row(&mesh.coords[v], k);
+                for cc in 0..mf {
+                    p[(a, cc)] = (0..m).map(|j| row[j] * self.q[(j, cc)]).sum();
+                }
+                at[a] = (0..m).map(|j| row[j] * rho[j]).sum();
+            }
+            if let Some(alpha) = p.lu().solve(&at) {
+                let corr = &self.q * alpha;
+                for (x, d) in rho.iter_mut().zip(corr.iter()) {
+                    *x -= d;
+                }
+            }
+        }
+        rho
+    }
+
+    /// Component k of the rigid motion `rho` at x.
+    pub fn motion_at(&self, rho: &Motion, x: &[f64; 3], k: usize) -> f64 {
+        (0..self.modes.m)
+            .map(|j| rho[j] * self.modes.value(j, x, k))
+            .sum()
+    }
+
+    /// The gaps after the rigid motion `rho` (g_k + nᵀρ(x_k): what (3.23) and (3.29) see for
+    /// w = u − ρ) into `shifted`, a copy of `b`. Local.
+    pub fn shift(&self, b: &ContactBoundary, rho: &Motion, shifted: &mut ContactBoundary) {
+        let dim = self.modes.dim;
+        for (k, s) in b.nodes.iter().zip(shifted.nodes.iter_mut()) {
+            let nr: f64 = (0..dim)
+                .map(|c| k.frame.n[c] * self.motion_at(rho, &k.x, c))
+                .sum();
+            s.gap = k.gap + nr;
+        }
+    }
+
     /// The "no support" diagnosis of an unbalanced load that no contact can carry.
     pub fn no_support(&self, n_active: usize, reaction: f64) -> RunError {
         RunError::Failed(format!(
             "no support: the body has {} rigid mode(s) fixed neither by Dirichlet data nor by \
              contact ({} active contact node(s)), the load is not balanced in them (unbalanced \
-             load {:.3e} against a largest nodal load of {:.3e}) and moving along it brings no \
+             load {:.3e} against a total load of {:.3e}) and moving along it brings no \
              contact node closer to the obstacle: there is no equilibrium — add Dirichlet data \
              or move the obstacle into the body's way",
             self.pins.len(),
             n_active,
             reaction,
-            self.fmax
+            self.load_scale
         ))
     }
 }

@@ -39,10 +39,7 @@ fn mpi_includes() -> Vec<PathBuf> {
         return env::split_paths(&d).collect();
     }
     for name in ["ompi-c", "mpich"] {
-        if let Ok(lib) = pkg_config::Config::new()
-            .cargo_metadata(false)
-            .probe(name)
-        {
+        if let Ok(lib) = pkg_config::Config::new().cargo_metadata(false).probe(name) {
             return lib.include_paths;
         }
     }

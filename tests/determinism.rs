@@ -1,0 +1,235 @@
+//! Determinism across rank counts and across repeated runs (issue 11, item 8).
+//!
+//! - On 1, 2, 3 and 4 ranks (4 oversubscribed on a 2-core machine) the Hertz disk (refined
+//!   level 3) and the 3D block give the same active set (contact_nodes.csv `state` by node id),
+//!   the same number of Newton steps and the same displacement (by node id) to 1e-10 of its
+//!   size.
+//! - With a fixed rank count (2 and 4), a repeated run gives the same partition
+//!   (summary.json partition.cells_per_rank and the `rank` cell field of solution.h5 by cell
+//!   id), the same Newton history (step, |A_n|, changes, pins and Krylov iterations exactly;
+//!   residuals to 1e-8 of the largest) and the same displacement to 1e-12.
+//!
+//! What repeats bit for bit is printed (`--nocapture`): with a fixed partition u still varies by
+//! round-off between runs when MUMPS schedules its factorisation dynamically and PETSc adds
+//! the off-process contributions of the assembly in the order their messages arrive.
+
+mod common;
+use common::*;
+
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+
+/// Everything compared, of one run.
+struct Outcome {
+    steps: usize,
+    /// node id → active?
+    active: BTreeMap<u64, bool>,
+    /// Displacement in node-id order (3 components per node).
+    u: Vec<f64>,
+    cells_per_rank: Vec<u64>,
+    /// (gmsh cell tag, rank) sorted by tag, from the `rank` cell field.
+    cell_rank: Vec<(u64, u64)>,
+    /// step, active, changed, pinned, Krylov iterations.
+    history: Vec<[u64; 5]>,
+    residuals: Vec<f64>,
+}
+
+fn hertz() -> (PathBuf, Vec<&'static str>) {
+    (
+        repo("cases/hertz/hertz.toml"),
+        vec!["mesh.file=\"meshes/hertz_refined_L3.msh\""],
+    )
+}
+
+fn block3d() -> (PathBuf, Vec<&'static str>) {
+    (repo("cases/blocks/block3d.toml"), vec![])
+}
+
+const FIELDS: &str = "output.fields=[\"displacement\",\"rank\",\"contact\"]";
+
+fn run(np: usize, (case, sets): &(PathBuf, Vec<&str>), out: &Path) -> Outcome {
+    let mut sets = sets.clone();
+    sets.push(FIELDS);
+    let r = run_solver(np, case, &sets, out);
+    r.expect_code(0, &format!("{} on {np} ranks", case.display()));
+    let text = std::fs::read_to_string(out.join("summary.json")).expect("summary.json");
+    let s: serde_json::Value = serde_json::from_str(&text).expect("summary.json is JSON");
+    assert_eq!(
+        get(&s, &["newton", "converged"]),
+        &serde_json::Value::Bool(true)
+    );
+    let steps = get(&s, &["newton", "steps"]).as_u64().expect("steps") as usize;
+    let cells_per_rank: Vec<u64> = get(&s, &["partition", "cells_per_rank"])
+        .as_array()
+        .expect("cells_per_rank")
+        .iter()
+        .map(|v| v.as_u64().expect("a cell count"))
+        .collect();
+    assert_eq!(cells_per_rank.len(), np);
+    let hist = get(&s, &["newton", "history"]).as_array().expect("history");
+    let history = hist
+        .iter()
+        .map(|h| {
+            ["step", "active", "changed", "pinned", "iterations"]
+                .map(|k| h[k].as_u64().unwrap_or_else(|| panic!("history {k}: {h}")))
+        })
+        .collect();
+    let residuals = hist
+        .iter()
+        .map(|h| h["residual"].as_f64().expect("residual"))
+        .collect();
+
+    let active = by_node_id(read_csv(&out.join("contact_nodes.csv")))
+        .into_iter()
+        .map(|(k, row)| (k, row.active()))
+        .collect();
+
+    let file = hdf5::File::open(out.join("solution.h5")).expect("solution.h5");
+    let read_u64 = |name: &str| -> Vec<u64> {
+        file.dataset(name)
+            .and_then(|d| d.read_raw::<u64>())
+            .unwrap_or_else(|e| panic!("{name}: {e}"))
+    };
+    let read_f64 = |name: &str| -> Vec<f64> {
+        file.dataset(name)
+            .and_then(|d| d.read_raw::<f64>())
+            .unwrap_or_else(|e| panic!("{name}: {e}"))
+    };
+    let node_id = read_u64("mesh/node_id");
+    let disp = read_f64("nodal/displacement");
+    assert_eq!(disp.len(), 3 * node_id.len());
+    let mut order: Vec<usize> = (0..node_id.len()).collect();
+    order.sort_by_key(|&i| node_id[i]);
+    let u = order
+        .iter()
+        .flat_map(|&i| disp[3 * i..3 * i + 3].iter().copied())
+        .collect();
+    let cell_id = read_u64("mesh/cell_id");
+    let rank = read_f64("cell/rank");
+    assert_eq!(cell_id.len(), rank.len());
+    let mut cell_rank: Vec<(u64, u64)> = cell_id
+        .iter()
+        .zip(&rank)
+        .map(|(&c, &r)| (c, r as u64))
+        .collect();
+    cell_rank.sort_unstable();
+    // The rank field agrees with cells_per_rank.
+    for (r, &n) in cells_per_rank.iter().enumerate() {
+        let count = cell_rank.iter().filter(|(_, k)| *k == r as u64).count() as u64;
+        assert_eq!(count, n, "rank {r}: cell field vs cells_per_rank");
+    }
+    Outcome {
+        steps,
+        active,
+        u,
+        cells_per_rank,
+        cell_rank,
+        history,
+        residuals,
+    }
+}
+
+/// max |a − b| / max |b|.
+fn rel_diff(a: &[f64], b: &[f64]) -> f64 {
+    assert_eq!(a.len(), b.len());
+    let scale = b.iter().fold(0.0f64, |m, x| m.max(x.abs()));
+    let d = a
+        .iter()
+        .zip(b)
+        .fold(0.0f64, |m, (x, y)| m.max((x - y).abs()));
+    d / scale
+}
+
+/// One case on 1–4 ranks, then repeated on 2 and 4 ranks.
+fn deterministic(name: &str, case: (PathBuf, Vec<&str>)) {
+    let tmp = tempfile::tempdir().expect("tempdir");
+    let runs: Vec<Outcome> = (1..=4)
+        .map(|np| run(np, &case, &tmp.path().join(format!("np{np}"))))
+        .collect();
+    let base = &runs[0];
+    assert!(
+        base.active.values().any(|&a| a),
+        "{name}: some node is active"
+    );
+    for (i, o) in runs.iter().enumerate().skip(1) {
+        let np = i + 1;
+        assert_eq!(o.steps, base.steps, "{name}: steps on {np} ranks vs 1");
+        assert_eq!(
+            o.active, base.active,
+            "{name}: active set on {np} ranks vs 1"
+        );
+        let du = rel_diff(&o.u, &base.u);
+        println!(
+            "{name}: {np} ranks vs 1: steps {}, same set, u {du:.1e}",
+            o.steps
+        );
+        assert!(du <= 1e-10, "{name}: u on {np} ranks differs by {du:.1e}");
+    }
+    for np in [2usize, 4] {
+        let first = &runs[np - 1];
+        let again = run(np, &case, &tmp.path().join(format!("np{np}-again")));
+        assert_eq!(
+            again.cells_per_rank, first.cells_per_rank,
+            "{name}: cells per rank of a repeated {np}-rank run"
+        );
+        let moved = again
+            .cell_rank
+            .iter()
+            .zip(&first.cell_rank)
+            .filter(|(a, b)| a != b)
+            .count();
+        assert_eq!(
+            again.cell_rank.len(),
+            first.cell_rank.len(),
+            "{name}: cell count"
+        );
+        assert_eq!(
+            moved, 0,
+            "{name}: {moved} cells on another rank in a repeated {np}-rank run"
+        );
+        assert_eq!(
+            again.history, first.history,
+            "{name}: Newton history of a repeated {np}-rank run"
+        );
+        assert_eq!(again.active, first.active, "{name}: active set, {np} ranks");
+        let rmax = first.residuals.iter().fold(0.0f64, |m, x| m.max(*x));
+        let dres = again
+            .residuals
+            .iter()
+            .zip(&first.residuals)
+            .fold(0.0f64, |m, (a, b)| m.max((a - b).abs()))
+            / rmax.max(f64::MIN_POSITIVE);
+        assert!(
+            dres <= 1e-8,
+            "{name}: residuals of a repeated {np}-rank run differ by {dres:.1e}"
+        );
+        let du = rel_diff(&again.u, &first.u);
+        println!(
+            "{name}: {np} ranks repeated: same partition and history, residuals {}, u {}",
+            if again.residuals == first.residuals {
+                "bit for bit".to_string()
+            } else {
+                format!("{dres:.1e}")
+            },
+            if du == 0.0 {
+                "bit for bit".to_string()
+            } else {
+                format!("{du:.1e}")
+            }
+        );
+        assert!(
+            du <= 1e-12,
+            "{name}: u of a repeated {np}-rank run differs by {du:.1e}"
+        );
+    }
+}
+
+#[test]
+fn hertz_refined_l3_is_deterministic() {
+    deterministic("hertz refined L3", hertz());
+}
+
+#[test]
+fn block3d_is_deterministic() {
+    deterministic("block3d", block3d());
+}

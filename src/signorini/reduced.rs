@@ -220,6 +220,8 @@ pub struct ReducedSystem {
     /// Seconds spent in λ recovery (MatMult + local work), all steps.
     pub lambda_seconds: f64,
     dim: usize,
+    /// How the solver solves (known after the first solve).
+    kind: Option<SolveKind>,
 }
 
 impl ReducedSystem {
@@ -254,6 +256,7 @@ impl ReducedSystem {
             rows_seconds: 0.0,
             lambda_seconds: 0.0,
             dim,
+            kind: None,
         })
     }
 
@@ -348,11 +351,19 @@ impl ReducedSystem {
         let t = Instant::now();
         self.ls.ksp.set_operator(&self.s)?;
         let info = self.ls.solve(&self.rhs, &mut self.u)?;
-        let (_, pc) = self.ls.ksp.type_names()?;
-        let kind = if pc == "lu" || pc == "cholesky" {
-            SolveKind::Factorisation
-        } else {
-            SolveKind::Krylov
+        let kind = match self.kind {
+            Some(k) => k,
+            None => {
+                // The solver's type does not change between steps: asked once.
+                let (_, pc) = self.ls.ksp.type_names()?;
+                let k = if pc == "lu" || pc == "cholesky" {
+                    SolveKind::Factorisation
+                } else {
+                    SolveKind::Krylov
+                };
+                self.kind = Some(k);
+                k
+            }
         };
         Ok((info, kind, t.elapsed().as_secs_f64()))
     }

@@ -218,7 +218,7 @@ pub fn solve(
             friction: friction_certificate,
         },
         linear_solver: PresetOnly {
-            preset: preset_name(solver_section.preset),
+            preset: solver_section.preset.name(),
         },
     };
     Ok(ContactSolution {
@@ -399,10 +399,6 @@ fn check_certificates(
 /// Compact JSON of a certificate (sorted keys).
 fn json<T: Serialize>(v: &T) -> String {
     serde_json::to_value(v).expect("plain data").to_string()
-}
-
-fn preset_name(p: Preset) -> &'static str {
-    p.name()
 }
 
 fn log_boundary(ctx: &Ctx, b: &ContactBoundary, group: &str) {

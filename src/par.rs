@@ -49,45 +49,34 @@ impl<'a> Ctx<'a> {
 
     /// True on every rank if it is true on any rank (one Allreduce).
     pub fn any(&self, flag: bool) -> bool {
-        let mut out = 0i32;
-        self.world
-            .all_reduce_into(&(flag as i32), &mut out, SystemOperation::max());
-        out != 0
+        self.reduce(flag as i32, SystemOperation::max()) != 0
+    }
+
+    /// One value reduced over all ranks by `op` (one Allreduce).
+    fn reduce<T: Equivalence + Default>(&self, v: T, op: SystemOperation) -> T {
+        let mut out = T::default();
+        self.world.all_reduce_into(&v, &mut out, op);
+        out
     }
 
     pub fn sum_f64(&self, v: f64) -> f64 {
-        let mut out = 0.0;
-        self.world
-            .all_reduce_into(&v, &mut out, SystemOperation::sum());
-        out
+        self.reduce(v, SystemOperation::sum())
     }
 
     pub fn max_f64(&self, v: f64) -> f64 {
-        let mut out = 0.0;
-        self.world
-            .all_reduce_into(&v, &mut out, SystemOperation::max());
-        out
+        self.reduce(v, SystemOperation::max())
     }
 
     pub fn min_f64(&self, v: f64) -> f64 {
-        let mut out = 0.0;
-        self.world
-            .all_reduce_into(&v, &mut out, SystemOperation::min());
-        out
+        self.reduce(v, SystemOperation::min())
     }
 
     pub fn min_u64(&self, v: u64) -> u64 {
-        let mut out = 0;
-        self.world
-            .all_reduce_into(&v, &mut out, SystemOperation::min());
-        out
+        self.reduce(v, SystemOperation::min())
     }
 
     pub fn sum_usize(&self, v: usize) -> usize {
-        let mut out = 0u64;
-        self.world
-            .all_reduce_into(&(v as u64), &mut out, SystemOperation::sum());
-        out as usize
+        self.reduce(v as u64, SystemOperation::sum()) as usize
     }
 
     /// Element-wise sum over ranks of a packed vector (one Allreduce).

@@ -49,6 +49,7 @@ pub struct NodeResult {
 
 /// The candidate contact boundary c_h: this rank's contact nodes, plus what every rank knows
 /// about the whole boundary.
+#[derive(Clone, Debug)]
 pub struct ContactBoundary {
     pub nodes: Vec<ContactNode>,
     /// |c_h| over all ranks.

@@ -146,7 +146,7 @@ pub fn semismooth_newton(
         guard,
         it,
         rho: [0.0; 6],
-        shifted: copy_boundary(b),
+        shifted: b.clone(),
     };
     let mut history = Vec::new();
     let mut converged = false;
@@ -191,18 +191,6 @@ pub fn semismooth_newton(
         cycle_detected_at: lp.guard.detected_at,
         u,
     })
-}
-
-/// A copy of the contact boundary (its gaps to be shifted by a rigid motion).
-fn copy_boundary(b: &ContactBoundary) -> ContactBoundary {
-    ContactBoundary {
-        nodes: b.nodes.clone(),
-        n_global: b.n_global,
-        offset: b.offset,
-        on_contact_boundary: b.on_contact_boundary.clone(),
-        excluded_dirichlet: b.excluded_dirichlet,
-        obstacle: b.obstacle,
-    }
 }
 
 /// u = w + ρ: the rigid motion taken out of the solve, added back to the solution and to the

@@ -13,7 +13,7 @@
 use crate::fem::{self, Material};
 use crate::mesh::Mesh;
 use crate::partition::Layout;
-use crate::petsc::{self, MPI_Comm, Matrix, PInt, Vector};
+use crate::petsc::{self, CsrMut, MPI_Comm, Matrix, PInt, Vector};
 use std::time::Instant;
 
 /// A load on a set of boundary facets.
@@ -78,56 +78,238 @@ fn dofs_of(nodes: &[usize], layout: &Layout, dim: usize, out: &mut [PInt]) {
     }
 }
 
-/// The exact pattern of the owned node rows: for each owned node (in global order) its
-/// neighbour nodes (itself included, every cell of the mesh that touches it), as sorted
-/// global node numbers.
-struct NodePattern {
-    ptr: Vec<usize>,
-    nbr: Vec<usize>,
+/// The cells that contribute to this rank's rows, in a compact, cache-friendly form: this
+/// rank's cells in the layout's order (lowest node number first), then the cells of other
+/// ranks that touch an owned node, and for every owned node its incidences `cell * N + a`
+/// (cell in this list, a = the node's position in the cell), in list order.
+struct RowCells {
+    /// Mesh node indices, nodes-per-cell per cell.
+    nodes: Vec<u32>,
+    ptr: Vec<u32>,
+    inc: Vec<u32>,
 }
 
-fn node_pattern(mesh: &Mesh, layout: &Layout) -> NodePattern {
+fn row_cells(mesh: &Mesh, layout: &Layout) -> RowCells {
+    let npc = mesh.nodes_per_cell();
+    let mut cells: Vec<usize> = layout.local_cells.clone();
+    if layout.size > 1 {
+        let mut ghost: Vec<usize> = layout
+            .owned_nodes
+            .iter()
+            .flat_map(|&v| layout.node_cells.of(v).iter().copied())
+            .filter(|&c| layout.cell_rank[c] as usize != layout.rank)
+            .collect();
+        let key = |c: usize| {
+            let lo = mesh.cell(c).iter().map(|&v| layout.node_global[v]).min();
+            (lo.unwrap_or(0), c)
+        };
+        ghost.sort_unstable_by_key(|&c| key(c));
+        ghost.dedup();
+        cells.extend(ghost);
+    }
+    let mut nodes = Vec::with_capacity(cells.len() * npc);
+    for &c in &cells {
+        nodes.extend(mesh.cell(c).iter().map(|&v| v as u32));
+    }
+    drop(cells);
+    let (node_lo, node_hi) = layout.node_range();
+    let local = |v: u32| {
+        let g = layout.node_global[v as usize];
+        (node_lo..node_hi).contains(&g).then(|| g - node_lo)
+    };
+    let mut ptr = vec![0u32; layout.n_owned_nodes() + 1];
+    for &v in &nodes {
+        if let Some(l) = local(v) {
+            ptr[l + 1] += 1;
+        }
+    }
+    for i in 0..layout.n_owned_nodes() {
+        ptr[i + 1] += ptr[i];
+    }
+    let mut fill = ptr.clone();
+    let mut inc = vec![0u32; ptr[layout.n_owned_nodes()] as usize];
+    for (e, &v) in nodes.iter().enumerate() {
+        if let Some(l) = local(v) {
+            inc[fill[l] as usize] = e as u32;
+            fill[l] += 1;
+        }
+    }
+    RowCells { nodes, ptr, inc }
+}
+
+/// One CSR part of the owned rows.
+#[derive(Default)]
+struct Csr {
+    rowptr: Vec<PInt>,
+    cols: Vec<PInt>,
+    vals: Vec<f64>,
+}
+
+impl Csr {
+    fn with_capacity(rows: usize, nnz: usize) -> Csr {
+        let mut rowptr = Vec::with_capacity(rows + 1);
+        rowptr.push(0);
+        Csr {
+            rowptr,
+            cols: Vec::with_capacity(nnz),
+            vals: Vec::with_capacity(nnz),
+        }
+    }
+    fn as_mut(&mut self) -> CsrMut<'_> {
+        CsrMut {
+            rowptr: &mut self.rowptr,
+            cols: &mut self.cols,
+            vals: &mut self.vals,
+        }
+    }
+}
+
+/// The owned rows of A as PETSc stores them (columns sorted per row): `diag` the columns of
+/// owned nodes (local numbers), `off` the others (global numbers); and the owned entries of
+/// the right-hand side that the Dirichlet elimination gives.
+struct OwnedRows {
+    diag: Csr,
+    off: Csr,
+    /// −Σ A_ij g_j over the fixed dofs j, per owned dof (0 for fixed dofs).
+    elim_rhs: Vec<f64>,
+    /// (owned dof, A_jj g_j) of the fixed dofs: their right-hand side.
+    fixed_rhs: Vec<(usize, f64)>,
+}
+
+/// (3.8) row by row: every owned node sums the element rows of the cells around it (in the
+/// order of the layout's cell loop) into a small dense row buffer, with the symmetric
+/// Dirichlet elimination applied per entry (a fixed dof's row keeps only its diagonal, a
+/// fixed column moves −K_ij g_j to the right-hand side), and appends the buffer to the CSR
+/// arrays. Every value of an owned row is computed on its owner (other ranks' cells that touch
+/// it included): no entries go to other ranks, and no searches (each neighbour's position in
+/// the row sits in `slot`).
+fn owned_rows<const D: usize, const N: usize>(
+    p: &Problem,
+    layout: &Layout,
+    rc: &RowCells,
+    gradients: impl Fn(&[u32]) -> ([[f64; D]; N], f64),
+) -> OwnedRows {
+    let mesh = p.mesh;
+    let (lambda, mu) = p.material.lame();
     let n_owned = layout.n_owned_nodes();
-    let mut ptr = Vec::with_capacity(n_owned + 1);
-    let mut nbr = Vec::with_capacity(n_owned * if mesh.dim == 2 { 7 } else { 15 });
-    ptr.push(0);
-    let mut stamp = vec![usize::MAX; mesh.n_nodes()];
-    for (i, &v) in layout.owned_nodes.iter().enumerate() {
-        let start = nbr.len();
-        for &c in layout.node_cells.of(v) {
-            for &w in mesh.cell(c) {
-                if stamp[w] != i {
-                    stamp[w] = i;
-                    nbr.push(layout.node_global[w]);
+    // A guess (a tetrahedral mesh has ~14 neighbours per node); the vectors grow if needed.
+    let guess = n_owned * D * D * if D == 2 { 7 } else { 15 };
+    let (lo, hi) = layout.node_range();
+    let mut diag = Csr::with_capacity(n_owned * D, guess);
+    let mut off = Csr::with_capacity(n_owned * D, if layout.size > 1 { guess / 8 } else { 0 });
+    let mut elim_rhs = vec![0.0f64; n_owned * D];
+    let mut fixed_rhs = Vec::new();
+    let mut slot = vec![u32::MAX; mesh.n_nodes()];
+    let mut nb: Vec<(usize, u32)> = Vec::with_capacity(64);
+    let mut buf: Vec<f64> = Vec::new();
+    let mut k = [[0.0f64; 12]; 3];
+    for (la, &v) in layout.owned_nodes.iter().enumerate() {
+        let inc = &rc.inc[rc.ptr[la] as usize..rc.ptr[la + 1] as usize];
+        // The row's neighbours, sorted by global number; slot = position in the row.
+        nb.clear();
+        for &e in inc {
+            let c0 = e as usize / N * N;
+            for &w in &rc.nodes[c0..c0 + N] {
+                if slot[w as usize] != la as u32 {
+                    slot[w as usize] = la as u32;
+                    nb.push((layout.node_global[w as usize], w));
                 }
             }
         }
-        nbr[start..].sort_unstable();
-        ptr.push(nbr.len());
-    }
-    NodePattern { ptr, nbr }
-}
-
-/// Owned dof rows of the pattern in CSR form (global columns), values zero.
-fn dof_csr(pat: &NodePattern, dim: usize) -> (Vec<PInt>, Vec<PInt>, Vec<usize>) {
-    let n_owned = pat.ptr.len() - 1;
-    let mut rowptr = Vec::with_capacity(n_owned * dim + 1);
-    let mut base = Vec::with_capacity(n_owned);
-    let mut cols: Vec<PInt> = Vec::with_capacity(pat.nbr.len() * dim * dim);
-    rowptr.push(0 as PInt);
-    for i in 0..n_owned {
-        base.push(cols.len());
-        let nb = &pat.nbr[pat.ptr[i]..pat.ptr[i + 1]];
-        for _ in 0..dim {
-            for &w in nb {
-                for c in 0..dim {
-                    cols.push((w * dim + c) as PInt);
+        nb.sort_unstable();
+        for (s, &(_, w)) in nb.iter().enumerate() {
+            slot[w as usize] = s as u32;
+        }
+        let width = nb.len() * D;
+        buf.clear();
+        buf.resize(D * width, 0.0);
+        let fixed_v: [f64; D] = std::array::from_fn(|i| p.fixed[v * D + i]);
+        let mut elim = [0.0f64; D];
+        for &e in inc {
+            let (c0, a) = (e as usize / N * N, e as usize % N);
+            let nodes = &rc.nodes[c0..c0 + N];
+            let (g, vol) = gradients(nodes);
+            fem::p1_stiffness_rows::<D, N>(&g, vol.abs(), lambda, mu, a, &mut k);
+            let mut gfix = [f64::NAN; 12];
+            let mut s0 = [0usize; N];
+            let mut any_fixed = false;
+            for b in 0..N {
+                let w = nodes[b] as usize;
+                s0[b] = slot[w] as usize * D;
+                for j in 0..D {
+                    gfix[b * D + j] = p.fixed[w * D + j];
+                    any_fixed |= !gfix[b * D + j].is_nan();
                 }
             }
-            rowptr.push(cols.len() as PInt);
+            if !any_fixed {
+                // No fixed dof in the cell: the rows as they are.
+                for i in 0..D {
+                    let row = &mut buf[i * width..(i + 1) * width];
+                    for b in 0..N {
+                        let dst = &mut row[s0[b]..s0[b] + D];
+                        let src = &k[i][b * D..b * D + D];
+                        for j in 0..D {
+                            dst[j] += src[j];
+                        }
+                    }
+                }
+                continue;
+            }
+            for i in 0..D {
+                let row = &mut buf[i * width..(i + 1) * width];
+                if !fixed_v[i].is_nan() {
+                    row[s0[a] + i] += k[i][a * D + i];
+                    continue;
+                }
+                let mut fe = 0.0;
+                for b in 0..N {
+                    for j in 0..D {
+                        let gv = gfix[b * D + j];
+                        if gv.is_nan() {
+                            row[s0[b] + j] += k[i][b * D + j];
+                        } else {
+                            fe -= k[i][b * D + j] * gv;
+                        }
+                    }
+                }
+                if fe != 0.0 {
+                    elim[i] += fe;
+                }
+            }
+        }
+        let diag0 = slot[v] as usize * D;
+        for i in 0..D {
+            let row = &buf[i * width..(i + 1) * width];
+            for (s, &(g, _)) in nb.iter().enumerate() {
+                let (part, c0) = if (lo..hi).contains(&g) {
+                    (&mut diag, (g - lo) * D)
+                } else {
+                    (&mut off, g * D)
+                };
+                for j in 0..D {
+                    part.cols.push((c0 + j) as PInt);
+                }
+                part.vals.extend_from_slice(&row[s * D..(s + 1) * D]);
+            }
+            diag.rowptr.push(diag.cols.len() as PInt);
+            off.rowptr.push(off.cols.len() as PInt);
+            if fixed_v[i].is_nan() {
+                elim_rhs[la * D + i] = elim[i];
+            } else {
+                fixed_rhs.push((la * D + i, row[diag0 + i] * fixed_v[i]));
+            }
+        }
+        // Slots must not alias the next row's stamp (la + 1): reset them.
+        for &(_, w) in &nb {
+            slot[w as usize] = u32::MAX;
         }
     }
-    (rowptr, cols, base)
+    OwnedRows {
+        diag,
+        off,
+        elim_rhs,
+        fixed_rhs,
+    }
 }
 
 /// The cell that contains a boundary facet, and the cell node opposite to it.
@@ -165,18 +347,13 @@ pub fn outward_normal(mesh: &Mesh, facet: usize, opposite: usize) -> ([f64; 3], 
     (n, m)
 }
 
-/// Assembles A (MPIAIJ, block size dim, exact preallocation) and f (3.8) on this rank's cells.
+/// Assembles A (MPIAIJ, block size dim, exact preallocation) and f (3.8): every rank its own
+/// rows.
 pub fn assemble(comm: MPI_Comm, layout: &Layout, p: &Problem) -> petsc::Result<System> {
     let mesh = p.mesh;
     let dim = mesh.dim;
-    let npc = dim + 1;
-    let nd = npc * dim;
     let t0 = Instant::now();
-    let pat = node_pattern(mesh, layout);
-    let (rowptr, cols, base) = dof_csr(&pat, dim);
-    let mut vals = vec![0.0f64; cols.len()];
     let local_rows = layout.n_owned_nodes() * dim;
-    let (node_lo, _) = layout.node_range();
     let mut b = Vector::new_mpi(comm, local_rows, dim)?;
     let mut stats = AssemblyStats {
         preallocation_seconds: t0.elapsed().as_secs_f64(),
@@ -184,133 +361,47 @@ pub fn assemble(comm: MPI_Comm, layout: &Layout, p: &Problem) -> petsc::Result<S
     };
 
     let t1 = Instant::now();
-    let (lambda, mu) = p.material.lame();
-    let mut ke = [0.0f64; 144];
-    let mut idx = [0 as PInt; 12];
-    let mut bidx: Vec<PInt> = Vec::with_capacity(layout.local_cells.len() * nd);
-    let mut bval: Vec<f64> = Vec::with_capacity(layout.local_cells.len() * nd);
-    // Element rows of nodes owned by other ranks: (local node, dofs, element matrix).
-    let mut off_rows: Vec<(usize, [PInt; 12], [f64; 144])> = Vec::new();
-    for &c in &layout.local_cells {
-        let nodes = mesh.cell(c);
-        element_stiffness(mesh, nodes, lambda, mu, &mut ke);
-        dofs_of(nodes, layout, dim, &mut idx);
-        eliminate_fixed(p, nodes, &mut ke, &idx, &mut bidx, &mut bval);
-        // Scatter-add into the owned rows' CSR values; rows of other ranks' nodes go through
-        // MatSetValues after the matrix exists.
-        for (ia, &va) in nodes.iter().enumerate() {
-            if !layout.owns_node(va) {
-                off_rows.push((ia, idx, ke));
-                continue;
-            }
-            let la = layout.node_global[va] - node_lo;
-            let nb = &pat.nbr[pat.ptr[la]..pat.ptr[la + 1]];
-            let m = nb.len();
-            for (ib, &vb) in nodes.iter().enumerate() {
-                let pos = nb
-                    .binary_search(&layout.node_global[vb])
-                    .expect("pattern holds every cell neighbour");
-                for r in 0..dim {
-                    let row0 = base[la] + r * dim * m + pos * dim;
-                    let krow = (ia * dim + r) * nd + ib * dim;
-                    for cc in 0..dim {
-                        vals[row0 + cc] += ke[krow + cc];
-                    }
-                }
-            }
-        }
-    }
-    let mut a = Matrix::from_csr(comm, dim, &rowptr, &cols, &vals)?;
-    drop(vals);
-    for (ia, ix, k) in &off_rows {
-        for r in 0..dim {
-            let row = ia * dim + r;
-            a.add_values(&[ix[row]], &ix[..nd], &k[row * nd..(row + 1) * nd])?;
-        }
-    }
-    a.assemble()?;
+    let x = &mesh.coords;
+    let rc = row_cells(mesh, layout);
+    let rows = if dim == 2 {
+        owned_rows::<2, 3>(p, layout, &rc, |n| {
+            let p = |v: u32| [x[v as usize][0], x[v as usize][1]];
+            fem::tri_gradients(&[p(n[0]), p(n[1]), p(n[2])])
+        })
+    } else {
+        owned_rows::<3, 4>(p, layout, &rc, |n| {
+            let p = |v: u32| x[v as usize];
+            fem::tet_gradients(&[p(n[0]), p(n[1]), p(n[2]), p(n[3])])
+        })
+    };
+    drop(rc);
+    let OwnedRows {
+        mut diag,
+        mut off,
+        elim_rhs,
+        fixed_rhs,
+    } = rows;
+    let a = Matrix::from_split_csr(comm, dim, diag.as_mut(), off.as_mut())?;
+    drop((diag, off));
     stats.matrix_seconds = t1.elapsed().as_secs_f64();
     let st = a.stats()?;
     stats.mallocs = st.mallocs;
     stats.nonzeros = st.nonzeros;
 
     let t2 = Instant::now();
+    b.write(|bv| bv.copy_from_slice(&elim_rhs))?;
+    let mut bidx: Vec<PInt> = Vec::new();
+    let mut bval: Vec<f64> = Vec::new();
     load_entries(p, layout, &mut bidx, &mut bval);
     b.set_values(&bidx, &bval, true)?;
     b.assemble()?;
-    fixed_rhs(&a, &mut b, layout, p)?;
+    b.write(|bv| {
+        for &(i, v) in &fixed_rhs {
+            bv[i] = v;
+        }
+    })?;
     stats.load_seconds = t2.elapsed().as_secs_f64();
     Ok(System { a, b, stats })
-}
-
-/// A cell's element stiffness matrix (row-major, (d+1)d × (d+1)d).
-fn element_stiffness(mesh: &Mesh, nodes: &[usize], lambda: f64, mu: f64, ke: &mut [f64; 144]) {
-    if mesh.dim == 2 {
-        let x = [
-            [mesh.coords[nodes[0]][0], mesh.coords[nodes[0]][1]],
-            [mesh.coords[nodes[1]][0], mesh.coords[nodes[1]][1]],
-            [mesh.coords[nodes[2]][0], mesh.coords[nodes[2]][1]],
-        ];
-        let k: &mut [f64; 36] = (&mut ke[..36]).try_into().expect("36 entries");
-        fem::tri_stiffness(&x, lambda, mu, k);
-    } else {
-        let x = [
-            mesh.coords[nodes[0]],
-            mesh.coords[nodes[1]],
-            mesh.coords[nodes[2]],
-            mesh.coords[nodes[3]],
-        ];
-        fem::tet_stiffness(&x, lambda, mu, ke);
-    }
-}
-
-/// Symmetric elimination of the cell's fixed dofs: their rows and columns of `ke` become zero
-/// off the diagonal, and −K_ij g_j goes to the right-hand side of the free dofs i (entries
-/// appended to `bidx`/`bval`).
-fn eliminate_fixed(
-    p: &Problem,
-    nodes: &[usize],
-    ke: &mut [f64; 144],
-    idx: &[PInt; 12],
-    bidx: &mut Vec<PInt>,
-    bval: &mut Vec<f64>,
-) {
-    let dim = p.mesh.dim;
-    let nd = nodes.len() * dim;
-    let mut fixed_local = [f64::NAN; 12];
-    let mut any_fixed = false;
-    for (a, &v) in nodes.iter().enumerate() {
-        for i in 0..dim {
-            let g = p.fixed[v * dim + i];
-            fixed_local[a * dim + i] = g;
-            any_fixed |= !g.is_nan();
-        }
-    }
-    if !any_fixed {
-        return;
-    }
-    let mut fe = [0.0f64; 12];
-    for j in 0..nd {
-        let g = fixed_local[j];
-        if g.is_nan() {
-            continue;
-        }
-        for i in 0..nd {
-            if i != j {
-                if fixed_local[i].is_nan() {
-                    fe[i] -= ke[i * nd + j] * g;
-                }
-                ke[i * nd + j] = 0.0;
-                ke[j * nd + i] = 0.0;
-            }
-        }
-    }
-    for i in 0..nd {
-        if fixed_local[i].is_nan() && fe[i] != 0.0 {
-            bidx.push(idx[i]);
-            bval.push(fe[i]);
-        }
-    }
 }
 
 /// The load entries (3.8) of this rank: body force on its cells, facet loads on the facets
@@ -369,25 +460,6 @@ fn load_entries(p: &Problem, layout: &Layout, bidx: &mut Vec<PInt>, bval: &mut V
     }
 }
 
-/// Fixed dofs: b_j = A_jj g_j (A's row j is zero off the diagonal).
-fn fixed_rhs(a: &Matrix, b: &mut Vector, layout: &Layout, p: &Problem) -> petsc::Result<()> {
-    let dim = p.mesh.dim;
-    let mut diag = b.duplicate()?;
-    a.diagonal(&mut diag)?;
-    let dvals = diag.to_local_vec()?;
-    b.write(|bv| {
-        for (i, &v) in layout.owned_nodes.iter().enumerate() {
-            for k in 0..dim {
-                let g = p.fixed[v * dim + k];
-                if !g.is_nan() {
-                    bv[i * dim + k] = dvals[i * dim + k] * g;
-                }
-            }
-        }
-    })?;
-    Ok(())
-}
-
 /// Nodal coordinates of the owned nodes as a PETSc vector with block size dim (for the
 /// rigid-body near-null space of AMG).
 pub fn coordinate_vector(comm: MPI_Comm, mesh: &Mesh, layout: &Layout) -> petsc::Result<Vector> {
@@ -402,3 +474,4 @@ pub fn coordinate_vector(comm: MPI_Comm, mesh: &Mesh, layout: &Layout) -> petsc:
     })?;
     Ok(v)
 }
+

@@ -57,8 +57,41 @@ pub fn tet_gradients(x: &[[f64; 3]; 4]) -> ([[f64; 3]; 4], f64) {
 }
 
 /// Bilinear form a(u, v) = ∫ lambda div u div v + 2 mu eps(u):eps(v) (the stiffness of (3.8))
-/// on a constant-gradient cell of measure `w`:
-/// K[(a,i),(b,j)] = w (lambda g_a[i] g_b[j] + mu g_a[j] g_b[i] + mu delta_ij g_a·g_b).
+/// on a constant-gradient cell of measure `w`, the `D` rows of node `a` only:
+/// rows[i][b D + j] = K[(a,i),(b,j)] = w (lambda g_a[i] g_b[j] + mu g_a[j] g_b[i]
+/// + mu delta_ij g_a·g_b). The full element matrix is these rows for a = 0..N, so both give
+/// the same numbers bit for bit.
+#[inline(always)]
+pub fn p1_stiffness_rows<const D: usize, const N: usize>(
+    g: &[[f64; D]; N],
+    w: f64,
+    lambda: f64,
+    mu: f64,
+    a: usize,
+    rows: &mut [[f64; 12]; 3],
+) {
+    let wl = w * lambda;
+    let wm = w * mu;
+    let ga = g[a];
+    for b in 0..N {
+        let gb = g[b];
+        let mut dot = 0.0;
+        for i in 0..D {
+            dot += ga[i] * gb[i];
+        }
+        for i in 0..D {
+            for j in 0..D {
+                let mut v = wl * ga[i] * gb[j] + wm * ga[j] * gb[i];
+                if i == j {
+                    v += wm * dot;
+                }
+                rows[i][b * D + j] = v;
+            }
+        }
+    }
+}
+
+/// The full element matrix (row-major (N D)²) from [`p1_stiffness_rows`].
 #[inline(always)]
 fn p1_stiffness<const D: usize, const N: usize>(
     g: &[[f64; D]; N],
@@ -69,24 +102,12 @@ fn p1_stiffness<const D: usize, const N: usize>(
 ) {
     let ndof = N * D;
     let k = &mut k[..ndof * ndof]; // fixed length: lets the compiler drop bounds checks
-    let wl = w * lambda;
-    let wm = w * mu;
+    let mut rows = [[0.0; 12]; 3];
     for a in 0..N {
-        for b in 0..N {
-            let mut dot = 0.0;
-            for i in 0..D {
-                dot += g[a][i] * g[b][i];
-            }
-            for i in 0..D {
-                let row = (a * D + i) * ndof + b * D;
-                for j in 0..D {
-                    let mut v = wl * g[a][i] * g[b][j] + wm * g[a][j] * g[b][i];
-                    if i == j {
-                        v += wm * dot;
-                    }
-                    k[row + j] = v;
-                }
-            }
+        p1_stiffness_rows::<D, N>(g, w, lambda, mu, a, &mut rows);
+        for i in 0..D {
+            let row = (a * D + i) * ndof;
+            k[row..row + ndof].copy_from_slice(&rows[i][..ndof]);
         }
     }
 }

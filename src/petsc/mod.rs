@@ -368,6 +368,13 @@ impl Drop for Vector {
     }
 }
 
+/// One CSR part of a matrix's owned rows, handed to PETSc (see [`Matrix::from_split_csr`]).
+pub struct CsrMut<'a> {
+    pub rowptr: &'a mut [PInt],
+    pub cols: &'a mut [PInt],
+    pub vals: &'a mut [f64],
+}
+
 /// A distributed sparse matrix (MPIAIJ with a block size).
 pub struct Matrix {
     raw: ffi::Mat,
@@ -427,6 +434,78 @@ impl Matrix {
             ))?;
             check(ffi::MatSetOption(
                 raw,
+                ffi::MAT_NEW_NONZERO_ALLOCATION_ERR,
+                ffi::PETSC_TRUE,
+            ))?;
+            Ok(m)
+        }
+    }
+
+    /// An AIJ matrix with block size `bs` from its owned rows given complete in two CSR
+    /// parts, as PETSc stores them: `diag` holds the columns this rank owns (local column
+    /// numbers), `off` the others (global column numbers); columns sorted per row. PETSc takes
+    /// the arrays as they are (MatCreateSeqAIJWithArrays on one rank,
+    /// MatCreateMPIAIJWithSplitArrays on several: no per-entry insertion), then the matrix is
+    /// duplicated into PETSc's own memory so that the arrays can be freed on return (PETSc
+    /// may rewrite `off`'s column numbers, hence `&mut`). The pattern is exact; new nonzeros
+    /// are an error afterwards. On one rank `off` must be empty.
+    pub fn from_split_csr(
+        comm: MPI_Comm,
+        bs: usize,
+        diag: CsrMut<'_>,
+        off: CsrMut<'_>,
+    ) -> Result<Matrix> {
+        let local_rows = diag.rowptr.len().saturating_sub(1);
+        for p in [&diag, &off] {
+            let n = p.rowptr.last().copied().unwrap_or(0) as usize;
+            if p.rowptr.len() != local_rows + 1 || p.cols.len() != n || p.vals.len() != n {
+                return Err(own_error("Matrix::from_split_csr: inconsistent CSR arrays"));
+            }
+        }
+        let mut size: std::os::raw::c_int = 0;
+        let mut raw: ffi::Mat = ptr::null_mut();
+        // SAFETY: the arrays are consistent (checked) and exclusively borrowed for the whole
+        // life of `view`, which is destroyed before return; the copy owns its memory.
+        unsafe {
+            ffi::MPI_Comm_size(comm, &mut size);
+            if size == 1 && !off.cols.is_empty() {
+                return Err(own_error("Matrix::from_split_csr: off-rank columns on one rank"));
+            }
+            let n = local_rows as PInt;
+            if size == 1 {
+                check(ffi::MatCreateSeqAIJWithArrays(
+                    comm,
+                    n,
+                    n,
+                    diag.rowptr.as_mut_ptr(),
+                    diag.cols.as_mut_ptr(),
+                    diag.vals.as_mut_ptr(),
+                    &mut raw,
+                ))?;
+            } else {
+                check(ffi::MatCreateMPIAIJWithSplitArrays(
+                    comm,
+                    n,
+                    n,
+                    ffi::PETSC_DETERMINE,
+                    ffi::PETSC_DETERMINE,
+                    diag.rowptr.as_mut_ptr(),
+                    diag.cols.as_mut_ptr(),
+                    diag.vals.as_mut_ptr(),
+                    off.rowptr.as_mut_ptr(),
+                    off.cols.as_mut_ptr(),
+                    off.vals.as_mut_ptr(),
+                    &mut raw,
+                ))?;
+            }
+            let view = Matrix { raw };
+            check(ffi::MatSetBlockSize(raw, bs as PInt))?;
+            let mut copy: ffi::Mat = ptr::null_mut();
+            check(ffi::MatDuplicate(raw, ffi::MAT_COPY_VALUES, &mut copy))?;
+            drop(view);
+            let m = Matrix { raw: copy };
+            check(ffi::MatSetOption(
+                copy,
                 ffi::MAT_NEW_NONZERO_ALLOCATION_ERR,
                 ffi::PETSC_TRUE,
             ))?;

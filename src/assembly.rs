@@ -1,14 +1,23 @@
-//! Assembly of the stiffness matrix A and load vector f of (3.8), every rank its own cells.
+//! Assembly of the stiffness matrix A and load vector f of (3.8), every rank its own rows.
 //!
-//! The exact pattern of the owned rows is built first (every cell touching an owned node, from
-//! the whole mesh every rank holds); element matrices are scatter-added into those CSR values
-//! and handed to PETSc in one piece (MatMPIAIJSetPreallocationCSR), rows of nodes owned by
-//! other ranks go through MatSetValues. No mallocs (checked), no per-entry searches in PETSc.
+//! Row by row: every owned node gathers the cells around it (a compact copy of the cells that
+//! touch owned nodes: this rank's in the layout's order, then those of other ranks), sums their
+//! element rows into a small dense buffer and appends it to the CSR arrays of its rows, split
+//! as PETSc stores them (owned columns / other columns). Each element matrix is thus computed
+//! in pieces by the owners of its nodes, every value of an owned row on its owner: no entries
+//! are sent to other ranks, no searches, no scatter into a large array. PETSc takes the two
+//! CSR parts as they are (no per-entry insertion) and copies them into its own memory; the
+//! copy is checked to hold exactly the entries given, with no mallocs.
 //!
-//! Dirichlet data are eliminated symmetrically inside the element loop (row and column of a
-//! fixed dof are zero except the diagonal, the known value moves to the right-hand side), so A
-//! keeps its full nonzero pattern and stays symmetric; the right-hand side of a fixed dof is set
-//! to A_jj · g_j after assembly. Zeros are inserted explicitly: the pattern never changes.
+//! On one rank every entry is summed over the same cells in the same order as the former cell
+//! loop (the layout's cell order), so A and f are the same bit for bit; on several ranks an
+//! interface row's sum now runs over all its cells in one order instead of own cells first,
+//! then the other ranks' parts (round-off differences only).
+//!
+//! Dirichlet data are eliminated symmetrically per entry (row and column of a fixed dof are
+//! zero except the diagonal, the known value moves to the right-hand side), so A keeps its
+//! full nonzero pattern and stays symmetric; the right-hand side of a fixed dof is A_jj · g_j.
+//! Zeros are stored explicitly: the pattern never changes.
 
 use crate::fem::{self, Material};
 use crate::mesh::Mesh;
@@ -474,4 +483,3 @@ pub fn coordinate_vector(comm: MPI_Comm, mesh: &Mesh, layout: &Layout) -> petsc:
     })?;
     Ok(v)
 }
-

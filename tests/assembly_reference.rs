@@ -11,6 +11,9 @@
 //! The test starts its own executable under mpirun: the `#[ignore]`d `worker` test does the
 //! MPI work and prints one `ASMREF {json}` line per mesh on rank 0.
 
+// Index loops mirror the tensor formulas.
+#![allow(clippy::needless_range_loop)]
+
 mod common;
 
 use common::*;
@@ -70,7 +73,11 @@ fn reference_element(x: &[[f64; 3]], dim: usize, lambda: f64, mu: f64) -> (Vec<f
         }
         (inv, det)
     };
-    let measure = if dim == 2 { det.abs() / 2.0 } else { det.abs() / 6.0 };
+    let measure = if dim == 2 {
+        det.abs() / 2.0
+    } else {
+        det.abs() / 6.0
+    };
     let mut g = vec![[0.0; 3]; n];
     for k in 1..n {
         g[k] = inv[k - 1];
@@ -254,7 +261,9 @@ fn check_mesh(world: &mpi::topology::SimpleCommunicator, petsc: &Petsc, path: &s
     let local: f64 = uv.iter().zip(&auv).map(|(a, b)| a * b).sum();
     let mut energy = 0.0;
     world.all_reduce_into(&local, &mut energy, mpi::collective::SystemOperation::sum());
-    let volume: f64 = (0..mesh.n_cells()).map(|c| mesh.cell_measure(c).abs()).sum();
+    let volume: f64 = (0..mesh.n_cells())
+        .map(|c| mesh.cell_measure(c).abs())
+        .sum();
     let mut eps = [[0.0; 3]; 3];
     for i in 0..dim {
         for j in 0..dim {
@@ -329,8 +338,14 @@ fn assembly_matches_references() {
             let f = |k: &str| row[k].as_f64().unwrap_or_else(|| panic!("{k}: {row}"));
             assert_eq!(row["ranks"].as_u64(), Some(np as u64), "{row}");
             assert!(f("fixed_dofs") > 10.0, "too few fixed dofs to test: {row}");
-            assert!(f("ax_rel_err") <= 1e-12, "A x differs from the reference: {row}");
-            assert!(f("f_rel_err") <= 1e-12, "f differs from the reference: {row}");
+            assert!(
+                f("ax_rel_err") <= 1e-12,
+                "A x differs from the reference: {row}"
+            );
+            assert!(
+                f("f_rel_err") <= 1e-12,
+                "f differs from the reference: {row}"
+            );
             let (e, ex) = (f("energy"), f("energy_exact"));
             assert!(ex > 0.0, "{row}");
             assert!(

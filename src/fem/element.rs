@@ -58,9 +58,10 @@ pub fn tet_gradients(x: &[[f64; 3]; 4]) -> ([[f64; 3]; 4], f64) {
 
 /// Bilinear form a(u, v) = ∫ lambda div u div v + 2 mu eps(u):eps(v) (the stiffness of (3.8))
 /// on a constant-gradient cell of measure `w`, the `D` rows of node `a` only:
-/// rows[i][b D + j] = K[(a,i),(b,j)] = w (lambda g_a[i] g_b[j] + mu g_a[j] g_b[i]
-/// + mu delta_ij g_a·g_b). The full element matrix is these rows for a = 0..N, so both give
-/// the same numbers bit for bit.
+/// rows[i][b D + j] = K[(a,i),(b,j)]
+/// = w (lambda g_a[i] g_b[j] + mu g_a[j] g_b[i] + mu delta_ij g_a·g_b).
+/// The full element matrix is these rows for a = 0..N, so both give the same numbers bit for
+/// bit.
 #[inline(always)]
 pub fn p1_stiffness_rows<const D: usize, const N: usize>(
     g: &[[f64; D]; N],

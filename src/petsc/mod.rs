@@ -469,7 +469,9 @@ impl Matrix {
         unsafe {
             ffi::MPI_Comm_size(comm, &mut size);
             if size == 1 && !off.cols.is_empty() {
-                return Err(own_error("Matrix::from_split_csr: off-rank columns on one rank"));
+                return Err(own_error(
+                    "Matrix::from_split_csr: off-rank columns on one rank",
+                ));
             }
             let n = local_rows as PInt;
             if size == 1 {
@@ -509,6 +511,15 @@ impl Matrix {
                 ffi::MAT_NEW_NONZERO_ALLOCATION_ERR,
                 ffi::PETSC_TRUE,
             ))?;
+            // Every entry handed over is stored, none merged or added.
+            let st = m.stats()?;
+            let given = diag.cols.len() + off.cols.len();
+            if st.nonzeros != given as f64 || st.mallocs != 0.0 {
+                return Err(own_error(format!(
+                    "Matrix::from_split_csr: {given} entries given, PETSc stores {} ({} mallocs)",
+                    st.nonzeros, st.mallocs
+                )));
+            }
             Ok(m)
         }
     }

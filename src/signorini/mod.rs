@@ -104,7 +104,9 @@ pub fn solve(
     fixed: &[f64],
     sys: &System,
     solver_section: &SolverSection,
+    previous: Option<&ContactSolution>,
 ) -> Result<ContactSolution, RunError> {
+    let _ = previous;
     let dim = mesh.dim;
     let b = boundary::build(ctx, mesh, layout, settings, fixed)?;
     log_boundary(ctx, &b, &settings.group);
@@ -154,7 +156,7 @@ pub fn solve(
         }
     };
     if !nr.converged {
-        return Err(RunError::Failed(match solver_section.method {
+        return Err(RunError::NoConvergence(match solver_section.method {
             Method::Newton => format!(
                 "Newton did not converge in newton.max_steps = {} steps (active set still \
                  changing: {} node(s) in the last step)",

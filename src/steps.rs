@@ -1,0 +1,478 @@
+//! Quasi-static load stepping: the solve stage of a run, one solve per load factor.
+//!
+//! Step s solves the problem with the Neumann data, the body force and the prescribed
+//! displacements multiplied by its factor t_s (the obstacle stays). The assembled right-hand
+//! side is linear in all three (the loads (3.8), −K_ij g_j of the eliminated Dirichlet columns
+//! and A_jj g_j of their rows), so f(t) = t · f(1): the system is assembled once and its
+//! right-hand side scaled per step. A contact step starts from the previous converged step
+//! (`previous` of [`signorini::solve`]).
+//!
+//! Cutback: a step whose solve does not converge ([`RunError::NoConvergence`]) is retried at
+//! the midpoint between the last converged factor and the failed one; after a success the
+//! halved increment is kept until the planned factor is reached. A planned step may halve its
+//! increment `max_cutbacks` times (so it becomes at most 2^max_cutbacks sub-steps); one more
+//! failure ends the run. Any other error ends the run at once.
+//!
+//! Without `[load]` the run is one step at factor 1 without cutback, written as today's single
+//! solution; with `[load]` every converged step (sub-steps of a cutback included) is a step of
+//! the XDMF temporal collection and a row of `history.csv`.
+
+use crate::assembly::System;
+use crate::case::{Case, LoadSection, OutputField};
+use crate::error::RunError;
+use crate::fem::Material;
+use crate::mesh::Mesh;
+use crate::output::{ContactResult, ResultSet};
+use crate::par::Ctx;
+use crate::partition::Layout;
+use crate::petsc::Vector;
+use crate::post;
+use crate::say;
+use crate::setup::{self, ContactSettings};
+use crate::signorini::{self, ContactReport, ContactSolution};
+use crate::solver::{self, LinearSummary};
+use serde::Serialize;
+use std::fmt::Write;
+use std::time::Instant;
+
+/// The solve's own summary section(s).
+#[derive(Serialize)]
+#[serde(untagged)]
+pub enum SolveReport {
+    Linear(LinearSummary),
+    Contact(Box<ContactReport>),
+}
+
+/// One converged load step: a row of history.csv and an entry of summary.json's `load.steps`.
+#[derive(Debug, Clone, Serialize)]
+pub struct StepRecord {
+    /// Converged steps so far, 1, 2, … (the XDMF time step).
+    pub step: usize,
+    /// The planned step (index into the case's factors, from 1) this one belongs to.
+    pub planned: usize,
+    /// The load factor t.
+    pub factor: f64,
+    /// Halvings of the increment of the planned step when this step converged.
+    pub cutbacks: usize,
+    /// Newton steps (contact) — None for a linear case.
+    pub newton_steps: Option<usize>,
+    pub active: Option<usize>,
+    /// Active nodes sticking / slipping (friction only).
+    pub stick: Option<usize>,
+    pub slip: Option<usize>,
+    /// Σ of the contact forces −λ over the contact nodes.
+    pub total_force: Option<Vec<f64>>,
+    pub max_pressure: Option<f64>,
+    /// 2D: half width of the contact zone.
+    pub half_width: Option<f64>,
+    /// 3D: Σ w_k over the active nodes (the contact area).
+    pub contact_area: Option<f64>,
+    /// Seconds of the step (solve, post-processing, output).
+    pub seconds: f64,
+}
+
+/// summary.json's `load` section (runs with `[load]`).
+#[derive(Debug, Clone, Serialize)]
+pub struct LoadReport {
+    /// The planned factors of the case.
+    pub factors: Vec<f64>,
+    pub max_cutbacks: usize,
+    /// Every step of the history reached the last factor.
+    pub completed: bool,
+    /// Failed attempts that were cut back, in all.
+    pub cutbacks: usize,
+    /// Why the run stopped before the last factor.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub failure: Option<String>,
+    pub steps: Vec<StepRecord>,
+}
+
+/// The solve stage's product: the last converged step and the record of all of them.
+pub struct Stepped {
+    pub report: SolveReport,
+    /// The last step's contact table (contact_nodes.csv).
+    pub contact_csv: Option<String>,
+    /// None without `[load]`.
+    pub load: Option<LoadReport>,
+    /// history.csv (with `[load]`).
+    pub history_csv: Option<String>,
+    /// The error that ended the run after some steps converged (their output is written).
+    pub failure: Option<RunError>,
+    pub solve_seconds: f64,
+    pub post_seconds: f64,
+    pub output_seconds: f64,
+}
+
+/// What the steps share: the case, its discretisation and the output being written.
+pub struct Stepper<'a> {
+    pub ctx: &'a Ctx<'a>,
+    pub case: &'a Case,
+    pub mesh: &'a Mesh,
+    pub layout: &'a Layout,
+    pub material: &'a Material,
+    /// Prescribed displacements at factor 1 (NaN = free dof).
+    pub fixed: &'a [f64],
+    pub out: &'a ResultSet,
+}
+
+/// One solved step before it is recorded.
+struct Solved {
+    /// The displacement of a linear solve (a contact solve has its own).
+    linear_u: Option<Vector>,
+    report: SolveReport,
+    contact: Option<ContactSolution>,
+}
+
+impl Solved {
+    fn u(&self) -> &Vector {
+        match (&self.contact, &self.linear_u) {
+            (Some(c), _) => &c.u,
+            (None, Some(u)) => u,
+            (None, None) => unreachable!("a solved step has a displacement"),
+        }
+    }
+}
+
+/// The solve of a linear case or of the contact algorithm at one factor.
+enum Physics {
+    Linear,
+    Contact(Box<ContactSettings>),
+}
+
+impl Stepper<'_> {
+    /// Solves every load step (one at factor 1 without `[load]`), writing each converged one.
+    /// An `Err` means nothing was written; a failure after some steps converged comes back in
+    /// [`Stepped::failure`] with the converged steps written.
+    pub fn run(&self, sys: &mut System) -> Result<Stepped, RunError> {
+        let (ctx, case) = (self.ctx, self.case);
+        let series = case.load.is_some();
+        let plan = case.load.clone().unwrap_or_else(LoadSection::single);
+        let physics = match &case.contact {
+            None => Physics::Linear,
+            Some(cc) => Physics::Contact(Box::new(ctx.agree(
+                setup::contact_settings(case, cc, self.mesh.dim).map_err(RunError::from),
+            )?)),
+        };
+        // f(1), kept to scale from (only with [load]: a single step solves f(1) itself).
+        let b_full = if series {
+            Some(sys.b.duplicate().and_then(|mut v| {
+                v.copy_from(&sys.b)?;
+                Ok(v)
+            })?)
+        } else {
+            None
+        };
+        let mut fixed = self.fixed.to_vec();
+        let mut last: Option<Solved> = None;
+        let mut records: Vec<StepRecord> = Vec::new();
+        let mut times: Vec<f64> = Vec::new();
+        let (mut solve_s, mut post_s, mut output_s) = (0.0, 0.0, 0.0);
+        let mut cutbacks_total = 0;
+        let mut failure = None;
+        let mut reached = 0.0f64;
+        'plan: for (p, &target) in plan.factors.iter().enumerate() {
+            let mut halvings = 0;
+            let mut increment = target - reached;
+            while reached != target {
+                let t0 = Instant::now();
+                let mut factor = reached + increment;
+                // the last sub-step lands exactly on the planned factor
+                if (increment > 0.0 && factor >= target) || (increment < 0.0 && factor <= target) {
+                    factor = target;
+                }
+                if let Some(b) = &b_full {
+                    scale(sys, b, self.fixed, &mut fixed, factor)?;
+                }
+                let previous = last.as_ref().and_then(|s| s.contact.as_ref());
+                let solved = self.solve_once(&physics, &fixed, sys, previous);
+                let ts = t0.elapsed().as_secs_f64();
+                solve_s += ts;
+                let solved = match solved {
+                    Ok(s) => s,
+                    Err(RunError::NoConvergence(why)) if halvings < plan.max_cutbacks => {
+                        halvings += 1;
+                        cutbacks_total += 1;
+                        increment *= 0.5;
+                        say!(
+                            ctx,
+                            "load step {}: factor {factor} failed ({why}), cut back to {}",
+                            p + 1,
+                            reached + increment
+                        );
+                        continue;
+                    }
+                    Err(e) => {
+                        let e = match e {
+                            RunError::NoConvergence(why) if series => RunError::Failed(format!(
+                                "load step {}: factor {factor} did not converge after {} \
+                                 cutback(s) of its increment (load.max_cutbacks = {}): {why}",
+                                p + 1,
+                                halvings,
+                                plan.max_cutbacks
+                            )),
+                            e => e,
+                        };
+                        if records.is_empty() {
+                            return Err(e);
+                        }
+                        failure = Some(e);
+                        break 'plan;
+                    }
+                };
+                let step = records.len() + 1;
+                let t1 = Instant::now();
+                let cells = post::cell_fields(
+                    self.mesh,
+                    self.layout,
+                    self.material,
+                    solved.u(),
+                    &case.output,
+                )?;
+                let fields =
+                    post::solution_fields(self.mesh, self.layout, solved.u(), cells, &case.output)?;
+                post_s += t1.elapsed().as_secs_f64();
+                let grid = solved
+                    .contact
+                    .as_ref()
+                    .map(|c| &c.result)
+                    .filter(|_| case.output.wants(OutputField::Contact));
+                let piece = fields.piece(grid);
+                output_s += if series {
+                    times.push(factor);
+                    self.out.write_step(ctx, &piece, step, &times)?
+                } else {
+                    self.out.write_solution(ctx, &piece)?
+                };
+                drop(fields);
+                let mut rec = self.record(&solved, step, p + 1, factor, halvings);
+                rec.seconds = t0.elapsed().as_secs_f64();
+                if series {
+                    log_step(ctx, &rec, plan.factors.len());
+                }
+                records.push(rec);
+                reached = factor;
+                last = Some(solved);
+            }
+        }
+        let last = last.expect("a step converged, or the run returned its error");
+        let contact_csv = last.contact.as_ref().map(|c| c.result.csv.clone());
+        let history_csv = series.then(|| history_csv(&records, self.mesh.dim));
+        let load = series.then(|| LoadReport {
+            factors: plan.factors.clone(),
+            max_cutbacks: plan.max_cutbacks,
+            completed: failure.is_none(),
+            cutbacks: cutbacks_total,
+            failure: failure.as_ref().map(|e| e.to_string()),
+            steps: records,
+        });
+        Ok(Stepped {
+            report: last.report,
+            contact_csv,
+            load,
+            history_csv,
+            failure,
+            solve_seconds: solve_s,
+            post_seconds: post_s,
+            output_seconds: output_s,
+        })
+    }
+
+    /// One linear solve, or the contact algorithm from the previous step's state.
+    fn solve_once(
+        &self,
+        physics: &Physics,
+        fixed: &[f64],
+        sys: &mut System,
+        previous: Option<&ContactSolution>,
+    ) -> Result<Solved, RunError> {
+        let (ctx, case) = (self.ctx, self.case);
+        match physics {
+            Physics::Linear => {
+                let (u, report) =
+                    solver::linear_solve(ctx, self.mesh, self.layout, sys, &case.solver)?;
+                Ok(Solved {
+                    linear_u: Some(u),
+                    report: SolveReport::Linear(report.summary(case.solver.preset)),
+                    contact: None,
+                })
+            }
+            Physics::Contact(settings) => {
+                let s = signorini::solve(
+                    ctx,
+                    settings,
+                    self.mesh,
+                    self.layout,
+                    fixed,
+                    sys,
+                    &case.solver,
+                    previous,
+                )?;
+                // the report goes to the summary, the rest stays as the next step's start
+                Ok(Solved {
+                    linear_u: None,
+                    report: SolveReport::Contact(Box::new(s.report.clone())),
+                    contact: Some(s),
+                })
+            }
+        }
+    }
+
+    /// The record of a converged step (contact counts summed over the ranks). Collective.
+    fn record(
+        &self,
+        s: &Solved,
+        step: usize,
+        planned: usize,
+        factor: f64,
+        cutbacks: usize,
+    ) -> StepRecord {
+        let mut rec = StepRecord {
+            step,
+            planned,
+            factor,
+            cutbacks,
+            newton_steps: None,
+            active: None,
+            stick: None,
+            slip: None,
+            total_force: None,
+            max_pressure: None,
+            half_width: None,
+            contact_area: None,
+            seconds: 0.0,
+        };
+        let (Some(c), SolveReport::Contact(r)) = (&s.contact, &s.report) else {
+            return rec;
+        };
+        rec.newton_steps = Some(r.newton.steps);
+        rec.active = Some(r.contact.active_count);
+        rec.total_force = Some(r.contact.total_force.clone());
+        rec.max_pressure = Some(r.contact.max_pressure);
+        rec.half_width = r.contact.half_width.filter(|_| self.mesh.dim == 2);
+        let (stick, slip, area) = contact_counts(&c.result);
+        let sums = self.ctx.sum_vec(&[stick, slip, area]);
+        if c.result.fields.iter().any(|f| f.name == "slip_state") {
+            rec.stick = Some(sums[0] as usize);
+            rec.slip = Some(sums[1] as usize);
+        }
+        if self.mesh.dim == 3 {
+            rec.contact_area = Some(sums[2]);
+        }
+        rec
+    }
+}
+
+/// sys.b = t · f(1) and the prescribed displacements t · g(1).
+fn scale(
+    sys: &mut System,
+    b_full: &Vector,
+    fixed_full: &[f64],
+    fixed: &mut [f64],
+    t: f64,
+) -> Result<(), RunError> {
+    sys.b.copy_from(b_full)?;
+    sys.b.write(|b| b.iter_mut().for_each(|x| *x *= t))?;
+    for (g, &g1) in fixed.iter_mut().zip(fixed_full) {
+        *g = t * g1;
+    }
+    Ok(())
+}
+
+/// This rank's active nodes that stick and slip, and their Σ w_k, from the contact grid's
+/// fields `state` (1 active), `slip_state` (0 stick, 1 slip) and `weight`.
+fn contact_counts(r: &ContactResult) -> (f64, f64, f64) {
+    let field = |name: &str| r.fields.iter().find(|f| f.name == name);
+    let (Some(state), weight) = (field("state"), field("weight")) else {
+        return (0.0, 0.0, 0.0);
+    };
+    let slip = field("slip_state");
+    let (mut n_stick, mut n_slip, mut area) = (0.0, 0.0, 0.0);
+    for (k, &s) in state.data.iter().enumerate() {
+        if s != 1.0 {
+            continue;
+        }
+        if let Some(w) = weight {
+            area += w.data[k];
+        }
+        match slip.map(|f| f.data[k]) {
+            Some(x) if x == 1.0 => n_slip += 1.0,
+            Some(_) => n_stick += 1.0,
+            None => {}
+        }
+    }
+    (n_stick, n_slip, area)
+}
+
+/// The progress line of a converged step.
+fn log_step(ctx: &Ctx, r: &StepRecord, planned: usize) {
+    let mut line = format!(
+        "load step {}/{planned}: factor {} converged",
+        r.planned, r.factor
+    );
+    if let Some(n) = r.newton_steps {
+        let _ = write!(
+            line,
+            " in {n} Newton steps, {} active",
+            r.active.unwrap_or(0)
+        );
+    }
+    if let (Some(st), Some(sl)) = (r.stick, r.slip) {
+        let _ = write!(line, " ({st} stick, {sl} slip)");
+    }
+    if let Some(p) = r.max_pressure {
+        let _ = write!(line, ", p_max = {p:.6}");
+    }
+    if let Some(f) = &r.total_force {
+        let _ = write!(line, ", total force = {f:?}");
+    }
+    if r.cutbacks > 0 {
+        let _ = write!(line, " ({} cutback(s))", r.cutbacks);
+    }
+    let _ = write!(line, " ({:.3} s)", r.seconds);
+    say!(ctx, "{line}");
+}
+
+/// history.csv: one row per converged step; empty cells where a value does not apply.
+pub fn history_csv(records: &[StepRecord], dim: usize) -> String {
+    let axes = ["x", "y", "z"];
+    let mut out = String::from("step,planned,factor,cutbacks,newton_steps,active,stick,slip");
+    for a in &axes[..dim] {
+        let _ = write!(out, ",force_{a}");
+    }
+    out.push_str(",max_pressure,half_width,contact_area\n");
+    fn opt<T: std::fmt::Display>(v: Option<T>) -> String {
+        v.map(|x| x.to_string()).unwrap_or_default()
+    }
+    fn num(v: Option<f64>) -> String {
+        v.map(|x| format!("{x:.17e}")).unwrap_or_default()
+    }
+    for r in records {
+        let _ = write!(
+            out,
+            "{},{},{:.17e},{},{},{},{},{}",
+            r.step,
+            r.planned,
+            r.factor,
+            r.cutbacks,
+            opt(r.newton_steps),
+            opt(r.active),
+            opt(r.stick),
+            opt(r.slip)
+        );
+        for k in 0..dim {
+            let _ = write!(
+                out,
+                ",{}",
+                num(r.total_force.as_ref().and_then(|f| f.get(k).copied()))
+            );
+        }
+        let _ = writeln!(
+            out,
+            ",{},{},{}",
+            num(r.max_pressure),
+            num(r.half_width),
+            num(r.contact_area)
+        );
+    }
+    out
+}

@@ -167,19 +167,12 @@ impl Stepper<'_> {
         let mut records: Vec<StepRecord> = Vec::new();
         let mut times: Vec<f64> = Vec::new();
         let (mut solve_s, mut post_s, mut output_s) = (0.0, 0.0, 0.0);
-        let mut cutbacks_total = 0;
         let mut failure = None;
-        let mut reached = 0.0f64;
-        'plan: for (p, &target) in plan.factors.iter().enumerate() {
-            let mut halvings = 0;
-            let mut increment = target - reached;
-            while reached != target {
+        let mut schedule = Schedule::new(&plan);
+        while let Some(factor) = schedule.next() {
+            {
                 let t0 = Instant::now();
-                let mut factor = reached + increment;
-                // the last sub-step lands exactly on the planned factor
-                if (increment > 0.0 && factor >= target) || (increment < 0.0 && factor <= target) {
-                    factor = target;
-                }
+                let (p, halvings) = (schedule.planned(), schedule.halvings());
                 if let Some(b) = &b_full {
                     scale(sys, b, self.fixed, &mut fixed, factor)?;
                 }
@@ -189,25 +182,19 @@ impl Stepper<'_> {
                 solve_s += ts;
                 let solved = match solved {
                     Ok(s) => s,
-                    Err(RunError::NoConvergence(why)) if halvings < plan.max_cutbacks => {
-                        halvings += 1;
-                        cutbacks_total += 1;
-                        increment *= 0.5;
+                    Err(RunError::NoConvergence(why)) if schedule.can_cut_back() => {
+                        let retry = schedule.cut_back();
                         say!(
                             ctx,
-                            "load step {}: factor {factor} failed ({why}), cut back to {}",
-                            p + 1,
-                            reached + increment
+                            "load step {p}: factor {factor} failed ({why}), cut back to {retry}"
                         );
                         continue;
                     }
                     Err(e) => {
                         let e = match e {
                             RunError::NoConvergence(why) if series => RunError::Failed(format!(
-                                "load step {}: factor {factor} did not converge after {} \
+                                "load step {p}: factor {factor} did not converge after {halvings} \
                                  cutback(s) of its increment (load.max_cutbacks = {}): {why}",
-                                p + 1,
-                                halvings,
                                 plan.max_cutbacks
                             )),
                             e => e,
@@ -216,7 +203,7 @@ impl Stepper<'_> {
                             return Err(e);
                         }
                         failure = Some(e);
-                        break 'plan;
+                        break;
                     }
                 };
                 let step = records.len() + 1;
@@ -244,13 +231,13 @@ impl Stepper<'_> {
                     self.out.write_solution(ctx, &piece)?
                 };
                 drop(fields);
-                let mut rec = self.record(&solved, step, p + 1, factor, halvings);
+                let mut rec = self.record(&solved, step, p, factor, halvings);
                 rec.seconds = t0.elapsed().as_secs_f64();
                 if series {
                     log_step(ctx, &rec, plan.factors.len());
                 }
                 records.push(rec);
-                reached = factor;
+                schedule.converged(factor);
                 last = Some(solved);
             }
         }
@@ -261,7 +248,7 @@ impl Stepper<'_> {
             factors: plan.factors.clone(),
             max_cutbacks: plan.max_cutbacks,
             completed: failure.is_none(),
-            cutbacks: cutbacks_total,
+            cutbacks: schedule.cutbacks,
             failure: failure.as_ref().map(|e| e.to_string()),
             steps: records,
         });
@@ -359,6 +346,85 @@ impl Stepper<'_> {
             rec.contact_area = Some(sums[2]);
         }
         rec
+    }
+}
+
+/// The load factors to solve at, with cutbacks (no solves: the loop asks it what comes next).
+pub struct Schedule<'p> {
+    plan: &'p LoadSection,
+    /// The planned step being worked on (index into the factors).
+    planned: usize,
+    /// The factor of the last converged step (0: the unloaded start).
+    reached: f64,
+    /// The current increment of the planned step.
+    increment: f64,
+    /// Halvings of the planned step's increment so far.
+    halvings: usize,
+    /// Cutbacks of the whole history.
+    pub cutbacks: usize,
+}
+
+impl<'p> Schedule<'p> {
+    pub fn new(plan: &'p LoadSection) -> Self {
+        Schedule {
+            plan,
+            planned: 0,
+            reached: 0.0,
+            increment: plan.factors.first().copied().unwrap_or(0.0),
+            halvings: 0,
+            cutbacks: 0,
+        }
+    }
+
+    /// The factor of the next solve; None once the last planned factor is reached.
+    pub fn next(&self) -> Option<f64> {
+        let target = *self.plan.factors.get(self.planned)?;
+        let f = self.reached + self.increment;
+        // the last sub-step lands exactly on the planned factor
+        let beyond = (self.increment > 0.0 && f >= target) || (self.increment < 0.0 && f <= target);
+        Some(if beyond { target } else { f })
+    }
+
+    /// The planned step being worked on, from 1.
+    pub fn planned(&self) -> usize {
+        self.planned + 1
+    }
+
+    /// Halvings of the planned step's increment so far.
+    pub fn halvings(&self) -> usize {
+        self.halvings
+    }
+
+    /// The solve at `f` (= [`Schedule::next`]) converged.
+    pub fn converged(&mut self, f: f64) {
+        self.reached = f;
+        if Some(&f) == self.plan.factors.get(self.planned) {
+            self.planned += 1;
+            self.halvings = 0;
+            if let Some(&t) = self.plan.factors.get(self.planned) {
+                self.increment = t - f;
+            }
+        }
+    }
+
+    /// May the failed solve at [`Schedule::next`] be retried with half the increment? Not
+    /// beyond `max_cutbacks` halvings of one planned step, nor when half the increment no
+    /// longer changes the factor.
+    pub fn can_cut_back(&self) -> bool {
+        let half = self.reached + 0.5 * self.increment;
+        self.halvings < self.plan.max_cutbacks && half != self.reached
+    }
+
+    /// Halves the increment; returns the factor to retry at (the midpoint between the last
+    /// converged factor and the failed one).
+    pub fn cut_back(&mut self) -> f64 {
+        if let Some(failed) = self.next() {
+            self.increment = failed - self.reached;
+        }
+        self.increment *= 0.5;
+        self.halvings += 1;
+        self.cutbacks += 1;
+        self.reached + self.increment
     }
 }
 
@@ -475,4 +541,84 @@ pub fn history_csv(records: &[StepRecord], dim: usize) -> String {
         );
     }
     out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Runs a schedule against a solver that converges when the step from the last converged
+    /// factor is at most `reach`; returns the converged factors, whether the plan was
+    /// completed, and the cutbacks.
+    fn walk(factors: &[f64], max_cutbacks: usize, reach: f64) -> (Vec<f64>, bool, usize) {
+        let plan = LoadSection {
+            factors: factors.to_vec(),
+            max_cutbacks,
+        };
+        let mut s = Schedule::new(&plan);
+        let (mut done, mut last, mut solves) = (Vec::new(), 0.0f64, 0);
+        while let Some(f) = s.next() {
+            solves += 1;
+            assert!(solves < 1000, "runaway schedule");
+            if (f - last).abs() <= reach + 1e-12 {
+                s.converged(f);
+                done.push(f);
+                last = f;
+            } else if s.can_cut_back() {
+                let r = s.cut_back();
+                assert!(
+                    close(r, 0.5 * (last + f)),
+                    "{r}: the midpoint of {last} and {f}"
+                );
+            } else {
+                return (done, false, s.cutbacks);
+            }
+        }
+        (done, true, s.cutbacks)
+    }
+
+    fn close(a: f64, b: f64) -> bool {
+        (a - b).abs() <= 1e-15
+    }
+
+    fn check(got: (Vec<f64>, bool, usize), factors: &[f64], completed: bool, cutbacks: usize) {
+        let ok = got.0.len() == factors.len()
+            && got.0.iter().zip(factors).all(|(x, y)| close(*x, *y))
+            && got.1 == completed
+            && got.2 == cutbacks;
+        assert!(ok, "{got:?}, expected {factors:?} {completed} {cutbacks}");
+    }
+
+    #[test]
+    fn no_failure_walks_the_plan() {
+        check(walk(&[0.25, 0.5, 1.0], 0, 1.0), &[0.25, 0.5, 1.0], true, 0);
+        // unloading and overloading
+        check(walk(&[1.0, 2.0, 0.5], 0, 2.0), &[1.0, 2.0, 0.5], true, 0);
+    }
+
+    #[test]
+    fn cutback_halves_and_keeps_the_increment() {
+        // steps of at most 0.3: 1.0 fails, 0.5 fails, 0.25 converges, then 0.5, 0.75, 1.0
+        check(walk(&[1.0], 5, 0.3), &[0.25, 0.5, 0.75, 1.0], true, 2);
+        // the next planned step starts with its full increment again
+        check(walk(&[0.2, 1.0], 5, 0.5), &[0.2, 0.6, 1.0], true, 1);
+        // unloading is cut back the same way
+        check(
+            walk(&[1.0, 0.0], 5, 0.4),
+            &[0.25, 0.5, 0.75, 1.0, 0.75, 0.5, 0.25, 0.0],
+            true,
+            4,
+        );
+    }
+
+    #[test]
+    fn cutbacks_are_bounded() {
+        // 1.0 → 0.5 → 0.25 allowed (2 halvings), 0.25 still too far: terminal
+        check(walk(&[1.0], 2, 0.2), &[], false, 2);
+        // halvings count per planned step, successes between them included: 0.5 fails, 0.25
+        // converges, 0.5 converges, 0.75 fails and no halving is left
+        check(walk(&[1.0], 2, 0.25), &[0.25, 0.5, 0.75, 1.0], true, 2);
+        check(walk(&[0.2, 1.0], 1, 0.3), &[0.2], false, 1);
+        check(walk(&[1.0], 0, 0.9), &[], false, 0);
+    }
 }

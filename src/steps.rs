@@ -461,7 +461,7 @@ fn contact_counts(r: &ContactResult) -> (f64, f64, f64) {
             area += w.data[k];
         }
         match slip.map(|f| f.data[k]) {
-            Some(x) if x == 1.0 => n_slip += 1.0,
+            Some(1.0) => n_slip += 1.0,
             Some(_) => n_stick += 1.0,
             None => {}
         }

@@ -96,6 +96,7 @@ pub struct ContactSolution {
 
 /// Builds c_h, configures the solver, runs Algorithm 1 or 2 and reports the final state.
 /// Collective; every rank returns the same `Ok` / `Err` kind.
+#[allow(clippy::too_many_arguments)]
 pub fn solve(
     ctx: &Ctx,
     settings: &ContactSettings,

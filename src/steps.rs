@@ -52,6 +52,9 @@ pub struct StepRecord {
     pub planned: usize,
     /// The load factor t.
     pub factor: f64,
+    /// The XDMF time of the step: the load factor while the history only loads; from the first
+    /// unloading step on, the length of the load path Σ|Δt| (ParaView needs increasing times).
+    pub time: f64,
     /// Halvings of the increment of the planned step when this step converged.
     pub cutbacks: usize,
     /// Newton steps (contact) — None for a linear case.
@@ -224,14 +227,16 @@ impl Stepper<'_> {
                     .map(|c| &c.result)
                     .filter(|_| case.output.wants(OutputField::Contact));
                 let piece = fields.piece(grid);
+                let time = step_time(&records, factor);
                 output_s += if series {
-                    times.push(factor);
+                    times.push(time);
                     self.out.write_step(ctx, &piece, step, &times)?
                 } else {
                     self.out.write_solution(ctx, &piece)?
                 };
                 drop(fields);
                 let mut rec = self.record(&solved, step, p, factor, halvings);
+                rec.time = time;
                 rec.seconds = t0.elapsed().as_secs_f64();
                 if series {
                     log_step(ctx, &rec, plan.factors.len());
@@ -317,6 +322,7 @@ impl Stepper<'_> {
             step,
             planned,
             factor,
+            time: factor,
             cutbacks,
             newton_steps: None,
             active: None,
@@ -346,6 +352,20 @@ impl Stepper<'_> {
             rec.contact_area = Some(sums[2]);
         }
         rec
+    }
+}
+
+/// The XDMF time of a step at `factor` after `done`: the factor while the history has only
+/// loaded, else the previous time plus |Δ factor| (the length of the load path).
+fn step_time(done: &[StepRecord], factor: f64) -> f64 {
+    let Some(last) = done.last() else {
+        return factor;
+    };
+    let loading = last.time == last.factor && factor > last.factor;
+    if loading {
+        factor
+    } else {
+        last.time + (factor - last.factor).abs()
     }
 }
 
@@ -501,7 +521,7 @@ fn log_step(ctx: &Ctx, r: &StepRecord, planned: usize) {
 /// history.csv: one row per converged step; empty cells where a value does not apply.
 pub fn history_csv(records: &[StepRecord], dim: usize) -> String {
     let axes = ["x", "y", "z"];
-    let mut out = String::from("step,planned,factor,cutbacks,newton_steps,active,stick,slip");
+    let mut out = String::from("step,planned,factor,time,cutbacks,newton_steps,active,stick,slip");
     for a in &axes[..dim] {
         let _ = write!(out, ",force_{a}");
     }
@@ -515,10 +535,11 @@ pub fn history_csv(records: &[StepRecord], dim: usize) -> String {
     for r in records {
         let _ = write!(
             out,
-            "{},{},{:.17e},{},{},{},{},{}",
+            "{},{},{:.17e},{:.17e},{},{},{},{},{}",
             r.step,
             r.planned,
             r.factor,
+            r.time,
             r.cutbacks,
             opt(r.newton_steps),
             opt(r.active),
@@ -587,6 +608,42 @@ mod tests {
             && got.1 == completed
             && got.2 == cutbacks;
         assert!(ok, "{got:?}, expected {factors:?} {completed} {cutbacks}");
+    }
+
+    fn at(factor: f64, time: f64) -> StepRecord {
+        StepRecord {
+            step: 1,
+            planned: 1,
+            factor,
+            time,
+            cutbacks: 0,
+            newton_steps: None,
+            active: None,
+            stick: None,
+            slip: None,
+            total_force: None,
+            max_pressure: None,
+            half_width: None,
+            contact_area: None,
+            seconds: 0.0,
+        }
+    }
+
+    #[test]
+    fn times_increase_along_the_load_path() {
+        let mut done: Vec<StepRecord> = Vec::new();
+        let mut times = Vec::new();
+        for f in [0.3, 0.7, 1.0, 0.5, 0.8] {
+            let t = step_time(&done, f);
+            times.push(t);
+            done.push(at(f, t));
+        }
+        // the factors themselves while loading, then the path length
+        assert_eq!(&times[..3], &[0.3, 0.7, 1.0]);
+        assert!(
+            (times[3] - 1.5).abs() < 1e-15 && (times[4] - 1.8).abs() < 1e-15,
+            "{times:?}"
+        );
     }
 
     #[test]

@@ -1,5 +1,6 @@
-//! The driver: case → mesh → partition → assembly → solve (linear, or the contact algorithm)
-//! → post-processing → output, one line per stage.
+//! The driver: case → mesh → partition → assembly → the load steps (`crate::steps`: per step
+//! the solve — linear, or the contact algorithm —, its post-processing and output) → summary
+//! and the result set put in place, one line per stage.
 
 use crate::assembly::{self, System};
 use crate::case::Case;

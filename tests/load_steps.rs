@@ -370,3 +370,89 @@ fn ranks_agree() {
         assert!(d <= 1e-10 * scale, "step {}: {d:e}", k + 1);
     }
 }
+
+/// A tmpfs of `size` mounted for the test (root only); unmounted when dropped.
+struct SmallDisk {
+    _tmp: tempfile::TempDir,
+    path: PathBuf,
+}
+
+impl SmallDisk {
+    fn mount(size: &str) -> Option<SmallDisk> {
+        let tmp = tempfile::tempdir().ok()?;
+        let path = tmp.path().join("disk");
+        std::fs::create_dir(&path).ok()?;
+        let ok = std::process::Command::new("mount")
+            .args(["-t", "tmpfs", "-o", &format!("size={size}"), "tmpfs"])
+            .arg(&path)
+            .output()
+            .map(|o| o.status.success())
+            .unwrap_or(false);
+        ok.then_some(SmallDisk { _tmp: tmp, path })
+    }
+}
+
+impl Drop for SmallDisk {
+    fn drop(&mut self) {
+        let _ = std::process::Command::new("umount")
+            .arg(&self.path)
+            .status();
+    }
+}
+
+fn files(dir: &Path) -> Vec<(String, Vec<u8>)> {
+    let mut v: Vec<(String, Vec<u8>)> = std::fs::read_dir(dir)
+        .unwrap()
+        .map(|e| {
+            let p = e.unwrap().path();
+            let name = p.file_name().unwrap().to_string_lossy().into_owned();
+            (name, std::fs::read(&p).unwrap_or_default())
+        })
+        .collect();
+    v.sort();
+    v
+}
+
+/// The disk fills while step 2 is appended (step 1 of the default Hertz case, ~0.9 MB, fits
+/// on 1.1 MB beside small previous results; step 2 adds ~0.3 MB): one error, exit 1, the
+/// previous results untouched, no staging left — an output failure keeps nothing.
+#[test]
+fn a_full_disk_during_a_later_step_writes_nothing() {
+    let Some(disk) = SmallDisk::mount("1100k") else {
+        eprintln!("SKIPPED: cannot mount a tmpfs here (needs root)");
+        return;
+    };
+    let out = disk.path.join("out");
+    run_solver(1, &repo("cases/blocks/block2d.toml"), &[], &out).expect_code(0, "small run");
+    let before = files(&out);
+    for np in [1, 2] {
+        let r = run_solver(np, &hertz(), &["load.steps=2"], &out);
+        r.expect_code(1, &format!("full disk, {np} rank(s)"));
+        assert!(
+            r.stdout.contains("load step 1/2: factor 0.5 converged"),
+            "{}",
+            r.output()
+        );
+        let errors: Vec<&str> = r
+            .stderr
+            .lines()
+            .filter(|l| l.starts_with("error:"))
+            .collect();
+        assert_eq!(errors.len(), 1, "one error line:\n{}", r.output());
+        assert!(
+            errors[0].contains("solution.h5") && errors[0].contains("cannot write results"),
+            "{}",
+            errors[0]
+        );
+        assert_eq!(
+            files(&out),
+            before,
+            "{np} rank(s): previous results changed"
+        );
+        let names: Vec<String> = std::fs::read_dir(&disk.path)
+            .unwrap()
+            .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+            .collect();
+        assert_eq!(names, ["out"], "{np} rank(s): staging left behind");
+    }
+}

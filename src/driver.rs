@@ -1,35 +1,27 @@
-//! The driver: case → mesh → partition → assembly → solve (linear, or the contact algorithm)
-//! → post-processing → output, one line per stage.
+//! The driver: case → mesh → partition → assembly → the load steps (`crate::steps`: per step
+//! the solve — linear, or the contact algorithm —, its post-processing and output) → summary
+//! and the result set put in place, one line per stage.
 
 use crate::assembly::{self, System};
-use crate::case::{Case, OutputField};
+use crate::case::Case;
 use crate::error::RunError;
 use crate::mesh::Mesh;
-use crate::output::{ContactResult, ResultSet};
+use crate::output::ResultSet;
 use crate::par::Ctx;
 use crate::partition::{self, Layout};
-use crate::petsc::Vector;
-use crate::post;
 use crate::say;
 use crate::setup::{self, Input};
-use crate::signorini::{self, ContactReport};
-use crate::solver::{self, LinearSummary};
+use crate::steps::{LoadReport, SolveReport, Stepper};
 use crate::summary::{self, AssemblyInfo, Clock, PartitionInfo, Summary};
 use serde::Serialize;
 
-/// The solve's own summary section(s).
+/// The solve's sections of summary.json: the last step's report, and the load history.
 #[derive(Serialize)]
-#[serde(untagged)]
-enum SolveReport {
-    Linear(LinearSummary),
-    Contact(Box<ContactReport>),
-}
-
-/// The solve stage's product.
-struct Solved {
-    u: Vector,
-    report: SolveReport,
-    contact: Option<ContactResult>,
+struct SolveSections {
+    #[serde(flatten)]
+    solve: SolveReport,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    load: Option<LoadReport>,
 }
 
 /// Runs a whole case. Returns summary.json's text (the same on every rank).
@@ -46,16 +38,22 @@ pub fn run_case(ctx: &Ctx, case: &Case) -> Result<String, RunError> {
     let assembly = check_assembly(ctx, &sys, clock.t.assembly)?;
     let out = ResultSet::begin(ctx, &case.output.dir, &case.file)?;
     clock.lap();
-    let solved = solve(ctx, case, &mesh, &layout, &problem.fixed, &mut sys)?;
-    clock.t.solve = clock.lap();
-    let cells = post::cell_fields(&mesh, &layout, &material, &solved.u, &case.output)?;
-    let fields = post::solution_fields(&mesh, &layout, &solved.u, cells, &case.output)?;
-    clock.t.post = clock.lap();
-    let grid = solved
-        .contact
-        .as_ref()
-        .filter(|_| case.output.wants(OutputField::Contact));
-    clock.t.output = out.write_solution(ctx, &fields.piece(grid))?;
+    let stepper = Stepper {
+        ctx,
+        case,
+        mesh: &mesh,
+        layout: &layout,
+        material: &material,
+        fixed: &problem.fixed,
+        out: &out,
+    };
+    let stepped = stepper.run(&mut sys)?;
+    clock.lap();
+    (clock.t.solve, clock.t.post, clock.t.output) = (
+        stepped.solve_seconds,
+        stepped.post_seconds,
+        stepped.output_seconds,
+    );
     let timings = clock.finish();
     let summary = Summary {
         case: case.file.display().to_string(),
@@ -70,42 +68,22 @@ pub fn run_case(ctx: &Ctx, case: &Case) -> Result<String, RunError> {
         assembly,
         peak_memory_bytes_per_rank: summary::peak_memory_and_log(ctx, &timings),
         timings,
-        solve: solved.report,
+        solve: SolveSections {
+            solve: stepped.report,
+            load: stepped.load,
+        },
     };
     let json = summary.to_json();
-    let csv = solved.contact.as_ref().map(|c| c.csv.as_str());
-    out.commit(ctx, &json, csv, timings.output)?;
-    Ok(json)
-}
-
-/// One linear solve, or the contact algorithm.
-fn solve(
-    ctx: &Ctx,
-    case: &Case,
-    mesh: &Mesh,
-    layout: &Layout,
-    fixed: &[f64],
-    sys: &mut System,
-) -> Result<Solved, RunError> {
-    match &case.contact {
-        None => {
-            let (u, report) = solver::linear_solve(ctx, mesh, layout, sys, &case.solver)?;
-            Ok(Solved {
-                u,
-                report: SolveReport::Linear(report.summary(case.solver.preset)),
-                contact: None,
-            })
-        }
-        Some(cc) => {
-            let settings =
-                ctx.agree(setup::contact_settings(case, cc, mesh.dim).map_err(RunError::from))?;
-            let s = signorini::solve(ctx, &settings, mesh, layout, fixed, sys, &case.solver)?;
-            Ok(Solved {
-                u: s.u,
-                report: SolveReport::Contact(Box::new(s.report)),
-                contact: Some(s.result),
-            })
-        }
+    let csv = stepped.contact_csv.as_deref();
+    let history = stepped.history_csv.as_deref();
+    out.commit(ctx, &json, csv, history, timings.output)?;
+    match stepped.failure {
+        None => Ok(json),
+        Some(e) => Err(RunError::Failed(format!(
+            "{e} (the steps that converged are written to {}, summary.json says load.completed \
+             = false)",
+            case.output.dir.display()
+        ))),
     }
 }
 

@@ -19,4 +19,5 @@ pub mod post;
 pub mod setup;
 pub mod signorini;
 pub mod solver;
+pub mod steps;
 pub mod summary;

@@ -6,6 +6,7 @@
 //! names the file, the key path (`material.poisson`, `dirichlet[1].value`, `neumann[0]`)
 //! and the line of that key, or says "(from --set)".
 
+mod load;
 mod tree;
 
 #[cfg(test)]
@@ -16,6 +17,7 @@ use std::path::{Path, PathBuf};
 
 use crate::error::InputError;
 use crate::mesh::Mesh;
+pub use load::LoadSection;
 use tree::{join_index, join_key, Kind, Loc, Node};
 
 /// A vector of the case file (2 or 3 entries) as 3 components, z = 0 in 2D.
@@ -307,6 +309,8 @@ pub struct Case {
     pub output: OutputSection,
     pub contact: Option<ContactSection>,
     pub newton: NewtonSection,
+    /// The load history (`[load]`); None: one step at factor 1.
+    pub load: Option<LoadSection>,
     /// Where every key path came from, for errors found after loading.
     locs: BTreeMap<String, Loc>,
 }
@@ -335,6 +339,7 @@ const ROOT_KEYS: &[&str] = &[
     "output",
     "contact",
     "newton",
+    "load",
 ];
 
 impl Case {
@@ -767,6 +772,7 @@ impl Reader<'_> {
         let output = self.output(&top, output_dir)?;
         let contact = self.contact(&top)?;
         let newton = self.newton(&top)?;
+        let load = self.load(&top)?;
         if solver.method == Method::SnesVi {
             let why = match &contact {
                 None => Some("needs a [contact] section"),
@@ -793,6 +799,7 @@ impl Reader<'_> {
             output,
             contact,
             newton,
+            load,
             locs: BTreeMap::new(),
         })
     }

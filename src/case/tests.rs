@@ -896,3 +896,117 @@ fn deep_nesting_in_the_file_is_a_syntax_error() {
         assert!(e.message.contains("recursion limit"), "{e}");
     }
 }
+
+#[test]
+fn load_section() {
+    assert_eq!(parse(MINIMAL).unwrap().load, None);
+    let c = parse(&with("[load]\nsteps = 4\n")).unwrap();
+    assert_eq!(
+        c.load,
+        Some(LoadSection {
+            factors: vec![0.25, 0.5, 0.75, 1.0],
+            max_cutbacks: load::DEFAULT_MAX_CUTBACKS,
+        })
+    );
+    let c = parse(&with(
+        "[load]\nfactors = [0.5, 2, 0.25]\nmax_cutbacks = 0\n",
+    ))
+    .unwrap();
+    assert_eq!(
+        c.load,
+        Some(LoadSection {
+            factors: vec![0.5, 2.0, 0.25],
+            max_cutbacks: 0,
+        })
+    );
+    let c = parse_set(MINIMAL, &["load.steps=3"]).unwrap();
+    assert_eq!(c.load.unwrap().factors.len(), 3);
+}
+
+#[test]
+fn load_rejections() {
+    for (extra, key, needle, says) in [
+        (
+            "[load]\nmax_cutbacks = 2\n",
+            "load",
+            "[load]",
+            "one of 'steps'",
+        ),
+        (
+            "[load]\nsteps = 2\nfactors = [1.0]\n",
+            "load.factors",
+            "factors",
+            "not both",
+        ),
+        ("[load]\nsteps = 0\n", "load.steps", "steps", "from 1"),
+        ("[load]\nsteps = 2.5\n", "load.steps", "steps", "integer"),
+        (
+            "[load]\nfactors = []\n",
+            "load.factors",
+            "factors",
+            "at least one",
+        ),
+        (
+            "[load]\nfactors = 1.0\n",
+            "load.factors",
+            "factors",
+            "array",
+        ),
+        (
+            "[load]\nfactors = [0.5, 0.0]\n",
+            "load.factors[1]",
+            "factors",
+            "> 0",
+        ),
+        (
+            "[load]\nfactors = [0.5, -1]\n",
+            "load.factors[1]",
+            "factors",
+            "> 0",
+        ),
+        (
+            "[load]\nfactors = [0.5, nan]\n",
+            "load.factors[1]",
+            "factors",
+            "finite",
+        ),
+        (
+            "[load]\nfactors = [0.5, \"x\"]\n",
+            "load.factors[1]",
+            "factors",
+            "number",
+        ),
+        (
+            "[load]\nfactors = [0.5, 0.5]\n",
+            "load.factors[1]",
+            "factors",
+            "equals",
+        ),
+        (
+            "[load]\nsteps = 2\nmax_cutbacks = -1\n",
+            "load.max_cutbacks",
+            "max_cutbacks",
+            "from 0",
+        ),
+        (
+            "[load]\nsteps = 2\nmax_cutbacks = 31\n",
+            "load.max_cutbacks",
+            "max_cutbacks",
+            "to 30",
+        ),
+        (
+            "[load]\nsteps = 2\ncutbacks = 3\n",
+            "load.cutbacks",
+            "cutbacks",
+            "allowed keys",
+        ),
+    ] {
+        let text = with(extra);
+        let e = expect_err(&text, key, needle);
+        assert!(e.message.contains(says), "{extra}: {e}");
+    }
+    let text = format!("load = 3\n{MINIMAL}");
+    assert!(expect_err(&text, "load", "load = 3")
+        .message
+        .contains("table"));
+}

@@ -19,6 +19,12 @@
 //! `solution.xdmf` (XDMF 3, written by rank 0) has one Domain with the Grid "mesh" and, when
 //! K > 0, the Grid "contact"; `node_id` / `cell_id` appear there as Int attributes.
 //!
+//! A load history (several solutions on one mesh, [`Slot::Step`]) keeps `/mesh/*` and
+//! `/contact/{geometry,topology,node_id}` (written with the first step) and puts the fields of
+//! step s (1, 2, …) under `/step_s/nodal/NAME`, `/step_s/cell/NAME`, `/step_s/contact/NAME`.
+//! Its XDMF has two temporal collections ("mesh", "contact"), one Uniform grid per step with
+//! `<Time Value>` = the step's load factor, every step pointing at the same mesh datasets.
+//!
 //! Error handling: every check that could differ between ranks is agreed on by all ranks
 //! before the next collective step, so a bad piece on one rank gives the same `Err` on all
 //! ranks instead of a hang. Messages name the file.
@@ -28,7 +34,7 @@ mod xdmf;
 
 pub use result_set::{ContactResult, ResultSet, SolutionFields};
 
-pub use xdmf::{attribute_type, xdmf_text, FieldMeta, Meta};
+pub use xdmf::{attribute_type, xdmf_series_text, xdmf_text, FieldMeta, Meta};
 
 use std::path::Path;
 
@@ -354,78 +360,130 @@ impl Writer<'_> {
     }
 }
 
-fn create_group(file: &hdf5::File, path: &str, name: &str) -> Result<Group, String> {
-    file.create_group(name)
-        .map_err(|e| format!("{path}: cannot create group /{name}: {e}"))
+fn create_group(parent: &Group, path: &str, name: &str) -> Result<Group, String> {
+    parent.create_group(name).map_err(|e| {
+        let at = parent.name();
+        let sep = if at.ends_with('/') { "" } else { "/" };
+        format!("{path}: cannot create group {at}{sep}{name}: {e}")
+    })
+}
+
+/// Where a piece goes in `solution.h5`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Slot {
+    /// One solution: `/mesh`, `/nodal`, `/cell`, `/contact` in a new file.
+    Static,
+    /// Step `index` (1, 2, …) of a load history: step 1 creates the file with the mesh and the
+    /// contact geometry, every step adds `/step_{index}/{nodal,cell,contact}`.
+    Step { index: usize },
+}
+
+impl Slot {
+    /// True when this piece creates the file and writes the mesh.
+    fn creates(self) -> bool {
+        matches!(self, Slot::Static | Slot::Step { index: 1 })
+    }
 }
 
 /// All datasets of the HDF5 file, in the same order on every rank. Returns the collective
 /// (same on all ranks) error, if any; independent write errors go to `w.local_err`.
-fn write_datasets(file: &hdf5::File, w: &mut Writer, p: &Piece, meta: &Meta) -> Result<(), String> {
+fn write_datasets(
+    file: &hdf5::File,
+    w: &mut Writer,
+    p: &Piece,
+    meta: &Meta,
+    slot: Slot,
+) -> Result<(), String> {
     let path = w.path;
     let n = meta.n_nodes;
     let m = meta.n_cells;
     let npe = meta.dim + 1;
+    // validated and agreed: every rank has Some(contact) when n_contact > 0
+    let contact = match &p.contact {
+        Some(c) if meta.n_contact > 0 => Some(c),
+        None if meta.n_contact > 0 => {
+            return Err(format!("{path}: contact piece missing on this rank"))
+        }
+        _ => None,
+    };
 
-    let mesh = create_group(file, path, "mesh")?;
-    w.rows::<f64, f64>(
-        &mesh,
-        "geometry",
-        n,
-        3,
-        p.node_offset,
-        p.coords.as_flattened(),
-    )?;
-    w.rows::<i64, usize>(&mesh, "topology", m, npe, p.cell_offset, p.connectivity)?;
-    w.rows::<i64, u64>(&mesh, "node_id", n, 1, p.node_offset, p.node_ids)?;
-    w.rows::<i64, u64>(&mesh, "cell_id", m, 1, p.cell_offset, p.cell_ids)?;
-    drop(mesh);
+    if slot.creates() {
+        let mesh = create_group(file, path, "mesh")?;
+        w.rows::<f64, f64>(
+            &mesh,
+            "geometry",
+            n,
+            3,
+            p.node_offset,
+            p.coords.as_flattened(),
+        )?;
+        w.rows::<i64, usize>(&mesh, "topology", m, npe, p.cell_offset, p.connectivity)?;
+        w.rows::<i64, u64>(&mesh, "node_id", n, 1, p.node_offset, p.node_ids)?;
+        w.rows::<i64, u64>(&mesh, "cell_id", m, 1, p.cell_offset, p.cell_ids)?;
+    }
+    let step = match slot {
+        Slot::Static => None,
+        Slot::Step { index } => Some(create_group(file, path, &format!("step_{index}"))?),
+    };
+    let root: &Group = step.as_ref().unwrap_or(file);
 
-    let nodal = create_group(file, path, "nodal")?;
+    let nodal = create_group(root, path, "nodal")?;
     for f in &p.nodal {
         w.rows::<f64, f64>(&nodal, f.name, n, f.ncomp, p.node_offset, f.data)?;
     }
     drop(nodal);
 
-    let cell = create_group(file, path, "cell")?;
+    let cell = create_group(root, path, "cell")?;
     for f in &p.cellwise {
         w.rows::<f64, f64>(&cell, f.name, m, f.ncomp, p.cell_offset, f.data)?;
     }
     drop(cell);
 
-    if meta.n_contact > 0 {
-        // validated and agreed: every rank has Some(contact) when n_contact > 0
-        let Some(c) = &p.contact else {
-            return Err(format!("{path}: contact piece missing on this rank"));
-        };
+    if let Some(c) = contact {
         let k = meta.n_contact;
-        let g = create_group(file, path, "contact")?;
-        w.rows::<f64, f64>(&g, "geometry", k, 3, c.offset, c.coords.as_flattened())?;
-        let topo: Vec<u64> = (c.offset as u64..(c.offset + c.coords.len()) as u64).collect();
-        w.rows::<i64, u64>(&g, "topology", k, 1, c.offset, &topo)?;
-        w.rows::<i64, u64>(&g, "node_id", k, 1, c.offset, c.node_ids)?;
+        let fields_group = if slot.creates() {
+            let g = create_group(file, path, "contact")?;
+            w.rows::<f64, f64>(&g, "geometry", k, 3, c.offset, c.coords.as_flattened())?;
+            let topo: Vec<u64> = (c.offset as u64..(c.offset + c.coords.len()) as u64).collect();
+            w.rows::<i64, u64>(&g, "topology", k, 1, c.offset, &topo)?;
+            w.rows::<i64, u64>(&g, "node_id", k, 1, c.offset, c.node_ids)?;
+            match step {
+                None => g,
+                Some(_) => create_group(root, path, "contact")?,
+            }
+        } else {
+            create_group(root, path, "contact")?
+        };
         for f in &c.fields {
-            w.rows::<f64, f64>(&g, f.name, k, f.ncomp, c.offset, f.data)?;
+            w.rows::<f64, f64>(&fields_group, f.name, k, f.ncomp, c.offset, f.data)?;
         }
     }
     Ok(())
 }
 
-/// Bytes `solution.h5` takes: its datasets exactly (every value 8 bytes), plus room for the
-/// metadata (superblock, groups, object headers: measured ~1 KiB per dataset).
-fn file_bytes(meta: &Meta) -> u64 {
+/// Bytes `solution.h5` takes (`with_mesh`), or a step adds to it: its datasets exactly (every
+/// value 8 bytes), plus room for the metadata (superblock, groups, object headers: measured
+/// ~1 KiB per dataset).
+fn file_bytes(meta: &Meta, with_mesh: bool) -> u64 {
     let (n, m, k) = (
         meta.n_nodes as u64,
         meta.n_cells as u64,
         meta.n_contact as u64,
     );
     let comps = |v: &[FieldMeta]| v.iter().map(|f| f.ncomp as u64).sum::<u64>();
-    let mut values = n * (3 + 1) + m * (meta.dim as u64 + 1 + 1);
-    values += n * comps(&meta.nodal) + m * comps(&meta.cellwise);
-    let mut datasets = 4 + meta.nodal.len() + meta.cellwise.len();
+    let mut values = n * comps(&meta.nodal) + m * comps(&meta.cellwise);
+    let mut datasets = meta.nodal.len() + meta.cellwise.len();
+    if with_mesh {
+        values += n * (3 + 1) + m * (meta.dim as u64 + 1 + 1);
+        datasets += 4;
+    }
     if k > 0 {
-        values += k * (3 + 1 + 1) + k * comps(&meta.contact);
-        datasets += 3 + meta.contact.len();
+        values += k * comps(&meta.contact);
+        datasets += meta.contact.len();
+        if with_mesh {
+            values += k * (3 + 1 + 1);
+            datasets += 3;
+        }
     }
     8 * values + 16 * 1024 + 2048 * datasets as u64
 }
@@ -456,6 +514,42 @@ fn release_unused(path: &Path) {
 /// `dir/solution.xdmf` (rank 0). `dir` must exist. Returns the same `Err` on every rank if
 /// any rank's piece is inconsistent or any write fails.
 pub fn write_xdmf_hdf5<C>(comm: &C, dir: &Path, piece: &Piece) -> Result<(), String>
+where
+    C: Communicator + AsRaw<Raw = mpi::ffi::MPI_Comm>,
+{
+    write_piece(comm, dir, piece, Slot::Static, |meta| {
+        xdmf_text(meta, H5_FILE)
+    })
+}
+
+/// Collective over `comm`: step `index` (1, 2, …; step 1 creates the files) of a load history
+/// into `dir/solution.h5`, and `dir/solution.xdmf` rewritten (rank 0) as the temporal
+/// collection of the steps so far, `times[s − 1]` being the time (load factor) of step s. Every
+/// step's piece must describe the same mesh and fields. The same `Err` on every rank.
+pub fn write_step_xdmf_hdf5<C>(
+    comm: &C,
+    dir: &Path,
+    piece: &Piece,
+    index: usize,
+    times: &[f64],
+) -> Result<(), String>
+where
+    C: Communicator + AsRaw<Raw = mpi::ffi::MPI_Comm>,
+{
+    write_piece(comm, dir, piece, Slot::Step { index }, |meta| {
+        xdmf_series_text(meta, H5_FILE, times)
+    })
+}
+
+/// The common body of [`write_xdmf_hdf5`] and [`write_step_xdmf_hdf5`]: checks, the HDF5 data
+/// into `slot`, then the XDMF text `xdmf` makes of the description.
+fn write_piece<C>(
+    comm: &C,
+    dir: &Path,
+    piece: &Piece,
+    slot: Slot,
+    xdmf: impl FnOnce(&Meta) -> String,
+) -> Result<(), String>
 where
     C: Communicator + AsRaw<Raw = mpi::ffi::MPI_Comm>,
 {
@@ -510,10 +604,20 @@ where
         }
         return Err(e);
     }
-    let created = hdf5::File::with_options()
-        .with_fapl(|p| p.mpio(comm.as_raw(), None))
-        .create(&h5_path)
-        .map_err(|e| format!("{h5_name}: cannot create: {e}"));
+    let mut builder = hdf5::File::with_options();
+    let builder = builder.with_fapl(|p| p.mpio(comm.as_raw(), None));
+    // What the file holds already (a later step of a history appends to it).
+    let mut before = 0;
+    let created = if slot.creates() {
+        builder
+            .create(&h5_path)
+            .map_err(|e| format!("{h5_name}: cannot create: {e}"))
+    } else {
+        before = std::fs::metadata(&h5_path).map_or(0, |m| m.len());
+        builder
+            .open_rw(&h5_path)
+            .map_err(|e| format!("{h5_name}: cannot open to add step {slot:?}: {e}"))
+    };
     let file = match created {
         Ok(f) => {
             agree(comm, Ok(()))?;
@@ -523,7 +627,7 @@ where
             // a live id, and the library's shutdown inside MPI_Finalize then crashes
             // (segfault after the error line). Here the file is still empty: give the reserve
             // back, close it (its first metadata fits) and stop with the reason.
-            let need = file_bytes(&meta);
+            let need = before + file_bytes(&meta, slot.creates());
             let reserved = if comm.rank() == 0 {
                 preallocate(&h5_path, need).map_err(|e| {
                     format!(
@@ -558,7 +662,7 @@ where
         path: &h5_name,
         local_err: None,
     };
-    let collective = write_datasets(&file, &mut w, piece, &meta);
+    let collective = write_datasets(&file, &mut w, piece, &meta, slot);
     let closed = file
         .close()
         .map_err(|e| format!("{h5_name}: closing failed: {e}"));
@@ -577,7 +681,7 @@ where
 
     // 3. The XDMF description (rank 0), after the data it points to is complete.
     if comm.rank() == 0 && local.is_ok() {
-        let text = xdmf_text(&meta, H5_FILE);
+        let text = xdmf(&meta);
         if let Err(e) = std::fs::write(&xdmf_path, text) {
             local = Err(format!("{}: cannot write: {e}", xdmf_path.display()));
         }

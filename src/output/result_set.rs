@@ -3,7 +3,9 @@
 //! (or, if the run fails, what was there before). Knows nothing of contact: the contact grid
 //! and its table arrive as plain fields and text.
 
-use super::{write_xdmf_hdf5, ContactPiece, Field, FieldBuf, Piece, XDMF_FILE};
+use super::{
+    write_step_xdmf_hdf5, write_xdmf_hdf5, ContactPiece, Field, FieldBuf, Piece, XDMF_FILE,
+};
 use crate::error::{InputError, RunError};
 use crate::par::Ctx;
 use crate::say;
@@ -15,8 +17,17 @@ pub const SUMMARY_FILE: &str = "summary.json";
 /// Name of the contact-node table inside the output directory.
 pub const CONTACT_CSV: &str = "contact_nodes.csv";
 
+/// Name of the table of load steps inside the output directory (a run with `[load]`).
+pub const HISTORY_CSV: &str = "history.csv";
+
 /// Every file a run may write into the output directory.
-pub const RESULT_FILES: &[&str] = &[super::H5_FILE, XDMF_FILE, SUMMARY_FILE, CONTACT_CSV];
+pub const RESULT_FILES: &[&str] = &[
+    super::H5_FILE,
+    XDMF_FILE,
+    SUMMARY_FILE,
+    CONTACT_CSV,
+    HISTORY_CSV,
+];
 
 /// This rank's part of the mesh and its fields, owned.
 pub struct SolutionFields {
@@ -186,6 +197,32 @@ impl ResultSet {
     /// seconds it took.
     pub fn write_solution(&self, ctx: &Ctx, piece: &Piece) -> Result<f64, RunError> {
         let t = Instant::now();
+        self.fresh_staging(ctx)?;
+        write_xdmf_hdf5(ctx.world, &self.staging, piece).map_err(|e| self.cannot(e))?;
+        Ok(t.elapsed().as_secs_f64())
+    }
+
+    /// Adds step `index` (1, 2, …) of a load history to solution.h5 in the staging directory
+    /// and rewrites solution.xdmf as the temporal collection of `times` (one per step so far,
+    /// the load factors). Collective. Returns the seconds it took.
+    pub fn write_step(
+        &self,
+        ctx: &Ctx,
+        piece: &Piece,
+        index: usize,
+        times: &[f64],
+    ) -> Result<f64, RunError> {
+        let t = Instant::now();
+        if index == 1 {
+            self.fresh_staging(ctx)?;
+        }
+        write_step_xdmf_hdf5(ctx.world, &self.staging, piece, index, times)
+            .map_err(|e| self.cannot(e))?;
+        Ok(t.elapsed().as_secs_f64())
+    }
+
+    /// An empty staging directory (rank 0 makes it, all agree).
+    fn fresh_staging(&self, ctx: &Ctx) -> Result<(), RunError> {
         let local = if ctx.rank == 0 {
             let _ = std::fs::remove_dir_all(&self.staging);
             std::fs::create_dir_all(&self.staging)
@@ -193,27 +230,29 @@ impl ResultSet {
         } else {
             Ok(())
         };
-        ctx.agree(local.map_err(RunError::Failed))?;
-        write_xdmf_hdf5(ctx.world, &self.staging, piece).map_err(|e| {
-            RunError::Failed(format!(
-                "cannot write results to {}: {e}",
-                self.dir.display()
-            ))
-        })?;
-        Ok(t.elapsed().as_secs_f64())
+        ctx.agree(local.map_err(RunError::Failed))
     }
 
-    /// Writes the summary (and the contact table) and puts the staging directory in place of
-    /// the output directory, replacing it as a whole. Collective.
+    fn cannot(&self, e: String) -> RunError {
+        RunError::Failed(format!(
+            "cannot write results to {}: {e}",
+            self.dir.display()
+        ))
+    }
+
+    /// Writes the summary (and the contact table, and the load history's table) and puts the
+    /// staging directory in place of the output directory, replacing it as a whole.
+    /// Collective.
     pub fn commit(
         mut self,
         ctx: &Ctx,
         summary_json: &str,
         csv: Option<&str>,
+        history_csv: Option<&str>,
         output_seconds: f64,
     ) -> Result<(), RunError> {
         let local = if ctx.rank == 0 {
-            self.finish(summary_json, csv).map_err(|e| {
+            self.finish(summary_json, csv, history_csv).map_err(|e| {
                 RunError::Failed(format!(
                     "cannot write results to {}: {e}",
                     self.dir.display()
@@ -234,10 +273,18 @@ impl ResultSet {
     }
 
     /// Rank 0: the small files, then the swap old → aside, staging → dir, aside removed.
-    fn finish(&self, summary_json: &str, csv: Option<&str>) -> std::io::Result<()> {
+    fn finish(
+        &self,
+        summary_json: &str,
+        csv: Option<&str>,
+        history_csv: Option<&str>,
+    ) -> std::io::Result<()> {
         std::fs::write(self.staging.join(SUMMARY_FILE), summary_json)?;
         if let Some(c) = csv {
             std::fs::write(self.staging.join(CONTACT_CSV), c)?;
+        }
+        if let Some(h) = history_csv {
+            std::fs::write(self.staging.join(HISTORY_CSV), h)?;
         }
         if let Some(p) = self.dir.parent() {
             if !p.as_os_str().is_empty() {

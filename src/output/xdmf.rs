@@ -3,6 +3,10 @@
 //! Layout: one `Domain` holding the Uniform Grid "mesh" and, when contact nodes exist, a
 //! second Uniform Grid "contact" (Polyvertex cells, one per contact node). ParaView's
 //! XDMF readers turn two grids of one Domain into a multiblock data set with two blocks.
+//!
+//! A load history ([`xdmf_series_text`]): the same two grids, each a temporal collection
+//! (`GridType="Collection" CollectionType="Temporal"`) of one Uniform grid per step with its
+//! `<Time Value>`; ParaView's time slider walks the steps.
 
 use std::fmt::Write;
 
@@ -114,33 +118,85 @@ fn escape(s: &str) -> String {
 /// The whole XDMF document; `h5` is the HDF5 file name relative to the XDMF file.
 pub fn xdmf_text(meta: &Meta, h5: &str) -> String {
     let mut out = String::with_capacity(4096);
+    head(&mut out);
+    mesh_grid(&mut out, meta, h5, "", None);
+    if meta.n_contact > 0 {
+        contact_grid(&mut out, meta, h5, "/contact", None);
+    }
+    tail(&mut out);
+    out
+}
+
+/// The XDMF document of a load history: the grids "mesh" and (with contact nodes) "contact"
+/// as temporal collections, step s (1, 2, …) at time `times[s − 1]` with its fields under
+/// `/step_s/`; every step points at the one `/mesh` and `/contact` geometry.
+pub fn xdmf_series_text(meta: &Meta, h5: &str, times: &[f64]) -> String {
+    let mut out = String::with_capacity(4096 * (times.len() + 1));
+    head(&mut out);
+    let mut grids = vec!["mesh"];
+    if meta.n_contact > 0 {
+        grids.push("contact");
+    }
+    for name in grids {
+        let _ = writeln!(
+            out,
+            "    <Grid Name=\"{name}\" GridType=\"Collection\" CollectionType=\"Temporal\">"
+        );
+        for (i, &t) in times.iter().enumerate() {
+            let mut g = String::with_capacity(4096);
+            let step = format!("/step_{}", i + 1);
+            if name == "mesh" {
+                mesh_grid(&mut g, meta, h5, &step, Some(t));
+            } else {
+                contact_grid(&mut g, meta, h5, &format!("{step}/contact"), Some(t));
+            }
+            for line in g.lines() {
+                let _ = writeln!(out, "  {line}");
+            }
+        }
+        out.push_str("    </Grid>\n");
+    }
+    tail(&mut out);
+    out
+}
+
+fn head(out: &mut String) {
     out.push_str("<?xml version=\"1.0\" encoding=\"utf-8\"?>\n");
     out.push_str("<Xdmf Version=\"3.0\" xmlns:xi=\"http://www.w3.org/2001/XInclude\">\n");
     out.push_str("  <Domain>\n");
+}
 
-    // Grid "mesh"
+fn tail(out: &mut String) {
+    out.push_str("  </Domain>\n");
+    out.push_str("</Xdmf>\n");
+}
+
+/// `<Time Value>` of a step (the shortest text that reads back as the same number).
+fn time(out: &mut String, t: Option<f64>) {
+    if let Some(t) = t {
+        let _ = writeln!(out, "      <Time Value=\"{t:?}\"/>");
+    }
+}
+
+/// Grid "mesh"; its fields under `{fields}/nodal` and `{fields}/cell`.
+fn mesh_grid(out: &mut String, meta: &Meta, h5: &str, fields: &str, t: Option<f64>) {
     let (topo, npe) = if meta.dim == 3 {
         ("Tetrahedron", 4)
     } else {
         ("Triangle", 3)
     };
     out.push_str("    <Grid Name=\"mesh\" GridType=\"Uniform\">\n");
+    time(out, t);
     let _ = writeln!(
         out,
         "      <Topology TopologyType=\"{topo}\" NumberOfElements=\"{}\" NodesPerElement=\"{npe}\">",
         meta.n_cells
     );
-    data_item(
-        &mut out,
-        h5,
-        "/mesh/topology",
-        &dims(meta.n_cells, npe),
-        false,
-    );
+    data_item(out, h5, "/mesh/topology", &dims(meta.n_cells, npe), false);
     out.push_str("      </Topology>\n");
-    geometry(&mut out, h5, "/mesh/geometry", meta.n_nodes);
+    geometry(out, h5, "/mesh/geometry", meta.n_nodes);
     attribute(
-        &mut out,
+        out,
         h5,
         "node_id",
         1,
@@ -150,7 +206,7 @@ pub fn xdmf_text(meta: &Meta, h5: &str) -> String {
         false,
     );
     attribute(
-        &mut out,
+        out,
         h5,
         "cell_id",
         1,
@@ -160,65 +216,35 @@ pub fn xdmf_text(meta: &Meta, h5: &str) -> String {
         false,
     );
     for f in &meta.nodal {
-        let path = format!("/nodal/{}", f.name);
-        attribute(
-            &mut out,
-            h5,
-            &f.name,
-            f.ncomp,
-            "Node",
-            &path,
-            meta.n_nodes,
-            true,
-        );
+        let path = format!("{fields}/nodal/{}", f.name);
+        attribute(out, h5, &f.name, f.ncomp, "Node", &path, meta.n_nodes, true);
     }
     for f in &meta.cellwise {
-        let path = format!("/cell/{}", f.name);
-        attribute(
-            &mut out,
-            h5,
-            &f.name,
-            f.ncomp,
-            "Cell",
-            &path,
-            meta.n_cells,
-            true,
-        );
+        let path = format!("{fields}/cell/{}", f.name);
+        attribute(out, h5, &f.name, f.ncomp, "Cell", &path, meta.n_cells, true);
     }
     out.push_str("    </Grid>\n");
+}
 
-    // Grid "contact": one Polyvertex cell per contact node
-    if meta.n_contact > 0 {
-        let k = meta.n_contact;
-        out.push_str("    <Grid Name=\"contact\" GridType=\"Uniform\">\n");
-        let _ = writeln!(
-            out,
-            "      <Topology TopologyType=\"Polyvertex\" NumberOfElements=\"{k}\" NodesPerElement=\"1\">"
-        );
-        // K × 1 connectivity 0, 1, …, K−1 (Polyvertex wants an explicit second dimension)
-        data_item(&mut out, h5, "/contact/topology", &format!("{k} 1"), false);
-        out.push_str("      </Topology>\n");
-        geometry(&mut out, h5, "/contact/geometry", k);
-        attribute(
-            &mut out,
-            h5,
-            "node_id",
-            1,
-            "Node",
-            "/contact/node_id",
-            k,
-            false,
-        );
-        for f in &meta.contact {
-            let path = format!("/contact/{}", f.name);
-            attribute(&mut out, h5, &f.name, f.ncomp, "Node", &path, k, true);
-        }
-        out.push_str("    </Grid>\n");
+/// Grid "contact": one Polyvertex cell per contact node; its fields under `fields`.
+fn contact_grid(out: &mut String, meta: &Meta, h5: &str, fields: &str, t: Option<f64>) {
+    let k = meta.n_contact;
+    out.push_str("    <Grid Name=\"contact\" GridType=\"Uniform\">\n");
+    time(out, t);
+    let _ = writeln!(
+        out,
+        "      <Topology TopologyType=\"Polyvertex\" NumberOfElements=\"{k}\" NodesPerElement=\"1\">"
+    );
+    // K × 1 connectivity 0, 1, …, K−1 (Polyvertex wants an explicit second dimension)
+    data_item(out, h5, "/contact/topology", &format!("{k} 1"), false);
+    out.push_str("      </Topology>\n");
+    geometry(out, h5, "/contact/geometry", k);
+    attribute(out, h5, "node_id", 1, "Node", "/contact/node_id", k, false);
+    for f in &meta.contact {
+        let path = format!("{fields}/{}", f.name);
+        attribute(out, h5, &f.name, f.ncomp, "Node", &path, k, true);
     }
-
-    out.push_str("  </Domain>\n");
-    out.push_str("</Xdmf>\n");
-    out
+    out.push_str("    </Grid>\n");
 }
 
 #[cfg(test)]
@@ -306,6 +332,41 @@ mod tests {
         let mesh = t.find("Name=\"mesh\"").unwrap();
         let contact = t.find("Name=\"contact\"").unwrap();
         assert!(mesh < contact && contact < t.find("</Domain>").unwrap());
+    }
+
+    #[test]
+    fn series_text() {
+        let t = xdmf_series_text(&meta(4), "solution.h5", &[0.25, 0.5, 1.0]);
+        assert_eq!(
+            t.matches("GridType=\"Collection\" CollectionType=\"Temporal\"")
+                .count(),
+            2
+        );
+        assert_eq!(
+            t.matches("<Grid Name=\"mesh\" GridType=\"Uniform\"")
+                .count(),
+            3
+        );
+        assert_eq!(
+            t.matches("<Grid Name=\"contact\" GridType=\"Uniform\"")
+                .count(),
+            3
+        );
+        for (s, v) in [(1, "0.25"), (2, "0.5"), (3, "1.0")] {
+            assert_eq!(t.matches(&format!("<Time Value=\"{v}\"/>")).count(), 2);
+            assert!(t.contains(&format!(">solution.h5:/step_{s}/nodal/displacement<")));
+            assert!(t.contains(&format!(">solution.h5:/step_{s}/cell/stress<")));
+            assert!(t.contains(&format!(">solution.h5:/step_{s}/contact/pressure<")));
+        }
+        // the mesh and the contact geometry once in the file, referenced by every step
+        assert_eq!(t.matches(">solution.h5:/mesh/geometry<").count(), 3);
+        assert_eq!(t.matches(">solution.h5:/contact/geometry<").count(), 3);
+        assert!(!t.contains(">solution.h5:/nodal/"));
+        assert_eq!(t.matches("<Grid ").count(), t.matches("</Grid>").count());
+        // without contact nodes one collection
+        let t = xdmf_series_text(&meta(0), "solution.h5", &[1.0]);
+        assert_eq!(t.matches("CollectionType=\"Temporal\"").count(), 1);
+        assert!(!t.contains("contact"));
     }
 
     #[test]

@@ -96,6 +96,7 @@ pub struct ContactSolution {
 
 /// Builds c_h, configures the solver, runs Algorithm 1 or 2 and reports the final state.
 /// Collective; every rank returns the same `Ok` / `Err` kind.
+#[allow(clippy::too_many_arguments)]
 pub fn solve(
     ctx: &Ctx,
     settings: &ContactSettings,
@@ -104,7 +105,9 @@ pub fn solve(
     fixed: &[f64],
     sys: &System,
     solver_section: &SolverSection,
+    previous: Option<&ContactSolution>,
 ) -> Result<ContactSolution, RunError> {
+    let _ = previous;
     let dim = mesh.dim;
     let b = boundary::build(ctx, mesh, layout, settings, fixed)?;
     log_boundary(ctx, &b, &settings.group);
@@ -154,7 +157,7 @@ pub fn solve(
         }
     };
     if !nr.converged {
-        return Err(RunError::Failed(match solver_section.method {
+        return Err(RunError::NoConvergence(match solver_section.method {
             Method::Newton => format!(
                 "Newton did not converge in newton.max_steps = {} steps (active set still \
                  changing: {} node(s) in the last step)",

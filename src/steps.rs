@@ -1,0 +1,681 @@
+//! Quasi-static load stepping: the solve stage of a run, one solve per load factor.
+//!
+//! Step s solves the problem with the Neumann data, the body force and the prescribed
+//! displacements multiplied by its factor t_s (the obstacle stays). The assembled right-hand
+//! side is linear in all three (the loads (3.8), −K_ij g_j of the eliminated Dirichlet columns
+//! and A_jj g_j of their rows), so f(t) = t · f(1): the system is assembled once and its
+//! right-hand side scaled per step. A contact step starts from the previous converged step
+//! (`previous` of [`signorini::solve`]).
+//!
+//! Cutback: a step whose solve does not converge ([`RunError::NoConvergence`]) is retried at
+//! the midpoint between the last converged factor and the failed one; after a success the
+//! halved increment is kept until the planned factor is reached. A planned step may halve its
+//! increment `max_cutbacks` times (so it becomes at most 2^max_cutbacks sub-steps); one more
+//! failure ends the run. Any other error ends the run at once.
+//!
+//! Without `[load]` the run is one step at factor 1 without cutback, written as today's single
+//! solution; with `[load]` every converged step (sub-steps of a cutback included) is a step of
+//! the XDMF temporal collection and a row of `history.csv`.
+
+use crate::assembly::System;
+use crate::case::{Case, LoadSection, OutputField};
+use crate::error::RunError;
+use crate::fem::Material;
+use crate::mesh::Mesh;
+use crate::output::{ContactResult, ResultSet};
+use crate::par::Ctx;
+use crate::partition::Layout;
+use crate::petsc::Vector;
+use crate::post;
+use crate::say;
+use crate::setup::{self, ContactSettings};
+use crate::signorini::{self, ContactReport, ContactSolution};
+use crate::solver::{self, LinearSummary};
+use serde::Serialize;
+use std::fmt::Write;
+use std::time::Instant;
+
+/// The solve's own summary section(s).
+#[derive(Serialize)]
+#[serde(untagged)]
+pub enum SolveReport {
+    Linear(LinearSummary),
+    Contact(Box<ContactReport>),
+}
+
+/// One converged load step: a row of history.csv and an entry of summary.json's `load.steps`.
+#[derive(Debug, Clone, Serialize)]
+pub struct StepRecord {
+    /// Converged steps so far, 1, 2, … (the XDMF time step).
+    pub step: usize,
+    /// The planned step (index into the case's factors, from 1) this one belongs to.
+    pub planned: usize,
+    /// The load factor t.
+    pub factor: f64,
+    /// The XDMF time of the step: the load factor while the history only loads; from the first
+    /// unloading step on, the length of the load path Σ|Δt| (ParaView needs increasing times).
+    pub time: f64,
+    /// Halvings of the increment of the planned step when this step converged.
+    pub cutbacks: usize,
+    /// Newton steps (contact) — None for a linear case.
+    pub newton_steps: Option<usize>,
+    pub active: Option<usize>,
+    /// Active nodes sticking / slipping (friction only).
+    pub stick: Option<usize>,
+    pub slip: Option<usize>,
+    /// Σ of the contact forces −λ over the contact nodes.
+    pub total_force: Option<Vec<f64>>,
+    pub max_pressure: Option<f64>,
+    /// 2D: half width of the contact zone.
+    pub half_width: Option<f64>,
+    /// 3D: Σ w_k over the active nodes (the contact area).
+    pub contact_area: Option<f64>,
+    /// Seconds of the step (solve, post-processing, output).
+    pub seconds: f64,
+}
+
+/// summary.json's `load` section (runs with `[load]`).
+#[derive(Debug, Clone, Serialize)]
+pub struct LoadReport {
+    /// The planned factors of the case.
+    pub factors: Vec<f64>,
+    pub max_cutbacks: usize,
+    /// Every step of the history reached the last factor.
+    pub completed: bool,
+    /// Failed attempts that were cut back, in all.
+    pub cutbacks: usize,
+    /// Why the run stopped before the last factor.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub failure: Option<String>,
+    pub steps: Vec<StepRecord>,
+}
+
+/// The solve stage's product: the last converged step and the record of all of them.
+pub struct Stepped {
+    pub report: SolveReport,
+    /// The last step's contact table (contact_nodes.csv).
+    pub contact_csv: Option<String>,
+    /// None without `[load]`.
+    pub load: Option<LoadReport>,
+    /// history.csv (with `[load]`).
+    pub history_csv: Option<String>,
+    /// The error that ended the run after some steps converged (their output is written).
+    pub failure: Option<RunError>,
+    pub solve_seconds: f64,
+    pub post_seconds: f64,
+    pub output_seconds: f64,
+}
+
+/// What the steps share: the case, its discretisation and the output being written.
+pub struct Stepper<'a> {
+    pub ctx: &'a Ctx<'a>,
+    pub case: &'a Case,
+    pub mesh: &'a Mesh,
+    pub layout: &'a Layout,
+    pub material: &'a Material,
+    /// Prescribed displacements at factor 1 (NaN = free dof).
+    pub fixed: &'a [f64],
+    pub out: &'a ResultSet,
+}
+
+/// One solved step before it is recorded.
+struct Solved {
+    /// The displacement of a linear solve (a contact solve has its own).
+    linear_u: Option<Vector>,
+    report: SolveReport,
+    contact: Option<ContactSolution>,
+}
+
+impl Solved {
+    fn u(&self) -> &Vector {
+        match (&self.contact, &self.linear_u) {
+            (Some(c), _) => &c.u,
+            (None, Some(u)) => u,
+            (None, None) => unreachable!("a solved step has a displacement"),
+        }
+    }
+}
+
+/// The solve of a linear case or of the contact algorithm at one factor.
+enum Physics {
+    Linear,
+    Contact(Box<ContactSettings>),
+}
+
+impl Stepper<'_> {
+    /// Solves every load step (one at factor 1 without `[load]`), writing each converged one.
+    /// An `Err` means nothing was written; a failure after some steps converged comes back in
+    /// [`Stepped::failure`] with the converged steps written.
+    pub fn run(&self, sys: &mut System) -> Result<Stepped, RunError> {
+        let (ctx, case) = (self.ctx, self.case);
+        let series = case.load.is_some();
+        let plan = case.load.clone().unwrap_or_else(LoadSection::single);
+        let physics = match &case.contact {
+            None => Physics::Linear,
+            Some(cc) => Physics::Contact(Box::new(ctx.agree(
+                setup::contact_settings(case, cc, self.mesh.dim).map_err(RunError::from),
+            )?)),
+        };
+        // f(1), kept to scale from (only with [load]: a single step solves f(1) itself).
+        let b_full = if series {
+            Some(sys.b.duplicate().and_then(|mut v| {
+                v.copy_from(&sys.b)?;
+                Ok(v)
+            })?)
+        } else {
+            None
+        };
+        let mut fixed = self.fixed.to_vec();
+        let mut last: Option<Solved> = None;
+        let mut records: Vec<StepRecord> = Vec::new();
+        let mut times: Vec<f64> = Vec::new();
+        let (mut solve_s, mut post_s, mut output_s) = (0.0, 0.0, 0.0);
+        let mut failure = None;
+        let mut schedule = Schedule::new(&plan);
+        while let Some(factor) = schedule.next() {
+            {
+                let t0 = Instant::now();
+                let (p, halvings) = (schedule.planned(), schedule.halvings());
+                if let Some(b) = &b_full {
+                    scale(sys, b, self.fixed, &mut fixed, factor)?;
+                }
+                let previous = last.as_ref().and_then(|s| s.contact.as_ref());
+                let solved = self.solve_once(&physics, &fixed, sys, previous);
+                let ts = t0.elapsed().as_secs_f64();
+                solve_s += ts;
+                let solved = match solved {
+                    Ok(s) => s,
+                    Err(RunError::NoConvergence(why)) if schedule.can_cut_back() => {
+                        let retry = schedule.cut_back();
+                        say!(
+                            ctx,
+                            "load step {p}: factor {factor} failed ({why}), cut back to {retry}"
+                        );
+                        continue;
+                    }
+                    Err(e) => {
+                        let e = match e {
+                            RunError::NoConvergence(why) if series => RunError::Failed(format!(
+                                "load step {p}: factor {factor} did not converge after {halvings} \
+                                 cutback(s) of its increment (load.max_cutbacks = {}): {why}",
+                                plan.max_cutbacks
+                            )),
+                            e => e,
+                        };
+                        if records.is_empty() {
+                            return Err(e);
+                        }
+                        failure = Some(e);
+                        break;
+                    }
+                };
+                let step = records.len() + 1;
+                let t1 = Instant::now();
+                let cells = post::cell_fields(
+                    self.mesh,
+                    self.layout,
+                    self.material,
+                    solved.u(),
+                    &case.output,
+                )?;
+                let fields =
+                    post::solution_fields(self.mesh, self.layout, solved.u(), cells, &case.output)?;
+                post_s += t1.elapsed().as_secs_f64();
+                let grid = solved
+                    .contact
+                    .as_ref()
+                    .map(|c| &c.result)
+                    .filter(|_| case.output.wants(OutputField::Contact));
+                let piece = fields.piece(grid);
+                let time = step_time(&records, factor);
+                output_s += if series {
+                    times.push(time);
+                    self.out.write_step(ctx, &piece, step, &times)?
+                } else {
+                    self.out.write_solution(ctx, &piece)?
+                };
+                drop(fields);
+                let mut rec = self.record(&solved, step, p, factor, halvings);
+                rec.time = time;
+                rec.seconds = t0.elapsed().as_secs_f64();
+                if series {
+                    log_step(ctx, &rec, plan.factors.len());
+                }
+                records.push(rec);
+                schedule.converged(factor);
+                last = Some(solved);
+            }
+        }
+        let last = last.expect("a step converged, or the run returned its error");
+        let contact_csv = last.contact.as_ref().map(|c| c.result.csv.clone());
+        let history_csv = series.then(|| history_csv(&records, self.mesh.dim));
+        let load = series.then(|| LoadReport {
+            factors: plan.factors.clone(),
+            max_cutbacks: plan.max_cutbacks,
+            completed: failure.is_none(),
+            cutbacks: schedule.cutbacks,
+            failure: failure.as_ref().map(|e| e.to_string()),
+            steps: records,
+        });
+        Ok(Stepped {
+            report: last.report,
+            contact_csv,
+            load,
+            history_csv,
+            failure,
+            solve_seconds: solve_s,
+            post_seconds: post_s,
+            output_seconds: output_s,
+        })
+    }
+
+    /// One linear solve, or the contact algorithm from the previous step's state.
+    fn solve_once(
+        &self,
+        physics: &Physics,
+        fixed: &[f64],
+        sys: &mut System,
+        previous: Option<&ContactSolution>,
+    ) -> Result<Solved, RunError> {
+        let (ctx, case) = (self.ctx, self.case);
+        match physics {
+            Physics::Linear => {
+                let (u, report) =
+                    solver::linear_solve(ctx, self.mesh, self.layout, sys, &case.solver)?;
+                Ok(Solved {
+                    linear_u: Some(u),
+                    report: SolveReport::Linear(report.summary(case.solver.preset)),
+                    contact: None,
+                })
+            }
+            Physics::Contact(settings) => {
+                let s = signorini::solve(
+                    ctx,
+                    settings,
+                    self.mesh,
+                    self.layout,
+                    fixed,
+                    sys,
+                    &case.solver,
+                    previous,
+                )?;
+                // the report goes to the summary, the rest stays as the next step's start
+                Ok(Solved {
+                    linear_u: None,
+                    report: SolveReport::Contact(Box::new(s.report.clone())),
+                    contact: Some(s),
+                })
+            }
+        }
+    }
+
+    /// The record of a converged step (contact counts summed over the ranks). Collective.
+    fn record(
+        &self,
+        s: &Solved,
+        step: usize,
+        planned: usize,
+        factor: f64,
+        cutbacks: usize,
+    ) -> StepRecord {
+        let mut rec = StepRecord {
+            step,
+            planned,
+            factor,
+            time: factor,
+            cutbacks,
+            newton_steps: None,
+            active: None,
+            stick: None,
+            slip: None,
+            total_force: None,
+            max_pressure: None,
+            half_width: None,
+            contact_area: None,
+            seconds: 0.0,
+        };
+        let (Some(c), SolveReport::Contact(r)) = (&s.contact, &s.report) else {
+            return rec;
+        };
+        rec.newton_steps = Some(r.newton.steps);
+        rec.active = Some(r.contact.active_count);
+        rec.total_force = Some(r.contact.total_force.clone());
+        rec.max_pressure = Some(r.contact.max_pressure);
+        rec.half_width = r.contact.half_width.filter(|_| self.mesh.dim == 2);
+        let (stick, slip, area) = contact_counts(&c.result);
+        let sums = self.ctx.sum_vec(&[stick, slip, area]);
+        if c.result.fields.iter().any(|f| f.name == "slip_state") {
+            rec.stick = Some(sums[0] as usize);
+            rec.slip = Some(sums[1] as usize);
+        }
+        if self.mesh.dim == 3 {
+            rec.contact_area = Some(sums[2]);
+        }
+        rec
+    }
+}
+
+/// The XDMF time of a step at `factor` after `done`: the factor while the history has only
+/// loaded, else the previous time plus |Δ factor| (the length of the load path).
+fn step_time(done: &[StepRecord], factor: f64) -> f64 {
+    let Some(last) = done.last() else {
+        return factor;
+    };
+    let loading = last.time == last.factor && factor > last.factor;
+    if loading {
+        factor
+    } else {
+        last.time + (factor - last.factor).abs()
+    }
+}
+
+/// The load factors to solve at, with cutbacks (no solves: the loop asks it what comes next).
+pub struct Schedule<'p> {
+    plan: &'p LoadSection,
+    /// The planned step being worked on (index into the factors).
+    planned: usize,
+    /// The factor of the last converged step (0: the unloaded start).
+    reached: f64,
+    /// The current increment of the planned step.
+    increment: f64,
+    /// Halvings of the planned step's increment so far.
+    halvings: usize,
+    /// Cutbacks of the whole history.
+    pub cutbacks: usize,
+}
+
+impl<'p> Schedule<'p> {
+    pub fn new(plan: &'p LoadSection) -> Self {
+        Schedule {
+            plan,
+            planned: 0,
+            reached: 0.0,
+            increment: plan.factors.first().copied().unwrap_or(0.0),
+            halvings: 0,
+            cutbacks: 0,
+        }
+    }
+
+    /// The factor of the next solve; None once the last planned factor is reached.
+    pub fn next(&self) -> Option<f64> {
+        let target = *self.plan.factors.get(self.planned)?;
+        let f = self.reached + self.increment;
+        // the last sub-step lands exactly on the planned factor
+        let beyond = (self.increment > 0.0 && f >= target) || (self.increment < 0.0 && f <= target);
+        Some(if beyond { target } else { f })
+    }
+
+    /// The planned step being worked on, from 1.
+    pub fn planned(&self) -> usize {
+        self.planned + 1
+    }
+
+    /// Halvings of the planned step's increment so far.
+    pub fn halvings(&self) -> usize {
+        self.halvings
+    }
+
+    /// The solve at `f` (= [`Schedule::next`]) converged.
+    pub fn converged(&mut self, f: f64) {
+        self.reached = f;
+        if Some(&f) == self.plan.factors.get(self.planned) {
+            self.planned += 1;
+            self.halvings = 0;
+            if let Some(&t) = self.plan.factors.get(self.planned) {
+                self.increment = t - f;
+            }
+        }
+    }
+
+    /// May the failed solve at [`Schedule::next`] be retried with half the increment? Not
+    /// beyond `max_cutbacks` halvings of one planned step, nor when half the increment no
+    /// longer changes the factor.
+    pub fn can_cut_back(&self) -> bool {
+        let half = self.reached + 0.5 * self.increment;
+        self.halvings < self.plan.max_cutbacks && half != self.reached
+    }
+
+    /// Halves the increment; returns the factor to retry at (the midpoint between the last
+    /// converged factor and the failed one).
+    pub fn cut_back(&mut self) -> f64 {
+        if let Some(failed) = self.next() {
+            self.increment = failed - self.reached;
+        }
+        self.increment *= 0.5;
+        self.halvings += 1;
+        self.cutbacks += 1;
+        self.reached + self.increment
+    }
+}
+
+/// sys.b = t · f(1) and the prescribed displacements t · g(1).
+fn scale(
+    sys: &mut System,
+    b_full: &Vector,
+    fixed_full: &[f64],
+    fixed: &mut [f64],
+    t: f64,
+) -> Result<(), RunError> {
+    sys.b.copy_from(b_full)?;
+    sys.b.write(|b| b.iter_mut().for_each(|x| *x *= t))?;
+    for (g, &g1) in fixed.iter_mut().zip(fixed_full) {
+        *g = t * g1;
+    }
+    Ok(())
+}
+
+/// This rank's active nodes that stick and slip, and their Σ w_k, from the contact grid's
+/// fields `state` (1 active), `slip_state` (0 stick, 1 slip) and `weight`.
+fn contact_counts(r: &ContactResult) -> (f64, f64, f64) {
+    let field = |name: &str| r.fields.iter().find(|f| f.name == name);
+    let (Some(state), weight) = (field("state"), field("weight")) else {
+        return (0.0, 0.0, 0.0);
+    };
+    let slip = field("slip_state");
+    let (mut n_stick, mut n_slip, mut area) = (0.0, 0.0, 0.0);
+    for (k, &s) in state.data.iter().enumerate() {
+        if s != 1.0 {
+            continue;
+        }
+        if let Some(w) = weight {
+            area += w.data[k];
+        }
+        match slip.map(|f| f.data[k]) {
+            Some(1.0) => n_slip += 1.0,
+            Some(_) => n_stick += 1.0,
+            None => {}
+        }
+    }
+    (n_stick, n_slip, area)
+}
+
+/// The progress line of a converged step.
+fn log_step(ctx: &Ctx, r: &StepRecord, planned: usize) {
+    let mut line = format!(
+        "load step {}/{planned}: factor {} converged",
+        r.planned, r.factor
+    );
+    if let Some(n) = r.newton_steps {
+        let _ = write!(
+            line,
+            " in {n} Newton steps, {} active",
+            r.active.unwrap_or(0)
+        );
+    }
+    if let (Some(st), Some(sl)) = (r.stick, r.slip) {
+        let _ = write!(line, " ({st} stick, {sl} slip)");
+    }
+    if let Some(p) = r.max_pressure {
+        let _ = write!(line, ", p_max = {p:.6}");
+    }
+    if let Some(f) = &r.total_force {
+        let _ = write!(line, ", total force = {f:?}");
+    }
+    if r.cutbacks > 0 {
+        let _ = write!(line, " ({} cutback(s))", r.cutbacks);
+    }
+    let _ = write!(line, " ({:.3} s)", r.seconds);
+    say!(ctx, "{line}");
+}
+
+/// history.csv: one row per converged step; empty cells where a value does not apply.
+pub fn history_csv(records: &[StepRecord], dim: usize) -> String {
+    let axes = ["x", "y", "z"];
+    let mut out = String::from("step,planned,factor,time,cutbacks,newton_steps,active,stick,slip");
+    for a in &axes[..dim] {
+        let _ = write!(out, ",force_{a}");
+    }
+    out.push_str(",max_pressure,half_width,contact_area\n");
+    fn opt<T: std::fmt::Display>(v: Option<T>) -> String {
+        v.map(|x| x.to_string()).unwrap_or_default()
+    }
+    fn num(v: Option<f64>) -> String {
+        v.map(|x| format!("{x:.17e}")).unwrap_or_default()
+    }
+    for r in records {
+        let _ = write!(
+            out,
+            "{},{},{:.17e},{:.17e},{},{},{},{},{}",
+            r.step,
+            r.planned,
+            r.factor,
+            r.time,
+            r.cutbacks,
+            opt(r.newton_steps),
+            opt(r.active),
+            opt(r.stick),
+            opt(r.slip)
+        );
+        for k in 0..dim {
+            let _ = write!(
+                out,
+                ",{}",
+                num(r.total_force.as_ref().and_then(|f| f.get(k).copied()))
+            );
+        }
+        let _ = writeln!(
+            out,
+            ",{},{},{}",
+            num(r.max_pressure),
+            num(r.half_width),
+            num(r.contact_area)
+        );
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Runs a schedule against a solver that converges when the step from the last converged
+    /// factor is at most `reach`; returns the converged factors, whether the plan was
+    /// completed, and the cutbacks.
+    fn walk(factors: &[f64], max_cutbacks: usize, reach: f64) -> (Vec<f64>, bool, usize) {
+        let plan = LoadSection {
+            factors: factors.to_vec(),
+            max_cutbacks,
+        };
+        let mut s = Schedule::new(&plan);
+        let (mut done, mut last, mut solves) = (Vec::new(), 0.0f64, 0);
+        while let Some(f) = s.next() {
+            solves += 1;
+            assert!(solves < 1000, "runaway schedule");
+            if (f - last).abs() <= reach + 1e-12 {
+                s.converged(f);
+                done.push(f);
+                last = f;
+            } else if s.can_cut_back() {
+                let r = s.cut_back();
+                assert!(
+                    close(r, 0.5 * (last + f)),
+                    "{r}: the midpoint of {last} and {f}"
+                );
+            } else {
+                return (done, false, s.cutbacks);
+            }
+        }
+        (done, true, s.cutbacks)
+    }
+
+    fn close(a: f64, b: f64) -> bool {
+        (a - b).abs() <= 1e-15
+    }
+
+    fn check(got: (Vec<f64>, bool, usize), factors: &[f64], completed: bool, cutbacks: usize) {
+        let ok = got.0.len() == factors.len()
+            && got.0.iter().zip(factors).all(|(x, y)| close(*x, *y))
+            && got.1 == completed
+            && got.2 == cutbacks;
+        assert!(ok, "{got:?}, expected {factors:?} {completed} {cutbacks}");
+    }
+
+    fn at(factor: f64, time: f64) -> StepRecord {
+        StepRecord {
+            step: 1,
+            planned: 1,
+            factor,
+            time,
+            cutbacks: 0,
+            newton_steps: None,
+            active: None,
+            stick: None,
+            slip: None,
+            total_force: None,
+            max_pressure: None,
+            half_width: None,
+            contact_area: None,
+            seconds: 0.0,
+        }
+    }
+
+    #[test]
+    fn times_increase_along_the_load_path() {
+        let mut done: Vec<StepRecord> = Vec::new();
+        let mut times = Vec::new();
+        for f in [0.3, 0.7, 1.0, 0.5, 0.8] {
+            let t = step_time(&done, f);
+            times.push(t);
+            done.push(at(f, t));
+        }
+        // the factors themselves while loading, then the path length
+        assert_eq!(&times[..3], &[0.3, 0.7, 1.0]);
+        assert!(
+            (times[3] - 1.5).abs() < 1e-15 && (times[4] - 1.8).abs() < 1e-15,
+            "{times:?}"
+        );
+    }
+
+    #[test]
+    fn no_failure_walks_the_plan() {
+        check(walk(&[0.25, 0.5, 1.0], 0, 1.0), &[0.25, 0.5, 1.0], true, 0);
+        // unloading and overloading
+        check(walk(&[1.0, 2.0, 0.5], 0, 2.0), &[1.0, 2.0, 0.5], true, 0);
+    }
+
+    #[test]
+    fn cutback_halves_and_keeps_the_increment() {
+        // steps of at most 0.3: 1.0 fails, 0.5 fails, 0.25 converges, then 0.5, 0.75, 1.0
+        check(walk(&[1.0], 5, 0.3), &[0.25, 0.5, 0.75, 1.0], true, 2);
+        // the next planned step starts with its full increment again
+        check(walk(&[0.2, 1.0], 5, 0.5), &[0.2, 0.6, 1.0], true, 1);
+        // unloading is cut back the same way
+        check(
+            walk(&[1.0, 0.0], 5, 0.4),
+            &[0.25, 0.5, 0.75, 1.0, 0.75, 0.5, 0.25, 0.0],
+            true,
+            4,
+        );
+    }
+
+    #[test]
+    fn cutbacks_are_bounded() {
+        // 1.0 → 0.5 → 0.25 allowed (2 halvings), 0.25 still too far: terminal
+        check(walk(&[1.0], 2, 0.2), &[], false, 2);
+        // halvings count per planned step, successes between them included: 0.5 fails, 0.25
+        // converges, 0.5 converges, 0.75 fails and no halving is left
+        check(walk(&[1.0], 2, 0.25), &[0.25, 0.5, 0.75, 1.0], true, 2);
+        check(walk(&[0.2, 1.0], 1, 0.3), &[0.2], false, 1);
+        check(walk(&[1.0], 0, 0.9), &[], false, 0);
+    }
+}

@@ -1,0 +1,458 @@
+//! Quasi-static load stepping (`[load]`): the section's rejections, one step = the static run,
+//! path independence of frictionless contact, linearity of a linear history, the temporal
+//! XDMF collection and history.csv, cutback with the converged steps kept, 1 vs 2 ranks.
+
+mod common;
+
+use common::*;
+use serde_json::Value;
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+
+fn hertz() -> PathBuf {
+    repo("cases/hertz/hertz.toml")
+}
+
+/// The small graded Hertz mesh (212 nodes; the contact zone grows from 1 to 3 active nodes
+/// between load factors 0.5 and 0.75).
+const HERTZ_L2: &str = "mesh.file=meshes/hertz_L2.msh";
+
+/// Reads a load history's output: the times of both temporal collections and, per step, the
+/// displacement by node id — through the paths the XDMF names (so they must be right) and
+/// through meshio's time-series reader (each collection in its own file).
+const SERIES_PY: &str = r#"
+import sys, os, json
+import xml.etree.ElementTree as ET
+import h5py, meshio
+d = sys.argv[1]
+root = ET.parse(os.path.join(d, "solution.xdmf")).getroot()
+dom = root.find("Domain")
+f = h5py.File(os.path.join(d, "solution.h5"), "r")
+out = {"collections": {}, "steps": []}
+for g in dom.findall("Grid"):
+    assert g.get("GridType") == "Collection" and g.get("CollectionType") == "Temporal", g.attrib
+    kids = g.findall("Grid")
+    out["collections"][g.get("Name")] = [float(k.find("Time").get("Value")) for k in kids]
+    if g.get("Name") == "mesh":
+        ids = f["mesh/node_id"][:].tolist()
+        for k in kids:
+            a = [x for x in k.findall("Attribute") if x.get("Name") == "displacement"][0]
+            path = a.find("DataItem").text.split(":", 1)[1]
+            geo = k.find("Geometry").find("DataItem").text.split(":", 1)[1]
+            assert geo == "/mesh/geometry", geo
+            out["steps"].append({"path": path, "u": dict(zip(map(str, ids), f[path][:].tolist()))})
+    # meshio: the collection alone in a file next to the original (HDF paths stay valid)
+    x = ET.Element("Xdmf", Version="3.0")
+    ET.SubElement(x, "Domain").append(g)
+    p = os.path.join(d, "_only_" + g.get("Name") + ".xdmf")
+    ET.ElementTree(x).write(p)
+    r = meshio.xdmf.TimeSeriesReader(p)
+    pts, cells = r.read_points_cells()
+    times = []
+    for k in range(r.num_steps):
+        t, pd, cd = r.read_data(k)
+        times.append(float(t))
+        assert len(pd) > 0 and all(len(v) == len(pts) for v in pd.values()), list(pd)
+    out["collections"][g.get("Name") + "_meshio"] = times
+    os.remove(p)
+print("RESULT " + json.dumps(out))
+"#;
+
+/// What a history run wrote.
+struct Series {
+    times: BTreeMap<String, Vec<f64>>,
+    /// Displacement of each step by node id.
+    u: Vec<BTreeMap<u64, Vec<f64>>>,
+}
+
+fn series(dir: &Path) -> Series {
+    let v = python_json(SERIES_PY, &[dir]);
+    let times = v["collections"]
+        .as_object()
+        .expect("collections")
+        .iter()
+        .map(|(k, t)| (k.clone(), floats(t)))
+        .collect();
+    let u = v["steps"]
+        .as_array()
+        .expect("steps")
+        .iter()
+        .enumerate()
+        .map(|(i, s)| {
+            assert_eq!(
+                s["path"].as_str().unwrap(),
+                format!("/step_{}/nodal/displacement", i + 1)
+            );
+            s["u"]
+                .as_object()
+                .expect("u")
+                .iter()
+                .map(|(id, u)| (id.parse().expect("id"), floats(u)))
+                .collect()
+        })
+        .collect();
+    Series { times, u }
+}
+
+/// history.csv as rows of named cells (empty cells stay empty strings).
+fn history(dir: &Path) -> Vec<BTreeMap<String, String>> {
+    let text = std::fs::read_to_string(dir.join("history.csv")).expect("history.csv");
+    let mut lines = text.lines();
+    let head: Vec<&str> = lines.next().expect("header").split(',').collect();
+    lines
+        .map(|l| {
+            let cells: Vec<&str> = l.split(',').collect();
+            assert_eq!(cells.len(), head.len(), "{l}");
+            head.iter()
+                .zip(cells)
+                .map(|(h, c)| (h.to_string(), c.to_string()))
+                .collect()
+        })
+        .collect()
+}
+
+fn num(row: &BTreeMap<String, String>, key: &str) -> f64 {
+    row[key]
+        .parse()
+        .unwrap_or_else(|e| panic!("history {key} = {:?}: {e}", row[key]))
+}
+
+/// max |a − b| over all nodes and components, and max |a|.
+fn diff(a: &BTreeMap<u64, Vec<f64>>, b: &BTreeMap<u64, Vec<f64>>) -> (f64, f64) {
+    assert_eq!(a.len(), b.len());
+    let mut d = 0.0f64;
+    let mut s = 0.0f64;
+    for (id, x) in a {
+        for (p, q) in x.iter().zip(&b[id]) {
+            d = d.max((p - q).abs());
+            s = s.max(p.abs());
+        }
+    }
+    (d, s)
+}
+
+#[test]
+fn load_section_rejected_with_its_key() {
+    for (set, key, says) in [
+        ("load.steps=0", "load.steps", "from 1"),
+        ("load.factors=[0.5, 0.5]", "load.factors[1]", "equals"),
+        ("load.factors=[0.5, -1.0]", "load.factors[1]", "> 0"),
+        ("load.max_cutbacks=2", "load", "one of 'steps'"),
+    ] {
+        let tmp = tempfile::tempdir().unwrap();
+        let out = tmp.path().join("out");
+        let run = run_solver(1, &hertz(), &[HERTZ_L2, set], &out);
+        run.expect_code(2, set);
+        assert!(
+            run.stderr.contains(&format!("key '{key}'")) && run.stderr.contains(says),
+            "{set}: {}",
+            run.output()
+        );
+        assert!(!out.exists(), "{set}: nothing written");
+    }
+    // both keys: the second one is named
+    let tmp = tempfile::tempdir().unwrap();
+    let out = tmp.path().join("out");
+    let run = run_solver(
+        1,
+        &hertz(),
+        &[HERTZ_L2, "load.steps=2", "load.factors=[1.0]"],
+        &out,
+    );
+    run.expect_code(2, "steps and factors");
+    assert!(run.stderr.contains("not both"), "{}", run.output());
+}
+
+#[test]
+fn one_step_equals_the_static_run() {
+    let plain = solve(1, &hertz(), &[HERTZ_L2]);
+    let one = solve(1, &hertz(), &[HERTZ_L2, "load.steps=1"]);
+    // the static run writes what it always wrote
+    assert!(plain.summary.get("load").is_none());
+    assert!(!plain.dir.join("history.csv").exists());
+    let u = plain.displacement();
+    let s = series(&one.dir);
+    assert_eq!(s.times["mesh"], vec![1.0]);
+    assert_eq!(s.times["contact"], vec![1.0]);
+    let (d, scale) = diff(&s.u[0], &u);
+    assert!(
+        d <= 1e-14 * scale,
+        "steps = 1 vs no [load]: {d:e} (|u| {scale:e})"
+    );
+    assert_eq!(
+        plain.f(&["contact", "max_pressure"]),
+        one.f(&["contact", "max_pressure"])
+    );
+    assert_eq!(plain.steps(), one.steps());
+    let steps = get(&one.summary, &["load", "steps"]).as_array().unwrap();
+    assert_eq!(steps.len(), 1);
+    assert_eq!(
+        get(&one.summary, &["load", "completed"]),
+        &Value::Bool(true)
+    );
+    assert_eq!(history(&one.dir).len(), 1);
+}
+
+#[test]
+fn frictionless_history_ends_where_one_step_does() {
+    let one = solve(1, &hertz(), &[HERTZ_L2]);
+    let four = solve(1, &hertz(), &[HERTZ_L2, "load.steps=4"]);
+    let s = series(&four.dir);
+    let want = [0.25, 0.5, 0.75, 1.0];
+    for k in ["mesh", "contact", "mesh_meshio", "contact_meshio"] {
+        assert_eq!(s.times[k], want, "{k}");
+    }
+    // frictionless contact is path independent: the last step is the one-step solution
+    let (d, scale) = diff(&s.u[3], &one.displacement());
+    assert!(d <= 1e-10 * scale, "steps = 4 vs 1: {d:e} (|u| {scale:e})");
+    // the steps differ (each is its own load)
+    let (d01, _) = diff(&s.u[0], &s.u[3]);
+    assert!(d01 > 0.1 * scale, "step 1 vs 4: {d01:e}");
+    // history: one row per step, factors increasing; a floating body carries its whole load
+    // through the contact, so the contact force scales with the factor
+    let h = history(&four.dir);
+    assert_eq!(h.len(), 4);
+    let f_end = num(&h[3], "force_y");
+    assert!(f_end > 0.0, "force_y {f_end}");
+    for (i, row) in h.iter().enumerate() {
+        assert_eq!(num(row, "factor"), want[i]);
+        assert_eq!(num(row, "step") as usize, i + 1);
+        let fy = num(row, "force_y");
+        assert!(
+            (fy - want[i] * f_end).abs() <= 1e-9 * f_end,
+            "step {}: force_y {fy} vs {}",
+            i + 1,
+            want[i] * f_end
+        );
+        assert!(num(row, "newton_steps") >= 1.0 && num(row, "active") >= 1.0);
+        assert!(num(row, "max_pressure") > 0.0);
+        assert_eq!(row["stick"], "", "frictionless: no stick count");
+    }
+    // summary.json lists the same steps; its contact section is the last step's
+    let steps = get(&four.summary, &["load", "steps"]).as_array().unwrap();
+    assert_eq!(steps.len(), 4);
+    assert_eq!(steps[3]["factor"].as_f64(), Some(1.0));
+    assert_eq!(
+        steps[3]["max_pressure"].as_f64(),
+        Some(four.f(&["contact", "max_pressure"]))
+    );
+    let p1 = one.f(&["contact", "max_pressure"]);
+    let p4 = four.f(&["contact", "max_pressure"]);
+    assert!(rel(p1, p4) <= 1e-9, "p_max {p1} vs {p4}");
+    assert!(four
+        .run
+        .stdout
+        .contains("load step 4/4: factor 1 converged"));
+}
+
+/// A plate with a body force, a pressure and a prescribed displacement: every load scales
+/// with the factor, so step 1 of 2 is half of step 2, and step 2 is the static solution.
+#[test]
+fn linear_history_scales_every_load() {
+    let plate = repo("cases/plate/plate.toml");
+    let sets = [
+        "dirichlet.0.value=[0.001, -0.002]",
+        "body_force.value=[0.0, -0.01]",
+    ];
+    let one = solve(1, &plate, &sets);
+    let mut two_sets = sets.to_vec();
+    two_sets.push("load.steps=2");
+    let two = solve(1, &plate, &two_sets);
+    let s = series(&two.dir);
+    assert_eq!(s.times["mesh"], vec![0.5, 1.0]);
+    let (d, scale) = diff(&s.u[1], &one.displacement());
+    assert!(d <= 1e-12 * scale, "2 steps vs 1: {d:e} (|u| {scale:e})");
+    let half: BTreeMap<u64, Vec<f64>> = s.u[1]
+        .iter()
+        .map(|(k, v)| (*k, v.iter().map(|x| 0.5 * x).collect()))
+        .collect();
+    let (d, _) = diff(&s.u[0], &half);
+    assert!(d <= 1e-12 * scale, "step 1 vs half of step 2: {d:e}");
+    let h = history(&two.dir);
+    assert_eq!(h.len(), 2);
+    assert_eq!(h[0]["newton_steps"], "", "linear: no Newton steps");
+}
+
+/// Contact driven by a prescribed displacement (the top of a block pushed down): the history
+/// ends at the one-step solution.
+#[test]
+fn prescribed_displacement_history() {
+    let block = repo("tests/cases/block2d_pulled.toml");
+    let down = "dirichlet.0.value=[0.0, -0.01]";
+    let one = solve(1, &block, &[down]);
+    let three = solve(1, &block, &[down, "load.steps=3"]);
+    let s = series(&three.dir);
+    assert_eq!(s.u.len(), 3);
+    let (d, scale) = diff(&s.u[2], &one.displacement());
+    assert!(scale > 0.0 && d <= 1e-10 * scale, "3 steps vs 1: {d:e}");
+    let h = history(&three.dir);
+    let f: Vec<f64> = h.iter().map(|r| num(r, "force_y")).collect();
+    assert!(f[0] > 0.0 && f[0] < f[1] && f[1] < f[2], "{f:?}");
+}
+
+/// newton.max_steps = 1 converges only where the initial active set (the touching node) is
+/// already right: below factor ~0.5 on this mesh, not at 0.75 or 1. So 1 fails, is cut back
+/// to 0.5 (converges), 1 fails again, 0.75 fails with no cutback left: the run fails and
+/// keeps the converged step.
+#[test]
+fn cutback_then_failure_keeps_the_converged_steps() {
+    let tmp = tempfile::tempdir().unwrap();
+    let out = tmp.path().join("out");
+    let sets = [
+        HERTZ_L2,
+        "newton.max_steps=1",
+        "load.factors=[1.0]",
+        "load.max_cutbacks=2",
+    ];
+    let run = run_solver(1, &hertz(), &sets, &out);
+    run.expect_code(1, "out of cutbacks");
+    let o = run.output();
+    assert!(
+        run.stdout
+            .contains("load step 1: factor 1 failed (Newton did not converge")
+            && run.stdout.contains("cut back to 0.5\n")
+            && run.stdout.contains("cut back to 0.75\n"),
+        "{o}"
+    );
+    assert!(
+        run.stderr
+            .contains("load step 1: factor 0.75 did not converge after 2 cutback(s)"),
+        "{o}"
+    );
+    let summary: Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
+    assert_eq!(summary["load"]["completed"], Value::Bool(false));
+    assert_eq!(summary["load"]["cutbacks"].as_u64(), Some(2));
+    assert!(summary["load"]["failure"]
+        .as_str()
+        .unwrap()
+        .contains("0.75"));
+    let h = history(&out);
+    assert_eq!(h.len(), 1);
+    assert_eq!(num(&h[0], "factor"), 0.5);
+    assert_eq!(num(&h[0], "cutbacks"), 1.0);
+    assert_eq!(series(&out).times["mesh"], vec![0.5]);
+
+    // without [load] there is no cutback: the run fails as before and writes nothing
+    let out2 = tmp.path().join("out2");
+    let run = run_solver(1, &hertz(), &[HERTZ_L2, "newton.max_steps=1"], &out2);
+    run.expect_code(1, "static run, no convergence");
+    assert!(!run.stdout.contains("cut back"), "{}", run.output());
+    assert!(!out2.exists());
+}
+
+#[test]
+fn ranks_agree() {
+    let sets = [HERTZ_L2, "load.factors=[0.4, 1.0, 0.7]"];
+    let a = solve(1, &hertz(), &sets);
+    let b = solve(2, &hertz(), &sets);
+    let (ha, hb) = (history(&a.dir), history(&b.dir));
+    assert_eq!(ha.len(), 3);
+    for (ra, rb) in ha.iter().zip(&hb) {
+        for k in ["factor", "active", "newton_steps"] {
+            assert_eq!(ra[k], rb[k], "{k}");
+        }
+        for k in ["force_y", "max_pressure"] {
+            assert!(rel(num(ra, k), num(rb, k)) <= 1e-9, "{k}: {ra:?} vs {rb:?}");
+        }
+    }
+    let (sa, sb) = (series(&a.dir), series(&b.dir));
+    // unloading after 1.0: the XDMF time goes on along the load path (1.0 + 0.3)
+    let t = &sa.times["mesh"];
+    assert!(
+        t.len() == 3 && t[0] == 0.4 && t[1] == 1.0 && (t[2] - 1.3).abs() < 1e-12,
+        "{t:?}"
+    );
+    assert_eq!(num(&ha[2], "factor"), 0.7);
+    assert_eq!(num(&ha[2], "time"), t[2]);
+    for k in 0..3 {
+        let (d, scale) = diff(&sa.u[k], &sb.u[k]);
+        assert!(d <= 1e-10 * scale, "step {}: {d:e}", k + 1);
+    }
+}
+
+/// A tmpfs of `size` mounted for the test (root only); unmounted when dropped.
+struct SmallDisk {
+    _tmp: tempfile::TempDir,
+    path: PathBuf,
+}
+
+impl SmallDisk {
+    fn mount(size: &str) -> Option<SmallDisk> {
+        let tmp = tempfile::tempdir().ok()?;
+        let path = tmp.path().join("disk");
+        std::fs::create_dir(&path).ok()?;
+        let ok = std::process::Command::new("mount")
+            .args(["-t", "tmpfs", "-o", &format!("size={size}"), "tmpfs"])
+            .arg(&path)
+            .output()
+            .map(|o| o.status.success())
+            .unwrap_or(false);
+        ok.then_some(SmallDisk { _tmp: tmp, path })
+    }
+}
+
+impl Drop for SmallDisk {
+    fn drop(&mut self) {
+        let _ = std::process::Command::new("umount")
+            .arg(&self.path)
+            .status();
+    }
+}
+
+fn files(dir: &Path) -> Vec<(String, Vec<u8>)> {
+    let mut v: Vec<(String, Vec<u8>)> = std::fs::read_dir(dir)
+        .unwrap()
+        .map(|e| {
+            let p = e.unwrap().path();
+            let name = p.file_name().unwrap().to_string_lossy().into_owned();
+            (name, std::fs::read(&p).unwrap_or_default())
+        })
+        .collect();
+    v.sort();
+    v
+}
+
+/// The disk fills while step 2 is appended (step 1 of the default Hertz case, ~0.9 MB, fits
+/// on 1.1 MB beside small previous results; step 2 adds ~0.3 MB): one error, exit 1, the
+/// previous results untouched, no staging left — an output failure keeps nothing.
+#[test]
+fn a_full_disk_during_a_later_step_writes_nothing() {
+    let Some(disk) = SmallDisk::mount("1100k") else {
+        eprintln!("SKIPPED: cannot mount a tmpfs here (needs root)");
+        return;
+    };
+    let out = disk.path.join("out");
+    run_solver(1, &repo("cases/blocks/block2d.toml"), &[], &out).expect_code(0, "small run");
+    let before = files(&out);
+    for np in [1, 2] {
+        let r = run_solver(np, &hertz(), &["load.steps=2"], &out);
+        r.expect_code(1, &format!("full disk, {np} rank(s)"));
+        assert!(
+            r.stdout.contains("load step 1/2: factor 0.5 converged"),
+            "{}",
+            r.output()
+        );
+        let errors: Vec<&str> = r
+            .stderr
+            .lines()
+            .filter(|l| l.starts_with("error:"))
+            .collect();
+        assert_eq!(errors.len(), 1, "one error line:\n{}", r.output());
+        assert!(
+            errors[0].contains("solution.h5") && errors[0].contains("cannot write results"),
+            "{}",
+            errors[0]
+        );
+        assert_eq!(
+            files(&out),
+            before,
+            "{np} rank(s): previous results changed"
+        );
+        let names: Vec<String> = std::fs::read_dir(&disk.path)
+            .unwrap()
+            .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+            .collect();
+        assert_eq!(names, ["out"], "{np} rank(s): staging left behind");
+    }
+}

@@ -39,6 +39,8 @@ pub struct FacetLoad {
     /// Indices into `mesh.facets`.
     pub facets: Vec<usize>,
     pub kind: FacetLoadKind,
+    /// Scaled by a load step's factor; `false`: held at its full value in every step.
+    pub ramp: bool,
 }
 
 /// Volume load.
@@ -73,6 +75,9 @@ pub struct AssemblyStats {
 pub struct System {
     pub a: Matrix,
     pub b: Vector,
+    /// The part of `b` from the facet loads that do not ramp with a load step's factor (zero
+    /// on fixed dofs); `None` when every load ramps.
+    pub b_held: Option<Vector>,
     pub stats: AssemblyStats,
 }
 
@@ -401,7 +406,7 @@ pub fn assemble(comm: MPI_Comm, layout: &Layout, p: &Problem) -> petsc::Result<S
     b.write(|bv| bv.copy_from_slice(&elim_rhs))?;
     let mut bidx: Vec<PInt> = Vec::new();
     let mut bval: Vec<f64> = Vec::new();
-    load_entries(p, layout, &mut bidx, &mut bval);
+    load_entries(p, layout, false, &mut bidx, &mut bval);
     b.set_values(&bidx, &bval, true)?;
     b.assemble()?;
     b.write(|bv| {
@@ -409,13 +414,50 @@ pub fn assemble(comm: MPI_Comm, layout: &Layout, p: &Problem) -> petsc::Result<S
             bv[i] = v;
         }
     })?;
+    let b_held = held_loads(p, layout, &b, &fixed_rhs)?;
     stats.load_seconds = t2.elapsed().as_secs_f64();
-    Ok(System { a, b, stats })
+    Ok(System {
+        a,
+        b,
+        b_held,
+        stats,
+    })
+}
+
+/// The right-hand side of the facet loads with `ramp = false` alone (zero on fixed dofs), if
+/// there are any. Collective.
+fn held_loads(
+    p: &Problem,
+    layout: &Layout,
+    like: &Vector,
+    fixed_rhs: &[(usize, f64)],
+) -> petsc::Result<Option<Vector>> {
+    if p.facet_loads.iter().all(|l| l.ramp) {
+        return Ok(None);
+    }
+    let mut h = like.duplicate()?;
+    h.write(|x| x.iter_mut().for_each(|v| *v = 0.0))?;
+    let (mut idx, mut val) = (Vec::new(), Vec::new());
+    load_entries(p, layout, true, &mut idx, &mut val);
+    h.set_values(&idx, &val, true)?;
+    h.assemble()?;
+    h.write(|x| {
+        for &(i, _) in fixed_rhs {
+            x[i] = 0.0;
+        }
+    })?;
+    Ok(Some(h))
 }
 
 /// The load entries (3.8) of this rank: body force on its cells, facet loads on the facets
-/// whose cell is its own.
-fn load_entries(p: &Problem, layout: &Layout, bidx: &mut Vec<PInt>, bval: &mut Vec<f64>) {
+/// whose cell is its own; with `held_only` only the facet loads that do not ramp.
+fn load_entries(
+    p: &Problem,
+    layout: &Layout,
+    held_only: bool,
+    bidx: &mut Vec<PInt>,
+    bval: &mut Vec<f64>,
+) {
     let mesh = p.mesh;
     let dim = mesh.dim;
     let nd = (dim + 1) * dim;
@@ -423,7 +465,12 @@ fn load_entries(p: &Problem, layout: &Layout, bidx: &mut Vec<PInt>, bval: &mut V
     let mut idx = [0 as PInt; 12];
     // Loads: body force on own cells, facet loads on facets whose cell is ours.
     let mut xs: Vec<[f64; 3]> = Vec::with_capacity(4);
-    match &p.body_force {
+    let body = if held_only {
+        &BodyForce::None
+    } else {
+        &p.body_force
+    };
+    match body {
         BodyForce::None => {}
         BodyForce::Constant(f) => {
             for &c in &layout.local_cells {
@@ -448,7 +495,7 @@ fn load_entries(p: &Problem, layout: &Layout, bidx: &mut Vec<PInt>, bval: &mut V
         }
     }
     let nf = dim * dim;
-    for load in &p.facet_loads {
+    for load in p.facet_loads.iter().filter(|l| !held_only || !l.ramp) {
         for &f in &load.facets {
             let Some((c, opp)) = facet_cell(mesh, layout, f) else {
                 continue;

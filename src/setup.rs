@@ -113,6 +113,7 @@ pub fn problem<'m>(case: &Case, mesh: &'m Mesh, material: Material) -> Problem<'
                 case::Load::Pressure(p) => FacetLoadKind::Pressure(*p),
                 case::Load::Traction(t) => FacetLoadKind::Traction(vec3(t)),
             },
+            ramp: n.ramp,
         })
         .collect();
     let body_force = match &case.body_force {

@@ -4,7 +4,8 @@
 //! displacements multiplied by its factor t_s (the obstacle stays). The assembled right-hand
 //! side is linear in all three (the loads (3.8), −K_ij g_j of the eliminated Dirichlet columns
 //! and A_jj g_j of their rows), so f(t) = t · f(1): the system is assembled once and its
-//! right-hand side scaled per step. A contact step starts from the previous converged step
+//! right-hand side scaled per step. A Neumann load with `ramp = false` is held at its full
+//! value: f(t) = t · f(1) + (1 − t) · f_held. A contact step starts from the previous converged step
 //! (`previous` of [`signorini::solve`]).
 //!
 //! Cutback: a step whose solve does not converge ([`RunError::NoConvergence`]) is retried at
@@ -458,6 +459,15 @@ fn scale(
 ) -> Result<(), RunError> {
     sys.b.copy_from(b_full)?;
     sys.b.write(|b| b.iter_mut().for_each(|x| *x *= t))?;
+    if let Some(h) = &sys.b_held {
+        // f(t) = t f(1) + (1 − t) f_held: the held loads at full value in every step
+        let h = h.to_local_vec()?;
+        sys.b.write(|b| {
+            for (x, hv) in b.iter_mut().zip(&h) {
+                *x += (1.0 - t) * hv;
+            }
+        })?;
+    }
     for (g, &g1) in fixed.iter_mut().zip(fixed_full) {
         *g = t * g1;
     }

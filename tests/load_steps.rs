@@ -136,7 +136,7 @@ fn load_section_rejected_with_its_key() {
     for (set, key, says) in [
         ("load.steps=0", "load.steps", "from 1"),
         ("load.factors=[0.5, 0.5]", "load.factors[1]", "equals"),
-        ("load.factors=[0.5, -1.0]", "load.factors[1]", "> 0"),
+        ("load.factors=[0.5, -1.0]", "load.factors[1]", "≥ 0"),
         ("load.max_cutbacks=2", "load", "one of 'steps'"),
     ] {
         let tmp = tempfile::tempdir().unwrap();
@@ -271,6 +271,45 @@ fn linear_history_scales_every_load() {
     let h = history(&two.dir);
     assert_eq!(h.len(), 2);
     assert_eq!(h[0]["newton_steps"], "", "linear: no Newton steps");
+}
+
+/// A pressure held with `ramp = false` while the body force and a prescribed displacement
+/// ramp: factor 0 is the pressure alone, factor 1 the static solution; a non-boolean `ramp`
+/// is an input error naming the key.
+#[test]
+fn held_load_does_not_ramp() {
+    let plate = repo("cases/plate/plate.toml");
+    let ramped = [
+        "dirichlet.0.value=[0.001, -0.002]",
+        "body_force.value=[0.0, -0.01]",
+    ];
+    let full = solve(1, &plate, &ramped);
+    let alone = solve(1, &plate, &[]);
+    let mut sets = ramped.to_vec();
+    sets.extend(["neumann.0.ramp=false", "load.factors=[0.0, 1.0]"]);
+    let held = solve(1, &plate, &sets);
+    let s = series(&held.dir);
+    assert_eq!(s.times["mesh"], vec![0.0, 1.0]);
+    let (d, scale) = diff(&s.u[0], &alone.displacement());
+    assert!(
+        scale > 0.0 && d <= 1e-12 * scale,
+        "factor 0 vs pressure alone: {d:e}"
+    );
+    let (d, scale) = diff(&s.u[1], &full.displacement());
+    assert!(d <= 1e-12 * scale, "factor 1 vs static: {d:e}");
+    let tmp = tempfile::tempdir().unwrap();
+    let run = run_solver(
+        1,
+        &plate,
+        &["neumann.0.ramp=\"no\""],
+        &tmp.path().join("out"),
+    );
+    run.expect_code(2, "ramp");
+    assert!(
+        run.stderr.contains("neumann[0].ramp") || run.stderr.contains("neumann.0.ramp"),
+        "{}",
+        run.stderr
+    );
 }
 
 /// Contact driven by a prescribed displacement (the top of a block pushed down): the history

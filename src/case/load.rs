@@ -8,7 +8,7 @@
 //! ```
 //!
 //! The Neumann data, the body force and the prescribed displacements are multiplied by the
-//! factor of a step; the obstacle stays where it is. Factors are finite and > 0, two steps in
+//! factor of a step; the obstacle stays where it is. Factors are finite and ≥ 0, two steps in
 //! a row differ, and the history may go up and down (unloading matters with friction) and
 //! end anywhere: the run's final state is the one at the last factor.
 
@@ -93,7 +93,8 @@ impl Reader<'_> {
         }))
     }
 
-    /// `load.factors`: a non-empty array of finite numbers > 0, no two in a row equal.
+    /// `load.factors`: a non-empty array of finite numbers ≥ 0, no two in a row equal (0: only
+    /// the loads with `ramp = false`).
     fn factors(&self, key: &str, n: &Node) -> Res<Vec<f64>> {
         let elems = self.array(key, n, "an array of load factors")?;
         if elems.is_empty() {
@@ -109,7 +110,10 @@ impl Reader<'_> {
         let mut out: Vec<f64> = Vec::with_capacity(elems.len());
         for (i, e) in elems.iter().enumerate() {
             let ek = join_index(key, i);
-            let x = self.positive(&ek, e)?;
+            let x = self.num(&ek, e)?;
+            if x < 0.0 {
+                return Err(self.err(&ek, e.loc, format!("must be ≥ 0, got {x}")));
+            }
             if out.last() == Some(&x) {
                 return Err(self.err(
                     &ek,

@@ -89,6 +89,9 @@ pub enum Load {
 pub struct Neumann {
     pub group: String,
     pub load: Load,
+    /// Scaled by the load factor of `[load]` (default); `ramp = false` holds the load at its
+    /// full value in every step (e.g. a normal force held while a tangential one grows).
+    pub ramp: bool,
 }
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -692,6 +695,13 @@ impl Reader<'_> {
         }
     }
 
+    fn boolean(&self, key: &str, n: &Node) -> Res<bool> {
+        match n.kind {
+            Kind::Bool(b) => Ok(b),
+            _ => Err(self.type_err(key, n, "a boolean (true or false)")),
+        }
+    }
+
     fn string<'n>(&self, key: &str, n: &'n Node) -> Res<&'n str> {
         match &n.kind {
             Kind::Str(s) => Ok(s),
@@ -892,7 +902,7 @@ impl Reader<'_> {
 
     fn neumann(&self, top: &Tab) -> Res<Vec<Neumann>> {
         let mut out = Vec::new();
-        for t in self.tables(top, "neumann", &["group", "pressure", "traction"])? {
+        for t in self.tables(top, "neumann", &["group", "pressure", "traction", "ramp"])? {
             let (gk, g) = self.required(&t, "group")?;
             let group = self.name(&gk, g)?;
             let load = match (t.get("pressure"), t.get("traction")) {
@@ -914,7 +924,11 @@ impl Reader<'_> {
                     ))
                 }
             };
-            out.push(Neumann { group, load });
+            let ramp = match t.get("ramp") {
+                None => true,
+                Some((rk, r)) => self.boolean(&rk, r)?,
+            };
+            out.push(Neumann { group, load, ramp });
         }
         Ok(out)
     }

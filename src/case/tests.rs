@@ -129,11 +129,13 @@ fn full_file_round_trip() {
         vec![
             Neumann {
                 group: "load".into(),
-                load: Load::Pressure(0.02)
+                load: Load::Pressure(0.02),
+                ramp: true,
             },
             Neumann {
                 group: "side".into(),
-                load: Load::Traction(vec![1.0, -0.02])
+                load: Load::Traction(vec![1.0, -0.02]),
+                ramp: true,
             },
         ]
     );

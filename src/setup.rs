@@ -54,7 +54,7 @@ pub fn read_input(ctx: &Ctx, case: &Case) -> Result<Input, RunError> {
 pub const NEARLY_INCOMPRESSIBLE: f64 = 0.49;
 
 fn read_and_check(case: &Case) -> Result<Input, InputError> {
-    let mesh = mesh::read_msh(&case.mesh.file)?;
+    let mesh = mesh::read_mesh(&case.mesh.file)?;
     let groups: Vec<(String, usize)> = mesh
         .groups
         .iter()

@@ -41,6 +41,7 @@
 //! - In 2D, z must be constant; it is set to 0.
 
 mod facets;
+pub mod h5;
 mod quiet;
 mod raw;
 #[cfg(test)]
@@ -267,6 +268,15 @@ fn element_dim(t: ElementType) -> Option<usize> {
 
 fn entity_word(dim: usize) -> &'static str {
     ["Point", "Curve", "Surface", "Volume"][dim.min(3)]
+}
+
+/// Reads a mesh file: the HDF5 mesh format of [`h5`] (by extension or signature), else Gmsh MSH.
+pub fn read_mesh(path: &Path) -> Result<Mesh, InputError> {
+    if h5::is_h5(path) {
+        h5::read_h5(path)
+    } else {
+        read_msh(path)
+    }
 }
 
 /// Reads a Gmsh MSH 4.1 file (ASCII or binary). All problems with the file are
@@ -584,7 +594,7 @@ fn flatten_2d(coords: &mut [[f64; 3]]) -> Result<(), String> {
 }
 
 /// Cells of zero measure are refused, inverted ones reoriented.
-fn orient_cells(
+pub(crate) fn orient_cells(
     dim: usize,
     cells: &mut [usize],
     cell_tags: &[u64],

@@ -57,12 +57,7 @@ fn to_u64(v: &[usize]) -> Vec<u64> {
     v.iter().map(|&x| x as u64).collect()
 }
 
-fn put<T: H5Type>(
-    f: &hdf5::Group,
-    name: &str,
-    data: &[T],
-    ncomp: usize,
-) -> hdf5::Result<()> {
+fn put<T: H5Type>(f: &hdf5::Group, name: &str, data: &[T], ncomp: usize) -> hdf5::Result<()> {
     let rows = if ncomp == 0 { 0 } else { data.len() / ncomp };
     if ncomp <= 1 {
         f.new_dataset::<T>()
@@ -286,7 +281,12 @@ impl H5Mesh {
     }
 
     /// Rows `lo..hi` of a 1-D dataset.
-    pub fn rows1<T: H5Type + Clone>(&self, name: &str, lo: usize, hi: usize) -> Result<Vec<T>, String> {
+    pub fn rows1<T: H5Type + Clone>(
+        &self,
+        name: &str,
+        lo: usize,
+        hi: usize,
+    ) -> Result<Vec<T>, String> {
         if lo >= hi {
             return Ok(Vec::new());
         }
@@ -298,7 +298,12 @@ impl H5Mesh {
     }
 
     /// Rows `lo..hi` of a 2-D dataset, flat (row-major).
-    pub fn rows2<T: H5Type + Clone>(&self, name: &str, lo: usize, hi: usize) -> Result<Vec<T>, String> {
+    pub fn rows2<T: H5Type + Clone>(
+        &self,
+        name: &str,
+        lo: usize,
+        hi: usize,
+    ) -> Result<Vec<T>, String> {
         if lo >= hi {
             return Ok(Vec::new());
         }
@@ -355,7 +360,9 @@ impl Mesh {
             ("points", &self.points),
         ] {
             if let Some(v) = list.iter().find(|&&v| v >= n) {
-                return Err(format!("/{what} references node {v}, but there are {n} nodes"));
+                return Err(format!(
+                    "/{what} references node {v}, but there are {n} nodes"
+                ));
             }
         }
         for g in &self.groups {

@@ -22,7 +22,6 @@ use crate::petsc::{self, MPI_Comm, PInt};
 use mpi::datatype::{Partition, PartitionMut};
 use mpi::topology::SimpleCommunicator;
 use mpi::traits::*;
-use std::collections::HashMap;
 use std::path::Path;
 
 /// First row of rank r's block of n rows (the same blocks as the partitioner's).
@@ -445,6 +444,9 @@ fn dual_graph(world: &SimpleCommunicator, b: &Blocks) -> (Vec<PInt>, Vec<PInt>) 
     (xadj, adjncy)
 }
 
+/// A received boundary element: (element, tag, nodes, groups).
+type BndRec = (u64, u64, [u64; 3], Vec<u64>);
+
 /// Load imbalance PT-Scotch may leave between the parts (PETSc's default, 1 %).
 const SCOTCH_IMBALANCE: f64 = 0.01;
 
@@ -515,20 +517,24 @@ fn build(
         send[r].extend_from_slice(&[k as u64, e, g]);
     }
     let recv = exchange(world, send);
-    let mut elem_groups: [HashMap<u64, Vec<u64>>; 4] = Default::default();
+    // kind → (element − first of the block) → groups
+    let mut elem_groups: [Vec<Vec<u64>>; 4] = Default::default();
+    let elem_lo: [usize; 4] = std::array::from_fn(|k| blk(b.count(k), size, rank));
+    for k in 0..4 {
+        elem_groups[k] = vec![Vec::new(); blk(b.count(k), size, rank + 1) - elem_lo[k]];
+    }
     for c in recv.chunks_exact(3) {
-        elem_groups[c[0] as usize]
-            .entry(c[1])
-            .or_default()
-            .push(c[2]);
+        let k = c[0] as usize;
+        elem_groups[k][c[1] as usize - elem_lo[k]].push(c[2]);
     }
     // Node-level memberships to the node homes: (node, group).
     let mut send = vec![Vec::new(); size];
-    for (k, map) in elem_groups.iter().enumerate() {
-        let lo = blk(b.count(k), size, rank);
+    for (k, list) in elem_groups.iter().enumerate() {
         let w = b.width(k);
-        for (&e, gs) in map {
-            let i = e as usize - lo;
+        for (i, gs) in list.iter().enumerate() {
+            if gs.is_empty() {
+                continue;
+            }
             let nodes = if k == 0 {
                 &b.cells[i * w..(i + 1) * w]
             } else {
@@ -559,7 +565,7 @@ fn build(
         let s = &mut send[part[i] as usize];
         s.extend_from_slice(&[gc, b.cell_tags[i]]);
         s.extend_from_slice(cell);
-        let gs = elem_groups[0].get(&gc).map_or(&[][..], |v| &v[..]);
+        let gs = &elem_groups[0][i];
         s.push(gs.len() as u64);
         s.extend_from_slice(gs);
     }
@@ -639,14 +645,21 @@ fn build(
         out
     };
     let recv = exchange(world, reply);
-    let owner_own: HashMap<u64, u64> = recv.chunks_exact(2).map(|c| (c[0], c[1])).collect();
+    let mut owner_pairs: Vec<(u64, u64)> = recv.chunks_exact(2).map(|c| (c[0], c[1])).collect();
+    owner_pairs.sort_unstable();
+    let owner_own = |v: u64| -> u64 {
+        let i = owner_pairs
+            .binary_search_by_key(&v, |p| p.0)
+            .expect("asked for it");
+        owner_pairs[i].1
+    };
 
     // 5. Ghost cells: every own cell to the owners of its nodes.
     let mut send = vec![Vec::new(); size];
     for c in &own {
         let mut targets: Vec<usize> = c.nodes[..npc]
             .iter()
-            .map(|v| owner_own[v] as usize)
+            .map(|&v| owner_own(v) as usize)
             .filter(|&r| r != rank)
             .collect();
         targets.sort_unstable();
@@ -670,7 +683,7 @@ fn build(
         let lo = blk(b.count(k), size, rank);
         for (i, nodes) in b.bnd[k - 1].chunks_exact(w).enumerate() {
             let e = (lo + i) as u64;
-            let gs = elem_groups[k].get(&e).map_or(&[][..], |v| &v[..]);
+            let gs = &elem_groups[k][i];
             let mut homes: Vec<usize> = nodes
                 .iter()
                 .map(|&v| block_of(v as usize, n_nodes, size))
@@ -708,7 +721,7 @@ fn build(
     }
     let recv = exchange(world, send);
     // kind → sorted (element, tag, nodes, groups)
-    let mut bnd: [Vec<(u64, u64, [u64; 3], Vec<u64>)>; 3] = Default::default();
+    let mut bnd: [Vec<BndRec>; 3] = Default::default();
     let mut i = 0;
     while i < recv.len() {
         let k = recv[i] as usize;
@@ -822,10 +835,12 @@ fn build(
         .map(|k| bbox.1[k] - bbox.0[k])
         .fold(0.0f64, f64::max)
         .max(f64::MIN_POSITIVE);
-    let mut owned: Vec<usize> = (0..nl)
+    let mut keyed: Vec<(u64, u64, usize)> = (0..nl)
         .filter(|&l| node_owner[l] as usize == rank)
+        .map(|l| (morton_key(&coords[l], dim, &bbox.0, extent), orig[l], l))
         .collect();
-    owned.sort_unstable_by_key(|&l| (morton_key(&coords[l], dim, &bbox.0, extent), orig[l]));
+    keyed.sort_unstable();
+    let owned: Vec<usize> = keyed.into_iter().map(|k| k.2).collect();
     let mut counts = vec![0u64; size];
     world.all_gather_into(&(owned.len() as u64), &mut counts[..]);
     let mut node_offsets = vec![0usize; size + 1];

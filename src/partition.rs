@@ -1,13 +1,17 @@
-//! The distribution of a mesh over the ranks ([`Layout`]), node → cells incidence, and the
-//! Morton key of the global node numbering. The distributed read, partition (PT-Scotch, called
-//! directly: repeatable) and migration that build them are in `crate::dist`.
+//! The distribution of a mesh over the ranks ([`Layout`]), node → cells incidence, the Morton
+//! key of the global node numbering, and [`partition`] for a WHOLE mesh held by every rank
+//! (examples and tools; runs read the mesh distributed through `crate::dist`, which builds a
+//! local mesh with a layout of local size by the same rules).
 //!
 //! A node belongs to the lowest rank among the cells that touch it. Rank r owns global node
 //! numbers `node_offsets[r] .. node_offsets[r+1]`, numbered along the Morton curve of the whole
-//! mesh's bounding box (ties by mesh order). Every array of a [`Layout`] is of local size (the
-//! rank's local mesh: own cells, ghost cells, the nodes they touch).
+//! mesh's bounding box (ties by mesh order). With PT-Scotch the partition is repeatable (one
+//! thread per rank, deterministic mode, fixed seed; see `petsc::scotch_partition`).
 
 use crate::mesh::Mesh;
+use crate::petsc::{self, MPI_Comm, PInt};
+use mpi::datatype::PartitionMut;
+use mpi::traits::*;
 
 /// Node → cells incidence in CSR form.
 pub struct NodeCells {
@@ -46,11 +50,11 @@ impl NodeCells {
 pub struct Layout {
     pub rank: usize,
     pub size: usize,
-    /// Rank of every local cell (own cells and ghosts).
+    /// Rank of every cell (mesh order).
     pub cell_rank: Vec<u32>,
-    /// Owner rank of every local node.
+    /// Owner rank of every node.
     pub node_owner: Vec<u32>,
-    /// Local node index → global (PETSc) node number.
+    /// Mesh node index → global (PETSc) node number.
     pub node_global: Vec<usize>,
     /// Rank r owns global node numbers node_offsets[r] .. node_offsets[r+1].
     pub node_offsets: Vec<usize>,
@@ -88,6 +92,47 @@ impl Layout {
     }
 }
 
+/// Dual-graph rows (cells sharing a facet) for cells `lo..hi`, CSR with global cell indices.
+fn dual_graph_rows(mesh: &Mesh, nc: &NodeCells, lo: usize, hi: usize) -> (Vec<PInt>, Vec<PInt>) {
+    let npc = mesh.nodes_per_cell();
+    let shared_needed = npc - 1; // a facet has dim nodes
+    let mut xadj = Vec::with_capacity(hi - lo + 1);
+    let mut adjncy = Vec::with_capacity((hi - lo) * npc);
+    let mut cand: Vec<usize> = Vec::with_capacity(64);
+    xadj.push(0 as PInt);
+    for c in lo..hi {
+        cand.clear();
+        for &v in mesh.cell(c) {
+            cand.extend(nc.of(v).iter().copied().filter(|&o| o != c));
+        }
+        cand.sort_unstable();
+        let mut i = 0;
+        while i < cand.len() {
+            let mut j = i;
+            while j < cand.len() && cand[j] == cand[i] {
+                j += 1;
+            }
+            if j - i >= shared_needed {
+                adjncy.push(cand[i] as PInt);
+            }
+            i = j;
+        }
+        xadj.push(adjncy.len() as PInt);
+    }
+    (xadj, adjncy)
+}
+
+/// Morton (Z-order) key of every node: coordinates scaled to 21-bit integers, bits
+/// interleaved.
+fn morton_keys(mesh: &Mesh) -> Vec<u64> {
+    let (lo, _) = mesh.bounding_box();
+    let extent = mesh.extent();
+    mesh.coords
+        .iter()
+        .map(|x| morton_key(x, mesh.dim, &lo, extent))
+        .collect()
+}
+
 /// Morton key of one point in the box from `lo` of size `extent`.
 pub fn morton_key(x: &[f64; 3], dim: usize, lo: &[f64; 3], extent: f64) -> u64 {
     let scale = ((1u64 << 21) - 1) as f64 / extent;
@@ -102,4 +147,116 @@ pub fn morton_key(x: &[f64; 3], dim: usize, lo: &[f64; 3], extent: f64) -> u64 {
         }
     }
     key
+}
+
+/// Load imbalance PT-Scotch may leave between the parts (PETSc's default, 1 %).
+const SCOTCH_IMBALANCE: f64 = 0.01;
+
+/// Partitions the mesh over the ranks of `comm` (`ptype`: "ptscotch", or another PETSc
+/// MatPartitioning type, e.g. "parmetis" where PETSc has it). PT-Scotch is called directly
+/// (repeatable); the PETSc option `-mat_partitioning_type` sends the graph through PETSc's
+/// MatPartitioning instead, with that type (`ptscotch` there is PT-Scotch's default,
+/// non-repeatable context).
+pub fn partition<C: Communicator>(
+    world: &C,
+    comm: MPI_Comm,
+    mesh: &Mesh,
+    ptype: &str,
+) -> petsc::Result<Layout> {
+    let rank = world.rank() as usize;
+    let size = world.size() as usize;
+    let n_cells = mesh.n_cells();
+    let node_cells = NodeCells::new(mesh);
+
+    let cell_rank: Vec<u32> = if size == 1 {
+        vec![0; n_cells]
+    } else {
+        let block = |r: usize| r * n_cells / size;
+        let (lo, hi) = (block(rank), block(rank + 1));
+        let (xadj, adjncy) = dual_graph_rows(mesh, &node_cells, lo, hi);
+        let part = if ptype == "ptscotch" && !petsc::options::has("-mat_partitioning_type")? {
+            petsc::scotch_partition(comm, &xadj, &adjncy, size, SCOTCH_IMBALANCE)?
+        } else {
+            petsc::partition_graph(comm, n_cells, &xadj, &adjncy, ptype)?
+        };
+        let mine: Vec<u32> = part.iter().map(|&p| p as u32).collect();
+        let counts: Vec<i32> = (0..size)
+            .map(|r| (block(r + 1) - block(r)) as i32)
+            .collect();
+        let displs: Vec<i32> = (0..size).map(|r| block(r) as i32).collect();
+        let mut all = vec![0u32; n_cells];
+        {
+            let mut buf = PartitionMut::new(&mut all[..], counts, displs);
+            world.all_gather_varcount_into(&mine[..], &mut buf);
+        }
+        all
+    };
+
+    // Owner of a node: the lowest rank among its cells.
+    let n_nodes = mesh.n_nodes();
+    let mut node_owner = vec![u32::MAX; n_nodes];
+    for (c, nodes) in mesh.cells.chunks_exact(mesh.nodes_per_cell()).enumerate() {
+        let r = cell_rank[c];
+        for &v in nodes {
+            if r < node_owner[v] {
+                node_owner[v] = r;
+            }
+        }
+    }
+    let mut counts = vec![0usize; size];
+    for &o in &node_owner {
+        counts[o as usize] += 1;
+    }
+    let mut node_offsets = vec![0usize; size + 1];
+    for r in 0..size {
+        node_offsets[r + 1] = node_offsets[r] + counts[r];
+    }
+    // Within each rank, nodes are numbered along a space-filling (Morton) curve: neighbours in
+    // the mesh get nearby numbers, so element matrices hit nearby rows (gmsh's own numbering
+    // is nearly random on large meshes, which made assembly several times slower).
+    let key = morton_keys(mesh);
+    let mut order: Vec<usize> = (0..n_nodes).collect();
+    order.sort_unstable_by_key(|&v| (node_owner[v], key[v], v));
+    let mut node_global = vec![0usize; n_nodes];
+    for (g, &v) in order.iter().enumerate() {
+        node_global[v] = g;
+    }
+    let owned_nodes: Vec<usize> = order[node_offsets[rank]..node_offsets[rank + 1]].to_vec();
+
+    let mut ccounts = vec![0usize; size];
+    for &r in &cell_rank {
+        ccounts[r as usize] += 1;
+    }
+    let mut cell_offsets = vec![0usize; size + 1];
+    for r in 0..size {
+        cell_offsets[r + 1] = cell_offsets[r] + ccounts[r];
+    }
+    // Local cells in the order of their lowest node number (locality of the assembly loop).
+    let mut local_cells: Vec<usize> = (0..n_cells)
+        .filter(|&c| cell_rank[c] as usize == rank)
+        .collect();
+    local_cells.sort_unstable_by_key(|&c| {
+        (
+            mesh.cell(c)
+                .iter()
+                .map(|&v| node_global[v])
+                .min()
+                .unwrap_or(0),
+            c,
+        )
+    });
+
+    Ok(Layout {
+        rank,
+        size,
+        cell_rank,
+        node_owner,
+        node_global,
+        node_offsets,
+        owned_nodes,
+        local_cells,
+        cell_offsets,
+        node_cells,
+        node_orig: (0..n_nodes).collect(),
+    })
 }

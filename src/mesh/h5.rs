@@ -58,7 +58,7 @@ fn to_u64(v: &[usize]) -> Vec<u64> {
 }
 
 fn put<T: H5Type>(f: &hdf5::Group, name: &str, data: &[T], ncomp: usize) -> hdf5::Result<()> {
-    let rows = if ncomp == 0 { 0 } else { data.len() / ncomp };
+    let rows = data.len().checked_div(ncomp).unwrap_or(0);
     if ncomp <= 1 {
         f.new_dataset::<T>()
             .shape([data.len()])

@@ -8,7 +8,7 @@ use crate::error::RunError;
 use crate::mesh::Mesh;
 use crate::output::ResultSet;
 use crate::par::Ctx;
-use crate::partition::{self, Layout};
+use crate::partition::Layout;
 use crate::say;
 use crate::setup::{self, Input};
 use crate::steps::{LoadReport, SolveReport, Stepper};
@@ -27,10 +27,15 @@ struct SolveSections {
 /// Runs a whole case. Returns summary.json's text (the same on every rank).
 pub fn run_case(ctx: &Ctx, case: &Case) -> Result<String, RunError> {
     let mut clock = Clock::start();
-    let Input { mesh, material } = setup::read_input(ctx, case)?;
-    clock.t.read = clock.lap();
-    let layout = partition::partition(ctx.world, ctx.comm(), &mesh, "ptscotch")?;
-    clock.t.partition = clock.lap();
+    let Input {
+        mesh,
+        material,
+        layout,
+        read_seconds,
+        partition_seconds,
+    } = setup::read_input(ctx, case)?;
+    clock.lap();
+    (clock.t.read, clock.t.partition) = (read_seconds, partition_seconds);
     let partition = log_partition(ctx, &mesh, &layout);
     let problem = setup::problem(case, &mesh, material);
     let mut sys = assembly::assemble(ctx.comm(), &layout, &problem)?;
@@ -60,9 +65,9 @@ pub fn run_case(ctx: &Ctx, case: &Case) -> Result<String, RunError> {
         mesh: case.mesh.file.display().to_string(),
         dimension: mesh.dim,
         model: format!("{:?}", material.model),
-        cells: mesh.n_cells(),
-        nodes: mesh.n_nodes(),
-        dofs: mesh.n_nodes() * mesh.dim,
+        cells: mesh.n_cells_global(),
+        nodes: mesh.n_nodes_global(),
+        dofs: mesh.n_nodes_global() * mesh.dim,
         ranks: ctx.size,
         partition,
         assembly,
@@ -102,7 +107,7 @@ fn log_partition(ctx: &Ctx, mesh: &Mesh, layout: &Layout) -> PartitionInfo {
         info.cell_imbalance,
         info.nodes_per_rank
     );
-    say!(ctx, "dofs: {}", mesh.n_nodes() * mesh.dim);
+    say!(ctx, "dofs: {}", mesh.n_nodes_global() * mesh.dim);
     info
 }
 

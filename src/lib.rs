@@ -6,6 +6,7 @@
 pub mod assembly;
 pub mod case;
 pub mod contact;
+pub mod dist;
 pub mod driver;
 pub mod error;
 pub mod fem;

@@ -27,7 +27,43 @@ struct Cli {
     petsc: Vec<String>,
 }
 
+/// `signorini-mpi convert MESH.msh MESH.h5`: the MSH file as an HDF5 mesh (+ .xdmf), serial.
+fn convert(args: &[String]) -> i32 {
+    let [src, dst] = args else {
+        eprintln!("usage: signorini-mpi convert MESH.msh MESH.h5");
+        return 2;
+    };
+    let mesh = match signorini_mpi::mesh::read_msh(std::path::Path::new(src)) {
+        Ok(m) => m,
+        Err(e) => {
+            eprintln!("error: {e}");
+            return 2;
+        }
+    };
+    match signorini_mpi::mesh::h5::write_h5(&mesh, std::path::Path::new(dst)) {
+        Ok(()) => {
+            println!(
+                "{dst}: {}D, {} nodes, {} cells, {} groups (and {})",
+                mesh.dim,
+                mesh.n_nodes(),
+                mesh.n_cells(),
+                mesh.groups.len(),
+                std::path::Path::new(dst).with_extension("xdmf").display()
+            );
+            0
+        }
+        Err(e) => {
+            eprintln!("error: {e}");
+            1
+        }
+    }
+}
+
 fn main() {
+    let args: Vec<String> = std::env::args().collect();
+    if args.get(1).map(String::as_str) == Some("convert") {
+        std::process::exit(convert(&args[2..]));
+    }
     let cli = Cli::parse();
     let code = {
         // MPI_THREAD_MULTIPLE where the MPI library grants it (Open MPI does): libraries that

@@ -1,13 +1,12 @@
-//! Cells → ranks with a real graph partitioner (PT-Scotch by default, called directly; other
-//! PETSc MatPartitioning types through PETSc), node ownership, and a contiguous global node
-//! numbering per rank.
+//! The distribution of a mesh over the ranks ([`Layout`]), node → cells incidence, the Morton
+//! key of the global node numbering, and [`partition`] for a WHOLE mesh held by every rank
+//! (examples and tools; runs read the mesh distributed through `crate::dist`, which builds a
+//! local mesh with a layout of local size by the same rules).
 //!
-//! Every rank holds the whole mesh (read by all ranks). Each rank builds the dual-graph rows of a
-//! block of cells, the partitioner assigns every cell a rank, and an all-gather gives every rank
-//! the full cell → rank map. With PT-Scotch the partition is repeatable: the same mesh on the
-//! same number of ranks gives the same cell → rank map on every run (one thread per rank,
-//! deterministic mode, fixed seed; see `petsc::scotch_partition`). A node belongs to the lowest rank among the cells that touch it.
-//! Rank r owns global node numbers `node_offsets[r] .. node_offsets[r+1]`, in mesh order.
+//! A node belongs to the lowest rank among the cells that touch it. Rank r owns global node
+//! numbers `node_offsets[r] .. node_offsets[r+1]`, numbered along the Morton curve of the whole
+//! mesh's bounding box (ties by mesh order). With PT-Scotch the partition is repeatable (one
+//! thread per rank, deterministic mode, fixed seed; see `petsc::scotch_partition`).
 
 use crate::mesh::Mesh;
 use crate::petsc::{self, MPI_Comm, PInt};
@@ -66,6 +65,8 @@ pub struct Layout {
     /// Rank r's cells are numbered cell_offsets[r] .. cell_offsets[r+1] in the output.
     pub cell_offsets: Vec<usize>,
     pub node_cells: NodeCells,
+    /// Mesh-order (file order) index of every local node (ascending).
+    pub node_orig: Vec<usize>,
 }
 
 impl Layout {
@@ -124,24 +125,28 @@ fn dual_graph_rows(mesh: &Mesh, nc: &NodeCells, lo: usize, hi: usize) -> (Vec<PI
 /// Morton (Z-order) key of every node: coordinates scaled to 21-bit integers, bits
 /// interleaved.
 fn morton_keys(mesh: &Mesh) -> Vec<u64> {
-    let dim = mesh.dim;
     let (lo, _) = mesh.bounding_box();
-    let scale = ((1u64 << 21) - 1) as f64 / mesh.extent();
+    let extent = mesh.extent();
     mesh.coords
         .iter()
-        .map(|x| {
-            let mut key = 0u64;
-            let q: Vec<u64> = (0..dim)
-                .map(|k| (((x[k] - lo[k]) * scale) as u64).min((1 << 21) - 1))
-                .collect();
-            for bit in (0..21).rev() {
-                for qk in &q {
-                    key = (key << 1) | ((qk >> bit) & 1);
-                }
-            }
-            key
-        })
+        .map(|x| morton_key(x, mesh.dim, &lo, extent))
         .collect()
+}
+
+/// Morton key of one point in the box from `lo` of size `extent`.
+pub fn morton_key(x: &[f64; 3], dim: usize, lo: &[f64; 3], extent: f64) -> u64 {
+    let scale = ((1u64 << 21) - 1) as f64 / extent;
+    let mut key = 0u64;
+    let mut q = [0u64; 3];
+    for k in 0..dim {
+        q[k] = (((x[k] - lo[k]) * scale) as u64).min((1 << 21) - 1);
+    }
+    for bit in (0..21).rev() {
+        for qk in &q[..dim] {
+            key = (key << 1) | ((qk >> bit) & 1);
+        }
+    }
+    key
 }
 
 /// Load imbalance PT-Scotch may leave between the parts (PETSc's default, 1 %).
@@ -252,5 +257,6 @@ pub fn partition<C: Communicator>(
         local_cells,
         cell_offsets,
         node_cells,
+        node_orig: (0..n_nodes).collect(),
     })
 }

@@ -117,7 +117,7 @@ pub fn solution_fields(
     let (node_offset, _) = layout.node_range();
     Ok(SolutionFields {
         dim,
-        n_nodes_global: mesh.n_nodes(),
+        n_nodes_global: mesh.n_nodes_global(),
         node_offset,
         coords: layout.owned_nodes.iter().map(|&v| mesh.coords[v]).collect(),
         node_ids: layout
@@ -125,7 +125,7 @@ pub fn solution_fields(
             .iter()
             .map(|&v| mesh.node_tags[v])
             .collect(),
-        n_cells_global: mesh.n_cells(),
+        n_cells_global: mesh.n_cells_global(),
         cell_offset: layout.cell_offsets[layout.rank],
         connectivity: layout
             .local_cells

@@ -4,23 +4,38 @@
 use crate::assembly::{BodyForce, FacetLoad, FacetLoadKind, Problem};
 use crate::case::{self, vec3, Case, ContactSection, Friction, NewtonSection};
 use crate::contact::{Obstacle, Plane, Sphere};
+use crate::dist;
 use crate::error::{InputError, RunError};
 use crate::fem::{self, Material};
 use crate::mesh::{self, Mesh};
 use crate::par::Ctx;
+use crate::partition::Layout;
 use crate::say;
 use std::path::Path;
 
-/// The mesh and the material of a case, checked against each other.
+/// The mesh (this rank's part: local indices) with its layout, and the material of a case,
+/// checked against each other.
 pub struct Input {
     pub mesh: Mesh,
     pub material: Material,
+    pub layout: Layout,
+    pub read_seconds: f64,
+    pub partition_seconds: f64,
 }
 
-/// Every rank reads the case's mesh and checks the case against it; all ranks agree before
-/// anything collective happens. Logs the mesh line.
+/// The ranks read the case's mesh distributed (`crate::dist`: each rank keeps its part),
+/// partition it and check the case against it; all ranks agree on an error. Logs the mesh line
+/// and the local sizes.
 pub fn read_input(ctx: &Ctx, case: &Case) -> Result<Input, RunError> {
-    let input = ctx.agree(read_and_check(case).map_err(RunError::from))?;
+    let d = dist::read_distributed(ctx, &case.mesh.file)?;
+    let material = ctx.agree(check(case, &d.mesh).map_err(RunError::from))?;
+    let input = Input {
+        mesh: d.mesh,
+        material,
+        layout: d.layout,
+        read_seconds: d.read_seconds,
+        partition_seconds: d.partition_seconds,
+    };
     let mesh = &input.mesh;
     let dim = mesh.dim;
     say!(
@@ -28,14 +43,25 @@ pub fn read_input(ctx: &Ctx, case: &Case) -> Result<Input, RunError> {
         "mesh {}: {}D, {} nodes, {} cells, {} boundary facets, groups: {}",
         case.mesh.file.display(),
         dim,
-        mesh.n_nodes(),
-        mesh.n_cells(),
-        mesh.facets.len() / dim.max(1),
+        mesh.n_nodes_global(),
+        mesh.n_cells_global(),
+        mesh.n_facets_global(),
         mesh.groups
             .iter()
-            .map(|g| format!("{} ({}D, {})", g.name, g.dim, g.elements.len()))
+            .enumerate()
+            .map(|(i, g)| format!("{} ({}D, {})", g.name, g.dim, mesh.group_size_global(i)))
             .collect::<Vec<_>>()
             .join(", ")
+    );
+    let local = [mesh.n_cells() as u64, mesh.n_nodes() as u64];
+    let per_rank = ctx.all_gather_varcount(&local);
+    say!(
+        ctx,
+        "local mesh per rank (cells with ghosts, nodes with ghosts): {:?}",
+        per_rank
+            .chunks_exact(2)
+            .map(|c| (c[0], c[1]))
+            .collect::<Vec<_>>()
     );
     let nu = input.material.poisson;
     if nu >= NEARLY_INCOMPRESSIBLE && input.material.model != fem::Model::PlaneStress {
@@ -53,26 +79,24 @@ pub fn read_input(ctx: &Ctx, case: &Case) -> Result<Input, RunError> {
 /// Poisson's ratio from which P1 locking is warned about (plane strain and 3D).
 pub const NEARLY_INCOMPRESSIBLE: f64 = 0.49;
 
-fn read_and_check(case: &Case) -> Result<Input, InputError> {
-    let mesh = mesh::read_msh(&case.mesh.file)?;
+fn check(case: &Case, mesh: &Mesh) -> Result<Material, InputError> {
     let groups: Vec<(String, usize)> = mesh
         .groups
         .iter()
         .map(|g| (g.name.clone(), g.dim))
         .collect();
     case.check_against_mesh(mesh.dim, &groups)?;
-    case.check_facet_groups(&mesh)?;
+    case.check_facet_groups(mesh)?;
     let model = match case.model(mesh.dim)? {
         case::MaterialModel::PlaneStrain => fem::Model::PlaneStrain,
         case::MaterialModel::PlaneStress => fem::Model::PlaneStress,
         case::MaterialModel::ThreeD => fem::Model::Solid,
     };
-    let material = Material {
+    Ok(Material {
         young: case.material.young,
         poisson: case.material.poisson,
         model,
-    };
-    Ok(Input { mesh, material })
+    })
 }
 
 /// All groups with this name (a name may label groups of several dimensions).

@@ -62,6 +62,7 @@ impl Mesh {
             .iter()
             .filter(|g| g.name == name && g.dim + 1 == self.dim)
             .flat_map(|g| g.elements.iter().copied())
+            .filter(|&f| self.global.as_ref().is_none_or(|g| g.facet_checked[f]))
             .collect();
         if facets.is_empty() {
             return Ok(());

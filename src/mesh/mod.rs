@@ -41,6 +41,7 @@
 //! - In 2D, z must be constant; it is set to 0.
 
 mod facets;
+pub mod h5;
 mod quiet;
 mod raw;
 #[cfg(test)]
@@ -80,9 +81,52 @@ pub struct Mesh {
     pub points: Vec<usize>,
     pub point_tags: Vec<u64>,
     pub groups: Vec<Group>,
+    /// Set on a rank's local part of a distributed mesh (`crate::dist`): what the whole mesh
+    /// is like. `None`: this is the whole mesh.
+    pub global: Option<Box<GlobalInfo>>,
+}
+
+/// The whole mesh, seen from a rank's local part (see `crate::dist`).
+#[derive(Debug, Clone, Default)]
+pub struct GlobalInfo {
+    pub n_nodes: usize,
+    pub n_cells: usize,
+    pub n_facets: usize,
+    /// Number of elements of every group (in group order).
+    pub group_sizes: Vec<usize>,
+    /// Bounding box of the whole mesh.
+    pub bbox: ([f64; 3], [f64; 3]),
+    /// Groups of every local node (CSR: group indices of node v are
+    /// `node_group_ids[node_group_ptr[v]..node_group_ptr[v + 1]]`), from all elements of the
+    /// whole mesh that contain it.
+    pub node_group_ptr: Vec<usize>,
+    pub node_group_ids: Vec<u32>,
+    /// Local facets whose boundary check is made here (those with an owned node: all cells
+    /// containing them are local).
+    pub facet_checked: Vec<bool>,
+    /// The local cells 0..n_own_cells are this rank's, the rest ghosts.
+    pub n_own_cells: usize,
 }
 
 impl Mesh {
+    /// Number of nodes of the whole mesh.
+    pub fn n_nodes_global(&self) -> usize {
+        self.global.as_ref().map_or(self.n_nodes(), |g| g.n_nodes)
+    }
+    /// Number of cells of the whole mesh.
+    pub fn n_cells_global(&self) -> usize {
+        self.global.as_ref().map_or(self.n_cells(), |g| g.n_cells)
+    }
+    /// Number of boundary facets of the whole mesh.
+    pub fn n_facets_global(&self) -> usize {
+        self.global.as_ref().map_or(self.n_facets(), |g| g.n_facets)
+    }
+    /// Number of elements of group i in the whole mesh.
+    pub fn group_size_global(&self, i: usize) -> usize {
+        self.global
+            .as_ref()
+            .map_or(self.groups[i].elements.len(), |g| g.group_sizes[i])
+    }
     pub fn nodes_per_cell(&self) -> usize {
         self.dim + 1
     }
@@ -124,6 +168,18 @@ impl Mesh {
     }
     /// Sorted, unique node indices of the elements of `g`.
     pub fn group_nodes(&self, g: &Group) -> Vec<usize> {
+        if let Some(gl) = &self.global {
+            // every local node of the group, also one whose group elements are elsewhere
+            let Some(i) = self.groups.iter().position(|x| std::ptr::eq(x, g)) else {
+                return Vec::new();
+            };
+            return (0..self.n_nodes())
+                .filter(|&v| {
+                    gl.node_group_ids[gl.node_group_ptr[v]..gl.node_group_ptr[v + 1]]
+                        .contains(&(i as u32))
+                })
+                .collect();
+        }
         let mut nodes = Vec::new();
         for &e in &g.elements {
             nodes.extend_from_slice(self.element_nodes(g.dim, e));
@@ -145,7 +201,11 @@ impl Mesh {
         }
     }
     /// Bounding box (lowest and highest coordinates) of the nodes.
+    /// Of the whole mesh for a distributed one.
     pub fn bounding_box(&self) -> ([f64; 3], [f64; 3]) {
+        if let Some(g) = &self.global {
+            return g.bbox;
+        }
         bounding_box(&self.coords)
     }
 
@@ -267,6 +327,15 @@ fn element_dim(t: ElementType) -> Option<usize> {
 
 fn entity_word(dim: usize) -> &'static str {
     ["Point", "Curve", "Surface", "Volume"][dim.min(3)]
+}
+
+/// Reads a mesh file: the HDF5 mesh format of [`h5`] (by extension or signature), else Gmsh MSH.
+pub fn read_mesh(path: &Path) -> Result<Mesh, InputError> {
+    if h5::is_h5(path) {
+        h5::read_h5(path)
+    } else {
+        read_msh(path)
+    }
 }
 
 /// Reads a Gmsh MSH 4.1 file (ASCII or binary). All problems with the file are
@@ -584,7 +653,7 @@ fn flatten_2d(coords: &mut [[f64; 3]]) -> Result<(), String> {
 }
 
 /// Cells of zero measure are refused, inverted ones reoriented.
-fn orient_cells(
+pub(crate) fn orient_cells(
     dim: usize,
     cells: &mut [usize],
     cell_tags: &[u64],

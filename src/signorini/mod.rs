@@ -242,11 +242,10 @@ fn snesvi_solve(
     let (mesh, b, sys) = (p.mesh, p.boundary, p.sys);
     let dim = mesh.dim;
     let mut free = FreeModes::new(ctx, mesh, p.layout, p.fixed, b, f_local, rigid);
-    let pins = free.update_for_whole_boundary(ctx, mesh, b)?.to_vec();
-    let pinned: Vec<usize> = pins
-        .iter()
-        .map(|&(v, k)| p.layout.node_global[v] * dim + k)
-        .collect();
+    let pins = free
+        .update_for_whole_boundary(ctx, mesh, p.layout, b)?
+        .to_vec();
+    let pinned: Vec<usize> = pins.iter().map(|&(v, k)| v * dim + k).collect();
     let nodes: Vec<snesvi::SnesContactNode> = b
         .nodes
         .iter()

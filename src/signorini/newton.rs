@@ -151,7 +151,7 @@ pub fn semismooth_newton(
     let mut history = Vec::new();
     let mut converged = false;
     for step in 1..=s.section.max_steps {
-        if lp.free.update(mesh, &lp.summary.gram)? {
+        if lp.free.update(ctx, mesh, layout, &lp.summary.gram)? {
             reduced.set_pins(sys, layout, lp.free.pins())?;
         }
         if !s.friction {

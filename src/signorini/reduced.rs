@@ -177,7 +177,7 @@ impl ConstraintMap {
         for &(v, k) in pins {
             let mut e = [0.0; 3];
             e[k] = 1.0;
-            map.entry(layout.node_global[v])
+            map.entry(v) // pins name global nodes
                 .or_default()
                 .dirs
                 .push((e, 0.0));
@@ -266,13 +266,13 @@ impl ReducedSystem {
         let mut owned: Vec<usize> = pins
             .iter()
             .map(|&(v, _)| v)
-            .filter(|&v| layout.owns_node(v))
+            .filter(|&v| (layout.node_range().0..layout.node_range().1).contains(&v))
             .collect();
         owned.sort_unstable();
         owned.dedup();
         self.pin_rows.clear();
         for v in owned {
-            let r = NodeRows::read(&sys.a, layout.node_global[v] * dim, dim)?;
+            let r = NodeRows::read(&sys.a, v * dim, dim)?;
             self.pin_rows.push((v, r));
         }
         Ok(())
@@ -312,7 +312,7 @@ impl ReducedSystem {
             writes.push((r, me, k.local_row));
         }
         for (v, r) in &self.pin_rows {
-            let gv = layout.node_global[*v];
+            let gv = *v;
             let me = cmap.get(gv).expect("pins are in the map").clone();
             writes.push((r, me, gv * dim - self.row_lo));
         }

@@ -34,7 +34,7 @@ use nalgebra::{DMatrix, SymmetricEigen};
 /// Packed m×m Gram matrix (row-major, room for m = 6).
 pub type Gram = [f64; 36];
 
-/// One pinned dof: (mesh node, component).
+/// One pinned dof: (global node number, component).
 pub type Pin = (usize, usize);
 
 /// The rigid modes of a mesh, in coordinates centred and scaled to O(1).
@@ -127,25 +127,29 @@ impl RigidModes {
         q
     }
 
-    /// Chooses one dof (node, component) per free mode: among the nodes allowed by
-    /// `candidate`, greedily the dof whose free-mode values are largest after removing the
-    /// directions already pinned (pivoted Gram–Schmidt). Same result on every rank.
+    /// Chooses one dof per free mode: among the owned nodes allowed by `candidate`, greedily
+    /// the dof whose free-mode values are largest after removing the directions already
+    /// pinned (pivoted Gram–Schmidt); each step picks the largest over the ranks (near ties:
+    /// the lowest mesh-order node). Returns (global node, component) and the node's
+    /// coordinates, the same on every rank. Collective.
     pub fn pins(
         &self,
+        ctx: &Ctx,
         mesh: &Mesh,
+        layout: &Layout,
         q: &DMatrix<f64>,
         candidate: impl Fn(usize) -> bool,
-    ) -> Vec<(usize, usize)> {
+    ) -> Vec<(Pin, [f64; 3])> {
         let mf = q.ncols();
         if mf == 0 {
             return Vec::new();
         }
         let dim = self.dim;
-        // Values of the free modes at every candidate dof.
+        // Values of the free modes at every owned candidate dof (mesh order).
         let mut dofs: Vec<(usize, usize)> = Vec::new();
         let mut w: Vec<f64> = Vec::new();
         for v in 0..mesh.n_nodes() {
-            if !candidate(v) {
+            if !layout.owns_node(v) || !candidate(v) {
                 continue;
             }
             for k in 0..dim {
@@ -157,6 +161,7 @@ impl RigidModes {
             }
         }
         let mut chosen = Vec::new();
+        const REC: usize = 13;
         for _ in 0..mf {
             let mut best = (0.0f64, usize::MAX);
             for i in 0..dofs.len() {
@@ -165,14 +170,37 @@ impl RigidModes {
                     best = (n2, i);
                 }
             }
-            if best.1 == usize::MAX || best.0 < 1e-20 {
+            // [n2, mesh-order node, k, global node, x, y, z, free-mode values (6)]
+            let mut rec = [0.0f64; REC];
+            if best.1 != usize::MAX {
+                let (v, k) = dofs[best.1];
+                let x = mesh.coords[v];
+                rec[..7].copy_from_slice(&[
+                    best.0,
+                    layout.node_orig[v] as f64,
+                    k as f64,
+                    layout.node_global[v] as f64,
+                    x[0],
+                    x[1],
+                    x[2],
+                ]);
+                rec[7..7 + mf].copy_from_slice(&w[best.1 * mf..(best.1 + 1) * mf]);
+            }
+            let all = ctx.all_gather_varcount(&rec);
+            let top = all.chunks_exact(REC).map(|r| r[0]).fold(0.0f64, f64::max);
+            let Some(win) = all
+                .chunks_exact(REC)
+                .filter(|r| r[0] > 0.0 && r[0] * (1.0 + 1e-12) >= top)
+                .min_by(|a, b| (a[1], a[2]).partial_cmp(&(b[1], b[2])).expect("finite"))
+            else {
+                break;
+            };
+            if win[0] < 1e-20 {
                 break;
             }
-            let i = best.1;
-            chosen.push(dofs[i]);
-            let p: Vec<f64> = w[i * mf..(i + 1) * mf].to_vec();
-            let pn = best.0.sqrt();
-            let p: Vec<f64> = p.iter().map(|x| x / pn).collect();
+            chosen.push(((win[3] as usize, win[2] as usize), [win[4], win[5], win[6]]));
+            let pn = win[0].sqrt();
+            let p: Vec<f64> = win[7..7 + mf].iter().map(|x| x / pn).collect();
             for r in 0..dofs.len() {
                 let s: f64 = (0..mf).map(|c| w[r * mf + c] * p[c]).sum();
                 for c in 0..mf {
@@ -212,6 +240,8 @@ pub struct FreeModes {
     /// taken out of the solve ([`FreeModes::fit_motion`]).
     z: DMatrix<f64>,
     pins: Vec<Pin>,
+    /// Coordinates of the pinned nodes.
+    pin_x: Vec<[f64; 3]>,
     /// Nodes allowed as pins: off the contact boundary, without Dirichlet data.
     candidate: Vec<bool>,
     /// The load in every rigid mode, Rᵀ f (summed over the ranks; m entries used).
@@ -285,6 +315,7 @@ impl FreeModes {
             g_dirichlet,
             key: None,
             pins: Vec::new(),
+            pin_x: Vec::new(),
             candidate,
             load,
             load_scale: total[6],
@@ -301,8 +332,14 @@ impl FreeModes {
     }
 
     /// New pins when the Gram matrix of Dirichlet data + the set (`g_set`) changed; `Ok(true)`
-    /// if the pins changed. Local (the same on every rank).
-    pub fn update(&mut self, mesh: &Mesh, g_set: &Gram) -> Result<bool, RunError> {
+    /// if the pins changed. Collective when they change (the same on every rank).
+    pub fn update(
+        &mut self,
+        ctx: &Ctx,
+        mesh: &Mesh,
+        layout: &Layout,
+        g_set: &Gram,
+    ) -> Result<bool, RunError> {
         if !self.enabled {
             return Ok(false);
         }
@@ -314,7 +351,9 @@ impl FreeModes {
             return Ok(false);
         }
         let q = self.modes.free_modes(&g);
-        let pins = self.modes.pins(mesh, &q, |v| self.candidate[v]);
+        let pins = self
+            .modes
+            .pins(ctx, mesh, layout, &q, |v| self.candidate[v]);
         if pins.len() < q.ncols() {
             return Err(RunError::Failed(format!(
                 "{} free rigid mode(s) but only {} dof(s) available to fix them",
@@ -324,7 +363,7 @@ impl FreeModes {
         }
         self.key = Some(g);
         self.q = q;
-        self.pins = pins;
+        (self.pins, self.pin_x) = pins.into_iter().unzip();
         Ok(true)
     }
 
@@ -334,6 +373,7 @@ impl FreeModes {
         &mut self,
         ctx: &Ctx,
         mesh: &Mesh,
+        layout: &Layout,
         b: &ContactBoundary,
     ) -> Result<&[Pin], RunError> {
         let mut g = [0.0; 36];
@@ -345,7 +385,7 @@ impl FreeModes {
             let total = ctx.sum_vec(&g);
             g.copy_from_slice(&total);
         }
-        self.update(mesh, &g)?;
+        self.update(ctx, mesh, layout, &g)?;
         Ok(&self.pins)
     }
 
@@ -416,7 +456,7 @@ impl FreeModes {
         b: &ContactBoundary,
         active: &[bool],
         g_set: &Gram,
-        mesh: &Mesh,
+        _mesh: &Mesh,
     ) -> Motion {
         let m = self.modes.m;
         let mut local = [0.0; 6];
@@ -453,8 +493,8 @@ impl FreeModes {
         if mf > 0 && self.pins.len() == mf {
             let mut p = DMatrix::zeros(mf, mf);
             let mut at = nalgebra::DVector::zeros(mf);
-            for (a, &(v, k)) in self.pins.iter().enumerate() {
-                let row = self.modes.dof_row(&mesh.coords[v], k);
+            for (a, &(_, k)) in self.pins.iter().enumerate() {
+                let row = self.modes.dof_row(&self.pin_x[a], k);
                 for cc in 0..mf {
                     p[(a, cc)] = (0..m).map(|j| row[j] * self.q[(j, cc)]).sum();
                 }

@@ -955,16 +955,10 @@ fn load_rejections() {
             "array",
         ),
         (
-            "[load]\nfactors = [0.5, 0.0]\n",
-            "load.factors[1]",
-            "factors",
-            "> 0",
-        ),
-        (
             "[load]\nfactors = [0.5, -1]\n",
             "load.factors[1]",
             "factors",
-            "> 0",
+            "≥ 0",
         ),
         (
             "[load]\nfactors = [0.5, nan]\n",

@@ -99,7 +99,7 @@ fn solve(
         Some(cc) => {
             let settings =
                 ctx.agree(setup::contact_settings(case, cc, mesh.dim).map_err(RunError::from))?;
-            let s = signorini::solve(ctx, &settings, mesh, layout, fixed, sys, &case.solver)?;
+            let s = signorini::solve(ctx, &settings, mesh, layout, fixed, sys, &case.solver, None)?;
             Ok(Solved {
                 u: s.u,
                 report: SolveReport::Contact(Box::new(s.report)),

@@ -57,6 +57,8 @@ pub enum RunError {
     Petsc(crate::petsc::PetscError),
     /// Anything else (solver did not converge, output could not be written, ...).
     Failed(String),
+    /// The contact algorithm did not converge (max_steps reached, or a cycle of active sets): a load step may be cut back.
+    NoConvergence(String),
 }
 
 impl RunError {
@@ -64,7 +66,7 @@ impl RunError {
     pub fn exit_code(&self) -> i32 {
         match self {
             RunError::Input(_) => 2,
-            RunError::Petsc(_) | RunError::Failed(_) => 1,
+            RunError::Petsc(_) | RunError::Failed(_) | RunError::NoConvergence(_) => 1,
         }
     }
 }
@@ -75,6 +77,7 @@ impl fmt::Display for RunError {
             RunError::Input(e) => write!(f, "{e}"),
             RunError::Petsc(e) => write!(f, "{e}"),
             RunError::Failed(s) => write!(f, "{s}"),
+            RunError::NoConvergence(s) => write!(f, "{s}"),
         }
     }
 }

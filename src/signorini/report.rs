@@ -8,7 +8,7 @@ use crate::par::Ctx;
 use serde::Serialize;
 
 /// Columns of one gathered contact-node row.
-const NCOL: usize = 17;
+const NCOL: usize = 19;
 
 /// Per owned node: the pressure p^k = −λ_n^k / w_k (THEORY §2).
 pub fn pressure(lambda_n: f64, weight: f64) -> f64 {
@@ -108,11 +108,14 @@ const W: usize = 13;
 const STATE: usize = 14;
 const BOUND: usize = 15;
 const SLIP: usize = 16;
+/// The tangential increment u_τ − u_ref friction acts on (= u_τ in a single static solve).
+const DUT: usize = 17;
 
 /// Gathers the contact nodes of all ranks (the contact boundary is small).
 pub fn gather(ctx: &Ctx, cs: &ContactBoundary, res: &[NodeResult], dim: usize) -> Table {
     let mut mine: Vec<f64> = Vec::with_capacity(cs.nodes.len() * NCOL);
     for (k, r) in cs.nodes.iter().zip(res) {
+        let du_t = super::active_set::increment(r, k);
         let row = [
             k.x[0],
             k.x[1],
@@ -131,6 +134,8 @@ pub fn gather(ctx: &Ctx, cs: &ContactBoundary, res: &[NodeResult], dim: usize) -
             if r.active { 1.0 } else { 0.0 },
             k.bound,
             if r.slip { 1.0 } else { 0.0 },
+            du_t[0],
+            du_t[1],
         ];
         mine.extend_from_slice(&row);
     }
@@ -272,13 +277,14 @@ impl Table {
     }
 
     /// Friction certificate of (3.18): max(|λ_τ| − b_k, 0), max |u_τ| on stick nodes, and the
-    /// alignment defect |λ_τ − b_k u_τ/|u_τ|| on slip nodes, with the scales.
+    /// alignment defect |λ_τ − b_k u_τ/|u_τ|| on slip nodes, with the scales. u_τ is the
+    /// increment since the previous load step; b_k the final μ(−λ_n^k) with Coulomb.
     pub fn friction_certificate(&self) -> FrictionCertificate {
         let (mut excess, mut stick, mut align, mut bmax, mut umax) =
             (0.0f64, 0.0f64, 0.0f64, 0.0f64, 0.0f64);
         let (mut n_stick, mut n_slip) = (0usize, 0usize);
         for r in &self.rows {
-            let ut = [r[UT], r[UT + 1]];
+            let ut = [r[DUT], r[DUT + 1]];
             let lt = [r[LT], r[LT + 1]];
             let slip = r[SLIP] > 0.5;
             let res = crate::contact::tangential_residual(&ut, &lt, r[BOUND], slip);

@@ -547,23 +547,31 @@ fn coulomb_friction_key() {
         }
     );
     let e = expect_err(
-        &with(&format!("{c}friction = {{ law = \"coulomb\", mu = -0.1 }}\n")),
+        &with(&format!(
+            "{c}friction = {{ law = \"coulomb\", mu = -0.1 }}\n"
+        )),
         "contact.friction.mu",
         "friction",
     );
     assert!(e.message.contains(">= 0"), "{e}");
     expect_err(
-        &with(&format!("{c}friction = {{ law = \"coulomb\", mu = nan }}\n")),
+        &with(&format!(
+            "{c}friction = {{ law = \"coulomb\", mu = nan }}\n"
+        )),
         "contact.friction.mu",
         "friction",
     );
     expect_err(
-        &with(&format!("{c}friction = {{ law = \"coulomb\", mu = inf }}\n")),
+        &with(&format!(
+            "{c}friction = {{ law = \"coulomb\", mu = inf }}\n"
+        )),
         "contact.friction.mu",
         "friction",
     );
     expect_err(
-        &with(&format!("{c}friction = {{ law = \"coulomb\", mu = \"0.3\" }}\n")),
+        &with(&format!(
+            "{c}friction = {{ law = \"coulomb\", mu = \"0.3\" }}\n"
+        )),
         "contact.friction.mu",
         "friction",
     );

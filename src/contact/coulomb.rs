@@ -192,11 +192,7 @@ impl<const M: usize> From<TangentialRow<M>> for CoulombRow<M> {
     fn from(t: TangentialRow<M>) -> Self {
         match t {
             TangentialRow::Stick => CoulombRow::Stick,
-            TangentialRow::Slip { l, r } => CoulombRow::Slip {
-                l,
-                q: [0.0; M],
-                r,
-            },
+            TangentialRow::Slip { l, r } => CoulombRow::Slip { l, q: [0.0; M], r },
         }
     }
 }

@@ -29,11 +29,29 @@ impl Law {
         let du_t = increment(r, k);
         match self {
             Law::Coulomb { mu } => {
-                contact::coulomb_row_dyn(dim, r.u_n, r.lambda_n, du_t, r.lambda_t, k.gap, mu, c)
-                    .row
+                contact::coulomb_row_dyn(dim, r.u_n, r.lambda_n, du_t, r.lambda_t, k.gap, mu, c).row
             }
             _ => contact::tangential_row_dyn(dim, du_t, r.lambda_t, k.bound, c).into(),
         }
+    }
+
+    /// The threshold b and v = λ_τ + c Δu_τ of node `k` at `r` (Tresca: b_k; Coulomb (F1)).
+    fn threshold_and_v(self, k: &ContactNode, r: &NodeResult, c: f64) -> (f64, [f64; 2]) {
+        let du_t = increment(r, k);
+        let v = [r.lambda_t[0] + c * du_t[0], r.lambda_t[1] + c * du_t[1]];
+        let b = match self {
+            Law::Coulomb { mu } => contact::coulomb_threshold(r.u_n, r.lambda_n, k.gap, mu, c),
+            _ => k.bound,
+        };
+        (b, v)
+    }
+
+    /// A stick node stays stick while |v| ≤ b (1 + [`STICK_TOL`]), b > 0: the hysteresis of
+    /// (3.33) that keeps a node at the stick/slip limit (|λ_τ| = b, Δu_τ = 0: every slip node of
+    /// a warm start from its own solution) from flipping on round-off.
+    fn stays_stuck(self, k: &ContactNode, r: &NodeResult, c: f64) -> bool {
+        let (b, v) = self.threshold_and_v(k, r, c);
+        b > 0.0 && v[0].hypot(v[1]) <= b * (1.0 + STICK_TOL)
     }
 
     /// The squared tangential residual of node `k` at `r`: ‖C_τ‖² (3.31) for Tresca, the
@@ -48,7 +66,9 @@ impl Law {
                     u_t: du_t,
                     lam_t: r.lambda_t,
                 };
-                contact::coulomb_residual(&p, k.gap, mu, c).tangential.powi(2)
+                contact::coulomb_residual(&p, k.gap, mu, c)
+                    .tangential
+                    .powi(2)
             }
             _ => {
                 let ct = contact::c_tau(&du_t, &r.lambda_t, k.bound, c);
@@ -57,6 +77,11 @@ impl Law {
         }
     }
 }
+
+/// Relative tolerance of the stick → slip test (3.33) for a node that sticks (see
+/// `Law::stays_stuck`): a stick node may end with |λ_τ| ≤ b (1 + STICK_TOL), far below the
+/// warning level of the friction certificate (1e-8 of the problem's scales).
+pub const STICK_TOL: f64 = 1e-8;
 
 /// u_τ − u_ref: the tangential increment friction acts on (u_τ itself for u_ref = 0).
 pub fn increment(r: &NodeResult, k: &ContactNode) -> [f64; 2] {
@@ -166,7 +191,16 @@ impl ActiveSet {
             b.nodes
                 .iter()
                 .zip(nodes)
-                .map(|(k, r)| law.row(k, r, c, dim))
+                .map(|(k, r)| {
+                    // Δu_τ = 0: a node at the slip limit starts as stick (the first solve then
+                    // tells whether the new load makes it slip, with a well-defined direction).
+                    let row = law.row(k, r, c, dim);
+                    if row.is_slip() && law.stays_stuck(k, r, c) {
+                        CoulombRow::Stick
+                    } else {
+                        row
+                    }
+                })
                 .collect()
         });
         ActiveSet {
@@ -306,6 +340,9 @@ impl ActiveSet {
             residual2 += cn * cn;
             if let Some(t) = next.tangential.as_mut() {
                 t[i] = law.row(k, r, c, dim);
+                if t[i].is_slip() && !self.slip(i) && law.stays_stuck(k, r, c) {
+                    t[i] = CoulombRow::Stick;
+                }
                 flip |= t[i].is_slip() != self.slip(i);
                 residual2 += law.residual2(k, r, c);
                 lambda2 += r.lambda.iter().map(|x| x * x).sum::<f64>();

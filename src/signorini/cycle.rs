@@ -170,13 +170,31 @@ mod tests {
     #[test]
     fn stopping_rules() {
         assert_eq!(decide(3, true, false, 0.0, 1e-10, true), Decision::NewSets);
-        assert_eq!(decide(0, true, false, 0.0, 1e-10, true), Decision::TestBalance);
-        assert_eq!(decide(0, false, false, 1.0, 1e-10, true), Decision::Converged);
-        assert_eq!(decide(0, false, true, 1e-12, 1e-10, true), Decision::Converged);
-        assert_eq!(decide(0, false, true, 1e-3, 1e-10, true), Decision::SameSets);
+        assert_eq!(
+            decide(0, true, false, 0.0, 1e-10, true),
+            Decision::TestBalance
+        );
+        assert_eq!(
+            decide(0, false, false, 1.0, 1e-10, true),
+            Decision::Converged
+        );
+        assert_eq!(
+            decide(0, false, true, 1e-12, 1e-10, true),
+            Decision::Converged
+        );
+        assert_eq!(
+            decide(0, false, true, 1e-3, 1e-10, true),
+            Decision::SameSets
+        );
         // Coulomb: a small step is not enough while (F3) is not small
-        assert_eq!(decide(0, false, true, 1e-12, 1e-10, false), Decision::SameSets);
-        assert_eq!(decide(1, false, true, 1e-12, 1e-10, true), Decision::NewSets);
+        assert_eq!(
+            decide(0, false, true, 1e-12, 1e-10, false),
+            Decision::SameSets
+        );
+        assert_eq!(
+            decide(1, false, true, 1e-12, 1e-10, true),
+            Decision::NewSets
+        );
     }
 
     #[test]

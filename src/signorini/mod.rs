@@ -306,7 +306,9 @@ fn take_reference(
 ) -> Result<Vec<f64>, RunError> {
     let u = prev.u.to_local_vec()?;
     let same = prev.nodes.len() == b.nodes.len()
-        && b.nodes.last().map_or(true, |k| k.local_row + k.frame.dim <= u.len());
+        && b.nodes
+            .last()
+            .map_or(true, |k| k.local_row + k.frame.dim <= u.len());
     ctx.agree(if same {
         Ok(())
     } else {
@@ -352,14 +354,10 @@ fn fixed_point(
     }
     let mut history: Vec<StepInfo> = Vec::new();
     for outer in 1..=ns.section.max_steps {
-        let pm = ContactProblem {
-            boundary: &b,
-            ..*p
-        };
-        let start = state.as_ref().map(|(nodes, u)| WarmStart {
-            nodes,
-            u_local: u,
-        });
+        let pm = ContactProblem { boundary: &b, ..*p };
+        let start = state
+            .as_ref()
+            .map(|(nodes, u)| WarmStart { nodes, u_local: u });
         let mut nr = newton::semismooth_newton(ctx, &pm, reduced, &tresca, start.as_ref())?;
         for h in &nr.history {
             let mut h = h.clone();

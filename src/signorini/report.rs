@@ -283,18 +283,29 @@ impl Table {
         let (mut excess, mut stick, mut align, mut bmax, mut umax) =
             (0.0f64, 0.0f64, 0.0f64, 0.0f64, 0.0f64);
         let (mut n_stick, mut n_slip) = (0usize, 0usize);
+        let mut total = 0.0f64; // the largest |u| at the contact, increments or not
         for r in &self.rows {
             let ut = [r[DUT], r[DUT + 1]];
+            umax = umax
+                .max((ut[0] * ut[0] + ut[1] * ut[1]).sqrt())
+                .max(r[UN].abs());
+            total = total.max(r[UT].hypot(r[UT + 1]));
+        }
+        // A slip node whose increment is round-off (a node at the slip limit that did not
+        // move in this load step) is at rest: (3.18) then asks |λ_τ| ≤ b only.
+        let rest = RESTING_SLIP * umax.max(total);
+        for r in &self.rows {
+            let mut ut = [r[DUT], r[DUT + 1]];
             let lt = [r[LT], r[LT + 1]];
             let slip = r[SLIP] > 0.5;
+            if slip && (ut[0] * ut[0] + ut[1] * ut[1]).sqrt() <= rest {
+                ut = [0.0; 2];
+            }
             let res = crate::contact::tangential_residual(&ut, &lt, r[BOUND], slip);
             excess = excess.max(res.excess);
             stick = stick.max(res.stick_motion);
             align = align.max(res.slip_alignment);
             bmax = bmax.max(r[BOUND]);
-            umax = umax
-                .max((ut[0] * ut[0] + ut[1] * ut[1]).sqrt())
-                .max(r[UN].abs());
             if slip {
                 n_slip += 1;
             } else {
@@ -353,6 +364,10 @@ pub struct Scales {
     pub force: f64,
     pub length: f64,
 }
+
+/// A slip node's tangential increment at most this fraction of the largest contact
+/// displacement counts as no motion in the friction certificate.
+pub const RESTING_SLIP: f64 = 1e-12;
 
 /// The relative violation of a certificate beyond which a final state is not accepted.
 pub const CERTIFICATE_TOL: f64 = 1e-6;

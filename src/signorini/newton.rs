@@ -325,6 +325,15 @@ impl Loop<'_> {
         let (ctx, dim) = (self.ctx, self.p.mesh.dim);
         let b = &self.shifted;
         let pins = !self.free.pins().is_empty();
+        let rows_move = t.changed == 0 && self.s.friction() && t.du_rel >= self.s.section.tol_u;
+        if pins && rows_move && t.next.gram != self.summary.gram {
+            // No state changed, but a slip row begins or stops holding u_τ (Coulomb: b turns
+            // positive after a frictionless first step): the pins change with the next rows, so
+            // neither the balance test nor the stop applies yet.
+            self.set.tangential = next.tangential;
+            self.summary = t.next;
+            return Ok(false);
+        }
         let residual_ok = match self.s.law {
             Law::Coulomb { .. } => t.residual <= COULOMB_RESIDUAL_TOL * t.lambda_norm,
             _ => true,

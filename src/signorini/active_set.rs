@@ -518,6 +518,154 @@ impl SetUpdate {
 mod tests {
     use super::*;
 
+    use crate::contact::Frame;
+
+    fn node(bound: f64, u_t_ref: [f64; 2]) -> ContactNode {
+        ContactNode {
+            node: 0,
+            tag: 7,
+            row: 0,
+            local_row: 0,
+            x: [0.0; 3],
+            frame: Frame::new([0.0, 1.0, 0.0], 2).expect("frame"),
+            gap: 0.0,
+            weight: 1.0,
+            bound,
+            u_t_ref,
+        }
+    }
+
+    fn at(u_t: f64, lambda_n: f64, lambda_t: f64) -> NodeResult {
+        NodeResult {
+            u_n: 0.0,
+            u_t: [u_t, 0.0],
+            lambda_n,
+            lambda_t: [lambda_t, 0.0],
+            active: true,
+            ..NodeResult::default()
+        }
+    }
+
+    #[test]
+    fn friction_acts_on_the_increment() {
+        let k = node(0.1, [0.3, 0.0]);
+        // u_τ = u_ref: no increment, |λ_τ| < b: stick (the row of u_τ itself would slip)
+        let r = at(0.3, -1.0, 0.05);
+        assert_eq!(increment(&r, &k), [0.0, 0.0]);
+        assert_eq!(Law::Tresca.row(&k, &r, 1.0, 2), CoulombRow::Stick);
+        assert!(Law::Tresca.row(&node(0.1, [0.0; 2]), &r, 1.0, 2).is_slip());
+        assert_eq!(
+            Law::Coulomb { mu: 0.1 }.row(&k, &r, 1.0, 2),
+            CoulombRow::Stick
+        );
+        // the stick row prescribes u_τ' = u_ref
+        let set = ActiveSet {
+            normal: vec![true],
+            tangential: Some(vec![CoulombRow::Stick]),
+        };
+        let b = ContactBoundary {
+            nodes: vec![k.clone()],
+            n_global: 1,
+            offset: 0,
+            on_contact_boundary: vec![true],
+            excluded_dirichlet: 0,
+            obstacle: crate::contact::Obstacle::Plane(
+                crate::contact::Plane::new([0.0; 3], [0.0, 1.0, 0.0], 2).expect("plane"),
+            ),
+        };
+        let p = set.prescribed(&b, 0, 2).expect("rewritten");
+        assert_eq!(p.dirs.len(), 2);
+        assert_eq!(p.dirs[1].1, 0.3);
+        // a slip row moves l u_ref to its right-hand side; with u_ref = 0 it is unchanged
+        let row = CoulombRow::Slip {
+            l: [[2.0, 0.0], [0.0, 0.0]],
+            q: [0.5, 0.0],
+            r: [1.0, 0.0],
+        };
+        assert_eq!(
+            row.with_reference(&[0.3, 0.0]),
+            CoulombRow::Slip {
+                l: [[2.0, 0.0], [0.0, 0.0]],
+                q: [0.5, 0.0],
+                r: [1.6, 0.0],
+            }
+        );
+        assert_eq!(row.with_reference(&[0.0; 2]), row);
+    }
+
+    #[test]
+    fn a_stuck_node_at_the_limit_stays_stuck() {
+        let k = node(0.1, [0.0; 2]);
+        let c = 1.0;
+        // |λ_τ| = b (1 + 1e-12), no motion: slips by (3.33), stays stuck with the tolerance
+        let r = at(0.0, -1.0, 0.1 * (1.0 + 1e-12));
+        assert!(Law::Tresca.row(&k, &r, c, 2).is_slip());
+        assert!(Law::Tresca.stays_stuck(&k, &r, c));
+        let coulomb = Law::Coulomb { mu: 0.1 };
+        assert!(coulomb.stays_stuck(&k, &r, c));
+        // clearly beyond the limit: slips
+        let r = at(0.0, -1.0, 0.1 * (1.0 + 1e-6));
+        assert!(!Law::Tresca.stays_stuck(&k, &r, c));
+        assert!(!coulomb.stays_stuck(&k, &r, c));
+        // b = 0 (Coulomb, free node): never stuck
+        let r = at(0.0, 0.0, 0.0);
+        assert!(!coulomb.stays_stuck(&k, &r, c));
+        // in the set update: a stick node at the limit keeps its state, a slip node does not
+        // go back for it
+        let b = ContactBoundary {
+            nodes: vec![k.clone(), k.clone()],
+            n_global: 2,
+            offset: 0,
+            on_contact_boundary: vec![true],
+            excluded_dirichlet: 0,
+            obstacle: crate::contact::Obstacle::Plane(
+                crate::contact::Plane::new([0.0; 3], [0.0, 1.0, 0.0], 2).expect("plane"),
+            ),
+        };
+        let mut it = Iterate::new(2, 4, true);
+        let limit = at(0.0, -1.0, 0.1 * (1.0 + 1e-12));
+        it.nodes = vec![limit, limit];
+        let zero = CoulombRow::Slip {
+            l: [[0.0; 2]; 2],
+            q: [0.0; 2],
+            r: [0.0; 2],
+        };
+        let set = ActiveSet {
+            normal: vec![true, true],
+            tangential: Some(vec![CoulombRow::Stick, zero]),
+        };
+        let up = set.update(&it, &b, Law::Tresca, c, 2);
+        let t = up.next.tangential.expect("friction");
+        assert_eq!(t[0], CoulombRow::Stick);
+        assert!(t[1].is_slip());
+        assert_eq!(up.changed, 0);
+        // the warm start puts both at the limit to stick
+        let w = ActiveSet::warm(&b, &it.nodes, Law::Tresca, c, 2);
+        assert_eq!(
+            w.tangential.expect("friction"),
+            vec![CoulombRow::Stick, CoulombRow::Stick]
+        );
+        assert_eq!(w.normal, vec![true, true]);
+    }
+
+    #[test]
+    fn coulomb_rows_carry_the_coupling() {
+        let k = node(0.0, [0.0; 2]);
+        // pressed (λ_n = −1), slipping fast: S4 with q ≠ 0; free node: zero row
+        let r = at(0.5, -1.0, 0.3);
+        let row = Law::Coulomb { mu: 0.3 }.row(&k, &r, 1.0, 2);
+        assert!(row.is_slip() && row.coupled());
+        let free = NodeResult {
+            u_n: 0.2,
+            ..NodeResult::default()
+        };
+        let row = Law::Coulomb { mu: 0.3 }.row(&k, &free, 1.0, 2);
+        assert!(row.is_slip() && !row.coupled());
+        // Tresca rows never couple
+        let t = Law::Tresca.row(&node(0.1, [0.0; 2]), &r, 1.0, 2);
+        assert!(!t.coupled());
+    }
+
     #[test]
     fn hashes_are_exact_in_f64_sums() {
         let (x, y) = node_hash(12345);

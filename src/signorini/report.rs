@@ -457,6 +457,48 @@ mod tests {
         assert!(k.beyond(CERTIFICATE_TOL));
     }
 
+    /// One contact row: total u_τ, increment Δu_τ, λ_τ, b, slip flag.
+    fn row(ut: f64, dut: f64, lt: f64, b: f64, slip: bool) -> [f64; NCOL] {
+        let mut r = [0.0; NCOL];
+        r[UT] = ut;
+        r[DUT] = dut;
+        r[LT] = lt;
+        r[LN] = -b * 10.0;
+        r[BOUND] = b;
+        r[STATE] = 1.0;
+        r[SLIP] = if slip { 1.0 } else { 0.0 };
+        r
+    }
+
+    #[test]
+    fn certificate_judges_the_increment() {
+        // a stick node that moved in an earlier load step (u_τ ≠ 0, Δu_τ = 0) and a slip node
+        // whose increment is round-off (at rest at the limit): both fine
+        let t = Table {
+            rows: vec![
+                row(0.5, 0.0, 0.05, 0.1, false),
+                row(0.5, 1e-17, 0.1, 0.1, true),
+                row(0.7, 0.2, 0.1, 0.1, true),
+            ],
+            dim: 2,
+        };
+        let c = t.friction_certificate();
+        assert_eq!(c.max_stick_motion, 0.0);
+        assert!(c.max_slip_alignment_defect <= 1e-15, "{c:?}");
+        assert_eq!((c.stick_count, c.slip_count), (1, 2));
+        // a stick node with an increment, a slip node against its increment: violations
+        let t = Table {
+            rows: vec![
+                row(0.5, 0.01, 0.05, 0.1, false),
+                row(0.7, 0.2, -0.1, 0.1, true),
+            ],
+            dim: 2,
+        };
+        let c = t.friction_certificate();
+        assert_eq!(c.max_stick_motion, 0.01);
+        assert!((c.max_slip_alignment_defect - 0.2).abs() < 1e-15, "{c:?}");
+    }
+
     #[test]
     fn friction_beyond_its_bound_is_a_violation() {
         let scales = Scales {

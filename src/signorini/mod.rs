@@ -308,7 +308,7 @@ fn take_reference(
     let same = prev.nodes.len() == b.nodes.len()
         && b.nodes
             .last()
-            .map_or(true, |k| k.local_row + k.frame.dim <= u.len());
+            .is_none_or(|k| k.local_row + k.frame.dim <= u.len());
     ctx.agree(if same {
         Ok(())
     } else {
@@ -329,7 +329,7 @@ fn take_reference(
 
 /// Coulomb by the fixed point on Tresca thresholds (docs/friction.md (a)):
 /// b^{m+1}_k = μ max(0, −λ_n^{k,m}), every outer step a Tresca solve (Algorithm 2) warm-started
-/// from the previous one (b^0 from the warm start's λ_n, else 0); stop when
+/// from the previous one (b^0 from the warm start's λ_n, else ‖f‖₁: all stick); stop when
 /// max_k |b^{m+1} − b^m| ≤ [`FIXED_POINT_TOL`] · max_k b^{m+1}. Returns the last Tresca
 /// result with the history and step count of all outer steps, and the number of outer steps.
 /// Collective.
@@ -349,8 +349,11 @@ fn fixed_point(
     let mut state: Option<(Vec<NodeResult>, Vec<f64>)> =
         warm.map(|w| (w.nodes.to_vec(), w.u_local.to_vec()));
     let threshold = |r: &NodeResult| mu * (-r.lambda_n).max(0.0);
+    // b^0 without a warm start: ‖f‖₁, beyond any nodal friction force, so the first solve
+    // sticks (b^0 = 0 would leave a free body with a tangential load without support).
+    let stick_all = ctx.sum_f64(reduced.f_local.iter().map(|x| x.abs()).sum());
     for (i, k) in b.nodes.iter_mut().enumerate() {
-        k.bound = state.as_ref().map_or(0.0, |(n, _)| threshold(&n[i]));
+        k.bound = state.as_ref().map_or(stick_all, |(n, _)| threshold(&n[i]));
     }
     let mut history: Vec<StepInfo> = Vec::new();
     for outer in 1..=ns.section.max_steps {

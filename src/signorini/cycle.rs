@@ -44,7 +44,8 @@ pub enum Decision {
 /// The stopping rules of Algorithm 1 (step 5: no set changed) and Algorithm 2 (no set changed
 /// and |u^ℓ − u^{ℓ−1}| / |u^ℓ| < tol_u), with the balance test of free rigid modes first
 /// whenever pins exist and the balance is not yet confirmed. `residual_ok`: Coulomb's residual
-/// (F3) is below its tolerance (always true for the other laws).
+/// (F3) is below its tolerance (always true for the other laws); `residual_zero`: it is at
+/// round-off, so the iterate is a solution without a further step to test |u^ℓ − u^{ℓ−1}|.
 pub fn decide(
     changed: usize,
     balance_pending: bool,
@@ -52,12 +53,13 @@ pub fn decide(
     du_rel: f64,
     tol_u: f64,
     residual_ok: bool,
+    residual_zero: bool,
 ) -> Decision {
     if changed > 0 {
         Decision::NewSets
     } else if balance_pending {
         Decision::TestBalance
-    } else if !friction || (du_rel < tol_u && residual_ok) {
+    } else if !friction || residual_zero || (du_rel < tol_u && residual_ok) {
         Decision::Converged
     } else {
         Decision::SameSets
@@ -169,32 +171,20 @@ mod tests {
 
     #[test]
     fn stopping_rules() {
-        assert_eq!(decide(3, true, false, 0.0, 1e-10, true), Decision::NewSets);
-        assert_eq!(
-            decide(0, true, false, 0.0, 1e-10, true),
-            Decision::TestBalance
-        );
-        assert_eq!(
-            decide(0, false, false, 1.0, 1e-10, true),
-            Decision::Converged
-        );
-        assert_eq!(
-            decide(0, false, true, 1e-12, 1e-10, true),
-            Decision::Converged
-        );
-        assert_eq!(
-            decide(0, false, true, 1e-3, 1e-10, true),
-            Decision::SameSets
-        );
+        let d = |changed, pending, friction, du, ok, zero| {
+            decide(changed, pending, friction, du, 1e-10, ok, zero)
+        };
+        assert_eq!(d(3, true, false, 0.0, true, false), Decision::NewSets);
+        assert_eq!(d(0, true, false, 0.0, true, false), Decision::TestBalance);
+        assert_eq!(d(0, false, false, 1.0, true, false), Decision::Converged);
+        assert_eq!(d(0, false, true, 1e-12, true, false), Decision::Converged);
+        assert_eq!(d(0, false, true, 1e-3, true, false), Decision::SameSets);
         // Coulomb: a small step is not enough while (F3) is not small
-        assert_eq!(
-            decide(0, false, true, 1e-12, 1e-10, false),
-            Decision::SameSets
-        );
-        assert_eq!(
-            decide(1, false, true, 1e-12, 1e-10, true),
-            Decision::NewSets
-        );
+        assert_eq!(d(0, false, true, 1e-12, false, false), Decision::SameSets);
+        assert_eq!(d(1, false, true, 1e-12, true, true), Decision::NewSets);
+        // ... and (F3) at round-off needs no further step (but the balance test first)
+        assert_eq!(d(0, false, true, 1e-3, true, true), Decision::Converged);
+        assert_eq!(d(0, true, true, 1e-3, true, true), Decision::TestBalance);
     }
 
     #[test]

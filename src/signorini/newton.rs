@@ -43,6 +43,11 @@ impl NewtonSettings<'_> {
 /// |u^ℓ − u^{ℓ−1}| / |u^ℓ| < tol_u), before the iteration stops.
 pub const COULOMB_RESIDUAL_TOL: f64 = 1e-9;
 
+/// Coulomb: a residual (F3) below this fraction of ‖λ‖₂ is round-off: with no state changed
+/// the iterate is a solution and the iteration stops at once (λ = f − A u holds by
+/// construction, so (F3) = 0 is the whole problem), without the step that tests |Δu|.
+pub const COULOMB_RESIDUAL_ZERO: f64 = 1e-12;
+
 /// A warm start: the converged state of a previous solve on the same mesh and boundary
 /// (the contact nodes' iterate with their final normal set in `active`, this rank's rows of u).
 pub struct WarmStart<'a> {
@@ -334,9 +339,12 @@ impl Loop<'_> {
             self.summary = t.next;
             return Ok(false);
         }
-        let residual_ok = match self.s.law {
-            Law::Coulomb { .. } => t.residual <= COULOMB_RESIDUAL_TOL * t.lambda_norm,
-            _ => true,
+        let (residual_ok, residual_zero) = match self.s.law {
+            Law::Coulomb { .. } => (
+                t.residual <= COULOMB_RESIDUAL_TOL * t.lambda_norm,
+                t.residual <= COULOMB_RESIDUAL_ZERO * t.lambda_norm,
+            ),
+            _ => (true, false),
         };
         let mut decision = decide(
             t.changed,
@@ -345,6 +353,7 @@ impl Loop<'_> {
             t.du_rel,
             self.s.section.tol_u,
             residual_ok,
+            residual_zero,
         );
         if decision == Decision::TestBalance {
             // A free rigid mode is harmless only if the load is balanced in it (the pins then
@@ -362,6 +371,7 @@ impl Loop<'_> {
                         t.du_rel,
                         self.s.section.tol_u,
                         residual_ok,
+                        residual_zero,
                     );
                 }
                 Balance::Touch(tag) => {

@@ -159,8 +159,10 @@ pub struct ContactSettings {
     pub file: std::path::PathBuf,
     pub group: String,
     pub obstacle: Obstacle,
-    /// Tresca threshold g_R (1.44e); `None` without friction.
+    /// Tresca threshold g_R (1.44e); `None` without friction or with Coulomb.
     pub tresca_threshold: Option<f64>,
+    /// Coulomb friction: the coefficient μ and the algorithm; `None` otherwise.
+    pub coulomb: Option<(f64, case::CoulombAlgorithm)>,
     pub rigid_modes: case::RigidModeHandling,
     pub newton: NewtonSection,
     /// Young's modulus (the default c = E / h_c).
@@ -170,7 +172,7 @@ pub struct ContactSettings {
 impl ContactSettings {
     /// True with a friction law: Algorithm 2 and its tangential states.
     pub fn friction(&self) -> bool {
-        self.tresca_threshold.is_some()
+        self.tresca_threshold.is_some() || self.coulomb.is_some()
     }
 }
 
@@ -185,8 +187,12 @@ pub fn contact_settings(
         group: cc.group.clone(),
         obstacle: obstacle_of(cc, dim, &case.file)?,
         tresca_threshold: match cc.friction {
-            Friction::None => None,
             Friction::Tresca { threshold } => Some(threshold),
+            Friction::None | Friction::Coulomb { .. } => None,
+        },
+        coulomb: match cc.friction {
+            Friction::Coulomb { mu, algorithm } => Some((mu, algorithm)),
+            Friction::None | Friction::Tresca { .. } => None,
         },
         rigid_modes: cc.rigid_modes,
         newton: case.newton.clone(),

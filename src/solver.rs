@@ -26,7 +26,8 @@ pub fn preset_options(preset: Preset, rtol: f64, symmetric: bool) -> String {
         ),
         // GMRES with right preconditioning (the true residual is tested) and smoothed
         // aggregation AMG with the rigid-body near-null space; the symmetrised graph keeps
-        // aggregation valid for the unsymmetric reduced systems of Tresca friction (3.42).
+        // aggregation valid for the unsymmetric reduced systems of friction (Tresca (3.42),
+        // Coulomb (F7) in docs/friction.md, unsymmetric also in 2D).
         Preset::Iterative => format!(
             "-ksp_type gmres -ksp_pc_side right -ksp_gmres_restart 200 -ksp_rtol {rtol:e} \
              -ksp_max_it 2000 -pc_type gamg -pc_gamg_sym_graph true \

@@ -220,7 +220,32 @@ pub enum ObstacleSpec {
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum Friction {
     None,
-    Tresca { threshold: f64 },
+    Tresca {
+        threshold: f64,
+    },
+    /// Coulomb's law node-wise, threshold b_k = μ (−λ_n^k) (docs/friction.md).
+    Coulomb {
+        mu: f64,
+        algorithm: CoulombAlgorithm,
+    },
+}
+
+/// How Coulomb friction is solved (docs/friction.md).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum CoulombAlgorithm {
+    /// One generalised semismooth Newton on (C_n, C_τ) with b = μ max(0, −λ_n − c(u_n + g)).
+    Newton,
+    /// Fixed point on Tresca thresholds b^{m+1} = μ max(0, −λ_n^m), a Tresca solve per step.
+    FixedPoint,
+}
+
+impl CoulombAlgorithm {
+    pub fn name(self) -> &'static str {
+        match self {
+            CoulombAlgorithm::Newton => "newton",
+            CoulombAlgorithm::FixedPoint => "fixed-point",
+        }
+    }
 }
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -1084,6 +1109,8 @@ impl Reader<'_> {
     }
 
     fn friction(&self, key: &str, n: &Node) -> Res<Friction> {
+        const FORMS: &str = "\"none\", { law = \"tresca\", threshold = ... } or \
+                             { law = \"coulomb\", mu = ... }";
         match &n.kind {
             Kind::Str(s) if s == "none" => Ok(Friction::None),
             Kind::Str(s) if s == "tresca" => Err(self.err(
@@ -1091,27 +1118,41 @@ impl Reader<'_> {
                 n.loc,
                 "Tresca friction needs a threshold: friction = { law = \"tresca\", threshold = ... }",
             )),
+            Kind::Str(s) if s == "coulomb" => Err(self.err(
+                key,
+                n.loc,
+                "Coulomb friction needs a friction coefficient: friction = { law = \"coulomb\", mu = ... }",
+            )),
             Kind::Str(s) => Err(self.err(
                 key,
                 n.loc,
-                format!(
-                    "unknown value \"{s}\"; allowed: \"none\" or {{ law = \"tresca\", threshold = ... }}"
-                ),
+                format!("unknown value \"{s}\"; allowed: {FORMS}"),
             )),
             Kind::Table(_) => {
-                let t = self.table(key, n, &["law", "threshold"])?;
+                let t = self.table(key, n, &["law", "threshold", "mu", "algorithm"])?;
                 let (lk, l) = self.required(&t, "law")?;
                 #[derive(Clone, Copy)]
                 enum Law {
                     None,
                     Tresca,
+                    Coulomb,
                 }
-                match self.choice(&lk, l, &[("none", Law::None), ("tresca", Law::Tresca)])? {
+                let law = self.choice(
+                    &lk,
+                    l,
+                    &[
+                        ("none", Law::None),
+                        ("tresca", Law::Tresca),
+                        ("coulomb", Law::Coulomb),
+                    ],
+                )?;
+                match law {
                     Law::None => {
                         self.table(key, n, &["law"])?;
                         Ok(Friction::None)
                     }
                     Law::Tresca => {
+                        self.table(key, n, &["law", "threshold"])?;
                         let (hk, h) = self.required(&t, "threshold")?;
                         let threshold = self.num(&hk, h)?;
                         if threshold < 0.0 {
@@ -1123,9 +1164,29 @@ impl Reader<'_> {
                         }
                         Ok(Friction::Tresca { threshold })
                     }
+                    Law::Coulomb => {
+                        self.table(key, n, &["law", "mu", "algorithm"])?;
+                        let (mk, m) = self.required(&t, "mu")?;
+                        let mu = self.num(&mk, m)?;
+                        if mu < 0.0 {
+                            return Err(self.err(&mk, m.loc, format!("must be >= 0, got {mu}")));
+                        }
+                        let algorithm = match t.get("algorithm") {
+                            None => CoulombAlgorithm::Newton,
+                            Some((ak, a)) => self.choice(
+                                &ak,
+                                a,
+                                &[
+                                    ("newton", CoulombAlgorithm::Newton),
+                                    ("fixed-point", CoulombAlgorithm::FixedPoint),
+                                ],
+                            )?,
+                        };
+                        Ok(Friction::Coulomb { mu, algorithm })
+                    }
                 }
             }
-            _ => Err(self.type_err(key, n, "\"none\" or a table { law = ..., threshold = ... }")),
+            _ => Err(self.type_err(key, n, FORMS)),
         }
     }
 

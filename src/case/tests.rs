@@ -518,6 +518,88 @@ fn reject_negative_threshold() {
 }
 
 #[test]
+fn coulomb_friction_key() {
+    let c = "[contact]\ngroup = \"c\"\nobstacle = { type = \"plane\", point = [0, 0], normal = [0, 1] }\n";
+    let parse = |f: &str| {
+        parse(&with(&format!("{c}friction = {f}\n")))
+            .expect("valid")
+            .contact
+            .expect("contact")
+            .friction
+    };
+    assert_eq!(
+        parse("{ law = \"coulomb\", mu = 0.3 }"),
+        Friction::Coulomb {
+            mu: 0.3,
+            algorithm: CoulombAlgorithm::Newton
+        }
+    );
+    assert_eq!(
+        parse("{ law = \"coulomb\", mu = 0, algorithm = \"fixed-point\" }"),
+        Friction::Coulomb {
+            mu: 0.0,
+            algorithm: CoulombAlgorithm::FixedPoint
+        }
+    );
+    assert_eq!(
+        parse("{ law = \"coulomb\", mu = 1, algorithm = \"newton\" }"),
+        Friction::Coulomb {
+            mu: 1.0,
+            algorithm: CoulombAlgorithm::Newton
+        }
+    );
+    let e = expect_err(
+        &with(&format!(
+            "{c}friction = {{ law = \"coulomb\", mu = -0.1 }}\n"
+        )),
+        "contact.friction.mu",
+        "friction",
+    );
+    assert!(e.message.contains(">= 0"), "{e}");
+    expect_err(
+        &with(&format!(
+            "{c}friction = {{ law = \"coulomb\", mu = nan }}\n"
+        )),
+        "contact.friction.mu",
+        "friction",
+    );
+    expect_err(
+        &with(&format!(
+            "{c}friction = {{ law = \"coulomb\", mu = inf }}\n"
+        )),
+        "contact.friction.mu",
+        "friction",
+    );
+    expect_err(
+        &with(&format!(
+            "{c}friction = {{ law = \"coulomb\", mu = \"0.3\" }}\n"
+        )),
+        "contact.friction.mu",
+        "friction",
+    );
+    expect_err(
+        &with(&format!("{c}friction = {{ law = \"coulomb\" }}\n")),
+        "contact.friction.mu",
+        "friction",
+    );
+    let e = expect_err(
+        &with(&format!(
+            "{c}friction = {{ law = \"coulomb\", mu = 0.3, algorithm = \"picard\" }}\n"
+        )),
+        "contact.friction.algorithm",
+        "friction",
+    );
+    assert!(e.message.contains("fixed-point"), "{e}");
+    expect_err(
+        &with(&format!(
+            "{c}friction = {{ law = \"tresca\", threshold = 1, algorithm = \"newton\" }}\n"
+        )),
+        "contact.friction.algorithm",
+        "friction",
+    );
+}
+
+#[test]
 fn reject_bad_friction_and_rigid_modes() {
     let c = "[contact]\ngroup = \"c\"\nobstacle = { type = \"plane\", point = [0, 0], normal = [0, 1] }\n";
     expect_err(
@@ -534,7 +616,7 @@ fn reject_bad_friction_and_rigid_modes() {
         &with(&format!(
             "{c}friction = {{ law = \"coulomb\", threshold = 1 }}\n"
         )),
-        "contact.friction.law",
+        "contact.friction.threshold",
         "friction",
     );
     expect_err(

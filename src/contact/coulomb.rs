@@ -187,9 +187,46 @@ pub enum CoulombRow<const M: usize> {
     },
 }
 
+impl<const M: usize> From<TangentialRow<M>> for CoulombRow<M> {
+    /// A Tresca row (3.39a) is a Coulomb row without the λ_n coupling (q = 0).
+    fn from(t: TangentialRow<M>) -> Self {
+        match t {
+            TangentialRow::Stick => CoulombRow::Stick,
+            TangentialRow::Slip { l, r } => CoulombRow::Slip { l, q: [0.0; M], r },
+        }
+    }
+}
+
 impl<const M: usize> CoulombRow<M> {
     pub fn is_slip(&self) -> bool {
         matches!(self, CoulombRow::Slip { .. })
+    }
+
+    /// A slip row with a λ_n coupling (q ≠ 0): Coulomb's S4 row (F6), not a Tresca row.
+    pub fn coupled(&self) -> bool {
+        matches!(self, CoulombRow::Slip { q, .. } if q.iter().any(|&x| x != 0.0))
+    }
+
+    /// The row for the tangential increment u_τ − u_ref (load steps, docs/friction.md): the
+    /// slip row −λ_τ' + l (u_τ' − u_ref) = r moves l u_ref to the right-hand side. Unchanged
+    /// for u_ref = 0 (bit for bit).
+    pub fn with_reference(&self, u_ref: &[f64; M]) -> Self {
+        match *self {
+            CoulombRow::Slip { l, q, r } if u_ref.iter().any(|&x| x != 0.0) => CoulombRow::Slip {
+                l,
+                q,
+                r: axpy(&r, 1.0, &matvec(&l, u_ref)),
+            },
+            row => row,
+        }
+    }
+
+    /// The Tresca part (l, r) of the row, the coupling q dropped.
+    pub fn tresca_part(&self) -> TangentialRow<M> {
+        match *self {
+            CoulombRow::Stick => TangentialRow::Stick,
+            CoulombRow::Slip { l, r, .. } => TangentialRow::Slip { l, r },
+        }
     }
 
     /// The Tresca row (3.39a) this row becomes when s' = λ_n' + c (u_n' + g) is frozen at `s`

@@ -1,29 +1,114 @@
 //! The sets of Algorithms 1 and 2 on this rank's contact nodes, an iterate's multipliers (3.28)
 //! and the set update (3.23)/(3.33) with its one reduction per Newton step.
 
-use super::boundary::{ContactBoundary, NodeResult};
+use super::boundary::{ContactBoundary, ContactNode, NodeResult};
 use super::rigid::{Gram, RigidModes};
 use crate::case::NewtonInit;
-use crate::contact::{self, NodeState, TangentialRow};
+use crate::contact::{self, CoulombRow, NodePoint, NodeState};
 use crate::par::Ctx;
 
-/// A_n (and, with friction, the tangential row of every node: stick, or slip with L̃, r̃ (3.39))
-/// on this rank's contact nodes.
+/// The tangential law of a solve: which rows the set update forms (docs/friction.md).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Law {
+    /// Algorithm 1: no tangential state.
+    Frictionless,
+    /// Algorithm 2 with the nodal thresholds b_k of the contact boundary (3.18).
+    Tresca,
+    /// The generalised Newton: b = μ max(0, −λ_n − c(u_n + g)) (F1), rows (F5)/(F6).
+    Coulomb { mu: f64 },
+}
+
+impl Law {
+    pub fn friction(self) -> bool {
+        self != Law::Frictionless
+    }
+
+    /// The tangential rows of node `k` at the iterate `r` (increment u_τ − u_ref): Tresca
+    /// (3.33)/(3.39) or Coulomb (F5). Local.
+    fn row(self, k: &ContactNode, r: &NodeResult, c: f64, dim: usize) -> CoulombRow<2> {
+        let du_t = increment(r, k);
+        match self {
+            Law::Coulomb { mu } => {
+                contact::coulomb_row_dyn(dim, r.u_n, r.lambda_n, du_t, r.lambda_t, k.gap, mu, c).row
+            }
+            _ => contact::tangential_row_dyn(dim, du_t, r.lambda_t, k.bound, c).into(),
+        }
+    }
+
+    /// The threshold b and v = λ_τ + c Δu_τ of node `k` at `r` (Tresca: b_k; Coulomb (F1)).
+    fn threshold_and_v(self, k: &ContactNode, r: &NodeResult, c: f64) -> (f64, [f64; 2]) {
+        let du_t = increment(r, k);
+        let v = [r.lambda_t[0] + c * du_t[0], r.lambda_t[1] + c * du_t[1]];
+        let b = match self {
+            Law::Coulomb { mu } => contact::coulomb_threshold(r.u_n, r.lambda_n, k.gap, mu, c),
+            _ => k.bound,
+        };
+        (b, v)
+    }
+
+    /// A stick node stays stick while |v| ≤ b (1 + [`STICK_TOL`]), b > 0: the hysteresis of
+    /// (3.33) that keeps a node at the stick/slip limit (|λ_τ| = b, Δu_τ = 0: every slip node of
+    /// a warm start from its own solution) from flipping on round-off.
+    fn stays_stuck(self, k: &ContactNode, r: &NodeResult, c: f64) -> bool {
+        let (b, v) = self.threshold_and_v(k, r, c);
+        b > 0.0 && v[0].hypot(v[1]) <= b * (1.0 + STICK_TOL)
+    }
+
+    /// The squared tangential residual of node `k` at `r`: ‖C_τ‖² (3.31) for Tresca, the
+    /// natural residual of (F3) squared for Coulomb (C_n is added by the caller).
+    fn residual2(self, k: &ContactNode, r: &NodeResult, c: f64) -> f64 {
+        let du_t = increment(r, k);
+        match self {
+            Law::Coulomb { mu } => {
+                let p = NodePoint {
+                    u_n: r.u_n,
+                    lam_n: r.lambda_n,
+                    u_t: du_t,
+                    lam_t: r.lambda_t,
+                };
+                contact::coulomb_residual(&p, k.gap, mu, c)
+                    .tangential
+                    .powi(2)
+            }
+            _ => {
+                let ct = contact::c_tau(&du_t, &r.lambda_t, k.bound, c);
+                ct[0] * ct[0] + ct[1] * ct[1]
+            }
+        }
+    }
+}
+
+/// Relative tolerance of the stick → slip test (3.33) for a node that sticks (see
+/// `Law::stays_stuck`): a stick node may end with |λ_τ| ≤ b (1 + STICK_TOL), far below the
+/// warning level of the friction certificate (1e-8 of the problem's scales).
+pub const STICK_TOL: f64 = 1e-8;
+
+/// u_τ − u_ref: the tangential increment friction acts on (u_τ itself for u_ref = 0).
+pub fn increment(r: &NodeResult, k: &ContactNode) -> [f64; 2] {
+    if k.u_t_ref == [0.0; 2] {
+        return r.u_t;
+    }
+    [r.u_t[0] - k.u_t_ref[0], r.u_t[1] - k.u_t_ref[1]]
+}
+
+/// A_n (and, with friction, the tangential row of every node: stick, or slip with L̃, r̃ (3.39)
+/// and, for Coulomb, the λ_n coupling q (F6)) on this rank's contact nodes.
 #[derive(Clone, Debug, PartialEq)]
 pub struct ActiveSet {
     /// k ∈ A_n.
     pub normal: Vec<bool>,
     /// With friction: the tangential row of each node; `None` without friction (no
     /// tangential state is formed or tested).
-    pub tangential: Option<Vec<TangentialRow<2>>>,
+    pub tangential: Option<Vec<CoulombRow<2>>>,
 }
 
 /// What one node's rows prescribe: directions c with cᵀu^k = value.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Prescribed {
     pub dirs: Vec<([f64; 3], f64)>,
-    /// A Tresca slip row (3.39): L̃ and r̃ go to the node's own block.
-    pub slip: Option<TangentialRow<2>>,
+    /// A slip row (3.39) / (F6) for the increment: L̃, r̃ go to the node's own block, a
+    /// Coulomb coupling q to its rows (reduced.rs).
+    pub slip: Option<CoulombRow<2>>,
 }
 
 /// A set as all ranks see it: |A_n|, two fingerprints, the Gram matrix of its constraint rows
@@ -46,21 +131,22 @@ fn node_hash(tag: u64) -> (f64, f64) {
 }
 
 /// Does a tangential row hold u_τ (stick, or slip with a spring L̃ ≠ 0)?
-fn holds_tangent(r: &TangentialRow<2>) -> bool {
+fn holds_tangent(r: &CoulombRow<2>) -> bool {
     match r {
-        TangentialRow::Stick => true,
-        TangentialRow::Slip { l, .. } => l.iter().flatten().any(|&x| x != 0.0),
+        CoulombRow::Stick => true,
+        CoulombRow::Slip { l, .. } => l.iter().flatten().any(|&x| x != 0.0),
     }
 }
 
 impl ActiveSet {
-    /// The first set A_n^1 (and, with friction, the rows from u = 0, λ = 0: stick where
-    /// b_k > 0 (3.33), slip with λ_τ = 0 where b_k = 0 (§3.4.3)). `friction_c` is c with
-    /// friction, `None` without.
+    /// The first set A_n^1 (and, with friction, the rows from u = 0, λ = 0: Tresca: stick where
+    /// b_k > 0 (3.33), slip with λ_τ = 0 where b_k = 0 (§3.4.3); Coulomb: b of (F1) is 0 unless
+    /// the node penetrates, so mostly λ_τ = 0).
     pub fn initial(
         b: &ContactBoundary,
         init: NewtonInit,
-        friction_c: Option<f64>,
+        law: Law,
+        c: f64,
         scale: f64,
         dim: usize,
     ) -> ActiveSet {
@@ -77,13 +163,50 @@ impl ActiveSet {
                 NewtonInit::Gap | NewtonInit::Auto => touching(k.gap),
             })
             .collect();
-        let tangential = friction_c.map(|c| {
+        let tangential = law.friction().then(|| {
             b.nodes
                 .iter()
-                .map(|k| contact::tangential_row_dyn(dim, [0.0; 2], [0.0; 2], k.bound, c))
+                .map(|k| {
+                    let zero = NodeResult {
+                        u_t: k.u_t_ref,
+                        ..NodeResult::default()
+                    };
+                    law.row(k, &zero, c, dim)
+                })
                 .collect()
         });
         ActiveSet { normal, tangential }
+    }
+
+    /// A warm start (a previous load step): A_n of the solve that produced `nodes`, the
+    /// tangential rows from that iterate (its increment is 0 where u_ref is its own u_τ). Local.
+    pub fn warm(
+        b: &ContactBoundary,
+        nodes: &[NodeResult],
+        law: Law,
+        c: f64,
+        dim: usize,
+    ) -> ActiveSet {
+        let tangential = law.friction().then(|| {
+            b.nodes
+                .iter()
+                .zip(nodes)
+                .map(|(k, r)| {
+                    // Δu_τ = 0: a node at the slip limit starts as stick (the first solve then
+                    // tells whether the new load makes it slip, with a well-defined direction).
+                    let row = law.row(k, r, c, dim);
+                    if row.is_slip() && law.stays_stuck(k, r, c) {
+                        CoulombRow::Stick
+                    } else {
+                        row
+                    }
+                })
+                .collect()
+        });
+        ActiveSet {
+            normal: nodes.iter().map(|r| r.active).collect(),
+            tangential,
+        }
     }
 
     pub fn friction(&self) -> bool {
@@ -118,14 +241,17 @@ impl ActiveSet {
         if self.normal[i] {
             dirs.push((k.frame.n, -k.gap));
         }
-        if let Some(TangentialRow::Stick) = row {
-            for t in &k.frame.t[..dim - 1] {
-                dirs.push((*t, 0.0));
+        if let Some(CoulombRow::Stick) = row {
+            // u_τ' = u_ref (3.34a) for the increment
+            for (t, v) in k.frame.t[..dim - 1].iter().zip(k.u_t_ref) {
+                dirs.push((*t, v));
             }
         }
         Some(Prescribed {
             dirs,
-            slip: row.filter(|r| r.is_slip()),
+            slip: row
+                .filter(|r| r.is_slip())
+                .map(|r| r.with_reference(&k.u_t_ref)),
         })
     }
 
@@ -191,12 +317,20 @@ impl ActiveSet {
         unpack_summary(&ctx.sum_vec(&self.pack_summary(b, modes, dim)))
     }
 
-    /// (3.23) and, with friction, (3.33) with the newest iterate (THEORY §4 erratum): the next
-    /// sets, and what changed. Local.
-    pub fn update(&self, it: &Iterate, b: &ContactBoundary, c: f64, dim: usize) -> SetUpdate {
+    /// (3.23) and, with friction, (3.33) (Tresca) or (F1)/(F5) (Coulomb) with the newest
+    /// iterate (THEORY §4 erratum): the next sets, and what changed. Local.
+    pub fn update(
+        &self,
+        it: &Iterate,
+        b: &ContactBoundary,
+        law: Law,
+        c: f64,
+        dim: usize,
+    ) -> SetUpdate {
         let mut next = self.clone();
         let mut changed = 0usize;
         let mut residual2 = 0.0;
+        let mut lambda2 = 0.0;
         let mut states = [0usize; 4];
         for (i, (k, r)) in b.nodes.iter().zip(&it.nodes).enumerate() {
             states[self.state(i).number() as usize - 1] += 1;
@@ -205,10 +339,13 @@ impl ActiveSet {
             let cn = contact::c_n(r.u_n, r.lambda_n, k.gap, c);
             residual2 += cn * cn;
             if let Some(t) = next.tangential.as_mut() {
-                t[i] = contact::tangential_row_dyn(dim, r.u_t, r.lambda_t, k.bound, c);
+                t[i] = law.row(k, r, c, dim);
+                if t[i].is_slip() && !self.slip(i) && law.stays_stuck(k, r, c) {
+                    t[i] = CoulombRow::Stick;
+                }
                 flip |= t[i].is_slip() != self.slip(i);
-                let ct = contact::c_tau(&r.u_t, &r.lambda_t, k.bound, c);
-                residual2 += ct[0] * ct[0] + ct[1] * ct[1];
+                residual2 += law.residual2(k, r, c);
+                lambda2 += r.lambda.iter().map(|x| x * x).sum::<f64>();
             }
             if flip {
                 changed += 1;
@@ -218,6 +355,7 @@ impl ActiveSet {
             next,
             changed,
             residual2,
+            lambda2,
             states,
             du2: it.du2,
             uu: it.uu,
@@ -258,6 +396,15 @@ impl Iterate {
             du2: 0.0,
             uu: 0.0,
         }
+    }
+
+    /// A warm start: u^0 = `u_local` (this rank's rows) for |u^1 − u^0| and `nodes` as the
+    /// iterate the first set was formed from.
+    pub fn warm(&mut self, u_local: &[f64], nodes: &[NodeResult]) {
+        if let Some(prev) = self.u_prev.as_mut() {
+            prev.copy_from_slice(u_local);
+        }
+        self.nodes.copy_from_slice(nodes);
     }
 
     /// (3.28): λ = f − A u on the contact rows, in the node frames; the states of `set` (the
@@ -309,8 +456,10 @@ pub struct SetUpdate {
     pub next: ActiveSet,
     /// Nodes whose state changed.
     pub changed: usize,
-    /// ‖C_n‖² (+ ‖C_τ‖² with friction) (3.21), (3.31).
+    /// ‖C_n‖² (+ ‖C_τ‖² (3.31) with Tresca, + the tangential (F3) with Coulomb) (3.21).
     pub residual2: f64,
+    /// ‖λ‖² on the contact nodes (friction: the scale of the residual).
+    pub lambda2: f64,
     /// Nodes in S1..S4 in the solve of this step.
     pub states: [usize; 4],
     pub du2: f64,
@@ -325,6 +474,8 @@ pub struct StepTotals {
     pub next: SetSummary,
     /// ‖C(u^ℓ, λ^ℓ)‖₂ over all contact nodes.
     pub residual: f64,
+    /// ‖λ^ℓ‖₂ over all contact nodes (friction; 0 without).
+    pub lambda_norm: f64,
     pub states: [usize; 4],
     /// |u^ℓ − u^{ℓ−1}| / |u^ℓ| (friction; 0 when u = 0).
     pub du_rel: f64,
@@ -345,6 +496,7 @@ impl SetUpdate {
         let mut local = vec![self.changed as f64, self.residual2, self.du2, self.uu];
         local.extend(self.states.map(|s| s as f64));
         local.extend(self.next.pack_summary(b, modes, dim));
+        local.push(self.lambda2);
         let g = ctx.sum_vec(&local);
         StepTotals {
             changed: g[0] as usize,
@@ -357,6 +509,7 @@ impl SetUpdate {
             u_norm2: g[3],
             states: [0, 1, 2, 3].map(|j| g[4 + j] as usize),
             next: unpack_summary(&g[8..]),
+            lambda_norm: g[g.len() - 1].sqrt(),
         }
     }
 }
@@ -364,6 +517,154 @@ impl SetUpdate {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    use crate::contact::Frame;
+
+    fn node(bound: f64, u_t_ref: [f64; 2]) -> ContactNode {
+        ContactNode {
+            node: 0,
+            tag: 7,
+            row: 0,
+            local_row: 0,
+            x: [0.0; 3],
+            frame: Frame::new([0.0, 1.0, 0.0], 2).expect("frame"),
+            gap: 0.0,
+            weight: 1.0,
+            bound,
+            u_t_ref,
+        }
+    }
+
+    fn at(u_t: f64, lambda_n: f64, lambda_t: f64) -> NodeResult {
+        NodeResult {
+            u_n: 0.0,
+            u_t: [u_t, 0.0],
+            lambda_n,
+            lambda_t: [lambda_t, 0.0],
+            active: true,
+            ..NodeResult::default()
+        }
+    }
+
+    #[test]
+    fn friction_acts_on_the_increment() {
+        let k = node(0.1, [0.3, 0.0]);
+        // u_τ = u_ref: no increment, |λ_τ| < b: stick (the row of u_τ itself would slip)
+        let r = at(0.3, -1.0, 0.05);
+        assert_eq!(increment(&r, &k), [0.0, 0.0]);
+        assert_eq!(Law::Tresca.row(&k, &r, 1.0, 2), CoulombRow::Stick);
+        assert!(Law::Tresca.row(&node(0.1, [0.0; 2]), &r, 1.0, 2).is_slip());
+        assert_eq!(
+            Law::Coulomb { mu: 0.1 }.row(&k, &r, 1.0, 2),
+            CoulombRow::Stick
+        );
+        // the stick row prescribes u_τ' = u_ref
+        let set = ActiveSet {
+            normal: vec![true],
+            tangential: Some(vec![CoulombRow::Stick]),
+        };
+        let b = ContactBoundary {
+            nodes: vec![k.clone()],
+            n_global: 1,
+            offset: 0,
+            on_contact_boundary: vec![true],
+            excluded_dirichlet: 0,
+            obstacle: crate::contact::Obstacle::Plane(
+                crate::contact::Plane::new([0.0; 3], [0.0, 1.0, 0.0], 2).expect("plane"),
+            ),
+        };
+        let p = set.prescribed(&b, 0, 2).expect("rewritten");
+        assert_eq!(p.dirs.len(), 2);
+        assert_eq!(p.dirs[1].1, 0.3);
+        // a slip row moves l u_ref to its right-hand side; with u_ref = 0 it is unchanged
+        let row = CoulombRow::Slip {
+            l: [[2.0, 0.0], [0.0, 0.0]],
+            q: [0.5, 0.0],
+            r: [1.0, 0.0],
+        };
+        assert_eq!(
+            row.with_reference(&[0.3, 0.0]),
+            CoulombRow::Slip {
+                l: [[2.0, 0.0], [0.0, 0.0]],
+                q: [0.5, 0.0],
+                r: [1.6, 0.0],
+            }
+        );
+        assert_eq!(row.with_reference(&[0.0; 2]), row);
+    }
+
+    #[test]
+    fn a_stuck_node_at_the_limit_stays_stuck() {
+        let k = node(0.1, [0.0; 2]);
+        let c = 1.0;
+        // |λ_τ| = b (1 + 1e-12), no motion: slips by (3.33), stays stuck with the tolerance
+        let r = at(0.0, -1.0, 0.1 * (1.0 + 1e-12));
+        assert!(Law::Tresca.row(&k, &r, c, 2).is_slip());
+        assert!(Law::Tresca.stays_stuck(&k, &r, c));
+        let coulomb = Law::Coulomb { mu: 0.1 };
+        assert!(coulomb.stays_stuck(&k, &r, c));
+        // clearly beyond the limit: slips
+        let r = at(0.0, -1.0, 0.1 * (1.0 + 1e-6));
+        assert!(!Law::Tresca.stays_stuck(&k, &r, c));
+        assert!(!coulomb.stays_stuck(&k, &r, c));
+        // b = 0 (Coulomb, free node): never stuck
+        let r = at(0.0, 0.0, 0.0);
+        assert!(!coulomb.stays_stuck(&k, &r, c));
+        // in the set update: a stick node at the limit keeps its state, a slip node does not
+        // go back for it
+        let b = ContactBoundary {
+            nodes: vec![k.clone(), k.clone()],
+            n_global: 2,
+            offset: 0,
+            on_contact_boundary: vec![true],
+            excluded_dirichlet: 0,
+            obstacle: crate::contact::Obstacle::Plane(
+                crate::contact::Plane::new([0.0; 3], [0.0, 1.0, 0.0], 2).expect("plane"),
+            ),
+        };
+        let mut it = Iterate::new(2, 4, true);
+        let limit = at(0.0, -1.0, 0.1 * (1.0 + 1e-12));
+        it.nodes = vec![limit, limit];
+        let zero = CoulombRow::Slip {
+            l: [[0.0; 2]; 2],
+            q: [0.0; 2],
+            r: [0.0; 2],
+        };
+        let set = ActiveSet {
+            normal: vec![true, true],
+            tangential: Some(vec![CoulombRow::Stick, zero]),
+        };
+        let up = set.update(&it, &b, Law::Tresca, c, 2);
+        let t = up.next.tangential.expect("friction");
+        assert_eq!(t[0], CoulombRow::Stick);
+        assert!(t[1].is_slip());
+        assert_eq!(up.changed, 0);
+        // the warm start puts both at the limit to stick
+        let w = ActiveSet::warm(&b, &it.nodes, Law::Tresca, c, 2);
+        assert_eq!(
+            w.tangential.expect("friction"),
+            vec![CoulombRow::Stick, CoulombRow::Stick]
+        );
+        assert_eq!(w.normal, vec![true, true]);
+    }
+
+    #[test]
+    fn coulomb_rows_carry_the_coupling() {
+        let k = node(0.0, [0.0; 2]);
+        // pressed (λ_n = −1), slipping fast: S4 with q ≠ 0; free node: zero row
+        let r = at(0.5, -1.0, 0.3);
+        let row = Law::Coulomb { mu: 0.3 }.row(&k, &r, 1.0, 2);
+        assert!(row.is_slip() && row.coupled());
+        let free = NodeResult {
+            u_n: 0.2,
+            ..NodeResult::default()
+        };
+        let row = Law::Coulomb { mu: 0.3 }.row(&k, &free, 1.0, 2);
+        assert!(row.is_slip() && !row.coupled());
+        // Tresca rows never couple
+        let t = Law::Tresca.row(&node(0.1, [0.0; 2]), &r, 1.0, 2);
+        assert!(!t.coupled());
+    }
 
     #[test]
     fn hashes_are_exact_in_f64_sums() {

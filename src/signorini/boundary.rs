@@ -27,8 +27,12 @@ pub struct ContactNode {
     pub gap: f64,
     /// w_k = ∫_Γc φ_k ds.
     pub weight: f64,
-    /// b_k = ∫_Γc g_R φ_k ds (0 without friction).
+    /// b_k = ∫_Γc g_R φ_k ds (0 without friction; with Coulomb the final μ(−λ_n^k), set for
+    /// the report).
     pub bound: f64,
+    /// u_τ of the previous load step (frame components, 2D padded): friction acts on the
+    /// increment u_τ − u_ref (docs/friction.md, "Load steps"); 0 for a single static solve.
+    pub u_t_ref: [f64; 2],
 }
 
 /// Per owned contact node: displacement and multiplier, in global components and in the
@@ -130,6 +134,7 @@ pub fn build(
             gap: proj.gap,
             weight: weight[v],
             bound: g_r * weight[v],
+            u_t_ref: [0.0; 2],
         });
     }
     let counts: Vec<u64> = ctx.gather(nodes.len() as u64);

@@ -30,7 +30,8 @@ impl SetKey {
 /// What the loop does after a step's reduction.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Decision {
-    /// No node changed and (friction) |u^ℓ − u^{ℓ−1}| / |u^ℓ| < tol_u: stop.
+    /// No node changed and (friction) |u^ℓ − u^{ℓ−1}| / |u^ℓ| < tol_u (Coulomb: and the
+    /// residual (F3) small): stop.
     Converged,
     /// No node changed but rigid modes are pinned: test that the pins carry no load first.
     TestBalance,
@@ -42,19 +43,23 @@ pub enum Decision {
 
 /// The stopping rules of Algorithm 1 (step 5: no set changed) and Algorithm 2 (no set changed
 /// and |u^ℓ − u^{ℓ−1}| / |u^ℓ| < tol_u), with the balance test of free rigid modes first
-/// whenever pins exist and the balance is not yet confirmed.
+/// whenever pins exist and the balance is not yet confirmed. `residual_ok`: Coulomb's residual
+/// (F3) is below its tolerance (always true for the other laws); `residual_zero`: it is at
+/// round-off, so the iterate is a solution without a further step to test |u^ℓ − u^{ℓ−1}|.
 pub fn decide(
     changed: usize,
     balance_pending: bool,
     friction: bool,
     du_rel: f64,
     tol_u: f64,
+    residual_ok: bool,
+    residual_zero: bool,
 ) -> Decision {
     if changed > 0 {
         Decision::NewSets
     } else if balance_pending {
         Decision::TestBalance
-    } else if !friction || du_rel < tol_u {
+    } else if !friction || residual_zero || (du_rel < tol_u && residual_ok) {
         Decision::Converged
     } else {
         Decision::SameSets
@@ -139,7 +144,7 @@ impl CycleGuard {
 
 /// `prev`: the step whose set recurs (`None`: a recurrence of the safeguarded iteration).
 fn cycling_error(step: usize, n: usize, prev: Option<usize>, friction: bool) -> RunError {
-    RunError::Failed(format!(
+    RunError::NoConvergence(format!(
         "Newton cycling: the active set of step {step} (|A_n| = {n}) equals one seen {}{} — the \
          exact active-set iteration would loop forever; stopping",
         match prev {
@@ -149,7 +154,7 @@ fn cycling_error(step: usize, n: usize, prev: Option<usize>, friction: bool) -> 
         if prev.is_none() {
             " even with single-node updates"
         } else if friction {
-            " (Tresca: no single-node fallback)"
+            " (Tresca/Coulomb: no single-node fallback)"
         } else {
             " (newton.on_cycle = \"stop\")"
         }
@@ -166,11 +171,20 @@ mod tests {
 
     #[test]
     fn stopping_rules() {
-        assert_eq!(decide(3, true, false, 0.0, 1e-10), Decision::NewSets);
-        assert_eq!(decide(0, true, false, 0.0, 1e-10), Decision::TestBalance);
-        assert_eq!(decide(0, false, false, 1.0, 1e-10), Decision::Converged);
-        assert_eq!(decide(0, false, true, 1e-12, 1e-10), Decision::Converged);
-        assert_eq!(decide(0, false, true, 1e-3, 1e-10), Decision::SameSets);
+        let d = |changed, pending, friction, du, ok, zero| {
+            decide(changed, pending, friction, du, 1e-10, ok, zero)
+        };
+        assert_eq!(d(3, true, false, 0.0, true, false), Decision::NewSets);
+        assert_eq!(d(0, true, false, 0.0, true, false), Decision::TestBalance);
+        assert_eq!(d(0, false, false, 1.0, true, false), Decision::Converged);
+        assert_eq!(d(0, false, true, 1e-12, true, false), Decision::Converged);
+        assert_eq!(d(0, false, true, 1e-3, true, false), Decision::SameSets);
+        // Coulomb: a small step is not enough while (F3) is not small
+        assert_eq!(d(0, false, true, 1e-12, false, false), Decision::SameSets);
+        assert_eq!(d(1, false, true, 1e-12, true, true), Decision::NewSets);
+        // ... and (F3) at round-off needs no further step (but the balance test first)
+        assert_eq!(d(0, false, true, 1e-3, true, true), Decision::Converged);
+        assert_eq!(d(0, true, true, 1e-3, true, true), Decision::TestBalance);
     }
 
     #[test]
@@ -200,7 +214,11 @@ mod tests {
         assert!(e.contains("on_cycle"), "{e}");
         let mut g = CycleGuard::new(OnCycle::LeastIndex, true, key(5, 1.0));
         let e = g.check(1, key(5, 1.0)).unwrap_err().to_string();
-        assert!(e.contains("Tresca"), "{e}");
+        assert!(e.contains("Tresca/Coulomb"), "{e}");
+        assert!(matches!(
+            g.check(2, key(5, 1.0)),
+            Err(RunError::NoConvergence(_))
+        ));
     }
 
     #[test]

@@ -16,7 +16,7 @@ pub mod rigid;
 pub mod snesvi;
 
 use crate::assembly::System;
-use crate::case::{self, Method, Preset, SolverSection};
+use crate::case::{self, CoulombAlgorithm, Method, Preset, SolverSection};
 use crate::contact::Obstacle;
 use crate::error::RunError;
 use crate::mesh::Mesh;
@@ -27,9 +27,9 @@ use crate::petsc::Vector;
 use crate::say;
 use crate::setup::ContactSettings;
 use crate::solver;
-use active_set::{ActiveSet, Iterate};
-use boundary::ContactBoundary;
-use newton::{ContactProblem, NewtonResult, NewtonSettings, StepInfo};
+use active_set::{ActiveSet, Iterate, Law};
+use boundary::{ContactBoundary, NodeResult};
+use newton::{ContactProblem, NewtonResult, NewtonSettings, StepInfo, WarmStart};
 use reduced::ReducedSystem;
 use report::{FrictionCertificate, Kkt, Scales};
 use rigid::FreeModes;
@@ -56,6 +56,23 @@ pub struct NewtonSummary {
     pub pinned_dofs: usize,
     pub on_cycle: &'static str,
     pub cycle_detected_at: Option<usize>,
+    /// Coulomb friction only: the law, μ, the algorithm and (fixed point) its outer steps.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub coulomb: Option<CoulombSummary>,
+}
+
+/// summary.json's "newton"."coulomb": how Coulomb friction was solved. `steps` of the
+/// newton section counts every Newton step (linear solve), over all outer steps.
+#[derive(Debug, Clone, Serialize)]
+pub struct CoulombSummary {
+    pub mu: f64,
+    /// "newton" (one generalised Newton) or "fixed-point" (Tresca solves).
+    pub algorithm: &'static str,
+    /// Fixed point: the number of Tresca solves (outer steps); `None` for "newton".
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub outer_steps: Option<usize>,
+    /// Whether the solve started from a previous load step (friction on the increment).
+    pub warm_start: bool,
 }
 
 /// summary.json's "contact" section.
@@ -92,9 +109,17 @@ pub struct ContactSolution {
     /// The contact grid, its fields and the table, for the output layer.
     pub result: ContactResult,
     pub report: ContactReport,
+    /// This rank's contact nodes (in the order of c_h) at the solution: u, λ in their frames,
+    /// the final normal set (`active`) and tangential state (`slip`). A later load step on
+    /// the same mesh and boundary starts from it and measures the slip from its u_τ.
+    pub nodes: Vec<NodeResult>,
 }
 
-/// Builds c_h, configures the solver, runs Algorithm 1 or 2 and reports the final state.
+/// Builds c_h, configures the solver, runs Algorithm 1, Algorithm 2 (Tresca) or Coulomb (the
+/// generalised Newton or the fixed point on Tresca thresholds) and reports the final state.
+/// `previous`: the converged solution of the previous load step on the same mesh and boundary;
+/// with it the Newton starts from its sets and iterate, and friction acts on the tangential
+/// increment u_τ − u_τ^prev (docs/friction.md, "Load steps"). `None`: one static solve.
 /// Collective; every rank returns the same `Ok` / `Err` kind.
 #[allow(clippy::too_many_arguments)]
 pub fn solve(
@@ -107,12 +132,20 @@ pub fn solve(
     solver_section: &SolverSection,
     previous: Option<&ContactSolution>,
 ) -> Result<ContactSolution, RunError> {
-    let _ = previous;
     let dim = mesh.dim;
-    let b = boundary::build(ctx, mesh, layout, settings, fixed)?;
+    let mut b = boundary::build(ctx, mesh, layout, settings, fixed)?;
     log_boundary(ctx, &b, &settings.group);
-    check_friction_capacity(ctx, &b, fixed, sys, dim)?;
+    let law = law_of(settings);
+    check_friction_capacity(ctx, &b, fixed, sys, dim, law)?;
     let friction = settings.friction();
+    let warm_u = match previous {
+        Some(prev) => Some(take_reference(ctx, &mut b, prev, friction)?),
+        None => None,
+    };
+    let warm = previous.zip(warm_u.as_ref()).map(|(prev, u)| WarmStart {
+        nodes: &prev.nodes,
+        u_local: u,
+    });
     solver::configure(
         solver_section.preset,
         solver_section.rtol,
@@ -143,13 +176,22 @@ pub fn solve(
     let ns = NewtonSettings {
         section: &settings.newton,
         c,
-        friction,
+        law,
         rigid: settings.rigid_modes,
     };
+    let mut outer_steps = None;
     let nr = match solver_section.method {
         Method::Newton => {
-            let reduced = ReducedSystem::new(ctx, sys, &b, coords.as_ref(), dim)?;
-            newton::semismooth_newton(ctx, &problem, reduced, &ns)?
+            let mut reduced = ReducedSystem::new(ctx, sys, &b, coords.as_ref(), dim)?;
+            match settings.coulomb {
+                Some((mu, CoulombAlgorithm::FixedPoint)) => {
+                    let (nr, outer) =
+                        fixed_point(ctx, &problem, &mut reduced, &ns, mu, warm.as_ref())?;
+                    outer_steps = Some(outer);
+                    nr
+                }
+                _ => newton::semismooth_newton(ctx, &problem, &mut reduced, &ns, warm.as_ref())?,
+            }
         }
         Method::SnesVi => {
             let f_local = sys.b.to_local_vec()?;
@@ -166,6 +208,12 @@ pub fn solve(
             ),
             Method::SnesVi => format!("SNES VI did not converge in {} steps", nr.steps),
         }));
+    }
+    if let Law::Coulomb { mu } = law {
+        // The certificate and the output judge Coulomb's law with b_k = μ(−λ_n^k).
+        for (k, r) in b.nodes.iter_mut().zip(&nr.nodes) {
+            k.bound = mu * (-r.lambda_n).max(0.0);
+        }
     }
     let table = report::gather(ctx, &b, &nr.nodes, dim);
     let total_force = report::total_force(ctx, &nr.nodes);
@@ -209,6 +257,12 @@ pub fn solve(
             pinned_dofs: nr.pinned_final.len(),
             on_cycle: settings.newton.on_cycle.name(),
             cycle_detected_at: nr.cycle_detected_at,
+            coulomb: settings.coulomb.map(|(mu, algorithm)| CoulombSummary {
+                mu,
+                algorithm: algorithm.name(),
+                outer_steps,
+                warm_start: previous.is_some(),
+            }),
         },
         contact: ContactSummary {
             nodes: b.n_global,
@@ -228,8 +282,124 @@ pub fn solve(
         result: report::contact_result(&b, &nr.nodes, dim, friction, &table),
         u: nr.u,
         report,
+        nodes: nr.nodes,
     })
 }
+
+/// The tangential law of the settings (the fixed point's inner solves are Tresca solves).
+fn law_of(settings: &ContactSettings) -> Law {
+    match (settings.tresca_threshold, settings.coulomb) {
+        (Some(_), _) => Law::Tresca,
+        (None, Some((mu, _))) => Law::Coulomb { mu },
+        (None, None) => Law::Frictionless,
+    }
+}
+
+/// A warm start from the previous load step: its u_τ becomes every contact node's reference
+/// (friction acts on the increment); returns this rank's rows of its u. The previous solution
+/// must be of the same mesh and boundary. Collective.
+fn take_reference(
+    ctx: &Ctx,
+    b: &mut ContactBoundary,
+    prev: &ContactSolution,
+    friction: bool,
+) -> Result<Vec<f64>, RunError> {
+    let u = prev.u.to_local_vec()?;
+    let same = prev.nodes.len() == b.nodes.len()
+        && b.nodes
+            .last()
+            .is_none_or(|k| k.local_row + k.frame.dim <= u.len());
+    ctx.agree(if same {
+        Ok(())
+    } else {
+        Err(RunError::Failed(format!(
+            "internal error: the previous load step's solution has {} contact nodes on this \
+             rank, the boundary {} (not the same mesh and boundary)",
+            prev.nodes.len(),
+            b.nodes.len()
+        )))
+    })?;
+    if friction {
+        for (k, r) in b.nodes.iter_mut().zip(&prev.nodes) {
+            k.u_t_ref = r.u_t;
+        }
+    }
+    Ok(u)
+}
+
+/// Coulomb by the fixed point on Tresca thresholds (docs/friction.md (a)):
+/// b^{m+1}_k = μ max(0, −λ_n^{k,m}), every outer step a Tresca solve (Algorithm 2) warm-started
+/// from the previous one (b^0 from the warm start's λ_n, else ‖f‖₁: all stick); stop when
+/// max_k |b^{m+1} − b^m| ≤ [`FIXED_POINT_TOL`] · max_k b^{m+1}. Returns the last Tresca
+/// result with the history and step count of all outer steps, and the number of outer steps.
+/// Collective.
+fn fixed_point(
+    ctx: &Ctx,
+    p: &ContactProblem,
+    reduced: &mut ReducedSystem,
+    ns: &NewtonSettings,
+    mu: f64,
+    warm: Option<&WarmStart>,
+) -> Result<(NewtonResult, usize), RunError> {
+    let tresca = NewtonSettings {
+        law: Law::Tresca,
+        ..*ns
+    };
+    let mut b = p.boundary.clone();
+    let mut state: Option<(Vec<NodeResult>, Vec<f64>)> =
+        warm.map(|w| (w.nodes.to_vec(), w.u_local.to_vec()));
+    let threshold = |r: &NodeResult| mu * (-r.lambda_n).max(0.0);
+    // b^0 without a warm start: ‖f‖₁, beyond any nodal friction force, so the first solve
+    // sticks (b^0 = 0 would leave a free body with a tangential load without support).
+    let stick_all = ctx.sum_f64(reduced.f_local.iter().map(|x| x.abs()).sum());
+    for (i, k) in b.nodes.iter_mut().enumerate() {
+        k.bound = state.as_ref().map_or(stick_all, |(n, _)| threshold(&n[i]));
+    }
+    let mut history: Vec<StepInfo> = Vec::new();
+    for outer in 1..=ns.section.max_steps {
+        let pm = ContactProblem { boundary: &b, ..*p };
+        let start = state
+            .as_ref()
+            .map(|(nodes, u)| WarmStart { nodes, u_local: u });
+        let mut nr = newton::semismooth_newton(ctx, &pm, reduced, &tresca, start.as_ref())?;
+        for h in &nr.history {
+            let mut h = h.clone();
+            h.step = history.len() + 1;
+            history.push(h);
+        }
+        let (mut change, mut scale) = (0.0f64, 0.0f64);
+        for (k, r) in b.nodes.iter_mut().zip(&nr.nodes) {
+            let next = threshold(r);
+            change = change.max((next - k.bound).abs());
+            scale = scale.max(next);
+            k.bound = next;
+        }
+        let (change, scale) = (ctx.max_f64(change), ctx.max_f64(scale));
+        say!(
+            ctx,
+            "fixed point {outer:3}: {} Newton steps, max |b^(m+1) - b^m| = {change:.3e} \
+             (max b = {scale:.3e})",
+            nr.steps
+        );
+        let done = change <= FIXED_POINT_TOL * scale;
+        if !nr.converged || done {
+            nr.converged &= done;
+            nr.steps = history.len();
+            nr.history = history;
+            return Ok((nr, outer));
+        }
+        let u = nr.u.to_local_vec()?;
+        state = Some((nr.nodes, u));
+    }
+    Err(RunError::NoConvergence(format!(
+        "the fixed point on Tresca thresholds did not converge in newton.max_steps = {} outer \
+         steps",
+        ns.section.max_steps
+    )))
+}
+
+/// The fixed point's stopping tolerance on the thresholds, relative to max_k b_k.
+pub const FIXED_POINT_TOL: f64 = 1e-9;
 
 /// The same discrete frictionless problem through PETSc's SNES VI (a baseline for Algorithm 1):
 /// the rigid modes that the whole contact boundary cannot fix are pinned once; λ by (3.28).
@@ -295,15 +465,17 @@ fn snesvi_solve(
     })
 }
 
-/// A floating body (no Dirichlet data) on a flat obstacle with Tresca friction has no
-/// equilibrium when the tangential resultant of its load exceeds the total friction capacity
-/// Σ_k b_k (3.18): said before the solve instead of after a long Newton run. Collective.
+/// A floating body (no Dirichlet data) on a flat obstacle with friction has no equilibrium
+/// when the tangential resultant of its load exceeds the total friction capacity: Tresca
+/// Σ_k b_k (3.18); Coulomb μ Σ_k (−λ_n^k) = μ (−normal resultant of the load), since all normals
+/// are equal on a plane. Said before the solve instead of after a long Newton run. Collective.
 fn check_friction_capacity(
     ctx: &Ctx,
     b: &ContactBoundary,
     fixed: &[f64],
     sys: &System,
     dim: usize,
+    law: Law,
 ) -> Result<(), RunError> {
     let Obstacle::Plane(plane) = b.obstacle else {
         return Ok(());
@@ -313,8 +485,12 @@ fn check_friction_capacity(
     if !floating {
         return Ok(());
     }
-    let capacity = ctx.sum_f64(b.nodes.iter().map(|k| k.bound).sum());
-    if capacity == 0.0 {
+    let tresca_capacity = match law {
+        Law::Coulomb { mu } if mu > 0.0 => None,
+        Law::Coulomb { .. } | Law::Frictionless => return Ok(()),
+        Law::Tresca => Some(ctx.sum_f64(b.nodes.iter().map(|k| k.bound).sum())),
+    };
+    if tresca_capacity == Some(0.0) {
         return Ok(()); // frictionless: the balance test of the free modes decides
     }
     let f = sys.b.to_local_vec()?;
@@ -329,11 +505,25 @@ fn check_friction_capacity(
         .map(|k| (r[k] - rn * n[k]).powi(2))
         .sum::<f64>()
         .sqrt();
+    let (capacity, what) = match (tresca_capacity, law) {
+        (Some(c), _) => (c, format!("Σ b_k = {c:.6e}, (3.18)")),
+        // The load pressing the body onto the plane is −rn (n points into the body); if it
+        // pulls the body off, the balance test of the free modes decides.
+        (None, Law::Coulomb { mu }) if rn < 0.0 => (
+            mu * -rn,
+            format!(
+                "μ Σ_k (−λ_n^k) = μ × normal load = {mu} × {:.6e} = {:.6e}, Coulomb",
+                -rn,
+                mu * -rn
+            ),
+        ),
+        _ => return Ok(()),
+    };
     if rt > capacity * (1.0 + 1e-9) + 1e-14 * r.iter().map(|x| x.abs()).sum::<f64>() {
         return Err(RunError::Failed(format!(
             "no equilibrium: the body has no Dirichlet data and the tangential resultant of its \
              load ({rt:.6e}) exceeds the total friction capacity of the contact boundary \
-             (Σ b_k = {capacity:.6e}, (3.18)): it would slide away"
+             ({what}): it would slide away"
         )));
     }
     Ok(())

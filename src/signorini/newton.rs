@@ -9,7 +9,7 @@
 //! assembly of entries in other ranks' rows), the solve, one MatMult, one Allreduce; rarely a
 //! load-balance test that finds an unbalanced load (two reductions) or a least-index pick.
 
-use super::active_set::{ActiveSet, Iterate, SetSummary, StepTotals};
+use super::active_set::{ActiveSet, Iterate, Law, SetSummary, StepTotals};
 use super::boundary::{ContactBoundary, NodeResult};
 use super::cycle::{decide, CycleGuard, Decision, Seen, SetKey};
 use super::reduced::{ReducedSystem, SolveKind};
@@ -28,8 +28,31 @@ pub struct NewtonSettings<'a> {
     pub section: &'a NewtonSection,
     /// The complementarity parameter c > 0 used.
     pub c: f64,
-    pub friction: bool,
+    pub law: Law,
     pub rigid: case::RigidModeHandling,
+}
+
+impl NewtonSettings<'_> {
+    pub fn friction(&self) -> bool {
+        self.law.friction()
+    }
+}
+
+/// Coulomb (generalised Newton): the residual (F3) over all contact nodes must be below this
+/// fraction of ‖λ‖₂ over all contact nodes, besides Algorithm 2's rule (no state changed,
+/// |u^ℓ − u^{ℓ−1}| / |u^ℓ| < tol_u), before the iteration stops.
+pub const COULOMB_RESIDUAL_TOL: f64 = 1e-9;
+
+/// Coulomb: a residual (F3) below this fraction of ‖λ‖₂ is round-off: with no state changed
+/// the iterate is a solution and the iteration stops at once (λ = f − A u holds by
+/// construction, so (F3) = 0 is the whole problem), without the step that tests |Δu|.
+pub const COULOMB_RESIDUAL_ZERO: f64 = 1e-12;
+
+/// A warm start: the converged state of a previous solve on the same mesh and boundary
+/// (the contact nodes' iterate with their final normal set in `active`, this rank's rows of u).
+pub struct WarmStart<'a> {
+    pub nodes: &'a [NodeResult],
+    pub u_local: &'a [f64],
 }
 
 /// One Newton step, for the history.
@@ -116,26 +139,35 @@ struct Loop<'a> {
     shifted: ContactBoundary,
 }
 
-/// Algorithm 1 (frictionless, (3.29)) or, with friction, Algorithm 2 (Tresca, (3.42)) on the
-/// assembled system `sys` (A, f), from the start `s.section.init`.
+/// Algorithm 1 (frictionless, (3.29)), with friction Algorithm 2 (Tresca, (3.42)) or the
+/// generalised Newton for Coulomb (docs/friction.md (b), rows (F7)) on the assembled system
+/// `sys` (A, f), from the start `s.section.init` or from a previous state `warm`.
 pub fn semismooth_newton(
     ctx: &Ctx,
     p: &ContactProblem,
-    mut reduced: ReducedSystem,
+    reduced: &mut ReducedSystem,
     s: &NewtonSettings,
+    warm: Option<&WarmStart>,
 ) -> Result<NewtonResult, RunError> {
     let (mesh, layout, b, fixed, sys) = (p.mesh, p.layout, p.boundary, p.fixed, p.sys);
     let dim = mesh.dim;
     let free = FreeModes::new(ctx, mesh, layout, fixed, b, &reduced.f_local, s.rigid);
+    reduced.set_pins(sys, layout, free.pins())?; // none yet (the system may be reused)
     let init: NewtonInit = s.section.init;
-    let set = ActiveSet::initial(b, init, s.friction.then_some(s.c), mesh.extent(), dim);
+    let set = match warm {
+        None => ActiveSet::initial(b, init, s.law, s.c, mesh.extent(), dim),
+        Some(w) => ActiveSet::warm(b, w.nodes, s.law, s.c, dim),
+    };
     let summary = set.summarise(ctx, b, free.modes(), dim);
     let guard = CycleGuard::new(
         s.section.on_cycle,
-        s.friction,
+        s.friction(),
         SetKey::new(summary.n_active, summary.fingerprint, None),
     );
-    let it = Iterate::new(b.nodes.len(), reduced.f_local.len(), s.friction);
+    let mut it = Iterate::new(b.nodes.len(), reduced.f_local.len(), s.friction());
+    if let Some(w) = warm {
+        it.warm(w.u_local, w.nodes);
+    }
     let mut lp = Loop {
         ctx,
         p,
@@ -154,7 +186,7 @@ pub fn semismooth_newton(
         if lp.free.update(ctx, mesh, layout, &lp.summary.gram)? {
             reduced.set_pins(sys, layout, lp.free.pins())?;
         }
-        if !s.friction {
+        if !s.friction() {
             // Friction reads u_τ itself (stick rows, slip rows), so only the frictionless
             // solve can leave the rigid motion out.
             lp.rho = lp
@@ -167,7 +199,7 @@ pub fn semismooth_newton(
         let (info, kind, seconds) = reduced.solve()?;
         ensure_converged(step, &info)?;
         reduced.recover(sys, bs, &lp.set, &mut lp.it)?; // (3.28)
-        let update = lp.set.update(&lp.it, bs, s.c, dim); // (3.23) / (3.33)
+        let update = lp.set.update(&lp.it, bs, s.law, s.c, dim); // (3.23) / (3.33) / (F5)
         let totals = update.reduce(ctx, bs, lp.free.modes(), dim);
         history.push(lp.step_info(step, &totals, &info, kind, seconds));
         log_step(ctx, history.last().expect("pushed"), &totals);
@@ -177,7 +209,7 @@ pub fn semismooth_newton(
         }
     }
     let (lambda_seconds, rows_seconds) = (reduced.lambda_seconds, reduced.rows_seconds);
-    let mut u = reduced.into_solution();
+    let mut u = reduced.solution()?;
     let mut nodes = lp.it.nodes;
     add_motion(&lp.free, &lp.rho, p, &mut u, &mut nodes)?;
     Ok(NewtonResult {
@@ -280,8 +312,8 @@ impl Loop<'_> {
             solve: kind,
             iterations: info.iterations,
             pinned: self.free.pins().len(),
-            states: self.s.friction.then_some(t.states),
-            du_rel: self.s.friction.then_some(t.du_rel),
+            states: self.s.friction().then_some(t.states),
+            du_rel: self.s.friction().then_some(t.du_rel),
         }
     }
 
@@ -289,7 +321,7 @@ impl Loop<'_> {
         SetKey::new(
             summary.n_active,
             summary.fingerprint,
-            self.s.friction.then_some(t.u_norm2),
+            self.s.friction().then_some(t.u_norm2),
         )
     }
 
@@ -298,12 +330,30 @@ impl Loop<'_> {
         let (ctx, dim) = (self.ctx, self.p.mesh.dim);
         let b = &self.shifted;
         let pins = !self.free.pins().is_empty();
+        let rows_move = t.changed == 0 && self.s.friction() && t.du_rel >= self.s.section.tol_u;
+        if pins && rows_move && t.next.gram != self.summary.gram {
+            // No state changed, but a slip row begins or stops holding u_τ (Coulomb: b turns
+            // positive after a frictionless first step): the pins change with the next rows, so
+            // neither the balance test nor the stop applies yet.
+            self.set.tangential = next.tangential;
+            self.summary = t.next;
+            return Ok(false);
+        }
+        let (residual_ok, residual_zero) = match self.s.law {
+            Law::Coulomb { .. } => (
+                t.residual <= COULOMB_RESIDUAL_TOL * t.lambda_norm,
+                t.residual <= COULOMB_RESIDUAL_ZERO * t.lambda_norm,
+            ),
+            _ => (true, false),
+        };
         let mut decision = decide(
             t.changed,
             pins,
-            self.s.friction,
+            self.s.friction(),
             t.du_rel,
             self.s.section.tol_u,
+            residual_ok,
+            residual_zero,
         );
         if decision == Decision::TestBalance {
             // A free rigid mode is harmless only if the load is balanced in it (the pins then
@@ -317,9 +367,11 @@ impl Loop<'_> {
                     decision = decide(
                         t.changed,
                         false,
-                        self.s.friction,
+                        self.s.friction(),
                         t.du_rel,
                         self.s.section.tol_u,
+                        residual_ok,
+                        residual_zero,
                     );
                 }
                 Balance::Touch(tag) => {
@@ -347,7 +399,10 @@ impl Loop<'_> {
             Decision::Converged => Ok(true),
             Decision::SameSets => {
                 // Same sets, but the slip rows are a linearisation: iterate on with the new rows.
+                // A slip row may start or stop holding u_τ (L̃ ≠ 0, e.g. Coulomb's b turning
+                // positive) without a state change: the Gram matrix (the pins) follows it.
                 self.set.tangential = next.tangential;
+                self.summary = t.next;
                 Ok(false)
             }
             Decision::TestBalance => unreachable!("the balance test was made above"),

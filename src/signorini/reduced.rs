@@ -11,7 +11,7 @@ use super::active_set::{ActiveSet, Iterate};
 use super::boundary::ContactBoundary;
 use super::rigid::Pin;
 use crate::assembly::System;
-use crate::contact::TangentialRow;
+use crate::contact::{coulomb_block, CoulombRow, Frame, TangentialRow};
 use crate::par::Ctx;
 use crate::partition::Layout;
 use crate::petsc::{self, Matrix, PInt, SolveInfo, Vector};
@@ -84,6 +84,9 @@ pub struct NodeConstraint {
     pub spring: [[f64; 3]; 3],
     /// Added to the node's right-hand side (Σ τ_i r̃_i).
     pub spring_rhs: [f64; 3],
+    /// A Coulomb slip row's λ_n coupling E = Σ q_i τ_i nᵀ (F7): the node's rows are
+    /// (P_k + E) A_kj P_j; zero otherwise. Only the owner of the node uses it.
+    pub row_mix: Option<[[f64; 3]; 3]>,
 }
 
 impl NodeConstraint {
@@ -116,6 +119,23 @@ impl NodeConstraint {
 }
 
 impl NodeConstraint {
+    /// A slip row: Tresca's (3.39a) by [`Self::add_slip_spring`], Coulomb's (F7) with its
+    /// coupling by `coulomb_block`.
+    pub fn add_slip_row(&mut self, frame: &Frame, row: &CoulombRow<2>, dim: usize) {
+        if !row.coupled() {
+            self.add_slip_spring(&frame.t, &row.tresca_part(), dim);
+            return;
+        }
+        let blk = coulomb_block(frame, row);
+        for a in 0..dim {
+            for b in 0..dim {
+                self.spring[a][b] += blk.spring[a][b];
+            }
+            self.spring_rhs[a] += blk.spring_rhs[a];
+        }
+        self.row_mix = Some(blk.row_mix);
+    }
+
     /// The slip row (3.39a) τᵀ(A u)_k + L̃ τᵀ u^k = τᵀ f_k + r̃: adds Σ τ_i L̃_ij τ_jᵀ to the node's
     /// block and Σ τ_i r̃_i to its right-hand side.
     pub fn add_slip_spring(&mut self, t: &[[f64; 3]; 2], row: &TangentialRow<2>, dim: usize) {
@@ -307,7 +327,7 @@ impl ReducedSystem {
                 .expect("gathered")
                 .clone();
             if let Some(row) = &p.slip {
-                me.add_slip_spring(&k.frame.t, row, dim);
+                me.add_slip_row(&k.frame, row, dim);
             }
             writes.push((r, me, k.local_row));
         }
@@ -386,9 +406,11 @@ impl ReducedSystem {
         Ok(())
     }
 
-    /// The solution, consumed.
-    pub fn into_solution(self) -> Vector {
-        self.u
+    /// A copy of the last solution (the system stays for further solves: the fixed point).
+    pub fn solution(&self) -> petsc::Result<Vector> {
+        let mut u = self.u.duplicate()?;
+        u.copy_from(&self.u)?;
+        Ok(u)
     }
 }
 
@@ -424,6 +446,19 @@ pub fn write_symmetric_constraint<'c>(
     let n = rows.cols.len();
     let node_k = rows.row / dim;
     let pk = me.projector(dim);
+    // The left factor of the node's rows: P_k, plus E for a Coulomb slip row (F7).
+    let left = match me.row_mix {
+        None => pk,
+        Some(e) => {
+            let mut l = pk;
+            for a in 0..dim {
+                for b in 0..dim {
+                    l[a][b] += e[a][b];
+                }
+            }
+            l
+        }
+    };
     let uk = me.known();
     let sk = (0..dim).map(|j| rows.diag(j)).sum::<f64>() / dim as f64;
     let mut new_rows = vec![vec![0.0; n]; dim];
@@ -456,7 +491,7 @@ pub fn write_symmetric_constraint<'c>(
                 t[a] += (0..dim).map(|b| blk[a][b] * uj[b]).sum::<f64>();
             }
         }
-        let mut nb = matmul3(&pk, &matmul3(&blk, &pj, dim), dim);
+        let mut nb = matmul3(&left, &matmul3(&blk, &pj, dim), dim);
         if j == node_k {
             for (cvec, _) in &me.dirs {
                 for a in 0..dim {
@@ -509,7 +544,7 @@ pub fn write_symmetric_constraint<'c>(
         ft[a] = f_k[a] - t[a];
     }
     for a in 0..dim {
-        rhs[a] = (0..dim).map(|b| pk[a][b] * ft[b]).sum::<f64>() + sk * uk[a] + me.spring_rhs[a];
+        rhs[a] = (0..dim).map(|b| left[a][b] * ft[b]).sum::<f64>() + sk * uk[a] + me.spring_rhs[a];
     }
     Ok(rhs)
 }

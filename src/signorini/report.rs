@@ -8,7 +8,7 @@ use crate::par::Ctx;
 use serde::Serialize;
 
 /// Columns of one gathered contact-node row.
-const NCOL: usize = 17;
+const NCOL: usize = 19;
 
 /// Per owned node: the pressure p^k = −λ_n^k / w_k (THEORY §2).
 pub fn pressure(lambda_n: f64, weight: f64) -> f64 {
@@ -108,11 +108,14 @@ const W: usize = 13;
 const STATE: usize = 14;
 const BOUND: usize = 15;
 const SLIP: usize = 16;
+/// The tangential increment u_τ − u_ref friction acts on (= u_τ in a single static solve).
+const DUT: usize = 17;
 
 /// Gathers the contact nodes of all ranks (the contact boundary is small).
 pub fn gather(ctx: &Ctx, cs: &ContactBoundary, res: &[NodeResult], dim: usize) -> Table {
     let mut mine: Vec<f64> = Vec::with_capacity(cs.nodes.len() * NCOL);
     for (k, r) in cs.nodes.iter().zip(res) {
+        let du_t = super::active_set::increment(r, k);
         let row = [
             k.x[0],
             k.x[1],
@@ -131,6 +134,8 @@ pub fn gather(ctx: &Ctx, cs: &ContactBoundary, res: &[NodeResult], dim: usize) -
             if r.active { 1.0 } else { 0.0 },
             k.bound,
             if r.slip { 1.0 } else { 0.0 },
+            du_t[0],
+            du_t[1],
         ];
         mine.extend_from_slice(&row);
     }
@@ -272,23 +277,35 @@ impl Table {
     }
 
     /// Friction certificate of (3.18): max(|λ_τ| − b_k, 0), max |u_τ| on stick nodes, and the
-    /// alignment defect |λ_τ − b_k u_τ/|u_τ|| on slip nodes, with the scales.
+    /// alignment defect |λ_τ − b_k u_τ/|u_τ|| on slip nodes, with the scales. u_τ is the
+    /// increment since the previous load step; b_k the final μ(−λ_n^k) with Coulomb.
     pub fn friction_certificate(&self) -> FrictionCertificate {
         let (mut excess, mut stick, mut align, mut bmax, mut umax) =
             (0.0f64, 0.0f64, 0.0f64, 0.0f64, 0.0f64);
         let (mut n_stick, mut n_slip) = (0usize, 0usize);
+        let mut total = 0.0f64; // the largest |u| at the contact, increments or not
         for r in &self.rows {
-            let ut = [r[UT], r[UT + 1]];
+            let ut = [r[DUT], r[DUT + 1]];
+            umax = umax
+                .max((ut[0] * ut[0] + ut[1] * ut[1]).sqrt())
+                .max(r[UN].abs());
+            total = total.max(r[UT].hypot(r[UT + 1]));
+        }
+        // A slip node whose increment is round-off (a node at the slip limit that did not
+        // move in this load step) is at rest: (3.18) then asks |λ_τ| ≤ b only.
+        let rest = RESTING_SLIP * umax.max(total);
+        for r in &self.rows {
+            let mut ut = [r[DUT], r[DUT + 1]];
             let lt = [r[LT], r[LT + 1]];
             let slip = r[SLIP] > 0.5;
+            if slip && (ut[0] * ut[0] + ut[1] * ut[1]).sqrt() <= rest {
+                ut = [0.0; 2];
+            }
             let res = crate::contact::tangential_residual(&ut, &lt, r[BOUND], slip);
             excess = excess.max(res.excess);
             stick = stick.max(res.stick_motion);
             align = align.max(res.slip_alignment);
             bmax = bmax.max(r[BOUND]);
-            umax = umax
-                .max((ut[0] * ut[0] + ut[1] * ut[1]).sqrt())
-                .max(r[UN].abs());
             if slip {
                 n_slip += 1;
             } else {
@@ -347,6 +364,10 @@ pub struct Scales {
     pub force: f64,
     pub length: f64,
 }
+
+/// A slip node's tangential increment at most this fraction of the largest contact
+/// displacement counts as no motion in the friction certificate.
+pub const RESTING_SLIP: f64 = 1e-12;
 
 /// The relative violation of a certificate beyond which a final state is not accepted.
 pub const CERTIFICATE_TOL: f64 = 1e-6;
@@ -434,6 +455,48 @@ mod tests {
         let mut k = kkt(0.0);
         k.max_abs_lambda_t = Some(1e-3);
         assert!(k.beyond(CERTIFICATE_TOL));
+    }
+
+    /// One contact row: total u_τ, increment Δu_τ, λ_τ, b, slip flag.
+    fn row(ut: f64, dut: f64, lt: f64, b: f64, slip: bool) -> [f64; NCOL] {
+        let mut r = [0.0; NCOL];
+        r[UT] = ut;
+        r[DUT] = dut;
+        r[LT] = lt;
+        r[LN] = -b * 10.0;
+        r[BOUND] = b;
+        r[STATE] = 1.0;
+        r[SLIP] = if slip { 1.0 } else { 0.0 };
+        r
+    }
+
+    #[test]
+    fn certificate_judges_the_increment() {
+        // a stick node that moved in an earlier load step (u_τ ≠ 0, Δu_τ = 0) and a slip node
+        // whose increment is round-off (at rest at the limit): both fine
+        let t = Table {
+            rows: vec![
+                row(0.5, 0.0, 0.05, 0.1, false),
+                row(0.5, 1e-17, 0.1, 0.1, true),
+                row(0.7, 0.2, 0.1, 0.1, true),
+            ],
+            dim: 2,
+        };
+        let c = t.friction_certificate();
+        assert_eq!(c.max_stick_motion, 0.0);
+        assert!(c.max_slip_alignment_defect <= 1e-15, "{c:?}");
+        assert_eq!((c.stick_count, c.slip_count), (1, 2));
+        // a stick node with an increment, a slip node against its increment: violations
+        let t = Table {
+            rows: vec![
+                row(0.5, 0.01, 0.05, 0.1, false),
+                row(0.7, 0.2, -0.1, 0.1, true),
+            ],
+            dim: 2,
+        };
+        let c = t.friction_certificate();
+        assert_eq!(c.max_stick_motion, 0.01);
+        assert!((c.max_slip_alignment_defect - 0.2).abs() < 1e-15, "{c:?}");
     }
 
     #[test]

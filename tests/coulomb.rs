@@ -1,0 +1,436 @@
+//! Coulomb friction (docs/friction.md): `friction = { law = "coulomb", mu = ..., algorithm =
+//! "newton" | "fixed-point" }` on the blocks of tests/cases/tresca/ (a block pressed onto a
+//! rigid plane by p = 0.1 on its top, the top dragged sideways by a prescribed displacement).
+//!
+//! * μ = 0 reproduces the frictionless solution; a huge μ sticks every contact node and solves
+//!   the clamped block's linear system.
+//! * A large drag: every contact node slips and the friction force is μ times the normal force,
+//!   node by node (|λ_τ| = μ(−λ_n), λ_τ ∥ u_τ), hence Σ|λ_τ| = μ Σ(−λ_n), in 2D and 3D.
+//! * The generalised Newton and the fixed point on Tresca thresholds reach the same solution;
+//!   1, 2 and 3 ranks agree.
+//! * A floating body whose tangential load exceeds μ × its normal load: a clear error.
+//! * Warm start (examples/warm_start.rs, `signorini::solve(.., previous)`): from its own
+//!   solution one Newton step; a drag in two steps with friction on the increment equals the
+//!   one-step drag in 2D, where every node slips the same way all along.
+
+mod common;
+
+use std::collections::BTreeMap;
+use std::path::Path;
+
+use common::*;
+
+fn coulomb(mu: f64, algorithm: &str) -> String {
+    format!("contact.friction={{law=\"coulomb\", mu={mu:e}, algorithm=\"{algorithm}\"}}")
+}
+
+fn block(dim: usize) -> std::path::PathBuf {
+    case(&format!("block{dim}d_tresca.toml"))
+}
+
+/// The prescribed displacement of the top (TOML value): `x` in the first in-plane direction.
+fn drag_value(dim: usize, x: f64) -> String {
+    if dim == 2 {
+        format!("[{x:e}, \"free\"]")
+    } else {
+        format!("[{x:e}, \"free\", \"free\"]")
+    }
+}
+
+/// The `--set` of the blocks' top drag (their first Dirichlet entry).
+fn drag(dim: usize, x: f64) -> String {
+    format!("dirichlet.0.value={}", drag_value(dim, x))
+}
+
+/// u at every node and (u_n, u_τ, λ_n, λ_τ) at every contact node of two runs: the largest
+/// differences, relative to max |u| and max |λ_n|.
+fn compare(a: &Solved, b: &Solved) -> (f64, f64) {
+    let (du, su) = max_diff(&a.displacement(), &b.displacement());
+    assert!(su > 0.0, "zero displacement");
+    let ra = a.contact_rows_by_id();
+    let rb = b.contact_rows_by_id();
+    let dim = csv_dim(&ra);
+    let mut lkeys = vec!["lambda_n".to_string()];
+    for i in 1..dim {
+        lkeys.push(format!("lambda_t{i}"));
+    }
+    let lkeys: Vec<&str> = lkeys.iter().map(String::as_str).collect();
+    let (dl, _) = max_diff(&columns(&ra, &lkeys), &columns(&rb, &lkeys));
+    let ls = ra
+        .values()
+        .map(|r| r.f("lambda_n").abs())
+        .fold(0.0, f64::max);
+    assert!(ls > 0.0, "no contact force");
+    (du / su, dl / ls)
+}
+
+fn converged(np: usize, case: &Path, sets: &[&str]) -> Solved {
+    let s = solve(np, case, sets);
+    s.assert_converged(&format!("{} {sets:?}", case.display()));
+    s
+}
+
+#[test]
+fn zero_mu_equals_frictionless() {
+    for dim in [2, 3] {
+        let free = converged(1, &block(dim), &["contact.friction=\"none\""]);
+        for alg in ["newton", "fixed-point"] {
+            let c = converged(1, &block(dim), &[&coulomb(0.0, alg)]);
+            let (du, dl) = compare(&c, &free);
+            eprintln!("{dim}D μ = 0 ({alg}) vs frictionless: |Δu| {du:.2e}, |Δλ| {dl:.2e}");
+            assert!(du <= 1e-11, "{dim}D {alg}: u differs by {du:e} (relative)");
+            assert!(dl <= 1e-10, "{dim}D {alg}: λ differs by {dl:e} (relative)");
+            for (id, r) in c.contact_rows_by_id() {
+                for l in r.lambda_t(dim) {
+                    assert!(l.abs() <= 1e-12, "node {id}: λ_τ = {l:e} with μ = 0");
+                }
+            }
+        }
+    }
+}
+
+#[test]
+fn huge_mu_sticks_like_clamped() {
+    for dim in [2, 3] {
+        let d = drag(dim, 0.01);
+        let fric = converged(1, &block(dim), &[&coulomb(1e6, "newton"), &d]);
+        let clamped_case = case(&format!("block{dim}d_clamped.toml"));
+        let top = format!("dirichlet.1.value={}", drag_value(dim, 0.01));
+        let clamped = solve(1, &clamped_case, &["dirichlet.1.group=top", &top]);
+        let rows = fric.contact_rows_by_id();
+        for (id, r) in &rows {
+            assert!(r.active(), "{dim}D node {id} lifted off");
+            assert_eq!(r.tangential(), "stick", "{dim}D node {id} slips at μ = 1e6");
+            assert!(norm(&r.u_t(dim)) <= 1e-14, "{dim}D node {id}: u_τ ≠ 0");
+            assert!(norm(&r.lambda_t(dim)) < 1e-3 * r.bound());
+        }
+        let (du, su) = max_diff(&fric.displacement(), &clamped.displacement());
+        eprintln!("{dim}D μ = 1e6 vs clamped: max |Δu| = {du:.3e} (max |u| {su:.3e})");
+        assert!(du <= 1e-10 * su, "{dim}D: huge μ vs clamped: |Δu| = {du:e}");
+        // the drag is carried by friction: the test is not trivially tangential-free
+        let shear: f64 = rows.values().map(|r| norm(&r.lambda_t(dim))).sum();
+        let normal: f64 = rows.values().map(|r| r.f("lambda_n").abs()).sum();
+        assert!(shear > 1e-2 * normal, "{dim}D: no friction force");
+    }
+}
+
+/// A large drag: every node slips, |λ_τ| = μ(−λ_n) and λ_τ ∥ u_τ node by node, and the sums.
+fn all_slip(dim: usize, mu: f64, alg: &str) -> Solved {
+    let s = converged(1, &block(dim), &[&coulomb(mu, alg), &drag(dim, 0.05)]);
+    let rows = s.contact_rows_by_id();
+    let (mut sum_t, mut sum_n) = (vec![0.0; dim - 1], 0.0);
+    let mut sum_abs_t = 0.0;
+    for (id, r) in &rows {
+        assert!(r.active(), "node {id} lost contact");
+        assert_eq!(r.tangential(), "slip", "{dim}D μ = {mu} node {id} sticks");
+        let (ln, lt, ut) = (r.f("lambda_n"), r.lambda_t(dim), r.u_t(dim));
+        let b = mu * -ln;
+        assert!(b > 0.0, "node {id}: no pressure");
+        assert!(
+            (norm(&lt) - b).abs() <= 1e-10 * b,
+            "node {id}: |λ_τ| = {:e} ≠ μ(−λ_n) = {b:e}",
+            norm(&lt)
+        );
+        for (l, u) in lt.iter().zip(&ut) {
+            assert!(
+                (l - b * u / norm(&ut)).abs() <= 1e-9 * b,
+                "node {id}: λ_τ {lt:?} not along u_τ {ut:?}"
+            );
+        }
+        for (s, l) in sum_t.iter_mut().zip(&lt) {
+            *s += l;
+        }
+        sum_abs_t += norm(&lt);
+        sum_n += ln;
+    }
+    eprintln!(
+        "{dim}D μ = {mu} ({alg}): Σλ_τ = {sum_t:?}, Σ|λ_τ| = {sum_abs_t:e}, Σλ_n = {sum_n:e}"
+    );
+    assert!(
+        (sum_abs_t - mu * -sum_n).abs() <= 1e-10 * mu * sum_n.abs(),
+        "Σ|λ_τ| = {sum_abs_t:e} vs μ Σ(−λ_n) = {:e}",
+        mu * -sum_n
+    );
+    if dim == 2 {
+        // every node slips in +x: Σλ_τ = μ Σλ_n exactly, and the total force balances the drag
+        assert!(
+            (sum_t[0] - mu * -sum_n).abs() <= 1e-10 * mu * sum_n.abs(),
+            "2D: Σλ_τ = {} vs μ Σ(−λ_n) = {:e}",
+            sum_t[0],
+            mu * -sum_n
+        );
+        let f = s.total_force();
+        assert!(
+            (f[0] + mu * f[1]).abs() <= 1e-10 * f[1].abs(),
+            "total force {f:?}"
+        );
+    }
+    let fc = get(&s.summary, &["contact", "friction"]);
+    assert_eq!(fc["slip_count"].as_u64(), Some(rows.len() as u64));
+    s
+}
+
+#[test]
+fn dragged_block_slips_everywhere_2d() {
+    // (μ = 0.3 tilts the block: its trailing edge lifts off)
+    for mu in [0.05, 0.1] {
+        let s = all_slip(2, mu, "newton");
+        assert_eq!(
+            get(&s.summary, &["newton", "coulomb", "algorithm"]),
+            "newton"
+        );
+    }
+}
+
+#[test]
+fn dragged_block_slips_everywhere_3d() {
+    all_slip(3, 0.1, "newton");
+}
+
+#[test]
+fn fixed_point_agrees_with_generalised_newton() {
+    for (dim, d) in [(2, 0.05), (2, 0.002), (3, 0.05), (3, 0.002)] {
+        let sets = |alg: &str| vec![coulomb(0.3, alg), drag(dim, d)];
+        let n = sets("newton");
+        let f = sets("fixed-point");
+        let a = converged(
+            1,
+            &block(dim),
+            &n.iter().map(String::as_str).collect::<Vec<_>>(),
+        );
+        let b = converged(
+            1,
+            &block(dim),
+            &f.iter().map(String::as_str).collect::<Vec<_>>(),
+        );
+        let (du, dl) = compare(&a, &b);
+        let outer = b.f(&["newton", "coulomb", "outer_steps"]);
+        eprintln!(
+            "{dim}D drag {d}: newton {} steps, fixed point {outer} outer / {} steps: |Δu| {du:.2e}, \
+             |Δλ| {dl:.2e}",
+            a.steps(),
+            b.steps()
+        );
+        assert!(
+            outer >= 2.0,
+            "the fixed point needs at least two thresholds"
+        );
+        assert!(
+            du <= 1e-7 && dl <= 1e-7,
+            "{dim}D drag {d}: |Δu| {du:e}, |Δλ| {dl:e}"
+        );
+        let states = |s: &Solved| -> BTreeMap<u64, (bool, String)> {
+            s.contact_rows_by_id()
+                .into_iter()
+                .map(|(id, r)| (id, (r.active(), r.tangential().to_string())))
+                .collect()
+        };
+        assert_eq!(states(&a), states(&b), "{dim}D drag {d}: states differ");
+    }
+}
+
+#[test]
+fn ranks_agree() {
+    for dim in [2, 3] {
+        // a small drag: stick in the middle, slip at the rim
+        let sets = [coulomb(0.3, "newton"), drag(dim, 0.002)];
+        let sets: Vec<&str> = sets.iter().map(String::as_str).collect();
+        let one = converged(1, &block(dim), &sets);
+        let rows = one.contact_rows_by_id();
+        let slip = rows.values().filter(|r| r.tangential() == "slip").count();
+        assert!(
+            slip > 0 && slip < rows.len(),
+            "{dim}D: want stick and slip, {slip} slip"
+        );
+        for np in [2, 3] {
+            let other = converged(np, &block(dim), &sets);
+            let (du, dl) = compare(&one, &other);
+            eprintln!("{dim}D {np} ranks vs 1: |Δu| {du:.2e}, |Δλ| {dl:.2e}");
+            assert!(
+                du <= 1e-10 && dl <= 1e-9,
+                "{dim}D {np} ranks: {du:e} {dl:e}"
+            );
+        }
+    }
+}
+
+/// A floating block (no Dirichlet data) pressed by p = 0.1 on its top (normal load 0.2) and
+/// pushed sideways by a traction on its left side (tangential load 0.025).
+fn floating_case(dir: &Path, mu: f64) -> std::path::PathBuf {
+    let mesh = repo("cases/blocks/block2d.msh");
+    write_case(
+        &dir.join("floating.toml"),
+        &format!(
+            "[mesh]\nfile = {}\n[material]\nyoung = 2.0\npoisson = 0.3\nmodel = \"plane_strain\"\n\
+             [[neumann]]\ngroup = \"top\"\npressure = 0.1\n[[neumann]]\ngroup = \"left\"\n\
+             traction = [0.05, 0.0]\n[contact]\ngroup = \"bottom\"\n\
+             obstacle = {{ type = \"plane\", point = [0.0, 0.0], normal = [0.0, 1.0] }}\n\
+             friction = {{ law = \"coulomb\", mu = {mu} }}\n[newton]\nc = 1.0\n\
+             [output]\ndir = \"out\"\nfields = [\"displacement\", \"contact\"]\n",
+            toml_path(&mesh)
+        ),
+    )
+}
+
+#[test]
+fn no_equilibrium_beyond_the_friction_capacity() {
+    let tmp = tempfile::tempdir().expect("tmp");
+    // μ = 0.1: capacity 0.02 < 0.025
+    let file = floating_case(tmp.path(), 0.1);
+    for np in [1, 2] {
+        let run = run_solver(np, &file, &[], &tmp.path().join("out"));
+        run.expect_code(1, "no equilibrium");
+        let err = run.stderr.clone();
+        assert!(err.contains("no equilibrium"), "{err}");
+        assert!(err.contains("μ"), "{err}");
+        assert!(
+            !err.contains("newton "),
+            "the message comes before the Newton run"
+        );
+        assert!(
+            !run.stdout.contains("newton   1"),
+            "Newton ran:\n{}",
+            run.stdout
+        );
+    }
+    // μ = 0.3: capacity 0.06 > 0.025, the block holds
+    let file = floating_case(tmp.path(), 0.3);
+    let s = solved(
+        run_solver(1, &file, &[], &tmp.path().join("out3")),
+        tempfile::tempdir().expect("tmp"),
+        tmp.path().join("out3"),
+    );
+    s.assert_converged("floating block, μ = 0.3");
+    let f = s.total_force();
+    assert!(
+        (f[0] + 0.025).abs() <= 1e-10,
+        "friction carries the push: {f:?}"
+    );
+}
+
+/// examples/warm_start on `np` ranks: the JSON it prints.
+fn warm_start(np: usize, case: &Path, both: &[String], then: &[String]) -> serde_json::Value {
+    let mut args = vec![case.display().to_string()];
+    for s in both {
+        args.extend(["--set".to_string(), s.clone()]);
+    }
+    for s in then {
+        args.extend(["--then".to_string(), s.clone()]);
+    }
+    let run = run_with_timeout(
+        mpirun(np, &example("warm_start"), &args),
+        std::time::Duration::from_secs(300),
+    );
+    run.expect_code(0, "warm_start");
+    json_after(&run.stdout, "warm_start: ")
+}
+
+#[test]
+fn warm_start_from_own_solution_takes_one_step() {
+    for dim in [2, 3] {
+        for (law, np) in [
+            (coulomb(0.3, "newton"), 1),
+            (coulomb(0.3, "fixed-point"), 2),
+            (coulomb(0.1, "newton"), 2),
+            (
+                "contact.friction={law=\"tresca\", threshold=0.01}".to_string(),
+                1,
+            ),
+            ("contact.friction=\"none\"".to_string(), 1),
+        ] {
+            for d in [0.05, 0.002] {
+                let v = warm_start(np, &block(dim), &[law.clone(), drag(dim, d)], &[]);
+                eprintln!(
+                    "{dim}D {law} drag {d}, {np} ranks: {} then {} steps",
+                    v["first_steps"], v["second_steps"]
+                );
+                assert!(v["first_steps"].as_u64().unwrap() >= 1);
+                assert_eq!(v["second_steps"], 1, "{dim}D {law} drag {d}: {v}");
+                let f1 = floats(&v["first_total_force"]);
+                let f2 = floats(&v["second_total_force"]);
+                for (a, b) in f1.iter().zip(&f2) {
+                    assert!((a - b).abs() <= 1e-10 * norm(&f1), "{f1:?} vs {f2:?}");
+                }
+            }
+        }
+    }
+}
+
+#[test]
+fn drag_in_two_steps_acts_on_the_increment() {
+    // 2D, every node slips in +x in both steps: the same state as the one-step drag.
+    let dim = 2;
+    for alg in ["newton", "fixed-point"] {
+        let law = coulomb(0.1, alg);
+        let v = warm_start(
+            1,
+            &block(dim),
+            &[law.clone(), drag(dim, 0.025)],
+            &[drag(dim, 0.05)],
+        );
+        let one = converged(1, &block(dim), &[&law, &drag(dim, 0.05)]);
+        let rows = one.contact_rows_by_id();
+        let nodes = v["nodes"].as_array().expect("nodes");
+        assert_eq!(nodes.len(), rows.len());
+        let ls = rows
+            .values()
+            .map(|r| r.f("lambda_n").abs())
+            .fold(0.0, f64::max);
+        for n in nodes {
+            let id = n["node_id"].as_f64().expect("id") as u64;
+            let r = &rows[&id];
+            assert_eq!(n["tangential"], "slip", "node {id} after two steps");
+            for k in ["lambda_n", "lambda_t1"] {
+                let (a, b) = (n[k].as_f64().unwrap(), r.f(k));
+                assert!(
+                    (a - b).abs() <= 1e-8 * ls,
+                    "{alg} node {id} {k}: {a:e} vs {b:e}"
+                );
+            }
+            let (a, b) = (n["u_t1"].as_f64().unwrap(), r.f("u_t1"));
+            assert!(
+                (a - b).abs() <= 1e-8 * b.abs(),
+                "{alg} node {id} u_t: {a:e} vs {b:e}"
+            );
+        }
+        // the second step starts from the first: fewer steps than a cold solve
+        let second = v["second_steps"].as_u64().unwrap() as usize;
+        eprintln!(
+            "{alg}: two-step drag, second step {second} Newton steps (cold {})",
+            one.steps()
+        );
+        // the certificate was judged on the increment (a stick test on u_τ itself would fail)
+        let fc = &v["second_friction"];
+        assert_eq!(fc["slip_count"].as_u64(), Some(rows.len() as u64));
+    }
+}
+
+#[test]
+fn coulomb_keys_are_checked() {
+    let tmp = tempfile::tempdir().expect("tmp");
+    for (set, key) in [
+        (
+            "contact.friction={law=\"coulomb\", mu=-0.3}",
+            "contact.friction.mu",
+        ),
+        ("contact.friction={law=\"coulomb\"}", "contact.friction.mu"),
+        (
+            "contact.friction={law=\"coulomb\", mu=0.3, algorithm=\"picard\"}",
+            "contact.friction.algorithm",
+        ),
+        (
+            "contact.friction={law=\"coulomb\", mu=0.3, threshold=0.1}",
+            "contact.friction.threshold",
+        ),
+    ] {
+        let run = run_solver(1, &block(2), &[set], &tmp.path().join("o"));
+        run.expect_code(2, set);
+        let errors: Vec<&str> = run
+            .stderr
+            .lines()
+            .filter(|l| l.starts_with("error"))
+            .collect();
+        assert_eq!(errors.len(), 1, "one message: {}", run.stderr);
+        assert!(errors[0].contains(key), "{set}: {}", errors[0]);
+    }
+}

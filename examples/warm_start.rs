@@ -18,7 +18,6 @@ use signorini_mpi::assembly;
 use signorini_mpi::case::Case;
 use signorini_mpi::error::RunError;
 use signorini_mpi::par::Ctx;
-use signorini_mpi::partition;
 use signorini_mpi::petsc::Petsc;
 use signorini_mpi::setup;
 use signorini_mpi::signorini::{self, ContactSolution};
@@ -62,10 +61,10 @@ fn run(ctx: &Ctx, a: &Args) -> Result<serde_json::Value, RunError> {
     let second_case = load(&a.then)?;
     let input = setup::read_input(ctx, &first_case)?;
     let mesh = &input.mesh;
-    let layout = partition::partition(ctx.world, ctx.comm(), mesh, "ptscotch")?;
+    let layout = &input.layout;
     let solve = |case: &Case, previous: Option<&ContactSolution>| {
         let problem = setup::problem(case, mesh, input.material);
-        let sys = assembly::assemble(ctx.comm(), &layout, &problem)?;
+        let sys = assembly::assemble(ctx.comm(), layout, &problem)?;
         let cc = case.contact.as_ref().expect("a contact case");
         let settings =
             ctx.agree(setup::contact_settings(case, cc, mesh.dim).map_err(RunError::from))?;
@@ -73,7 +72,7 @@ fn run(ctx: &Ctx, a: &Args) -> Result<serde_json::Value, RunError> {
             ctx,
             &settings,
             mesh,
-            &layout,
+            layout,
             &problem.fixed,
             &sys,
             &case.solver,

@@ -291,8 +291,8 @@ impl Table {
                 .max(r[UN].abs());
             total = total.max(r[UT].hypot(r[UT + 1]));
         }
-        // A slip node whose increment is round-off (a node at the slip limit that did not
-        // move in this load step) is at rest: (3.18) then asks |λ_τ| ≤ b only.
+        // A slip node whose increment is below the certificate's tolerance (a node at the slip
+        // limit that did not move in this load step) is at rest: (3.18) then asks |λ_τ| ≤ b only.
         let rest = RESTING_SLIP * umax.max(total);
         for r in &self.rows {
             let mut ut = [r[DUT], r[DUT + 1]];
@@ -366,8 +366,11 @@ pub struct Scales {
 }
 
 /// A slip node's tangential increment at most this fraction of the largest contact
-/// displacement counts as no motion in the friction certificate.
-pub const RESTING_SLIP: f64 = 1e-12;
+/// displacement counts as no motion in the friction certificate: the certificate's own
+/// tolerance, since a stick node may move that much too (a node at the slip limit that did not
+/// move in a load step — e.g. after a fixed point stopped at max|Δb| ≤ 1e-9 max b — has an
+/// increment of solver-tolerance size whose direction means nothing).
+pub const RESTING_SLIP: f64 = CERTIFICATE_TOL;
 
 /// The relative violation of a certificate beyond which a final state is not accepted.
 pub const CERTIFICATE_TOL: f64 = 1e-6;

@@ -345,7 +345,11 @@ fn warm_start_from_own_solution_takes_one_step() {
                     v["first_steps"], v["second_steps"]
                 );
                 assert!(v["first_steps"].as_u64().unwrap() >= 1);
-                assert_eq!(v["second_steps"], 1, "{dim}D {law} drag {d}: {v}");
+                // One step; on several ranks the solve's round-off (MUMPS' parallel scheduling
+                // varies from run to run) may ask for one confirming step more.
+                let most = if np == 1 { 1 } else { 2 };
+                let second = v["second_steps"].as_u64().unwrap();
+                assert!((1..=most).contains(&second), "{dim}D {law} drag {d}: {v}");
                 let f1 = floats(&v["first_total_force"]);
                 let f2 = floats(&v["second_total_force"]);
                 for (a, b) in f1.iter().zip(&f2) {

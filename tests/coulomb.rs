@@ -438,3 +438,37 @@ fn coulomb_keys_are_checked() {
         assert!(errors[0].contains(key), "{set}: {}", errors[0]);
     }
 }
+
+/// The Hertz disk held sideways on its top arc (Dirichlet data that only one rank's part of the
+/// mesh holds) and pressed onto the plane, with Coulomb and Tresca friction on 2 ranks: the
+/// ranks agree on whether the body floats (a rank without Dirichlet dofs once took the other
+/// branch of a collective and the run hung), and the result equals the 1-rank one.
+#[test]
+fn dirichlet_on_one_rank_only_with_friction() {
+    let tmp = tempfile::tempdir().expect("tmp");
+    let mesh = repo("cases/hertz/meshes/hertz_refined_L2.msh");
+    for law in [
+        "{ law = \"coulomb\", mu = 0.3 }",
+        "{ law = \"tresca\", threshold = 0.001 }",
+    ] {
+        let file = write_case(
+            &tmp.path().join("held.toml"),
+            &format!(
+                "[mesh]\nfile = {}\n[material]\nyoung = 2.0\npoisson = 0.3\n\
+                 model = \"plane_strain\"\n[[neumann]]\ngroup = \"load\"\npressure = 0.02\n\
+                 [[dirichlet]]\ngroup = \"load\"\nvalue = [1e-4, \"free\"]\n[contact]\n\
+                 group = \"contact\"\n\
+                 obstacle = {{ type = \"plane\", point = [0.0, -1.0], normal = [0.0, 1.0] }}\n\
+                 friction = {law}\n[output]\ndir = \"out\"\nfields = [\"displacement\", \"contact\"]\n",
+                toml_path(&mesh)
+            ),
+        );
+        let one = converged(1, &file, &[]);
+        let two = converged(2, &file, &[]);
+        let (du, dl) = compare(&one, &two);
+        assert!(
+            du <= 1e-10 && dl <= 1e-8,
+            "{law}: 1 vs 2 ranks: u {du:e}, λ {dl:e}"
+        );
+    }
+}

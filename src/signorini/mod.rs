@@ -480,8 +480,13 @@ fn check_friction_capacity(
     let Obstacle::Plane(plane) = b.obstacle else {
         return Ok(());
     };
-    // `fixed` holds every mesh dof on every rank: the same answer everywhere.
-    let floating = fixed.iter().all(|x| x.is_nan());
+    // `fixed` covers this rank's local mesh only: agree on it (every rank reaches this).
+    let fixed_here = if fixed.iter().any(|x| !x.is_nan()) {
+        1.0
+    } else {
+        0.0
+    };
+    let floating = ctx.max_f64(fixed_here) == 0.0;
     if !floating {
         return Ok(());
     }

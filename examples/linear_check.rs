@@ -158,6 +158,7 @@ fn solve(
         partition::partition(ctx.world, comm, mesh, "ptscotch").map_err(|e| e.to_string())?;
     let problem = Problem {
         mesh,
+        held_fixed: Vec::new(),
         material,
         fixed,
         facet_loads: Vec::new(),

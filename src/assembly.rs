@@ -57,6 +57,9 @@ pub struct Problem<'a> {
     pub material: Material,
     /// Prescribed value per mesh dof (node * dim + component); NaN = free.
     pub fixed: Vec<f64>,
+    /// Per mesh dof: a prescribed value held at full value in every load step (`ramp = false`);
+    /// empty when the case holds none (the same on every rank).
+    pub held_fixed: Vec<bool>,
     pub facet_loads: Vec<FacetLoad>,
     pub body_force: BodyForce,
 }
@@ -414,7 +417,54 @@ pub fn assemble(comm: MPI_Comm, layout: &Layout, p: &Problem) -> petsc::Result<S
             bv[i] = v;
         }
     })?;
-    let b_held = held_loads(p, layout, &b, &fixed_rhs)?;
+    let mut b_held = held_loads(p, layout, &b, &fixed_rhs)?;
+    // A case-level decision (held_fixed is non-empty on every rank or on none): collective.
+    if !p.held_fixed.is_empty() {
+        // The elimination terms of the held values alone: the same fixed pattern, the ramped
+        // values set to 0 (the matrix part of this pass is dropped).
+        let only_held = Problem {
+            mesh,
+            material: p.material,
+            fixed: p
+                .fixed
+                .iter()
+                .zip(&p.held_fixed)
+                .map(|(&g, &h)| if g.is_nan() || h { g } else { 0.0 })
+                .collect(),
+            held_fixed: Vec::new(),
+            facet_loads: Vec::new(),
+            body_force: BodyForce::None,
+        };
+        let rc = row_cells(mesh, layout);
+        let held = if dim == 2 {
+            owned_rows::<2, 3>(&only_held, layout, &rc, |n| {
+                let p = |v: u32| [x[v as usize][0], x[v as usize][1]];
+                fem::tri_gradients(&[p(n[0]), p(n[1]), p(n[2])])
+            })
+        } else {
+            owned_rows::<3, 4>(&only_held, layout, &rc, |n| {
+                let p = |v: u32| x[v as usize];
+                fem::tet_gradients(&[p(n[0]), p(n[1]), p(n[2]), p(n[3])])
+            })
+        };
+        let mut h = match b_held.take() {
+            Some(h) => h,
+            None => {
+                let mut h = b.duplicate()?;
+                h.write(|v| v.iter_mut().for_each(|x| *x = 0.0))?;
+                h
+            }
+        };
+        h.write(|v| {
+            for (x, e) in v.iter_mut().zip(&held.elim_rhs) {
+                *x += e;
+            }
+            for &(i, g) in &held.fixed_rhs {
+                v[i] = g;
+            }
+        })?;
+        b_held = Some(h);
+    }
     stats.load_seconds = t2.elapsed().as_secs_f64();
     Ok(System {
         a,

@@ -50,6 +50,7 @@ pub fn run_case(ctx: &Ctx, case: &Case) -> Result<String, RunError> {
         layout: &layout,
         material: &material,
         fixed: &problem.fixed,
+        held_fixed: &problem.held_fixed,
         out: &out,
     };
     let stepped = stepper.run(&mut sys)?;

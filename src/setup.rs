@@ -117,12 +117,19 @@ pub fn group_facets(mesh: &Mesh, name: &str) -> Vec<usize> {
 pub fn problem<'m>(case: &Case, mesh: &'m Mesh, material: Material) -> Problem<'m> {
     let dim = mesh.dim;
     let mut fixed = vec![f64::NAN; mesh.n_nodes() * dim];
+    let mut held_fixed = Vec::new();
+    if case.dirichlet.iter().any(|d| !d.ramp) {
+        held_fixed = vec![false; fixed.len()];
+    }
     for d in &case.dirichlet {
         for g in groups_named(mesh, &d.group) {
             for v in mesh.group_nodes(g) {
                 for (k, val) in d.value.iter().enumerate().take(dim) {
                     if let Some(x) = val {
                         fixed[v * dim + k] = *x;
+                        if let Some(h) = held_fixed.get_mut(v * dim + k) {
+                            *h = !d.ramp;
+                        }
                     }
                 }
             }
@@ -148,6 +155,7 @@ pub fn problem<'m>(case: &Case, mesh: &'m Mesh, material: Material) -> Problem<'
         mesh,
         material,
         fixed,
+        held_fixed,
         facet_loads,
         body_force,
     }

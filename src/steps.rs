@@ -5,7 +5,8 @@
 //! side is linear in all three (the loads (3.8), −K_ij g_j of the eliminated Dirichlet columns
 //! and A_jj g_j of their rows), so f(t) = t · f(1): the system is assembled once and its
 //! right-hand side scaled per step. A Neumann load with `ramp = false` is held at its full
-//! value: f(t) = t · f(1) + (1 − t) · f_held. A contact step starts from the previous converged step
+//! value: f(t) = t · f(1) + (1 − t) · f_held; so is a Dirichlet entry with `ramp = false` (its
+//! prescribed values, and f_held holds their elimination terms). A contact step starts from the previous converged step
 //! (`previous` of [`signorini::solve`]).
 //!
 //! Cutback: a step whose solve does not converge ([`RunError::NoConvergence`]) is retried at
@@ -116,6 +117,8 @@ pub struct Stepper<'a> {
     pub material: &'a Material,
     /// Prescribed displacements at factor 1 (NaN = free dof).
     pub fixed: &'a [f64],
+    /// Per dof: held at full value in every step (`ramp = false`); empty = none held.
+    pub held_fixed: &'a [bool],
     pub out: &'a ResultSet,
 }
 
@@ -178,7 +181,7 @@ impl Stepper<'_> {
                 let t0 = Instant::now();
                 let (p, halvings) = (schedule.planned(), schedule.halvings());
                 if let Some(b) = &b_full {
-                    scale(sys, b, self.fixed, &mut fixed, factor)?;
+                    scale(sys, b, self.fixed, self.held_fixed, &mut fixed, factor)?;
                 }
                 let previous = last.as_ref().and_then(|s| s.contact.as_ref());
                 let solved = self.solve_once(&physics, &fixed, sys, previous);
@@ -454,6 +457,7 @@ fn scale(
     sys: &mut System,
     b_full: &Vector,
     fixed_full: &[f64],
+    held: &[bool],
     fixed: &mut [f64],
     t: f64,
 ) -> Result<(), RunError> {
@@ -468,8 +472,12 @@ fn scale(
             }
         })?;
     }
-    for (g, &g1) in fixed.iter_mut().zip(fixed_full) {
-        *g = t * g1;
+    for (i, (g, &g1)) in fixed.iter_mut().zip(fixed_full).enumerate() {
+        *g = if held.get(i) == Some(&true) {
+            g1
+        } else {
+            t * g1
+        };
     }
     Ok(())
 }

@@ -165,6 +165,7 @@ fn check_mesh(world: &mpi::topology::SimpleCommunicator, petsc: &Petsc, path: &s
     let force = [0.3, -0.2, 0.1];
     let problem = Problem {
         mesh: &mesh,
+        held_fixed: Vec::new(),
         material,
         fixed: fixed.clone(),
         facet_loads: vec![],
@@ -239,6 +240,7 @@ fn check_mesh(world: &mpi::topology::SimpleCommunicator, petsc: &Petsc, path: &s
     let bm = [[0.3, -0.2, 0.15], [0.1, 0.25, -0.05], [-0.12, 0.07, 0.2]];
     let free = Problem {
         mesh: &mesh,
+        held_fixed: Vec::new(),
         material,
         fixed: vec![f64::NAN; mesh.n_nodes() * dim],
         facet_loads: vec![],

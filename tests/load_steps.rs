@@ -329,6 +329,32 @@ fn prescribed_displacement_history() {
     assert!(f[0] > 0.0 && f[0] < f[1] && f[1] < f[2], "{f:?}");
 }
 
+/// A prescribed displacement with `ramp = false` is held at its full value: every step of a
+/// history equals the static solution (the only load), on 1 and 2 ranks.
+#[test]
+fn held_prescribed_displacement() {
+    let block = repo("tests/cases/block2d_pulled.toml");
+    let down = "dirichlet.0.value=[0.0, -0.01]";
+    let one = solve(1, &block, &[down]);
+    for np in [1, 2] {
+        let held = solve(
+            np,
+            &block,
+            &[down, "dirichlet.0.ramp=false", "load.factors=[0.5, 1.0]"],
+        );
+        let s = series(&held.dir);
+        assert_eq!(s.u.len(), 2);
+        for (i, u) in s.u.iter().enumerate() {
+            let (d, scale) = diff(u, &one.displacement());
+            assert!(
+                scale > 0.0 && d <= 1e-10 * scale,
+                "{np} ranks, step {}: {d:e}",
+                i + 1
+            );
+        }
+    }
+}
+
 /// newton.max_steps = 1 converges only where the initial active set (the touching node) is
 /// already right: below factor ~0.5 on this mesh, not at 0.75 or 1. So 1 fails, is cut back
 /// to 0.5 (converges), 1 fails again, 0.75 fails with no cutback left: the run fails and

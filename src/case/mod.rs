@@ -75,6 +75,9 @@ pub struct Dirichlet {
     pub group: String,
     /// One entry per component; `None` = "free".
     pub value: Vec<Option<f64>>,
+    /// Scaled by the load factor of `[load]` (default); `ramp = false` holds the prescribed
+    /// components at their full value in every step.
+    pub ramp: bool,
 }
 
 #[derive(Debug, Clone, PartialEq)]
@@ -898,7 +901,7 @@ impl Reader<'_> {
 
     fn dirichlet(&self, top: &Tab) -> Res<Vec<Dirichlet>> {
         let mut out = Vec::new();
-        for t in self.tables(top, "dirichlet", &["group", "value"])? {
+        for t in self.tables(top, "dirichlet", &["group", "value", "ramp"])? {
             let (gk, g) = self.required(&t, "group")?;
             let group = self.name(&gk, g)?;
             let (vk, v) = self.required(&t, "value")?;
@@ -920,7 +923,11 @@ impl Reader<'_> {
                     _ => return Err(self.type_err(&ek, e, "a number or \"free\"")),
                 });
             }
-            out.push(Dirichlet { group, value });
+            let ramp = match t.get("ramp") {
+                None => true,
+                Some((rk, r)) => self.boolean(&rk, r)?,
+            };
+            out.push(Dirichlet { group, value, ramp });
         }
         Ok(out)
     }

@@ -116,11 +116,13 @@ fn full_file_round_trip() {
         vec![
             Dirichlet {
                 group: "clamp".into(),
-                value: vec![Some(0.0), Some(0.0)]
+                value: vec![Some(0.0), Some(0.0)],
+                ramp: true,
             },
             Dirichlet {
                 group: "roller".into(),
-                value: vec![None, Some(-0.5)]
+                value: vec![None, Some(-0.5)],
+                ramp: true,
             },
         ]
     );
@@ -740,7 +742,8 @@ fn overrides_create_sections_and_entries() {
         c.dirichlet,
         vec![Dirichlet {
             group: "clamp".into(),
-            value: vec![Some(0.0), None]
+            value: vec![Some(0.0), None],
+            ramp: true,
         }]
     );
     assert_eq!(

@@ -483,33 +483,91 @@ fn sorted_unique(mut v: Vec<u64>) -> Vec<u64> {
     v
 }
 
+/// This rank and the number of ranks.
+fn rank_size(world: &SimpleCommunicator) -> (usize, usize) {
+    (world.rank() as usize, world.size() as usize)
+}
+
+/// Offsets of the ranks' blocks of `n` items each (all-gathered), with the total at the end.
+fn gathered_offsets(world: &SimpleCommunicator, n: usize) -> Vec<usize> {
+    let (_, size) = rank_size(world);
+    let mut counts = vec![0u64; size];
+    world.all_gather_into(&(n as u64), &mut counts[..]);
+    let mut offsets = vec![0usize; size + 1];
+    for r in 0..size {
+        offsets[r + 1] = offsets[r] + counts[r] as usize;
+    }
+    offsets
+}
+
+/// Builds the local mesh and layout from the blocks read, in phases: partition, group
+/// memberships, cells to their ranks, node holders and owners, ghost cells, boundary
+/// elements, node data, global numbering, local mesh, layout. Collective.
 fn build(
     world: &SimpleCommunicator,
     comm: MPI_Comm,
     b: Blocks,
 ) -> Result<(Mesh, Layout), RunError> {
-    let rank = world.rank() as usize;
-    let size = world.size() as usize;
     let dim = b.dim;
-    let npc = dim + 1;
-    let n_nodes = b.n_nodes;
-    let cell_lo = blk(b.n_cells, size, rank);
-    let node_lo = blk(n_nodes, size, rank);
-
-    // 1. Partition (the same rows on the same blocks as before: the same partition).
-    let part: Vec<u64> = if size == 1 {
-        vec![0; b.cell_tags.len()]
-    } else {
-        let (xadj, adjncy) = dual_graph(world, &b);
-        let p = if !petsc::options::has("-mat_partitioning_type")? {
-            petsc::scotch_partition(comm, &xadj, &adjncy, size, SCOTCH_IMBALANCE)?
-        } else {
-            petsc::partition_graph(comm, b.n_cells, &xadj, &adjncy, "ptscotch")?
-        };
-        p.iter().map(|&r| r as u64).collect()
+    let part = partition_cells(world, comm, &b)?;
+    let elem_groups = element_groups(world, &b);
+    let node_groups = node_groups(world, &b, &elem_groups);
+    let own = own_cells(world, &b, part, &elem_groups);
+    let own_nodes = sorted_unique(
+        own.iter()
+            .flat_map(|c| c.nodes[..dim + 1].to_vec())
+            .collect(),
+    );
+    let (homes, owners) = node_homes(world, &b, &own_nodes);
+    let ghosts = ghost_cells(world, &own, &owners, dim + 1);
+    let bnd = boundary_elements(world, &b, &elem_groups, &homes);
+    drop(elem_groups);
+    let orig = local_node_list(&b, own_nodes, &ghosts, &bnd);
+    let bbox = global_bbox(world, &b);
+    let reply = node_data_reply(world, &b, &homes, &node_groups, &orig);
+    let whole = WholeMesh {
+        dim,
+        n_nodes: b.n_nodes,
+        n_facets: b.n_bnd[0],
+        groups: b.groups.clone(),
+        group_sizes: b.group_sizes.clone(),
+        bbox,
     };
+    drop(b);
+    drop(homes);
+    drop(node_groups);
+    let nodes = LocalNodes::receive(world, reply, orig);
+    let numbering = global_numbering(world, &nodes, &whole);
+    let mut nodes = nodes;
+    let mesh = local_mesh(world, &whole, &mut nodes, &own, &ghosts, &bnd);
+    let layout = local_layout(world, &mesh, nodes, numbering, &own, &ghosts);
+    Ok((mesh, layout))
+}
 
-    // 2. Group memberships to the readers of the elements: kind → element → groups.
+/// 1. The rank of every cell of this block (the same dual-graph rows on the same blocks as
+/// the whole-mesh path: the same partition).
+fn partition_cells(
+    world: &SimpleCommunicator,
+    comm: MPI_Comm,
+    b: &Blocks,
+) -> Result<Vec<u64>, RunError> {
+    let (_, size) = rank_size(world);
+    if size == 1 {
+        return Ok(vec![0; b.cell_tags.len()]);
+    }
+    let (xadj, adjncy) = dual_graph(world, b);
+    let p = if !petsc::options::has("-mat_partitioning_type")? {
+        petsc::scotch_partition(comm, &xadj, &adjncy, size, SCOTCH_IMBALANCE)?
+    } else {
+        petsc::partition_graph(comm, b.n_cells, &xadj, &adjncy, "ptscotch")?
+    };
+    Ok(p.iter().map(|&r| r as u64).collect())
+}
+
+/// 2a. Group memberships sent to the readers of the elements: kind → (element − first of this
+/// rank's block) → groups.
+fn element_groups(world: &SimpleCommunicator, b: &Blocks) -> [Vec<Vec<u64>>; 4] {
+    let (rank, size) = rank_size(world);
     let mut send = vec![Vec::new(); size];
     for &(g, e) in &b.members {
         let k = b.kind(b.groups[g as usize].dim);
@@ -517,7 +575,6 @@ fn build(
         send[r].extend_from_slice(&[k as u64, e, g]);
     }
     let recv = exchange(world, send);
-    // kind → (element − first of the block) → groups
     let mut elem_groups: [Vec<Vec<u64>>; 4] = Default::default();
     let elem_lo: [usize; 4] = std::array::from_fn(|k| blk(b.count(k), size, rank));
     for k in 0..4 {
@@ -527,7 +584,17 @@ fn build(
         let k = c[0] as usize;
         elem_groups[k][c[1] as usize - elem_lo[k]].push(c[2]);
     }
-    // Node-level memberships to the node homes: (node, group).
+    elem_groups
+}
+
+/// 2b. Node-level memberships at the node homes: per home node, its groups (sorted, unique).
+fn node_groups(
+    world: &SimpleCommunicator,
+    b: &Blocks,
+    elem_groups: &[Vec<Vec<u64>>; 4],
+) -> Vec<Vec<u64>> {
+    let (rank, size) = rank_size(world);
+    let node_lo = blk(b.n_nodes, size, rank);
     let mut send = vec![Vec::new(); size];
     for (k, list) in elem_groups.iter().enumerate() {
         let w = b.width(k);
@@ -541,7 +608,7 @@ fn build(
                 &b.bnd[k - 1][i * w..(i + 1) * w]
             };
             for &v in nodes {
-                let h = block_of(v as usize, n_nodes, size);
+                let h = block_of(v as usize, b.n_nodes, size);
                 for &g in gs {
                     send[h].extend_from_slice(&[v, g]);
                 }
@@ -557,109 +624,152 @@ fn build(
         g.sort_unstable();
         g.dedup();
     }
+    node_groups
+}
 
-    // 3. Cells to their ranks: [global cell, tag, nodes, n groups, groups].
+/// A migrated cell: global number, rank, tag, nodes, groups.
+struct CellRec {
+    gc: u64,
+    rank: u32,
+    tag: u64,
+    nodes: [u64; 4],
+    groups: Vec<u64>,
+}
+
+/// Cell records [global cell, (rank,) tag, nodes (npc), n groups, groups], sorted by global
+/// cell; without `with_rank` the cells are this rank's (`rank`).
+fn parse_cells(recv: &[u64], with_rank: bool, rank: usize, npc: usize) -> Vec<CellRec> {
+    let mut out = Vec::new();
+    let mut i = 0;
+    while i < recv.len() {
+        let gc = recv[i];
+        let (r, off) = if with_rank {
+            (recv[i + 1] as u32, 1)
+        } else {
+            (rank as u32, 0)
+        };
+        let tag = recv[i + 1 + off];
+        let mut nodes = [0u64; 4];
+        nodes[..npc].copy_from_slice(&recv[i + 2 + off..i + 2 + off + npc]);
+        let ng = recv[i + 2 + off + npc] as usize;
+        let s = i + 3 + off + npc;
+        out.push(CellRec {
+            gc,
+            rank: r,
+            tag,
+            nodes,
+            groups: recv[s..s + ng].to_vec(),
+        });
+        i = s + ng;
+    }
+    out.sort_unstable_by_key(|c| c.gc);
+    out
+}
+
+/// 3. The cells to their ranks: this rank's own cells, in global order.
+fn own_cells(
+    world: &SimpleCommunicator,
+    b: &Blocks,
+    part: Vec<u64>,
+    elem_groups: &[Vec<Vec<u64>>; 4],
+) -> Vec<CellRec> {
+    let (rank, size) = rank_size(world);
+    let npc = b.dim + 1;
+    let cell_lo = blk(b.n_cells, size, rank);
     let mut send = vec![Vec::new(); size];
     for (i, cell) in b.cells.chunks_exact(npc).enumerate() {
-        let gc = (cell_lo + i) as u64;
         let s = &mut send[part[i] as usize];
-        s.extend_from_slice(&[gc, b.cell_tags[i]]);
+        s.extend_from_slice(&[(cell_lo + i) as u64, b.cell_tags[i]]);
         s.extend_from_slice(cell);
         let gs = &elem_groups[0][i];
         s.push(gs.len() as u64);
         s.extend_from_slice(gs);
     }
     drop(part);
-    let recv = exchange(world, send);
-    // (global cell, rank, tag, nodes, groups)
-    struct CellRec {
-        gc: u64,
-        rank: u32,
-        tag: u64,
-        nodes: [u64; 4],
-        groups: Vec<u64>,
-    }
-    let parse_cells = |recv: &[u64], with_rank: bool| -> Vec<CellRec> {
-        let mut out = Vec::new();
-        let mut i = 0;
-        while i < recv.len() {
-            let gc = recv[i];
-            let (r, off) = if with_rank {
-                (recv[i + 1] as u32, 1)
-            } else {
-                (rank as u32, 0)
-            };
-            let tag = recv[i + 1 + off];
-            let mut nodes = [0u64; 4];
-            nodes[..npc].copy_from_slice(&recv[i + 2 + off..i + 2 + off + npc]);
-            let ng = recv[i + 2 + off + npc] as usize;
-            let s = i + 3 + off + npc;
-            out.push(CellRec {
-                gc,
-                rank: r,
-                tag,
-                nodes,
-                groups: recv[s..s + ng].to_vec(),
-            });
-            i = s + ng;
-        }
-        out.sort_unstable_by_key(|c| c.gc);
-        out
-    };
-    let own = parse_cells(&recv, false);
+    parse_cells(&exchange(world, send), false, rank, npc)
+}
 
-    // 4. Holders and owners at the node homes.
-    let own_nodes = sorted_unique(own.iter().flat_map(|c| c.nodes[..npc].to_vec()).collect());
+/// What the home rank of a block of nodes knows of them: the ranks holding each (ascending;
+/// the first, the lowest, owns it).
+struct Homes {
+    node_lo: usize,
+    holders: Vec<Vec<u32>>,
+}
+
+impl Homes {
+    fn holders_of(&self, v: u64) -> &[u32] {
+        &self.holders[v as usize - self.node_lo]
+    }
+
+    /// The owner of home node v (u64::MAX if no cell holds it).
+    fn owner(&self, v: u64) -> u64 {
+        self.holders_of(v).first().map_or(u64::MAX, |&r| r as u64)
+    }
+}
+
+/// The owners of this rank's own nodes, sorted by node.
+struct Owners(Vec<(u64, u64)>);
+
+impl Owners {
+    fn of(&self, v: u64) -> u64 {
+        let i = self
+            .0
+            .binary_search_by_key(&v, |p| p.0)
+            .expect("asked for it");
+        self.0[i].1
+    }
+}
+
+/// 4. Holders and owners: every rank tells the homes which nodes its cells hold; the homes
+/// answer with the owners.
+fn node_homes(world: &SimpleCommunicator, b: &Blocks, own_nodes: &[u64]) -> (Homes, Owners) {
+    let (rank, size) = rank_size(world);
+    let node_lo = blk(b.n_nodes, size, rank);
     let mut send = vec![Vec::new(); size];
-    for &v in &own_nodes {
-        send[block_of(v as usize, n_nodes, size)].push(v);
+    for &v in own_nodes {
+        send[block_of(v as usize, b.n_nodes, size)].push(v);
     }
     let (recv_nodes, node_counts) = exchange_counted(world, send);
-    // who asked: per home node, the holder ranks (ascending by construction of exchange)
-    let mut holders: Vec<Vec<u32>> = vec![Vec::new(); b.node_tags.len()];
-    {
-        let mut i = 0;
-        for (r, &c) in node_counts.iter().enumerate() {
-            for _ in 0..c {
-                holders[recv_nodes[i] as usize - node_lo].push(r as u32);
-                i += 1;
-            }
+    // per home node, the holder ranks (ascending by construction of exchange)
+    let mut homes = Homes {
+        node_lo,
+        holders: vec![Vec::new(); b.node_tags.len()],
+    };
+    let mut i = 0;
+    for (r, &c) in node_counts.iter().enumerate() {
+        for _ in 0..c {
+            homes.holders[recv_nodes[i] as usize - node_lo].push(r as u32);
+            i += 1;
         }
     }
-    // owner of each own node: ask again (the answer comes from the home)
-    let owner_of_home = |v: u64| -> u64 {
-        holders[v as usize - node_lo]
-            .first()
-            .map_or(u64::MAX, |&r| r as u64)
-    };
-    let reply: Vec<Vec<u64>> = {
-        let mut out = vec![Vec::new(); size];
-        let mut i = 0;
-        for (r, &c) in node_counts.iter().enumerate() {
-            for _ in 0..c {
-                let v = recv_nodes[i];
-                out[r].extend_from_slice(&[v, owner_of_home(v)]);
-                i += 1;
-            }
+    let mut reply = vec![Vec::new(); size];
+    let mut i = 0;
+    for (r, &c) in node_counts.iter().enumerate() {
+        for _ in 0..c {
+            let v = recv_nodes[i];
+            reply[r].extend_from_slice(&[v, homes.owner(v)]);
+            i += 1;
         }
-        out
-    };
+    }
     let recv = exchange(world, reply);
     let mut owner_pairs: Vec<(u64, u64)> = recv.chunks_exact(2).map(|c| (c[0], c[1])).collect();
     owner_pairs.sort_unstable();
-    let owner_own = |v: u64| -> u64 {
-        let i = owner_pairs
-            .binary_search_by_key(&v, |p| p.0)
-            .expect("asked for it");
-        owner_pairs[i].1
-    };
+    (homes, Owners(owner_pairs))
+}
 
-    // 5. Ghost cells: every own cell to the owners of its nodes.
+/// 5. Ghost cells: every own cell to the owners of its nodes.
+fn ghost_cells(
+    world: &SimpleCommunicator,
+    own: &[CellRec],
+    owners: &Owners,
+    npc: usize,
+) -> Vec<CellRec> {
+    let (rank, size) = rank_size(world);
     let mut send = vec![Vec::new(); size];
-    for c in &own {
+    for c in own {
         let mut targets: Vec<usize> = c.nodes[..npc]
             .iter()
-            .map(|&v| owner_own(v) as usize)
+            .map(|&v| owners.of(v) as usize)
             .filter(|&r| r != rank)
             .collect();
         targets.sort_unstable();
@@ -672,27 +782,33 @@ fn build(
             s.extend_from_slice(&c.groups);
         }
     }
-    let recv = exchange(world, send);
-    let ghosts = parse_cells(&recv, true);
+    parse_cells(&exchange(world, send), true, rank, npc)
+}
 
-    // 6. Boundary elements to every rank holding one of their nodes, through the homes:
-    //    [kind, element, tag, nodes (width), n groups, groups].
+/// 6. Boundary elements to every rank holding one of their nodes, through the homes:
+/// [kind, element, tag, nodes (width), n groups, groups] → kind − 1 → sorted records.
+fn boundary_elements(
+    world: &SimpleCommunicator,
+    b: &Blocks,
+    elem_groups: &[Vec<Vec<u64>>; 4],
+    homes: &Homes,
+) -> [Vec<BndRec>; 3] {
+    let (rank, size) = rank_size(world);
     let mut send = vec![Vec::new(); size];
     for k in 1..4 {
         let w = b.width(k);
         let lo = blk(b.count(k), size, rank);
         for (i, nodes) in b.bnd[k - 1].chunks_exact(w).enumerate() {
-            let e = (lo + i) as u64;
             let gs = &elem_groups[k][i];
-            let mut homes: Vec<usize> = nodes
+            let mut to: Vec<usize> = nodes
                 .iter()
-                .map(|&v| block_of(v as usize, n_nodes, size))
+                .map(|&v| block_of(v as usize, b.n_nodes, size))
                 .collect();
-            homes.sort_unstable();
-            homes.dedup();
-            for h in homes {
+            to.sort_unstable();
+            to.dedup();
+            for h in to {
                 let s = &mut send[h];
-                s.extend_from_slice(&[k as u64, e, b.bnd_tags[k - 1][i]]);
+                s.extend_from_slice(&[k as u64, (lo + i) as u64, b.bnd_tags[k - 1][i]]);
                 s.extend_from_slice(nodes);
                 s.push(gs.len() as u64);
                 s.extend_from_slice(gs);
@@ -700,6 +816,7 @@ fn build(
         }
     }
     let recv = exchange(world, send);
+    // at the homes: forward each record to the holders of its home nodes
     let mut send = vec![Vec::new(); size];
     let mut i = 0;
     while i < recv.len() {
@@ -709,8 +826,8 @@ fn build(
         let rec = &recv[i..i + len];
         let mut to: Vec<u32> = rec[3..3 + w]
             .iter()
-            .filter(|&&v| block_of(v as usize, n_nodes, size) == rank)
-            .flat_map(|&v| holders[v as usize - node_lo].iter().copied())
+            .filter(|&&v| block_of(v as usize, b.n_nodes, size) == rank)
+            .flat_map(|&v| homes.holders_of(v).iter().copied())
             .collect();
         to.sort_unstable();
         to.dedup();
@@ -720,7 +837,6 @@ fn build(
         i += len;
     }
     let recv = exchange(world, send);
-    // kind → sorted (element, tag, nodes, groups)
     let mut bnd: [Vec<BndRec>; 3] = Default::default();
     let mut i = 0;
     while i < recv.len() {
@@ -741,42 +857,28 @@ fn build(
         list.sort_unstable_by_key(|e| e.0);
         list.dedup_by_key(|e| e.0);
     }
+    bnd
+}
 
-    // 7. The local nodes and their data from the homes: [v, owner, tag, x, y, z, n g, groups].
-    let mut all: Vec<u64> = own_nodes;
-    all.extend(ghosts.iter().flat_map(|c| c.nodes[..npc].to_vec()));
+/// 7a. The local nodes (mesh numbers, sorted): those of the own cells, the ghosts and the
+/// boundary elements.
+fn local_node_list(
+    b: &Blocks,
+    own_nodes: Vec<u64>,
+    ghosts: &[CellRec],
+    bnd: &[Vec<BndRec>; 3],
+) -> Vec<u64> {
+    let mut all = own_nodes;
+    all.extend(ghosts.iter().flat_map(|c| c.nodes[..b.dim + 1].to_vec()));
     for (k, list) in bnd.iter().enumerate() {
         let w = b.width(k + 1);
         all.extend(list.iter().flat_map(|e| e.2[..w].to_vec()));
     }
-    let orig = sorted_unique(all);
-    let mut send = vec![Vec::new(); size];
-    for &v in &orig {
-        send[block_of(v as usize, n_nodes, size)].push(v);
-    }
-    let (req, counts) = exchange_counted(world, send);
-    let mut reply = vec![Vec::new(); size];
-    let mut i = 0;
-    for (r, &c) in counts.iter().enumerate() {
-        for _ in 0..c {
-            let v = req[i];
-            let j = v as usize - node_lo;
-            let x = &b.coords[3 * j..3 * j + 3];
-            let gs = &node_groups[j];
-            reply[r].extend_from_slice(&[
-                v,
-                owner_of_home(v),
-                b.node_tags[j],
-                x[0].to_bits(),
-                x[1].to_bits(),
-                x[2].to_bits(),
-                gs.len() as u64,
-            ]);
-            reply[r].extend_from_slice(gs);
-            i += 1;
-        }
-    }
-    // global bounding box from the coordinate blocks
+    sorted_unique(all)
+}
+
+/// The bounding box of the whole mesh, from the coordinate blocks. Collective.
+fn global_bbox(world: &SimpleCommunicator, b: &Blocks) -> ([f64; 3], [f64; 3]) {
     let mut lohi = [f64::INFINITY; 6];
     for x in b.coords.chunks_exact(3) {
         for k in 0..3 {
@@ -790,71 +892,148 @@ fn build(
         &mut glohi[..],
         mpi::collective::SystemOperation::min(),
     );
-    let bbox = (
+    (
         [glohi[0], glohi[1], glohi[2]],
         [-glohi[3], -glohi[4], -glohi[5]],
-    );
-    let n_bnd = b.n_bnd;
-    let groups_meta = b.groups.clone();
-    let group_sizes = b.group_sizes.clone();
-    drop(b);
-    drop(holders);
-    drop(node_groups);
-    let recv = exchange(world, reply);
-    let nl = orig.len();
-    let mut coords = vec![[0.0; 3]; nl];
-    let mut node_tags = vec![0u64; nl];
-    let mut node_owner = vec![0u32; nl];
-    let mut ng_ptr = vec![0usize; nl + 1];
-    let mut ng_ids: Vec<u32> = Vec::new();
-    let mut recs: Vec<(usize, usize)> = Vec::with_capacity(nl); // (local, start in recv)
-    let mut i = 0;
-    while i < recv.len() {
-        let l = orig.binary_search(&recv[i]).expect("asked for it");
-        recs.push((l, i));
-        i += 7 + recv[i + 6] as usize;
-    }
-    recs.sort_unstable();
-    for &(l, i) in &recs {
-        node_owner[l] = recv[i + 1] as u32;
-        node_tags[l] = recv[i + 2];
-        coords[l] = [
-            f64::from_bits(recv[i + 3]),
-            f64::from_bits(recv[i + 4]),
-            f64::from_bits(recv[i + 5]),
-        ];
-        let ng = recv[i + 6] as usize;
-        ng_ids.extend(recv[i + 7..i + 7 + ng].iter().map(|&g| g as u32));
-        ng_ptr[l + 1] = ng_ids.len();
-    }
-    drop(recv);
-    let local = |v: u64| orig.binary_search(&v).expect("local node");
+    )
+}
 
-    // 8. Global numbering: owned nodes along the Morton curve of the whole mesh.
+/// 7b. The homes' answers to the requests for the local nodes' data:
+/// [v, owner, tag, x, y, z, n groups, groups] per requested node, per requesting rank.
+fn node_data_reply(
+    world: &SimpleCommunicator,
+    b: &Blocks,
+    homes: &Homes,
+    node_groups: &[Vec<u64>],
+    orig: &[u64],
+) -> Vec<Vec<u64>> {
+    let (_, size) = rank_size(world);
+    let mut send = vec![Vec::new(); size];
+    for &v in orig {
+        send[block_of(v as usize, b.n_nodes, size)].push(v);
+    }
+    let (req, counts) = exchange_counted(world, send);
+    let mut reply = vec![Vec::new(); size];
+    let mut i = 0;
+    for (r, &c) in counts.iter().enumerate() {
+        for _ in 0..c {
+            let v = req[i];
+            let j = v as usize - homes.node_lo;
+            let x = &b.coords[3 * j..3 * j + 3];
+            let gs = &node_groups[j];
+            reply[r].extend_from_slice(&[
+                v,
+                homes.owner(v),
+                b.node_tags[j],
+                x[0].to_bits(),
+                x[1].to_bits(),
+                x[2].to_bits(),
+                gs.len() as u64,
+            ]);
+            reply[r].extend_from_slice(gs);
+            i += 1;
+        }
+    }
+    reply
+}
+
+/// What is kept of the whole mesh once its blocks are dropped.
+struct WholeMesh {
+    dim: usize,
+    n_nodes: usize,
+    n_facets: usize,
+    groups: Vec<Group>,
+    group_sizes: Vec<usize>,
+    bbox: ([f64; 3], [f64; 3]),
+}
+
+/// The local nodes (mesh numbers `orig`, sorted) and their data.
+struct LocalNodes {
+    orig: Vec<u64>,
+    coords: Vec<[f64; 3]>,
+    tags: Vec<u64>,
+    owner: Vec<u32>,
+    /// Groups of local node l: group_ids[group_ptr[l]..group_ptr[l + 1]].
+    group_ptr: Vec<usize>,
+    group_ids: Vec<u32>,
+}
+
+impl LocalNodes {
+    /// 7c. Sends the homes' replies and unpacks the answers. Collective.
+    fn receive(world: &SimpleCommunicator, reply: Vec<Vec<u64>>, orig: Vec<u64>) -> LocalNodes {
+        let recv = exchange(world, reply);
+        let nl = orig.len();
+        let mut n = LocalNodes {
+            coords: vec![[0.0; 3]; nl],
+            tags: vec![0u64; nl],
+            owner: vec![0u32; nl],
+            group_ptr: vec![0usize; nl + 1],
+            group_ids: Vec::new(),
+            orig,
+        };
+        let mut recs: Vec<(usize, usize)> = Vec::with_capacity(nl); // (local, start in recv)
+        let mut i = 0;
+        while i < recv.len() {
+            let l = n.local(recv[i]);
+            recs.push((l, i));
+            i += 7 + recv[i + 6] as usize;
+        }
+        recs.sort_unstable();
+        for &(l, i) in &recs {
+            n.owner[l] = recv[i + 1] as u32;
+            n.tags[l] = recv[i + 2];
+            n.coords[l] = [
+                f64::from_bits(recv[i + 3]),
+                f64::from_bits(recv[i + 4]),
+                f64::from_bits(recv[i + 5]),
+            ];
+            let ng = recv[i + 6] as usize;
+            n.group_ids
+                .extend(recv[i + 7..i + 7 + ng].iter().map(|&g| g as u32));
+            n.group_ptr[l + 1] = n.group_ids.len();
+        }
+        n
+    }
+
+    /// The local index of mesh node v.
+    fn local(&self, v: u64) -> usize {
+        self.orig.binary_search(&v).expect("local node")
+    }
+}
+
+/// The global node numbering.
+struct Numbering {
+    /// Local indices of the owned nodes, in global order.
+    owned: Vec<usize>,
+    node_offsets: Vec<usize>,
+    node_global: Vec<usize>,
+}
+
+/// 8. Global numbering: the owned nodes along the Morton curve of the whole mesh (ties by mesh
+/// order); the owners answer for the other local nodes. Collective.
+fn global_numbering(world: &SimpleCommunicator, n: &LocalNodes, whole: &WholeMesh) -> Numbering {
+    let (rank, size) = rank_size(world);
+    let (dim, bbox) = (whole.dim, &whole.bbox);
+    let nl = n.orig.len();
     let extent = (0..dim)
         .map(|k| bbox.1[k] - bbox.0[k])
         .fold(0.0f64, f64::max)
         .max(f64::MIN_POSITIVE);
     let mut keyed: Vec<(u64, u64, usize)> = (0..nl)
-        .filter(|&l| node_owner[l] as usize == rank)
-        .map(|l| (morton_key(&coords[l], dim, &bbox.0, extent), orig[l], l))
+        .filter(|&l| n.owner[l] as usize == rank)
+        .map(|l| (morton_key(&n.coords[l], dim, &bbox.0, extent), n.orig[l], l))
         .collect();
     keyed.sort_unstable();
     let owned: Vec<usize> = keyed.into_iter().map(|k| k.2).collect();
-    let mut counts = vec![0u64; size];
-    world.all_gather_into(&(owned.len() as u64), &mut counts[..]);
-    let mut node_offsets = vec![0usize; size + 1];
-    for r in 0..size {
-        node_offsets[r + 1] = node_offsets[r] + counts[r] as usize;
-    }
+    let node_offsets = gathered_offsets(world, owned.len());
     let mut node_global = vec![usize::MAX; nl];
     for (i, &l) in owned.iter().enumerate() {
         node_global[l] = node_offsets[rank] + i;
     }
     let mut send = vec![Vec::new(); size];
     for l in 0..nl {
-        if node_owner[l] as usize != rank {
-            send[node_owner[l] as usize].push(orig[l]);
+        if n.owner[l] as usize != rank {
+            send[n.owner[l] as usize].push(n.orig[l]);
         }
     }
     let (req, counts_req) = exchange_counted(world, send);
@@ -862,36 +1041,52 @@ fn build(
     let mut i = 0;
     for (r, &c) in counts_req.iter().enumerate() {
         for _ in 0..c {
-            let l = local(req[i]);
+            let l = n.local(req[i]);
             reply[r].extend_from_slice(&[req[i], node_global[l] as u64]);
             i += 1;
         }
     }
     let recv = exchange(world, reply);
     for c in recv.chunks_exact(2) {
-        node_global[local(c[0])] = c[1] as usize;
+        node_global[n.local(c[0])] = c[1] as usize;
     }
+    Numbering {
+        owned,
+        node_offsets,
+        node_global,
+    }
+}
 
-    // 9. The local mesh: own cells (global order), then ghosts; boundary elements; groups.
+/// 9. The local mesh: own cells (global order), then ghosts; boundary elements; groups (cell
+/// groups hold own cells only); the whole mesh's counts. Takes the nodes' coordinates, tags
+/// and groups out of `n` (no copies). Collective (one sum).
+fn local_mesh(
+    world: &SimpleCommunicator,
+    whole: &WholeMesh,
+    n: &mut LocalNodes,
+    own: &[CellRec],
+    ghosts: &[CellRec],
+    bnd: &[Vec<BndRec>; 3],
+) -> Mesh {
+    let (rank, _) = rank_size(world);
+    let (dim, npc) = (whole.dim, whole.dim + 1);
     let n_own = own.len();
     let mut cells = Vec::with_capacity((n_own + ghosts.len()) * npc);
     let mut cell_tags = Vec::with_capacity(n_own + ghosts.len());
-    let mut cell_rank = Vec::with_capacity(n_own + ghosts.len());
-    let mut groups: Vec<Group> = groups_meta
+    let mut groups: Vec<Group> = whole
+        .groups
         .iter()
         .map(|g| Group {
             elements: Vec::new(),
             ..g.clone()
         })
         .collect();
-    let cell_group_dim = dim;
     for (ci, c) in own.iter().chain(ghosts.iter()).enumerate() {
-        cells.extend(c.nodes[..npc].iter().map(|&v| local(v)));
+        cells.extend(c.nodes[..npc].iter().map(|&v| n.local(v)));
         cell_tags.push(c.tag);
-        cell_rank.push(c.rank);
         if ci < n_own {
             for &g in &c.groups {
-                if groups[g as usize].dim == cell_group_dim {
+                if groups[g as usize].dim == dim {
                     groups[g as usize].elements.push(ci);
                 }
             }
@@ -901,7 +1096,7 @@ fn build(
     for k in 0..3 {
         let w = [dim, 2, 1][k];
         for (i, e) in bnd[k].iter().enumerate() {
-            lists[k].0.extend(e.2[..w].iter().map(|&v| local(v)));
+            lists[k].0.extend(e.2[..w].iter().map(|&v| n.local(v)));
             lists[k].1.push(e.1);
             for &g in &e.3 {
                 groups[g as usize].elements.push(i);
@@ -909,12 +1104,10 @@ fn build(
         }
     }
     let [(facets, facet_tags), (edges, edge_tags), (points, point_tags)] = lists;
-    let n_cells_local = cell_tags.len();
-    let _ = n_cells_local;
     let mut mesh = Mesh {
         dim,
-        coords,
-        node_tags,
+        coords: std::mem::take(&mut n.coords),
+        node_tags: std::mem::take(&mut n.tags),
         cells,
         cell_tags,
         facets,
@@ -927,26 +1120,35 @@ fn build(
         global: None,
     };
     let facet_checked: Vec<bool> = (0..mesh.n_facets())
-        .map(|f| {
-            mesh.facet(f)
-                .iter()
-                .any(|&v| node_owner[v] as usize == rank)
-        })
+        .map(|f| mesh.facet(f).iter().any(|&v| n.owner[v] as usize == rank))
         .collect();
     mesh.global = Some(Box::new(GlobalInfo {
-        n_nodes,
+        n_nodes: whole.n_nodes,
         n_cells: counts_sum(world, n_own),
-        n_facets: n_bnd[0],
-        group_sizes,
-        bbox,
-        node_group_ptr: ng_ptr,
-        node_group_ids: ng_ids,
+        n_facets: whole.n_facets,
+        group_sizes: whole.group_sizes.clone(),
+        bbox: whole.bbox,
+        node_group_ptr: std::mem::take(&mut n.group_ptr),
+        node_group_ids: std::mem::take(&mut n.group_ids),
         facet_checked,
         n_own_cells: n_own,
     }));
+    mesh
+}
 
-    // 10. The layout.
-    let node_cells = NodeCells::new(&mesh);
+/// 10. The layout: node ownership and numbering, own cells in the order of their lowest
+/// global node (locality of the assembly loop), cell offsets of the output. Collective.
+fn local_layout(
+    world: &SimpleCommunicator,
+    mesh: &Mesh,
+    n: LocalNodes,
+    numbering: Numbering,
+    own: &[CellRec],
+    ghosts: &[CellRec],
+) -> Layout {
+    let (rank, size) = rank_size(world);
+    let n_own = own.len();
+    let node_global = numbering.node_global;
     let mut local_cells: Vec<usize> = (0..n_own).collect();
     local_cells.sort_unstable_by_key(|&c| {
         (
@@ -958,26 +1160,19 @@ fn build(
             own[c].gc,
         )
     });
-    let mut ccounts = vec![0u64; size];
-    world.all_gather_into(&(n_own as u64), &mut ccounts[..]);
-    let mut cell_offsets = vec![0usize; size + 1];
-    for r in 0..size {
-        cell_offsets[r + 1] = cell_offsets[r] + ccounts[r] as usize;
-    }
-    let layout = Layout {
+    Layout {
         rank,
         size,
-        cell_rank,
-        node_owner,
+        cell_rank: own.iter().chain(ghosts).map(|c| c.rank).collect(),
+        node_owner: n.owner,
         node_global,
-        node_offsets,
-        owned_nodes: owned,
+        node_offsets: numbering.node_offsets,
+        owned_nodes: numbering.owned,
         local_cells,
-        cell_offsets,
-        node_cells,
-        node_orig: orig.iter().map(|&v| v as usize).collect(),
-    };
-    Ok((mesh, layout))
+        cell_offsets: gathered_offsets(world, n_own),
+        node_cells: NodeCells::new(mesh),
+        node_orig: n.orig.iter().map(|&v| v as usize).collect(),
+    }
 }
 
 fn counts_sum(world: &SimpleCommunicator, n: usize) -> usize {

@@ -544,7 +544,7 @@ fn build(
     Ok((mesh, layout))
 }
 
-/// 1. The rank of every cell of this block (the same dual-graph rows on the same blocks as
+/// Phase 1: the rank of every cell of this block (the same dual-graph rows on the same blocks as
 /// the whole-mesh path: the same partition).
 fn partition_cells(
     world: &SimpleCommunicator,
@@ -564,8 +564,8 @@ fn partition_cells(
     Ok(p.iter().map(|&r| r as u64).collect())
 }
 
-/// 2a. Group memberships sent to the readers of the elements: kind → (element − first of this
-/// rank's block) → groups.
+/// Phase 2a: group memberships sent to the readers of the elements:
+/// kind → (element − first of this rank's block) → groups.
 fn element_groups(world: &SimpleCommunicator, b: &Blocks) -> [Vec<Vec<u64>>; 4] {
     let (rank, size) = rank_size(world);
     let mut send = vec![Vec::new(); size];
@@ -587,7 +587,7 @@ fn element_groups(world: &SimpleCommunicator, b: &Blocks) -> [Vec<Vec<u64>>; 4] 
     elem_groups
 }
 
-/// 2b. Node-level memberships at the node homes: per home node, its groups (sorted, unique).
+/// Phase 2b: node-level memberships at the node homes: per home node, its groups (sorted, unique).
 fn node_groups(
     world: &SimpleCommunicator,
     b: &Blocks,
@@ -666,7 +666,7 @@ fn parse_cells(recv: &[u64], with_rank: bool, rank: usize, npc: usize) -> Vec<Ce
     out
 }
 
-/// 3. The cells to their ranks: this rank's own cells, in global order.
+/// Phase 3: the cells to their ranks: this rank's own cells, in global order.
 fn own_cells(
     world: &SimpleCommunicator,
     b: &Blocks,
@@ -720,7 +720,7 @@ impl Owners {
     }
 }
 
-/// 4. Holders and owners: every rank tells the homes which nodes its cells hold; the homes
+/// Phase 4: holders and owners: every rank tells the homes which nodes its cells hold; the homes
 /// answer with the owners.
 fn node_homes(world: &SimpleCommunicator, b: &Blocks, own_nodes: &[u64]) -> (Homes, Owners) {
     let (rank, size) = rank_size(world);
@@ -757,7 +757,7 @@ fn node_homes(world: &SimpleCommunicator, b: &Blocks, own_nodes: &[u64]) -> (Hom
     (homes, Owners(owner_pairs))
 }
 
-/// 5. Ghost cells: every own cell to the owners of its nodes.
+/// Phase 5: ghost cells: every own cell to the owners of its nodes.
 fn ghost_cells(
     world: &SimpleCommunicator,
     own: &[CellRec],
@@ -785,7 +785,7 @@ fn ghost_cells(
     parse_cells(&exchange(world, send), true, rank, npc)
 }
 
-/// 6. Boundary elements to every rank holding one of their nodes, through the homes:
+/// Phase 6: boundary elements to every rank holding one of their nodes, through the homes:
 /// [kind, element, tag, nodes (width), n groups, groups] → kind − 1 → sorted records.
 fn boundary_elements(
     world: &SimpleCommunicator,
@@ -860,7 +860,7 @@ fn boundary_elements(
     bnd
 }
 
-/// 7a. The local nodes (mesh numbers, sorted): those of the own cells, the ghosts and the
+/// Phase 7a: the local nodes (mesh numbers, sorted): those of the own cells, the ghosts and the
 /// boundary elements.
 fn local_node_list(
     b: &Blocks,
@@ -898,7 +898,7 @@ fn global_bbox(world: &SimpleCommunicator, b: &Blocks) -> ([f64; 3], [f64; 3]) {
     )
 }
 
-/// 7b. The homes' answers to the requests for the local nodes' data:
+/// Phase 7b: the homes' answers to the requests for the local nodes' data:
 /// [v, owner, tag, x, y, z, n groups, groups] per requested node, per requesting rank.
 fn node_data_reply(
     world: &SimpleCommunicator,
@@ -959,7 +959,7 @@ struct LocalNodes {
 }
 
 impl LocalNodes {
-    /// 7c. Sends the homes' replies and unpacks the answers. Collective.
+    /// Phase 7c: sends the homes' replies and unpacks the answers. Collective.
     fn receive(world: &SimpleCommunicator, reply: Vec<Vec<u64>>, orig: Vec<u64>) -> LocalNodes {
         let recv = exchange(world, reply);
         let nl = orig.len();
@@ -1009,8 +1009,8 @@ struct Numbering {
     node_global: Vec<usize>,
 }
 
-/// 8. Global numbering: the owned nodes along the Morton curve of the whole mesh (ties by mesh
-/// order); the owners answer for the other local nodes. Collective.
+/// Phase 8: global numbering: the owned nodes along the Morton curve of the whole mesh (ties
+/// by mesh order); the owners answer for the other local nodes. Collective.
 fn global_numbering(world: &SimpleCommunicator, n: &LocalNodes, whole: &WholeMesh) -> Numbering {
     let (rank, size) = rank_size(world);
     let (dim, bbox) = (whole.dim, &whole.bbox);
@@ -1057,7 +1057,7 @@ fn global_numbering(world: &SimpleCommunicator, n: &LocalNodes, whole: &WholeMes
     }
 }
 
-/// 9. The local mesh: own cells (global order), then ghosts; boundary elements; groups (cell
+/// Phase 9: the local mesh: own cells (global order), then ghosts; boundary elements; groups (cell
 /// groups hold own cells only); the whole mesh's counts. Takes the nodes' coordinates, tags
 /// and groups out of `n` (no copies). Collective (one sum).
 fn local_mesh(
@@ -1136,7 +1136,7 @@ fn local_mesh(
     mesh
 }
 
-/// 10. The layout: node ownership and numbering, own cells in the order of their lowest
+/// Phase 10: the layout: node ownership and numbering, own cells in the order of their lowest
 /// global node (locality of the assembly loop), cell offsets of the output. Collective.
 fn local_layout(
     world: &SimpleCommunicator,

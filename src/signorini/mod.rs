@@ -133,11 +133,11 @@ pub fn solve(
     previous: Option<&ContactSolution>,
 ) -> Result<ContactSolution, RunError> {
     let dim = mesh.dim;
+    let law = law_of(settings);
+    let friction = settings.friction();
     let mut b = boundary::build(ctx, mesh, layout, settings, fixed)?;
     log_boundary(ctx, &b, &settings.group);
-    let law = law_of(settings);
     check_friction_capacity(ctx, &b, fixed, sys, dim, law)?;
-    let friction = settings.friction();
     let warm_u = match previous {
         Some(prev) => Some(take_reference(ctx, &mut b, prev, friction)?),
         None => None,
@@ -153,19 +153,7 @@ pub fn solve(
         &solver_section.petsc_options,
     )?;
     let coords = solver::near_null_space_coordinates(ctx, mesh, layout, solver_section.preset)?;
-    let c = match settings.newton.c {
-        Some(c) => c,
-        None => newton::default_c(ctx, &b, dim, settings.young),
-    };
-    say!(
-        ctx,
-        "newton: c = {c:.6e}{}",
-        if settings.newton.c.is_none() {
-            " (E / h_c)"
-        } else {
-            ""
-        }
-    );
+    let c = complementarity_parameter(ctx, settings, &b, dim);
     let problem = ContactProblem {
         mesh,
         layout,
@@ -179,23 +167,90 @@ pub fn solve(
         law,
         rigid: settings.rigid_modes,
     };
+    let (mut nr, outer_steps) = run_method(
+        ctx,
+        &problem,
+        &ns,
+        settings,
+        solver_section,
+        coords.as_ref(),
+        warm.as_ref(),
+    )?;
+    if let Law::Coulomb { mu } = law {
+        // The certificate and the output judge Coulomb's law with b_k = μ(−λ_n^k).
+        for (k, r) in b.nodes.iter_mut().zip(&nr.nodes) {
+            k.bound = mu * (-r.lambda_n).max(0.0);
+        }
+    }
+    let (contact, table) = final_state(ctx, sys, &b, &nr, friction, dim)?;
+    let newton = newton_summary(settings, solver_section, c, &mut nr, outer_steps, previous);
+    Ok(ContactSolution {
+        result: report::contact_result(&b, &nr.nodes, dim, friction, &table),
+        u: nr.u,
+        report: ContactReport {
+            newton,
+            contact,
+            linear_solver: PresetOnly {
+                preset: solver_section.preset.name(),
+            },
+        },
+        nodes: nr.nodes,
+    })
+}
+
+/// The complementarity parameter c: the case's, or E / h_c; said in the log. Collective.
+fn complementarity_parameter(
+    ctx: &Ctx,
+    settings: &ContactSettings,
+    b: &ContactBoundary,
+    dim: usize,
+) -> f64 {
+    let c = match settings.newton.c {
+        Some(c) => c,
+        None => newton::default_c(ctx, b, dim, settings.young),
+    };
+    say!(
+        ctx,
+        "newton: c = {c:.6e}{}",
+        if settings.newton.c.is_none() {
+            " (E / h_c)"
+        } else {
+            ""
+        }
+    );
+    c
+}
+
+/// Runs the method of the case (Algorithm 1/2 or Coulomb's generalised Newton, the fixed
+/// point on Tresca thresholds, or SNES VI) to convergence; a run that does not converge is
+/// [`RunError::NoConvergence`]. Returns the result and the fixed point's outer steps.
+/// Collective.
+fn run_method(
+    ctx: &Ctx,
+    problem: &ContactProblem,
+    ns: &NewtonSettings,
+    settings: &ContactSettings,
+    solver_section: &SolverSection,
+    coords: Option<&Vector>,
+    warm: Option<&WarmStart>,
+) -> Result<(NewtonResult, Option<usize>), RunError> {
+    let (sys, b, dim) = (problem.sys, problem.boundary, problem.mesh.dim);
     let mut outer_steps = None;
     let nr = match solver_section.method {
         Method::Newton => {
-            let mut reduced = ReducedSystem::new(ctx, sys, &b, coords.as_ref(), dim)?;
+            let mut reduced = ReducedSystem::new(ctx, sys, b, coords, dim)?;
             match settings.coulomb {
                 Some((mu, CoulombAlgorithm::FixedPoint)) => {
-                    let (nr, outer) =
-                        fixed_point(ctx, &problem, &mut reduced, &ns, mu, warm.as_ref())?;
+                    let (nr, outer) = fixed_point(ctx, problem, &mut reduced, ns, mu, warm)?;
                     outer_steps = Some(outer);
                     nr
                 }
-                _ => newton::semismooth_newton(ctx, &problem, &mut reduced, &ns, warm.as_ref())?,
+                _ => newton::semismooth_newton(ctx, problem, &mut reduced, ns, warm)?,
             }
         }
         Method::SnesVi => {
             let f_local = sys.b.to_local_vec()?;
-            snesvi_solve(ctx, &problem, &f_local, settings.rigid_modes)?
+            snesvi_solve(ctx, problem, &f_local, settings.rigid_modes)?
         }
     };
     if !nr.converged {
@@ -209,13 +264,20 @@ pub fn solve(
             Method::SnesVi => format!("SNES VI did not converge in {} steps", nr.steps),
         }));
     }
-    if let Law::Coulomb { mu } = law {
-        // The certificate and the output judge Coulomb's law with b_k = μ(−λ_n^k).
-        for (k, r) in b.nodes.iter_mut().zip(&nr.nodes) {
-            k.bound = mu * (-r.lambda_n).max(0.0);
-        }
-    }
-    let table = report::gather(ctx, &b, &nr.nodes, dim);
+    Ok((nr, outer_steps))
+}
+
+/// The final state: the contact table, the KKT and friction certificates (an error if they
+/// fail), the contact line of the log and summary.json's "contact" section. Collective.
+fn final_state(
+    ctx: &Ctx,
+    sys: &System,
+    b: &ContactBoundary,
+    nr: &NewtonResult,
+    friction: bool,
+    dim: usize,
+) -> Result<(ContactSummary, report::Table), RunError> {
+    let table = report::gather(ctx, b, &nr.nodes, dim);
     let total_force = report::total_force(ctx, &nr.nodes);
     let half_width = table.half_width(&b.obstacle);
     let scales = problem_scales(ctx, sys, &nr.u)?;
@@ -232,58 +294,60 @@ pub fn solve(
             .unwrap_or_else(|| "n/a".into()),
         &total_force[..dim]
     );
-    let report = ContactReport {
-        newton: NewtonSummary {
-            method: solver_section.method.name(),
-            algorithm: if friction { 2 } else { 1 },
-            init: settings.newton.init.name(),
-            c,
-            c_default: settings.newton.c.is_none(),
-            steps: nr.steps,
-            factorisations: match solver_section.method {
-                Method::Newton => nr
-                    .history
-                    .iter()
-                    .filter(|h| h.solve == reduced::SolveKind::Factorisation)
-                    .count(),
-                // rsls factors every reduced system of its steps with the direct preset
-                Method::SnesVi if solver_section.preset == Preset::Direct => nr.steps,
-                Method::SnesVi => 0,
-            },
-            converged: nr.converged,
-            history: nr.history.clone(),
-            rows_seconds: nr.rows_seconds,
-            lambda_seconds: nr.lambda_seconds,
-            pinned_dofs: nr.pinned_final.len(),
-            on_cycle: settings.newton.on_cycle.name(),
-            cycle_detected_at: nr.cycle_detected_at,
-            coulomb: settings.coulomb.map(|(mu, algorithm)| CoulombSummary {
-                mu,
-                algorithm: algorithm.name(),
-                outer_steps,
-                warm_start: previous.is_some(),
-            }),
-        },
-        contact: ContactSummary {
-            nodes: b.n_global,
-            excluded_dirichlet: b.excluded_dirichlet,
-            active_count: table.active_count(),
-            max_pressure: table.max_pressure(),
-            total_force: total_force[..dim].to_vec(),
-            half_width,
-            kkt,
-            friction: friction_certificate,
-        },
-        linear_solver: PresetOnly {
-            preset: solver_section.preset.name(),
-        },
+    let contact = ContactSummary {
+        nodes: b.n_global,
+        excluded_dirichlet: b.excluded_dirichlet,
+        active_count: table.active_count(),
+        max_pressure: table.max_pressure(),
+        total_force: total_force[..dim].to_vec(),
+        half_width,
+        kkt,
+        friction: friction_certificate,
     };
-    Ok(ContactSolution {
-        result: report::contact_result(&b, &nr.nodes, dim, friction, &table),
-        u: nr.u,
-        report,
-        nodes: nr.nodes,
-    })
+    Ok((contact, table))
+}
+
+/// summary.json's "newton" section; takes the step history out of `nr`.
+fn newton_summary(
+    settings: &ContactSettings,
+    solver_section: &SolverSection,
+    c: f64,
+    nr: &mut NewtonResult,
+    outer_steps: Option<usize>,
+    previous: Option<&ContactSolution>,
+) -> NewtonSummary {
+    let factorisations = match solver_section.method {
+        Method::Newton => nr
+            .history
+            .iter()
+            .filter(|h| h.solve == reduced::SolveKind::Factorisation)
+            .count(),
+        // rsls factors every reduced system of its steps with the direct preset
+        Method::SnesVi if solver_section.preset == Preset::Direct => nr.steps,
+        Method::SnesVi => 0,
+    };
+    NewtonSummary {
+        method: solver_section.method.name(),
+        algorithm: if settings.friction() { 2 } else { 1 },
+        init: settings.newton.init.name(),
+        c,
+        c_default: settings.newton.c.is_none(),
+        steps: nr.steps,
+        factorisations,
+        converged: nr.converged,
+        history: std::mem::take(&mut nr.history),
+        rows_seconds: nr.rows_seconds,
+        lambda_seconds: nr.lambda_seconds,
+        pinned_dofs: nr.pinned_final.len(),
+        on_cycle: settings.newton.on_cycle.name(),
+        cycle_detected_at: nr.cycle_detected_at,
+        coulomb: settings.coulomb.map(|(mu, algorithm)| CoulombSummary {
+            mu,
+            algorithm: algorithm.name(),
+            outer_steps,
+            warm_start: previous.is_some(),
+        }),
+    }
 }
 
 /// The tangential law of the settings (the fixed point's inner solves are Tresca solves).

@@ -76,6 +76,28 @@ pub struct StepRecord {
     pub seconds: f64,
 }
 
+impl StepRecord {
+    /// A step's record at `factor` (time = factor) with no contact data yet.
+    fn new(step: usize, planned: usize, factor: f64, cutbacks: usize) -> StepRecord {
+        StepRecord {
+            step,
+            planned,
+            factor,
+            time: factor,
+            cutbacks,
+            newton_steps: None,
+            active: None,
+            stick: None,
+            slip: None,
+            total_force: None,
+            max_pressure: None,
+            half_width: None,
+            contact_area: None,
+            seconds: 0.0,
+        }
+    }
+}
+
 /// summary.json's `load` section (runs with `[load]`).
 #[derive(Debug, Clone, Serialize)]
 pub struct LoadReport {
@@ -322,22 +344,7 @@ impl Stepper<'_> {
         factor: f64,
         cutbacks: usize,
     ) -> StepRecord {
-        let mut rec = StepRecord {
-            step,
-            planned,
-            factor,
-            time: factor,
-            cutbacks,
-            newton_steps: None,
-            active: None,
-            stick: None,
-            slip: None,
-            total_force: None,
-            max_pressure: None,
-            half_width: None,
-            contact_area: None,
-            seconds: 0.0,
-        };
+        let mut rec = StepRecord::new(step, planned, factor, cutbacks);
         let (Some(c), SolveReport::Contact(r)) = (&s.contact, &s.report) else {
             return rec;
         };
@@ -630,20 +637,8 @@ mod tests {
 
     fn at(factor: f64, time: f64) -> StepRecord {
         StepRecord {
-            step: 1,
-            planned: 1,
-            factor,
             time,
-            cutbacks: 0,
-            newton_steps: None,
-            active: None,
-            stick: None,
-            slip: None,
-            total_force: None,
-            max_pressure: None,
-            half_width: None,
-            contact_area: None,
-            seconds: 0.0,
+            ..StepRecord::new(1, 1, factor, 0)
         }
     }
 

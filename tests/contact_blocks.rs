@@ -326,3 +326,58 @@ fn indentation_by_circle_is_symmetric() {
         f[1]
     );
 }
+
+#[test]
+fn symmetry_row_on_a_contact_node_equals_the_full_mesh() {
+    // The right half of indent2d_sym with u_x = 0 on x = 0 (indent2d_half.geo meshes it as
+    // the full mesh's right half): the node (0, 1) is on the contact boundary and on the
+    // symmetry line; it keeps its contact row, and the half solution is the full one.
+    let full = solve(1, &repo("tests/cases/indent2d_sym.toml"), &[]);
+    for np in [1, 2] {
+        let half = solve(np, &repo("tests/cases/indent2d_half.toml"), &[]);
+        assert!(half.converged(), "indent2d_half:\n{}", half.run.output());
+        assert!(
+            !half.run.output().contains("left to their Dirichlet data"),
+            "the symmetry node was dropped from the contact boundary:\n{}",
+            half.run.output()
+        );
+        let key = |r: &Row| (r.f("x").to_bits(), r.f("y").to_bits());
+        let by_x: std::collections::BTreeMap<_, Row> = full
+            .contact_rows()
+            .into_iter()
+            .map(|r| (key(&r), r))
+            .collect();
+        let rows = half.contact_rows();
+        let centre = rows.iter().find(|r| r.f("x") == 0.0).expect("node (0, 1)");
+        assert!(centre.active(), "node (0, 1) not active: {centre:?}");
+        let pmax = rows
+            .iter()
+            .map(|r| r.f("pressure").abs())
+            .fold(0.0, f64::max);
+        let mut n_active = 0;
+        for r in &rows {
+            let f = by_x
+                .get(&key(r))
+                .unwrap_or_else(|| panic!("no full node at {r:?}"));
+            assert_eq!(r.active(), f.active(), "state differs at {r:?}");
+            n_active += usize::from(r.active());
+            // the half node (0, 1) has half the weight and half the force; p is the same
+            assert!(
+                (r.f("pressure") - f.f("pressure")).abs() <= 1e-9 * pmax,
+                "{np} rank(s): pressure {} vs full {} at x = {}",
+                r.f("pressure"),
+                f.f("pressure"),
+                r.f("x")
+            );
+            assert!(
+                (r.f("u_n") - f.f("u_n")).abs() <= 1e-9 * 0.01,
+                "{np} rank(s): u_n {} vs full {} at x = {}",
+                r.f("u_n"),
+                f.f("u_n"),
+                r.f("x")
+            );
+        }
+        let full_active = by_x.values().filter(|r| r.active()).count();
+        assert_eq!(2 * n_active - 1, full_active, "active counts half vs full");
+    }
+}

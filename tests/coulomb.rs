@@ -346,8 +346,11 @@ fn warm_start_from_own_solution_takes_one_step() {
                 );
                 assert!(v["first_steps"].as_u64().unwrap() >= 1);
                 // One step; on several ranks the solve's round-off (MUMPS' parallel scheduling
-                // varies from run to run) may ask for one confirming step more.
-                let most = if np == 1 { 1 } else { 2 };
+                // varies from run to run) may flip a node that sits on the stick/slip
+                // threshold to round-off: up to two confirming steps more (measured: 1 or 3
+                // steps over 12 runs of the 3D fixed point; the flip back and forth then stops
+                // on the recurring set, newton.rs).
+                let most = if np == 1 { 1 } else { 3 };
                 let second = v["second_steps"].as_u64().unwrap();
                 assert!((1..=most).contains(&second), "{dim}D {law} drag {d}: {v}");
                 let f1 = floats(&v["first_total_force"]);

@@ -355,8 +355,8 @@ fn held_prescribed_displacement() {
     }
 }
 
-/// newton.max_steps = 1 converges only where the initial active set (the touching node) is
-/// already right: below factor ~0.5 on this mesh, not at 0.75 or 1. So 1 fails, is cut back
+/// newton.max_steps = 1 converges only where the initial active set (the touching node of
+/// the "gap" start) is already right: below factor ~0.5 on this mesh, not at 0.75 or 1. So 1 fails, is cut back
 /// to 0.5 (converges), 1 fails again, 0.75 fails with no cutback left: the run fails and
 /// keeps the converged step.
 #[test]
@@ -366,6 +366,7 @@ fn cutback_then_failure_keeps_the_converged_steps() {
     let sets = [
         HERTZ_L2,
         "newton.max_steps=1",
+        "newton.init=\"gap\"",
         "load.factors=[1.0]",
         "load.max_cutbacks=2",
     ];

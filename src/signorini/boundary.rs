@@ -69,9 +69,21 @@ pub struct ContactBoundary {
 }
 
 /// Builds the owned contact nodes. `fixed` holds the Dirichlet value per mesh dof (NaN = free):
-/// a node with a prescribed component is left to its Dirichlet data.
+/// a node with a prescribed component is left to its Dirichlet data — unless, without
+/// friction, every prescribed component is orthogonal to the obstacle's normal at the node
+/// (a symmetry row: u_x = 0 on the plane x = 0 of a body pressed along z), where both hold:
+/// the contact row constrains nᵀu only, which the Dirichlet rows do not touch.
 /// A node that cannot be projected onto the obstacle is an input error; every rank returns the
 /// same result (the collectives run on every path first). Collective.
+/// True when every prescribed component d (`fixed_k[d]` not NaN) of a node has n_d = 0: the
+/// Dirichlet rows and the contact row (3.29) constrain orthogonal directions.
+fn symmetry_row(normal: &[f64; 3], fixed_k: &[f64]) -> bool {
+    fixed_k
+        .iter()
+        .enumerate()
+        .all(|(d, v)| v.is_nan() || normal[d].abs() <= 1e-12)
+}
+
 pub fn build(
     ctx: &Ctx,
     mesh: &Mesh,
@@ -105,13 +117,18 @@ pub fn build(
         if !on[v] {
             continue;
         }
-        if (0..dim).any(|k| !fixed[v * dim + k].is_nan()) {
+        let x = mesh.coords[v];
+        let prescribed = (0..dim).any(|k| !fixed[v * dim + k].is_nan());
+        if prescribed && settings.friction() {
             excluded += 1;
             continue;
         }
-        let x = mesh.coords[v];
         let proj = match obstacle.project(x) {
             Ok(p) => p,
+            Err(_) if prescribed => {
+                excluded += 1;
+                continue;
+            }
             Err(e) => {
                 bad.get_or_insert(
                     InputError::new(
@@ -123,6 +140,10 @@ pub fn build(
                 continue;
             }
         };
+        if prescribed && !symmetry_row(&proj.normal, &fixed[v * dim..(v + 1) * dim]) {
+            excluded += 1;
+            continue;
+        }
         let frame = Frame::new(proj.normal, dim).expect("obstacle normals are unit vectors");
         nodes.push(ContactNode {
             node: v,

@@ -322,6 +322,11 @@ impl FreeModes {
         }
     }
 
+    /// True when rigid-mode handling is on and Dirichlet data leave some rigid mode free.
+    pub fn floats(&self) -> bool {
+        self.enabled && self.z.ncols() > 0
+    }
+
     /// The modes to test sets against (`None` when rigid-mode handling is off).
     pub fn modes(&self) -> Option<&RigidModes> {
         self.enabled.then_some(&self.modes)

@@ -31,6 +31,9 @@ use mpi::topology::SimpleCommunicator;
 use mpi::traits::*;
 use std::path::Path;
 
+/// Checks projections against a mesh's dimension and (name, dimension) groups.
+pub type GroupCheck<'a> = dyn Fn(usize, &[(String, usize)]) -> Result<(), InputError> + 'a;
+
 /// What `mesh.refine` and `[[mesh.project]]` ask for.
 pub struct Refine<'a> {
     /// Uniform refinements (0: the mesh as read).
@@ -38,7 +41,7 @@ pub struct Refine<'a> {
     pub project: &'a [Projection],
     /// Checks `project` against the mesh's dimension and (name, dimension) groups, naming the
     /// case key on an error (`Case::check_projections`).
-    pub check: &'a dyn Fn(usize, &[(String, usize)]) -> Result<(), InputError>,
+    pub check: &'a GroupCheck<'a>,
 }
 
 impl Refine<'_> {

@@ -289,34 +289,48 @@ fn tet_children(x: &[[f64; 3]; 4]) -> [[usize; 4]; 8] {
 /// (orientation kept).
 const TRI_CHILDREN: [[usize; 3]; 4] = [[0, 3, 4], [3, 1, 5], [4, 5, 2], [3, 5, 4]];
 
-/// Sends rows with global numbers to the standard blocks of `total` rows; returns this
-/// rank's block, rows in order (`width` u64 each). Collective.
-fn to_blocks(
-    world: &SimpleCommunicator,
+/// Rows with global numbers on their way to the standard blocks of `total` rows (`width`
+/// u64 each), packed as they are pushed.
+struct Outbox {
     total: usize,
     width: usize,
-    rows: impl Iterator<Item = (u64, Vec<u64>)>,
-) -> Vec<u64> {
-    let (rank, size) = rank_size(world);
-    let mut send = vec![Vec::new(); size];
-    for (id, row) in rows {
-        debug_assert_eq!(row.len(), width);
-        let s = &mut send[block_of(id as usize, total, size)];
+    send: Vec<Vec<u64>>,
+}
+
+impl Outbox {
+    fn new(world: &SimpleCommunicator, total: usize, width: usize) -> Outbox {
+        Outbox {
+            total,
+            width,
+            send: vec![Vec::new(); rank_size(world).1],
+        }
+    }
+
+    fn push(&mut self, id: u64, row: &[u64]) {
+        debug_assert_eq!(row.len(), self.width);
+        let to = block_of(id as usize, self.total, self.send.len());
+        let s = &mut self.send[to];
         s.push(id);
-        s.extend_from_slice(&row);
+        s.extend_from_slice(row);
     }
-    let recv = exchange(world, send);
-    let lo = blk(total, size, rank);
-    let n = blk(total, size, rank + 1) - lo;
-    let mut out = vec![0u64; n * width];
-    let mut seen = 0;
-    for rec in recv.chunks_exact(width + 1) {
-        let i = rec[0] as usize - lo;
-        out[i * width..(i + 1) * width].copy_from_slice(&rec[1..]);
-        seen += 1;
+
+    /// Sends the rows; returns this rank's block, rows in order. Collective.
+    fn deliver(self, world: &SimpleCommunicator) -> Vec<u64> {
+        let (rank, size) = rank_size(world);
+        let (total, width) = (self.total, self.width);
+        let recv = exchange(world, self.send);
+        let lo = blk(total, size, rank);
+        let n = blk(total, size, rank + 1) - lo;
+        let mut out = vec![0u64; n * width];
+        let mut seen = 0;
+        for rec in recv.chunks_exact(width + 1) {
+            let i = rec[0] as usize - lo;
+            out[i * width..(i + 1) * width].copy_from_slice(&rec[1..]);
+            seen += 1;
+        }
+        debug_assert_eq!(seen, n, "every row of the block arrives once");
+        out
     }
-    debug_assert_eq!(seen, n, "every row of the block arrives once");
-    out
 }
 
 /// One level of refinement of the blocks. Collective.
@@ -438,35 +452,31 @@ fn refine_once(world: &SimpleCommunicator, b: Blocks, shapes: &[Shape]) -> Block
 
     // nodes: [x, y, z, tag]
     let node_lo = blk(b.n_nodes, size, rank) as u64;
-    let old = b
-        .coords
-        .chunks_exact(3)
-        .zip(&b.node_tags)
-        .enumerate()
-        .map(|(i, (c, &t))| {
-            (
-                node_lo + i as u64,
-                vec![c[0].to_bits(), c[1].to_bits(), c[2].to_bits(), t],
-            )
-        });
-    let new = home_mid.iter().enumerate().map(|(j, m)| {
+    let mut out = Outbox::new(world, n_nodes2, 4);
+    for (i, (c, &t)) in b.coords.chunks_exact(3).zip(&b.node_tags).enumerate() {
+        out.push(
+            node_lo + i as u64,
+            &[c[0].to_bits(), c[1].to_bits(), c[2].to_bits(), t],
+        );
+    }
+    for (j, m) in home_mid.iter().enumerate() {
         let e = edge_offsets[rank] as u64 + j as u64;
-        (
+        out.push(
             n_nodes + e,
-            vec![
+            &[
                 m[0].to_bits(),
                 m[1].to_bits(),
                 m[2].to_bits(),
                 max_tag + 1 + e,
             ],
-        )
-    });
-    let nodes = to_blocks(world, n_nodes2, 4, old.chain(new));
+        );
+    }
+    let nodes = out.deliver(world);
     drop(home_mid);
 
     // cells: [nodes, tag]
     let cell_lo = blk(b.n_cells, size, rank) as u64;
-    let mut cell_rows: Vec<(u64, Vec<u64>)> = Vec::with_capacity(b.cell_tags.len() * f[0]);
+    let mut out = Outbox::new(world, n_cells2, npc + 1);
     for (i, cell) in b.cells.chunks_exact(npc).enumerate() {
         let tag = b.cell_tags[i];
         let gc = (cell_lo + i as u64) * f[0] as u64;
@@ -498,17 +508,17 @@ fn refine_once(world: &SimpleCommunicator, b: Blocks, shapes: &[Shape]) -> Block
             }
             let mut row: Vec<u64> = ch.iter().map(|&l| all[l]).collect();
             row.push(tag);
-            cell_rows.push((gc + j as u64, row));
+            out.push(gc + j as u64, &row);
         }
     }
-    let cells = to_blocks(world, n_cells2, npc + 1, cell_rows.into_iter());
+    let cells = out.deliver(world);
 
     // boundary elements: [nodes, tag]
     let mut bnd: [Vec<u64>; 3] = Default::default();
     for k in 1..4 {
         let w = b.width(k);
         let lo = blk(b.count(k), size, rank) as u64;
-        let mut rows: Vec<(u64, Vec<u64>)> = Vec::new();
+        let mut out = Outbox::new(world, n_bnd2[k - 1], w + 1);
         for (i, e) in b.bnd[k - 1].chunks_exact(w).enumerate() {
             let tag = b.bnd_tags[k - 1][i];
             let id = (lo + i as u64) * f[k] as u64;
@@ -535,10 +545,10 @@ fn refine_once(world: &SimpleCommunicator, b: Blocks, shapes: &[Shape]) -> Block
             };
             for (j, mut row) in kids.into_iter().enumerate() {
                 row.push(tag);
-                rows.push((id + j as u64, row));
+                out.push(id + j as u64, &row);
             }
         }
-        bnd[k - 1] = to_blocks(world, n_bnd2[k - 1], w + 1, rows.into_iter());
+        bnd[k - 1] = out.deliver(world);
     }
     drop(edges);
 
@@ -552,16 +562,16 @@ fn refine_once(world: &SimpleCommunicator, b: Blocks, shapes: &[Shape]) -> Block
     }
     let n_members = off_old[b.groups.len()];
     let mem_lo = blk(n_members, size, rank);
-    let mut rows: Vec<(u64, Vec<u64>)> = Vec::new();
+    let mut out = Outbox::new(world, off_new[b.groups.len()], 2);
     for (i, &(g, e)) in b.members.iter().enumerate() {
         let gi = g as usize;
         let fk = f[kinds[gi]];
         let base = off_new[gi] + (mem_lo + i - off_old[gi]) * fk;
         for j in 0..fk {
-            rows.push(((base + j) as u64, vec![g, e * fk as u64 + j as u64]));
+            out.push((base + j) as u64, &[g, e * fk as u64 + j as u64]);
         }
     }
-    let members = to_blocks(world, off_new[b.groups.len()], 2, rows.into_iter());
+    let members = out.deliver(world);
 
     let split = |v: Vec<u64>, w: usize| -> (Vec<u64>, Vec<u64>) {
         let n = v.len() / (w + 1);

@@ -610,3 +610,159 @@ fn refine_once(world: &SimpleCommunicator, b: Blocks, shapes: &[Shape]) -> Block
         members: members.chunks_exact(2).map(|c| (c[0], c[1])).collect(),
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The children of a tetrahedron (midpoints added as in `refine_once`), orientation fixed
+    /// as there.
+    fn children(x: [[f64; 3]; 4]) -> Vec<Vec<[f64; 3]>> {
+        let mut pos: Vec<[f64; 3]> = x.to_vec();
+        for p in 0..4 {
+            for q in p + 1..4 {
+                pos.push(midpoint(&x[p], &x[q]));
+            }
+        }
+        let sign = det(&pos[..4]) >= 0.0;
+        tet_children(&x)
+            .iter()
+            .map(|c| {
+                let mut px: Vec<[f64; 3]> = c.iter().map(|&l| pos[l]).collect();
+                if (det(&px) >= 0.0) != sign {
+                    px.swap(0, 1);
+                }
+                px
+            })
+            .collect()
+    }
+
+    #[test]
+    fn tet_children_fill_the_parent_with_its_orientation() {
+        let tets = [
+            [
+                [0.0, 0.0, 0.0],
+                [1.0, 0.0, 0.0],
+                [0.0, 1.0, 0.0],
+                [0.0, 0.0, 1.0],
+            ],
+            [
+                [0.1, 0.2, 0.0],
+                [0.9, -0.1, 0.3],
+                [0.2, 1.3, 0.1],
+                [0.4, 0.3, 2.0],
+            ],
+            [
+                [0.0, 0.0, 0.0],
+                [0.0, 1.0, 0.0],
+                [1.0, 0.0, 0.0],
+                [0.3, 0.2, -0.7],
+            ],
+        ];
+        for t in tets {
+            let v = det(&t);
+            let kids = children(t);
+            assert_eq!(kids.len(), 8);
+            let sum: f64 = kids.iter().map(|k| det(k)).sum();
+            assert!((sum - v).abs() < 1e-14 * v.abs(), "volumes {sum} vs {v}");
+            for k in &kids {
+                let d = det(k);
+                assert!(d * v > 0.0, "a child is inverted or flat: {d} vs {v}");
+                assert!(
+                    (d.abs() - v.abs() / 8.0).abs() < 1e-12 * v.abs(),
+                    "{d} vs {v}/8"
+                );
+            }
+        }
+    }
+
+    #[test]
+    fn tet_diagonal_is_the_shortest_and_independent_of_vertex_order() {
+        // a tetrahedron stretched along x: the diagonals have different lengths
+        let x = [
+            [0.0, 0.0, 0.0],
+            [3.0, 0.1, 0.0],
+            [0.2, 1.0, 0.1],
+            [2.9, 0.8, 1.1],
+        ];
+        let diag = |x: &[[f64; 3]; 4]| -> f64 {
+            let k = children(*x);
+            // the diagonal: the common edge of the four interior children
+            let d = |a: [f64; 3], b: [f64; 3]| {
+                ((a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2) + (a[2] - b[2]).powi(2)).sqrt()
+            };
+            let mut best = f64::INFINITY;
+            for p in 0..4 {
+                for q in p + 1..4 {
+                    if (4..8).all(|c| k[c].contains(&k[4][p]) && k[c].contains(&k[4][q])) {
+                        best = best.min(d(k[4][p], k[4][q]));
+                    }
+                }
+            }
+            best
+        };
+        let mids: Vec<[f64; 3]> = (0..4)
+            .flat_map(|p| (p + 1..4).map(move |q| (p, q)))
+            .map(|(p, q)| midpoint(&x[p], &x[q]))
+            .collect();
+        let shortest = [(0, 5), (1, 4), (2, 3)]
+            .iter()
+            .map(|&(a, b)| {
+                let (u, v): ([f64; 3], [f64; 3]) = (mids[a], mids[b]);
+                ((u[0] - v[0]).powi(2) + (u[1] - v[1]).powi(2) + (u[2] - v[2]).powi(2)).sqrt()
+            })
+            .fold(f64::INFINITY, f64::min);
+        assert!((diag(&x) - shortest).abs() < 1e-15);
+        let y = [x[2], x[0], x[3], x[1]];
+        assert!((diag(&y) - shortest).abs() < 1e-15);
+    }
+
+    #[test]
+    fn triangle_children_fill_the_parent_with_its_orientation() {
+        for t in [
+            [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]],
+            [[0.3, 0.1, 0.0], [-0.2, 0.9, 0.0], [1.4, 0.5, 0.0]],
+        ] {
+            let pos = [
+                t[0],
+                t[1],
+                t[2],
+                midpoint(&t[0], &t[1]),
+                midpoint(&t[0], &t[2]),
+                midpoint(&t[1], &t[2]),
+            ];
+            let v = det(&t);
+            for c in TRI_CHILDREN {
+                let d = det(&[pos[c[0]], pos[c[1]], pos[c[2]]]);
+                assert!((d - v / 4.0).abs() < 1e-14 * v.abs(), "{d} vs {v}/4");
+            }
+        }
+    }
+
+    #[test]
+    fn projection_onto_circle_and_plane() {
+        let circle = Shape {
+            groups: vec![],
+            shape: ObstacleSpec::Sphere {
+                center: vec![0.0, 1.0],
+                radius: 2.0,
+            },
+        };
+        let p = circle.project([0.6, 1.8, 0.0]);
+        assert!(((p[0] * p[0] + (p[1] - 1.0).powi(2)).sqrt() - 2.0).abs() < 1e-15);
+        assert!(
+            (p[0] / (p[1] - 1.0) - 0.75).abs() < 1e-15,
+            "along the ray: {p:?}"
+        );
+        let plane = Shape {
+            groups: vec![],
+            shape: ObstacleSpec::Plane {
+                point: vec![0.0, 0.0, 1.0],
+                normal: vec![0.0, 0.6, 0.8],
+            },
+        };
+        let p = plane.project([1.0, 2.0, 3.0]);
+        assert!((0.6 * p[1] + 0.8 * (p[2] - 1.0)).abs() < 1e-15);
+        assert!((p[0] - 1.0).abs() < 1e-15);
+    }
+}

@@ -406,3 +406,71 @@ fn bad_refine_values_exit_2_naming_the_key() {
         assert!(!out.exists(), "{set}: output written");
     }
 }
+
+/// The lower half of the unit ball: flat face "flat" (clamped), curved face "curved".
+const HEMI_GEO: &str = r#"
+SetFactory("OpenCASCADE");
+Sphere(1) = {0, 0, 0, 1, -Pi/2, 0};
+Mesh.MeshSizeMax = 0.4;
+flat() = Surface In BoundingBox{-2, -2, -1e-6, 2, 2, 1e-6};
+curved() = Surface{:};
+curved() -= flat();
+Physical Surface("flat") = {flat()};
+Physical Surface("curved") = {curved()};
+Physical Volume("body") = {1};
+"#;
+
+#[test]
+fn sphere_projection_3d_puts_new_surface_nodes_on_the_sphere() {
+    let tmp = tempfile::tempdir().unwrap();
+    let geo = tmp.path().join("hemi.geo");
+    std::fs::write(&geo, HEMI_GEO).unwrap();
+    let msh = tmp.path().join("hemi.msh");
+    let mut cmd = std::process::Command::new("gmsh");
+    cmd.arg("-3")
+        .arg(&geo)
+        .args(["-format", "msh41", "-o"])
+        .arg(&msh);
+    run_with_timeout(cmd, std::time::Duration::from_secs(120)).expect_code(0, "gmsh hemi");
+    // the curved face is the contact group (its nodes are written with their coordinates);
+    // the plane lies below the body, so nothing touches
+    let radii = |project: bool| -> (usize, f64) {
+        let text = format!(
+            "[mesh]\nfile = {}\nrefine = 1\n{}\n[material]\nyoung = 1.0\npoisson = 0.3\n\n\
+             [[dirichlet]]\ngroup = \"flat\"\nvalue = [0.0, 0.0, 0.0]\n\n\
+             [body_force]\nvalue = [0.0, 0.0, -0.01]\n\n[contact]\ngroup = \"curved\"\n\
+             obstacle = {{ type = \"plane\", point = [0.0, 0.0, -1.5], normal = [0.0, 0.0, 1.0] }}\n",
+            toml_path(&msh),
+            if project {
+                "\n[[mesh.project]]\ngroup = \"curved\"\n\
+                 shape = { type = \"sphere\", center = [0.0, 0.0, 0.0], radius = 1.0 }\n"
+            } else {
+                ""
+            }
+        );
+        let case = write_case(&tmp.path().join(format!("hemi_{project}.toml")), &text);
+        let s = solve(2, &case, &[]);
+        s.assert_converged("hemisphere");
+        let v = python_json(CONTACT_PY, &[&s.dir.join("solution.h5")]);
+        let xs = v["cx"].as_array().unwrap();
+        let dev = xs
+            .iter()
+            .map(|x| {
+                let x = floats(x);
+                ((x[0] * x[0] + x[1] * x[1] + x[2] * x[2]).sqrt() - 1.0).abs()
+            })
+            .fold(0.0f64, f64::max);
+        (xs.len(), dev)
+    };
+    let (n, dev) = radii(true);
+    println!("projected: {n} contact nodes, max ||x| - 1| = {dev:.1e}");
+    assert!(n > 100, "{n}");
+    assert!(dev < 1e-12, "a surface node is off the sphere by {dev:e}");
+    let (n2, dev2) = radii(false);
+    println!("not projected: {n2} contact nodes, max ||x| - 1| = {dev2:.1e}");
+    assert_eq!(n, n2);
+    assert!(
+        dev2 > 1e-3,
+        "without projection the new nodes stay on the flat facets"
+    );
+}

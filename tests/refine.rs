@@ -393,6 +393,12 @@ fn bad_refine_values_exit_2_naming_the_key() {
             "mesh.project.2.shape={type=\"plane\",point=[0,0,0],normal=[0,1,0]}",
             "mesh.project[2].shape.point",
         ),
+        // a circle of half the disk's radius: the new contact nodes invert their cells
+        (
+            2,
+            "mesh.project.0.shape={type=\"sphere\",center=[0,0],radius=0.5}",
+            "mesh.project",
+        ),
     ] {
         let out = tmp.path().join("out");
         let r = run_solver(np, &case, &[set], &out);

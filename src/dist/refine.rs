@@ -105,18 +105,18 @@ pub(super) fn refine_blocks(
         .map_err(RunError::Input)
         .and_then(|()| {
             if !(2..=3).contains(&b.dim) {
-                Err(RunError::Input(InputError::new(
-                    path,
-                    format!(
-                        "mesh.refine: the mesh is {}D; only 2D and 3D meshes are refined",
-                        b.dim
-                    ),
-                )))
+                Err(RunError::Input(
+                    InputError::new(
+                        path,
+                        format!("the mesh is {}D; only 2D and 3D meshes are refined", b.dim),
+                    )
+                    .with_key("mesh.refine"),
+                ))
             } else if spec.project.len() > MAX_PROJECTIONS {
-                Err(RunError::Input(InputError::new(
-                    path,
-                    format!("mesh.project: at most {MAX_PROJECTIONS} entries"),
-                )))
+                Err(RunError::Input(
+                    InputError::new(path, format!("at most {MAX_PROJECTIONS} entries"))
+                        .with_key("mesh.project"),
+                ))
             } else {
                 Ok(())
             }
@@ -139,6 +139,21 @@ pub(super) fn refine_blocks(
     for _ in 0..spec.level {
         b = refine_once(ctx.world, b, &shapes);
     }
+    if !shapes.is_empty() {
+        let bad = first_bad_cell(ctx.world, &b).map_err(|msg| {
+            RunError::Input(
+                InputError::new(
+                    path,
+                    format!(
+                        "{msg}: the projected nodes moved too far for this mesh (use a finer mesh \
+                     file or fewer refinements)"
+                    ),
+                )
+                .with_key("mesh.project"),
+            )
+        });
+        ctx.agree(bad)?;
+    }
     say!(
         ctx,
         "refine: {} level(s), {} -> {} cells, {} -> {} nodes ({:.3} s)",
@@ -150,6 +165,37 @@ pub(super) fn refine_blocks(
         t0.elapsed().as_secs_f64()
     );
     Ok(b)
+}
+
+/// Err naming the first cell of this rank's block that is inverted or flat (measure at most
+/// 1e-12 h^dim, as the mesh readers refuse) after the projections. Collective.
+fn first_bad_cell(world: &SimpleCommunicator, b: &Blocks) -> Result<(), String> {
+    let (rank, size) = rank_size(world);
+    let npc = b.dim + 1;
+    let (need, xyz) = fetch_coords(world, b);
+    let lo = blk(b.n_cells, size, rank);
+    for (i, cell) in b.cells.chunks_exact(npc).enumerate() {
+        let p: Vec<[f64; 3]> = cell
+            .iter()
+            .map(|v| xyz[need.binary_search(v).expect("fetched")])
+            .collect();
+        let mut h2 = 0.0f64;
+        for a in 0..npc {
+            for c in a + 1..npc {
+                h2 = h2.max((0..3).map(|k| (p[a][k] - p[c][k]).powi(2)).sum());
+            }
+        }
+        let m = det(&p);
+        if m.is_nan() || m <= 1e-12 * h2.sqrt().powi(b.dim as i32) {
+            return Err(format!(
+                "refined cell {} (a child of element tag {}) is {}",
+                lo + i,
+                b.cell_tags[i],
+                if m < 0.0 { "inverted" } else { "flat" }
+            ));
+        }
+    }
+    Ok(())
 }
 
 /// Children per element of kind 0 (cells), 1 (facets), 2 (edges), 3 (points).

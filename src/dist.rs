@@ -24,6 +24,9 @@ use mpi::topology::SimpleCommunicator;
 use mpi::traits::*;
 use std::path::Path;
 
+mod refine; // `mesh.refine`: the blocks refined before the partition (src/dist/refine.rs)
+pub use refine::Refine;
+
 /// First row of rank r's block of n rows (the same blocks as the partitioner's).
 pub fn blk(n: usize, size: usize, r: usize) -> usize {
     ((r as u128 * n as u128) / size as u128) as usize
@@ -459,12 +462,13 @@ pub struct Distributed {
     pub partition_seconds: f64,
 }
 
-/// Reads the mesh file distributed over the ranks of `world`, partitions and migrates it.
-/// Collective; an input error is the same on every rank.
-pub fn read_distributed(ctx: &Ctx, path: &Path) -> Result<Distributed, RunError> {
+/// Reads the mesh file distributed over the ranks of `world`, refines it as `refine` asks,
+/// partitions and migrates it. Collective; an input error is the same on every rank.
+pub fn read_distributed(ctx: &Ctx, path: &Path, refine: &Refine) -> Result<Distributed, RunError> {
     let (world, comm) = (ctx.world, ctx.comm());
     let t0 = std::time::Instant::now();
     let b = read_blocks(ctx, path)?;
+    let b = refine::refine_blocks(ctx, path, b, refine)?;
     let read_seconds = t0.elapsed().as_secs_f64();
     let t1 = std::time::Instant::now();
     let (mesh, layout) = build(world, comm, b)?;

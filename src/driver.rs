@@ -69,6 +69,7 @@ pub fn run_case(ctx: &Ctx, case: &Case) -> Result<String, RunError> {
         cells: mesh.n_cells_global(),
         nodes: mesh.n_nodes_global(),
         dofs: mesh.n_nodes_global() * mesh.dim,
+        refine: case.mesh.refine,
         ranks: ctx.size,
         partition,
         assembly,

@@ -27,7 +27,12 @@ pub struct Input {
 /// partition it and check the case against it; all ranks agree on an error. Logs the mesh line
 /// and the local sizes.
 pub fn read_input(ctx: &Ctx, case: &Case) -> Result<Input, RunError> {
-    let d = dist::read_distributed(ctx, &case.mesh.file)?;
+    let refine = dist::Refine {
+        level: case.mesh.refine,
+        project: &case.mesh.project,
+        check: &|dim, groups| case.check_projections(dim, groups),
+    };
+    let d = dist::read_distributed(ctx, &case.mesh.file, &refine)?;
     let material = ctx.agree(check(case, &d.mesh).map_err(RunError::from))?;
     let input = Input {
         mesh: d.mesh,
@@ -40,8 +45,12 @@ pub fn read_input(ctx: &Ctx, case: &Case) -> Result<Input, RunError> {
     let dim = mesh.dim;
     say!(
         ctx,
-        "mesh {}: {}D, {} nodes, {} cells, {} boundary facets, groups: {}",
+        "mesh {}{}: {}D, {} nodes, {} cells, {} boundary facets, groups: {}",
         case.mesh.file.display(),
+        match case.mesh.refine {
+            0 => String::new(),
+            k => format!(" refined {k}x"),
+        },
         dim,
         mesh.n_nodes_global(),
         mesh.n_cells_global(),

@@ -74,6 +74,9 @@ pub struct Summary<S: Serialize> {
     pub cells: usize,
     pub nodes: usize,
     pub dofs: usize,
+    /// `mesh.refine` (absent when 0); cells, nodes and dofs are those of the refined mesh.
+    #[serde(skip_serializing_if = "is_zero")]
+    pub refine: usize,
     pub ranks: usize,
     pub partition: PartitionInfo,
     pub assembly: AssemblyInfo,
@@ -89,6 +92,10 @@ impl<S: Serialize> Summary<S> {
         let v = serde_json::to_value(self).expect("a summary is plain data");
         serde_json::to_string_pretty(&v).expect("JSON") + "\n"
     }
+}
+
+fn is_zero(n: &usize) -> bool {
+    *n == 0
 }
 
 /// Peak memory of every rank (one Allgather) and the closing timing line on rank 0.

@@ -60,6 +60,19 @@ impl MaterialModel {
 pub struct MeshSection {
     /// Resolved against the case file's directory.
     pub file: PathBuf,
+    /// `mesh.refine`: uniform refinements after the distributed read (0: none).
+    pub refine: usize,
+    /// `[[mesh.project]]`: the new nodes of a group's facets moved onto a shape.
+    pub project: Vec<Projection>,
+}
+
+/// `[[mesh.project]]`: the nodes that refinement adds on the facets (or, in 3D, edges) of
+/// `group` are moved onto `shape` (the first entry naming a group of the facet wins).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Projection {
+    pub group: String,
+    /// A sphere (circle in 2D) or a plane, written as a contact obstacle is.
+    pub shape: ObstacleSpec,
 }
 
 #[derive(Debug, Clone, PartialEq)]
@@ -346,6 +359,9 @@ pub struct Case {
     locs: BTreeMap<String, Loc>,
 }
 
+/// The largest `mesh.refine` (each level multiplies the cells by 4 in 2D, 8 in 3D).
+pub const MAX_REFINE: usize = 10;
+
 /// The largest case file read (a case file is a few hundred bytes; the bound keeps a wrong
 /// file from costing gigabytes of memory for its value tree).
 pub const MAX_CASE_BYTES: usize = 256 * 1024;
@@ -511,6 +527,51 @@ impl Case {
                 }
                 ObstacleSpec::Sphere { center, .. } => {
                     len("contact.obstacle.center".into(), center.len())?;
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// Checks `[[mesh.project]]` against the mesh read (before it is refined): every group
+    /// exists and has facets (dimension `dim - 1`) or, in 3D, edges; the shape's vectors have
+    /// `dim` components. `groups` lists the mesh's physical groups as (name, dimension).
+    pub fn check_projections(
+        &self,
+        dim: usize,
+        groups: &[(String, usize)],
+    ) -> Result<(), InputError> {
+        for (i, p) in self.mesh.project.iter().enumerate() {
+            let k = join_index("mesh.project", i);
+            let gk = join_key(&k, "group");
+            self.check_group(&gk, &p.group, groups, None)?;
+            if !groups
+                .iter()
+                .any(|(g, d)| g == &p.group && *d >= 1 && *d < dim)
+            {
+                return Err(self.err_at(
+                    &gk,
+                    format!(
+                        "physical group \"{}\" has no facets{}: only new nodes on the \
+                         boundary can be projected",
+                        p.group,
+                        if dim == 3 { " or edges" } else { "" }
+                    ),
+                ));
+            }
+            let sk = join_key(&k, "shape");
+            let vectors: Vec<(&str, usize)> = match &p.shape {
+                ObstacleSpec::Plane { point, normal } => {
+                    vec![("point", point.len()), ("normal", normal.len())]
+                }
+                ObstacleSpec::Sphere { center, .. } => vec![("center", center.len())],
+            };
+            for (name, n) in vectors {
+                if n != dim {
+                    return Err(self.err_at(
+                        &join_key(&sk, name),
+                        format!("has {n} components, but the mesh is {dim}D and needs {dim}"),
+                    ));
                 }
             }
         }
@@ -844,12 +905,38 @@ impl Reader<'_> {
 
     fn mesh(&self, top: &Tab) -> Res<MeshSection> {
         let (k, n) = self.required(top, "mesh")?;
-        let t = self.table(&k, n, &["file"])?;
+        let t = self.table(&k, n, &["file", "refine", "project"])?;
         let (fk, f) = self.required(&t, "file")?;
         let rel = self.name(&fk, f)?;
         let dir = self.file.parent().unwrap_or(Path::new(""));
+        let refine = match t.get("refine") {
+            None => 0,
+            Some((rk, r)) => {
+                let Kind::Int(v) = r.kind else {
+                    return Err(self.type_err(&rk, r, "an integer >= 0"));
+                };
+                if !(0..=MAX_REFINE as i64).contains(&v) {
+                    return Err(self.err(
+                        &rk,
+                        r.loc,
+                        format!("must be an integer from 0 to {MAX_REFINE}, got {v}"),
+                    ));
+                }
+                v as usize
+            }
+        };
+        let mut project = Vec::new();
+        for p in self.tables(&t, "project", &["group", "shape"])? {
+            let (gk, g) = self.required(&p, "group")?;
+            let group = self.name(&gk, g)?;
+            let (sk, sh) = self.required(&p, "shape")?;
+            let shape = self.obstacle(&sk, sh)?;
+            project.push(Projection { group, shape });
+        }
         Ok(MeshSection {
             file: dir.join(rel),
+            refine,
+            project,
         })
     }
 

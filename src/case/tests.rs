@@ -1091,3 +1091,76 @@ fn load_rejections() {
         .message
         .contains("table"));
 }
+
+#[test]
+fn mesh_refine_and_project() {
+    let c = parse(MINIMAL).unwrap();
+    assert_eq!((c.mesh.refine, c.mesh.project.len()), (0, 0));
+    let text = replace(
+        MINIMAL,
+        "file = \"meshes/plate.msh\"\n",
+        "file = \"meshes/plate.msh\"\nrefine = 2\n\n[[mesh.project]]\ngroup = \"arc\"\n\
+         shape = { type = \"sphere\", center = [0, 1], radius = 1 }\n\n[[mesh.project]]\n\
+         group = \"flat\"\nshape = { type = \"plane\", point = [0, 0], normal = [0, 2] }\n",
+    );
+    let c = parse(&text).unwrap();
+    assert_eq!(c.mesh.refine, 2);
+    assert_eq!(
+        c.mesh.project,
+        vec![
+            Projection {
+                group: "arc".into(),
+                shape: ObstacleSpec::Sphere {
+                    center: vec![0.0, 1.0],
+                    radius: 1.0
+                }
+            },
+            Projection {
+                group: "flat".into(),
+                shape: ObstacleSpec::Plane {
+                    point: vec![0.0, 0.0],
+                    normal: vec![0.0, 1.0]
+                }
+            }
+        ]
+    );
+    let groups = |v: &[(&str, usize)]| -> Vec<(String, usize)> {
+        v.iter().map(|(n, d)| (n.to_string(), *d)).collect()
+    };
+    c.check_projections(2, &groups(&[("arc", 1), ("flat", 1), ("body", 2)]))
+        .unwrap();
+    let e = c
+        .check_projections(2, &groups(&[("arc", 1), ("body", 2)]))
+        .unwrap_err();
+    assert_eq!(e.key.as_deref(), Some("mesh.project[1].group"), "{e}");
+    assert_eq!(e.line, Some(line(&text, "group = \"flat\"")), "{e}");
+    let e = c
+        .check_projections(2, &groups(&[("arc", 2), ("flat", 1)]))
+        .unwrap_err();
+    assert_eq!(e.key.as_deref(), Some("mesh.project[0].group"), "{e}");
+    let e = c
+        .check_projections(3, &groups(&[("arc", 2), ("flat", 2)]))
+        .unwrap_err();
+    assert_eq!(
+        e.key.as_deref(),
+        Some("mesh.project[0].shape.center"),
+        "{e}"
+    );
+    for bad in ["-1", "1.5", "\"1\"", "11"] {
+        expect_err(
+            &replace(&text, "refine = 2", &format!("refine = {bad}")),
+            "mesh.refine",
+            "refine =",
+        );
+    }
+    expect_err(
+        &replace(&text, "group = \"arc\"", "group = \"arc\"\ncolor = 1"),
+        "mesh.project[0].color",
+        "color",
+    );
+    expect_err(
+        &replace(&text, "type = \"plane\"", "type = \"cone\""),
+        "mesh.project[1].shape.type",
+        "cone",
+    );
+}

@@ -846,7 +846,11 @@ impl Reader<'_> {
             };
             if let Some(why) = why {
                 let (sk, sn) = top.get("solver").expect("method was set in [solver]");
-                let t = self.table(&sk, sn, &["preset", "method", "petsc_options", "rtol", "reuse"])?;
+                let t = self.table(
+                    &sk,
+                    sn,
+                    &["preset", "method", "petsc_options", "rtol", "reuse"],
+                )?;
                 let (mk, m) = t.get("method").expect("method was set");
                 return Err(self.err(&mk, m.loc, format!("\"snesvi\" {why}")));
             }
@@ -995,7 +999,11 @@ impl Reader<'_> {
         let Some((k, n)) = top.get("solver") else {
             return Ok(s);
         };
-        let t = self.table(&k, n, &["preset", "method", "petsc_options", "rtol", "reuse"])?;
+        let t = self.table(
+            &k,
+            n,
+            &["preset", "method", "petsc_options", "rtol", "reuse"],
+        )?;
         if let Some((mk, m)) = t.get("method") {
             s.method = self.choice(
                 &mk,

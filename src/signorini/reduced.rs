@@ -11,8 +11,8 @@ use super::active_set::{ActiveSet, Iterate};
 use super::boundary::ContactBoundary;
 use super::rigid::Pin;
 use crate::assembly::System;
-use crate::contact::{coulomb_block, CoulombRow, Frame, TangentialRow};
 use crate::case::Reuse;
+use crate::contact::{coulomb_block, CoulombRow, Frame, TangentialRow};
 use crate::par::Ctx;
 use crate::partition::Layout;
 use crate::petsc::{self, Ksp, Matrix, PInt, SolveInfo, Vector};
@@ -348,7 +348,8 @@ impl Reuser {
                 // factorisation step
                 let budget = ((t_factor + t_solve) / t_it).floor() as usize;
                 let budget = budget.saturating_sub(1).min(solver::REUSE_RESTART);
-                (rank + 1 <= budget).then_some(budget)
+                // the expected rank + 1 iterations fit the budget
+                (rank < budget).then_some(budget)
             }
         }
     }

@@ -301,6 +301,10 @@ pub struct StepSolve {
 /// runs and tests are reproducible; "auto" takes its budget from the measured costs).
 pub const ALWAYS_BUDGET: usize = 30;
 
+/// "auto" reuses only if the expected Krylov solve costs at most this fraction of a
+/// factorisation step: room for the estimate of one iteration and for timing noise.
+pub const AUTO_MARGIN: f64 = 0.75;
+
 /// Before any reuse step has measured it, the cost of one Krylov iteration is estimated as
 /// this multiple of one triangular solve pair (MatSolve; plus MatMult and orthogonalisation).
 pub const ITERATION_PER_SOLVE: f64 = 1.25;
@@ -325,10 +329,10 @@ struct Reuser {
 
 impl Reuser {
     /// Whether to try the reuse, and its budget: "always" whenever a factorisation exists;
-    /// "auto" when the expected rank + 1 iterations of the Krylov solve cost less than the
-    /// numeric factorisation and its solve, both measured in this run; the budget is what
-    /// that costs (beyond it the reuse no longer pays). `costs` = the ranks' mean
-    /// (t_factor, t_solve, t_iteration).
+    /// "auto" when the expected rank + 1 iterations of the Krylov solve cost at most
+    /// [`AUTO_MARGIN`] of the numeric factorisation and its solve, both measured in this run;
+    /// the budget is what a factorisation step costs (beyond it the reuse no longer pays).
+    /// `costs` = the ranks' mean (t_factor, t_solve, t_iteration).
     fn plan(&self, rank: usize, costs: [f64; 3]) -> Option<usize> {
         self.factored.as_ref()?;
         match self.mode {
@@ -348,8 +352,9 @@ impl Reuser {
                 // factorisation step
                 let budget = ((t_factor + t_solve) / t_it).floor() as usize;
                 let budget = budget.saturating_sub(1).min(solver::REUSE_RESTART);
-                // the expected rank + 1 iterations fit the budget
-                (rank < budget).then_some(budget)
+                // the expected rank + 1 iterations (+ the first M⁻¹ b) well within the cost
+                let expected = (rank + 2) as f64 * t_it;
+                (rank < budget && expected <= AUTO_MARGIN * (t_factor + t_solve)).then_some(budget)
             }
         }
     }

@@ -96,6 +96,43 @@ impl LinearSolver {
     }
 }
 
+/// Options prefix of the Krylov solver that reuses a factorisation (`-reuse_ksp_monitor`, ...).
+pub const REUSE_PREFIX: &str = "reuse_";
+
+/// GMRES restart of the reuse solver: no budget exceeds it, so GMRES never restarts.
+pub const REUSE_RESTART: usize = 200;
+
+/// Relative tolerance of the reuse solver on the preconditioned residual ‖M⁻¹(b − S x)‖ with
+/// x₀ = 0: M = S_j (the factored matrix) is close to S, so this bounds the relative error of
+/// x, far below Algorithm 1's tolerances (tests/reuse.rs: u agrees with the plain path to
+/// 1e-10).
+pub const REUSE_RTOL: f64 = 1e-13;
+
+/// The reuse solver's defaults (the case's `petsc_options` and the command line, with the
+/// prefix, override them): GMRES, left preconditioning (the preconditioned residual is
+/// tested), classical Gram–Schmidt refined when needed.
+pub fn reuse_options() -> String {
+    let p = REUSE_PREFIX;
+    format!(
+        "-{p}ksp_type gmres -{p}ksp_pc_side left -{p}ksp_norm_type preconditioned \
+         -{p}ksp_rtol {REUSE_RTOL:e} -{p}ksp_gmres_restart {REUSE_RESTART} \
+         -{p}ksp_gmres_cgs_refinement_type refine_ifneeded"
+    )
+}
+
+/// A Krylov solver that applies the preconditioner of `direct` (its factorisation, shared, not
+/// copied): the solver of the steps that reuse a factorisation. Collective.
+pub fn reuse_solver(comm: MPI_Comm, direct: &Ksp) -> petsc::Result<Ksp> {
+    for (name, value) in split_options(&reuse_options()) {
+        options::set_default(&name, &value)?;
+    }
+    let mut ksp = Ksp::new(comm)?;
+    ksp.set_options_prefix(REUSE_PREFIX)?;
+    ksp.set_from_options()?;
+    ksp.share_pc_of(direct)?;
+    Ok(ksp)
+}
+
 /// The coordinates for AMG's rigid-body near-null space: only the iterative preset uses them.
 pub fn near_null_space_coordinates(
     ctx: &Ctx,

@@ -145,6 +145,28 @@ impl Method {
     }
 }
 
+/// `solver.reuse`: whether a Newton step of the direct preset may solve its reduced system by
+/// Krylov iterations preconditioned with the last factorisation instead of refactorising.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Reuse {
+    /// Reuse when the measured costs say it pays (signorini::reduced), refactorise otherwise.
+    Auto,
+    /// Every step refactorises (the plain path, the reference).
+    Never,
+    /// Every step after the first tries the reuse (bounded budget, then refactorises).
+    Always,
+}
+
+impl Reuse {
+    pub fn name(self) -> &'static str {
+        match self {
+            Reuse::Auto => "auto",
+            Reuse::Never => "never",
+            Reuse::Always => "always",
+        }
+    }
+}
+
 #[derive(Debug, Clone, PartialEq)]
 pub struct SolverSection {
     pub preset: Preset,
@@ -154,6 +176,8 @@ pub struct SolverSection {
     pub petsc_options: String,
     /// Relative tolerance of the iterative preset.
     pub rtol: f64,
+    /// Reuse of a factorisation across Newton steps (direct preset, contact).
+    pub reuse: Reuse,
 }
 
 impl Default for SolverSection {
@@ -163,6 +187,7 @@ impl Default for SolverSection {
             method: Method::Newton,
             petsc_options: String::new(),
             rtol: 1e-10,
+            reuse: Reuse::Auto,
         }
     }
 }
@@ -882,7 +907,11 @@ impl Reader<'_> {
             };
             if let Some(why) = why {
                 let (sk, sn) = top.get("solver").expect("method was set in [solver]");
-                let t = self.table(&sk, sn, &["preset", "method", "petsc_options", "rtol"])?;
+                let t = self.table(
+                    &sk,
+                    sn,
+                    &["preset", "method", "petsc_options", "rtol", "reuse"],
+                )?;
                 let (mk, m) = t.get("method").expect("method was set");
                 return Err(self.err(&mk, m.loc, format!("\"snesvi\" {why}")));
             }
@@ -1057,7 +1086,11 @@ impl Reader<'_> {
         let Some((k, n)) = top.get("solver") else {
             return Ok(s);
         };
-        let t = self.table(&k, n, &["preset", "method", "petsc_options", "rtol"])?;
+        let t = self.table(
+            &k,
+            n,
+            &["preset", "method", "petsc_options", "rtol", "reuse"],
+        )?;
         if let Some((mk, m)) = t.get("method") {
             s.method = self.choice(
                 &mk,
@@ -1070,6 +1103,17 @@ impl Reader<'_> {
                 &pk,
                 p,
                 &[("direct", Preset::Direct), ("iterative", Preset::Iterative)],
+            )?;
+        }
+        if let Some((uk, u)) = t.get("reuse") {
+            s.reuse = self.choice(
+                &uk,
+                u,
+                &[
+                    ("auto", Reuse::Auto),
+                    ("never", Reuse::Never),
+                    ("always", Reuse::Always),
+                ],
             )?;
         }
         if let Some((ok, o)) = t.get("petsc_options") {

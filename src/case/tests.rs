@@ -185,6 +185,7 @@ fn minimal_file_gets_defaults() {
     assert_eq!(c.solver.preset, Preset::Direct);
     assert_eq!(c.solver.petsc_options, "");
     assert_eq!(c.solver.rtol, 1e-10);
+    assert_eq!(c.solver.reuse, Reuse::Auto);
     assert_eq!(c.output.dir, Path::new("out/plate"));
     assert_eq!(
         c.output.fields,
@@ -443,6 +444,28 @@ fn reject_unknown_field() {
         "fields",
     );
     assert!(e.message.contains("von_mises_thesis"), "{e}");
+}
+
+#[test]
+fn solver_reuse_values_and_rejection() {
+    for (name, want) in [
+        ("auto", Reuse::Auto),
+        ("never", Reuse::Never),
+        ("always", Reuse::Always),
+    ] {
+        let c = parse(&with(&format!("[solver]\nreuse = \"{name}\"\n"))).unwrap();
+        assert_eq!(c.solver.reuse, want);
+        assert_eq!(want.name(), name);
+    }
+    let c = parse_set(MINIMAL, &["solver.reuse=\"never\""]).unwrap();
+    assert_eq!(c.solver.reuse, Reuse::Never);
+    let e = expect_err(
+        &with("[solver]\npreset = \"direct\"\nreuse = \"sometimes\"\n"),
+        "solver.reuse",
+        "reuse",
+    );
+    assert!(e.message.contains("\"auto\", \"never\", \"always\""), "{e}");
+    expect_err(&with("[solver]\nreuse = true\n"), "solver.reuse", "reuse");
 }
 
 #[test]

@@ -735,6 +735,60 @@ impl Ksp {
         }
     }
 
+    /// KSPSetUp: builds the preconditioner for the current operator (for LU / Cholesky the
+    /// numeric factorisation, after the symbolic one the first time) without solving.
+    pub fn set_up(&mut self) -> Result<()> {
+        // SAFETY: valid KSP with operators set.
+        unsafe { check(ffi::KSPSetUp(self.raw)) }
+    }
+
+    /// The prefix of this KSP's options (call before `set_from_options`).
+    pub fn set_options_prefix(&mut self, prefix: &str) -> Result<()> {
+        let p = cstring(prefix);
+        // SAFETY: PETSc copies the string.
+        unsafe { check(ffi::KSPSetOptionsPrefix(self.raw, p.as_ptr())) }
+    }
+
+    /// Makes this KSP use `other`'s preconditioner object (KSPSetPC: shared and reference
+    /// counted), so a factorisation made by one KSP is applied by the other.
+    pub fn share_pc_of(&mut self, other: &Ksp) -> Result<()> {
+        let mut pc: ffi::PC = ptr::null_mut();
+        // SAFETY: both KSPs valid; KSPSetPC takes its own reference on the PC.
+        unsafe {
+            check(ffi::KSPGetPC(other.raw, &mut pc))?;
+            check(ffi::KSPSetPC(self.raw, pc))
+        }
+    }
+
+    /// KSPSetReusePreconditioner: with `true`, PCSetUp keeps the preconditioner it has even
+    /// when the operator's values changed (PETSc tests this flag first in PCSetUp); with
+    /// `false` a changed operator is set up anew (for a factorisation with the same nonzero
+    /// pattern: the numeric part only). The flag lives in the PC, so a shared PC sees it.
+    pub fn set_reuse_preconditioner(&mut self, reuse: bool) -> Result<()> {
+        let flag = if reuse {
+            ffi::PETSC_TRUE
+        } else {
+            ffi::PETSC_FALSE
+        };
+        // SAFETY: valid KSP.
+        unsafe { check(ffi::KSPSetReusePreconditioner(self.raw, flag)) }
+    }
+
+    /// The maximum number of iterations; the other tolerances stay as they are.
+    pub fn set_max_iterations(&mut self, max_it: usize) -> Result<()> {
+        let d = ffi::PETSC_DEFAULT;
+        // SAFETY: valid KSP; PETSC_DEFAULT leaves a tolerance unchanged.
+        unsafe {
+            check(ffi::KSPSetTolerances(
+                self.raw,
+                d as f64,
+                d as f64,
+                d as f64,
+                max_it as PInt,
+            ))
+        }
+    }
+
     /// The KSP and PC type names in use (after set_from_options).
     pub fn type_names(&self) -> Result<(String, String)> {
         let mut kt: *const c_char = ptr::null();

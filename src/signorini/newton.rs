@@ -3,7 +3,8 @@
 //! (3.39)/(3.40)). One step: update the pins of free rigid modes, write the reduced system,
 //! solve, recover λ (3.28), update the sets (3.23)/(3.33), one reduction, log, decide.
 //!
-//! Collectives per step: without friction one Allreduce of m values (the rigid motion fitted to
+//! Collectives per step: with the reuse path one Allreduce of 4 values (its costs and changed
+//! slip blocks, `ReducedSystem::solve`); without friction one Allreduce of m values (the rigid motion fitted to
 //! the active gaps, taken out of the solve: u = ρ + w, see `FreeModes::fit_motion`), the
 //! writing of the reduced system (one all-gather of the rewritten nodes' directions, PETSc's
 //! assembly of entries in other ranks' rows), the solve, one MatMult, one Allreduce; rarely a
@@ -12,7 +13,7 @@
 use super::active_set::{ActiveSet, Iterate, Law, SetSummary, StepTotals};
 use super::boundary::{ContactBoundary, NodeResult};
 use super::cycle::{decide, CycleGuard, Decision, Seen, SetKey};
-use super::reduced::{ReducedSystem, SolveKind};
+use super::reduced::{ReducedSystem, ReuseStep, SolveKind, StepSolve};
 use super::rigid::{Balance, FreeModes, Motion, Pin};
 use crate::assembly::System;
 use crate::case::{self, NewtonInit, NewtonSection};
@@ -66,9 +67,13 @@ pub struct StepInfo {
     /// ‖C_n(u^ℓ, λ^ℓ)‖₂ over all contact nodes (3.21); with friction also C_τ (3.31).
     pub residual: f64,
     pub solve_seconds: f64,
-    /// A numeric factorisation (direct preset) or Krylov iterations (iterative preset).
+    /// A numeric factorisation (direct preset), Krylov iterations (iterative preset), or
+    /// Krylov iterations on an earlier step's factorisation (direct preset, reuse).
     pub solve: SolveKind,
     pub iterations: usize,
+    /// The reuse path's record of the step (direct preset, `solver.reuse` not "never").
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub reuse: Option<ReuseStep>,
     /// Number of rigid modes pinned in this step.
     pub pinned: usize,
     /// Tresca: nodes in S1..S4 (inactive/stick, inactive/slip, active/stick, active/slip) in
@@ -210,12 +215,12 @@ pub fn semismooth_newton(
         }
         let bs = &lp.shifted;
         reduced.write(ctx, sys, layout, bs, &lp.set, lp.free.pins())?; // (3.29) / (3.42)
-        let (info, kind, seconds) = reduced.solve()?;
-        ensure_converged(step, &info)?;
+        let solved = reduced.solve(ctx, !matches!(s.law, Law::Coulomb { .. }))?;
+        ensure_converged(step, &solved.info)?;
         reduced.recover(sys, bs, &lp.set, &mut lp.it)?; // (3.28)
         let update = lp.set.update(&lp.it, bs, s.law, s.c, dim); // (3.23) / (3.33) / (F5)
         let totals = update.reduce(ctx, bs, lp.free.modes(), dim);
-        history.push(lp.step_info(step, &totals, &info, kind, seconds));
+        history.push(lp.step_info(step, &totals, solved));
         log_step(ctx, history.last().expect("pushed"), &totals);
         if lp.next(step, update.next, &totals)? {
             converged = true;
@@ -284,16 +289,20 @@ fn ensure_converged(step: usize, info: &SolveInfo) -> Result<(), RunError> {
 
 /// The rank-0 progress lines of a step.
 fn log_step(ctx: &Ctx, h: &StepInfo, t: &StepTotals) {
+    let how = match &h.reuse {
+        Some(_) if h.solve == SolveKind::Reuse => format!("reuse, {} its", h.iterations),
+        Some(r) if r.fallback => format!("{} its, refactorised", r.krylov_iterations),
+        _ => format!("{} its", h.iterations),
+    };
     say!(
         ctx,
-        "newton {:3}: |A_n| = {:6}  changed {:6}  |C_n| = {:.3e}  pinned {}  solve {:.3} s ({} its)",
+        "newton {:3}: |A_n| = {:6}  changed {:6}  |C_n| = {:.3e}  pinned {}  solve {:.3} s ({how})",
         h.step,
         h.active,
         h.changed,
         h.residual,
         h.pinned,
         h.solve_seconds,
-        h.iterations
     );
     if let Some(s) = h.states {
         say!(
@@ -309,22 +318,16 @@ fn log_step(ctx: &Ctx, h: &StepInfo, t: &StepTotals) {
 }
 
 impl Loop<'_> {
-    fn step_info(
-        &self,
-        step: usize,
-        t: &StepTotals,
-        info: &SolveInfo,
-        kind: SolveKind,
-        secs: f64,
-    ) -> StepInfo {
+    fn step_info(&self, step: usize, t: &StepTotals, solved: StepSolve) -> StepInfo {
         StepInfo {
             step,
             active: self.summary.n_active,
             changed: t.changed,
             residual: t.residual,
-            solve_seconds: secs,
-            solve: kind,
-            iterations: info.iterations,
+            solve_seconds: solved.seconds,
+            solve: solved.kind,
+            iterations: solved.info.iterations,
+            reuse: solved.reuse,
             pinned: self.free.pins().len(),
             states: self.s.friction().then_some(t.states),
             du_rel: self.s.friction().then_some(t.du_rel),

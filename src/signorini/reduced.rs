@@ -11,11 +11,12 @@ use super::active_set::{ActiveSet, Iterate};
 use super::boundary::ContactBoundary;
 use super::rigid::Pin;
 use crate::assembly::System;
+use crate::case::Reuse;
 use crate::contact::{coulomb_block, CoulombRow, Frame, TangentialRow};
 use crate::par::Ctx;
 use crate::partition::Layout;
-use crate::petsc::{self, Matrix, PInt, SolveInfo, Vector};
-use crate::solver::LinearSolver;
+use crate::petsc::{self, Ksp, Matrix, PInt, SolveInfo, Vector};
+use crate::solver::{self, LinearSolver};
 use std::collections::HashMap;
 use std::time::Instant;
 
@@ -208,6 +209,53 @@ impl ConstraintMap {
     pub fn get(&self, global_node: usize) -> Option<&NodeConstraint> {
         self.0.get(&global_node)
     }
+
+    /// The prescribed directions of every rewritten node (the same on every rank): with the
+    /// slip blocks, what the matrix S depends on (the values only reach the right-hand side).
+    fn directions(&self) -> Directions {
+        self.0
+            .iter()
+            .map(|(&k, c)| (k, c.dirs.iter().map(|(d, _)| *d).collect()))
+            .collect()
+    }
+}
+
+/// Prescribed directions by global node.
+type Directions = HashMap<usize, Vec<[f64; 3]>>;
+
+/// Slip blocks Σ τ_i L̃_ij τ_jᵀ of this rank's rewritten nodes, by first local row.
+type Springs = HashMap<usize, [[f64; 3]; 3]>;
+
+/// Prescribed directions added or removed between two systems, over all nodes. Each changes
+/// the node's rows and columns by a term of rank ≤ 2 (S' − S = c wᵀ + w cᵀ for one direction c
+/// of (3.29) applied symmetrically).
+fn direction_changes(old: &Directions, new: &Directions) -> usize {
+    let missing = |a: &Directions, b: &Directions| -> usize {
+        a.iter()
+            .map(|(k, dirs)| {
+                let other = b.get(k).map(Vec::as_slice).unwrap_or(&[]);
+                dirs.iter().filter(|d| !other.contains(d)).count()
+            })
+            .sum()
+    };
+    missing(old, new) + missing(new, old)
+}
+
+/// This rank's nodes whose slip block differs between two systems (each a change of rank
+/// ≤ d − 1 in the node's own block).
+fn spring_changes(old: &Springs, new: &Springs) -> usize {
+    let zero = [[0.0; 3]; 3];
+    let differs = |a: &Springs, b: &Springs| -> usize {
+        a.iter()
+            .filter(|(k, m)| b.get(k).unwrap_or(&zero) != *m)
+            .count()
+    };
+    // a key in both maps that differs is counted twice: count the union once
+    let both = old
+        .iter()
+        .filter(|(k, m)| new.get(k).is_some_and(|n| n != *m))
+        .count();
+    differs(old, new) + differs(new, old) - both
 }
 
 /// How a step's system was solved: a numeric factorisation of the new matrix (the symbolic
@@ -218,6 +266,98 @@ impl ConstraintMap {
 pub enum SolveKind {
     Factorisation,
     Krylov,
+    /// Direct preset: Krylov iterations preconditioned by the factorisation of an earlier
+    /// step's matrix (no new factorisation).
+    Reuse,
+}
+
+/// What the reuse path did in one step (summary.json `newton.history[].reuse`; absent with
+/// `solver.reuse = "never"` and with the iterative preset).
+#[derive(Clone, Debug, serde::Serialize)]
+pub struct ReuseStep {
+    /// Bound on the rank of S_k − S_j, S_j the factored matrix: 2 per prescribed direction
+    /// added or removed since, d − 1 per changed slip block (0 before the first factorisation).
+    pub rank: usize,
+    /// Krylov iterations allowed on S_j's factorisation (0: not tried).
+    pub budget: usize,
+    /// Krylov iterations made on S_j's factorisation (0: not tried).
+    pub krylov_iterations: usize,
+    /// The Krylov solve did not reach its tolerance within the budget: refactorised.
+    pub fallback: bool,
+    /// Seconds of this step's numeric factorisation (0 without one).
+    pub factorisation_seconds: f64,
+}
+
+/// One step's solve: the solver's report of the solve that produced u, how it was made, the
+/// seconds (all of it, a failed reuse attempt included) and what the reuse path did.
+pub struct StepSolve {
+    pub info: SolveInfo,
+    pub kind: SolveKind,
+    pub seconds: f64,
+    pub reuse: Option<ReuseStep>,
+}
+
+/// "always": Krylov iterations a reuse may make before the step refactorises (fixed, so that
+/// runs and tests are reproducible; "auto" takes its budget from the measured costs).
+pub const ALWAYS_BUDGET: usize = 30;
+
+/// "auto" reuses only if the expected Krylov solve costs at most this fraction of a
+/// factorisation step: room for the estimate of one iteration and for timing noise.
+pub const AUTO_MARGIN: f64 = 0.75;
+
+/// Before any reuse step has measured it, the cost of one Krylov iteration is estimated as
+/// this multiple of one triangular solve pair (MatSolve; plus MatMult and orthogonalisation).
+pub const ITERATION_PER_SOLVE: f64 = 1.25;
+
+/// The reuse path of the direct preset: a GMRES solver on the shared factorisation, the
+/// constraints of the factored matrix S_j and of the system written last, and the costs
+/// measured in this run (seconds on this rank; the ranks agree on their means per step).
+struct Reuser {
+    mode: Reuse,
+    ksp: Ksp,
+    /// Directions and this rank's slip blocks of the factored matrix (`None`: none factored).
+    factored: Option<(Directions, Springs)>,
+    /// The same of the system written last.
+    current: (Directions, Springs),
+    /// Numeric factorisation (KSPSetUp) and one solve with it (KSPSolve, preonly), last
+    /// factorisation step.
+    t_factor: f64,
+    t_solve: f64,
+    /// One Krylov iteration of the last successful reuse (seconds / (iterations + 1)).
+    t_iteration: Option<f64>,
+}
+
+impl Reuser {
+    /// Whether to try the reuse, and its budget: "always" whenever a factorisation exists;
+    /// "auto" when the expected rank + 1 iterations of the Krylov solve cost at most
+    /// [`AUTO_MARGIN`] of the numeric factorisation and its solve, both measured in this run;
+    /// the budget is what a factorisation step costs (beyond it the reuse no longer pays).
+    /// `costs` = the ranks' mean (t_factor, t_solve, t_iteration).
+    fn plan(&self, rank: usize, costs: [f64; 3]) -> Option<usize> {
+        self.factored.as_ref()?;
+        match self.mode {
+            Reuse::Never => None,
+            Reuse::Always => Some(ALWAYS_BUDGET),
+            Reuse::Auto => {
+                let [t_factor, t_solve, t_it] = costs;
+                let t_it = if t_it > 0.0 {
+                    t_it
+                } else {
+                    ITERATION_PER_SOLVE * t_solve
+                };
+                if t_it <= 0.0 {
+                    return None;
+                }
+                // (budget + 1) iterations (the first applies M⁻¹ to b) cost at most one
+                // factorisation step
+                let budget = ((t_factor + t_solve) / t_it).floor() as usize;
+                let budget = budget.saturating_sub(1).min(solver::REUSE_RESTART);
+                // the expected rank + 1 iterations (+ the first M⁻¹ b) well within the cost
+                let expected = (rank + 2) as f64 * t_it;
+                (rank < budget && expected <= AUTO_MARGIN * (t_factor + t_solve)).then_some(budget)
+            }
+        }
+    }
 }
 
 /// The reduced system of one Newton step and its solver: the matrix S on A's pattern, the
@@ -242,6 +382,8 @@ pub struct ReducedSystem {
     dim: usize,
     /// How the solver solves (known after the first solve).
     kind: Option<SolveKind>,
+    /// The reuse path (direct preset, `solver.reuse` not "never").
+    reuser: Option<Reuser>,
 }
 
 impl ReducedSystem {
@@ -277,7 +419,29 @@ impl ReducedSystem {
             lambda_seconds: 0.0,
             dim,
             kind: None,
+            reuser: None,
         })
+    }
+
+    /// Enables the reuse of factorisations across steps (`solver.reuse`): only if the solver
+    /// factorises (direct preset). Collective.
+    pub fn enable_reuse(&mut self, ctx: &Ctx, mode: Reuse) -> petsc::Result<()> {
+        let (_, pc) = self.ls.ksp.type_names()?;
+        if mode == Reuse::Never || !(pc == "lu" || pc == "cholesky") {
+            self.reuser = None;
+            return Ok(());
+        }
+        let ksp = solver::reuse_solver(ctx.comm(), &self.ls.ksp)?;
+        self.reuser = Some(Reuser {
+            mode,
+            ksp,
+            factored: None,
+            current: (Directions::new(), Springs::new()),
+            t_factor: 0.0,
+            t_solve: 0.0,
+            t_iteration: None,
+        });
+        Ok(())
     }
 
     /// Reads the rows of A of the owned pinned nodes (for their symmetric elimination).
@@ -336,6 +500,15 @@ impl ReducedSystem {
             let me = cmap.get(gv).expect("pins are in the map").clone();
             writes.push((r, me, gv * dim - self.row_lo));
         }
+        if let Some(re) = &mut self.reuser {
+            let zero = [[0.0; 3]; 3];
+            let springs = writes
+                .iter()
+                .filter(|(_, me, _)| me.spring != zero)
+                .map(|(_, me, lr)| (*lr, me.spring))
+                .collect();
+            re.current = (cmap.directions(), springs);
+        }
         for (r, me, lr) in &writes {
             let fk = &self.f_local[*lr..*lr + dim];
             let rk = write_symmetric_constraint(
@@ -365,9 +538,89 @@ impl ReducedSystem {
         Ok(())
     }
 
-    /// Solves the step's system; returns the solver's report, the kind of solve and the
-    /// seconds. Collective.
-    pub fn solve(&mut self) -> petsc::Result<(SolveInfo, SolveKind, f64)> {
+    /// Solves the step's system. Without the reuse path: one KSPSolve (a numeric
+    /// factorisation of the direct preset, or Krylov iterations). With it (`allow_reuse`:
+    /// Coulomb's unsymmetric (F7) rows stay on the plain path): Krylov iterations on S_k
+    /// preconditioned by the factorisation of the last factored S_j when [`Reuser::plan`]
+    /// says so, and a numeric refactorisation of S_k otherwise or when they do not reach
+    /// their tolerance within the budget. Collective.
+    pub fn solve(&mut self, ctx: &Ctx, allow_reuse: bool) -> petsc::Result<StepSolve> {
+        if self.reuser.is_none() {
+            return self.solve_plain();
+        }
+        let t = Instant::now();
+        let dim = self.dim;
+        let re = self.reuser.as_mut().expect("checked");
+        // One Allreduce: the slip blocks changed on every rank and the ranks' mean costs,
+        // so that every rank takes the same path.
+        let (dirs, springs) = match &re.factored {
+            Some((d, sp)) => (
+                direction_changes(d, &re.current.0),
+                spring_changes(sp, &re.current.1),
+            ),
+            None => (0, 0),
+        };
+        let g = ctx.sum_vec(&[
+            springs as f64,
+            re.t_factor,
+            re.t_solve,
+            re.t_iteration.unwrap_or(0.0),
+        ]);
+        let n = ctx.size as f64;
+        let rank = 2 * dirs + (dim - 1) * (g[0].round() as usize);
+        let mut step = ReuseStep {
+            rank,
+            budget: 0,
+            krylov_iterations: 0,
+            fallback: false,
+            factorisation_seconds: 0.0,
+        };
+        let plan = if allow_reuse {
+            re.plan(rank, [g[1] / n, g[2] / n, g[3] / n])
+        } else {
+            None
+        };
+        if let Some(budget) = plan {
+            re.ksp.set_operator(&self.s)?;
+            re.ksp.set_reuse_preconditioner(true)?;
+            re.ksp.set_max_iterations(budget)?;
+            let info = re.ksp.solve(&self.rhs, &mut self.u)?;
+            step.budget = budget;
+            step.krylov_iterations = info.iterations;
+            if info.converged() {
+                let secs = t.elapsed().as_secs_f64();
+                re.t_iteration = Some(secs / (info.iterations + 1) as f64);
+                return Ok(StepSolve {
+                    info,
+                    kind: SolveKind::Reuse,
+                    seconds: secs,
+                    reuse: Some(step),
+                });
+            }
+            step.fallback = true;
+        }
+        // A numeric factorisation of S_k (the shared PC sets up anew: its operator changed),
+        // timed apart from its solve.
+        self.ls.ksp.set_reuse_preconditioner(false)?;
+        self.ls.ksp.set_operator(&self.s)?;
+        let tf = Instant::now();
+        self.ls.ksp.set_up()?;
+        re.t_factor = tf.elapsed().as_secs_f64();
+        let ts = Instant::now();
+        let info = self.ls.solve(&self.rhs, &mut self.u)?;
+        re.t_solve = ts.elapsed().as_secs_f64();
+        re.factored = Some(re.current.clone());
+        step.factorisation_seconds = re.t_factor;
+        Ok(StepSolve {
+            info,
+            kind: SolveKind::Factorisation,
+            seconds: t.elapsed().as_secs_f64(),
+            reuse: Some(step),
+        })
+    }
+
+    /// One KSPSolve on the step's matrix (the plain path).
+    fn solve_plain(&mut self) -> petsc::Result<StepSolve> {
         let t = Instant::now();
         self.ls.ksp.set_operator(&self.s)?;
         let info = self.ls.solve(&self.rhs, &mut self.u)?;
@@ -385,7 +638,12 @@ impl ReducedSystem {
                 k
             }
         };
-        Ok((info, kind, t.elapsed().as_secs_f64()))
+        Ok(StepSolve {
+            info,
+            kind,
+            seconds: t.elapsed().as_secs_f64(),
+            reuse: None,
+        })
     }
 
     /// (3.28) for the last solution: λ = f − A u on the contact rows (one MatMult), into `it`.

@@ -1,0 +1,223 @@
+//! `solver.reuse` (issue 9, item 1): Newton steps of the direct preset that solve their reduced
+//! system by GMRES preconditioned with an earlier step's factorisation end in the same iterate
+//! as the plain path (every step refactorised): the same active sets step by step, the same
+//! final active nodes and u within 1e-10 of max|u|, on 1 and 2 ranks, frictionless (2D, 3D)
+//! and Tresca. "always" is used to force the reuse (its choice does not depend on timings);
+//! where its budget is too small it must refactorise and still give the same answer.
+//! summary.json records every step's solve consistently.
+
+mod common;
+use common::*;
+use serde_json::Value;
+use std::path::{Path, PathBuf};
+
+/// max |u_a − u_b| / max |u_a| over all nodes (by node id).
+fn u_diff(a: &Solved, b: &Solved) -> f64 {
+    let (ua, ub) = (a.displacement(), b.displacement());
+    assert_eq!(ua.len(), ub.len());
+    let scale = ua.values().flatten().fold(0.0f64, |m, x| m.max(x.abs()));
+    assert!(scale > 0.0, "u = 0: nothing tested");
+    let (diff, _) = max_diff(&ua, &ub);
+    diff / scale
+}
+
+fn history(s: &Solved) -> Vec<Value> {
+    get(&s.summary, &["newton", "history"])
+        .as_array()
+        .expect("history array")
+        .clone()
+}
+
+fn active_nodes(s: &Solved) -> Vec<u64> {
+    s.contact_rows_by_id()
+        .iter()
+        .filter(|(_, r)| r.active())
+        .map(|(id, _)| *id)
+        .collect()
+}
+
+/// Steps solved by [kind] and the fallbacks, after checking the history's consistency:
+/// factorisations + reuses = steps = newton.steps, newton.factorisations counts the
+/// factorisations, a reuse made 1..=budget Krylov iterations, a fallback reached its budget
+/// (or broke down) and refactorised, and `reuse` is recorded exactly when `with_reuse`.
+fn check_history(s: &Solved, with_reuse: bool) -> (usize, usize, usize) {
+    let h = history(s);
+    assert_eq!(h.len(), s.steps(), "{}", s.run.output());
+    let (mut fact, mut reuse, mut fallback) = (0, 0, 0);
+    for (i, e) in h.iter().enumerate() {
+        let kind = e["solve"].as_str().expect("solve kind");
+        let r = &e["reuse"];
+        assert_eq!(!r.is_null(), with_reuse, "step {}: {e}", i + 1);
+        match kind {
+            "factorisation" => fact += 1,
+            "reuse" => {
+                reuse += 1;
+                assert!(i > 0, "the first step has nothing to reuse: {e}");
+                let its = e["iterations"].as_u64().unwrap();
+                assert_eq!(r["krylov_iterations"].as_u64(), Some(its), "{e}");
+                assert!(its >= 1 && its <= r["budget"].as_u64().unwrap(), "{e}");
+                assert_eq!(r["fallback"], Value::Bool(false), "{e}");
+                assert_eq!(r["factorisation_seconds"].as_f64(), Some(0.0), "{e}");
+            }
+            other => panic!("unexpected solve kind {other} on the direct preset: {e}"),
+        }
+        if with_reuse && r["fallback"] == Value::Bool(true) {
+            fallback += 1;
+            assert_eq!(kind, "factorisation", "{e}");
+            let its = r["krylov_iterations"].as_u64().unwrap();
+            assert!(its >= 1 && its <= r["budget"].as_u64().unwrap(), "{e}");
+        }
+    }
+    assert_eq!(fact + reuse, s.steps());
+    assert_eq!(s.f(&["newton", "factorisations"]) as usize, fact);
+    assert_eq!(h[0]["solve"], "factorisation");
+    (fact, reuse, fallback)
+}
+
+/// Runs `case` with reuse "never" and `mode`: the same steps, active sets and active nodes, u
+/// within 1e-10; returns (reuses, fallbacks) of the `mode` run.
+fn same_as_plain(np: usize, case: &Path, sets: &[&str], mode: &str) -> (usize, usize) {
+    let with = |m: &str| {
+        let mut v: Vec<String> = sets.iter().map(|s| s.to_string()).collect();
+        v.push(format!("solver.reuse=\"{m}\""));
+        v
+    };
+    let plain_sets = with("never");
+    let plain = solve(
+        np,
+        case,
+        &plain_sets.iter().map(String::as_str).collect::<Vec<_>>(),
+    );
+    plain.assert_converged("plain path");
+    let reuse_sets = with(mode);
+    let reuse = solve(
+        np,
+        case,
+        &reuse_sets.iter().map(String::as_str).collect::<Vec<_>>(),
+    );
+    reuse.assert_converged(mode);
+    let (pf, pr, _) = check_history(&plain, false);
+    assert_eq!((pf, pr), (plain.steps(), 0));
+    let (_, reuses, fallbacks) = check_history(&reuse, true);
+    assert_eq!(plain.active_history(), reuse.active_history());
+    assert_eq!(active_nodes(&plain), active_nodes(&reuse));
+    assert!(!active_nodes(&plain).is_empty());
+    let d = u_diff(&plain, &reuse);
+    assert!(
+        d <= 1e-10,
+        "{} on {np} rank(s), reuse = {mode}: |u - u_plain| / max|u| = {d:e}\n{}",
+        case.display(),
+        reuse.run.output()
+    );
+    (reuses, fallbacks)
+}
+
+fn hertz(level: usize) -> (PathBuf, String) {
+    let mesh = repo(&format!("cases/hertz/meshes/hertz_refined_L{level}.msh"));
+    (
+        repo("cases/hertz/hertz.toml"),
+        format!("mesh.file={}", toml_path(&mesh)),
+    )
+}
+
+#[test]
+fn frictionless_2d_reuse_and_fallback_agree_with_plain() {
+    // Hertz refined L3 (4 134 dofs, 7 steps, a free rigid mode pinned): the second step
+    // changes 32 nodes (rank ~66 > the 30 iterations "always" allows), so it must fall back;
+    // later steps change few nodes and reuse.
+    let (case, mesh) = hertz(3);
+    for np in [1, 2] {
+        let (reuses, fallbacks) = same_as_plain(np, &case, &[&mesh], "always");
+        assert!(reuses >= 1, "{np} rank(s): no step reused");
+        assert!(fallbacks >= 1, "{np} rank(s): no step fell back");
+    }
+    let (reuses, _) = same_as_plain(2, &repo("cases/blocks/indent2d.toml"), &[], "always");
+    assert!(reuses >= 1);
+}
+
+#[test]
+fn auto_agrees_with_plain() {
+    // What "auto" chooses depends on the measured costs; whatever it chose, the answer and the
+    // record are the plain path's.
+    let (case, mesh) = hertz(3);
+    same_as_plain(2, &case, &[&mesh], "auto");
+}
+
+#[test]
+fn tresca_reuse_agrees_with_plain() {
+    for np in [1, 2] {
+        let (reuses, _) = same_as_plain(
+            np,
+            &repo("tests/cases/tresca/hertz_tresca.toml"),
+            &[],
+            "always",
+        );
+        assert!(reuses >= 1, "{np} rank(s): no step reused");
+    }
+    let (reuses, _) = same_as_plain(
+        1,
+        &repo("tests/cases/tresca/block3d_tresca.toml"),
+        &[],
+        "always",
+    );
+    assert!(reuses >= 1);
+}
+
+#[test]
+fn frictionless_3d_reuse_agrees_with_plain() {
+    for np in [1, 2] {
+        let (reuses, _) = same_as_plain(
+            np,
+            &repo("tests/cases/sphere3d.toml"),
+            &["newton.init=\"auto\""],
+            "always",
+        );
+        assert!(reuses >= 1, "{np} rank(s): no step reused");
+    }
+}
+
+#[test]
+fn coulomb_and_iterative_preset_stay_plain() {
+    // Coulomb's unsymmetric (F7) rows: every step refactorises even with "always".
+    let s = solve(
+        1,
+        &repo("tests/cases/tresca/block2d_tresca.toml"),
+        &[
+            "contact.friction={law=\"coulomb\", mu=0.3, algorithm=\"newton\"}",
+            "solver.reuse=\"always\"",
+        ],
+    );
+    s.assert_converged("Coulomb");
+    let (fact, reuse, fallback) = check_history(&s, true);
+    assert_eq!((fact, reuse, fallback), (s.steps(), 0, 0));
+    // The iterative preset has no factorisation to reuse: no reuse record.
+    let s = solve(
+        1,
+        &repo("cases/blocks/indent2d.toml"),
+        &["solver.preset=\"iterative\"", "solver.reuse=\"always\""],
+    );
+    s.assert_converged("iterative");
+    for e in history(&s) {
+        assert_eq!(e["solve"], "krylov", "{e}");
+        assert!(e["reuse"].is_null(), "{e}");
+    }
+}
+
+#[test]
+fn bad_reuse_value_is_an_input_error() {
+    let tmp = tempfile::tempdir().unwrap();
+    let out = tmp.path().join("out");
+    let r = run_solver(
+        1,
+        &repo("cases/blocks/indent2d.toml"),
+        &["solver.reuse=\"sometimes\""],
+        &out,
+    );
+    r.expect_code(2, "solver.reuse = sometimes");
+    assert!(
+        r.stderr.contains("solver.reuse") && r.stderr.contains("\"never\""),
+        "{}",
+        r.output()
+    );
+    assert!(!out.exists(), "nothing written");
+}

@@ -452,24 +452,58 @@ fn facet_home(key: &[u64; 3], size: usize) -> usize {
     ((h >> 32) % size as u64) as usize
 }
 
+/// Calls `f` with every run of records with the same facet key (records sorted).
+fn facet_runs(recs: &[[u64; 4]], mut f: impl FnMut(&[[u64; 4]])) {
+    let mut i = 0;
+    while i < recs.len() {
+        let mut j = i + 1;
+        while j < recs.len() && recs[j][..3] == recs[i][..3] {
+            j += 1;
+        }
+        f(&recs[i..j]);
+        i = j;
+    }
+}
+
 /// Dual-graph rows of this rank's block of cells (cells sharing a facet), CSR, global cell
-/// indices, neighbours ascending: facet keys are sent to a home rank by hash, which sends
-/// every pair of cells sharing a facet back to the readers of the cells. Two exchanges.
+/// indices, neighbours ascending. A facet of exactly two cells of the block is matched on the
+/// block's rank; every other facet (on the boundary, between blocks, or of more than two
+/// cells) is sent to a home rank chosen by hashing its key, which sends every pair of cells
+/// sharing it back to the readers of the cells. Two exchanges. (A facet of two cells of one
+/// block and more of other blocks — not a valid mesh — loses the pairs across.)
 fn dual_graph(world: &SimpleCommunicator, b: &Blocks) -> (Vec<PInt>, Vec<PInt>) {
     let (rank, size) = rank_size(world);
     let (w, npc) = (b.dim, b.dim + 1);
     let lo = blk(b.n_cells, size, rank);
     let n_local = b.cell_tags.len();
-    let recv = exchange(world, |p| {
-        for (i, cell) in b.cells.chunks_exact(npc).enumerate() {
-            for skip in 0..npc {
-                let key = facet_key(cell, skip);
-                p.to(facet_home(&key, size)).extend(&key[..w]);
-                p.push((lo + i) as u64);
-            }
+    // [facet key (padded), cell] of this block, sorted by key
+    let mut mine: Vec<[u64; 4]> = Vec::with_capacity(n_local * npc);
+    for (i, cell) in b.cells.chunks_exact(npc).enumerate() {
+        for skip in 0..npc {
+            let key = facet_key(cell, skip);
+            mine.push([key[0], key[1], key[2], (lo + i) as u64]);
+        }
+    }
+    mine.sort_unstable();
+    let mut local_pairs: Vec<u64> = Vec::new();
+    facet_runs(&mine, |run| {
+        if run.len() == 2 && run[0][3] != run[1][3] {
+            local_pairs.extend_from_slice(&[run[0][3], run[1][3], run[1][3], run[0][3]]);
         }
     });
-    // [facet key (padded), cell], sorted: the cells of a facet are neighbours.
+    let recv = exchange(world, |p| {
+        facet_runs(&mine, |run| {
+            if run.len() != 2 || run[0][3] == run[1][3] {
+                for r in run {
+                    let key = [r[0], r[1], r[2]];
+                    p.to(facet_home(&key, size)).extend(&key[..w]);
+                    p.push(r[3]);
+                }
+            }
+        });
+    });
+    drop(mine);
+    // at the homes: the cells of a facet are neighbours
     let mut recs: Vec<[u64; 4]> = recv
         .data
         .chunks_exact(w + 1)
@@ -483,41 +517,40 @@ fn dual_graph(world: &SimpleCommunicator, b: &Blocks) -> (Vec<PInt>, Vec<PInt>) 
     drop(recv);
     recs.sort_unstable();
     let pairs = exchange(world, |p| {
-        let mut i = 0;
-        while i < recs.len() {
-            let mut j = i;
-            while j < recs.len() && recs[j][..3] == recs[i][..3] {
-                j += 1;
-            }
-            for a in i..j {
-                for c in i..j {
-                    if a != c {
-                        let ca = recs[a][3];
-                        p.to(block_of(ca as usize, b.n_cells, size))
-                            .extend(&[ca, recs[c][3]]);
+        facet_runs(&recs, |run| {
+            for a in run {
+                for c in run {
+                    if a[3] != c[3] {
+                        p.to(block_of(a[3] as usize, b.n_cells, size))
+                            .extend(&[a[3], c[3]]);
                     }
                 }
             }
-            i = j;
-        }
+        });
     });
     drop(recs);
+    let all = || {
+        local_pairs
+            .chunks_exact(2)
+            .chain(pairs.data.chunks_exact(2))
+    };
     // CSR by a counting sort on the local cell, then every row sorted and unique.
     let mut start = vec![0usize; n_local + 1];
-    for pr in pairs.data.chunks_exact(2) {
+    for pr in all() {
         start[pr[0] as usize - lo + 1] += 1;
     }
     for i in 0..n_local {
         start[i + 1] += start[i];
     }
     let mut fill = start.clone();
-    let mut adjncy = vec![0 as PInt; pairs.data.len() / 2];
-    for pr in pairs.data.chunks_exact(2) {
+    let mut adjncy = vec![0 as PInt; start[n_local]];
+    for pr in all() {
         let i = pr[0] as usize - lo;
         adjncy[fill[i]] = pr[1] as PInt;
         fill[i] += 1;
     }
     drop(pairs);
+    drop(local_pairs);
     drop(fill);
     let mut xadj = Vec::with_capacity(n_local + 1);
     xadj.push(0 as PInt);

@@ -244,6 +244,11 @@ pub fn add_in_rank_order(v: &mut Vector, idx: &[PInt], vals: &[f64]) -> petsc::R
     })
 }
 
+/// The number of ranks of MPI_COMM_WORLD (PETSc's communicator).
+pub fn world_size() -> usize {
+    SimpleCommunicator::world().size() as usize
+}
+
 /// Prefix sums: `offsets(&[2, 3, 1]) = [0, 2, 5]` (the first index of every block).
 pub fn offsets(counts: &[usize]) -> Vec<usize> {
     counts

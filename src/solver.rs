@@ -70,6 +70,13 @@ pub fn configure(
     for (name, value) in split_options(&preset_options(preset, rtol, symmetric)) {
         options::set_default(&name, &value)?;
     }
+    // Issue 10 (repeatable runs): on several ranks GAMG's Galerkin products PᵀAP by the
+    // all-at-once algorithm, whose off-process sums do not depend on message arrival (the
+    // default adds them in arrival order: round-off from run to run on 3 or more ranks).
+    // Sequential matrices do not have it (one rank: unchanged).
+    if matches!(preset, Preset::Iterative) && crate::par::world_size() > 1 {
+        options::set_default("-matptap_via", "allatonce")?;
+    }
     Ok(())
 }
 

@@ -9,6 +9,13 @@
 //! coordinates; the home learns which ranks hold the node (the ranks of the cells touching it),
 //! its owner (the lowest of them) and the physical groups of the elements containing it.
 //!
+//! Every exchange is one all-to-all-v of flat u64 records, written by a closure in two
+//! passes (count, fill: `exchange`); per-element data (groups, holders) are CSR arrays, and
+//! local numbers come from one sort of (value, position) pairs, not from a search per entry.
+//! Nothing depends on the order in which messages arrive or on a hash seed, so a run on a
+//! fixed rank count repeats bit for bit. `SIGNORINI_DIST_PHASES=1` prints the seconds and
+//! peak memory of every phase (`scripts/bench-dist`).
+//!
 //! The rules are today's: the same dual graph rows on the same blocks (so the same partition),
 //! a node belongs to the lowest rank among its cells, rank r owns a contiguous range of global
 //! numbers, numbered along the Morton curve of the whole mesh's bounding box (ties by mesh

@@ -13,9 +13,9 @@
 //!   BIT: the partition, the Newton history with its residuals, the active set and u (Hertz L3
 //!   and the 3D block). Nothing sums in the order messages arrive: the mesh pipeline exchanges
 //!   in rank order, the matrix rows are built by their owners, the right-hand sides' off-process
-//!   entries are added in rank order (`par::add_in_rank_order`), and GAMG's PᵀAP uses PETSc's
-//!   all-at-once product (`-matptap_via allatonce`; the default adds off-process parts in
-//!   arrival order, which showed on 3 ranks).
+//!   entries are added in rank order (`par::add_in_rank_order`), and on 3 or more ranks GAMG's
+//!   PᵀAP uses PETSc's all-at-once product (`-matptap_via allatonce`; the default adds the
+//!   off-process parts of two or more ranks in arrival order, which showed on 3 ranks).
 //!
 //! What repeats bit for bit with the direct preset is printed (`--nocapture`): with a fixed
 //! partition and the same matrix and right-hand side, u may still vary by round-off (~1e-17)

@@ -410,7 +410,7 @@ pub fn assemble(comm: MPI_Comm, layout: &Layout, p: &Problem) -> petsc::Result<S
     let mut bidx: Vec<PInt> = Vec::new();
     let mut bval: Vec<f64> = Vec::new();
     load_entries(p, layout, false, &mut bidx, &mut bval);
-    b.set_values(&bidx, &bval, true)?;
+    crate::par::add_in_rank_order(&mut b, &bidx, &bval)?; // deterministic order (issue 10)
     b.assemble()?;
     b.write(|bv| {
         for &(i, v) in &fixed_rhs {
@@ -489,7 +489,7 @@ fn held_loads(
     h.write(|x| x.iter_mut().for_each(|v| *v = 0.0))?;
     let (mut idx, mut val) = (Vec::new(), Vec::new());
     load_entries(p, layout, true, &mut idx, &mut val);
-    h.set_values(&idx, &val, true)?;
+    crate::par::add_in_rank_order(&mut h, &idx, &val)?; // deterministic order (issue 10)
     h.assemble()?;
     h.write(|x| {
         for &(i, _) in fixed_rhs {

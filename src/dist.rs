@@ -9,6 +9,13 @@
 //! coordinates; the home learns which ranks hold the node (the ranks of the cells touching it),
 //! its owner (the lowest of them) and the physical groups of the elements containing it.
 //!
+//! Every exchange is one all-to-all-v of flat u64 records, written by a closure in two
+//! passes (count, fill: `exchange`); per-element data (groups, holders) are CSR arrays, and
+//! local numbers come from one sort of (value, position) pairs, not from a search per entry.
+//! Nothing depends on the order in which messages arrive or on a hash seed, so a run on a
+//! fixed rank count repeats bit for bit. `SIGNORINI_DIST_PHASES=1` prints the seconds and
+//! peak memory of every phase (`scripts/bench-dist`).
+//!
 //! The rules are today's: the same dual graph rows on the same blocks (so the same partition),
 //! a node belongs to the lowest rank among its cells, rank r owns a contiguous range of global
 //! numbers, numbered along the Morton curve of the whole mesh's bounding box (ties by mesh
@@ -47,45 +54,97 @@ fn block_of(i: usize, n: usize, size: usize) -> usize {
     lo
 }
 
-/// All-to-all of u64 streams: `send[r]` goes to rank r; returns what every rank sent here,
-/// concatenated in rank order.
-fn exchange(world: &SimpleCommunicator, send: Vec<Vec<u64>>) -> Vec<u64> {
-    exchange_counted(world, send).0
+/// The records of one all-to-all-v, written by the same closure in two passes: the first
+/// counts the u64 sent to every rank, the second writes them into one contiguous buffer at
+/// their rank's place. No vector per item or per rank.
+struct Packer {
+    filling: bool,
+    dest: usize,
+    counts: Vec<usize>,
+    fill: Vec<usize>,
+    buf: Vec<u64>,
 }
 
-/// As [`exchange`], with the number of u64 received from each rank.
-fn exchange_counted(world: &SimpleCommunicator, send: Vec<Vec<u64>>) -> (Vec<u64>, Vec<usize>) {
-    let size = send.len();
-    let counts: Vec<i32> = send.iter().map(|v| v.len() as i32).collect();
+impl Packer {
+    /// The next values go to rank r.
+    fn to(&mut self, r: usize) -> &mut Packer {
+        self.dest = r;
+        self
+    }
+
+    fn push(&mut self, x: u64) {
+        if self.filling {
+            self.buf[self.fill[self.dest]] = x;
+            self.fill[self.dest] += 1;
+        } else {
+            self.counts[self.dest] += 1;
+        }
+    }
+
+    fn extend(&mut self, xs: &[u64]) {
+        if self.filling {
+            let f = self.fill[self.dest];
+            self.buf[f..f + xs.len()].copy_from_slice(xs);
+            self.fill[self.dest] += xs.len();
+        } else {
+            self.counts[self.dest] += xs.len();
+        }
+    }
+}
+
+/// What one all-to-all-v brought: every rank's records, concatenated in rank order.
+struct Received {
+    data: Vec<u64>,
+    /// Rank r's records are data[offsets[r]..offsets[r + 1]].
+    offsets: Vec<usize>,
+}
+
+impl Received {
+    fn from(&self, r: usize) -> &[u64] {
+        &self.data[self.offsets[r]..self.offsets[r + 1]]
+    }
+}
+
+/// One all-to-all-v of u64 records (and one all-to-all of the counts): `pack` writes every
+/// record with its destination; it is called twice (count, fill) and must write the same
+/// records both times. Collective.
+fn exchange(world: &SimpleCommunicator, mut pack: impl FnMut(&mut Packer)) -> Received {
+    let size = world.size() as usize;
+    let mut p = Packer {
+        filling: false,
+        dest: 0,
+        counts: vec![0; size],
+        fill: Vec::new(),
+        buf: Vec::new(),
+    };
+    pack(&mut p);
+    let displs = crate::par::offsets(&p.counts);
+    let total: usize = p.counts.iter().sum();
+    p.fill = displs.clone();
+    p.buf = vec![0u64; total];
+    p.filling = true;
+    pack(&mut p);
+    debug_assert!((0..size).all(|r| p.fill[r] == displs[r] + p.counts[r]));
+    let to_i32 = |v: &[usize]| -> Vec<i32> {
+        v.iter()
+            .map(|&c| i32::try_from(c).expect("fewer than 2^31 values per message"))
+            .collect()
+    };
+    let counts = to_i32(&p.counts);
     let mut rcounts = vec![0i32; size];
     world.all_to_all_into(&counts[..], &mut rcounts[..]);
-    let displs: Vec<i32> = counts
-        .iter()
-        .scan(0, |s, &c| {
-            let d = *s;
-            *s += c;
-            Some(d)
-        })
-        .collect();
-    let rdispls: Vec<i32> = rcounts
-        .iter()
-        .scan(0, |s, &c| {
-            let d = *s;
-            *s += c;
-            Some(d)
-        })
-        .collect();
-    let flat: Vec<u64> = send.into_iter().flatten().collect();
-    let total: usize = rcounts.iter().map(|&c| c as usize).sum();
-    let mut recv = vec![0u64; total];
+    let rc: Vec<usize> = rcounts.iter().map(|&c| c as usize).collect();
+    let mut offsets = crate::par::offsets(&rc);
+    let rtotal: usize = rc.iter().sum();
+    let mut data = vec![0u64; rtotal];
     {
-        let sp = Partition::new(&flat[..], counts, displs);
-        let mut rp = PartitionMut::new(&mut recv[..], rcounts.clone(), rdispls);
+        let sp = Partition::new(&p.buf[..], counts, to_i32(&displs));
+        let mut rp = PartitionMut::new(&mut data[..], rcounts, to_i32(&offsets));
         world.all_to_all_varcount_into(&sp, &mut rp);
     }
-    (recv, rcounts.iter().map(|&c| c as usize).collect())
+    offsets.push(rtotal);
+    Received { data, offsets }
 }
-
 /// This rank's blocks of the mesh file.
 #[derive(Default)]
 struct Blocks {
@@ -377,78 +436,148 @@ fn read_blocks(ctx: &Ctx, path: &Path) -> Result<Blocks, RunError> {
     }
 }
 
-/// Dual-graph rows of this rank's block of cells (cells sharing a facet), CSR, global cell
-/// indices, neighbours ascending: facet keys are sent to a home rank by hash.
-fn dual_graph(world: &SimpleCommunicator, b: &Blocks) -> (Vec<PInt>, Vec<PInt>) {
-    let size = world.size() as usize;
-    let rank = world.rank() as usize;
-    let npc = b.dim + 1;
-    let lo = blk(b.n_cells, size, rank);
-    let n_local = b.cell_tags.len();
-    let mut send = vec![Vec::new(); size];
-    for (i, cell) in b.cells.chunks_exact(npc).enumerate() {
-        for skip in 0..npc {
-            let mut key = [u64::MAX; 3];
-            let mut j = 0;
-            for (a, &v) in cell.iter().enumerate() {
-                if a != skip {
-                    key[j] = v;
-                    j += 1;
-                }
-            }
-            key.sort_unstable();
-            let h = key
-                .iter()
-                .fold(0xcbf29ce484222325u64, |h, &k| {
-                    (h ^ k).wrapping_mul(0x100000001b3)
-                })
-                .wrapping_mul(0x9E3779B97F4A7C15);
-            let home = ((h >> 32) % size as u64) as usize;
-            send[home].extend_from_slice(&[key[0], key[1], key[2], (lo + i) as u64]);
+/// The facet of `cell` without its corner `skip`: its nodes ascending (`u64::MAX` pads the
+/// unused places).
+fn facet_key(cell: &[u64], skip: usize) -> [u64; 3] {
+    let mut key = [u64::MAX; 3];
+    let mut j = 0;
+    for (a, &v) in cell.iter().enumerate() {
+        if a != skip {
+            key[j] = v;
+            j += 1;
         }
     }
-    let recv = exchange(world, send);
-    let mut recs: Vec<[u64; 4]> = recv
-        .chunks_exact(4)
-        .map(|c| [c[0], c[1], c[2], c[3]])
-        .collect();
-    recs.sort_unstable();
-    let mut back = vec![Vec::new(); size];
+    key[..j].sort_unstable();
+    key
+}
+
+/// The rank that matches the cells sharing a facet (a hash of its key).
+fn facet_home(key: &[u64; 3], size: usize) -> usize {
+    let h = key
+        .iter()
+        .fold(0xcbf29ce484222325u64, |h, &k| {
+            (h ^ k).wrapping_mul(0x100000001b3)
+        })
+        .wrapping_mul(0x9E3779B97F4A7C15);
+    ((h >> 32) % size as u64) as usize
+}
+
+/// Calls `f` with every run of records with the same facet key (records sorted).
+fn facet_runs(recs: &[[u64; 4]], mut f: impl FnMut(&[[u64; 4]])) {
     let mut i = 0;
     while i < recs.len() {
-        let mut j = i;
+        let mut j = i + 1;
         while j < recs.len() && recs[j][..3] == recs[i][..3] {
             j += 1;
         }
-        for a in i..j {
-            for c in i..j {
-                if a != c {
-                    let ca = recs[a][3] as usize;
-                    back[block_of(ca, b.n_cells, size)].extend_from_slice(&[ca as u64, recs[c][3]]);
-                }
-            }
-        }
+        f(&recs[i..j]);
         i = j;
     }
-    let recv = exchange(world, back);
-    let mut adj: Vec<Vec<PInt>> = vec![Vec::new(); n_local];
-    for p in recv.chunks_exact(2) {
-        adj[p[0] as usize - lo].push(p[1] as PInt);
-    }
-    let mut xadj = Vec::with_capacity(n_local + 1);
-    let mut adjncy = Vec::new();
-    xadj.push(0 as PInt);
-    for mut a in adj {
-        a.sort_unstable();
-        a.dedup();
-        adjncy.extend_from_slice(&a);
-        xadj.push(adjncy.len() as PInt);
-    }
-    (xadj, adjncy)
 }
 
-/// A received boundary element: (element, tag, nodes, groups).
-type BndRec = (u64, u64, [u64; 3], Vec<u64>);
+/// Dual-graph rows of this rank's block of cells (cells sharing a facet), CSR, global cell
+/// indices, neighbours ascending. A facet of exactly two cells of the block is matched on the
+/// block's rank; every other facet (on the boundary, between blocks, or of more than two
+/// cells) is sent to a home rank chosen by hashing its key, which sends every pair of cells
+/// sharing it back to the readers of the cells. Two exchanges. (A facet of two cells of one
+/// block and more of other blocks — not a valid mesh — loses the pairs across.)
+fn dual_graph(world: &SimpleCommunicator, b: &Blocks) -> (Vec<PInt>, Vec<PInt>) {
+    let (rank, size) = rank_size(world);
+    let (w, npc) = (b.dim, b.dim + 1);
+    let lo = blk(b.n_cells, size, rank);
+    let n_local = b.cell_tags.len();
+    // [facet key (padded), cell] of this block, sorted by key
+    let mut mine: Vec<[u64; 4]> = Vec::with_capacity(n_local * npc);
+    for (i, cell) in b.cells.chunks_exact(npc).enumerate() {
+        for skip in 0..npc {
+            let key = facet_key(cell, skip);
+            mine.push([key[0], key[1], key[2], (lo + i) as u64]);
+        }
+    }
+    mine.sort_unstable();
+    let mut local_pairs: Vec<u64> = Vec::new();
+    facet_runs(&mine, |run| {
+        if run.len() == 2 && run[0][3] != run[1][3] {
+            local_pairs.extend_from_slice(&[run[0][3], run[1][3], run[1][3], run[0][3]]);
+        }
+    });
+    let recv = exchange(world, |p| {
+        facet_runs(&mine, |run| {
+            if run.len() != 2 || run[0][3] == run[1][3] {
+                for r in run {
+                    let key = [r[0], r[1], r[2]];
+                    p.to(facet_home(&key, size)).extend(&key[..w]);
+                    p.push(r[3]);
+                }
+            }
+        });
+    });
+    drop(mine);
+    // at the homes: the cells of a facet are neighbours
+    let mut recs: Vec<[u64; 4]> = recv
+        .data
+        .chunks_exact(w + 1)
+        .map(|c| {
+            let mut r = [u64::MAX; 4];
+            r[..w].copy_from_slice(&c[..w]);
+            r[3] = c[w];
+            r
+        })
+        .collect();
+    drop(recv);
+    recs.sort_unstable();
+    let pairs = exchange(world, |p| {
+        facet_runs(&recs, |run| {
+            for a in run {
+                for c in run {
+                    if a[3] != c[3] {
+                        p.to(block_of(a[3] as usize, b.n_cells, size))
+                            .extend(&[a[3], c[3]]);
+                    }
+                }
+            }
+        });
+    });
+    drop(recs);
+    let all = || {
+        local_pairs
+            .chunks_exact(2)
+            .chain(pairs.data.chunks_exact(2))
+    };
+    // CSR by a counting sort on the local cell, then every row sorted and unique.
+    let mut start = vec![0usize; n_local + 1];
+    for pr in all() {
+        start[pr[0] as usize - lo + 1] += 1;
+    }
+    for i in 0..n_local {
+        start[i + 1] += start[i];
+    }
+    let mut fill = start.clone();
+    let mut adjncy = vec![0 as PInt; start[n_local]];
+    for pr in all() {
+        let i = pr[0] as usize - lo;
+        adjncy[fill[i]] = pr[1] as PInt;
+        fill[i] += 1;
+    }
+    drop(pairs);
+    drop(local_pairs);
+    drop(fill);
+    let mut xadj = Vec::with_capacity(n_local + 1);
+    xadj.push(0 as PInt);
+    let mut out = 0;
+    for i in 0..n_local {
+        adjncy[start[i]..start[i + 1]].sort_unstable();
+        for k in start[i]..start[i + 1] {
+            if k == start[i] || adjncy[k] != adjncy[k - 1] {
+                adjncy[out] = adjncy[k];
+                out += 1;
+            }
+        }
+        xadj.push(out as PInt);
+    }
+    adjncy.truncate(out);
+    (xadj, adjncy)
+}
 
 /// Load imbalance PT-Scotch may leave between the parts (PETSc's default, 1 %).
 const SCOTCH_IMBALANCE: f64 = 0.01;
@@ -467,9 +596,12 @@ pub struct Distributed {
 pub fn read_distributed(ctx: &Ctx, path: &Path, refine: &Refine) -> Result<Distributed, RunError> {
     let (world, comm) = (ctx.world, ctx.comm());
     let t0 = std::time::Instant::now();
+    let mut phases = Phases::start(world);
     let b = read_blocks(ctx, path)?;
     let b = refine::refine_blocks(ctx, path, b, refine)?;
     let read_seconds = t0.elapsed().as_secs_f64();
+    phases.lap("read");
+    phases.report(world);
     let t1 = std::time::Instant::now();
     let (mesh, layout) = build(world, comm, b)?;
     Ok(Distributed {
@@ -478,13 +610,6 @@ pub fn read_distributed(ctx: &Ctx, path: &Path, refine: &Refine) -> Result<Distr
         read_seconds,
         partition_seconds: t1.elapsed().as_secs_f64(),
     })
-}
-
-/// Sorted, unique.
-fn sorted_unique(mut v: Vec<u64>) -> Vec<u64> {
-    v.sort_unstable();
-    v.dedup();
-    v
 }
 
 /// This rank and the number of ranks.
@@ -506,45 +631,68 @@ fn gathered_offsets(world: &SimpleCommunicator, n: usize) -> Vec<usize> {
 
 /// Builds the local mesh and layout from the blocks read, in phases: partition, group
 /// memberships, cells to their ranks, node holders and owners, ghost cells, boundary
-/// elements, node data, global numbering, local mesh, layout. Collective.
+/// elements, node data, global numbering, local mesh, layout. Every exchange is one
+/// all-to-all-v of flat records; the blocks' arrays are freed as soon as their last phase
+/// ends. Collective.
 fn build(
     world: &SimpleCommunicator,
     comm: MPI_Comm,
-    b: Blocks,
+    mut b: Blocks,
 ) -> Result<(Mesh, Layout), RunError> {
+    let mut phases = Phases::start(world);
     let dim = b.dim;
-    let part = partition_cells(world, comm, &b)?;
+    let part = partition_cells(world, comm, &b, &mut phases)?;
     let elem_groups = element_groups(world, &b);
+    b.members = Vec::new();
+    phases.lap("element_groups");
     let node_groups = node_groups(world, &b, &elem_groups);
-    let own = own_cells(world, &b, part, &elem_groups);
-    let own_nodes = sorted_unique(
-        own.iter()
-            .flat_map(|c| c.nodes[..dim + 1].to_vec())
-            .collect(),
-    );
-    let (homes, owners) = node_homes(world, &b, &own_nodes);
-    let ghosts = ghost_cells(world, &own, &owners, dim + 1);
+    phases.lap("node_groups");
+    let own = own_cells(world, &b, &part, &elem_groups);
+    drop(part);
+    b.cells = Vec::new();
+    b.cell_tags = Vec::new();
+    let (own_nodes, own_index) = number_nodes(&own.nodes);
+    phases.lap("own_cells");
+    let (homes, own_owner) = node_homes(world, &b, &own_nodes);
+    phases.lap("node_homes");
+    let ghosts = ghost_cells(world, &own, &own_index, &own_owner);
+    drop(own_owner);
+    phases.lap("ghost_cells");
     let bnd = boundary_elements(world, &b, &elem_groups, &homes);
     drop(elem_groups);
-    let orig = local_node_list(&b, own_nodes, &ghosts, &bnd);
+    b.bnd = Default::default();
+    b.bnd_tags = Default::default();
+    phases.lap("boundary_elements");
+    let (orig, own_local) = local_node_list(own_nodes, &ghosts, &bnd);
     let bbox = global_bbox(world, &b);
-    let reply = node_data_reply(world, &b, &homes, &node_groups, &orig);
+    let mut nodes = node_data(world, &b, &homes, &node_groups, orig);
     let whole = WholeMesh {
         dim,
         n_nodes: b.n_nodes,
         n_facets: b.n_bnd[0],
-        groups: b.groups.clone(),
-        group_sizes: b.group_sizes.clone(),
+        groups: std::mem::take(&mut b.groups),
+        group_sizes: std::mem::take(&mut b.group_sizes),
         bbox,
     };
     drop(b);
     drop(homes);
     drop(node_groups);
-    let nodes = LocalNodes::receive(world, reply, orig);
+    phases.lap("node_data");
     let numbering = global_numbering(world, &nodes, &whole);
-    let mut nodes = nodes;
-    let mesh = local_mesh(world, &whole, &mut nodes, &own, &ghosts, &bnd);
+    phases.lap("global_numbering");
+    let cell_nodes: Vec<usize> = own_index
+        .iter()
+        .map(|&i| own_local[i as usize] as usize)
+        .chain(ghosts.nodes.iter().map(|&v| nodes.local(v)))
+        .collect();
+    drop(own_index);
+    drop(own_local);
+    let mesh = local_mesh(world, &whole, &mut nodes, cell_nodes, &own, &ghosts, &bnd);
+    drop(bnd);
+    phases.lap("local_mesh");
     let layout = local_layout(world, &mesh, nodes, numbering, &own, &ghosts);
+    phases.lap("local_layout");
+    phases.report(world);
     Ok((mesh, layout))
 }
 
@@ -554,155 +702,275 @@ fn partition_cells(
     world: &SimpleCommunicator,
     comm: MPI_Comm,
     b: &Blocks,
-) -> Result<Vec<u64>, RunError> {
+    phases: &mut Phases,
+) -> Result<Vec<u32>, RunError> {
     let (_, size) = rank_size(world);
     if size == 1 {
         return Ok(vec![0; b.cell_tags.len()]);
     }
     let (xadj, adjncy) = dual_graph(world, b);
+    phases.lap("dual_graph");
     let p = if !petsc::options::has("-mat_partitioning_type")? {
         petsc::scotch_partition(comm, &xadj, &adjncy, size, SCOTCH_IMBALANCE)?
     } else {
         petsc::partition_graph(comm, b.n_cells, &xadj, &adjncy, "ptscotch")?
     };
-    Ok(p.iter().map(|&r| r as u64).collect())
+    phases.lap("scotch");
+    Ok(p.iter().map(|&r| r as u32).collect())
 }
 
-/// Phase 2a: group memberships sent to the readers of the elements:
-/// kind → (element − first of this rank's block) → groups.
-fn element_groups(world: &SimpleCommunicator, b: &Blocks) -> [Vec<Vec<u64>>; 4] {
+/// The groups of this rank's block of elements of every kind, CSR over (element − first of
+/// the block).
+struct ElemGroups {
+    ptr: [Vec<usize>; 4],
+    ids: [Vec<u32>; 4],
+}
+
+impl ElemGroups {
+    /// The groups of element i (of this rank's block) of kind k.
+    fn of(&self, k: usize, i: usize) -> &[u32] {
+        &self.ids[k][self.ptr[k][i]..self.ptr[k][i + 1]]
+    }
+}
+
+/// Phase 2a: group memberships sent to the readers of the elements (one exchange of
+/// [kind, element, group]); each element's groups in the file's order.
+fn element_groups(world: &SimpleCommunicator, b: &Blocks) -> ElemGroups {
     let (rank, size) = rank_size(world);
-    let mut send = vec![Vec::new(); size];
-    for &(g, e) in &b.members {
-        let k = b.kind(b.groups[g as usize].dim);
-        let r = block_of(e as usize, b.count(k), size);
-        send[r].extend_from_slice(&[k as u64, e, g]);
-    }
-    let recv = exchange(world, send);
-    let mut elem_groups: [Vec<Vec<u64>>; 4] = Default::default();
-    let elem_lo: [usize; 4] = std::array::from_fn(|k| blk(b.count(k), size, rank));
-    for k in 0..4 {
-        elem_groups[k] = vec![Vec::new(); blk(b.count(k), size, rank + 1) - elem_lo[k]];
-    }
-    for c in recv.chunks_exact(3) {
+    let recv = exchange(world, |p| {
+        for &(g, e) in &b.members {
+            let k = b.kind(b.groups[g as usize].dim);
+            p.to(block_of(e as usize, b.count(k), size))
+                .extend(&[k as u64, e, g]);
+        }
+    });
+    let lo: [usize; 4] = std::array::from_fn(|k| blk(b.count(k), size, rank));
+    let mut ptr: [Vec<usize>; 4] =
+        std::array::from_fn(|k| vec![0; blk(b.count(k), size, rank + 1) - lo[k] + 1]);
+    for c in recv.data.chunks_exact(3) {
         let k = c[0] as usize;
-        elem_groups[k][c[1] as usize - elem_lo[k]].push(c[2]);
+        ptr[k][c[1] as usize - lo[k] + 1] += 1;
     }
-    elem_groups
+    for p in ptr.iter_mut() {
+        for i in 1..p.len() {
+            p[i] += p[i - 1];
+        }
+    }
+    let mut ids: [Vec<u32>; 4] = std::array::from_fn(|k| vec![0; *ptr[k].last().unwrap_or(&0)]);
+    let mut fill = ptr.clone();
+    for c in recv.data.chunks_exact(3) {
+        let (k, i) = (c[0] as usize, c[1] as usize - lo[c[0] as usize]);
+        ids[k][fill[k][i]] = c[2] as u32;
+        fill[k][i] += 1;
+    }
+    ElemGroups { ptr, ids }
 }
 
-/// Phase 2b: node-level memberships at the node homes: per home node, its groups (sorted, unique).
-fn node_groups(
-    world: &SimpleCommunicator,
-    b: &Blocks,
-    elem_groups: &[Vec<Vec<u64>>; 4],
-) -> Vec<Vec<u64>> {
+/// The groups of this rank's home nodes, CSR over (node − first home node): the groups of
+/// every element containing the node, ascending, unique.
+struct NodeGroups {
+    ptr: Vec<usize>,
+    ids: Vec<u32>,
+}
+
+impl NodeGroups {
+    fn of(&self, j: usize) -> &[u32] {
+        &self.ids[self.ptr[j]..self.ptr[j + 1]]
+    }
+}
+
+/// Phase 2b: node-level memberships at the node homes: every rank sends the distinct
+/// (node, group) pairs of its block's elements (one exchange, one u64 each).
+fn node_groups(world: &SimpleCommunicator, b: &Blocks, eg: &ElemGroups) -> NodeGroups {
     let (rank, size) = rank_size(world);
-    let node_lo = blk(b.n_nodes, size, rank);
-    let mut send = vec![Vec::new(); size];
-    for (k, list) in elem_groups.iter().enumerate() {
+    let ng = b.groups.len().max(1) as u64;
+    let mut codes: Vec<u64> = Vec::new();
+    for k in 0..4 {
         let w = b.width(k);
-        for (i, gs) in list.iter().enumerate() {
-            if gs.is_empty() {
-                continue;
-            }
-            let nodes = if k == 0 {
-                &b.cells[i * w..(i + 1) * w]
-            } else {
-                &b.bnd[k - 1][i * w..(i + 1) * w]
-            };
-            for &v in nodes {
-                let h = block_of(v as usize, b.n_nodes, size);
-                for &g in gs {
-                    send[h].extend_from_slice(&[v, g]);
-                }
+        let list = if k == 0 { &b.cells } else { &b.bnd[k - 1] };
+        for (i, nodes) in list.chunks_exact(w).enumerate() {
+            for &g in eg.of(k, i) {
+                codes.extend(nodes.iter().map(|&v| v * ng + g as u64));
             }
         }
     }
-    let recv = exchange(world, send);
-    let mut node_groups: Vec<Vec<u64>> = vec![Vec::new(); b.node_tags.len()];
-    for c in recv.chunks_exact(2) {
-        node_groups[c[0] as usize - node_lo].push(c[1]);
+    codes.sort_unstable();
+    codes.dedup();
+    let recv = exchange(world, |p| {
+        for &c in &codes {
+            p.to(block_of((c / ng) as usize, b.n_nodes, size)).push(c);
+        }
+    });
+    drop(codes);
+    let mut got = recv.data;
+    got.sort_unstable();
+    got.dedup();
+    let node_lo = blk(b.n_nodes, size, rank);
+    let mut ptr = vec![0usize; b.node_tags.len() + 1];
+    for &c in &got {
+        ptr[(c / ng) as usize - node_lo + 1] += 1;
     }
-    for g in node_groups.iter_mut() {
-        g.sort_unstable();
-        g.dedup();
+    for i in 1..ptr.len() {
+        ptr[i] += ptr[i - 1];
     }
-    node_groups
+    let ids = got.iter().map(|&c| (c % ng) as u32).collect();
+    NodeGroups { ptr, ids }
 }
 
-/// A migrated cell: global number, rank, tag, nodes, groups.
-struct CellRec {
-    gc: u64,
-    rank: u32,
-    tag: u64,
-    nodes: [u64; 4],
-    groups: Vec<u64>,
+/// Migrated elements of one width (cells, or boundary elements of one kind) as flat arrays:
+/// global element number, rank (cells: the rank that owns the cell), tag, nodes (mesh
+/// numbers), groups (CSR).
+struct Elems {
+    width: usize,
+    id: Vec<u64>,
+    rank: Vec<u32>,
+    tag: Vec<u64>,
+    nodes: Vec<u64>,
+    gptr: Vec<usize>,
+    gids: Vec<u32>,
 }
 
-/// Cell records [global cell, (rank,) tag, nodes (npc), n groups, groups], sorted by global
-/// cell; without `with_rank` the cells are this rank's (`rank`).
-fn parse_cells(recv: &[u64], with_rank: bool, rank: usize, npc: usize) -> Vec<CellRec> {
-    let mut out = Vec::new();
-    let mut i = 0;
-    while i < recv.len() {
-        let gc = recv[i];
-        let (r, off) = if with_rank {
-            (recv[i + 1] as u32, 1)
-        } else {
-            (rank as u32, 0)
-        };
-        let tag = recv[i + 1 + off];
-        let mut nodes = [0u64; 4];
-        nodes[..npc].copy_from_slice(&recv[i + 2 + off..i + 2 + off + npc]);
-        let ng = recv[i + 2 + off + npc] as usize;
-        let s = i + 3 + off + npc;
-        out.push(CellRec {
-            gc,
-            rank: r,
-            tag,
-            nodes,
-            groups: recv[s..s + ng].to_vec(),
-        });
-        i = s + ng;
+impl Elems {
+    fn new(width: usize) -> Elems {
+        Elems {
+            width,
+            id: Vec::new(),
+            rank: Vec::new(),
+            tag: Vec::new(),
+            nodes: Vec::new(),
+            gptr: vec![0],
+            gids: Vec::new(),
+        }
     }
-    out.sort_unstable_by_key(|c| c.gc);
-    out
+
+    fn len(&self) -> usize {
+        self.id.len()
+    }
+
+    fn nodes_of(&self, i: usize) -> &[u64] {
+        &self.nodes[i * self.width..(i + 1) * self.width]
+    }
+
+    fn groups_of(&self, i: usize) -> &[u32] {
+        &self.gids[self.gptr[i]..self.gptr[i + 1]]
+    }
+
+    /// Writes element i as the record [id, tag, nodes (width), n groups, groups].
+    fn pack(&self, i: usize, p: &mut Packer) {
+        p.extend(&[self.id[i], self.tag[i]]);
+        p.extend(self.nodes_of(i));
+        let gs = self.groups_of(i);
+        p.push(gs.len() as u64);
+        for &g in gs {
+            p.push(g as u64);
+        }
+    }
+
+    /// Appends the record at the start of `rec` (as [`Elems::pack`] writes it) with the rank
+    /// `rank`; returns its length.
+    fn push_record(&mut self, rec: &[u64], rank: u32) -> usize {
+        let w = self.width;
+        self.id.push(rec[0]);
+        self.tag.push(rec[1]);
+        self.rank.push(rank);
+        self.nodes.extend_from_slice(&rec[2..2 + w]);
+        let ng = rec[2 + w] as usize;
+        self.gids
+            .extend(rec[3 + w..3 + w + ng].iter().map(|&g| g as u32));
+        self.gptr.push(self.gids.len());
+        3 + w + ng
+    }
+
+    /// Appends every record of `data`, with the rank `rank`.
+    fn push_all(&mut self, data: &[u64], rank: u32) {
+        let mut i = 0;
+        while i < data.len() {
+            i += self.push_record(&data[i..], rank);
+        }
+    }
+
+    /// Sorted by element number; an element received more than once is kept once.
+    fn sorted(self) -> Elems {
+        if self.id.windows(2).all(|p| p[0] < p[1]) {
+            return self;
+        }
+        let mut order: Vec<(u64, u32)> = self
+            .id
+            .iter()
+            .enumerate()
+            .map(|(i, &e)| (e, i as u32))
+            .collect();
+        order.sort_unstable();
+        order.dedup_by_key(|p| p.0);
+        let mut out = Elems::new(self.width);
+        for &(_, i) in &order {
+            let i = i as usize;
+            out.id.push(self.id[i]);
+            out.tag.push(self.tag[i]);
+            out.rank.push(self.rank[i]);
+            out.nodes.extend_from_slice(self.nodes_of(i));
+            out.gids.extend_from_slice(self.groups_of(i));
+            out.gptr.push(out.gids.len());
+        }
+        out
+    }
 }
 
-/// Phase 3: the cells to their ranks: this rank's own cells, in global order.
-fn own_cells(
-    world: &SimpleCommunicator,
-    b: &Blocks,
-    part: Vec<u64>,
-    elem_groups: &[Vec<Vec<u64>>; 4],
-) -> Vec<CellRec> {
+/// Phase 3: the cells to their ranks (one exchange): this rank's own cells, in global order
+/// (the blocks are in rank order, so they arrive sorted).
+fn own_cells(world: &SimpleCommunicator, b: &Blocks, part: &[u32], eg: &ElemGroups) -> Elems {
     let (rank, size) = rank_size(world);
     let npc = b.dim + 1;
     let cell_lo = blk(b.n_cells, size, rank);
-    let mut send = vec![Vec::new(); size];
-    for (i, cell) in b.cells.chunks_exact(npc).enumerate() {
-        let s = &mut send[part[i] as usize];
-        s.extend_from_slice(&[(cell_lo + i) as u64, b.cell_tags[i]]);
-        s.extend_from_slice(cell);
-        let gs = &elem_groups[0][i];
-        s.push(gs.len() as u64);
-        s.extend_from_slice(gs);
+    let recv = exchange(world, |p| {
+        for (i, cell) in b.cells.chunks_exact(npc).enumerate() {
+            p.to(part[i] as usize)
+                .extend(&[(cell_lo + i) as u64, b.cell_tags[i]]);
+            p.extend(cell);
+            let gs = eg.of(0, i);
+            p.push(gs.len() as u64);
+            for &g in gs {
+                p.push(g as u64);
+            }
+        }
+    });
+    let mut own = Elems::new(npc);
+    own.push_all(&recv.data, rank as u32);
+    own.sorted()
+}
+
+/// The distinct values of `list` (ascending) and the index of every entry of `list` in them
+/// (one sort of (value, position) pairs: no search per entry).
+fn number_nodes(list: &[u64]) -> (Vec<u64>, Vec<u32>) {
+    let mut pairs: Vec<(u64, u32)> = list
+        .iter()
+        .enumerate()
+        .map(|(i, &v)| (v, i as u32))
+        .collect();
+    pairs.sort_unstable();
+    let mut uniq: Vec<u64> = Vec::new();
+    let mut index = vec![0u32; list.len()];
+    for &(v, i) in &pairs {
+        if uniq.last() != Some(&v) {
+            uniq.push(v);
+        }
+        index[i as usize] = (uniq.len() - 1) as u32;
     }
-    drop(part);
-    parse_cells(&exchange(world, send), false, rank, npc)
+    (uniq, index)
 }
 
 /// What the home rank of a block of nodes knows of them: the ranks holding each (ascending;
-/// the first, the lowest, owns it).
+/// the first, the lowest, owns it), CSR over (node − first home node).
 struct Homes {
     node_lo: usize,
-    holders: Vec<Vec<u32>>,
+    ptr: Vec<usize>,
+    ranks: Vec<u32>,
 }
 
 impl Homes {
     fn holders_of(&self, v: u64) -> &[u32] {
-        &self.holders[v as usize - self.node_lo]
+        let j = v as usize - self.node_lo;
+        &self.ranks[self.ptr[j]..self.ptr[j + 1]]
     }
 
     /// The owner of home node v (u64::MAX if no cell holds it).
@@ -711,174 +979,190 @@ impl Homes {
     }
 }
 
-/// The owners of this rank's own nodes, sorted by node.
-struct Owners(Vec<(u64, u64)>);
-
-impl Owners {
-    fn of(&self, v: u64) -> u64 {
-        let i = self
-            .0
-            .binary_search_by_key(&v, |p| p.0)
-            .expect("asked for it");
-        self.0[i].1
-    }
-}
-
 /// Phase 4: holders and owners: every rank tells the homes which nodes its cells hold; the homes
-/// answer with the owners.
-fn node_homes(world: &SimpleCommunicator, b: &Blocks, own_nodes: &[u64]) -> (Homes, Owners) {
+/// answer with the owners (two exchanges). Returns the homes' knowledge and the owner of
+/// every own node (in the order of `own_nodes`, ascending).
+fn node_homes(world: &SimpleCommunicator, b: &Blocks, own_nodes: &[u64]) -> (Homes, Vec<u32>) {
     let (rank, size) = rank_size(world);
     let node_lo = blk(b.n_nodes, size, rank);
-    let mut send = vec![Vec::new(); size];
-    for &v in own_nodes {
-        send[block_of(v as usize, b.n_nodes, size)].push(v);
+    let recv = exchange(world, |p| {
+        for &v in own_nodes {
+            p.to(block_of(v as usize, b.n_nodes, size)).push(v);
+        }
+    });
+    // a counting sort on the node, ranks in ascending order
+    let mut ptr = vec![0usize; b.node_tags.len() + 1];
+    for &v in &recv.data {
+        ptr[v as usize - node_lo + 1] += 1;
     }
-    let (recv_nodes, node_counts) = exchange_counted(world, send);
-    // per home node, the holder ranks (ascending by construction of exchange)
-    let mut homes = Homes {
+    for i in 1..ptr.len() {
+        ptr[i] += ptr[i - 1];
+    }
+    let mut fill = ptr.clone();
+    let mut ranks = vec![0u32; recv.data.len()];
+    for r in 0..size {
+        for &v in recv.from(r) {
+            let j = v as usize - node_lo;
+            ranks[fill[j]] = r as u32;
+            fill[j] += 1;
+        }
+    }
+    drop(fill);
+    let homes = Homes {
         node_lo,
-        holders: vec![Vec::new(); b.node_tags.len()],
+        ptr,
+        ranks,
     };
-    let mut i = 0;
-    for (r, &c) in node_counts.iter().enumerate() {
-        for _ in 0..c {
-            homes.holders[recv_nodes[i] as usize - node_lo].push(r as u32);
-            i += 1;
+    // The answers in the order asked: in rank order they follow `own_nodes` (sorted, and
+    // the homes' blocks are in rank order).
+    let reply = exchange(world, |p| {
+        for r in 0..size {
+            p.to(r);
+            for &v in recv.from(r) {
+                p.push(homes.owner(v));
+            }
         }
-    }
-    let mut reply = vec![Vec::new(); size];
-    let mut i = 0;
-    for (r, &c) in node_counts.iter().enumerate() {
-        for _ in 0..c {
-            let v = recv_nodes[i];
-            reply[r].extend_from_slice(&[v, homes.owner(v)]);
-            i += 1;
-        }
-    }
-    let recv = exchange(world, reply);
-    let mut owner_pairs: Vec<(u64, u64)> = recv.chunks_exact(2).map(|c| (c[0], c[1])).collect();
-    owner_pairs.sort_unstable();
-    (homes, Owners(owner_pairs))
+    });
+    let owner = reply.data.iter().map(|&o| o as u32).collect();
+    (homes, owner)
 }
 
-/// Phase 5: ghost cells: every own cell to the owners of its nodes.
+/// Phase 5: ghost cells: every own cell to the owners of its nodes (one exchange); sorted by
+/// global cell.
 fn ghost_cells(
     world: &SimpleCommunicator,
-    own: &[CellRec],
-    owners: &Owners,
-    npc: usize,
-) -> Vec<CellRec> {
+    own: &Elems,
+    own_index: &[u32],
+    own_owner: &[u32],
+) -> Elems {
     let (rank, size) = rank_size(world);
-    let mut send = vec![Vec::new(); size];
-    for c in own {
-        let mut targets: Vec<usize> = c.nodes[..npc]
-            .iter()
-            .map(|&v| owners.of(v) as usize)
-            .filter(|&r| r != rank)
-            .collect();
-        targets.sort_unstable();
-        targets.dedup();
-        for r in targets {
-            let s = &mut send[r];
-            s.extend_from_slice(&[c.gc, rank as u64, c.tag]);
-            s.extend_from_slice(&c.nodes[..npc]);
-            s.push(c.groups.len() as u64);
-            s.extend_from_slice(&c.groups);
+    let npc = own.width;
+    let recv = exchange(world, |p| {
+        for c in 0..own.len() {
+            let mut to = [u32::MAX; 4];
+            let mut n = 0;
+            for &i in &own_index[c * npc..(c + 1) * npc] {
+                let r = own_owner[i as usize];
+                if r as usize != rank && !to[..n].contains(&r) {
+                    to[n] = r;
+                    n += 1;
+                }
+            }
+            to[..n].sort_unstable();
+            for &r in &to[..n] {
+                own.pack(c, p.to(r as usize));
+            }
         }
+    });
+    let mut ghosts = Elems::new(npc);
+    for r in 0..size {
+        ghosts.push_all(recv.from(r), r as u32);
     }
-    parse_cells(&exchange(world, send), true, rank, npc)
+    ghosts.sorted()
 }
 
-/// Phase 6: boundary elements to every rank holding one of their nodes, through the homes:
-/// [kind, element, tag, nodes (width), n groups, groups] → kind − 1 → sorted records.
+/// Phase 6: boundary elements to every rank holding one of their nodes, through the homes (two
+/// exchanges of [kind, element, tag, nodes (width), n groups, groups]): kind − 1 → elements
+/// sorted by number.
 fn boundary_elements(
     world: &SimpleCommunicator,
     b: &Blocks,
-    elem_groups: &[Vec<Vec<u64>>; 4],
+    eg: &ElemGroups,
     homes: &Homes,
-) -> [Vec<BndRec>; 3] {
+) -> [Elems; 3] {
     let (rank, size) = rank_size(world);
-    let mut send = vec![Vec::new(); size];
-    for k in 1..4 {
-        let w = b.width(k);
-        let lo = blk(b.count(k), size, rank);
-        for (i, nodes) in b.bnd[k - 1].chunks_exact(w).enumerate() {
-            let gs = &elem_groups[k][i];
-            let mut to: Vec<usize> = nodes
-                .iter()
-                .map(|&v| block_of(v as usize, b.n_nodes, size))
-                .collect();
-            to.sort_unstable();
-            to.dedup();
-            for h in to {
-                let s = &mut send[h];
-                s.extend_from_slice(&[k as u64, (lo + i) as u64, b.bnd_tags[k - 1][i]]);
-                s.extend_from_slice(nodes);
-                s.push(gs.len() as u64);
-                s.extend_from_slice(gs);
+    let recv = exchange(world, |p| {
+        for k in 1..4 {
+            let w = b.width(k);
+            let lo = blk(b.count(k), size, rank);
+            for (i, nodes) in b.bnd[k - 1].chunks_exact(w).enumerate() {
+                let mut to = [usize::MAX; 3];
+                let mut n = 0;
+                for &v in nodes {
+                    let h = block_of(v as usize, b.n_nodes, size);
+                    if !to[..n].contains(&h) {
+                        to[n] = h;
+                        n += 1;
+                    }
+                }
+                to[..n].sort_unstable();
+                let gs = eg.of(k, i);
+                for &h in &to[..n] {
+                    p.to(h)
+                        .extend(&[k as u64, (lo + i) as u64, b.bnd_tags[k - 1][i]]);
+                    p.extend(nodes);
+                    p.push(gs.len() as u64);
+                    for &g in gs {
+                        p.push(g as u64);
+                    }
+                }
             }
         }
-    }
-    let recv = exchange(world, send);
-    // at the homes: forward each record to the holders of its home nodes
-    let mut send = vec![Vec::new(); size];
-    let mut i = 0;
-    while i < recv.len() {
-        let k = recv[i] as usize;
-        let w = b.width(k);
-        let len = 3 + w + 1 + recv[i + 3 + w] as usize;
-        let rec = &recv[i..i + len];
-        let mut to: Vec<u32> = rec[3..3 + w]
-            .iter()
-            .filter(|&&v| block_of(v as usize, b.n_nodes, size) == rank)
-            .flat_map(|&v| homes.holders_of(v).iter().copied())
-            .collect();
-        to.sort_unstable();
-        to.dedup();
-        for r in to {
-            send[r as usize].extend_from_slice(rec);
+    });
+    // the length of the record at the start of `rec`
+    let len = |rec: &[u64]| {
+        let w = b.width(rec[0] as usize);
+        4 + w + rec[3 + w] as usize
+    };
+    // at the homes: each record to the holders of its home nodes
+    let mut to: Vec<u32> = Vec::new();
+    let fwd = exchange(world, |p| {
+        let mut i = 0;
+        while i < recv.data.len() {
+            let rec = &recv.data[i..];
+            let (k, n) = (rec[0] as usize, len(rec));
+            to.clear();
+            for &v in &rec[3..3 + b.width(k)] {
+                if block_of(v as usize, b.n_nodes, size) == rank {
+                    to.extend_from_slice(homes.holders_of(v));
+                }
+            }
+            to.sort_unstable();
+            to.dedup();
+            for &r in &to {
+                p.to(r as usize).extend(&rec[..n]);
+            }
+            i += n;
         }
-        i += len;
-    }
-    let recv = exchange(world, send);
-    let mut bnd: [Vec<BndRec>; 3] = Default::default();
+    });
+    drop(recv);
+    let mut bnd: [Elems; 3] = std::array::from_fn(|k| Elems::new(b.width(k + 1)));
     let mut i = 0;
-    while i < recv.len() {
-        let k = recv[i] as usize;
-        let w = b.width(k);
-        let ng = recv[i + 3 + w] as usize;
-        let mut nodes = [0u64; 3];
-        nodes[..w].copy_from_slice(&recv[i + 3..i + 3 + w]);
-        bnd[k - 1].push((
-            recv[i + 1],
-            recv[i + 2],
-            nodes,
-            recv[i + 4 + w..i + 4 + w + ng].to_vec(),
-        ));
-        i += 4 + w + ng;
+    while i < fwd.data.len() {
+        let k = fwd.data[i] as usize;
+        i += 1 + bnd[k - 1].push_record(&fwd.data[i + 1..], 0);
     }
-    for list in bnd.iter_mut() {
-        list.sort_unstable_by_key(|e| e.0);
-        list.dedup_by_key(|e| e.0);
-    }
-    bnd
+    bnd.map(Elems::sorted)
 }
 
-/// Phase 7a: the local nodes (mesh numbers, sorted): those of the own cells, the ghosts and the
-/// boundary elements.
-fn local_node_list(
-    b: &Blocks,
-    own_nodes: Vec<u64>,
-    ghosts: &[CellRec],
-    bnd: &[Vec<BndRec>; 3],
-) -> Vec<u64> {
-    let mut all = own_nodes;
-    all.extend(ghosts.iter().flat_map(|c| c.nodes[..b.dim + 1].to_vec()));
-    for (k, list) in bnd.iter().enumerate() {
-        let w = b.width(k + 1);
-        all.extend(list.iter().flat_map(|e| e.2[..w].to_vec()));
+/// Phase 7a: the local nodes (mesh numbers, ascending): the own nodes merged with those of the
+/// ghosts and the boundary elements; and the local index of every own node.
+fn local_node_list(own_nodes: Vec<u64>, ghosts: &Elems, bnd: &[Elems; 3]) -> (Vec<u64>, Vec<u32>) {
+    let mut extra: Vec<u64> = ghosts
+        .nodes
+        .iter()
+        .chain(bnd.iter().flat_map(|e| e.nodes.iter()))
+        .copied()
+        .filter(|v| own_nodes.binary_search(v).is_err())
+        .collect();
+    extra.sort_unstable();
+    extra.dedup();
+    let mut orig = Vec::with_capacity(own_nodes.len() + extra.len());
+    let mut own_local = Vec::with_capacity(own_nodes.len());
+    let mut e = extra.iter().peekable();
+    for &v in &own_nodes {
+        while let Some(&&x) = e.peek() {
+            if x > v {
+                break;
+            }
+            orig.push(x);
+            e.next();
+        }
+        own_local.push(orig.len() as u32);
+        orig.push(v);
     }
-    sorted_unique(all)
+    orig.extend(e);
+    (orig, own_local)
 }
 
 /// The bounding box of the whole mesh, from the coordinate blocks. Collective.
@@ -900,45 +1184,6 @@ fn global_bbox(world: &SimpleCommunicator, b: &Blocks) -> ([f64; 3], [f64; 3]) {
         [glohi[0], glohi[1], glohi[2]],
         [-glohi[3], -glohi[4], -glohi[5]],
     )
-}
-
-/// Phase 7b: the homes' answers to the requests for the local nodes' data:
-/// [v, owner, tag, x, y, z, n groups, groups] per requested node, per requesting rank.
-fn node_data_reply(
-    world: &SimpleCommunicator,
-    b: &Blocks,
-    homes: &Homes,
-    node_groups: &[Vec<u64>],
-    orig: &[u64],
-) -> Vec<Vec<u64>> {
-    let (_, size) = rank_size(world);
-    let mut send = vec![Vec::new(); size];
-    for &v in orig {
-        send[block_of(v as usize, b.n_nodes, size)].push(v);
-    }
-    let (req, counts) = exchange_counted(world, send);
-    let mut reply = vec![Vec::new(); size];
-    let mut i = 0;
-    for (r, &c) in counts.iter().enumerate() {
-        for _ in 0..c {
-            let v = req[i];
-            let j = v as usize - homes.node_lo;
-            let x = &b.coords[3 * j..3 * j + 3];
-            let gs = &node_groups[j];
-            reply[r].extend_from_slice(&[
-                v,
-                homes.owner(v),
-                b.node_tags[j],
-                x[0].to_bits(),
-                x[1].to_bits(),
-                x[2].to_bits(),
-                gs.len() as u64,
-            ]);
-            reply[r].extend_from_slice(gs);
-            i += 1;
-        }
-    }
-    reply
 }
 
 /// What is kept of the whole mesh once its blocks are dropped.
@@ -963,46 +1208,78 @@ struct LocalNodes {
 }
 
 impl LocalNodes {
-    /// Phase 7c: sends the homes' replies and unpacks the answers. Collective.
-    fn receive(world: &SimpleCommunicator, reply: Vec<Vec<u64>>, orig: Vec<u64>) -> LocalNodes {
-        let recv = exchange(world, reply);
-        let nl = orig.len();
-        let mut n = LocalNodes {
-            coords: vec![[0.0; 3]; nl],
-            tags: vec![0u64; nl],
-            owner: vec![0u32; nl],
-            group_ptr: vec![0usize; nl + 1],
-            group_ids: Vec::new(),
-            orig,
-        };
-        let mut recs: Vec<(usize, usize)> = Vec::with_capacity(nl); // (local, start in recv)
-        let mut i = 0;
-        while i < recv.len() {
-            let l = n.local(recv[i]);
-            recs.push((l, i));
-            i += 7 + recv[i + 6] as usize;
-        }
-        recs.sort_unstable();
-        for &(l, i) in &recs {
-            n.owner[l] = recv[i + 1] as u32;
-            n.tags[l] = recv[i + 2];
-            n.coords[l] = [
-                f64::from_bits(recv[i + 3]),
-                f64::from_bits(recv[i + 4]),
-                f64::from_bits(recv[i + 5]),
-            ];
-            let ng = recv[i + 6] as usize;
-            n.group_ids
-                .extend(recv[i + 7..i + 7 + ng].iter().map(|&g| g as u32));
-            n.group_ptr[l + 1] = n.group_ids.len();
-        }
-        n
-    }
-
     /// The local index of mesh node v.
     fn local(&self, v: u64) -> usize {
         self.orig.binary_search(&v).expect("local node")
     }
+}
+
+/// Phase 7b: the local nodes' data from their homes (two exchanges: the nodes asked, the
+/// answers [owner, tag, x, y, z, n groups, groups] in the order asked, which in rank order
+/// is the order of `orig`).
+fn node_data(
+    world: &SimpleCommunicator,
+    b: &Blocks,
+    homes: &Homes,
+    node_groups: &NodeGroups,
+    orig: Vec<u64>,
+) -> LocalNodes {
+    let (_, size) = rank_size(world);
+    let req = exchange(world, |p| {
+        for &v in &orig {
+            p.to(block_of(v as usize, b.n_nodes, size)).push(v);
+        }
+    });
+    let reply = exchange(world, |p| {
+        for r in 0..size {
+            p.to(r);
+            for &v in req.from(r) {
+                let j = v as usize - homes.node_lo;
+                let x = &b.coords[3 * j..3 * j + 3];
+                let gs = node_groups.of(j);
+                p.extend(&[
+                    homes.owner(v),
+                    b.node_tags[j],
+                    x[0].to_bits(),
+                    x[1].to_bits(),
+                    x[2].to_bits(),
+                    gs.len() as u64,
+                ]);
+                for &g in gs {
+                    p.push(g as u64);
+                }
+            }
+        }
+    });
+    drop(req);
+    let nl = orig.len();
+    let mut n = LocalNodes {
+        coords: Vec::with_capacity(nl),
+        tags: Vec::with_capacity(nl),
+        owner: Vec::with_capacity(nl),
+        group_ptr: Vec::with_capacity(nl + 1),
+        group_ids: Vec::new(),
+        orig,
+    };
+    n.group_ptr.push(0);
+    let d = &reply.data;
+    let mut i = 0;
+    while i < d.len() {
+        n.owner.push(d[i] as u32);
+        n.tags.push(d[i + 1]);
+        n.coords.push([
+            f64::from_bits(d[i + 2]),
+            f64::from_bits(d[i + 3]),
+            f64::from_bits(d[i + 4]),
+        ]);
+        let ng = d[i + 5] as usize;
+        n.group_ids
+            .extend(d[i + 6..i + 6 + ng].iter().map(|&g| g as u32));
+        n.group_ptr.push(n.group_ids.len());
+        i += 6 + ng;
+    }
+    debug_assert_eq!(n.owner.len(), nl);
+    n
 }
 
 /// The global node numbering.
@@ -1014,7 +1291,8 @@ struct Numbering {
 }
 
 /// Phase 8: global numbering: the owned nodes along the Morton curve of the whole mesh (ties
-/// by mesh order); the owners answer for the other local nodes. Collective.
+/// by mesh order); the owners answer for the other local nodes (two exchanges, the answers
+/// in the order asked). Collective.
 fn global_numbering(world: &SimpleCommunicator, n: &LocalNodes, whole: &WholeMesh) -> Numbering {
     let (rank, size) = rank_size(world);
     let (dim, bbox) = (whole.dim, &whole.bbox);
@@ -1034,25 +1312,27 @@ fn global_numbering(world: &SimpleCommunicator, n: &LocalNodes, whole: &WholeMes
     for (i, &l) in owned.iter().enumerate() {
         node_global[l] = node_offsets[rank] + i;
     }
-    let mut send = vec![Vec::new(); size];
-    for l in 0..nl {
-        if n.owner[l] as usize != rank {
-            send[n.owner[l] as usize].push(n.orig[l]);
+    // a node no cell holds has no owner (u32::MAX) and no number
+    let asked = |l: usize| n.owner[l] as usize != rank && (n.owner[l] as usize) < size;
+    let req = exchange(world, |p| {
+        for l in (0..nl).filter(|&l| asked(l)) {
+            p.to(n.owner[l] as usize).push(n.orig[l]);
         }
-    }
-    let (req, counts_req) = exchange_counted(world, send);
-    let mut reply = vec![Vec::new(); size];
-    let mut i = 0;
-    for (r, &c) in counts_req.iter().enumerate() {
-        for _ in 0..c {
-            let l = n.local(req[i]);
-            reply[r].extend_from_slice(&[req[i], node_global[l] as u64]);
-            i += 1;
+    });
+    let reply = exchange(world, |p| {
+        for r in 0..size {
+            p.to(r);
+            for &v in req.from(r) {
+                p.push(node_global[n.local(v)] as u64);
+            }
         }
-    }
-    let recv = exchange(world, reply);
-    for c in recv.chunks_exact(2) {
-        node_global[n.local(c[0])] = c[1] as usize;
+    });
+    drop(req);
+    let mut next = reply.offsets.clone();
+    for l in (0..nl).filter(|&l| asked(l)) {
+        let r = n.owner[l] as usize;
+        node_global[l] = reply.data[next[r]] as usize;
+        next[r] += 1;
     }
     Numbering {
         owned,
@@ -1061,22 +1341,22 @@ fn global_numbering(world: &SimpleCommunicator, n: &LocalNodes, whole: &WholeMes
     }
 }
 
-/// Phase 9: the local mesh: own cells (global order), then ghosts; boundary elements; groups (cell
-/// groups hold own cells only); the whole mesh's counts. Takes the nodes' coordinates, tags
-/// and groups out of `n` (no copies). Collective (one sum).
+/// Phase 9: the local mesh: own cells (global order), then ghosts (`cell_nodes`: their local
+/// nodes); boundary elements; groups (cell groups hold own cells only); the whole mesh's
+/// counts. Takes the nodes' coordinates, tags and groups out of `n` (no copies). Collective
+/// (one sum).
 fn local_mesh(
     world: &SimpleCommunicator,
     whole: &WholeMesh,
     n: &mut LocalNodes,
-    own: &[CellRec],
-    ghosts: &[CellRec],
-    bnd: &[Vec<BndRec>; 3],
+    cell_nodes: Vec<usize>,
+    own: &Elems,
+    ghosts: &Elems,
+    bnd: &[Elems; 3],
 ) -> Mesh {
     let (rank, _) = rank_size(world);
-    let (dim, npc) = (whole.dim, whole.dim + 1);
+    let dim = whole.dim;
     let n_own = own.len();
-    let mut cells = Vec::with_capacity((n_own + ghosts.len()) * npc);
-    let mut cell_tags = Vec::with_capacity(n_own + ghosts.len());
     let mut groups: Vec<Group> = whole
         .groups
         .iter()
@@ -1085,24 +1365,20 @@ fn local_mesh(
             ..g.clone()
         })
         .collect();
-    for (ci, c) in own.iter().chain(ghosts.iter()).enumerate() {
-        cells.extend(c.nodes[..npc].iter().map(|&v| n.local(v)));
-        cell_tags.push(c.tag);
-        if ci < n_own {
-            for &g in &c.groups {
-                if groups[g as usize].dim == dim {
-                    groups[g as usize].elements.push(ci);
-                }
+    for ci in 0..n_own {
+        for &g in own.groups_of(ci) {
+            if groups[g as usize].dim == dim {
+                groups[g as usize].elements.push(ci);
             }
         }
     }
+    let cell_tags = own.tag.iter().chain(&ghosts.tag).copied().collect();
     let mut lists: [(Vec<usize>, Vec<u64>); 3] = Default::default();
-    for k in 0..3 {
-        let w = [dim, 2, 1][k];
-        for (i, e) in bnd[k].iter().enumerate() {
-            lists[k].0.extend(e.2[..w].iter().map(|&v| n.local(v)));
-            lists[k].1.push(e.1);
-            for &g in &e.3 {
+    for (k, e) in bnd.iter().enumerate() {
+        lists[k].0 = e.nodes.iter().map(|&v| n.local(v)).collect();
+        lists[k].1 = e.tag.clone();
+        for i in 0..e.len() {
+            for &g in e.groups_of(i) {
                 groups[g as usize].elements.push(i);
             }
         }
@@ -1112,7 +1388,7 @@ fn local_mesh(
         dim,
         coords: std::mem::take(&mut n.coords),
         node_tags: std::mem::take(&mut n.tags),
-        cells,
+        cells: cell_nodes,
         cell_tags,
         facets,
         facet_tags,
@@ -1141,33 +1417,37 @@ fn local_mesh(
 }
 
 /// Phase 10: the layout: node ownership and numbering, own cells in the order of their lowest
-/// global node (locality of the assembly loop), cell offsets of the output. Collective.
+/// global node (locality of the assembly loop; ties by global cell), cell offsets of the
+/// output. Collective.
 fn local_layout(
     world: &SimpleCommunicator,
     mesh: &Mesh,
     n: LocalNodes,
     numbering: Numbering,
-    own: &[CellRec],
-    ghosts: &[CellRec],
+    own: &Elems,
+    ghosts: &Elems,
 ) -> Layout {
     let (rank, size) = rank_size(world);
     let n_own = own.len();
     let node_global = numbering.node_global;
-    let mut local_cells: Vec<usize> = (0..n_own).collect();
-    local_cells.sort_unstable_by_key(|&c| {
-        (
-            mesh.cell(c)
+    // the keys computed once (a key per comparison would read scattered memory)
+    let mut keyed: Vec<(usize, u64, usize)> = (0..n_own)
+        .map(|c| {
+            let first = mesh
+                .cell(c)
                 .iter()
                 .map(|&v| node_global[v])
                 .min()
-                .unwrap_or(0),
-            own[c].gc,
-        )
-    });
+                .unwrap_or(0);
+            (first, own.id[c], c)
+        })
+        .collect();
+    keyed.sort_unstable();
+    let local_cells = keyed.into_iter().map(|k| k.2).collect();
     Layout {
         rank,
         size,
-        cell_rank: own.iter().chain(ghosts).map(|c| c.rank).collect(),
+        cell_rank: own.rank.iter().chain(&ghosts.rank).copied().collect(),
         node_owner: n.owner,
         node_global,
         node_offsets: numbering.node_offsets,
@@ -1183,4 +1463,60 @@ fn counts_sum(world: &SimpleCommunicator, n: usize) -> usize {
     let mut s = 0u64;
     world.all_reduce_into(&(n as u64), &mut s, mpi::collective::SystemOperation::sum());
     s as usize
+}
+
+/// Seconds and memory of the phases of the pipeline, printed by rank 0 to stderr when the
+/// environment variable `SIGNORINI_DIST_PHASES` is set (on any rank): per phase the slowest
+/// rank's seconds, and per rank the peak resident memory (VmHWM) at the end of the phase.
+struct Phases {
+    on: bool,
+    t: std::time::Instant,
+    rows: Vec<(&'static str, f64, f64)>,
+}
+
+impl Phases {
+    /// Collective (one reduction: the ranks agree on printing).
+    fn start(world: &SimpleCommunicator) -> Phases {
+        let mine = std::env::var_os("SIGNORINI_DIST_PHASES").is_some() as u32;
+        let mut on = 0u32;
+        world.all_reduce_into(&mine, &mut on, mpi::collective::SystemOperation::max());
+        Phases {
+            on: on != 0,
+            t: std::time::Instant::now(),
+            rows: Vec::new(),
+        }
+    }
+
+    fn lap(&mut self, name: &'static str) {
+        if self.on {
+            let s = self.t.elapsed().as_secs_f64();
+            self.rows
+                .push((name, s, crate::par::peak_memory_bytes() / 1e6));
+            self.t = std::time::Instant::now();
+        }
+    }
+
+    /// Collective when on (one all-gather per phase).
+    fn report(&self, world: &SimpleCommunicator) {
+        if !self.on {
+            return;
+        }
+        let size = world.size() as usize;
+        for &(name, s, mb) in &self.rows {
+            let mut all = vec![0.0f64; 2 * size];
+            world.all_gather_into(&[s, mb][..], &mut all[..]);
+            if world.rank() == 0 {
+                let tmax = all.iter().step_by(2).fold(0.0f64, |m, &p| m.max(p));
+                let mbs: Vec<String> = all[1..]
+                    .iter()
+                    .step_by(2)
+                    .map(|p| format!("{p:.0}"))
+                    .collect();
+                eprintln!(
+                    "dist phase {name:<18} {tmax:8.3} s  peak MB per rank [{}]",
+                    mbs.join(", ")
+                );
+            }
+        }
+    }
 }

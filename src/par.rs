@@ -7,9 +7,9 @@
 //! every rank the same `Err` (the lowest failing rank's message and kind).
 
 use crate::error::{InputError, RunError};
-use crate::petsc::{MPI_Comm, Petsc};
+use crate::petsc::{self, MPI_Comm, PInt, Petsc, Vector};
 use mpi::collective::SystemOperation;
-use mpi::datatype::{Equivalence, PartitionMut};
+use mpi::datatype::{Equivalence, Partition, PartitionMut};
 use mpi::topology::SimpleCommunicator;
 use mpi::traits::*;
 use serde_json::{json, Value};
@@ -185,6 +185,68 @@ fn decode(text: &str) -> RunError {
     } else {
         RunError::Failed(message)
     }
+}
+
+/// Adds `vals` at the global rows `idx` of the distributed vector `v` (negative rows are
+/// skipped) in an order that does not depend on message arrival: the entries owned elsewhere
+/// travel in one all-to-all-v; every rank adds its own entries in the order given, then the
+/// other ranks' entries in rank order. Replaces `set_values(.., add)` + `assemble`, whose
+/// VecAssembly adds received entries in the order the messages arrive — a run-to-run
+/// round-off difference where a row gets entries from two or more other ranks. On one rank
+/// the same additions in the same order as `set_values`. Collective over MPI_COMM_WORLD
+/// (PETSc's communicator).
+pub fn add_in_rank_order(v: &mut Vector, idx: &[PInt], vals: &[f64]) -> petsc::Result<()> {
+    let world = SimpleCommunicator::world();
+    let (rank, size) = (world.rank() as usize, world.size() as usize);
+    let (lo, hi) = v.ownership_range()?;
+    let mut starts = vec![0u64; size];
+    world.all_gather_into(&(lo as u64), &mut starts[..]);
+    let owner = |i: usize| starts.partition_point(|&s| s as usize <= i) - 1;
+    let rows = || {
+        idx.iter()
+            .zip(vals)
+            .filter(|(&i, _)| i >= 0)
+            .map(|(&i, &x)| (i as usize, x))
+    };
+    let mut counts = vec![0usize; size];
+    for (i, _) in rows().filter(|&(i, _)| !(lo..hi).contains(&i)) {
+        counts[owner(i)] += 2;
+    }
+    let displs = offsets(&counts);
+    let mut fill = displs.clone();
+    let mut send = vec![0u64; counts.iter().sum()];
+    for (i, x) in rows().filter(|&(i, _)| !(lo..hi).contains(&i)) {
+        let r = owner(i);
+        send[fill[r]] = i as u64;
+        send[fill[r] + 1] = x.to_bits();
+        fill[r] += 2;
+    }
+    let to_i32 = |c: &[usize]| c.iter().map(|&c| c as i32).collect::<Vec<i32>>();
+    let counts = to_i32(&counts);
+    let mut rcounts = vec![0i32; size];
+    world.all_to_all_into(&counts[..], &mut rcounts[..]);
+    let rc: Vec<usize> = rcounts.iter().map(|&c| c as usize).collect();
+    let rdispls = offsets(&rc);
+    let mut recv = vec![0u64; rc.iter().sum()];
+    {
+        let sp = Partition::new(&send[..], counts, to_i32(&displs));
+        let mut rp = PartitionMut::new(&mut recv[..], rcounts, to_i32(&rdispls));
+        world.all_to_all_varcount_into(&sp, &mut rp);
+    }
+    debug_assert!(rc[rank] == 0);
+    v.write(|x| {
+        for (i, val) in rows().filter(|&(i, _)| (lo..hi).contains(&i)) {
+            x[i - lo] += val;
+        }
+        for p in recv.chunks_exact(2) {
+            x[p[0] as usize - lo] += f64::from_bits(p[1]);
+        }
+    })
+}
+
+/// The number of ranks of MPI_COMM_WORLD (PETSc's communicator).
+pub fn world_size() -> usize {
+    SimpleCommunicator::world().size() as usize
 }
 
 /// Prefix sums: `offsets(&[2, 3, 1]) = [0, 2, 5]` (the first index of every block).

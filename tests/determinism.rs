@@ -9,9 +9,17 @@
 //!   id), the same Newton history (step, |A_n|, changes, pins and Krylov iterations exactly;
 //!   residuals to 1e-8 of the largest) and the same displacement to 1e-12.
 //!
-//! What repeats bit for bit is printed (`--nocapture`): with a fixed partition u still varies by
-//! round-off between runs when MUMPS schedules its factorisation dynamically and PETSc adds
-//! the off-process contributions of the assembly in the order their messages arrive.
+//! - With the iterative preset (GMRES + GAMG) three runs on 2 and on 3 ranks repeat BIT FOR
+//!   BIT: the partition, the Newton history with its residuals, the active set and u (Hertz L3
+//!   and the 3D block). Nothing sums in the order messages arrive: the mesh pipeline exchanges
+//!   in rank order, the matrix rows are built by their owners, the right-hand sides' off-process
+//!   entries are added in rank order (`par::add_in_rank_order`), and on 3 or more ranks GAMG's
+//!   PᵀAP uses PETSc's all-at-once product (`-matptap_via allatonce`; the default adds the
+//!   off-process parts of two or more ranks in arrival order, which showed on 3 ranks).
+//!
+//! What repeats bit for bit with the direct preset is printed (`--nocapture`): with a fixed
+//! partition and the same matrix and right-hand side, u may still vary by round-off (~1e-17)
+//! between runs, because MUMPS schedules its parallel factorisation dynamically.
 
 mod common;
 use common::*;
@@ -237,4 +245,71 @@ fn hertz_refined_l3_is_deterministic() {
 #[test]
 fn block3d_is_deterministic() {
     deterministic("block3d", block3d());
+}
+
+/// Three runs on 2 and on 3 ranks with the iterative preset: everything the same, bit for bit.
+fn bit_for_bit_iterative(name: &str, (case, mut sets): (PathBuf, Vec<&'static str>)) {
+    sets.push("solver.preset=\"iterative\"");
+    let case = (case, sets);
+    for np in [2, 3] {
+        three_runs_bit_for_bit(name, np, &case);
+    }
+}
+
+fn three_runs_bit_for_bit(name: &str, np: usize, case: &(PathBuf, Vec<&str>)) {
+    let tmp = tempfile::tempdir().expect("tempdir");
+    let runs: Vec<Outcome> = (0..3)
+        .map(|i| run(np, case, &tmp.path().join(format!("run{i}"))))
+        .collect();
+    let first = &runs[0];
+    assert!(
+        first.active.values().any(|&a| a),
+        "{name}: some node is active"
+    );
+    let bits = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<u64>>();
+    for (i, o) in runs.iter().enumerate().skip(1) {
+        let what = format!(
+            "{name}, iterative preset, run {} vs run 1 on 2 ranks",
+            i + 1
+        );
+        assert_eq!(
+            o.cells_per_rank, first.cells_per_rank,
+            "{what}: cells per rank"
+        );
+        assert_eq!(o.cell_rank, first.cell_rank, "{what}: rank of every cell");
+        assert_eq!(o.history, first.history, "{what}: Newton history");
+        assert_eq!(
+            bits(&o.residuals),
+            bits(&first.residuals),
+            "{what}: residuals differ: {:?} vs {:?}",
+            o.residuals,
+            first.residuals
+        );
+        assert_eq!(o.active, first.active, "{what}: active set");
+        let differ =
+            o.u.iter()
+                .zip(&first.u)
+                .filter(|(a, b)| a.to_bits() != b.to_bits())
+                .count();
+        assert_eq!(
+            differ,
+            0,
+            "{what}: {differ} displacement values differ (max {:.1e} relative)",
+            rel_diff(&o.u, &first.u)
+        );
+    }
+    println!(
+        "{name}: 3 runs on {np} ranks, iterative preset: partition, history, residuals and u bit \
+         for bit"
+    );
+}
+
+#[test]
+fn hertz_refined_l3_repeats_bit_for_bit_with_the_iterative_preset() {
+    bit_for_bit_iterative("hertz refined L3", hertz());
+}
+
+#[test]
+fn block3d_repeats_bit_for_bit_with_the_iterative_preset() {
+    bit_for_bit_iterative("block3d", block3d());
 }

@@ -526,7 +526,7 @@ impl ReducedSystem {
             }
         }
         let (idx, vals): (Vec<PInt>, Vec<f64>) = rhs_add.into_iter().unzip();
-        self.rhs.set_values(&idx, &vals, true)?;
+        crate::par::add_in_rank_order(&mut self.rhs, &idx, &vals)?; // deterministic order (issue 10)
         self.rhs.assemble()?;
         self.s.assemble()?;
         self.rhs.write(|x| {

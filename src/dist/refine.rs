@@ -19,9 +19,7 @@
 //!   edge's elements); old nodes never move; new node tags continue after the largest tag;
 //! - everything is then sent to the standard blocks of the refined counts.
 
-use super::{
-    blk, block_of, element_groups, exchange, exchange_counted, gathered_offsets, rank_size, Blocks,
-};
+use super::{blk, block_of, element_groups, gathered_offsets, rank_size, Blocks};
 use crate::case::{vec3, ObstacleSpec, Projection};
 use crate::error::{InputError, RunError};
 use crate::par::Ctx;
@@ -389,11 +387,11 @@ fn refine_once(world: &SimpleCommunicator, b: Blocks, shapes: &[Shape]) -> Block
 
     // projection masks of the boundary elements (kinds 1, 2) of this rank's blocks
     let eg = element_groups(world, &b);
-    let mask_of = |gs: &Vec<u64>| -> u64 {
+    let mask_of = |gs: &[u32]| -> u64 {
         shapes
             .iter()
             .enumerate()
-            .filter(|(_, s)| gs.iter().any(|g| s.groups.contains(g)))
+            .filter(|(_, s)| gs.iter().any(|&g| s.groups.contains(&u64::from(g))))
             .fold(0u64, |m, (p, _)| m | (1u64 << p))
     };
 
@@ -415,7 +413,7 @@ fn refine_once(world: &SimpleCommunicator, b: Blocks, shapes: &[Shape]) -> Block
     }
     for (k, w) in [(1usize, dim), (2, 2)] {
         for (i, e) in b.bnd[k - 1].chunks_exact(w).enumerate() {
-            push_edges(e, mask_of(&eg[k][i]));
+            push_edges(e, mask_of(eg.of(k, i)));
         }
     }
     drop(eg);
@@ -655,6 +653,24 @@ fn refine_once(world: &SimpleCommunicator, b: Blocks, shapes: &[Shape]) -> Block
         bnd_tags: [t0, t1, t2],
         members: members.chunks_exact(2).map(|c| (c[0], c[1])).collect(),
     }
+}
+
+/// One all-to-all-v of per-rank rows (`send[r]` goes to rank r) through dist's flat
+/// [`super::exchange`]; returns the data received (in rank order) and the count from each rank.
+/// Collective.
+fn exchange_counted(world: &SimpleCommunicator, send: Vec<Vec<u64>>) -> (Vec<u64>, Vec<usize>) {
+    let recv = super::exchange(world, |p| {
+        for (r, v) in send.iter().enumerate() {
+            p.to(r).extend(v);
+        }
+    });
+    let counts = recv.offsets.windows(2).map(|w| w[1] - w[0]).collect();
+    (recv.data, counts)
+}
+
+/// As [`exchange_counted`], the data only.
+fn exchange(world: &SimpleCommunicator, send: Vec<Vec<u64>>) -> Vec<u64> {
+    exchange_counted(world, send).0
 }
 
 #[cfg(test)]

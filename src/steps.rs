@@ -31,6 +31,7 @@ use crate::petsc::Vector;
 use crate::post;
 use crate::say;
 use crate::setup::{self, ContactSettings};
+use crate::signorini::report::{FrictionCertificate, Kkt};
 use crate::signorini::{self, ContactReport, ContactSolution};
 use crate::solver::{self, LinearSummary};
 use serde::Serialize;
@@ -72,6 +73,19 @@ pub struct StepRecord {
     pub half_width: Option<f64>,
     /// 3D: Σ w_k over the active nodes (the contact area).
     pub contact_area: Option<f64>,
+    /// The step's KKT certificate of (3.14) (checked at every step: beyond
+    /// `report::CERTIFICATE_TOL` the step is an error).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub kkt: Option<Kkt>,
+    /// Its worst violation relative to its scale (`Kkt::worst`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub kkt_violation: Option<f64>,
+    /// The step's friction certificate of (3.18), on the increment of the step.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub friction: Option<FrictionCertificate>,
+    /// Its worst violation relative to its scale (`FrictionCertificate::worst`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub friction_violation: Option<f64>,
     /// Seconds of the step (solve, post-processing, output).
     pub seconds: f64,
 }
@@ -93,6 +107,10 @@ impl StepRecord {
             max_pressure: None,
             half_width: None,
             contact_area: None,
+            kkt: None,
+            kkt_violation: None,
+            friction: None,
+            friction_violation: None,
             seconds: 0.0,
         }
     }
@@ -353,6 +371,10 @@ impl Stepper<'_> {
         rec.total_force = Some(r.contact.total_force.clone());
         rec.max_pressure = Some(r.contact.max_pressure);
         rec.half_width = r.contact.half_width.filter(|_| self.mesh.dim == 2);
+        rec.kkt = Some(r.contact.kkt);
+        rec.kkt_violation = Some(r.contact.kkt.worst());
+        rec.friction = r.contact.friction;
+        rec.friction_violation = r.contact.friction.map(|f| f.worst(&r.contact.scales));
         let (stick, slip, area) = contact_counts(&c.result);
         let sums = self.ctx.sum_vec(&[stick, slip, area]);
         if c.result.fields.iter().any(|f| f.name == "slip_state") {
@@ -550,7 +572,10 @@ pub fn history_csv(records: &[StepRecord], dim: usize) -> String {
     for a in &axes[..dim] {
         let _ = write!(out, ",force_{a}");
     }
-    out.push_str(",max_pressure,half_width,contact_area\n");
+    out.push_str(",max_pressure,half_width,contact_area");
+    out.push_str(",kkt_penetration,kkt_positive_lambda_n,kkt_complementarity,kkt_violation");
+    out.push_str(",friction_excess,friction_stick_motion,friction_slip_alignment");
+    out.push_str(",friction_violation\n");
     fn opt<T: std::fmt::Display>(v: Option<T>) -> String {
         v.map(|x| x.to_string()).unwrap_or_default()
     }
@@ -578,12 +603,25 @@ pub fn history_csv(records: &[StepRecord], dim: usize) -> String {
                 num(r.total_force.as_ref().and_then(|f| f.get(k).copied()))
             );
         }
-        let _ = writeln!(
+        let _ = write!(
             out,
             ",{},{},{}",
             num(r.max_pressure),
             num(r.half_width),
             num(r.contact_area)
+        );
+        let (k, f) = (r.kkt.as_ref(), r.friction.as_ref());
+        let _ = writeln!(
+            out,
+            ",{},{},{},{},{},{},{},{}",
+            num(k.map(|k| k.max_penetration)),
+            num(k.map(|k| k.max_positive_lambda_n)),
+            num(k.map(|k| k.max_complementarity)),
+            num(r.kkt_violation),
+            num(f.map(|f| f.max_excess)),
+            num(f.map(|f| f.max_stick_motion)),
+            num(f.map(|f| f.max_slip_alignment_defect)),
+            num(r.friction_violation)
         );
     }
     out

@@ -87,6 +87,9 @@ pub struct ContactSummary {
     pub kkt: Kkt,
     #[serde(skip_serializing_if = "Option::is_none")]
     pub friction: Option<FrictionCertificate>,
+    /// The problem's scales the certificates were judged by (not written).
+    #[serde(skip)]
+    pub scales: Scales,
 }
 
 /// summary.json's "linear_solver" section of a contact run.
@@ -303,6 +306,7 @@ fn final_state(
         half_width,
         kkt,
         friction: friction_certificate,
+        scales,
     };
     Ok((contact, table))
 }

@@ -223,6 +223,9 @@ impl Stepper<'_> {
                 if let Some(b) = &b_full {
                     scale(sys, b, self.fixed, self.held_fixed, &mut fixed, factor)?;
                 }
+                if let Some(c) = last.as_mut().and_then(|s| s.contact.as_mut()) {
+                    c.predict = predictor_ratio(&records, factor);
+                }
                 let previous = last.as_ref().and_then(|s| s.contact.as_ref());
                 let solved = self.solve_once(&physics, &fixed, sys, previous);
                 let ts = t0.elapsed().as_secs_f64();
@@ -399,6 +402,22 @@ fn step_time(done: &[StepRecord], factor: f64) -> f64 {
         factor
     } else {
         last.time + (factor - last.factor).abs()
+    }
+}
+
+/// The predictor of a step at `factor` after the converged steps `done`: the ratio of its
+/// load increment to the last step's, when the last step itself started from a converged step
+/// (its increment is then parallel to this one's: f(t) = t f(1) + (1 − t) f_held) and the
+/// load goes on in the same sense; 0 (no predictor) otherwise.
+fn predictor_ratio(done: &[StepRecord], factor: f64) -> f64 {
+    let [.., before, last] = done else {
+        return 0.0;
+    };
+    let s = (factor - last.factor) / (last.factor - before.factor);
+    if s.is_finite() && s > 0.0 {
+        s
+    } else {
+        0.0
     }
 }
 

@@ -559,3 +559,37 @@ fn certificate_at_every_load_step_on_1_2_3_ranks() {
         }
     }
 }
+
+/// A proportional history (every load scaled together, the 3D block pressed and dragged in
+/// four steps): the solution path is linear (same stick/slip sets, slip directions fixed), so
+/// the predictor of the warm start (the last step's increment extrapolated) is the solution:
+/// the steps after the second take one Newton step (two on several ranks, where round-off may
+/// ask for a confirming step), and the last step equals the static solve.
+#[test]
+fn proportional_history_is_predicted() {
+    let law = coulomb(0.3, "newton");
+    let drag = drag(3, 0.003);
+    let one = converged(1, &block(3), &[&law, &drag]);
+    for np in [1, 2] {
+        let four = converged(np, &block(3), &[&law, &drag, "load.steps=4"]);
+        let h = read_csv(&four.dir.join("history.csv"));
+        let steps: Vec<f64> = h.iter().map(|r| r.f("newton_steps")).collect();
+        eprintln!("{np} ranks: Newton steps per load step {steps:?}");
+        assert_eq!(steps.len(), 4);
+        for (k, &s) in steps.iter().enumerate().skip(2) {
+            assert!(
+                s <= if np == 1 { 1.0 } else { 2.0 },
+                "{np} ranks, step {}: {s} Newton steps ({steps:?})",
+                k + 1
+            );
+        }
+        // the last step's contact nodes (contact_nodes.csv) against the static solve's
+        let keys = ["u_n", "u_t1", "u_t2", "lambda_n", "lambda_t1", "lambda_t2"];
+        let (a, b) = (one.contact_rows_by_id(), four.contact_rows_by_id());
+        let (d, scale) = max_diff(&columns(&a, &keys), &columns(&b, &keys));
+        assert!(
+            scale > 0.0 && d <= 1e-10 * scale,
+            "{np} ranks: {d:e} of {scale:e}"
+        );
+    }
+}

@@ -700,6 +700,24 @@ mod tests {
     }
 
     #[test]
+    fn predictor_only_while_the_load_goes_on() {
+        let done = |fs: &[f64]| -> Vec<StepRecord> { fs.iter().map(|&f| at(f, f)).collect() };
+        // the next increment over the last one
+        assert_eq!(predictor_ratio(&done(&[0.25, 0.5]), 0.75), 1.0);
+        assert_eq!(predictor_ratio(&done(&[0.0, 0.5]), 0.75), 0.5);
+        // a held load: factor 0 first, then the ramp
+        assert_eq!(predictor_ratio(&done(&[0.0, 0.25]), 0.5), 1.0);
+        // the first step has no increment of its own to extrapolate (it started unloaded)
+        assert_eq!(predictor_ratio(&done(&[0.25]), 0.5), 0.0);
+        assert_eq!(predictor_ratio(&[], 0.5), 0.0);
+        // unloading after loading (and back): no predictor
+        assert_eq!(predictor_ratio(&done(&[0.5, 1.0]), 0.7), 0.0);
+        assert_eq!(predictor_ratio(&done(&[1.0, 0.5]), 0.8), 0.0);
+        // unloading on: extrapolated as well
+        assert_eq!(predictor_ratio(&done(&[1.0, 0.5]), 0.25), 0.5);
+    }
+
+    #[test]
     fn times_increase_along_the_load_path() {
         let mut done: Vec<StepRecord> = Vec::new();
         let mut times = Vec::new();

@@ -31,6 +31,7 @@ use crate::petsc::Vector;
 use crate::post;
 use crate::say;
 use crate::setup::{self, ContactSettings};
+use crate::signorini::report::{FrictionCertificate, Kkt};
 use crate::signorini::{self, ContactReport, ContactSolution};
 use crate::solver::{self, LinearSummary};
 use serde::Serialize;
@@ -72,6 +73,19 @@ pub struct StepRecord {
     pub half_width: Option<f64>,
     /// 3D: Σ w_k over the active nodes (the contact area).
     pub contact_area: Option<f64>,
+    /// The step's KKT certificate of (3.14) (checked at every step: beyond
+    /// `report::CERTIFICATE_TOL` the step is an error).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub kkt: Option<Kkt>,
+    /// Its worst violation relative to its scale (`Kkt::worst`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub kkt_violation: Option<f64>,
+    /// The step's friction certificate of (3.18), on the increment of the step.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub friction: Option<FrictionCertificate>,
+    /// Its worst violation relative to its scale (`FrictionCertificate::worst`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub friction_violation: Option<f64>,
     /// Seconds of the step (solve, post-processing, output).
     pub seconds: f64,
 }
@@ -93,6 +107,10 @@ impl StepRecord {
             max_pressure: None,
             half_width: None,
             contact_area: None,
+            kkt: None,
+            kkt_violation: None,
+            friction: None,
+            friction_violation: None,
             seconds: 0.0,
         }
     }
@@ -204,6 +222,9 @@ impl Stepper<'_> {
                 let (p, halvings) = (schedule.planned(), schedule.halvings());
                 if let Some(b) = &b_full {
                     scale(sys, b, self.fixed, self.held_fixed, &mut fixed, factor)?;
+                }
+                if let Some(c) = last.as_mut().and_then(|s| s.contact.as_mut()) {
+                    c.predict = predictor_ratio(&records, factor);
                 }
                 let previous = last.as_ref().and_then(|s| s.contact.as_ref());
                 let solved = self.solve_once(&physics, &fixed, sys, previous);
@@ -353,6 +374,10 @@ impl Stepper<'_> {
         rec.total_force = Some(r.contact.total_force.clone());
         rec.max_pressure = Some(r.contact.max_pressure);
         rec.half_width = r.contact.half_width.filter(|_| self.mesh.dim == 2);
+        rec.kkt = Some(r.contact.kkt);
+        rec.kkt_violation = Some(r.contact.kkt.worst());
+        rec.friction = r.contact.friction;
+        rec.friction_violation = r.contact.friction.map(|f| f.worst(&r.contact.scales));
         let (stick, slip, area) = contact_counts(&c.result);
         let sums = self.ctx.sum_vec(&[stick, slip, area]);
         if c.result.fields.iter().any(|f| f.name == "slip_state") {
@@ -377,6 +402,22 @@ fn step_time(done: &[StepRecord], factor: f64) -> f64 {
         factor
     } else {
         last.time + (factor - last.factor).abs()
+    }
+}
+
+/// The predictor of a step at `factor` after the converged steps `done`: the ratio of its
+/// load increment to the last step's, when the last step itself started from a converged step
+/// (its increment is then parallel to this one's: f(t) = t f(1) + (1 − t) f_held) and the
+/// load goes on in the same sense; 0 (no predictor) otherwise.
+fn predictor_ratio(done: &[StepRecord], factor: f64) -> f64 {
+    let [.., before, last] = done else {
+        return 0.0;
+    };
+    let s = (factor - last.factor) / (last.factor - before.factor);
+    if s.is_finite() && s > 0.0 {
+        s
+    } else {
+        0.0
     }
 }
 
@@ -550,7 +591,10 @@ pub fn history_csv(records: &[StepRecord], dim: usize) -> String {
     for a in &axes[..dim] {
         let _ = write!(out, ",force_{a}");
     }
-    out.push_str(",max_pressure,half_width,contact_area\n");
+    out.push_str(",max_pressure,half_width,contact_area");
+    out.push_str(",kkt_penetration,kkt_positive_lambda_n,kkt_complementarity,kkt_violation");
+    out.push_str(",friction_excess,friction_stick_motion,friction_slip_alignment");
+    out.push_str(",friction_violation\n");
     fn opt<T: std::fmt::Display>(v: Option<T>) -> String {
         v.map(|x| x.to_string()).unwrap_or_default()
     }
@@ -578,12 +622,25 @@ pub fn history_csv(records: &[StepRecord], dim: usize) -> String {
                 num(r.total_force.as_ref().and_then(|f| f.get(k).copied()))
             );
         }
-        let _ = writeln!(
+        let _ = write!(
             out,
             ",{},{},{}",
             num(r.max_pressure),
             num(r.half_width),
             num(r.contact_area)
+        );
+        let (k, f) = (r.kkt.as_ref(), r.friction.as_ref());
+        let _ = writeln!(
+            out,
+            ",{},{},{},{},{},{},{},{}",
+            num(k.map(|k| k.max_penetration)),
+            num(k.map(|k| k.max_positive_lambda_n)),
+            num(k.map(|k| k.max_complementarity)),
+            num(r.kkt_violation),
+            num(f.map(|f| f.max_excess)),
+            num(f.map(|f| f.max_stick_motion)),
+            num(f.map(|f| f.max_slip_alignment_defect)),
+            num(r.friction_violation)
         );
     }
     out
@@ -640,6 +697,24 @@ mod tests {
             time,
             ..StepRecord::new(1, 1, factor, 0)
         }
+    }
+
+    #[test]
+    fn predictor_only_while_the_load_goes_on() {
+        let done = |fs: &[f64]| -> Vec<StepRecord> { fs.iter().map(|&f| at(f, f)).collect() };
+        // the next increment over the last one
+        assert_eq!(predictor_ratio(&done(&[0.25, 0.5]), 0.75), 1.0);
+        assert_eq!(predictor_ratio(&done(&[0.0, 0.5]), 0.75), 0.5);
+        // a held load: factor 0 first, then the ramp
+        assert_eq!(predictor_ratio(&done(&[0.0, 0.25]), 0.5), 1.0);
+        // the first step has no increment of its own to extrapolate (it started unloaded)
+        assert_eq!(predictor_ratio(&done(&[0.25]), 0.5), 0.0);
+        assert_eq!(predictor_ratio(&[], 0.5), 0.0);
+        // unloading after loading (and back): no predictor
+        assert_eq!(predictor_ratio(&done(&[0.5, 1.0]), 0.7), 0.0);
+        assert_eq!(predictor_ratio(&done(&[1.0, 0.5]), 0.8), 0.0);
+        // unloading on: extrapolated as well
+        assert_eq!(predictor_ratio(&done(&[1.0, 0.5]), 0.25), 0.5);
     }
 
     #[test]

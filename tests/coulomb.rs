@@ -475,3 +475,124 @@ fn dirichlet_on_one_rank_only_with_friction() {
         );
     }
 }
+
+/// A press-then-drag history on the 3D block (the pressure held with `ramp = false`, factor 0
+/// = the pressure alone, then the top dragged in four steps): history.csv carries every
+/// step's KKT and friction certificates, each below the tolerance the solver accepts
+/// (`report::CERTIFICATE_TOL` = 1e-6) and at round-off here, summary.json's `load.steps`
+/// the same certificates, and 1, 2 and 3 ranks agree step by step.
+#[test]
+fn certificate_at_every_load_step_on_1_2_3_ranks() {
+    const CERTIFICATE_TOL: f64 = 1e-6;
+    let law = coulomb(0.3, "newton");
+    let drag = drag(3, 0.004);
+    let sets = [
+        law.as_str(),
+        drag.as_str(),
+        "neumann.0.ramp=false",
+        "load.factors=[0, 0.25, 0.5, 0.75, 1.0]",
+    ];
+    let runs: Vec<(usize, Solved)> = [1, 2, 3]
+        .into_iter()
+        .map(|np| (np, converged(np, &block(3), &sets)))
+        .collect();
+    let mut reference: Option<Vec<Row>> = None;
+    for (np, s) in &runs {
+        let h = read_csv(&s.dir.join("history.csv"));
+        assert_eq!(h.len(), 5, "{np} ranks: one row per step");
+        let steps = get(&s.summary, &["load", "steps"])
+            .as_array()
+            .expect("load.steps");
+        assert_eq!(steps.len(), h.len());
+        for (row, js) in h.iter().zip(steps) {
+            let step = row.s("step");
+            for k in ["kkt_violation", "friction_violation"] {
+                let v = row.f(k);
+                eprintln!("{np} ranks, step {step}: {k} {v:.2e}");
+                assert!(
+                    (0.0..=CERTIFICATE_TOL).contains(&v),
+                    "{np} ranks, step {step}: {k} = {v:e}"
+                );
+            }
+            // the absolute residuals are there and consistent with the summary's
+            for (col, path) in [
+                ("kkt_penetration", ["kkt", "max_penetration"]),
+                ("kkt_complementarity", ["kkt", "max_complementarity"]),
+                ("friction_excess", ["friction", "max_excess"]),
+                ("friction_stick_motion", ["friction", "max_stick_motion"]),
+                (
+                    "friction_slip_alignment",
+                    ["friction", "max_slip_alignment_defect"],
+                ),
+            ] {
+                let (c, j) = (row.f(col), get(js, &path).as_f64().expect("number"));
+                assert!(
+                    (c - j).abs() <= 1e-15 * c.abs().max(j.abs()),
+                    "{np} ranks, step {step}: {col} {} vs summary {j}",
+                    row.f(col)
+                );
+            }
+            let fc = get(js, &["friction"]);
+            assert_eq!(
+                fc["stick_count"].as_u64().unwrap() + fc["slip_count"].as_u64().unwrap(),
+                get(&s.summary, &["contact", "nodes"]).as_u64().unwrap(),
+                "{np} ranks, step {step}: every contact node judged"
+            );
+        }
+        // the drag makes a mixed state: some steps stick, some slip
+        assert!(h.iter().all(|r| r.f("stick") > 0.0 && r.f("slip") > 0.0));
+        match &reference {
+            None => reference = Some(h),
+            Some(a) => {
+                for (ra, rb) in a.iter().zip(&h) {
+                    for k in ["factor", "active", "stick", "slip"] {
+                        assert_eq!(ra.s(k), rb.s(k), "{np} ranks vs 1, step {}", ra.s("step"));
+                    }
+                    for k in ["force_x", "force_z", "max_pressure", "contact_area"] {
+                        assert!(
+                            rel(ra.f(k), rb.f(k)) <= 1e-9,
+                            "{np} ranks vs 1, step {}: {k} {} vs {}",
+                            ra.s("step"),
+                            ra.f(k),
+                            rb.f(k)
+                        );
+                    }
+                }
+            }
+        }
+    }
+}
+
+/// A proportional history (every load scaled together, the 3D block pressed and dragged in
+/// four steps): the solution path is linear (same stick/slip sets, slip directions fixed), so
+/// the predictor of the warm start (the last step's increment extrapolated) is the solution:
+/// the steps after the second take one Newton step (two on several ranks, where round-off may
+/// ask for a confirming step), and the last step equals the static solve.
+#[test]
+fn proportional_history_is_predicted() {
+    let law = coulomb(0.3, "newton");
+    let drag = drag(3, 0.003);
+    let one = converged(1, &block(3), &[&law, &drag]);
+    for np in [1, 2] {
+        let four = converged(np, &block(3), &[&law, &drag, "load.steps=4"]);
+        let h = read_csv(&four.dir.join("history.csv"));
+        let steps: Vec<f64> = h.iter().map(|r| r.f("newton_steps")).collect();
+        eprintln!("{np} ranks: Newton steps per load step {steps:?}");
+        assert_eq!(steps.len(), 4);
+        for (k, &s) in steps.iter().enumerate().skip(2) {
+            assert!(
+                s <= if np == 1 { 1.0 } else { 2.0 },
+                "{np} ranks, step {}: {s} Newton steps ({steps:?})",
+                k + 1
+            );
+        }
+        // the last step's contact nodes (contact_nodes.csv) against the static solve's
+        let keys = ["u_n", "u_t1", "u_t2", "lambda_n", "lambda_t1", "lambda_t2"];
+        let (a, b) = (one.contact_rows_by_id(), four.contact_rows_by_id());
+        let (d, scale) = max_diff(&columns(&a, &keys), &columns(&b, &keys));
+        assert!(
+            scale > 0.0 && d <= 1e-10 * scale,
+            "{np} ranks: {d:e} of {scale:e}"
+        );
+    }
+}

@@ -87,6 +87,9 @@ pub struct ContactSummary {
     pub kkt: Kkt,
     #[serde(skip_serializing_if = "Option::is_none")]
     pub friction: Option<FrictionCertificate>,
+    /// The problem's scales the certificates were judged by (not written).
+    #[serde(skip)]
+    pub scales: Scales,
 }
 
 /// summary.json's "linear_solver" section of a contact run.
@@ -113,6 +116,95 @@ pub struct ContactSolution {
     /// the final normal set (`active`) and tangential state (`slip`). A later load step on
     /// the same mesh and boundary starts from it and measures the slip from its u_τ.
     pub nodes: Vec<NodeResult>,
+    /// A warm-started solve: its change since the previous load step (the predictor of the
+    /// next step).
+    pub delta: Option<StepDelta>,
+    /// Set by the load stepping before the next step starts from this solution: the ratio of
+    /// the next load increment to this step's, s > 0: the next solve starts from the linear
+    /// extrapolation `self + s · delta` (0: from this solution itself).
+    pub predict: f64,
+}
+
+/// A load step's change of the contact nodes' values (u, λ in both forms) and of this rank's
+/// rows of u since the previous step.
+pub struct StepDelta {
+    pub nodes: Vec<NodeResult>,
+    pub u_local: Vec<f64>,
+}
+
+impl ContactSolution {
+    /// The start of the next load step: this solution, or with `predict` > 0 and a `delta`
+    /// the linear extrapolation x + s Δx of every contact node's u, λ and of u (the
+    /// increment of the next step predicted from this one's: the load increments of a history
+    /// are all parallel, f(t) = t f(1) + (1 − t) f_held), the normal set from the predicted
+    /// values by (3.23). `u_local`: this rank's rows of u. Local.
+    fn start(
+        &self,
+        b: &ContactBoundary,
+        u_local: Vec<f64>,
+        c: f64,
+    ) -> (Option<Vec<NodeResult>>, Vec<f64>) {
+        let s = self.predict;
+        let Some(d) = self.delta.as_ref().filter(|_| s > 0.0 && s.is_finite()) else {
+            return (None, u_local);
+        };
+        let lin = |x: f64, dx: f64| x + s * dx;
+        let nodes = self
+            .nodes
+            .iter()
+            .zip(&d.nodes)
+            .zip(&b.nodes)
+            .map(|((r, dr), k)| {
+                let mut p = *r;
+                for j in 0..3 {
+                    p.u[j] = lin(r.u[j], dr.u[j]);
+                    p.lambda[j] = lin(r.lambda[j], dr.lambda[j]);
+                }
+                for j in 0..2 {
+                    p.u_t[j] = lin(r.u_t[j], dr.u_t[j]);
+                    p.lambda_t[j] = lin(r.lambda_t[j], dr.lambda_t[j]);
+                }
+                p.u_n = lin(r.u_n, dr.u_n);
+                p.lambda_n = lin(r.lambda_n, dr.lambda_n);
+                p.active = crate::contact::normal_active(p.u_n, p.lambda_n, k.gap, c);
+                p
+            })
+            .collect();
+        let u = u_local
+            .iter()
+            .zip(&d.u_local)
+            .map(|(x, dx)| lin(*x, *dx))
+            .collect();
+        (Some(nodes), u)
+    }
+}
+
+/// This solve's change since `prev` (same mesh and boundary). Local.
+fn step_delta(
+    prev: &ContactSolution,
+    nodes: &[NodeResult],
+    u: &[f64],
+    u_prev: &[f64],
+) -> StepDelta {
+    let sub3 = |a: [f64; 3], b: [f64; 3]| [a[0] - b[0], a[1] - b[1], a[2] - b[2]];
+    let sub2 = |a: [f64; 2], b: [f64; 2]| [a[0] - b[0], a[1] - b[1]];
+    StepDelta {
+        nodes: nodes
+            .iter()
+            .zip(&prev.nodes)
+            .map(|(r, p)| NodeResult {
+                u: sub3(r.u, p.u),
+                lambda: sub3(r.lambda, p.lambda),
+                u_n: r.u_n - p.u_n,
+                u_t: sub2(r.u_t, p.u_t),
+                lambda_n: r.lambda_n - p.lambda_n,
+                lambda_t: sub2(r.lambda_t, p.lambda_t),
+                active: r.active,
+                slip: r.slip,
+            })
+            .collect(),
+        u_local: u.iter().zip(u_prev).map(|(a, b)| a - b).collect(),
+    }
 }
 
 /// Builds c_h, configures the solver, runs Algorithm 1, Algorithm 2 (Tresca) or Coulomb (the
@@ -138,14 +230,10 @@ pub fn solve(
     let mut b = boundary::build(ctx, mesh, layout, settings, fixed)?;
     log_boundary(ctx, &b, &settings.group);
     check_friction_capacity(ctx, &b, fixed, sys, dim, law)?;
-    let warm_u = match previous {
+    let prev_u = match previous {
         Some(prev) => Some(take_reference(ctx, &mut b, prev, friction)?),
         None => None,
     };
-    let warm = previous.zip(warm_u.as_ref()).map(|(prev, u)| WarmStart {
-        nodes: &prev.nodes,
-        u_local: u,
-    });
     solver::configure(
         solver_section.preset,
         solver_section.rtol,
@@ -154,6 +242,16 @@ pub fn solve(
     )?;
     let coords = solver::near_null_space_coordinates(ctx, mesh, layout, solver_section.preset)?;
     let c = complementarity_parameter(ctx, settings, &b, dim);
+    // the start: the previous step's solution, or its extrapolation along its own increment
+    let start = previous
+        .zip(prev_u.clone())
+        .map(|(prev, u)| prev.start(&b, u, c));
+    let warm = previous
+        .zip(start.as_ref())
+        .map(|(prev, (nodes, u))| WarmStart {
+            nodes: nodes.as_deref().unwrap_or(&prev.nodes),
+            u_local: u,
+        });
     let problem = ContactProblem {
         mesh,
         layout,
@@ -184,6 +282,10 @@ pub fn solve(
     }
     let (contact, table) = final_state(ctx, sys, &b, &nr, friction, dim)?;
     let newton = newton_summary(settings, solver_section, c, &mut nr, outer_steps, previous);
+    let delta = match previous.zip(prev_u) {
+        Some((prev, u_prev)) => Some(step_delta(prev, &nr.nodes, &nr.u.to_local_vec()?, &u_prev)),
+        None => None,
+    };
     Ok(ContactSolution {
         result: report::contact_result(&b, &nr.nodes, dim, friction, &table),
         u: nr.u,
@@ -195,6 +297,8 @@ pub fn solve(
             },
         },
         nodes: nr.nodes,
+        delta,
+        predict: 0.0,
     })
 }
 
@@ -304,6 +408,7 @@ fn final_state(
         half_width,
         kkt,
         friction: friction_certificate,
+        scales,
     };
     Ok((contact, table))
 }

@@ -410,6 +410,31 @@ impl Kkt {
             || self.max_complementarity > rel * fs * ls
             || self.max_abs_lambda_t.unwrap_or(0.0) > rel * fs
     }
+
+    /// The worst violation of (3.14) relative to its scale: `beyond(rel)` ⇔ `worst() > rel`
+    /// (the per-step number of history.csv).
+    pub fn worst(&self) -> f64 {
+        let (fs, ls) = (self.force_scale, self.length_scale);
+        [
+            ratio(self.max_penetration, ls),
+            ratio(self.max_positive_lambda_n, fs),
+            ratio(self.max_complementarity, fs * ls),
+            ratio(self.max_abs_lambda_t.unwrap_or(0.0), fs),
+        ]
+        .into_iter()
+        .fold(0.0, f64::max)
+    }
+}
+
+/// v / scale; 0 for v = 0 and infinity for v > 0 at a zero scale (as `v > rel · scale`).
+fn ratio(v: f64, scale: f64) -> f64 {
+    if v <= 0.0 {
+        0.0
+    } else if scale > 0.0 {
+        v / scale
+    } else {
+        f64::INFINITY
+    }
 }
 
 impl FrictionCertificate {
@@ -420,6 +445,16 @@ impl FrictionCertificate {
         self.max_excess > rel * force
             || self.max_stick_motion > rel * length
             || self.max_slip_alignment_defect > rel * force
+    }
+
+    /// The worst violation of (3.18) relative to its scale: `beyond(rel, s)` ⇔
+    /// `worst(s) > rel` (the per-step number of history.csv).
+    pub fn worst(&self, scales: &Scales) -> f64 {
+        let force = scales.force.max(self.bound_scale);
+        let length = scales.length.max(self.length_scale);
+        ratio(self.max_excess, force)
+            .max(ratio(self.max_stick_motion, length))
+            .max(ratio(self.max_slip_alignment_defect, force))
     }
 }
 
@@ -455,6 +490,8 @@ mod tests {
         assert!(!kkt(1e-9).beyond(1e-8));
         assert!(kkt(1e-7).beyond(1e-8));
         assert!(!kkt(1e-7).beyond(CERTIFICATE_TOL));
+        assert!((kkt(1e-7).worst() - 0.5e-7).abs() < 1e-22);
+        assert_eq!(kkt(0.0).worst(), 0.0);
         let mut k = kkt(0.0);
         k.max_abs_lambda_t = Some(1e-3);
         assert!(k.beyond(CERTIFICATE_TOL));
@@ -518,7 +555,9 @@ mod tests {
             slip_count: 2,
         };
         assert!(!c.beyond(CERTIFICATE_TOL, &scales));
+        assert!((c.worst(&scales) - 1e-12).abs() < 1e-27);
         c.max_excess = 2.0; // |λ_τ| 20 × b_k
         assert!(c.beyond(CERTIFICATE_TOL, &scales));
+        assert_eq!(c.worst(&scales), 2.0);
     }
 }

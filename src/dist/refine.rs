@@ -377,16 +377,93 @@ impl Outbox {
     }
 }
 
-/// One level of refinement of the blocks. Collective.
-fn refine_once(world: &SimpleCommunicator, b: Blocks, shapes: &[Shape]) -> Blocks {
-    let (rank, size) = rank_size(world);
-    let dim = b.dim;
-    let npc = dim + 1;
-    let f = factors(dim);
-    let n_nodes = b.n_nodes as u64;
+/// The coordinates of the nodes this rank's elements use (sorted ids and their points).
+struct Fetched {
+    need: Vec<u64>,
+    xyz: Vec<[f64; 3]>,
+}
 
-    // projection masks of the boundary elements (kinds 1, 2) of this rank's blocks
-    let eg = element_groups(world, &b);
+impl Fetched {
+    fn at(&self, v: u64) -> &[f64; 3] {
+        &self.xyz[self.need.binary_search(&v).expect("fetched")]
+    }
+}
+
+/// The new nodes this rank numbers (the edges whose smaller node it holds): their midpoints
+/// (projected where a group asks), the first global edge number of every rank, the largest
+/// node tag of the mesh; and the new node of every local edge.
+struct NewNodes {
+    edges: Edges,
+    home_mid: Vec<[f64; 3]>,
+    edge_offsets: Vec<usize>,
+    max_tag: u64,
+}
+
+/// One level of refinement of the blocks: edges numbered, nodes, cells, boundary elements
+/// and group members of the refined mesh sent to their standard blocks. Collective.
+fn refine_once(world: &SimpleCommunicator, b: Blocks, shapes: &[Shape]) -> Blocks {
+    let dim = b.dim;
+    let f = factors(dim);
+    let (need, xyz) = fetch_coords(world, &b);
+    let pts = Fetched { need, xyz };
+    let (keys, masks) = local_edges(world, &b, shapes);
+    let nn = number_edges(world, &b, keys, masks, &pts, shapes);
+    let n_nodes2 = b.n_nodes + nn.edge_offsets[world.size() as usize];
+    let nodes = refined_nodes(world, &b, &nn, n_nodes2);
+    let edges = nn.edges;
+    let cells = refined_cells(world, &b, &edges, &pts);
+    let bnd = refined_boundary(world, &b, &edges);
+    drop(edges);
+    let kinds: Vec<usize> = b.groups.iter().map(|g| b.kind(g.dim)).collect();
+    let members = refined_members(world, &b, &kinds);
+
+    let split = |v: Vec<u64>, w: usize| -> (Vec<u64>, Vec<u64>) {
+        let n = v.len() / (w + 1);
+        let mut a = Vec::with_capacity(n * w);
+        let mut t = Vec::with_capacity(n);
+        for r in v.chunks_exact(w + 1) {
+            a.extend_from_slice(&r[..w]);
+            t.push(r[w]);
+        }
+        (a, t)
+    };
+    let (cells, cell_tags) = split(cells, dim + 1);
+    let (coord_bits, node_tags) = split(nodes, 3);
+    let [b0, b1, b2] = bnd;
+    let (f0, t0) = split(b0, dim);
+    let (e0, t1) = split(b1, 2);
+    let (p0, t2) = split(b2, 1);
+    Blocks {
+        dim,
+        n_nodes: n_nodes2,
+        n_cells: b.n_cells * f[0],
+        n_bnd: [b.n_bnd[0] * f[1], b.n_bnd[1] * f[2], b.n_bnd[2] * f[3]],
+        group_sizes: b
+            .group_sizes
+            .iter()
+            .zip(&kinds)
+            .map(|(&n, &k)| n * f[k])
+            .collect(),
+        groups: b.groups,
+        cells,
+        cell_tags,
+        coords: coord_bits.into_iter().map(f64::from_bits).collect(),
+        node_tags,
+        bnd: [f0, e0, p0],
+        bnd_tags: [t0, t1, t2],
+        members: members.chunks_exact(2).map(|c| (c[0], c[1])).collect(),
+    }
+}
+
+/// Phase 1: the edges (a < b) of this rank's cells and boundary elements, sorted and unique,
+/// each with the OR of the projection masks of the boundary elements it lies on. Collective.
+fn local_edges(
+    world: &SimpleCommunicator,
+    b: &Blocks,
+    shapes: &[Shape],
+) -> (Vec<(u64, u64)>, Vec<u64>) {
+    let dim = b.dim;
+    let eg = element_groups(world, b);
     let mask_of = |gs: &[u32]| -> u64 {
         shapes
             .iter()
@@ -394,11 +471,6 @@ fn refine_once(world: &SimpleCommunicator, b: Blocks, shapes: &[Shape]) -> Block
             .filter(|(_, s)| gs.iter().any(|&g| s.groups.contains(&u64::from(g))))
             .fold(0u64, |m, (p, _)| m | (1u64 << p))
     };
-
-    let (need, xyz) = fetch_coords(world, &b);
-    let x = |v: u64| &xyz[need.binary_search(&v).expect("fetched")];
-
-    // the edges of the local elements, with the OR of their projection masks
     let mut recs: Vec<(u64, u64, u64)> = Vec::new();
     let mut push_edges = |nodes: &[u64], mask: u64| {
         for i in 0..nodes.len() {
@@ -408,7 +480,7 @@ fn refine_once(world: &SimpleCommunicator, b: Blocks, shapes: &[Shape]) -> Block
             }
         }
     };
-    for cell in b.cells.chunks_exact(npc) {
+    for cell in b.cells.chunks_exact(dim + 1) {
         push_edges(cell, 0);
     }
     for (k, w) in [(1usize, dim), (2, 2)] {
@@ -428,11 +500,25 @@ fn refine_once(world: &SimpleCommunicator, b: Blocks, shapes: &[Shape]) -> Block
             masks.push(m);
         }
     }
+    (keys, masks)
+}
 
-    // to the homes of the edges: [a, b, mask, midpoint]
+/// Phase 2: every edge sent to the home of its smaller node ([a, b, mask, midpoint]); the
+/// homes number their unique edges after the old nodes (a running count over the ranks),
+/// project the midpoints of masked edges, and answer every sender with the new node ids (in
+/// the order of `keys`). Collective.
+fn number_edges(
+    world: &SimpleCommunicator,
+    b: &Blocks,
+    keys: Vec<(u64, u64)>,
+    masks: Vec<u64>,
+    pts: &Fetched,
+    shapes: &[Shape],
+) -> NewNodes {
+    let (rank, size) = rank_size(world);
     let mut send = vec![Vec::new(); size];
     for (&(a, c), &m) in keys.iter().zip(&masks) {
-        let mid = midpoint(x(a), x(c));
+        let mid = midpoint(pts.at(a), pts.at(c));
         let s = &mut send[block_of(a as usize, b.n_nodes, size)];
         s.extend_from_slice(&[a, c, m]);
         s.extend(mid.iter().map(|v| v.to_bits()));
@@ -462,10 +548,8 @@ fn refine_once(world: &SimpleCommunicator, b: Blocks, shapes: &[Shape]) -> Block
         unique_of[i] = home_mask.len() - 1;
     }
     drop(order);
-    let n_home = home_mask.len();
-    let edge_offsets = gathered_offsets(world, n_home);
-    let first_new = n_nodes + edge_offsets[rank] as u64;
-    let n_edges = edge_offsets[size];
+    let edge_offsets = gathered_offsets(world, home_mask.len());
+    let first_new = b.n_nodes as u64 + edge_offsets[rank] as u64;
     let mut reply = vec![Vec::new(); size];
     let mut i = 0;
     for (r, &c) in counts.iter().enumerate() {
@@ -488,13 +572,23 @@ fn refine_once(world: &SimpleCommunicator, b: Blocks, shapes: &[Shape]) -> Block
     let local_max = b.node_tags.iter().copied().max().unwrap_or(0);
     let mut max_tag = 0u64;
     world.all_reduce_into(&local_max, &mut max_tag, SystemOperation::max());
+    NewNodes {
+        edges,
+        home_mid,
+        edge_offsets,
+        max_tag,
+    }
+}
 
-    // the refined counts
-    let n_nodes2 = b.n_nodes + n_edges;
-    let n_cells2 = b.n_cells * f[0];
-    let n_bnd2 = [b.n_bnd[0] * f[1], b.n_bnd[1] * f[2], b.n_bnd[2] * f[3]];
-
-    // nodes: [x, y, z, tag]
+/// Phase 3: the old nodes and the new ones numbered here, as rows [x, y, z, tag] of the
+/// refined node blocks (new tags continue after the largest tag). Collective.
+fn refined_nodes(
+    world: &SimpleCommunicator,
+    b: &Blocks,
+    nn: &NewNodes,
+    n_nodes2: usize,
+) -> Vec<u64> {
+    let (rank, size) = rank_size(world);
     let node_lo = blk(b.n_nodes, size, rank) as u64;
     let mut out = Outbox::new(world, n_nodes2, 4);
     for (i, (c, &t)) in b.coords.chunks_exact(3).zip(&b.node_tags).enumerate() {
@@ -503,24 +597,29 @@ fn refine_once(world: &SimpleCommunicator, b: Blocks, shapes: &[Shape]) -> Block
             &[c[0].to_bits(), c[1].to_bits(), c[2].to_bits(), t],
         );
     }
-    for (j, m) in home_mid.iter().enumerate() {
-        let e = edge_offsets[rank] as u64 + j as u64;
+    for (j, m) in nn.home_mid.iter().enumerate() {
+        let e = nn.edge_offsets[rank] as u64 + j as u64;
         out.push(
-            n_nodes + e,
+            b.n_nodes as u64 + e,
             &[
                 m[0].to_bits(),
                 m[1].to_bits(),
                 m[2].to_bits(),
-                max_tag + 1 + e,
+                nn.max_tag + 1 + e,
             ],
         );
     }
-    let nodes = out.deliver(world);
-    drop(home_mid);
+    out.deliver(world)
+}
 
-    // cells: [nodes, tag]
+/// Phase 4: the children of every cell (cell c → cells f·c .. f·c + f − 1, oriented like the
+/// parent) as rows [nodes, tag] of the refined cell blocks. Collective.
+fn refined_cells(world: &SimpleCommunicator, b: &Blocks, edges: &Edges, pts: &Fetched) -> Vec<u64> {
+    let (rank, size) = rank_size(world);
+    let (dim, npc) = (b.dim, b.dim + 1);
+    let f = factors(dim);
     let cell_lo = blk(b.n_cells, size, rank) as u64;
-    let mut out = Outbox::new(world, n_cells2, npc + 1);
+    let mut out = Outbox::new(world, b.n_cells * f[0], npc + 1);
     for (i, cell) in b.cells.chunks_exact(npc).enumerate() {
         let tag = b.cell_tags[i];
         let gc = (cell_lo + i as u64) * f[0] as u64;
@@ -530,7 +629,7 @@ fn refine_once(world: &SimpleCommunicator, b: Blocks, shapes: &[Shape]) -> Block
                 all.push(edges.mid(cell[p], cell[q]));
             }
         }
-        let mut pos: Vec<[f64; 3]> = cell.iter().map(|&v| *x(v)).collect();
+        let mut pos: Vec<[f64; 3]> = cell.iter().map(|&v| *pts.at(v)).collect();
         for p in 0..npc {
             for q in p + 1..npc {
                 pos.push(midpoint(&pos[p], &pos[q]));
@@ -555,9 +654,15 @@ fn refine_once(world: &SimpleCommunicator, b: Blocks, shapes: &[Shape]) -> Block
             out.push(gc + j as u64, &row);
         }
     }
-    let cells = out.deliver(world);
+    out.deliver(world)
+}
 
-    // boundary elements: [nodes, tag]
+/// Phase 5: the children of the boundary elements (facets, edges, points) as rows
+/// [nodes, tag] of the refined blocks of each kind. Collective.
+fn refined_boundary(world: &SimpleCommunicator, b: &Blocks, edges: &Edges) -> [Vec<u64>; 3] {
+    let (rank, size) = rank_size(world);
+    let f = factors(b.dim);
+    let n_bnd2 = [b.n_bnd[0] * f[1], b.n_bnd[1] * f[2], b.n_bnd[2] * f[3]];
     let mut bnd: [Vec<u64>; 3] = Default::default();
     for k in 1..4 {
         let w = b.width(k);
@@ -594,10 +699,14 @@ fn refine_once(world: &SimpleCommunicator, b: Blocks, shapes: &[Shape]) -> Block
         }
         bnd[k - 1] = out.deliver(world);
     }
-    drop(edges);
+    bnd
+}
 
-    // group members: member k of group g (elements e) -> f members (children of e)
-    let kinds: Vec<usize> = b.groups.iter().map(|g| b.kind(g.dim)).collect();
+/// Phase 6: group members: member k of group g (element e) → its f members (the children of
+/// e), as rows [group, element] of the refined member blocks. Collective.
+fn refined_members(world: &SimpleCommunicator, b: &Blocks, kinds: &[usize]) -> Vec<u64> {
+    let (rank, size) = rank_size(world);
+    let f = factors(b.dim);
     let mut off_old = vec![0usize; b.groups.len() + 1];
     let mut off_new = vec![0usize; b.groups.len() + 1];
     for (g, &n) in b.group_sizes.iter().enumerate() {
@@ -615,44 +724,7 @@ fn refine_once(world: &SimpleCommunicator, b: Blocks, shapes: &[Shape]) -> Block
             out.push((base + j) as u64, &[g, e * fk as u64 + j as u64]);
         }
     }
-    let members = out.deliver(world);
-
-    let split = |v: Vec<u64>, w: usize| -> (Vec<u64>, Vec<u64>) {
-        let n = v.len() / (w + 1);
-        let mut a = Vec::with_capacity(n * w);
-        let mut t = Vec::with_capacity(n);
-        for r in v.chunks_exact(w + 1) {
-            a.extend_from_slice(&r[..w]);
-            t.push(r[w]);
-        }
-        (a, t)
-    };
-    let (cells, cell_tags) = split(cells, npc);
-    let (coord_bits, node_tags) = split(nodes, 3);
-    let [b0, b1, b2] = bnd;
-    let (f0, t0) = split(b0, dim);
-    let (e0, t1) = split(b1, 2);
-    let (p0, t2) = split(b2, 1);
-    Blocks {
-        dim,
-        n_nodes: n_nodes2,
-        n_cells: n_cells2,
-        n_bnd: n_bnd2,
-        group_sizes: b
-            .group_sizes
-            .iter()
-            .zip(&kinds)
-            .map(|(&n, &k)| n * f[k])
-            .collect(),
-        groups: b.groups,
-        cells,
-        cell_tags,
-        coords: coord_bits.into_iter().map(f64::from_bits).collect(),
-        node_tags,
-        bnd: [f0, e0, p0],
-        bnd_tags: [t0, t1, t2],
-        members: members.chunks_exact(2).map(|c| (c[0], c[1])).collect(),
-    }
+    out.deliver(world)
 }
 
 /// One all-to-all-v of per-rank rows (`send[r]` goes to rank r) through dist's flat

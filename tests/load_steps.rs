@@ -437,35 +437,6 @@ fn ranks_agree() {
     }
 }
 
-/// A tmpfs of `size` mounted for the test (root only); unmounted when dropped.
-struct SmallDisk {
-    _tmp: tempfile::TempDir,
-    path: PathBuf,
-}
-
-impl SmallDisk {
-    fn mount(size: &str) -> Option<SmallDisk> {
-        let tmp = tempfile::tempdir().ok()?;
-        let path = tmp.path().join("disk");
-        std::fs::create_dir(&path).ok()?;
-        let ok = std::process::Command::new("mount")
-            .args(["-t", "tmpfs", "-o", &format!("size={size}"), "tmpfs"])
-            .arg(&path)
-            .output()
-            .map(|o| o.status.success())
-            .unwrap_or(false);
-        ok.then_some(SmallDisk { _tmp: tmp, path })
-    }
-}
-
-impl Drop for SmallDisk {
-    fn drop(&mut self) {
-        let _ = std::process::Command::new("umount")
-            .arg(&self.path)
-            .status();
-    }
-}
-
 fn files(dir: &Path) -> Vec<(String, Vec<u8>)> {
     let mut v: Vec<(String, Vec<u8>)> = std::fs::read_dir(dir)
         .unwrap()

@@ -5,7 +5,6 @@ mod common;
 use common::*;
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
-use std::process::Command;
 
 fn hertz() -> PathBuf {
     repo("cases/hertz/hertz.toml")
@@ -103,33 +102,6 @@ fn the_iterative_preset_at_poisson_04999_converges_like_the_direct_one() {
     );
 }
 
-/// A 900 KiB tmpfs mounted for the test (root only); unmounted when dropped.
-struct SmallDisk {
-    _tmp: tempfile::TempDir,
-    path: PathBuf,
-}
-
-impl SmallDisk {
-    fn mount() -> Option<SmallDisk> {
-        let tmp = tempfile::tempdir().ok()?;
-        let path = tmp.path().join("disk");
-        std::fs::create_dir(&path).ok()?;
-        let ok = Command::new("mount")
-            .args(["-t", "tmpfs", "-o", "size=900k", "tmpfs"])
-            .arg(&path)
-            .output()
-            .map(|o| o.status.success())
-            .unwrap_or(false);
-        ok.then_some(SmallDisk { _tmp: tmp, path })
-    }
-}
-
-impl Drop for SmallDisk {
-    fn drop(&mut self) {
-        let _ = Command::new("umount").arg(&self.path).status();
-    }
-}
-
 fn listing(dir: &Path) -> Vec<(String, Vec<u8>)> {
     let mut v: Vec<(String, Vec<u8>)> = std::fs::read_dir(dir)
         .unwrap()
@@ -153,7 +125,7 @@ fn a_full_disk_while_writing_is_one_error_and_exit_1_on_every_rank() {
     // Before: on 1 rank "closing failed: … unable to flush cached data" and then a segfault
     // (exit 139) in HDF5's shutdown inside MPI_Finalize; on 2 ranks a hang, with the staging
     // directory left.
-    let Some(disk) = SmallDisk::mount() else {
+    let Some(disk) = SmallDisk::mount("900k") else {
         eprintln!(
             "SKIPPED: cannot mount a tmpfs here (needs root); the full-disk path is not tested"
         );

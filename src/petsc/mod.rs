@@ -801,8 +801,8 @@ impl Ksp {
         unsafe { check(ffi::KSPSetInitialGuessNonzero(self.raw, flag)) }
     }
 
-    /// The relative tolerance (KSPGetTolerances).
-    pub fn rtol(&self) -> Result<f64> {
+    /// The relative tolerance and the maximum number of iterations (KSPGetTolerances).
+    pub fn tolerances(&self) -> Result<(f64, usize)> {
         let (mut rtol, mut abstol, mut dtol, mut maxit) = (0.0, 0.0, 0.0, 0 as PInt);
         // SAFETY: valid KSP; outputs are plain values.
         unsafe {
@@ -814,7 +814,7 @@ impl Ksp {
                 &mut maxit,
             ))?
         };
-        Ok(rtol)
+        Ok((rtol, maxit.max(0) as usize))
     }
 
     /// Sets the relative tolerance; the other tolerances stay as they are.

@@ -378,6 +378,10 @@ pub const INEXACT_REDUCTION: f64 = 1e-6;
 /// residual reduction that the solve right after the last setup needed.
 pub const REBUILD_GROWTH: f64 = 1.3;
 
+/// A solve on a reused preconditioner may make this multiple of the iterations that the rate
+/// after the last setup predicts for it before it stops and the preconditioner is set up anew.
+pub const REUSE_BUDGET: f64 = 4.0;
+
 /// A solve must reduce the residual by at least this many decades and make this many
 /// iterations before its rate (iterations per decade) is compared: a warm start that is
 /// already nearly converged says nothing about the preconditioner.
@@ -412,8 +416,9 @@ pub struct AmgStep {
 /// preconditioner kept from step to step, inexact early steps (set by the Newton loop).
 struct AmgReuser {
     mode: Reuse,
-    /// The configured relative tolerance (preset < case < command line).
+    /// The configured relative tolerance and iteration limit (preset < case < command line).
     rtol: f64,
+    max_it: usize,
     /// Iterations per decade of the solve right after the last PCSetUp.
     fresh_rate: Option<f64>,
     /// A preconditioner has been set up.
@@ -505,9 +510,11 @@ impl ReducedSystem {
         if !(pc == "lu" || pc == "cholesky") {
             // Krylov with a preconditioner that is set up per matrix (GAMG and the like).
             self.reuser = None;
+            let (rtol, max_it) = self.ls.ksp.tolerances()?;
             self.amg = Some(AmgReuser {
                 mode,
-                rtol: self.ls.ksp.rtol()?,
+                rtol,
+                max_it,
                 fresh_rate: None,
                 built: false,
                 rebuild: false,
@@ -782,6 +789,16 @@ impl ReducedSystem {
         ksp.set_operator(&self.s)?;
         ksp.set_initial_guess_nonzero(!first)?;
         ksp.set_rtol(rtol)?;
+        // On a reused preconditioner at most REUSE_BUDGET times the iterations the rate after
+        // the last setup predicts (then it is set up anew), on a fresh one the configured limit.
+        let budget = match amg.fresh_rate {
+            Some(f) if !setup && r0 > 0.0 && bnorm > 0.0 => {
+                let decades = (r0 / (rtol * bnorm)).log10().max(1.0);
+                ((REUSE_BUDGET * f * decades).ceil() as usize + RATE_MIN_ITERATIONS).min(amg.max_it)
+            }
+            _ => amg.max_it,
+        };
+        ksp.set_max_iterations(budget)?;
         let mut setup_seconds = 0.0;
         if setup {
             ksp.set_reuse_preconditioner(false)?;
@@ -800,6 +817,7 @@ impl ReducedSystem {
             // go on from where the solve stopped.
             fallback = true;
             let its = info.iterations;
+            ksp.set_max_iterations(amg.max_it)?;
             ksp.set_reuse_preconditioner(false)?;
             ksp.set_initial_guess_nonzero(true)?;
             let ts = Instant::now();
@@ -821,7 +839,8 @@ impl ReducedSystem {
             0.0
         };
         if measured && !fallback {
-            if setup {
+            // after a fallback the next measured solve on the new preconditioner is the reference
+            if setup || amg.fresh_rate.is_none() {
                 amg.fresh_rate = Some(rate);
             } else if amg.mode == Reuse::Auto {
                 amg.rebuild = amg.fresh_rate.is_some_and(|f| rate > REBUILD_GROWTH * f);

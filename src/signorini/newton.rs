@@ -4,7 +4,8 @@
 //! solve, recover λ (3.28), update the sets (3.23)/(3.33), one reduction, log, decide.
 //!
 //! Collectives per step: with the reuse path one Allreduce of 4 values (its costs and changed
-//! slip blocks, `ReducedSystem::solve`); without friction one Allreduce of m values (the rigid motion fitted to
+//! slip blocks, `ReducedSystem::solve`), with the iterative preset's reuse path one MatMult and
+//! one Allreduce of 2 values (the warm start's residual); without friction one Allreduce of m values (the rigid motion fitted to
 //! the active gaps, taken out of the solve: u = ρ + w, see `FreeModes::fit_motion`), the
 //! writing of the reduced system (one all-gather of the rewritten nodes' directions, PETSc's
 //! assembly of entries in other ranks' rows), the solve, one MatMult, one Allreduce; rarely a

@@ -190,16 +190,26 @@ fn coulomb_and_iterative_preset_stay_plain() {
     s.assert_converged("Coulomb");
     let (fact, reuse, fallback) = check_history(&s, true);
     assert_eq!((fact, reuse, fallback), (s.steps(), 0, 0));
-    // The iterative preset has no factorisation to reuse: no reuse record.
-    let s = solve(
-        1,
-        &repo("cases/blocks/indent2d.toml"),
-        &["solver.preset=\"iterative\"", "solver.reuse=\"always\""],
-    );
-    s.assert_converged("iterative");
-    for e in history(&s) {
-        assert_eq!(e["solve"], "krylov", "{e}");
-        assert!(e["reuse"].is_null(), "{e}");
+    // The iterative preset has no factorisation to reuse: no factorisation reuse record (its
+    // own reuse path, tests/reuse_iterative.rs, records under "amg"); with "never" it is the
+    // plain path, every step a Krylov solve on a preconditioner set up for it.
+    for mode in ["always", "never"] {
+        let s = solve(
+            1,
+            &repo("cases/blocks/indent2d.toml"),
+            &[
+                "solver.preset=\"iterative\"",
+                &format!("solver.reuse=\"{mode}\""),
+            ],
+        );
+        s.assert_converged("iterative");
+        for e in history(&s) {
+            assert!(e["reuse"].is_null(), "{e}");
+            assert_eq!(e["amg"].is_null(), mode == "never", "{e}");
+            if mode == "never" {
+                assert_eq!(e["solve"], "krylov", "{e}");
+            }
+        }
     }
 }
 

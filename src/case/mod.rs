@@ -146,14 +146,23 @@ impl Method {
 }
 
 /// `solver.reuse`: whether a Newton step of the direct preset may solve its reduced system by
-/// Krylov iterations preconditioned with the last factorisation instead of refactorising.
+/// Krylov iterations preconditioned with the last factorisation instead of refactorising; with
+/// the iterative preset, whether Newton steps share one preconditioner (GAMG hierarchy), start
+/// from the previous iterate and (frictionless) solve inexactly while the active set changes
+/// (signorini::reduced, `solve_amg`).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Reuse {
-    /// Reuse when the measured costs say it pays (signorini::reduced), refactorise otherwise.
+    /// Direct: reuse when the measured costs say it pays (signorini::reduced), refactorise
+    /// otherwise. Iterative: warm starts, inexact early steps, the preconditioner of an earlier
+    /// step, set up anew when the Krylov iterations per decade grew by more than 30 % over
+    /// those after the last setup, or when a solve on it does not converge.
     Auto,
-    /// Every step refactorises (the plain path, the reference).
+    /// Every step refactorises (direct) or sets its preconditioner up and solves from zero to
+    /// the preset's tolerance (iterative): the plain path, the reference.
     Never,
-    /// Every step after the first tries the reuse (bounded budget, then refactorises).
+    /// Direct: every step after the first tries the reuse (bounded budget, then refactorises).
+    /// Iterative: as "auto", but the preconditioner of the first step is kept unless a solve
+    /// on it fails.
     Always,
 }
 
@@ -176,7 +185,8 @@ pub struct SolverSection {
     pub petsc_options: String,
     /// Relative tolerance of the iterative preset.
     pub rtol: f64,
-    /// Reuse of a factorisation across Newton steps (direct preset, contact).
+    /// Reuse of a factorisation (direct preset) or of the preconditioner, warm starts and
+    /// inexact early steps (iterative preset) across Newton steps (contact).
     pub reuse: Reuse,
 }
 

@@ -789,6 +789,54 @@ impl Ksp {
         }
     }
 
+    /// KSPSetInitialGuessNonzero: with `true` the solve starts from the values in x (a warm
+    /// start); the default convergence test then measures the residual against ‖b‖.
+    pub fn set_initial_guess_nonzero(&mut self, nonzero: bool) -> Result<()> {
+        let flag = if nonzero {
+            ffi::PETSC_TRUE
+        } else {
+            ffi::PETSC_FALSE
+        };
+        // SAFETY: valid KSP.
+        unsafe { check(ffi::KSPSetInitialGuessNonzero(self.raw, flag)) }
+    }
+
+    /// The relative tolerance and the maximum number of iterations (KSPGetTolerances).
+    pub fn tolerances(&self) -> Result<(f64, usize)> {
+        let (mut rtol, mut abstol, mut dtol, mut maxit) = (0.0, 0.0, 0.0, 0 as PInt);
+        // SAFETY: valid KSP; outputs are plain values.
+        unsafe {
+            check(ffi::KSPGetTolerances(
+                self.raw,
+                &mut rtol,
+                &mut abstol,
+                &mut dtol,
+                &mut maxit,
+            ))?
+        };
+        Ok((rtol, maxit.max(0) as usize))
+    }
+
+    /// Sets the relative tolerance; the other tolerances stay as they are.
+    pub fn set_rtol(&mut self, rtol: f64) -> Result<()> {
+        let d = ffi::PETSC_DEFAULT;
+        // SAFETY: valid KSP; PETSC_DEFAULT leaves a tolerance unchanged.
+        unsafe {
+            check(ffi::KSPSetTolerances(
+                self.raw, rtol, d as f64, d as f64, d as PInt,
+            ))
+        }
+    }
+
+    /// The residual norm of the last iteration (KSPGetResidualNorm; for GMRES with right
+    /// preconditioning the norm of b − A x).
+    pub fn residual_norm(&self) -> Result<f64> {
+        let mut r = 0.0;
+        // SAFETY: valid KSP.
+        unsafe { check(ffi::KSPGetResidualNorm(self.raw, &mut r))? };
+        Ok(r)
+    }
+
     /// The KSP and PC type names in use (after set_from_options).
     pub fn type_names(&self) -> Result<(String, String)> {
         let mut kt: *const c_char = ptr::null();

@@ -101,6 +101,12 @@ impl CycleGuard {
         self.least_index
     }
 
+    /// Whether the plain iteration has gone through this set already (a recurrence that
+    /// [`Self::check`] would report).
+    pub fn has_seen(&self, key: SetKey) -> bool {
+        !self.least_index && self.seen.contains(&key)
+    }
+
     /// Records a set the iteration goes on with.
     pub fn record(&mut self, key: SetKey) {
         self.seen.push(key);

@@ -49,6 +49,10 @@ pub struct NewtonSummary {
     pub steps: usize,
     /// Numeric factorisations of the run (each step of the direct preset is one).
     pub factorisations: usize,
+    /// Iterative preset with `solver.reuse` not "never": preconditioner setups (PCSetUp) of
+    /// the run; the plain path sets up once per step.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub pc_setups: Option<usize>,
     pub converged: bool,
     pub history: Vec<StepInfo>,
     pub rows_seconds: f64,
@@ -432,6 +436,13 @@ fn newton_summary(
         Method::SnesVi if solver_section.preset == Preset::Direct => nr.steps,
         Method::SnesVi => 0,
     };
+    let pc_setups = nr.history.iter().any(|h| h.amg.is_some()).then(|| {
+        nr.history
+            .iter()
+            .filter_map(|h| h.amg.as_ref())
+            .map(|a| usize::from(a.pc_setup))
+            .sum()
+    });
     NewtonSummary {
         method: solver_section.method.name(),
         algorithm: if settings.friction() { 2 } else { 1 },
@@ -440,6 +451,7 @@ fn newton_summary(
         c_default: settings.newton.c.is_none(),
         steps: nr.steps,
         factorisations,
+        pc_setups,
         converged: nr.converged,
         history: std::mem::take(&mut nr.history),
         rows_seconds: nr.rows_seconds,

@@ -4,7 +4,8 @@
 //! solve, recover λ (3.28), update the sets (3.23)/(3.33), one reduction, log, decide.
 //!
 //! Collectives per step: with the reuse path one Allreduce of 4 values (its costs and changed
-//! slip blocks, `ReducedSystem::solve`); without friction one Allreduce of m values (the rigid motion fitted to
+//! slip blocks, `ReducedSystem::solve`), with the iterative preset's reuse path one MatMult and
+//! one Allreduce of 2 values (the warm start's residual); without friction one Allreduce of m values (the rigid motion fitted to
 //! the active gaps, taken out of the solve: u = ρ + w, see `FreeModes::fit_motion`), the
 //! writing of the reduced system (one all-gather of the rewritten nodes' directions, PETSc's
 //! assembly of entries in other ranks' rows), the solve, one MatMult, one Allreduce; rarely a
@@ -13,7 +14,7 @@
 use super::active_set::{ActiveSet, Iterate, Law, SetSummary, StepTotals};
 use super::boundary::{ContactBoundary, NodeResult};
 use super::cycle::{decide, CycleGuard, Decision, Seen, SetKey};
-use super::reduced::{ReducedSystem, ReuseStep, SolveKind, StepSolve};
+use super::reduced::{AmgStep, ReducedSystem, ReuseStep, SolveKind, StepSolve};
 use super::rigid::{Balance, FreeModes, Motion, Pin};
 use crate::assembly::System;
 use crate::case::{self, NewtonInit, NewtonSection};
@@ -74,6 +75,10 @@ pub struct StepInfo {
     /// The reuse path's record of the step (direct preset, `solver.reuse` not "never").
     #[serde(skip_serializing_if = "Option::is_none")]
     pub reuse: Option<ReuseStep>,
+    /// The iterative preset's reuse path: PC setup or reuse, tolerance, warm start (iterative
+    /// preset, `solver.reuse` not "never").
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub amg: Option<AmgStep>,
     /// Number of rigid modes pinned in this step.
     pub pinned: usize,
     /// Tresca: nodes in S1..S4 (inactive/stick, inactive/slip, active/stick, active/slip) in
@@ -201,6 +206,14 @@ pub fn semismooth_newton(
     };
     let mut history = Vec::new();
     let mut converged = false;
+    // Inexact steps (frictionless, iterative preset's reuse path): loose solves while the set
+    // changes; the first loose step that changes no node (or leads back to a set seen before)
+    // is followed by an exact solve on the same set, and from then on every step is exact, so
+    // the iteration ends as Algorithm 1 does: an exact solve whose update changes no node.
+    // A loose step that changes at least as many nodes as the loose step before it makes no
+    // progress (the inexact solves may make the set chatter): exact from then on as well.
+    let mut exact = !(reduced.inexact_available() && s.law == Law::Frictionless);
+    let mut last_changed = usize::MAX;
     for step in 1..=s.section.max_steps {
         if lp.free.update(ctx, mesh, layout, &lp.summary.gram)? {
             reduced.set_pins(sys, layout, lp.free.pins())?;
@@ -215,6 +228,7 @@ pub fn semismooth_newton(
         }
         let bs = &lp.shifted;
         reduced.write(ctx, sys, layout, bs, &lp.set, lp.free.pins())?; // (3.29) / (3.42)
+        reduced.set_inexact(!exact);
         let solved = reduced.solve(ctx, !matches!(s.law, Law::Coulomb { .. }))?;
         ensure_converged(step, &solved.info)?;
         reduced.recover(sys, bs, &lp.set, &mut lp.it)?; // (3.28)
@@ -222,6 +236,16 @@ pub fn semismooth_newton(
         let totals = update.reduce(ctx, bs, lp.free.modes(), dim);
         history.push(lp.step_info(step, &totals, solved));
         log_step(ctx, history.last().expect("pushed"), &totals);
+        if !exact {
+            // Identical on every rank: `totals` and the guard's keys are global.
+            let recurs = totals.changed > 0 && lp.guard.has_seen(lp.key(&totals.next, &totals));
+            if totals.changed == 0 || recurs {
+                exact = true;
+                continue; // the same sets, solved exactly
+            }
+            exact = totals.changed >= last_changed;
+            last_changed = totals.changed;
+        }
         if lp.next(step, update.next, &totals)? {
             converged = true;
             break;
@@ -289,9 +313,22 @@ fn ensure_converged(step: usize, info: &SolveInfo) -> Result<(), RunError> {
 
 /// The rank-0 progress lines of a step.
 fn log_step(ctx: &Ctx, h: &StepInfo, t: &StepTotals) {
-    let how = match &h.reuse {
-        Some(_) if h.solve == SolveKind::Reuse => format!("reuse, {} its", h.iterations),
-        Some(r) if r.fallback => format!("{} its, refactorised", r.krylov_iterations),
+    let how = match (&h.reuse, &h.amg) {
+        (Some(_), _) if h.solve == SolveKind::Reuse => format!("reuse, {} its", h.iterations),
+        (Some(r), _) if r.fallback => format!("{} its, refactorised", r.krylov_iterations),
+        (_, Some(a)) => format!(
+            "{} its, {}{}, r0 {:.1e}",
+            h.iterations,
+            if a.fallback {
+                "PC reused, failed, set up"
+            } else if a.pc_setup {
+                "PC set up"
+            } else {
+                "PC reused"
+            },
+            if a.inexact { ", inexact" } else { "" },
+            a.initial_residual
+        ),
         _ => format!("{} its", h.iterations),
     };
     say!(
@@ -328,6 +365,7 @@ impl Loop<'_> {
             solve: solved.kind,
             iterations: solved.info.iterations,
             reuse: solved.reuse,
+            amg: solved.amg,
             pinned: self.free.pins().len(),
             states: self.s.friction().then_some(t.states),
             du_rel: self.s.friction().then_some(t.du_rel),

@@ -22,6 +22,10 @@
 //!                                           (by the group's dimension), ascending per group
 //! ```
 //!
+//! `convert` stores the cells along the Morton curve of their centroids ([`cell_order`]), so
+//! that every rank's block of cells is compact; the reader takes any order, and checks and
+//! orients the cells as the MSH reader does (`crate::dist`, after the migration).
+//!
 //! A sibling `.xdmf` file (written by [`write_h5`]) lets ParaView open the mesh with its cell
 //! tags.
 

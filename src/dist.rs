@@ -461,6 +461,13 @@ fn facet_hash(key: &[u64; 3]) -> u64 {
         .wrapping_mul(0x9E3779B97F4A7C15)
 }
 
+/// A second, independent 24-bit hash of a facet key (with [`facet_hash`]: 88 bits).
+fn facet_check(key: &[u64; 3]) -> u64 {
+    key.iter().fold(0x2545F4914F6CDD1Du64, |h, &k| {
+        (h.rotate_left(23) ^ k).wrapping_mul(0xff51afd7ed558ccd)
+    }) >> 40
+}
+
 /// The rank that matches the cells sharing a facet (a hash of its key).
 fn facet_home(key: &[u64; 3], size: usize) -> usize {
     ((facet_hash(key) >> 32) % size as u64) as usize
@@ -481,7 +488,7 @@ fn facet_runs(recs: &[[u64; 4]], mut f: impl FnMut(&[[u64; 4]])) {
 
 /// Dual-graph rows of this rank's block of cells (cells sharing a facet), CSR, global cell
 /// indices, neighbours ascending. A facet of exactly two cells of the block is matched on the
-/// block's rank; every other facet (on the boundary, between blocks, or of more than two
+/// block's rank (by an 88-bit hash of its key); every other facet (on the boundary, between blocks, or of more than two
 /// cells) is sent to a home rank chosen by hashing its key, which sends every pair of cells
 /// sharing it back to the readers of the cells. Two exchanges. (A facet of two cells of one
 /// block and more of other blocks — not a valid mesh — loses the pairs across.)
@@ -490,40 +497,44 @@ fn dual_graph(world: &SimpleCommunicator, b: &Blocks) -> (Vec<PInt>, Vec<PInt>) 
     let (w, npc) = (b.dim, b.dim + 1);
     let lo = blk(b.n_cells, size, rank);
     let n_local = b.cell_tags.len();
-    // (facet hash, cell · 4 + corner left out) of this block, sorted: 16-byte records, equal
-    // facets next to each other (a run of equal hashes is split by the keys themselves)
+    // (88-bit facet hash, cell · 4 + corner left out) of this block, sorted: 16-byte records,
+    // equal facets next to each other. Two records of equal hash are taken as one facet of two
+    // cells without comparing the keys (a false match, ~2^-88 per pair of facets, would only
+    // add one edge to the partitioner's graph, never change the mesh); every other run of
+    // equal hashes goes to the facets' homes, which match the keys exactly.
     let mut mine: Vec<u128> = Vec::with_capacity(n_local * npc);
     for (i, cell) in b.cells.chunks_exact(npc).enumerate() {
         for skip in 0..npc {
-            let h = facet_hash(&facet_key(cell, skip));
-            mine.push(((h as u128) << 64) | (4 * i + skip) as u128);
+            let key = facet_key(cell, skip);
+            mine.push(
+                ((facet_hash(&key) as u128) << 64)
+                    | ((facet_check(&key) as u128) << 40)
+                    | (4 * i + skip) as u128,
+            );
         }
     }
     mine.sort_unstable();
+    let cell_of = |r: u128| ((r as u64 & ((1 << 40) - 1)) >> 2) as usize;
     let mut local_pairs: Vec<u64> = Vec::new();
     // [facet key (padded), cell] of the facets matched at their home rank
     let mut remote: Vec<[u64; 4]> = Vec::new();
-    let mut run: Vec<[u64; 4]> = Vec::new();
     let mut i = 0;
     while i < mine.len() {
         let mut j = i + 1;
-        while j < mine.len() && mine[j] >> 64 == mine[i] >> 64 {
+        while j < mine.len() && mine[j] >> 40 == mine[i] >> 40 {
             j += 1;
         }
-        run.clear();
-        for &r in &mine[i..j] {
-            let (c, skip) = ((r as u64 >> 2) as usize, (r as u64 & 3) as usize);
-            let key = facet_key(&b.cells[c * npc..(c + 1) * npc], skip);
-            run.push([key[0], key[1], key[2], (lo + c) as u64]);
-        }
-        run.sort_unstable();
-        facet_runs(&run, |r| {
-            if r.len() == 2 && r[0][3] != r[1][3] {
-                local_pairs.extend_from_slice(&[r[0][3], r[1][3], r[1][3], r[0][3]]);
-            } else {
-                remote.extend_from_slice(r);
+        let (a, c) = (cell_of(mine[i]), cell_of(mine[j - 1]));
+        if j - i == 2 && a != c {
+            let (a, c) = ((lo + a) as u64, (lo + c) as u64);
+            local_pairs.extend_from_slice(&[a, c, c, a]);
+        } else {
+            for &r in &mine[i..j] {
+                let (c, skip) = (cell_of(r), (r as u64 & 3) as usize);
+                let key = facet_key(&b.cells[c * npc..(c + 1) * npc], skip);
+                remote.push([key[0], key[1], key[2], (lo + c) as u64]);
             }
-        });
+        }
         i = j;
     }
     drop(mine);

@@ -12,8 +12,13 @@ use std::time::Duration;
 
 /// `signorini-mpi convert` of the Hertz disk (refined level 2) into `dir/ok.h5`.
 fn converted(dir: &Path) -> PathBuf {
+    converted_from(dir, "cases/hertz/meshes/hertz_refined_L2.msh")
+}
+
+/// `signorini-mpi convert` of the repository's mesh `rel` into `dir/ok.h5`.
+fn converted_from(dir: &Path, rel: &str) -> PathBuf {
     let h5 = dir.join("ok.h5");
-    let msh = repo("cases/hertz/meshes/hertz_refined_L2.msh");
+    let msh = repo(rel);
     run_with_timeout(
         solver(
             0,
@@ -125,4 +130,71 @@ fn inverted_cells_in_h5_are_reoriented_as_in_msh() {
             "{np} rank(s): flipped cells change the contact result (max diff {diff:e}, scale {scale:e})"
         );
     }
+}
+
+/// The 3D block (tetrahedra), clamped at the bottom and pressed on top: a tetrahedron with a
+/// repeated node is named, flipped tetrahedra are turned around (the same displacement by
+/// node id, every written tetrahedron of positive volume). 2 ranks.
+#[test]
+fn tetrahedra_in_h5_are_checked_and_reoriented() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let ok = converted_from(dir.path(), "cases/blocks/block3d.msh");
+    let case = repo("tests/cases/tresca/block3d_clamped.toml");
+    let bad = dir.path().join("degenerate3d.h5");
+    let r = damaged(
+        &ok,
+        &bad,
+        "k = len(c) // 2\nc[k, 3] = c[k, 1]\nout['tag'] = int(tags[k])",
+    );
+    let tag = r["tag"].as_u64().expect("tag");
+    let run = run_solver(
+        2,
+        &case,
+        &[&format!("mesh.file={}", toml_path(&bad))],
+        &dir.path().join("bad"),
+    );
+    run.expect_code(2, "degenerate tetrahedron");
+    let text = run.output();
+    assert!(
+        text.lines()
+            .filter(|l| l.contains("degenerate cell"))
+            .count()
+            == 1
+            && text.contains(&format!("element {tag} has zero volume"))
+            && text.contains("degenerate3d.h5"),
+        "{text}"
+    );
+
+    let flip = dir.path().join("flipped3d.h5");
+    damaged(&ok, &flip, "c[::5, [2, 3]] = c[::5, [3, 2]]");
+    let state = "import h5py, json, sys, numpy as np\n\
+        f = h5py.File(sys.argv[1] + '/solution.h5', 'r')\n\
+        t = f['mesh/topology'][:]; x = f['mesh/geometry'][:]\n\
+        a = x[t[:, 1]] - x[t[:, 0]]; b = x[t[:, 2]] - x[t[:, 0]]; c = x[t[:, 3]] - x[t[:, 0]]\n\
+        vol = np.einsum('ij,ij->i', a, np.cross(b, c)) / 6\n\
+        u = f['nodal/displacement'][:]; ids = f['mesh/node_id'][:]\n\
+        order = np.argsort(ids)\n\
+        print('RESULT ' + json.dumps({'not_positive': int((vol <= 0).sum()), \
+        'u': u[order].ravel().tolist()}))\n";
+    let mut us = Vec::new();
+    for (name, mesh) in [("ok", &ok), ("flipped", &flip)] {
+        let out = dir.path().join(name);
+        run_solver(2, &case, &[&format!("mesh.file={}", toml_path(mesh))], &out)
+            .expect_code(0, name);
+        let r = python_json(state, &[&out]);
+        assert_eq!(
+            r["not_positive"].as_u64(),
+            Some(0),
+            "{name}: {}",
+            r["not_positive"]
+        );
+        us.push(floats(&r["u"]));
+    }
+    let scale = norm(&us[0]);
+    let diff: Vec<f64> = us[0].iter().zip(&us[1]).map(|(a, b)| a - b).collect();
+    assert!(
+        scale > 0.0 && norm(&diff) <= 1e-10 * scale,
+        "flipped tetrahedra change u: |du| {:e}, |u| {scale:e}",
+        norm(&diff)
+    );
 }

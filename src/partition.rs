@@ -175,7 +175,7 @@ pub fn partition<C: Communicator>(
         let (lo, hi) = (block(rank), block(rank + 1));
         let (xadj, adjncy) = dual_graph_rows(mesh, &node_cells, lo, hi);
         let part = if ptype == "ptscotch" && !petsc::options::has("-mat_partitioning_type")? {
-            petsc::scotch_partition(comm, &xadj, &adjncy, size, SCOTCH_IMBALANCE)?
+            petsc::scotch_partition(comm, &xadj, &adjncy, None, size, SCOTCH_IMBALANCE)?
         } else {
             petsc::partition_graph(comm, n_cells, &xadj, &adjncy, ptype)?
         };

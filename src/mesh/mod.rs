@@ -659,26 +659,37 @@ pub(crate) fn orient_cells(
     cell_tags: &[u64],
     coords: &[[f64; 3]],
 ) -> Result<(), String> {
+    for (c, cell) in cells.chunks_exact_mut(dim + 1).enumerate() {
+        orient_cell(dim, cell, cell_tags[c], coords)?;
+    }
+    Ok(())
+}
+
+/// One cell of [`orient_cells`]: an error naming element `tag` if its measure is zero (or
+/// nearly: |m| ≤ 1e-12 h^dim, h its longest edge) or NaN, two nodes swapped if it is inverted.
+/// Also used by the distributed reader (`crate::dist`) on every rank's cells.
+pub(crate) fn orient_cell(
+    dim: usize,
+    cell: &mut [usize],
+    tag: u64,
+    coords: &[[f64; 3]],
+) -> Result<(), String> {
     let nc = dim + 1;
     let mut p = [[0.0; 3]; 4];
-    for (c, cell) in cells.chunks_exact_mut(nc).enumerate() {
-        for k in 0..nc {
-            p[k] = coords[cell[k]];
-        }
-        let (m, h) = signed_measure(dim, &p[..nc]);
-        let tol = 1e-12 * h.powi(dim as i32);
-        if m.is_nan() || m.abs() <= tol {
-            return Err(format!(
-                "element {} has zero {} ({m:e}, longest edge {h:e}): degenerate cell",
-                cell_tags[c],
-                if dim == 2 { "area" } else { "volume" }
-            ));
-        }
-        if m < 0.0 {
-            cell.swap(nc - 2, nc - 1);
-        }
+    for k in 0..nc {
+        p[k] = coords[cell[k]];
     }
-
+    let (m, h) = signed_measure(dim, &p[..nc]);
+    let tol = 1e-12 * h.powi(dim as i32);
+    if m.is_nan() || m.abs() <= tol {
+        return Err(format!(
+            "element {tag} has zero {} ({m:e}, longest edge {h:e}): degenerate cell",
+            if dim == 2 { "area" } else { "volume" }
+        ));
+    }
+    if m < 0.0 {
+        cell.swap(nc - 2, nc - 1);
+    }
     Ok(())
 }
 

@@ -1005,13 +1005,16 @@ fn scotch_check(code: c_int, call: &str) -> Result<()> {
 ///
 /// This rank passes the rows `[row_start, row_start + xadj.len() - 1)` of a symmetric graph
 /// without self-loops, in CSR form with global 0-based column indices; rows are distributed
-/// in rank order. `imbalance` is the allowed load imbalance (0.01 = 1 %). Returns the part of
-/// each local row. Collective over `comm`; the graph is checked (`SCOTCH_dgraphCheck`)
+/// in rank order. `weights`, if given, are the vertex weights of the local rows and the edge
+/// weights in `adjncy`'s order (positive; the balance is then by vertex weight, the cut by edge
+/// weight). `imbalance` is the allowed load imbalance (0.01 = 1 %). Returns the part of each
+/// local row. Collective over `comm`; the graph is checked (`SCOTCH_dgraphCheck`)
 /// before it is partitioned.
 pub fn scotch_partition(
     comm: MPI_Comm,
     xadj: &[PInt],
     adjncy: &[PInt],
+    weights: Option<(&[PInt], &[PInt])>,
     n_parts: usize,
     imbalance: f64,
 ) -> Result<Vec<PInt>> {
@@ -1025,11 +1028,38 @@ pub fn scotch_partition(
             adjncy.len()
         )));
     }
+    if let Some((v, e)) = weights {
+        if v.len() != n_local || e.len() != n_edges {
+            return Err(own_error(format!(
+                "scotch_partition: {} vertex weights for {n_local} rows, {} edge weights for {n_edges} edges",
+                v.len(),
+                e.len()
+            )));
+        }
+    }
     // PT-Scotch takes non-const pointers (it does not write through them) and keeps them until
     // the graph is freed: private copies in its index type, alive until the end.
     let mut vert: Vec<Num> = xadj.iter().map(|&v| v as Num).collect();
     let mut edge: Vec<Num> = adjncy.iter().map(|&v| v as Num).collect();
     edge.reserve(1); // a valid pointer even without edges
+    let (mut velo, mut edlo): (Vec<Num>, Vec<Num>) = match weights {
+        Some((v, e)) => (
+            v.iter().map(|&w| w as Num).collect(),
+            e.iter().map(|&w| w as Num).collect(),
+        ),
+        None => (Vec::new(), Vec::new()),
+    };
+    velo.reserve(1);
+    edlo.reserve(1);
+    let weighted = weights.is_some();
+    let or_null = |v: &mut Vec<Num>| {
+        if weighted {
+            v.as_mut_ptr()
+        } else {
+            ptr::null_mut()
+        }
+    };
+    let (velo_ptr, edlo_ptr) = (or_null(&mut velo), or_null(&mut edlo));
     let mut part: Vec<Num> = vec![0; n_local.max(1)];
     let mut run = ScotchRun {
         // SAFETY: reads mpi-sys' constant for MPI_COMM_NULL.
@@ -1094,13 +1124,13 @@ pub fn scotch_partition(
                 n_local as Num,
                 vert.as_mut_ptr(),
                 vert.as_mut_ptr().add(1),
-                ptr::null_mut(),
+                velo_ptr,
                 ptr::null_mut(),
                 n_edges as Num,
                 n_edges as Num,
                 edge.as_mut_ptr(),
                 ptr::null_mut(),
-                ptr::null_mut(),
+                edlo_ptr,
             ),
             "SCOTCH_dgraphBuild",
         )?;

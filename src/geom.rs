@@ -42,3 +42,21 @@ mod tests {
         assert_eq!(norm2([3.0, 4.0, 0.0]), 25.0);
     }
 }
+
+/// Key of a point on the Morton (Z-order) curve of the box from `lo` of size `extent`:
+/// coordinates scaled to 21-bit integers (clamped to the box), bits interleaved. Used to order
+/// nodes (partition, dist) and cells (`convert`) along space.
+pub fn morton_key(x: &[f64; 3], dim: usize, lo: &[f64; 3], extent: f64) -> u64 {
+    let scale = ((1u64 << 21) - 1) as f64 / extent;
+    let mut q = [0u64; 3];
+    for k in 0..dim {
+        q[k] = (((x[k] - lo[k]) * scale).max(0.0) as u64).min((1 << 21) - 1);
+    }
+    let mut key = 0u64;
+    for bit in (0..21).rev() {
+        for qk in &q[..dim] {
+            key = (key << 1) | ((qk >> bit) & 1);
+        }
+    }
+    key
+}

@@ -133,21 +133,7 @@ fn morton_keys(mesh: &Mesh) -> Vec<u64> {
         .collect()
 }
 
-/// Morton key of one point in the box from `lo` of size `extent`.
-pub fn morton_key(x: &[f64; 3], dim: usize, lo: &[f64; 3], extent: f64) -> u64 {
-    let scale = ((1u64 << 21) - 1) as f64 / extent;
-    let mut key = 0u64;
-    let mut q = [0u64; 3];
-    for k in 0..dim {
-        q[k] = (((x[k] - lo[k]) * scale) as u64).min((1 << 21) - 1);
-    }
-    for bit in (0..21).rev() {
-        for qk in &q[..dim] {
-            key = (key << 1) | ((qk >> bit) & 1);
-        }
-    }
-    key
-}
+pub use crate::geom::morton_key;
 
 /// Load imbalance PT-Scotch may leave between the parts (PETSc's default, 1 %).
 const SCOTCH_IMBALANCE: f64 = 0.01;

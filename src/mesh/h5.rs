@@ -77,23 +77,6 @@ fn put<T: H5Type>(f: &hdf5::Group, name: &str, data: &[T], ncomp: usize) -> hdf5
     }
 }
 
-/// Key of a point on the Morton (Z-order) curve of the box from `lo` of size `extent`:
-/// coordinates scaled to 21-bit integers, bits interleaved.
-fn z_key(x: &[f64; 3], dim: usize, lo: &[f64; 3], extent: f64) -> u64 {
-    let scale = ((1u64 << 21) - 1) as f64 / extent;
-    let mut q = [0u64; 3];
-    for k in 0..dim {
-        q[k] = (((x[k] - lo[k]) * scale).max(0.0) as u64).min((1 << 21) - 1);
-    }
-    let mut key = 0u64;
-    for bit in (0..21).rev() {
-        for qk in &q[..dim] {
-            key = (key << 1) | ((qk >> bit) & 1);
-        }
-    }
-    key
-}
-
 /// The order in which [`write_h5`] stores the cells: along the Morton curve of their
 /// centroids (ties by mesh order). Every rank then reads a compact block of cells, so the
 /// distributed dual graph has few edges between blocks and the partitioner's aggregates are
@@ -111,7 +94,7 @@ pub fn cell_order(mesh: &Mesh) -> Vec<usize> {
                     x[k] += mesh.coords[v][k] / npc as f64;
                 }
             }
-            (z_key(&x, mesh.dim, &lo, extent), c)
+            (crate::geom::morton_key(&x, mesh.dim, &lo, extent), c)
         })
         .collect();
     keyed.sort_unstable();

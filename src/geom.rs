@@ -28,21 +28,6 @@ pub fn norm2(a: [f64; 3]) -> f64 {
     dot(a, a)
 }
 
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn right_handed() {
-        assert_eq!(cross([1.0, 0.0, 0.0], [0.0, 1.0, 0.0]), [0.0, 0.0, 1.0]);
-        assert_eq!(
-            dot(sub([3.0, 2.0, 1.0], [1.0, 1.0, 1.0]), [1.0, 1.0, 1.0]),
-            3.0
-        );
-        assert_eq!(norm2([3.0, 4.0, 0.0]), 25.0);
-    }
-}
-
 /// Key of a point on the Morton (Z-order) curve of the box from `lo` of size `extent`:
 /// coordinates scaled to 21-bit integers (clamped to the box), bits interleaved. Used to order
 /// nodes (partition, dist) and cells (`convert`) along space.
@@ -59,4 +44,19 @@ pub fn morton_key(x: &[f64; 3], dim: usize, lo: &[f64; 3], extent: f64) -> u64 {
         }
     }
     key
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn right_handed() {
+        assert_eq!(cross([1.0, 0.0, 0.0], [0.0, 1.0, 0.0]), [0.0, 0.0, 1.0]);
+        assert_eq!(
+            dot(sub([3.0, 2.0, 1.0], [1.0, 1.0, 1.0]), [1.0, 1.0, 1.0]),
+            3.0
+        );
+        assert_eq!(norm2([3.0, 4.0, 0.0]), 25.0);
+    }
 }

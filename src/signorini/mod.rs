@@ -347,7 +347,8 @@ fn run_method(
     let nr = match solver_section.method {
         Method::Newton => {
             let mut reduced = ReducedSystem::new(ctx, sys, b, coords, dim)?;
-            reduced.enable_reuse(ctx, solver_section.reuse)?;
+            let friction = settings.tresca_threshold.is_some() || settings.coulomb.is_some();
+            reduced.enable_reuse(ctx, solver_section.reuse, friction)?;
             match settings.coulomb {
                 Some((mu, CoulombAlgorithm::FixedPoint)) => {
                     let (nr, outer) = fixed_point(ctx, problem, &mut reduced, ns, mu, warm)?;

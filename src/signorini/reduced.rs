@@ -499,8 +499,14 @@ impl ReducedSystem {
     }
 
     /// Enables the reuse of factorisations across steps (`solver.reuse`): only if the solver
-    /// factorises (direct preset). Collective.
-    pub fn enable_reuse(&mut self, ctx: &Ctx, mode: Reuse) -> petsc::Result<()> {
+    /// factorises (direct preset). With friction (`friction`: a Tresca threshold or Coulomb's
+    /// fixed point) "auto" stays on the plain path with the direct preset: a node on its
+    /// stick/slip threshold to round-off may flip between steps, and the ~1e-10 that a reuse
+    /// solve leaves in Δu (GMRES to 1e-13 on the preconditioned residual) then hides that the
+    /// iterate no longer moves, so the recurring-set stop (|Δu|/|u| < tol_u) cannot apply and the
+    /// run ends as cycling (seen on 2 ranks: tests/coulomb.rs, warm start of the fixed point,
+    /// whenever the timings made "auto" reuse). "always" still reuses. Collective.
+    pub fn enable_reuse(&mut self, ctx: &Ctx, mode: Reuse, friction: bool) -> petsc::Result<()> {
         let (_, pc) = self.ls.ksp.type_names()?;
         self.amg = None;
         if mode == Reuse::Never {
@@ -521,6 +527,10 @@ impl ReducedSystem {
                 inexact: false,
                 prescribed: Vec::new(),
             });
+            return Ok(());
+        }
+        if friction && mode == Reuse::Auto {
+            self.reuser = None;
             return Ok(());
         }
         let ksp = solver::reuse_solver(ctx.comm(), &self.ls.ksp)?;
@@ -777,7 +787,17 @@ impl ReducedSystem {
         }
         let setup = first || amg.rebuild;
         let inexact = amg.inexact;
-        let (r0, bnorm) = self.residual_norms(ctx)?;
+        let (mut r0, bnorm) = self.residual_norms(ctx)?;
+        // A warm start worse than none (‖b − S u₀‖ ≥ ‖b‖: e.g. the rigid motion of a free body
+        // that the previous step's pins allowed, measured on block2d at ν = 0.4999, where it
+        // was > 1e5 ‖b‖ and GMRES stopped at once with DIVERGED_DTOL): start from zero.
+        // The norms are global: every rank decides alike.
+        let mut zero_start = first;
+        if !first && r0 >= bnorm {
+            self.u.set_all(0.0)?;
+            r0 = bnorm;
+            zero_start = true;
+        }
         let amg = self.amg.as_mut().expect("checked");
         // the default convergence test of a nonzero start measures ‖b − S u‖ against ‖b‖
         let rtol = if inexact && bnorm > 0.0 {
@@ -787,7 +807,7 @@ impl ReducedSystem {
         };
         let ksp = &mut self.ls.ksp;
         ksp.set_operator(&self.s)?;
-        ksp.set_initial_guess_nonzero(!first)?;
+        ksp.set_initial_guess_nonzero(!zero_start)?;
         ksp.set_rtol(rtol)?;
         // On a reused preconditioner at most REUSE_BUDGET times the iterations the rate after
         // the last setup predicts (then it is set up anew), on a fresh one the configured limit.

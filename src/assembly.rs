@@ -6,8 +6,8 @@
 //! as PETSc stores them (owned columns / other columns). Each element matrix is thus computed
 //! in pieces by the owners of its nodes, every value of an owned row on its owner: no entries
 //! are sent to other ranks, no searches, no scatter into a large array. PETSc takes the two
-//! CSR parts as they are (no per-entry insertion) and copies them into its own memory; the
-//! copy is checked to hold exactly the entries given, with no mallocs.
+//! CSR parts as they are (no per-entry insertion, no copy: the matrix keeps the arrays);
+//! PETSc's storage is checked to hold exactly the entries given, with no mallocs.
 //!
 //! On one rank every entry is summed over the same cells in the same order as the former cell
 //! loop (the layout's cell order), so A and f are the same bit for bit; on several ranks an
@@ -19,10 +19,11 @@
 //! full nonzero pattern and stays symmetric; the right-hand side of a fixed dof is A_jj · g_j.
 //! Zeros are stored explicitly: the pattern never changes.
 
+use crate::bigbuf::BigVec;
 use crate::fem::{self, Material};
 use crate::mesh::Mesh;
 use crate::partition::Layout;
-use crate::petsc::{self, CsrMut, MPI_Comm, Matrix, PInt, Vector};
+use crate::petsc::{self, Csr, MPI_Comm, Matrix, PInt, Vector};
 use std::time::Instant;
 
 /// A load on a set of boundary facets.
@@ -69,6 +70,10 @@ pub struct Problem<'a> {
 pub struct AssemblyStats {
     pub preallocation_seconds: f64,
     pub matrix_seconds: f64,
+    /// Of `matrix_seconds`: the element rows summed into the CSR arrays (incl. the cell list).
+    pub rows_seconds: f64,
+    /// Of `matrix_seconds`: the arrays handed to PETSc (its assembly, no copy).
+    pub petsc_seconds: f64,
     pub load_seconds: f64,
     pub mallocs: f64,
     pub nonzeros: f64,
@@ -110,29 +115,42 @@ fn row_cells(mesh: &Mesh, layout: &Layout) -> RowCells {
     let npc = mesh.nodes_per_cell();
     let mut cells: Vec<usize> = layout.local_cells.clone();
     if layout.size > 1 {
-        let mut ghost: Vec<usize> = layout
-            .owned_nodes
-            .iter()
-            .flat_map(|&v| layout.node_cells.of(v).iter().copied())
-            .filter(|&c| layout.cell_rank[c] as usize != layout.rank)
+        // Ordered by (lowest global node number, cell), each key computed once.
+        let mut ghost: Vec<(usize, usize)> = (0..mesh.n_cells())
+            .filter(|&c| {
+                layout.cell_rank[c] as usize != layout.rank
+                    && mesh.cell(c).iter().any(|&v| layout.owns_node(v))
+            })
+            .map(|c| {
+                let lo = mesh.cell(c).iter().map(|&v| layout.node_global[v]).min();
+                (lo.unwrap_or(0), c)
+            })
             .collect();
-        let key = |c: usize| {
-            let lo = mesh.cell(c).iter().map(|&v| layout.node_global[v]).min();
-            (lo.unwrap_or(0), c)
-        };
-        ghost.sort_unstable_by_key(|&c| key(c));
+        ghost.sort_unstable();
         ghost.dedup();
-        cells.extend(ghost);
+        cells.extend(ghost.into_iter().map(|(_, c)| c));
     }
     let mut nodes = Vec::with_capacity(cells.len() * npc);
     for &c in &cells {
         nodes.extend(mesh.cell(c).iter().map(|&v| v as u32));
     }
     drop(cells);
+    // Per mesh node: its owned (local) number, or u32::MAX.
     let (node_lo, node_hi) = layout.node_range();
+    let owned: Vec<u32> = layout
+        .node_global
+        .iter()
+        .map(|&g| {
+            if (node_lo..node_hi).contains(&g) {
+                (g - node_lo) as u32
+            } else {
+                u32::MAX
+            }
+        })
+        .collect();
     let local = |v: u32| {
-        let g = layout.node_global[v as usize];
-        (node_lo..node_hi).contains(&g).then(|| g - node_lo)
+        let l = owned[v as usize];
+        (l != u32::MAX).then_some(l as usize)
     };
     let mut ptr = vec![0u32; layout.n_owned_nodes() + 1];
     for &v in &nodes {
@@ -154,30 +172,13 @@ fn row_cells(mesh: &Mesh, layout: &Layout) -> RowCells {
     RowCells { nodes, ptr, inc }
 }
 
-/// One CSR part of the owned rows.
-#[derive(Default)]
-struct Csr {
-    rowptr: Vec<PInt>,
-    cols: Vec<PInt>,
-    vals: Vec<f64>,
-}
-
-impl Csr {
-    fn with_capacity(rows: usize, nnz: usize) -> Csr {
-        let mut rowptr = Vec::with_capacity(rows + 1);
-        rowptr.push(0);
-        Csr {
-            rowptr,
-            cols: Vec::with_capacity(nnz),
-            vals: Vec::with_capacity(nnz),
-        }
-    }
-    fn as_mut(&mut self) -> CsrMut<'_> {
-        CsrMut {
-            rowptr: &mut self.rowptr,
-            cols: &mut self.cols,
-            vals: &mut self.vals,
-        }
+fn csr_with_capacity(rows: usize, nnz: usize) -> Csr {
+    let mut rowptr = Vec::with_capacity(rows + 1);
+    rowptr.push(0);
+    Csr {
+        rowptr,
+        cols: BigVec::with_capacity(nnz),
+        vals: BigVec::with_capacity(nnz),
     }
 }
 
@@ -212,13 +213,21 @@ fn owned_rows<const D: usize, const N: usize>(
     // A guess (a tetrahedral mesh has ~14 neighbours per node); the vectors grow if needed.
     let guess = n_owned * D * D * if D == 2 { 7 } else { 15 };
     let (lo, hi) = layout.node_range();
-    let mut diag = Csr::with_capacity(n_owned * D, guess);
-    let mut off = Csr::with_capacity(n_owned * D, if layout.size > 1 { guess / 8 } else { 0 });
+    let mut diag = csr_with_capacity(n_owned * D, guess);
+    let mut off = csr_with_capacity(n_owned * D, if layout.size > 1 { guess / 8 } else { 0 });
     let mut elim_rhs = vec![0.0f64; n_owned * D];
     let mut fixed_rhs = Vec::new();
     let mut slot = vec![u32::MAX; mesh.n_nodes()];
-    let mut nb: Vec<(usize, u32)> = Vec::with_capacity(64);
+    // Per node: does any of its components carry Dirichlet data (one byte, cache-resident).
+    let has_fixed: Vec<bool> = (0..mesh.n_nodes())
+        .map(|w| (0..D).any(|j| !p.fixed[w * D + j].is_nan()))
+        .collect();
+    let (wl_unit, wm_unit) = (lambda, mu);
+    // (global number << 32 | mesh node): sorting these sorts by global number.
+    let mut nb: Vec<u64> = Vec::with_capacity(64);
     let mut buf: Vec<f64> = Vec::new();
+    let mut scratch: [(Vec<PInt>, Vec<f64>); 2] = Default::default();
+    let mut off_slots: Vec<usize> = Vec::new();
     let mut k = [[0.0f64; 12]; 3];
     for (la, &v) in layout.owned_nodes.iter().enumerate() {
         let inc = &rc.inc[rc.ptr[la] as usize..rc.ptr[la + 1] as usize];
@@ -229,13 +238,13 @@ fn owned_rows<const D: usize, const N: usize>(
             for &w in &rc.nodes[c0..c0 + N] {
                 if slot[w as usize] != la as u32 {
                     slot[w as usize] = la as u32;
-                    nb.push((layout.node_global[w as usize], w));
+                    nb.push(((layout.node_global[w as usize] as u64) << 32) | w as u64);
                 }
             }
         }
         nb.sort_unstable();
-        for (s, &(_, w)) in nb.iter().enumerate() {
-            slot[w as usize] = s as u32;
+        for (s, &key) in nb.iter().enumerate() {
+            slot[key as u32 as usize] = s as u32;
         }
         let width = nb.len() * D;
         buf.clear();
@@ -246,31 +255,35 @@ fn owned_rows<const D: usize, const N: usize>(
             let (c0, a) = (e as usize / N * N, e as usize % N);
             let nodes = &rc.nodes[c0..c0 + N];
             let (g, vol) = gradients(nodes);
-            fem::p1_stiffness_rows::<D, N>(&g, vol.abs(), lambda, mu, a, &mut k);
-            let mut gfix = [f64::NAN; 12];
             let mut s0 = [0usize; N];
             let mut any_fixed = false;
             for b in 0..N {
                 let w = nodes[b] as usize;
                 s0[b] = slot[w] as usize * D;
-                for j in 0..D {
-                    gfix[b * D + j] = p.fixed[w * D + j];
-                    any_fixed |= !gfix[b * D + j].is_nan();
-                }
+                any_fixed |= has_fixed[w];
             }
             if !any_fixed {
-                // No fixed dof in the cell: the rows as they are.
-                for i in 0..D {
-                    let row = &mut buf[i * width..(i + 1) * width];
-                    for b in 0..N {
-                        let dst = &mut row[s0[b]..s0[b] + D];
-                        let src = &k[i][b * D..b * D + D];
+                // No fixed dof in the cell: node a's rows as they are, block by block
+                // (the numbers of p1_stiffness_rows, bit for bit).
+                let (wl, wm) = (vol.abs() * wl_unit, vol.abs() * wm_unit);
+                for b in 0..N {
+                    let kb = fem::p1_stiffness_block::<D>(&g[a], &g[b], wl, wm);
+                    for i in 0..D {
+                        let dst = &mut buf[i * width + s0[b]..i * width + s0[b] + D];
                         for j in 0..D {
-                            dst[j] += src[j];
+                            dst[j] += kb[i][j];
                         }
                     }
                 }
                 continue;
+            }
+            fem::p1_stiffness_rows::<D, N>(&g, vol.abs(), lambda, mu, a, &mut k);
+            let mut gfix = [f64::NAN; 12];
+            for b in 0..N {
+                let w = nodes[b] as usize;
+                for j in 0..D {
+                    gfix[b * D + j] = p.fixed[w * D + j];
+                }
             }
             for i in 0..D {
                 let row = &mut buf[i * width..(i + 1) * width];
@@ -295,18 +308,44 @@ fn owned_rows<const D: usize, const N: usize>(
             }
         }
         let diag0 = slot[v] as usize * D;
+        // The node's columns, the same for its D rows: owned ones (local numbers) and the
+        // others (global numbers), each in sorted order, and which neighbours are off-rank.
+        let [(dcols, _), (ocols, _)] = &mut scratch;
+        dcols.clear();
+        ocols.clear();
+        off_slots.clear();
+        for (s, &key) in nb.iter().enumerate() {
+            let g = (key >> 32) as usize;
+            if (lo..hi).contains(&g) {
+                dcols.extend((0..D).map(|j| ((g - lo) * D + j) as PInt));
+            } else {
+                ocols.extend((0..D).map(|j| (g * D + j) as PInt));
+                off_slots.push(s);
+            }
+        }
         for i in 0..D {
             let row = &buf[i * width..(i + 1) * width];
-            for (s, &(g, _)) in nb.iter().enumerate() {
-                let (part, c0) = if (lo..hi).contains(&g) {
-                    (&mut diag, (g - lo) * D)
-                } else {
-                    (&mut off, g * D)
-                };
-                for j in 0..D {
-                    part.cols.push((c0 + j) as PInt);
+            diag.cols.extend_from_slice(&scratch[0].0);
+            if off_slots.is_empty() {
+                diag.vals.extend_from_slice(row);
+            } else {
+                // An interface row: its values split between the two parts.
+                let [(_, dvals), (_, ovals)] = &mut scratch;
+                dvals.clear();
+                ovals.clear();
+                let mut next_off = off_slots.iter().copied().peekable();
+                for s in 0..nb.len() {
+                    let part = if next_off.peek() == Some(&s) {
+                        next_off.next();
+                        &mut *ovals
+                    } else {
+                        &mut *dvals
+                    };
+                    part.extend_from_slice(&row[s * D..(s + 1) * D]);
                 }
-                part.vals.extend_from_slice(&row[s * D..(s + 1) * D]);
+                diag.vals.extend_from_slice(dvals);
+                off.cols.extend_from_slice(&scratch[1].0);
+                off.vals.extend_from_slice(&scratch[1].1);
             }
             diag.rowptr.push(diag.cols.len() as PInt);
             off.rowptr.push(off.cols.len() as PInt);
@@ -317,8 +356,8 @@ fn owned_rows<const D: usize, const N: usize>(
             }
         }
         // Slots must not alias the next row's stamp (la + 1): reset them.
-        for &(_, w) in &nb {
-            slot[w as usize] = u32::MAX;
+        for &key in &nb {
+            slot[key as u32 as usize] = u32::MAX;
         }
     }
     OwnedRows {
@@ -392,14 +431,16 @@ pub fn assemble(comm: MPI_Comm, layout: &Layout, p: &Problem) -> petsc::Result<S
         })
     };
     drop(rc);
+    stats.rows_seconds = t1.elapsed().as_secs_f64();
     let OwnedRows {
-        mut diag,
-        mut off,
+        diag,
+        off,
         elim_rhs,
         fixed_rhs,
     } = rows;
-    let a = Matrix::from_split_csr(comm, dim, diag.as_mut(), off.as_mut())?;
-    drop((diag, off));
+    let t_petsc = Instant::now();
+    let a = Matrix::from_split_csr(comm, dim, diag, off)?;
+    stats.petsc_seconds = t_petsc.elapsed().as_secs_f64();
     stats.matrix_seconds = t1.elapsed().as_secs_f64();
     let st = a.stats()?;
     stats.mallocs = st.mallocs;

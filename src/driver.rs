@@ -118,13 +118,17 @@ fn check_assembly(ctx: &Ctx, sys: &System, seconds: f64) -> Result<AssemblyInfo,
     let info = AssemblyInfo {
         mallocs: ctx.sum_f64(sys.stats.mallocs),
         matrix_seconds_max: ctx.max_f64(sys.stats.matrix_seconds),
+        rows_seconds_max: ctx.max_f64(sys.stats.rows_seconds),
+        petsc_seconds_max: ctx.max_f64(sys.stats.petsc_seconds),
     };
     let nonzeros = ctx.sum_f64(sys.stats.nonzeros);
     say!(
         ctx,
-        "assembly: {:.3} s (matrix {:.3} s, {} nonzeros, {} mallocs)",
+        "assembly: {:.3} s (matrix {:.3} s: rows {:.3} s, PETSc {:.3} s; {} nonzeros, {} mallocs)",
         seconds,
         info.matrix_seconds_max,
+        info.rows_seconds_max,
+        info.petsc_seconds_max,
         nonzeros,
         info.mallocs
     );

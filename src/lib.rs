@@ -4,6 +4,7 @@
 #![allow(clippy::needless_range_loop)] // index loops read like the tensor formulas
 
 pub mod assembly;
+pub mod bigbuf;
 pub mod case;
 pub mod contact;
 pub mod dist;

@@ -62,6 +62,10 @@ pub struct PartitionInfo {
 pub struct AssemblyInfo {
     pub mallocs: f64,
     pub matrix_seconds_max: f64,
+    /// Of the matrix: element rows summed into the CSR arrays (slowest rank).
+    pub rows_seconds_max: f64,
+    /// Of the matrix: PETSc's assembly of the handed-over arrays (slowest rank).
+    pub petsc_seconds_max: f64,
 }
 
 /// What summary.json holds. `S` is the solve's own section(s), flattened in.

@@ -73,23 +73,39 @@ pub fn p1_stiffness_rows<const D: usize, const N: usize>(
 ) {
     let wl = w * lambda;
     let wm = w * mu;
-    let ga = g[a];
     for b in 0..N {
-        let gb = g[b];
-        let mut dot = 0.0;
+        let k = p1_stiffness_block::<D>(&g[a], &g[b], wl, wm);
         for i in 0..D {
-            dot += ga[i] * gb[i];
-        }
-        for i in 0..D {
-            for j in 0..D {
-                let mut v = wl * ga[i] * gb[j] + wm * ga[j] * gb[i];
-                if i == j {
-                    v += wm * dot;
-                }
-                rows[i][b * D + j] = v;
-            }
+            rows[i][b * D..b * D + D].copy_from_slice(&k[i]);
         }
     }
+}
+
+/// One D×D block of the stiffness of (3.8) on a constant-gradient cell, between nodes a and b
+/// (gradients `ga`, `gb`; `wl` = w lambda, `wm` = w mu):
+/// K[(a,i),(b,j)] = wl g_a[i] g_b[j] + wm g_a[j] g_b[i] + wm delta_ij g_a·g_b.
+#[inline(always)]
+pub fn p1_stiffness_block<const D: usize>(
+    ga: &[f64; D],
+    gb: &[f64; D],
+    wl: f64,
+    wm: f64,
+) -> [[f64; D]; D] {
+    let mut dot = 0.0;
+    for i in 0..D {
+        dot += ga[i] * gb[i];
+    }
+    let mut k = [[0.0; D]; D];
+    for i in 0..D {
+        for j in 0..D {
+            let mut v = wl * ga[i] * gb[j] + wm * ga[j] * gb[i];
+            if i == j {
+                v += wm * dot;
+            }
+            k[i][j] = v;
+        }
+    }
+    k
 }
 
 /// The full element matrix (row-major (N D)²) from [`p1_stiffness_rows`].

@@ -9,7 +9,10 @@ mod stress;
 #[cfg(test)]
 mod tests;
 
-pub use element::{p1_stiffness_rows, tet_gradients, tet_stiffness, tri_gradients, tri_stiffness};
+pub use element::{
+    p1_stiffness_block, p1_stiffness_rows, tet_gradients, tet_stiffness, tri_gradients,
+    tri_stiffness,
+};
 pub use load::{
     body_force_load, cell_load_quadrature, facet_normal_measure, lumped_facet_load,
     simplex_measure, simplex_quadrature, QuadPoint,

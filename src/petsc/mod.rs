@@ -13,6 +13,8 @@ use std::os::raw::{c_char, c_int};
 use std::panic::Location;
 use std::ptr;
 
+use crate::bigbuf::BigVec;
+
 pub use ffi::MPI_Comm;
 /// PETSc's index type (32-bit in Debian's build).
 pub type PInt = ffi::PetscInt;
@@ -369,15 +371,19 @@ impl Drop for Vector {
 }
 
 /// One CSR part of a matrix's owned rows, handed to PETSc (see [`Matrix::from_split_csr`]).
-pub struct CsrMut<'a> {
-    pub rowptr: &'a mut [PInt],
-    pub cols: &'a mut [PInt],
-    pub vals: &'a mut [f64],
+#[derive(Default)]
+pub struct Csr {
+    pub rowptr: Vec<PInt>,
+    pub cols: BigVec<PInt>,
+    pub vals: BigVec<f64>,
 }
 
 /// A distributed sparse matrix (MPIAIJ with a block size).
 pub struct Matrix {
     raw: ffi::Mat,
+    /// The CSR arrays PETSc works in, for a matrix made by [`Matrix::from_split_csr`]
+    /// (PETSc does not own them): kept alive until the matrix is destroyed.
+    _arrays: Option<Box<(Csr, Csr)>>,
 }
 
 /// Storage statistics of a matrix (local to this rank).
@@ -410,7 +416,7 @@ impl Matrix {
         // SAFETY: PETSc copies the CSR arrays, which outlive the calls.
         unsafe {
             check(ffi::MatCreate(comm, &mut raw))?;
-            let m = Matrix { raw };
+            let m = Matrix { raw, _arrays: None };
             check(ffi::MatSetSizes(
                 raw,
                 local_rows as PInt,
@@ -445,16 +451,11 @@ impl Matrix {
     /// parts, as PETSc stores them: `diag` holds the columns this rank owns (local column
     /// numbers), `off` the others (global column numbers); columns sorted per row. PETSc takes
     /// the arrays as they are (MatCreateSeqAIJWithArrays on one rank,
-    /// MatCreateMPIAIJWithSplitArrays on several: no per-entry insertion), then the matrix is
-    /// duplicated into PETSc's own memory so that the arrays can be freed on return (PETSc
-    /// may rewrite `off`'s column numbers, hence `&mut`). The pattern is exact; new nonzeros
-    /// are an error afterwards. On one rank `off` must be empty.
-    pub fn from_split_csr(
-        comm: MPI_Comm,
-        bs: usize,
-        diag: CsrMut<'_>,
-        off: CsrMut<'_>,
-    ) -> Result<Matrix> {
+    /// MatCreateMPIAIJWithSplitArrays on several: no per-entry insertion, no copy). The
+    /// matrix owns the arrays from then on and PETSc works in them (it rewrites `off`'s
+    /// column numbers to its local numbering). The pattern is exact; new nonzeros are an
+    /// error afterwards. On one rank `off` must be empty.
+    pub fn from_split_csr(comm: MPI_Comm, bs: usize, diag: Csr, off: Csr) -> Result<Matrix> {
         let local_rows = diag.rowptr.len().saturating_sub(1);
         for p in [&diag, &off] {
             let n = p.rowptr.last().copied().unwrap_or(0) as usize;
@@ -462,12 +463,18 @@ impl Matrix {
                 return Err(own_error("Matrix::from_split_csr: inconsistent CSR arrays"));
             }
         }
+        let given = diag.cols.len() + off.cols.len();
+        // Boxed: the matrix keeps the arrays; moving the box moves no heap buffer.
+        let mut arrays = Box::new((diag, off));
         let mut size: std::os::raw::c_int = 0;
         let mut raw: ffi::Mat = ptr::null_mut();
-        // SAFETY: the arrays are consistent (checked) and exclusively borrowed for the whole
-        // life of `view`, which is destroyed before return; the copy owns its memory.
+        // SAFETY: the arrays are consistent (checked); PETSc works in them in place (it
+        // renumbers the off-diagonal columns during assembly) and never frees or reallocates
+        // them (new nonzeros are an error); they live in `arrays`, which the returned matrix
+        // owns and drops only after MatDestroy (see Drop), and nothing else touches them.
         unsafe {
             ffi::MPI_Comm_size(comm, &mut size);
+            let (diag, off) = &mut *arrays;
             if size == 1 && !off.cols.is_empty() {
                 return Err(own_error(
                     "Matrix::from_split_csr: off-rank columns on one rank",
@@ -500,20 +507,18 @@ impl Matrix {
                     &mut raw,
                 ))?;
             }
-            let view = Matrix { raw };
+            let m = Matrix {
+                raw,
+                _arrays: Some(arrays),
+            };
             check(ffi::MatSetBlockSize(raw, bs as PInt))?;
-            let mut copy: ffi::Mat = ptr::null_mut();
-            check(ffi::MatDuplicate(raw, ffi::MAT_COPY_VALUES, &mut copy))?;
-            drop(view);
-            let m = Matrix { raw: copy };
             check(ffi::MatSetOption(
-                copy,
+                raw,
                 ffi::MAT_NEW_NONZERO_ALLOCATION_ERR,
                 ffi::PETSC_TRUE,
             ))?;
             // Every entry handed over is stored, none merged or added.
             let st = m.stats()?;
-            let given = diag.cols.len() + off.cols.len();
             if st.nonzeros != given as f64 || st.mallocs != 0.0 {
                 return Err(own_error(format!(
                     "Matrix::from_split_csr: {given} entries given, PETSc stores {} ({} mallocs)",
@@ -595,7 +600,7 @@ impl Matrix {
         unsafe {
             check(ffi::MatDuplicate(self.raw, ffi::MAT_COPY_VALUES, &mut raw))?;
         }
-        Ok(Matrix { raw })
+        Ok(Matrix { raw, _arrays: None })
     }
 
     /// self = other, both with the same nonzero pattern (no reallocation, nonzero state kept).
@@ -665,7 +670,8 @@ impl Matrix {
 
 impl Drop for Matrix {
     fn drop(&mut self) {
-        // SAFETY: destroys the matrix we own.
+        // SAFETY: destroys the matrix we own; its CSR arrays (if any) are dropped after this,
+        // with the other fields.
         unsafe {
             ffi::MatDestroy(&mut self.raw);
         }
@@ -923,7 +929,10 @@ pub fn partition_graph(
             petsc_free(ja);
             return Err(e);
         }
-        let adj = Matrix { raw: adj };
+        let adj = Matrix {
+            raw: adj,
+            _arrays: None,
+        };
         let mut part: ffi::MatPartitioning = ptr::null_mut();
         check(ffi::MatPartitioningCreate(comm, &mut part))?;
         let t = cstring(ptype);

@@ -240,7 +240,10 @@ impl Matrix {
                 &mut c,
             ))?;
         }
-        Ok(Matrix { raw: c })
+        Ok(Matrix {
+            raw: c,
+            _arrays: None,
+        })
     }
 
     /// y = Aᵀ x

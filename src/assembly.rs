@@ -210,8 +210,11 @@ fn owned_rows<const D: usize, const N: usize>(
     let mesh = p.mesh;
     let (lambda, mu) = p.material.lame();
     let n_owned = layout.n_owned_nodes();
-    // A guess (a tetrahedral mesh has ~14 neighbours per node); the vectors grow if needed.
-    let guess = n_owned * D * D * if D == 2 { 7 } else { 15 };
+    // A generous guess of the row lengths (nodes incl. itself: ~7 in a triangle mesh, 15-16 in
+    // a tetrahedral one; the 2.3 M-unknown Hertz ball has 15.3): the capacity is only reserved
+    // (pages are touched as the arrays fill), while a growth copies the arrays (a doubling at
+    // 2.3 M unknowns cost seconds).
+    let guess = n_owned * D * D * if D == 2 { 9 } else { 20 };
     let (lo, hi) = layout.node_range();
     let mut diag = csr_with_capacity(n_owned * D, guess);
     let mut off = csr_with_capacity(n_owned * D, if layout.size > 1 { guess / 8 } else { 0 });

@@ -37,22 +37,32 @@ impl<T: Pod> Default for BigVec<T> {
 }
 
 impl<T: Pod> BigVec<T> {
+    /// An empty buffer with room for `cap` elements (a reservation: pages are committed as
+    /// they fill; if the system refuses the reservation, the buffer grows on demand).
     pub fn with_capacity(cap: usize) -> BigVec<T> {
         BigVec {
-            store: Self::store(cap),
+            store: Self::store(cap, false),
             len: 0,
             _t: PhantomData,
         }
     }
 
-    fn store(cap: usize) -> Store<T> {
+    /// `needed`: the room is needed now (a growth), so a refused map falls back to a `Vec` of
+    /// that capacity; otherwise to an empty `Vec`.
+    fn store(cap: usize, needed: bool) -> Store<T> {
         let bytes = cap * std::mem::size_of::<T>();
         if bytes >= MAP_FROM {
-            if let Ok(map) = MmapOptions::new().len(bytes).map_anon() {
-                // Advice only: a kernel without THP leaves the map as it is.
-                let _ = map.advise(Advice::HugePage);
-                return Store::Map(map);
-            }
+            return match MmapOptions::new().len(bytes).map_anon() {
+                Ok(map) => {
+                    // Advice only: a kernel without THP leaves the map as it is.
+                    let _ = map.advise(Advice::HugePage);
+                    Store::Map(map)
+                }
+                // The system refuses to reserve that much (strict overcommit): grow on demand
+                // instead of asking the allocator for the same amount.
+                Err(_) if !needed => Store::Vec(Vec::new()),
+                Err(_) => Store::Vec(Vec::with_capacity(cap)),
+            };
         }
         Store::Vec(Vec::with_capacity(cap))
     }
@@ -72,11 +82,15 @@ impl<T: Pod> BigVec<T> {
         self.len == 0
     }
 
-    /// Appends `s`, growing the buffer (×2) when it is full.
+    /// Appends `s`, growing the buffer (×2, or to what `s` needs) when it is full.
     pub fn extend_from_slice(&mut self, s: &[T]) {
         let need = self.len + s.len();
         if need > self.capacity() {
-            let mut bigger = Self::with_capacity(need.max(2 * self.capacity()));
+            let mut bigger = BigVec {
+                store: Self::store(need.max(2 * self.capacity()), true),
+                len: 0,
+                _t: PhantomData,
+            };
             bigger.extend_from_slice(self.as_slice());
             self.store = bigger.store;
         }

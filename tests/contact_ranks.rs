@@ -28,7 +28,14 @@ for d in sys.argv[2:]:
 print("RESULT " + json.dumps(out))
 "#;
 
+/// On the plain path (`solver.reuse = "never"`): "auto" decides from wall-clock times whether a
+/// step reuses a factorisation, and a stop decided on a reuse step costs one confirming
+/// factorised step, so under load the step counts of the default path may differ by one
+/// between runs (seen in CI: 10 against 9 on Hertz L4) while the answer is the same.
 fn same_on_1_2_3_ranks(case: &Path, sets: &[&str], what: &str) {
+    let mut sets = sets.to_vec();
+    sets.push("solver.reuse=\"never\"");
+    let sets = &sets[..];
     let runs: Vec<Solved> = (1..=3).map(|np| solve(np, case, sets)).collect();
     for (np, s) in runs.iter().enumerate() {
         assert!(

@@ -194,47 +194,33 @@ struct OwnedRows {
     fixed_rhs: Vec<(usize, f64)>,
 }
 
-/// (3.8) row by row: every owned node sums the element rows of the cells around it (in the
-/// order of the layout's cell loop) into a small dense row buffer, with the symmetric
-/// Dirichlet elimination applied per entry (a fixed dof's row keeps only its diagonal, a
-/// fixed column moves −K_ij g_j to the right-hand side), and appends the buffer to the CSR
-/// arrays. Every value of an owned row is computed on its owner (other ranks' cells that touch
-/// it included): no entries go to other ranks, and no searches (each neighbour's position in
-/// the row sits in `slot`).
-fn owned_rows<const D: usize, const N: usize>(
-    p: &Problem,
-    layout: &Layout,
-    rc: &RowCells,
-    gradients: impl Fn(&[u32]) -> ([[f64; D]; N], f64),
-) -> OwnedRows {
-    let mesh = p.mesh;
-    let (lambda, mu) = p.material.lame();
-    let n_owned = layout.n_owned_nodes();
-    // A generous guess of the row lengths (nodes incl. itself: ~7 in a triangle mesh, 15-16 in
-    // a tetrahedral one; the 2.3 M-unknown Hertz ball has 15.3): the capacity is only reserved
-    // (pages are touched as the arrays fill), while a growth copies the arrays (a doubling at
-    // 2.3 M unknowns cost seconds).
-    let guess = n_owned * D * D * if D == 2 { 9 } else { 20 };
-    let (lo, hi) = layout.node_range();
-    let mut diag = csr_with_capacity(n_owned * D, guess);
-    let mut off = csr_with_capacity(n_owned * D, if layout.size > 1 { guess / 8 } else { 0 });
-    let mut elim_rhs = vec![0.0f64; n_owned * D];
-    let mut fixed_rhs = Vec::new();
-    let mut slot = vec![u32::MAX; mesh.n_nodes()];
-    // Per node: does any of its components carry Dirichlet data (one byte, cache-resident).
-    let has_fixed: Vec<bool> = (0..mesh.n_nodes())
-        .map(|w| (0..D).any(|j| !p.fixed[w * D + j].is_nan()))
-        .collect();
-    let (wl_unit, wm_unit) = (lambda, mu);
-    // (global number << 32 | mesh node): sorting these sorts by global number.
-    let mut nb: Vec<u64> = Vec::with_capacity(64);
-    let mut buf: Vec<f64> = Vec::new();
-    let mut scratch: [(Vec<PInt>, Vec<f64>); 2] = Default::default();
-    let mut off_slots: Vec<usize> = Vec::new();
-    let mut k = [[0.0f64; 12]; 3];
-    for (la, &v) in layout.owned_nodes.iter().enumerate() {
-        let inc = &rc.inc[rc.ptr[la] as usize..rc.ptr[la + 1] as usize];
-        // The row's neighbours, sorted by global number; slot = position in the row.
+/// Per-row work space of [`owned_rows`], reused from node to node.
+struct RowScratch {
+    /// Per mesh node: its position in the current row (u32::MAX: not in it). The row of owned
+    /// node `la` first stamps its neighbours with `la` while gathering them.
+    slot: Vec<u32>,
+    /// The row's neighbours as (global number << 32 | mesh node): sorted = by global number.
+    nb: Vec<u64>,
+    /// The node's D rows, dense over its neighbours (D × nb.len() × D values).
+    buf: Vec<f64>,
+    /// The columns shared by the node's D rows: owned ones (local numbers), the others
+    /// (global numbers); one row's values split the same way; the off-rank neighbours.
+    cols: [Vec<PInt>; 2],
+    vals: [Vec<f64>; 2],
+    off_slots: Vec<usize>,
+}
+
+impl RowScratch {
+    /// The neighbours of owned node `la` (the nodes of its cells `inc`), sorted by global
+    /// number, with `slot` set to their positions in the row.
+    fn gather_neighbours<const N: usize>(
+        &mut self,
+        layout: &Layout,
+        rc: &RowCells,
+        la: usize,
+        inc: &[u32],
+    ) {
+        let (slot, nb) = (&mut self.slot, &mut self.nb);
         nb.clear();
         for &e in inc {
             let c0 = e as usize / N * N;
@@ -249,9 +235,150 @@ fn owned_rows<const D: usize, const N: usize>(
         for (s, &key) in nb.iter().enumerate() {
             slot[key as u32 as usize] = s as u32;
         }
-        let width = nb.len() * D;
-        buf.clear();
-        buf.resize(D * width, 0.0);
+    }
+
+    /// Resets the row's slots (they must not alias the next row's stamp).
+    fn clear_slots(&mut self) {
+        for &key in &self.nb {
+            self.slot[key as u32 as usize] = u32::MAX;
+        }
+    }
+
+    /// Appends the node's D rows in `buf` to the two CSR parts: the columns once per node,
+    /// an interior row's values as one slice, an interface row's values split.
+    fn append_rows<const D: usize>(
+        &mut self,
+        (lo, hi): (usize, usize),
+        diag: &mut Csr,
+        off: &mut Csr,
+    ) {
+        let width = self.nb.len() * D;
+        let [dcols, ocols] = &mut self.cols;
+        dcols.clear();
+        ocols.clear();
+        self.off_slots.clear();
+        for (s, &key) in self.nb.iter().enumerate() {
+            let g = (key >> 32) as usize;
+            if (lo..hi).contains(&g) {
+                dcols.extend((0..D).map(|j| ((g - lo) * D + j) as PInt));
+            } else {
+                ocols.extend((0..D).map(|j| (g * D + j) as PInt));
+                self.off_slots.push(s);
+            }
+        }
+        for i in 0..D {
+            let row = &self.buf[i * width..(i + 1) * width];
+            diag.cols.extend_from_slice(dcols);
+            if self.off_slots.is_empty() {
+                diag.vals.extend_from_slice(row);
+            } else {
+                let [dvals, ovals] = &mut self.vals;
+                dvals.clear();
+                ovals.clear();
+                let mut next_off = self.off_slots.iter().copied().peekable();
+                for s in 0..self.nb.len() {
+                    let part = if next_off.peek() == Some(&s) {
+                        next_off.next();
+                        &mut *ovals
+                    } else {
+                        &mut *dvals
+                    };
+                    part.extend_from_slice(&row[s * D..(s + 1) * D]);
+                }
+                diag.vals.extend_from_slice(dvals);
+                off.cols.extend_from_slice(ocols);
+                off.vals.extend_from_slice(ovals);
+            }
+            diag.rowptr.push(diag.cols.len() as PInt);
+            off.rowptr.push(off.cols.len() as PInt);
+        }
+    }
+}
+
+/// Node a's D rows of one cell's stiffness (3.8) added into the row buffer `row` (width
+/// `width`, neighbour offsets `s0`) with the symmetric Dirichlet elimination per entry: a
+/// fixed row (`fixed_v[i]` not NaN) keeps only its diagonal, a fixed column `gfix` moves
+/// −K_ij g_j into `elim`.
+#[allow(clippy::too_many_arguments)]
+fn add_rows_with_dirichlet<const D: usize, const N: usize>(
+    k: &[[f64; 12]; 3],
+    gfix: &[f64; 12],
+    fixed_v: &[f64; D],
+    a: usize,
+    s0: &[usize; N],
+    buf: &mut [f64],
+    width: usize,
+    elim: &mut [f64; D],
+) {
+    for i in 0..D {
+        let row = &mut buf[i * width..(i + 1) * width];
+        if !fixed_v[i].is_nan() {
+            row[s0[a] + i] += k[i][a * D + i];
+            continue;
+        }
+        let mut fe = 0.0;
+        for b in 0..N {
+            for j in 0..D {
+                let gv = gfix[b * D + j];
+                if gv.is_nan() {
+                    row[s0[b] + j] += k[i][b * D + j];
+                } else {
+                    fe -= k[i][b * D + j] * gv;
+                }
+            }
+        }
+        if fe != 0.0 {
+            elim[i] += fe;
+        }
+    }
+}
+
+/// (3.8) row by row: every owned node sums the element rows of the cells around it (in the
+/// order of the layout's cell loop) into a small dense row buffer, with the symmetric
+/// Dirichlet elimination applied per entry (a fixed dof's row keeps only its diagonal, a
+/// fixed column moves −K_ij g_j to the right-hand side), and appends the buffer to the CSR
+/// arrays. Every value of an owned row is computed on its owner (other ranks' cells that touch
+/// it included): no entries go to other ranks, and no searches (each neighbour's position in
+/// the row sits in `slot`). Phases per node: its neighbours ([`RowScratch::gather_neighbours`]),
+/// its cells' rows (here; [`add_rows_with_dirichlet`] for cells with fixed dofs), the CSR
+/// parts ([`RowScratch::append_rows`]) and its right-hand-side entries.
+fn owned_rows<const D: usize, const N: usize>(
+    p: &Problem,
+    layout: &Layout,
+    rc: &RowCells,
+    gradients: impl Fn(&[u32]) -> ([[f64; D]; N], f64),
+) -> OwnedRows {
+    let mesh = p.mesh;
+    let (lambda, mu) = p.material.lame();
+    let n_owned = layout.n_owned_nodes();
+    // A generous guess of the row lengths (nodes incl. itself: ~7 in a triangle mesh, 15-16 in
+    // a tetrahedral one; the 2.3 M-unknown Hertz ball has 15.3): the capacity is only reserved
+    // (pages are touched as the arrays fill), while a growth copies the arrays (a doubling at
+    // 2.3 M unknowns cost seconds).
+    let guess = n_owned * D * D * if D == 2 { 9 } else { 20 };
+    let mut diag = csr_with_capacity(n_owned * D, guess);
+    let mut off = csr_with_capacity(n_owned * D, if layout.size > 1 { guess / 8 } else { 0 });
+    let mut elim_rhs = vec![0.0f64; n_owned * D];
+    let mut fixed_rhs = Vec::new();
+    // Per node: does any of its components carry Dirichlet data (one byte, cache-resident).
+    let has_fixed: Vec<bool> = (0..mesh.n_nodes())
+        .map(|w| (0..D).any(|j| !p.fixed[w * D + j].is_nan()))
+        .collect();
+    let mut sc = RowScratch {
+        slot: vec![u32::MAX; mesh.n_nodes()],
+        nb: Vec::with_capacity(64),
+        buf: Vec::new(),
+        cols: Default::default(),
+        vals: Default::default(),
+        off_slots: Vec::new(),
+    };
+    let mut k = [[0.0f64; 12]; 3];
+    for (la, &v) in layout.owned_nodes.iter().enumerate() {
+        let inc = &rc.inc[rc.ptr[la] as usize..rc.ptr[la + 1] as usize];
+        sc.gather_neighbours::<N>(layout, rc, la, inc);
+        let width = sc.nb.len() * D;
+        sc.buf.clear();
+        sc.buf.resize(D * width, 0.0);
         let fixed_v: [f64; D] = std::array::from_fn(|i| p.fixed[v * D + i]);
         let mut elim = [0.0f64; D];
         for &e in inc {
@@ -262,106 +389,51 @@ fn owned_rows<const D: usize, const N: usize>(
             let mut any_fixed = false;
             for b in 0..N {
                 let w = nodes[b] as usize;
-                s0[b] = slot[w] as usize * D;
+                s0[b] = sc.slot[w] as usize * D;
                 any_fixed |= has_fixed[w];
             }
-            if !any_fixed {
-                // No fixed dof in the cell: node a's rows as they are, block by block
-                // (the numbers of p1_stiffness_rows, bit for bit).
-                let (wl, wm) = (vol.abs() * wl_unit, vol.abs() * wm_unit);
+            if any_fixed {
+                fem::p1_stiffness_rows::<D, N>(&g, vol.abs(), lambda, mu, a, &mut k);
+                let mut gfix = [f64::NAN; 12];
                 for b in 0..N {
-                    let kb = fem::p1_stiffness_block::<D>(&g[a], &g[b], wl, wm);
-                    for i in 0..D {
-                        let dst = &mut buf[i * width + s0[b]..i * width + s0[b] + D];
-                        for j in 0..D {
-                            dst[j] += kb[i][j];
-                        }
-                    }
+                    let w = nodes[b] as usize;
+                    gfix[b * D..b * D + D].copy_from_slice(&p.fixed[w * D..w * D + D]);
                 }
+                add_rows_with_dirichlet::<D, N>(
+                    &k,
+                    &gfix,
+                    &fixed_v,
+                    a,
+                    &s0,
+                    &mut sc.buf,
+                    width,
+                    &mut elim,
+                );
                 continue;
             }
-            fem::p1_stiffness_rows::<D, N>(&g, vol.abs(), lambda, mu, a, &mut k);
-            let mut gfix = [f64::NAN; 12];
+            // No fixed dof in the cell: node a's rows as they are, block by block (the
+            // numbers of p1_stiffness_rows, bit for bit).
+            let (wl, wm) = (vol.abs() * lambda, vol.abs() * mu);
             for b in 0..N {
-                let w = nodes[b] as usize;
-                for j in 0..D {
-                    gfix[b * D + j] = p.fixed[w * D + j];
-                }
-            }
-            for i in 0..D {
-                let row = &mut buf[i * width..(i + 1) * width];
-                if !fixed_v[i].is_nan() {
-                    row[s0[a] + i] += k[i][a * D + i];
-                    continue;
-                }
-                let mut fe = 0.0;
-                for b in 0..N {
+                let kb = fem::p1_stiffness_block::<D>(&g[a], &g[b], wl, wm);
+                for i in 0..D {
+                    let dst = &mut sc.buf[i * width + s0[b]..i * width + s0[b] + D];
                     for j in 0..D {
-                        let gv = gfix[b * D + j];
-                        if gv.is_nan() {
-                            row[s0[b] + j] += k[i][b * D + j];
-                        } else {
-                            fe -= k[i][b * D + j] * gv;
-                        }
+                        dst[j] += kb[i][j];
                     }
                 }
-                if fe != 0.0 {
-                    elim[i] += fe;
-                }
             }
         }
-        let diag0 = slot[v] as usize * D;
-        // The node's columns, the same for its D rows: owned ones (local numbers) and the
-        // others (global numbers), each in sorted order, and which neighbours are off-rank.
-        let [(dcols, _), (ocols, _)] = &mut scratch;
-        dcols.clear();
-        ocols.clear();
-        off_slots.clear();
-        for (s, &key) in nb.iter().enumerate() {
-            let g = (key >> 32) as usize;
-            if (lo..hi).contains(&g) {
-                dcols.extend((0..D).map(|j| ((g - lo) * D + j) as PInt));
-            } else {
-                ocols.extend((0..D).map(|j| (g * D + j) as PInt));
-                off_slots.push(s);
-            }
-        }
+        sc.append_rows::<D>(layout.node_range(), &mut diag, &mut off);
+        let diag0 = sc.slot[v] as usize * D;
         for i in 0..D {
-            let row = &buf[i * width..(i + 1) * width];
-            diag.cols.extend_from_slice(&scratch[0].0);
-            if off_slots.is_empty() {
-                diag.vals.extend_from_slice(row);
-            } else {
-                // An interface row: its values split between the two parts.
-                let [(_, dvals), (_, ovals)] = &mut scratch;
-                dvals.clear();
-                ovals.clear();
-                let mut next_off = off_slots.iter().copied().peekable();
-                for s in 0..nb.len() {
-                    let part = if next_off.peek() == Some(&s) {
-                        next_off.next();
-                        &mut *ovals
-                    } else {
-                        &mut *dvals
-                    };
-                    part.extend_from_slice(&row[s * D..(s + 1) * D]);
-                }
-                diag.vals.extend_from_slice(dvals);
-                off.cols.extend_from_slice(&scratch[1].0);
-                off.vals.extend_from_slice(&scratch[1].1);
-            }
-            diag.rowptr.push(diag.cols.len() as PInt);
-            off.rowptr.push(off.cols.len() as PInt);
             if fixed_v[i].is_nan() {
                 elim_rhs[la * D + i] = elim[i];
             } else {
-                fixed_rhs.push((la * D + i, row[diag0 + i] * fixed_v[i]));
+                fixed_rhs.push((la * D + i, sc.buf[i * width + diag0 + i] * fixed_v[i]));
             }
         }
-        // Slots must not alias the next row's stamp (la + 1): reset them.
-        for &key in &nb {
-            slot[key as u32 as usize] = u32::MAX;
-        }
+        sc.clear_slots();
     }
     OwnedRows {
         diag,

@@ -1027,154 +1027,212 @@ pub fn scotch_partition(
     n_parts: usize,
     imbalance: f64,
 ) -> Result<Vec<PInt>> {
-    type Num = ffi::SCOTCH_Num;
-    let n_local = xadj.len().saturating_sub(1);
-    let n_edges = xadj.last().copied().unwrap_or(0) as usize;
-    if xadj.is_empty() || xadj[0] != 0 || n_edges != adjncy.len() {
-        return Err(own_error(format!(
-            "scotch_partition: malformed CSR rows ({} offsets, {} edges, last offset {n_edges})",
-            xadj.len(),
-            adjncy.len()
-        )));
-    }
-    if let Some((v, e)) = weights {
-        if v.len() != n_local || e.len() != n_edges {
+    // Declared before `run`: PT-Scotch keeps pointers into the arrays until the graph is freed.
+    let mut arrays = ScotchArrays::new(xadj, adjncy, weights)?;
+    let n_local = arrays.vert.len() - 1;
+    let mut part: Vec<ffi::SCOTCH_Num> = vec![0; n_local.max(1)];
+    let mut run = ScotchRun::new(comm)?;
+    // SAFETY: `arrays` outlives `run` (dropped explicitly below, before `arrays`).
+    unsafe { run.build_graph(&mut arrays)? };
+    run.partition(n_parts, imbalance, &mut part)?;
+    drop(run);
+    part.truncate(n_local);
+    Ok(part.into_iter().map(|p| p as PInt).collect())
+}
+
+/// PT-Scotch's private copies of a graph's CSR arrays and weights, in its index type (it takes
+/// non-const pointers, does not write through them, and keeps them until the graph is freed).
+struct ScotchArrays {
+    vert: Vec<ffi::SCOTCH_Num>,
+    edge: Vec<ffi::SCOTCH_Num>,
+    velo: Vec<ffi::SCOTCH_Num>,
+    edlo: Vec<ffi::SCOTCH_Num>,
+    weighted: bool,
+}
+
+impl ScotchArrays {
+    /// Checks the CSR arrays and the weights' lengths, and copies them.
+    fn new(
+        xadj: &[PInt],
+        adjncy: &[PInt],
+        weights: Option<(&[PInt], &[PInt])>,
+    ) -> Result<ScotchArrays> {
+        type Num = ffi::SCOTCH_Num;
+        let n_local = xadj.len().saturating_sub(1);
+        let n_edges = xadj.last().copied().unwrap_or(0) as usize;
+        if xadj.is_empty() || xadj[0] != 0 || n_edges != adjncy.len() {
             return Err(own_error(format!(
-                "scotch_partition: {} vertex weights for {n_local} rows, {} edge weights for {n_edges} edges",
-                v.len(),
-                e.len()
+                "scotch_partition: malformed CSR rows ({} offsets, {} edges, last offset {n_edges})",
+                xadj.len(),
+                adjncy.len()
             )));
         }
+        if let Some((v, e)) = weights {
+            if v.len() != n_local || e.len() != n_edges {
+                return Err(own_error(format!(
+                    "scotch_partition: {} vertex weights for {n_local} rows, {} edge weights for {n_edges} edges",
+                    v.len(),
+                    e.len()
+                )));
+            }
+        }
+        let copy = |x: &[PInt]| -> Vec<Num> {
+            let mut v: Vec<Num> = x.iter().map(|&w| w as Num).collect();
+            v.reserve(1); // a valid pointer even when empty
+            v
+        };
+        let (velo, edlo) = match weights {
+            Some((v, e)) => (copy(v), copy(e)),
+            None => (copy(&[]), copy(&[])),
+        };
+        Ok(ScotchArrays {
+            vert: copy(xadj),
+            edge: copy(adjncy),
+            velo,
+            edlo,
+            weighted: weights.is_some(),
+        })
     }
-    // PT-Scotch takes non-const pointers (it does not write through them) and keeps them until
-    // the graph is freed: private copies in its index type, alive until the end.
-    let mut vert: Vec<Num> = xadj.iter().map(|&v| v as Num).collect();
-    let mut edge: Vec<Num> = adjncy.iter().map(|&v| v as Num).collect();
-    edge.reserve(1); // a valid pointer even without edges
-    let (mut velo, mut edlo): (Vec<Num>, Vec<Num>) = match weights {
-        Some((v, e)) => (
-            v.iter().map(|&w| w as Num).collect(),
-            e.iter().map(|&w| w as Num).collect(),
-        ),
-        None => (Vec::new(), Vec::new()),
-    };
-    velo.reserve(1);
-    edlo.reserve(1);
-    let weighted = weights.is_some();
-    let or_null = |v: &mut Vec<Num>| {
-        if weighted {
-            v.as_mut_ptr()
-        } else {
-            ptr::null_mut()
-        }
-    };
-    let (velo_ptr, edlo_ptr) = (or_null(&mut velo), or_null(&mut edlo));
-    let mut part: Vec<Num> = vec![0; n_local.max(1)];
-    let mut run = ScotchRun {
-        // SAFETY: reads mpi-sys' constant for MPI_COMM_NULL.
-        comm: unsafe { ffi::RSMPI_COMM_NULL },
-        context: None,
-        graph: None,
-        strat: None,
-    };
-    // SAFETY: every object is boxed (PT-Scotch keeps pointers to the context and the graph),
-    // initialised before use and released by `run`'s Drop; the arrays outlive the graph.
-    unsafe {
-        // Scotch's own communicator: its messages can never meet ours.
-        let rc = ffi::MPI_Comm_dup(comm, &mut run.comm);
-        if rc != 0 {
-            run.comm = ffi::RSMPI_COMM_NULL;
-            return Err(own_error(format!("MPI_Comm_dup failed with code {rc}")));
-        }
+}
 
-        let mut context: Box<ffi::SCOTCH_Context> = Box::new(std::mem::zeroed());
-        scotch_check(ffi::SCOTCH_contextInit(&mut *context), "SCOTCH_contextInit")?;
-        let context = &mut **run.context.insert(context);
-        // One thread: no concurrent MPI calls inside PT-Scotch (our MPI is not initialised
-        // for them), no dependence on the machine's core count.
-        scotch_check(
-            ffi::SCOTCH_contextThreadSpawn(context, 1, ptr::null()),
-            "SCOTCH_contextThreadSpawn",
-        )?;
-        scotch_check(
-            ffi::SCOTCH_contextOptionSetNum(
-                context,
-                ffi::SCOTCH_OPTIONNUMDETERMINISTIC as c_int,
-                1,
-            ),
-            "SCOTCH_contextOptionSetNum(deterministic)",
-        )?;
-        scotch_check(
-            ffi::SCOTCH_contextOptionSetNum(
-                context,
-                ffi::SCOTCH_OPTIONNUMRANDOMFIXEDSEED as c_int,
-                1,
-            ),
-            "SCOTCH_contextOptionSetNum(fixed seed)",
-        )?;
-        // A private generator with a fixed seed, independent of earlier PT-Scotch calls.
-        scotch_check(
-            ffi::SCOTCH_contextRandomClone(context),
-            "SCOTCH_contextRandomClone",
-        )?;
-        ffi::SCOTCH_contextRandomSeed(context, SCOTCH_SEED);
+impl ScotchRun {
+    /// PT-Scotch's own communicator (its messages can never meet ours) and a context with one
+    /// thread (no concurrent MPI calls inside PT-Scotch, no dependence on the core count),
+    /// deterministic mode and a private generator with a fixed seed.
+    fn new(comm: MPI_Comm) -> Result<ScotchRun> {
+        let mut run = ScotchRun {
+            // SAFETY: reads mpi-sys' constant for MPI_COMM_NULL.
+            comm: unsafe { ffi::RSMPI_COMM_NULL },
+            context: None,
+            graph: None,
+            strat: None,
+        };
+        // SAFETY: the context is boxed (PT-Scotch keeps a pointer to it), initialised before
+        // use and released by `run`'s Drop.
+        unsafe {
+            let rc = ffi::MPI_Comm_dup(comm, &mut run.comm);
+            if rc != 0 {
+                run.comm = ffi::RSMPI_COMM_NULL;
+                return Err(own_error(format!("MPI_Comm_dup failed with code {rc}")));
+            }
+            let mut context: Box<ffi::SCOTCH_Context> = Box::new(std::mem::zeroed());
+            scotch_check(ffi::SCOTCH_contextInit(&mut *context), "SCOTCH_contextInit")?;
+            let context = &mut **run.context.insert(context);
+            scotch_check(
+                ffi::SCOTCH_contextThreadSpawn(context, 1, ptr::null()),
+                "SCOTCH_contextThreadSpawn",
+            )?;
+            scotch_check(
+                ffi::SCOTCH_contextOptionSetNum(
+                    context,
+                    ffi::SCOTCH_OPTIONNUMDETERMINISTIC as c_int,
+                    1,
+                ),
+                "SCOTCH_contextOptionSetNum(deterministic)",
+            )?;
+            scotch_check(
+                ffi::SCOTCH_contextOptionSetNum(
+                    context,
+                    ffi::SCOTCH_OPTIONNUMRANDOMFIXEDSEED as c_int,
+                    1,
+                ),
+                "SCOTCH_contextOptionSetNum(fixed seed)",
+            )?;
+            // A private generator with a fixed seed, independent of earlier PT-Scotch calls.
+            scotch_check(
+                ffi::SCOTCH_contextRandomClone(context),
+                "SCOTCH_contextRandomClone",
+            )?;
+            ffi::SCOTCH_contextRandomSeed(context, SCOTCH_SEED);
+        }
+        Ok(run)
+    }
 
+    /// Builds the distributed graph on `a` and checks it (`SCOTCH_dgraphCheck`).
+    ///
+    /// # Safety
+    /// `a` must outlive `self` and stay unchanged: PT-Scotch keeps pointers into it.
+    unsafe fn build_graph(&mut self, a: &mut ScotchArrays) -> Result<()> {
+        type Num = ffi::SCOTCH_Num;
+        let n_local = (a.vert.len() - 1) as Num;
+        let n_edges = a.edge.len() as Num;
+        let weighted = a.weighted;
+        let or_null = |v: &mut Vec<Num>| {
+            if weighted {
+                v.as_mut_ptr()
+            } else {
+                ptr::null_mut()
+            }
+        };
+        let (velo, edlo) = (or_null(&mut a.velo), or_null(&mut a.edlo));
         let mut graph: Box<ffi::SCOTCH_Dgraph> = Box::new(std::mem::zeroed());
         scotch_check(
-            ffi::SCOTCH_dgraphInit(&mut *graph, run.comm),
+            ffi::SCOTCH_dgraphInit(&mut *graph, self.comm),
             "SCOTCH_dgraphInit",
         )?;
-        let graph = &mut **run.graph.insert(graph);
+        let graph = &mut **self.graph.insert(graph);
         scotch_check(
             ffi::SCOTCH_dgraphBuild(
                 graph,
                 0,
-                n_local as Num,
-                n_local as Num,
-                vert.as_mut_ptr(),
-                vert.as_mut_ptr().add(1),
-                velo_ptr,
+                n_local,
+                n_local,
+                a.vert.as_mut_ptr(),
+                a.vert.as_mut_ptr().add(1),
+                velo,
                 ptr::null_mut(),
-                n_edges as Num,
-                n_edges as Num,
-                edge.as_mut_ptr(),
+                n_edges,
+                n_edges,
+                a.edge.as_mut_ptr(),
                 ptr::null_mut(),
-                edlo_ptr,
+                edlo,
             ),
             "SCOTCH_dgraphBuild",
         )?;
-        scotch_check(ffi::SCOTCH_dgraphCheck(graph), "SCOTCH_dgraphCheck")?;
-
-        let mut bound: ffi::SCOTCH_Dgraph = std::mem::zeroed();
-        scotch_check(
-            ffi::SCOTCH_contextBindDgraph(context, graph, &mut bound),
-            "SCOTCH_contextBindDgraph",
-        )?;
-
-        let mut strat: Box<ffi::SCOTCH_Strat> = Box::new(std::mem::zeroed());
-        scotch_check(ffi::SCOTCH_stratInit(&mut *strat), "SCOTCH_stratInit")?;
-        let strat = &mut **run.strat.insert(strat);
-        let mut n_procs: c_int = 0;
-        ffi::MPI_Comm_size(run.comm, &mut n_procs);
-        // PETSc's MatPartitioning defaults: the default strategy, 1 % imbalance.
-        scotch_check(
-            ffi::SCOTCH_stratDgraphMapBuild(
-                strat,
-                ffi::SCOTCH_STRATDEFAULT as Num,
-                n_procs as Num,
-                n_parts as Num,
-                imbalance,
-            ),
-            "SCOTCH_stratDgraphMapBuild",
-        )?;
-        scotch_check(
-            ffi::SCOTCH_dgraphPart(&mut bound, n_parts as Num, strat, part.as_mut_ptr()),
-            "SCOTCH_dgraphPart",
-        )?;
+        scotch_check(ffi::SCOTCH_dgraphCheck(graph), "SCOTCH_dgraphCheck")
     }
-    drop(run);
-    part.truncate(n_local);
-    Ok(part.into_iter().map(|p| p as PInt).collect())
+
+    /// Partitions the built graph under the context into `n_parts` parts: PETSc's
+    /// MatPartitioning defaults (the default strategy) with the allowed `imbalance`.
+    fn partition(
+        &mut self,
+        n_parts: usize,
+        imbalance: f64,
+        part: &mut [ffi::SCOTCH_Num],
+    ) -> Result<()> {
+        type Num = ffi::SCOTCH_Num;
+        let (Some(context), Some(graph)) = (self.context.as_mut(), self.graph.as_ref()) else {
+            return Err(own_error("scotch_partition: no context or graph"));
+        };
+        // SAFETY: context and graph are initialised (build_graph succeeded), the strategy is
+        // boxed and released by Drop; `part` holds one entry per local vertex (at least one).
+        unsafe {
+            let mut bound: ffi::SCOTCH_Dgraph = std::mem::zeroed();
+            scotch_check(
+                ffi::SCOTCH_contextBindDgraph(&mut **context, &**graph, &mut bound),
+                "SCOTCH_contextBindDgraph",
+            )?;
+            let mut strat: Box<ffi::SCOTCH_Strat> = Box::new(std::mem::zeroed());
+            scotch_check(ffi::SCOTCH_stratInit(&mut *strat), "SCOTCH_stratInit")?;
+            let strat = &mut **self.strat.insert(strat);
+            let mut n_procs: c_int = 0;
+            ffi::MPI_Comm_size(self.comm, &mut n_procs);
+            scotch_check(
+                ffi::SCOTCH_stratDgraphMapBuild(
+                    strat,
+                    ffi::SCOTCH_STRATDEFAULT as Num,
+                    n_procs as Num,
+                    n_parts as Num,
+                    imbalance,
+                ),
+                "SCOTCH_stratDgraphMapBuild",
+            )?;
+            scotch_check(
+                ffi::SCOTCH_dgraphPart(&mut bound, n_parts as Num, strat, part.as_mut_ptr()),
+                "SCOTCH_dgraphPart",
+            )
+        }
+    }
 }
 
 /// Frees memory from PetscMalloc that no PETSc object has taken over.

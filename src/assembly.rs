@@ -213,6 +213,7 @@ struct RowScratch {
 impl RowScratch {
     /// The neighbours of owned node `la` (the nodes of its cells `inc`), sorted by global
     /// number, with `slot` set to their positions in the row.
+    #[inline(always)]
     fn gather_neighbours<const N: usize>(
         &mut self,
         layout: &Layout,
@@ -246,6 +247,7 @@ impl RowScratch {
 
     /// Appends the node's D rows in `buf` to the two CSR parts: the columns once per node,
     /// an interior row's values as one slice, an interface row's values split.
+    #[inline(always)]
     fn append_rows<const D: usize>(
         &mut self,
         (lo, hi): (usize, usize),
@@ -300,6 +302,7 @@ impl RowScratch {
 /// fixed row (`fixed_v[i]` not NaN) keeps only its diagonal, a fixed column `gfix` moves
 /// −K_ij g_j into `elim`.
 #[allow(clippy::too_many_arguments)]
+#[inline(always)]
 fn add_rows_with_dirichlet<const D: usize, const N: usize>(
     k: &[[f64; 12]; 3],
     gfix: &[f64; 12],

@@ -115,6 +115,15 @@ impl<'a> Ctx<'a> {
         all
     }
 
+    /// Rank 0's vector on every rank (two broadcasts: the length, the values). Collective.
+    pub fn broadcast_f64s(&self, v: &mut Vec<f64>) {
+        let root = self.world.process_at_rank(0);
+        let mut len = v.len() as u64;
+        root.broadcast_into(&mut len);
+        v.resize(len as usize, 0.0);
+        root.broadcast_into(&mut v[..]);
+    }
+
     /// Every rank gets `Err` if any rank has one: the lowest failing rank's error, with its kind
     /// (input: exit code 2; anything else: exit code 1) and message. Collective.
     pub fn agree<T>(&self, local: Result<T, RunError>) -> Result<T, RunError> {

@@ -164,6 +164,11 @@ pub enum Reuse {
     /// Iterative: as "auto", but the preconditioner of the first step is kept unless a solve
     /// on it fails.
     Always,
+    /// Frictionless contact on the direct preset: Algorithm 1 condensed onto the contact
+    /// unknowns — one factorisation, the compliance of the contact nodes from MUMPS'
+    /// selected inverse, dense steps, one expansion solve (signorini::condensed). Elsewhere
+    /// as "auto". "auto" takes this path wherever it applies.
+    Condensed,
 }
 
 impl Reuse {
@@ -172,6 +177,7 @@ impl Reuse {
             Reuse::Auto => "auto",
             Reuse::Never => "never",
             Reuse::Always => "always",
+            Reuse::Condensed => "condensed",
         }
     }
 }
@@ -1123,6 +1129,7 @@ impl Reader<'_> {
                     ("auto", Reuse::Auto),
                     ("never", Reuse::Never),
                     ("always", Reuse::Always),
+                    ("condensed", Reuse::Condensed),
                 ],
             )?;
         }

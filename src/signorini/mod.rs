@@ -8,6 +8,7 @@
 
 pub mod active_set;
 pub mod boundary;
+pub mod condensed;
 pub mod cycle;
 pub mod newton;
 pub mod reduced;
@@ -16,7 +17,7 @@ pub mod rigid;
 pub mod snesvi;
 
 use crate::assembly::System;
-use crate::case::{self, CoulombAlgorithm, Method, Preset, SolverSection};
+use crate::case::{self, CoulombAlgorithm, Method, Preset, Reuse, SolverSection};
 use crate::contact::Obstacle;
 use crate::error::RunError;
 use crate::mesh::Mesh;
@@ -63,6 +64,9 @@ pub struct NewtonSummary {
     /// Coulomb friction only: the law, μ, the algorithm and (fixed point) its outer steps.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub coulomb: Option<CoulombSummary>,
+    /// The condensed path (frictionless, direct preset), when it was tried.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub condensed: Option<condensed::CondensedSummary>,
 }
 
 /// summary.json's "newton"."coulomb": how Coulomb friction was solved. `steps` of the
@@ -269,7 +273,7 @@ pub fn solve(
         law,
         rigid: settings.rigid_modes,
     };
-    let (mut nr, outer_steps) = run_method(
+    let (mut nr, outer_steps, condensed_summary) = run_method(
         ctx,
         &problem,
         &ns,
@@ -285,7 +289,11 @@ pub fn solve(
         }
     }
     let (contact, table) = final_state(ctx, sys, &b, &nr, friction, dim)?;
-    let newton = newton_summary(settings, solver_section, c, &mut nr, outer_steps, previous);
+    let mut newton = newton_summary(settings, solver_section, c, &mut nr, outer_steps, previous);
+    if let Some(cs) = condensed_summary {
+        newton.factorisations += 1; // K_p's (the dense steps factorise nothing sparse)
+        newton.condensed = Some(cs);
+    }
     let delta = match previous.zip(prev_u) {
         Some((prev, u_prev)) => Some(step_delta(prev, &nr.nodes, &nr.u.to_local_vec()?, &u_prev)),
         None => None,
@@ -341,14 +349,32 @@ fn run_method(
     solver_section: &SolverSection,
     coords: Option<&Vector>,
     warm: Option<&WarmStart>,
-) -> Result<(NewtonResult, Option<usize>), RunError> {
+) -> Result<(NewtonResult, Option<usize>, Option<condensed::CondensedSummary>), RunError> {
     let (sys, b, dim) = (problem.sys, problem.boundary, problem.mesh.dim);
     let mut outer_steps = None;
+    let mut condensed_summary = None;
     let nr = match solver_section.method {
         Method::Newton => {
             let mut reduced = ReducedSystem::new(ctx, sys, b, coords, dim)?;
             let friction = settings.tresca_threshold.is_some() || settings.coulomb.is_some();
-            reduced.enable_reuse(ctx, solver_section.reuse, friction)?;
+            let condense = !friction
+                && matches!(solver_section.reuse, Reuse::Auto | Reuse::Condensed)
+                && b.n_global > 0
+                && b.n_global <= condensed::MAX_CANDIDATES
+                && reduced.factorises()?;
+            if condense {
+                match condensed::solve(ctx, problem, &mut reduced, ns, warm)? {
+                    condensed::Condensed::Solved(nr, s) => {
+                        return Ok((*nr, None, Some(s)));
+                    }
+                    condensed::Condensed::Fallback(s) => condensed_summary = Some(s),
+                }
+            }
+            let reuse = match solver_section.reuse {
+                Reuse::Condensed => Reuse::Auto,
+                r => r,
+            };
+            reduced.enable_reuse(ctx, reuse, friction)?;
             match settings.coulomb {
                 Some((mu, CoulombAlgorithm::FixedPoint)) => {
                     let (nr, outer) = fixed_point(ctx, problem, &mut reduced, ns, mu, warm)?;
@@ -374,7 +400,7 @@ fn run_method(
             Method::SnesVi => format!("SNES VI did not converge in {} steps", nr.steps),
         }));
     }
-    Ok((nr, outer_steps))
+    Ok((nr, outer_steps, condensed_summary))
 }
 
 /// The final state: the contact table, the KKT and friction certificates (an error if they
@@ -460,6 +486,7 @@ fn newton_summary(
         pinned_dofs: nr.pinned_final.len(),
         on_cycle: settings.newton.on_cycle.name(),
         cycle_detected_at: nr.cycle_detected_at,
+        condensed: None,
         coulomb: settings.coulomb.map(|(mu, algorithm)| CoulombSummary {
             mu,
             algorithm: algorithm.name(),

@@ -155,7 +155,7 @@ struct Loop<'a> {
 /// shift ([`super::rigid`]) instead of hanging the whole load on the touching point, whose
 /// point support inflates the first penetration (3D Hertz: 6 instead of 20 Newton steps;
 /// 2D Hertz: 1–2 steps fewer, README).
-fn auto_start(init: NewtonInit, friction: bool, free: &FreeModes) -> NewtonInit {
+pub(super) fn auto_start(init: NewtonInit, friction: bool, free: &FreeModes) -> NewtonInit {
     if init == NewtonInit::Auto && !friction && free.floats() {
         NewtonInit::AllInactive
     } else {

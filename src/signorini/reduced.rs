@@ -270,6 +270,9 @@ pub enum SolveKind {
     /// another matrix: the factorisation (direct preset) or the AMG hierarchy (iterative
     /// preset) of an earlier step (no new factorisation, no new PCSetUp).
     Reuse,
+    /// A step of Algorithm 1 on the contact unknowns alone (signorini::condensed): a dense
+    /// solve, no sparse one.
+    Condensed,
 }
 
 /// What the reuse path did in one step (summary.json `newton.history[].reuse`; absent with
@@ -340,7 +343,7 @@ impl Reuser {
         match self.mode {
             Reuse::Never => None,
             Reuse::Always => Some(ALWAYS_BUDGET),
-            Reuse::Auto => {
+            Reuse::Auto | Reuse::Condensed => {
                 let [t_factor, t_solve, t_it] = costs;
                 let t_it = if t_it > 0.0 {
                     t_it
@@ -888,6 +891,44 @@ impl ReducedSystem {
                 fallback,
             }),
         })
+    }
+
+    /// True when the solver factorises (direct preset: PCLU / PCCHOLESKY). Local.
+    pub fn factorises(&self) -> petsc::Result<bool> {
+        let (_, pc) = self.ls.ksp.type_names()?;
+        Ok(pc == "lu" || pc == "cholesky")
+    }
+
+    /// The solver (the condensed path reads entries of the inverse from its factorisation).
+    pub fn ksp(&self) -> &crate::petsc::Ksp {
+        &self.ls.ksp
+    }
+
+    /// One KSPSolve of the matrix written last with the current right-hand side: a
+    /// factorisation when the matrix changed since the last solve, else triangular solves only.
+    /// Collective.
+    pub fn solve_current(&mut self) -> petsc::Result<StepSolve> {
+        self.solve_plain()
+    }
+
+    /// This rank's rows of the right-hand side written last.
+    pub fn rhs_local(&self) -> petsc::Result<Vec<f64>> {
+        self.rhs.to_local_vec()
+    }
+
+    /// Replaces this rank's rows of the right-hand side.
+    pub fn set_rhs_local(&mut self, v: &[f64]) -> petsc::Result<()> {
+        self.rhs.write(|x| x.copy_from_slice(v))
+    }
+
+    /// This rank's rows of the last solution.
+    pub fn solution_local(&self) -> petsc::Result<Vec<f64>> {
+        self.u.to_local_vec()
+    }
+
+    /// Replaces this rank's rows of the solution (what `recover` and `solution` read).
+    pub fn set_solution_local(&mut self, v: &[f64]) -> petsc::Result<()> {
+        self.u.write(|x| x.copy_from_slice(v))
     }
 
     /// One KSPSolve on the step's matrix (the plain path).

@@ -336,6 +336,22 @@ impl FreeModes {
         &self.pins
     }
 
+    /// Basis of the modes Dirichlet data leave free (m × m_z, orthonormal columns; no
+    /// columns with rigid-mode handling off).
+    pub fn dirichlet_free(&self) -> &DMatrix<f64> {
+        &self.z
+    }
+
+    /// The rigid modes (also with handling off: then nothing is free).
+    pub fn rigid_modes(&self) -> &RigidModes {
+        &self.modes
+    }
+
+    /// The load in every rigid mode, Rᵀ f (m entries used), and its scale Σ|f_i|‖R_i‖.
+    pub fn load(&self) -> ([f64; 6], f64) {
+        (self.load, self.load_scale)
+    }
+
     /// New pins when the Gram matrix of Dirichlet data + the set (`g_set`) changed; `Ok(true)`
     /// if the pins changed. Collective when they change (the same on every rank).
     pub fn update(

@@ -1,0 +1,726 @@
+//! Algorithm 1 on the contact unknowns alone (frictionless, direct preset): one factorisation
+//! of the stiffness with every rigid mode that Dirichlet data leave free pinned, K_p; the
+//! compliance of the candidate contact nodes C = Nᵀ K_p⁻¹ N from MUMPS' selected-inverse
+//! solve (the entries of K_p⁻¹ between their dofs only); then every step of Algorithm 1 is a
+//! dense solve of the active nodes' block; at the end one more solve with the factorisation
+//! expands the multipliers into u.
+//!
+//! Why it is Algorithm 1: with u = w + ρ (ρ a rigid motion Dirichlet data leave free, zero in
+//! K_p's pins) and K_p w = f − N λ_n, the reduced system (3.29) of a set A is, eliminated onto
+//! the contact unknowns,
+//!
+//! ```text
+//!   u_n = d₀ − C λ_n + G α        (d₀ = Nᵀ K_p⁻¹ f, G = Nᵀ R z: the free modes' normal parts)
+//!   u_n,k = −g_k  (k ∈ A),  λ_n,k = 0  (k ∉ A),   Gᵀ λ_n = zᵀ Rᵀ f  (the pins carry nothing)
+//! ```
+//!
+//! for the modes the set fixes; modes the set leaves free stay pinned (as the plain path pins
+//! them) and the balance test of [`super::rigid`] decides, as in the plain path. λ_n of (3.28)
+//! and u_n come out of the same dense system, the set update is (3.23). The final set is
+//! checked on the expanded u by the plain path's own recovery (3.28) and update (3.23): a
+//! node that changes there sends the solve to the plain path.
+//!
+//! Collectives: the gathering of the candidates (one all-gather), the selected-inverse solve,
+//! two triangular solves, one broadcast of the dense result, one MatMult.
+
+use super::active_set::{ActiveSet, Iterate, Law};
+use super::newton::{ContactProblem, NewtonResult, NewtonSettings, StepInfo, WarmStart};
+use super::reduced::{ReducedSystem, SolveKind};
+use super::rigid::FreeModes;
+use crate::contact::{c_n, normal_active};
+use crate::error::RunError;
+use crate::par::Ctx;
+use crate::petsc::InverseRequest;
+use crate::say;
+use nalgebra::{DMatrix, DVector, SymmetricEigen};
+use serde::Serialize;
+use std::collections::HashSet;
+use std::time::Instant;
+
+/// More candidate contact nodes than this and the condensed path is not tried: the dense
+/// compliance (8 n_c² bytes on rank 0) and its selected-inverse solve would not pay.
+pub const MAX_CANDIDATES: usize = 8000;
+
+/// An unbalanced load in the set's free modes below this fraction of the load's scale is
+/// balanced (as [`super::rigid`]'s balance test).
+const BALANCE_RTOL: f64 = 1e-10;
+
+/// summary.json's `newton.condensed`: what the condensed path did.
+#[derive(Debug, Clone, Serialize)]
+pub struct CondensedSummary {
+    /// The path ran to the end ("condensed"), or handed the solve to the plain path
+    /// ("fallback", with the reason).
+    pub outcome: &'static str,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub fallback_reason: Option<String>,
+    /// Candidate contact nodes (the dense system's size).
+    pub candidates: usize,
+    /// Entries of K_p⁻¹ computed by the selected-inverse solve.
+    pub inverse_entries: usize,
+    /// Analysis + numeric factorisation of K_p and the solve for d₀ [s].
+    pub factorisation_seconds: f64,
+    /// The selected-inverse solve and the assembly of C [s].
+    pub inverse_seconds: f64,
+    /// Algorithm 1's steps on the dense system [s].
+    pub dense_seconds: f64,
+    /// The expansion solve, (3.28) and the check of the final set [s].
+    pub expansion_seconds: f64,
+    /// Triangular solves with the factorisation (d₀, expansion).
+    pub solves: usize,
+}
+
+/// What the condensed path returns: the solution, or the reason to run the plain path.
+pub enum Condensed {
+    Solved(Box<NewtonResult>, CondensedSummary),
+    Fallback(CondensedSummary),
+}
+
+/// One candidate contact node as the dense algorithm sees it (gathered to every rank).
+const REC: usize = 13;
+
+/// Runs Algorithm 1 condensed onto the contact unknowns (module note). `Fallback` when the
+/// dense iteration cycles, does not converge within `max_steps`, or its final set changes on
+/// the expanded u; an error only where the plain path would give the same one (no support).
+/// Collective.
+pub fn solve(
+    ctx: &Ctx,
+    p: &ContactProblem,
+    reduced: &mut ReducedSystem,
+    s: &NewtonSettings,
+    warm: Option<&WarmStart>,
+) -> Result<Condensed, RunError> {
+    let (mesh, layout, b, sys) = (p.mesh, p.layout, p.boundary, p.sys);
+    let dim = mesh.dim;
+    let mut summary = CondensedSummary {
+        outcome: "condensed",
+        fallback_reason: None,
+        candidates: b.n_global,
+        inverse_entries: 0,
+        factorisation_seconds: 0.0,
+        inverse_seconds: 0.0,
+        dense_seconds: 0.0,
+        expansion_seconds: 0.0,
+        solves: 0,
+    };
+    // K_p: A with every Dirichlet-free rigid mode pinned, no contact row.
+    let t = Instant::now();
+    let mut free = FreeModes::new(ctx, mesh, layout, p.fixed, b, &reduced.f_local, s.rigid);
+    free.update(ctx, mesh, layout, &[0.0; 36])?;
+    reduced.set_pins(sys, layout, free.pins())?;
+    let empty = ActiveSet {
+        normal: vec![false; b.nodes.len()],
+        tangential: None,
+    };
+    reduced.write(ctx, sys, layout, b, &empty, free.pins())?;
+    let solved = reduced.solve_current()?;
+    if !solved.info.converged() {
+        return Err(RunError::Failed(format!(
+            "the factorisation of the stiffness for the condensed contact solve failed ({})",
+            solved.info.reason_name
+        )));
+    }
+    summary.solves += 1;
+    let w0 = reduced.solution_local()?;
+    let rhs0 = reduced.rhs_local()?;
+    summary.factorisation_seconds = t.elapsed().as_secs_f64();
+
+    // The candidates, gathered on every rank in rank order (= c_h's global order).
+    let t = Instant::now();
+    let z = free.dirichlet_free().clone();
+    let mz = z.ncols();
+    let modes = free.rigid_modes();
+    let start = match warm {
+        Some(w) => w.nodes.iter().map(|r| r.active).collect::<Vec<bool>>(),
+        None => {
+            let init = super::newton::auto_start(s.section.init, false, &free);
+            ActiveSet::initial(b, init, Law::Frictionless, s.c, mesh.extent(), dim).normal
+        }
+    };
+    let mut mine = Vec::with_capacity(b.nodes.len() * REC);
+    for (k, &a) in b.nodes.iter().zip(&start) {
+        let d0: f64 = (0..dim).map(|j| k.frame.n[j] * w0[k.local_row + j]).sum();
+        let row = modes.direction_row(&k.x, &k.frame.n);
+        let mut gz = [0.0; 6];
+        for (c, g) in gz.iter_mut().enumerate().take(mz) {
+            *g = (0..modes.m).map(|j| row[j] * z[(j, c)]).sum();
+        }
+        mine.extend_from_slice(&[
+            k.row as f64,
+            k.frame.n[0],
+            k.frame.n[1],
+            k.frame.n[2],
+            k.gap,
+            d0,
+            if a { 1.0 } else { 0.0 },
+        ]);
+        mine.extend_from_slice(&gz);
+    }
+    let all = ctx.all_gather_varcount(&mine);
+    let n = all.len() / REC;
+    let rec = |i: usize| &all[i * REC..(i + 1) * REC];
+    // The requested entries: every pair of the candidates' dofs with a normal component.
+    let dofs: Vec<(usize, usize, f64)> = (0..n)
+        .flat_map(|i| {
+            let r = rec(i);
+            (0..dim)
+                .filter(move |&a| r[1 + a] != 0.0)
+                .map(move |a| (i, r[0] as usize + a, r[1 + a]))
+        })
+        .collect();
+    let mut rows: Vec<usize> = dofs.iter().map(|d| d.1).collect();
+    rows.sort_unstable();
+    let root = ctx.rank == 0;
+    let request: InverseRequest = if root {
+        dofs.iter().map(|d| (d.1, rows.clone())).collect()
+    } else {
+        Vec::new()
+    };
+    summary.inverse_entries = dofs.len() * dofs.len();
+    let n_rows = layout.node_offsets.last().copied().unwrap_or(0) * dim;
+    let entries = reduced
+        .ksp()
+        .mumps_inverse_entries(ctx.comm(), n_rows, root, &request)?;
+    // C = Nᵀ K_p⁻¹ N, on rank 0.
+    let mut cmat = DMatrix::<f64>::zeros(if root { n } else { 0 }, if root { n } else { 0 });
+    if root {
+        let pos: std::collections::HashMap<usize, usize> =
+            rows.iter().enumerate().map(|(p, &r)| (r, p)).collect();
+        for (col, &(j, _, nj)) in dofs.iter().enumerate() {
+            let vals = &entries[col];
+            for &(i, ri, ni) in &dofs {
+                cmat[(i, j)] += ni * nj * vals[pos[&ri]];
+            }
+        }
+    }
+    summary.inverse_seconds = t.elapsed().as_secs_f64();
+
+    // Algorithm 1 on the dense system, on rank 0; the outcome broadcast.
+    let t = Instant::now();
+    let (load, load_scale) = free.load();
+    let phi: Vec<f64> = (0..mz)
+        .map(|c| (0..modes.m).map(|j| z[(j, c)] * load[j]).sum())
+        .collect();
+    let mut packed: Vec<f64> = Vec::new();
+    if root {
+        let g = DMatrix::from_fn(n, mz, |i, c| rec(i)[7 + c]);
+        let d0: Vec<f64> = (0..n).map(|i| rec(i)[5]).collect();
+        let gap: Vec<f64> = (0..n).map(|i| rec(i)[4]).collect();
+        let active: Vec<bool> = (0..n).map(|i| rec(i)[6] != 0.0).collect();
+        let dense = Dense {
+            cmat: &cmat,
+            d0: &d0,
+            gap: &gap,
+            g: &g,
+            phi: &phi,
+            load_scale,
+            c: s.c,
+            max_steps: s.section.max_steps,
+        };
+        packed = dense.run(active).pack(n, mz);
+    }
+    ctx.broadcast_f64s(&mut packed);
+    let run = DenseRun::unpack(&packed, n, mz);
+    summary.dense_seconds = t.elapsed().as_secs_f64();
+    for h in &run.steps {
+        say!(
+            ctx,
+            "newton {:3}: |A_n| = {:6}  changed {:6}  |C_n| = {:.3e}  condensed ({:.4} s)",
+            h.0,
+            h.1,
+            h.2,
+            h.3,
+            h.4
+        );
+    }
+    match run.end {
+        End::Converged => {}
+        End::NoSupport(reaction) => {
+            return Err(free.no_support(run.active.iter().filter(|&&a| a).count(), reaction))
+        }
+        End::Fallback(why) => {
+            summary.outcome = "fallback";
+            say!(ctx, "newton: condensed path: {why}; solving on the plain path");
+            summary.fallback_reason = Some(why);
+            return Ok(Condensed::Fallback(summary));
+        }
+    }
+
+    // Expansion: w = K_p⁻¹ (f − N λ_n), u = w + R z α; then (3.28) and (3.23) on it.
+    let t = Instant::now();
+    let off = b.offset;
+    let mut rhs = rhs0;
+    for (i, k) in b.nodes.iter().enumerate() {
+        let l = run.lambda[off + i];
+        for j in 0..dim {
+            rhs[k.local_row + j] -= k.frame.n[j] * l;
+        }
+    }
+    reduced.set_rhs_local(&rhs)?;
+    let solved = reduced.solve_current()?;
+    summary.solves += 1;
+    if !solved.info.converged() {
+        return Err(RunError::Failed(format!(
+            "the expansion solve of the condensed contact solve failed ({})",
+            solved.info.reason_name
+        )));
+    }
+    let mut rho = [0.0; 6];
+    for (j, r) in rho.iter_mut().enumerate().take(modes.m) {
+        *r = (0..mz).map(|c| z[(j, c)] * run.alpha[c]).sum();
+    }
+    let mut u = reduced.solution_local()?;
+    for (i, &v) in layout.owned_nodes.iter().enumerate() {
+        for k in 0..dim {
+            u[i * dim + k] += free.motion_at(&rho, &mesh.coords[v], k);
+        }
+    }
+    reduced.set_solution_local(&u)?;
+    let set = ActiveSet {
+        normal: run.active[off..off + b.nodes.len()].to_vec(),
+        tangential: None,
+    };
+    let mut it = Iterate::new(b.nodes.len(), u.len(), false);
+    reduced.recover(sys, b, &set, &mut it)?; // (3.28)
+    let update = set.update(&it, b, Law::Frictionless, s.c, dim); // (3.23)
+    let totals = update.reduce(ctx, b, free.modes(), dim);
+    summary.expansion_seconds = t.elapsed().as_secs_f64();
+    if totals.changed > 0 {
+        summary.outcome = "fallback";
+        let why = format!(
+            "{} node(s) change on the expanded u (round-off at nodes on the edge of the set)",
+            totals.changed
+        );
+        say!(ctx, "newton: condensed path: {why}; solving on the plain path");
+        summary.fallback_reason = Some(why);
+        return Ok(Condensed::Fallback(summary));
+    }
+    let n_active = run.active.iter().filter(|&&a| a).count();
+    say!(
+        ctx,
+        "newton: condensed: {} candidates, {} active, factorisation {:.3} s, inverse {:.3} s, \
+         dense {:.3} s, expansion {:.3} s",
+        n,
+        n_active,
+        summary.factorisation_seconds,
+        summary.inverse_seconds,
+        summary.dense_seconds,
+        summary.expansion_seconds
+    );
+    let history = run
+        .steps
+        .iter()
+        .map(|h| StepInfo {
+            step: h.0,
+            active: h.1,
+            changed: h.2,
+            residual: h.3,
+            solve_seconds: h.4,
+            solve: SolveKind::Condensed,
+            iterations: 0,
+            reuse: None,
+            amg: None,
+            pinned: free.pins().len(),
+            states: None,
+            du_rel: None,
+        })
+        .collect::<Vec<_>>();
+    let result = NewtonResult {
+        u: reduced.solution()?,
+        nodes: it.nodes,
+        steps: history.len(),
+        history,
+        converged: true,
+        lambda_seconds: reduced.lambda_seconds,
+        rows_seconds: reduced.rows_seconds,
+        pinned_final: free.pins().to_vec(),
+        cycle_detected_at: None,
+    };
+    Ok(Condensed::Solved(Box::new(result), summary))
+}
+
+/// Algorithm 1 on the condensed system (module note): C (n × n), d₀, the gaps, the free
+/// modes' normal parts G (n × m_z), the load in them φ = zᵀ Rᵀ f and its scale, c.
+pub struct Dense<'a> {
+    pub cmat: &'a DMatrix<f64>,
+    pub d0: &'a [f64],
+    pub gap: &'a [f64],
+    pub g: &'a DMatrix<f64>,
+    pub phi: &'a [f64],
+    pub load_scale: f64,
+    pub c: f64,
+    pub max_steps: usize,
+}
+
+/// How the dense iteration ended.
+#[derive(Debug, Clone, PartialEq)]
+pub enum End {
+    Converged,
+    /// The load is unbalanced in a mode no contact node can fix (the unbalanced load).
+    NoSupport(f64),
+    Fallback(String),
+}
+
+/// The dense iteration's result: final set, λ_n, the free modes' coefficients α, u_n, and per
+/// step (step, |A_n|, changed, ‖C_n‖, seconds).
+#[derive(Debug, Clone)]
+pub struct DenseRun {
+    pub active: Vec<bool>,
+    pub lambda: Vec<f64>,
+    pub alpha: Vec<f64>,
+    pub u_n: Vec<f64>,
+    pub steps: Vec<(usize, usize, usize, f64, f64)>,
+    pub end: End,
+}
+
+impl DenseRun {
+    /// One flat vector for the broadcast.
+    fn pack(&self, n: usize, mz: usize) -> Vec<f64> {
+        let mut v = Vec::with_capacity(4 * n + mz + 5 * self.steps.len() + 3);
+        let (code, x) = match &self.end {
+            End::Converged => (0.0, 0.0),
+            End::NoSupport(r) => (1.0, *r),
+            End::Fallback(_) => (2.0, 0.0),
+        };
+        v.extend_from_slice(&[code, x, self.steps.len() as f64]);
+        v.extend(self.active.iter().map(|&a| if a { 1.0 } else { 0.0 }));
+        v.extend_from_slice(&self.lambda);
+        v.extend_from_slice(&self.u_n);
+        v.extend_from_slice(&self.alpha[..mz]);
+        for s in &self.steps {
+            v.extend_from_slice(&[s.0 as f64, s.1 as f64, s.2 as f64, s.3, s.4]);
+        }
+        if let End::Fallback(why) = &self.end {
+            v.extend(why.bytes().map(f64::from));
+        }
+        v
+    }
+
+    fn unpack(v: &[f64], n: usize, mz: usize) -> DenseRun {
+        let steps_n = v[2] as usize;
+        let mut p = 3;
+        let mut take = |len: usize| {
+            let s = &v[p..p + len];
+            p += len;
+            s.to_vec()
+        };
+        let active = take(n).iter().map(|&x| x != 0.0).collect();
+        let lambda = take(n);
+        let u_n = take(n);
+        let alpha = take(mz);
+        let steps = (0..steps_n)
+            .map(|_| {
+                let s = take(5);
+                (s[0] as usize, s[1] as usize, s[2] as usize, s[3], s[4])
+            })
+            .collect();
+        let end = match v[0] as i32 {
+            0 => End::Converged,
+            1 => End::NoSupport(v[1]),
+            _ => End::Fallback(
+                v[p..]
+                    .iter()
+                    .map(|&b| char::from(b as u8))
+                    .collect::<String>(),
+            ),
+        };
+        DenseRun {
+            active,
+            lambda,
+            alpha,
+            u_n,
+            steps,
+            end,
+        }
+    }
+}
+
+impl Dense<'_> {
+    /// Algorithm 1 from the set `active`: solve the set's dense system, λ_n and u_n of every
+    /// candidate, update by (3.23); stop when no node changes (with the balance test of the
+    /// modes the set leaves free, as the plain path). Local.
+    pub fn run(&self, mut active: Vec<bool>) -> DenseRun {
+        let n = self.d0.len();
+        let mz = self.g.ncols();
+        let mut seen: HashSet<Vec<bool>> = HashSet::new();
+        seen.insert(active.clone());
+        let mut steps = Vec::new();
+        let out = |active: Vec<bool>, lambda, alpha, u_n, steps, end| DenseRun {
+            active,
+            lambda,
+            alpha,
+            u_n,
+            steps,
+            end,
+        };
+        for step in 1..=self.max_steps {
+            let t = Instant::now();
+            let (lambda, alpha, u_n, free_dirs) = match self.solve_set(&active) {
+                Some(x) => x,
+                None => {
+                    return out(
+                        active,
+                        vec![0.0; n],
+                        vec![0.0; mz],
+                        vec![0.0; n],
+                        steps,
+                        End::Fallback(format!("the dense system of step {step} is singular")),
+                    )
+                }
+            };
+            let mut next = active.clone();
+            let mut changed = 0;
+            let mut res2 = 0.0;
+            for i in 0..n {
+                let cn = c_n(u_n[i], lambda[i], self.gap[i], self.c); // (3.21)
+                res2 += cn * cn;
+                next[i] = normal_active(u_n[i], lambda[i], self.gap[i], self.c); // (3.23)
+                changed += usize::from(next[i] != active[i]);
+            }
+            let n_active = active.iter().filter(|&&a| a).count();
+            steps.push((
+                step,
+                n_active,
+                changed,
+                res2.sqrt(),
+                t.elapsed().as_secs_f64(),
+            ));
+            if changed == 0 {
+                match self.balance(&active, &u_n, &free_dirs) {
+                    None => return out(active, lambda, alpha, u_n, steps, End::Converged),
+                    Some(Ok(i)) => next[i] = true,
+                    Some(Err(r)) => return out(active, lambda, alpha, u_n, steps, End::NoSupport(r)),
+                }
+            }
+            if !seen.insert(next.clone()) {
+                return out(
+                    active,
+                    lambda,
+                    alpha,
+                    u_n,
+                    steps,
+                    End::Fallback(format!("the set of step {} recurs (cycling)", step + 1)),
+                );
+            }
+            active = next;
+        }
+        let n_active = active.iter().filter(|&&a| a).count();
+        out(
+            active,
+            vec![0.0; n],
+            vec![0.0; mz],
+            vec![0.0; n],
+            steps,
+            End::Fallback(format!(
+                "no convergence in newton.max_steps = {} dense steps ({n_active} active)",
+                self.max_steps
+            )),
+        )
+    }
+
+    /// The system of set A: [C_AA, −H; −Hᵀ, 0] [λ_A; β] = [g_A + d₀_A; −V_fᵀ φ] with H = G_A V_f,
+    /// V_f the modes A fixes (α = V_f β; the others stay pinned). Returns λ_n (0 off A), α,
+    /// u_n = d₀ − C λ + G α, and V_u (the modes A leaves free, m_z × ·). `None` if singular.
+    #[allow(clippy::type_complexity)]
+    fn solve_set(&self, active: &[bool]) -> Option<(Vec<f64>, Vec<f64>, Vec<f64>, DMatrix<f64>)> {
+        let n = self.d0.len();
+        let mz = self.g.ncols();
+        let idx: Vec<usize> = (0..n).filter(|&i| active[i]).collect();
+        let na = idx.len();
+        let ga = DMatrix::from_fn(na, mz, |r, c| self.g[(idx[r], c)]);
+        let (vf, vu) = split_modes(&(ga.transpose() * &ga), mz);
+        let nf = vf.ncols();
+        let h = &ga * &vf;
+        let dimn = na + nf;
+        let mut m = DMatrix::<f64>::zeros(dimn, dimn);
+        let mut rhs = DVector::<f64>::zeros(dimn);
+        for (r, &i) in idx.iter().enumerate() {
+            for (q, &j) in idx.iter().enumerate() {
+                m[(r, q)] = self.cmat[(i, j)];
+            }
+            for c in 0..nf {
+                m[(r, na + c)] = -h[(r, c)];
+                m[(na + c, r)] = -h[(r, c)];
+            }
+            rhs[r] = self.gap[i] + self.d0[i];
+        }
+        let phi = DVector::from_column_slice(self.phi);
+        let pf = vf.transpose() * phi;
+        for c in 0..nf {
+            rhs[na + c] = -pf[c];
+        }
+        let x = if dimn == 0 {
+            DVector::zeros(0)
+        } else {
+            let lu = m.lu();
+            let x = lu.solve(&rhs)?;
+            if !x.iter().all(|v| v.is_finite()) {
+                return None;
+            }
+            x
+        };
+        let mut lambda = vec![0.0; n];
+        for (r, &i) in idx.iter().enumerate() {
+            lambda[i] = x[r];
+        }
+        let beta = DVector::from_iterator(nf, (0..nf).map(|c| x[na + c]));
+        let alpha = &vf * beta;
+        let la = DVector::from_column_slice(&lambda);
+        let un = DVector::from_column_slice(self.d0) - self.cmat * la + self.g * &alpha;
+        Some((lambda, alpha.as_slice().to_vec(), un.as_slice().to_vec(), vu))
+    }
+
+    /// The plain path's balance test on the modes the set leaves free (`vu`): `None` balanced;
+    /// `Some(Ok(i))` the inactive node a rigid motion along the unbalanced load brings into
+    /// contact first; `Some(Err(r))` no node approaches (no support, unbalanced load r).
+    fn balance(&self, active: &[bool], u_n: &[f64], vu: &DMatrix<f64>) -> Option<Result<usize, f64>> {
+        if vu.ncols() == 0 {
+            return None;
+        }
+        let phi = DVector::from_column_slice(self.phi);
+        let pu = vu.transpose() * phi;
+        let norm = pu.norm();
+        if norm <= BALANCE_RTOL * self.load_scale {
+            return None;
+        }
+        let dir = vu * pu / norm; // motion per unit length, in z coordinates
+        let mut best: Option<(f64, usize)> = None;
+        for i in 0..active.len() {
+            if active[i] {
+                continue;
+            }
+            let speed = -(0..dir.len()).map(|c| self.g[(i, c)] * dir[c]).sum::<f64>();
+            if speed <= 1e-12 {
+                continue;
+            }
+            let a = (u_n[i] + self.gap[i]).max(0.0) / speed;
+            if best.is_none_or(|(b, _)| a < b) {
+                best = Some((a, i));
+            }
+        }
+        Some(best.map(|(_, i)| i).ok_or(norm))
+    }
+}
+
+/// The modes (columns of the m_z × m_z identity's eigenbasis of the Gram matrix `gram`) that
+/// a set fixes (eigenvalue above 1e-9 of the largest, at least 1e-9) and those it leaves free.
+fn split_modes(gram: &DMatrix<f64>, mz: usize) -> (DMatrix<f64>, DMatrix<f64>) {
+    if mz == 0 {
+        return (DMatrix::zeros(0, 0), DMatrix::zeros(0, 0));
+    }
+    let eig = SymmetricEigen::new(gram.clone());
+    let lmax = eig.eigenvalues.iter().fold(0.0f64, |a, &b| a.max(b.abs()));
+    let tol = 1e-9 * lmax.max(1.0);
+    let fixed: Vec<usize> = (0..mz).filter(|&i| eig.eigenvalues[i] >= tol).collect();
+    let loose: Vec<usize> = (0..mz).filter(|&i| eig.eigenvalues[i] < tol).collect();
+    let pick = |cols: &[usize]| {
+        let mut q = DMatrix::zeros(mz, cols.len());
+        for (c, &i) in cols.iter().enumerate() {
+            q.set_column(c, &eig.eigenvectors.column(i));
+        }
+        q
+    };
+    (pick(&fixed), pick(&loose))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Two springs of compliance 1 under a load pressing both onto an obstacle at gap 0 and a
+    /// third far away: the dense Algorithm 1 finds the set and λ by hand.
+    #[test]
+    fn dense_algorithm1_on_independent_springs() {
+        // u_n = d0 − C λ; node 0 and 1 would penetrate (d0 < −g), node 2 not.
+        let cmat = DMatrix::<f64>::identity(3, 3);
+        let d0 = [-1.0, -0.5, 0.2];
+        let gap = [0.0, 0.1, 0.0];
+        let g = DMatrix::<f64>::zeros(3, 0);
+        let dense = Dense {
+            cmat: &cmat,
+            d0: &d0,
+            gap: &gap,
+            g: &g,
+            phi: &[],
+            load_scale: 1.0,
+            c: 1.0,
+            max_steps: 20,
+        };
+        let run = dense.run(vec![false; 3]);
+        assert_eq!(run.end, End::Converged);
+        assert_eq!(run.active, vec![true, true, false]);
+        // u_n = −g on A: λ = d0 + g (≤ 0, pressing)
+        assert!((run.lambda[0] - -1.0).abs() < 1e-15);
+        assert!((run.lambda[1] - -0.4).abs() < 1e-15);
+        assert_eq!(run.lambda[2], 0.0);
+        assert!((run.u_n[2] - 0.2).abs() < 1e-15);
+    }
+
+    /// A floating "body" of two uncoupled nodes with one free translation along the normal: the
+    /// load φ must be carried by the contact (Σ λ = φ); from the empty set the balance test
+    /// activates the node that touches first, then the set converges.
+    #[test]
+    fn dense_algorithm1_floating_translation() {
+        let cmat = DMatrix::<f64>::identity(2, 2);
+        let d0 = [0.0, 0.0];
+        let gap = [0.0, 0.5];
+        // the translation moves both normal displacements equally
+        let g = DMatrix::from_row_slice(2, 1, &[1.0, 1.0]);
+        let phi = [-1.0]; // Gᵀ λ = φ: the load presses with 1
+        let dense = Dense {
+            cmat: &cmat,
+            d0: &d0,
+            gap: &gap,
+            g: &g,
+            phi: &phi,
+            load_scale: 1.0,
+            c: 1.0,
+            max_steps: 20,
+        };
+        let run = dense.run(vec![false; 2]);
+        assert_eq!(run.end, End::Converged, "{run:?}");
+        // node 0 alone carries λ = −1, u_n,0 = 0 = −λ + α → α = −1; node 1: u_n = α = −1 < −0.5
+        // penetrates → both active: λ0 + λ1 = −1, −λ0 + α = 0, −λ1 + α = −0.5 → α = −0.75
+        assert_eq!(run.active, vec![true, true]);
+        let s: f64 = run.lambda.iter().sum();
+        assert!((s - -1.0).abs() < 1e-14);
+        assert!((run.alpha[0] - -0.75).abs() < 1e-14);
+        assert!((run.u_n[0] + gap[0]).abs() < 1e-14 && (run.u_n[1] + gap[1]).abs() < 1e-14);
+    }
+
+    #[test]
+    fn dense_no_support_when_the_load_pulls_away() {
+        let cmat = DMatrix::<f64>::identity(1, 1);
+        let g = DMatrix::from_row_slice(1, 1, &[1.0]);
+        let dense = Dense {
+            cmat: &cmat,
+            d0: &[0.0],
+            gap: &[0.0],
+            g: &g,
+            phi: &[1.0],
+            load_scale: 1.0,
+            c: 1.0,
+            max_steps: 20,
+        };
+        let run = dense.run(vec![false]);
+        assert!(matches!(run.end, End::NoSupport(_)), "{run:?}");
+    }
+
+    #[test]
+    fn pack_round_trip() {
+        let run = DenseRun {
+            active: vec![true, false],
+            lambda: vec![-1.0, 0.0],
+            alpha: vec![0.5],
+            u_n: vec![0.0, 0.3],
+            steps: vec![(1, 0, 1, 0.1, 0.01), (2, 1, 0, 0.0, 0.02)],
+            end: End::Fallback("cycling".into()),
+        };
+        let back = DenseRun::unpack(&run.pack(2, 1), 2, 1);
+        assert_eq!(back.active, run.active);
+        assert_eq!(back.lambda, run.lambda);
+        assert_eq!(back.alpha, run.alpha);
+        assert_eq!(back.u_n, run.u_n);
+        assert_eq!(back.steps, run.steps);
+        assert_eq!(back.end, run.end);
+    }
+}

@@ -915,7 +915,13 @@ impl Ksp {
             check(ffi::MatSetType(bt, ffi::MATAIJ.as_ptr() as *const c_char))?;
             let nnz_ptr = if root { nnz.as_ptr() } else { ptr::null() };
             check(ffi::MatSeqAIJSetPreallocation(bt, 0, nnz_ptr))?;
-            check(ffi::MatMPIAIJSetPreallocation(bt, 0, nnz_ptr, 0, ptr::null()))?;
+            check(ffi::MatMPIAIJSetPreallocation(
+                bt,
+                0,
+                nnz_ptr,
+                0,
+                ptr::null(),
+            ))?;
             if root {
                 let mut zeros: Vec<f64> = Vec::new();
                 for (j, rows) in request {

@@ -30,7 +30,7 @@ use super::rigid::FreeModes;
 use crate::contact::{c_n, normal_active};
 use crate::error::RunError;
 use crate::par::Ctx;
-use crate::petsc::InverseRequest;
+use crate::petsc::{InverseRequest, PInt};
 use crate::say;
 use nalgebra::{DMatrix, DVector, SymmetricEigen};
 use serde::Serialize;
@@ -239,7 +239,10 @@ pub fn solve(
         }
         End::Fallback(why) => {
             summary.outcome = "fallback";
-            say!(ctx, "newton: condensed path: {why}; solving on the plain path");
+            say!(
+                ctx,
+                "newton: condensed path: {why}; solving on the plain path"
+            );
             summary.fallback_reason = Some(why);
             return Ok(Condensed::Fallback(summary));
         }
@@ -279,6 +282,26 @@ pub fn solve(
         normal: run.active[off..off + b.nodes.len()].to_vec(),
         tangential: None,
     };
+    // The modes the final set leaves free (balanced, else the iteration had not stopped) are
+    // fixed as the plain path fixes them: zero at the pins it chooses for this set.
+    let set_summary = set.summarise(ctx, b, free.modes(), dim);
+    let mut fin = FreeModes::new(ctx, mesh, layout, p.fixed, b, &reduced.f_local, s.rigid);
+    fin.update(ctx, mesh, layout, &set_summary.gram)?;
+    if !fin.pins().is_empty() {
+        let idx: Vec<PInt> = fin
+            .pins()
+            .iter()
+            .map(|&(v, k)| (v * dim + k) as PInt)
+            .collect();
+        let at = reduced.solution_at(&idx)?;
+        let rho = fin.motion_to_zero_pins(&at);
+        for (i, &v) in layout.owned_nodes.iter().enumerate() {
+            for k in 0..dim {
+                u[i * dim + k] += fin.motion_at(&rho, &mesh.coords[v], k);
+            }
+        }
+        reduced.set_solution_local(&u)?;
+    }
     let mut it = Iterate::new(b.nodes.len(), u.len(), false);
     reduced.recover(sys, b, &set, &mut it)?; // (3.28)
     let update = set.update(&it, b, Law::Frictionless, s.c, dim); // (3.23)
@@ -290,7 +313,10 @@ pub fn solve(
             "{} node(s) change on the expanded u (round-off at nodes on the edge of the set)",
             totals.changed
         );
-        say!(ctx, "newton: condensed path: {why}; solving on the plain path");
+        say!(
+            ctx,
+            "newton: condensed path: {why}; solving on the plain path"
+        );
         summary.fallback_reason = Some(why);
         return Ok(Condensed::Fallback(summary));
     }
@@ -319,7 +345,7 @@ pub fn solve(
             iterations: 0,
             reuse: None,
             amg: None,
-            pinned: free.pins().len(),
+            pinned: fin.pins().len(),
             states: None,
             du_rel: None,
         })
@@ -332,7 +358,7 @@ pub fn solve(
         converged: true,
         lambda_seconds: reduced.lambda_seconds,
         rows_seconds: reduced.rows_seconds,
-        pinned_final: free.pins().to_vec(),
+        pinned_final: fin.pins().to_vec(),
         cycle_detected_at: None,
     };
     Ok(Condensed::Solved(Box::new(result), summary))
@@ -488,7 +514,9 @@ impl Dense<'_> {
                 match self.balance(&active, &u_n, &free_dirs) {
                     None => return out(active, lambda, alpha, u_n, steps, End::Converged),
                     Some(Ok(i)) => next[i] = true,
-                    Some(Err(r)) => return out(active, lambda, alpha, u_n, steps, End::NoSupport(r)),
+                    Some(Err(r)) => {
+                        return out(active, lambda, alpha, u_n, steps, End::NoSupport(r))
+                    }
                 }
             }
             if !seen.insert(next.clone()) {
@@ -566,13 +594,23 @@ impl Dense<'_> {
         let alpha = &vf * beta;
         let la = DVector::from_column_slice(&lambda);
         let un = DVector::from_column_slice(self.d0) - self.cmat * la + self.g * &alpha;
-        Some((lambda, alpha.as_slice().to_vec(), un.as_slice().to_vec(), vu))
+        Some((
+            lambda,
+            alpha.as_slice().to_vec(),
+            un.as_slice().to_vec(),
+            vu,
+        ))
     }
 
     /// The plain path's balance test on the modes the set leaves free (`vu`): `None` balanced;
     /// `Some(Ok(i))` the inactive node a rigid motion along the unbalanced load brings into
     /// contact first; `Some(Err(r))` no node approaches (no support, unbalanced load r).
-    fn balance(&self, active: &[bool], u_n: &[f64], vu: &DMatrix<f64>) -> Option<Result<usize, f64>> {
+    fn balance(
+        &self,
+        active: &[bool],
+        u_n: &[f64],
+        vu: &DMatrix<f64>,
+    ) -> Option<Result<usize, f64>> {
         if vu.ncols() == 0 {
             return None;
         }

@@ -349,7 +349,14 @@ fn run_method(
     solver_section: &SolverSection,
     coords: Option<&Vector>,
     warm: Option<&WarmStart>,
-) -> Result<(NewtonResult, Option<usize>, Option<condensed::CondensedSummary>), RunError> {
+) -> Result<
+    (
+        NewtonResult,
+        Option<usize>,
+        Option<condensed::CondensedSummary>,
+    ),
+    RunError,
+> {
     let (sys, b, dim) = (problem.sys, problem.boundary, problem.mesh.dim);
     let mut outer_steps = None;
     let mut condensed_summary = None;

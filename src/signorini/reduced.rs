@@ -921,6 +921,12 @@ impl ReducedSystem {
         self.rhs.write(|x| x.copy_from_slice(v))
     }
 
+    /// Entries of the last solution at global rows `idx` (any rank's), on every rank.
+    /// Collective.
+    pub fn solution_at(&self, idx: &[PInt]) -> petsc::Result<Vec<f64>> {
+        self.u.gather(idx)
+    }
+
     /// This rank's rows of the last solution.
     pub fn solution_local(&self) -> petsc::Result<Vec<f64>> {
         self.u.to_local_vec()

@@ -531,6 +531,33 @@ impl FreeModes {
         rho
     }
 
+    /// The motion in the current free modes that, added to a displacement whose pinned dofs
+    /// hold `at_pins` (in the order of [`FreeModes::pins`]), makes it vanish there: the
+    /// normalisation the plain path's pins give the modes that nothing fixes. Local.
+    pub fn motion_to_zero_pins(&self, at_pins: &[f64]) -> Motion {
+        let m = self.modes.m;
+        let mf = self.q.ncols();
+        let mut rho = [0.0; 6];
+        if mf == 0 || self.pins.len() != mf || at_pins.len() != mf {
+            return rho;
+        }
+        let mut p = DMatrix::zeros(mf, mf);
+        for (a, &(_, k)) in self.pins.iter().enumerate() {
+            let row = self.modes.dof_row(&self.pin_x[a], k);
+            for cc in 0..mf {
+                p[(a, cc)] = (0..m).map(|j| row[j] * self.q[(j, cc)]).sum();
+            }
+        }
+        let at = nalgebra::DVector::from_column_slice(at_pins);
+        if let Some(alpha) = p.lu().solve(&at) {
+            let corr = &self.q * alpha;
+            for (x, d) in rho.iter_mut().zip(corr.iter()) {
+                *x = -d;
+            }
+        }
+        rho
+    }
+
     /// Component k of the rigid motion `rho` at x.
     pub fn motion_at(&self, rho: &Motion, x: &[f64; 3], k: usize) -> f64 {
         (0..self.modes.m)

@@ -170,12 +170,16 @@ pub fn solve(
     let mut rows: Vec<usize> = dofs.iter().map(|d| d.1).collect();
     rows.sort_unstable();
     let root = ctx.rank == 0;
+    // K_p is symmetric: only the entries on and below the diagonal (rows ≥ the column), which
+    // also lets MUMPS prune more of each backward solve.
     let request: InverseRequest = if root {
-        dofs.iter().map(|d| (d.1, rows.clone())).collect()
+        dofs.iter()
+            .map(|d| (d.1, rows.iter().copied().filter(|&r| r >= d.1).collect()))
+            .collect()
     } else {
         Vec::new()
     };
-    summary.inverse_entries = dofs.len() * dofs.len();
+    summary.inverse_entries = dofs.len() * (dofs.len() + 1) / 2;
     let n_rows = layout.node_offsets.last().copied().unwrap_or(0) * dim;
     let entries = reduced
         .ksp()
@@ -183,12 +187,18 @@ pub fn solve(
     // C = Nᵀ K_p⁻¹ N, on rank 0.
     let mut cmat = DMatrix::<f64>::zeros(if root { n } else { 0 }, if root { n } else { 0 });
     if root {
-        let pos: std::collections::HashMap<usize, usize> =
-            rows.iter().enumerate().map(|(p, &r)| (r, p)).collect();
-        for (col, &(j, _, nj)) in dofs.iter().enumerate() {
-            let vals = &entries[col];
-            for &(i, ri, ni) in &dofs {
-                cmat[(i, j)] += ni * nj * vals[pos[&ri]];
+        // dof row → (candidate, normal component)
+        let of_row: std::collections::HashMap<usize, (usize, f64)> =
+            dofs.iter().map(|&(i, r, ni)| (r, (i, ni))).collect();
+        for (col, &(j, rj, nj)) in dofs.iter().enumerate() {
+            let wanted = request[col].1.iter();
+            for (&ri, &v) in wanted.zip(&entries[col]) {
+                let (i, ni) = of_row[&ri];
+                let x = ni * nj * v;
+                cmat[(i, j)] += x;
+                if ri != rj {
+                    cmat[(j, i)] += x; // the mirror entry (K_p⁻¹ symmetric)
+                }
             }
         }
     }

@@ -41,6 +41,15 @@ use std::time::Instant;
 /// compliance (8 n_c² bytes on rank 0) and its selected-inverse solve would not pay.
 pub const MAX_CANDIDATES: usize = 8000;
 
+/// The first candidate set: the 1/FIRST_FRACTION of the contact nodes with the smallest gaps.
+const FIRST_FRACTION: usize = 8;
+
+/// The first candidate set holds at least this many contact nodes (all if fewer).
+const MIN_CANDIDATES: usize = 64;
+
+/// Rounds of candidate growth before the plain path takes over.
+const MAX_ROUNDS: usize = 8;
+
 /// An unbalanced load in the set's free modes below this fraction of the load's scale is
 /// balanced (as [`super::rigid`]'s balance test).
 const BALANCE_RTOL: f64 = 1e-10;
@@ -125,7 +134,6 @@ pub fn solve(
     summary.factorisation_seconds = t.elapsed().as_secs_f64();
 
     // The candidates, gathered on every rank in rank order (= c_h's global order).
-    let t = Instant::now();
     let z = free.dirichlet_free().clone();
     let mz = z.ncols();
     let modes = free.rigid_modes();
@@ -158,195 +166,145 @@ pub fn solve(
     let all = ctx.all_gather_varcount(&mine);
     let n = all.len() / REC;
     let rec = |i: usize| &all[i * REC..(i + 1) * REC];
-    // The requested entries: every pair of the candidates' dofs with a normal component.
-    let dofs: Vec<(usize, usize, f64)> = (0..n)
-        .flat_map(|i| {
-            let r = rec(i);
-            (0..dim)
-                .filter(move |&a| r[1 + a] != 0.0)
-                .map(move |a| (i, r[0] as usize + a, r[1 + a]))
-        })
-        .collect();
-    let mut rows: Vec<usize> = dofs.iter().map(|d| d.1).collect();
-    rows.sort_unstable();
     let root = ctx.rank == 0;
-    // K_p is symmetric: only the entries on and below the diagonal (rows ≥ the column), which
-    // also lets MUMPS prune more of each backward solve.
-    let request: InverseRequest = if root {
-        dofs.iter()
-            .map(|d| (d.1, rows.iter().copied().filter(|&r| r >= d.1).collect()))
-            .collect()
-    } else {
-        Vec::new()
-    };
-    summary.inverse_entries = dofs.len() * (dofs.len() + 1) / 2;
     let n_rows = layout.node_offsets.last().copied().unwrap_or(0) * dim;
-    let entries = reduced
-        .ksp()
-        .mumps_inverse_entries(ctx.comm(), n_rows, root, &request)?;
-    // C = Nᵀ K_p⁻¹ N, on rank 0.
-    let mut cmat = DMatrix::<f64>::zeros(if root { n } else { 0 }, if root { n } else { 0 });
-    if root {
-        // dof row → (candidate, normal component)
-        let of_row: std::collections::HashMap<usize, (usize, f64)> =
-            dofs.iter().map(|&(i, r, ni)| (r, (i, ni))).collect();
-        for (col, &(j, rj, nj)) in dofs.iter().enumerate() {
-            let wanted = request[col].1.iter();
-            for (&ri, &v) in wanted.zip(&entries[col]) {
-                let (i, ni) = of_row[&ri];
-                let x = ni * nj * v;
-                cmat[(i, j)] += x;
-                if ri != rj {
-                    cmat[(j, i)] += x; // the mirror entry (K_p⁻¹ symmetric)
-                }
-            }
-        }
-    }
-    summary.inverse_seconds = t.elapsed().as_secs_f64();
-
-    // Algorithm 1 on the dense system, on rank 0; the outcome broadcast.
-    let t = Instant::now();
+    let gap: Vec<f64> = (0..n).map(|i| rec(i)[4]).collect();
+    let d0_all: Vec<f64> = (0..n).map(|i| rec(i)[5]).collect();
+    // The candidates: first the nodes with the smallest gaps (an eighth of c_h, at least
+    // MIN_CANDIDATES), grown (the gap bound doubled, and every node that penetrates or is
+    // active in (3.23) on the expanded u) until (3.23) changes no node outside them.
+    let mut sorted = gap.clone();
+    sorted.sort_by(|a, b| a.total_cmp(b));
+    let mut bound = sorted[(n / FIRST_FRACTION).max(MIN_CANDIDATES).min(n) - 1];
+    let mut in_s = vec![false; n];
+    let mut s_list: Vec<usize> = Vec::new();
+    let mut cmat = DMatrix::<f64>::zeros(0, 0); // C on the candidates (rank 0)
+    let mut active: Vec<bool> = (0..n).map(|i| rec(i)[6] != 0.0).collect();
+    let mut forced: HashSet<usize> = HashSet::new();
     let (load, load_scale) = free.load();
     let phi: Vec<f64> = (0..mz)
         .map(|c| (0..modes.m).map(|j| z[(j, c)] * load[j]).sum())
         .collect();
-    let mut packed: Vec<f64> = Vec::new();
-    if root {
-        let g = DMatrix::from_fn(n, mz, |i, c| rec(i)[7 + c]);
-        let d0: Vec<f64> = (0..n).map(|i| rec(i)[5]).collect();
-        let gap: Vec<f64> = (0..n).map(|i| rec(i)[4]).collect();
-        let active: Vec<bool> = (0..n).map(|i| rec(i)[6] != 0.0).collect();
-        let dense = Dense {
-            cmat: &cmat,
-            d0: &d0,
-            gap: &gap,
-            g: &g,
-            phi: &phi,
-            load_scale,
-            c: s.c,
-            max_steps: s.section.max_steps,
-        };
-        packed = dense.run(active).pack(n, mz);
-    }
-    ctx.broadcast_f64s(&mut packed);
-    let run = DenseRun::unpack(&packed, n, mz);
-    summary.dense_seconds = t.elapsed().as_secs_f64();
-    for h in &run.steps {
-        say!(
-            ctx,
-            "newton {:3}: |A_n| = {:6}  changed {:6}  |C_n| = {:.3e}  condensed ({:.4} s)",
-            h.0,
-            h.1,
-            h.2,
-            h.3,
-            h.4
-        );
-    }
-    match run.end {
-        End::Converged => {}
-        End::NoSupport(reaction) => {
-            return Err(free.no_support(run.active.iter().filter(|&&a| a).count(), reaction))
-        }
-        End::Fallback(why) => {
+    let off = b.offset;
+    let mut history: Vec<StepInfo> = Vec::new();
+    let mut fin_pins = Vec::new();
+    let mut it = Iterate::new(b.nodes.len(), reduced.f_local.len(), false);
+    for round in 1..=MAX_ROUNDS {
+        // New candidates and their columns of C (all rows of the grown set).
+        let t = Instant::now();
+        let new: Vec<usize> = (0..n)
+            .filter(|&i| !in_s[i] && (gap[i] <= bound || forced.contains(&i)))
+            .collect();
+        if new.is_empty() && round > 1 {
             summary.outcome = "fallback";
-            say!(
-                ctx,
-                "newton: condensed path: {why}; solving on the plain path"
-            );
+            let why = "the candidate set cannot grow (internal)".to_string();
             summary.fallback_reason = Some(why);
             return Ok(Condensed::Fallback(summary));
         }
-    }
-
-    // Expansion: w = K_p⁻¹ (f − N λ_n), u = w + R z α; then (3.28) and (3.23) on it.
-    let t = Instant::now();
-    let off = b.offset;
-    let mut rhs = rhs0;
-    for (i, k) in b.nodes.iter().enumerate() {
-        let l = run.lambda[off + i];
-        for j in 0..dim {
-            rhs[k.local_row + j] -= k.frame.n[j] * l;
+        let old_len = s_list.len();
+        for &i in &new {
+            in_s[i] = true;
         }
-    }
-    reduced.set_rhs_local(&rhs)?;
-    let solved = reduced.solve_current()?;
-    summary.solves += 1;
-    if !solved.info.converged() {
-        return Err(RunError::Failed(format!(
-            "the expansion solve of the condensed contact solve failed ({})",
-            solved.info.reason_name
-        )));
-    }
-    let mut rho = [0.0; 6];
-    for (j, r) in rho.iter_mut().enumerate().take(modes.m) {
-        *r = (0..mz).map(|c| z[(j, c)] * run.alpha[c]).sum();
-    }
-    let mut u = reduced.solution_local()?;
-    for (i, &v) in layout.owned_nodes.iter().enumerate() {
-        for k in 0..dim {
-            u[i * dim + k] += free.motion_at(&rho, &mesh.coords[v], k);
-        }
-    }
-    reduced.set_solution_local(&u)?;
-    let set = ActiveSet {
-        normal: run.active[off..off + b.nodes.len()].to_vec(),
-        tangential: None,
-    };
-    // The modes the final set leaves free (balanced, else the iteration had not stopped) are
-    // fixed as the plain path fixes them: zero at the pins it chooses for this set.
-    let set_summary = set.summarise(ctx, b, free.modes(), dim);
-    let mut fin = FreeModes::new(ctx, mesh, layout, p.fixed, b, &reduced.f_local, s.rigid);
-    fin.update(ctx, mesh, layout, &set_summary.gram)?;
-    if !fin.pins().is_empty() {
-        let idx: Vec<PInt> = fin
-            .pins()
+        s_list.extend_from_slice(&new);
+        let ns = s_list.len();
+        // (position in s_list, global row, normal component) of every candidate dof
+        let dofs: Vec<(usize, usize, f64)> = s_list
             .iter()
-            .map(|&(v, k)| (v * dim + k) as PInt)
+            .enumerate()
+            .flat_map(|(q, &i)| {
+                let r = rec(i);
+                (0..dim)
+                    .filter(move |&a| r[1 + a] != 0.0)
+                    .map(move |a| (q, r[0] as usize + a, r[1 + a]))
+            })
             .collect();
-        let at = reduced.solution_at(&idx)?;
-        let rho = fin.motion_to_zero_pins(&at);
-        for (i, &v) in layout.owned_nodes.iter().enumerate() {
-            for k in 0..dim {
-                u[i * dim + k] += fin.motion_at(&rho, &mesh.coords[v], k);
+        let mut rows: Vec<usize> = dofs.iter().map(|d| d.1).collect();
+        rows.sort_unstable();
+        let new_dofs: Vec<&(usize, usize, f64)> = dofs.iter().filter(|d| d.0 >= old_len).collect();
+        // K_p⁻¹ is symmetric: of the new-new pairs only those on and below the diagonal (the
+        // fewer rows a column asks for, the more of its backward solve MUMPS prunes).
+        let old_rows: Vec<usize> = dofs.iter().filter(|d| d.0 < old_len).map(|d| d.1).collect();
+        let request: InverseRequest = if root {
+            new_dofs
+                .iter()
+                .map(|d| {
+                    let mut r: Vec<usize> = old_rows.clone();
+                    r.extend(new_dofs.iter().map(|e| e.1).filter(|&x| x >= d.1));
+                    r.sort_unstable();
+                    (d.1, r)
+                })
+                .collect()
+        } else {
+            Vec::new()
+        };
+        summary.inverse_entries += request.iter().map(|r| r.1.len()).sum::<usize>();
+        let entries = reduced
+            .ksp()
+            .mumps_inverse_entries(ctx.comm(), n_rows, root, &request)?;
+        if root {
+            let of_row: std::collections::HashMap<usize, (usize, f64)> =
+                dofs.iter().map(|&(q, r, ni)| (r, (q, ni))).collect();
+            let mut grown = DMatrix::<f64>::zeros(ns, ns);
+            grown.view_mut((0, 0), (old_len, old_len)).copy_from(&cmat);
+            for (col, &&(qj, _, nj)) in new_dofs.iter().enumerate() {
+                let rj = request[col].0;
+                for (&ri, &v) in request[col].1.iter().zip(&entries[col]) {
+                    let (qi, ni) = of_row[&ri];
+                    let x = ni * nj * v;
+                    grown[(qi, qj)] += x;
+                    if qi >= old_len && ri != rj {
+                        grown[(qj, qi)] += x; // the mirror entry of a new-new pair
+                    }
+                }
             }
+            for qj in old_len..ns {
+                for qi in 0..old_len {
+                    grown[(qj, qi)] = grown[(qi, qj)]; // K_p⁻¹ symmetric
+                }
+            }
+            cmat = grown;
         }
-        reduced.set_solution_local(&u)?;
-    }
-    let mut it = Iterate::new(b.nodes.len(), u.len(), false);
-    reduced.recover(sys, b, &set, &mut it)?; // (3.28)
-    let update = set.update(&it, b, Law::Frictionless, s.c, dim); // (3.23)
-    let totals = update.reduce(ctx, b, free.modes(), dim);
-    summary.expansion_seconds = t.elapsed().as_secs_f64();
-    if totals.changed > 0 {
-        summary.outcome = "fallback";
-        let why = format!(
-            "{} node(s) change on the expanded u (round-off at nodes on the edge of the set)",
-            totals.changed
-        );
-        say!(
-            ctx,
-            "newton: condensed path: {why}; solving on the plain path"
-        );
-        summary.fallback_reason = Some(why);
-        return Ok(Condensed::Fallback(summary));
-    }
-    let n_active = run.active.iter().filter(|&&a| a).count();
-    say!(
-        ctx,
-        "newton: condensed: {} candidates, {} active, factorisation {:.3} s, inverse {:.3} s, \
-         dense {:.3} s, expansion {:.3} s",
-        n,
-        n_active,
-        summary.factorisation_seconds,
-        summary.inverse_seconds,
-        summary.dense_seconds,
-        summary.expansion_seconds
-    );
-    let history = run
-        .steps
-        .iter()
-        .map(|h| StepInfo {
-            step: h.0,
+        summary.inverse_seconds += t.elapsed().as_secs_f64();
+        summary.candidates = ns;
+
+        // Algorithm 1 on the candidates' dense system, on rank 0; the outcome broadcast.
+        let t = Instant::now();
+        let mut packed: Vec<f64> = Vec::new();
+        if root {
+            let g = DMatrix::from_fn(ns, mz, |q, c| rec(s_list[q])[7 + c]);
+            let d0: Vec<f64> = s_list.iter().map(|&i| d0_all[i]).collect();
+            let gs: Vec<f64> = s_list.iter().map(|&i| gap[i]).collect();
+            let start: Vec<bool> = s_list.iter().map(|&i| active[i]).collect();
+            let dense = Dense {
+                cmat: &cmat,
+                d0: &d0,
+                gap: &gs,
+                g: &g,
+                phi: &phi,
+                load_scale,
+                c: s.c,
+                max_steps: s.section.max_steps,
+            };
+            packed = dense.run(start).pack(ns, mz);
+        }
+        ctx.broadcast_f64s(&mut packed);
+        let run = DenseRun::unpack(&packed, ns, mz);
+        summary.dense_seconds += t.elapsed().as_secs_f64();
+        for h in &run.steps {
+            say!(
+                ctx,
+                "newton {:3}: |A_n| = {:6}  changed {:6}  |C_n| = {:.3e}  condensed, {} candidates ({:.4} s)",
+                history.len() + h.0,
+                h.1,
+                h.2,
+                h.3,
+                ns,
+                h.4
+            );
+        }
+        let base = history.len();
+        history.extend(run.steps.iter().map(|h| StepInfo {
+            step: base + h.0,
             active: h.1,
             changed: h.2,
             residual: h.3,
@@ -355,11 +313,147 @@ pub fn solve(
             iterations: 0,
             reuse: None,
             amg: None,
-            pinned: fin.pins().len(),
+            pinned: free.pins().len(),
             states: None,
             du_rel: None,
-        })
-        .collect::<Vec<_>>();
+        }));
+        let mut lambda = vec![0.0; n];
+        active = vec![false; n];
+        for (q, &i) in s_list.iter().enumerate() {
+            lambda[i] = run.lambda[q];
+            active[i] = run.active[q];
+        }
+        match run.end {
+            End::Converged => {}
+            End::NoSupport(_) if ns < n => {
+                // a node beyond the candidates may still carry the load: all of them
+                bound = f64::INFINITY;
+                continue;
+            }
+            End::NoSupport(reaction) => {
+                return Err(free.no_support(run.active.iter().filter(|&&a| a).count(), reaction))
+            }
+            End::Fallback(why) => {
+                summary.outcome = "fallback";
+                say!(
+                    ctx,
+                    "newton: condensed path: {why}; solving on the plain path"
+                );
+                summary.fallback_reason = Some(why);
+                return Ok(Condensed::Fallback(summary));
+            }
+        }
+
+        // Expansion: w = K_p⁻¹ (f − N λ_n), u = w + R z α; then (3.28) and (3.23) on it.
+        let t = Instant::now();
+        let mut rhs = rhs0.clone();
+        for (i, k) in b.nodes.iter().enumerate() {
+            let l = lambda[off + i];
+            for j in 0..dim {
+                rhs[k.local_row + j] -= k.frame.n[j] * l;
+            }
+        }
+        reduced.set_rhs_local(&rhs)?;
+        let solved = reduced.solve_current()?;
+        summary.solves += 1;
+        if !solved.info.converged() {
+            return Err(RunError::Failed(format!(
+                "the expansion solve of the condensed contact solve failed ({})",
+                solved.info.reason_name
+            )));
+        }
+        let mut rho = [0.0; 6];
+        for (j, r) in rho.iter_mut().enumerate().take(modes.m) {
+            *r = (0..mz).map(|c| z[(j, c)] * run.alpha[c]).sum();
+        }
+        let mut u = reduced.solution_local()?;
+        for (i, &v) in layout.owned_nodes.iter().enumerate() {
+            for k in 0..dim {
+                u[i * dim + k] += free.motion_at(&rho, &mesh.coords[v], k);
+            }
+        }
+        reduced.set_solution_local(&u)?;
+        let set = ActiveSet {
+            normal: active[off..off + b.nodes.len()].to_vec(),
+            tangential: None,
+        };
+        // The modes the final set leaves free (balanced, else the iteration had not stopped)
+        // are fixed as the plain path fixes them: zero at the pins it chooses for this set.
+        let set_summary = set.summarise(ctx, b, free.modes(), dim);
+        let mut fin = FreeModes::new(ctx, mesh, layout, p.fixed, b, &reduced.f_local, s.rigid);
+        fin.update(ctx, mesh, layout, &set_summary.gram)?;
+        if !fin.pins().is_empty() {
+            let idx: Vec<PInt> = fin
+                .pins()
+                .iter()
+                .map(|&(v, k)| (v * dim + k) as PInt)
+                .collect();
+            let at = reduced.solution_at(&idx)?;
+            let rho = fin.motion_to_zero_pins(&at);
+            for (i, &v) in layout.owned_nodes.iter().enumerate() {
+                for k in 0..dim {
+                    u[i * dim + k] += fin.motion_at(&rho, &mesh.coords[v], k);
+                }
+            }
+            reduced.set_solution_local(&u)?;
+        }
+        fin_pins = fin.pins().to_vec();
+        it = Iterate::new(b.nodes.len(), u.len(), false);
+        reduced.recover(sys, b, &set, &mut it)?; // (3.28)
+        let update = set.update(&it, b, Law::Frictionless, s.c, dim); // (3.23)
+        let changed_here: Vec<u64> = set
+            .normal
+            .iter()
+            .zip(&update.next.normal)
+            .enumerate()
+            .filter(|(_, (a, b))| a != b)
+            .map(|(i, _)| (off + i) as u64)
+            .collect();
+        let changed = ctx.all_gather_varcount(&changed_here);
+        summary.expansion_seconds += t.elapsed().as_secs_f64();
+        if changed.is_empty() {
+            break;
+        }
+        let inside = changed.iter().filter(|&&i| in_s[i as usize]).count();
+        if inside > 0 || round == MAX_ROUNDS {
+            summary.outcome = "fallback";
+            let why = format!(
+                "{} node(s) change on the expanded u ({inside} of them candidates: round-off at \
+                 nodes on the edge of the set)",
+                changed.len()
+            );
+            say!(
+                ctx,
+                "newton: condensed path: {why}; solving on the plain path"
+            );
+            summary.fallback_reason = Some(why);
+            return Ok(Condensed::Fallback(summary));
+        }
+        say!(
+            ctx,
+            "newton: condensed: {} node(s) beyond the {ns} candidates come into contact: more \
+             candidates",
+            changed.len()
+        );
+        for &i in &changed {
+            forced.insert(i as usize);
+            active[i as usize] = true;
+        }
+        bound *= 2.0;
+    }
+    let n_active = active.iter().filter(|&&a| a).count();
+    say!(
+        ctx,
+        "newton: condensed: {} of {} contact nodes as candidates, {} active, factorisation \
+         {:.3} s, inverse {:.3} s, dense {:.3} s, expansion {:.3} s",
+        summary.candidates,
+        n,
+        n_active,
+        summary.factorisation_seconds,
+        summary.inverse_seconds,
+        summary.dense_seconds,
+        summary.expansion_seconds
+    );
     let result = NewtonResult {
         u: reduced.solution()?,
         nodes: it.nodes,
@@ -368,7 +462,7 @@ pub fn solve(
         converged: true,
         lambda_seconds: reduced.lambda_seconds,
         rows_seconds: reduced.rows_seconds,
-        pinned_final: fin.pins().to_vec(),
+        pinned_final: fin_pins,
         cycle_detected_at: None,
     };
     Ok(Condensed::Solved(Box::new(result), summary))

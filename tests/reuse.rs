@@ -159,14 +159,6 @@ fn frictionless_2d_reuse_and_fallback_agree_with_plain() {
 }
 
 #[test]
-fn auto_agrees_with_plain() {
-    // What "auto" chooses depends on the measured costs; whatever it chose, the answer and the
-    // record are the plain path's.
-    let (case, mesh) = hertz(3);
-    same_as_plain(2, &case, &[&mesh], "auto");
-}
-
-#[test]
 fn tresca_reuse_agrees_with_plain() {
     for np in [1, 2] {
         let (reuses, _) = same_as_plain(

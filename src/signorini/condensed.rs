@@ -180,7 +180,8 @@ pub fn solve(
     let mut s_list: Vec<usize> = Vec::new();
     let mut cmat = DMatrix::<f64>::zeros(0, 0); // C on the candidates (rank 0)
     let mut active: Vec<bool> = (0..n).map(|i| rec(i)[6] != 0.0).collect();
-    let mut forced: HashSet<usize> = HashSet::new();
+    // Every node of the start set is a candidate (the thesis' all-active start: all of them).
+    let mut forced: HashSet<usize> = (0..n).filter(|&i| active[i]).collect();
     let (load, load_scale) = free.load();
     let phi: Vec<f64> = (0..mz)
         .map(|c| (0..modes.m).map(|j| z[(j, c)] * load[j]).sum())

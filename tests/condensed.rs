@@ -1,0 +1,131 @@
+//! The condensed path (issue 9, item 1; signorini::condensed): Algorithm 1 on the contact
+//! unknowns, one factorisation, the contact compliance from MUMPS' selected inverse. Its final
+//! iterate must be the plain path's (every step a factorisation of (3.29)): the same active
+//! nodes, u within 1e-10 of max|u|, on 1, 2 and 3 ranks, for a floating body (Hertz: free rigid
+//! modes pinned, balance test), a clamped 3D body under a sphere (normals off the axes, every
+//! dof component in C) and a case whose first candidate set is too small (it must grow). The
+//! record: one factorisation, every step "condensed", newton.condensed filled in.
+
+mod common;
+use common::*;
+use std::path::{Path, PathBuf};
+
+fn u_diff(a: &Solved, b: &Solved) -> f64 {
+    let (ua, ub) = (a.displacement(), b.displacement());
+    assert_eq!(ua.len(), ub.len());
+    let scale = ua.values().flatten().fold(0.0f64, |m, x| m.max(x.abs()));
+    assert!(scale > 0.0, "u = 0: nothing tested");
+    let (diff, _) = max_diff(&ua, &ub);
+    diff / scale
+}
+
+fn active_nodes(s: &Solved) -> Vec<u64> {
+    s.contact_rows_by_id()
+        .iter()
+        .filter(|(_, r)| r.active())
+        .map(|(id, _)| *id)
+        .collect()
+}
+
+fn hertz(level: usize) -> (PathBuf, String) {
+    let mesh = repo(&format!("cases/hertz/meshes/hertz_refined_L{level}.msh"));
+    (
+        repo("cases/hertz/hertz.toml"),
+        format!("mesh.file={}", toml_path(&mesh)),
+    )
+}
+
+/// Solves `case` on the plain path (1 rank) and condensed on `ranks`; checks the answer and
+/// the record; returns the condensed runs.
+fn same_as_plain(case: &Path, sets: &[&str], ranks: &[usize]) -> Vec<Solved> {
+    let with = |m: &str| {
+        let mut v: Vec<String> = sets.iter().map(|s| s.to_string()).collect();
+        v.push(format!("solver.reuse=\"{m}\""));
+        v
+    };
+    let plain_sets = with("never");
+    let plain = solve(
+        1,
+        case,
+        &plain_sets.iter().map(String::as_str).collect::<Vec<_>>(),
+    );
+    plain.assert_converged("plain path");
+    assert!(plain.summary["newton"]["condensed"].is_null());
+    let mut out = Vec::new();
+    for &np in ranks {
+        let c_sets = with("auto");
+        let c = solve(
+            np,
+            case,
+            &c_sets.iter().map(String::as_str).collect::<Vec<_>>(),
+        );
+        c.assert_converged("condensed");
+        let cs = &c.summary["newton"]["condensed"];
+        assert_eq!(cs["outcome"], "condensed", "{}", c.run.output());
+        assert_eq!(c.f(&["newton", "factorisations"]), 1.0);
+        let h = c.summary["newton"]["history"].as_array().unwrap();
+        assert_eq!(h.len(), c.steps());
+        assert!(h.iter().all(|e| e["solve"] == "condensed"), "{h:?}");
+        assert!(cs["candidates"].as_u64().unwrap() >= 1);
+        assert!(cs["solves"].as_u64().unwrap() >= 2);
+        assert_eq!(active_nodes(&plain), active_nodes(&c), "{np} rank(s)");
+        assert!(!active_nodes(&c).is_empty());
+        let d = u_diff(&plain, &c);
+        assert!(
+            d <= 1e-10,
+            "{} on {np} rank(s): |u - u_plain| / max|u| = {d:e}\n{}",
+            case.display(),
+            c.run.output()
+        );
+        out.push(c);
+    }
+    out
+}
+
+#[test]
+fn floating_hertz_disk_equals_the_plain_path_on_1_2_3_ranks() {
+    let (case, mesh) = hertz(3);
+    let runs = same_as_plain(&case, &[&mesh], &[1, 2, 3]);
+    // The dense steps are Algorithm 1's: the plain path's step count from the same start.
+    let steps: Vec<usize> = runs.iter().map(|r| r.steps()).collect();
+    assert!(steps.iter().all(|&s| s == steps[0]), "{steps:?}");
+}
+
+#[test]
+fn sphere_on_clamped_block_3d_equals_the_plain_path() {
+    same_as_plain(&repo("tests/cases/sphere3d.toml"), &[], &[1, 2]);
+}
+
+#[test]
+fn flat_contact_grows_the_candidates() {
+    // The indentation of a block by a flat plane: most contact nodes touch, far more than the
+    // first eighth of them, so the candidate set must grow at least once.
+    let runs = same_as_plain(&repo("cases/blocks/block2d.toml"), &[], &[1, 2]);
+    for r in &runs {
+        let n = r.f(&["contact", "nodes"]);
+        let cand = r.f(&["newton", "condensed", "candidates"]);
+        let active = r.f(&["contact", "active_count"]);
+        assert!(
+            cand >= active && cand <= n,
+            "{cand} candidates, {active} active, {n} nodes"
+        );
+        assert!(
+            r.f(&["newton", "condensed", "solves"]) >= 3.0 || cand >= n,
+            "the first eighth held everything?\n{}",
+            r.run.output()
+        );
+    }
+}
+
+#[test]
+fn plain_path_stays_selectable() {
+    let (case, mesh) = hertz(2);
+    let plain = solve(1, &case, &[&mesh, "solver.reuse=\"never\""]);
+    plain.assert_converged("plain");
+    let h = plain.summary["newton"]["history"].as_array().unwrap();
+    assert!(h.iter().all(|e| e["solve"] == "factorisation"));
+    assert_eq!(
+        plain.f(&["newton", "factorisations"]) as usize,
+        plain.steps()
+    );
+}

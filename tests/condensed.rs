@@ -53,7 +53,7 @@ fn same_as_plain(case: &Path, sets: &[&str], ranks: &[usize]) -> Vec<Solved> {
     assert!(plain.summary["newton"]["condensed"].is_null());
     let mut out = Vec::new();
     for &np in ranks {
-        let c_sets = with("auto");
+        let c_sets = with("condensed");
         let c = solve(
             np,
             case,

@@ -367,13 +367,9 @@ pub fn solve(
         for (j, r) in rho.iter_mut().enumerate().take(modes.m) {
             *r = (0..mz).map(|c| z[(j, c)] * run.alpha[c]).sum();
         }
-        let mut u = reduced.solution_local()?;
-        for (i, &v) in layout.owned_nodes.iter().enumerate() {
-            for k in 0..dim {
-                u[i * dim + k] += free.motion_at(&rho, &mesh.coords[v], k);
-            }
-        }
-        reduced.set_solution_local(&u)?;
+        // u = w + ρ: λ (3.28) and the set update (3.23) are taken on w with the gaps after ρ
+        // (as the plain path does), so a large rigid motion does not round λ.
+        let w = reduced.solution_local()?;
         let set = ActiveSet {
             normal: active[off..off + b.nodes.len()].to_vec(),
             tangential: None,
@@ -390,18 +386,31 @@ pub fn solve(
                 .map(|&(v, k)| (v * dim + k) as PInt)
                 .collect();
             let at = reduced.solution_at(&idx)?;
-            let rho = fin.motion_to_zero_pins(&at);
-            for (i, &v) in layout.owned_nodes.iter().enumerate() {
-                for k in 0..dim {
-                    u[i * dim + k] += fin.motion_at(&rho, &mesh.coords[v], k);
-                }
+            let corr = fin.motion_to_zero_pins(&at, &rho);
+            for (x, c) in rho.iter_mut().zip(corr) {
+                *x += c;
             }
-            reduced.set_solution_local(&u)?;
         }
         fin_pins = fin.pins().to_vec();
-        it = Iterate::new(b.nodes.len(), u.len(), false);
-        reduced.recover(sys, b, &set, &mut it)?; // (3.28)
-        let update = set.update(&it, b, Law::Frictionless, s.c, dim); // (3.23)
+        let mut shifted = b.clone();
+        free.shift(b, &rho, &mut shifted);
+        it = Iterate::new(b.nodes.len(), w.len(), false);
+        reduced.recover(sys, &shifted, &set, &mut it)?; // (3.28)
+        let update = set.update(&it, &shifted, Law::Frictionless, s.c, dim); // (3.23)
+        let mut u = w;
+        for (i, &v) in layout.owned_nodes.iter().enumerate() {
+            for k in 0..dim {
+                u[i * dim + k] += free.motion_at(&rho, &mesh.coords[v], k);
+            }
+        }
+        reduced.set_solution_local(&u)?;
+        for (k, r) in b.nodes.iter().zip(it.nodes.iter_mut()) {
+            for c in 0..dim {
+                r.u[c] += free.motion_at(&rho, &k.x, c);
+            }
+            r.u_n = k.frame.normal_part(&r.u);
+            r.u_t = k.frame.tangential_part(&r.u);
+        }
         let changed_here: Vec<u64> = set
             .normal
             .iter()

@@ -365,7 +365,7 @@ fn run_method(
             let mut reduced = ReducedSystem::new(ctx, sys, b, coords, dim)?;
             let friction = settings.tresca_threshold.is_some() || settings.coulomb.is_some();
             let condense = !friction
-                && matches!(solver_section.reuse, Reuse::Auto | Reuse::Condensed)
+                && solver_section.reuse == Reuse::Condensed
                 && b.n_global > 0
                 && b.n_global <= condensed::MAX_CANDIDATES
                 && reduced.factorises()?;

@@ -534,7 +534,7 @@ impl FreeModes {
     /// The motion in the current free modes that, added to a displacement whose pinned dofs
     /// hold `at_pins` (in the order of [`FreeModes::pins`]), makes it vanish there: the
     /// normalisation the plain path's pins give the modes that nothing fixes. Local.
-    pub fn motion_to_zero_pins(&self, at_pins: &[f64]) -> Motion {
+    pub fn motion_to_zero_pins(&self, at_pins: &[f64], before: &Motion) -> Motion {
         let m = self.modes.m;
         let mf = self.q.ncols();
         let mut rho = [0.0; 6];
@@ -548,7 +548,10 @@ impl FreeModes {
                 p[(a, cc)] = (0..m).map(|j| row[j] * self.q[(j, cc)]).sum();
             }
         }
-        let at = nalgebra::DVector::from_column_slice(at_pins);
+        let mut at = nalgebra::DVector::from_column_slice(at_pins);
+        for (a, &(_, k)) in self.pins.iter().enumerate() {
+            at[a] += self.motion_at(before, &self.pin_x[a], k);
+        }
         if let Some(alpha) = p.lu().solve(&at) {
             let corr = &self.q * alpha;
             for (x, d) in rho.iter_mut().zip(corr.iter()) {

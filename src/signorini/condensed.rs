@@ -24,9 +24,12 @@
 //! two triangular solves, one broadcast of the dense result, one MatMult.
 
 use super::active_set::{ActiveSet, Iterate, Law};
-use super::newton::{ContactProblem, NewtonResult, NewtonSettings, StepInfo, WarmStart};
+use super::boundary::ContactBoundary;
+use super::newton::{
+    add_motion, ContactProblem, NewtonResult, NewtonSettings, StepInfo, WarmStart,
+};
 use super::reduced::{ReducedSystem, SolveKind};
-use super::rigid::FreeModes;
+use super::rigid::{FreeModes, Motion, Pin};
 use crate::contact::{c_n, normal_active};
 use crate::error::RunError;
 use crate::par::Ctx;
@@ -78,14 +81,41 @@ pub struct CondensedSummary {
     pub solves: usize,
 }
 
+impl CondensedSummary {
+    fn new(candidates: usize) -> CondensedSummary {
+        CondensedSummary {
+            outcome: "condensed",
+            fallback_reason: None,
+            candidates,
+            inverse_entries: 0,
+            factorisation_seconds: 0.0,
+            inverse_seconds: 0.0,
+            dense_seconds: 0.0,
+            expansion_seconds: 0.0,
+            solves: 0,
+        }
+    }
+
+    /// The closing log line of a converged condensed solve (`n` contact nodes).
+    fn log(&self, ctx: &Ctx, n: usize, active: usize) {
+        say!(
+            ctx,
+            "newton: condensed: {} of {n} contact nodes as candidates, {active} active, \
+             factorisation {:.3} s, inverse {:.3} s, dense {:.3} s, expansion {:.3} s",
+            self.candidates,
+            self.factorisation_seconds,
+            self.inverse_seconds,
+            self.dense_seconds,
+            self.expansion_seconds
+        );
+    }
+}
+
 /// What the condensed path returns: the solution, or the reason to run the plain path.
 pub enum Condensed {
     Solved(Box<NewtonResult>, CondensedSummary),
     Fallback(CondensedSummary),
 }
-
-/// One candidate contact node as the dense algorithm sees it (gathered to every rank).
-const REC: usize = 13;
 
 /// Runs Algorithm 1 condensed onto the contact unknowns (module note). `Fallback` when the
 /// dense iteration cycles, does not converge within `max_steps`, or its final set changes on
@@ -98,21 +128,152 @@ pub fn solve(
     s: &NewtonSettings,
     warm: Option<&WarmStart>,
 ) -> Result<Condensed, RunError> {
-    let (mesh, layout, b, sys) = (p.mesh, p.layout, p.boundary, p.sys);
-    let dim = mesh.dim;
-    let mut summary = CondensedSummary {
-        outcome: "condensed",
-        fallback_reason: None,
-        candidates: b.n_global,
-        inverse_entries: 0,
-        factorisation_seconds: 0.0,
-        inverse_seconds: 0.0,
-        dense_seconds: 0.0,
-        expansion_seconds: 0.0,
-        solves: 0,
-    };
-    // K_p: A with every Dirichlet-free rigid mode pinned, no contact row.
+    let b = p.boundary;
+    let dim = p.mesh.dim;
+    let mut summary = CondensedSummary::new(b.n_global);
     let t = Instant::now();
+    let (free, w0, rhs0) = factorise_base(ctx, p, reduced, s)?;
+    summary.solves += 1;
+    summary.factorisation_seconds = t.elapsed().as_secs_f64();
+
+    let start = start_set(p, s, &free, warm);
+    let cand = Candidates::gather(ctx, b, &free, &start, &w0, dim);
+    let n = cand.n;
+    let n_rows = p.layout.node_offsets.last().copied().unwrap_or(0) * dim;
+    // The candidates: first the nodes with the smallest gaps (an eighth of c_h, at least
+    // MIN_CANDIDATES), grown (the gap bound doubled, and every node that (3.23) activates on
+    // the expanded u) until (3.23) changes no node outside them.
+    let mut sorted: Vec<f64> = (0..n).map(|i| cand.gap(i)).collect();
+    sorted.sort_by(|a, b| a.total_cmp(b));
+    let mut bound = sorted[(n / FIRST_FRACTION).max(MIN_CANDIDATES).min(n) - 1];
+    let mut comp = Compliance::new(n);
+    let mut active: Vec<bool> = (0..n).map(|i| cand.start(i)).collect();
+    // Every node of the start set is a candidate (the thesis' all-active start: all of them).
+    let mut forced: HashSet<usize> = (0..n).filter(|&i| active[i]).collect();
+    let mut history: Vec<StepInfo> = Vec::new();
+    let mut last: Option<Expanded> = None;
+    for round in 1..=MAX_ROUNDS {
+        let t = Instant::now();
+        let new: Vec<usize> = (0..n)
+            .filter(|&i| !comp.in_s[i] && (cand.gap(i) <= bound || forced.contains(&i)))
+            .collect();
+        if new.is_empty() && round > 1 {
+            let why = "the candidate set cannot grow (internal)".to_string();
+            return Ok(fallback(ctx, summary, why));
+        }
+        summary.inverse_entries += comp.grow(ctx, reduced, &cand, &new, dim, n_rows)?;
+        summary.inverse_seconds += t.elapsed().as_secs_f64();
+        let ns = comp.list.len();
+        summary.candidates = ns;
+
+        let t = Instant::now();
+        let run = dense_round(ctx, &cand, &comp, &free, s, &active);
+        summary.dense_seconds += t.elapsed().as_secs_f64();
+        record_steps(ctx, &mut history, &run, ns, free.pins().len());
+        let mut lambda = vec![0.0; n];
+        active = vec![false; n];
+        for (q, &i) in comp.list.iter().enumerate() {
+            lambda[i] = run.lambda[q];
+            active[i] = run.active[q];
+        }
+        match run.end {
+            End::Converged => {}
+            End::NoSupport(_) if ns < n => {
+                // a node beyond the candidates may still carry the load: all of them
+                bound = f64::INFINITY;
+                continue;
+            }
+            End::NoSupport(reaction) => {
+                return Err(free.no_support(run.active.iter().filter(|&&a| a).count(), reaction))
+            }
+            End::Fallback(why) => return Ok(fallback(ctx, summary, why)),
+        }
+
+        let t = Instant::now();
+        let ex = expand(
+            ctx,
+            p,
+            reduced,
+            s,
+            &free,
+            &rhs0,
+            (&lambda, &active),
+            &run.alpha,
+        )?;
+        summary.solves += 1;
+        summary.expansion_seconds += t.elapsed().as_secs_f64();
+        if ex.changed.is_empty() {
+            last = Some(ex);
+            break;
+        }
+        let inside = ex
+            .changed
+            .iter()
+            .filter(|&&i| comp.in_s[i as usize])
+            .count();
+        if inside > 0 || round == MAX_ROUNDS {
+            let why = format!(
+                "{} node(s) change on the expanded u ({inside} of them candidates: round-off at \
+                 nodes on the edge of the set)",
+                ex.changed.len()
+            );
+            return Ok(fallback(ctx, summary, why));
+        }
+        say!(
+            ctx,
+            "newton: condensed: {} node(s) beyond the {ns} candidates come into contact: more \
+             candidates",
+            ex.changed.len()
+        );
+        for &i in &ex.changed {
+            forced.insert(i as usize);
+            active[i as usize] = true;
+        }
+        bound *= 2.0;
+    }
+    let Some(mut ex) = last else {
+        let why = format!("no final set in {MAX_ROUNDS} rounds of candidates");
+        return Ok(fallback(ctx, summary, why));
+    };
+    summary.log(ctx, n, active.iter().filter(|&&a| a).count());
+    // u = w + ρ (λ and the set were taken on w, as the plain path does)
+    let mut u = reduced.solution()?;
+    add_motion(&free, &ex.rho, p, &mut u, &mut ex.it.nodes)?;
+    let result = NewtonResult {
+        u,
+        nodes: ex.it.nodes,
+        steps: history.len(),
+        history,
+        converged: true,
+        lambda_seconds: reduced.lambda_seconds,
+        rows_seconds: reduced.rows_seconds,
+        pinned_final: ex.pins,
+        cycle_detected_at: None,
+    };
+    Ok(Condensed::Solved(Box::new(result), summary))
+}
+
+/// The plain path takes over: said in the log and in the summary.
+fn fallback(ctx: &Ctx, mut summary: CondensedSummary, why: String) -> Condensed {
+    say!(
+        ctx,
+        "newton: condensed path: {why}; solving on the plain path"
+    );
+    summary.outcome = "fallback";
+    summary.fallback_reason = Some(why);
+    Condensed::Fallback(summary)
+}
+
+/// K_p: A with every Dirichlet-free rigid mode pinned and no contact row, factorised, and
+/// w₀ = K_p⁻¹ f. Returns the free modes (with K_p's pins), this rank's rows of w₀ and of
+/// K_p's right-hand side. Collective.
+fn factorise_base(
+    ctx: &Ctx,
+    p: &ContactProblem,
+    reduced: &mut ReducedSystem,
+    s: &NewtonSettings,
+) -> Result<(FreeModes, Vec<f64>, Vec<f64>), RunError> {
+    let (mesh, layout, b, sys) = (p.mesh, p.layout, p.boundary, p.sys);
     let mut free = FreeModes::new(ctx, mesh, layout, p.fixed, b, &reduced.f_local, s.rigid);
     free.update(ctx, mesh, layout, &[0.0; 36])?;
     reduced.set_pins(sys, layout, free.pins())?;
@@ -128,102 +289,140 @@ pub fn solve(
             solved.info.reason_name
         )));
     }
-    summary.solves += 1;
-    let w0 = reduced.solution_local()?;
-    let rhs0 = reduced.rhs_local()?;
-    summary.factorisation_seconds = t.elapsed().as_secs_f64();
+    Ok((free, reduced.solution_local()?, reduced.rhs_local()?))
+}
 
-    // The candidates, gathered on every rank in rank order (= c_h's global order).
-    let z = free.dirichlet_free().clone();
-    let mz = z.ncols();
-    let modes = free.rigid_modes();
-    let start = match warm {
-        Some(w) => w.nodes.iter().map(|r| r.active).collect::<Vec<bool>>(),
+/// The start set of this rank's contact nodes: the warm start's final set, or the case's
+/// start as the plain path forms it. Local.
+fn start_set(
+    p: &ContactProblem,
+    s: &NewtonSettings,
+    free: &FreeModes,
+    warm: Option<&WarmStart>,
+) -> Vec<bool> {
+    match warm {
+        Some(w) => w.nodes.iter().map(|r| r.active).collect(),
         None => {
-            let init = super::newton::auto_start(s.section.init, false, &free);
-            ActiveSet::initial(b, init, Law::Frictionless, s.c, mesh.extent(), dim).normal
+            let init = super::newton::auto_start(s.section.init, false, free);
+            let (b, dim) = (p.boundary, p.mesh.dim);
+            ActiveSet::initial(b, init, Law::Frictionless, s.c, p.mesh.extent(), dim).normal
         }
-    };
-    let mut mine = Vec::with_capacity(b.nodes.len() * REC);
-    for (k, &a) in b.nodes.iter().zip(&start) {
-        let d0: f64 = (0..dim).map(|j| k.frame.n[j] * w0[k.local_row + j]).sum();
-        let row = modes.direction_row(&k.x, &k.frame.n);
-        let mut gz = [0.0; 6];
-        for (c, g) in gz.iter_mut().enumerate().take(mz) {
-            *g = (0..modes.m).map(|j| row[j] * z[(j, c)]).sum();
-        }
-        mine.extend_from_slice(&[
-            k.row as f64,
-            k.frame.n[0],
-            k.frame.n[1],
-            k.frame.n[2],
-            k.gap,
-            d0,
-            if a { 1.0 } else { 0.0 },
-        ]);
-        mine.extend_from_slice(&gz);
     }
-    let all = ctx.all_gather_varcount(&mine);
-    let n = all.len() / REC;
-    let rec = |i: usize| &all[i * REC..(i + 1) * REC];
-    let root = ctx.rank == 0;
-    let n_rows = layout.node_offsets.last().copied().unwrap_or(0) * dim;
-    let gap: Vec<f64> = (0..n).map(|i| rec(i)[4]).collect();
-    let d0_all: Vec<f64> = (0..n).map(|i| rec(i)[5]).collect();
-    // The candidates: first the nodes with the smallest gaps (an eighth of c_h, at least
-    // MIN_CANDIDATES), grown (the gap bound doubled, and every node that penetrates or is
-    // active in (3.23) on the expanded u) until (3.23) changes no node outside them.
-    let mut sorted = gap.clone();
-    sorted.sort_by(|a, b| a.total_cmp(b));
-    let mut bound = sorted[(n / FIRST_FRACTION).max(MIN_CANDIDATES).min(n) - 1];
-    let mut in_s = vec![false; n];
-    let mut s_list: Vec<usize> = Vec::new();
-    let mut cmat = DMatrix::<f64>::zeros(0, 0); // C on the candidates (rank 0)
-    let mut active: Vec<bool> = (0..n).map(|i| rec(i)[6] != 0.0).collect();
-    // Every node of the start set is a candidate (the thesis' all-active start: all of them).
-    let mut forced: HashSet<usize> = (0..n).filter(|&i| active[i]).collect();
-    let (load, load_scale) = free.load();
-    let phi: Vec<f64> = (0..mz)
-        .map(|c| (0..modes.m).map(|j| z[(j, c)] * load[j]).sum())
-        .collect();
-    let off = b.offset;
-    let mut history: Vec<StepInfo> = Vec::new();
-    let mut fin_pins = Vec::new();
-    let mut it = Iterate::new(b.nodes.len(), reduced.f_local.len(), false);
-    for round in 1..=MAX_ROUNDS {
-        // New candidates and their columns of C (all rows of the grown set).
-        let t = Instant::now();
-        let new: Vec<usize> = (0..n)
-            .filter(|&i| !in_s[i] && (gap[i] <= bound || forced.contains(&i)))
-            .collect();
-        if new.is_empty() && round > 1 {
-            summary.outcome = "fallback";
-            let why = "the candidate set cannot grow (internal)".to_string();
-            summary.fallback_reason = Some(why);
-            return Ok(Condensed::Fallback(summary));
+}
+
+/// Every contact node of c_h (all ranks', in c_h's global order) as the dense algorithm sees
+/// it: first dof row, normal, gap, d₀ = nᵀw₀, start flag, the free modes' normal parts G.
+struct Candidates {
+    all: Vec<f64>,
+    n: usize,
+    mz: usize,
+}
+
+/// Values per candidate record: row, n (3), gap, d₀, start, G (6).
+const REC: usize = 13;
+
+impl Candidates {
+    /// One all-gather. Collective.
+    fn gather(
+        ctx: &Ctx,
+        b: &ContactBoundary,
+        free: &FreeModes,
+        start: &[bool],
+        w0: &[f64],
+        dim: usize,
+    ) -> Candidates {
+        let (z, modes) = (free.dirichlet_free(), free.rigid_modes());
+        let mz = z.ncols();
+        let mut mine = Vec::with_capacity(b.nodes.len() * REC);
+        for (k, &a) in b.nodes.iter().zip(start) {
+            let d0: f64 = (0..dim).map(|j| k.frame.n[j] * w0[k.local_row + j]).sum();
+            let row = modes.direction_row(&k.x, &k.frame.n);
+            let mut gz = [0.0; 6];
+            for (c, g) in gz.iter_mut().enumerate().take(mz) {
+                *g = (0..modes.m).map(|j| row[j] * z[(j, c)]).sum();
+            }
+            let n = k.frame.n;
+            let flag = if a { 1.0 } else { 0.0 };
+            mine.extend_from_slice(&[k.row as f64, n[0], n[1], n[2], k.gap, d0, flag]);
+            mine.extend_from_slice(&gz);
         }
-        let old_len = s_list.len();
-        for &i in &new {
-            in_s[i] = true;
+        let all = ctx.all_gather_varcount(&mine);
+        let n = all.len() / REC;
+        Candidates { all, n, mz }
+    }
+
+    fn rec(&self, i: usize) -> &[f64] {
+        &self.all[i * REC..(i + 1) * REC]
+    }
+    fn row(&self, i: usize) -> usize {
+        self.rec(i)[0] as usize
+    }
+    fn normal(&self, i: usize, a: usize) -> f64 {
+        self.rec(i)[1 + a]
+    }
+    fn gap(&self, i: usize) -> f64 {
+        self.rec(i)[4]
+    }
+    fn d0(&self, i: usize) -> f64 {
+        self.rec(i)[5]
+    }
+    fn start(&self, i: usize) -> bool {
+        self.rec(i)[6] != 0.0
+    }
+    fn g(&self, i: usize, c: usize) -> f64 {
+        self.rec(i)[7 + c]
+    }
+}
+
+/// The compliance C = Nᵀ K_p⁻¹ N on a growing candidate set (the matrix on rank 0 only).
+struct Compliance {
+    in_s: Vec<bool>,
+    /// The candidates in the order of C's rows and columns.
+    list: Vec<usize>,
+    cmat: DMatrix<f64>,
+}
+
+impl Compliance {
+    fn new(n: usize) -> Compliance {
+        Compliance {
+            in_s: vec![false; n],
+            list: Vec::new(),
+            cmat: DMatrix::zeros(0, 0),
         }
-        s_list.extend_from_slice(&new);
-        let ns = s_list.len();
-        // (position in s_list, global row, normal component) of every candidate dof
-        let dofs: Vec<(usize, usize, f64)> = s_list
+    }
+
+    /// Adds the candidates `new`: their columns of K_p⁻¹ (all rows of the grown set; of the
+    /// new-new pairs only those on and below the diagonal, since K_p⁻¹ is symmetric and the
+    /// fewer rows a column asks for, the more of its backward solve MUMPS prunes) from MUMPS'
+    /// selected inverse. Returns the number of entries requested. Collective.
+    fn grow(
+        &mut self,
+        ctx: &Ctx,
+        reduced: &ReducedSystem,
+        cand: &Candidates,
+        new: &[usize],
+        dim: usize,
+        n_rows: usize,
+    ) -> Result<usize, RunError> {
+        let root = ctx.rank == 0;
+        let old_len = self.list.len();
+        for &i in new {
+            self.in_s[i] = true;
+        }
+        self.list.extend_from_slice(new);
+        let ns = self.list.len();
+        // (position in the list, global row, normal component) of every candidate dof
+        let dofs: Vec<(usize, usize, f64)> = self
+            .list
             .iter()
             .enumerate()
             .flat_map(|(q, &i)| {
-                let r = rec(i);
                 (0..dim)
-                    .filter(move |&a| r[1 + a] != 0.0)
-                    .map(move |a| (q, r[0] as usize + a, r[1 + a]))
+                    .filter(move |&a| cand.normal(i, a) != 0.0)
+                    .map(move |a| (q, cand.row(i) + a, cand.normal(i, a)))
             })
             .collect();
-        let mut rows: Vec<usize> = dofs.iter().map(|d| d.1).collect();
-        rows.sort_unstable();
         let new_dofs: Vec<&(usize, usize, f64)> = dofs.iter().filter(|d| d.0 >= old_len).collect();
-        // K_p⁻¹ is symmetric: of the new-new pairs only those on and below the diagonal (the
-        // fewer rows a column asks for, the more of its backward solve MUMPS prunes).
         let old_rows: Vec<usize> = dofs.iter().filter(|d| d.0 < old_len).map(|d| d.1).collect();
         let request: InverseRequest = if root {
             new_dofs
@@ -238,7 +437,6 @@ pub fn solve(
         } else {
             Vec::new()
         };
-        summary.inverse_entries += request.iter().map(|r| r.1.len()).sum::<usize>();
         let entries = reduced
             .ksp()
             .mumps_inverse_entries(ctx.comm(), n_rows, root, &request)?;
@@ -246,7 +444,9 @@ pub fn solve(
             let of_row: std::collections::HashMap<usize, (usize, f64)> =
                 dofs.iter().map(|&(q, r, ni)| (r, (q, ni))).collect();
             let mut grown = DMatrix::<f64>::zeros(ns, ns);
-            grown.view_mut((0, 0), (old_len, old_len)).copy_from(&cmat);
+            grown
+                .view_mut((0, 0), (old_len, old_len))
+                .copy_from(&self.cmat);
             for (col, &&(qj, _, nj)) in new_dofs.iter().enumerate() {
                 let rj = request[col].0;
                 for (&ri, &v) in request[col].1.iter().zip(&entries[col]) {
@@ -263,48 +463,72 @@ pub fn solve(
                     grown[(qj, qi)] = grown[(qi, qj)]; // K_p⁻¹ symmetric
                 }
             }
-            cmat = grown;
+            self.cmat = grown;
         }
-        summary.inverse_seconds += t.elapsed().as_secs_f64();
-        summary.candidates = ns;
+        Ok(request.iter().map(|r| r.1.len()).sum())
+    }
+}
 
-        // Algorithm 1 on the candidates' dense system, on rank 0; the outcome broadcast.
-        let t = Instant::now();
-        let mut packed: Vec<f64> = Vec::new();
-        if root {
-            let g = DMatrix::from_fn(ns, mz, |q, c| rec(s_list[q])[7 + c]);
-            let d0: Vec<f64> = s_list.iter().map(|&i| d0_all[i]).collect();
-            let gs: Vec<f64> = s_list.iter().map(|&i| gap[i]).collect();
-            let start: Vec<bool> = s_list.iter().map(|&i| active[i]).collect();
-            let dense = Dense {
-                cmat: &cmat,
-                d0: &d0,
-                gap: &gs,
-                g: &g,
-                phi: &phi,
-                load_scale,
-                c: s.c,
-                max_steps: s.section.max_steps,
-            };
-            packed = dense.run(start).pack(ns, mz);
-        }
-        ctx.broadcast_f64s(&mut packed);
-        let run = DenseRun::unpack(&packed, ns, mz);
-        summary.dense_seconds += t.elapsed().as_secs_f64();
-        for h in &run.steps {
-            say!(
-                ctx,
-                "newton {:3}: |A_n| = {:6}  changed {:6}  |C_n| = {:.3e}  condensed, {} candidates ({:.4} s)",
-                history.len() + h.0,
-                h.1,
-                h.2,
-                h.3,
-                ns,
-                h.4
-            );
-        }
-        let base = history.len();
-        history.extend(run.steps.iter().map(|h| StepInfo {
+/// Algorithm 1 on the candidates' dense system, from `active`, on rank 0; the outcome
+/// broadcast to every rank. Collective.
+fn dense_round(
+    ctx: &Ctx,
+    cand: &Candidates,
+    comp: &Compliance,
+    free: &FreeModes,
+    s: &NewtonSettings,
+    active: &[bool],
+) -> DenseRun {
+    let (ns, mz) = (comp.list.len(), cand.mz);
+    let mut packed: Vec<f64> = Vec::new();
+    if ctx.rank == 0 {
+        let (z, modes) = (free.dirichlet_free(), free.rigid_modes());
+        let (load, load_scale) = free.load();
+        let phi: Vec<f64> = (0..mz)
+            .map(|c| (0..modes.m).map(|j| z[(j, c)] * load[j]).sum())
+            .collect();
+        let list = &comp.list;
+        let g = DMatrix::from_fn(ns, mz, |q, c| cand.g(list[q], c));
+        let d0: Vec<f64> = list.iter().map(|&i| cand.d0(i)).collect();
+        let gap: Vec<f64> = list.iter().map(|&i| cand.gap(i)).collect();
+        let start: Vec<bool> = list.iter().map(|&i| active[i]).collect();
+        let dense = Dense {
+            cmat: &comp.cmat,
+            d0: &d0,
+            gap: &gap,
+            g: &g,
+            phi: &phi,
+            load_scale,
+            c: s.c,
+            max_steps: s.section.max_steps,
+        };
+        packed = dense.run(start).pack(ns, mz);
+    }
+    ctx.broadcast_f64s(&mut packed);
+    DenseRun::unpack(&packed, ns, mz)
+}
+
+/// The dense steps of one round into the history (numbered on) and the log.
+fn record_steps(
+    ctx: &Ctx,
+    history: &mut Vec<StepInfo>,
+    run: &DenseRun,
+    candidates: usize,
+    pinned: usize,
+) {
+    let base = history.len();
+    for h in &run.steps {
+        say!(
+            ctx,
+            "newton {:3}: |A_n| = {:6}  changed {:6}  |C_n| = {:.3e}  condensed, {candidates} \
+             candidates ({:.4} s)",
+            base + h.0,
+            h.1,
+            h.2,
+            h.3,
+            h.4
+        );
+        history.push(StepInfo {
             step: base + h.0,
             active: h.1,
             changed: h.2,
@@ -314,168 +538,98 @@ pub fn solve(
             iterations: 0,
             reuse: None,
             amg: None,
-            pinned: free.pins().len(),
+            pinned,
             states: None,
             du_rel: None,
-        }));
-        let mut lambda = vec![0.0; n];
-        active = vec![false; n];
-        for (q, &i) in s_list.iter().enumerate() {
-            lambda[i] = run.lambda[q];
-            active[i] = run.active[q];
-        }
-        match run.end {
-            End::Converged => {}
-            End::NoSupport(_) if ns < n => {
-                // a node beyond the candidates may still carry the load: all of them
-                bound = f64::INFINITY;
-                continue;
-            }
-            End::NoSupport(reaction) => {
-                return Err(free.no_support(run.active.iter().filter(|&&a| a).count(), reaction))
-            }
-            End::Fallback(why) => {
-                summary.outcome = "fallback";
-                say!(
-                    ctx,
-                    "newton: condensed path: {why}; solving on the plain path"
-                );
-                summary.fallback_reason = Some(why);
-                return Ok(Condensed::Fallback(summary));
-            }
-        }
-
-        // Expansion: w = K_p⁻¹ (f − N λ_n), u = w + R z α; then (3.28) and (3.23) on it.
-        let t = Instant::now();
-        let mut rhs = rhs0.clone();
-        for (i, k) in b.nodes.iter().enumerate() {
-            let l = lambda[off + i];
-            for j in 0..dim {
-                rhs[k.local_row + j] -= k.frame.n[j] * l;
-            }
-        }
-        reduced.set_rhs_local(&rhs)?;
-        let solved = reduced.solve_current()?;
-        summary.solves += 1;
-        if !solved.info.converged() {
-            return Err(RunError::Failed(format!(
-                "the expansion solve of the condensed contact solve failed ({})",
-                solved.info.reason_name
-            )));
-        }
-        let mut rho = [0.0; 6];
-        for (j, r) in rho.iter_mut().enumerate().take(modes.m) {
-            *r = (0..mz).map(|c| z[(j, c)] * run.alpha[c]).sum();
-        }
-        // u = w + ρ: λ (3.28) and the set update (3.23) are taken on w with the gaps after ρ
-        // (as the plain path does), so a large rigid motion does not round λ.
-        let w = reduced.solution_local()?;
-        let set = ActiveSet {
-            normal: active[off..off + b.nodes.len()].to_vec(),
-            tangential: None,
-        };
-        // The modes the final set leaves free (balanced, else the iteration had not stopped)
-        // are fixed as the plain path fixes them: zero at the pins it chooses for this set.
-        let set_summary = set.summarise(ctx, b, free.modes(), dim);
-        let mut fin = FreeModes::new(ctx, mesh, layout, p.fixed, b, &reduced.f_local, s.rigid);
-        fin.update(ctx, mesh, layout, &set_summary.gram)?;
-        if !fin.pins().is_empty() {
-            let idx: Vec<PInt> = fin
-                .pins()
-                .iter()
-                .map(|&(v, k)| (v * dim + k) as PInt)
-                .collect();
-            let at = reduced.solution_at(&idx)?;
-            let corr = fin.motion_to_zero_pins(&at, &rho);
-            for (x, c) in rho.iter_mut().zip(corr) {
-                *x += c;
-            }
-        }
-        fin_pins = fin.pins().to_vec();
-        let mut shifted = b.clone();
-        free.shift(b, &rho, &mut shifted);
-        it = Iterate::new(b.nodes.len(), w.len(), false);
-        reduced.recover(sys, &shifted, &set, &mut it)?; // (3.28)
-        let update = set.update(&it, &shifted, Law::Frictionless, s.c, dim); // (3.23)
-        let mut u = w;
-        for (i, &v) in layout.owned_nodes.iter().enumerate() {
-            for k in 0..dim {
-                u[i * dim + k] += free.motion_at(&rho, &mesh.coords[v], k);
-            }
-        }
-        reduced.set_solution_local(&u)?;
-        for (k, r) in b.nodes.iter().zip(it.nodes.iter_mut()) {
-            for c in 0..dim {
-                r.u[c] += free.motion_at(&rho, &k.x, c);
-            }
-            r.u_n = k.frame.normal_part(&r.u);
-            r.u_t = k.frame.tangential_part(&r.u);
-        }
-        let changed_here: Vec<u64> = set
-            .normal
-            .iter()
-            .zip(&update.next.normal)
-            .enumerate()
-            .filter(|(_, (a, b))| a != b)
-            .map(|(i, _)| (off + i) as u64)
-            .collect();
-        let changed = ctx.all_gather_varcount(&changed_here);
-        summary.expansion_seconds += t.elapsed().as_secs_f64();
-        if changed.is_empty() {
-            break;
-        }
-        let inside = changed.iter().filter(|&&i| in_s[i as usize]).count();
-        if inside > 0 || round == MAX_ROUNDS {
-            summary.outcome = "fallback";
-            let why = format!(
-                "{} node(s) change on the expanded u ({inside} of them candidates: round-off at \
-                 nodes on the edge of the set)",
-                changed.len()
-            );
-            say!(
-                ctx,
-                "newton: condensed path: {why}; solving on the plain path"
-            );
-            summary.fallback_reason = Some(why);
-            return Ok(Condensed::Fallback(summary));
-        }
-        say!(
-            ctx,
-            "newton: condensed: {} node(s) beyond the {ns} candidates come into contact: more \
-             candidates",
-            changed.len()
-        );
-        for &i in &changed {
-            forced.insert(i as usize);
-            active[i as usize] = true;
-        }
-        bound *= 2.0;
+        });
     }
-    let n_active = active.iter().filter(|&&a| a).count();
-    say!(
-        ctx,
-        "newton: condensed: {} of {} contact nodes as candidates, {} active, factorisation \
-         {:.3} s, inverse {:.3} s, dense {:.3} s, expansion {:.3} s",
-        summary.candidates,
-        n,
-        n_active,
-        summary.factorisation_seconds,
-        summary.inverse_seconds,
-        summary.dense_seconds,
-        summary.expansion_seconds
-    );
-    let result = NewtonResult {
-        u: reduced.solution()?,
-        nodes: it.nodes,
-        steps: history.len(),
-        history,
-        converged: true,
-        lambda_seconds: reduced.lambda_seconds,
-        rows_seconds: reduced.rows_seconds,
-        pinned_final: fin_pins,
-        cycle_detected_at: None,
+}
+
+/// The expanded iterate of a round: (3.28) on w with the set, the rigid motion ρ that u = w + ρ
+/// carries, the pins of the set's free modes, and the global indices of the nodes (3.23)
+/// changes.
+struct Expanded {
+    it: Iterate,
+    rho: Motion,
+    pins: Vec<Pin>,
+    changed: Vec<u64>,
+}
+
+/// Expansion: w = K_p⁻¹ (f − N λ_n) (one triangular solve; the solution stays in `reduced`),
+/// ρ = R z α normalised at the pins the plain path chooses for the set (the modes the set
+/// leaves free are balanced, else the dense iteration had not stopped), then (3.28) and (3.23)
+/// on w with the gaps after ρ, as the plain path does, so that a large rigid motion does not
+/// round λ. `(lambda, active)` of every contact node in c_h's global order. Collective.
+#[allow(clippy::too_many_arguments)]
+fn expand(
+    ctx: &Ctx,
+    p: &ContactProblem,
+    reduced: &mut ReducedSystem,
+    s: &NewtonSettings,
+    free: &FreeModes,
+    rhs0: &[f64],
+    (lambda, active): (&[f64], &[bool]),
+    alpha: &[f64],
+) -> Result<Expanded, RunError> {
+    let (mesh, layout, b, sys) = (p.mesh, p.layout, p.boundary, p.sys);
+    let (dim, off) = (mesh.dim, b.offset);
+    let mut rhs = rhs0.to_vec();
+    for (i, k) in b.nodes.iter().enumerate() {
+        for j in 0..dim {
+            rhs[k.local_row + j] -= k.frame.n[j] * lambda[off + i];
+        }
+    }
+    reduced.set_rhs_local(&rhs)?;
+    let solved = reduced.solve_current()?;
+    if !solved.info.converged() {
+        return Err(RunError::Failed(format!(
+            "the expansion solve of the condensed contact solve failed ({})",
+            solved.info.reason_name
+        )));
+    }
+    let z = free.dirichlet_free();
+    let mut rho = [0.0; 6];
+    for (j, r) in rho.iter_mut().enumerate().take(free.rigid_modes().m) {
+        *r = (0..z.ncols()).map(|c| z[(j, c)] * alpha[c]).sum();
+    }
+    let set = ActiveSet {
+        normal: active[off..off + b.nodes.len()].to_vec(),
+        tangential: None,
     };
-    Ok(Condensed::Solved(Box::new(result), summary))
+    let gram = set.summarise(ctx, b, free.modes(), dim).gram;
+    let mut fin = FreeModes::new(ctx, mesh, layout, p.fixed, b, &reduced.f_local, s.rigid);
+    fin.update(ctx, mesh, layout, &gram)?;
+    if !fin.pins().is_empty() {
+        let idx: Vec<PInt> = fin
+            .pins()
+            .iter()
+            .map(|&(v, k)| (v * dim + k) as PInt)
+            .collect();
+        let at = reduced.solution_at(&idx)?;
+        let corr = fin.motion_to_zero_pins(&at, &rho);
+        for (x, c) in rho.iter_mut().zip(corr) {
+            *x += c;
+        }
+    }
+    let mut shifted = b.clone();
+    free.shift(b, &rho, &mut shifted);
+    let mut it = Iterate::new(b.nodes.len(), rhs.len(), false);
+    reduced.recover(sys, &shifted, &set, &mut it)?; // (3.28)
+    let update = set.update(&it, &shifted, Law::Frictionless, s.c, dim); // (3.23)
+    let changed_here: Vec<u64> = set
+        .normal
+        .iter()
+        .zip(&update.next.normal)
+        .enumerate()
+        .filter(|(_, (a, b))| a != b)
+        .map(|(i, _)| (off + i) as u64)
+        .collect();
+    Ok(Expanded {
+        it,
+        rho,
+        pins: fin.pins().to_vec(),
+        changed: ctx.all_gather_varcount(&changed_here),
+    })
 }
 
 /// Algorithm 1 on the condensed system (module note): C (n × n), d₀, the gaps, the free

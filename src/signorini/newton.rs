@@ -282,7 +282,7 @@ pub fn semismooth_newton(
 
 /// u = w + ρ: the rigid motion taken out of the solve, added back to the solution and to the
 /// contact nodes' displacements. Collective when ρ ≠ 0 (the same ρ on every rank).
-fn add_motion(
+pub(super) fn add_motion(
     free: &FreeModes,
     rho: &Motion,
     p: &ContactProblem,

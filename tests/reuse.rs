@@ -11,29 +11,11 @@ use common::*;
 use serde_json::Value;
 use std::path::{Path, PathBuf};
 
-/// max |u_a − u_b| / max |u_a| over all nodes (by node id).
-fn u_diff(a: &Solved, b: &Solved) -> f64 {
-    let (ua, ub) = (a.displacement(), b.displacement());
-    assert_eq!(ua.len(), ub.len());
-    let scale = ua.values().flatten().fold(0.0f64, |m, x| m.max(x.abs()));
-    assert!(scale > 0.0, "u = 0: nothing tested");
-    let (diff, _) = max_diff(&ua, &ub);
-    diff / scale
-}
-
 fn history(s: &Solved) -> Vec<Value> {
     get(&s.summary, &["newton", "history"])
         .as_array()
         .expect("history array")
         .clone()
-}
-
-fn active_nodes(s: &Solved) -> Vec<u64> {
-    s.contact_rows_by_id()
-        .iter()
-        .filter(|(_, r)| r.active())
-        .map(|(id, _)| *id)
-        .collect()
 }
 
 /// Steps solved by [kind] and the fallbacks, after checking the history's consistency:
@@ -123,9 +105,9 @@ fn same_as_plain(np: usize, case: &Path, sets: &[&str], mode: &str) -> (usize, u
         rh.pop();
     }
     assert_eq!(ph, rh);
-    assert_eq!(active_nodes(&plain), active_nodes(&reuse));
-    assert!(!active_nodes(&plain).is_empty());
-    let d = u_diff(&plain, &reuse);
+    assert_eq!(plain.active_node_ids(), reuse.active_node_ids());
+    assert!(!plain.active_node_ids().is_empty());
+    let d = plain.u_rel_diff(&reuse);
     assert!(
         d <= 1e-10,
         "{} on {np} rank(s), reuse = {mode}: |u - u_plain| / max|u| = {d:e}\n{}",

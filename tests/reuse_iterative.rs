@@ -33,24 +33,6 @@ fn history(s: &Solved) -> Vec<Value> {
         .clone()
 }
 
-fn active_nodes(s: &Solved) -> Vec<u64> {
-    s.contact_rows_by_id()
-        .iter()
-        .filter(|(_, r)| r.active())
-        .map(|(id, _)| *id)
-        .collect()
-}
-
-/// max |u_a − u_b| / max |u_a| over all nodes (by node id).
-fn u_diff(a: &Solved, b: &Solved) -> f64 {
-    let (ua, ub) = (a.displacement(), b.displacement());
-    assert_eq!(ua.len(), ub.len());
-    let scale = ua.values().flatten().fold(0.0f64, |m, x| m.max(x.abs()));
-    assert!(scale > 0.0, "u = 0: nothing tested");
-    let (diff, _) = max_diff(&ua, &ub);
-    diff / scale
-}
-
 /// Checks the record of a run of the reuse path and returns (PC setups, reuse steps, inexact
 /// steps): every step has an `amg` record and no factorisation one; the first step sets the
 /// preconditioner up; a step is "krylov" exactly when it set the PC up and "reuse" otherwise;
@@ -131,19 +113,19 @@ fn same_as_plain(
     };
     let plain = run("never");
     check_plain(&plain);
-    assert!(!active_nodes(&plain).is_empty());
+    assert!(!plain.active_node_ids().is_empty());
     let rtol = 1e-10; // the preset's (solver.rtol's default)
     let mut out = Vec::new();
     for &mode in modes {
         let s = run(mode);
         out.push(check_history(&s, mode, rtol));
         assert_eq!(
-            active_nodes(&plain),
-            active_nodes(&s),
+            plain.active_node_ids(),
+            s.active_node_ids(),
             "{} on {np} rank(s), reuse = {mode}: final active sets differ",
             case.display()
         );
-        let d = u_diff(&plain, &s);
+        let d = plain.u_rel_diff(&s);
         assert!(
             d <= 1e-8,
             "{} on {np} rank(s), reuse = {mode}: |u - u_plain| / max|u| = {d:e}\n{}",
@@ -203,7 +185,7 @@ fn tresca_makes_no_inexact_steps() {
     for e in history(&s) {
         assert_eq!(e["amg"]["inexact"], Value::Bool(false), "{e}");
     }
-    assert_eq!(active_nodes(&plain), active_nodes(&s));
-    let d = u_diff(&plain, &s);
+    assert_eq!(plain.active_node_ids(), s.active_node_ids());
+    let d = plain.u_rel_diff(&s);
     assert!(d <= 1e-8, "Tresca: |u - u_plain| / max|u| = {d:e}");
 }

@@ -82,6 +82,26 @@ pub struct Solved {
 }
 
 impl Solved {
+    /// max |u_self − u_other| / max |u_self| over all nodes (by node id); u = 0 is a failure
+    /// (nothing would be tested).
+    pub fn u_rel_diff(&self, other: &Solved) -> f64 {
+        let (ua, ub) = (self.displacement(), other.displacement());
+        assert_eq!(ua.len(), ub.len());
+        let scale = ua.values().flatten().fold(0.0f64, |m, x| m.max(x.abs()));
+        assert!(scale > 0.0, "u = 0: nothing tested");
+        let (diff, _) = super::compare::max_diff(&ua, &ub);
+        diff / scale
+    }
+
+    /// Node ids of the active contact nodes (contact_nodes.csv), ascending.
+    pub fn active_node_ids(&self) -> Vec<u64> {
+        self.contact_rows_by_id()
+            .iter()
+            .filter(|(_, r)| r.active())
+            .map(|(id, _)| *id)
+            .collect()
+    }
+
     /// `summary[a][b]...` as f64 (panics with the path and the log if absent or not a number).
     pub fn f(&self, path: &[&str]) -> f64 {
         get(&self.summary, path)

@@ -130,4 +130,37 @@ fn main() {
     bindings
         .write_to_file(&out)
         .expect("writing PETSc bindings");
+    mumps_bindings(&petsc.include_paths);
+}
+
+/// MUMPS' own C interface (src/petsc/mumps.rs: the Schur complement of a distributed matrix,
+/// which PETSc's interface offers on one process only). The library PETSc links; its header
+/// from libmumps-dev (or MUMPS_INCLUDE_DIR, or a PETSc build's include directory).
+fn mumps_bindings(petsc_include: &[PathBuf]) {
+    println!("cargo:rerun-if-env-changed=MUMPS_INCLUDE_DIR");
+    println!("cargo:rerun-if-env-changed=MUMPS_LIB_DIR");
+    let mut builder = bindgen::Builder::default()
+        .header_contents("mumps_wrapper.h", "#include <dmumps_c.h>\n")
+        .layout_tests(false)
+        .generate_comments(false)
+        .allowlist_function("dmumps_c")
+        .allowlist_type("DMUMPS_STRUC_C");
+    if let Ok(d) = env::var("MUMPS_INCLUDE_DIR") {
+        builder = builder.clang_arg(format!("-I{d}"));
+    }
+    for p in petsc_include {
+        builder = builder.clang_arg(format!("-I{}", p.display()));
+    }
+    if let Ok(d) = env::var("MUMPS_LIB_DIR") {
+        println!("cargo:rustc-link-search=native={d}");
+        println!("cargo:rustc-link-arg=-Wl,-rpath,{d}");
+    }
+    println!("cargo:rustc-link-lib=dylib=dmumps");
+    let bindings = builder
+        .generate()
+        .expect("bindgen failed on dmumps_c.h: install libmumps-dev (petsc-dev pulls it in)");
+    let out = PathBuf::from(env::var("OUT_DIR").unwrap()).join("mumps_bindings.rs");
+    bindings
+        .write_to_file(&out)
+        .expect("writing MUMPS bindings");
 }

@@ -115,6 +115,52 @@ impl<'a> Ctx<'a> {
         all
     }
 
+    /// The concatenation of every rank's slice, in rank order, on rank 0 (empty elsewhere;
+    /// one Gather of the counts, one Gatherv). Collective.
+    pub fn gather_to_root(&self, mine: &[f64]) -> Vec<f64> {
+        let root = self.world.process_at_rank(0);
+        let n = mine.len() as i32;
+        if self.rank != 0 {
+            root.gather_into(&n);
+            root.gather_varcount_into(mine);
+            return Vec::new();
+        }
+        let mut counts = vec![0i32; self.size];
+        root.gather_into_root(&n, &mut counts[..]);
+        let displs: Vec<i32> = offsets(&counts.iter().map(|&c| c as usize).collect::<Vec<_>>())
+            .iter()
+            .map(|&d| d as i32)
+            .collect();
+        let mut all = vec![0.0; counts.iter().map(|&c| c as usize).sum()];
+        {
+            let mut part = PartitionMut::new(&mut all[..], counts, displs);
+            root.gather_varcount_into_root(mine, &mut part);
+        }
+        all
+    }
+
+    /// The inverse of [`Ctx::gather_to_root`]: rank 0's vector cut into consecutive pieces
+    /// of `mine` entries each (every rank's own count). Collective.
+    pub fn scatter_from_root(&self, all: &[f64], mine: usize) -> Vec<f64> {
+        let root = self.world.process_at_rank(0);
+        let n = mine as i32;
+        let mut out = vec![0.0; mine];
+        if self.rank != 0 {
+            root.gather_into(&n);
+            root.scatter_varcount_into(&mut out[..]);
+            return out;
+        }
+        let mut counts = vec![0i32; self.size];
+        root.gather_into_root(&n, &mut counts[..]);
+        let displs: Vec<i32> = offsets(&counts.iter().map(|&c| c as usize).collect::<Vec<_>>())
+            .iter()
+            .map(|&d| d as i32)
+            .collect();
+        let part = Partition::new(all, counts, displs);
+        root.scatter_varcount_into_root(&part, &mut out[..]);
+        out
+    }
+
     /// Rank 0's vector on every rank (two broadcasts: the length, the values). Collective.
     pub fn broadcast_f64s(&self, v: &mut Vec<f64>) {
         let root = self.world.process_at_rank(0);

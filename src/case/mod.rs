@@ -152,10 +152,11 @@ impl Method {
 /// (signorini::reduced, `solve_amg`).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Reuse {
-    /// Direct: reuse when the measured costs say it pays (signorini::reduced), refactorise
-    /// otherwise. Iterative: warm starts, inexact early steps, the preconditioner of an earlier
-    /// step, set up anew when the Krylov iterations per decade grew by more than 30 % over
-    /// those after the last setup, or when a solve on it does not converge.
+    /// Direct, frictionless: the condensed path (as "condensed"). Direct with friction: reuse
+    /// when the measured costs say it pays (signorini::reduced), refactorise otherwise.
+    /// Iterative: warm starts, inexact early steps, the preconditioner of an earlier step, set
+    /// up anew when the Krylov iterations per decade grew by more than 30 % over those after
+    /// the last setup, or when a solve on it does not converge.
     Auto,
     /// Every step refactorises (direct) or sets its preconditioner up and solves from zero to
     /// the preset's tolerance (iterative): the plain path, the reference.
@@ -165,9 +166,9 @@ pub enum Reuse {
     /// on it fails.
     Always,
     /// Frictionless contact on the direct preset: Algorithm 1 condensed onto the contact
-    /// unknowns — one factorisation, the compliance of the contact nodes from MUMPS'
-    /// selected inverse, dense steps, one expansion solve (signorini::condensed). Elsewhere
-    /// as "auto". "auto" takes this path wherever it applies.
+    /// unknowns — one factorisation with MUMPS' Schur complement on the candidate contact
+    /// nodes' dofs, dense steps, one expansion solve (signorini::condensed). Elsewhere as
+    /// "auto" ("auto" takes this path wherever it applies).
     Condensed,
 }
 

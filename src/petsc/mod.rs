@@ -5,6 +5,7 @@
 //! caller's location. Everything here is collective where the PETSc call is collective.
 
 pub mod ffi;
+pub mod mumps;
 pub mod snes;
 
 use std::ffi::{CStr, CString};
@@ -861,113 +862,6 @@ impl Ksp {
                 }
             };
             Ok((s(kt), s(pt)))
-        }
-    }
-}
-
-/// Requested entries of A⁻¹ (MUMPS ICNTL(30)): per requested column j of A⁻¹ (a global row
-/// index of A), the sorted global rows i of the entries A⁻¹(i, j) wanted.
-pub type InverseRequest = Vec<(usize, Vec<usize>)>;
-
-impl Ksp {
-    /// Entries of A⁻¹ from the MUMPS factorisation this KSP holds (PCLU / PCCHOLESKY with
-    /// MUMPS, set up): MUMPS' selected-inverse solve (ICNTL(30), through
-    /// MatMumpsGetInverseTranspose), which prunes the triangular solves to the requested
-    /// pattern. `request` is read on `root` only (rank 0 of the KSP's communicator, MUMPS'
-    /// host); the values A⁻¹(i, j) come back there in the request's order (empty lists on the
-    /// other ranks). `n` is A's global size. ICNTL(30) is reset afterwards, so later solves
-    /// are ordinary ones. Collective.
-    pub fn mumps_inverse_entries(
-        &self,
-        comm: MPI_Comm,
-        n: usize,
-        root: bool,
-        request: &InverseRequest,
-    ) -> Result<Vec<Vec<f64>>> {
-        let local = if root { n } else { 0 };
-        let mut nnz: Vec<PInt> = vec![0; local];
-        if root {
-            for (j, rows) in request {
-                nnz[*j] = rows.len() as PInt;
-            }
-        }
-        let mut pc: ffi::PC = ptr::null_mut();
-        let mut f: ffi::Mat = ptr::null_mut();
-        let mut bt: ffi::Mat = ptr::null_mut();
-        // SAFETY: `bt` is created, filled and destroyed here; the factor `f` belongs to the
-        // PC; every array passed outlives its call; MatGetRow's arrays are read before
-        // MatRestoreRow.
-        unsafe {
-            check(ffi::KSPGetPC(self.raw, &mut pc))?;
-            check(ffi::PCFactorGetMatrix(pc, &mut f))?;
-            check(ffi::MatCreate(comm, &mut bt))?;
-            let guard = Matrix {
-                raw: bt,
-                _arrays: None,
-            };
-            check(ffi::MatSetSizes(
-                bt,
-                local as PInt,
-                local as PInt,
-                n as PInt,
-                n as PInt,
-            ))?;
-            check(ffi::MatSetType(bt, ffi::MATAIJ.as_ptr() as *const c_char))?;
-            let nnz_ptr = if root { nnz.as_ptr() } else { ptr::null() };
-            check(ffi::MatSeqAIJSetPreallocation(bt, 0, nnz_ptr))?;
-            check(ffi::MatMPIAIJSetPreallocation(
-                bt,
-                0,
-                nnz_ptr,
-                0,
-                ptr::null(),
-            ))?;
-            if root {
-                let mut zeros: Vec<f64> = Vec::new();
-                for (j, rows) in request {
-                    let cols: Vec<PInt> = rows.iter().map(|&i| i as PInt).collect();
-                    zeros.clear();
-                    zeros.resize(cols.len(), 0.0);
-                    let row = *j as PInt;
-                    check(ffi::MatSetValues(
-                        bt,
-                        1,
-                        &row,
-                        cols.len() as PInt,
-                        cols.as_ptr(),
-                        zeros.as_ptr(),
-                        ffi::INSERT_VALUES,
-                    ))?;
-                }
-            }
-            check(ffi::MatAssemblyBegin(bt, ffi::MAT_FINAL_ASSEMBLY))?;
-            check(ffi::MatAssemblyEnd(bt, ffi::MAT_FINAL_ASSEMBLY))?;
-            // The selected-inverse solve sets ICNTL(20) (sparse right-hand side) and ICNTL(21)
-            // (centralised solution) for itself: restored after it with ICNTL(30).
-            let (mut icntl20, mut icntl21): (PInt, PInt) = (0, 0);
-            check(ffi::MatMumpsGetIcntl(f, 20, &mut icntl20))?;
-            check(ffi::MatMumpsGetIcntl(f, 21, &mut icntl21))?;
-            check(ffi::MatMumpsGetInverseTranspose(f, bt))?;
-            check(ffi::MatMumpsSetIcntl(f, 30, 0))?;
-            check(ffi::MatMumpsSetIcntl(f, 20, icntl20))?;
-            check(ffi::MatMumpsSetIcntl(f, 21, icntl21))?;
-            let mut out = Vec::with_capacity(if root { request.len() } else { 0 });
-            if root {
-                for (j, rows) in request {
-                    let vals = guard.with_row(*j, |c, v| {
-                        rows.iter()
-                            .map(|&i| {
-                                c.binary_search(&(i as PInt))
-                                    .map(|p| v[p])
-                                    .unwrap_or(f64::NAN)
-                            })
-                            .collect::<Vec<f64>>()
-                    })?;
-                    out.push(vals);
-                }
-            }
-            drop(guard);
-            Ok(out)
         }
     }
 }

@@ -1,9 +1,13 @@
 //! Algorithm 1 on the contact unknowns alone (frictionless, direct preset): one factorisation
-//! of the stiffness with every rigid mode that Dirichlet data leave free pinned, K_p; the
-//! compliance of the candidate contact nodes C = Nᵀ K_p⁻¹ N from MUMPS' selected-inverse
-//! solve (the entries of K_p⁻¹ between their dofs only); then every step of Algorithm 1 is a
-//! dense solve of the active nodes' block; at the end one more solve with the factorisation
-//! expands the multipliers into u.
+//! of the stiffness with every rigid mode that Dirichlet data leave free pinned, K_p, by MUMPS
+//! directly with the Schur complement S on every dof of the candidate contact nodes
+//! (ICNTL(19); K_p⁻¹ restricted to those dofs is S⁻¹, so the compliance C = Nᵀ K_p⁻¹ N costs a
+//! dense factorisation of S); every step of Algorithm 1 is then a dense solve of the active
+//! nodes' block; at the end MUMPS' condensation and expansion solves give u.
+//!
+//! The step count: with newton.init = "auto" and no warm start, Algorithm 1 first runs on
+//! coarse subsets of the candidates (nested iteration, [`Dense::run_nested`]), each level
+//! starting the next; the steps on the candidates themselves are those counted.
 //!
 //! Why it is Algorithm 1: with u = w + ρ (ρ a rigid motion Dirichlet data leave free, zero in
 //! K_p's pins) and K_p w = f − N λ_n, the reduced system (3.29) of a set A is, eliminated onto
@@ -20,8 +24,9 @@
 //! checked on the expanded u by the plain path's own recovery (3.28) and update (3.23): a
 //! node that changes there sends the solve to the plain path.
 //!
-//! Collectives: the gathering of the candidates (one all-gather), the selected-inverse solve,
-//! two triangular solves, one broadcast of the dense result, one MatMult.
+//! Collectives: the gathering of the candidates (one all-gather), MUMPS' factorisation and
+//! three solve phases (the right-hand sides gathered on rank 0, the solution scattered back),
+//! two broadcasts (S's definiteness, the dense result), one MatMult.
 
 use super::active_set::{ActiveSet, Iterate, Law};
 use super::boundary::ContactBoundary;
@@ -30,18 +35,20 @@ use super::newton::{
 };
 use super::reduced::{ReducedSystem, SolveKind};
 use super::rigid::{FreeModes, Motion, Pin};
+use crate::case::NewtonInit;
 use crate::contact::{c_n, normal_active};
 use crate::error::RunError;
 use crate::par::Ctx;
-use crate::petsc::{InverseRequest, PInt};
+use crate::petsc::mumps::SchurFactor;
+use crate::petsc::PInt;
 use crate::say;
 use nalgebra::{DMatrix, DVector, SymmetricEigen};
 use serde::Serialize;
 use std::collections::HashSet;
 use std::time::Instant;
 
-/// More candidate contact nodes than this and the condensed path is not tried: the dense
-/// compliance (8 n_c² bytes on rank 0) and its selected-inverse solve would not pay.
+/// More contact nodes than this and the condensed path is not tried: the dense Schur
+/// complement (8 (d n_c)² bytes on rank 0 if every node became a candidate) would not pay.
 pub const MAX_CANDIDATES: usize = 8000;
 
 /// The first candidate set: the 1/FIRST_FRACTION of the contact nodes with the smallest gaps.
@@ -67,18 +74,31 @@ pub struct CondensedSummary {
     pub fallback_reason: Option<String>,
     /// Candidate contact nodes (the dense system's size).
     pub candidates: usize,
-    /// Entries of K_p⁻¹ computed by the selected-inverse solve.
-    pub inverse_entries: usize,
-    /// Analysis + numeric factorisation of K_p and the solve for d₀ [s].
+    /// Variables of the Schur complement (every dof of every candidate), last round.
+    pub schur_dofs: usize,
+    /// Numeric factorisations of K_p with the Schur complement (one per round of candidates).
+    pub factorisations: usize,
+    /// MUMPS' analysis + numeric factorisation of K_p with the Schur complement [s].
     pub factorisation_seconds: f64,
-    /// The selected-inverse solve and the assembly of C [s].
-    pub inverse_seconds: f64,
+    /// Handing K_p to MUMPS, the condensation of f, the dense factorisation of S, C and d₀ [s].
+    pub schur_seconds: f64,
     /// Algorithm 1's steps on the dense system [s].
     pub dense_seconds: f64,
     /// The expansion solve, (3.28) and the check of the final set [s].
     pub expansion_seconds: f64,
-    /// Triangular solves with the factorisation (d₀, expansion).
+    /// Solve phases with the factorisation (condensations, expansions).
     pub solves: usize,
+    /// The nested start (newton.init = "auto", no warm start): per coarse level, coarsest
+    /// first, its nodes and Algorithm 1's steps on it (dense; not counted in newton.steps).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub coarse_levels: Vec<CoarseLevel>,
+}
+
+/// One coarse level of the nested start.
+#[derive(Debug, Clone, Serialize)]
+pub struct CoarseLevel {
+    pub nodes: usize,
+    pub steps: usize,
 }
 
 impl CondensedSummary {
@@ -87,12 +107,14 @@ impl CondensedSummary {
             outcome: "condensed",
             fallback_reason: None,
             candidates,
-            inverse_entries: 0,
+            schur_dofs: 0,
+            factorisations: 0,
             factorisation_seconds: 0.0,
-            inverse_seconds: 0.0,
+            schur_seconds: 0.0,
             dense_seconds: 0.0,
             expansion_seconds: 0.0,
             solves: 0,
+            coarse_levels: Vec::new(),
         }
     }
 
@@ -101,10 +123,10 @@ impl CondensedSummary {
         say!(
             ctx,
             "newton: condensed: {} of {n} contact nodes as candidates, {active} active, \
-             factorisation {:.3} s, inverse {:.3} s, dense {:.3} s, expansion {:.3} s",
+             factorisation {:.3} s, Schur complement {:.3} s, dense {:.3} s, expansion {:.3} s",
             self.candidates,
             self.factorisation_seconds,
-            self.inverse_seconds,
+            self.schur_seconds,
             self.dense_seconds,
             self.expansion_seconds
         );
@@ -131,13 +153,9 @@ pub fn solve(
     let b = p.boundary;
     let dim = p.mesh.dim;
     let mut summary = CondensedSummary::new(b.n_global);
-    let t = Instant::now();
-    let (free, w0, rhs0) = factorise_base(ctx, p, reduced, s)?;
-    summary.solves += 1;
-    summary.factorisation_seconds = t.elapsed().as_secs_f64();
-
+    let (free, rhs0) = prepare_base(ctx, p, reduced, s)?;
     let start = start_set(p, s, &free, warm);
-    let cand = Candidates::gather(ctx, b, &free, &start, &w0, dim);
+    let cand = Candidates::gather(ctx, b, &free, &start);
     let n = cand.n;
     let n_rows = p.layout.node_offsets.last().copied().unwrap_or(0) * dim;
     // The candidates: first the nodes with the smallest gaps (an eighth of c_h, at least
@@ -161,14 +179,38 @@ pub fn solve(
             let why = "the candidate set cannot grow (internal)".to_string();
             return Ok(fallback(ctx, summary, why));
         }
-        summary.inverse_entries += comp.grow(ctx, reduced, &cand, &new, dim, n_rows)?;
-        summary.inverse_seconds += t.elapsed().as_secs_f64();
+        if let Err(why) = comp.grow(ctx, reduced, &cand, &new, (dim, n_rows), &rhs0) {
+            return Ok(fallback(ctx, summary, why));
+        }
+        summary.factorisations += 1;
+        summary.solves += 1;
+        summary.factorisation_seconds += comp.factorisation_seconds;
+        summary.schur_seconds += t.elapsed().as_secs_f64() - comp.factorisation_seconds;
         let ns = comp.list.len();
         summary.candidates = ns;
+        summary.schur_dofs = ns * dim;
 
         let t = Instant::now();
-        let run = dense_round(ctx, &cand, &comp, &free, s, &active);
+        let nested = round == 1 && warm.is_none() && s.section.init == NewtonInit::Auto;
+        let run = dense_round(ctx, &cand, &comp, &free, s, (&active, nested));
         summary.dense_seconds += t.elapsed().as_secs_f64();
+        if !run.coarse.is_empty() {
+            let levels: Vec<String> = run
+                .coarse
+                .iter()
+                .map(|c| format!("{} nodes {} steps", c.0, c.1))
+                .collect();
+            say!(
+                ctx,
+                "newton: condensed: nested start on coarse subsets of the candidates: {}",
+                levels.join(", ")
+            );
+            summary.coarse_levels.extend(
+                run.coarse
+                    .iter()
+                    .map(|&(nodes, steps)| CoarseLevel { nodes, steps }),
+            );
+        }
         record_steps(ctx, &mut history, &run, ns, free.pins().len());
         let mut lambda = vec![0.0; n];
         active = vec![false; n];
@@ -190,17 +232,19 @@ pub fn solve(
         }
 
         let t = Instant::now();
-        let ex = expand(
+        let ex = match expand(
             ctx,
             p,
             reduced,
-            s,
-            &free,
+            (s, &free, &mut comp),
             &rhs0,
             (&lambda, &active),
             &run.alpha,
-        )?;
-        summary.solves += 1;
+        )? {
+            Ok(ex) => ex,
+            Err(why) => return Ok(fallback(ctx, summary, why)),
+        };
+        summary.solves += 2;
         summary.expansion_seconds += t.elapsed().as_secs_f64();
         if ex.changed.is_empty() {
             last = Some(ex);
@@ -264,15 +308,16 @@ fn fallback(ctx: &Ctx, mut summary: CondensedSummary, why: String) -> Condensed 
     Condensed::Fallback(summary)
 }
 
-/// K_p: A with every Dirichlet-free rigid mode pinned and no contact row, factorised, and
-/// w₀ = K_p⁻¹ f. Returns the free modes (with K_p's pins), this rank's rows of w₀ and of
-/// K_p's right-hand side. Collective.
-fn factorise_base(
+/// K_p: A with every Dirichlet-free rigid mode pinned and no contact row, written into the
+/// reduced system's matrix (factorised later, by MUMPS directly, with the Schur complement).
+/// Returns the free modes (with K_p's pins) and this rank's rows of K_p's right-hand side.
+/// Collective.
+fn prepare_base(
     ctx: &Ctx,
     p: &ContactProblem,
     reduced: &mut ReducedSystem,
     s: &NewtonSettings,
-) -> Result<(FreeModes, Vec<f64>, Vec<f64>), RunError> {
+) -> Result<(FreeModes, Vec<f64>), RunError> {
     let (mesh, layout, b, sys) = (p.mesh, p.layout, p.boundary, p.sys);
     let mut free = FreeModes::new(ctx, mesh, layout, p.fixed, b, &reduced.f_local, s.rigid);
     free.update(ctx, mesh, layout, &[0.0; 36])?;
@@ -282,14 +327,7 @@ fn factorise_base(
         tangential: None,
     };
     reduced.write(ctx, sys, layout, b, &empty, free.pins())?;
-    let solved = reduced.solve_current()?;
-    if !solved.info.converged() {
-        return Err(RunError::Failed(format!(
-            "the factorisation of the stiffness for the condensed contact solve failed ({})",
-            solved.info.reason_name
-        )));
-    }
-    Ok((free, reduced.solution_local()?, reduced.rhs_local()?))
+    Ok((free, reduced.rhs_local()?))
 }
 
 /// The start set of this rank's contact nodes: the warm start's final set, or the case's
@@ -311,31 +349,23 @@ fn start_set(
 }
 
 /// Every contact node of c_h (all ranks', in c_h's global order) as the dense algorithm sees
-/// it: first dof row, normal, gap, d₀ = nᵀw₀, start flag, the free modes' normal parts G.
+/// it: first dof row, normal, gap, start flag, the free modes' normal parts G, position.
 struct Candidates {
     all: Vec<f64>,
     n: usize,
     mz: usize,
 }
 
-/// Values per candidate record: row, n (3), gap, d₀, start, G (6).
-const REC: usize = 13;
+/// Values per candidate record: row, n (3), gap, start, G (6), x (3).
+const REC: usize = 15;
 
 impl Candidates {
     /// One all-gather. Collective.
-    fn gather(
-        ctx: &Ctx,
-        b: &ContactBoundary,
-        free: &FreeModes,
-        start: &[bool],
-        w0: &[f64],
-        dim: usize,
-    ) -> Candidates {
+    fn gather(ctx: &Ctx, b: &ContactBoundary, free: &FreeModes, start: &[bool]) -> Candidates {
         let (z, modes) = (free.dirichlet_free(), free.rigid_modes());
         let mz = z.ncols();
         let mut mine = Vec::with_capacity(b.nodes.len() * REC);
         for (k, &a) in b.nodes.iter().zip(start) {
-            let d0: f64 = (0..dim).map(|j| k.frame.n[j] * w0[k.local_row + j]).sum();
             let row = modes.direction_row(&k.x, &k.frame.n);
             let mut gz = [0.0; 6];
             for (c, g) in gz.iter_mut().enumerate().take(mz) {
@@ -343,8 +373,9 @@ impl Candidates {
             }
             let n = k.frame.n;
             let flag = if a { 1.0 } else { 0.0 };
-            mine.extend_from_slice(&[k.row as f64, n[0], n[1], n[2], k.gap, d0, flag]);
+            mine.extend_from_slice(&[k.row as f64, n[0], n[1], n[2], k.gap, flag]);
             mine.extend_from_slice(&gz);
+            mine.extend_from_slice(&k.x);
         }
         let all = ctx.all_gather_varcount(&mine);
         let n = all.len() / REC;
@@ -363,23 +394,34 @@ impl Candidates {
     fn gap(&self, i: usize) -> f64 {
         self.rec(i)[4]
     }
-    fn d0(&self, i: usize) -> f64 {
-        self.rec(i)[5]
-    }
     fn start(&self, i: usize) -> bool {
-        self.rec(i)[6] != 0.0
+        self.rec(i)[5] != 0.0
     }
     fn g(&self, i: usize, c: usize) -> f64 {
-        self.rec(i)[7 + c]
+        self.rec(i)[6 + c]
+    }
+    fn x(&self, i: usize) -> [f64; 3] {
+        let r = self.rec(i);
+        [r[12], r[13], r[14]]
     }
 }
 
-/// The compliance C = Nᵀ K_p⁻¹ N on a growing candidate set (the matrix on rank 0 only).
+/// The compliance C = Nᵀ K_p⁻¹ N of a growing candidate set and d₀ = Nᵀ K_p⁻¹ f there, from
+/// the Schur complement S of K_p on every dof of the candidates (K_p⁻¹ restricted to them is
+/// S⁻¹): C = N_sᵀ S⁻¹ N_s, d₀ = N_sᵀ S⁻¹ r with r = f_s − K_sr K_rr⁻¹ f_r (MUMPS'
+/// condensation). The dense parts live on rank 0 only.
 struct Compliance {
     in_s: Vec<bool>,
     /// The candidates in the order of C's rows and columns.
     list: Vec<usize>,
     cmat: DMatrix<f64>,
+    d0: Vec<f64>,
+    /// S⁻¹ r and S⁻¹ N_s (rank 0), for the expansion.
+    x0: DVector<f64>,
+    sinv_n: DMatrix<f64>,
+    factor: Option<SchurFactor>,
+    /// MUMPS' analysis + factorisation in the last `grow` [s].
+    factorisation_seconds: f64,
 }
 
 impl Compliance {
@@ -388,84 +430,79 @@ impl Compliance {
             in_s: vec![false; n],
             list: Vec::new(),
             cmat: DMatrix::zeros(0, 0),
+            d0: Vec::new(),
+            x0: DVector::zeros(0),
+            sinv_n: DMatrix::zeros(0, 0),
+            factor: None,
+            factorisation_seconds: 0.0,
         }
     }
 
-    /// Adds the candidates `new`: their columns of K_p⁻¹ (all rows of the grown set; of the
-    /// new-new pairs only those on and below the diagonal, since K_p⁻¹ is symmetric and the
-    /// fewer rows a column asks for, the more of its backward solve MUMPS prunes) from MUMPS'
-    /// selected inverse. Returns the number of entries requested. Collective.
+    /// Adds the candidates `new` and factorises K_p (the reduced system's matrix, global size
+    /// `n_rows`) anew with the Schur complement on every dof of every candidate; then C and
+    /// d₀ (`rhs0`: this rank's rows of f). `Err` (the same on every rank): why the condensed
+    /// path gives up (MUMPS failed, S not positive definite). Collective.
     fn grow(
         &mut self,
         ctx: &Ctx,
         reduced: &ReducedSystem,
         cand: &Candidates,
         new: &[usize],
-        dim: usize,
-        n_rows: usize,
-    ) -> Result<usize, RunError> {
+        (dim, n_rows): (usize, usize),
+        rhs0: &[f64],
+    ) -> Result<(), String> {
         let root = ctx.rank == 0;
-        let old_len = self.list.len();
         for &i in new {
             self.in_s[i] = true;
         }
         self.list.extend_from_slice(new);
         let ns = self.list.len();
-        // (position in the list, global row, normal component) of every candidate dof
-        let dofs: Vec<(usize, usize, f64)> = self
+        let dofs: Vec<usize> = self
             .list
             .iter()
-            .enumerate()
-            .flat_map(|(q, &i)| {
-                (0..dim)
-                    .filter(move |&a| cand.normal(i, a) != 0.0)
-                    .map(move |a| (q, cand.row(i) + a, cand.normal(i, a)))
-            })
+            .flat_map(|&i| (0..dim).map(move |a| cand.row(i) + a))
             .collect();
-        let new_dofs: Vec<&(usize, usize, f64)> = dofs.iter().filter(|d| d.0 >= old_len).collect();
-        let old_rows: Vec<usize> = dofs.iter().filter(|d| d.0 < old_len).map(|d| d.1).collect();
-        let request: InverseRequest = if root {
-            new_dofs
-                .iter()
-                .map(|d| {
-                    let mut r: Vec<usize> = old_rows.clone();
-                    r.extend(new_dofs.iter().map(|e| e.1).filter(|&x| x >= d.1));
-                    r.sort_unstable();
-                    (d.1, r)
-                })
-                .collect()
-        } else {
-            Vec::new()
-        };
-        let entries = reduced
-            .ksp()
-            .mumps_inverse_entries(ctx.comm(), n_rows, root, &request)?;
+        self.factor = None; // the old factorisation's memory first
+        let t = Instant::now();
+        let factor = SchurFactor::factorise(ctx.comm(), reduced.matrix(), n_rows, &dofs, root);
+        self.factorisation_seconds = t.elapsed().as_secs_f64();
+        let mut factor =
+            factor.map_err(|e| format!("the Schur factorisation of K_p failed: {e}"))?;
+        let rhs_root = ctx.gather_to_root(rhs0);
+        let r = factor
+            .condense(&rhs_root)
+            .map_err(|e| format!("the condensation of f failed: {e}"))?;
+        let mut ok = vec![1.0];
         if root {
-            let of_row: std::collections::HashMap<usize, (usize, f64)> =
-                dofs.iter().map(|&(q, r, ni)| (r, (q, ni))).collect();
-            let mut grown = DMatrix::<f64>::zeros(ns, ns);
-            grown
-                .view_mut((0, 0), (old_len, old_len))
-                .copy_from(&self.cmat);
-            for (col, &&(qj, _, nj)) in new_dofs.iter().enumerate() {
-                let rj = request[col].0;
-                for (&ri, &v) in request[col].1.iter().zip(&entries[col]) {
-                    let (qi, ni) = of_row[&ri];
-                    let x = ni * nj * v;
-                    grown[(qi, qj)] += x;
-                    if qi >= old_len && ri != rj {
-                        grown[(qj, qi)] += x; // the mirror entry of a new-new pair
-                    }
+            let sdim = dofs.len();
+            let smat = DMatrix::from_column_slice(sdim, sdim, factor.schur());
+            let nmat = DMatrix::from_fn(sdim, ns, |row, q| {
+                if row / dim == q {
+                    cand.normal(self.list[q], row % dim)
+                } else {
+                    0.0
                 }
-            }
-            for qj in old_len..ns {
-                for qi in 0..old_len {
-                    grown[(qj, qi)] = grown[(qi, qj)]; // K_p⁻¹ symmetric
+            });
+            match smat.cholesky() {
+                Some(ch) => {
+                    self.sinv_n = ch.solve(&nmat);
+                    self.x0 = ch.solve(&DVector::from_column_slice(&r));
+                    let c = nmat.transpose() * &self.sinv_n;
+                    self.cmat = (&c + c.transpose()) * 0.5;
+                    self.d0 = (nmat.transpose() * &self.x0).as_slice().to_vec();
                 }
+                None => ok[0] = 0.0,
             }
-            self.cmat = grown;
         }
-        Ok(request.iter().map(|r| r.1.len()).sum())
+        ctx.broadcast_f64s(&mut ok);
+        self.factor = Some(factor);
+        if ok[0] == 0.0 {
+            return Err(format!(
+                "the Schur complement of K_p on the {} candidate dofs is not positive definite",
+                dofs.len()
+            ));
+        }
+        Ok(())
     }
 }
 
@@ -477,7 +514,7 @@ fn dense_round(
     comp: &Compliance,
     free: &FreeModes,
     s: &NewtonSettings,
-    active: &[bool],
+    (active, nested): (&[bool], bool),
 ) -> DenseRun {
     let (ns, mz) = (comp.list.len(), cand.mz);
     let mut packed: Vec<f64> = Vec::new();
@@ -489,12 +526,12 @@ fn dense_round(
             .collect();
         let list = &comp.list;
         let g = DMatrix::from_fn(ns, mz, |q, c| cand.g(list[q], c));
-        let d0: Vec<f64> = list.iter().map(|&i| cand.d0(i)).collect();
+        let d0 = &comp.d0;
         let gap: Vec<f64> = list.iter().map(|&i| cand.gap(i)).collect();
         let start: Vec<bool> = list.iter().map(|&i| active[i]).collect();
         let dense = Dense {
             cmat: &comp.cmat,
-            d0: &d0,
+            d0,
             gap: &gap,
             g: &g,
             phi: &phi,
@@ -502,7 +539,13 @@ fn dense_round(
             c: s.c,
             max_steps: s.section.max_steps,
         };
-        packed = dense.run(start).pack(ns, mz);
+        packed = if nested {
+            let x: Vec<[f64; 3]> = list.iter().map(|&i| cand.x(i)).collect();
+            dense.run_nested(start, &x)
+        } else {
+            dense.run(start)
+        }
+        .pack(ns, mz);
     }
     ctx.broadcast_f64s(&mut packed);
     DenseRun::unpack(&packed, ns, mz)
@@ -555,22 +598,22 @@ struct Expanded {
     changed: Vec<u64>,
 }
 
-/// Expansion: w = K_p⁻¹ (f − N λ_n) (one triangular solve; the solution stays in `reduced`),
+/// Expansion: w = K_p⁻¹ (f − N λ_n) (MUMPS' condensation and expansion with the Schur
+/// variables' part S⁻¹ (r − N_s λ_n) = x₀ − S⁻¹N_s λ_n; w goes into `reduced`),
 /// ρ = R z α normalised at the pins the plain path chooses for the set (the modes the set
 /// leaves free are balanced, else the dense iteration had not stopped), then (3.28) and (3.23)
 /// on w with the gaps after ρ, as the plain path does, so that a large rigid motion does not
-/// round λ. `(lambda, active)` of every contact node in c_h's global order. Collective.
-#[allow(clippy::too_many_arguments)]
+/// round λ. `(lambda, active)` of every contact node in c_h's global order. The inner `Err`:
+/// MUMPS' solve failed (the plain path takes over). Collective.
 fn expand(
     ctx: &Ctx,
     p: &ContactProblem,
     reduced: &mut ReducedSystem,
-    s: &NewtonSettings,
-    free: &FreeModes,
+    (s, free, comp): (&NewtonSettings, &FreeModes, &mut Compliance),
     rhs0: &[f64],
     (lambda, active): (&[f64], &[bool]),
     alpha: &[f64],
-) -> Result<Expanded, RunError> {
+) -> Result<Result<Expanded, String>, RunError> {
     let (mesh, layout, b, sys) = (p.mesh, p.layout, p.boundary, p.sys);
     let (dim, off) = (mesh.dim, b.offset);
     let mut rhs = rhs0.to_vec();
@@ -579,14 +622,21 @@ fn expand(
             rhs[k.local_row + j] -= k.frame.n[j] * lambda[off + i];
         }
     }
+    let x_s: Vec<f64> = if ctx.rank == 0 {
+        let lam = DVector::from_iterator(comp.list.len(), comp.list.iter().map(|&i| lambda[i]));
+        (&comp.x0 - &comp.sinv_n * lam).as_slice().to_vec()
+    } else {
+        Vec::new()
+    };
+    let rhs_root = ctx.gather_to_root(&rhs);
+    let factor = comp.factor.as_mut().expect("factorised by grow");
+    let w_root = match factor.expand(&rhs_root, &x_s) {
+        Ok(w) => w,
+        Err(e) => return Ok(Err(format!("the expansion solve failed: {e}"))),
+    };
+    let w = ctx.scatter_from_root(&w_root, rhs.len());
     reduced.set_rhs_local(&rhs)?;
-    let solved = reduced.solve_current()?;
-    if !solved.info.converged() {
-        return Err(RunError::Failed(format!(
-            "the expansion solve of the condensed contact solve failed ({})",
-            solved.info.reason_name
-        )));
-    }
+    reduced.set_solution_local(&w)?;
     let z = free.dirichlet_free();
     let mut rho = [0.0; 6];
     for (j, r) in rho.iter_mut().enumerate().take(free.rigid_modes().m) {
@@ -624,12 +674,12 @@ fn expand(
         .filter(|(_, (a, b))| a != b)
         .map(|(i, _)| (off + i) as u64)
         .collect();
-    Ok(Expanded {
+    Ok(Ok(Expanded {
         it,
         rho,
         pins: fin.pins().to_vec(),
         changed: ctx.all_gather_varcount(&changed_here),
-    })
+    }))
 }
 
 /// Algorithm 1 on the condensed system (module note): C (n × n), d₀, the gaps, the free
@@ -664,6 +714,8 @@ pub struct DenseRun {
     pub u_n: Vec<f64>,
     pub steps: Vec<(usize, usize, usize, f64, f64)>,
     pub end: End,
+    /// The nested start's coarse levels, coarsest first: (nodes, steps).
+    pub coarse: Vec<(usize, usize)>,
 }
 
 impl DenseRun {
@@ -675,13 +727,16 @@ impl DenseRun {
             End::NoSupport(r) => (1.0, *r),
             End::Fallback(_) => (2.0, 0.0),
         };
-        v.extend_from_slice(&[code, x, self.steps.len() as f64]);
+        v.extend_from_slice(&[code, x, self.steps.len() as f64, self.coarse.len() as f64]);
         v.extend(self.active.iter().map(|&a| if a { 1.0 } else { 0.0 }));
         v.extend_from_slice(&self.lambda);
         v.extend_from_slice(&self.u_n);
         v.extend_from_slice(&self.alpha[..mz]);
         for s in &self.steps {
             v.extend_from_slice(&[s.0 as f64, s.1 as f64, s.2 as f64, s.3, s.4]);
+        }
+        for c in &self.coarse {
+            v.extend_from_slice(&[c.0 as f64, c.1 as f64]);
         }
         if let End::Fallback(why) = &self.end {
             v.extend(why.bytes().map(f64::from));
@@ -690,8 +745,8 @@ impl DenseRun {
     }
 
     fn unpack(v: &[f64], n: usize, mz: usize) -> DenseRun {
-        let steps_n = v[2] as usize;
-        let mut p = 3;
+        let (steps_n, coarse_n) = (v[2] as usize, v[3] as usize);
+        let mut p = 4;
         let mut take = |len: usize| {
             let s = &v[p..p + len];
             p += len;
@@ -705,6 +760,12 @@ impl DenseRun {
             .map(|_| {
                 let s = take(5);
                 (s[0] as usize, s[1] as usize, s[2] as usize, s[3], s[4])
+            })
+            .collect();
+        let coarse = (0..coarse_n)
+            .map(|_| {
+                let c = take(2);
+                (c[0] as usize, c[1] as usize)
             })
             .collect();
         let end = match v[0] as i32 {
@@ -724,6 +785,7 @@ impl DenseRun {
             u_n,
             steps,
             end,
+            coarse,
         }
     }
 }
@@ -745,6 +807,7 @@ impl Dense<'_> {
             u_n,
             steps,
             end,
+            coarse: Vec::new(),
         };
         for step in 1..=self.max_steps {
             let t = Instant::now();
@@ -813,6 +876,50 @@ impl Dense<'_> {
         )
     }
 
+    /// Nested iteration: Algorithm 1 first on coarse subsets of the candidates (`coarsen`,
+    /// coarsest first; each subset's problem holds the contact conditions at its nodes only,
+    /// with the exact compliance C between them), each level's solution starting the next
+    /// finer one through (3.23) evaluated at every candidate (λ_n = 0 off the subset,
+    /// u_n = d₀ − C λ_n + G α); then Algorithm 1 on all candidates from there. The coarse
+    /// steps are dense solves of at most half the size; the result's `steps` are the fine
+    /// ones, `coarse` (nodes, steps) per level. A coarse level that does not converge leaves
+    /// the set as it was. `x`: the candidates' coordinates. Local.
+    pub fn run_nested(&self, start: Vec<bool>, x: &[[f64; 3]]) -> DenseRun {
+        let levels = coarsen(x, self.gap);
+        let mut active = start;
+        let mut coarse = Vec::new();
+        for idx in levels.iter().rev() {
+            let sub_c = DMatrix::from_fn(idx.len(), idx.len(), |r, q| self.cmat[(idx[r], idx[q])]);
+            let sub_g = DMatrix::from_fn(idx.len(), self.g.ncols(), |r, c| self.g[(idx[r], c)]);
+            let pick = |v: &[f64]| idx.iter().map(|&i| v[i]).collect::<Vec<f64>>();
+            let (d0, gap) = (pick(self.d0), pick(self.gap));
+            let sub = Dense {
+                cmat: &sub_c,
+                d0: &d0,
+                gap: &gap,
+                g: &sub_g,
+                ..*self
+            };
+            let run = sub.run(idx.iter().map(|&i| active[i]).collect());
+            coarse.push((idx.len(), run.steps.len()));
+            if run.end != End::Converged {
+                continue;
+            }
+            let mut lambda = DVector::<f64>::zeros(self.d0.len());
+            for (r, &i) in idx.iter().enumerate() {
+                lambda[i] = run.lambda[r];
+            }
+            let alpha = DVector::from_column_slice(&run.alpha);
+            let un = DVector::from_column_slice(self.d0) - self.cmat * &lambda + self.g * alpha;
+            active = (0..self.d0.len())
+                .map(|i| normal_active(un[i], lambda[i], self.gap[i], self.c)) // (3.23)
+                .collect();
+        }
+        let mut run = self.run(active);
+        run.coarse = coarse;
+        run
+    }
+
     /// The system of set A: [C_AA, −H; −Hᵀ, 0] [λ_A; β] = [g_A + d₀_A; −V_fᵀ φ] with H = G_A V_f,
     /// V_f the modes A fixes (α = V_f β; the others stay pinned). Returns λ_n (0 off A), α,
     /// u_n = d₀ − C λ + G α, and V_u (the modes A leaves free, m_z × ·). `None` if singular.
@@ -847,8 +954,16 @@ impl Dense<'_> {
         let x = if dimn == 0 {
             DVector::zeros(0)
         } else {
-            let lu = m.lu();
-            let x = lu.solve(&rhs)?;
+            let lu = m.clone().lu();
+            let mut x = lu.solve(&rhs)?;
+            // Two steps of iterative refinement: the balance rows' residual (the load the
+            // pins would carry, i.e. the total contact force) to round-off of their own
+            // scale, also when the gaps and α hold a large rigid motion (a body 700 units
+            // away: the rows' right-hand sides are ~700 while λ's effect is ~1e-3).
+            for _ in 0..2 {
+                let r = &rhs - &m * &x;
+                x += lu.solve(&r)?;
+            }
             if !x.iter().all(|v| v.is_finite()) {
                 return None;
             }
@@ -906,6 +1021,62 @@ impl Dense<'_> {
         Some(best.map(|(_, i)| i).ok_or(norm))
     }
 }
+
+/// The coarse subsets of the nested iteration, finest first, for points `x` (the candidates):
+/// level k keeps, greedily in the order of increasing gap (the first contact first), the
+/// points of level k − 1 farther than r_k = 2^k · 0.99 h from every point kept before, h the
+/// median distance of a point to its nearest neighbour (sampled): about every second point of
+/// a contact line, every fourth of a contact surface, whatever the mesh. Levels stop at
+/// fewer than COARSEST points; a radius that keeps more than 3/4 of the level before (graded
+/// meshes) makes no level, the next radius is tried. Local.
+fn coarsen(x: &[[f64; 3]], gap: &[f64]) -> Vec<Vec<usize>> {
+    let n = x.len();
+    if n < 2 * COARSEST {
+        return Vec::new();
+    }
+    let d2 = |a: &[f64; 3], b: &[f64; 3]| (0..3).map(|k| (a[k] - b[k]).powi(2)).sum::<f64>();
+    let step = (n / 256).max(1);
+    let mut nn: Vec<f64> = (0..n)
+        .step_by(step)
+        .map(|i| {
+            (0..n)
+                .filter(|&j| j != i)
+                .map(|j| d2(&x[i], &x[j]))
+                .fold(f64::INFINITY, f64::min)
+                .sqrt()
+        })
+        .collect();
+    nn.sort_by(|a, b| a.total_cmp(b));
+    let h = nn[nn.len() / 2];
+    if !(h > 0.0 && h.is_finite()) {
+        return Vec::new();
+    }
+    let mut order: Vec<usize> = (0..n).collect();
+    order.sort_by(|&a, &b| gap[a].total_cmp(&gap[b]).then(a.cmp(&b)));
+    let mut levels: Vec<Vec<usize>> = Vec::new();
+    let mut prev: Vec<usize> = order; // level 0: every point, by gap
+    let mut r = 0.99 * h;
+    loop {
+        r *= 2.0;
+        let mut kept: Vec<usize> = Vec::new();
+        for &i in &prev {
+            if kept.iter().all(|&j| d2(&x[i], &x[j]) >= r * r) {
+                kept.push(i);
+            }
+        }
+        if kept.len() < COARSEST {
+            break;
+        }
+        if 4 * kept.len() <= 3 * prev.len() {
+            levels.push(kept.clone());
+            prev = kept;
+        }
+    }
+    levels
+}
+
+/// The nested iteration's coarsest level has at least this many points.
+const COARSEST: usize = 8;
 
 /// The modes (columns of the m_z × m_z identity's eigenbasis of the Gram matrix `gram`) that
 /// a set fixes (eigenvalue above 1e-9 of the largest, at least 1e-9) and those it leaves free.
@@ -1012,6 +1183,82 @@ mod tests {
     }
 
     #[test]
+    fn coarsening_of_a_line_halves_it_and_keeps_the_first_contact() {
+        // 201 points at spacing 0.01 on a line, the smallest gap at point 137
+        let x: Vec<[f64; 3]> = (0..201).map(|i| [0.01 * i as f64, 0.0, 0.0]).collect();
+        let gap: Vec<f64> = (0..201).map(|i| (i as f64 - 137.0).abs()).collect();
+        let levels = coarsen(&x, &gap);
+        assert!(levels.len() >= 3, "{} levels", levels.len());
+        let mut before = x.len();
+        for (k, l) in levels.iter().enumerate() {
+            assert!(l.contains(&137), "level {k} lost the first contact");
+            assert!(l.len() >= COARSEST);
+            assert!(
+                l.len() * 4 <= before * 3,
+                "level {k}: {} of {before}",
+                l.len()
+            );
+            // spread: the kept points are 2^(k+1) spacings apart, so about n / 2^(k+1)
+            let r = 0.01 * 0.99 * f64::powi(2.0, k as i32 + 1);
+            for (a, &i) in l.iter().enumerate() {
+                for &j in &l[..a] {
+                    assert!((x[i][0] - x[j][0]).abs() >= r * (1.0 - 1e-12));
+                }
+            }
+            assert!(
+                l.len() <= 201 / (1 << (k + 1)) + 2,
+                "level {k}: {}",
+                l.len()
+            );
+            before = l.len();
+        }
+    }
+
+    #[test]
+    fn nested_run_ends_in_the_plain_runs_solution_in_fewer_fine_steps() {
+        // A coupled line of 129 nodes pressed onto a flat obstacle: C_ij = exp(−|i−j| / 8)
+        // (positive definite), d₀ a parabola deepest at the middle.
+        let n = 129;
+        let cmat = DMatrix::from_fn(n, n, |i, j| (-(i as f64 - j as f64).abs() / 8.0).exp());
+        let d0: Vec<f64> = (0..n)
+            .map(|i| {
+                let t = (i as f64 - 64.0) / 64.0;
+                -1.0 + 2.0 * t * t
+            })
+            .collect();
+        let gap = vec![0.0; n];
+        let x: Vec<[f64; 3]> = (0..n).map(|i| [i as f64, 0.0, 0.0]).collect();
+        let g = DMatrix::<f64>::zeros(n, 0);
+        let dense = Dense {
+            cmat: &cmat,
+            d0: &d0,
+            gap: &gap,
+            g: &g,
+            phi: &[],
+            load_scale: 1.0,
+            c: 1.0,
+            max_steps: 50,
+        };
+        let mut start = vec![false; n];
+        start[64] = true;
+        let plain = dense.run(start.clone());
+        let nested = dense.run_nested(start, &x);
+        assert_eq!(plain.end, End::Converged);
+        assert_eq!(nested.end, End::Converged);
+        assert_eq!(nested.active, plain.active);
+        for i in 0..n {
+            assert!((nested.lambda[i] - plain.lambda[i]).abs() <= 1e-12);
+        }
+        assert!(!nested.coarse.is_empty());
+        assert!(
+            nested.steps.len() < plain.steps.len(),
+            "fine steps: nested {} plain {}",
+            nested.steps.len(),
+            plain.steps.len()
+        );
+    }
+
+    #[test]
     fn pack_round_trip() {
         let run = DenseRun {
             active: vec![true, false],
@@ -1020,8 +1267,10 @@ mod tests {
             u_n: vec![0.0, 0.3],
             steps: vec![(1, 0, 1, 0.1, 0.01), (2, 1, 0, 0.0, 0.02)],
             end: End::Fallback("cycling".into()),
+            coarse: vec![(16, 3), (32, 2)],
         };
         let back = DenseRun::unpack(&run.pack(2, 1), 2, 1);
+        assert_eq!(back.coarse, run.coarse);
         assert_eq!(back.active, run.active);
         assert_eq!(back.lambda, run.lambda);
         assert_eq!(back.alpha, run.alpha);

@@ -291,7 +291,9 @@ pub fn solve(
     let (contact, table) = final_state(ctx, sys, &b, &nr, friction, dim)?;
     let mut newton = newton_summary(settings, solver_section, c, &mut nr, outer_steps, previous);
     if let Some(cs) = condensed_summary {
-        newton.factorisations += 1; // K_p's (the dense steps factorise nothing sparse)
+        // K_p's with the Schur complement, one per round of candidates (the dense steps
+        // factorise nothing sparse)
+        newton.factorisations += cs.factorisations;
         newton.condensed = Some(cs);
     }
     let delta = match previous.zip(prev_u) {
@@ -365,7 +367,7 @@ fn run_method(
             let mut reduced = ReducedSystem::new(ctx, sys, b, coords, dim)?;
             let friction = settings.tresca_threshold.is_some() || settings.coulomb.is_some();
             let condense = !friction
-                && solver_section.reuse == Reuse::Condensed
+                && matches!(solver_section.reuse, Reuse::Auto | Reuse::Condensed)
                 && b.n_global > 0
                 && b.n_global <= condensed::MAX_CANDIDATES
                 && reduced.factorises()?;

@@ -899,6 +899,11 @@ impl ReducedSystem {
         Ok(pc == "lu" || pc == "cholesky")
     }
 
+    /// The matrix written last (the condensed path hands K_p to MUMPS directly).
+    pub fn matrix(&self) -> &Matrix {
+        &self.s
+    }
+
     /// The solver (the condensed path reads entries of the inverse from its factorisation).
     pub fn ksp(&self) -> &crate::petsc::Ksp {
         &self.ls.ksp

@@ -103,7 +103,24 @@ pub fn mpi_env(cmd: &mut Command) {
         // Yield instead of busy-polling when idle: the test machine is shared.
         .env("OMPI_MCA_mpi_yield_when_idle", "1")
         .env("OPENBLAS_NUM_THREADS", "1")
-        .env("OMP_NUM_THREADS", "1");
+        .env("OMP_NUM_THREADS", "1")
+        // Every mpirun its own session directory: with one shared /tmp/ompi.<host>.<uid>, an
+        // mpirun that cleans up while another starts can remove the parent of the other's
+        // new session directory ("orte_session_dir failed"; seen once in a full run).
+        .env("OMPI_MCA_orte_tmpdir_base", session_dir());
+}
+
+/// A new, empty directory for one mpirun's session files.
+fn session_dir() -> PathBuf {
+    use std::sync::atomic::{AtomicUsize, Ordering};
+    static NEXT: AtomicUsize = AtomicUsize::new(0);
+    let d = std::env::temp_dir().join(format!(
+        "signorini-tests-ompi/{}-{}",
+        std::process::id(),
+        NEXT.fetch_add(1, Ordering::Relaxed)
+    ));
+    std::fs::create_dir_all(&d).expect("creating an Open MPI session directory");
+    d
 }
 
 /// `mpirun -n np --oversubscribe program args...` with the MPI environment set.

@@ -1,0 +1,229 @@
+//! Direct calls to MUMPS (`dmumps_c`, the library PETSc itself uses) for the one thing PETSc's
+//! interface offers on a single process only: the Schur complement of a distributed matrix
+//! (ICNTL(19)), with the condensation and expansion solves (ICNTL(26)).
+//!
+//! The matrix is handed over as it stands in a PETSc [`Matrix`]: every rank its own rows,
+//! in MUMPS' distributed assembled format (ICNTL(18) = 3), lower triangle only (symmetric,
+//! SYM = 2: LDLᵀ as PETSc's Cholesky with MUMPS). The Schur complement comes back centralised
+//! on the host (rank 0, ICNTL(19) = 1), the right-hand sides and solutions of the solve phase
+//! too (ICNTL(20) = ICNTL(21) = 0): vectors of the global size on rank 0 only.
+
+mod raw {
+    #![allow(
+        non_upper_case_globals,
+        non_camel_case_types,
+        non_snake_case,
+        dead_code,
+        clippy::all
+    )]
+    include!(concat!(env!("OUT_DIR"), "/mumps_bindings.rs"));
+}
+
+use super::{own_error, MPI_Comm, Matrix, Result};
+
+/// Per cent of workspace over MUMPS' estimate (ICNTL(14)), as the direct preset gives PETSc.
+const WORKSPACE_PERCENT: i32 = 40;
+
+/// A MUMPS instance holding the LDLᵀ factorisation of a symmetric matrix whose Schur
+/// complement on a list of variables was computed instead of factorised.
+pub struct SchurFactor {
+    id: Box<raw::DMUMPS_STRUC_C>,
+    irn: Vec<i32>,
+    jcn: Vec<i32>,
+    vals: Vec<f64>,
+    listvar: Vec<i32>,
+    schur: Vec<f64>,
+    rhs: Vec<f64>,
+    redrhs: Vec<f64>,
+    n: usize,
+    size_schur: usize,
+    root: bool,
+    initialised: bool,
+}
+
+impl SchurFactor {
+    /// Analysis and numeric factorisation of the symmetric `mat` (global size `n`; its owned
+    /// rows read here, lower triangle) with the Schur complement on the global rows
+    /// `schur_rows` (0-based, the same list on every rank, no duplicates). `root`: this rank
+    /// is rank 0 of `comm` (MUMPS' host). Collective; MUMPS' error codes are global, so
+    /// every rank returns the same `Err`.
+    pub fn factorise(
+        comm: MPI_Comm,
+        mat: &Matrix,
+        n: usize,
+        schur_rows: &[usize],
+        root: bool,
+    ) -> Result<SchurFactor> {
+        if n >= i32::MAX as usize {
+            return Err(own_error(format!(
+                "SchurFactor: {n} unknowns exceed MUMPS' 32-bit indices"
+            )));
+        }
+        let (lo, hi) = mat.ownership_range()?;
+        let (mut irn, mut jcn, mut vals) = (Vec::new(), Vec::new(), Vec::new());
+        for row in lo..hi {
+            mat.with_row(row, |cols, v| {
+                for (&c, &x) in cols.iter().zip(v) {
+                    if (c as usize) <= row {
+                        irn.push(row as i32 + 1);
+                        jcn.push(c as usize as i32 + 1); // PetscInt may be 64-bit
+                        vals.push(x);
+                    }
+                }
+            })?;
+        }
+        let size_schur = schur_rows.len();
+        let mut f = SchurFactor {
+            // SAFETY: DMUMPS_STRUC_C is plain data (integers, reals, raw pointers, char
+            // arrays); all-zero is MUMPS' "nothing set" state, filled by JOB = −1.
+            id: Box::new(unsafe { std::mem::zeroed() }),
+            irn,
+            jcn,
+            vals,
+            listvar: schur_rows.iter().map(|&r| r as i32 + 1).collect(),
+            schur: if root {
+                vec![0.0; size_schur * size_schur]
+            } else {
+                Vec::new()
+            },
+            rhs: Vec::new(),
+            redrhs: Vec::new(),
+            n,
+            size_schur,
+            root,
+            initialised: false,
+        };
+        // SAFETY: MPI_Comm_c2f only converts the handle.
+        f.id.comm_fortran = unsafe { super::ffi::MPI_Comm_c2f(comm) };
+        f.id.par = 1;
+        f.id.sym = 2;
+        f.call(-1)?;
+        f.initialised = true;
+        let icntl = &mut f.id.icntl;
+        icntl[0] = -1; // ICNTL(1..4): no output
+        icntl[1] = -1;
+        icntl[2] = -1;
+        icntl[3] = 0;
+        icntl[13] = WORKSPACE_PERCENT; // ICNTL(14)
+        icntl[17] = 3; // ICNTL(18): distributed assembled matrix
+        icntl[18] = 1; // ICNTL(19): Schur complement, centralised on the host
+        f.id.n = n as i32;
+        f.id.nz_loc = f.irn.len() as i32;
+        f.id.nnz_loc = f.irn.len() as i64;
+        f.id.irn_loc = f.irn.as_mut_ptr();
+        f.id.jcn_loc = f.jcn.as_mut_ptr();
+        f.id.a_loc = f.vals.as_mut_ptr();
+        f.id.size_schur = size_schur as i32;
+        f.id.listvar_schur = f.listvar.as_mut_ptr();
+        if root {
+            f.id.schur = f.schur.as_mut_ptr();
+            f.id.schur_lld = size_schur as i32;
+        }
+        f.call(4)?; // analysis + factorisation
+                    // The solve phase does not read the matrix (no iterative refinement, ICNTL(10) = 0):
+                    // its copy is freed.
+        f.id.irn_loc = std::ptr::null_mut();
+        f.id.jcn_loc = std::ptr::null_mut();
+        f.id.a_loc = std::ptr::null_mut();
+        f.irn = Vec::new();
+        f.jcn = Vec::new();
+        f.vals = Vec::new();
+        Ok(f)
+    }
+
+    /// The Schur complement S (size_schur², symmetric, column-major = row-major) on the host;
+    /// empty elsewhere. MUMPS returns the lower triangle by rows for a symmetric matrix; it is
+    /// mirrored here.
+    pub fn schur(&mut self) -> &[f64] {
+        let s = self.size_schur;
+        if self.root {
+            for i in 0..s {
+                for j in 0..i {
+                    self.schur[j * s + i] = self.schur[i * s + j];
+                }
+            }
+        }
+        &self.schur
+    }
+
+    /// Condensation (ICNTL(26) = 1): the right-hand side `rhs` (global size, on the host;
+    /// ignored elsewhere) reduced onto the Schur variables, b_s − K_sr K_rr⁻¹ b_r, returned on
+    /// the host (empty elsewhere). Collective.
+    pub fn condense(&mut self, rhs: &[f64]) -> Result<Vec<f64>> {
+        self.prepare_solve(rhs, None)?;
+        self.id.icntl[25] = 1;
+        self.call(3)?;
+        Ok(if self.root {
+            self.redrhs.clone()
+        } else {
+            Vec::new()
+        })
+    }
+
+    /// Condensation of `rhs` followed by the expansion (ICNTL(26) = 2) of the Schur
+    /// variables' solution `x_s` (on the host): the solution of the whole system, on the
+    /// host (empty elsewhere). `x_s` must solve S x_s = (the condensed `rhs`). Collective.
+    pub fn expand(&mut self, rhs: &[f64], x_s: &[f64]) -> Result<Vec<f64>> {
+        self.condense(rhs)?;
+        self.prepare_solve(rhs, Some(x_s))?;
+        self.id.icntl[25] = 2;
+        self.call(3)?;
+        Ok(if self.root {
+            std::mem::take(&mut self.rhs)
+        } else {
+            Vec::new()
+        })
+    }
+
+    fn prepare_solve(&mut self, rhs: &[f64], x_s: Option<&[f64]>) -> Result<()> {
+        if self.root {
+            if rhs.len() != self.n || x_s.is_some_and(|x| x.len() != self.size_schur) {
+                return Err(own_error("SchurFactor: right-hand side of the wrong size"));
+            }
+            self.rhs = rhs.to_vec();
+            self.redrhs = match x_s {
+                Some(x) => x.to_vec(),
+                None => vec![0.0; self.size_schur],
+            };
+            self.id.rhs = self.rhs.as_mut_ptr();
+            self.id.lrhs = self.n as i32;
+            self.id.redrhs = self.redrhs.as_mut_ptr();
+            self.id.lredrhs = self.size_schur as i32;
+        }
+        self.id.nrhs = 1;
+        self.id.icntl[19] = 0; // ICNTL(20): dense centralised right-hand side
+        self.id.icntl[20] = 0; // ICNTL(21): centralised solution
+        Ok(())
+    }
+
+    /// One MUMPS call with `job`; INFOG(1) < 0 is an error (the same on every rank).
+    fn call(&mut self, job: i32) -> Result<()> {
+        self.id.job = job;
+        // SAFETY: every array the structure points to is owned by `self` and outlives the
+        // call; the structure was initialised by JOB = −1 (or is being initialised by it).
+        unsafe { raw::dmumps_c(&mut *self.id) };
+        let (i1, i2) = (self.id.infog[0], self.id.infog[1]);
+        if i1 < 0 {
+            return Err(own_error(format!(
+                "MUMPS (JOB = {job}) failed: INFOG(1) = {i1}, INFOG(2) = {i2}"
+            )));
+        }
+        Ok(())
+    }
+
+    /// Global size of the Schur complement.
+    pub fn size_schur(&self) -> usize {
+        self.size_schur
+    }
+}
+
+impl Drop for SchurFactor {
+    fn drop(&mut self) {
+        if self.initialised {
+            self.id.job = -2;
+            // SAFETY: frees MUMPS' own data of an initialised instance (collective, as its
+            // creation was: every rank drops its SchurFactor on the same path).
+            unsafe { raw::dmumps_c(&mut *self.id) };
+        }
+    }
+}

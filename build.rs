@@ -94,10 +94,10 @@ fn main() {
         // PT-Scotch: a distributed graph partitioned under an explicit context (threads,
         // determinism, seed); see petsc::scotch_partition.
         .allowlist_function(
-            "SCOTCH_(context(Init|Exit|OptionSetNum|RandomClone|RandomSeed|ThreadSpawn|BindDgraph)|dgraph(Init|Exit|Build|Check|Part)|strat(Init|Exit|DgraphMapBuild))",
+            "SCOTCH_(context(Init|Exit|OptionSetNum|RandomClone|RandomSeed|ThreadSpawn|BindDgraph|BindGraph)|dgraph(Init|Exit|Build|Check|Part)|graph(Init|Exit|Build|Check|Order)|strat(Init|Exit|DgraphMapBuild|GraphOrderBuild))",
         )
         .allowlist_var("SCOTCH_(STRAT|OPTIONNUM)[A-Z]+")
-        .allowlist_type("SCOTCH_(Num|Context|Dgraph|Strat)")
+        .allowlist_type("SCOTCH_(Num|Context|Dgraph|Graph|Strat)")
         .blocklist_type("MPI_.*")
         .blocklist_type("ompi_.*")
         .blocklist_item("FP_.*")

@@ -117,7 +117,7 @@ impl<'a> Ctx<'a> {
 
     /// The concatenation of every rank's slice, in rank order, on rank 0 (empty elsewhere;
     /// one Gather of the counts, one Gatherv). Collective.
-    pub fn gather_to_root(&self, mine: &[f64]) -> Vec<f64> {
+    pub fn gather_to_root<T: Equivalence + Default + Clone>(&self, mine: &[T]) -> Vec<T> {
         let root = self.world.process_at_rank(0);
         let n = mine.len() as i32;
         if self.rank != 0 {
@@ -131,7 +131,7 @@ impl<'a> Ctx<'a> {
             .iter()
             .map(|&d| d as i32)
             .collect();
-        let mut all = vec![0.0; counts.iter().map(|&c| c as usize).sum()];
+        let mut all = vec![T::default(); counts.iter().map(|&c| c as usize).sum()];
         {
             let mut part = PartitionMut::new(&mut all[..], counts, displs);
             root.gather_varcount_into_root(mine, &mut part);

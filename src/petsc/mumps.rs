@@ -32,6 +32,7 @@ pub struct SchurFactor {
     jcn: Vec<i32>,
     vals: Vec<f64>,
     listvar: Vec<i32>,
+    perm: Vec<i32>,
     schur: Vec<f64>,
     rhs: Vec<f64>,
     redrhs: Vec<f64>,
@@ -47,11 +48,15 @@ impl SchurFactor {
     /// `schur_rows` (0-based, the same list on every rank, no duplicates). `root`: this rank
     /// is rank 0 of `comm` (MUMPS' host). Collective; MUMPS' error codes are global, so
     /// every rank returns the same `Err`.
+    /// `order`: an elimination order for MUMPS (ICNTL(7) = 1; `Some` on every rank, the
+    /// positions read on the host only: order[i] = the 0-based position of variable i, the
+    /// Schur variables last), or `None` for MUMPS' own choice (with a Schur complement that is
+    /// AMD whatever ICNTL(7) asks; measured).
     pub fn factorise(
         comm: MPI_Comm,
         mat: &Matrix,
-        n: usize,
-        schur_rows: &[usize],
+        (n, schur_rows): (usize, &[usize]),
+        order: Option<&[usize]>,
         root: bool,
     ) -> Result<SchurFactor> {
         if n >= i32::MAX as usize {
@@ -88,6 +93,10 @@ impl SchurFactor {
             },
             rhs: Vec::new(),
             redrhs: Vec::new(),
+            perm: match order {
+                Some(o) if root => o.iter().map(|&p| p as i32 + 1).collect(),
+                _ => Vec::new(),
+            },
             n,
             size_schur,
             root,
@@ -119,15 +128,23 @@ impl SchurFactor {
             f.id.schur = f.schur.as_mut_ptr();
             f.id.schur_lld = size_schur as i32;
         }
+        // ICNTL(7) and PERM_IN are read on the host only; an order of the wrong length is
+        // ignored there (MUMPS' own ordering) rather than read out of bounds.
+        if root && f.perm.len() == n {
+            f.id.icntl[6] = 1; // ICNTL(7): the order given in PERM_IN
+            f.id.perm_in = f.perm.as_mut_ptr();
+        }
         f.call(4)?; // analysis + factorisation
                     // The solve phase does not read the matrix (no iterative refinement, ICNTL(10) = 0):
                     // its copy is freed.
         f.id.irn_loc = std::ptr::null_mut();
         f.id.jcn_loc = std::ptr::null_mut();
         f.id.a_loc = std::ptr::null_mut();
+        f.id.perm_in = std::ptr::null_mut();
         f.irn = Vec::new();
         f.jcn = Vec::new();
         f.vals = Vec::new();
+        f.perm = Vec::new();
         Ok(f)
     }
 
@@ -226,4 +243,110 @@ impl Drop for SchurFactor {
             unsafe { raw::dmumps_c(&mut *self.id) };
         }
     }
+}
+
+/// A fill-reducing ordering of a graph (nested dissection by Scotch's default ordering
+/// strategy, sequential, under a context with one thread, deterministic mode and a fixed seed:
+/// the same graph gives the same order on every run). The graph: CSR rows `xadj`, `adjncy`
+/// (0-based, symmetric, no self-loops). Returns `perm` with perm[v] = the position of vertex v
+/// in the elimination order. Local.
+pub fn nested_dissection(xadj: &[usize], adjncy: &[usize]) -> Result<Vec<usize>> {
+    use super::ffi;
+    type Num = ffi::SCOTCH_Num;
+    let n = xadj.len().saturating_sub(1);
+    if xadj.first() != Some(&0) || xadj[n] != adjncy.len() || adjncy.iter().any(|&v| v >= n) {
+        return Err(own_error("nested_dissection: malformed CSR graph"));
+    }
+    let mut vert: Vec<Num> = xadj.iter().map(|&x| x as Num).collect();
+    let mut edge: Vec<Num> = adjncy.iter().map(|&x| x as Num).collect();
+    edge.reserve(1); // a valid pointer even when empty
+    let mut perm: Vec<Num> = vec![0; n.max(1)];
+    // SAFETY: the structures are boxed and initialised before use, released on every path
+    // below (in reverse order); Scotch reads `vert`/`edge` (which outlive the graphs) and
+    // writes `perm` (n entries).
+    unsafe {
+        let mut context: Box<ffi::SCOTCH_Context> = Box::new(std::mem::zeroed());
+        let mut graph: Box<ffi::SCOTCH_Graph> = Box::new(std::mem::zeroed());
+        let mut bound: Box<ffi::SCOTCH_Graph> = Box::new(std::mem::zeroed());
+        let mut strat: Box<ffi::SCOTCH_Strat> = Box::new(std::mem::zeroed());
+        super::scotch_check(ffi::SCOTCH_contextInit(&mut *context), "SCOTCH_contextInit")?;
+        let result = (|| -> Result<()> {
+            super::scotch_check(
+                ffi::SCOTCH_contextThreadSpawn(&mut *context, 1, std::ptr::null()),
+                "SCOTCH_contextThreadSpawn",
+            )?;
+            for opt in [
+                ffi::SCOTCH_OPTIONNUMDETERMINISTIC,
+                ffi::SCOTCH_OPTIONNUMRANDOMFIXEDSEED,
+            ] {
+                super::scotch_check(
+                    ffi::SCOTCH_contextOptionSetNum(&mut *context, opt as std::os::raw::c_int, 1),
+                    "SCOTCH_contextOptionSetNum",
+                )?;
+            }
+            super::scotch_check(
+                ffi::SCOTCH_contextRandomClone(&mut *context),
+                "SCOTCH_contextRandomClone",
+            )?;
+            ffi::SCOTCH_contextRandomSeed(&mut *context, 1);
+            super::scotch_check(ffi::SCOTCH_graphInit(&mut *graph), "SCOTCH_graphInit")?;
+            let built = (|| -> Result<()> {
+                super::scotch_check(
+                    ffi::SCOTCH_graphBuild(
+                        &mut *graph,
+                        0,
+                        n as Num,
+                        vert.as_mut_ptr(),
+                        vert.as_mut_ptr().add(1),
+                        std::ptr::null_mut(),
+                        std::ptr::null_mut(),
+                        adjncy.len() as Num,
+                        edge.as_mut_ptr(),
+                        std::ptr::null_mut(),
+                    ),
+                    "SCOTCH_graphBuild",
+                )?;
+                super::scotch_check(ffi::SCOTCH_graphCheck(&*graph), "SCOTCH_graphCheck")?;
+                super::scotch_check(
+                    ffi::SCOTCH_contextBindGraph(&mut *context, &*graph, &mut *bound),
+                    "SCOTCH_contextBindGraph",
+                )?;
+                super::scotch_check(ffi::SCOTCH_stratInit(&mut *strat), "SCOTCH_stratInit")?;
+                // Scotch's fast ordering strategy (nested dissection with cheaper separators,
+                // 20 % separator imbalance allowed): on Hertz L7 (280 k nodes) 0.8 s with
+                // the graph's gathering, instead of 1.35 s for the default strategy, and a
+                // factorisation as fast (measured).
+                super::scotch_check(
+                    ffi::SCOTCH_stratGraphOrderBuild(
+                        &mut *strat,
+                        ffi::SCOTCH_STRATSPEED as Num,
+                        0,
+                        0.2,
+                    ),
+                    "SCOTCH_stratGraphOrderBuild",
+                )?;
+                let ordered = super::scotch_check(
+                    ffi::SCOTCH_graphOrder(
+                        &mut *bound,
+                        &mut *strat,
+                        perm.as_mut_ptr(),
+                        std::ptr::null_mut(),
+                        std::ptr::null_mut(),
+                        std::ptr::null_mut(),
+                        std::ptr::null_mut(),
+                    ),
+                    "SCOTCH_graphOrder",
+                );
+                ffi::SCOTCH_stratExit(&mut *strat);
+                ffi::SCOTCH_graphExit(&mut *bound);
+                ordered
+            })();
+            ffi::SCOTCH_graphExit(&mut *graph);
+            built
+        })();
+        ffi::SCOTCH_contextExit(&mut *context);
+        result?;
+    }
+    perm.truncate(n);
+    Ok(perm.into_iter().map(|p| p as usize).collect())
 }

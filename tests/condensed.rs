@@ -118,3 +118,46 @@ fn plain_path_stays_selectable() {
         plain.steps()
     );
 }
+
+#[test]
+fn a_flat_punch_too_wide_for_the_dense_schur_complement_takes_the_plain_path() {
+    // The top face of the box of cases/blocks/block3d.geo (h = 0.06: over 1 000 nodes) pressed
+    // flat by a plane 0.01 below it: every node has the same gap, so all are candidates, with
+    // more dofs than the dense Schur complement's limit (3 000): the plain path, decided before
+    // anything is factorised (before the limit, this case ran for minutes in dense algebra).
+    let tmp = tempfile::tempdir().unwrap();
+    let mesh = tmp.path().join("box.msh");
+    let mut cmd = std::process::Command::new("gmsh");
+    cmd.arg("-3")
+        .arg(repo("cases/blocks/block3d.geo"))
+        .args(["-setnumber", "h", "0.06", "-format", "msh41", "-o"])
+        .arg(&mesh);
+    run_with_timeout(cmd, std::time::Duration::from_secs(120)).expect_code(0, "gmsh box");
+    let case = write_case(
+        &tmp.path().join("flat.toml"),
+        &format!(
+            "[mesh]\nfile = {}\n[material]\nyoung = 2.0\npoisson = 0.3\nmodel = \"3d\"\n\
+             [[dirichlet]]\ngroup = \"bottom\"\nvalue = [0.0, 0.0, 0.0]\n[contact]\n\
+             group = \"top\"\nobstacle = {{ type = \"plane\", point = [0.0, 0.0, 0.49], \
+             normal = [0.0, 0.0, -1.0] }}\nfriction = \"none\"\nrigid_modes = \"none\"\n\
+             [output]\nfields = [\"displacement\"]\n",
+            toml_path(&mesh)
+        ),
+    );
+    let r = solve(2, &case, &[]);
+    r.assert_converged("flat punch");
+    let nodes = r.f(&["contact", "nodes"]);
+    assert!(nodes * 3.0 > 3000.0, "only {nodes} contact nodes");
+    let cs = &r.summary["newton"]["condensed"];
+    assert_eq!(cs["outcome"], "fallback", "{}", r.run.output());
+    let why = cs["fallback_reason"].as_str().unwrap();
+    assert!(why.contains("Schur complement's limit"), "{why}");
+    assert_eq!(cs["factorisations"], 0);
+    let h = r.summary["newton"]["history"].as_array().unwrap();
+    assert!(h.iter().all(|e| e["solve"] == "factorisation"), "{h:?}");
+    assert_eq!(
+        r.f(&["contact", "active_count"]),
+        nodes,
+        "the whole face presses"
+    );
+}

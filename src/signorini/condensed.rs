@@ -47,9 +47,15 @@ use serde::Serialize;
 use std::collections::HashSet;
 use std::time::Instant;
 
-/// More contact nodes than this and the condensed path is not tried: the dense Schur
-/// complement (8 (d n_c)² bytes on rank 0 if every node became a candidate) would not pay.
-pub const MAX_CANDIDATES: usize = 8000;
+/// More contact nodes than this and the condensed path is not tried (every rank holds a
+/// record of 15 values per contact node).
+pub const MAX_CONTACT_NODES: usize = 100_000;
+
+/// More Schur variables (dofs of the candidates) than this and the plain path takes over
+/// before anything is factorised: the dense work on rank 0 grows as their cube (1 128 took
+/// 0.2 s; a flat punch with all 3 015 nodes of a face as candidates, 9 045, did not finish in
+/// 5 minutes, where the plain path needs one step of 2.5 s).
+pub const MAX_SCHUR_DOFS: usize = 3000;
 
 /// The first candidate set: the 1/FIRST_FRACTION of the contact nodes with the smallest gaps.
 const FIRST_FRACTION: usize = 8;
@@ -169,7 +175,11 @@ pub fn solve(
     // the expanded u) until (3.23) changes no node outside them.
     let mut sorted: Vec<f64> = (0..n).map(|i| cand.gap(i)).collect();
     sorted.sort_by(|a, b| a.total_cmp(b));
-    let mut bound = sorted[(n / FIRST_FRACTION).max(MIN_CANDIDATES).min(n) - 1];
+    let first = (n / FIRST_FRACTION)
+        .max(MIN_CANDIDATES)
+        .min(MAX_SCHUR_DOFS / (2 * dim))
+        .min(n);
+    let mut bound = sorted[first - 1];
     let mut comp = Compliance::new(n);
     let mut active: Vec<bool> = (0..n).map(|i| cand.start(i)).collect();
     // Every node of the start set is a candidate (the thesis' all-active start: all of them).
@@ -183,6 +193,16 @@ pub fn solve(
             .collect();
         if new.is_empty() && round > 1 {
             let why = "the candidate set cannot grow (internal)".to_string();
+            return Ok(fallback(ctx, summary, why));
+        }
+        let wanted = comp.list.len() + new.len();
+        if wanted * dim > MAX_SCHUR_DOFS {
+            let why = format!(
+                "{wanted} candidate contact nodes ({} dofs) exceed the dense Schur complement's \
+                 limit of {MAX_SCHUR_DOFS} dofs (a contact zone this wide costs less on the \
+                 plain path)",
+                wanted * dim
+            );
             return Ok(fallback(ctx, summary, why));
         }
         if let Err(why) = comp.grow(ctx, reduced, &cand, &new, (dim, n_rows), &rhs0) {

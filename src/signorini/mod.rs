@@ -369,7 +369,7 @@ fn run_method(
             let condense = !friction
                 && matches!(solver_section.reuse, Reuse::Auto | Reuse::Condensed)
                 && b.n_global > 0
-                && b.n_global <= condensed::MAX_CANDIDATES
+                && b.n_global <= condensed::MAX_CONTACT_NODES
                 && reduced.factorises()?;
             if condense {
                 match condensed::solve(ctx, problem, &mut reduced, ns, warm)? {

@@ -115,22 +115,32 @@ impl<'a> Ctx<'a> {
         all
     }
 
+    /// Every rank's count `n` gathered on rank 0, with the offsets: `Some((counts,
+    /// displacements))` there, `None` elsewhere (one Gather). Collective.
+    fn counts_at_root(&self, n: usize) -> Option<(Vec<i32>, Vec<i32>)> {
+        let root = self.world.process_at_rank(0);
+        let n = n as i32;
+        if self.rank != 0 {
+            root.gather_into(&n);
+            return None;
+        }
+        let mut counts = vec![0i32; self.size];
+        root.gather_into_root(&n, &mut counts[..]);
+        let displs = offsets(&counts.iter().map(|&c| c as usize).collect::<Vec<_>>())
+            .iter()
+            .map(|&d| d as i32)
+            .collect();
+        Some((counts, displs))
+    }
+
     /// The concatenation of every rank's slice, in rank order, on rank 0 (empty elsewhere;
     /// one Gather of the counts, one Gatherv). Collective.
     pub fn gather_to_root<T: Equivalence + Default + Clone>(&self, mine: &[T]) -> Vec<T> {
         let root = self.world.process_at_rank(0);
-        let n = mine.len() as i32;
-        if self.rank != 0 {
-            root.gather_into(&n);
+        let Some((counts, displs)) = self.counts_at_root(mine.len()) else {
             root.gather_varcount_into(mine);
             return Vec::new();
-        }
-        let mut counts = vec![0i32; self.size];
-        root.gather_into_root(&n, &mut counts[..]);
-        let displs: Vec<i32> = offsets(&counts.iter().map(|&c| c as usize).collect::<Vec<_>>())
-            .iter()
-            .map(|&d| d as i32)
-            .collect();
+        };
         let mut all = vec![T::default(); counts.iter().map(|&c| c as usize).sum()];
         {
             let mut part = PartitionMut::new(&mut all[..], counts, displs);
@@ -143,19 +153,11 @@ impl<'a> Ctx<'a> {
     /// of `mine` entries each (every rank's own count). Collective.
     pub fn scatter_from_root(&self, all: &[f64], mine: usize) -> Vec<f64> {
         let root = self.world.process_at_rank(0);
-        let n = mine as i32;
         let mut out = vec![0.0; mine];
-        if self.rank != 0 {
-            root.gather_into(&n);
+        let Some((counts, displs)) = self.counts_at_root(mine) else {
             root.scatter_varcount_into(&mut out[..]);
             return out;
-        }
-        let mut counts = vec![0i32; self.size];
-        root.gather_into_root(&n, &mut counts[..]);
-        let displs: Vec<i32> = offsets(&counts.iter().map(|&c| c as usize).collect::<Vec<_>>())
-            .iter()
-            .map(|&d| d as i32)
-            .collect();
+        };
         let part = Partition::new(all, counts, displs);
         root.scatter_varcount_into_root(&part, &mut out[..]);
         out

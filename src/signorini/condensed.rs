@@ -1224,6 +1224,26 @@ fn split_modes(gram: &DMatrix<f64>, mz: usize) -> (DMatrix<f64>, DMatrix<f64>) {
 mod tests {
     use super::*;
 
+    /// A dense problem without free modes (c = 1, unit load scale).
+    fn no_modes<'a>(
+        cmat: &'a DMatrix<f64>,
+        d0: &'a [f64],
+        gap: &'a [f64],
+        g: &'a DMatrix<f64>,
+        max_steps: usize,
+    ) -> Dense<'a> {
+        Dense {
+            cmat,
+            d0,
+            gap,
+            g,
+            phi: &[],
+            load_scale: 1.0,
+            c: 1.0,
+            max_steps,
+        }
+    }
+
     /// Two springs of compliance 1 under a load pressing both onto an obstacle at gap 0 and a
     /// third far away: the dense Algorithm 1 finds the set and λ by hand.
     #[test]
@@ -1233,16 +1253,7 @@ mod tests {
         let d0 = [-1.0, -0.5, 0.2];
         let gap = [0.0, 0.1, 0.0];
         let g = DMatrix::<f64>::zeros(3, 0);
-        let dense = Dense {
-            cmat: &cmat,
-            d0: &d0,
-            gap: &gap,
-            g: &g,
-            phi: &[],
-            load_scale: 1.0,
-            c: 1.0,
-            max_steps: 20,
-        };
+        let dense = no_modes(&cmat, &d0, &gap, &g, 20);
         let run = dense.run(vec![false; 3]);
         assert_eq!(run.end, End::Converged);
         assert_eq!(run.active, vec![true, true, false]);
@@ -1350,16 +1361,7 @@ mod tests {
         let gap = vec![0.0; n];
         let x: Vec<[f64; 3]> = (0..n).map(|i| [i as f64, 0.0, 0.0]).collect();
         let g = DMatrix::<f64>::zeros(n, 0);
-        let dense = Dense {
-            cmat: &cmat,
-            d0: &d0,
-            gap: &gap,
-            g: &g,
-            phi: &[],
-            load_scale: 1.0,
-            c: 1.0,
-            max_steps: 50,
-        };
+        let dense = no_modes(&cmat, &d0, &gap, &g, 50);
         let mut start = vec![false; n];
         start[64] = true;
         let plain = dense.run(start.clone());

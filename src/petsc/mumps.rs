@@ -135,8 +135,15 @@ impl SchurFactor {
             f.id.perm_in = f.perm.as_mut_ptr();
         }
         f.call(4)?; // analysis + factorisation
-                    // The solve phase does not read the matrix (no iterative refinement, ICNTL(10) = 0):
-                    // its copy is freed.
+                    // MUMPS returns the lower triangle by rows for a symmetric matrix: mirrored once.
+        let s = size_schur;
+        for i in 0..if root { s } else { 0 } {
+            for j in 0..i {
+                f.schur[j * s + i] = f.schur[i * s + j];
+            }
+        }
+        // The solve phase does not read the matrix (no iterative refinement, ICNTL(10) = 0):
+        // its copy is freed.
         f.id.irn_loc = std::ptr::null_mut();
         f.id.jcn_loc = std::ptr::null_mut();
         f.id.a_loc = std::ptr::null_mut();
@@ -149,17 +156,8 @@ impl SchurFactor {
     }
 
     /// The Schur complement S (size_schur², symmetric, column-major = row-major) on the host;
-    /// empty elsewhere. MUMPS returns the lower triangle by rows for a symmetric matrix; it is
-    /// mirrored here.
-    pub fn schur(&mut self) -> &[f64] {
-        let s = self.size_schur;
-        if self.root {
-            for i in 0..s {
-                for j in 0..i {
-                    self.schur[j * s + i] = self.schur[i * s + j];
-                }
-            }
-        }
+    /// empty elsewhere.
+    pub fn schur(&self) -> &[f64] {
         &self.schur
     }
 
@@ -179,7 +177,10 @@ impl SchurFactor {
 
     /// Condensation of `rhs` followed by the expansion (ICNTL(26) = 2) of the Schur
     /// variables' solution `x_s` (on the host): the solution of the whole system, on the
-    /// host (empty elsewhere). `x_s` must solve S x_s = (the condensed `rhs`). Collective.
+    /// host (empty elsewhere). `x_s` must solve S x_s = (the condensed `rhs`). The expansion
+    /// continues from the forward elimination of the condensation right before it, so the
+    /// condensation is redone here rather than trusted to be the caller's last call.
+    /// Collective.
     pub fn expand(&mut self, rhs: &[f64], x_s: &[f64]) -> Result<Vec<f64>> {
         self.condense(rhs)?;
         self.prepare_solve(rhs, Some(x_s))?;
@@ -226,11 +227,6 @@ impl SchurFactor {
             )));
         }
         Ok(())
-    }
-
-    /// Global size of the Schur complement.
-    pub fn size_schur(&self) -> usize {
-        self.size_schur
     }
 }
 

@@ -128,6 +128,40 @@ impl CondensedSummary {
         }
     }
 
+    /// A round's factorisation into the record: `seconds` of the round so far, of which
+    /// `comp.factorisation_seconds` the ordering, analysis and factorisation.
+    fn record_factorisation(&mut self, comp: &Compliance, dim: usize, seconds: f64) {
+        self.factorisations += 1;
+        self.solves += 1;
+        self.factorisation_seconds += comp.factorisation_seconds;
+        self.ordering_seconds = comp.ordering_seconds;
+        self.schur_seconds += seconds - comp.factorisation_seconds;
+        self.candidates = comp.list.len();
+        self.schur_dofs = comp.list.len() * dim;
+    }
+
+    /// The nested start's coarse levels of a dense round, into the record and the log.
+    fn record_coarse(&mut self, ctx: &Ctx, run: &DenseRun) {
+        if run.coarse.is_empty() {
+            return;
+        }
+        let levels: Vec<String> = run
+            .coarse
+            .iter()
+            .map(|c| format!("{} nodes {} steps", c.0, c.1))
+            .collect();
+        say!(
+            ctx,
+            "newton: condensed: nested start on coarse subsets of the candidates: {}",
+            levels.join(", ")
+        );
+        self.coarse_levels.extend(
+            run.coarse
+                .iter()
+                .map(|&(nodes, steps)| CoarseLevel { nodes, steps }),
+        );
+    }
+
     /// The closing log line of a converged condensed solve (`n` contact nodes).
     fn log(&self, ctx: &Ctx, n: usize, active: usize) {
         say!(
@@ -162,94 +196,45 @@ pub fn solve(
     s: &NewtonSettings,
     warm: Option<&WarmStart>,
 ) -> Result<Condensed, RunError> {
-    let b = p.boundary;
     let dim = p.mesh.dim;
-    let mut summary = CondensedSummary::new(b.n_global);
+    let mut summary = CondensedSummary::new(p.boundary.n_global);
     let (free, rhs0) = prepare_base(ctx, p, reduced, s)?;
     let start = start_set(p, s, &free, warm);
-    let cand = Candidates::gather(ctx, b, &free, &start);
-    let n = cand.n;
+    let cand = Candidates::gather(ctx, p.boundary, &free, &start);
     let n_rows = p.layout.node_offsets.last().copied().unwrap_or(0) * dim;
-    // The candidates: first the nodes with the smallest gaps (an eighth of c_h, at least
-    // MIN_CANDIDATES), grown (the gap bound doubled, and every node that (3.23) activates on
-    // the expanded u) until (3.23) changes no node outside them.
-    let mut sorted: Vec<f64> = (0..n).map(|i| cand.gap(i)).collect();
-    sorted.sort_by(|a, b| a.total_cmp(b));
-    let first = (n / FIRST_FRACTION)
-        .max(MIN_CANDIDATES)
-        .min(MAX_SCHUR_DOFS / (2 * dim))
-        .min(n);
-    let mut bound = sorted[first - 1];
-    let mut comp = Compliance::new(n);
-    let mut active: Vec<bool> = (0..n).map(|i| cand.start(i)).collect();
-    // Every node of the start set is a candidate (the thesis' all-active start: all of them).
-    let mut forced: HashSet<usize> = (0..n).filter(|&i| active[i]).collect();
+    let nested = warm.is_none() && s.section.init == NewtonInit::Auto;
+    let mut growth = Growth::new(&cand, dim);
+    let mut comp = Compliance::new(cand.n);
     let mut history: Vec<StepInfo> = Vec::new();
-    let mut last: Option<Expanded> = None;
     for round in 1..=MAX_ROUNDS {
         let t = Instant::now();
-        let new: Vec<usize> = (0..n)
-            .filter(|&i| !comp.in_s[i] && (cand.gap(i) <= bound || forced.contains(&i)))
-            .collect();
-        if new.is_empty() && round > 1 {
-            let why = "the candidate set cannot grow (internal)".to_string();
-            return Ok(fallback(ctx, summary, why));
-        }
-        let wanted = comp.list.len() + new.len();
-        if wanted * dim > MAX_SCHUR_DOFS {
-            let why = format!(
-                "{wanted} candidate contact nodes ({} dofs) exceed the dense Schur complement's \
-                 limit of {MAX_SCHUR_DOFS} dofs (a contact zone this wide costs less on the \
-                 plain path)",
-                wanted * dim
-            );
-            return Ok(fallback(ctx, summary, why));
-        }
+        let new = match growth.next(&cand, &comp, round, dim) {
+            Ok(new) => new,
+            Err(why) => return Ok(fallback(ctx, summary, why)),
+        };
         if let Err(why) = comp.grow(ctx, reduced, &cand, &new, (dim, n_rows), &rhs0) {
             return Ok(fallback(ctx, summary, why));
         }
-        summary.factorisations += 1;
-        summary.solves += 1;
-        summary.factorisation_seconds += comp.factorisation_seconds;
-        summary.ordering_seconds = comp.ordering_seconds;
-        summary.schur_seconds += t.elapsed().as_secs_f64() - comp.factorisation_seconds;
-        let ns = comp.list.len();
-        summary.candidates = ns;
-        summary.schur_dofs = ns * dim;
+        summary.record_factorisation(&comp, dim, t.elapsed().as_secs_f64());
 
         let t = Instant::now();
-        let nested = round == 1 && warm.is_none() && s.section.init == NewtonInit::Auto;
-        let run = dense_round(ctx, &cand, &comp, &free, s, (&active, nested));
+        let run = dense_round(
+            ctx,
+            &cand,
+            &comp,
+            &free,
+            s,
+            (&growth.active, nested && round == 1),
+        );
         summary.dense_seconds += t.elapsed().as_secs_f64();
-        if !run.coarse.is_empty() {
-            let levels: Vec<String> = run
-                .coarse
-                .iter()
-                .map(|c| format!("{} nodes {} steps", c.0, c.1))
-                .collect();
-            say!(
-                ctx,
-                "newton: condensed: nested start on coarse subsets of the candidates: {}",
-                levels.join(", ")
-            );
-            summary.coarse_levels.extend(
-                run.coarse
-                    .iter()
-                    .map(|&(nodes, steps)| CoarseLevel { nodes, steps }),
-            );
-        }
-        record_steps(ctx, &mut history, &run, ns, free.pins().len());
-        let mut lambda = vec![0.0; n];
-        active = vec![false; n];
-        for (q, &i) in comp.list.iter().enumerate() {
-            lambda[i] = run.lambda[q];
-            active[i] = run.active[q];
-        }
+        summary.record_coarse(ctx, &run);
+        record_steps(ctx, &mut history, &run, comp.list.len(), free.pins().len());
+        let lambda = growth.take_dense(&comp, &run);
         match run.end {
             End::Converged => {}
-            End::NoSupport(_) if ns < n => {
+            End::NoSupport(_) if comp.list.len() < cand.n => {
                 // a node beyond the candidates may still carry the load: all of them
-                bound = f64::INFINITY;
+                growth.bound = f64::INFINITY;
                 continue;
             }
             End::NoSupport(reaction) => {
@@ -259,13 +244,14 @@ pub fn solve(
         }
 
         let t = Instant::now();
+        let set = (lambda.as_slice(), growth.active.as_slice());
         let ex = match expand(
             ctx,
             p,
             reduced,
             (s, &free, &mut comp),
             &rhs0,
-            (&lambda, &active),
+            set,
             &run.alpha,
         )? {
             Ok(ex) => ex,
@@ -274,42 +260,132 @@ pub fn solve(
         summary.solves += 2;
         summary.expansion_seconds += t.elapsed().as_secs_f64();
         if ex.changed.is_empty() {
-            last = Some(ex);
-            break;
+            let n_active = growth.active.iter().filter(|&&a| a).count();
+            summary.log(ctx, cand.n, n_active);
+            return finish(p, reduced, &free, ex, history, summary);
         }
-        let inside = ex
-            .changed
-            .iter()
-            .filter(|&&i| comp.in_s[i as usize])
-            .count();
+        if let Err(why) = growth.widen(ctx, &ex.changed, &comp, round) {
+            return Ok(fallback(ctx, summary, why));
+        }
+    }
+    let why = format!("no final set in {MAX_ROUNDS} rounds of candidates");
+    Ok(fallback(ctx, summary, why))
+}
+
+/// The candidate set from round to round: the gap bound, the nodes forced in (the start set,
+/// nodes (3.23) activated beyond the candidates), and the current set of every contact node
+/// (c_h's global order).
+struct Growth {
+    bound: f64,
+    forced: HashSet<usize>,
+    active: Vec<bool>,
+}
+
+impl Growth {
+    /// The first candidates: the nodes with the smallest gaps (an eighth of c_h, at least
+    /// MIN_CANDIDATES, at most half the Schur limit) and every node of the start set (the
+    /// thesis' all-active start: all of them).
+    fn new(cand: &Candidates, dim: usize) -> Growth {
+        let n = cand.n;
+        let mut sorted: Vec<f64> = (0..n).map(|i| cand.gap(i)).collect();
+        sorted.sort_by(|a, b| a.total_cmp(b));
+        let first = (n / FIRST_FRACTION)
+            .max(MIN_CANDIDATES)
+            .min(MAX_SCHUR_DOFS / (2 * dim))
+            .min(n);
+        let active: Vec<bool> = (0..n).map(|i| cand.start(i)).collect();
+        Growth {
+            bound: sorted[first - 1],
+            forced: (0..n).filter(|&i| active[i]).collect(),
+            active,
+        }
+    }
+
+    /// The nodes this round adds; `Err`: why the plain path takes over (none to add after the
+    /// first round, or more Schur dofs than MAX_SCHUR_DOFS).
+    fn next(
+        &self,
+        cand: &Candidates,
+        comp: &Compliance,
+        round: usize,
+        dim: usize,
+    ) -> Result<Vec<usize>, String> {
+        let new: Vec<usize> = (0..cand.n)
+            .filter(|&i| !comp.in_s[i] && (cand.gap(i) <= self.bound || self.forced.contains(&i)))
+            .collect();
+        if new.is_empty() && round > 1 {
+            return Err("the candidate set cannot grow (internal)".to_string());
+        }
+        let wanted = comp.list.len() + new.len();
+        if wanted * dim > MAX_SCHUR_DOFS {
+            return Err(format!(
+                "{wanted} candidate contact nodes ({} dofs) exceed the dense Schur complement's \
+                 limit of {MAX_SCHUR_DOFS} dofs (a contact zone this wide costs less on the \
+                 plain path)",
+                wanted * dim
+            ));
+        }
+        Ok(new)
+    }
+
+    /// The dense round's set and λ_n over every contact node (0 and inactive off the
+    /// candidates); the set is kept, λ_n returned.
+    fn take_dense(&mut self, comp: &Compliance, run: &DenseRun) -> Vec<f64> {
+        let mut lambda = vec![0.0; self.active.len()];
+        self.active.iter_mut().for_each(|a| *a = false);
+        for (q, &i) in comp.list.iter().enumerate() {
+            lambda[i] = run.lambda[q];
+            self.active[i] = run.active[q];
+        }
+        lambda
+    }
+
+    /// Nodes beyond the candidates that (3.23) activates on the expanded u (`changed`) join
+    /// the set and the candidates, and the gap bound doubles. `Err`: a candidate changed
+    /// (round-off at the edge of the set) or the last round is spent. Collective (log).
+    fn widen(
+        &mut self,
+        ctx: &Ctx,
+        changed: &[u64],
+        comp: &Compliance,
+        round: usize,
+    ) -> Result<(), String> {
+        let inside = changed.iter().filter(|&&i| comp.in_s[i as usize]).count();
         if inside > 0 || round == MAX_ROUNDS {
-            let why = format!(
+            return Err(format!(
                 "{} node(s) change on the expanded u ({inside} of them candidates: round-off at \
                  nodes on the edge of the set)",
-                ex.changed.len()
-            );
-            return Ok(fallback(ctx, summary, why));
+                changed.len()
+            ));
         }
         say!(
             ctx,
-            "newton: condensed: {} node(s) beyond the {ns} candidates come into contact: more \
+            "newton: condensed: {} node(s) beyond the {} candidates come into contact: more \
              candidates",
-            ex.changed.len()
+            changed.len(),
+            comp.list.len()
         );
-        for &i in &ex.changed {
-            forced.insert(i as usize);
-            active[i as usize] = true;
+        for &i in changed {
+            self.forced.insert(i as usize);
+            self.active[i as usize] = true;
         }
-        bound *= 2.0;
+        self.bound *= 2.0;
+        Ok(())
     }
-    let Some(mut ex) = last else {
-        let why = format!("no final set in {MAX_ROUNDS} rounds of candidates");
-        return Ok(fallback(ctx, summary, why));
-    };
-    summary.log(ctx, n, active.iter().filter(|&&a| a).count());
-    // u = w + ρ (λ and the set were taken on w, as the plain path does)
+}
+
+/// The converged condensed solve as the plain path's result: u = w + ρ (λ and the set were
+/// taken on w, as the plain path does). Collective.
+fn finish(
+    p: &ContactProblem,
+    reduced: &ReducedSystem,
+    free: &FreeModes,
+    mut ex: Expanded,
+    history: Vec<StepInfo>,
+    summary: CondensedSummary,
+) -> Result<Condensed, RunError> {
     let mut u = reduced.solution()?;
-    add_motion(&free, &ex.rho, p, &mut u, &mut ex.it.nodes)?;
+    add_motion(free, &ex.rho, p, &mut u, &mut ex.it.nodes)?;
     let result = NewtonResult {
         u,
         nodes: ex.it.nodes,

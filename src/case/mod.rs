@@ -152,7 +152,9 @@ impl Method {
 /// (signorini::reduced, `solve_amg`).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Reuse {
-    /// Direct, frictionless: the condensed path (as "condensed"). Direct with friction: reuse
+    /// Direct, frictionless: the condensed path (Algorithm 1 on the contact unknowns, one
+    /// factorisation with MUMPS' Schur complement, signorini::condensed; the case file may
+    /// also say "condensed"). Direct with friction: reuse
     /// when the measured costs say it pays (signorini::reduced), refactorise otherwise.
     /// Iterative: warm starts, inexact early steps, the preconditioner of an earlier step, set
     /// up anew when the Krylov iterations per decade grew by more than 30 % over those after
@@ -165,11 +167,6 @@ pub enum Reuse {
     /// Iterative: as "auto", but the preconditioner of the first step is kept unless a solve
     /// on it fails.
     Always,
-    /// Frictionless contact on the direct preset: Algorithm 1 condensed onto the contact
-    /// unknowns — one factorisation with MUMPS' Schur complement on the candidate contact
-    /// nodes' dofs, dense steps, one expansion solve (signorini::condensed). Elsewhere as
-    /// "auto" ("auto" takes this path wherever it applies).
-    Condensed,
 }
 
 impl Reuse {
@@ -178,7 +175,6 @@ impl Reuse {
             Reuse::Auto => "auto",
             Reuse::Never => "never",
             Reuse::Always => "always",
-            Reuse::Condensed => "condensed",
         }
     }
 }
@@ -1130,7 +1126,7 @@ impl Reader<'_> {
                     ("auto", Reuse::Auto),
                     ("never", Reuse::Never),
                     ("always", Reuse::Always),
-                    ("condensed", Reuse::Condensed),
+                    ("condensed", Reuse::Auto), // the name of auto's direct path
                 ],
             )?;
         }

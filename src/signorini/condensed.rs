@@ -199,6 +199,7 @@ pub fn solve(
     let dim = p.mesh.dim;
     let mut summary = CondensedSummary::new(p.boundary.n_global);
     let (free, rhs0) = prepare_base(ctx, p, reduced, s)?;
+    let f_root = ctx.gather_to_root(&rhs0); // f for MUMPS' solve phases, once
     let start = start_set(p, s, &free, warm);
     let cand = Candidates::gather(ctx, p.boundary, &free, &start);
     let n_rows = p.layout.node_offsets.last().copied().unwrap_or(0) * dim;
@@ -212,7 +213,7 @@ pub fn solve(
             Ok(new) => new,
             Err(why) => return Ok(fallback(ctx, summary, why)),
         };
-        if let Err(why) = comp.grow(ctx, reduced, &cand, &new, (dim, n_rows), &rhs0) {
+        if let Err(why) = comp.grow(ctx, reduced, &cand, &new, (dim, n_rows), &f_root) {
             return Ok(fallback(ctx, summary, why));
         }
         summary.record_factorisation(&comp, dim, t.elapsed().as_secs_f64());
@@ -249,8 +250,8 @@ pub fn solve(
             ctx,
             p,
             reduced,
-            (s, &free, &mut comp),
-            &rhs0,
+            (s, &free, &mut comp, &cand),
+            (&f_root, rhs0.len()),
             set,
             &run.alpha,
         )? {
@@ -550,7 +551,7 @@ impl Compliance {
 
     /// Adds the candidates `new` and factorises K_p (the reduced system's matrix, global size
     /// `n_rows`) anew with the Schur complement on every dof of every candidate; then C and
-    /// d₀ (`rhs0`: this rank's rows of f). `Err` (the same on every rank): why the condensed
+    /// d₀ (`f_root`: f on rank 0, empty elsewhere). `Err` (the same on every rank): why the condensed
     /// path gives up (MUMPS failed, S not positive definite). Collective.
     fn grow(
         &mut self,
@@ -559,7 +560,7 @@ impl Compliance {
         cand: &Candidates,
         new: &[usize],
         (dim, n_rows): (usize, usize),
-        rhs0: &[f64],
+        f_root: &[f64],
     ) -> Result<(), String> {
         let root = ctx.rank == 0;
         for &i in new {
@@ -594,9 +595,8 @@ impl Compliance {
         self.factorisation_seconds = t.elapsed().as_secs_f64();
         let mut factor =
             factor.map_err(|e| format!("the Schur factorisation of K_p failed: {e}"))?;
-        let rhs_root = ctx.gather_to_root(rhs0);
         let r = factor
-            .condense(&rhs_root)
+            .condense(f_root)
             .map_err(|e| format!("the condensation of f failed: {e}"))?;
         let mut ok = vec![1.0];
         if root {
@@ -806,33 +806,33 @@ fn expand(
     ctx: &Ctx,
     p: &ContactProblem,
     reduced: &mut ReducedSystem,
-    (s, free, comp): (&NewtonSettings, &FreeModes, &mut Compliance),
-    rhs0: &[f64],
+    (s, free, comp, cand): (&NewtonSettings, &FreeModes, &mut Compliance, &Candidates),
+    (f_root, n_local): (&[f64], usize),
     (lambda, active): (&[f64], &[bool]),
     alpha: &[f64],
 ) -> Result<Result<Expanded, String>, RunError> {
     let (mesh, layout, b, sys) = (p.mesh, p.layout, p.boundary, p.sys);
     let (dim, off) = (mesh.dim, b.offset);
-    let mut rhs = rhs0.to_vec();
-    for (i, k) in b.nodes.iter().enumerate() {
-        for j in 0..dim {
-            rhs[k.local_row + j] -= k.frame.n[j] * lambda[off + i];
+    // On rank 0: f − N λ_n (λ_n vanishes off the candidates) and x_s = S⁻¹ (r − N_s λ_n).
+    let (rhs_root, x_s) = if ctx.rank == 0 {
+        let mut rhs = f_root.to_vec();
+        for &i in &comp.list {
+            for a in 0..dim {
+                rhs[cand.row(i) + a] -= cand.normal(i, a) * lambda[i];
+            }
         }
-    }
-    let x_s: Vec<f64> = if ctx.rank == 0 {
         let lam = DVector::from_iterator(comp.list.len(), comp.list.iter().map(|&i| lambda[i]));
-        (&comp.x0 - &comp.sinv_n * lam).as_slice().to_vec()
+        let x_s = (&comp.x0 - &comp.sinv_n * lam).as_slice().to_vec();
+        (rhs, x_s)
     } else {
-        Vec::new()
+        (Vec::new(), Vec::new())
     };
-    let rhs_root = ctx.gather_to_root(&rhs);
     let factor = comp.factor.as_mut().expect("factorised by grow");
     let w_root = match factor.expand(&rhs_root, &x_s) {
         Ok(w) => w,
         Err(e) => return Ok(Err(format!("the expansion solve failed: {e}"))),
     };
-    let w = ctx.scatter_from_root(&w_root, rhs.len());
-    reduced.set_rhs_local(&rhs)?;
+    let w = ctx.scatter_from_root(&w_root, n_local);
     reduced.set_solution_local(&w)?;
     let z = free.dirichlet_free();
     let mut rho = [0.0; 6];
@@ -860,7 +860,7 @@ fn expand(
     }
     let mut shifted = b.clone();
     free.shift(b, &rho, &mut shifted);
-    let mut it = Iterate::new(b.nodes.len(), rhs.len(), false);
+    let mut it = Iterate::new(b.nodes.len(), n_local, false);
     reduced.recover(sys, &shifted, &set, &mut it)?; // (3.28)
     let update = set.update(&it, &shifted, Law::Frictionless, s.c, dim); // (3.23)
     let changed_here: Vec<u64> = set

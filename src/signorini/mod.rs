@@ -367,7 +367,7 @@ fn run_method(
             let mut reduced = ReducedSystem::new(ctx, sys, b, coords, dim)?;
             let friction = settings.tresca_threshold.is_some() || settings.coulomb.is_some();
             let condense = !friction
-                && matches!(solver_section.reuse, Reuse::Auto | Reuse::Condensed)
+                && solver_section.reuse == Reuse::Auto
                 && b.n_global > 0
                 && b.n_global <= condensed::MAX_CONTACT_NODES
                 && reduced.factorises()?;
@@ -379,11 +379,7 @@ fn run_method(
                     condensed::Condensed::Fallback(s) => condensed_summary = Some(s),
                 }
             }
-            let reuse = match solver_section.reuse {
-                Reuse::Condensed => Reuse::Auto,
-                r => r,
-            };
-            reduced.enable_reuse(ctx, reuse, friction)?;
+            reduced.enable_reuse(ctx, solver_section.reuse, friction)?;
             match settings.coulomb {
                 Some((mu, CoulombAlgorithm::FixedPoint)) => {
                     let (nr, outer) = fixed_point(ctx, problem, &mut reduced, ns, mu, warm)?;

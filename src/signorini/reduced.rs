@@ -343,7 +343,7 @@ impl Reuser {
         match self.mode {
             Reuse::Never => None,
             Reuse::Always => Some(ALWAYS_BUDGET),
-            Reuse::Auto | Reuse::Condensed => {
+            Reuse::Auto => {
                 let [t_factor, t_solve, t_it] = costs;
                 let t_it = if t_it > 0.0 {
                     t_it
@@ -904,37 +904,15 @@ impl ReducedSystem {
         &self.s
     }
 
-    /// The solver (the condensed path reads entries of the inverse from its factorisation).
-    pub fn ksp(&self) -> &crate::petsc::Ksp {
-        &self.ls.ksp
-    }
-
-    /// One KSPSolve of the matrix written last with the current right-hand side: a
-    /// factorisation when the matrix changed since the last solve, else triangular solves only.
-    /// Collective.
-    pub fn solve_current(&mut self) -> petsc::Result<StepSolve> {
-        self.solve_plain()
-    }
-
     /// This rank's rows of the right-hand side written last.
     pub fn rhs_local(&self) -> petsc::Result<Vec<f64>> {
         self.rhs.to_local_vec()
-    }
-
-    /// Replaces this rank's rows of the right-hand side.
-    pub fn set_rhs_local(&mut self, v: &[f64]) -> petsc::Result<()> {
-        self.rhs.write(|x| x.copy_from_slice(v))
     }
 
     /// Entries of the last solution at global rows `idx` (any rank's), on every rank.
     /// Collective.
     pub fn solution_at(&self, idx: &[PInt]) -> petsc::Result<Vec<f64>> {
         self.u.gather(idx)
-    }
-
-    /// This rank's rows of the last solution.
-    pub fn solution_local(&self) -> petsc::Result<Vec<f64>> {
-        self.u.to_local_vec()
     }
 
     /// Replaces this rank's rows of the solution (what `recover` and `solution` read).

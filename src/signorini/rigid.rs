@@ -509,37 +509,28 @@ impl FreeModes {
         }
         let r = z * c;
         rho[..m].copy_from_slice(r.as_slice());
-        // Zero at the pins: ρ − Q α with (pin rows of Q) α = ρ at the pins.
-        let mf = self.q.ncols();
-        if mf > 0 && self.pins.len() == mf {
-            let mut p = DMatrix::zeros(mf, mf);
-            let mut at = nalgebra::DVector::zeros(mf);
-            for (a, &(_, k)) in self.pins.iter().enumerate() {
+        // Zero at the pins: ρ minus the free-mode motion with ρ's values there.
+        let at: Vec<f64> = (self.pins.iter().enumerate())
+            .map(|(a, &(_, k))| {
                 let row = self.modes.dof_row(&self.pin_x[a], k);
-                for cc in 0..mf {
-                    p[(a, cc)] = (0..m).map(|j| row[j] * self.q[(j, cc)]).sum();
-                }
-                at[a] = (0..m).map(|j| row[j] * rho[j]).sum();
-            }
-            if let Some(alpha) = p.lu().solve(&at) {
-                let corr = &self.q * alpha;
-                for (x, d) in rho.iter_mut().zip(corr.iter()) {
-                    *x -= d;
-                }
+                (0..m).map(|j| row[j] * rho[j]).sum()
+            })
+            .collect();
+        if let Some(corr) = self.motion_with_pin_values(&at) {
+            for (x, d) in rho.iter_mut().zip(corr.iter()) {
+                *x -= d;
             }
         }
         rho
     }
 
-    /// The motion in the current free modes that, added to a displacement whose pinned dofs
-    /// hold `at_pins` (in the order of [`FreeModes::pins`]), makes it vanish there: the
-    /// normalisation the plain path's pins give the modes that nothing fixes. Local.
-    pub fn motion_to_zero_pins(&self, at_pins: &[f64], before: &Motion) -> Motion {
-        let m = self.modes.m;
-        let mf = self.q.ncols();
-        let mut rho = [0.0; 6];
-        if mf == 0 || self.pins.len() != mf || at_pins.len() != mf {
-            return rho;
+    /// Q α with (pin rows of Q) α = `at`: the motion in the free modes Q that takes the values
+    /// `at` at the pins (in the order of [`FreeModes::pins`]). `None` without free modes, with
+    /// a pin count other than theirs, or singular. Local.
+    fn motion_with_pin_values(&self, at: &[f64]) -> Option<nalgebra::DVector<f64>> {
+        let (m, mf) = (self.modes.m, self.q.ncols());
+        if mf == 0 || self.pins.len() != mf || at.len() != mf {
+            return None;
         }
         let mut p = DMatrix::zeros(mf, mf);
         for (a, &(_, k)) in self.pins.iter().enumerate() {
@@ -548,12 +539,19 @@ impl FreeModes {
                 p[(a, cc)] = (0..m).map(|j| row[j] * self.q[(j, cc)]).sum();
             }
         }
-        let mut at = nalgebra::DVector::from_column_slice(at_pins);
-        for (a, &(_, k)) in self.pins.iter().enumerate() {
-            at[a] += self.motion_at(before, &self.pin_x[a], k);
-        }
-        if let Some(alpha) = p.lu().solve(&at) {
-            let corr = &self.q * alpha;
+        let alpha = p.lu().solve(&nalgebra::DVector::from_column_slice(at))?;
+        Some(&self.q * alpha)
+    }
+
+    /// The motion in the current free modes that, added to a displacement whose pinned dofs
+    /// hold `at_pins` (in the order of [`FreeModes::pins`]), makes it vanish there: the
+    /// normalisation the plain path's pins give the modes that nothing fixes. Local.
+    pub fn motion_to_zero_pins(&self, at_pins: &[f64], before: &Motion) -> Motion {
+        let mut rho = [0.0; 6];
+        let at: Vec<f64> = (at_pins.iter().zip(&self.pins).enumerate())
+            .map(|(a, (&u, &(_, k)))| u + self.motion_at(before, &self.pin_x[a], k))
+            .collect();
+        if let Some(corr) = self.motion_with_pin_values(&at) {
             for (x, d) in rho.iter_mut().zip(corr.iter()) {
                 *x = -d;
             }

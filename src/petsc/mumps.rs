@@ -48,10 +48,10 @@ impl SchurFactor {
     /// `schur_rows` (0-based, the same list on every rank, no duplicates). `root`: this rank
     /// is rank 0 of `comm` (MUMPS' host). Collective; MUMPS' error codes are global, so
     /// every rank returns the same `Err`.
-    /// `order`: an elimination order for MUMPS (ICNTL(7) = 1; `Some` on every rank, the
-    /// positions read on the host only: order[i] = the 0-based position of variable i, the
-    /// Schur variables last), or `None` for MUMPS' own choice (with a Schur complement that is
-    /// AMD whatever ICNTL(7) asks; measured).
+    /// `order`: an elimination order for MUMPS (ICNTL(7) = 1; read on the host only, the other
+    /// ranks may pass `None`: order[i] = the 0-based position of variable i, the Schur
+    /// variables last), or `None` on the host for MUMPS' own choice (with a Schur complement
+    /// that is AMD whatever ICNTL(7) asks; measured).
     pub fn factorise(
         comm: MPI_Comm,
         mat: &Matrix,
@@ -165,7 +165,7 @@ impl SchurFactor {
     /// ignored elsewhere) reduced onto the Schur variables, b_s − K_sr K_rr⁻¹ b_r, returned on
     /// the host (empty elsewhere). Collective.
     pub fn condense(&mut self, rhs: &[f64]) -> Result<Vec<f64>> {
-        self.prepare_solve(rhs, None)?;
+        self.prepare_solve(rhs, None);
         self.id.icntl[25] = 1;
         self.call(3)?;
         Ok(if self.root {
@@ -183,7 +183,7 @@ impl SchurFactor {
     /// Collective.
     pub fn expand(&mut self, rhs: &[f64], x_s: &[f64]) -> Result<Vec<f64>> {
         self.condense(rhs)?;
-        self.prepare_solve(rhs, Some(x_s))?;
+        self.prepare_solve(rhs, Some(x_s));
         self.id.icntl[25] = 2;
         self.call(3)?;
         Ok(if self.root {
@@ -193,16 +193,17 @@ impl SchurFactor {
         })
     }
 
-    fn prepare_solve(&mut self, rhs: &[f64], x_s: Option<&[f64]>) -> Result<()> {
+    /// The solve phase's arrays on the host, of exactly the sizes MUMPS reads (`rhs` and
+    /// `x_s` are built so by the caller; a wrong length is cut or padded with zeros here rather
+    /// than read out of bounds or answered on the host alone, which would leave the other
+    /// ranks waiting in MUMPS).
+    fn prepare_solve(&mut self, rhs: &[f64], x_s: Option<&[f64]>) {
         if self.root {
-            if rhs.len() != self.n || x_s.is_some_and(|x| x.len() != self.size_schur) {
-                return Err(own_error("SchurFactor: right-hand side of the wrong size"));
-            }
+            debug_assert!(rhs.len() == self.n && x_s.is_none_or(|x| x.len() == self.size_schur));
             self.rhs = rhs.to_vec();
-            self.redrhs = match x_s {
-                Some(x) => x.to_vec(),
-                None => vec![0.0; self.size_schur],
-            };
+            self.rhs.resize(self.n, 0.0);
+            self.redrhs = x_s.map(<[f64]>::to_vec).unwrap_or_default();
+            self.redrhs.resize(self.size_schur, 0.0);
             self.id.rhs = self.rhs.as_mut_ptr();
             self.id.lrhs = self.n as i32;
             self.id.redrhs = self.redrhs.as_mut_ptr();
@@ -211,7 +212,6 @@ impl SchurFactor {
         self.id.nrhs = 1;
         self.id.icntl[19] = 0; // ICNTL(20): dense centralised right-hand side
         self.id.icntl[20] = 0; // ICNTL(21): centralised solution
-        Ok(())
     }
 
     /// One MUMPS call with `job`; INFOG(1) < 0 is an error (the same on every rank).

@@ -156,6 +156,8 @@ fn mumps_bindings(petsc_include: &[PathBuf]) {
         println!("cargo:rustc-link-arg=-Wl,-rpath,{d}");
     }
     println!("cargo:rustc-link-lib=dylib=dmumps");
+    // dgetrf/dgetrs (src/petsc/lapack.rs): the LAPACK PETSc links as well
+    println!("cargo:rustc-link-lib=dylib=lapack");
     let bindings = builder
         .generate()
         .expect("bindgen failed on dmumps_c.h: install libmumps-dev (petsc-dev pulls it in)");

@@ -184,6 +184,9 @@ pub struct ContactSettings {
     pub newton: NewtonSection,
     /// Young's modulus (the default c = E / h_c).
     pub young: f64,
+    /// The contact modulus E* = E / (1 − ν²) (3D, plane strain) or E (plane stress): the
+    /// half-space predictor's (predictor.rs).
+    pub contact_modulus: f64,
 }
 
 impl ContactSettings {
@@ -214,6 +217,15 @@ pub fn contact_settings(
         rigid_modes: cc.rigid_modes,
         newton: case.newton.clone(),
         young: case.material.young,
+        contact_modulus: {
+            let (e, nu) = (case.material.young, case.material.poisson);
+            match case.model(dim)? {
+                case::MaterialModel::PlaneStress => e,
+                case::MaterialModel::PlaneStrain | case::MaterialModel::ThreeD => {
+                    e / (1.0 - nu * nu)
+                }
+            }
+        },
     })
 }
 

@@ -5,6 +5,7 @@
 //! caller's location. Everything here is collective where the PETSc call is collective.
 
 pub mod ffi;
+pub mod lapack;
 pub mod mumps;
 pub mod snes;
 

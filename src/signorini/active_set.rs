@@ -466,6 +466,19 @@ pub struct SetUpdate {
     pub uu: f64,
 }
 
+impl SetUpdate {
+    /// Replaces the next normal set (frictionless) by `normal` (a prediction), counting the
+    /// changes against `current`. Local.
+    pub fn replace_normal(&mut self, current: &ActiveSet, normal: Vec<bool>) {
+        self.changed = normal
+            .iter()
+            .zip(&current.normal)
+            .filter(|(a, b)| a != b)
+            .count();
+        self.next.normal = normal;
+    }
+}
+
 /// A step's update as all ranks see it.
 #[derive(Clone, Copy, Debug)]
 pub struct StepTotals {

@@ -39,6 +39,7 @@ use crate::case::NewtonInit;
 use crate::contact::{c_n, normal_active};
 use crate::error::RunError;
 use crate::par::Ctx;
+use crate::petsc::lapack::{DenseCholesky, DenseLu};
 use crate::petsc::mumps::{nested_dissection, SchurFactor};
 use crate::petsc::{self, Matrix, PInt};
 use crate::say;
@@ -781,6 +782,7 @@ fn record_steps(
             pinned,
             states: None,
             du_rel: None,
+            predictor: None,
         });
     }
 }
@@ -1131,16 +1133,9 @@ impl Dense<'_> {
         let nf = vf.ncols();
         let h = &ga * &vf;
         let dimn = na + nf;
-        let mut m = DMatrix::<f64>::zeros(dimn, dimn);
+        let caa = DMatrix::from_fn(na, na, |r, q| self.cmat[(idx[r], idx[q])]);
         let mut rhs = DVector::<f64>::zeros(dimn);
         for (r, &i) in idx.iter().enumerate() {
-            for (q, &j) in idx.iter().enumerate() {
-                m[(r, q)] = self.cmat[(i, j)];
-            }
-            for c in 0..nf {
-                m[(r, na + c)] = -h[(r, c)];
-                m[(na + c, r)] = -h[(r, c)];
-            }
             rhs[r] = self.gap[i] + self.d0[i];
         }
         let phi = DVector::from_column_slice(self.phi);
@@ -1148,18 +1143,26 @@ impl Dense<'_> {
         for c in 0..nf {
             rhs[na + c] = -pf[c];
         }
+        // M x for M = [C_AA, −H; −Hᵀ, 0]
+        let apply = |x: &DVector<f64>| {
+            let (l, b) = (x.rows(0, na), x.rows(na, nf));
+            let mut y = DVector::zeros(dimn);
+            y.rows_mut(0, na).copy_from(&(&caa * l - &h * b));
+            y.rows_mut(na, nf).copy_from(&(-(h.transpose() * l)));
+            y
+        };
         let x = if dimn == 0 {
             DVector::zeros(0)
         } else {
-            let lu = m.clone().lu();
-            let mut x = lu.solve(&rhs)?;
+            let solve = SaddleSolver::new(&caa, &h)?;
+            let mut x = solve.solve(&rhs);
             // Two steps of iterative refinement: the balance rows' residual (the load the
             // pins would carry, i.e. the total contact force) to round-off of their own
             // scale, also when the gaps and α hold a large rigid motion (a body 700 units
             // away: the rows' right-hand sides are ~700 while λ's effect is ~1e-3).
             for _ in 0..2 {
-                let r = &rhs - &m * &x;
-                x += lu.solve(&r)?;
+                let r = &rhs - apply(&x);
+                x += solve.solve(&r);
             }
             if !x.iter().all(|v| v.is_finite()) {
                 return None;
@@ -1216,6 +1219,67 @@ impl Dense<'_> {
             }
         }
         Some(best.map(|(_, i)| i).ok_or(norm))
+    }
+}
+
+/// Solves [C, −H; −Hᵀ, 0] [λ; β] = [r₁; r₂] (C symmetric positive definite, n × n; H n × m,
+/// m ≤ 6): by LAPACK's Cholesky of C and the m × m Schur complement Hᵀ C⁻¹ H, or, if C is
+/// not positive definite to LAPACK or H is rank-deficient, by the LU of the whole matrix.
+enum SaddleSolver {
+    Cholesky {
+        c: DenseCholesky,
+        /// C⁻¹ H and the LU of Hᵀ C⁻¹ H.
+        ch: DMatrix<f64>,
+        t: nalgebra::LU<f64, nalgebra::Dyn, nalgebra::Dyn>,
+        h: DMatrix<f64>,
+    },
+    Lu(DenseLu),
+}
+
+impl SaddleSolver {
+    fn new(c: &DMatrix<f64>, h: &DMatrix<f64>) -> Option<SaddleSolver> {
+        let (n, m) = (c.nrows(), h.ncols());
+        if let Some(chol) = DenseCholesky::factor(c) {
+            let ch = chol.solve(h);
+            let t = (h.transpose() * &ch).lu();
+            if m == 0 || t.is_invertible() {
+                return Some(SaddleSolver::Cholesky {
+                    c: chol,
+                    ch,
+                    t,
+                    h: h.clone(),
+                });
+            }
+        }
+        let mut full = DMatrix::zeros(n + m, n + m);
+        full.view_mut((0, 0), (n, n)).copy_from(c);
+        full.view_mut((0, n), (n, m)).copy_from(&(-h));
+        full.view_mut((n, 0), (m, n)).copy_from(&(-h.transpose()));
+        DenseLu::factor(&full).map(SaddleSolver::Lu)
+    }
+
+    fn solve(&self, r: &DVector<f64>) -> DVector<f64> {
+        match self {
+            SaddleSolver::Lu(lu) => lu.solve(r),
+            SaddleSolver::Cholesky { c, ch, t, h } => {
+                let (n, m) = (h.nrows(), h.ncols());
+                let r1 = DMatrix::from_column_slice(n, 1, r.rows(0, n).as_slice());
+                let y1 = c.solve(&r1).column(0).into_owned();
+                let mut x = DVector::zeros(n + m);
+                if m == 0 {
+                    x.copy_from(&y1);
+                    return x;
+                }
+                // −Hᵀ (y₁ + C⁻¹H β) = r₂  ⇒  (Hᵀ C⁻¹ H) β = −r₂ − Hᵀ y₁
+                let rhs = -r.rows(n, m) - h.transpose() * &y1;
+                let beta = t
+                    .solve(&rhs)
+                    .unwrap_or_else(|| DVector::from_element(m, f64::NAN));
+                x.rows_mut(0, n).copy_from(&(y1 + ch * &beta));
+                x.rows_mut(n, m).copy_from(&beta);
+                x
+            }
+        }
     }
 }
 

@@ -11,6 +11,7 @@ pub mod boundary;
 pub mod condensed;
 pub mod cycle;
 pub mod newton;
+pub mod predictor;
 pub mod reduced;
 pub mod report;
 pub mod rigid;
@@ -267,11 +268,18 @@ pub fn solve(
         fixed,
         sys,
     };
+    let halfspace = (!friction).then(|| predictor::HalfSpace {
+        modulus: settings.contact_modulus,
+        dim,
+        length: 2.0 * mesh.extent(),
+        mirrors: predictor::mirror_planes(ctx, mesh, fixed),
+    });
     let ns = NewtonSettings {
         section: &settings.newton,
         c,
         law,
         rigid: settings.rigid_modes,
+        halfspace: halfspace.as_ref(),
     };
     let (mut nr, outer_steps, condensed_summary) = run_method(
         ctx,

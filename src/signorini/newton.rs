@@ -14,6 +14,7 @@
 use super::active_set::{ActiveSet, Iterate, Law, SetSummary, StepTotals};
 use super::boundary::{ContactBoundary, NodeResult};
 use super::cycle::{decide, CycleGuard, Decision, Seen, SetKey};
+use super::predictor::{self, HalfSpace, PredictorStep};
 use super::reduced::{AmgStep, ReducedSystem, ReuseStep, SolveKind, StepSolve};
 use super::rigid::{Balance, FreeModes, Motion, Pin};
 use crate::assembly::System;
@@ -32,6 +33,9 @@ pub struct NewtonSettings<'a> {
     pub c: f64,
     pub law: Law,
     pub rigid: case::RigidModeHandling,
+    /// The half-space model of the body for the first set of the iterative preset's reuse
+    /// path (predictor.rs); `None`: no prediction.
+    pub halfspace: Option<&'a HalfSpace>,
 }
 
 impl NewtonSettings<'_> {
@@ -88,6 +92,9 @@ pub struct StepInfo {
     /// Tresca: |u^ℓ − u^{ℓ−1}| / |u^ℓ|.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub du_rel: Option<f64>,
+    /// The half-space predictor after this (first) step (iterative preset, frictionless).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub predictor: Option<PredictorStep>,
 }
 
 /// What Algorithms 1 and 2 return.
@@ -213,6 +220,12 @@ pub fn semismooth_newton(
     // A loose step that changes at least as many nodes as the loose step before it makes no
     // progress (the inexact solves may make the set chatter): exact from then on as well.
     let mut exact = !(reduced.inexact_available() && s.law == Law::Frictionless);
+    // The half-space predictor: the iterative preset's reuse path (the steps are Krylov
+    // solves of the whole body), without friction and warm start, from an empty first set
+    // (then the first solve is u⁰ = K_p⁻¹ f, the model's d₀).
+    let mut predict = s.halfspace.filter(|_| {
+        !exact && warm.is_none() && s.section.init == NewtonInit::Auto && lp.summary.n_active == 0
+    });
     let mut last_changed = usize::MAX;
     // Set after a stop decided on a reuse step: the next step is factorised (direct preset).
     let mut final_check = false;
@@ -231,14 +244,27 @@ pub fn semismooth_newton(
         let bs = &lp.shifted;
         reduced.write(ctx, sys, layout, bs, &lp.set, lp.free.pins())?; // (3.29) / (3.42)
         reduced.set_inexact(!exact);
+        if predict.is_some() {
+            reduced.set_predictor_solve();
+        }
         let allow_reuse = !matches!(s.law, Law::Coulomb { .. }) && !final_check;
         let solved = reduced.solve(ctx, allow_reuse)?;
         let reused = solved.reuse.is_some() && solved.kind == SolveKind::Reuse;
         ensure_converged(step, &solved.info)?;
         reduced.recover(sys, bs, &lp.set, &mut lp.it)?; // (3.28)
-        let update = lp.set.update(&lp.it, bs, s.law, s.c, dim); // (3.23) / (3.33) / (F5)
+        let mut update = lp.set.update(&lp.it, bs, s.law, s.c, dim); // (3.23) / (3.33) / (F5)
+        let mut predicted = None;
+        if let Some(hs) = predict.take() {
+            let (set, rec) =
+                predictor::predict(ctx, hs, bs, &lp.it, &lp.free, s.c, s.section.max_steps)?;
+            if let Some(normal) = set {
+                update.replace_normal(&lp.set, normal);
+            }
+            predicted = Some(rec);
+        }
         let totals = update.reduce(ctx, bs, lp.free.modes(), dim);
         history.push(lp.step_info(step, &totals, solved));
+        history.last_mut().expect("pushed").predictor = predicted;
         log_step(ctx, history.last().expect("pushed"), &totals);
         if !exact {
             // Identical on every rank: `totals` and the guard's keys are global.
@@ -381,6 +407,7 @@ impl Loop<'_> {
             pinned: self.free.pins().len(),
             states: self.s.friction().then_some(t.states),
             du_rel: self.s.friction().then_some(t.du_rel),
+            predictor: None,
         }
     }
 

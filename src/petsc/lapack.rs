@@ -1,0 +1,193 @@
+//! LAPACK's dense Cholesky (dpotrf / dpotrs) and LU (dgetrf / dgetrs) for the dense systems on rank 0 (the condensed path's
+//! active blocks, the half-space predictor): blocked and BLAS-3, against nalgebra's unblocked
+//! LU (1 600 unknowns: ~0.1 s instead of seconds). The LAPACK PETSc itself links (Debian:
+//! liblapack.so.3, OpenBLAS by default). OpenBLAS' threaded LU takes a few MiB of the calling
+//! thread's stack: call it from the main thread (8 MiB) or a thread with as much.
+
+use nalgebra::{DMatrix, DVector};
+use std::os::raw::c_int;
+
+extern "C" {
+    fn dgetrf_(
+        m: *const c_int,
+        n: *const c_int,
+        a: *mut f64,
+        lda: *const c_int,
+        ipiv: *mut c_int,
+        info: *mut c_int,
+    );
+    #[allow(clippy::too_many_arguments)]
+    fn dgetrs_(
+        trans: *const u8,
+        n: *const c_int,
+        nrhs: *const c_int,
+        a: *const f64,
+        lda: *const c_int,
+        ipiv: *const c_int,
+        b: *mut f64,
+        ldb: *const c_int,
+        info: *mut c_int,
+    );
+}
+
+extern "C" {
+    fn dpotrf_(uplo: *const u8, n: *const c_int, a: *mut f64, lda: *const c_int, info: *mut c_int);
+    #[allow(clippy::too_many_arguments)]
+    fn dpotrs_(
+        uplo: *const u8,
+        n: *const c_int,
+        nrhs: *const c_int,
+        a: *const f64,
+        lda: *const c_int,
+        b: *mut f64,
+        ldb: *const c_int,
+        info: *mut c_int,
+    );
+}
+
+/// The Cholesky factor of a symmetric positive definite matrix (its lower triangle is read),
+/// for repeated solves: half the work of [`DenseLu`].
+pub struct DenseCholesky {
+    n: usize,
+    l: Vec<f64>,
+}
+
+impl DenseCholesky {
+    /// Factorises `m` (n × n). `None` if not positive definite (or too large for LAPACK's
+    /// 32-bit indices).
+    pub fn factor(m: &DMatrix<f64>) -> Option<DenseCholesky> {
+        let n = m.nrows();
+        assert_eq!(n, m.ncols(), "square matrix");
+        let ni = c_int::try_from(n).ok()?;
+        let mut l = m.as_slice().to_vec();
+        let mut info: c_int = 0;
+        if n > 0 {
+            // SAFETY: l holds n × n values with leading dimension n.
+            unsafe { dpotrf_(b"L".as_ptr(), &ni, l.as_mut_ptr(), &ni, &mut info) };
+        }
+        (info == 0).then_some(DenseCholesky { n, l })
+    }
+
+    /// X with A X = B (B: n × k).
+    pub fn solve(&self, b: &DMatrix<f64>) -> DMatrix<f64> {
+        assert_eq!(b.nrows(), self.n, "right-hand side rows");
+        let mut x = b.clone();
+        if self.n == 0 || b.ncols() == 0 {
+            return x;
+        }
+        let ni = self.n as c_int;
+        let k = b.ncols() as c_int;
+        let mut info: c_int = 0;
+        // SAFETY: the factor of an n × n matrix, x n × k column-major (ldb = n).
+        unsafe {
+            dpotrs_(
+                b"L".as_ptr(),
+                &ni,
+                &k,
+                self.l.as_ptr(),
+                &ni,
+                x.as_mut_slice().as_mut_ptr(),
+                &ni,
+                &mut info,
+            )
+        };
+        debug_assert_eq!(info, 0);
+        x
+    }
+}
+
+/// The LU factors of a square matrix (partial pivoting), for repeated solves.
+pub struct DenseLu {
+    n: usize,
+    lu: Vec<f64>,
+    piv: Vec<c_int>,
+}
+
+impl DenseLu {
+    /// Factorises `m` (n × n). `None` if singular (a zero pivot) or too large for LAPACK's
+    /// 32-bit indices.
+    pub fn factor(m: &DMatrix<f64>) -> Option<DenseLu> {
+        let n = m.nrows();
+        assert_eq!(n, m.ncols(), "square matrix");
+        let ni = c_int::try_from(n).ok()?;
+        let mut lu = m.as_slice().to_vec(); // column-major, as LAPACK
+        let mut piv = vec![0 as c_int; n];
+        let mut info: c_int = 0;
+        if n > 0 {
+            // SAFETY: lu holds n × n values with leading dimension n, piv n entries.
+            unsafe { dgetrf_(&ni, &ni, lu.as_mut_ptr(), &ni, piv.as_mut_ptr(), &mut info) };
+        }
+        (info == 0).then_some(DenseLu { n, lu, piv })
+    }
+
+    /// x with A x = b.
+    pub fn solve(&self, b: &DVector<f64>) -> DVector<f64> {
+        assert_eq!(b.len(), self.n, "right-hand side length");
+        let mut x = b.clone();
+        if self.n == 0 {
+            return x;
+        }
+        let ni = self.n as c_int;
+        let one: c_int = 1;
+        let mut info: c_int = 0;
+        // SAFETY: the factors of an n × n matrix, n pivots, x of length n (ldb = n).
+        unsafe {
+            dgetrs_(
+                b"N".as_ptr(),
+                &ni,
+                &one,
+                self.lu.as_ptr(),
+                &ni,
+                self.piv.as_ptr(),
+                x.as_mut_slice().as_mut_ptr(),
+                &ni,
+                &mut info,
+            )
+        };
+        debug_assert_eq!(info, 0);
+        x
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn lu_solves_an_indefinite_saddle_system_like_nalgebra() {
+        // [C -h; -hᵀ 0] with C symmetric positive definite: indefinite, needs pivoting
+        let n = 40;
+        let c = DMatrix::from_fn(n, n, |i, j| 1.0 / (1.0 + (i as f64 - j as f64).abs()));
+        let mut m = DMatrix::zeros(n + 1, n + 1);
+        m.view_mut((0, 0), (n, n)).copy_from(&c);
+        for i in 0..n {
+            m[(i, n)] = -1.0;
+            m[(n, i)] = -1.0;
+        }
+        let b = DVector::from_fn(n + 1, |i, _| (i as f64 * 0.37).sin());
+        let x = DenseLu::factor(&m).expect("regular").solve(&b);
+        let y = m.clone().lu().solve(&b).expect("regular");
+        assert!((&x - &y).norm() <= 1e-10 * y.norm(), "{}", (&x - &y).norm());
+        assert!((&m * &x - &b).norm() <= 1e-12 * b.norm().max(1.0));
+    }
+
+    #[test]
+    fn cholesky_solves_and_rejects_an_indefinite_matrix() {
+        let n = 30;
+        let c = DMatrix::from_fn(n, n, |i, j| 1.0 / (1.0 + (i as f64 - j as f64).abs()));
+        let b = DMatrix::from_fn(n, 2, |i, j| ((i + 7 * j) as f64 * 0.37).sin());
+        let x = DenseCholesky::factor(&c)
+            .expect("positive definite")
+            .solve(&b);
+        assert!((&c * &x - &b).norm() <= 1e-12 * b.norm());
+        let mut d = c.clone();
+        d[(3, 3)] = -1.0;
+        assert!(DenseCholesky::factor(&d).is_none());
+    }
+
+    #[test]
+    fn lu_reports_a_singular_matrix() {
+        let m = DMatrix::from_row_slice(2, 2, &[1.0, 2.0, 2.0, 4.0]);
+        assert!(DenseLu::factor(&m).is_none());
+    }
+}

@@ -1,0 +1,437 @@
+//! The half-space predictor of the frictionless active set (issue 9, iterative preset).
+//!
+//! On the iterative preset every Newton step is a Krylov solve of the whole body, and the
+//! steps Algorithm 1 makes from the all-inactive start (grow past the final set, then shrink
+//! by about half the excess per step) cost 5–8 such solves. The direct preset avoids them with
+//! the exact compliance C = Nᵀ K_p⁻¹ N on the candidates (condensed.rs); the iterative preset
+//! has no factorisation to take it from. This module replaces C by the compliance of an
+//! elastic half-space with the body's contact modulus E* (Boussinesq in 3D, Flamant in 2D),
+//! with mirror images in the body's symmetry planes, and keeps the rest exact: d₀ = the
+//! normal displacements of the first solve (no active node, u⁰ = K_p⁻¹ f), the gaps, the
+//! free rigid modes and their load balance. Algorithm 1 on that dense model (the nested
+//! iteration of condensed.rs) gives the set the second Newton step starts from; from there
+//! Algorithm 1 goes on on the real system, so the final iterate is Algorithm 1's whatever
+//! the model's error (it only costs steps). The model is that of Hertz' theory: exact for
+//! a small contact zone on a smooth body, rougher for conforming contact or thin bodies.
+
+use super::active_set::Iterate;
+use super::boundary::ContactBoundary;
+use super::condensed::{Dense, End};
+use super::rigid::FreeModes;
+use crate::error::RunError;
+use crate::mesh::Mesh;
+use crate::par::Ctx;
+use crate::say;
+use nalgebra::DMatrix;
+use serde::Serialize;
+use std::f64::consts::PI;
+use std::time::Instant;
+
+/// The model holds at most this many contact nodes (those nearest to contact after the first
+/// solve): its dense compliance has this squared entries on rank 0.
+pub const MAX_MODEL_NODES: usize = 3000;
+
+/// The model takes this multiple of the nodes that penetrate after the first solve (the final
+/// set of 3D Hertz is 1.2 × it), at least [`MIN_MODEL_NODES`].
+pub const MODEL_MARGIN: usize = 3;
+pub const MIN_MODEL_NODES: usize = 256;
+
+/// The centre displacement of a uniformly loaded square of side s on a half-space is
+/// SQUARE_SELF · F / (π E* s) (∫∫ dA / r over the square = 4 s ln(1 + √2)).
+const SQUARE_SELF: f64 = 3.525_494_348_078_172;
+
+/// An elastic half-space with the body's contact modulus, mirrored in its symmetry planes.
+#[derive(Clone, Debug)]
+pub struct HalfSpace {
+    /// E* = E / (1 − ν²) in 3D and plane strain, E in plane stress.
+    pub modulus: f64,
+    pub dim: usize,
+    /// 2D: the length L of the Flamant solution's ln(L / r) (the displacement of a half-plane
+    /// is defined up to a constant: here relative to the distance L, twice the mesh extent).
+    pub length: f64,
+    /// Symmetry planes x_k = c (Dirichlet u_k = 0 alone on a plane group), at most 3.
+    pub mirrors: Vec<(usize, f64)>,
+}
+
+/// What the predictor did (summary.json `newton.history[0].predictor`).
+#[derive(Clone, Debug, Serialize)]
+pub struct PredictorStep {
+    /// The set the second step starts from came from the model ("predicted"), or why not.
+    pub outcome: String,
+    /// Contact nodes in the model.
+    pub model_nodes: usize,
+    /// Nodes the model puts in contact.
+    pub predicted_active: usize,
+    pub mirror_planes: usize,
+    /// Steps of Algorithm 1 on the model (finest level) and its coarse levels.
+    pub model_steps: usize,
+    pub coarse_levels: usize,
+    pub seconds: f64,
+}
+
+impl HalfSpace {
+    /// Normal displacement at x per unit normal force at y (Boussinesq: 1 / (π E* r); Flamant:
+    /// 2 / (π E*) ln(L / r)).
+    fn point(&self, r: f64) -> f64 {
+        if self.dim == 3 {
+            1.0 / (PI * self.modulus * r)
+        } else {
+            2.0 / (PI * self.modulus) * (self.length / r).ln()
+        }
+    }
+
+    /// The displacement of a node under its own unit force spread uniformly over its lumped
+    /// weight w (3D: a square of area w; 2D: a strip of width w, centre value).
+    fn own(&self, w: f64) -> f64 {
+        if self.dim == 3 {
+            SQUARE_SELF / (PI * self.modulus * w.sqrt())
+        } else {
+            2.0 / (PI * self.modulus) * ((2.0 * self.length / w).ln() + 1.0)
+        }
+    }
+
+    /// The images of y in the mirror planes (y itself first): 2^|mirrors| points.
+    fn images(&self, y: &[f64; 3]) -> Vec<[f64; 3]> {
+        let mut out = vec![*y];
+        for &(k, c) in &self.mirrors {
+            let n = out.len();
+            for i in 0..n {
+                let mut p = out[i];
+                p[k] = 2.0 * c - p[k];
+                out.push(p);
+            }
+        }
+        out
+    }
+
+    /// The model's compliance C (n × n, symmetric) of nodes at `x` with lumped weights `w`:
+    /// the displacement at node i per unit force at node j and at j's images. Images that
+    /// fall on the node itself (a node on a symmetry plane) merge with it: m coincident copies
+    /// make one node of weight m w and force m.
+    pub fn compliance(&self, x: &[[f64; 3]], w: &[f64]) -> DMatrix<f64> {
+        let n = x.len();
+        let scale = x
+            .iter()
+            .flat_map(|p| p.iter())
+            .fold(0.0f64, |a, v| a.max(v.abs()))
+            .max(self.length);
+        let tiny = 1e-9 * scale;
+        let images: Vec<Vec<[f64; 3]>> = x.iter().map(|p| self.images(p)).collect();
+        let dist =
+            |a: &[f64; 3], b: &[f64; 3]| (0..3).map(|k| (a[k] - b[k]).powi(2)).sum::<f64>().sqrt();
+        // symmetric: |x_i − image(x_j)| = |image(x_i) − x_j| in mirror planes
+        let mut c = DMatrix::zeros(n, n);
+        for j in 0..n {
+            for i in 0..=j {
+                let mut v = 0.0;
+                let mut own = 0usize;
+                for y in &images[j] {
+                    let r = dist(&x[i], y);
+                    if r <= tiny {
+                        own += 1;
+                    } else {
+                        v += self.point(r);
+                    }
+                }
+                if own > 0 {
+                    v += own as f64 * self.own(own as f64 * w[j]);
+                }
+                c[(i, j)] = v;
+                c[(j, i)] = v;
+            }
+        }
+        c
+    }
+}
+
+/// The symmetry planes of the Dirichlet data `fixed` (per local node and component, NaN =
+/// free): for each axis k, the nodes whose only prescribed component is u_k = 0; a plane
+/// x_k = c if there are at least 3 of them (all ranks) and they all have x_k = c. Collective.
+pub fn mirror_planes(ctx: &Ctx, mesh: &Mesh, fixed: &[f64]) -> Vec<(usize, f64)> {
+    let dim = mesh.dim;
+    let mut local = Vec::with_capacity(3 * dim);
+    let mut lo = [f64::INFINITY; 3];
+    let mut hi = [f64::NEG_INFINITY; 3];
+    let mut count = [0.0f64; 3];
+    for (v, x) in mesh.coords.iter().enumerate() {
+        let f = &fixed[v * dim..(v + 1) * dim];
+        let set: Vec<usize> = (0..dim).filter(|&k| !f[k].is_nan()).collect();
+        if let [k] = set[..] {
+            if f[k] == 0.0 {
+                count[k] += 1.0;
+                lo[k] = lo[k].min(x[k]);
+                hi[k] = hi[k].max(x[k]);
+            }
+        }
+    }
+    local.extend_from_slice(&count[..dim]);
+    let n = ctx.sum_vec(&local);
+    let extent = mesh.extent();
+    let mut out = Vec::new();
+    for k in 0..dim {
+        let (a, b) = (ctx.min_f64(lo[k]), ctx.max_f64(hi[k]));
+        if n[k] >= 3.0 && b - a <= 1e-9 * extent {
+            out.push((k, 0.5 * (a + b)));
+        }
+    }
+    out
+}
+
+/// Values per node record gathered on rank 0: x (3), n (3), gap, w, u_n, G (6).
+const REC: usize = 15;
+
+/// The predicted normal set of this rank's contact nodes after the first solve (`it`, on the
+/// boundary `b` as the solve saw it, all nodes inactive), or `None` when the model does not
+/// apply (no node penetrates, the dense iteration did not converge); and the record.
+/// Collective.
+pub fn predict(
+    ctx: &Ctx,
+    hs: &HalfSpace,
+    b: &ContactBoundary,
+    it: &Iterate,
+    free: &FreeModes,
+    c: f64,
+    max_steps: usize,
+) -> Result<(Option<Vec<bool>>, PredictorStep), RunError> {
+    let t = Instant::now();
+    let (z, modes) = (free.dirichlet_free(), free.rigid_modes());
+    let mz = if free.floats() { z.ncols() } else { 0 };
+    let mut mine = Vec::with_capacity(b.nodes.len() * REC);
+    for (k, r) in b.nodes.iter().zip(&it.nodes) {
+        let mut gz = [0.0; 6];
+        if mz > 0 {
+            let row = modes.direction_row(&k.x, &k.frame.n);
+            for (cc, g) in gz.iter_mut().enumerate().take(mz) {
+                *g = (0..modes.m).map(|j| row[j] * z[(j, cc)]).sum();
+            }
+        }
+        mine.extend_from_slice(&k.x);
+        mine.extend_from_slice(&k.frame.n);
+        mine.extend_from_slice(&[k.gap, k.weight, r.u_n]);
+        mine.extend_from_slice(&gz);
+    }
+    let all = ctx.gather_to_root(&mine);
+    let mut rec = PredictorStep {
+        outcome: String::new(),
+        model_nodes: 0,
+        predicted_active: 0,
+        mirror_planes: hs.mirrors.len(),
+        model_steps: 0,
+        coarse_levels: 0,
+        seconds: 0.0,
+    };
+    // rank 0: [code, model nodes, model steps, coarse levels, flags of all nodes...]
+    let mut packed: Vec<f64> = Vec::new();
+    if ctx.rank == 0 {
+        let n = all.len() / REC;
+        let r = |i: usize| &all[i * REC..(i + 1) * REC];
+        // s⁰ = u_n + g: the first solve's clearance (< 0 penetrates)
+        let s0: Vec<f64> = (0..n).map(|i| r(i)[8] + r(i)[6]).collect();
+        let pen = s0.iter().filter(|&&s| s < 0.0).count();
+        let mut flags = vec![0.0; n];
+        let (code, m, steps, levels) = if pen == 0 {
+            (1.0, 0, 0, 0)
+        } else {
+            let m = (MODEL_MARGIN * pen)
+                .clamp(MIN_MODEL_NODES, MAX_MODEL_NODES)
+                .min(n);
+            let mut order: Vec<usize> = (0..n).collect();
+            order.sort_by(|&a, &b| s0[a].total_cmp(&s0[b]).then(a.cmp(&b)));
+            let pick = &order[..m];
+            let x: Vec<[f64; 3]> = pick.iter().map(|&i| [r(i)[0], r(i)[1], r(i)[2]]).collect();
+            let w: Vec<f64> = pick.iter().map(|&i| r(i)[7]).collect();
+            let cmat = hs.compliance(&x, &w);
+            let d0: Vec<f64> = pick.iter().map(|&i| r(i)[8]).collect();
+            let gap: Vec<f64> = pick.iter().map(|&i| r(i)[6]).collect();
+            let g = DMatrix::from_fn(m, mz, |q, cc| r(pick[q])[9 + cc]);
+            let (load, load_scale) = free.load();
+            let phi: Vec<f64> = (0..mz)
+                .map(|cc| (0..modes.m).map(|j| z[(j, cc)] * load[j]).sum())
+                .collect();
+            let dense = Dense {
+                cmat: &cmat,
+                d0: &d0,
+                gap: &gap,
+                g: &g,
+                phi: &phi,
+                load_scale,
+                c,
+                max_steps,
+            };
+            let run = dense.run_nested(vec![false; m], &x);
+            if run.end == End::Converged {
+                for (q, &i) in pick.iter().enumerate() {
+                    if run.active[q] {
+                        flags[i] = 1.0;
+                    }
+                }
+                (0.0, m, run.steps.len(), run.coarse.len())
+            } else {
+                (2.0, m, run.steps.len(), run.coarse.len())
+            }
+        };
+        packed = vec![code, m as f64, steps as f64, levels as f64];
+        packed.extend_from_slice(&flags);
+    }
+    ctx.broadcast_f64s(&mut packed);
+    let code = packed[0];
+    rec.model_nodes = packed[1] as usize;
+    rec.model_steps = packed[2] as usize;
+    rec.coarse_levels = packed[3] as usize;
+    let flags_all = &packed[4..];
+    rec.predicted_active = flags_all.iter().filter(|&&f| f != 0.0).count();
+    rec.outcome = match code as i32 {
+        0 => "predicted".into(),
+        1 => "no node penetrates after the first solve".into(),
+        _ => "the model's dense iteration did not converge".into(),
+    };
+    let mine = if code == 0.0 {
+        let o = b.offset;
+        Some(
+            flags_all[o..o + b.nodes.len()]
+                .iter()
+                .map(|&f| f != 0.0)
+                .collect(),
+        )
+    } else {
+        None
+    };
+    rec.seconds = t.elapsed().as_secs_f64();
+    say!(
+        ctx,
+        "predictor: half-space model (E* = {:.4e}, {} mirror plane(s)) on {} contact nodes: {} ({} active, {} steps, {} coarse levels, {:.3} s)",
+        hs.modulus,
+        rec.mirror_planes,
+        rec.model_nodes,
+        rec.outcome,
+        rec.predicted_active,
+        rec.model_steps,
+        rec.coarse_levels,
+        rec.seconds
+    );
+    Ok((mine, rec))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn hs3(mirrors: Vec<(usize, f64)>) -> HalfSpace {
+        HalfSpace {
+            modulus: 2.0,
+            dim: 3,
+            length: 1.0,
+            mirrors,
+        }
+    }
+
+    #[test]
+    fn boussinesq_kernel_and_symmetry() {
+        let h = hs3(vec![]);
+        let x = vec![[0.0, 0.0, 0.0], [0.1, 0.0, 0.0], [0.0, 0.2, 0.0]];
+        let c = h.compliance(&x, &[0.01, 0.01, 0.01]);
+        assert!((c[(0, 1)] - 1.0 / (PI * 2.0 * 0.1)).abs() < 1e-12);
+        assert!((c[(1, 2)] - c[(2, 1)]).abs() == 0.0);
+        // own term: the square of side 0.1
+        assert!((c[(0, 0)] - SQUARE_SELF / (PI * 2.0 * 0.1)).abs() < 1e-12);
+        assert!(c[(0, 0)] > c[(0, 1)], "the own displacement is the largest");
+    }
+
+    #[test]
+    fn a_mirror_plane_adds_the_image_and_merges_nodes_on_it() {
+        let h = hs3(vec![(0, 0.0)]);
+        let x = vec![[0.1, 0.0, 0.0], [0.0, 0.3, 0.0]];
+        let c = h.compliance(&x, &[0.01, 0.005]);
+        // node 0 and its image at (-0.1, 0, 0)
+        let own0 = SQUARE_SELF / (PI * 2.0 * 0.1) + 1.0 / (PI * 2.0 * 0.2);
+        assert!((c[(0, 0)] - own0).abs() < 1e-12);
+        // node 1 lies on the plane: one node of twice the weight carrying twice the force
+        let own1 = 2.0 * SQUARE_SELF / (PI * 2.0 * (0.01f64).sqrt());
+        assert!((c[(1, 1)] - own1).abs() < 1e-12);
+        let r = (0.1f64 * 0.1 + 0.09).sqrt();
+        assert!((c[(0, 1)] - 2.0 / (PI * 2.0 * r)).abs() < 1e-12);
+    }
+
+    #[test]
+    fn flamant_kernel_decreases_with_distance() {
+        let h = HalfSpace {
+            modulus: 1.0,
+            dim: 2,
+            length: 2.0,
+            mirrors: vec![],
+        };
+        let x: Vec<[f64; 3]> = (0..5).map(|i| [0.1 * i as f64, 0.0, 0.0]).collect();
+        let c = h.compliance(&x, &[0.1; 5]);
+        for j in 1..4 {
+            assert!(c[(0, j)] > c[(0, j + 1)] && c[(0, j + 1)] > 0.0);
+        }
+        assert!(c[(0, 0)] > c[(0, 1)]);
+    }
+
+    /// The model reproduces Hertz: a paraboloid gap g = r² / (2R) on a half-space pressed by a
+    /// free rigid translation with the load F gives a = (3 F R / (4 E*))^(1/3).
+    #[test]
+    fn the_model_reproduces_hertz_radius() {
+        // OpenBLAS' threaded LU needs more stack than a test thread's 2 MiB (the binary's
+        // main thread has the system's 8 MiB)
+        std::thread::Builder::new()
+            .stack_size(16 << 20)
+            .spawn(hertz_radius)
+            .expect("thread")
+            .join()
+            .expect("no panic");
+    }
+
+    fn hertz_radius() {
+        let (rr, f, e): (f64, f64, f64) = (1.0, 0.003, 2.0);
+        let a = (3.0 * f * rr / (4.0 * e)).powf(1.0 / 3.0);
+        // a quarter grid (two mirror planes), spacing h
+        let h = a / 20.0;
+        let mut x = Vec::new();
+        for i in 0..45 {
+            for j in 0..45 {
+                x.push([i as f64 * h, j as f64 * h, 0.0]);
+            }
+        }
+        let w: Vec<f64> = x
+            .iter()
+            .map(|p| {
+                let f = |v: f64| if v == 0.0 { 0.5 } else { 1.0 };
+                h * h * f(p[0]) * f(p[1])
+            })
+            .collect();
+        let model = hs3(vec![(0, 0.0), (1, 0.0)]);
+        let cmat = model.compliance(&x, &w);
+        let gap: Vec<f64> = x
+            .iter()
+            .map(|p| (p[0] * p[0] + p[1] * p[1]) / (2.0 * rr))
+            .collect();
+        let n = x.len();
+        // one free mode (translation towards the plane: u_n = +α), the load F/4 on it
+        let g = DMatrix::from_element(n, 1, -1.0);
+        let dense = Dense {
+            cmat: &cmat,
+            d0: &vec![0.0; n],
+            gap: &gap,
+            g: &g,
+            phi: &[f / 4.0],
+            load_scale: f,
+            c: 1.0,
+            max_steps: 100,
+        };
+        let run = dense.run_nested(vec![false; n], &x);
+        assert_eq!(run.end, End::Converged);
+        let rmax = x
+            .iter()
+            .zip(&run.active)
+            .filter(|(_, &a)| a)
+            .map(|(p, _)| (p[0] * p[0] + p[1] * p[1]).sqrt())
+            .fold(0.0, f64::max);
+        assert!(
+            (rmax - a).abs() <= 1.5 * h,
+            "contact radius {rmax} against Hertz {a} (h = {h})"
+        );
+        let total: f64 = -run.lambda.iter().sum::<f64>();
+        assert!((total - f / 4.0).abs() <= 1e-9 * f, "force {total}");
+    }
+}

@@ -184,7 +184,19 @@ pub fn semismooth_newton(
     let dim = mesh.dim;
     let free = FreeModes::new(ctx, mesh, layout, fixed, b, &reduced.f_local, s.rigid);
     reduced.set_pins(sys, layout, free.pins())?; // none yet (the system may be reused)
-    let init = auto_start(s.section.init, s.friction(), &free);
+                                                 // The half-space predictor (iterative preset's reuse path, frictionless, the "auto" start,
+                                                 // no warm start): the first solve has no active node (u⁰ = K_p⁻¹ f, the model's d₀),
+                                                 // also where the "gap" start would clamp the initially touching nodes.
+    let predicting = s.halfspace.is_some()
+        && reduced.inexact_available()
+        && s.law == Law::Frictionless
+        && warm.is_none()
+        && s.section.init == NewtonInit::Auto;
+    let init = if predicting {
+        NewtonInit::AllInactive
+    } else {
+        auto_start(s.section.init, s.friction(), &free)
+    };
     let set = match warm {
         None => ActiveSet::initial(b, init, s.law, s.c, mesh.extent(), dim),
         Some(w) => ActiveSet::warm(b, w.nodes, s.law, s.c, dim),
@@ -220,12 +232,7 @@ pub fn semismooth_newton(
     // A loose step that changes at least as many nodes as the loose step before it makes no
     // progress (the inexact solves may make the set chatter): exact from then on as well.
     let mut exact = !(reduced.inexact_available() && s.law == Law::Frictionless);
-    // The half-space predictor: the iterative preset's reuse path (the steps are Krylov
-    // solves of the whole body), without friction and warm start, from an empty first set
-    // (then the first solve is u⁰ = K_p⁻¹ f, the model's d₀).
-    let mut predict = s.halfspace.filter(|_| {
-        !exact && warm.is_none() && s.section.init == NewtonInit::Auto && lp.summary.n_active == 0
-    });
+    let mut predict = s.halfspace.filter(|_| predicting);
     let mut last_changed = usize::MAX;
     // Set after a stop decided on a reuse step: the next step is factorised (direct preset).
     let mut final_check = false;
@@ -354,6 +361,9 @@ fn log_step(ctx: &Ctx, h: &StepInfo, t: &StepTotals) {
     let how = match (&h.reuse, &h.amg) {
         (Some(_), _) if h.solve == SolveKind::Reuse => format!("reuse, {} its", h.iterations),
         (Some(r), _) if r.fallback => format!("{} its, refactorised", r.krylov_iterations),
+        (_, Some(a)) if a.initial_residual == 0.0 && h.iterations == 0 && !a.pc_setup => {
+            "no right-hand side, no solve".to_string()
+        }
         (_, Some(a)) => format!(
             "{} its, {}{}, r0 {:.1e}",
             h.iterations,

@@ -822,6 +822,32 @@ impl ReducedSystem {
             zero_start = true;
         }
         let amg = self.amg.as_mut().expect("checked");
+        if bnorm == 0.0 && first {
+            // No load yet (a body loaded only through the contact, the predictor's first
+            // solve): u = 0 without a solve, and the preconditioner is set up by the first
+            // solve that has a right-hand side, on its own matrix.
+            self.u.set_all(0.0)?;
+            amg.predictor = false;
+            return Ok(StepSolve {
+                info: SolveInfo {
+                    iterations: 0,
+                    reason: 2, // KSP_CONVERGED_RTOL_NORMAL's sign: converged
+                    reason_name: "zero right-hand side".into(),
+                },
+                kind: SolveKind::Krylov,
+                seconds: t.elapsed().as_secs_f64(),
+                reuse: None,
+                amg: Some(AmgStep {
+                    pc_setup: false,
+                    pc_setup_seconds: 0.0,
+                    rtol: amg.rtol,
+                    inexact,
+                    initial_residual: 0.0,
+                    rate: 0.0,
+                    fallback: false,
+                }),
+            });
+        }
         // the default convergence test of a nonzero start measures ‖b − S u‖ against ‖b‖
         let predictor = std::mem::take(&mut amg.predictor);
         let reduction = if predictor {

@@ -1,0 +1,136 @@
+//! The half-space predictor of the iterative preset's reuse path (issue 9, item 3;
+//! src/signorini/predictor.rs): after a first solve without active nodes, Algorithm 1 on a
+//! dense half-space model (Boussinesq / Flamant, mirrored in the symmetry planes) gives the set
+//! the second Newton step starts from. The final iterate stays Algorithm 1's: the same final
+//! active nodes as the plain path and u within 1e-8 of max |u|; summary.json records the
+//! prediction in the first step; no other path predicts.
+
+mod common;
+use common::*;
+use serde_json::Value;
+use std::path::Path;
+
+fn predictor(s: &Solved) -> Value {
+    get(&s.summary, &["newton", "history"])[0]["predictor"].clone()
+}
+
+fn iterative(sets: &[&str], reuse: &str) -> Vec<String> {
+    let mut v: Vec<String> = sets.iter().map(|s| s.to_string()).collect();
+    v.push("solver.preset=\"iterative\"".into());
+    v.push(format!("solver.reuse=\"{reuse}\""));
+    v
+}
+
+fn run(np: usize, case: &Path, sets: &[String]) -> Solved {
+    let s = solve(
+        np,
+        case,
+        &sets.iter().map(String::as_str).collect::<Vec<_>>(),
+    );
+    s.assert_converged(&format!("{} {sets:?}", case.display()));
+    s
+}
+
+/// Runs the plain path and the default reuse path; checks the prediction's record and the
+/// final iterate; returns (plain, predicted) runs.
+fn predicted_against_plain(
+    np: usize,
+    case: &Path,
+    sets: &[&str],
+    mirrors: u64,
+) -> (Solved, Solved) {
+    let plain = run(np, case, &iterative(sets, "never"));
+    let auto = run(np, case, &iterative(sets, "auto"));
+    assert!(
+        predictor(&plain).is_null(),
+        "the plain path does not predict"
+    );
+    let p = predictor(&auto);
+    assert_eq!(p["outcome"], "predicted", "{p}\n{}", auto.run.output());
+    assert_eq!(p["mirror_planes"].as_u64(), Some(mirrors), "{p}");
+    let predicted = p["predicted_active"].as_u64().unwrap() as f64;
+    let fin = auto.active_node_ids().len() as f64;
+    assert!(fin > 0.0);
+    assert!(
+        (predicted - fin).abs() <= 0.15 * fin + 1.0,
+        "predicted {predicted} active nodes, {fin} at the end: {p}"
+    );
+    assert!(p["model_nodes"].as_u64().unwrap() as f64 >= predicted);
+    // the second step solves with the predicted set
+    let h = get(&auto.summary, &["newton", "history"]);
+    assert_eq!(h[1]["active"].as_u64(), Some(predicted as u64), "{}", h[1]);
+    assert_eq!(
+        plain.active_node_ids(),
+        auto.active_node_ids(),
+        "{}: final active sets differ",
+        case.display()
+    );
+    let d = plain.u_rel_diff(&auto);
+    assert!(
+        d <= 1e-8,
+        "{}: |u - u_plain| / max|u| = {d:e}",
+        case.display()
+    );
+    (plain, auto)
+}
+
+#[test]
+fn hertz_cylinder_2d_starts_near_the_final_set_and_saves_steps() {
+    let (plain, auto) = predicted_against_plain(2, &repo("cases/hertz/hertz.toml"), &[], 0);
+    assert!(
+        auto.steps() < plain.steps(),
+        "predicted: {} steps, plain: {}",
+        auto.steps(),
+        plain.steps()
+    );
+}
+
+#[test]
+fn quarter_ball_3d_mirrors_in_its_two_symmetry_planes() {
+    let tmp = tempfile::tempdir().unwrap();
+    let mesh = tmp.path().join("hertz3d.msh");
+    let mut cmd = std::process::Command::new("gmsh");
+    cmd.arg("-3")
+        .arg(repo("cases/hertz3d/hertz3d.geo"))
+        .args(["-setnumber", "h", "0.025", "-format", "msh41", "-o"])
+        .arg(&mesh);
+    run_with_timeout(cmd, std::time::Duration::from_secs(120)).expect_code(0, "gmsh hertz3d");
+    let m = format!("mesh.file={}", toml_path(&mesh));
+    for np in [1, 2] {
+        predicted_against_plain(np, &repo("cases/hertz3d/hertz3d.toml"), &[&m], 2);
+    }
+}
+
+#[test]
+fn half_indentation_mirrors_in_one_plane_and_skips_the_unloaded_first_solve() {
+    // a clamped block loaded only through the contact (the obstacle overlaps it): the first
+    // solve has no right-hand side, u⁰ = 0, no solve and no preconditioner setup
+    let case = repo("tests/cases/indent2d_half.toml");
+    let init = "newton.init=\"auto\"";
+    let (_, auto) = predicted_against_plain(2, &case, &[init], 1);
+    let h0 = &get(&auto.summary, &["newton", "history"])[0];
+    assert_eq!(h0["iterations"].as_u64(), Some(0), "{h0}");
+    assert_eq!(h0["amg"]["pc_setup"], Value::Bool(false), "{h0}");
+}
+
+#[test]
+fn only_the_iterative_reuse_path_without_friction_predicts() {
+    let case = repo("cases/hertz/hertz.toml");
+    for sets in [
+        // an explicit start is the user's
+        iterative(&["newton.init=\"all_inactive\""], "auto"),
+        // the direct preset condenses instead
+        vec!["solver.preset=\"direct\"".to_string()],
+    ] {
+        let s = run(2, &case, &sets);
+        assert!(predictor(&s).is_null(), "{sets:?}: {}", predictor(&s));
+        assert!(!s.run.output().contains("predictor:"), "{sets:?}");
+    }
+    // Tresca: Algorithm 2 without inexact steps
+    let tresca = repo("tests/cases/tresca/hertz_tresca.toml");
+    for sets in [iterative(&[], "auto")] {
+        let s = run(2, &tresca, &sets);
+        assert!(predictor(&s).is_null(), "{sets:?}: {}", predictor(&s));
+        assert!(!s.run.output().contains("predictor:"), "{sets:?}");
+    }
+}

@@ -266,6 +266,10 @@ pub fn semismooth_newton(
                 predictor::predict(ctx, hs, bs, &lp.it, &lp.free, s.c, s.section.max_steps)?;
             if let Some(normal) = set {
                 update.replace_normal(&lp.set, normal);
+                // From the predicted set every step is exact: the inexact steps (a residual
+                // reduction of 1e-6) flip edge nodes whose λ_n or gap is near 0 (3D Hertz,
+                // 527 k unknowns: changes 18, 17, 0 and an exact step after them; exact: 6, 0).
+                exact = true;
             }
             predicted = Some(rec);
         }

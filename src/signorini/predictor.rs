@@ -109,24 +109,29 @@ impl HalfSpace {
     /// fall on the node itself (a node on a symmetry plane) merge with it: m coincident copies
     /// make one node of weight m w and force m.
     pub fn compliance(&self, x: &[[f64; 3]], w: &[f64]) -> DMatrix<f64> {
-        let n = x.len();
+        assemble(x.len(), &self.columns(x, w, 0..x.len()))
+    }
+
+    /// Columns `cols` of the upper triangle of [`HalfSpace::compliance`], packed: for each
+    /// column j the entries i = 0..=j (C is symmetric: |x_i − image(x_j)| = |image(x_i) − x_j|
+    /// in mirror planes).
+    pub fn columns(&self, x: &[[f64; 3]], w: &[f64], cols: std::ops::Range<usize>) -> Vec<f64> {
         let scale = x
             .iter()
             .flat_map(|p| p.iter())
             .fold(0.0f64, |a, v| a.max(v.abs()))
             .max(self.length);
         let tiny = 1e-9 * scale;
-        let images: Vec<Vec<[f64; 3]>> = x.iter().map(|p| self.images(p)).collect();
         let dist =
             |a: &[f64; 3], b: &[f64; 3]| (0..3).map(|k| (a[k] - b[k]).powi(2)).sum::<f64>().sqrt();
-        // symmetric: |x_i − image(x_j)| = |image(x_i) − x_j| in mirror planes
-        let mut c = DMatrix::zeros(n, n);
-        for j in 0..n {
-            for i in 0..=j {
+        let mut out = Vec::with_capacity(cols.clone().map(|j| j + 1).sum());
+        for j in cols {
+            let images = self.images(&x[j]);
+            for xi in &x[..=j] {
                 let mut v = 0.0;
                 let mut own = 0usize;
-                for y in &images[j] {
-                    let r = dist(&x[i], y);
+                for y in &images {
+                    let r = dist(xi, y);
                     if r <= tiny {
                         own += 1;
                     } else {
@@ -136,12 +141,32 @@ impl HalfSpace {
                 if own > 0 {
                     v += own as f64 * self.own(own as f64 * w[j]);
                 }
-                c[(i, j)] = v;
-                c[(j, i)] = v;
+                out.push(v);
             }
         }
-        c
+        out
     }
+}
+
+/// The symmetric n × n matrix of the packed upper-triangle columns 0..n ([`HalfSpace::columns`]).
+pub fn assemble(n: usize, packed: &[f64]) -> DMatrix<f64> {
+    let mut c = DMatrix::zeros(n, n);
+    let mut p = 0;
+    for j in 0..n {
+        for i in 0..=j {
+            c[(i, j)] = packed[p];
+            c[(j, i)] = packed[p];
+            p += 1;
+        }
+    }
+    c
+}
+
+/// Rank `rank` of `size` builds the columns lo..hi of an n × n triangle: about equal shares
+/// of its n (n + 1) / 2 entries (column j has j + 1).
+fn column_share(n: usize, rank: usize, size: usize) -> std::ops::Range<usize> {
+    let at = |r: usize| ((n as f64) * (r as f64 / size as f64).sqrt()).round() as usize;
+    at(rank).min(n)..at(rank + 1).min(n)
 }
 
 /// The symmetry planes of the Dirichlet data `fixed` (per local node and component, NaN =
@@ -210,7 +235,7 @@ pub fn predict(
         mine.extend_from_slice(&[k.gap, k.weight, r.u_n]);
         mine.extend_from_slice(&gz);
     }
-    let all = ctx.gather_to_root(&mine);
+    let all = ctx.all_gather_varcount(&mine);
     let mut rec = PredictorStep {
         outcome: String::new(),
         model_nodes: 0,
@@ -220,27 +245,34 @@ pub fn predict(
         coarse_levels: 0,
         seconds: 0.0,
     };
+    // Every rank: the model's nodes (the same everywhere) and its share of C's columns.
+    let n = all.len() / REC;
+    let r = |i: usize| &all[i * REC..(i + 1) * REC];
+    // s⁰ = u_n + g: the first solve's clearance (< 0 penetrates)
+    let s0: Vec<f64> = (0..n).map(|i| r(i)[8] + r(i)[6]).collect();
+    let pen = s0.iter().filter(|&&s| s < 0.0).count();
+    let m = if pen == 0 {
+        0
+    } else {
+        (MODEL_MARGIN * pen)
+            .clamp(MIN_MODEL_NODES, MAX_MODEL_NODES)
+            .min(n)
+    };
+    let mut order: Vec<usize> = (0..n).collect();
+    order.sort_by(|&a, &b| s0[a].total_cmp(&s0[b]).then(a.cmp(&b)));
+    let pick = &order[..m];
+    let x: Vec<[f64; 3]> = pick.iter().map(|&i| [r(i)[0], r(i)[1], r(i)[2]]).collect();
+    let w: Vec<f64> = pick.iter().map(|&i| r(i)[7]).collect();
+    let share = hs.columns(&x, &w, column_share(m, ctx.rank, ctx.size));
+    let packed_c = ctx.gather_to_root(&share);
     // rank 0: [code, model nodes, model steps, coarse levels, flags of all nodes...]
     let mut packed: Vec<f64> = Vec::new();
     if ctx.rank == 0 {
-        let n = all.len() / REC;
-        let r = |i: usize| &all[i * REC..(i + 1) * REC];
-        // s⁰ = u_n + g: the first solve's clearance (< 0 penetrates)
-        let s0: Vec<f64> = (0..n).map(|i| r(i)[8] + r(i)[6]).collect();
-        let pen = s0.iter().filter(|&&s| s < 0.0).count();
         let mut flags = vec![0.0; n];
-        let (code, m, steps, levels) = if pen == 0 {
-            (1.0, 0, 0, 0)
+        let (code, steps, levels) = if pen == 0 {
+            (1.0, 0, 0)
         } else {
-            let m = (MODEL_MARGIN * pen)
-                .clamp(MIN_MODEL_NODES, MAX_MODEL_NODES)
-                .min(n);
-            let mut order: Vec<usize> = (0..n).collect();
-            order.sort_by(|&a, &b| s0[a].total_cmp(&s0[b]).then(a.cmp(&b)));
-            let pick = &order[..m];
-            let x: Vec<[f64; 3]> = pick.iter().map(|&i| [r(i)[0], r(i)[1], r(i)[2]]).collect();
-            let w: Vec<f64> = pick.iter().map(|&i| r(i)[7]).collect();
-            let cmat = hs.compliance(&x, &w);
+            let cmat = assemble(m, &packed_c);
             let d0: Vec<f64> = pick.iter().map(|&i| r(i)[8]).collect();
             let gap: Vec<f64> = pick.iter().map(|&i| r(i)[6]).collect();
             let g = DMatrix::from_fn(m, mz, |q, cc| r(pick[q])[9 + cc]);
@@ -265,9 +297,9 @@ pub fn predict(
                         flags[i] = 1.0;
                     }
                 }
-                (0.0, m, run.steps.len(), run.coarse.len())
+                (0.0, run.steps.len(), run.coarse.len())
             } else {
-                (2.0, m, run.steps.len(), run.coarse.len())
+                (2.0, run.steps.len(), run.coarse.len())
             }
         };
         packed = vec![code, m as f64, steps as f64, levels as f64];
@@ -350,6 +382,27 @@ mod tests {
         assert!((c[(1, 1)] - own1).abs() < 1e-12);
         let r = (0.1f64 * 0.1 + 0.09).sqrt();
         assert!((c[(0, 1)] - 2.0 / (PI * 2.0 * r)).abs() < 1e-12);
+    }
+
+    #[test]
+    fn column_shares_cover_the_triangle_once_and_assemble_to_the_matrix() {
+        let h = hs3(vec![(0, 0.0)]);
+        let x: Vec<[f64; 3]> = (0..23)
+            .map(|i| [0.01 * i as f64, 0.003 * i as f64, 0.0])
+            .collect();
+        let w = vec![1e-4; 23];
+        for size in 1..5 {
+            let mut packed = Vec::new();
+            let mut next = 0;
+            for rank in 0..size {
+                let cols = column_share(23, rank, size);
+                assert_eq!(cols.start, next, "contiguous");
+                next = cols.end;
+                packed.extend(h.columns(&x, &w, cols));
+            }
+            assert_eq!(next, 23);
+            assert_eq!(assemble(23, &packed), h.compliance(&x, &w));
+        }
     }
 
     #[test]

@@ -148,15 +148,24 @@ impl HalfSpace {
     }
 }
 
-/// The symmetric n × n matrix of the packed upper-triangle columns 0..n ([`HalfSpace::columns`]).
+/// The symmetric n × n matrix of the packed upper-triangle columns 0..n ([`HalfSpace::columns`]):
+/// the upper triangle column by column, the lower one mirrored in 64 × 64 tiles.
 pub fn assemble(n: usize, packed: &[f64]) -> DMatrix<f64> {
     let mut c = DMatrix::zeros(n, n);
     let mut p = 0;
     for j in 0..n {
-        for i in 0..=j {
-            c[(i, j)] = packed[p];
-            c[(j, i)] = packed[p];
-            p += 1;
+        c.view_mut((0, j), (j + 1, 1))
+            .copy_from_slice(&packed[p..p + j + 1]);
+        p += j + 1;
+    }
+    const T: usize = 64;
+    for bj in (0..n).step_by(T) {
+        for bi in (bj..n).step_by(T) {
+            for j in bj..(bj + T).min(n) {
+                for i in bi.max(j + 1)..(bi + T).min(n) {
+                    c[(i, j)] = c[(j, i)];
+                }
+            }
         }
     }
     c

@@ -1290,7 +1290,7 @@ impl SaddleSolver {
 /// a contact line, every fourth of a contact surface, whatever the mesh. Levels stop at
 /// fewer than COARSEST points; a radius that keeps more than 3/4 of the level before (graded
 /// meshes) makes no level, the next radius is tried. Local.
-fn coarsen(x: &[[f64; 3]], gap: &[f64]) -> Vec<Vec<usize>> {
+pub(super) fn coarsen(x: &[[f64; 3]], gap: &[f64]) -> Vec<Vec<usize>> {
     let n = x.len();
     if n < 2 * COARSEST {
         return Vec::new();

@@ -269,7 +269,8 @@ pub fn semismooth_newton(
                 // From the predicted set every step is exact: the inexact steps (a residual
                 // reduction of 1e-6) flip edge nodes whose λ_n or gap is near 0 (3D Hertz,
                 // 527 k unknowns: changes 18, 17, 0 and an exact step after them; exact: 6, 0).
-                exact = true;
+                // A set that reaches the model's border will still move: inexact steps first.
+                exact = !rec.truncated;
             }
             predicted = Some(rec);
         }

@@ -31,10 +31,46 @@ use std::time::Instant;
 /// solve): its dense compliance has this squared entries on rank 0.
 pub const MAX_MODEL_NODES: usize = 3000;
 
-/// The model takes this multiple of the nodes that penetrate after the first solve (the final
-/// set of 3D Hertz is 1.2 × it), at least [`MIN_MODEL_NODES`].
+/// The model represents this multiple of the nodes that penetrate after the first solve (the
+/// final set of 3D Hertz is 1.2 × it), at least [`MIN_MODEL_NODES`], at most
+/// [`MAX_REPRESENTED`]; beyond [`MAX_MODEL_NODES`] by a coarser subset ([`model_nodes`]).
 pub const MODEL_MARGIN: usize = 3;
 pub const MIN_MODEL_NODES: usize = 256;
+pub const MAX_REPRESENTED: usize = 24_000;
+
+/// The model's nodes among the represented ones (`x`, ordered by the first solve's clearance
+/// `s0`): all of them up to [`MAX_MODEL_NODES`], else the finest level of the nested
+/// iteration's coarsening (about every second node of a contact line, every fourth of a
+/// surface, per level) with at most that many, each represented node belonging to the nearest
+/// model node (whose weight is the sum of its nodes'; the prediction gives a node its model
+/// node's state). Returns (model nodes as indices into `x`, owner of every node of `x`).
+pub fn model_nodes(x: &[[f64; 3]], s0: &[f64]) -> (Vec<usize>, Vec<usize>) {
+    let n = x.len();
+    if n <= MAX_MODEL_NODES {
+        return ((0..n).collect(), (0..n).collect());
+    }
+    let levels = super::condensed::coarsen(x, s0);
+    let kept = match levels.iter().find(|l| l.len() <= MAX_MODEL_NODES) {
+        Some(l) => l.clone(),
+        // no level small enough: the nodes nearest to contact alone (a truncated model)
+        None => (0..MAX_MODEL_NODES).collect(),
+    };
+    let d2 = |a: &[f64; 3], b: &[f64; 3]| (0..3).map(|k| (a[k] - b[k]).powi(2)).sum::<f64>();
+    let owner = x
+        .iter()
+        .map(|p| {
+            let mut best = (f64::INFINITY, 0);
+            for (o, &q) in kept.iter().enumerate() {
+                let d = d2(p, &x[q]);
+                if d < best.0 {
+                    best = (d, o);
+                }
+            }
+            best.1
+        })
+        .collect();
+    (kept, owner)
+}
 
 /// The centre displacement of a uniformly loaded square of side s on a half-space is
 /// SQUARE_SELF · F / (π E* s) (∫∫ dA / r over the square = 4 s ln(1 + √2)).
@@ -58,14 +94,20 @@ pub struct HalfSpace {
 pub struct PredictorStep {
     /// The set the second step starts from came from the model ("predicted"), or why not.
     pub outcome: String,
-    /// Contact nodes in the model.
+    /// Nodes in the model and contact nodes it represents (more when coarsened).
     pub model_nodes: usize,
+    pub represented: usize,
     /// Nodes the model puts in contact.
     pub predicted_active: usize,
     pub mirror_planes: usize,
     /// Steps of Algorithm 1 on the model (finest level) and its coarse levels.
     pub model_steps: usize,
     pub coarse_levels: usize,
+    /// The predicted set reaches the outer tenth of the model's nodes (by the first solve's
+    /// clearance) while contact nodes are left out of the model ([`MAX_MODEL_NODES`]): the
+    /// contact zone may extend beyond the model, and the steps after the prediction stay
+    /// inexact while the set moves, as without one.
+    pub truncated: bool,
     pub seconds: f64,
 }
 
@@ -248,10 +290,12 @@ pub fn predict(
     let mut rec = PredictorStep {
         outcome: String::new(),
         model_nodes: 0,
+        represented: 0,
         predicted_active: 0,
         mirror_planes: hs.mirrors.len(),
         model_steps: 0,
         coarse_levels: 0,
+        truncated: false,
         seconds: 0.0,
     };
     // Every rank: the model's nodes (the same everywhere) and its share of C's columns.
@@ -260,21 +304,30 @@ pub fn predict(
     // s⁰ = u_n + g: the first solve's clearance (< 0 penetrates)
     let s0: Vec<f64> = (0..n).map(|i| r(i)[8] + r(i)[6]).collect();
     let pen = s0.iter().filter(|&&s| s < 0.0).count();
-    let m = if pen == 0 {
+    // the contact nodes the model represents: those nearest to contact
+    let wanted = if pen == 0 {
         0
     } else {
         (MODEL_MARGIN * pen)
-            .clamp(MIN_MODEL_NODES, MAX_MODEL_NODES)
+            .clamp(MIN_MODEL_NODES, MAX_REPRESENTED)
             .min(n)
     };
     let mut order: Vec<usize> = (0..n).collect();
     order.sort_by(|&a, &b| s0[a].total_cmp(&s0[b]).then(a.cmp(&b)));
-    let pick = &order[..m];
-    let x: Vec<[f64; 3]> = pick.iter().map(|&i| [r(i)[0], r(i)[1], r(i)[2]]).collect();
-    let w: Vec<f64> = pick.iter().map(|&i| r(i)[7]).collect();
+    let fine = &order[..wanted];
+    let xf: Vec<[f64; 3]> = fine.iter().map(|&i| [r(i)[0], r(i)[1], r(i)[2]]).collect();
+    // the model's nodes (indices into `fine`) and each represented node's model node
+    let (kept, owner) = model_nodes(&xf, &fine.iter().map(|&i| s0[i]).collect::<Vec<_>>());
+    let m = kept.len();
+    let pick: Vec<usize> = kept.iter().map(|&q| fine[q]).collect();
+    let x: Vec<[f64; 3]> = kept.iter().map(|&q| xf[q]).collect();
+    let mut w = vec![0.0; m];
+    for (q, &o) in owner.iter().enumerate() {
+        w[o] += r(fine[q])[7];
+    }
     let share = hs.columns(&x, &w, column_share(m, ctx.rank, ctx.size));
     let packed_c = ctx.gather_to_root(&share);
-    // rank 0: [code, model nodes, model steps, coarse levels, flags of all nodes...]
+    // rank 0: [code, model nodes, model steps, coarse levels, represented, flags of all nodes]
     let mut packed: Vec<f64> = Vec::new();
     if ctx.rank == 0 {
         let mut flags = vec![0.0; n];
@@ -301,17 +354,23 @@ pub fn predict(
             };
             let run = dense.run_nested(vec![false; m], &x);
             if run.end == End::Converged {
-                for (q, &i) in pick.iter().enumerate() {
-                    if run.active[q] {
+                for (q, &i) in fine.iter().enumerate() {
+                    if run.active[owner[q]] {
                         flags[i] = 1.0;
                     }
                 }
-                (0.0, run.steps.len(), run.coarse.len())
+                let border = wanted - wanted / 10;
+                let truncated = wanted < n && fine[border..].iter().any(|&i| flags[i] != 0.0);
+                (
+                    if truncated { 3.0 } else { 0.0 },
+                    run.steps.len(),
+                    run.coarse.len(),
+                )
             } else {
                 (2.0, run.steps.len(), run.coarse.len())
             }
         };
-        packed = vec![code, m as f64, steps as f64, levels as f64];
+        packed = vec![code, m as f64, steps as f64, levels as f64, wanted as f64];
         packed.extend_from_slice(&flags);
     }
     ctx.broadcast_f64s(&mut packed);
@@ -319,14 +378,16 @@ pub fn predict(
     rec.model_nodes = packed[1] as usize;
     rec.model_steps = packed[2] as usize;
     rec.coarse_levels = packed[3] as usize;
-    let flags_all = &packed[4..];
+    rec.represented = packed[4] as usize;
+    let flags_all = &packed[5..];
     rec.predicted_active = flags_all.iter().filter(|&&f| f != 0.0).count();
+    rec.truncated = code == 3.0;
     rec.outcome = match code as i32 {
-        0 => "predicted".into(),
+        0 | 3 => "predicted".into(),
         1 => "no node penetrates after the first solve".into(),
         _ => "the model's dense iteration did not converge".into(),
     };
-    let mine = if code == 0.0 {
+    let mine = if code == 0.0 || code == 3.0 {
         let o = b.offset;
         Some(
             flags_all[o..o + b.nodes.len()]
@@ -340,11 +401,17 @@ pub fn predict(
     rec.seconds = t.elapsed().as_secs_f64();
     say!(
         ctx,
-        "predictor: half-space model (E* = {:.4e}, {} mirror plane(s)) on {} contact nodes: {} ({} active, {} steps, {} coarse levels, {:.3} s)",
+        "predictor: half-space model (E* = {:.4e}, {} mirror plane(s)) on {} nodes for {} contact nodes: {}{} ({} active, {} steps, {} coarse levels, {:.3} s)",
         hs.modulus,
         rec.mirror_planes,
         rec.model_nodes,
+        rec.represented,
         rec.outcome,
+        if rec.truncated {
+            ", reaching the model's border"
+        } else {
+            ""
+        },
         rec.predicted_active,
         rec.model_steps,
         rec.coarse_levels,
@@ -412,6 +479,35 @@ mod tests {
             assert_eq!(next, 23);
             assert_eq!(assemble(23, &packed), h.compliance(&x, &w));
         }
+    }
+
+    #[test]
+    fn a_wide_zone_is_modelled_by_a_coarser_subset_whose_nodes_own_their_neighbours() {
+        let k = 80; // 6 400 points > MAX_MODEL_NODES
+        let x: Vec<[f64; 3]> = (0..k * k)
+            .map(|i| [(i % k) as f64 * 0.01, (i / k) as f64 * 0.01, 0.0])
+            .collect();
+        let s0: Vec<f64> = x.iter().map(|p| p[0] * p[0] + p[1] * p[1]).collect();
+        let (kept, owner) = model_nodes(&x, &s0);
+        assert!(
+            kept.len() <= MAX_MODEL_NODES && kept.len() >= k * k / 8,
+            "{}",
+            kept.len()
+        );
+        assert_eq!(owner.len(), x.len());
+        for (o, &q) in kept.iter().enumerate() {
+            assert_eq!(owner[q], o, "a model node owns itself");
+        }
+        // every node lies within the coarsening radius of its owner (≤ 2 spacings here)
+        for (q, &o) in owner.iter().enumerate() {
+            let p = x[kept[o]];
+            let d = ((x[q][0] - p[0]).powi(2) + (x[q][1] - p[1]).powi(2)).sqrt();
+            assert!(d <= 0.02 + 1e-12, "node {q}: {d}");
+        }
+        // up to the cap: every node is a model node
+        let (kept, owner) = model_nodes(&x[..100], &s0[..100]);
+        assert_eq!(kept, (0..100).collect::<Vec<_>>());
+        assert_eq!(owner, kept);
     }
 
     #[test]

@@ -610,13 +610,10 @@ impl Compliance {
                     0.0
                 }
             });
-            match DenseCholesky::factor(&smat) {
+            match smat.cholesky() {
                 Some(ch) => {
                     self.sinv_n = ch.solve(&nmat);
-                    self.x0 = ch
-                        .solve(&DMatrix::from_column_slice(sdim, 1, &r))
-                        .column(0)
-                        .into_owned();
+                    self.x0 = ch.solve(&DVector::from_column_slice(&r));
                     let c = nmat.transpose() * &self.sinv_n;
                     self.cmat = (&c + c.transpose()) * 0.5;
                     self.d0 = (nmat.transpose() * &self.x0).as_slice().to_vec();

@@ -467,15 +467,10 @@ const REC: usize = 15;
 impl Candidates {
     /// One all-gather. Collective.
     fn gather(ctx: &Ctx, b: &ContactBoundary, free: &FreeModes, start: &[bool]) -> Candidates {
-        let (z, modes) = (free.dirichlet_free(), free.rigid_modes());
-        let mz = z.ncols();
+        let mz = free.dirichlet_free().ncols();
         let mut mine = Vec::with_capacity(b.nodes.len() * REC);
         for (k, &a) in b.nodes.iter().zip(start) {
-            let row = modes.direction_row(&k.x, &k.frame.n);
-            let mut gz = [0.0; 6];
-            for (c, g) in gz.iter_mut().enumerate().take(mz) {
-                *g = (0..modes.m).map(|j| row[j] * z[(j, c)]).sum();
-            }
+            let gz = free.normal_parts(&k.x, &k.frame.n);
             let n = k.frame.n;
             let flag = if a { 1.0 } else { 0.0 };
             mine.extend_from_slice(&[k.row as f64, n[0], n[1], n[2], k.gap, flag]);
@@ -717,11 +712,8 @@ fn dense_round(
     let (ns, mz) = (comp.list.len(), cand.mz);
     let mut packed: Vec<f64> = Vec::new();
     if ctx.rank == 0 {
-        let (z, modes) = (free.dirichlet_free(), free.rigid_modes());
-        let (load, load_scale) = free.load();
-        let phi: Vec<f64> = (0..mz)
-            .map(|c| (0..modes.m).map(|j| z[(j, c)] * load[j]).sum())
-            .collect();
+        let (_, load_scale) = free.load();
+        let phi = free.free_load();
         let list = &comp.list;
         let g = DMatrix::from_fn(ns, mz, |q, c| cand.g(list[q], c));
         let d0 = &comp.d0;

@@ -268,7 +268,9 @@ pub fn solve(
         fixed,
         sys,
     };
-    let halfspace = (!friction).then(|| predictor::HalfSpace {
+    // the half-space predictor's model: frictionless on the iterative preset only (newton.rs)
+    let predicts = !friction && matches!(solver_section.preset, Preset::Iterative);
+    let halfspace = predicts.then(|| predictor::HalfSpace {
         modulus: settings.contact_modulus,
         dim,
         length: 2.0 * mesh.extent(),

@@ -256,7 +256,7 @@ pub fn mirror_planes(ctx: &Ctx, mesh: &Mesh, fixed: &[f64]) -> Vec<(usize, f64)>
     out
 }
 
-/// Values per node record gathered on rank 0: x (3), n (3), gap, w, u_n, G (6).
+/// Values per node record gathered on every rank: x (3), n (3), gap, w, u_n, G (6).
 const REC: usize = 15;
 
 /// The predicted normal set of this rank's contact nodes after the first solve (`it`, on the
@@ -273,139 +273,51 @@ pub fn predict(
     max_steps: usize,
 ) -> Result<(Option<Vec<bool>>, PredictorStep), RunError> {
     let t = Instant::now();
-    let (z, modes) = (free.dirichlet_free(), free.rigid_modes());
-    let mz = if free.floats() { z.ncols() } else { 0 };
-    let mut mine = Vec::with_capacity(b.nodes.len() * REC);
-    for (k, r) in b.nodes.iter().zip(&it.nodes) {
-        let mut gz = [0.0; 6];
-        if mz > 0 {
-            let row = modes.direction_row(&k.x, &k.frame.n);
-            for (cc, g) in gz.iter_mut().enumerate().take(mz) {
-                *g = (0..modes.m).map(|j| row[j] * z[(j, cc)]).sum();
-            }
-        }
-        mine.extend_from_slice(&k.x);
-        mine.extend_from_slice(&k.frame.n);
-        mine.extend_from_slice(&[k.gap, k.weight, r.u_n]);
-        mine.extend_from_slice(&gz);
-    }
-    let all = ctx.all_gather_varcount(&mine);
-    let mut rec = PredictorStep {
-        outcome: String::new(),
-        model_nodes: 0,
-        represented: 0,
-        predicted_active: 0,
-        mirror_planes: hs.mirrors.len(),
-        model_steps: 0,
-        coarse_levels: 0,
-        truncated: false,
-        seconds: 0.0,
-    };
-    // Every rank: the model's nodes (the same everywhere) and its share of C's columns.
-    let n = all.len() / REC;
-    let r = |i: usize| &all[i * REC..(i + 1) * REC];
-    // s⁰ = u_n + g: the first solve's clearance (< 0 penetrates)
-    let s0: Vec<f64> = (0..n).map(|i| r(i)[8] + r(i)[6]).collect();
-    let pen = s0.iter().filter(|&&s| s < 0.0).count();
-    // the contact nodes the model represents: those nearest to contact, all of them model
-    // nodes while that covers 1.5 × the penetrating ones (the final set of 3D Hertz: 1.23 ×),
-    // else a coarser subset of 3 × as many (model_nodes)
-    let wanted = if pen == 0 {
-        0
-    } else if 2 * MAX_MODEL_NODES >= 3 * pen {
-        (MODEL_MARGIN * pen)
-            .clamp(MIN_MODEL_NODES, MAX_MODEL_NODES)
-            .min(n)
+    let mz = if free.floats() {
+        free.dirichlet_free().ncols()
     } else {
-        (MODEL_MARGIN * pen).min(MAX_REPRESENTED).min(n)
+        0
     };
-    let mut order: Vec<usize> = (0..n).collect();
-    order.sort_by(|&a, &b| s0[a].total_cmp(&s0[b]).then(a.cmp(&b)));
-    let fine = &order[..wanted];
-    let xf: Vec<[f64; 3]> = fine.iter().map(|&i| [r(i)[0], r(i)[1], r(i)[2]]).collect();
-    // the model's nodes (indices into `fine`) and each represented node's model node
-    let (kept, owner) = model_nodes(&xf, &fine.iter().map(|&i| s0[i]).collect::<Vec<_>>());
-    let m = kept.len();
-    let pick: Vec<usize> = kept.iter().map(|&q| fine[q]).collect();
-    let x: Vec<[f64; 3]> = kept.iter().map(|&q| xf[q]).collect();
-    let mut w = vec![0.0; m];
-    for (q, &o) in owner.iter().enumerate() {
-        w[o] += r(fine[q])[7];
-    }
-    let share = hs.columns(&x, &w, column_share(m, ctx.rank, ctx.size));
+    let all = gather_records(ctx, b, it, free);
+    let model = Model::choose(&all);
+    // every rank builds a share of C's columns
+    let share = hs.columns(
+        &model.x,
+        &model.w,
+        column_share(model.m(), ctx.rank, ctx.size),
+    );
     let packed_c = ctx.gather_to_root(&share);
     // rank 0: [code, model nodes, model steps, coarse levels, represented, flags of all nodes]
     let mut packed: Vec<f64> = Vec::new();
     if ctx.rank == 0 {
-        let mut flags = vec![0.0; n];
-        let (code, steps, levels) = if pen == 0 {
-            (1.0, 0, 0)
-        } else {
-            let cmat = assemble(m, &packed_c);
-            let d0: Vec<f64> = pick.iter().map(|&i| r(i)[8]).collect();
-            let gap: Vec<f64> = pick.iter().map(|&i| r(i)[6]).collect();
-            let g = DMatrix::from_fn(m, mz, |q, cc| r(pick[q])[9 + cc]);
-            let (load, load_scale) = free.load();
-            let phi: Vec<f64> = (0..mz)
-                .map(|cc| (0..modes.m).map(|j| z[(j, cc)] * load[j]).sum())
-                .collect();
-            let dense = Dense {
-                cmat: &cmat,
-                d0: &d0,
-                gap: &gap,
-                g: &g,
-                phi: &phi,
-                load_scale,
-                c,
-                max_steps,
-            };
-            let run = dense.run_nested(vec![false; m], &x);
-            if run.end == End::Converged {
-                for (q, &i) in fine.iter().enumerate() {
-                    if run.active[owner[q]] {
-                        flags[i] = 1.0;
-                    }
-                }
-                let border = wanted - wanted / 10;
-                let truncated = wanted < n && fine[border..].iter().any(|&i| flags[i] != 0.0);
-                (
-                    if truncated { 3.0 } else { 0.0 },
-                    run.steps.len(),
-                    run.coarse.len(),
-                )
-            } else {
-                (2.0, run.steps.len(), run.coarse.len())
-            }
-        };
-        packed = vec![code, m as f64, steps as f64, levels as f64, wanted as f64];
-        packed.extend_from_slice(&flags);
+        packed = model.solve(&all, &packed_c, free, mz, c, max_steps);
     }
     ctx.broadcast_f64s(&mut packed);
     let code = packed[0];
-    rec.model_nodes = packed[1] as usize;
-    rec.model_steps = packed[2] as usize;
-    rec.coarse_levels = packed[3] as usize;
-    rec.represented = packed[4] as usize;
     let flags_all = &packed[5..];
-    rec.predicted_active = flags_all.iter().filter(|&&f| f != 0.0).count();
-    rec.truncated = code == 3.0;
-    rec.outcome = match code as i32 {
-        0 | 3 => "predicted".into(),
-        1 => "no node penetrates after the first solve".into(),
-        _ => "the model's dense iteration did not converge".into(),
-    };
-    let mine = if code == 0.0 || code == 3.0 {
+    let predicted = code == 0.0 || code == 3.0;
+    let mine = predicted.then(|| {
         let o = b.offset;
-        Some(
-            flags_all[o..o + b.nodes.len()]
-                .iter()
-                .map(|&f| f != 0.0)
-                .collect(),
-        )
-    } else {
-        None
+        flags_all[o..o + b.nodes.len()]
+            .iter()
+            .map(|&f| f != 0.0)
+            .collect()
+    });
+    let rec = PredictorStep {
+        outcome: match code as i32 {
+            0 | 3 => "predicted".into(),
+            1 => "no node penetrates after the first solve".into(),
+            _ => "the model's dense iteration did not converge".into(),
+        },
+        model_nodes: packed[1] as usize,
+        represented: packed[4] as usize,
+        predicted_active: flags_all.iter().filter(|&&f| f != 0.0).count(),
+        mirror_planes: hs.mirrors.len(),
+        model_steps: packed[2] as usize,
+        coarse_levels: packed[3] as usize,
+        truncated: code == 3.0,
+        seconds: t.elapsed().as_secs_f64(),
     };
-    rec.seconds = t.elapsed().as_secs_f64();
     say!(
         ctx,
         "predictor: half-space model (E* = {:.4e}, {} mirror plane(s)) on {} nodes for {} contact nodes: {}{} ({} active, {} steps, {} coarse levels, {:.3} s)",
@@ -425,6 +337,138 @@ pub fn predict(
         rec.seconds
     );
     Ok((mine, rec))
+}
+
+/// Every contact node of every rank (rank order, = the boundary's global numbering): x, n,
+/// gap, lumped weight, the first solve's u_n and the free modes' normal parts ([`REC`] values).
+/// Collective.
+fn gather_records(ctx: &Ctx, b: &ContactBoundary, it: &Iterate, free: &FreeModes) -> Vec<f64> {
+    let mut mine = Vec::with_capacity(b.nodes.len() * REC);
+    for (k, r) in b.nodes.iter().zip(&it.nodes) {
+        mine.extend_from_slice(&k.x);
+        mine.extend_from_slice(&k.frame.n);
+        mine.extend_from_slice(&[k.gap, k.weight, r.u_n]);
+        mine.extend_from_slice(&free.normal_parts(&k.x, &k.frame.n));
+    }
+    ctx.all_gather_varcount(&mine)
+}
+
+/// The nodes of the model, the same on every rank.
+struct Model {
+    /// Contact nodes that penetrate after the first solve.
+    pen: usize,
+    /// The represented contact nodes (global indices), nearest to contact first.
+    fine: Vec<usize>,
+    /// The model node of each represented node (index into `pick`).
+    owner: Vec<usize>,
+    /// The model nodes (global indices), their positions and weights.
+    pick: Vec<usize>,
+    x: Vec<[f64; 3]>,
+    w: Vec<f64>,
+}
+
+impl Model {
+    /// The represented nodes: those nearest to contact, all of them model nodes while that
+    /// covers 1.5 × the penetrating ones (the final set of 3D Hertz: 1.23 ×), else a coarser
+    /// subset of 3 × as many ([`model_nodes`]). Local (the same on every rank).
+    fn choose(all: &[f64]) -> Model {
+        let n = all.len() / REC;
+        let r = |i: usize| &all[i * REC..(i + 1) * REC];
+        // s⁰ = u_n + g: the first solve's clearance (< 0 penetrates)
+        let s0: Vec<f64> = (0..n).map(|i| r(i)[8] + r(i)[6]).collect();
+        let pen = s0.iter().filter(|&&s| s < 0.0).count();
+        let wanted = if pen == 0 {
+            0
+        } else if 2 * MAX_MODEL_NODES >= 3 * pen {
+            (MODEL_MARGIN * pen)
+                .clamp(MIN_MODEL_NODES, MAX_MODEL_NODES)
+                .min(n)
+        } else {
+            (MODEL_MARGIN * pen).min(MAX_REPRESENTED).min(n)
+        };
+        let mut order: Vec<usize> = (0..n).collect();
+        order.sort_by(|&a, &b| s0[a].total_cmp(&s0[b]).then(a.cmp(&b)));
+        order.truncate(wanted);
+        let fine = order;
+        let xf: Vec<[f64; 3]> = fine.iter().map(|&i| [r(i)[0], r(i)[1], r(i)[2]]).collect();
+        let (kept, owner) = model_nodes(&xf, &fine.iter().map(|&i| s0[i]).collect::<Vec<_>>());
+        let mut w = vec![0.0; kept.len()];
+        for (q, &o) in owner.iter().enumerate() {
+            w[o] += r(fine[q])[7];
+        }
+        Model {
+            pen,
+            pick: kept.iter().map(|&q| fine[q]).collect(),
+            x: kept.iter().map(|&q| xf[q]).collect(),
+            fine,
+            owner,
+            w,
+        }
+    }
+
+    fn m(&self) -> usize {
+        self.pick.len()
+    }
+
+    /// Algorithm 1 on the dense model (rank 0): C from the gathered column shares, d₀ = u⁰_n,
+    /// the gaps, the free modes (`mz` of them) and their load. Returns [code (0 predicted, 1 no
+    /// penetration, 2 no convergence, 3 predicted but reaching the border), model nodes, model
+    /// steps, coarse levels, represented nodes, flag of every contact node].
+    fn solve(
+        &self,
+        all: &[f64],
+        packed_c: &[f64],
+        free: &FreeModes,
+        mz: usize,
+        c: f64,
+        max_steps: usize,
+    ) -> Vec<f64> {
+        let n = all.len() / REC;
+        let (m, wanted) = (self.m(), self.fine.len());
+        let r = |i: usize| &all[i * REC..(i + 1) * REC];
+        let mut flags = vec![0.0; n];
+        let (code, steps, levels) = if self.pen == 0 {
+            (1.0, 0, 0)
+        } else {
+            let cmat = assemble(m, packed_c);
+            let d0: Vec<f64> = self.pick.iter().map(|&i| r(i)[8]).collect();
+            let gap: Vec<f64> = self.pick.iter().map(|&i| r(i)[6]).collect();
+            let g = DMatrix::from_fn(m, mz, |q, cc| r(self.pick[q])[9 + cc]);
+            let (_, load_scale) = free.load();
+            let mut phi = free.free_load();
+            phi.truncate(mz);
+            let dense = Dense {
+                cmat: &cmat,
+                d0: &d0,
+                gap: &gap,
+                g: &g,
+                phi: &phi,
+                load_scale,
+                c,
+                max_steps,
+            };
+            let run = dense.run_nested(vec![false; m], &self.x);
+            if run.end == End::Converged {
+                for (q, &i) in self.fine.iter().enumerate() {
+                    if run.active[self.owner[q]] {
+                        flags[i] = 1.0;
+                    }
+                }
+                let border = wanted - wanted / 10;
+                let truncated = wanted < n && self.fine[border..].iter().any(|&i| flags[i] != 0.0);
+                (
+                    if truncated { 3.0 } else { 0.0 },
+                    run.steps.len(),
+                    run.coarse.len(),
+                )
+            } else {
+                (2.0, run.steps.len(), run.coarse.len())
+            }
+        };
+        let mut packed = vec![code, m as f64, steps as f64, levels as f64, wanted as f64];
+        packed.extend_from_slice(&flags);
+        packed
+    }
 }
 
 #[cfg(test)]

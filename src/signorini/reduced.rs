@@ -443,6 +443,136 @@ struct AmgReuser {
     prescribed: Vec<(usize, [[f64; 3]; 3], [f64; 3])>,
 }
 
+impl AmgReuser {
+    /// The relative tolerance (on ‖b‖, the default test of a nonzero start) of this solve:
+    /// the preset's, or for an inexact step [`INEXACT_REDUCTION`] (the predictor's first
+    /// solve: [`PREDICTOR_REDUCTION`]) of the start's residual, never tighter than the preset's.
+    fn tolerance(&self, predictor: bool, r0: f64, bnorm: f64) -> f64 {
+        let reduction = if predictor {
+            PREDICTOR_REDUCTION
+        } else {
+            INEXACT_REDUCTION
+        };
+        if self.inexact && bnorm > 0.0 {
+            (reduction * r0 / bnorm).max(self.rtol)
+        } else {
+            self.rtol
+        }
+    }
+
+    /// The iteration limit: on a reused preconditioner [`REUSE_BUDGET`] times the iterations
+    /// the rate after the last setup predicts (then it is set up anew), on a fresh one the
+    /// configured limit.
+    fn budget(&self, setup: bool, r0: f64, rtol: f64, bnorm: f64) -> usize {
+        match self.fresh_rate {
+            Some(f) if !setup && r0 > 0.0 && bnorm > 0.0 => {
+                let decades = (r0 / (rtol * bnorm)).log10().max(1.0);
+                ((REUSE_BUDGET * f * decades).ceil() as usize + RATE_MIN_ITERATIONS)
+                    .min(self.max_it)
+            }
+            _ => self.max_it,
+        }
+    }
+
+    /// The Krylov solve, on a preconditioner set up for this matrix (`setup`) or the kept one;
+    /// a solve on the kept one that does not converge sets up on this matrix and goes on from
+    /// where it stopped. Returns (info, fallback, PCSetUp seconds). Collective.
+    fn krylov(
+        &mut self,
+        ksp: &mut Ksp,
+        rhs: &Vector,
+        u: &mut Vector,
+        setup: bool,
+    ) -> petsc::Result<(SolveInfo, bool, f64)> {
+        let mut setup_seconds = 0.0;
+        if setup {
+            ksp.set_reuse_preconditioner(false)?;
+            let ts = Instant::now();
+            ksp.set_up()?;
+            setup_seconds += ts.elapsed().as_secs_f64();
+            self.built = true;
+            self.rebuild = false;
+        } else {
+            ksp.set_reuse_preconditioner(true)?;
+        }
+        let mut info = ksp.solve(rhs, u)?;
+        if info.converged() || setup {
+            return Ok((info, false, setup_seconds));
+        }
+        let its = info.iterations;
+        ksp.set_max_iterations(self.max_it)?;
+        ksp.set_reuse_preconditioner(false)?;
+        ksp.set_initial_guess_nonzero(true)?;
+        let ts = Instant::now();
+        ksp.set_up()?;
+        setup_seconds += ts.elapsed().as_secs_f64();
+        info = ksp.solve(rhs, u)?;
+        info.iterations += its;
+        Ok((info, true, setup_seconds))
+    }
+
+    /// The rate of this solve (iterations per decade, 0 when too few to tell) and what it
+    /// decides for the next one: the reference rate after a setup, a rebuild ("auto") when it
+    /// grew beyond [`REBUILD_GROWTH`] × the reference; after the predictor's first solve a
+    /// rebuild on the next matrix ("auto"; "always" keeps this one).
+    fn learn(
+        &mut self,
+        predictor: bool,
+        setup: bool,
+        fallback: bool,
+        r0: f64,
+        r_end: f64,
+        iterations: usize,
+    ) -> f64 {
+        let decades = if r_end > 0.0 && r0 > 0.0 {
+            (r0 / r_end).log10()
+        } else {
+            0.0
+        };
+        let measured = decades >= RATE_MIN_DECADES && iterations >= RATE_MIN_ITERATIONS;
+        let rate = if measured {
+            iterations as f64 / decades
+        } else {
+            0.0
+        };
+        if predictor {
+            self.rebuild = self.mode == Reuse::Auto;
+        } else if measured && !fallback {
+            // after a fallback the next measured solve on the new preconditioner is the reference
+            if setup || self.fresh_rate.is_none() {
+                self.fresh_rate = Some(rate);
+            } else if self.mode == Reuse::Auto {
+                self.rebuild = self.fresh_rate.is_some_and(|f| rate > REBUILD_GROWTH * f);
+            }
+        }
+        if fallback {
+            self.fresh_rate = None;
+        }
+        rate
+    }
+
+    /// The step's record for summary.json.
+    fn record(
+        &self,
+        pc_setup: bool,
+        pc_setup_seconds: f64,
+        rtol: f64,
+        initial_residual: f64,
+        rate: f64,
+        fallback: bool,
+    ) -> AmgStep {
+        AmgStep {
+            pc_setup,
+            pc_setup_seconds,
+            rtol,
+            inexact: self.inexact,
+            initial_residual,
+            rate,
+            fallback,
+        }
+    }
+}
+
 /// The reduced system of one Newton step and its solver: the matrix S on A's pattern, the
 /// right-hand side, the KSP, and the (constant) rows of A at the contact nodes and the pins.
 pub struct ReducedSystem {
@@ -791,8 +921,67 @@ impl ReducedSystem {
     /// counts, norms), the same on every rank. Collective.
     fn solve_amg(&mut self, ctx: &Ctx) -> petsc::Result<StepSolve> {
         let t = Instant::now();
-        let dim = self.dim;
+        let (r0, bnorm, zero_start) = self.warm_start(ctx)?;
         let amg = self.amg.as_mut().expect("checked");
+        let first = !amg.built;
+        if bnorm == 0.0 && first {
+            // No load yet (a body loaded only through the contact, the predictor's first
+            // solve): u = 0 without a solve, and the preconditioner is set up by the first
+            // solve that has a right-hand side, on its own matrix.
+            amg.predictor = false;
+            let info = SolveInfo {
+                iterations: 0,
+                reason: 2, // KSP_CONVERGED_RTOL_NORMAL's sign: converged
+                reason_name: "zero right-hand side".into(),
+            };
+            let record = amg.record(false, 0.0, amg.rtol, 0.0, 0.0, false);
+            return Ok(StepSolve {
+                info,
+                kind: SolveKind::Krylov,
+                seconds: t.elapsed().as_secs_f64(),
+                reuse: None,
+                amg: Some(record),
+            });
+        }
+        let setup = first || amg.rebuild;
+        let predictor = std::mem::take(&mut amg.predictor);
+        let rtol = amg.tolerance(predictor, r0, bnorm);
+        let ksp = &mut self.ls.ksp;
+        ksp.set_operator(&self.s)?;
+        ksp.set_initial_guess_nonzero(!zero_start)?;
+        ksp.set_rtol(rtol)?;
+        ksp.set_max_iterations(amg.budget(setup, r0, rtol, bnorm))?;
+        let (info, fallback, setup_seconds) = amg.krylov(ksp, &self.rhs, &mut self.u, setup)?;
+        let r_end = ksp.residual_norm()?;
+        let rate = amg.learn(predictor, setup, fallback, r0, r_end, info.iterations);
+        let r0_rel = if bnorm > 0.0 { r0 / bnorm } else { 0.0 };
+        let record = amg.record(
+            setup || fallback,
+            setup_seconds,
+            rtol,
+            r0_rel,
+            rate,
+            fallback,
+        );
+        Ok(StepSolve {
+            info,
+            kind: if setup || fallback {
+                SolveKind::Krylov
+            } else {
+                SolveKind::Reuse
+            },
+            seconds: t.elapsed().as_secs_f64(),
+            reuse: None,
+            amg: Some(record),
+        })
+    }
+
+    /// The start of an iterative-preset solve: zero in the first solve, else the previous u
+    /// with its prescribed components set exactly (u_k ← P_k u_k + ū_k) — or zero again if
+    /// that start is worse than none. Returns (‖b − S u₀‖, ‖b‖, zero start). Collective.
+    fn warm_start(&mut self, ctx: &Ctx) -> petsc::Result<(f64, f64, bool)> {
+        let dim = self.dim;
+        let amg = self.amg.as_ref().expect("checked");
         let first = !amg.built;
         if first {
             self.u.set_all(0.0)?;
@@ -808,144 +997,16 @@ impl ReducedSystem {
                 }
             })?;
         }
-        let setup = first || amg.rebuild;
-        let inexact = amg.inexact;
-        let (mut r0, bnorm) = self.residual_norms(ctx)?;
+        let (r0, bnorm) = self.residual_norms(ctx)?;
         // A warm start worse than none (‖b − S u₀‖ ≥ ‖b‖: e.g. the rigid motion of a free body
         // that the previous step's pins allowed, measured on block2d at ν = 0.4999, where it
         // was > 1e5 ‖b‖ and GMRES stopped at once with DIVERGED_DTOL): start from zero.
         // The norms are global: every rank decides alike.
-        let mut zero_start = first;
         if !first && r0 >= bnorm {
             self.u.set_all(0.0)?;
-            r0 = bnorm;
-            zero_start = true;
+            return Ok((bnorm, bnorm, true));
         }
-        let amg = self.amg.as_mut().expect("checked");
-        if bnorm == 0.0 && first {
-            // No load yet (a body loaded only through the contact, the predictor's first
-            // solve): u = 0 without a solve, and the preconditioner is set up by the first
-            // solve that has a right-hand side, on its own matrix.
-            self.u.set_all(0.0)?;
-            amg.predictor = false;
-            return Ok(StepSolve {
-                info: SolveInfo {
-                    iterations: 0,
-                    reason: 2, // KSP_CONVERGED_RTOL_NORMAL's sign: converged
-                    reason_name: "zero right-hand side".into(),
-                },
-                kind: SolveKind::Krylov,
-                seconds: t.elapsed().as_secs_f64(),
-                reuse: None,
-                amg: Some(AmgStep {
-                    pc_setup: false,
-                    pc_setup_seconds: 0.0,
-                    rtol: amg.rtol,
-                    inexact,
-                    initial_residual: 0.0,
-                    rate: 0.0,
-                    fallback: false,
-                }),
-            });
-        }
-        // the default convergence test of a nonzero start measures ‖b − S u‖ against ‖b‖
-        let predictor = std::mem::take(&mut amg.predictor);
-        let reduction = if predictor {
-            PREDICTOR_REDUCTION
-        } else {
-            INEXACT_REDUCTION
-        };
-        let rtol = if inexact && bnorm > 0.0 {
-            (reduction * r0 / bnorm).max(amg.rtol)
-        } else {
-            amg.rtol
-        };
-        let ksp = &mut self.ls.ksp;
-        ksp.set_operator(&self.s)?;
-        ksp.set_initial_guess_nonzero(!zero_start)?;
-        ksp.set_rtol(rtol)?;
-        // On a reused preconditioner at most REUSE_BUDGET times the iterations the rate after
-        // the last setup predicts (then it is set up anew), on a fresh one the configured limit.
-        let budget = match amg.fresh_rate {
-            Some(f) if !setup && r0 > 0.0 && bnorm > 0.0 => {
-                let decades = (r0 / (rtol * bnorm)).log10().max(1.0);
-                ((REUSE_BUDGET * f * decades).ceil() as usize + RATE_MIN_ITERATIONS).min(amg.max_it)
-            }
-            _ => amg.max_it,
-        };
-        ksp.set_max_iterations(budget)?;
-        let mut setup_seconds = 0.0;
-        if setup {
-            ksp.set_reuse_preconditioner(false)?;
-            let ts = Instant::now();
-            ksp.set_up()?;
-            setup_seconds += ts.elapsed().as_secs_f64();
-            amg.built = true;
-            amg.rebuild = false;
-        } else {
-            ksp.set_reuse_preconditioner(true)?;
-        }
-        let mut info = ksp.solve(&self.rhs, &mut self.u)?;
-        let mut fallback = false;
-        if !info.converged() && !setup {
-            // The reused preconditioner did not reach the tolerance: set up on this matrix and
-            // go on from where the solve stopped.
-            fallback = true;
-            let its = info.iterations;
-            ksp.set_max_iterations(amg.max_it)?;
-            ksp.set_reuse_preconditioner(false)?;
-            ksp.set_initial_guess_nonzero(true)?;
-            let ts = Instant::now();
-            ksp.set_up()?;
-            setup_seconds += ts.elapsed().as_secs_f64();
-            info = ksp.solve(&self.rhs, &mut self.u)?;
-            info.iterations += its;
-        }
-        let r_end = ksp.residual_norm()?;
-        let decades = if r_end > 0.0 && r0 > 0.0 {
-            (r0 / r_end).log10()
-        } else {
-            0.0
-        };
-        let measured = decades >= RATE_MIN_DECADES && info.iterations >= RATE_MIN_ITERATIONS;
-        let rate = if measured {
-            info.iterations as f64 / decades
-        } else {
-            0.0
-        };
-        if predictor {
-            // "auto": the next matrix gets its own preconditioner ("always" keeps this one)
-            amg.rebuild = amg.mode == Reuse::Auto;
-        } else if measured && !fallback {
-            // after a fallback the next measured solve on the new preconditioner is the reference
-            if setup || amg.fresh_rate.is_none() {
-                amg.fresh_rate = Some(rate);
-            } else if amg.mode == Reuse::Auto {
-                amg.rebuild = amg.fresh_rate.is_some_and(|f| rate > REBUILD_GROWTH * f);
-            }
-        }
-        if fallback {
-            amg.fresh_rate = None;
-        }
-        Ok(StepSolve {
-            info,
-            kind: if setup || fallback {
-                SolveKind::Krylov
-            } else {
-                SolveKind::Reuse
-            },
-            seconds: t.elapsed().as_secs_f64(),
-            reuse: None,
-            amg: Some(AmgStep {
-                pc_setup: setup || fallback,
-                pc_setup_seconds: setup_seconds,
-                rtol,
-                inexact,
-                initial_residual: if bnorm > 0.0 { r0 / bnorm } else { 0.0 },
-                rate,
-                fallback,
-            }),
-        })
+        Ok((r0, bnorm, first))
     }
 
     /// True when the solver factorises (direct preset: PCLU / PCCHOLESKY). Local.

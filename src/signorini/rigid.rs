@@ -352,6 +352,30 @@ impl FreeModes {
         (self.load, self.load_scale)
     }
 
+    /// The Dirichlet-free modes' normal parts at a contact node at x with normal n: the
+    /// direction row of n times Z (the first Z.ncols() entries; a row of G in the condensed
+    /// systems).
+    pub fn normal_parts(&self, x: &[f64; 3], n: &[f64; 3]) -> [f64; 6] {
+        let (z, modes) = (&self.z, &self.modes);
+        let row = modes.direction_row(x, n);
+        let mut gz = [0.0; 6];
+        for (c, g) in gz.iter_mut().enumerate().take(z.ncols()) {
+            *g = (0..modes.m).map(|j| row[j] * z[(j, c)]).sum();
+        }
+        gz
+    }
+
+    /// The load in the Dirichlet-free modes, φ = Zᵀ (Rᵀ f) (one entry per column of Z).
+    pub fn free_load(&self) -> Vec<f64> {
+        (0..self.z.ncols())
+            .map(|c| {
+                (0..self.modes.m)
+                    .map(|j| self.z[(j, c)] * self.load[j])
+                    .sum()
+            })
+            .collect()
+    }
+
     /// New pins when the Gram matrix of Dirichlet data + the set (`g_set`) changed; `Ok(true)`
     /// if the pins changed. Collective when they change (the same on every rank).
     pub fn update(

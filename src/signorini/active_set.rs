@@ -46,12 +46,22 @@ impl Law {
         (b, v)
     }
 
-    /// A stick node stays stick while |v| ≤ b (1 + [`STICK_TOL`]), b > 0: the hysteresis of
-    /// (3.33) that keeps a node at the stick/slip limit (|λ_τ| = b, Δu_τ = 0: every slip node of
-    /// a warm start from its own solution) from flipping on round-off.
-    fn stays_stuck(self, k: &ContactNode, r: &NodeResult, c: f64) -> bool {
+    /// A stick node stays stick while |v| ≤ b + [`STICK_TOL`] · max(b, `scale`), b > 0, with
+    /// `scale` the largest threshold on the whole boundary ([`threshold_scale`]): the hysteresis
+    /// of (3.33) that keeps a node at the stick/slip limit (|λ_τ| = b, Δu_τ = 0: every slip node
+    /// of a warm start from its own solution) from flipping on round-off. The band is measured
+    /// against the problem's threshold scale, not against the node's own b: a node with a small
+    /// b (the edge of the contact zone) sees the same round-off in λ_τ as every other node, and a
+    /// fixed point on Tresca thresholds leaves b within 1e-9 · max b of μ(−λ_n), not within
+    /// 1e-9 · b.
+    fn stays_stuck(self, k: &ContactNode, r: &NodeResult, c: f64, scale: f64) -> bool {
         let (b, v) = self.threshold_and_v(k, r, c);
-        b > 0.0 && v[0].hypot(v[1]) <= b * (1.0 + STICK_TOL)
+        b > 0.0 && v[0].hypot(v[1]) <= b + STICK_TOL * b.max(scale)
+    }
+
+    /// The threshold of node `k` at `r`: b_k (Tresca), μ max(0, −λ_n − c(u_n + g)) (Coulomb).
+    fn threshold(self, k: &ContactNode, r: &NodeResult, c: f64) -> f64 {
+        self.threshold_and_v(k, r, c).0
     }
 
     /// The squared tangential residual of node `k` at `r`: ‖C_τ‖² (3.31) for Tresca, the
@@ -79,9 +89,32 @@ impl Law {
 }
 
 /// Relative tolerance of the stick → slip test (3.33) for a node that sticks (see
-/// `Law::stays_stuck`): a stick node may end with |λ_τ| ≤ b (1 + STICK_TOL), far below the
-/// warning level of the friction certificate (1e-8 of the problem's scales).
+/// `Law::stays_stuck`): a stick node may end with |λ_τ| ≤ b + STICK_TOL · max_k b_k, at the
+/// warning level of the friction certificate (1e-8 of the problem's scales) at most.
 pub const STICK_TOL: f64 = 1e-8;
+
+/// The largest threshold b over every rank's contact nodes at the iterate `nodes` (Tresca: the
+/// given b_k; Coulomb: (F1)): the scale of the stick band of [`Law::stays_stuck`]. 0 without
+/// friction. Collective (one reduction) with friction.
+pub fn threshold_scale(
+    ctx: &Ctx,
+    b: &ContactBoundary,
+    nodes: &[NodeResult],
+    law: Law,
+    c: f64,
+) -> f64 {
+    if !law.friction() {
+        return 0.0;
+    }
+    let local = b
+        .nodes
+        .iter()
+        .zip(nodes)
+        .map(|(k, r)| law.threshold(k, r, c))
+        .filter(|x| x.is_finite())
+        .fold(0.0, f64::max);
+    ctx.max_f64(local)
+}
 
 /// u_τ − u_ref: the tangential increment friction acts on (u_τ itself for u_ref = 0).
 pub fn increment(r: &NodeResult, k: &ContactNode) -> [f64; 2] {
@@ -179,12 +212,14 @@ impl ActiveSet {
     }
 
     /// A warm start (a previous load step): A_n of the solve that produced `nodes`, the
-    /// tangential rows from that iterate (its increment is 0 where u_ref is its own u_τ). Local.
+    /// tangential rows from that iterate (its increment is 0 where u_ref is its own u_τ);
+    /// `scale` = [`threshold_scale`] of `nodes`. Local.
     pub fn warm(
         b: &ContactBoundary,
         nodes: &[NodeResult],
         law: Law,
         c: f64,
+        scale: f64,
         dim: usize,
     ) -> ActiveSet {
         let tangential = law.friction().then(|| {
@@ -195,7 +230,7 @@ impl ActiveSet {
                     // Δu_τ = 0: a node at the slip limit starts as stick (the first solve then
                     // tells whether the new load makes it slip, with a well-defined direction).
                     let row = law.row(k, r, c, dim);
-                    if row.is_slip() && law.stays_stuck(k, r, c) {
+                    if row.is_slip() && law.stays_stuck(k, r, c, scale) {
                         CoulombRow::Stick
                     } else {
                         row
@@ -318,13 +353,15 @@ impl ActiveSet {
     }
 
     /// (3.23) and, with friction, (3.33) (Tresca) or (F1)/(F5) (Coulomb) with the newest
-    /// iterate (THEORY §4 erratum): the next sets, and what changed. Local.
+    /// iterate (THEORY §4 erratum): the next sets, and what changed; `scale` =
+    /// [`threshold_scale`] of the iterate (friction; unused without). Local.
     pub fn update(
         &self,
         it: &Iterate,
         b: &ContactBoundary,
         law: Law,
         c: f64,
+        scale: f64,
         dim: usize,
     ) -> SetUpdate {
         let mut next = self.clone();
@@ -340,7 +377,7 @@ impl ActiveSet {
             residual2 += cn * cn;
             if let Some(t) = next.tangential.as_mut() {
                 t[i] = law.row(k, r, c, dim);
-                if t[i].is_slip() && !self.slip(i) && law.stays_stuck(k, r, c) {
+                if t[i].is_slip() && !self.slip(i) && law.stays_stuck(k, r, c, scale) {
                     t[i] = CoulombRow::Stick;
                 }
                 flip |= t[i].is_slip() != self.slip(i);
@@ -613,16 +650,24 @@ mod tests {
         // |λ_τ| = b (1 + 1e-12), no motion: slips by (3.33), stays stuck with the tolerance
         let r = at(0.0, -1.0, 0.1 * (1.0 + 1e-12));
         assert!(Law::Tresca.row(&k, &r, c, 2).is_slip());
-        assert!(Law::Tresca.stays_stuck(&k, &r, c));
+        assert!(Law::Tresca.stays_stuck(&k, &r, c, 0.1));
         let coulomb = Law::Coulomb { mu: 0.1 };
-        assert!(coulomb.stays_stuck(&k, &r, c));
+        assert!(coulomb.stays_stuck(&k, &r, c, 0.1));
         // clearly beyond the limit: slips
         let r = at(0.0, -1.0, 0.1 * (1.0 + 1e-6));
-        assert!(!Law::Tresca.stays_stuck(&k, &r, c));
-        assert!(!coulomb.stays_stuck(&k, &r, c));
+        assert!(!Law::Tresca.stays_stuck(&k, &r, c, 0.1));
+        assert!(!coulomb.stays_stuck(&k, &r, c, 0.1));
         // b = 0 (Coulomb, free node): never stuck
         let r = at(0.0, 0.0, 0.0);
-        assert!(!coulomb.stays_stuck(&k, &r, c));
+        assert!(!coulomb.stays_stuck(&k, &r, c, 1.0));
+        // a small threshold (b = 1e-4 · the boundary's largest, 10): the band is that of the
+        // scale, so λ_τ exceeding b by 1e-9 · 10 (1e-4 of b) is round-off; by 1e-6 · 10 not
+        let small = node(1e-3, [0.0; 2]);
+        let r = at(0.0, -1.0, 1e-3 + 1e-8);
+        assert!(!Law::Tresca.stays_stuck(&small, &r, c, 0.0));
+        assert!(Law::Tresca.stays_stuck(&small, &r, c, 10.0));
+        let r = at(0.0, -1.0, 1e-3 + 1e-5);
+        assert!(!Law::Tresca.stays_stuck(&small, &r, c, 10.0));
         // in the set update: a stick node at the limit keeps its state, a slip node does not
         // go back for it
         let b = ContactBoundary {
@@ -647,13 +692,13 @@ mod tests {
             normal: vec![true, true],
             tangential: Some(vec![CoulombRow::Stick, zero]),
         };
-        let up = set.update(&it, &b, Law::Tresca, c, 2);
+        let up = set.update(&it, &b, Law::Tresca, c, 0.1, 2);
         let t = up.next.tangential.expect("friction");
         assert_eq!(t[0], CoulombRow::Stick);
         assert!(t[1].is_slip());
         assert_eq!(up.changed, 0);
         // the warm start puts both at the limit to stick
-        let w = ActiveSet::warm(&b, &it.nodes, Law::Tresca, c, 2);
+        let w = ActiveSet::warm(&b, &it.nodes, Law::Tresca, c, 0.1, 2);
         assert_eq!(
             w.tangential.expect("friction"),
             vec![CoulombRow::Stick, CoulombRow::Stick]

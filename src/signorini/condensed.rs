@@ -856,7 +856,7 @@ fn expand(
     free.shift(b, &rho, &mut shifted);
     let mut it = Iterate::new(b.nodes.len(), n_local, false);
     reduced.recover(sys, &shifted, &set, &mut it)?; // (3.28)
-    let update = set.update(&it, &shifted, Law::Frictionless, s.c, dim); // (3.23)
+    let update = set.update(&it, &shifted, Law::Frictionless, s.c, 0.0, dim); // (3.23)
     let changed_here: Vec<u64> = set
         .normal
         .iter()

@@ -11,7 +11,7 @@
 //! assembly of entries in other ranks' rows), the solve, one MatMult, one Allreduce; rarely a
 //! load-balance test that finds an unbalanced load (two reductions) or a least-index pick.
 
-use super::active_set::{ActiveSet, Iterate, Law, SetSummary, StepTotals};
+use super::active_set::{threshold_scale, ActiveSet, Iterate, Law, SetSummary, StepTotals};
 use super::boundary::{ContactBoundary, NodeResult};
 use super::cycle::{decide, CycleGuard, Decision, Seen, SetKey};
 use super::predictor::{self, HalfSpace, PredictorStep};
@@ -199,7 +199,10 @@ pub fn semismooth_newton(
     };
     let set = match warm {
         None => ActiveSet::initial(b, init, s.law, s.c, mesh.extent(), dim),
-        Some(w) => ActiveSet::warm(b, w.nodes, s.law, s.c, dim),
+        Some(w) => {
+            let scale = threshold_scale(ctx, b, w.nodes, s.law, s.c);
+            ActiveSet::warm(b, w.nodes, s.law, s.c, scale, dim)
+        }
     };
     let summary = set.summarise(ctx, b, free.modes(), dim);
     let guard = CycleGuard::new(
@@ -259,7 +262,8 @@ pub fn semismooth_newton(
         let reused = solved.reuse.is_some() && solved.kind == SolveKind::Reuse;
         ensure_converged(step, &solved.info)?;
         reduced.recover(sys, bs, &lp.set, &mut lp.it)?; // (3.28)
-        let mut update = lp.set.update(&lp.it, bs, s.law, s.c, dim); // (3.23) / (3.33) / (F5)
+        let scale = threshold_scale(ctx, bs, &lp.it.nodes, s.law, s.c);
+        let mut update = lp.set.update(&lp.it, bs, s.law, s.c, scale, dim); // (3.23) / (3.33) / (F5)
         let mut predicted = None;
         if let Some(hs) = predict.take() {
             let (set, rec) =

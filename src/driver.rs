@@ -11,8 +11,9 @@ use crate::par::Ctx;
 use crate::partition::Layout;
 use crate::say;
 use crate::setup::{self, Input};
+use crate::solver;
 use crate::steps::{LoadReport, SolveReport, Stepper};
-use crate::summary::{self, AssemblyInfo, Clock, PartitionInfo, Summary};
+use crate::summary::{self, AssemblyInfo, Clock, PartitionInfo, PresetChoice, Summary};
 use serde::Serialize;
 
 /// The solve's sections of summary.json: the last step's report, and the load history.
@@ -26,6 +27,7 @@ struct SolveSections {
 
 /// Runs a whole case. Returns summary.json's text (the same on every rank).
 pub fn run_case(ctx: &Ctx, case: &Case) -> Result<String, RunError> {
+    let asked = case.solver.preset;
     let mut clock = Clock::start();
     let Input {
         mesh,
@@ -37,6 +39,15 @@ pub fn run_case(ctx: &Ctx, case: &Case) -> Result<String, RunError> {
     clock.lap();
     (clock.t.read, clock.t.partition) = (read_seconds, partition_seconds);
     let partition = log_partition(ctx, &mesh, &layout);
+    let (preset, preset_reason) = solver::choose_preset(
+        case.solver.preset,
+        mesh.dim,
+        mesh.n_nodes_global() * mesh.dim,
+    );
+    say!(ctx, "solver: preset {} ({preset_reason})", preset.name());
+    let mut resolved = case.clone();
+    resolved.solver.preset = preset;
+    let case = &resolved;
     let problem = setup::problem(case, &mesh, material);
     let mut sys = assembly::assemble(ctx.comm(), &layout, &problem)?;
     clock.t.assembly = clock.lap();
@@ -71,6 +82,11 @@ pub fn run_case(ctx: &Ctx, case: &Case) -> Result<String, RunError> {
         dofs: mesh.n_nodes_global() * mesh.dim,
         refine: case.mesh.refine,
         ranks: ctx.size,
+        preset: PresetChoice {
+            asked: asked.name(),
+            used: preset.name(),
+            reason: preset_reason,
+        },
         partition,
         assembly,
         peak_memory_bytes_per_rank: summary::peak_memory_and_log(ctx, &timings),

@@ -68,6 +68,14 @@ pub struct AssemblyInfo {
     pub petsc_seconds_max: f64,
 }
 
+/// `solver.preset` as asked and as used.
+#[derive(Debug, Clone, Serialize)]
+pub struct PresetChoice {
+    pub asked: &'static str,
+    pub used: &'static str,
+    pub reason: String,
+}
+
 /// What summary.json holds. `S` is the solve's own section(s), flattened in.
 #[derive(Debug, Clone, Serialize)]
 pub struct Summary<S: Serialize> {
@@ -82,6 +90,8 @@ pub struct Summary<S: Serialize> {
     #[serde(skip_serializing_if = "is_zero")]
     pub refine: usize,
     pub ranks: usize,
+    /// `solver.preset` as asked and as used (the "auto" choice).
+    pub preset: PresetChoice,
     pub partition: PartitionInfo,
     pub assembly: AssemblyInfo,
     pub timings: Timings,

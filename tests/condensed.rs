@@ -144,7 +144,7 @@ fn a_flat_punch_too_wide_for_the_dense_schur_complement_takes_the_plain_path() {
             toml_path(&mesh)
         ),
     );
-    let r = solve(2, &case, &[]);
+    let r = solve(2, &case, &["solver.preset=\"direct\""]);
     r.assert_converged("flat punch");
     let nodes = r.f(&["contact", "nodes"]);
     assert!(nodes * 3.0 > 3000.0, "only {nodes} contact nodes");

@@ -176,3 +176,35 @@ fn nearly_incompressible_materials_are_warned_about() {
         "plane stress does not lock"
     );
 }
+
+#[test]
+fn an_obstacle_deep_inside_the_body_is_refused_naming_the_key() {
+    // The Hertz disk (radius 1, resting on y = −1): a plane at y = +0.5 with its normal up (the
+    // obstacle's side is below: the disk starts 1.5 deep inside, every node beyond) and a plane
+    // at y = −0.75 (the lowest 0.25 of the disk inside, 12.5 % of its size 2): both refused before
+    // Newton on 1 and 2 ranks, exit 2, naming contact.obstacle; nothing written.
+    let tmp = tempfile::tempdir().unwrap();
+    let plane =
+        |y: f64| format!("contact.obstacle={{type=\"plane\",point=[0.0,{y}],normal=[0.0,1.0]}}");
+    for (y, hint) in [(0.5, "normal"), (-0.75, "placed")] {
+        for np in [1, 2] {
+            let out = tmp.path().join(format!("out{np}"));
+            let p = plane(y);
+            let r = run_solver(np, &repo("cases/hertz/hertz.toml"), &[&p], &out);
+            r.expect_code(2, "deep start");
+            assert!(r.stderr.contains("contact.obstacle"), "{}", r.output());
+            assert!(
+                r.stderr.contains("deep inside the obstacle"),
+                "{}",
+                r.output()
+            );
+            assert!(r.stderr.contains(hint), "{}", r.output());
+            assert!(!r.stdout.contains("newton   1"), "{}", r.output());
+            assert!(!out.exists(), "nothing written");
+        }
+    }
+    // An overlap of 1 % of the disk's size starts and converges.
+    let s = solve(2, &repo("cases/hertz/hertz.toml"), &[&plane(-0.98)]);
+    s.assert_converged("overlap of 0.02");
+    assert!(s.f(&["contact", "active_count"]) > 0.0);
+}

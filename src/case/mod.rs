@@ -116,6 +116,9 @@ pub enum Preset {
     Direct,
     /// Krylov + AMG.
     Iterative,
+    /// The default: direct or iterative from the dimension and the size of the mesh
+    /// (`solver::choose_preset`), chosen once the mesh is read.
+    Auto,
 }
 
 impl Preset {
@@ -123,6 +126,7 @@ impl Preset {
         match self {
             Preset::Direct => "direct",
             Preset::Iterative => "iterative",
+            Preset::Auto => "auto",
         }
     }
 }
@@ -196,7 +200,7 @@ pub struct SolverSection {
 impl Default for SolverSection {
     fn default() -> Self {
         SolverSection {
-            preset: Preset::Direct,
+            preset: Preset::Auto,
             method: Method::Newton,
             petsc_options: String::new(),
             rtol: 1e-10,
@@ -1115,7 +1119,11 @@ impl Reader<'_> {
             s.preset = self.choice(
                 &pk,
                 p,
-                &[("direct", Preset::Direct), ("iterative", Preset::Iterative)],
+                &[
+                    ("auto", Preset::Auto),
+                    ("direct", Preset::Direct),
+                    ("iterative", Preset::Iterative),
+                ],
             )?;
         }
         if let Some((uk, u)) = t.get("reuse") {

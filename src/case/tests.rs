@@ -182,7 +182,7 @@ fn minimal_file_gets_defaults() {
     assert!(c.dirichlet.is_empty() && c.neumann.is_empty());
     assert_eq!(c.body_force, None);
     assert_eq!(c.solver, SolverSection::default());
-    assert_eq!(c.solver.preset, Preset::Direct);
+    assert_eq!(c.solver.preset, Preset::Auto);
     assert_eq!(c.solver.petsc_options, "");
     assert_eq!(c.solver.rtol, 1e-10);
     assert_eq!(c.solver.reuse, Reuse::Auto);

@@ -7,6 +7,7 @@
 pub mod ffi;
 pub mod lapack;
 pub mod mumps;
+pub mod ndfactor;
 pub mod snes;
 
 use std::ffi::{CStr, CString};
@@ -726,7 +727,7 @@ impl Ksp {
         let mut name: *const c_char = ptr::null();
         // SAFETY: valid objects; the reason name is a static string.
         unsafe {
-            check(ffi::KSPSolve(self.raw, b.raw, x.raw))?;
+            check(ffi::KSPSolve(self.raw, b.raw, x.raw)).map_err(|e| self.explain(e))?;
             check(ffi::KSPGetIterationNumber(self.raw, &mut its))?;
             check(ffi::KSPGetConvergedReason(self.raw, &mut reason))?;
             check(ffi::KSPGetConvergedReasonString(self.raw, &mut name))?;
@@ -747,7 +748,16 @@ impl Ksp {
     /// numeric factorisation, after the symbolic one the first time) without solving.
     pub fn set_up(&mut self) -> Result<()> {
         // SAFETY: valid KSP with operators set.
-        unsafe { check(ffi::KSPSetUp(self.raw)) }
+        unsafe { check(ffi::KSPSetUp(self.raw)).map_err(|e| self.explain(e)) }
+    }
+
+    /// A failure inside our MUMPS preconditioner reaches PETSc as an error code only: its
+    /// message replaces PETSc's generic one.
+    fn explain(&self, mut e: PetscError) -> PetscError {
+        if let Ok(Some((_, Some(m)))) = ndfactor::record(self) {
+            e.message = m;
+        }
+        e
     }
 
     /// The prefix of this KSP's options (call before `set_from_options`).
@@ -862,8 +872,22 @@ impl Ksp {
                     CStr::from_ptr(p).to_string_lossy().into_owned()
                 }
             };
-            Ok((s(kt), s(pt)))
+            let pc_type = s(pt);
+            if pc_type == "shell" {
+                if let Some(sym) = ndfactor::kind(pc)? {
+                    let t = if sym { "cholesky" } else { "lu" };
+                    return Ok((s(kt), format!("{t}-mumps-nd")));
+                }
+            }
+            Ok((s(kt), pc_type))
         }
+    }
+
+    /// Whether the PC factorises the operator (PCLU, PCCHOLESKY, or the MUMPS factorisation
+    /// with our order, [`ndfactor`]). Local.
+    pub fn factorises(&self) -> Result<bool> {
+        let pc = self.type_names()?.1;
+        Ok(pc == "lu" || pc == "cholesky" || pc.ends_with("-mumps-nd"))
     }
 }
 

@@ -27,7 +27,7 @@ const WORKSPACE_PERCENT: i32 = 40;
 /// A MUMPS instance holding the LDLᵀ factorisation of a symmetric matrix whose Schur
 /// complement on a list of variables was computed instead of factorised.
 pub struct SchurFactor {
-    id: Box<raw::DMUMPS_STRUC_C>,
+    inst: Instance,
     irn: Vec<i32>,
     jcn: Vec<i32>,
     vals: Vec<f64>,
@@ -39,7 +39,6 @@ pub struct SchurFactor {
     n: usize,
     size_schur: usize,
     root: bool,
-    initialised: bool,
 }
 
 impl SchurFactor {
@@ -64,24 +63,10 @@ impl SchurFactor {
                 "SchurFactor: {n} unknowns exceed MUMPS' 32-bit indices"
             )));
         }
-        let (lo, hi) = mat.ownership_range()?;
-        let (mut irn, mut jcn, mut vals) = (Vec::new(), Vec::new(), Vec::new());
-        for row in lo..hi {
-            mat.with_row(row, |cols, v| {
-                for (&c, &x) in cols.iter().zip(v) {
-                    if (c as usize) <= row {
-                        irn.push(row as i32 + 1);
-                        jcn.push(c as usize as i32 + 1); // PetscInt may be 64-bit
-                        vals.push(x);
-                    }
-                }
-            })?;
-        }
+        let (irn, jcn, vals) = triplets(mat, true)?;
         let size_schur = schur_rows.len();
         let mut f = SchurFactor {
-            // SAFETY: DMUMPS_STRUC_C is plain data (integers, reals, raw pointers, char
-            // arrays); all-zero is MUMPS' "nothing set" state, filled by JOB = −1.
-            id: Box::new(unsafe { std::mem::zeroed() }),
+            inst: Instance::new(comm, 2)?,
             irn,
             jcn,
             vals,
@@ -100,42 +85,20 @@ impl SchurFactor {
             n,
             size_schur,
             root,
-            initialised: false,
         };
-        // SAFETY: MPI_Comm_c2f only converts the handle.
-        f.id.comm_fortran = unsafe { super::ffi::MPI_Comm_c2f(comm) };
-        f.id.par = 1;
-        f.id.sym = 2;
-        f.call(-1)?;
-        f.initialised = true;
-        let icntl = &mut f.id.icntl;
-        icntl[0] = -1; // ICNTL(1..4): no output
-        icntl[1] = -1;
-        icntl[2] = -1;
-        icntl[3] = 0;
-        icntl[13] = WORKSPACE_PERCENT; // ICNTL(14)
-        icntl[17] = 3; // ICNTL(18): distributed assembled matrix
-        icntl[18] = 1; // ICNTL(19): Schur complement, centralised on the host
-        f.id.n = n as i32;
-        f.id.nz_loc = f.irn.len() as i32;
-        f.id.nnz_loc = f.irn.len() as i64;
-        f.id.irn_loc = f.irn.as_mut_ptr();
-        f.id.jcn_loc = f.jcn.as_mut_ptr();
-        f.id.a_loc = f.vals.as_mut_ptr();
-        f.id.size_schur = size_schur as i32;
-        f.id.listvar_schur = f.listvar.as_mut_ptr();
+        f.inst.id.icntl[18] = 1; // ICNTL(19): Schur complement, centralised on the host
+        f.inst.id.n = n as i32;
+        f.inst.set_matrix(&mut f.irn, &mut f.jcn, &mut f.vals)?;
+        let id = &mut f.inst.id;
+        id.size_schur = size_schur as i32;
+        id.listvar_schur = f.listvar.as_mut_ptr();
         if root {
-            f.id.schur = f.schur.as_mut_ptr();
-            f.id.schur_lld = size_schur as i32;
+            id.schur = f.schur.as_mut_ptr();
+            id.schur_lld = size_schur as i32;
         }
-        // ICNTL(7) and PERM_IN are read on the host only; an order of the wrong length is
-        // ignored there (MUMPS' own ordering) rather than read out of bounds.
-        if root && f.perm.len() == n {
-            f.id.icntl[6] = 1; // ICNTL(7): the order given in PERM_IN
-            f.id.perm_in = f.perm.as_mut_ptr();
-        }
-        f.call(4)?; // analysis + factorisation
-                    // MUMPS returns the lower triangle by rows for a symmetric matrix: mirrored once.
+        f.inst.set_order(root, &mut f.perm, n);
+        f.inst.call(4)?; // analysis + factorisation
+                         // MUMPS returns the lower triangle by rows for a symmetric matrix: mirrored once.
         let s = size_schur;
         for i in 0..if root { s } else { 0 } {
             for j in 0..i {
@@ -144,10 +107,10 @@ impl SchurFactor {
         }
         // The solve phase does not read the matrix (no iterative refinement, ICNTL(10) = 0):
         // its copy is freed.
-        f.id.irn_loc = std::ptr::null_mut();
-        f.id.jcn_loc = std::ptr::null_mut();
-        f.id.a_loc = std::ptr::null_mut();
-        f.id.perm_in = std::ptr::null_mut();
+        f.inst.id.irn_loc = std::ptr::null_mut();
+        f.inst.id.jcn_loc = std::ptr::null_mut();
+        f.inst.id.a_loc = std::ptr::null_mut();
+        f.inst.id.perm_in = std::ptr::null_mut();
         f.irn = Vec::new();
         f.jcn = Vec::new();
         f.vals = Vec::new();
@@ -166,8 +129,8 @@ impl SchurFactor {
     /// the host (empty elsewhere). Collective.
     pub fn condense(&mut self, rhs: &[f64]) -> Result<Vec<f64>> {
         self.prepare_solve(rhs, None);
-        self.id.icntl[25] = 1;
-        self.call(3)?;
+        self.inst.id.icntl[25] = 1;
+        self.inst.call(3)?;
         Ok(if self.root {
             self.redrhs.clone()
         } else {
@@ -184,8 +147,8 @@ impl SchurFactor {
     pub fn expand(&mut self, rhs: &[f64], x_s: &[f64]) -> Result<Vec<f64>> {
         self.condense(rhs)?;
         self.prepare_solve(rhs, Some(x_s));
-        self.id.icntl[25] = 2;
-        self.call(3)?;
+        self.inst.id.icntl[25] = 2;
+        self.inst.call(3)?;
         Ok(if self.root {
             std::mem::take(&mut self.rhs)
         } else {
@@ -204,21 +167,90 @@ impl SchurFactor {
             self.rhs.resize(self.n, 0.0);
             self.redrhs = x_s.map(<[f64]>::to_vec).unwrap_or_default();
             self.redrhs.resize(self.size_schur, 0.0);
-            self.id.rhs = self.rhs.as_mut_ptr();
-            self.id.lrhs = self.n as i32;
-            self.id.redrhs = self.redrhs.as_mut_ptr();
-            self.id.lredrhs = self.size_schur as i32;
+            self.inst.id.rhs = self.rhs.as_mut_ptr();
+            self.inst.id.lrhs = self.n as i32;
+            self.inst.id.redrhs = self.redrhs.as_mut_ptr();
+            self.inst.id.lredrhs = self.size_schur as i32;
         }
+        self.inst.centralised_solve();
+    }
+}
+
+/// One MUMPS instance (DMUMPS_STRUC_C), initialised by JOB = −1 and released by JOB = −2 on
+/// drop; quiet, with [`WORKSPACE_PERCENT`] workspace slack and the distributed assembled matrix
+/// input (ICNTL(18) = 3).
+struct Instance {
+    id: Box<raw::DMUMPS_STRUC_C>,
+    initialised: bool,
+}
+
+impl Instance {
+    /// JOB = −1 on `comm` with SYM = `sym` (0: unsymmetric, 2: general symmetric). Collective.
+    fn new(comm: MPI_Comm, sym: i32) -> Result<Instance> {
+        let mut inst = Instance {
+            // SAFETY: DMUMPS_STRUC_C is plain data (integers, reals, raw pointers, char
+            // arrays); all-zero is MUMPS' "nothing set" state, filled by JOB = −1.
+            id: Box::new(unsafe { std::mem::zeroed() }),
+            initialised: false,
+        };
+        // SAFETY: MPI_Comm_c2f only converts the handle.
+        inst.id.comm_fortran = unsafe { super::ffi::MPI_Comm_c2f(comm) };
+        inst.id.par = 1;
+        inst.id.sym = sym;
+        inst.call(-1)?;
+        inst.initialised = true;
+        let icntl = &mut inst.id.icntl;
+        icntl[0] = -1; // ICNTL(1..4): no output
+        icntl[1] = -1;
+        icntl[2] = -1;
+        icntl[3] = 0;
+        icntl[13] = WORKSPACE_PERCENT; // ICNTL(14)
+        icntl[17] = 3; // ICNTL(18): distributed assembled matrix
+        Ok(inst)
+    }
+
+    /// Points MUMPS at this rank's triplets (1-based), which must outlive every call that reads
+    /// them (analysis, factorisation). An entry count beyond MUMPS' 32-bit NZ_loc is an error
+    /// on this rank (callers agree on it before the next collective call).
+    fn set_matrix(&mut self, irn: &mut [i32], jcn: &mut [i32], vals: &mut [f64]) -> Result<()> {
+        let nz = i32::try_from(irn.len()).map_err(|_| {
+            own_error(format!(
+                "MUMPS: {} matrix entries on one rank exceed its 32-bit NZ_loc",
+                irn.len()
+            ))
+        })?;
+        self.id.nz_loc = nz;
+        self.id.nnz_loc = irn.len() as i64;
+        self.id.irn_loc = irn.as_mut_ptr();
+        self.id.jcn_loc = jcn.as_mut_ptr();
+        self.id.a_loc = vals.as_mut_ptr();
+        Ok(())
+    }
+
+    /// ICNTL(7) = 1 with PERM_IN = `perm` (1-based) on the host when `perm` has `n` entries;
+    /// otherwise MUMPS orders by itself (ICNTL(7) and PERM_IN are read on the host only; an
+    /// order of the wrong length is ignored rather than read out of bounds).
+    fn set_order(&mut self, root: bool, perm: &mut [i32], n: usize) {
+        if root && perm.len() == n {
+            self.id.icntl[6] = 1;
+            self.id.perm_in = perm.as_mut_ptr();
+        }
+    }
+
+    /// The solve phase with one dense centralised right-hand side and a centralised solution
+    /// (ICNTL(20) = ICNTL(21) = 0).
+    fn centralised_solve(&mut self) {
         self.id.nrhs = 1;
-        self.id.icntl[19] = 0; // ICNTL(20): dense centralised right-hand side
-        self.id.icntl[20] = 0; // ICNTL(21): centralised solution
+        self.id.icntl[19] = 0;
+        self.id.icntl[20] = 0;
     }
 
     /// One MUMPS call with `job`; INFOG(1) < 0 is an error (the same on every rank).
     fn call(&mut self, job: i32) -> Result<()> {
         self.id.job = job;
-        // SAFETY: every array the structure points to is owned by `self` and outlives the
-        // call; the structure was initialised by JOB = −1 (or is being initialised by it).
+        // SAFETY: every array the structure points to is owned by the caller's factor and
+        // outlives the call; the structure was initialised by JOB = −1 (or is being
+        // initialised by it).
         unsafe { raw::dmumps_c(&mut *self.id) };
         let (i1, i2) = (self.id.infog[0], self.id.infog[1]);
         if i1 < 0 {
@@ -230,14 +262,156 @@ impl SchurFactor {
     }
 }
 
-impl Drop for SchurFactor {
+impl Drop for Instance {
     fn drop(&mut self) {
         if self.initialised {
             self.id.job = -2;
             // SAFETY: frees MUMPS' own data of an initialised instance (collective, as its
-            // creation was: every rank drops its SchurFactor on the same path).
+            // creation was: every rank drops its factor on the same path).
             unsafe { raw::dmumps_c(&mut *self.id) };
         }
+    }
+}
+
+/// This rank's rows of `mat` as 1-based triplets: the lower triangle (`lower`, for SYM = 2) or
+/// every entry.
+fn triplets(mat: &Matrix, lower: bool) -> Result<(Vec<i32>, Vec<i32>, Vec<f64>)> {
+    let (lo, hi) = mat.ownership_range()?;
+    let (mut irn, mut jcn, mut vals) = (Vec::new(), Vec::new(), Vec::new());
+    for row in lo..hi {
+        mat.with_row(row, |cols, v| {
+            for (&c, &x) in cols.iter().zip(v) {
+                if !lower || (c as usize) <= row {
+                    irn.push(row as i32 + 1);
+                    jcn.push(c as usize as i32 + 1); // PetscInt may be 64-bit
+                    vals.push(x);
+                }
+            }
+        })?;
+    }
+    Ok((irn, jcn, vals))
+}
+
+/// What the analysis and the factorisation of a [`Factor`] cost (MUMPS' global statistics).
+#[derive(Clone, Copy, Debug, Default, serde::Serialize)]
+pub struct FactorStats {
+    /// RINFOG(1): the flops of the elimination estimated by the analysis.
+    pub flops: f64,
+    /// INFOG(11): the order of the largest frontal matrix (INFOG(5), the analysis' estimate,
+    /// before a factorisation).
+    pub largest_front: i64,
+    /// INFOG(29) (INFOG(9) when that is 0): entries in the factors.
+    pub factor_entries: i64,
+    /// The order was ours (ICNTL(7) = 1), not MUMPS' own.
+    pub given_order: bool,
+}
+
+/// An LDLᵀ (symmetric, SYM = 2) or LU (SYM = 0) factorisation of a distributed matrix by MUMPS
+/// with an elimination order chosen by the caller: the analysis once per nonzero pattern, the
+/// numeric factorisation per set of values, solves with the right-hand side and the solution
+/// centralised on the host (rank 0 of the communicator).
+pub struct Factor {
+    inst: Instance,
+    irn: Vec<i32>,
+    jcn: Vec<i32>,
+    vals: Vec<f64>,
+    perm: Vec<i32>,
+    n: usize,
+    root: bool,
+    symmetric: bool,
+    stats: FactorStats,
+}
+
+impl Factor {
+    /// The analysis (JOB = 1) of `mat` (global size `n`, this rank's rows read here) with the
+    /// elimination order `order` (order[i] = 0-based position of variable i; read on the host
+    /// only, `None` or empty there: MUMPS' own choice). Collective; MUMPS' errors are global.
+    pub fn analyse(
+        comm: MPI_Comm,
+        mat: &Matrix,
+        n: usize,
+        order: Option<&[usize]>,
+        symmetric: bool,
+        root: bool,
+    ) -> Result<Factor> {
+        if n >= i32::MAX as usize {
+            return Err(own_error(format!(
+                "MUMPS: {n} unknowns exceed its 32-bit indices"
+            )));
+        }
+        let (irn, jcn, vals) = triplets(mat, symmetric)?;
+        let mut f = Factor {
+            inst: Instance::new(comm, if symmetric { 2 } else { 0 })?,
+            irn,
+            jcn,
+            vals,
+            perm: match order {
+                Some(o) if root => o.iter().map(|&p| p as i32 + 1).collect(),
+                _ => Vec::new(),
+            },
+            n,
+            root,
+            symmetric,
+            stats: FactorStats::default(),
+        };
+        f.inst.id.n = n as i32;
+        f.inst.set_matrix(&mut f.irn, &mut f.jcn, &mut f.vals)?;
+        f.inst.set_order(root, &mut f.perm, n);
+        f.inst.call(1)?;
+        f.stats.flops = f.inst.id.rinfog[0];
+        f.stats.largest_front = f.inst.id.infog[4] as i64; // INFOG(5), the estimate
+        f.stats.given_order = f.perm.len() == n && n > 0;
+        f.inst.id.perm_in = std::ptr::null_mut();
+        Ok(f)
+    }
+
+    /// Whether `mat` has the nonzero pattern of the analysis on this rank (local; callers agree
+    /// over the ranks before [`Factor::factorise`]).
+    pub fn same_pattern(&self, mat: &Matrix) -> Result<bool> {
+        let (irn, jcn, _) = triplets(mat, self.symmetric)?;
+        Ok(irn == self.irn && jcn == self.jcn)
+    }
+
+    /// The numeric factorisation (JOB = 2) of the values of `mat`, whose pattern must be that
+    /// of the analysis on every rank ([`Factor::same_pattern`]). Collective.
+    pub fn factorise(&mut self, mat: &Matrix) -> Result<()> {
+        let (_, _, vals) = triplets(mat, self.symmetric)?;
+        if vals.len() != self.irn.len() {
+            return Err(own_error(
+                "MUMPS: the matrix's pattern changed since the analysis",
+            ));
+        }
+        self.vals = vals;
+        self.inst
+            .set_matrix(&mut self.irn, &mut self.jcn, &mut self.vals)?;
+        self.inst.call(2)?;
+        let g = &self.inst.id.infog;
+        self.stats.factor_entries = if g[28] != 0 {
+            g[28] as i64
+        } else {
+            g[8] as i64
+        };
+        Ok(())
+    }
+
+    /// Solves with the last factorisation (JOB = 3): `rhs` (on the host; ignored elsewhere) is
+    /// overwritten by the solution on the host (a length other than the global size is padded
+    /// or cut there, so that no rank leaves the collective call alone). Collective.
+    pub fn solve(&mut self, rhs: &mut Vec<f64>) -> Result<()> {
+        if self.root {
+            rhs.resize(self.n, 0.0);
+            self.inst.id.rhs = rhs.as_mut_ptr();
+            self.inst.id.lrhs = self.n as i32;
+        }
+        self.inst.centralised_solve();
+        let done = self.inst.call(3);
+        self.inst.id.rhs = std::ptr::null_mut();
+        done
+    }
+
+    /// The analysis' and the last factorisation's statistics (global, the same on every rank).
+    pub fn stats(&self) -> FactorStats {
+        self.stats
     }
 }
 

@@ -84,6 +84,61 @@ fn symmetry_row(normal: &[f64; 3], fixed_k: &[f64]) -> bool {
         .all(|(d, v)| v.is_nan() || normal[d].abs() <= 1e-12)
 }
 
+/// A start deeper inside the obstacle than this fraction of the body's size (the largest side
+/// of its bounding box) is refused as a misplaced obstacle: small-deformation contact cannot
+/// close it (the strains would be of that order), and such a start is almost always a wrong
+/// position or a normal pointing the wrong way. Overlaps of a few per cent start fine.
+pub const DEEP_START_FRACTION: f64 = 0.1;
+
+/// The deepest initial penetration over every rank's contact nodes against
+/// [`DEEP_START_FRACTION`] of the body's size: an input error naming `contact.obstacle`, with
+/// the node and the likely mistake. Collective.
+fn check_depth(
+    ctx: &Ctx,
+    mesh: &Mesh,
+    nodes: &[ContactNode],
+    settings: &ContactSettings,
+) -> Result<(), RunError> {
+    let deepest = nodes
+        .iter()
+        .min_by(|a, b| a.gap.total_cmp(&b.gap).then(a.tag.cmp(&b.tag)));
+    let local = deepest.map_or(f64::INFINITY, |k| k.gap);
+    let min_gap = ctx.min_f64(local);
+    let size = mesh.extent();
+    if min_gap.is_nan() || min_gap >= -DEEP_START_FRACTION * size {
+        return Ok(());
+    }
+    // The rank holding the deepest node (the smallest tag among equal gaps) names it.
+    let tag = deepest
+        .filter(|k| k.gap == min_gap)
+        .map_or(u64::MAX, |k| k.tag);
+    let tag = ctx.min_u64(tag);
+    let penetrating = ctx.sum_usize(nodes.iter().filter(|k| k.gap < 0.0).count());
+    let total = ctx.sum_usize(nodes.len());
+    let hint = if penetrating == total {
+        "every contact node starts inside it: is the obstacle on the wrong side of the body, or \
+         does its normal point away from the body (it must point from the obstacle into the \
+         body)?"
+    } else {
+        "is the obstacle placed where it should be (units, origin, the sign of a coordinate)?"
+    };
+    Err(RunError::Input(
+        InputError::new(
+            &settings.file,
+            format!(
+                "the body starts {:.4e} deep inside the obstacle (contact node {tag}; \
+                 {penetrating} of {total} contact nodes inside), {:.0} % of the body's size \
+                 {size:.4e} — beyond what small-deformation contact can close \
+                 ({:.0} %): {hint}",
+                -min_gap,
+                -100.0 * min_gap / size,
+                100.0 * DEEP_START_FRACTION,
+            ),
+        )
+        .with_key("contact.obstacle"),
+    ))
+}
+
 pub fn build(
     ctx: &Ctx,
     mesh: &Mesh,
@@ -161,6 +216,7 @@ pub fn build(
     let counts: Vec<u64> = ctx.gather(nodes.len() as u64);
     let ex_all = ctx.sum_usize(excluded);
     ctx.agree(bad.map_or(Ok(()), |e| Err(RunError::Input(e))))?;
+    check_depth(ctx, mesh, &nodes, settings)?;
     Ok(ContactBoundary {
         n_global: counts.iter().sum::<u64>() as usize,
         offset: counts[..ctx.rank].iter().sum::<u64>() as usize,

@@ -40,8 +40,9 @@ use crate::contact::{c_n, normal_active};
 use crate::error::RunError;
 use crate::par::Ctx;
 use crate::petsc::lapack::{DenseCholesky, DenseLu};
-use crate::petsc::mumps::{nested_dissection, SchurFactor};
-use crate::petsc::{self, Matrix, PInt};
+use crate::petsc::mumps::SchurFactor;
+use crate::petsc::ndfactor::node_order;
+use crate::petsc::PInt;
 use crate::say;
 use nalgebra::{DMatrix, DVector, SymmetricEigen};
 use serde::Serialize;
@@ -236,7 +237,11 @@ pub fn solve(
             End::Converged => {}
             End::NoSupport(_) if comp.list.len() < cand.n => {
                 // a node beyond the candidates may still carry the load: all of them
-                growth.bound = f64::INFINITY;
+                growth.take = cand.n;
+                growth.why = format!(
+                    "no support among the {} candidates, so every contact node",
+                    comp.list.len()
+                );
                 continue;
             }
             End::NoSupport(reaction) => {
@@ -274,13 +279,21 @@ pub fn solve(
     Ok(fallback(ctx, summary, why))
 }
 
-/// The candidate set from round to round: the gap bound, the nodes forced in (the start set,
-/// nodes (3.23) activated beyond the candidates), and the current set of every contact node
-/// (c_h's global order).
+/// The candidate set from round to round: the `take` contact nodes with the smallest gaps and
+/// every node whose gap equals the largest of theirs (equal gaps are alike to this rule: a flat
+/// face is taken whole, and when it exceeds the Schur limit the plain path runs before anything
+/// is factorised), the nodes forced in (the start set, nodes (3.23) activated beyond the
+/// candidates), and the current set of every contact node (c_h's global order). Growth doubles
+/// `take`, a count, so it also grows where the gaps are ≤ 0 (bodies that start touching or
+/// overlapping).
 struct Growth {
-    bound: f64,
+    /// Every contact node by increasing gap (ties: global order).
+    by_gap: Vec<usize>,
+    take: usize,
     forced: HashSet<usize>,
     active: Vec<bool>,
+    /// Why the set has the size it has (for a fallback's reason).
+    why: String,
 }
 
 impl Growth {
@@ -289,17 +302,19 @@ impl Growth {
     /// thesis' all-active start: all of them).
     fn new(cand: &Candidates, dim: usize) -> Growth {
         let n = cand.n;
-        let mut sorted: Vec<f64> = (0..n).map(|i| cand.gap(i)).collect();
-        sorted.sort_by(|a, b| a.total_cmp(b));
+        let mut by_gap: Vec<usize> = (0..n).collect();
+        by_gap.sort_by(|&a, &b| cand.gap(a).total_cmp(&cand.gap(b)).then(a.cmp(&b)));
         let first = (n / FIRST_FRACTION)
             .max(MIN_CANDIDATES)
             .min(MAX_SCHUR_DOFS / (2 * dim))
             .min(n);
         let active: Vec<bool> = (0..n).map(|i| cand.start(i)).collect();
         Growth {
-            bound: sorted[first - 1],
+            by_gap,
+            take: first,
             forced: (0..n).filter(|&i| active[i]).collect(),
             active,
+            why: format!("the {first} nodes with the smallest gaps and the start set"),
         }
     }
 
@@ -312,8 +327,13 @@ impl Growth {
         round: usize,
         dim: usize,
     ) -> Result<Vec<usize>, String> {
+        let take = self.take.clamp(1, cand.n.max(1));
+        let bound = self
+            .by_gap
+            .get(take - 1)
+            .map_or(f64::NEG_INFINITY, |&i| cand.gap(i));
         let new: Vec<usize> = (0..cand.n)
-            .filter(|&i| !comp.in_s[i] && (cand.gap(i) <= self.bound || self.forced.contains(&i)))
+            .filter(|&i| !comp.in_s[i] && (cand.gap(i) <= bound || self.forced.contains(&i)))
             .collect();
         if new.is_empty() && round > 1 {
             return Err("the candidate set cannot grow (internal)".to_string());
@@ -321,9 +341,10 @@ impl Growth {
         let wanted = comp.list.len() + new.len();
         if wanted * dim > MAX_SCHUR_DOFS {
             return Err(format!(
-                "{wanted} candidate contact nodes ({} dofs) exceed the dense Schur complement's \
-                 limit of {MAX_SCHUR_DOFS} dofs (a contact zone this wide costs less on the \
-                 plain path)",
+                "{wanted} candidate contact nodes ({}: {} dofs) exceed the dense Schur \
+                 complement's limit of {MAX_SCHUR_DOFS} dofs (a contact zone this wide costs \
+                 less on the plain path)",
+                self.why,
                 wanted * dim
             ));
         }
@@ -343,7 +364,7 @@ impl Growth {
     }
 
     /// Nodes beyond the candidates that (3.23) activates on the expanded u (`changed`) join
-    /// the set and the candidates, and the gap bound doubles. `Err`: a candidate changed
+    /// the set and the candidates, and the number taken by gap doubles. `Err`: a candidate changed
     /// (round-off at the edge of the set) or the last round is spent. Collective (log).
     fn widen(
         &mut self,
@@ -371,7 +392,13 @@ impl Growth {
             self.forced.insert(i as usize);
             self.active[i as usize] = true;
         }
-        self.bound *= 2.0;
+        self.take = (2 * self.take).max(1);
+        self.why = format!(
+            "{} node(s) beyond the candidates came into contact, so the {} nodes with the \
+             smallest gaps",
+            changed.len(),
+            self.take
+        );
         Ok(())
     }
 }
@@ -427,10 +454,7 @@ fn prepare_base(
     let mut free = FreeModes::new(ctx, mesh, layout, p.fixed, b, &reduced.f_local, s.rigid);
     free.update(ctx, mesh, layout, &[0.0; 36])?;
     reduced.set_pins(sys, layout, free.pins())?;
-    let empty = ActiveSet {
-        normal: vec![false; b.nodes.len()],
-        tangential: None,
-    };
+    let empty = ActiveSet::frictionless(vec![false; b.nodes.len()]);
     reduced.write(ctx, sys, layout, b, &empty, free.pins())?;
     Ok((free, reduced.rhs_local()?))
 }
@@ -572,7 +596,9 @@ impl Compliance {
         self.factor = None; // the old factorisation's memory first
         let t = Instant::now();
         if self.node_order.is_none() {
-            let order = node_order(ctx, reduced.matrix(), dim).map_err(|e| e.to_string())?;
+            // With a Schur complement MUMPS would order by AMD (2.4 × the flops of PORD on a 3D
+            // block of 82 584 unknowns, measured): our nested-dissection order instead.
+            let order = node_order(ctx.comm(), reduced.matrix(), dim).map_err(|e| e.to_string())?;
             self.node_order = Some(order);
             self.ordering_seconds = t.elapsed().as_secs_f64();
         }
@@ -625,51 +651,6 @@ impl Compliance {
             ));
         }
         Ok(())
-    }
-}
-
-/// A fill-reducing order of the nodes of `mat` (block size `dim`): its node graph (the union
-/// of the patterns of a node's rows) gathered on rank 0 and ordered there by nested dissection
-/// (Scotch). With a Schur complement MUMPS would order by AMD, which costs 2.4 × the flops of
-/// PORD (PETSc's linear solves) on a 3D block of 82 584 unknowns (measured: 2.2e11 against
-/// 8.9e10). On rank 0 perm[v] = position of node v; empty on the other ranks, and on rank 0
-/// when Scotch fails (said in the log; MUMPS then orders). Collective.
-fn node_order(ctx: &Ctx, mat: &Matrix, dim: usize) -> Result<Vec<usize>, petsc::PetscError> {
-    let (lo, hi) = mat.ownership_range()?;
-    let (mut deg, mut adj, mut nb): (Vec<u64>, Vec<u64>, Vec<u64>) = Default::default();
-    for node in lo / dim..hi / dim {
-        nb.clear();
-        for a in 0..dim {
-            mat.with_row(node * dim + a, |cols, _| {
-                nb.extend(cols.iter().map(|&c| c as u64 / dim as u64))
-            })?;
-        }
-        nb.sort_unstable();
-        nb.dedup();
-        nb.retain(|&v| v != node as u64);
-        deg.push(nb.len() as u64);
-        adj.extend_from_slice(&nb);
-    }
-    let deg = ctx.gather_to_root(&deg);
-    let adj: Vec<usize> = ctx
-        .gather_to_root(&adj)
-        .into_iter()
-        .map(|v| v as usize)
-        .collect();
-    if ctx.rank != 0 {
-        return Ok(Vec::new());
-    }
-    let mut xadj = Vec::with_capacity(deg.len() + 1);
-    xadj.push(0usize);
-    for d in deg {
-        xadj.push(xadj.last().unwrap() + d as usize);
-    }
-    match nested_dissection(&xadj, &adj) {
-        Ok(perm) => Ok(perm),
-        Err(e) => {
-            println!("newton: condensed: no nested-dissection order ({e}); MUMPS orders");
-            Ok(Vec::new())
-        }
     }
 }
 
@@ -833,10 +814,7 @@ fn expand(
     for (j, r) in rho.iter_mut().enumerate().take(free.rigid_modes().m) {
         *r = (0..z.ncols()).map(|c| z[(j, c)] * alpha[c]).sum();
     }
-    let set = ActiveSet {
-        normal: active[off..off + b.nodes.len()].to_vec(),
-        tangential: None,
-    };
+    let set = ActiveSet::frictionless(active[off..off + b.nodes.len()].to_vec());
     let gram = set.summarise(ctx, b, free.modes(), dim).gram;
     let mut fin = FreeModes::new(ctx, mesh, layout, p.fixed, b, &reduced.f_local, s.rigid);
     fin.update(ctx, mesh, layout, &gram)?;
@@ -1355,6 +1333,7 @@ fn split_modes(gram: &DMatrix<f64>, mz: usize) -> (DMatrix<f64>, DMatrix<f64>) {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::petsc::mumps::nested_dissection;
 
     /// A dense problem without free modes (c = 1, unit load scale).
     fn no_modes<'a>(

@@ -667,10 +667,7 @@ fn snesvi_solve(
     sys.a.mult(&r.u, &mut au)?;
     let u_local = r.u.to_local_vec()?;
     let scale = ctx.max_f64(u_local.iter().fold(0.0f64, |m, x| m.max(x.abs())));
-    let mut set = ActiveSet {
-        normal: vec![false; b.nodes.len()],
-        tangential: None,
-    };
+    let mut set = ActiveSet::frictionless(vec![false; b.nodes.len()]);
     let mut it = Iterate::new(b.nodes.len(), u_local.len(), false);
     it.recover(u_local.clone(), au.to_local_vec()?, f_local, b, &set, dim);
     for (i, (k, r)) in b.nodes.iter().zip(&it.nodes).enumerate() {

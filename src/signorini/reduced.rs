@@ -648,13 +648,13 @@ impl ReducedSystem {
     /// run ends as cycling (seen on 2 ranks: tests/coulomb.rs, warm start of the fixed point,
     /// whenever the timings made "auto" reuse). "always" still reuses. Collective.
     pub fn enable_reuse(&mut self, ctx: &Ctx, mode: Reuse, friction: bool) -> petsc::Result<()> {
-        let (_, pc) = self.ls.ksp.type_names()?;
+        let factorises = self.ls.ksp.factorises()?;
         self.amg = None;
         if mode == Reuse::Never {
             self.reuser = None;
             return Ok(());
         }
-        if !(pc == "lu" || pc == "cholesky") {
+        if !factorises {
             // Krylov with a preconditioner that is set up per matrix (GAMG and the like).
             self.reuser = None;
             let (rtol, max_it) = self.ls.ksp.tolerances()?;
@@ -1011,8 +1011,7 @@ impl ReducedSystem {
 
     /// True when the solver factorises (direct preset: PCLU / PCCHOLESKY). Local.
     pub fn factorises(&self) -> petsc::Result<bool> {
-        let (_, pc) = self.ls.ksp.type_names()?;
-        Ok(pc == "lu" || pc == "cholesky")
+        self.ls.ksp.factorises()
     }
 
     /// The matrix written last (the condensed path hands K_p to MUMPS directly).
@@ -1045,8 +1044,7 @@ impl ReducedSystem {
             Some(k) => k,
             None => {
                 // The solver's type does not change between steps: asked once.
-                let (_, pc) = self.ls.ksp.type_names()?;
-                let k = if pc == "lu" || pc == "cholesky" {
+                let k = if self.ls.ksp.factorises()? {
                     SolveKind::Factorisation
                 } else {
                     SolveKind::Krylov

@@ -1,0 +1,474 @@
+//! Direct solves by MUMPS with a nested-dissection order computed by the project: the matrix's
+//! node graph gathered on rank 0 and ordered there by Scotch ([`nested_dissection`]), handed to
+//! MUMPS as its elimination order (ICNTL(7) = 1, [`Factor`]). Debian's MUMPS has neither METIS
+//! nor Scotch and falls back to PORD, whose orders cost several times the flops in 3D
+//! (docs/ordering.md).
+//!
+//! [`install`] puts this factorisation behind a PETSc preconditioner (PCSHELL named
+//! [`SHELL_NAME`]) so that every KSP of the project — the linear solve, the Newton steps, the
+//! Krylov solves on an earlier step's factorisation that share the PC — uses it unchanged: the
+//! shell's set-up analyses once per nonzero pattern and factorises the new values, its apply
+//! gathers the vector on rank 0, solves there by MUMPS and scatters the solution back.
+
+use std::ffi::c_void;
+use std::os::raw::c_int;
+use std::ptr;
+use std::time::Instant;
+
+use super::mumps::{nested_dissection, Factor, FactorStats};
+use super::{check, cstring, ffi, own_error, Ksp, MPI_Comm, Matrix, Result};
+
+/// The name of the preconditioner (PCShellSetName), by which [`is_ours`] knows it.
+pub const SHELL_NAME: &str = "mumps with nested-dissection order";
+
+/// The last factorisation's record, for the logs and summary.json.
+#[derive(Clone, Copy, Debug, Default, serde::Serialize)]
+pub struct FactorRecord {
+    #[serde(flatten)]
+    pub stats: FactorStats,
+    /// The node graph's gathering and Scotch's ordering, last analysis [s].
+    pub ordering_seconds: f64,
+    /// MUMPS' analysis (JOB = 1), last one [s].
+    pub analysis_seconds: f64,
+    /// The last numeric factorisation (JOB = 2) [s].
+    pub factorisation_seconds: f64,
+    /// Analyses so far (one per nonzero pattern).
+    pub analyses: usize,
+    /// Numeric factorisations so far.
+    pub factorisations: usize,
+}
+
+/// A fill-reducing order of the dofs of `mat` (block size `dim`, every node's dofs together):
+/// the node graph (the union of the patterns of a node's rows, without self-loops) gathered on
+/// rank 0 of `comm` and ordered there by nested dissection. On rank 0 order[i] = position of
+/// dof i; empty on the other ranks, and on rank 0 when Scotch fails or the graph exceeds MPI's
+/// 32-bit counts (said on stdout; MUMPS then orders by itself). Collective: every rank takes
+/// the same path.
+pub fn dof_order(comm: MPI_Comm, mat: &Matrix, dim: usize) -> Result<Vec<usize>> {
+    let perm = node_order(comm, mat, dim)?;
+    let mut order = Vec::with_capacity(perm.len() * dim);
+    if !perm.is_empty() {
+        order.resize(perm.len() * dim, 0);
+        for (v, &p) in perm.iter().enumerate() {
+            for a in 0..dim {
+                order[v * dim + a] = p * dim + a;
+            }
+        }
+    }
+    Ok(order)
+}
+
+/// The nested-dissection order of the nodes of `mat` (block size `dim`): on rank 0 perm[v] =
+/// position of node v; empty elsewhere and when no order could be made. Collective.
+pub fn node_order(comm: MPI_Comm, mat: &Matrix, dim: usize) -> Result<Vec<usize>> {
+    let (lo, hi) = mat.ownership_range()?;
+    let (mut deg, mut adj, mut nb): (Vec<u64>, Vec<u64>, Vec<u64>) = Default::default();
+    let mut read = Ok(());
+    for node in lo / dim..hi / dim {
+        nb.clear();
+        for a in 0..dim {
+            read = read.and_then(|_| {
+                mat.with_row(node * dim + a, |cols, _| {
+                    nb.extend(cols.iter().map(|&c| c as u64 / dim as u64))
+                })
+            });
+        }
+        nb.sort_unstable();
+        nb.dedup();
+        nb.retain(|&v| v != node as u64);
+        deg.push(nb.len() as u64);
+        adj.extend_from_slice(&nb);
+    }
+    // A failed read on one rank fails every rank, before any gathering.
+    if !all_true(comm, read.is_ok())? {
+        read?;
+        return Err(own_error(
+            "node_order: another rank could not read its rows",
+        ));
+    }
+    let fits = adj.len() < i32::MAX as usize && hi % dim == 0 && lo % dim == 0;
+    if !all_true(comm, fits)? {
+        say_root(
+            comm,
+            "factorisation: no node graph (32-bit counts or block size); MUMPS orders",
+        );
+        return Ok(Vec::new());
+    }
+    let (Some(deg), Some(adj)) = (gather_u64(comm, &deg)?, gather_u64(comm, &adj)?) else {
+        return Ok(Vec::new()); // not rank 0
+    };
+    let mut xadj = Vec::with_capacity(deg.len() + 1);
+    xadj.push(0usize);
+    for d in deg {
+        xadj.push(xadj.last().expect("not empty") + d as usize);
+    }
+    let adj: Vec<usize> = adj.into_iter().map(|v| v as usize).collect();
+    match nested_dissection(&xadj, &adj) {
+        Ok(perm) => Ok(perm),
+        Err(e) => {
+            println!("factorisation: no nested-dissection order ({e}); MUMPS orders");
+            Ok(Vec::new())
+        }
+    }
+}
+
+/// `flag` on every rank of `comm` (one Allreduce).
+fn all_true(comm: MPI_Comm, flag: bool) -> Result<bool> {
+    let mine: i32 = flag as i32;
+    let mut all: i32 = 0;
+    // SAFETY: one int in, one out, on a valid communicator.
+    let rc = unsafe {
+        ffi::MPI_Allreduce(
+            &mine as *const i32 as *const c_void,
+            &mut all as *mut i32 as *mut c_void,
+            1,
+            ffi::RSMPI_INT32_T,
+            ffi::RSMPI_MIN,
+            comm,
+        )
+    };
+    mpi_ok(rc, "MPI_Allreduce")?;
+    Ok(all == 1)
+}
+
+fn mpi_ok(rc: c_int, call: &str) -> Result<()> {
+    if rc == 0 {
+        Ok(())
+    } else {
+        Err(own_error(format!("{call} failed with code {rc}")))
+    }
+}
+
+fn rank_of(comm: MPI_Comm) -> Result<i32> {
+    let mut r = 0;
+    // SAFETY: valid communicator, one int out.
+    mpi_ok(unsafe { ffi::MPI_Comm_rank(comm, &mut r) }, "MPI_Comm_rank")?;
+    Ok(r)
+}
+
+fn say_root(comm: MPI_Comm, line: &str) {
+    if rank_of(comm).unwrap_or(1) == 0 {
+        println!("{line}");
+    }
+}
+
+/// Every rank's `mine` in rank order on rank 0 (`Some` there, `None` elsewhere); the total must
+/// fit MPI's int counts (checked by the caller on every rank). Collective.
+fn gather_u64(comm: MPI_Comm, mine: &[u64]) -> Result<Option<Vec<u64>>> {
+    let (mut size, root) = (0, rank_of(comm)? == 0);
+    // SAFETY: valid communicator, one int out.
+    mpi_ok(
+        unsafe { ffi::MPI_Comm_size(comm, &mut size) },
+        "MPI_Comm_size",
+    )?;
+    let count = mine.len() as i32;
+    let mut counts = vec![0i32; if root { size as usize } else { 0 }];
+    // SAFETY: one int per rank into `counts` (size entries on the root).
+    mpi_ok(
+        unsafe {
+            ffi::MPI_Gather(
+                &count as *const i32 as *const c_void,
+                1,
+                ffi::RSMPI_INT32_T,
+                counts.as_mut_ptr() as *mut c_void,
+                1,
+                ffi::RSMPI_INT32_T,
+                0,
+                comm,
+            )
+        },
+        "MPI_Gather",
+    )?;
+    let mut displs = Vec::with_capacity(counts.len());
+    let mut total = 0i64;
+    for &c in &counts {
+        displs.push(total as i32);
+        total += c as i64;
+    }
+    let mut all = vec![0u64; total as usize];
+    // SAFETY: the root's buffer holds the sum of the counts; the others pass no buffer.
+    mpi_ok(
+        unsafe {
+            ffi::MPI_Gatherv(
+                mine.as_ptr() as *const c_void,
+                count,
+                ffi::RSMPI_UINT64_T,
+                all.as_mut_ptr() as *mut c_void,
+                counts.as_ptr(),
+                displs.as_ptr(),
+                ffi::RSMPI_UINT64_T,
+                0,
+                comm,
+            )
+        },
+        "MPI_Gatherv",
+    )?;
+    Ok(root.then_some(all))
+}
+
+/// The shell's state (PCShellSetContext), owned by the PC and dropped by its destroy callback.
+struct Shell {
+    comm: MPI_Comm,
+    dim: usize,
+    symmetric: bool,
+    root: bool,
+    factor: Option<Factor>,
+    record: FactorRecord,
+    /// VecScatterCreateToZero of the operator's layout, made at the first apply.
+    scatter: ffi::VecScatter,
+    seq: ffi::Vec,
+    buf: Vec<f64>,
+    /// The message of the last failure in a callback (PETSc only sees an error code).
+    error: Option<String>,
+}
+
+impl Shell {
+    /// Analysis when the pattern is new (on any rank), then the numeric factorisation.
+    fn set_up(&mut self, pmat: ffi::Mat) -> Result<()> {
+        // A non-owning view: the PC owns the matrix.
+        let mat = std::mem::ManuallyDrop::new(Matrix {
+            raw: pmat,
+            _arrays: None,
+        });
+        let same = match &self.factor {
+            Some(f) => f.same_pattern(&mat),
+            None => Ok(false),
+        };
+        let same = all_true(self.comm, matches!(same, Ok(true)))?;
+        if !same {
+            self.factor = None; // collective drop (JOB = −2) on every rank alike
+            let t = Instant::now();
+            let order = dof_order(self.comm, &mat, self.dim)?;
+            self.record.ordering_seconds = t.elapsed().as_secs_f64();
+            let (mut m, mut nn) = (0, 0);
+            // SAFETY: valid matrix, two ints out.
+            unsafe { check(ffi::MatGetSize(pmat, &mut m, &mut nn))? };
+            let t = Instant::now();
+            let order = (!order.is_empty()).then_some(&order[..]);
+            let f = Factor::analyse(
+                self.comm,
+                &mat,
+                m as usize,
+                order,
+                self.symmetric,
+                self.root,
+            )?;
+            self.record.analysis_seconds = t.elapsed().as_secs_f64();
+            self.record.analyses += 1;
+            self.factor = Some(f);
+        }
+        let f = self.factor.as_mut().expect("analysed above");
+        let t = Instant::now();
+        f.factorise(&mat)?;
+        self.record.factorisation_seconds = t.elapsed().as_secs_f64();
+        self.record.factorisations += 1;
+        self.record.stats = f.stats();
+        Ok(())
+    }
+
+    /// y = A⁻¹ x through rank 0.
+    fn apply(&mut self, x: ffi::Vec, y: ffi::Vec) -> Result<()> {
+        // SAFETY: x, y are the PC's vectors; the scatter and the sequential vector are made
+        // once from x's layout (the operator's, fixed for the PC's life) and destroyed with the
+        // shell; the array of `seq` is read and written between Get/Restore only.
+        unsafe {
+            if self.scatter.is_null() {
+                check(ffi::VecScatterCreateToZero(
+                    x,
+                    &mut self.scatter,
+                    &mut self.seq,
+                ))?;
+            }
+            let fwd = (ffi::INSERT_VALUES, ffi::SCATTER_FORWARD);
+            check(ffi::VecScatterBegin(
+                self.scatter,
+                x,
+                self.seq,
+                fwd.0,
+                fwd.1,
+            ))?;
+            check(ffi::VecScatterEnd(self.scatter, x, self.seq, fwd.0, fwd.1))?;
+            let mut n = 0;
+            check(ffi::VecGetLocalSize(self.seq, &mut n))?;
+            let mut a: *mut f64 = ptr::null_mut();
+            check(ffi::VecGetArray(self.seq, &mut a))?;
+            let seq = std::slice::from_raw_parts_mut(a, n as usize);
+            self.buf.clear();
+            self.buf.extend_from_slice(seq);
+            let solved = match self.factor.as_mut() {
+                Some(f) => f.solve(&mut self.buf),
+                None => Err(own_error("apply before set-up")),
+            };
+            if solved.is_ok() && self.root {
+                seq.copy_from_slice(&self.buf[..seq.len()]);
+            }
+            check(ffi::VecRestoreArray(self.seq, &mut a))?;
+            solved?;
+            let rev = (ffi::INSERT_VALUES, ffi::SCATTER_REVERSE);
+            check(ffi::VecScatterBegin(
+                self.scatter,
+                self.seq,
+                y,
+                rev.0,
+                rev.1,
+            ))?;
+            check(ffi::VecScatterEnd(self.scatter, self.seq, y, rev.0, rev.1))
+        }
+    }
+}
+
+impl Drop for Shell {
+    fn drop(&mut self) {
+        // SAFETY: objects made by `apply` (or null: the destroy calls accept null handles).
+        unsafe {
+            ffi::VecScatterDestroy(&mut self.scatter);
+            ffi::VecDestroy(&mut self.seq);
+        }
+    }
+}
+
+/// The shell's context pointer.
+///
+/// # Safety
+/// `pc` must be a PC made by [`install`] and not yet destroyed.
+unsafe fn shell_of<'a>(pc: ffi::PC) -> Option<&'a mut Shell> {
+    let mut p: *mut c_void = ptr::null_mut();
+    if ffi::PCShellGetContext(pc, &mut p as *mut *mut c_void as *mut c_void) != 0 || p.is_null() {
+        return None;
+    }
+    Some(&mut *(p as *mut Shell))
+}
+
+/// PETSC_ERR_LIB: the code a callback returns on a failure (its message kept in the shell).
+const ERR_LIB: ffi::PetscErrorCode = 76;
+
+fn code_of(shell: &mut Shell, r: Result<()>) -> ffi::PetscErrorCode {
+    match r {
+        Ok(()) => 0,
+        Err(e) => {
+            shell.error = Some(e.message);
+            ERR_LIB
+        }
+    }
+}
+
+unsafe extern "C" fn shell_set_up(pc: ffi::PC) -> ffi::PetscErrorCode {
+    let Some(shell) = shell_of(pc) else {
+        return ERR_LIB;
+    };
+    let (mut amat, mut pmat): (ffi::Mat, ffi::Mat) = (ptr::null_mut(), ptr::null_mut());
+    let got = check(ffi::PCGetOperators(pc, &mut amat, &mut pmat));
+    let r = got.and_then(|_| shell.set_up(pmat));
+    code_of(shell, r)
+}
+
+unsafe extern "C" fn shell_apply(pc: ffi::PC, x: ffi::Vec, y: ffi::Vec) -> ffi::PetscErrorCode {
+    let Some(shell) = shell_of(pc) else {
+        return ERR_LIB;
+    };
+    let r = shell.apply(x, y);
+    code_of(shell, r)
+}
+
+unsafe extern "C" fn shell_destroy(pc: ffi::PC) -> ffi::PetscErrorCode {
+    let mut p: *mut c_void = ptr::null_mut();
+    if ffi::PCShellGetContext(pc, &mut p as *mut *mut c_void as *mut c_void) == 0 && !p.is_null() {
+        drop(Box::from_raw(p as *mut Shell));
+        ffi::PCShellSetContext(pc, ptr::null_mut());
+    }
+    0
+}
+
+/// Makes the PC of `ksp` the MUMPS factorisation with the project's nested-dissection order
+/// (LDLᵀ when `symmetric`, else LU) on matrices of block size `dim`. Collective.
+pub fn install(ksp: &Ksp, comm: MPI_Comm, dim: usize, symmetric: bool) -> Result<()> {
+    let shell = Box::new(Shell {
+        comm,
+        dim: dim.max(1),
+        symmetric,
+        root: rank_of(comm)? == 0,
+        factor: None,
+        record: FactorRecord::default(),
+        scatter: ptr::null_mut(),
+        seq: ptr::null_mut(),
+        buf: Vec::new(),
+        error: None,
+    });
+    let name = cstring(SHELL_NAME);
+    // SAFETY: the PC takes the boxed shell as its context and frees it in its destroy
+    // callback; PETSc copies the name.
+    unsafe {
+        let mut pc: ffi::PC = ptr::null_mut();
+        check(ffi::KSPGetPC(ksp.raw, &mut pc))?;
+        check(ffi::PCSetType(pc, ffi::PCSHELL.as_ptr() as *const _))?;
+        let raw = Box::into_raw(shell);
+        check(ffi::PCShellSetContext(pc, raw as *mut c_void))?;
+        check(ffi::PCShellSetDestroy(pc, Some(shell_destroy)))?;
+        check(ffi::PCShellSetSetUp(pc, Some(shell_set_up)))?;
+        check(ffi::PCShellSetApply(pc, Some(shell_apply)))?;
+        check(ffi::PCShellSetName(pc, name.as_ptr()))?;
+    }
+    Ok(())
+}
+
+/// After `set_from_options`: when the PC of `ksp` is a MUMPS factorisation (PCCHOLESKY or PCLU
+/// with the solver type "mumps", the direct preset) and no MUMPS ordering was asked for
+/// (`-mat_mumps_icntl_7`, case file or command line), it becomes the shell of [`install`] with
+/// the operator `mat`'s block size. Returns whether it did. Collective.
+pub fn install_if_mumps(ksp: &Ksp, comm: MPI_Comm, mat: &Matrix) -> Result<bool> {
+    let pc_type = ksp.type_names()?.1;
+    if !(pc_type == "cholesky" || pc_type == "lu") || super::options::has("-mat_mumps_icntl_7")? {
+        return Ok(false);
+    }
+    // SAFETY: reads the PC's factor solver type (a PETSc-owned string) and the block size.
+    let (solver, bs) = unsafe {
+        let mut pc: ffi::PC = ptr::null_mut();
+        check(ffi::KSPGetPC(ksp.raw, &mut pc))?;
+        let mut t: ffi::MatSolverType = ptr::null();
+        check(ffi::PCFactorGetMatSolverType(pc, &mut t))?;
+        let solver = if t.is_null() {
+            String::new()
+        } else {
+            std::ffi::CStr::from_ptr(t).to_string_lossy().into_owned()
+        };
+        let mut bs = 1;
+        check(ffi::MatGetBlockSize(mat.raw, &mut bs))?;
+        (solver, bs)
+    };
+    if solver != "mumps" {
+        return Ok(false);
+    }
+    install(ksp, comm, bs.max(1) as usize, pc_type == "cholesky")?;
+    Ok(true)
+}
+
+/// For a PC of type "shell": `Some(symmetric)` when it is the shell of [`install`]. Local.
+pub(super) fn kind(pc: ffi::PC) -> Result<Option<bool>> {
+    // SAFETY: reads the shell's name (a PETSc-owned string); a shell with our name has a live
+    // Shell as its context.
+    unsafe {
+        let mut name: *const std::os::raw::c_char = ptr::null();
+        check(ffi::PCShellGetName(pc, &mut name))?;
+        if name.is_null() || std::ffi::CStr::from_ptr(name).to_bytes() != SHELL_NAME.as_bytes() {
+            return Ok(None);
+        }
+        Ok(shell_of(pc).map(|s| s.symmetric))
+    }
+}
+
+/// The last factorisation's record of the shell of `ksp` and the message of its last failure
+/// (taken), or `None` when the PC is not ours. Local.
+pub fn record(ksp: &Ksp) -> Result<Option<(FactorRecord, Option<String>)>> {
+    // SAFETY: the context is a live Shell when `kind` recognises the PC as ours.
+    unsafe {
+        let mut pc: ffi::PC = ptr::null_mut();
+        check(ffi::KSPGetPC(ksp.raw, &mut pc))?;
+        let mut t: *const std::os::raw::c_char = ptr::null();
+        check(ffi::PCGetType(pc, &mut t))?;
+        if t.is_null() || std::ffi::CStr::from_ptr(t).to_bytes() != b"shell" || kind(pc)?.is_none()
+        {
+            return Ok(None);
+        }
+        Ok(shell_of(pc).map(|s| (s.record, s.error.take())))
+    }
+}

@@ -21,6 +21,9 @@ fn material_and_pressure(case: &Path) -> (f64, f64, f64) {
 /// Block of cases/blocks pressed onto z = 0 (3D) / y = 0 (2D) by the uniform pressure p on
 /// its top: every bottom node active with pressure p, Σ −λ = p · area, KKT at round-off, and
 /// the displacement is the exact linear field (P1 reproduces it): σ_nn = −p, the rest 0.
+/// The solve's round-off in the multipliers, relative to the force scale (see `block_on_plane`).
+const ROUND_OFF: f64 = 1e-10;
+
 fn block_on_plane(dim: usize, np: usize) {
     let case: PathBuf = repo(&format!("cases/blocks/block{dim}d.toml"));
     let (e, nu, p) = material_and_pressure(&case);
@@ -65,13 +68,20 @@ fn block_on_plane(dim: usize, np: usize) {
         );
     }
     let k = |key: &str| s.f(&["contact", "kkt", key]);
+    // λ = f − A u carries the solve's round-off, ~ ε κ(K) times the force scale: measured on
+    // block3d 7.2e-13 (OpenBLAS' Prescott and SkylakeX kernels) and 1.15e-12 (Haswell) of the
+    // force scale; 1e-10 keeps the check far below any real tangential force (μ ~ 0.1) without
+    // deciding it by the CPU's BLAS kernels.
+    let round_off = ROUND_OFF * k("force_scale");
     assert!(
-        k("max_positive_lambda_n") <= 1e-12 * k("force_scale"),
-        "{what}: λ_n > 0"
+        k("max_positive_lambda_n") <= round_off,
+        "{what}: λ_n = {:e} > 0",
+        k("max_positive_lambda_n")
     );
     assert!(
-        k("max_abs_lambda_t") <= 1e-12 * k("force_scale"),
-        "{what}: λ_t ≠ 0"
+        k("max_abs_lambda_t") <= round_off,
+        "{what}: λ_t = {:e} ≠ 0",
+        k("max_abs_lambda_t")
     );
     assert!(
         k("max_penetration") <= 1e-12,

@@ -59,6 +59,12 @@ fn predicted_against_plain(
     // the second step solves with the predicted set
     let h = get(&auto.summary, &["newton", "history"]);
     assert_eq!(h[1]["active"].as_u64(), Some(predicted as u64), "{}", h[1]);
+    // the last step is an exact solve whose update changes no node (Algorithm 1's stop)
+    let steps = h.as_array().unwrap();
+    let last = &steps[steps.len() - 1];
+    assert_eq!(last["changed"].as_u64(), Some(0), "{last}");
+    assert_eq!(last["amg"]["inexact"], Value::Bool(false), "{last}");
+    assert!(last["iterations"].as_u64().unwrap() >= 1, "{last}");
     assert_eq!(
         plain.active_node_ids(),
         auto.active_node_ids(),

@@ -53,6 +53,14 @@ fn check_history(s: &Solved, with_reuse: bool) -> (usize, usize, usize) {
     assert_eq!(fact + reuse, s.steps());
     assert_eq!(s.f(&["newton", "factorisations"]) as usize, fact);
     assert_eq!(h[0]["solve"], "factorisation");
+    // The final iterate is a factorised one: a stop decided on a reuse step is confirmed by
+    // one more step on the same sets, factorised (newton.rs).
+    assert_eq!(
+        h[h.len() - 1]["solve"],
+        "factorisation",
+        "the last step is not factorised: {}",
+        s.run.output()
+    );
     (fact, reuse, fallback)
 }
 

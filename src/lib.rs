@@ -10,6 +10,7 @@ pub mod contact;
 pub mod dist;
 pub mod driver;
 pub mod error;
+pub mod fault;
 pub mod fem;
 pub mod geom;
 pub mod mesh;

@@ -208,3 +208,35 @@ fn an_obstacle_deep_inside_the_body_is_refused_naming_the_key() {
     s.assert_converged("overlap of 0.02");
     assert!(s.f(&["contact", "active_count"]) > 0.0);
 }
+
+#[test]
+fn a_failure_on_one_rank_ends_every_rank_alike() {
+    // Test-only fault injection (src/fault.rs, SIGNORINI_TEST_FAULT=STAGE@RANK) in the stages
+    // of a contact solve where one rank acts alone before a collective: rank 1 of 2 and of 3
+    // fails; every rank ends with the same message, exit 1, within the time limit (no hang),
+    // nothing written. The default Hertz case runs the condensed path (a failure in its
+    // factorisation falls back to the plain path, whose factorisation fails the same way).
+    let tmp = tempfile::tempdir().unwrap();
+    for stage in ["mumps-rows", "nd-graph", "condensed-expand"] {
+        for np in [2, 3] {
+            let out = tmp.path().join(format!("{stage}-{np}"));
+            let mut cmd = solver_command(np, &repo("cases/hertz/hertz.toml"), &[], &out);
+            cmd.env("SIGNORINI_TEST_FAULT", format!("{stage}@1"));
+            let r = run_with_timeout(cmd, std::time::Duration::from_secs(120));
+            r.expect_code(1, stage);
+            let msg = format!("injected fault at {stage} on rank 1");
+            // every rank that prints an error prints this one: as many copies of the message
+            // as error headers (counted, not matched line by line: the ranks' lines and
+            // MPI_Abort's banner interleave on stderr)
+            let headers = r.stderr.matches("error (rank").count()
+                + r.stderr.lines().filter(|l| l.starts_with("error:")).count();
+            assert!(headers >= 1, "{}", r.output());
+            assert!(
+                r.stderr.matches(&msg).count() >= headers,
+                "{stage}, {np} ranks: {headers} error(s), not all with the same message\n{}",
+                r.output()
+            );
+            assert!(!out.exists(), "{stage}, {np} ranks: output written");
+        }
+    }
+}

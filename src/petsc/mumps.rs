@@ -63,7 +63,7 @@ impl SchurFactor {
                 "SchurFactor: {n} unknowns exceed MUMPS' 32-bit indices"
             )));
         }
-        let (irn, jcn, vals) = triplets(mat, true)?;
+        let (irn, jcn, vals) = agreed(comm, rows(comm, mat, true))?;
         let size_schur = schur_rows.len();
         let mut f = SchurFactor {
             inst: Instance::new(comm, 2)?,
@@ -88,7 +88,8 @@ impl SchurFactor {
         };
         f.inst.id.icntl[18] = 1; // ICNTL(19): Schur complement, centralised on the host
         f.inst.id.n = n as i32;
-        f.inst.set_matrix(&mut f.irn, &mut f.jcn, &mut f.vals)?;
+        let set = f.inst.set_matrix(&mut f.irn, &mut f.jcn, &mut f.vals);
+        agreed(comm, set)?;
         let id = &mut f.inst.id;
         id.size_schur = size_schur as i32;
         id.listvar_schur = f.listvar.as_mut_ptr();
@@ -273,6 +274,26 @@ impl Drop for Instance {
     }
 }
 
+/// A rank-local result agreed over `comm` before the next collective MUMPS call: `Ok` only if
+/// every rank has `Ok`; a rank without an error of its own then says that another one failed.
+/// Collective (one Allreduce).
+fn agreed<T>(comm: MPI_Comm, local: Result<T>) -> Result<T> {
+    let msg = local.as_ref().err().map(|e| e.message.clone());
+    match super::ndfactor::first_message(comm, msg.as_deref())? {
+        None => local,
+        Some(m) => Err(own_error(m)),
+    }
+}
+
+/// [`triplets`] with the test-only fault stage "mumps-rows" (`crate::fault`).
+fn rows(comm: MPI_Comm, mat: &Matrix, lower: bool) -> Result<(Vec<i32>, Vec<i32>, Vec<f64>)> {
+    let t = triplets(mat, lower)?;
+    match crate::fault::injected("mumps-rows", super::ndfactor::rank_of(comm)? as usize) {
+        Some(m) => Err(own_error(m)),
+        None => Ok(t),
+    }
+}
+
 /// This rank's rows of `mat` as 1-based triplets: the lower triangle (`lower`, for SYM = 2) or
 /// every entry.
 fn triplets(mat: &Matrix, lower: bool) -> Result<(Vec<i32>, Vec<i32>, Vec<f64>)> {
@@ -312,6 +333,7 @@ pub struct FactorStats {
 /// centralised on the host (rank 0 of the communicator).
 pub struct Factor {
     inst: Instance,
+    comm: MPI_Comm,
     irn: Vec<i32>,
     jcn: Vec<i32>,
     vals: Vec<f64>,
@@ -339,9 +361,10 @@ impl Factor {
                 "MUMPS: {n} unknowns exceed its 32-bit indices"
             )));
         }
-        let (irn, jcn, vals) = triplets(mat, symmetric)?;
+        let (irn, jcn, vals) = agreed(comm, rows(comm, mat, symmetric))?;
         let mut f = Factor {
             inst: Instance::new(comm, if symmetric { 2 } else { 0 })?,
+            comm,
             irn,
             jcn,
             vals,
@@ -355,7 +378,8 @@ impl Factor {
             stats: FactorStats::default(),
         };
         f.inst.id.n = n as i32;
-        f.inst.set_matrix(&mut f.irn, &mut f.jcn, &mut f.vals)?;
+        let set = f.inst.set_matrix(&mut f.irn, &mut f.jcn, &mut f.vals);
+        agreed(comm, set)?;
         f.inst.set_order(root, &mut f.perm, n);
         f.inst.call(1)?;
         f.stats.flops = f.inst.id.rinfog[0];
@@ -375,15 +399,21 @@ impl Factor {
     /// The numeric factorisation (JOB = 2) of the values of `mat`, whose pattern must be that
     /// of the analysis on every rank ([`Factor::same_pattern`]). Collective.
     pub fn factorise(&mut self, mat: &Matrix) -> Result<()> {
-        let (_, _, vals) = triplets(mat, self.symmetric)?;
-        if vals.len() != self.irn.len() {
-            return Err(own_error(
-                "MUMPS: the matrix's pattern changed since the analysis",
-            ));
-        }
-        self.vals = vals;
-        self.inst
-            .set_matrix(&mut self.irn, &mut self.jcn, &mut self.vals)?;
+        let n_entries = self.irn.len();
+        let vals = rows(self.comm, mat, self.symmetric).and_then(|(_, _, vals)| {
+            if vals.len() == n_entries {
+                Ok(vals)
+            } else {
+                Err(own_error(
+                    "MUMPS: the matrix's pattern changed since the analysis",
+                ))
+            }
+        });
+        self.vals = agreed(self.comm, vals)?;
+        let set = self
+            .inst
+            .set_matrix(&mut self.irn, &mut self.jcn, &mut self.vals);
+        agreed(self.comm, set)?;
         self.inst.call(2)?;
         let g = &self.inst.id.infog;
         self.stats.factor_entries = if g[28] != 0 {

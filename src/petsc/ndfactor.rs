@@ -79,12 +79,13 @@ pub fn node_order(comm: MPI_Comm, mat: &Matrix, dim: usize) -> Result<Vec<usize>
         deg.push(nb.len() as u64);
         adj.extend_from_slice(&nb);
     }
-    // A failed read on one rank fails every rank, before any gathering.
-    if !all_true(comm, read.is_ok())? {
-        read?;
-        return Err(own_error(
-            "node_order: another rank could not read its rows",
-        ));
+    if let Some(m) = crate::fault::injected("nd-graph", rank_of(comm)? as usize) {
+        read = Err(own_error(m));
+    }
+    // A failed read on one rank fails every rank (with its message), before any gathering.
+    let local = read.as_ref().err().map(|e| e.message.clone());
+    if let Some(m) = first_message(comm, local.as_deref())? {
+        return Err(own_error(m));
     }
     let fits = adj.len() < i32::MAX as usize && hi % dim == 0 && lo % dim == 0;
     if !all_true(comm, fits)? {
@@ -113,7 +114,7 @@ pub fn node_order(comm: MPI_Comm, mat: &Matrix, dim: usize) -> Result<Vec<usize>
 }
 
 /// `flag` on every rank of `comm` (one Allreduce).
-fn all_true(comm: MPI_Comm, flag: bool) -> Result<bool> {
+pub(super) fn all_true(comm: MPI_Comm, flag: bool) -> Result<bool> {
     let mine: i32 = flag as i32;
     let mut all: i32 = 0;
     // SAFETY: one int in, one out, on a valid communicator.
@@ -131,6 +132,67 @@ fn all_true(comm: MPI_Comm, flag: bool) -> Result<bool> {
     Ok(all == 1)
 }
 
+/// The message of the lowest rank whose `local` is `Some`, on every rank (`None` when no rank
+/// failed). Collective (one Allreduce, and two broadcasts when a rank failed).
+pub(super) fn first_message(comm: MPI_Comm, local: Option<&str>) -> Result<Option<String>> {
+    let (mut size, rank) = (0, rank_of(comm)?);
+    // SAFETY: valid communicator, one int out.
+    mpi_ok(
+        unsafe { ffi::MPI_Comm_size(comm, &mut size) },
+        "MPI_Comm_size",
+    )?;
+    let mine: i32 = if local.is_some() { rank } else { size };
+    let mut first: i32 = size;
+    // SAFETY: one int in, one out, on a valid communicator.
+    mpi_ok(
+        unsafe {
+            ffi::MPI_Allreduce(
+                &mine as *const i32 as *const c_void,
+                &mut first as *mut i32 as *mut c_void,
+                1,
+                ffi::RSMPI_INT32_T,
+                ffi::RSMPI_MIN,
+                comm,
+            )
+        },
+        "MPI_Allreduce",
+    )?;
+    if first >= size {
+        return Ok(None);
+    }
+    let mut bytes = if rank == first {
+        local.unwrap_or_default().as_bytes().to_vec()
+    } else {
+        Vec::new()
+    };
+    let mut len = bytes.len() as i32;
+    // SAFETY: one int, then `len` bytes into a buffer of that length, from rank `first`.
+    unsafe {
+        mpi_ok(
+            ffi::MPI_Bcast(
+                &mut len as *mut i32 as *mut c_void,
+                1,
+                ffi::RSMPI_INT32_T,
+                first,
+                comm,
+            ),
+            "MPI_Bcast",
+        )?;
+        bytes.resize(len.max(0) as usize, 0);
+        mpi_ok(
+            ffi::MPI_Bcast(
+                bytes.as_mut_ptr() as *mut c_void,
+                len,
+                ffi::RSMPI_UINT8_T,
+                first,
+                comm,
+            ),
+            "MPI_Bcast",
+        )?;
+    }
+    Ok(Some(String::from_utf8_lossy(&bytes).into_owned()))
+}
+
 fn mpi_ok(rc: c_int, call: &str) -> Result<()> {
     if rc == 0 {
         Ok(())
@@ -139,7 +201,7 @@ fn mpi_ok(rc: c_int, call: &str) -> Result<()> {
     }
 }
 
-fn rank_of(comm: MPI_Comm) -> Result<i32> {
+pub(super) fn rank_of(comm: MPI_Comm) -> Result<i32> {
     let mut r = 0;
     // SAFETY: valid communicator, one int out.
     mpi_ok(unsafe { ffi::MPI_Comm_rank(comm, &mut r) }, "MPI_Comm_rank")?;

@@ -808,7 +808,15 @@ fn expand(
         Err(e) => return Ok(Err(format!("the expansion solve failed: {e}"))),
     };
     let w = ctx.scatter_from_root(&w_root, n_local);
-    reduced.set_solution_local(&w)?;
+    // local (this rank's array): agreed before the collectives that follow
+    let set = reduced.set_solution_local(&w).map_err(RunError::from);
+    let set = set.and_then(
+        |()| match crate::fault::injected("condensed-expand", ctx.rank) {
+            Some(m) => Err(RunError::Failed(m)),
+            None => Ok(()),
+        },
+    );
+    ctx.agree(set)?;
     let z = free.dirichlet_free();
     let mut rho = [0.0; 6];
     for (j, r) in rho.iter_mut().enumerate().take(free.rigid_modes().m) {
@@ -940,11 +948,10 @@ impl DenseRun {
         let end = match v[0] as i32 {
             0 => End::Converged,
             1 => End::NoSupport(v[1]),
+            // the reason's UTF-8 bytes, one per entry (0..=255: exact in f64)
             _ => End::Fallback(
-                v[p..]
-                    .iter()
-                    .map(|&b| char::from(b as u8))
-                    .collect::<String>(),
+                String::from_utf8_lossy(&v[p..].iter().map(|&b| b as u8).collect::<Vec<u8>>())
+                    .into_owned(),
             ),
         };
         DenseRun {

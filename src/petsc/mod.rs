@@ -6,6 +6,7 @@
 
 pub mod ffi;
 pub mod lapack;
+mod mpi;
 pub mod mumps;
 pub mod ndfactor;
 pub mod snes;

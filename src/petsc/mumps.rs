@@ -279,7 +279,7 @@ impl Drop for Instance {
 /// Collective (one Allreduce).
 fn agreed<T>(comm: MPI_Comm, local: Result<T>) -> Result<T> {
     let msg = local.as_ref().err().map(|e| e.message.clone());
-    match super::ndfactor::first_message(comm, msg.as_deref())? {
+    match super::mpi::first_message(comm, msg.as_deref())? {
         None => local,
         Some(m) => Err(own_error(m)),
     }
@@ -288,7 +288,7 @@ fn agreed<T>(comm: MPI_Comm, local: Result<T>) -> Result<T> {
 /// [`triplets`] with the test-only fault stage "mumps-rows" (`crate::fault`).
 fn rows(comm: MPI_Comm, mat: &Matrix, lower: bool) -> Result<(Vec<i32>, Vec<i32>, Vec<f64>)> {
     let t = triplets(mat, lower)?;
-    match crate::fault::injected("mumps-rows", super::ndfactor::rank_of(comm)? as usize) {
+    match crate::fault::injected("mumps-rows", super::mpi::rank_of(comm)? as usize) {
         Some(m) => Err(own_error(m)),
         None => Ok(t),
     }
@@ -389,27 +389,8 @@ impl Factor {
         Ok(f)
     }
 
-    /// Whether `mat` has the nonzero pattern of the analysis on this rank (local; callers agree
-    /// over the ranks before [`Factor::factorise`]).
-    pub fn same_pattern(&self, mat: &Matrix) -> Result<bool> {
-        let (irn, jcn, _) = triplets(mat, self.symmetric)?;
-        Ok(irn == self.irn && jcn == self.jcn)
-    }
-
-    /// The numeric factorisation (JOB = 2) of the values of `mat`, whose pattern must be that
-    /// of the analysis on every rank ([`Factor::same_pattern`]). Collective.
-    pub fn factorise(&mut self, mat: &Matrix) -> Result<()> {
-        let n_entries = self.irn.len();
-        let vals = rows(self.comm, mat, self.symmetric).and_then(|(_, _, vals)| {
-            if vals.len() == n_entries {
-                Ok(vals)
-            } else {
-                Err(own_error(
-                    "MUMPS: the matrix's pattern changed since the analysis",
-                ))
-            }
-        });
-        self.vals = agreed(self.comm, vals)?;
+    /// The numeric factorisation (JOB = 2) of the values read by the analysis. Collective.
+    pub fn factorise(&mut self) -> Result<()> {
         let set = self
             .inst
             .set_matrix(&mut self.irn, &mut self.jcn, &mut self.vals);
@@ -422,6 +403,21 @@ impl Factor {
             g[8] as i64
         };
         Ok(())
+    }
+
+    /// The numeric factorisation of new values: `mat` is read once; `Ok(false)` (nothing
+    /// factorised, on every rank) when its pattern is not the analysis' on some rank — the
+    /// caller analyses anew. Collective.
+    pub fn refactorise(&mut self, mat: &Matrix) -> Result<bool> {
+        let read = rows(self.comm, mat, self.symmetric);
+        let same = matches!(&read, Ok((i, j, _)) if *i == self.irn && *j == self.jcn);
+        let (_, _, vals) = agreed(self.comm, read)?;
+        if !super::mpi::all_true(self.comm, same)? {
+            return Ok(false);
+        }
+        self.vals = vals;
+        self.factorise()?;
+        Ok(true)
     }
 
     /// Solves with the last factorisation (JOB = 3): `rhs` (on the host; ignored elsewhere) is

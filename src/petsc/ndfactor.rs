@@ -11,10 +11,10 @@
 //! gathers the vector on rank 0, solves there by MUMPS and scatters the solution back.
 
 use std::ffi::c_void;
-use std::os::raw::c_int;
 use std::ptr;
 use std::time::Instant;
 
+use super::mpi::{all_true, first_message, gather_u64, rank_of, say_root};
 use super::mumps::{nested_dissection, Factor, FactorStats};
 use super::{check, cstring, ffi, own_error, Ksp, MPI_Comm, Matrix, Result};
 
@@ -113,161 +113,6 @@ pub fn node_order(comm: MPI_Comm, mat: &Matrix, dim: usize) -> Result<Vec<usize>
     }
 }
 
-/// `flag` on every rank of `comm` (one Allreduce).
-pub(super) fn all_true(comm: MPI_Comm, flag: bool) -> Result<bool> {
-    let mine: i32 = flag as i32;
-    let mut all: i32 = 0;
-    // SAFETY: one int in, one out, on a valid communicator.
-    let rc = unsafe {
-        ffi::MPI_Allreduce(
-            &mine as *const i32 as *const c_void,
-            &mut all as *mut i32 as *mut c_void,
-            1,
-            ffi::RSMPI_INT32_T,
-            ffi::RSMPI_MIN,
-            comm,
-        )
-    };
-    mpi_ok(rc, "MPI_Allreduce")?;
-    Ok(all == 1)
-}
-
-/// The message of the lowest rank whose `local` is `Some`, on every rank (`None` when no rank
-/// failed). Collective (one Allreduce, and two broadcasts when a rank failed).
-pub(super) fn first_message(comm: MPI_Comm, local: Option<&str>) -> Result<Option<String>> {
-    let (mut size, rank) = (0, rank_of(comm)?);
-    // SAFETY: valid communicator, one int out.
-    mpi_ok(
-        unsafe { ffi::MPI_Comm_size(comm, &mut size) },
-        "MPI_Comm_size",
-    )?;
-    let mine: i32 = if local.is_some() { rank } else { size };
-    let mut first: i32 = size;
-    // SAFETY: one int in, one out, on a valid communicator.
-    mpi_ok(
-        unsafe {
-            ffi::MPI_Allreduce(
-                &mine as *const i32 as *const c_void,
-                &mut first as *mut i32 as *mut c_void,
-                1,
-                ffi::RSMPI_INT32_T,
-                ffi::RSMPI_MIN,
-                comm,
-            )
-        },
-        "MPI_Allreduce",
-    )?;
-    if first >= size {
-        return Ok(None);
-    }
-    let mut bytes = if rank == first {
-        local.unwrap_or_default().as_bytes().to_vec()
-    } else {
-        Vec::new()
-    };
-    let mut len = bytes.len() as i32;
-    // SAFETY: one int, then `len` bytes into a buffer of that length, from rank `first`.
-    unsafe {
-        mpi_ok(
-            ffi::MPI_Bcast(
-                &mut len as *mut i32 as *mut c_void,
-                1,
-                ffi::RSMPI_INT32_T,
-                first,
-                comm,
-            ),
-            "MPI_Bcast",
-        )?;
-        bytes.resize(len.max(0) as usize, 0);
-        mpi_ok(
-            ffi::MPI_Bcast(
-                bytes.as_mut_ptr() as *mut c_void,
-                len,
-                ffi::RSMPI_UINT8_T,
-                first,
-                comm,
-            ),
-            "MPI_Bcast",
-        )?;
-    }
-    Ok(Some(String::from_utf8_lossy(&bytes).into_owned()))
-}
-
-fn mpi_ok(rc: c_int, call: &str) -> Result<()> {
-    if rc == 0 {
-        Ok(())
-    } else {
-        Err(own_error(format!("{call} failed with code {rc}")))
-    }
-}
-
-pub(super) fn rank_of(comm: MPI_Comm) -> Result<i32> {
-    let mut r = 0;
-    // SAFETY: valid communicator, one int out.
-    mpi_ok(unsafe { ffi::MPI_Comm_rank(comm, &mut r) }, "MPI_Comm_rank")?;
-    Ok(r)
-}
-
-fn say_root(comm: MPI_Comm, line: &str) {
-    if rank_of(comm).unwrap_or(1) == 0 {
-        println!("{line}");
-    }
-}
-
-/// Every rank's `mine` in rank order on rank 0 (`Some` there, `None` elsewhere); the total must
-/// fit MPI's int counts (checked by the caller on every rank). Collective.
-fn gather_u64(comm: MPI_Comm, mine: &[u64]) -> Result<Option<Vec<u64>>> {
-    let (mut size, root) = (0, rank_of(comm)? == 0);
-    // SAFETY: valid communicator, one int out.
-    mpi_ok(
-        unsafe { ffi::MPI_Comm_size(comm, &mut size) },
-        "MPI_Comm_size",
-    )?;
-    let count = mine.len() as i32;
-    let mut counts = vec![0i32; if root { size as usize } else { 0 }];
-    // SAFETY: one int per rank into `counts` (size entries on the root).
-    mpi_ok(
-        unsafe {
-            ffi::MPI_Gather(
-                &count as *const i32 as *const c_void,
-                1,
-                ffi::RSMPI_INT32_T,
-                counts.as_mut_ptr() as *mut c_void,
-                1,
-                ffi::RSMPI_INT32_T,
-                0,
-                comm,
-            )
-        },
-        "MPI_Gather",
-    )?;
-    let mut displs = Vec::with_capacity(counts.len());
-    let mut total = 0i64;
-    for &c in &counts {
-        displs.push(total as i32);
-        total += c as i64;
-    }
-    let mut all = vec![0u64; total as usize];
-    // SAFETY: the root's buffer holds the sum of the counts; the others pass no buffer.
-    mpi_ok(
-        unsafe {
-            ffi::MPI_Gatherv(
-                mine.as_ptr() as *const c_void,
-                count,
-                ffi::RSMPI_UINT64_T,
-                all.as_mut_ptr() as *mut c_void,
-                counts.as_ptr(),
-                displs.as_ptr(),
-                ffi::RSMPI_UINT64_T,
-                0,
-                comm,
-            )
-        },
-        "MPI_Gatherv",
-    )?;
-    Ok(root.then_some(all))
-}
-
 /// The shell's state (PCShellSetContext), owned by the PC and dropped by its destroy callback.
 struct Shell {
     comm: MPI_Comm,
@@ -292,22 +137,21 @@ impl Shell {
             raw: pmat,
             _arrays: None,
         });
-        let same = match &self.factor {
-            Some(f) => f.same_pattern(&mat),
-            None => Ok(false),
+        let t = Instant::now();
+        let refactorised = match self.factor.as_mut() {
+            Some(f) => f.refactorise(&mat)?,
+            None => false,
         };
-        let same = all_true(self.comm, matches!(same, Ok(true)))?;
-        if !same {
+        if !refactorised {
             self.factor = None; // collective drop (JOB = −2) on every rank alike
-            let t = Instant::now();
             let order = dof_order(self.comm, &mat, self.dim)?;
             self.record.ordering_seconds = t.elapsed().as_secs_f64();
             let (mut m, mut nn) = (0, 0);
             // SAFETY: valid matrix, two ints out.
             unsafe { check(ffi::MatGetSize(pmat, &mut m, &mut nn))? };
-            let t = Instant::now();
+            let ta = Instant::now();
             let order = (!order.is_empty()).then_some(&order[..]);
-            let f = Factor::analyse(
+            let mut f = Factor::analyse(
                 self.comm,
                 &mat,
                 m as usize,
@@ -315,16 +159,17 @@ impl Shell {
                 self.symmetric,
                 self.root,
             )?;
-            self.record.analysis_seconds = t.elapsed().as_secs_f64();
+            self.record.analysis_seconds = ta.elapsed().as_secs_f64();
             self.record.analyses += 1;
+            let tf = Instant::now();
+            f.factorise()?;
+            self.record.factorisation_seconds = tf.elapsed().as_secs_f64();
             self.factor = Some(f);
+        } else {
+            self.record.factorisation_seconds = t.elapsed().as_secs_f64();
         }
-        let f = self.factor.as_mut().expect("analysed above");
-        let t = Instant::now();
-        f.factorise(&mat)?;
-        self.record.factorisation_seconds = t.elapsed().as_secs_f64();
         self.record.factorisations += 1;
-        self.record.stats = f.stats();
+        self.record.stats = self.factor.as_ref().expect("factorised above").stats();
         Ok(())
     }
 

@@ -10,6 +10,7 @@ pub mod active_set;
 pub mod boundary;
 pub mod condensed;
 pub mod cycle;
+pub mod dense;
 pub mod newton;
 pub mod predictor;
 pub mod reduced;

@@ -16,7 +16,7 @@
 
 use super::active_set::Iterate;
 use super::boundary::ContactBoundary;
-use super::condensed::{Dense, End};
+use super::dense::{coarsen, Dense, End};
 use super::rigid::FreeModes;
 use crate::error::RunError;
 use crate::mesh::Mesh;
@@ -52,7 +52,7 @@ pub fn model_nodes(x: &[[f64; 3]], s0: &[f64]) -> (Vec<usize>, Vec<usize>) {
     if n <= MAX_MODEL_NODES {
         return ((0..n).collect(), (0..n).collect());
     }
-    let levels = super::condensed::coarsen(x, s0);
+    let levels = coarsen(x, s0);
     let kept = match levels.iter().find(|l| l.len() <= MAX_MODEL_NODES) {
         Some(l) => l.clone(),
         // no level small enough: the nodes nearest to contact alone (a truncated model)

@@ -1,0 +1,493 @@
+//! Algorithm 1 on a dense model of the contact unknowns, shared by the condensed path
+//! (condensed.rs: the exact compliance from MUMPS' Schur complement) and the half-space
+//! predictor (predictor.rs: a modelled compliance): the dense active-set iteration with the free
+//! rigid modes' balance (`Dense`), its result and how it ended (`DenseRun`, `End`), the saddle
+//! solver of one step, and the coarsening of the nested start.
+
+use crate::contact::{c_n, normal_active};
+use crate::petsc::lapack::{DenseCholesky, DenseLu};
+use nalgebra::{DMatrix, DVector, SymmetricEigen};
+use std::collections::HashSet;
+use std::time::Instant;
+
+/// An unbalanced load in the set's free modes below this fraction of the load's scale is
+/// balanced (as [`super::rigid`]'s balance test).
+pub(super) const BALANCE_RTOL: f64 = 1e-10;
+
+/// Algorithm 1 on the condensed system (module note): C (n × n), d₀, the gaps, the free
+/// modes' normal parts G (n × m_z), the load in them φ = zᵀ Rᵀ f and its scale, c.
+pub struct Dense<'a> {
+    pub cmat: &'a DMatrix<f64>,
+    pub d0: &'a [f64],
+    pub gap: &'a [f64],
+    pub g: &'a DMatrix<f64>,
+    pub phi: &'a [f64],
+    pub load_scale: f64,
+    pub c: f64,
+    pub max_steps: usize,
+}
+
+/// How the dense iteration ended.
+#[derive(Debug, Clone, PartialEq)]
+pub enum End {
+    Converged,
+    /// The load is unbalanced in a mode no contact node can fix (the unbalanced load).
+    NoSupport(f64),
+    Fallback(String),
+}
+
+/// The dense iteration's result: final set, λ_n, the free modes' coefficients α, u_n, and per
+/// step (step, |A_n|, changed, ‖C_n‖, seconds).
+#[derive(Debug, Clone)]
+pub struct DenseRun {
+    pub active: Vec<bool>,
+    pub lambda: Vec<f64>,
+    pub alpha: Vec<f64>,
+    pub u_n: Vec<f64>,
+    pub steps: Vec<(usize, usize, usize, f64, f64)>,
+    pub end: End,
+    /// The nested start's coarse levels, coarsest first: (nodes, steps).
+    pub coarse: Vec<(usize, usize)>,
+}
+
+impl DenseRun {
+    /// One flat vector for the broadcast.
+    pub(super) fn pack(&self, n: usize, mz: usize) -> Vec<f64> {
+        let mut v = Vec::with_capacity(4 * n + mz + 5 * self.steps.len() + 3);
+        let (code, x) = match &self.end {
+            End::Converged => (0.0, 0.0),
+            End::NoSupport(r) => (1.0, *r),
+            End::Fallback(_) => (2.0, 0.0),
+        };
+        v.extend_from_slice(&[code, x, self.steps.len() as f64, self.coarse.len() as f64]);
+        v.extend(self.active.iter().map(|&a| if a { 1.0 } else { 0.0 }));
+        v.extend_from_slice(&self.lambda);
+        v.extend_from_slice(&self.u_n);
+        v.extend_from_slice(&self.alpha[..mz]);
+        for s in &self.steps {
+            v.extend_from_slice(&[s.0 as f64, s.1 as f64, s.2 as f64, s.3, s.4]);
+        }
+        for c in &self.coarse {
+            v.extend_from_slice(&[c.0 as f64, c.1 as f64]);
+        }
+        if let End::Fallback(why) = &self.end {
+            v.extend(why.bytes().map(f64::from));
+        }
+        v
+    }
+
+    pub(super) fn unpack(v: &[f64], n: usize, mz: usize) -> DenseRun {
+        let (steps_n, coarse_n) = (v[2] as usize, v[3] as usize);
+        let mut p = 4;
+        let mut take = |len: usize| {
+            let s = &v[p..p + len];
+            p += len;
+            s.to_vec()
+        };
+        let active = take(n).iter().map(|&x| x != 0.0).collect();
+        let lambda = take(n);
+        let u_n = take(n);
+        let alpha = take(mz);
+        let steps = (0..steps_n)
+            .map(|_| {
+                let s = take(5);
+                (s[0] as usize, s[1] as usize, s[2] as usize, s[3], s[4])
+            })
+            .collect();
+        let coarse = (0..coarse_n)
+            .map(|_| {
+                let c = take(2);
+                (c[0] as usize, c[1] as usize)
+            })
+            .collect();
+        let end = match v[0] as i32 {
+            0 => End::Converged,
+            1 => End::NoSupport(v[1]),
+            // the reason's UTF-8 bytes, one per entry (0..=255: exact in f64)
+            _ => End::Fallback(
+                String::from_utf8_lossy(&v[p..].iter().map(|&b| b as u8).collect::<Vec<u8>>())
+                    .into_owned(),
+            ),
+        };
+        DenseRun {
+            active,
+            lambda,
+            alpha,
+            u_n,
+            steps,
+            end,
+            coarse,
+        }
+    }
+}
+
+impl Dense<'_> {
+    /// Algorithm 1 from the set `active`: solve the set's dense system, λ_n and u_n of every
+    /// candidate, update by (3.23); stop when no node changes (with the balance test of the
+    /// modes the set leaves free, as the plain path). Local.
+    pub fn run(&self, mut active: Vec<bool>) -> DenseRun {
+        let n = self.d0.len();
+        let mz = self.g.ncols();
+        let mut seen: HashSet<Vec<bool>> = HashSet::new();
+        seen.insert(active.clone());
+        let mut steps = Vec::new();
+        let out = |active: Vec<bool>, lambda, alpha, u_n, steps, end| DenseRun {
+            active,
+            lambda,
+            alpha,
+            u_n,
+            steps,
+            end,
+            coarse: Vec::new(),
+        };
+        for step in 1..=self.max_steps {
+            let t = Instant::now();
+            let (lambda, alpha, u_n, free_dirs) = match self.solve_set(&active) {
+                Some(x) => x,
+                None => {
+                    return out(
+                        active,
+                        vec![0.0; n],
+                        vec![0.0; mz],
+                        vec![0.0; n],
+                        steps,
+                        End::Fallback(format!("the dense system of step {step} is singular")),
+                    )
+                }
+            };
+            let mut next = active.clone();
+            let mut changed = 0;
+            let mut res2 = 0.0;
+            for i in 0..n {
+                let cn = c_n(u_n[i], lambda[i], self.gap[i], self.c); // (3.21)
+                res2 += cn * cn;
+                next[i] = normal_active(u_n[i], lambda[i], self.gap[i], self.c); // (3.23)
+                changed += usize::from(next[i] != active[i]);
+            }
+            let n_active = active.iter().filter(|&&a| a).count();
+            steps.push((
+                step,
+                n_active,
+                changed,
+                res2.sqrt(),
+                t.elapsed().as_secs_f64(),
+            ));
+            if changed == 0 {
+                match self.balance(&active, &u_n, &free_dirs) {
+                    None => return out(active, lambda, alpha, u_n, steps, End::Converged),
+                    Some(Ok(i)) => next[i] = true,
+                    Some(Err(r)) => {
+                        return out(active, lambda, alpha, u_n, steps, End::NoSupport(r))
+                    }
+                }
+            }
+            if !seen.insert(next.clone()) {
+                return out(
+                    active,
+                    lambda,
+                    alpha,
+                    u_n,
+                    steps,
+                    End::Fallback(format!("the set of step {} recurs (cycling)", step + 1)),
+                );
+            }
+            active = next;
+        }
+        let n_active = active.iter().filter(|&&a| a).count();
+        out(
+            active,
+            vec![0.0; n],
+            vec![0.0; mz],
+            vec![0.0; n],
+            steps,
+            End::Fallback(format!(
+                "no convergence in newton.max_steps = {} dense steps ({n_active} active)",
+                self.max_steps
+            )),
+        )
+    }
+
+    /// Nested iteration: Algorithm 1 first on coarse subsets of the candidates (`coarsen`,
+    /// coarsest first; each subset's problem holds the contact conditions at its nodes only,
+    /// with the exact compliance C between them), each level's solution starting the next
+    /// finer one through (3.23) evaluated at every candidate (λ_n = 0 off the subset,
+    /// u_n = d₀ − C λ_n + G α); then Algorithm 1 on all candidates from there. The coarse
+    /// steps are dense solves of at most half the size; the result's `steps` are the fine
+    /// ones, `coarse` (nodes, steps) per level. A coarse level that does not converge leaves
+    /// the set as it was. `x`: the candidates' coordinates. Local.
+    pub fn run_nested(&self, start: Vec<bool>, x: &[[f64; 3]]) -> DenseRun {
+        let levels = coarsen(x, self.gap);
+        let mut active = start;
+        let mut coarse = Vec::new();
+        for idx in levels.iter().rev() {
+            let sub_c = DMatrix::from_fn(idx.len(), idx.len(), |r, q| self.cmat[(idx[r], idx[q])]);
+            let sub_g = DMatrix::from_fn(idx.len(), self.g.ncols(), |r, c| self.g[(idx[r], c)]);
+            let pick = |v: &[f64]| idx.iter().map(|&i| v[i]).collect::<Vec<f64>>();
+            let (d0, gap) = (pick(self.d0), pick(self.gap));
+            let sub = Dense {
+                cmat: &sub_c,
+                d0: &d0,
+                gap: &gap,
+                g: &sub_g,
+                ..*self
+            };
+            let run = sub.run(idx.iter().map(|&i| active[i]).collect());
+            coarse.push((idx.len(), run.steps.len()));
+            if run.end != End::Converged {
+                continue;
+            }
+            let mut lambda = DVector::<f64>::zeros(self.d0.len());
+            for (r, &i) in idx.iter().enumerate() {
+                lambda[i] = run.lambda[r];
+            }
+            let alpha = DVector::from_column_slice(&run.alpha);
+            let un = DVector::from_column_slice(self.d0) - self.cmat * &lambda + self.g * alpha;
+            active = (0..self.d0.len())
+                .map(|i| normal_active(un[i], lambda[i], self.gap[i], self.c)) // (3.23)
+                .collect();
+        }
+        let mut run = self.run(active);
+        run.coarse = coarse;
+        run
+    }
+
+    /// The system of set A: [C_AA, −H; −Hᵀ, 0] [λ_A; β] = [g_A + d₀_A; −V_fᵀ φ] with H = G_A V_f,
+    /// V_f the modes A fixes (α = V_f β; the others stay pinned). Returns λ_n (0 off A), α,
+    /// u_n = d₀ − C λ + G α, and V_u (the modes A leaves free, m_z × ·). `None` if singular.
+    #[allow(clippy::type_complexity)]
+    fn solve_set(&self, active: &[bool]) -> Option<(Vec<f64>, Vec<f64>, Vec<f64>, DMatrix<f64>)> {
+        let n = self.d0.len();
+        let mz = self.g.ncols();
+        let idx: Vec<usize> = (0..n).filter(|&i| active[i]).collect();
+        let na = idx.len();
+        let ga = DMatrix::from_fn(na, mz, |r, c| self.g[(idx[r], c)]);
+        let (vf, vu) = split_modes(&(ga.transpose() * &ga), mz);
+        let nf = vf.ncols();
+        let h = &ga * &vf;
+        let dimn = na + nf;
+        let caa = DMatrix::from_fn(na, na, |r, q| self.cmat[(idx[r], idx[q])]);
+        let mut rhs = DVector::<f64>::zeros(dimn);
+        for (r, &i) in idx.iter().enumerate() {
+            rhs[r] = self.gap[i] + self.d0[i];
+        }
+        let phi = DVector::from_column_slice(self.phi);
+        let pf = vf.transpose() * phi;
+        for c in 0..nf {
+            rhs[na + c] = -pf[c];
+        }
+        // M x for M = [C_AA, −H; −Hᵀ, 0]
+        let apply = |x: &DVector<f64>| {
+            let (l, b) = (x.rows(0, na), x.rows(na, nf));
+            let mut y = DVector::zeros(dimn);
+            y.rows_mut(0, na).copy_from(&(&caa * l - &h * b));
+            y.rows_mut(na, nf).copy_from(&(-(h.transpose() * l)));
+            y
+        };
+        let x = if dimn == 0 {
+            DVector::zeros(0)
+        } else {
+            let solve = SaddleSolver::new(&caa, &h)?;
+            let mut x = solve.solve(&rhs);
+            // Two steps of iterative refinement: the balance rows' residual (the load the
+            // pins would carry, i.e. the total contact force) to round-off of their own
+            // scale, also when the gaps and α hold a large rigid motion (a body 700 units
+            // away: the rows' right-hand sides are ~700 while λ's effect is ~1e-3).
+            for _ in 0..2 {
+                let r = &rhs - apply(&x);
+                x += solve.solve(&r);
+            }
+            if !x.iter().all(|v| v.is_finite()) {
+                return None;
+            }
+            x
+        };
+        let mut lambda = vec![0.0; n];
+        for (r, &i) in idx.iter().enumerate() {
+            lambda[i] = x[r];
+        }
+        let beta = DVector::from_iterator(nf, (0..nf).map(|c| x[na + c]));
+        let alpha = &vf * beta;
+        let la = DVector::from_column_slice(&lambda);
+        let un = DVector::from_column_slice(self.d0) - self.cmat * la + self.g * &alpha;
+        Some((
+            lambda,
+            alpha.as_slice().to_vec(),
+            un.as_slice().to_vec(),
+            vu,
+        ))
+    }
+
+    /// The plain path's balance test on the modes the set leaves free (`vu`): `None` balanced;
+    /// `Some(Ok(i))` the inactive node a rigid motion along the unbalanced load brings into
+    /// contact first; `Some(Err(r))` no node approaches (no support, unbalanced load r).
+    fn balance(
+        &self,
+        active: &[bool],
+        u_n: &[f64],
+        vu: &DMatrix<f64>,
+    ) -> Option<Result<usize, f64>> {
+        if vu.ncols() == 0 {
+            return None;
+        }
+        let phi = DVector::from_column_slice(self.phi);
+        let pu = vu.transpose() * phi;
+        let norm = pu.norm();
+        if norm <= BALANCE_RTOL * self.load_scale {
+            return None;
+        }
+        let dir = vu * pu / norm; // motion per unit length, in z coordinates
+        let mut best: Option<(f64, usize)> = None;
+        for i in 0..active.len() {
+            if active[i] {
+                continue;
+            }
+            let speed = -(0..dir.len()).map(|c| self.g[(i, c)] * dir[c]).sum::<f64>();
+            if speed <= 1e-12 {
+                continue;
+            }
+            let a = (u_n[i] + self.gap[i]).max(0.0) / speed;
+            if best.is_none_or(|(b, _)| a < b) {
+                best = Some((a, i));
+            }
+        }
+        Some(best.map(|(_, i)| i).ok_or(norm))
+    }
+}
+
+/// Solves [C, −H; −Hᵀ, 0] [λ; β] = [r₁; r₂] (C symmetric positive definite, n × n; H n × m,
+/// m ≤ 6): by LAPACK's Cholesky of C and the m × m Schur complement Hᵀ C⁻¹ H, or, if C is
+/// not positive definite to LAPACK or H is rank-deficient, by the LU of the whole matrix.
+enum SaddleSolver {
+    Cholesky {
+        c: DenseCholesky,
+        /// C⁻¹ H and the LU of Hᵀ C⁻¹ H.
+        ch: DMatrix<f64>,
+        t: nalgebra::LU<f64, nalgebra::Dyn, nalgebra::Dyn>,
+        h: DMatrix<f64>,
+    },
+    Lu(DenseLu),
+}
+
+impl SaddleSolver {
+    fn new(c: &DMatrix<f64>, h: &DMatrix<f64>) -> Option<SaddleSolver> {
+        let (n, m) = (c.nrows(), h.ncols());
+        if let Some(chol) = DenseCholesky::factor(c) {
+            let ch = chol.solve(h);
+            let t = (h.transpose() * &ch).lu();
+            if m == 0 || t.is_invertible() {
+                return Some(SaddleSolver::Cholesky {
+                    c: chol,
+                    ch,
+                    t,
+                    h: h.clone(),
+                });
+            }
+        }
+        let mut full = DMatrix::zeros(n + m, n + m);
+        full.view_mut((0, 0), (n, n)).copy_from(c);
+        full.view_mut((0, n), (n, m)).copy_from(&(-h));
+        full.view_mut((n, 0), (m, n)).copy_from(&(-h.transpose()));
+        DenseLu::factor(&full).map(SaddleSolver::Lu)
+    }
+
+    fn solve(&self, r: &DVector<f64>) -> DVector<f64> {
+        match self {
+            SaddleSolver::Lu(lu) => lu.solve(r),
+            SaddleSolver::Cholesky { c, ch, t, h } => {
+                let (n, m) = (h.nrows(), h.ncols());
+                let r1 = DMatrix::from_column_slice(n, 1, r.rows(0, n).as_slice());
+                let y1 = c.solve(&r1).column(0).into_owned();
+                let mut x = DVector::zeros(n + m);
+                if m == 0 {
+                    x.copy_from(&y1);
+                    return x;
+                }
+                // −Hᵀ (y₁ + C⁻¹H β) = r₂  ⇒  (Hᵀ C⁻¹ H) β = −r₂ − Hᵀ y₁
+                let rhs = -r.rows(n, m) - h.transpose() * &y1;
+                let beta = t
+                    .solve(&rhs)
+                    .unwrap_or_else(|| DVector::from_element(m, f64::NAN));
+                x.rows_mut(0, n).copy_from(&(y1 + ch * &beta));
+                x.rows_mut(n, m).copy_from(&beta);
+                x
+            }
+        }
+    }
+}
+
+/// The coarse subsets of the nested iteration, finest first, for points `x` (the candidates):
+/// level k keeps, greedily in the order of increasing gap (the first contact first), the
+/// points of level k − 1 farther than r_k = 2^k · 0.99 h from every point kept before, h the
+/// median distance of a point to its nearest neighbour (sampled): about every second point of
+/// a contact line, every fourth of a contact surface, whatever the mesh. Levels stop at
+/// fewer than COARSEST points; a radius that keeps more than 3/4 of the level before (graded
+/// meshes) makes no level, the next radius is tried. Local.
+pub(super) fn coarsen(x: &[[f64; 3]], gap: &[f64]) -> Vec<Vec<usize>> {
+    let n = x.len();
+    if n < 2 * COARSEST {
+        return Vec::new();
+    }
+    let d2 = |a: &[f64; 3], b: &[f64; 3]| (0..3).map(|k| (a[k] - b[k]).powi(2)).sum::<f64>();
+    let step = (n / 256).max(1);
+    let mut nn: Vec<f64> = (0..n)
+        .step_by(step)
+        .map(|i| {
+            (0..n)
+                .filter(|&j| j != i)
+                .map(|j| d2(&x[i], &x[j]))
+                .fold(f64::INFINITY, f64::min)
+                .sqrt()
+        })
+        .collect();
+    nn.sort_by(|a, b| a.total_cmp(b));
+    let h = nn[nn.len() / 2];
+    if !(h > 0.0 && h.is_finite()) {
+        return Vec::new();
+    }
+    let mut order: Vec<usize> = (0..n).collect();
+    order.sort_by(|&a, &b| gap[a].total_cmp(&gap[b]).then(a.cmp(&b)));
+    let mut levels: Vec<Vec<usize>> = Vec::new();
+    let mut prev: Vec<usize> = order; // level 0: every point, by gap
+    let mut r = 0.99 * h;
+    loop {
+        r *= 2.0;
+        let mut kept: Vec<usize> = Vec::new();
+        for &i in &prev {
+            if kept.iter().all(|&j| d2(&x[i], &x[j]) >= r * r) {
+                kept.push(i);
+            }
+        }
+        if kept.len() < COARSEST {
+            break;
+        }
+        if 4 * kept.len() <= 3 * prev.len() {
+            levels.push(kept.clone());
+            prev = kept;
+        }
+    }
+    levels
+}
+
+/// The nested iteration's coarsest level has at least this many points.
+pub(super) const COARSEST: usize = 8;
+
+/// The modes (columns of the m_z × m_z identity's eigenbasis of the Gram matrix `gram`) that
+/// a set fixes (eigenvalue above 1e-9 of the largest, at least 1e-9) and those it leaves free.
+fn split_modes(gram: &DMatrix<f64>, mz: usize) -> (DMatrix<f64>, DMatrix<f64>) {
+    if mz == 0 {
+        return (DMatrix::zeros(0, 0), DMatrix::zeros(0, 0));
+    }
+    let eig = SymmetricEigen::new(gram.clone());
+    let lmax = eig.eigenvalues.iter().fold(0.0f64, |a, &b| a.max(b.abs()));
+    let tol = 1e-9 * lmax.max(1.0);
+    let fixed: Vec<usize> = (0..mz).filter(|&i| eig.eigenvalues[i] >= tol).collect();
+    let loose: Vec<usize> = (0..mz).filter(|&i| eig.eigenvalues[i] < tol).collect();
+    let pick = |cols: &[usize]| {
+        let mut q = DMatrix::zeros(mz, cols.len());
+        for (c, &i) in cols.iter().enumerate() {
+            q.set_column(c, &eig.eigenvectors.column(i));
+        }
+        q
+    };
+    (pick(&fixed), pick(&loose))
+}

@@ -126,6 +126,30 @@ fn plain_path_stays_selectable() {
     );
 }
 
+/// The box of cases/blocks/block3d.geo meshed with h = 0.06 (over 1 000 top nodes) in `dir`,
+/// clamped at the bottom, its top pressed by a plane 0.01 below it with the normal `normal`;
+/// `extra` TOML tables appended. Returns the case file.
+fn punch_case(dir: &Path, normal: &str, extra: &str) -> PathBuf {
+    let mesh = dir.join("box.msh");
+    let mut cmd = std::process::Command::new("gmsh");
+    cmd.arg("-3")
+        .arg(repo("cases/blocks/block3d.geo"))
+        .args(["-setnumber", "h", "0.06", "-format", "msh41", "-o"])
+        .arg(&mesh);
+    run_with_timeout(cmd, std::time::Duration::from_secs(120)).expect_code(0, "gmsh box");
+    write_case(
+        &dir.join("punch.toml"),
+        &format!(
+            "[mesh]\nfile = {}\n[material]\nyoung = 2.0\npoisson = 0.3\nmodel = \"3d\"\n\
+             [[dirichlet]]\ngroup = \"bottom\"\nvalue = [0.0, 0.0, 0.0]\n[contact]\n\
+             group = \"top\"\nobstacle = {{ type = \"plane\", point = [0.0, 0.0, 0.49], \
+             normal = {normal} }}\nfriction = \"none\"\nrigid_modes = \"none\"\n{extra}\
+             [output]\nfields = [\"displacement\"]\n",
+            toml_path(&mesh)
+        ),
+    )
+}
+
 #[test]
 fn a_flat_punch_too_wide_for_the_dense_schur_complement_takes_the_plain_path() {
     // The top face of the box of cases/blocks/block3d.geo (h = 0.06: over 1 000 nodes) pressed
@@ -133,24 +157,7 @@ fn a_flat_punch_too_wide_for_the_dense_schur_complement_takes_the_plain_path() {
     // more dofs than the dense Schur complement's limit (3 000): the plain path, decided before
     // anything is factorised (before the limit, this case ran for minutes in dense algebra).
     let tmp = tempfile::tempdir().unwrap();
-    let mesh = tmp.path().join("box.msh");
-    let mut cmd = std::process::Command::new("gmsh");
-    cmd.arg("-3")
-        .arg(repo("cases/blocks/block3d.geo"))
-        .args(["-setnumber", "h", "0.06", "-format", "msh41", "-o"])
-        .arg(&mesh);
-    run_with_timeout(cmd, std::time::Duration::from_secs(120)).expect_code(0, "gmsh box");
-    let case = write_case(
-        &tmp.path().join("flat.toml"),
-        &format!(
-            "[mesh]\nfile = {}\n[material]\nyoung = 2.0\npoisson = 0.3\nmodel = \"3d\"\n\
-             [[dirichlet]]\ngroup = \"bottom\"\nvalue = [0.0, 0.0, 0.0]\n[contact]\n\
-             group = \"top\"\nobstacle = {{ type = \"plane\", point = [0.0, 0.0, 0.49], \
-             normal = [0.0, 0.0, -1.0] }}\nfriction = \"none\"\nrigid_modes = \"none\"\n\
-             [output]\nfields = [\"displacement\"]\n",
-            toml_path(&mesh)
-        ),
-    );
+    let case = punch_case(tmp.path(), "[0.0, 0.0, -1.0]", "");
     let r = solve(2, &case, &["solver.preset=\"direct\""]);
     r.assert_converged("flat punch");
     let nodes = r.f(&["contact", "nodes"]);
@@ -178,25 +185,8 @@ fn a_fallback_after_a_factorisation_gives_the_plain_answer() {
     // set must grow beyond the Schur limit, and the plain path takes over on a system the
     // condensed path has already factorised and written. Its answer must be the plain path's.
     let tmp = tempfile::tempdir().unwrap();
-    let mesh = tmp.path().join("box.msh");
-    let mut cmd = std::process::Command::new("gmsh");
-    cmd.arg("-3")
-        .arg(repo("cases/blocks/block3d.geo"))
-        .args(["-setnumber", "h", "0.06", "-format", "msh41", "-o"])
-        .arg(&mesh);
-    run_with_timeout(cmd, std::time::Duration::from_secs(120)).expect_code(0, "gmsh box");
-    let case = write_case(
-        &tmp.path().join("tilted.toml"),
-        &format!(
-            "[mesh]\nfile = {}\n[material]\nyoung = 2.0\npoisson = 0.3\nmodel = \"3d\"\n\
-             [[dirichlet]]\ngroup = \"bottom\"\nvalue = [0.0, 0.0, 0.0]\n[contact]\n\
-             group = \"top\"\nobstacle = {{ type = \"plane\", point = [0.0, 0.0, 0.49], \
-             normal = [0.003, 0.0, -1.0] }}\nfriction = \"none\"\nrigid_modes = \"none\"\n\
-             [newton]\ninit = \"all_inactive\"\n[solver]\npreset = \"direct\"\n\
-             [output]\nfields = [\"displacement\"]\n",
-            toml_path(&mesh)
-        ),
-    );
+    let extra = "[newton]\ninit = \"all_inactive\"\n[solver]\npreset = \"direct\"\n";
+    let case = punch_case(tmp.path(), "[0.003, 0.0, -1.0]", extra);
     let plain = solve(2, &case, &["solver.reuse=\"never\""]);
     plain.assert_converged("plain");
     let r = solve(2, &case, &[]);

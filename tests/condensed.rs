@@ -126,25 +126,45 @@ fn plain_path_stays_selectable() {
     );
 }
 
-/// The box of cases/blocks/block3d.geo meshed with h = 0.06 (over 1 000 top nodes) in `dir`,
-/// clamped at the bottom, its top pressed by a plane 0.01 below it with the normal `normal`;
+/// Nodes on the top of the strip of [`strip_case`]: more than the dense limit of the condensed
+/// path allows where the factorisation is as cheap as a strip's (n³ = 4.7e10 flops of dense
+/// work against ~1e7 for K_p).
+const STRIP_TOP_NODES: usize = 3601;
+
+/// A strip [0, 4] × [0, 0.02] (a structured gmsh mesh: STRIP_TOP_NODES nodes on the top,
+/// 4 layers, 28 800 triangles) in `dir`, clamped at the bottom, its top pressed by a rigid
+/// plane through (2, 0.02 − 0.002) with the normal `normal` (pointing down, into the strip);
 /// `extra` TOML tables appended. Returns the case file.
-fn punch_case(dir: &Path, normal: &str, extra: &str) -> PathBuf {
-    let mesh = dir.join("box.msh");
+fn strip_case(dir: &Path, normal: &str, extra: &str) -> PathBuf {
+    let geo = dir.join("strip.geo");
+    std::fs::write(
+        &geo,
+        format!(
+            "Point(1) = {{0, 0, 0}};\nPoint(2) = {{4, 0, 0}};\nPoint(3) = {{4, 0.02, 0}};\n\
+             Point(4) = {{0, 0.02, 0}};\nLine(1) = {{1, 2}};\nLine(2) = {{2, 3}};\n\
+             Line(3) = {{3, 4}};\nLine(4) = {{4, 1}};\nCurve Loop(1) = {{1, 2, 3, 4}};\n\
+             Plane Surface(1) = {{1}};\nTransfinite Curve {{1, 3}} = {STRIP_TOP_NODES};\n\
+             Transfinite Curve {{2, 4}} = 5;\nTransfinite Surface {{1}};\n\
+             Physical Curve(\"bottom\") = {{1}};\nPhysical Curve(\"top\") = {{3}};\n\
+             Physical Surface(\"body\") = {{1}};\n"
+        ),
+    )
+    .unwrap();
+    let mesh = dir.join("strip.msh");
     let mut cmd = std::process::Command::new("gmsh");
-    cmd.arg("-3")
-        .arg(repo("cases/blocks/block3d.geo"))
-        .args(["-setnumber", "h", "0.06", "-format", "msh41", "-o"])
+    cmd.arg("-2")
+        .arg(&geo)
+        .args(["-format", "msh41", "-o"])
         .arg(&mesh);
-    run_with_timeout(cmd, std::time::Duration::from_secs(120)).expect_code(0, "gmsh box");
+    run_with_timeout(cmd, std::time::Duration::from_secs(120)).expect_code(0, "gmsh strip");
     write_case(
-        &dir.join("punch.toml"),
+        &dir.join("strip.toml"),
         &format!(
-            "[mesh]\nfile = {}\n[material]\nyoung = 2.0\npoisson = 0.3\nmodel = \"3d\"\n\
-             [[dirichlet]]\ngroup = \"bottom\"\nvalue = [0.0, 0.0, 0.0]\n[contact]\n\
-             group = \"top\"\nobstacle = {{ type = \"plane\", point = [0.0, 0.0, 0.49], \
-             normal = {normal} }}\nfriction = \"none\"\nrigid_modes = \"none\"\n{extra}\
-             [output]\nfields = [\"displacement\"]\n",
+            "[mesh]\nfile = {}\n[material]\nyoung = 2.0\npoisson = 0.3\n\
+             model = \"plane_strain\"\n[[dirichlet]]\ngroup = \"bottom\"\n\
+             value = [0.0, 0.0]\n[contact]\ngroup = \"top\"\nobstacle = {{ type = \"plane\", \
+             point = [2.0, 0.018], normal = {normal} }}\nfriction = \"none\"\n\
+             rigid_modes = \"none\"\n{extra}[output]\nfields = [\"displacement\"]\n",
             toml_path(&mesh)
         ),
     )
@@ -152,41 +172,47 @@ fn punch_case(dir: &Path, normal: &str, extra: &str) -> PathBuf {
 
 #[test]
 fn a_flat_punch_too_wide_for_the_dense_schur_complement_takes_the_plain_path() {
-    // The top face of the box of cases/blocks/block3d.geo (h = 0.06: over 1 000 nodes) pressed
-    // flat by a plane 0.01 below it: every node has the same gap, so all are candidates, with
-    // more dofs than the dense Schur complement's limit (3 000): the plain path, decided before
-    // anything is factorised (before the limit, this case ran for minutes in dense algebra).
+    // The strip's top pressed flat: every node has the same gap, so all are candidates, and
+    // their dense compliance would cost far more than the strip's factorisation: the plain
+    // path, decided after MUMPS' analysis, before any numeric factorisation.
     let tmp = tempfile::tempdir().unwrap();
-    let case = punch_case(tmp.path(), "[0.0, 0.0, -1.0]", "");
+    let case = strip_case(tmp.path(), "[0.0, -1.0]", "");
     let r = solve(2, &case, &["solver.preset=\"direct\""]);
     r.assert_converged("flat punch");
     let nodes = r.f(&["contact", "nodes"]);
-    assert!(nodes * 3.0 > 3000.0, "only {nodes} contact nodes");
+    assert_eq!(nodes as usize, STRIP_TOP_NODES);
     let cs = &r.summary["newton"]["condensed"];
     assert_eq!(cs["outcome"], "fallback", "{}", r.run.output());
     let why = cs["fallback_reason"].as_str().unwrap();
-    assert!(why.contains("Schur complement's limit"), "{why}");
+    assert!(
+        why.contains("would cost more than the factorisation"),
+        "{why}"
+    );
+    assert!(
+        why.contains(&format!("{STRIP_TOP_NODES} candidate")),
+        "{why}"
+    );
     assert_eq!(cs["factorisations"], 0);
     let h = r.summary["newton"]["history"].as_array().unwrap();
     assert!(h.iter().all(|e| e["solve"] == "factorisation"), "{h:?}");
     assert_eq!(
         r.f(&["contact", "active_count"]),
         nodes,
-        "the whole face presses"
+        "the whole top presses"
     );
 }
 
 #[test]
 fn a_fallback_after_a_factorisation_gives_the_plain_answer() {
-    // The box of the flat-punch test pressed by a slightly tilted plane (normal tilted by 0.3 %,
-    // every top node 0.007–0.013 inside), started with no active node (the "gap" start would
-    // force every penetrating node in): the gaps differ, so the first candidates are the 179
-    // with the smallest gaps; on the expanded u every other node comes into contact, the
-    // set must grow beyond the Schur limit, and the plain path takes over on a system the
-    // condensed path has already factorised and written. Its answer must be the plain path's.
+    // The strip pressed by a slightly tilted plane (every top node 0.001–0.003 inside), started
+    // with no active node (the "gap" start would force every penetrating node in): the gaps
+    // differ, so the first candidates are the eighth with the smallest gaps; on the expanded u
+    // every other node comes into contact, the set must grow beyond what pays, and the plain
+    // path takes over on a system the condensed path has already factorised and written. Its
+    // answer must be the plain path's.
     let tmp = tempfile::tempdir().unwrap();
     let extra = "[newton]\ninit = \"all_inactive\"\n[solver]\npreset = \"direct\"\n";
-    let case = punch_case(tmp.path(), "[0.003, 0.0, -1.0]", extra);
+    let case = strip_case(tmp.path(), "[0.0005, -1.0]", extra);
     let plain = solve(2, &case, &["solver.reuse=\"never\""]);
     plain.assert_converged("plain");
     let r = solve(2, &case, &[]);
@@ -199,6 +225,10 @@ fn a_fallback_after_a_factorisation_gives_the_plain_answer() {
     );
     let why = cs["fallback_reason"].as_str().unwrap();
     assert!(why.contains("came into contact"), "{why}");
+    assert!(
+        why.contains("would cost more than the factorisation"),
+        "{why}"
+    );
     assert_eq!(plain.active_node_ids(), r.active_node_ids());
     assert!(!r.active_node_ids().is_empty());
     let d = plain.u_rel_diff(&r);

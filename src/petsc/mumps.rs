@@ -42,7 +42,8 @@ pub struct SchurFactor {
 }
 
 impl SchurFactor {
-    /// Analysis and numeric factorisation of the symmetric `mat` (global size `n`; its owned
+    /// Analysis (MUMPS' JOB = 1; [`SchurFactor::factorise`] follows) of the symmetric `mat`
+    /// (global size `n`; its owned
     /// rows read here, lower triangle) with the Schur complement on the global rows
     /// `schur_rows` (0-based, the same list on every rank, no duplicates). `root`: this rank
     /// is rank 0 of `comm` (MUMPS' host). Collective; MUMPS' error codes are global, so
@@ -51,11 +52,14 @@ impl SchurFactor {
     /// ranks may pass `None`: order[i] = the 0-based position of variable i, the Schur
     /// variables last), or `None` on the host for MUMPS' own choice (with a Schur complement
     /// that is AMD whatever ICNTL(7) asks; measured).
-    pub fn factorise(
+    /// `bases`: the matrix is read as Qᵀ A Q (see [`NodeBases`]); the Schur rows and the
+    /// vectors of the solve phases are then in the rotated dofs.
+    pub fn analyse(
         comm: MPI_Comm,
         mat: &Matrix,
         (n, schur_rows): (usize, &[usize]),
         order: Option<&[usize]>,
+        bases: &NodeBases,
         root: bool,
     ) -> Result<SchurFactor> {
         if n >= i32::MAX as usize {
@@ -63,7 +67,8 @@ impl SchurFactor {
                 "SchurFactor: {n} unknowns exceed MUMPS' 32-bit indices"
             )));
         }
-        let (irn, jcn, vals) = agreed(comm, rows(comm, mat, true))?;
+        let read = rows(comm, mat, true).and_then(|t| bases.rotate(mat, t));
+        let (irn, jcn, vals) = agreed(comm, read)?;
         let size_schur = schur_rows.len();
         let mut f = SchurFactor {
             inst: Instance::new(comm, 2)?,
@@ -98,14 +103,28 @@ impl SchurFactor {
             id.schur_lld = size_schur as i32;
         }
         f.inst.set_order(root, &mut f.perm, n);
-        f.inst.call(4)?; // analysis + factorisation
-                         // MUMPS returns the lower triangle by rows for a symmetric matrix: mirrored once.
-        let s = size_schur;
-        for i in 0..if root { s } else { 0 } {
+        f.inst.call(1)?; // analysis
+        Ok(f)
+    }
+
+    /// RINFOG(1) of the analysis: the flops of eliminating the variables outside the Schur
+    /// list (the same on every rank).
+    pub fn flops(&self) -> f64 {
+        self.inst.id.rinfog[0]
+    }
+
+    /// The numeric factorisation after [`SchurFactor::analyse`], which fills the Schur
+    /// complement. Collective.
+    pub fn factorise(&mut self) -> Result<()> {
+        self.inst.call(2)?;
+        // MUMPS returns the lower triangle by rows for a symmetric matrix: mirrored once.
+        let s = self.size_schur;
+        for i in 0..if self.root { s } else { 0 } {
             for j in 0..i {
-                f.schur[j * s + i] = f.schur[i * s + j];
+                self.schur[j * s + i] = self.schur[i * s + j];
             }
         }
+        let f = self;
         // The solve phase does not read the matrix (no iterative refinement, ICNTL(10) = 0):
         // its copy is freed.
         f.inst.id.irn_loc = std::ptr::null_mut();
@@ -116,13 +135,14 @@ impl SchurFactor {
         f.jcn = Vec::new();
         f.vals = Vec::new();
         f.perm = Vec::new();
-        Ok(f)
+        Ok(())
     }
 
-    /// The Schur complement S (size_schur², symmetric, column-major = row-major) on the host;
-    /// empty elsewhere.
-    pub fn schur(&self) -> &[f64] {
-        &self.schur
+    /// The Schur complement S (size_schur², symmetric, column-major = row-major) on the host,
+    /// empty elsewhere; handed over (the solve phases do not read it).
+    pub fn take_schur(&mut self) -> Vec<f64> {
+        self.inst.id.schur = std::ptr::null_mut();
+        std::mem::take(&mut self.schur)
     }
 
     /// Condensation (ICNTL(26) = 1): the right-hand side `rhs` (global size, on the host;
@@ -311,6 +331,134 @@ fn triplets(mat: &Matrix, lower: bool) -> Result<(Vec<i32>, Vec<i32>, Vec<f64>)>
         })?;
     }
     Ok((irn, jcn, vals))
+}
+
+/// Orthonormal bases of some nodes' dofs (a node's `dim` dofs are the rows dim·v … dim·v +
+/// dim − 1): the matrix is handed to MUMPS as Qᵀ A Q with Q block diagonal, the node's block
+/// Q_v (columns: the new basis vectors) where given and the identity elsewhere. With a contact
+/// node's frame (normal first) the normal displacement becomes one variable of its own.
+#[derive(Default)]
+pub struct NodeBases {
+    pub dim: usize,
+    /// Node → Q_v (row-major: q[a][b] = Q_v[a, b]).
+    pub q: std::collections::HashMap<usize, [[f64; 3]; 3]>,
+}
+
+impl NodeBases {
+    /// The block of node `v` (None: the identity).
+    fn block(&self, v: usize) -> Option<&[[f64; 3]; 3]> {
+        self.q.get(&v)
+    }
+
+    /// ũ_v = Q_vᵀ u_v on every node with a basis (`x`: a global vector of the original dofs).
+    pub fn to_local(&self, x: &mut [f64]) {
+        self.apply(x, true);
+    }
+
+    /// u_v = Q_v ũ_v on every node with a basis (`x`: a global vector of the rotated dofs).
+    pub fn to_global(&self, x: &mut [f64]) {
+        self.apply(x, false);
+    }
+
+    fn apply(&self, x: &mut [f64], transpose: bool) {
+        let d = self.dim;
+        for (&v, q) in &self.q {
+            let Some(xv) = x.get_mut(v * d..(v + 1) * d) else {
+                continue;
+            };
+            let mut y = [0.0; 3];
+            for (a, ya) in y.iter_mut().enumerate().take(d) {
+                *ya = (0..d)
+                    .map(|b| if transpose { q[b][a] } else { q[a][b] } * xv[b])
+                    .sum();
+            }
+            xv.copy_from_slice(&y[..d]);
+        }
+    }
+
+    /// The lower-triangle triplets `t` of this rank's rows of `mat` as those of Qᵀ A Q: a node
+    /// block A_vw with a basis at v or w becomes Q_vᵀ A_vw Q_w, read from the full rows (every
+    /// entry of the block, explicit zeros included); the rest is kept as read.
+    fn rotate(
+        &self,
+        mat: &Matrix,
+        t: (Vec<i32>, Vec<i32>, Vec<f64>),
+    ) -> Result<(Vec<i32>, Vec<i32>, Vec<f64>)> {
+        if self.q.is_empty() {
+            return Ok(t);
+        }
+        let d = self.dim;
+        let (mut irn, mut jcn, mut vals) = t;
+        // drop the entries of rotated blocks, then add them back rotated
+        let hit = |r: i32, c: i32| {
+            self.block((r as usize - 1) / d).is_some() || self.block((c as usize - 1) / d).is_some()
+        };
+        // the nodes whose rows hold a rotated block (of the lower triangle: w ≤ v)
+        let mut touched = std::collections::BTreeSet::new();
+        let mut k = 0;
+        for i in 0..irn.len() {
+            if hit(irn[i], jcn[i]) {
+                touched.insert((irn[i] as usize - 1) / d);
+            } else {
+                irn[k] = irn[i];
+                jcn[k] = jcn[i];
+                vals[k] = vals[i];
+                k += 1;
+            }
+        }
+        irn.truncate(k);
+        jcn.truncate(k);
+        vals.truncate(k);
+        let (lo, hi) = mat.ownership_range()?;
+        if lo % d != 0 || hi % d != 0 {
+            return Err(own_error(format!(
+                "NodeBases: rows {lo}..{hi} split a node of {d} dofs"
+            )));
+        }
+        let ident = {
+            let mut m = [[0.0; 3]; 3];
+            (0..3).for_each(|a| m[a][a] = 1.0);
+            m
+        };
+        for v in touched {
+            // the node's block row: column node → d × d block
+            let mut blocks: std::collections::BTreeMap<usize, [[f64; 3]; 3]> = Default::default();
+            for a in 0..d {
+                mat.with_row(v * d + a, |cols, x| {
+                    for (&c, &x) in cols.iter().zip(x) {
+                        let c = c as usize;
+                        blocks.entry(c / d).or_insert([[0.0; 3]; 3])[a][c % d] = x;
+                    }
+                })?;
+            }
+            let qv = self.block(v);
+            for (w, blk) in blocks {
+                let qw = self.block(w);
+                if (qv.is_none() && qw.is_none()) || w > v {
+                    continue; // kept as read / the upper triangle
+                }
+                let (qv, qw) = (qv.unwrap_or(&ident), qw.unwrap_or(&ident));
+                for a in 0..d {
+                    for b in 0..d {
+                        if w == v && b > a {
+                            continue;
+                        }
+                        // (Q_vᵀ A Q_w)[a, b]
+                        let mut s = 0.0;
+                        for (i, qi) in qv.iter().enumerate().take(d) {
+                            for (j, aij) in blk[i].iter().enumerate().take(d) {
+                                s += qi[a] * aij * qw[j][b];
+                            }
+                        }
+                        irn.push((v * d + a) as i32 + 1);
+                        jcn.push((w * d + b) as i32 + 1);
+                        vals.push(s);
+                    }
+                }
+            }
+        }
+        Ok((irn, jcn, vals))
+    }
 }
 
 /// What the analysis and the factorisation of a [`Factor`] cost (MUMPS' global statistics).

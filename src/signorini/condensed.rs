@@ -1,9 +1,10 @@
 //! Algorithm 1 on the contact unknowns alone (frictionless, direct preset): one factorisation
 //! of the stiffness with every rigid mode that Dirichlet data leave free pinned, K_p, by MUMPS
-//! directly with the Schur complement S on every dof of the candidate contact nodes
-//! (ICNTL(19); K_p⁻¹ restricted to those dofs is S⁻¹, so the compliance C = Nᵀ K_p⁻¹ N costs a
-//! dense factorisation of S); every step of Algorithm 1 is then a dense solve of the active
-//! nodes' block; at the end MUMPS' condensation and expansion solves give u.
+//! directly, in the candidate contact nodes' frames (Qᵀ K_p Q, normal first) and with the Schur
+//! complement S on the candidates' normal dofs alone (ICNTL(19)); K_p⁻¹ restricted to those dofs
+//! is S⁻¹, so the compliance is C = Nᵀ K_p⁻¹ N = S⁻¹, one dense Cholesky and inversion (LAPACK)
+//! of the size of the candidate set; every step of Algorithm 1 is then a dense solve of the
+//! active nodes' block; at the end MUMPS' condensation and expansion solves give u.
 //!
 //! The step count: with newton.init = "auto" and no warm start, Algorithm 1 first runs on
 //! coarse subsets of the candidates (nested iteration, [`Dense::run_nested`]), each level
@@ -37,9 +38,11 @@ use super::newton::{
 use super::reduced::{ReducedSystem, SolveKind};
 use super::rigid::{FreeModes, Motion, Pin};
 use crate::case::NewtonInit;
+use crate::contact::Frame;
 use crate::error::RunError;
 use crate::par::Ctx;
-use crate::petsc::mumps::SchurFactor;
+use crate::petsc::lapack::DenseCholesky;
+use crate::petsc::mumps::{NodeBases, SchurFactor};
 use crate::petsc::ndfactor::node_order;
 use crate::petsc::PInt;
 use crate::say;
@@ -52,11 +55,16 @@ use std::time::Instant;
 /// record of 15 values per contact node).
 pub const MAX_CONTACT_NODES: usize = 100_000;
 
-/// More Schur variables (dofs of the candidates) than this and the plain path takes over
-/// before anything is factorised: the dense work on rank 0 grows as their cube (1 128 took
-/// 0.2 s; a flat punch with all 3 015 nodes of a face as candidates, 9 045, did not finish in
-/// 5 minutes, where the plain path needs one step of 2.5 s).
-pub const MAX_SCHUR_DOFS: usize = 3000;
+/// More Schur variables (the candidates' normal dofs: one per candidate) than this and the
+/// plain path takes over before anything is factorised: rank 0 holds S (then C) as one dense
+/// matrix of their square (8 000: 512 MB), and the dense work grows as their cube (see also
+/// DENSE_FLOOR_FLOPS).
+pub const MAX_SCHUR_DOFS: usize = 8000;
+
+/// Dense work (n³ flops for the compliance of n candidates) always allowed: about 0.1 s of
+/// LAPACK on one core. Beyond it the candidates must cost no more than the factorisation of
+/// K_p (MUMPS' analysis estimate): else the plain path runs.
+const DENSE_FLOOR_FLOPS: f64 = 1e9;
 
 /// The first candidate set: the 1/FIRST_FRACTION of the contact nodes with the smallest gaps.
 const FIRST_FRACTION: usize = 8;
@@ -127,14 +135,14 @@ impl CondensedSummary {
 
     /// A round's factorisation into the record: `seconds` of the round so far, of which
     /// `comp.factorisation_seconds` the ordering, analysis and factorisation.
-    fn record_factorisation(&mut self, comp: &Compliance, dim: usize, seconds: f64) {
+    fn record_factorisation(&mut self, comp: &Compliance, seconds: f64) {
         self.factorisations += 1;
         self.solves += 1;
         self.factorisation_seconds += comp.factorisation_seconds;
         self.ordering_seconds = comp.ordering_seconds;
         self.schur_seconds += seconds - comp.factorisation_seconds;
         self.candidates = comp.list.len();
-        self.schur_dofs = comp.list.len() * dim;
+        self.schur_dofs = comp.list.len();
     }
 
     /// The nested start's coarse levels of a dense round, into the record and the log.
@@ -201,19 +209,27 @@ pub fn solve(
     let cand = Candidates::gather(ctx, p.boundary, &free, &start);
     let n_rows = p.layout.node_offsets.last().copied().unwrap_or(0) * dim;
     let nested = warm.is_none() && s.section.init == NewtonInit::Auto;
-    let mut growth = Growth::new(&cand, dim);
+    let mut growth = Growth::new(&cand);
     let mut comp = Compliance::new(cand.n);
     let mut history: Vec<StepInfo> = Vec::new();
     for round in 1..=MAX_ROUNDS {
         let t = Instant::now();
-        let new = match growth.next(&cand, &comp, round, dim) {
+        let new = match growth.next(&cand, &comp, round) {
             Ok(new) => new,
             Err(why) => return Ok(fallback(ctx, summary, why)),
         };
-        if let Err(why) = comp.grow(ctx, reduced, &cand, &new, (dim, n_rows), &f_root) {
+        let grown = comp.grow(
+            ctx,
+            reduced,
+            &cand,
+            &new,
+            (dim, n_rows),
+            (&f_root, &growth.why),
+        );
+        if let Err(why) = grown {
             return Ok(fallback(ctx, summary, why));
         }
-        summary.record_factorisation(&comp, dim, t.elapsed().as_secs_f64());
+        summary.record_factorisation(&comp, t.elapsed().as_secs_f64());
 
         let t = Instant::now();
         let run = dense_round(
@@ -295,13 +311,12 @@ impl Growth {
     /// The first candidates: the nodes with the smallest gaps (an eighth of c_h, at least
     /// MIN_CANDIDATES, at most half the Schur limit) and every node of the start set (the
     /// thesis' all-active start: all of them).
-    fn new(cand: &Candidates, dim: usize) -> Growth {
+    fn new(cand: &Candidates) -> Growth {
         let n = cand.n;
         let mut by_gap: Vec<usize> = (0..n).collect();
         by_gap.sort_by(|&a, &b| cand.gap(a).total_cmp(&cand.gap(b)).then(a.cmp(&b)));
         let first = (n / FIRST_FRACTION)
-            .max(MIN_CANDIDATES)
-            .min(MAX_SCHUR_DOFS / (2 * dim))
+            .clamp(MIN_CANDIDATES, MAX_SCHUR_DOFS / 2)
             .min(n);
         let active: Vec<bool> = (0..n).map(|i| cand.start(i)).collect();
         Growth {
@@ -320,7 +335,6 @@ impl Growth {
         cand: &Candidates,
         comp: &Compliance,
         round: usize,
-        dim: usize,
     ) -> Result<Vec<usize>, String> {
         let take = self.take.clamp(1, cand.n.max(1));
         let bound = self
@@ -334,13 +348,12 @@ impl Growth {
             return Err("the candidate set cannot grow (internal)".to_string());
         }
         let wanted = comp.list.len() + new.len();
-        if wanted * dim > MAX_SCHUR_DOFS {
+        if wanted > MAX_SCHUR_DOFS {
             return Err(format!(
-                "{wanted} candidate contact nodes ({}: {} dofs) exceed the dense Schur \
-                 complement's limit of {MAX_SCHUR_DOFS} dofs (a contact zone this wide costs \
-                 less on the plain path)",
+                "{wanted} candidate contact nodes ({}) exceed the dense Schur complement's \
+                 limit of {MAX_SCHUR_DOFS} normal dofs (a contact zone this wide costs less on \
+                 the plain path)",
                 self.why,
-                wanted * dim
             ));
         }
         Ok(new)
@@ -519,25 +532,37 @@ impl Candidates {
     fn g(&self, i: usize, c: usize) -> f64 {
         self.rec(i)[6 + c]
     }
+    /// The node frame as an orthonormal basis, normal first (columns: n, t₁, t₂).
+    fn basis(&self, i: usize, dim: usize) -> [[f64; 3]; 3] {
+        let n = [self.normal(i, 0), self.normal(i, 1), self.normal(i, 2)];
+        let mut q = [[0.0; 3]; 3];
+        let Some(f) = Frame::new(n, dim) else {
+            (0..3).for_each(|a| q[a][a] = 1.0);
+            return q;
+        };
+        for (a, qa) in q.iter_mut().enumerate() {
+            *qa = [f.n[a], f.t[0][a], f.t[1][a]];
+        }
+        q
+    }
     fn x(&self, i: usize) -> [f64; 3] {
         let r = self.rec(i);
         [r[12], r[13], r[14]]
     }
 }
 
-/// The compliance C = Nᵀ K_p⁻¹ N of a growing candidate set and d₀ = Nᵀ K_p⁻¹ f there, from
-/// the Schur complement S of K_p on every dof of the candidates (K_p⁻¹ restricted to them is
-/// S⁻¹): C = N_sᵀ S⁻¹ N_s, d₀ = N_sᵀ S⁻¹ r with r = f_s − K_sr K_rr⁻¹ f_r (MUMPS'
-/// condensation). The dense parts live on rank 0 only.
+/// The compliance C = Nᵀ K_p⁻¹ N of a growing candidate set and d₀ = Nᵀ K_p⁻¹ f there. In the
+/// candidates' node frames (Q, normal first) N becomes the unit columns of their normal dofs,
+/// so with S the Schur complement of Qᵀ K_p Q on those dofs: C = S⁻¹ and d₀ = S⁻¹ r, r = f̃_s −
+/// K̃_sr K̃_rr⁻¹ f̃_r (MUMPS' condensation of f̃ = Qᵀ f). The dense parts live on rank 0 only.
 struct Compliance {
     in_s: Vec<bool>,
     /// The candidates in the order of C's rows and columns.
     list: Vec<usize>,
     cmat: DMatrix<f64>,
     d0: Vec<f64>,
-    /// S⁻¹ r and S⁻¹ N_s (rank 0), for the expansion.
-    x0: DVector<f64>,
-    sinv_n: DMatrix<f64>,
+    /// The candidates' node frames (normal first): K_p is factorised as Qᵀ K_p Q.
+    bases: NodeBases,
     factor: Option<SchurFactor>,
     /// Rank 0: the nested-dissection order of K_p's node graph (empty: MUMPS' own), made by
     /// the first `grow`.
@@ -555,8 +580,7 @@ impl Compliance {
             list: Vec::new(),
             cmat: DMatrix::zeros(0, 0),
             d0: Vec::new(),
-            x0: DVector::zeros(0),
-            sinv_n: DMatrix::zeros(0, 0),
+            bases: NodeBases::default(),
             factor: None,
             node_order: None,
             factorisation_seconds: 0.0,
@@ -565,9 +589,11 @@ impl Compliance {
     }
 
     /// Adds the candidates `new` and factorises K_p (the reduced system's matrix, global size
-    /// `n_rows`) anew with the Schur complement on every dof of every candidate; then C and
-    /// d₀ (`f_root`: f on rank 0, empty elsewhere). `Err` (the same on every rank): why the condensed
-    /// path gives up (MUMPS failed, S not positive definite). Collective.
+    /// `n_rows`) anew in the candidates' frames with the Schur complement on their normal dofs;
+    /// then C and d₀ (`f_root`: f on rank 0, empty elsewhere; `why`: how the set came about,
+    /// for the log). `Err` (the same on every rank): why the condensed path gives up (MUMPS
+    /// failed, the dense work would cost more than the factorisation, S not positive
+    /// definite). Collective.
     fn grow(
         &mut self,
         ctx: &Ctx,
@@ -575,20 +601,21 @@ impl Compliance {
         cand: &Candidates,
         new: &[usize],
         (dim, n_rows): (usize, usize),
-        f_root: &[f64],
+        (f_root, why): (&[f64], &str),
     ) -> Result<(), String> {
         let root = ctx.rank == 0;
         for &i in new {
             self.in_s[i] = true;
         }
         self.list.extend_from_slice(new);
-        let ns = self.list.len();
-        let dofs: Vec<usize> = self
-            .list
-            .iter()
-            .flat_map(|&i| (0..dim).map(move |a| cand.row(i) + a))
-            .collect();
+        for &i in new {
+            self.bases.q.insert(cand.row(i) / dim, cand.basis(i, dim));
+        }
+        self.bases.dim = dim;
+        // in the node frame the normal displacement is the node's first dof
+        let dofs: Vec<usize> = self.list.iter().map(|&i| cand.row(i)).collect();
         self.factor = None; // the old factorisation's memory first
+        self.cmat = DMatrix::zeros(0, 0);
         let t = Instant::now();
         if self.node_order.is_none() {
             // With a Schur complement MUMPS would order by AMD (2.4 × the flops of PORD on a 3D
@@ -601,38 +628,44 @@ impl Compliance {
             Some(o) if root && !o.is_empty() => Some(dof_order(o, &dofs, dim, n_rows)),
             _ => None,
         };
-        let factor = SchurFactor::factorise(
+        let factor = SchurFactor::analyse(
             ctx.comm(),
             reduced.matrix(),
             (n_rows, &dofs),
             order.as_deref(),
+            &self.bases,
             root,
         );
         drop(order);
+        let mut factor = factor.map_err(|e| format!("MUMPS' analysis of K_p failed: {e}"))?;
+        // the same numbers on every rank: the same decision
+        let dense = (dofs.len() as f64).powi(3);
+        if dense > DENSE_FLOOR_FLOPS.max(factor.flops()) {
+            return Err(format!(
+                "{} candidate contact nodes ({}): the dense compliance ({:.1e} flops) would \
+                 cost more than the factorisation of K_p ({:.1e} flops); a contact zone this \
+                 wide costs less on the plain path",
+                dofs.len(),
+                why,
+                dense,
+                factor.flops()
+            ));
+        }
+        let done = factor.factorise();
         self.factorisation_seconds = t.elapsed().as_secs_f64();
-        let mut factor =
-            factor.map_err(|e| format!("the Schur factorisation of K_p failed: {e}"))?;
+        done.map_err(|e| format!("the Schur factorisation of K_p failed: {e}"))?;
         let r = factor
-            .condense(f_root)
+            .condense(&self.rotated(f_root))
             .map_err(|e| format!("the condensation of f failed: {e}"))?;
         let mut ok = vec![1.0];
         if root {
-            let sdim = dofs.len();
-            let smat = DMatrix::from_column_slice(sdim, sdim, factor.schur());
-            let nmat = DMatrix::from_fn(sdim, ns, |row, q| {
-                if row / dim == q {
-                    cand.normal(self.list[q], row % dim)
-                } else {
-                    0.0
-                }
-            });
-            match smat.cholesky() {
+            // S's one copy, factorised and inverted in place: C = S⁻¹
+            match DenseCholesky::factor_owned(dofs.len(), factor.take_schur()) {
                 Some(ch) => {
-                    self.sinv_n = ch.solve(&nmat);
-                    self.x0 = ch.solve(&DVector::from_column_slice(&r));
-                    let c = nmat.transpose() * &self.sinv_n;
-                    self.cmat = (&c + c.transpose()) * 0.5;
-                    self.d0 = (nmat.transpose() * &self.x0).as_slice().to_vec();
+                    self.cmat = ch.inverse();
+                    self.d0 = (&self.cmat * DVector::from_column_slice(&r))
+                        .as_slice()
+                        .to_vec();
                 }
                 None => ok[0] = 0.0,
             }
@@ -641,20 +674,29 @@ impl Compliance {
         self.factor = Some(factor);
         if ok[0] == 0.0 {
             return Err(format!(
-                "the Schur complement of K_p on the {} candidate dofs is not positive definite",
+                "the Schur complement of K_p on the {} candidates' normal dofs is not positive \
+                 definite",
                 dofs.len()
             ));
         }
         Ok(())
+    }
+
+    /// Qᵀ x (x: a global vector on rank 0, empty elsewhere): the candidates' dofs in their
+    /// node frames.
+    fn rotated(&self, x: &[f64]) -> Vec<f64> {
+        let mut y = x.to_vec();
+        self.bases.to_local(&mut y);
+        y
     }
 }
 
 /// The dof order for MUMPS from the node order: every node's dofs together, the Schur
 /// variables (`schur`, all dofs of the candidates) last. order[i] = position of dof i.
 fn dof_order(node_perm: &[usize], schur: &[usize], dim: usize, n_rows: usize) -> Vec<usize> {
-    let mut in_schur = vec![false; node_perm.len()];
+    let mut in_schur = vec![false; n_rows];
     for &r in schur {
-        in_schur[r / dim] = true;
+        in_schur[r] = true;
     }
     let mut by_position = vec![0usize; node_perm.len()];
     for (v, &p) in node_perm.iter().enumerate() {
@@ -662,9 +704,9 @@ fn dof_order(node_perm: &[usize], schur: &[usize], dim: usize, n_rows: usize) ->
     }
     let mut order = vec![0usize; n_rows];
     let mut pos = 0;
-    for &v in by_position.iter().filter(|&&v| !in_schur[v]) {
-        for a in 0..dim {
-            order[v * dim + a] = pos;
+    for &v in &by_position {
+        for r in (v * dim..(v + 1) * dim).filter(|&r| !in_schur[r]) {
+            order[r] = pos;
             pos += 1;
         }
     }
@@ -783,25 +825,26 @@ fn expand(
 ) -> Result<Result<Expanded, String>, RunError> {
     let (mesh, layout, b, sys) = (p.mesh, p.layout, p.boundary, p.sys);
     let (dim, off) = (mesh.dim, b.offset);
-    // On rank 0: f − N λ_n (λ_n vanishes off the candidates) and x_s = S⁻¹ (r − N_s λ_n).
+    // On rank 0, in the candidates' frames: Qᵀ (f − N λ_n) (λ_n vanishes off the candidates:
+    // it enters each candidate's normal dof) and the normal dofs' part d₀ − C λ_n.
     let (rhs_root, x_s) = if ctx.rank == 0 {
-        let mut rhs = f_root.to_vec();
+        let mut rhs = comp.rotated(f_root);
         for &i in &comp.list {
-            for a in 0..dim {
-                rhs[cand.row(i) + a] -= cand.normal(i, a) * lambda[i];
-            }
+            rhs[cand.row(i)] -= lambda[i];
         }
         let lam = DVector::from_iterator(comp.list.len(), comp.list.iter().map(|&i| lambda[i]));
-        let x_s = (&comp.x0 - &comp.sinv_n * lam).as_slice().to_vec();
+        let d0 = DVector::from_column_slice(&comp.d0);
+        let x_s = (d0 - &comp.cmat * lam).as_slice().to_vec();
         (rhs, x_s)
     } else {
         (Vec::new(), Vec::new())
     };
     let factor = comp.factor.as_mut().expect("factorised by grow");
-    let w_root = match factor.expand(&rhs_root, &x_s) {
+    let mut w_root = match factor.expand(&rhs_root, &x_s) {
         Ok(w) => w,
         Err(e) => return Ok(Err(format!("the expansion solve failed: {e}"))),
     };
+    comp.bases.to_global(&mut w_root);
     let w = ctx.scatter_from_root(&w_root, n_local);
     // local (this rank's array): agreed before the collectives that follow
     let set = reduced.set_solution_local(&w).map_err(RunError::from);

@@ -746,6 +746,7 @@ fn dense_round(
             load_scale,
             c: s.c,
             max_steps: s.section.max_steps,
+            pins_carry: s.estimate,
         };
         packed = if nested {
             let x: Vec<[f64; 3]> = list.iter().map(|&i| cand.x(i)).collect();
@@ -920,6 +921,7 @@ mod tests {
             load_scale: 1.0,
             c: 1.0,
             max_steps,
+            pins_carry: false,
         }
     }
 
@@ -963,6 +965,7 @@ mod tests {
             load_scale: 1.0,
             c: 1.0,
             max_steps: 20,
+            pins_carry: false,
         };
         let run = dense.run(vec![false; 2]);
         assert_eq!(run.end, End::Converged, "{run:?}");
@@ -988,6 +991,7 @@ mod tests {
             load_scale: 1.0,
             c: 1.0,
             max_steps: 20,
+            pins_carry: false,
         };
         let run = dense.run(vec![false]);
         assert!(matches!(run.end, End::NoSupport(_)), "{run:?}");

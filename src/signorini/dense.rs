@@ -25,6 +25,10 @@ pub struct Dense<'a> {
     pub load_scale: f64,
     pub c: f64,
     pub max_steps: usize,
+    /// The pins carry the load in the modes a set leaves free (no balance test): an estimate
+    /// of the contact zone for a start (Coulomb's, where friction holds a tangential load),
+    /// not a solution of the frictionless problem.
+    pub pins_carry: bool,
 }
 
 /// How the dense iteration ended.
@@ -326,7 +330,7 @@ impl Dense<'_> {
         u_n: &[f64],
         vu: &DMatrix<f64>,
     ) -> Option<Result<usize, f64>> {
-        if vu.ncols() == 0 {
+        if vu.ncols() == 0 || self.pins_carry {
             return None;
         }
         let phi = DVector::from_column_slice(self.phi);

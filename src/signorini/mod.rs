@@ -283,6 +283,7 @@ pub fn solve(
         law,
         rigid: settings.rigid_modes,
         halfspace: halfspace.as_ref(),
+        estimate: false,
     };
     let (mut nr, outer_steps, condensed_summary) = run_method(
         ctx,
@@ -390,6 +391,16 @@ fn run_method(
                     condensed::Condensed::Fallback(s) => condensed_summary = Some(s),
                 }
             }
+            let coulomb_newton = matches!(settings.coulomb, Some((_, CoulombAlgorithm::Newton)));
+            let start =
+                if coulomb_newton && warm.is_none() && ns.section.init == case::NewtonInit::Auto {
+                    let (start, cs) =
+                        frictionless_start(ctx, problem, &mut reduced, ns, solver_section)?;
+                    condensed_summary = cs;
+                    start
+                } else {
+                    None
+                };
             reduced.enable_reuse(ctx, solver_section.reuse, friction)?;
             match settings.coulomb {
                 Some((mu, CoulombAlgorithm::FixedPoint)) => {
@@ -397,7 +408,26 @@ fn run_method(
                     outer_steps = Some(outer);
                     nr
                 }
-                _ => newton::semismooth_newton(ctx, problem, &mut reduced, ns, warm)?,
+                _ => match start {
+                    Some((first, u)) => {
+                        let w = WarmStart {
+                            nodes: &first.nodes,
+                            u_local: &u,
+                        };
+                        let mut nr =
+                            newton::semismooth_newton(ctx, problem, &mut reduced, ns, Some(&w))?;
+                        // the frictionless steps first in the record (and their factorisations)
+                        let mut history = first.history;
+                        for mut h in std::mem::take(&mut nr.history) {
+                            h.step += history.len();
+                            history.push(h);
+                        }
+                        nr.steps = history.len();
+                        nr.history = history;
+                        nr
+                    }
+                    None => newton::semismooth_newton(ctx, problem, &mut reduced, ns, warm)?,
+                },
             }
         }
         Method::SnesVi => {
@@ -622,6 +652,80 @@ fn fixed_point(
          steps",
         ns.section.max_steps
     )))
+}
+
+/// The start of Coulomb's generalised Newton under newton.init = "auto" (no warm start) where
+/// the condensed path applies (direct preset): the frictionless solution of the same case by
+/// the condensed path (about one factorisation; the pins carry a load in the modes only
+/// friction can hold, e.g. a tangential load on a floating body), whose active set and λ_n give
+/// the thresholds b = μ(−λ_n) of (F1), every active node sticking — instead of a start from
+/// the touching nodes, where the whole load first hangs on them and the set needs many steps to
+/// shrink. `None` (the touching start, said in the log) where the condensed path does not
+/// apply or does not find a frictionless set (e.g. a moment that only friction holds tips the
+/// frictionless body). Returns the start (the frictionless result, this rank's rows of its u)
+/// and the condensed path's record. Collective.
+#[allow(clippy::type_complexity)]
+fn frictionless_start(
+    ctx: &Ctx,
+    problem: &ContactProblem,
+    reduced: &mut ReducedSystem,
+    ns: &NewtonSettings,
+    solver_section: &SolverSection,
+) -> Result<
+    (
+        Option<(NewtonResult, Vec<f64>)>,
+        Option<condensed::CondensedSummary>,
+    ),
+    RunError,
+> {
+    let fl = NewtonSettings {
+        law: Law::Frictionless,
+        halfspace: None,
+        estimate: true,
+        ..*ns
+    };
+    let b = problem.boundary;
+    let condense = solver_section.reuse == Reuse::Auto
+        && b.n_global > 0
+        && b.n_global <= condensed::MAX_CONTACT_NODES
+        && reduced.factorises()?;
+    if !condense {
+        return Ok((None, None));
+    }
+    // errors are agreed: every rank takes the same branch
+    let (mut nr, summary) = match condensed::solve(ctx, problem, reduced, &fl, None) {
+        Ok(condensed::Condensed::Solved(nr, s)) => (*nr, s),
+        Ok(condensed::Condensed::Fallback(s)) => {
+            say!(
+                ctx,
+                "coulomb: no frictionless start; starting from the touching nodes"
+            );
+            return Ok((None, Some(s)));
+        }
+        Err(RunError::Failed(why)) => {
+            say!(
+                ctx,
+                "coulomb: no frictionless start ({why}); starting from the touching nodes"
+            );
+            return Ok((None, None));
+        }
+        Err(e) => return Err(e),
+    };
+    let active = ctx.sum_usize(nr.nodes.iter().filter(|r| r.active).count());
+    say!(
+        ctx,
+        "coulomb: start from the frictionless solution ({} steps, {active} active nodes)",
+        nr.steps
+    );
+    let u = nr.u.to_local_vec()?;
+    // every active node starts sticking (Δu_τ = 0, λ_τ = 0): the first Coulomb step gives the
+    // all-stick λ_τ, and (3.33) lets slip where |λ_τ| exceeds μ(−λ_n)
+    for (k, r) in b.nodes.iter().zip(nr.nodes.iter_mut()) {
+        r.u_t = k.u_t_ref;
+        r.lambda_t = [0.0; 2];
+        r.slip = false;
+    }
+    Ok((Some((nr, u)), Some(summary)))
 }
 
 /// The fixed point's stopping tolerance on the thresholds, relative to max_k b_k.

@@ -36,6 +36,9 @@ pub struct NewtonSettings<'a> {
     /// The half-space model of the body for the first set of the iterative preset's reuse
     /// path (predictor.rs); `None`: no prediction.
     pub halfspace: Option<&'a HalfSpace>,
+    /// A frictionless estimate for a start (condensed path): the pins carry the load in the
+    /// modes the set leaves free instead of the balance test ([`super::dense::Dense`]).
+    pub estimate: bool,
 }
 
 impl NewtonSettings<'_> {

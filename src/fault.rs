@@ -3,7 +3,9 @@
 //! [`injected`] report a failure at the stage named STAGE on rank RANK only. Unset (every real
 //! run), it never fires. Stages: "mumps-rows" (a rank hands its matrix rows to MUMPS),
 //! "nd-graph" (a rank reads its part of the node graph for the nested-dissection order),
-//! "condensed-expand" (a rank takes its part of the condensed path's expanded solution).
+//! "condensed-expand" (a rank takes its part of the condensed path's expanded solution),
+//! "dense-steps" and "predictor-model" (rank 0 only: a panic in the dense computation that
+//! the other ranks wait for).
 
 /// The environment variable that names the stage and the rank.
 pub const VAR: &str = "SIGNORINI_TEST_FAULT";

@@ -240,3 +240,52 @@ fn a_failure_on_one_rank_ends_every_rank_alike() {
         }
     }
 }
+
+#[test]
+fn a_panic_in_rank_0s_dense_work_is_caught_and_every_rank_goes_on_alike() {
+    // The dense steps of the condensed path and the predictor's model run on rank 0 while the
+    // other ranks wait in a broadcast: a panic there (test-only fault injection) is caught,
+    // broadcast as a failure, and every rank takes the same way on — the condensed path falls
+    // back to the plain path, the iterative path goes on without a prediction — to the same
+    // answer as without the fault, within the time limit.
+    let case = repo("cases/hertz/hertz.toml");
+    for (stage, sets) in [
+        ("dense-steps", vec![]),
+        ("predictor-model", vec!["solver.preset=\"iterative\""]),
+    ] {
+        let clean = solve(2, &case, &sets);
+        clean.assert_converged(stage);
+        for np in [2, 3] {
+            let tmp = tempfile::tempdir().unwrap();
+            let out = tmp.path().join("out");
+            let mut cmd = solver_command(np, &case, &sets, &out);
+            cmd.env("SIGNORINI_TEST_FAULT", format!("{stage}@0"));
+            let r = solved(
+                run_with_timeout(cmd, std::time::Duration::from_secs(120)),
+                tmp,
+                out,
+            );
+            r.assert_converged(&format!("{stage} on {np} ranks"));
+            let msg = format!("injected fault at {stage} on rank 0");
+            if stage == "dense-steps" {
+                let cs = &r.summary["newton"]["condensed"];
+                assert_eq!(cs["outcome"], "fallback", "{}", r.run.output());
+                let why = cs["fallback_reason"].as_str().unwrap();
+                assert!(why.contains(&msg), "{why}");
+            } else {
+                let p = &r.summary["newton"]["history"][0]["predictor"];
+                assert_eq!(
+                    p["outcome"], "the model failed on rank 0 (no prediction)",
+                    "{p}"
+                );
+            }
+            assert_eq!(
+                clean.active_node_ids(),
+                r.active_node_ids(),
+                "{stage}, {np} ranks"
+            );
+            let d = clean.u_rel_diff(&r);
+            assert!(d <= 1e-8, "{stage}, {np} ranks: |Δu| / max|u| = {d:e}");
+        }
+    }
+}

@@ -31,7 +31,7 @@
 
 use super::active_set::{ActiveSet, Iterate, Law};
 use super::boundary::ContactBoundary;
-use super::dense::{Dense, DenseRun, End};
+use super::dense::{guarded, Dense, DenseRun, End};
 use super::newton::{
     add_motion, ContactProblem, NewtonResult, NewtonSettings, StepInfo, WarmStart,
 };
@@ -730,31 +730,35 @@ fn dense_round(
     let (ns, mz) = (comp.list.len(), cand.mz);
     let mut packed: Vec<f64> = Vec::new();
     if ctx.rank == 0 {
-        let (_, load_scale) = free.load();
-        let phi = free.free_load();
-        let list = &comp.list;
-        let g = DMatrix::from_fn(ns, mz, |q, c| cand.g(list[q], c));
-        let d0 = &comp.d0;
-        let gap: Vec<f64> = list.iter().map(|&i| cand.gap(i)).collect();
-        let start: Vec<bool> = list.iter().map(|&i| active[i]).collect();
-        let dense = Dense {
-            cmat: &comp.cmat,
-            d0,
-            gap: &gap,
-            g: &g,
-            phi: &phi,
-            load_scale,
-            c: s.c,
-            max_steps: s.section.max_steps,
-            pins_carry: s.estimate,
-        };
-        packed = if nested {
-            let x: Vec<[f64; 3]> = list.iter().map(|&i| cand.x(i)).collect();
-            dense.run_nested(start, &x)
-        } else {
-            dense.run(start)
-        }
-        .pack(ns, mz);
+        let run = guarded("dense-steps", || {
+            let (_, load_scale) = free.load();
+            let phi = free.free_load();
+            let list = &comp.list;
+            let g = DMatrix::from_fn(ns, mz, |q, c| cand.g(list[q], c));
+            let d0 = &comp.d0;
+            let gap: Vec<f64> = list.iter().map(|&i| cand.gap(i)).collect();
+            let start: Vec<bool> = list.iter().map(|&i| active[i]).collect();
+            let dense = Dense {
+                cmat: &comp.cmat,
+                d0,
+                gap: &gap,
+                g: &g,
+                phi: &phi,
+                load_scale,
+                c: s.c,
+                max_steps: s.section.max_steps,
+                pins_carry: s.estimate,
+            };
+            if nested {
+                let x: Vec<[f64; 3]> = list.iter().map(|&i| cand.x(i)).collect();
+                dense.run_nested(start, &x)
+            } else {
+                dense.run(start)
+            }
+        });
+        packed = run
+            .unwrap_or_else(|why| DenseRun::failed(ns, mz, why))
+            .pack(ns, mz);
     }
     ctx.broadcast_f64s(&mut packed);
     DenseRun::unpack(&packed, ns, mz)

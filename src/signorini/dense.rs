@@ -54,7 +54,41 @@ pub struct DenseRun {
     pub coarse: Vec<(usize, usize)>,
 }
 
+/// Runs `f` (rank 0's share of a collective stage: the other ranks wait in the broadcast that
+/// follows) with a panic caught: `Err` with its message instead of unwinding out of the stage,
+/// so that rank 0 still broadcasts and every rank learns of the failure (the parallel rule).
+/// The test-only fault stage `stage` (`crate::fault`) panics inside. Local.
+pub(super) fn guarded<T>(stage: &str, f: impl FnOnce() -> T) -> Result<T, String> {
+    let run = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+        if let Some(m) = crate::fault::injected(stage, 0) {
+            panic!("{m}");
+        }
+        f()
+    }));
+    run.map_err(|e| {
+        let what = e
+            .downcast_ref::<String>()
+            .cloned()
+            .or_else(|| e.downcast_ref::<&str>().map(|s| s.to_string()))
+            .unwrap_or_else(|| "a panic".to_string());
+        format!("the dense computation on rank 0 failed: {what}")
+    })
+}
+
 impl DenseRun {
+    /// A run that failed before its first step (`why`: the fallback reason).
+    pub(super) fn failed(n: usize, mz: usize, why: String) -> DenseRun {
+        DenseRun {
+            active: vec![false; n],
+            lambda: vec![0.0; n],
+            alpha: vec![0.0; mz],
+            u_n: vec![0.0; n],
+            steps: Vec::new(),
+            end: End::Fallback(why),
+            coarse: Vec::new(),
+        }
+    }
+
     /// One flat vector for the broadcast.
     pub(super) fn pack(&self, n: usize, mz: usize) -> Vec<f64> {
         let mut v = Vec::with_capacity(4 * n + mz + 5 * self.steps.len() + 3);

@@ -231,17 +231,12 @@ pub fn semismooth_newton(
     };
     let mut history = Vec::new();
     let mut converged = false;
-    // Inexact steps (frictionless, iterative preset's reuse path): loose solves while the set
-    // changes; the first loose step that changes no node (or leads back to a set seen before)
-    // is followed by an exact solve on the same set, and from then on every step is exact, so
-    // the iteration ends as Algorithm 1 does: an exact solve whose update changes no node.
-    // A loose step that changes at least as many nodes as the loose step before it makes no
-    // progress (the inexact solves may make the set chatter): exact from then on as well.
-    let mut exact = !(reduced.inexact_available() && s.law == Law::Frictionless);
-    let mut predict = s.halfspace.filter(|_| predicting);
+    let mut plan = StepPlan {
+        exact: !(reduced.inexact_available() && s.law == Law::Frictionless),
+        predict: s.halfspace.is_some() && predicting,
+        confirm: false,
+    };
     let mut last_changed = usize::MAX;
-    // Set after a stop decided on a reuse step: the next step is factorised (direct preset).
-    let mut final_check = false;
     for step in 1..=s.section.max_steps {
         if lp.free.update(ctx, mesh, layout, &lp.summary.gram)? {
             reduced.set_pins(sys, layout, lp.free.pins())?;
@@ -256,11 +251,11 @@ pub fn semismooth_newton(
         }
         let bs = &lp.shifted;
         reduced.write(ctx, sys, layout, bs, &lp.set, lp.free.pins())?; // (3.29) / (3.42)
-        reduced.set_inexact(!exact);
-        if predict.is_some() {
+        reduced.set_inexact(!plan.exact);
+        if plan.predict {
             reduced.set_predictor_solve();
         }
-        let allow_reuse = !matches!(s.law, Law::Coulomb { .. }) && !final_check;
+        let allow_reuse = !matches!(s.law, Law::Coulomb { .. }) && !plan.confirm;
         let solved = reduced.solve(ctx, allow_reuse)?;
         let reused = solved.reuse.is_some() && solved.kind == SolveKind::Reuse;
         ensure_converged(step, &solved.info)?;
@@ -268,16 +263,13 @@ pub fn semismooth_newton(
         let scale = threshold_scale(ctx, bs, &lp.it.nodes, s.law, s.c);
         let mut update = lp.set.update(&lp.it, bs, s.law, s.c, scale, dim); // (3.23) / (3.33) / (F5)
         let mut predicted = None;
-        if let Some(hs) = predict.take() {
+        let mut exact_from_prediction = None;
+        if let Some(hs) = s.halfspace.filter(|_| plan.predict) {
             let (set, rec) =
                 predictor::predict(ctx, hs, bs, &lp.it, &lp.free, s.c, s.section.max_steps)?;
             if let Some(normal) = set {
                 update.replace_normal(&lp.set, normal);
-                // From the predicted set every step is exact: the inexact steps (a residual
-                // reduction of 1e-6) flip edge nodes whose λ_n or gap is near 0 (3D Hertz,
-                // 527 k unknowns: changes 18, 17, 0 and an exact step after them; exact: 6, 0).
-                // A set that reaches the model's border will still move: inexact steps first.
-                exact = !rec.truncated;
+                exact_from_prediction = Some(!rec.truncated);
             }
             predicted = Some(rec);
         }
@@ -285,27 +277,29 @@ pub fn semismooth_newton(
         history.push(lp.step_info(step, &totals, solved));
         history.last_mut().expect("pushed").predictor = predicted;
         log_step(ctx, history.last().expect("pushed"), &totals);
-        if !exact {
-            // Identical on every rank: `totals` and the guard's keys are global.
-            let recurs = totals.changed > 0 && lp.guard.has_seen(lp.key(&totals.next, &totals));
-            if totals.changed == 0 || recurs {
-                exact = true;
-                continue; // the same sets, solved exactly
+        let done = plan;
+        let exact_now = exact_from_prediction.unwrap_or(done.exact);
+        // Identical on every rank: `totals` and the guard's keys are global.
+        let recurs =
+            !exact_now && totals.changed > 0 && lp.guard.has_seen(lp.key(&totals.next, &totals));
+        plan = match done.after_solve(exact_now, totals.changed, recurs, &mut last_changed) {
+            After::Repeat(next) => {
+                plan = next;
+                continue; // the same sets
             }
-            exact = totals.changed >= last_changed;
-            last_changed = totals.changed;
-        }
+            After::Update(next) => next,
+        };
         if lp.next(step, update.next, &totals)? {
-            if reused && !final_check {
-                // The stop was decided on a direct-preset step solved by GMRES on an earlier
-                // factorisation: its u carries the Krylov tolerance (~1e-10 of u where A is
-                // ill-conditioned, ν → ½; 7e-8 in λ_t measured on block2d at ν = 0.4999). The
-                // same sets once more, factorised: the final iterate is Algorithm 1's.
-                final_check = true;
-                continue;
+            match done.after_stop(reused) {
+                After::Repeat(next) => {
+                    plan = next;
+                    continue;
+                }
+                After::Update(_) => {
+                    converged = true;
+                    break;
+                }
             }
-            converged = true;
-            break;
         }
     }
     let (lambda_seconds, rows_seconds) = (reduced.lambda_seconds, reduced.rows_seconds);
@@ -323,6 +317,84 @@ pub fn semismooth_newton(
         cycle_detected_at: lp.guard.detected_at,
         u,
     })
+}
+
+/// What a Newton step is, decided before it runs: the per-step record the loop's rules read.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+struct StepPlan {
+    /// Solved to the preset's tolerance (else inexact: frictionless, iterative preset's reuse
+    /// path, the solve stops at `reduced::INEXACT_REDUCTION` of its start's residual).
+    exact: bool,
+    /// The half-space model predicts the set after this step's solve (its first step).
+    predict: bool,
+    /// The confirming step: the same sets factorised after a stop decided on a step solved by
+    /// GMRES on an earlier factorisation (no reuse).
+    confirm: bool,
+}
+
+/// What follows a step: the same sets once more, or the set updated by (3.23)/(3.33); with
+/// the next step's plan.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum After {
+    Repeat(StepPlan),
+    Update(StepPlan),
+}
+
+impl StepPlan {
+    /// After the solve and the update (before the stop rule). `exact`: whether the next steps
+    /// are exact as far as this step knows (its own plan, or the prediction's verdict: from a
+    /// predicted set every step is exact — the inexact steps, a residual reduction of 1e-6,
+    /// flip edge nodes whose λ_n or gap is near 0, 3D Hertz at 527 k unknowns: changes 18, 17,
+    /// 0 and an exact step after them, exact: 6, 0 — unless the set reached the model's
+    /// border). Inexact steps run while the set changes; the first that changes no node (or
+    /// leads back to a set seen before, `recurs`) is repeated exactly on the same set, and from
+    /// then on every step is exact, so the iteration ends as Algorithm 1 does: an exact solve
+    /// whose update changes no node. An inexact step that changes at least as many nodes as
+    /// the one before it (`last_changed`) makes no progress (the set chatters): exact from
+    /// then on as well.
+    fn after_solve(
+        self,
+        exact: bool,
+        changed: usize,
+        recurs: bool,
+        last_changed: &mut usize,
+    ) -> After {
+        // a confirming step keeps every later step factorised
+        let next = StepPlan {
+            exact,
+            predict: false,
+            confirm: self.confirm,
+        };
+        if exact {
+            return After::Update(next);
+        }
+        if changed == 0 || recurs {
+            return After::Repeat(StepPlan {
+                exact: true,
+                ..next
+            });
+        }
+        let exact = changed >= *last_changed;
+        *last_changed = changed;
+        After::Update(StepPlan { exact, ..next })
+    }
+
+    /// After the stop rule said stop: a stop decided on a step solved by GMRES on an earlier
+    /// factorisation (`reused`, direct preset) carries the Krylov tolerance in u (~1e-10 of u
+    /// where A is ill-conditioned, ν → ½; 7e-8 in λ_t measured on block2d at ν = 0.4999), so
+    /// the same sets once more, factorised, and the final iterate is Algorithm 1's; else the
+    /// end (`Update`).
+    fn after_stop(self, reused: bool) -> After {
+        if reused && !self.confirm {
+            After::Repeat(StepPlan {
+                exact: true,
+                predict: false,
+                confirm: true,
+            })
+        } else {
+            After::Update(self)
+        }
+    }
 }
 
 /// u = w + ρ: the rigid motion taken out of the solve, added back to the solution and to the
@@ -593,5 +665,110 @@ fn least_index_step(ctx: &Ctx, b: &ContactBoundary, old: &ActiveSet, next: &mut 
     }
     for ((k, a), n) in b.nodes.iter().zip(&old.normal).zip(next.normal.iter_mut()) {
         *n = if k.tag == tag { !*a } else { *a };
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const LOOSE: StepPlan = StepPlan {
+        exact: false,
+        predict: false,
+        confirm: false,
+    };
+
+    #[test]
+    fn inexact_steps_run_while_the_set_shrinks_and_end_in_an_exact_repeat() {
+        let mut last = usize::MAX;
+        // changes 10, then 4: still loose
+        assert_eq!(
+            LOOSE.after_solve(false, 10, false, &mut last),
+            After::Update(LOOSE)
+        );
+        assert_eq!(
+            LOOSE.after_solve(false, 4, false, &mut last),
+            After::Update(LOOSE)
+        );
+        // nothing changes: the same sets once more, exactly
+        let exact = StepPlan {
+            exact: true,
+            ..LOOSE
+        };
+        assert_eq!(
+            LOOSE.after_solve(false, 0, false, &mut last),
+            After::Repeat(exact)
+        );
+        // a recurring set likewise
+        assert_eq!(
+            LOOSE.after_solve(false, 3, true, &mut last),
+            After::Repeat(exact)
+        );
+        // exact stays exact
+        assert_eq!(
+            exact.after_solve(true, 5, false, &mut last),
+            After::Update(exact)
+        );
+    }
+
+    #[test]
+    fn a_loose_step_without_progress_makes_the_rest_exact() {
+        let mut last = usize::MAX;
+        assert_eq!(
+            LOOSE.after_solve(false, 6, false, &mut last),
+            After::Update(LOOSE)
+        );
+        let exact = StepPlan {
+            exact: true,
+            ..LOOSE
+        };
+        assert_eq!(
+            LOOSE.after_solve(false, 6, false, &mut last),
+            After::Update(exact)
+        );
+    }
+
+    #[test]
+    fn the_prediction_decides_and_predicts_once() {
+        let first = StepPlan {
+            predict: true,
+            ..LOOSE
+        };
+        let mut last = usize::MAX;
+        // a set predicted inside the model: exact from here, no second prediction
+        let exact = StepPlan {
+            exact: true,
+            ..LOOSE
+        };
+        assert_eq!(
+            first.after_solve(true, 40, false, &mut last),
+            After::Update(exact)
+        );
+        // truncated at the model's border: loose steps first
+        assert_eq!(
+            first.after_solve(false, 40, false, &mut last),
+            After::Update(LOOSE)
+        );
+    }
+
+    #[test]
+    fn a_stop_on_a_reused_step_is_confirmed_once_by_a_factorisation() {
+        let exact = StepPlan {
+            exact: true,
+            ..LOOSE
+        };
+        let confirm = StepPlan {
+            confirm: true,
+            ..exact
+        };
+        assert_eq!(exact.after_stop(true), After::Repeat(confirm));
+        assert_eq!(exact.after_stop(false), After::Update(exact));
+        assert_eq!(confirm.after_stop(true), After::Update(confirm));
+        // every step after a confirming one is factorised
+        let mut last = usize::MAX;
+        assert_eq!(
+            confirm.after_solve(true, 2, false, &mut last),
+            After::Update(confirm)
+        );
     }
 }

@@ -287,10 +287,14 @@ pub fn predict(
         column_share(model.m(), ctx.rank, ctx.size),
     );
     let packed_c = ctx.gather_to_root(&share);
-    // rank 0: [code, model nodes, model steps, coarse levels, represented, flags of all nodes]
+    // rank 0: [code, model nodes, model steps, coarse levels, represented, flags of all nodes];
+    // a panic in the model is caught there (code 4) so that the broadcast still happens
     let mut packed: Vec<f64> = Vec::new();
     if ctx.rank == 0 {
-        packed = model.solve(&all, &packed_c, free, mz, c, max_steps);
+        packed = super::dense::guarded("predictor-model", || {
+            model.solve(&all, &packed_c, free, mz, c, max_steps)
+        })
+        .unwrap_or_else(|_| vec![4.0, 0.0, 0.0, 0.0, 0.0]);
     }
     ctx.broadcast_f64s(&mut packed);
     let code = packed[0];
@@ -307,6 +311,7 @@ pub fn predict(
         outcome: match code as i32 {
             0 | 3 => "predicted".into(),
             1 => "no node penetrates after the first solve".into(),
+            4 => "the model failed on rank 0 (no prediction)".into(),
             _ => "the model's dense iteration did not converge".into(),
         },
         model_nodes: packed[1] as usize,

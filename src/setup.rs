@@ -3,7 +3,7 @@
 
 use crate::assembly::{BodyForce, FacetLoad, FacetLoadKind, Problem};
 use crate::case::{self, vec3, Case, ContactSection, Friction, NewtonSection};
-use crate::contact::{Obstacle, Plane, Sphere};
+use crate::contact::Obstacle;
 use crate::dist;
 use crate::error::{InputError, RunError};
 use crate::fem::{self, Material};
@@ -229,14 +229,9 @@ pub fn contact_settings(
     })
 }
 
-/// The obstacle of the case, checked.
+/// The obstacle of the case, checked (every shape: [`case::ObstacleSpec::to_obstacle`]).
 pub fn obstacle_of(c: &ContactSection, dim: usize, file: &Path) -> Result<Obstacle, InputError> {
-    match &c.obstacle {
-        case::ObstacleSpec::Plane { point, normal } => Plane::new(vec3(point), vec3(normal), dim)
-            .map(Obstacle::Plane)
-            .map_err(|e| e.into_input_error(file, "contact.obstacle")),
-        case::ObstacleSpec::Sphere { center, radius } => Sphere::new(vec3(center), *radius, dim)
-            .map(Obstacle::Sphere)
-            .map_err(|e| e.into_input_error(file, "contact.obstacle")),
-    }
+    c.obstacle
+        .to_obstacle(dim)
+        .map_err(|e| e.into_input_error(file, "contact.obstacle"))
 }

@@ -385,7 +385,7 @@ fn bad_refine_values_exit_2_naming_the_key() {
         (2, "mesh.project.0.group=\"body\"", "mesh.project[0].group"),
         (
             1,
-            "mesh.project.0.shape={type=\"cone\"}",
+            "mesh.project.0.shape={type=\"torus\"}",
             "mesh.project[0].shape.type",
         ),
         (

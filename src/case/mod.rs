@@ -15,6 +15,8 @@ mod tests;
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
+use crate::contact::obstacle::{Cone, Cylinder, Punch, Pyramid, MAX_FACES, MIN_FACES};
+use crate::contact::{Obstacle, ObstacleError, Plane, Sphere};
 use crate::error::InputError;
 use crate::mesh::Mesh;
 pub use load::LoadSection;
@@ -267,12 +269,136 @@ pub const DEFAULT_FIELDS: [OutputField; 3] = [
     OutputField::Contact,
 ];
 
+/// A rigid obstacle (or a `[[mesh.project]]` shape) as the case file gives it: vectors with
+/// 2 or 3 components (their number checked against the mesh later), axes and normals unit
+/// vectors, angles in degrees (docs/obstacles.md).
 #[derive(Debug, Clone, PartialEq)]
 pub enum ObstacleSpec {
     /// Half-space bounded by the plane through `point`; `normal` is a unit vector.
     Plane { point: Vec<f64>, normal: Vec<f64> },
     /// Ball (circle in 2D).
     Sphere { center: Vec<f64>, radius: f64 },
+    /// Infinite circular cylinder around the line through `point` along `axis` (3D only).
+    Cylinder {
+        point: Vec<f64>,
+        axis: Vec<f64>,
+        radius: f64,
+    },
+    /// Solid cone (wedge in 2D) with its tip at `apex`; `axis` points from the tip into the
+    /// indenter; 0 < `half_angle` < 90 degrees.
+    Cone {
+        apex: Vec<f64>,
+        axis: Vec<f64>,
+        half_angle: f64,
+    },
+    /// Regular pyramid (3D only) of `faces` planar faces, each at `half_angle` degrees to the
+    /// axis; `azimuth` (degrees) turns face 0 about the axis from the reference direction.
+    Pyramid {
+        apex: Vec<f64>,
+        axis: Vec<f64>,
+        half_angle: f64,
+        faces: usize,
+        azimuth: f64,
+    },
+    /// Flat-ended cylinder (strip in 2D) whose end face is centred at `center` with the
+    /// outward normal −`axis`; its edge rounded with `edge_radius` in [0, `radius`].
+    Punch {
+        center: Vec<f64>,
+        axis: Vec<f64>,
+        radius: f64,
+        edge_radius: f64,
+    },
+}
+
+impl ObstacleSpec {
+    /// The spelling of the type in the case file.
+    pub fn type_name(&self) -> &'static str {
+        match self {
+            ObstacleSpec::Plane { .. } => "plane",
+            ObstacleSpec::Sphere { .. } => "sphere",
+            ObstacleSpec::Cylinder { .. } => "cylinder",
+            ObstacleSpec::Cone { .. } => "cone",
+            ObstacleSpec::Pyramid { .. } => "pyramid",
+            ObstacleSpec::Punch { .. } => "punch",
+        }
+    }
+
+    /// The vector keys with their numbers of components, in the order they are checked.
+    pub fn vectors(&self) -> Vec<(&'static str, usize)> {
+        match self {
+            ObstacleSpec::Plane { point, normal } => {
+                vec![("point", point.len()), ("normal", normal.len())]
+            }
+            ObstacleSpec::Sphere { center, .. } => vec![("center", center.len())],
+            ObstacleSpec::Cylinder { point, axis, .. } => {
+                vec![("point", point.len()), ("axis", axis.len())]
+            }
+            ObstacleSpec::Cone { apex, axis, .. } | ObstacleSpec::Pyramid { apex, axis, .. } => {
+                vec![("apex", apex.len()), ("axis", axis.len())]
+            }
+            ObstacleSpec::Punch { center, axis, .. } => {
+                vec![("center", center.len()), ("axis", axis.len())]
+            }
+        }
+    }
+
+    /// For a shape that exists in 3D only: what to use in 2D instead.
+    fn in_2d_use(&self) -> Option<&'static str> {
+        match self {
+            ObstacleSpec::Cylinder { .. } => Some("\"sphere\" (a circle)"),
+            ObstacleSpec::Pyramid { .. } => Some("\"cone\" (a wedge)"),
+            _ => None,
+        }
+    }
+
+    /// The obstacle of dimension `dim` (the vectors have `dim` components:
+    /// [`Case::check_against_mesh`], [`Case::check_projections`]).
+    pub fn to_obstacle(&self, dim: usize) -> Result<Obstacle, ObstacleError> {
+        Ok(match self {
+            ObstacleSpec::Plane { point, normal } => {
+                Obstacle::Plane(Plane::new(vec3(point), vec3(normal), dim)?)
+            }
+            ObstacleSpec::Sphere { center, radius } => {
+                Obstacle::Sphere(Sphere::new(vec3(center), *radius, dim)?)
+            }
+            ObstacleSpec::Cylinder {
+                point,
+                axis,
+                radius,
+            } => Obstacle::Cylinder(Cylinder::new(vec3(point), vec3(axis), *radius, dim)?),
+            ObstacleSpec::Cone {
+                apex,
+                axis,
+                half_angle,
+            } => Obstacle::Cone(Cone::new(vec3(apex), vec3(axis), *half_angle, dim)?),
+            ObstacleSpec::Pyramid {
+                apex,
+                axis,
+                half_angle,
+                faces,
+                azimuth,
+            } => Obstacle::Pyramid(Pyramid::new(
+                vec3(apex),
+                vec3(axis),
+                *half_angle,
+                *faces,
+                *azimuth,
+                dim,
+            )?),
+            ObstacleSpec::Punch {
+                center,
+                axis,
+                radius,
+                edge_radius,
+            } => Obstacle::Punch(Punch::new(
+                vec3(center),
+                vec3(axis),
+                *radius,
+                *edge_radius,
+                dim,
+            )?),
+        })
+    }
 }
 
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -562,14 +688,28 @@ impl Case {
         }
         if let Some(c) = &self.contact {
             self.check_group("contact.group", &c.group, groups, Some(dim - 1))?;
-            match &c.obstacle {
-                ObstacleSpec::Plane { point, normal } => {
-                    len("contact.obstacle.point".into(), point.len())?;
-                    len("contact.obstacle.normal".into(), normal.len())?;
-                }
-                ObstacleSpec::Sphere { center, .. } => {
-                    len("contact.obstacle.center".into(), center.len())?;
-                }
+            self.check_shape("contact.obstacle", &c.obstacle, dim)?;
+        }
+        Ok(())
+    }
+
+    /// A 3D-only shape needs a 3D mesh; every vector of the shape needs `dim` components.
+    fn check_shape(&self, key: &str, shape: &ObstacleSpec, dim: usize) -> Result<(), InputError> {
+        if let (2, Some(instead)) = (dim, shape.in_2d_use()) {
+            return Err(self.err_at(
+                &join_key(key, "type"),
+                format!(
+                    "\"{}\" is a 3D obstacle, but the mesh is 2D; in 2D use {instead}",
+                    shape.type_name()
+                ),
+            ));
+        }
+        for (name, n) in shape.vectors() {
+            if n != dim {
+                return Err(self.err_at(
+                    &join_key(key, name),
+                    format!("has {n} components, but the mesh is {dim}D and needs {dim}"),
+                ));
             }
         }
         Ok(())
@@ -601,21 +741,7 @@ impl Case {
                     ),
                 ));
             }
-            let sk = join_key(&k, "shape");
-            let vectors: Vec<(&str, usize)> = match &p.shape {
-                ObstacleSpec::Plane { point, normal } => {
-                    vec![("point", point.len()), ("normal", normal.len())]
-                }
-                ObstacleSpec::Sphere { center, .. } => vec![("center", center.len())],
-            };
-            for (name, n) in vectors {
-                if n != dim {
-                    return Err(self.err_at(
-                        &join_key(&sk, name),
-                        format!("has {n} components, but the mesh is {dim}D and needs {dim}"),
-                    ));
-                }
-            }
+            self.check_shape(&join_key(&k, "shape"), &p.shape, dim)?;
         }
         Ok(())
     }
@@ -1231,8 +1357,24 @@ impl Reader<'_> {
         enum Ty {
             Plane,
             Sphere,
+            Cylinder,
+            Cone,
+            Pyramid,
+            Punch,
         }
-        match self.choice(&tk, ty, &[("plane", Ty::Plane), ("sphere", Ty::Sphere)])? {
+        let ty = self.choice(
+            &tk,
+            ty,
+            &[
+                ("plane", Ty::Plane),
+                ("sphere", Ty::Sphere),
+                ("cylinder", Ty::Cylinder),
+                ("cone", Ty::Cone),
+                ("pyramid", Ty::Pyramid),
+                ("punch", Ty::Punch),
+            ],
+        )?;
+        match ty {
             Ty::Plane => {
                 let t = self.table(key, n, &["type", "point", "normal"])?;
                 let (pk, p) = self.required(&t, "point")?;
@@ -1265,6 +1407,125 @@ impl Reader<'_> {
                 let radius = self.positive(&rk, r)?;
                 Ok(ObstacleSpec::Sphere { center, radius })
             }
+            Ty::Cylinder => {
+                let t = self.table(key, n, &["type", "point", "axis", "radius"])?;
+                let (pk, p) = self.required(&t, "point")?;
+                let point = self.vector(&pk, p)?;
+                let axis = self.axis(&t, "point", point.len())?;
+                let (rk, r) = self.required(&t, "radius")?;
+                let radius = self.positive(&rk, r)?;
+                Ok(ObstacleSpec::Cylinder {
+                    point,
+                    axis,
+                    radius,
+                })
+            }
+            Ty::Cone => {
+                let t = self.table(key, n, &["type", "apex", "axis", "half_angle"])?;
+                let (pk, p) = self.required(&t, "apex")?;
+                let apex = self.vector(&pk, p)?;
+                let axis = self.axis(&t, "apex", apex.len())?;
+                let half_angle = self.half_angle(&t)?;
+                Ok(ObstacleSpec::Cone {
+                    apex,
+                    axis,
+                    half_angle,
+                })
+            }
+            Ty::Pyramid => {
+                let t = self.table(
+                    key,
+                    n,
+                    &["type", "apex", "axis", "half_angle", "faces", "azimuth"],
+                )?;
+                let (pk, p) = self.required(&t, "apex")?;
+                let apex = self.vector(&pk, p)?;
+                let axis = self.axis(&t, "apex", apex.len())?;
+                let half_angle = self.half_angle(&t)?;
+                let (fk, f) = self.required(&t, "faces")?;
+                let Kind::Int(v) = f.kind else {
+                    return Err(self.type_err(&fk, f, "an integer"));
+                };
+                if !(MIN_FACES as i64..=MAX_FACES as i64).contains(&v) {
+                    return Err(self.err(
+                        &fk,
+                        f.loc,
+                        format!("must be an integer from {MIN_FACES} to {MAX_FACES}, got {v}"),
+                    ));
+                }
+                let azimuth = match t.get("azimuth") {
+                    None => 0.0,
+                    Some((ak, a)) => self.num(&ak, a)?,
+                };
+                Ok(ObstacleSpec::Pyramid {
+                    apex,
+                    axis,
+                    half_angle,
+                    faces: v as usize,
+                    azimuth,
+                })
+            }
+            Ty::Punch => {
+                let t = self.table(key, n, &["type", "center", "axis", "radius", "edge_radius"])?;
+                let (ck, c) = self.required(&t, "center")?;
+                let center = self.vector(&ck, c)?;
+                let axis = self.axis(&t, "center", center.len())?;
+                let (rk, r) = self.required(&t, "radius")?;
+                let radius = self.positive(&rk, r)?;
+                let edge_radius = match t.get("edge_radius") {
+                    None => 0.0,
+                    Some((ek, e)) => {
+                        let x = self.num(&ek, e)?;
+                        if !(0.0..=radius).contains(&x) {
+                            return Err(self.err(
+                                &ek,
+                                e.loc,
+                                format!("must lie in [0, radius] = [0, {radius}], got {x}"),
+                            ));
+                        }
+                        x
+                    }
+                };
+                Ok(ObstacleSpec::Punch {
+                    center,
+                    axis,
+                    radius,
+                    edge_radius,
+                })
+            }
+        }
+    }
+
+    /// The required `axis` of an obstacle: a nonzero vector with as many components as the
+    /// vector `with` (`len`), returned as a unit vector.
+    fn axis(&self, t: &Tab, with: &str, len: usize) -> Res<Vec<f64>> {
+        let (ak, a) = self.required(t, "axis")?;
+        let axis = self.vector(&ak, a)?;
+        if axis.len() != len {
+            return Err(self.err(
+                &ak,
+                a.loc,
+                format!("has {} components but {with} has {len}", axis.len()),
+            ));
+        }
+        // Scaled by the largest entry first: huge entries do not overflow.
+        let big = axis.iter().fold(0.0_f64, |m, x| m.max(x.abs()));
+        if big == 0.0 {
+            return Err(self.err(&ak, a.loc, "the axis must be a nonzero vector"));
+        }
+        let scaled: Vec<f64> = axis.iter().map(|x| x / big).collect();
+        let norm = scaled.iter().map(|x| x * x).sum::<f64>().sqrt();
+        Ok(scaled.iter().map(|x| x / norm).collect())
+    }
+
+    /// The required `half_angle` of a cone or pyramid, in degrees, 0 < half_angle < 90.
+    fn half_angle(&self, t: &Tab) -> Res<f64> {
+        let (hk, h) = self.required(t, "half_angle")?;
+        let x = self.num(&hk, h)?;
+        if x > 0.0 && x < 90.0 {
+            Ok(x)
+        } else {
+            Err(self.err(&hk, h.loc, format!("must be in (0, 90) degrees, got {x}")))
         }
     }
 

@@ -482,9 +482,13 @@ fn reject_unknown_preset() {
 
 #[test]
 fn reject_unknown_obstacle_type() {
-    let text = with("[contact]\ngroup = \"c\"\nobstacle = { type = \"cone\", point = [0, 0] }\n");
+    let text = with("[contact]\ngroup = \"c\"\nobstacle = { type = \"torus\", point = [0, 0] }\n");
     let e = expect_err(&text, "contact.obstacle.type", "obstacle");
-    assert!(e.message.contains("\"plane\", \"sphere\""), "{e}");
+    assert!(
+        e.message
+            .contains("\"plane\", \"sphere\", \"cylinder\", \"cone\", \"pyramid\", \"punch\""),
+        "{e}"
+    );
 }
 
 #[test]
@@ -1182,8 +1186,572 @@ fn mesh_refine_and_project() {
         "color",
     );
     expect_err(
-        &replace(&text, "type = \"plane\"", "type = \"cone\""),
+        &replace(&text, "type = \"plane\"", "type = \"torus\""),
         "mesh.project[1].shape.type",
-        "cone",
+        "torus",
+    );
+}
+
+// ---- the indenter obstacles: cylinder, cone, pyramid, punch --------------------------------
+
+const CYLINDER: &str = "type = \"cylinder\"\npoint = [0, 0, 1.5]\naxis = [0, 3, 0]\nradius = 0.5\n";
+const CONE: &str = "type = \"cone\"\napex = [0, 0.99]\naxis = [0, 2]\nhalf_angle = 70\n";
+const PYRAMID: &str = "type = \"pyramid\"\napex = [0, 0, 0.49]\naxis = [0, 0, 1]\n\
+                       half_angle = 68\nfaces = 4\nazimuth = 45\n";
+const PUNCH: &str = "type = \"punch\"\ncenter = [0, 0, 0.49]\naxis = [0, 0, 0.5]\n\
+                     radius = 0.3\nedge_radius = 0.05\n";
+
+/// `base` with a contact section whose obstacle is the table `[contact.obstacle]` of `lines`.
+fn obstacle_case(base: &str, lines: &str) -> String {
+    format!("{base}\n[contact]\ngroup = \"c\"\n\n[contact.obstacle]\n{lines}")
+}
+
+fn minimal_3d() -> String {
+    replace(MINIMAL, "model = \"plane_strain\"\n", "")
+}
+
+fn spec(lines: &str) -> ObstacleSpec {
+    parse(&obstacle_case(MINIMAL, lines))
+        .unwrap()
+        .contact
+        .unwrap()
+        .obstacle
+}
+
+#[test]
+fn indenter_obstacles_parse() {
+    assert_eq!(
+        spec(CYLINDER),
+        ObstacleSpec::Cylinder {
+            point: vec![0.0, 0.0, 1.5],
+            axis: vec![0.0, 1.0, 0.0],
+            radius: 0.5
+        }
+    );
+    assert_eq!(
+        spec(CONE),
+        ObstacleSpec::Cone {
+            apex: vec![0.0, 0.99],
+            axis: vec![0.0, 1.0],
+            half_angle: 70.0
+        }
+    );
+    assert_eq!(
+        spec(PYRAMID),
+        ObstacleSpec::Pyramid {
+            apex: vec![0.0, 0.0, 0.49],
+            axis: vec![0.0, 0.0, 1.0],
+            half_angle: 68.0,
+            faces: 4,
+            azimuth: 45.0
+        }
+    );
+    assert_eq!(
+        spec(PUNCH),
+        ObstacleSpec::Punch {
+            center: vec![0.0, 0.0, 0.49],
+            axis: vec![0.0, 0.0, 1.0],
+            radius: 0.3,
+            edge_radius: 0.05
+        }
+    );
+    // Optional keys: azimuth 0, edge_radius 0 (a sharp edge); edge_radius = radius is allowed.
+    match spec(&replace(PYRAMID, "azimuth = 45\n", "")) {
+        ObstacleSpec::Pyramid { azimuth, .. } => assert_eq!(azimuth, 0.0),
+        o => panic!("{o:?}"),
+    }
+    match spec(&replace(PUNCH, "edge_radius = 0.05\n", "")) {
+        ObstacleSpec::Punch { edge_radius, .. } => assert_eq!(edge_radius, 0.0),
+        o => panic!("{o:?}"),
+    }
+    match spec(&replace(PUNCH, "edge_radius = 0.05", "edge_radius = 0.3")) {
+        ObstacleSpec::Punch { edge_radius, .. } => assert_eq!(edge_radius, 0.3),
+        o => panic!("{o:?}"),
+    }
+    // A huge axis is normalised without overflowing; the inline table form; --set.
+    match spec(&replace(CONE, "axis = [0, 2]", "axis = [1e300, 1e300]")) {
+        ObstacleSpec::Cone { axis, .. } => {
+            let s = 0.5f64.sqrt();
+            assert!((axis[0] - s).abs() < 1e-15 && (axis[1] - s).abs() < 1e-15);
+        }
+        o => panic!("{o:?}"),
+    }
+    let c = parse(&with(
+        "[contact]\ngroup = \"c\"\n\
+         obstacle = { type = \"cone\", apex = [0, 1], axis = [0, 1], half_angle = 45 }\n",
+    ))
+    .unwrap();
+    assert!(matches!(
+        c.contact.unwrap().obstacle,
+        ObstacleSpec::Cone { half_angle, .. } if half_angle == 45.0
+    ));
+    let c = parse_set(
+        &obstacle_case(MINIMAL, CONE),
+        &["contact.obstacle.half_angle=30"],
+    )
+    .unwrap();
+    assert!(matches!(
+        c.contact.unwrap().obstacle,
+        ObstacleSpec::Cone { half_angle, .. } if half_angle == 30.0
+    ));
+    let e = parse_set(
+        &obstacle_case(MINIMAL, CONE),
+        &["contact.obstacle.half_angle=90"],
+    )
+    .unwrap_err();
+    assert_eq!(e.key.as_deref(), Some("contact.obstacle.half_angle"), "{e}");
+    assert!(e.message.contains("(from --set)"), "{e}");
+}
+
+/// Rejects `shape` with `from` replaced by `to`: the key `contact.obstacle.<key>` at its line
+/// (at the `[contact.obstacle]` line when the key is missing), the message containing `msg`.
+fn reject_shape(shape: &str, from: &str, to: &str, key: &str, msg: &str) {
+    let text = obstacle_case(MINIMAL, &replace(shape, from, to));
+    let needle = if to.is_empty() {
+        "[contact.obstacle]"
+    } else {
+        key.split('[').next().unwrap()
+    };
+    let e = expect_err(&text, &format!("contact.obstacle.{key}"), needle);
+    assert!(e.message.contains(msg), "{from} -> {to}: {e}");
+}
+
+#[test]
+fn reject_bad_indenter_obstacles() {
+    reject_shape(
+        CYLINDER,
+        "point = [0, 0, 1.5]\n",
+        "",
+        "point",
+        "missing required key",
+    );
+    reject_shape(
+        CYLINDER,
+        "axis = [0, 3, 0]\n",
+        "",
+        "axis",
+        "missing required key",
+    );
+    reject_shape(
+        CYLINDER,
+        "radius = 0.5\n",
+        "",
+        "radius",
+        "missing required key",
+    );
+    reject_shape(
+        CYLINDER,
+        "axis = [0, 3, 0]",
+        "axis = [0, 0, 0]",
+        "axis",
+        "the axis must be a nonzero vector",
+    );
+    reject_shape(
+        CYLINDER,
+        "axis = [0, 3, 0]",
+        "axis = [0, 3]",
+        "axis",
+        "has 2 components but point has 3",
+    );
+    reject_shape(
+        CYLINDER,
+        "axis = [0, 3, 0]",
+        "axis = [0, 3, 0, 1]",
+        "axis",
+        "expected 2 or 3 components",
+    );
+    reject_shape(
+        CYLINDER,
+        "axis = [0, 3, 0]",
+        "axis = [0, \"y\", 0]",
+        "axis[1]",
+        "expected a number",
+    );
+    reject_shape(
+        CYLINDER,
+        "axis = [0, 3, 0]",
+        "axis = 1",
+        "axis",
+        "expected an array of numbers",
+    );
+    reject_shape(
+        CYLINDER,
+        "radius = 0.5",
+        "radius = 0",
+        "radius",
+        "must be > 0, got 0",
+    );
+    reject_shape(
+        CYLINDER,
+        "radius = 0.5",
+        "radius = -2",
+        "radius",
+        "must be > 0, got -2",
+    );
+    reject_shape(
+        CYLINDER,
+        "radius = 0.5",
+        "radius = 0.5\nhalf_angle = 30",
+        "half_angle",
+        "unknown key in [contact.obstacle]; allowed keys: type, point, axis, radius",
+    );
+    reject_shape(
+        CONE,
+        "apex = [0, 0.99]\n",
+        "",
+        "apex",
+        "missing required key",
+    );
+    reject_shape(
+        CONE,
+        "half_angle = 70\n",
+        "",
+        "half_angle",
+        "missing required key",
+    );
+    reject_shape(
+        CONE,
+        "half_angle = 70",
+        "half_angle = 0",
+        "half_angle",
+        "must be in (0, 90) degrees, got 0",
+    );
+    reject_shape(
+        CONE,
+        "half_angle = 70",
+        "half_angle = 90",
+        "half_angle",
+        "must be in (0, 90) degrees, got 90",
+    );
+    reject_shape(
+        CONE,
+        "half_angle = 70",
+        "half_angle = -10",
+        "half_angle",
+        "must be in (0, 90) degrees, got -10",
+    );
+    reject_shape(
+        CONE,
+        "half_angle = 70",
+        "half_angle = 120.5",
+        "half_angle",
+        "must be in (0, 90) degrees, got 120.5",
+    );
+    reject_shape(
+        CONE,
+        "half_angle = 70",
+        "half_angle = \"70\"",
+        "half_angle",
+        "expected a number",
+    );
+    reject_shape(
+        CONE,
+        "half_angle = 70",
+        "half_angle = nan",
+        "half_angle",
+        "must be a finite number",
+    );
+    reject_shape(
+        CONE,
+        "axis = [0, 2]",
+        "axis = [0.0, -0.0]",
+        "axis",
+        "the axis must be a nonzero vector",
+    );
+    reject_shape(
+        CONE,
+        "axis = [0, 2]",
+        "axis = [0, 2, 0]",
+        "axis",
+        "has 3 components but apex has 2",
+    );
+    reject_shape(
+        CONE,
+        "apex = [0, 0.99]",
+        "apex = [0, 0.99]\nradius = 1",
+        "radius",
+        "unknown key in [contact.obstacle]; allowed keys: type, apex, axis, half_angle",
+    );
+    reject_shape(PYRAMID, "faces = 4\n", "", "faces", "missing required key");
+    reject_shape(
+        PYRAMID,
+        "faces = 4",
+        "faces = 2",
+        "faces",
+        "must be an integer from 3 to 64, got 2",
+    );
+    reject_shape(
+        PYRAMID,
+        "faces = 4",
+        "faces = 65",
+        "faces",
+        "must be an integer from 3 to 64, got 65",
+    );
+    reject_shape(
+        PYRAMID,
+        "faces = 4",
+        "faces = -4",
+        "faces",
+        "must be an integer from 3 to 64, got -4",
+    );
+    reject_shape(
+        PYRAMID,
+        "faces = 4",
+        "faces = 4.0",
+        "faces",
+        "expected an integer, found",
+    );
+    reject_shape(
+        PYRAMID,
+        "faces = 4",
+        "faces = \"4\"",
+        "faces",
+        "expected an integer, found",
+    );
+    reject_shape(
+        PYRAMID,
+        "half_angle = 68",
+        "half_angle = 90",
+        "half_angle",
+        "must be in (0, 90) degrees, got 90",
+    );
+    reject_shape(
+        PYRAMID,
+        "azimuth = 45",
+        "azimuth = \"north\"",
+        "azimuth",
+        "expected a number",
+    );
+    reject_shape(
+        PYRAMID,
+        "azimuth = 45",
+        "azimuth = inf",
+        "azimuth",
+        "must be a finite number",
+    );
+    reject_shape(
+        PYRAMID,
+        "axis = [0, 0, 1]",
+        "axis = [0, 0]",
+        "axis",
+        "has 2 components but apex has 3",
+    );
+    reject_shape(
+        PYRAMID,
+        "azimuth = 45",
+        "azimuth = 45\nedge_radius = 0",
+        "edge_radius",
+        "allowed keys: type, apex, axis, half_angle, faces, azimuth",
+    );
+    reject_shape(
+        PUNCH,
+        "center = [0, 0, 0.49]\n",
+        "",
+        "center",
+        "missing required key",
+    );
+    reject_shape(
+        PUNCH,
+        "radius = 0.3\n",
+        "",
+        "radius",
+        "missing required key",
+    );
+    reject_shape(
+        PUNCH,
+        "radius = 0.3",
+        "radius = -0.3",
+        "radius",
+        "must be > 0, got -0.3",
+    );
+    reject_shape(
+        PUNCH,
+        "edge_radius = 0.05",
+        "edge_radius = 0.31",
+        "edge_radius",
+        "must lie in [0, radius] = [0, 0.3], got 0.31",
+    );
+    reject_shape(
+        PUNCH,
+        "edge_radius = 0.05",
+        "edge_radius = -0.01",
+        "edge_radius",
+        "must lie in [0, radius] = [0, 0.3], got -0.01",
+    );
+    reject_shape(
+        PUNCH,
+        "edge_radius = 0.05",
+        "edge_radius = true",
+        "edge_radius",
+        "expected a number",
+    );
+    reject_shape(
+        PUNCH,
+        "axis = [0, 0, 0.5]",
+        "axis = [0, 0, 0]",
+        "axis",
+        "the axis must be a nonzero vector",
+    );
+    reject_shape(
+        PUNCH,
+        "axis = [0, 0, 0.5]",
+        "axis = [0, 0.5]",
+        "axis",
+        "has 2 components but center has 3",
+    );
+    reject_shape(
+        PUNCH,
+        "edge_radius = 0.05",
+        "edge_radius = 0.05\nfaces = 4",
+        "faces",
+        "unknown key in [contact.obstacle]; allowed keys: type, center, axis, radius, edge_radius",
+    );
+}
+
+#[test]
+fn indenter_obstacles_against_mesh_dimension() {
+    let g = groups(&[("c", 1)]);
+    // A 2D mesh: the cylinder and the pyramid exist in 3D only; the message names the 2D shape.
+    for (shape, instead) in [
+        (CYLINDER, "\"sphere\" (a circle)"),
+        (PYRAMID, "\"cone\" (a wedge)"),
+    ] {
+        let text = obstacle_case(MINIMAL, shape);
+        let e = parse(&text).unwrap().check_against_mesh(2, &g).unwrap_err();
+        assert_eq!(e.key.as_deref(), Some("contact.obstacle.type"), "{e}");
+        assert_eq!(e.line, Some(line(&text, "type = ")), "{e}");
+        assert!(
+            e.message
+                .contains("is a 3D obstacle, but the mesh is 2D; in 2D use")
+                && e.message.contains(instead),
+            "{e}"
+        );
+    }
+    // The cone (a wedge in 2D) and the punch (a strip in 2D) in both dimensions, with vectors
+    // of the mesh's dimension.
+    let two_d_punch = "type = \"punch\"\ncenter = [0, 1]\naxis = [0, 1]\nradius = 0.3\n";
+    let three_d_cone = "type = \"cone\"\napex = [0, 0, 1]\naxis = [0, 0, 1]\nhalf_angle = 60\n";
+    for shape in [CONE, two_d_punch] {
+        let c = parse(&obstacle_case(MINIMAL, shape)).unwrap();
+        c.check_against_mesh(2, &g).unwrap();
+    }
+    let g3 = groups(&[("c", 2)]);
+    for shape in [CYLINDER, three_d_cone, PYRAMID, PUNCH] {
+        let c = parse(&obstacle_case(&minimal_3d(), shape)).unwrap();
+        c.check_against_mesh(3, &g3).unwrap();
+    }
+    for (base, dim, shape, key, needle) in [
+        (MINIMAL.to_string(), 2, PUNCH, "center", "center"),
+        (MINIMAL.to_string(), 2, three_d_cone, "apex", "apex"),
+        (minimal_3d(), 3, CONE, "apex", "apex"),
+        (minimal_3d(), 3, two_d_punch, "center", "center"),
+    ] {
+        let text = obstacle_case(&base, shape);
+        let gg = if dim == 2 { &g } else { &g3 };
+        let e = parse(&text)
+            .unwrap()
+            .check_against_mesh(dim, gg)
+            .unwrap_err();
+        assert_eq!(
+            e.key.as_deref(),
+            Some(format!("contact.obstacle.{key}").as_str()),
+            "{e}"
+        );
+        assert_eq!(e.line, Some(line(&text, needle)), "{e}");
+        assert!(
+            e.message
+                .contains(&format!("but the mesh is {dim}D and needs {dim}")),
+            "{e}"
+        );
+    }
+}
+
+#[test]
+fn obstacle_specs_become_obstacles() {
+    use crate::contact::obstacle::{Cone, Punch, Pyramid};
+    use crate::contact::{Obstacle, ObstacleError, Plane, Sphere};
+    // Plane and sphere: exactly what their constructors give.
+    let p = ObstacleSpec::Plane {
+        point: vec![0.0, -1.0],
+        normal: vec![0.6, 0.8],
+    };
+    assert_eq!(
+        p.to_obstacle(2),
+        Ok(Obstacle::Plane(
+            Plane::new([0.0, -1.0, 0.0], [0.6, 0.8, 0.0], 2).unwrap()
+        ))
+    );
+    let s = ObstacleSpec::Sphere {
+        center: vec![0.0, 0.0, 1.0],
+        radius: 0.5,
+    };
+    assert_eq!(
+        s.to_obstacle(3),
+        Ok(Obstacle::Sphere(
+            Sphere::new([0.0, 0.0, 1.0], 0.5, 3).unwrap()
+        ))
+    );
+    // The indenters carry their data over (angles in degrees).
+    let o = spec(CONE).to_obstacle(2).unwrap();
+    assert_eq!(
+        o,
+        Obstacle::Cone(Cone::new([0.0, 0.99, 0.0], [0.0, 1.0, 0.0], 70.0, 2).unwrap())
+    );
+    assert_eq!(o.dim(), 2);
+    let o = spec(PYRAMID).to_obstacle(3).unwrap();
+    assert_eq!(
+        o,
+        Obstacle::Pyramid(
+            Pyramid::new([0.0, 0.0, 0.49], [0.0, 0.0, 1.0], 68.0, 4, 45.0, 3).unwrap()
+        )
+    );
+    // Vickers at azimuth 45°: face 0 faces (1, 1, 0)/√2 horizontally.
+    let Obstacle::Pyramid(py) = o else {
+        unreachable!()
+    };
+    let m = py.face_normal(0);
+    assert!(
+        (m[0] - m[1]).abs() < 1e-15 && m[0] > 0.0 && m[2] < 0.0,
+        "{m:?}"
+    );
+    let o = spec(PUNCH).to_obstacle(3).unwrap();
+    assert_eq!(
+        o,
+        Obstacle::Punch(Punch::new([0.0, 0.0, 0.49], [0.0, 0.0, 1.0], 0.3, 0.05, 3).unwrap())
+    );
+    // The flat face lies at z = 0.49: a point at z = 0.5 under it penetrates by 0.01.
+    let q = o.project([0.1, 0.0, 0.5]).unwrap();
+    assert!((q.gap + 0.01).abs() < 1e-15 && q.normal == [0.0, 0.0, -1.0]);
+    let o = spec(CYLINDER).to_obstacle(3).unwrap();
+    assert!(matches!(o, Obstacle::Cylinder(_)) && o.dim() == 3);
+    assert_eq!(
+        spec(CYLINDER).to_obstacle(2),
+        Err(ObstacleError::Only3D("cylinder"))
+    );
+    assert_eq!(spec(CONE).type_name(), "cone");
+}
+
+#[test]
+fn mesh_project_takes_every_shape() {
+    let text = replace(
+        MINIMAL,
+        "file = \"meshes/plate.msh\"\n",
+        "file = \"meshes/plate.msh\"\nrefine = 1\n\n[[mesh.project]]\ngroup = \"hole\"\n\
+         shape = { type = \"cylinder\", point = [0, 0, 0], axis = [0, 0, 1], radius = 1 }\n",
+    );
+    let c = parse(&text).unwrap();
+    assert!(matches!(
+        c.mesh.project[0].shape,
+        ObstacleSpec::Cylinder { radius, .. } if radius == 1.0
+    ));
+    c.check_projections(3, &groups(&[("hole", 2)])).unwrap();
+    let e = c.check_projections(2, &groups(&[("hole", 1)])).unwrap_err();
+    assert_eq!(e.key.as_deref(), Some("mesh.project[0].shape.type"), "{e}");
+    assert_eq!(e.line, Some(line(&text, "shape = ")), "{e}");
+    assert!(e.message.contains("in 2D use \"sphere\""), "{e}");
+    expect_err(
+        &replace(&text, "radius = 1", "radius = 1, half_angle = 3"),
+        "mesh.project[0].shape.half_angle",
+        "shape = ",
     );
 }

@@ -2,7 +2,8 @@
 //! node states and residual certificates. Pure functions on small fixed-size arrays; no
 //! MPI, no PETSc. Equation numbers refer to the thesis / docs/THEORY.md.
 //!
-//! - [`obstacle`]: `Plane`, `Sphere`, `Obstacle::project` → closest point, normal n (into
+//! - [`obstacle`]: `Plane`, `Sphere`, `Cylinder`, `Cone`, `Pyramid`, `Punch` (docs/obstacles.md),
+//!   `Obstacle::project` → closest point, normal n (into
 //!   the body), gap g0 (3.3).
 //! - [`frame`]: orthonormal frames {n, τ_1 (, τ_2)}; 2D τ = (n_y, −n_x), 3D right-handed.
 //! - [`complementarity`]: C_n (3.21), normal test (3.23), C_τ (3.31), slip test (3.33),

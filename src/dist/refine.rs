@@ -63,7 +63,7 @@ struct Shape {
 }
 
 impl Shape {
-    /// x moved onto the shape: the nearest point of the sphere (circle) or plane.
+    /// x moved onto the shape: the nearest point of its surface.
     fn project(&self, x: [f64; 3]) -> [f64; 3] {
         match &self.shape {
             ObstacleSpec::Sphere { center, radius } => {
@@ -81,6 +81,16 @@ impl Shape {
                 let (p, n) = (vec3(point), vec3(normal));
                 let t = (0..3).map(|k| (x[k] - p[k]) * n[k]).sum::<f64>();
                 [x[0] - t * n[0], x[1] - t * n[1], x[2] - t * n[2]]
+            }
+            // The indenter shapes: the nearest point of the surface (contact::obstacle); their
+            // vectors have the mesh's dimension (Case::check_projections). A point without a
+            // nearest point (on a cylinder's axis) stays, as a sphere's centre does.
+            shape => {
+                let dim = shape.vectors()[0].1;
+                match shape.to_obstacle(dim).and_then(|o| o.project(x)) {
+                    Ok(q) => q.closest,
+                    Err(_) => x,
+                }
             }
         }
     }

@@ -199,7 +199,12 @@ impl Shell {
             check(ffi::VecGetLocalSize(self.seq, &mut n))?;
             let mut a: *mut f64 = ptr::null_mut();
             check(ffi::VecGetArray(self.seq, &mut a))?;
-            let seq = std::slice::from_raw_parts_mut(a, n as usize);
+            // (off the host the sequential vector is empty and its array may be null)
+            let seq: &mut [f64] = if n == 0 || a.is_null() {
+                &mut []
+            } else {
+                std::slice::from_raw_parts_mut(a, n as usize)
+            };
             self.buf.clear();
             self.buf.extend_from_slice(seq);
             let solved = match self.factor.as_mut() {

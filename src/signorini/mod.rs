@@ -692,6 +692,13 @@ fn frictionless_start(
     if !condense {
         return Ok((None, None));
     }
+    if let Some(why) = unsupported_without_friction(ctx, problem, reduced, ns) {
+        say!(
+            ctx,
+            "coulomb: no frictionless start ({why}); starting from the touching nodes"
+        );
+        return Ok((None, None));
+    }
     // errors are agreed: every rank takes the same branch
     let (mut nr, summary) = match condensed::solve(ctx, problem, reduced, &fl, None) {
         Ok(condensed::Condensed::Solved(nr, s)) => (*nr, s),
@@ -726,6 +733,61 @@ fn frictionless_start(
         r.slip = false;
     }
     Ok((Some((nr, u)), Some(summary)))
+}
+
+/// Why the frictionless problem cannot carry the load, if it cannot: a load in a rigid mode
+/// that Dirichlet data leave free and that moves no contact node along its normal (e.g. a
+/// tangential load on a floating body pressed onto a plane) is held by friction alone — its
+/// frictionless estimate tips the body (measured: the Hertz disk with a tangential traction,
+/// 42 k and 172 k unknowns, the dense steps shrink the set to one node and the attempt costs a
+/// factorisation for nothing). `None`: no such load. Collective (one reduction).
+fn unsupported_without_friction(
+    ctx: &Ctx,
+    problem: &ContactProblem,
+    reduced: &ReducedSystem,
+    ns: &NewtonSettings,
+) -> Option<String> {
+    let (mesh, b) = (problem.mesh, problem.boundary);
+    let free = FreeModes::new(
+        ctx,
+        mesh,
+        problem.layout,
+        problem.fixed,
+        b,
+        &reduced.f_local,
+        ns.rigid,
+    );
+    let mz = free.dirichlet_free().ncols();
+    if !free.floats() || mz == 0 {
+        return None;
+    }
+    // Σ_k g_k g_kᵀ over every contact node (g_k: the free modes' normal parts at k)
+    let mut gram = vec![0.0; mz * mz];
+    for k in &b.nodes {
+        let g = free.normal_parts(&k.x, &k.frame.n);
+        for i in 0..mz {
+            for j in 0..mz {
+                gram[i * mz + j] += g[i] * g[j];
+            }
+        }
+    }
+    let gram = nalgebra::DMatrix::from_row_slice(mz, mz, &ctx.sum_vec(&gram));
+    let eig = gram.symmetric_eigen();
+    let top = eig.eigenvalues.iter().fold(0.0_f64, |m, &e| m.max(e));
+    let phi = nalgebra::DVector::from_vec(free.free_load());
+    let (_, load_scale) = free.load();
+    // the load's part in the modes no normal moves
+    let unheld: f64 = (0..mz)
+        .filter(|&i| eig.eigenvalues[i] <= 1e-12 * top)
+        .map(|i| eig.eigenvectors.column(i).dot(&phi).powi(2))
+        .sum::<f64>()
+        .sqrt();
+    (unheld > dense::BALANCE_RTOL * load_scale).then(|| {
+        format!(
+            "a load of {unheld:.3e} (of {load_scale:.3e}) in rigid modes no contact normal holds: \
+             friction alone carries it"
+        )
+    })
 }
 
 /// The fixed point's stopping tolerance on the thresholds, relative to max_k b_k.

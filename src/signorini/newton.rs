@@ -330,6 +330,15 @@ pub fn semismooth_newton(
     })
 }
 
+/// [`COULOMB_RESIDUAL_STALL`]: this step changed no state and left u unchanged (`still`), so did
+/// the step before it (`last`: its residual), the residual did not halve, and it is below
+/// COULOMB_RESIDUAL_STALL · ‖λ‖₂. Pure.
+fn stalled(still: bool, last: Option<f64>, residual: f64, lambda_norm: f64) -> bool {
+    still
+        && last.is_some_and(|r| residual >= 0.5 * r)
+        && residual <= COULOMB_RESIDUAL_STALL * lambda_norm
+}
+
 /// What a Newton step is, decided before it runs: the per-step record the loop's rules read.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 struct StepPlan {
@@ -539,11 +548,7 @@ impl Loop<'_> {
             return Ok(false);
         }
         let still = t.changed == 0 && t.du_rel < self.s.section.tol_u;
-        let stalled = still
-            && self
-                .last_still_residual
-                .is_some_and(|r| t.residual >= 0.5 * r)
-            && t.residual <= COULOMB_RESIDUAL_STALL * t.lambda_norm;
+        let stalled = stalled(still, self.last_still_residual, t.residual, t.lambda_norm);
         self.last_still_residual = still.then_some(t.residual);
         let (residual_ok, residual_zero) = match self.s.law {
             Law::Coulomb { .. } => (
@@ -767,6 +772,20 @@ mod tests {
             first.after_solve(false, 40, false, &mut last),
             After::Update(LOOSE)
         );
+    }
+
+    #[test]
+    fn a_residual_is_round_off_only_when_still_steps_stop_reducing_it() {
+        // two still steps, the residual not halved, small against ‖λ‖: round-off
+        assert!(stalled(true, Some(9e-13), 8.9e-13, 6e-4));
+        // the first still step: no verdict yet
+        assert!(!stalled(true, None, 8.9e-13, 6e-4));
+        // still decreasing: Newton is still working
+        assert!(!stalled(true, Some(9e-12), 8.9e-13, 6e-4));
+        // states or u still move
+        assert!(!stalled(false, Some(9e-13), 8.9e-13, 6e-4));
+        // stalled, but far from small: not a solution
+        assert!(!stalled(true, Some(1e-3), 1e-3, 6e-4));
     }
 
     #[test]

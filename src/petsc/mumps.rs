@@ -3,8 +3,9 @@
 //! (ICNTL(19)), with the condensation and expansion solves (ICNTL(26)).
 //!
 //! The matrix is handed over as it stands in a PETSc [`Matrix`]: every rank its own rows,
-//! in MUMPS' distributed assembled format (ICNTL(18) = 3), lower triangle only (symmetric,
-//! SYM = 2: LDLᵀ as PETSc's Cholesky with MUMPS). The Schur complement comes back centralised
+//! in MUMPS' distributed assembled format (ICNTL(18) = 3), lower triangle only where symmetric
+//! (SYM = 1, LLᵀ, for the Schur complement of the positive definite K_p; SYM = 2, LDLᵀ as
+//! PETSc's Cholesky with MUMPS, for [`Factor`]). The Schur complement comes back centralised
 //! on the host (rank 0, ICNTL(19) = 1), the right-hand sides and solutions of the solve phase
 //! too (ICNTL(20) = ICNTL(21) = 0): vectors of the global size on rank 0 only.
 
@@ -24,7 +25,9 @@ use super::{own_error, MPI_Comm, Matrix, Result};
 /// Per cent of workspace over MUMPS' estimate (ICNTL(14)), as the direct preset gives PETSc.
 const WORKSPACE_PERCENT: i32 = 40;
 
-/// A MUMPS instance holding the LDLᵀ factorisation of a symmetric matrix whose Schur
+/// A MUMPS instance holding the LLᵀ factorisation (SYM = 1: the matrix must be symmetric
+/// positive definite; no pivoting, so repeated runs on a fixed rank count give the same bits,
+/// which SYM = 2's pivots under MUMPS' dynamic scheduling did not) of a matrix whose Schur
 /// complement on a list of variables was computed instead of factorised.
 pub struct SchurFactor {
     inst: Instance,
@@ -71,7 +74,7 @@ impl SchurFactor {
         let (irn, jcn, vals) = agreed(comm, read)?;
         let size_schur = schur_rows.len();
         let mut f = SchurFactor {
-            inst: Instance::new(comm, 2)?,
+            inst: Instance::new(comm, 1)?,
             irn,
             jcn,
             vals,
@@ -314,7 +317,7 @@ fn rows(comm: MPI_Comm, mat: &Matrix, lower: bool) -> Result<(Vec<i32>, Vec<i32>
     }
 }
 
-/// This rank's rows of `mat` as 1-based triplets: the lower triangle (`lower`, for SYM = 2) or
+/// This rank's rows of `mat` as 1-based triplets: the lower triangle (`lower`, for SYM = 1, 2) or
 /// every entry.
 fn triplets(mat: &Matrix, lower: bool) -> Result<(Vec<i32>, Vec<i32>, Vec<f64>)> {
     let (lo, hi) = mat.ownership_range()?;

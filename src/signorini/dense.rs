@@ -78,12 +78,23 @@ pub(super) fn guarded<T>(stage: &str, f: impl FnOnce() -> T) -> Result<T, String
 impl DenseRun {
     /// A run that failed before its first step (`why`: the fallback reason).
     pub(super) fn failed(n: usize, mz: usize, why: String) -> DenseRun {
+        DenseRun::unsolved(vec![false; n], mz, Vec::new(), why)
+    }
+
+    /// A run that ends without a solution: the set and steps it reached, λ_n, α and u_n zero.
+    fn unsolved(
+        active: Vec<bool>,
+        mz: usize,
+        steps: Vec<(usize, usize, usize, f64, f64)>,
+        why: String,
+    ) -> DenseRun {
+        let n = active.len();
         DenseRun {
-            active: vec![false; n],
+            active,
             lambda: vec![0.0; n],
             alpha: vec![0.0; mz],
             u_n: vec![0.0; n],
-            steps: Vec::new(),
+            steps,
             end: End::Fallback(why),
             coarse: Vec::new(),
         }
@@ -183,14 +194,8 @@ impl Dense<'_> {
             let (lambda, alpha, u_n, free_dirs) = match self.solve_set(&active) {
                 Some(x) => x,
                 None => {
-                    return out(
-                        active,
-                        vec![0.0; n],
-                        vec![0.0; mz],
-                        vec![0.0; n],
-                        steps,
-                        End::Fallback(format!("the dense system of step {step} is singular")),
-                    )
+                    let why = format!("the dense system of step {step} is singular");
+                    return DenseRun::unsolved(active, mz, steps, why);
                 }
             };
             let mut next = active.clone();
@@ -232,17 +237,11 @@ impl Dense<'_> {
             active = next;
         }
         let n_active = active.iter().filter(|&&a| a).count();
-        out(
-            active,
-            vec![0.0; n],
-            vec![0.0; mz],
-            vec![0.0; n],
-            steps,
-            End::Fallback(format!(
-                "no convergence in newton.max_steps = {} dense steps ({n_active} active)",
-                self.max_steps
-            )),
-        )
+        let why = format!(
+            "no convergence in newton.max_steps = {} dense steps ({n_active} active)",
+            self.max_steps
+        );
+        DenseRun::unsolved(active, mz, steps, why)
     }
 
     /// Nested iteration: Algorithm 1 first on coarse subsets of the candidates (`coarsen`,

@@ -334,11 +334,35 @@ fn held_disk(dir: &Path, friction: &str) -> PathBuf {
 fn the_direct_presets_frictionless_default_repeats_bit_for_bit() {
     // The condensed path: MUMPS' LLᵀ with the Schur complement (SYM = 1: no pivoting, whose
     // choices followed MUMPS' dynamic scheduling with SYM = 2 — measured on this disk at level
-    // 8, 42 040 unknowns: 2 different u in 3 runs). Coulomb's LU steps (SYM = 0, pivoting) do
-    // not repeat bit for bit yet: its last residual differed at 1e-16 between runs here, so it
-    // is not asserted. At this size (refined L4) SYM = 2 repeated too in the runs seen: the
+    // 8, 42 040 unknowns: 2 different u in 3 runs). Coulomb's sparse LU steps (SYM = 0,
+    // pivoting; a floating body) do not repeat bit for bit yet: the last residual differed at
+    // 1e-16 between runs, so they are not asserted. At this size (refined L4) SYM = 2 repeated too in the runs seen: the
     // test guards the repeat, the level-8 measurement its cause.
     let tmp = tempfile::tempdir().expect("tempdir");
     let case = (held_disk(tmp.path(), "\"none\""), vec![]);
     three_runs_bit_for_bit("held disk, frictionless", 2, &case);
+}
+
+#[test]
+fn the_direct_presets_coulomb_default_on_a_held_body_repeats_bit_for_bit() {
+    // A body that Dirichlet data hold: Coulomb on the contact unknowns after the same LLᵀ
+    // factorisation (dense LU on rank 0, one expansion solve), no sparse LU step — the same
+    // bits in every run. The test fails if the solve leaves the condensed path.
+    let tmp = tempfile::tempdir().expect("tempdir");
+    let case = (
+        held_disk(tmp.path(), "{ law = \"coulomb\", mu = 0.3 }"),
+        vec![],
+    );
+    three_runs_bit_for_bit("held disk, Coulomb", 2, &case);
+    let out = tmp.path().join("check");
+    let o = run(2, &case, &out);
+    let summary: serde_json::Value = serde_json::from_str(
+        &std::fs::read_to_string(out.join("summary.json")).expect("summary.json"),
+    )
+    .expect("json");
+    assert_eq!(
+        summary["newton"]["condensed"]["coulomb"]["outcome"], "condensed",
+        "{:?}",
+        o.history
+    );
 }

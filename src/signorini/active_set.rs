@@ -106,14 +106,17 @@ pub fn threshold_scale(
     if !law.friction() {
         return 0.0;
     }
-    let local = b
-        .nodes
+    ctx.max_f64(threshold_scale_local(b, nodes, law, c))
+}
+
+/// [`threshold_scale`] over the nodes of `b` alone. Local.
+pub fn threshold_scale_local(b: &ContactBoundary, nodes: &[NodeResult], law: Law, c: f64) -> f64 {
+    b.nodes
         .iter()
         .zip(nodes)
         .map(|(k, r)| law.threshold(k, r, c))
         .filter(|x| x.is_finite())
-        .fold(0.0, f64::max);
-    ctx.max_f64(local)
+        .fold(0.0, f64::max)
 }
 
 /// A slip row whose spring L̃ is at most this fraction of c holds no rigid mode (`holds_tangent`):

@@ -48,6 +48,7 @@ use crate::petsc::PInt;
 use crate::say;
 use nalgebra::{DMatrix, DVector};
 use serde::Serialize;
+use std::borrow::Cow;
 use std::collections::HashSet;
 use std::time::Instant;
 
@@ -106,6 +107,9 @@ pub struct CondensedSummary {
     /// first, its nodes and Algorithm 1's steps on it (dense; not counted in newton.steps).
     #[serde(skip_serializing_if = "Vec::is_empty")]
     pub coarse_levels: Vec<CoarseLevel>,
+    /// Coulomb's generalised Newton on the same candidates (friction, held bodies).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub coulomb: Option<super::coulomb_condensed::CoulombCondensedSummary>,
 }
 
 /// One coarse level of the nested start.
@@ -130,6 +134,7 @@ impl CondensedSummary {
             expansion_seconds: 0.0,
             solves: 0,
             coarse_levels: Vec::new(),
+            coulomb: None,
         }
     }
 
@@ -142,7 +147,7 @@ impl CondensedSummary {
         self.ordering_seconds = comp.ordering_seconds;
         self.schur_seconds += seconds - comp.factorisation_seconds;
         self.candidates = comp.list.len();
-        self.schur_dofs = comp.list.len();
+        self.schur_dofs = comp.list.len() * comp.per;
     }
 
     /// The nested start's coarse levels of a dense round, into the record and the log.
@@ -201,6 +206,33 @@ pub fn solve(
     s: &NewtonSettings,
     warm: Option<&WarmStart>,
 ) -> Result<Condensed, RunError> {
+    solve_keeping(ctx, p, reduced, s, warm, 1).map(|(c, _)| c)
+}
+
+/// What a converged condensed solve with every dof of the candidates in the Schur complement
+/// (`per` = d) leaves for a friction solve on the same candidates: the compliance with its
+/// factorisation, the candidates, f on rank 0 and the frictionless set and λ_n
+/// over every contact node (c_h's global order).
+pub(super) struct Kept {
+    pub(super) comp: Compliance,
+    pub(super) cand: Candidates,
+    pub(super) f_root: Vec<f64>,
+    pub(super) n_local: usize,
+    pub(super) lambda: Vec<f64>,
+    pub(super) active: Vec<bool>,
+}
+
+/// [`solve`] with `per` Schur variables per candidate (1: the normal dof; d: every dof, for
+/// friction); with `per` > 1 a converged solve also returns what it [`Kept`]. Collective.
+pub(super) fn solve_keeping(
+    ctx: &Ctx,
+    p: &ContactProblem,
+    reduced: &mut ReducedSystem,
+    s: &NewtonSettings,
+    warm: Option<&WarmStart>,
+    per: usize,
+) -> Result<(Condensed, Option<Kept>), RunError> {
+    let fall = |c: Condensed| Ok((c, None));
     let dim = p.mesh.dim;
     let mut summary = CondensedSummary::new(p.boundary.n_global);
     let (free, rhs0) = prepare_base(ctx, p, reduced, s)?;
@@ -209,14 +241,14 @@ pub fn solve(
     let cand = Candidates::gather(ctx, p.boundary, &free, &start);
     let n_rows = p.layout.node_offsets.last().copied().unwrap_or(0) * dim;
     let nested = warm.is_none() && s.section.init == NewtonInit::Auto;
-    let mut growth = Growth::new(&cand);
-    let mut comp = Compliance::new(cand.n);
+    let mut growth = Growth::new(&cand, per);
+    let mut comp = Compliance::new(cand.n, per);
     let mut history: Vec<StepInfo> = Vec::new();
     for round in 1..=MAX_ROUNDS {
         let t = Instant::now();
         let new = match growth.next(&cand, &comp, round) {
             Ok(new) => new,
-            Err(why) => return Ok(fallback(ctx, summary, why)),
+            Err(why) => return fall(fallback(ctx, summary, why)),
         };
         let grown = comp.grow(
             ctx,
@@ -227,7 +259,7 @@ pub fn solve(
             (&f_root, &growth.why),
         );
         if let Err(why) = grown {
-            return Ok(fallback(ctx, summary, why));
+            return fall(fallback(ctx, summary, why));
         }
         summary.record_factorisation(&comp, t.elapsed().as_secs_f64());
 
@@ -258,36 +290,46 @@ pub fn solve(
             End::NoSupport(reaction) => {
                 return Err(free.no_support(run.active.iter().filter(|&&a| a).count(), reaction))
             }
-            End::Fallback(why) => return Ok(fallback(ctx, summary, why)),
+            End::Fallback(why) => return fall(fallback(ctx, summary, why)),
         }
 
         let t = Instant::now();
         let set = (lambda.as_slice(), growth.active.as_slice());
+        let f_ref = f_root.as_slice();
         let ex = match expand(
             ctx,
             p,
             reduced,
             (s, &free, &mut comp, &cand),
-            (&f_root, rhs0.len()),
+            (f_ref, rhs0.len()),
             set,
             &run.alpha,
         )? {
             Ok(ex) => ex,
-            Err(why) => return Ok(fallback(ctx, summary, why)),
+            Err(why) => return fall(fallback(ctx, summary, why)),
         };
         summary.solves += 2;
         summary.expansion_seconds += t.elapsed().as_secs_f64();
         if ex.changed.is_empty() {
             let n_active = growth.active.iter().filter(|&&a| a).count();
             summary.log(ctx, cand.n, n_active);
-            return finish(p, reduced, &free, ex, history, summary);
+            let solved = finish(p, reduced, &free, ex, history, summary)?;
+            let kept = (per > 1).then(|| Kept {
+                comp,
+                cand,
+                n_local: rhs0.len(),
+                f_root,
+                lambda,
+                active: growth.active,
+            });
+            return Ok((solved, kept));
         }
         if let Err(why) = growth.widen(ctx, &ex.changed, &comp, round) {
-            return Ok(fallback(ctx, summary, why));
+            return fall(fallback(ctx, summary, why));
         }
     }
     let why = format!("no final set in {MAX_ROUNDS} rounds of candidates");
-    Ok(fallback(ctx, summary, why))
+    fall(fallback(ctx, summary, why))
 }
 
 /// The candidate set from round to round: the `take` contact nodes with the smallest gaps and
@@ -311,12 +353,12 @@ impl Growth {
     /// The first candidates: the nodes with the smallest gaps (an eighth of c_h, at least
     /// MIN_CANDIDATES, at most half the Schur limit) and every node of the start set (the
     /// thesis' all-active start: all of them).
-    fn new(cand: &Candidates) -> Growth {
+    fn new(cand: &Candidates, per: usize) -> Growth {
         let n = cand.n;
         let mut by_gap: Vec<usize> = (0..n).collect();
         by_gap.sort_by(|&a, &b| cand.gap(a).total_cmp(&cand.gap(b)).then(a.cmp(&b)));
         let first = (n / FIRST_FRACTION)
-            .clamp(MIN_CANDIDATES, MAX_SCHUR_DOFS / 2)
+            .clamp(MIN_CANDIDATES, MAX_SCHUR_DOFS / (2 * per))
             .min(n);
         let active: Vec<bool> = (0..n).map(|i| cand.start(i)).collect();
         Growth {
@@ -348,12 +390,12 @@ impl Growth {
             return Err("the candidate set cannot grow (internal)".to_string());
         }
         let wanted = comp.list.len() + new.len();
-        if wanted > MAX_SCHUR_DOFS {
+        if wanted * comp.per > MAX_SCHUR_DOFS {
             return Err(format!(
                 "{wanted} candidate contact nodes ({}) exceed the dense Schur complement's \
-                 limit of {MAX_SCHUR_DOFS} normal dofs (a contact zone this wide costs less on \
-                 the plain path)",
-                self.why,
+                 limit of {MAX_SCHUR_DOFS} dofs ({} per node; a contact zone this wide costs \
+                 less on the plain path)",
+                self.why, comp.per,
             ));
         }
         Ok(new)
@@ -486,15 +528,16 @@ fn start_set(
 }
 
 /// Every contact node of c_h (all ranks', in c_h's global order) as the dense algorithm sees
-/// it: first dof row, normal, gap, start flag, the free modes' normal parts G, position.
-struct Candidates {
+/// it: first dof row, normal, gap, start flag, the free modes' normal parts G, position, the
+/// reference tangential displacement u_τ^ref (friction).
+pub(super) struct Candidates {
     all: Vec<f64>,
-    n: usize,
+    pub(super) n: usize,
     mz: usize,
 }
 
-/// Values per candidate record: row, n (3), gap, start, G (6), x (3).
-const REC: usize = 15;
+/// Values per candidate record: row, n (3), gap, start, G (6), x (3), u_τ^ref (2).
+const REC: usize = 17;
 
 impl Candidates {
     /// One all-gather. Collective.
@@ -508,6 +551,7 @@ impl Candidates {
             mine.extend_from_slice(&[k.row as f64, n[0], n[1], n[2], k.gap, flag]);
             mine.extend_from_slice(&gz);
             mine.extend_from_slice(&k.x);
+            mine.extend_from_slice(&k.u_t_ref);
         }
         let all = ctx.all_gather_varcount(&mine);
         let n = all.len() / REC;
@@ -523,7 +567,7 @@ impl Candidates {
     fn normal(&self, i: usize, a: usize) -> f64 {
         self.rec(i)[1 + a]
     }
-    fn gap(&self, i: usize) -> f64 {
+    pub(super) fn gap(&self, i: usize) -> f64 {
         self.rec(i)[4]
     }
     fn start(&self, i: usize) -> bool {
@@ -545,9 +589,16 @@ impl Candidates {
         }
         q
     }
-    fn x(&self, i: usize) -> [f64; 3] {
+    pub(super) fn x(&self, i: usize) -> [f64; 3] {
         let r = self.rec(i);
         [r[12], r[13], r[14]]
+    }
+    pub(super) fn u_t_ref(&self, i: usize) -> [f64; 2] {
+        let r = self.rec(i);
+        [r[15], r[16]]
+    }
+    pub(super) fn n(&self, i: usize) -> [f64; 3] {
+        [self.normal(i, 0), self.normal(i, 1), self.normal(i, 2)]
     }
 }
 
@@ -555,12 +606,15 @@ impl Candidates {
 /// candidates' node frames (Q, normal first) N becomes the unit columns of their normal dofs,
 /// so with S the Schur complement of Qᵀ K_p Q on those dofs: C = S⁻¹ and d₀ = S⁻¹ r, r = f̃_s −
 /// K̃_sr K̃_rr⁻¹ f̃_r (MUMPS' condensation of f̃ = Qᵀ f). The dense parts live on rank 0 only.
-struct Compliance {
+pub(super) struct Compliance {
+    /// Schur variables per candidate: 1 (the normal dof) or d (every dof, in the node frame,
+    /// normal first: C then holds the tangential compliance friction needs).
+    pub(super) per: usize,
     in_s: Vec<bool>,
-    /// The candidates in the order of C's rows and columns.
-    list: Vec<usize>,
-    cmat: DMatrix<f64>,
-    d0: Vec<f64>,
+    /// The candidates in the order of C's rows and columns (`per` rows each).
+    pub(super) list: Vec<usize>,
+    pub(super) cmat: DMatrix<f64>,
+    pub(super) d0: Vec<f64>,
     /// The candidates' node frames (normal first): K_p is factorised as Qᵀ K_p Q.
     bases: NodeBases,
     factor: Option<SchurFactor>,
@@ -574,8 +628,9 @@ struct Compliance {
 }
 
 impl Compliance {
-    fn new(n: usize) -> Compliance {
+    fn new(n: usize, per: usize) -> Compliance {
         Compliance {
+            per,
             in_s: vec![false; n],
             list: Vec::new(),
             cmat: DMatrix::zeros(0, 0),
@@ -613,7 +668,12 @@ impl Compliance {
         }
         self.bases.dim = dim;
         // in the node frame the normal displacement is the node's first dof
-        let dofs: Vec<usize> = self.list.iter().map(|&i| cand.row(i)).collect();
+        let per = self.per;
+        let dofs: Vec<usize> = self
+            .list
+            .iter()
+            .flat_map(|&i| (0..per).map(move |a| cand.row(i) + a))
+            .collect();
         self.factor = None; // the old factorisation's memory first
         self.cmat = DMatrix::zeros(0, 0);
         let t = Instant::now();
@@ -674,12 +734,59 @@ impl Compliance {
         self.factor = Some(factor);
         if ok[0] == 0.0 {
             return Err(format!(
-                "the Schur complement of K_p on the {} candidates' normal dofs is not positive \
-                 definite",
-                dofs.len()
+                "the Schur complement of K_p on the {} candidates' dofs ({per} per node) is not \
+                 positive definite",
+                self.list.len()
             ));
         }
         Ok(())
+    }
+
+    /// C and d₀ on the candidates' normal dofs (the frictionless model): themselves for
+    /// `per` = 1, else every `per`-th row and column (the compliance of the normal dofs with
+    /// the tangential forces zero). Rank 0.
+    fn normal_part(&self) -> (Cow<'_, DMatrix<f64>>, Cow<'_, [f64]>) {
+        let (n, per) = (self.list.len(), self.per);
+        if per == 1 {
+            return (Cow::Borrowed(&self.cmat), Cow::Borrowed(&self.d0[..]));
+        }
+        let c = DMatrix::from_fn(n, n, |i, j| self.cmat[(i * per, j * per)]);
+        let d = (0..n).map(|i| self.d0[i * per]).collect::<Vec<f64>>();
+        (Cow::Owned(c), Cow::Owned(d))
+    }
+
+    /// w = K_p⁻¹ (f − N λ), this rank's rows (`n_local`), from MUMPS' condensation and
+    /// expansion with the Schur variables' part S⁻¹ (r − λ) = d₀ − C λ; `lam`: on rank 0 the
+    /// candidates' multipliers in C's order (`per` per node, node frame), empty elsewhere;
+    /// `f_root`: f on rank 0. `Err`: MUMPS' solve failed. Collective.
+    pub(super) fn expand_u(
+        &mut self,
+        ctx: &Ctx,
+        cand: &Candidates,
+        (f_root, n_local): (&[f64], usize),
+        lam: &[f64],
+    ) -> Result<Vec<f64>, String> {
+        let (rhs_root, x_s) = if ctx.rank == 0 {
+            let mut rhs = self.rotated(f_root);
+            for (q, &i) in self.list.iter().enumerate() {
+                for a in 0..self.per {
+                    rhs[cand.row(i) + a] -= lam[q * self.per + a];
+                }
+            }
+            let d0 = DVector::from_column_slice(&self.d0);
+            let x_s = (d0 - &self.cmat * DVector::from_column_slice(lam))
+                .as_slice()
+                .to_vec();
+            (rhs, x_s)
+        } else {
+            (Vec::new(), Vec::new())
+        };
+        let factor = self.factor.as_mut().expect("factorised by grow");
+        let mut w_root = factor
+            .expand(&rhs_root, &x_s)
+            .map_err(|e| format!("the expansion solve failed: {e}"))?;
+        self.bases.to_global(&mut w_root);
+        Ok(ctx.scatter_from_root(&w_root, n_local))
     }
 
     /// Qᵀ x (x: a global vector on rank 0, empty elsewhere): the candidates' dofs in their
@@ -735,11 +842,12 @@ fn dense_round(
             let phi = free.free_load();
             let list = &comp.list;
             let g = DMatrix::from_fn(ns, mz, |q, c| cand.g(list[q], c));
-            let d0 = &comp.d0;
+            let (cmat, d0) = comp.normal_part();
+            let d0 = &d0[..];
             let gap: Vec<f64> = list.iter().map(|&i| cand.gap(i)).collect();
             let start: Vec<bool> = list.iter().map(|&i| active[i]).collect();
             let dense = Dense {
-                cmat: &comp.cmat,
+                cmat: &cmat,
                 d0,
                 gap: &gap,
                 g: &g,
@@ -832,25 +940,20 @@ fn expand(
     let (dim, off) = (mesh.dim, b.offset);
     // On rank 0, in the candidates' frames: Qᵀ (f − N λ_n) (λ_n vanishes off the candidates:
     // it enters each candidate's normal dof) and the normal dofs' part d₀ − C λ_n.
-    let (rhs_root, x_s) = if ctx.rank == 0 {
-        let mut rhs = comp.rotated(f_root);
-        for &i in &comp.list {
-            rhs[cand.row(i)] -= lambda[i];
+    let lam: Vec<f64> = if ctx.rank == 0 {
+        let per = comp.per;
+        let mut lam = vec![0.0; comp.list.len() * per];
+        for (q, &i) in comp.list.iter().enumerate() {
+            lam[q * per] = lambda[i];
         }
-        let lam = DVector::from_iterator(comp.list.len(), comp.list.iter().map(|&i| lambda[i]));
-        let d0 = DVector::from_column_slice(&comp.d0);
-        let x_s = (d0 - &comp.cmat * lam).as_slice().to_vec();
-        (rhs, x_s)
+        lam
     } else {
-        (Vec::new(), Vec::new())
+        Vec::new()
     };
-    let factor = comp.factor.as_mut().expect("factorised by grow");
-    let mut w_root = match factor.expand(&rhs_root, &x_s) {
+    let w = match comp.expand_u(ctx, cand, (f_root, n_local), &lam) {
         Ok(w) => w,
-        Err(e) => return Ok(Err(format!("the expansion solve failed: {e}"))),
+        Err(why) => return Ok(Err(why)),
     };
-    comp.bases.to_global(&mut w_root);
-    let w = ctx.scatter_from_root(&w_root, n_local);
     // local (this rank's array): agreed before the collectives that follow
     let set = reduced.set_solution_local(&w).map_err(RunError::from);
     let set = set.and_then(

@@ -9,6 +9,7 @@
 pub mod active_set;
 pub mod boundary;
 pub mod condensed;
+pub mod coulomb_condensed;
 pub mod cycle;
 pub mod dense;
 pub mod newton;
@@ -392,15 +393,17 @@ fn run_method(
                 }
             }
             let coulomb_newton = matches!(settings.coulomb, Some((_, CoulombAlgorithm::Newton)));
-            let start =
-                if coulomb_newton && warm.is_none() && ns.section.init == case::NewtonInit::Auto {
-                    let (start, cs) =
-                        frictionless_start(ctx, problem, &mut reduced, ns, solver_section)?;
-                    condensed_summary = cs;
-                    start
-                } else {
-                    None
-                };
+            let start = if coulomb_newton && ns.section.init == case::NewtonInit::Auto {
+                let (start, cs) =
+                    coulomb_start(ctx, problem, &mut reduced, ns, solver_section, warm)?;
+                condensed_summary = cs;
+                start
+            } else {
+                Begin::Touching
+            };
+            if let Begin::Solved(nr) = start {
+                return Ok((nr, None, condensed_summary));
+            }
             reduced.enable_reuse(ctx, solver_section.reuse, friction)?;
             match settings.coulomb {
                 Some((mu, CoulombAlgorithm::FixedPoint)) => {
@@ -409,7 +412,7 @@ fn run_method(
                     nr
                 }
                 _ => match start {
-                    Some((first, u)) => {
+                    Begin::Start(first, u) => {
                         let w = WarmStart {
                             nodes: &first.nodes,
                             u_local: &u,
@@ -426,7 +429,7 @@ fn run_method(
                         nr.history = history;
                         nr
                     }
-                    None => newton::semismooth_newton(ctx, problem, &mut reduced, ns, warm)?,
+                    _ => newton::semismooth_newton(ctx, problem, &mut reduced, ns, warm)?,
                 },
             }
         }
@@ -654,30 +657,38 @@ fn fixed_point(
     )))
 }
 
+/// How Coulomb's generalised Newton begins (`coulomb_start`).
+enum Begin {
+    /// Solved on the contact unknowns and checked on every contact node (coulomb_condensed).
+    Solved(NewtonResult),
+    /// A start for the plain path: the records of every contact node, this rank's rows of u.
+    Start(NewtonResult, Vec<f64>),
+    /// The touching nodes (`ActiveSet::initial`), or the warm start of a load step.
+    Touching,
+}
+
 /// The start of Coulomb's generalised Newton under newton.init = "auto" (no warm start) where
 /// the condensed path applies (direct preset): the frictionless solution of the same case by
 /// the condensed path (about one factorisation; the pins carry a load in the modes only
-/// friction can hold, e.g. a tangential load on a floating body), whose active set and λ_n give
-/// the thresholds b = μ(−λ_n) of (F1), every active node sticking — instead of a start from
-/// the touching nodes, where the whole load first hangs on them and the set needs many steps to
-/// shrink. `None` (the touching start, said in the log) where the condensed path does not
-/// apply or does not find a frictionless set (e.g. a moment that only friction holds tips the
-/// frictionless body). Returns the start (the frictionless result, this rank's rows of its u)
-/// and the condensed path's record. Collective.
-#[allow(clippy::type_complexity)]
-fn frictionless_start(
+/// friction can hold, e.g. a tangential load on a floating body). For a body that Dirichlet
+/// data hold, the Schur complement takes every dof of the candidates and Coulomb's iteration
+/// runs on them (coulomb_condensed): its checked result, or its expanded iterate as the plain
+/// path's start. Else (or if that gives up) the frictionless active set and λ_n give the
+/// thresholds b = μ(−λ_n) of (F1), every active node sticking — instead of a start from the
+/// touching nodes, where the whole load first hangs on them and the set needs many steps to
+/// shrink. `Touching` (said in the log) where the condensed path does not apply or does not
+/// find a frictionless set (e.g. a moment that only friction holds tips the frictionless
+/// body). A load step (`warm`) tries the condensed iteration alone (the frictionless set from
+/// the warm one; references u_τ^ref of the previous step) and otherwise keeps its warm start.
+/// Returns the beginning and the condensed path's record. Collective.
+fn coulomb_start(
     ctx: &Ctx,
     problem: &ContactProblem,
     reduced: &mut ReducedSystem,
     ns: &NewtonSettings,
     solver_section: &SolverSection,
-) -> Result<
-    (
-        Option<(NewtonResult, Vec<f64>)>,
-        Option<condensed::CondensedSummary>,
-    ),
-    RunError,
-> {
+    warm: Option<&WarmStart>,
+) -> Result<(Begin, Option<condensed::CondensedSummary>), RunError> {
     let fl = NewtonSettings {
         law: Law::Frictionless,
         halfspace: None,
@@ -690,39 +701,95 @@ fn frictionless_start(
         && b.n_global <= condensed::MAX_CONTACT_NODES
         && reduced.factorises()?;
     if !condense {
-        return Ok((None, None));
+        return Ok((Begin::Touching, None));
     }
+    let from = if warm.is_some() {
+        "the previous load step"
+    } else {
+        "the touching nodes"
+    };
     if let Some(why) = unsupported_without_friction(ctx, problem, reduced, ns) {
         say!(
             ctx,
-            "coulomb: no frictionless start ({why}); starting from the touching nodes"
+            "coulomb: no frictionless start ({why}); starting from {from}"
         );
-        return Ok((None, None));
+        return Ok((Begin::Touching, None));
     }
+    let dim = problem.mesh.dim;
+    let held = held_by_dirichlet(ctx, problem, reduced, ns);
+    if warm.is_some() && !held {
+        return Ok((Begin::Touching, None));
+    }
+    let per = if held { dim } else { 1 };
     // errors are agreed: every rank takes the same branch
-    let (mut nr, summary) = match condensed::solve(ctx, problem, reduced, &fl, None) {
-        Ok(condensed::Condensed::Solved(nr, s)) => (*nr, s),
-        Ok(condensed::Condensed::Fallback(s)) => {
-            say!(
-                ctx,
-                "coulomb: no frictionless start; starting from the touching nodes"
-            );
-            return Ok((None, Some(s)));
+    let mut tried = condensed::solve_keeping(ctx, problem, reduced, &fl, warm, per);
+    if per > 1 {
+        if let Ok((condensed::Condensed::Fallback(s), _)) = &tried {
+            if s.factorisations == 0 {
+                // too many candidates' dofs for the dense tangential compliance: normal only
+                say!(
+                    ctx,
+                    "coulomb: the candidates' normal dofs alone in the Schur complement"
+                );
+                tried = condensed::solve_keeping(ctx, problem, reduced, &fl, warm, 1);
+            }
+        }
+    }
+    let (mut nr, mut summary, kept) = match tried {
+        Ok((condensed::Condensed::Solved(nr, s), kept)) => (*nr, s, kept),
+        Ok((condensed::Condensed::Fallback(s), _)) => {
+            say!(ctx, "coulomb: no frictionless start; starting from {from}");
+            return Ok((Begin::Touching, Some(s)));
         }
         Err(RunError::Failed(why)) => {
             say!(
                 ctx,
-                "coulomb: no frictionless start ({why}); starting from the touching nodes"
+                "coulomb: no frictionless start ({why}); starting from {from}"
             );
-            return Ok((None, None));
+            return Ok((Begin::Touching, None));
         }
         Err(e) => return Err(e),
     };
     let active = ctx.sum_usize(nr.nodes.iter().filter(|r| r.active).count());
     say!(
         ctx,
-        "coulomb: start from the frictionless solution ({} steps, {active} active nodes)",
+        "coulomb: the frictionless solution: {} steps, {active} active nodes",
         nr.steps
+    );
+    if let Some(kept) = kept {
+        let first = std::mem::take(&mut nr.history);
+        let joined = |mut r: NewtonResult| {
+            let mut history = first.clone();
+            for mut h in std::mem::take(&mut r.history) {
+                h.step += history.len();
+                history.push(h);
+            }
+            r.steps = history.len();
+            r.history = history;
+            r
+        };
+        match coulomb_condensed::solve(ctx, problem, reduced, ns, kept)? {
+            coulomb_condensed::CoulombCondensed::Solved(r, cs) => {
+                summary.coulomb = Some(cs);
+                return Ok((Begin::Solved(joined(*r)), Some(summary)));
+            }
+            coulomb_condensed::CoulombCondensed::Start(r, u, cs) => {
+                summary.coulomb = Some(cs);
+                return Ok((Begin::Start(joined(*r), u), Some(summary)));
+            }
+            coulomb_condensed::CoulombCondensed::Fallback(cs) => {
+                summary.coulomb = Some(cs);
+                nr.history = first;
+            }
+        }
+    }
+    if warm.is_some() {
+        // the previous step's states are the better start
+        return Ok((Begin::Touching, Some(summary)));
+    }
+    say!(
+        ctx,
+        "coulomb: start from the frictionless solution, every active node sticking"
     );
     let u = nr.u.to_local_vec()?;
     // every active node starts sticking (Δu_τ = 0, λ_τ = 0): the first Coulomb step gives the
@@ -732,7 +799,27 @@ fn frictionless_start(
         r.lambda_t = [0.0; 2];
         r.slip = false;
     }
-    Ok((Some((nr, u)), Some(summary)))
+    Ok((Begin::Start(nr, u), Some(summary)))
+}
+
+/// Do Dirichlet data hold every rigid mode (no free mode: the condensed Coulomb iteration
+/// applies)? Collective.
+fn held_by_dirichlet(
+    ctx: &Ctx,
+    problem: &ContactProblem,
+    reduced: &ReducedSystem,
+    ns: &NewtonSettings,
+) -> bool {
+    let free = FreeModes::new(
+        ctx,
+        problem.mesh,
+        problem.layout,
+        problem.fixed,
+        problem.boundary,
+        &reduced.f_local,
+        ns.rigid,
+    );
+    free.dirichlet_free().ncols() == 0
 }
 
 /// Why the frictionless problem cannot carry the load, if it cannot: a load in a rigid mode

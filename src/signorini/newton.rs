@@ -333,7 +333,7 @@ pub fn semismooth_newton(
 /// [`COULOMB_RESIDUAL_STALL`]: this step changed no state and left u unchanged (`still`), so did
 /// the step before it (`last`: its residual), the residual did not halve, and it is below
 /// COULOMB_RESIDUAL_STALL · ‖λ‖₂. Pure.
-fn stalled(still: bool, last: Option<f64>, residual: f64, lambda_norm: f64) -> bool {
+pub(super) fn stalled(still: bool, last: Option<f64>, residual: f64, lambda_norm: f64) -> bool {
     still
         && last.is_some_and(|r| residual >= 0.5 * r)
         && residual <= COULOMB_RESIDUAL_STALL * lambda_norm

@@ -1,0 +1,559 @@
+//! Coulomb's generalised Newton (docs/friction.md (F1)–(F6)) on the contact unknowns alone
+//! (direct preset, a body that Dirichlet data hold): the frictionless condensed solve with every
+//! dof of its candidates in the Schur complement (condensed.rs, `per` = d) leaves the
+//! compliance C = Qᵀ K⁻¹ Q of the candidates' dofs in their node frames (normal first) and
+//! d₀ = Qᵀ K⁻¹ f there. With λ the candidates' multipliers (3.28) and u = d₀ − C λ, every Newton
+//! step of the plain path is, on the candidates, one dense system in the active nodes' λ:
+//!
+//! ```text
+//!   k ∈ A_n:            u_n,k = −g_k
+//!   stick (S3):         u_τ,k = u_τ^ref                                          (3.34a)
+//!   slip (S4):          −λ_τ,k + L̃ (u_τ,k − u_τ^ref) − q (λ_n,k + c (u_n,k + g_k)) = r̃   (F6)
+//!   k ∉ A_n (S2):       λ_k = 0
+//! ```
+//!
+//! with the rows of `contact::coulomb_row_dyn` and the set update (3.23)/(F5) of the plain
+//! path (`ActiveSet::update`, its stick band included), stopped by the same rule. Nodes beyond
+//! the candidates stay inactive. At the end one expansion solve gives u = K⁻¹ (f − Q λ), and
+//! the plain path's recovery (3.28) and set update on every contact node check it: no state
+//! may change and the residual (F3) must pass the plain path's tolerance. A check that fails
+//! hands the expanded iterate to the plain path as its start.
+//!
+//! Collectives: one broadcast (the dense result), the expansion solve, one MatMult and the
+//! update's reduction.
+
+use super::active_set::{threshold_scale, threshold_scale_local, ActiveSet, Iterate, Law};
+use super::boundary::{ContactBoundary, ContactNode, NodeResult};
+use super::condensed::Kept;
+use super::dense::guarded;
+use super::newton::{
+    stalled, ContactProblem, NewtonResult, NewtonSettings, StepInfo, COULOMB_RESIDUAL_TOL,
+    COULOMB_RESIDUAL_ZERO,
+};
+use super::reduced::{ReducedSystem, SolveKind};
+use crate::contact::{CoulombRow, Frame};
+use crate::error::RunError;
+use crate::par::Ctx;
+use crate::petsc::lapack::DenseLu;
+use crate::say;
+use nalgebra::{DMatrix, DVector};
+use serde::Serialize;
+use std::time::Instant;
+
+/// summary.json's `newton.condensed.coulomb`: what the dense Coulomb iteration did.
+#[derive(Debug, Clone, Serialize)]
+pub struct CoulombCondensedSummary {
+    /// "condensed": the expanded iterate passed the check; "start": it became the plain
+    /// path's start (`reason` says why); "fallback": the dense iteration gave up (`reason`).
+    pub outcome: &'static str,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub reason: Option<String>,
+    /// Steps of the dense generalised Newton.
+    pub steps: usize,
+    pub dense_seconds: f64,
+    /// The expansion solve, (3.28) and the check on every contact node [s].
+    pub expansion_seconds: f64,
+}
+
+/// What the condensed Coulomb solve returns.
+pub enum CoulombCondensed {
+    /// The checked solution (the dense steps are its history).
+    Solved(Box<NewtonResult>, CoulombCondensedSummary),
+    /// A start for the plain path: every contact node's record and this rank's rows of u.
+    Start(Box<NewtonResult>, Vec<f64>, CoulombCondensedSummary),
+    /// Nothing to start from (the frictionless start then applies).
+    Fallback(CoulombCondensedSummary),
+}
+
+/// The dense generalised Newton on rank 0 and how it ended.
+struct DenseCoulomb {
+    /// λ of every candidate, d per node in C's order (node frame, normal first).
+    lambda: Vec<f64>,
+    /// Per candidate: in A_n, slipping.
+    active: Vec<bool>,
+    slip: Vec<bool>,
+    /// Per step: step, |A_n|, changed, residual, seconds.
+    steps: Vec<(usize, usize, usize, f64, f64)>,
+    /// `Err`: why the iteration gave up.
+    end: Result<(), String>,
+}
+
+impl DenseCoulomb {
+    fn failed(n: usize, dim: usize, why: String) -> DenseCoulomb {
+        DenseCoulomb {
+            lambda: vec![0.0; n * dim],
+            active: vec![false; n],
+            slip: vec![false; n],
+            steps: Vec::new(),
+            end: Err(why),
+        }
+    }
+
+    /// All fields as one f64 vector (the broadcast); the reason travels as UTF-8 bytes.
+    fn pack(&self) -> Vec<f64> {
+        let mut v = self.lambda.clone();
+        v.extend(self.active.iter().map(|&a| a as u8 as f64));
+        v.extend(self.slip.iter().map(|&a| a as u8 as f64));
+        v.push(self.steps.len() as f64);
+        for s in &self.steps {
+            v.extend([s.0 as f64, s.1 as f64, s.2 as f64, s.3, s.4]);
+        }
+        let why = self.end.as_ref().err().map_or(&[][..], |w| w.as_bytes());
+        v.push(if self.end.is_ok() { 1.0 } else { 0.0 });
+        v.push(why.len() as f64);
+        v.extend(why.iter().map(|&b| b as f64));
+        v
+    }
+
+    fn unpack(v: &[f64], n: usize, dim: usize) -> DenseCoulomb {
+        let nl = n * dim;
+        let lambda = v[..nl].to_vec();
+        let active = v[nl..nl + n].iter().map(|&x| x != 0.0).collect();
+        let slip = v[nl + n..nl + 2 * n].iter().map(|&x| x != 0.0).collect();
+        let mut at = nl + 2 * n;
+        let ns = v[at] as usize;
+        at += 1;
+        let steps = (0..ns)
+            .map(|i| {
+                let s = &v[at + 5 * i..at + 5 * i + 5];
+                (s[0] as usize, s[1] as usize, s[2] as usize, s[3], s[4])
+            })
+            .collect();
+        at += 5 * ns;
+        let ok = v[at] != 0.0;
+        let len = v[at + 1] as usize;
+        let bytes: Vec<u8> = v[at + 2..at + 2 + len].iter().map(|&b| b as u8).collect();
+        let end = if ok {
+            Ok(())
+        } else {
+            Err(String::from_utf8_lossy(&bytes).into_owned())
+        };
+        DenseCoulomb {
+            lambda,
+            active,
+            slip,
+            steps,
+            end,
+        }
+    }
+}
+
+/// The candidates as contact nodes of their own boundary (rank 0): frames, gaps, references.
+fn candidate_boundary(kept: &Kept, b: &ContactBoundary, dim: usize) -> ContactBoundary {
+    let nodes = kept
+        .comp
+        .list
+        .iter()
+        .map(|&i| {
+            let n = kept.cand.n(i);
+            ContactNode {
+                node: 0,
+                tag: i as u64,
+                row: 0,
+                local_row: 0,
+                x: kept.cand.x(i),
+                frame: Frame::new(n, dim).expect("obstacle normals are unit vectors"),
+                gap: kept.cand.gap(i),
+                weight: 0.0,
+                bound: 0.0,
+                u_t_ref: kept.cand.u_t_ref(i),
+            }
+        })
+        .collect();
+    ContactBoundary {
+        nodes,
+        n_global: kept.comp.list.len(),
+        offset: 0,
+        on_contact_boundary: Vec::new(),
+        excluded_dirichlet: 0,
+        obstacle: b.obstacle,
+    }
+}
+
+/// The generalised Newton of docs/friction.md on the candidates' dense system (module note).
+struct Dense<'a> {
+    dim: usize,
+    cmat: &'a DMatrix<f64>,
+    d0: &'a [f64],
+    cb: &'a ContactBoundary,
+    law: Law,
+    c: f64,
+    max_steps: usize,
+    tol_u: f64,
+}
+
+impl Dense<'_> {
+    /// From the frictionless solution (`active`, λ_n per candidate, u = d₀ − C λ_n): every
+    /// active node sticks (Δu_τ = 0, λ_τ = 0), so the first step gives the all-stick λ_τ and
+    /// (F5) lets slip where |λ_τ| exceeds μ(−λ_n).
+    fn run(&self, active: &[bool], lambda_n: &[f64]) -> DenseCoulomb {
+        let (d, n) = (self.dim, self.cb.nodes.len());
+        let mut u_prev = self.d0.to_vec();
+        for (q, &l) in lambda_n.iter().enumerate() {
+            if l != 0.0 {
+                for (ui, ci) in u_prev.iter_mut().zip(self.cmat.column(q * d).iter()) {
+                    *ui -= ci * l;
+                }
+            }
+        }
+        let start: Vec<NodeResult> = (0..n)
+            .map(|q| NodeResult {
+                u_n: u_prev[q * d],
+                u_t: self.cb.nodes[q].u_t_ref,
+                lambda_n: lambda_n[q],
+                active: active[q],
+                ..NodeResult::default()
+            })
+            .collect();
+        let (law, c) = (self.law, self.c);
+        let scale = threshold_scale_local(self.cb, &start, law, c);
+        let mut set = ActiveSet::warm(self.cb, &start, law, c, scale, d);
+        let mut it = Iterate::new(n, 0, true);
+        let mut last_still = None;
+        let mut steps = Vec::new();
+        for step in 1..=self.max_steps {
+            let t = Instant::now();
+            let Some((lam, u)) = self.solve_set(&set) else {
+                let why = format!("the dense Coulomb system of step {step} is singular");
+                return self.end(&set, vec![0.0; n * d], steps, Err(why));
+            };
+            self.records(&set, &lam, &u, &mut it.nodes);
+            let scale = threshold_scale_local(self.cb, &it.nodes, law, c);
+            let up = set.update(&it, self.cb, law, c, scale, d); // (3.23) / (F5)
+            let (residual, lambda_norm) = (up.residual2.sqrt(), up.lambda2.sqrt());
+            let du: f64 = u.iter().zip(&u_prev).map(|(a, b)| (a - b).powi(2)).sum();
+            let uu: f64 = u.iter().map(|a| a * a).sum();
+            let du_rel = if uu > 0.0 { (du / uu).sqrt() } else { 0.0 };
+            let n_active = set.local_active();
+            steps.push((
+                step,
+                n_active,
+                up.changed,
+                residual,
+                t.elapsed().as_secs_f64(),
+            ));
+            let still = up.changed == 0 && du_rel < self.tol_u;
+            let stall = stalled(still, last_still, residual, lambda_norm);
+            last_still = still.then_some(residual);
+            let zero = residual <= COULOMB_RESIDUAL_ZERO * lambda_norm;
+            let small = residual <= COULOMB_RESIDUAL_TOL * lambda_norm || stall;
+            if up.changed == 0 && (zero || (du_rel < self.tol_u && small)) {
+                return self.end(&set, lam, steps, Ok(()));
+            }
+            set = up.next;
+            u_prev = u;
+        }
+        let why = format!(
+            "the dense Coulomb iteration did not converge in {} steps",
+            self.max_steps
+        );
+        self.end(&set, vec![0.0; n * d], steps, Err(why))
+    }
+
+    fn end(
+        &self,
+        set: &ActiveSet,
+        lambda: Vec<f64>,
+        steps: Vec<(usize, usize, usize, f64, f64)>,
+        end: Result<(), String>,
+    ) -> DenseCoulomb {
+        let n = self.cb.nodes.len();
+        DenseCoulomb {
+            lambda,
+            active: set.normal.clone(),
+            slip: (0..n).map(|q| set.slip(q)).collect(),
+            steps,
+            end,
+        }
+    }
+
+    /// The step's dense system in the active nodes' λ (module note), solved by LU (LAPACK);
+    /// returns λ and u = d₀ − C λ of every candidate (d per node). `None`: singular.
+    fn solve_set(&self, set: &ActiveSet) -> Option<(Vec<f64>, Vec<f64>)> {
+        let (d, n, c) = (self.dim, self.cb.nodes.len(), self.c);
+        let act: Vec<usize> = (0..n).filter(|&q| set.normal[q]).collect();
+        let m = d * act.len();
+        let cm = self.cmat;
+        // C's columns of the active nodes' dofs
+        let cols: Vec<usize> = act
+            .iter()
+            .flat_map(|&q| (0..d).map(move |b| q * d + b))
+            .collect();
+        let mut a = DMatrix::<f64>::zeros(m, m);
+        let mut rhs = DVector::<f64>::zeros(m);
+        let rows = set.tangential.as_ref()?;
+        for (ap, &p) in act.iter().enumerate() {
+            let k = &self.cb.nodes[p];
+            let r0 = ap * d;
+            let (pn, w) = (p * d, self.d0);
+            // u_n = −g
+            for (j, &col) in cols.iter().enumerate() {
+                a[(r0, j)] = -cm[(pn, col)];
+            }
+            rhs[r0] = -k.gap - w[pn];
+            match rows[p] {
+                CoulombRow::Stick => {
+                    for i in 0..d - 1 {
+                        for (j, &col) in cols.iter().enumerate() {
+                            a[(r0 + 1 + i, j)] = -cm[(pn + 1 + i, col)];
+                        }
+                        rhs[r0 + 1 + i] = k.u_t_ref[i] - w[pn + 1 + i];
+                    }
+                }
+                row => {
+                    let CoulombRow::Slip { l, q, r } = row.with_reference(&k.u_t_ref) else {
+                        unreachable!("a slip row stays a slip row")
+                    };
+                    for i in 0..d - 1 {
+                        let ri = r0 + 1 + i;
+                        for (jc, &col) in cols.iter().enumerate() {
+                            let lc: f64 = (0..d - 1).map(|j| l[i][j] * cm[(pn + 1 + j, col)]).sum();
+                            a[(ri, jc)] = -lc + c * q[i] * cm[(pn, col)];
+                        }
+                        a[(ri, r0 + 1 + i)] -= 1.0;
+                        a[(ri, r0)] -= q[i];
+                        let lw: f64 = (0..d - 1).map(|j| l[i][j] * w[pn + 1 + j]).sum();
+                        rhs[ri] = r[i] - lw + c * q[i] * (w[pn] + k.gap);
+                    }
+                }
+            }
+        }
+        let x = DenseLu::factor(&a)?.solve(&rhs);
+        if x.iter().any(|v| !v.is_finite()) {
+            return None;
+        }
+        let mut lam = vec![0.0; n * d];
+        for (j, &col) in cols.iter().enumerate() {
+            lam[col] = x[j];
+        }
+        let mut u = self.d0.to_vec();
+        for (j, &col) in cols.iter().enumerate() {
+            let xj = x[j];
+            if xj != 0.0 {
+                for (ui, ci) in u.iter_mut().zip(cm.column(col).iter()) {
+                    *ui -= ci * xj;
+                }
+            }
+        }
+        Some((lam, u))
+    }
+
+    /// The iterate's per-node records (frame and global components) from λ and u.
+    fn records(&self, set: &ActiveSet, lam: &[f64], u: &[f64], out: &mut [NodeResult]) {
+        let d = self.dim;
+        for (q, (k, r)) in self.cb.nodes.iter().zip(out.iter_mut()).enumerate() {
+            let f = &k.frame;
+            let (uq, lq) = (&u[q * d..q * d + d], &lam[q * d..q * d + d]);
+            let mut ug = [0.0; 3];
+            let mut lg = [0.0; 3];
+            for a in 0..3 {
+                ug[a] = f.n[a] * uq[0];
+                lg[a] = f.n[a] * lq[0];
+                for i in 0..d - 1 {
+                    ug[a] += f.t[i][a] * uq[1 + i];
+                    lg[a] += f.t[i][a] * lq[1 + i];
+                }
+            }
+            let mut u_t = [0.0; 2];
+            let mut lambda_t = [0.0; 2];
+            u_t[..d - 1].copy_from_slice(&uq[1..d]);
+            lambda_t[..d - 1].copy_from_slice(&lq[1..d]);
+            *r = NodeResult {
+                u: ug,
+                lambda: lg,
+                u_n: uq[0],
+                u_t,
+                lambda_n: lq[0],
+                lambda_t,
+                active: set.normal[q],
+                slip: set.slip(q),
+            };
+        }
+    }
+}
+
+/// Coulomb with friction coefficient `mu` condensed onto the candidates that the frictionless
+/// condensed solve `first` (its result) left in `kept` (module note). Collective.
+pub(super) fn solve(
+    ctx: &Ctx,
+    p: &ContactProblem,
+    reduced: &mut ReducedSystem,
+    ns: &NewtonSettings,
+    mut kept: Kept,
+) -> Result<CoulombCondensed, RunError> {
+    let (b, dim) = (p.boundary, p.mesh.dim);
+    let n = kept.comp.list.len();
+    let mut summary = CoulombCondensedSummary {
+        outcome: "condensed",
+        reason: None,
+        steps: 0,
+        dense_seconds: 0.0,
+        expansion_seconds: 0.0,
+    };
+    let t = Instant::now();
+    let mut packed = Vec::new();
+    if ctx.rank == 0 {
+        let run = guarded("coulomb-dense-steps", || {
+            let cb = candidate_boundary(&kept, b, dim);
+            let active: Vec<bool> = kept.comp.list.iter().map(|&i| kept.active[i]).collect();
+            let lambda_n: Vec<f64> = kept.comp.list.iter().map(|&i| kept.lambda[i]).collect();
+            let dense = Dense {
+                dim,
+                cmat: &kept.comp.cmat,
+                d0: &kept.comp.d0,
+                cb: &cb,
+                law: ns.law,
+                c: ns.c,
+                max_steps: ns.section.max_steps,
+                tol_u: ns.section.tol_u,
+            };
+            dense.run(&active, &lambda_n)
+        });
+        packed = run
+            .unwrap_or_else(|why| DenseCoulomb::failed(n, dim, why))
+            .pack();
+    }
+    ctx.broadcast_f64s(&mut packed);
+    let run = DenseCoulomb::unpack(&packed, n, dim);
+    summary.dense_seconds = t.elapsed().as_secs_f64();
+    summary.steps = run.steps.len();
+    let history = record_steps(ctx, &run, n);
+    if let Err(why) = run.end {
+        say!(
+            ctx,
+            "coulomb: condensed: {why}; the plain path from the frictionless solution"
+        );
+        summary.outcome = "fallback";
+        summary.reason = Some(why);
+        return Ok(CoulombCondensed::Fallback(summary));
+    }
+
+    // u = K⁻¹ (f − Q λ): one expansion solve
+    let t = Instant::now();
+    let lam = if ctx.rank == 0 {
+        run.lambda.clone()
+    } else {
+        Vec::new()
+    };
+    let f_root = std::mem::take(&mut kept.f_root);
+    let w = match kept
+        .comp
+        .expand_u(ctx, &kept.cand, (&f_root, kept.n_local), &lam)
+    {
+        Ok(w) => w,
+        Err(why) => {
+            say!(
+                ctx,
+                "coulomb: condensed: {why}; the plain path from the frictionless solution"
+            );
+            summary.outcome = "fallback";
+            summary.reason = Some(why);
+            return Ok(CoulombCondensed::Fallback(summary));
+        }
+    };
+    ctx.agree(reduced.set_solution_local(&w).map_err(RunError::from))?;
+    // the dense states on this rank's contact nodes (the others inactive, λ = 0)
+    let mut pos = vec![usize::MAX; kept.cand.n];
+    for (q, &i) in kept.comp.list.iter().enumerate() {
+        pos[i] = q;
+    }
+    let zero = CoulombRow::Slip {
+        l: [[0.0; 2]; 2],
+        q: [0.0; 2],
+        r: [0.0; 2],
+    };
+    let local: Vec<usize> = (0..b.nodes.len()).map(|i| pos[b.offset + i]).collect();
+    let set = ActiveSet {
+        normal: local
+            .iter()
+            .map(|&q| q != usize::MAX && run.active[q])
+            .collect(),
+        tangential: Some(
+            local
+                .iter()
+                .map(|&q| {
+                    let stick = q != usize::MAX && run.active[q] && !run.slip[q];
+                    if stick {
+                        CoulombRow::Stick
+                    } else {
+                        zero
+                    }
+                })
+                .collect(),
+        ),
+        spring_floor: 0.0,
+    };
+    let mut it = Iterate::new(b.nodes.len(), w.len(), true);
+    reduced.recover(p.sys, b, &set, &mut it)?; // (3.28)
+    let scale = threshold_scale(ctx, b, &it.nodes, ns.law, ns.c);
+    let up = set.update(&it, b, ns.law, ns.c, scale, dim); // (3.23) / (F5)
+    let totals = up.reduce(ctx, b, None, dim);
+    summary.expansion_seconds = t.elapsed().as_secs_f64();
+    let residual_ok = totals.residual <= COULOMB_RESIDUAL_TOL * totals.lambda_norm;
+    let result = NewtonResult {
+        u: reduced.solution()?,
+        nodes: it.nodes,
+        steps: history.len(),
+        history,
+        converged: true,
+        lambda_seconds: reduced.lambda_seconds,
+        rows_seconds: reduced.rows_seconds,
+        pinned_final: Vec::new(),
+        cycle_detected_at: None,
+    };
+    if totals.changed == 0 && residual_ok {
+        say!(
+            ctx,
+            "coulomb: condensed: {} dense steps on {n} candidates ({:.3} s), expansion and check \
+             {:.3} s: |C| = {:.3e} of |λ| = {:.3e}",
+            summary.steps,
+            summary.dense_seconds,
+            summary.expansion_seconds,
+            totals.residual,
+            totals.lambda_norm
+        );
+        return Ok(CoulombCondensed::Solved(Box::new(result), summary));
+    }
+    let why = format!(
+        "on the expanded u {} node(s) change state, |C| = {:.3e} of |λ| = {:.3e}",
+        totals.changed, totals.residual, totals.lambda_norm
+    );
+    say!(ctx, "coulomb: condensed: {why}; the plain path from there");
+    summary.outcome = "start";
+    summary.reason = Some(why);
+    Ok(CoulombCondensed::Start(Box::new(result), w, summary))
+}
+
+/// The dense steps into the log and a history (numbered from 1).
+fn record_steps(ctx: &Ctx, run: &DenseCoulomb, candidates: usize) -> Vec<StepInfo> {
+    run.steps
+        .iter()
+        .map(|h| {
+            say!(
+                ctx,
+                "newton {:3}: |A_n| = {:6}  changed {:6}  |C| = {:.3e}  condensed Coulomb, \
+                 {candidates} candidates ({:.4} s)",
+                h.0,
+                h.1,
+                h.2,
+                h.3,
+                h.4
+            );
+            StepInfo {
+                step: h.0,
+                active: h.1,
+                changed: h.2,
+                residual: h.3,
+                solve_seconds: h.4,
+                solve: SolveKind::Condensed,
+                iterations: 0,
+                reuse: None,
+                amg: None,
+                pinned: 0,
+                states: None,
+                du_rel: None,
+                predictor: None,
+            }
+        })
+        .collect()
+}

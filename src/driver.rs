@@ -39,10 +39,15 @@ pub fn run_case(ctx: &Ctx, case: &Case) -> Result<String, RunError> {
     clock.lap();
     (clock.t.read, clock.t.partition) = (read_seconds, partition_seconds);
     let partition = log_partition(ctx, &mesh, &layout);
+    let friction = case
+        .contact
+        .as_ref()
+        .is_some_and(|c| c.friction != crate::case::Friction::None);
     let (preset, preset_reason) = solver::choose_preset(
         case.solver.preset,
         mesh.dim,
         mesh.n_nodes_global() * mesh.dim,
+        friction,
     );
     say!(ctx, "solver: preset {} ({preset_reason})", preset.name());
     let mut resolved = case.clone();

@@ -46,10 +46,18 @@ pub fn preset_options(preset: Preset, rtol: f64, symmetric: bool) -> String {
 /// every size measured (2D Hertz, 561 112 unknowns: contact 4.0 s direct, 4.6 s iterative).
 pub const AUTO_ITERATIVE_3D_DOFS: usize = 10_000;
 
-/// The preset to use for `asked` on a mesh of dimension `dim` with `dofs` unknowns, and why
-/// (for the log and summary.json).
-pub fn choose_preset(asked: Preset, dim: usize, dofs: usize) -> (Preset, String) {
+/// The preset to use for `asked` on a mesh of dimension `dim` with `dofs` unknowns and
+/// `friction` (Tresca or Coulomb), and why (for the log and summary.json). With friction the
+/// auto preset is direct at every size: GMRES + GAMG breaks down on the unsymmetric friction
+/// systems of a 3D block held and pushed into a sphere (44 529 and 112 890 unknowns, Coulomb
+/// μ = 0.3: DIVERGED_BREAKDOWN in Newton step 2), while the direct preset solves it for about
+/// one factorisation (bench/results/friction-held.md).
+pub fn choose_preset(asked: Preset, dim: usize, dofs: usize, friction: bool) -> (Preset, String) {
     match asked {
+        Preset::Auto if dim == 3 && friction => (
+            Preset::Direct,
+            format!("auto: 3D with friction, {dofs} unknowns"),
+        ),
         Preset::Auto if dim == 3 && dofs >= AUTO_ITERATIVE_3D_DOFS => (
             Preset::Iterative,
             format!("auto: 3D, {dofs} unknowns >= {AUTO_ITERATIVE_3D_DOFS}"),

@@ -67,6 +67,13 @@ pub const MAX_SCHUR_DOFS: usize = 8000;
 /// K_p (MUMPS' analysis estimate): else the plain path runs.
 const DENSE_FLOOR_FLOPS: f64 = 1e9;
 
+/// In 2D a dense flop costs this fraction of one of MUMPS' (the dense work may be this many
+/// times the factorisation's flops): LAPACK's Cholesky and inversion run at 13.6 GFlop/s on one
+/// core here (n = 3 000 in 2.0 s), MUMPS' factorisation of a 2D body at about 0.8 GFlop/s on 2
+/// ranks (the Hertz disk at 171 602 unknowns: 1.0e9 flops in 1.3 s; small fronts). 3D fronts
+/// are dense enough for BLAS-3 rates: there the ratio stays 1 (not measured beyond).
+const DENSE_SPEEDUP_2D: f64 = 4.0;
+
 /// The first candidate set: the 1/FIRST_FRACTION of the contact nodes with the smallest gaps.
 const FIRST_FRACTION: usize = 8;
 
@@ -193,6 +200,9 @@ impl CondensedSummary {
 pub enum Condensed {
     Solved(Box<NewtonResult>, CondensedSummary),
     Fallback(CondensedSummary),
+    /// [`solve_keeping`] without the frictionless steps: K_p factorised with the first
+    /// candidates' Schur complement, nothing solved.
+    Factorised(CondensedSummary),
 }
 
 /// Runs Algorithm 1 condensed onto the contact unknowns (module note). `Fallback` when the
@@ -206,31 +216,35 @@ pub fn solve(
     s: &NewtonSettings,
     warm: Option<&WarmStart>,
 ) -> Result<Condensed, RunError> {
-    solve_keeping(ctx, p, reduced, s, warm, 1).map(|(c, _)| c)
+    solve_keeping(ctx, p, reduced, s, warm, (1, true)).map(|(c, _)| c)
 }
 
 /// What a converged condensed solve with every dof of the candidates in the Schur complement
 /// (`per` = d) leaves for a friction solve on the same candidates: the compliance with its
-/// factorisation, the candidates, f on rank 0 and the frictionless set and λ_n
+/// factorisation, the candidates, f on rank 0, the free modes (K_p's pins) and the
+/// frictionless set and λ_n
 /// over every contact node (c_h's global order).
 pub(super) struct Kept {
     pub(super) comp: Compliance,
     pub(super) cand: Candidates,
     pub(super) f_root: Vec<f64>,
     pub(super) n_local: usize,
+    pub(super) free: FreeModes,
     pub(super) lambda: Vec<f64>,
     pub(super) active: Vec<bool>,
 }
 
 /// [`solve`] with `per` Schur variables per candidate (1: the normal dof; d: every dof, for
-/// friction); with `per` > 1 a converged solve also returns what it [`Kept`]. Collective.
+/// friction); with `per` > 1 a converged solve also returns what it [`Kept`]. Without `steps`
+/// it stops after the first factorisation (`Factorised`; the start set and λ = 0 kept: a load
+/// step of a friction solve starts from its warm start instead). Collective.
 pub(super) fn solve_keeping(
     ctx: &Ctx,
     p: &ContactProblem,
     reduced: &mut ReducedSystem,
     s: &NewtonSettings,
     warm: Option<&WarmStart>,
-    per: usize,
+    (per, steps): (usize, bool),
 ) -> Result<(Condensed, Option<Kept>), RunError> {
     let fall = |c: Condensed| Ok((c, None));
     let dim = p.mesh.dim;
@@ -262,6 +276,19 @@ pub(super) fn solve_keeping(
             return fall(fallback(ctx, summary, why));
         }
         summary.record_factorisation(&comp, t.elapsed().as_secs_f64());
+        if !steps {
+            summary.outcome = "factorised";
+            let kept = Kept {
+                lambda: vec![0.0; cand.n],
+                comp,
+                cand,
+                n_local: rhs0.len(),
+                f_root,
+                free,
+                active: growth.active,
+            };
+            return Ok((Condensed::Factorised(summary), Some(kept)));
+        }
 
         let t = Instant::now();
         let run = dense_round(
@@ -319,6 +346,7 @@ pub(super) fn solve_keeping(
                 cand,
                 n_local: rhs0.len(),
                 f_root,
+                free,
                 lambda,
                 active: growth.active,
             });
@@ -700,11 +728,13 @@ impl Compliance {
         let mut factor = factor.map_err(|e| format!("MUMPS' analysis of K_p failed: {e}"))?;
         // the same numbers on every rank: the same decision
         let dense = (dofs.len() as f64).powi(3);
-        if dense > DENSE_FLOOR_FLOPS.max(factor.flops()) {
+        let speedup = if dim == 2 { DENSE_SPEEDUP_2D } else { 1.0 };
+        if dense > DENSE_FLOOR_FLOPS.max(speedup * factor.flops()) {
             return Err(format!(
-                "{} candidate contact nodes ({}): the dense compliance ({:.1e} flops) would \
-                 cost more than the factorisation of K_p ({:.1e} flops); a contact zone this \
+                "{} candidate contact nodes ({} Schur dofs; {}): the dense compliance ({:.1e} \
+                 flops) would cost more than the factorisation of K_p ({:.1e} flops); a contact zone this \
                  wide costs less on the plain path",
+                self.list.len(),
                 dofs.len(),
                 why,
                 dense,

@@ -1,9 +1,11 @@
 //! Coulomb's generalised Newton (docs/friction.md (F1)–(F6)) on the contact unknowns alone
-//! (direct preset, a body that Dirichlet data hold): the frictionless condensed solve with every
-//! dof of its candidates in the Schur complement (condensed.rs, `per` = d) leaves the
-//! compliance C = Qᵀ K⁻¹ Q of the candidates' dofs in their node frames (normal first) and
-//! d₀ = Qᵀ K⁻¹ f there. With λ the candidates' multipliers (3.28) and u = d₀ − C λ, every Newton
-//! step of the plain path is, on the candidates, one dense system in the active nodes' λ:
+//! (direct preset): the frictionless condensed solve with every dof of its candidates in the
+//! Schur complement (condensed.rs, `per` = d) leaves the compliance C = Qᵀ K_p⁻¹ Q of the
+//! candidates' dofs in their node frames (normal first) and d₀ = Qᵀ K_p⁻¹ f there. With λ the
+//! candidates' multipliers (3.28), α the amplitudes of the rigid modes Dirichlet data leave free
+//! (K_p pins them) and G their parts at the candidates, u = d₀ − C λ + G α, and every Newton
+//! step of the plain path is, on the candidates, one dense system in the active nodes' λ and α
+//! (with the balance Gᵀ λ = φ, the load in those modes):
 //!
 //! ```text
 //!   k ∈ A_n:            u_n,k = −g_k
@@ -14,10 +16,11 @@
 //!
 //! with the rows of `contact::coulomb_row_dyn` and the set update (3.23)/(F5) of the plain
 //! path (`ActiveSet::update`, its stick band included), stopped by the same rule. Nodes beyond
-//! the candidates stay inactive. At the end one expansion solve gives u = K⁻¹ (f − Q λ), and
-//! the plain path's recovery (3.28) and set update on every contact node check it: no state
-//! may change and the residual (F3) must pass the plain path's tolerance. A check that fails
-//! hands the expanded iterate to the plain path as its start.
+//! the candidates stay inactive. At the end one expansion solve gives u = K_p⁻¹ (f − Q λ) +
+//! R z α, and the plain path's recovery (3.28) and set update on every contact node check it:
+//! no state may change, the residual (F3) must pass the plain path's tolerance and the set must
+//! hold every free mode. A check that fails hands the expanded iterate to the plain path as
+//! its start.
 //!
 //! Collectives: one broadcast (the dense result), the expansion solve, one MatMult and the
 //! update's reduction.
@@ -27,10 +30,11 @@ use super::boundary::{ContactBoundary, ContactNode, NodeResult};
 use super::condensed::Kept;
 use super::dense::guarded;
 use super::newton::{
-    stalled, ContactProblem, NewtonResult, NewtonSettings, StepInfo, COULOMB_RESIDUAL_TOL,
-    COULOMB_RESIDUAL_ZERO,
+    add_motion, stalled, ContactProblem, NewtonResult, NewtonSettings, StepInfo, WarmStart,
+    COULOMB_RESIDUAL_STALL, COULOMB_RESIDUAL_TOL, COULOMB_RESIDUAL_ZERO,
 };
 use super::reduced::{ReducedSystem, SolveKind};
+use super::rigid::FreeModes;
 use crate::contact::{CoulombRow, Frame};
 use crate::error::RunError;
 use crate::par::Ctx;
@@ -69,6 +73,8 @@ pub enum CoulombCondensed {
 struct DenseCoulomb {
     /// λ of every candidate, d per node in C's order (node frame, normal first).
     lambda: Vec<f64>,
+    /// The free modes' amplitudes α (u = w + R z α).
+    alpha: Vec<f64>,
     /// Per candidate: in A_n, slipping.
     active: Vec<bool>,
     slip: Vec<bool>,
@@ -76,22 +82,28 @@ struct DenseCoulomb {
     steps: Vec<(usize, usize, usize, f64, f64)>,
     /// `Err`: why the iteration gave up.
     end: Result<(), String>,
+    /// It stopped by the stall rule (`newton::stalled`: the residual at the round-off of the
+    /// dense compliance, above COULOMB_RESIDUAL_TOL).
+    stalled: bool,
 }
 
 impl DenseCoulomb {
-    fn failed(n: usize, dim: usize, why: String) -> DenseCoulomb {
+    fn failed(n: usize, dim: usize, mz: usize, why: String) -> DenseCoulomb {
         DenseCoulomb {
             lambda: vec![0.0; n * dim],
+            alpha: vec![0.0; mz],
             active: vec![false; n],
             slip: vec![false; n],
             steps: Vec::new(),
             end: Err(why),
+            stalled: false,
         }
     }
 
     /// All fields as one f64 vector (the broadcast); the reason travels as UTF-8 bytes.
     fn pack(&self) -> Vec<f64> {
         let mut v = self.lambda.clone();
+        v.extend_from_slice(&self.alpha);
         v.extend(self.active.iter().map(|&a| a as u8 as f64));
         v.extend(self.slip.iter().map(|&a| a as u8 as f64));
         v.push(self.steps.len() as f64);
@@ -100,14 +112,16 @@ impl DenseCoulomb {
         }
         let why = self.end.as_ref().err().map_or(&[][..], |w| w.as_bytes());
         v.push(if self.end.is_ok() { 1.0 } else { 0.0 });
+        v.push(if self.stalled { 1.0 } else { 0.0 });
         v.push(why.len() as f64);
         v.extend(why.iter().map(|&b| b as f64));
         v
     }
 
-    fn unpack(v: &[f64], n: usize, dim: usize) -> DenseCoulomb {
-        let nl = n * dim;
-        let lambda = v[..nl].to_vec();
+    fn unpack(v: &[f64], n: usize, dim: usize, mz: usize) -> DenseCoulomb {
+        let lambda = v[..n * dim].to_vec();
+        let alpha = v[n * dim..n * dim + mz].to_vec();
+        let nl = n * dim + mz;
         let active = v[nl..nl + n].iter().map(|&x| x != 0.0).collect();
         let slip = v[nl + n..nl + 2 * n].iter().map(|&x| x != 0.0).collect();
         let mut at = nl + 2 * n;
@@ -121,8 +135,9 @@ impl DenseCoulomb {
             .collect();
         at += 5 * ns;
         let ok = v[at] != 0.0;
-        let len = v[at + 1] as usize;
-        let bytes: Vec<u8> = v[at + 2..at + 2 + len].iter().map(|&b| b as u8).collect();
+        let stalled = v[at + 1] != 0.0;
+        let len = v[at + 2] as usize;
+        let bytes: Vec<u8> = v[at + 3..at + 3 + len].iter().map(|&b| b as u8).collect();
         let end = if ok {
             Ok(())
         } else {
@@ -130,10 +145,12 @@ impl DenseCoulomb {
         };
         DenseCoulomb {
             lambda,
+            alpha,
             active,
             slip,
             steps,
             end,
+            stalled,
         }
     }
 }
@@ -170,11 +187,32 @@ fn candidate_boundary(kept: &Kept, b: &ContactBoundary, dim: usize) -> ContactBo
     }
 }
 
+/// G: the free modes' parts at the candidates, d rows per node (its frame: n, τ₁, τ₂), one
+/// column per free mode (rank 0).
+fn mode_parts(free: &FreeModes, cb: &ContactBoundary, dim: usize) -> DMatrix<f64> {
+    let mz = free.dirichlet_free().ncols();
+    let mut g = DMatrix::zeros(cb.nodes.len() * dim, mz);
+    for (q, k) in cb.nodes.iter().enumerate() {
+        let dirs = [k.frame.n, k.frame.t[0], k.frame.t[1]];
+        for (a, dir) in dirs.iter().enumerate().take(dim) {
+            let parts = free.normal_parts(&k.x, dir);
+            for cz in 0..mz {
+                g[(q * dim + a, cz)] = parts[cz];
+            }
+        }
+    }
+    g
+}
+
 /// The generalised Newton of docs/friction.md on the candidates' dense system (module note).
 struct Dense<'a> {
     dim: usize,
     cmat: &'a DMatrix<f64>,
     d0: &'a [f64],
+    /// The free modes' parts at the candidates (d rows per node, frame components; mz columns)
+    /// and the load in them, φ = zᵀ Rᵀ f: u = d₀ − C λ + G α, Gᵀ λ = φ.
+    g: &'a DMatrix<f64>,
+    phi: &'a [f64],
     cb: &'a ContactBoundary,
     law: Law,
     c: f64,
@@ -183,10 +221,10 @@ struct Dense<'a> {
 }
 
 impl Dense<'_> {
-    /// From the frictionless solution (`active`, λ_n per candidate, u = d₀ − C λ_n): every
-    /// active node sticks (Δu_τ = 0, λ_τ = 0), so the first step gives the all-stick λ_τ and
-    /// (F5) lets slip where |λ_τ| exceeds μ(−λ_n).
-    fn run(&self, active: &[bool], lambda_n: &[f64]) -> DenseCoulomb {
+    /// The start from the frictionless solution (`active`, λ_n per candidate, u = d₀ − C λ_n):
+    /// every active node sticks (Δu_τ = 0, λ_τ = 0), so the first step gives the all-stick λ_τ
+    /// and (F5) lets slip where |λ_τ| exceeds μ(−λ_n). Returns the records and u (d per node).
+    fn frictionless_start(&self, active: &[bool], lambda_n: &[f64]) -> (Vec<NodeResult>, Vec<f64>) {
         let (d, n) = (self.dim, self.cb.nodes.len());
         let mut u_prev = self.d0.to_vec();
         for (q, &l) in lambda_n.iter().enumerate() {
@@ -196,26 +234,38 @@ impl Dense<'_> {
                 }
             }
         }
+        // u_n = −g on the frictionless set (its rigid motion G α is not in u_prev), never a
+        // penetration off it: b of (F1) is μ(−λ_n) on the set and 0 elsewhere
         let start: Vec<NodeResult> = (0..n)
             .map(|q| NodeResult {
-                u_n: u_prev[q * d],
+                u_n: if active[q] {
+                    -self.cb.nodes[q].gap
+                } else {
+                    u_prev[q * d].max(-self.cb.nodes[q].gap)
+                },
                 u_t: self.cb.nodes[q].u_t_ref,
                 lambda_n: lambda_n[q],
                 active: active[q],
                 ..NodeResult::default()
             })
             .collect();
+        (start, u_prev)
+    }
+
+    /// The iteration from `start` (per candidate; `u_prev`: its u, d per node).
+    fn run(&self, start: &[NodeResult], mut u_prev: Vec<f64>) -> DenseCoulomb {
+        let (d, n) = (self.dim, self.cb.nodes.len());
         let (law, c) = (self.law, self.c);
-        let scale = threshold_scale_local(self.cb, &start, law, c);
-        let mut set = ActiveSet::warm(self.cb, &start, law, c, scale, d);
+        let scale = threshold_scale_local(self.cb, start, law, c);
+        let mut set = ActiveSet::warm(self.cb, start, law, c, scale, d);
         let mut it = Iterate::new(n, 0, true);
         let mut last_still = None;
         let mut steps = Vec::new();
         for step in 1..=self.max_steps {
             let t = Instant::now();
-            let Some((lam, u)) = self.solve_set(&set) else {
+            let Some((lam, u, alpha)) = self.solve_set(&set) else {
                 let why = format!("the dense Coulomb system of step {step} is singular");
-                return self.end(&set, vec![0.0; n * d], steps, Err(why));
+                return self.end(&set, (vec![0.0; n * d], Vec::new()), steps, Err(why));
             };
             self.records(&set, &lam, &u, &mut it.nodes);
             let scale = threshold_scale_local(self.cb, &it.nodes, law, c);
@@ -238,7 +288,9 @@ impl Dense<'_> {
             let zero = residual <= COULOMB_RESIDUAL_ZERO * lambda_norm;
             let small = residual <= COULOMB_RESIDUAL_TOL * lambda_norm || stall;
             if up.changed == 0 && (zero || (du_rel < self.tol_u && small)) {
-                return self.end(&set, lam, steps, Ok(()));
+                let mut run = self.end(&set, (lam, alpha), steps, Ok(()));
+                run.stalled = residual > COULOMB_RESIDUAL_TOL * lambda_norm;
+                return run;
             }
             set = up.next;
             u_prev = u;
@@ -247,76 +299,97 @@ impl Dense<'_> {
             "the dense Coulomb iteration did not converge in {} steps",
             self.max_steps
         );
-        self.end(&set, vec![0.0; n * d], steps, Err(why))
+        self.end(&set, (vec![0.0; n * d], Vec::new()), steps, Err(why))
     }
 
     fn end(
         &self,
         set: &ActiveSet,
-        lambda: Vec<f64>,
+        (lambda, mut alpha): (Vec<f64>, Vec<f64>),
         steps: Vec<(usize, usize, usize, f64, f64)>,
         end: Result<(), String>,
     ) -> DenseCoulomb {
         let n = self.cb.nodes.len();
+        alpha.resize(self.g.ncols(), 0.0);
         DenseCoulomb {
             lambda,
+            alpha,
             active: set.normal.clone(),
             slip: (0..n).map(|q| set.slip(q)).collect(),
             steps,
             end,
+            stalled: false,
         }
     }
 
-    /// The step's dense system in the active nodes' λ (module note), solved by LU (LAPACK);
-    /// returns λ and u = d₀ − C λ of every candidate (d per node). `None`: singular.
-    fn solve_set(&self, set: &ActiveSet) -> Option<(Vec<f64>, Vec<f64>)> {
-        let (d, n, c) = (self.dim, self.cb.nodes.len(), self.c);
+    /// The step's dense system in the active nodes' λ and the free modes' α (module note;
+    /// bordered by the balance Gᵀ λ = φ where Dirichlet data leave rigid modes free), solved by
+    /// LU (LAPACK); returns λ and u = d₀ − C λ + G α of every candidate (d per node) and α.
+    /// `None`: singular (e.g. a free mode that the set does not hold).
+    #[allow(clippy::type_complexity)]
+    fn solve_set(&self, set: &ActiveSet) -> Option<(Vec<f64>, Vec<f64>, Vec<f64>)> {
+        let (d, n, c, mz) = (self.dim, self.cb.nodes.len(), self.c, self.g.ncols());
         let act: Vec<usize> = (0..n).filter(|&q| set.normal[q]).collect();
         let m = d * act.len();
-        let cm = self.cmat;
+        let (cm, g, w) = (self.cmat, self.g, self.d0);
         // C's columns of the active nodes' dofs
         let cols: Vec<usize> = act
             .iter()
             .flat_map(|&q| (0..d).map(move |b| q * d + b))
             .collect();
-        let mut a = DMatrix::<f64>::zeros(m, m);
-        let mut rhs = DVector::<f64>::zeros(m);
+        let mut a = DMatrix::<f64>::zeros(m + mz, m + mz);
+        let mut rhs = DVector::<f64>::zeros(m + mz);
         let rows = set.tangential.as_ref()?;
+        // row `ri` := Σ_j coef_j · u_(dof_j) (+ constants on the right): u = w − C λ + G α
+        let put_u = |a: &mut DMatrix<f64>, ri: usize, terms: &[(usize, f64)]| -> f64 {
+            for (jc, &col) in cols.iter().enumerate() {
+                a[(ri, jc)] -= terms
+                    .iter()
+                    .map(|&(dof, f)| f * cm[(dof, col)])
+                    .sum::<f64>();
+            }
+            for cz in 0..mz {
+                a[(ri, m + cz)] += terms.iter().map(|&(dof, f)| f * g[(dof, cz)]).sum::<f64>();
+            }
+            terms.iter().map(|&(dof, f)| f * w[dof]).sum::<f64>()
+        };
         for (ap, &p) in act.iter().enumerate() {
             let k = &self.cb.nodes[p];
-            let r0 = ap * d;
-            let (pn, w) = (p * d, self.d0);
+            let (r0, pn) = (ap * d, p * d);
             // u_n = −g
-            for (j, &col) in cols.iter().enumerate() {
-                a[(r0, j)] = -cm[(pn, col)];
-            }
-            rhs[r0] = -k.gap - w[pn];
+            rhs[r0] = -k.gap - put_u(&mut a, r0, &[(pn, 1.0)]);
             match rows[p] {
                 CoulombRow::Stick => {
+                    // u_τ = u_τ^ref (3.34a)
                     for i in 0..d - 1 {
-                        for (j, &col) in cols.iter().enumerate() {
-                            a[(r0 + 1 + i, j)] = -cm[(pn + 1 + i, col)];
-                        }
-                        rhs[r0 + 1 + i] = k.u_t_ref[i] - w[pn + 1 + i];
+                        let wi = put_u(&mut a, r0 + 1 + i, &[(pn + 1 + i, 1.0)]);
+                        rhs[r0 + 1 + i] = k.u_t_ref[i] - wi;
                     }
                 }
                 row => {
+                    // (F6): −λ_τ + L̃ u_τ − q (λ_n + c (u_n + g)) = r̃ + L̃ u_τ^ref
                     let CoulombRow::Slip { l, q, r } = row.with_reference(&k.u_t_ref) else {
                         unreachable!("a slip row stays a slip row")
                     };
                     for i in 0..d - 1 {
                         let ri = r0 + 1 + i;
-                        for (jc, &col) in cols.iter().enumerate() {
-                            let lc: f64 = (0..d - 1).map(|j| l[i][j] * cm[(pn + 1 + j, col)]).sum();
-                            a[(ri, jc)] = -lc + c * q[i] * cm[(pn, col)];
-                        }
+                        let mut terms: Vec<(usize, f64)> =
+                            (0..d - 1).map(|j| (pn + 1 + j, l[i][j])).collect();
+                        terms.push((pn, -c * q[i]));
+                        let wi = put_u(&mut a, ri, &terms);
                         a[(ri, r0 + 1 + i)] -= 1.0;
                         a[(ri, r0)] -= q[i];
-                        let lw: f64 = (0..d - 1).map(|j| l[i][j] * w[pn + 1 + j]).sum();
-                        rhs[ri] = r[i] - lw + c * q[i] * (w[pn] + k.gap);
+                        rhs[ri] = r[i] + c * q[i] * k.gap - wi;
                     }
                 }
             }
+        }
+        // the balance of the free modes: Gᵀ λ = φ (the pins carry nothing)
+        for cz in 0..mz {
+            for (jc, &col) in cols.iter().enumerate() {
+                a[(m + cz, jc)] = g[(col, cz)];
+            }
+            rhs[m + cz] = self.phi[cz];
         }
         let x = DenseLu::factor(&a)?.solve(&rhs);
         if x.iter().any(|v| !v.is_finite()) {
@@ -326,7 +399,8 @@ impl Dense<'_> {
         for (j, &col) in cols.iter().enumerate() {
             lam[col] = x[j];
         }
-        let mut u = self.d0.to_vec();
+        let alpha: Vec<f64> = (0..mz).map(|cz| x[m + cz]).collect();
+        let mut u = w.to_vec();
         for (j, &col) in cols.iter().enumerate() {
             let xj = x[j];
             if xj != 0.0 {
@@ -335,7 +409,12 @@ impl Dense<'_> {
                 }
             }
         }
-        Some((lam, u))
+        for (cz, &al) in alpha.iter().enumerate() {
+            for (ui, gi) in u.iter_mut().zip(g.column(cz).iter()) {
+                *ui += gi * al;
+            }
+        }
+        Some((lam, u, alpha))
     }
 
     /// The iterate's per-node records (frame and global components) from λ and u.
@@ -380,9 +459,11 @@ pub(super) fn solve(
     reduced: &mut ReducedSystem,
     ns: &NewtonSettings,
     mut kept: Kept,
+    warm: Option<&WarmStart>,
 ) -> Result<CoulombCondensed, RunError> {
     let (b, dim) = (p.boundary, p.mesh.dim);
     let n = kept.comp.list.len();
+    let mz = kept.free.dirichlet_free().ncols();
     let mut summary = CoulombCondensedSummary {
         outcome: "condensed",
         reason: None,
@@ -391,30 +472,39 @@ pub(super) fn solve(
         expansion_seconds: 0.0,
     };
     let t = Instant::now();
+    let warm_records = warm.map(|w| gather_records(ctx, w.nodes));
     let mut packed = Vec::new();
     if ctx.rank == 0 {
         let run = guarded("coulomb-dense-steps", || {
             let cb = candidate_boundary(&kept, b, dim);
             let active: Vec<bool> = kept.comp.list.iter().map(|&i| kept.active[i]).collect();
             let lambda_n: Vec<f64> = kept.comp.list.iter().map(|&i| kept.lambda[i]).collect();
+            let g = mode_parts(&kept.free, &cb, dim);
+            let phi = kept.free.free_load();
             let dense = Dense {
                 dim,
                 cmat: &kept.comp.cmat,
                 d0: &kept.comp.d0,
+                g: &g,
+                phi: &phi,
                 cb: &cb,
                 law: ns.law,
                 c: ns.c,
                 max_steps: ns.section.max_steps,
                 tol_u: ns.section.tol_u,
             };
-            dense.run(&active, &lambda_n)
+            let (start, u_prev) = match &warm_records {
+                Some(all) => warm_start(all, &kept.comp.list, dim),
+                None => dense.frictionless_start(&active, &lambda_n),
+            };
+            dense.run(&start, u_prev)
         });
         packed = run
-            .unwrap_or_else(|why| DenseCoulomb::failed(n, dim, why))
+            .unwrap_or_else(|why| DenseCoulomb::failed(n, dim, mz, why))
             .pack();
     }
     ctx.broadcast_f64s(&mut packed);
-    let run = DenseCoulomb::unpack(&packed, n, dim);
+    let run = DenseCoulomb::unpack(&packed, n, dim, mz);
     summary.dense_seconds = t.elapsed().as_secs_f64();
     summary.steps = run.steps.len();
     let history = record_steps(ctx, &run, n);
@@ -428,7 +518,7 @@ pub(super) fn solve(
         return Ok(CoulombCondensed::Fallback(summary));
     }
 
-    // u = K⁻¹ (f − Q λ): one expansion solve
+    // w = K_p⁻¹ (f − Q λ): one expansion solve
     let t = Instant::now();
     let lam = if ctx.rank == 0 {
         run.lambda.clone()
@@ -484,14 +574,48 @@ pub(super) fn solve(
         spring_floor: 0.0,
     };
     let mut it = Iterate::new(b.nodes.len(), w.len(), true);
-    reduced.recover(p.sys, b, &set, &mut it)?; // (3.28)
+    reduced.recover(p.sys, b, &set, &mut it)?; // (3.28) on w (A ρ = 0)
+                                               // u = w + ρ, ρ = R z α: the free modes' motion
+    let free = &kept.free;
+    let z = free.dirichlet_free();
+    let mut rho = [0.0; 6];
+    for (j, r) in rho.iter_mut().enumerate().take(free.rigid_modes().m) {
+        *r = (0..z.ncols()).map(|c| z[(j, c)] * run.alpha[c]).sum();
+    }
+    let mut u = reduced.solution()?;
+    add_motion(free, &rho, p, &mut u, &mut it.nodes)?;
     let scale = threshold_scale(ctx, b, &it.nodes, ns.law, ns.c);
     let up = set.update(&it, b, ns.law, ns.c, scale, dim); // (3.23) / (F5)
-    let totals = up.reduce(ctx, b, None, dim);
+    let totals = up.reduce(ctx, b, free.modes(), dim);
+    // a mode the final set leaves free: the plain path pins it (not unique)
+    let loose = if z.ncols() > 0 {
+        let gram = set.summarise(ctx, b, free.modes(), dim).gram;
+        let mut fin = FreeModes::new(
+            ctx,
+            p.mesh,
+            p.layout,
+            p.fixed,
+            b,
+            &reduced.f_local,
+            ns.rigid,
+        );
+        fin.update(ctx, p.mesh, p.layout, &gram)?;
+        !fin.pins().is_empty()
+    } else {
+        false
+    };
     summary.expansion_seconds = t.elapsed().as_secs_f64();
-    let residual_ok = totals.residual <= COULOMB_RESIDUAL_TOL * totals.lambda_norm;
+    // the plain path's stop rule: the tolerance, or the stall bound where the dense steps
+    // stopped reducing the residual (the round-off of the dense compliance C = S⁻¹)
+    let bound = if run.stalled {
+        COULOMB_RESIDUAL_STALL
+    } else {
+        COULOMB_RESIDUAL_TOL
+    };
+    let residual_ok = totals.residual <= bound * totals.lambda_norm;
+    let u_local = u.to_local_vec()?;
     let result = NewtonResult {
-        u: reduced.solution()?,
+        u,
         nodes: it.nodes,
         steps: history.len(),
         history,
@@ -501,7 +625,7 @@ pub(super) fn solve(
         pinned_final: Vec::new(),
         cycle_detected_at: None,
     };
-    if totals.changed == 0 && residual_ok {
+    if totals.changed == 0 && residual_ok && !loose {
         say!(
             ctx,
             "coulomb: condensed: {} dense steps on {n} candidates ({:.3} s), expansion and check \
@@ -514,14 +638,57 @@ pub(super) fn solve(
         );
         return Ok(CoulombCondensed::Solved(Box::new(result), summary));
     }
-    let why = format!(
-        "on the expanded u {} node(s) change state, |C| = {:.3e} of |λ| = {:.3e}",
-        totals.changed, totals.residual, totals.lambda_norm
-    );
+    let why = if loose {
+        "the final set leaves a rigid mode free".to_string()
+    } else {
+        format!(
+            "on the expanded u {} node(s) change state, |C| = {:.3e} of |λ| = {:.3e}",
+            totals.changed, totals.residual, totals.lambda_norm
+        )
+    };
     say!(ctx, "coulomb: condensed: {why}; the plain path from there");
     summary.outcome = "start";
     summary.reason = Some(why);
-    Ok(CoulombCondensed::Start(Box::new(result), w, summary))
+    Ok(CoulombCondensed::Start(Box::new(result), u_local, summary))
+}
+
+/// Values per node of a gathered warm record: u_n, u_τ (2), λ_n, λ_τ (2), active, slip.
+const WARM_REC: usize = 8;
+
+/// Every rank's warm-start records in c_h's global order (one all-gather). Collective.
+fn gather_records(ctx: &Ctx, nodes: &[NodeResult]) -> Vec<f64> {
+    let mut mine = Vec::with_capacity(nodes.len() * WARM_REC);
+    for r in nodes {
+        mine.extend_from_slice(&[r.u_n, r.u_t[0], r.u_t[1], r.lambda_n]);
+        mine.extend_from_slice(&[r.lambda_t[0], r.lambda_t[1]]);
+        mine.extend_from_slice(&[r.active as u8 as f64, r.slip as u8 as f64]);
+    }
+    ctx.all_gather_varcount(&mine)
+}
+
+/// The dense iteration's start from a load step's warm records (`all`, gathered) at the
+/// candidates `list`: their states and values, u (d per node).
+fn warm_start(all: &[f64], list: &[usize], dim: usize) -> (Vec<NodeResult>, Vec<f64>) {
+    let mut u = vec![0.0; list.len() * dim];
+    let start = list
+        .iter()
+        .enumerate()
+        .map(|(q, &i)| {
+            let r = &all[i * WARM_REC..(i + 1) * WARM_REC];
+            u[q * dim] = r[0];
+            u[q * dim + 1..(q + 1) * dim].copy_from_slice(&r[1..dim]);
+            NodeResult {
+                u_n: r[0],
+                u_t: [r[1], r[2]],
+                lambda_n: r[3],
+                lambda_t: [r[4], r[5]],
+                active: r[6] != 0.0,
+                slip: r[7] != 0.0,
+                ..NodeResult::default()
+            }
+        })
+        .collect();
+    (start, u)
 }
 
 /// The dense steps into the log and a history (numbered from 1).

@@ -646,7 +646,6 @@ mod tests {
             obstacle: crate::contact::Obstacle::Plane(
                 crate::contact::Plane::new([0.0; 3], [0.0, 1.0, 0.0], 2).expect("plane"),
             ),
-            displacement: [0.0; 3],
         };
         let p = set.prescribed(&b, 0, 2).expect("rewritten");
         assert_eq!(p.dirs.len(), 2);
@@ -704,7 +703,6 @@ mod tests {
             obstacle: crate::contact::Obstacle::Plane(
                 crate::contact::Plane::new([0.0; 3], [0.0, 1.0, 0.0], 2).expect("plane"),
             ),
-            displacement: [0.0; 3],
         };
         let mut it = Iterate::new(2, 4, true);
         let limit = at(0.0, -1.0, 0.1 * (1.0 + 1e-12));

@@ -69,10 +69,8 @@ pub struct ContactBoundary {
     pub on_contact_boundary: Vec<bool>,
     /// Contact nodes dropped because Dirichlet data fix one of their components (global count).
     pub excluded_dirichlet: usize,
-    /// The obstacle as the case gives it.
+    /// The obstacle as the case gives it (its motion is in the nodes' gaps and references).
     pub obstacle: Obstacle,
-    /// Its displacement d in this solve (`ContactSettings::displacement`).
-    pub displacement: [f64; 3],
 }
 
 /// Builds the owned contact nodes. `fixed` holds the Dirichlet value per mesh dof (NaN = free):
@@ -232,7 +230,6 @@ pub fn build(
         on_contact_boundary: on,
         excluded_dirichlet: ex_all,
         obstacle,
-        displacement: settings.displacement,
     })
 }
 

@@ -247,7 +247,13 @@ pub fn solve(
     log_boundary(ctx, &b, settings, dim);
     check_friction_capacity(ctx, &b, fixed, sys, dim, law)?;
     let prev_u = match previous {
-        Some(prev) => Some(take_reference(ctx, &mut b, prev, friction)?),
+        Some(prev) => Some(take_reference(
+            ctx,
+            &mut b,
+            prev,
+            friction,
+            settings.displacement,
+        )?),
         None => None,
     };
     solver::configure(
@@ -308,7 +314,7 @@ pub fn solve(
     }
     let (mut contact, table) = final_state(ctx, sys, &b, &nr, friction, dim)?;
     if settings.motion.is_some() {
-        contact.obstacle_displacement = Some(b.displacement[..dim].to_vec());
+        contact.obstacle_displacement = Some(settings.displacement[..dim].to_vec());
     }
     let mut newton = newton_summary(settings, solver_section, c, &mut nr, outer_steps, previous);
     if let Some(cs) = condensed_summary {
@@ -334,7 +340,7 @@ pub fn solve(
         nodes: nr.nodes,
         delta,
         predict: 0.0,
-        obstacle_displacement: b.displacement,
+        obstacle_displacement: settings.displacement,
     })
 }
 
@@ -564,7 +570,8 @@ fn law_of(settings: &ContactSettings) -> Law {
 
 /// A warm start from the previous load step: its u_τ becomes every contact node's reference
 /// (friction acts on the increment), moved along with the obstacle's tangential displacement
-/// since then (the slip is relative to the obstacle: u_τ − u_τ^prev − (d − d_prev)_τ); returns
+/// since then (`displacement` = d of this solve; the slip is relative to the obstacle:
+/// u_τ − u_τ^prev − (d − d_prev)_τ); returns
 /// this rank's rows of its u. The previous solution must be of the same mesh and boundary.
 /// Collective.
 fn take_reference(
@@ -572,6 +579,7 @@ fn take_reference(
     b: &mut ContactBoundary,
     prev: &ContactSolution,
     friction: bool,
+    displacement: [f64; 3],
 ) -> Result<Vec<f64>, RunError> {
     let u = prev.u.to_local_vec()?;
     let same = prev.nodes.len() == b.nodes.len()
@@ -589,7 +597,7 @@ fn take_reference(
         )))
     })?;
     if friction {
-        let dd = crate::geom::sub(b.displacement, prev.obstacle_displacement);
+        let dd = crate::geom::sub(displacement, prev.obstacle_displacement);
         for (k, r) in b.nodes.iter_mut().zip(&prev.nodes) {
             let t = &k.frame.t;
             k.u_t_ref = [
@@ -1020,7 +1028,7 @@ fn log_boundary(ctx: &Ctx, b: &ContactBoundary, settings: &ContactSettings, dim:
             String::new()
         },
         if settings.motion.is_some() {
-            format!(", obstacle moved by {:?}", &b.displacement[..dim])
+            format!(", obstacle moved by {:?}", &settings.displacement[..dim])
         } else {
             String::new()
         }

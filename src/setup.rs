@@ -175,7 +175,14 @@ pub struct ContactSettings {
     /// The case file (named in messages about the contact boundary).
     pub file: std::path::PathBuf,
     pub group: String,
+    /// The obstacle as the case gives it (before any motion).
     pub obstacle: Obstacle,
+    /// `contact.motion`: the obstacle's rigid translation at load factor 1.
+    pub motion: Option<case::Motion>,
+    /// The obstacle's displacement d in the step being solved (t·m, or m when held; 0 without
+    /// a motion): the contact condition is u_n + g0 − d·n ≥ 0 and friction acts on u_τ − d_τ
+    /// (docs/obstacles.md, "Moving obstacles"). [`ContactSettings::at_factor`] sets it.
+    pub displacement: [f64; 3],
     /// Tresca threshold g_R (1.44e); `None` without friction or with Coulomb.
     pub tresca_threshold: Option<f64>,
     /// Coulomb friction: the coefficient μ and the algorithm; `None` otherwise.
@@ -194,6 +201,11 @@ impl ContactSettings {
     pub fn friction(&self) -> bool {
         self.tresca_threshold.is_some() || self.coulomb.is_some()
     }
+
+    /// Moves the obstacle to where it is at load factor t ([`case::Motion::at`]).
+    pub fn at_factor(&mut self, t: f64) {
+        self.displacement = self.motion.as_ref().map_or([0.0; 3], |m| m.at(t));
+    }
 }
 
 /// The contact settings of a case.
@@ -206,6 +218,9 @@ pub fn contact_settings(
         file: case.file.clone(),
         group: cc.group.clone(),
         obstacle: obstacle_of(cc, dim, &case.file)?,
+        motion: cc.motion.clone(),
+        // a single static solve is the problem at factor 1
+        displacement: cc.motion.as_ref().map_or([0.0; 3], |m| m.at(1.0)),
         tresca_threshold: match cc.friction {
             Friction::Tresca { threshold } => Some(threshold),
             Friction::None | Friction::Coulomb { .. } => None,

@@ -68,6 +68,8 @@ pub struct StepRecord {
     pub slip: Option<usize>,
     /// Σ of the contact forces −λ over the contact nodes.
     pub total_force: Option<Vec<f64>>,
+    /// The obstacle's displacement d = t·m (`contact.motion`; 0 for an obstacle at rest).
+    pub obstacle_displacement: Option<Vec<f64>>,
     pub max_pressure: Option<f64>,
     /// 2D: half width of the contact zone.
     pub half_width: Option<f64>,
@@ -104,6 +106,7 @@ impl StepRecord {
             stick: None,
             slip: None,
             total_force: None,
+            obstacle_displacement: None,
             max_pressure: None,
             half_width: None,
             contact_area: None,
@@ -194,7 +197,7 @@ impl Stepper<'_> {
         let (ctx, case) = (self.ctx, self.case);
         let series = case.load.is_some();
         let plan = case.load.clone().unwrap_or_else(LoadSection::single);
-        let physics = match &case.contact {
+        let mut physics = match &case.contact {
             None => Physics::Linear,
             Some(cc) => Physics::Contact(Box::new(ctx.agree(
                 setup::contact_settings(case, cc, self.mesh.dim).map_err(RunError::from),
@@ -222,6 +225,9 @@ impl Stepper<'_> {
                 let (p, halvings) = (schedule.planned(), schedule.halvings());
                 if let Some(b) = &b_full {
                     scale(sys, b, self.fixed, self.held_fixed, &mut fixed, factor)?;
+                }
+                if let Physics::Contact(settings) = &mut physics {
+                    settings.at_factor(factor);
                 }
                 if let Some(c) = last.as_mut().and_then(|s| s.contact.as_mut()) {
                     c.predict = predictor_ratio(&records, factor);
@@ -372,6 +378,7 @@ impl Stepper<'_> {
         rec.newton_steps = Some(r.newton.steps);
         rec.active = Some(r.contact.active_count);
         rec.total_force = Some(r.contact.total_force.clone());
+        rec.obstacle_displacement = Some(c.obstacle_displacement[..self.mesh.dim].to_vec());
         rec.max_pressure = Some(r.contact.max_pressure);
         rec.half_width = r.contact.half_width.filter(|_| self.mesh.dim == 2);
         rec.kkt = Some(r.contact.kkt);
@@ -577,6 +584,13 @@ fn log_step(ctx: &Ctx, r: &StepRecord, planned: usize) {
     if let Some(f) = &r.total_force {
         let _ = write!(line, ", total force = {f:?}");
     }
+    if let Some(d) = r
+        .obstacle_displacement
+        .as_ref()
+        .filter(|d| d.iter().any(|&x| x != 0.0))
+    {
+        let _ = write!(line, ", obstacle at {d:?}");
+    }
     if r.cutbacks > 0 {
         let _ = write!(line, " ({} cutback(s))", r.cutbacks);
     }
@@ -590,6 +604,9 @@ pub fn history_csv(records: &[StepRecord], dim: usize) -> String {
     let mut out = String::from("step,planned,factor,time,cutbacks,newton_steps,active,stick,slip");
     for a in &axes[..dim] {
         let _ = write!(out, ",force_{a}");
+    }
+    for a in &axes[..dim] {
+        let _ = write!(out, ",obstacle_{a}");
     }
     out.push_str(",max_pressure,half_width,contact_area");
     out.push_str(",kkt_penetration,kkt_positive_lambda_n,kkt_complementarity,kkt_violation");
@@ -620,6 +637,16 @@ pub fn history_csv(records: &[StepRecord], dim: usize) -> String {
                 out,
                 ",{}",
                 num(r.total_force.as_ref().and_then(|f| f.get(k).copied()))
+            );
+        }
+        for k in 0..dim {
+            let _ = write!(
+                out,
+                ",{}",
+                num(r
+                    .obstacle_displacement
+                    .as_ref()
+                    .and_then(|d| d.get(k).copied()))
             );
         }
         let _ = write!(

@@ -354,6 +354,22 @@ fn mpirun_2_zero_area_cell() {
     rejected_np(&t, 2, &["zero area"]);
 }
 
+/// `contact.motion` with as many components as the mesh has dimensions, checked once the
+/// mesh is read: a 3-component motion on the 2D square, on 2 ranks, and a non-finite one.
+#[test]
+fn mpirun_2_motion_of_the_wrong_length() {
+    let contact = "[contact]\ngroup = \"bottom\"\n\
+                   obstacle = { type = \"plane\", point = [0.0, 0.0], normal = [0.0, 1.0] }\n";
+    let t = format!("{}{contact}motion = [0.0, 0.01, 0.0]\n", case_2d(&square()));
+    rejected_np(
+        &t,
+        2,
+        &["case.toml", "contact.motion", "3 components", "2D"],
+    );
+    let t = format!("{}{contact}motion = [0.0, nan]\n", case_2d(&square()));
+    rejected(&t, &["case.toml", "contact.motion[1]", "finite"]);
+}
+
 #[test]
 fn mpirun_3_partitioned_msh() {
     let t = case_2d(&mesh_dir().join("square_h0.5_part2.msh"));

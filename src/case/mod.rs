@@ -442,8 +442,35 @@ pub enum RigidModeHandling {
 pub struct ContactSection {
     pub group: String,
     pub obstacle: ObstacleSpec,
+    /// `contact.motion`: a rigid translation of the obstacle (docs/obstacles.md, "Moving
+    /// obstacles"); None: the obstacle stays where it is given.
+    pub motion: Option<Motion>,
     pub friction: Friction,
     pub rigid_modes: RigidModeHandling,
+}
+
+/// A rigid translation m of the obstacle, reached at load factor 1: at factor t the obstacle
+/// has moved by t·m (by m in every step with `ramp = false`).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Motion {
+    /// m, one component per dimension.
+    pub value: Vec<f64>,
+    /// Scaled by the load factor of `[load]` (default); `ramp = false` holds it at m.
+    pub ramp: bool,
+    /// The key of the vector in the case file (`contact.motion` or `contact.motion.value`).
+    pub key: &'static str,
+}
+
+impl Motion {
+    /// The obstacle's displacement at load factor t: t·m, or m when held (padded to 3).
+    pub fn at(&self, t: f64) -> [f64; 3] {
+        let m = vec3(&self.value);
+        if self.ramp {
+            m.map(|x| t * x)
+        } else {
+            m
+        }
+    }
 }
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -689,6 +716,9 @@ impl Case {
         if let Some(c) = &self.contact {
             self.check_group("contact.group", &c.group, groups, Some(dim - 1))?;
             self.check_shape("contact.obstacle", &c.obstacle, dim)?;
+            if let Some(m) = &c.motion {
+                len(m.key.into(), m.value.len())?;
+            }
         }
         Ok(())
     }
@@ -1321,11 +1351,19 @@ impl Reader<'_> {
         let Some((k, n)) = top.get("contact") else {
             return Ok(None);
         };
-        let t = self.table(&k, n, &["group", "obstacle", "friction", "rigid_modes"])?;
+        let t = self.table(
+            &k,
+            n,
+            &["group", "obstacle", "motion", "friction", "rigid_modes"],
+        )?;
         let (gk, g) = self.required(&t, "group")?;
         let group = self.name(&gk, g)?;
         let (ok, o) = self.required(&t, "obstacle")?;
         let obstacle = self.obstacle(&ok, o)?;
+        let motion = match t.get("motion") {
+            None => None,
+            Some((mk, m)) => Some(self.motion(&mk, m)?),
+        };
         let friction = match t.get("friction") {
             None => Friction::None,
             Some((fk, f)) => self.friction(&fk, f)?,
@@ -1344,9 +1382,42 @@ impl Reader<'_> {
         Ok(Some(ContactSection {
             group,
             obstacle,
+            motion,
             friction,
             rigid_modes,
         }))
+    }
+
+    /// `contact.motion`: a vector `[dx, dy(, dz)]`, or a table `{ value = [...], ramp = false }`.
+    fn motion(&self, key: &str, n: &Node) -> Res<Motion> {
+        if let Kind::Table(_) = n.kind {
+            let t = self.table(key, n, &["value", "ramp"])?;
+            let (vk, v) = self.required(&t, "value")?;
+            let value = self.vector(&vk, v)?;
+            let ramp = match t.get("ramp") {
+                None => true,
+                Some((rk, r)) => self.boolean(&rk, r)?,
+            };
+            return Ok(Motion {
+                value,
+                ramp,
+                key: "contact.motion.value",
+            });
+        }
+        let value =
+            match n.kind {
+                Kind::Array(_) => self.vector(key, n)?,
+                _ => return Err(self.type_err(
+                    key,
+                    n,
+                    "an array of numbers (the obstacle's translation) or a table { value, ramp }",
+                )),
+            };
+        Ok(Motion {
+            value,
+            ramp: true,
+            key: "contact.motion",
+        })
     }
 
     fn obstacle(&self, key: &str, n: &Node) -> Res<ObstacleSpec> {

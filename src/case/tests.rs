@@ -1755,3 +1755,77 @@ fn mesh_project_takes_every_shape() {
         "shape = ",
     );
 }
+
+#[test]
+fn contact_motion_vector_or_table() {
+    let c = "[contact]\ngroup = \"c\"\nobstacle = { type = \"plane\", point = [0, 0], normal = [0, 1] }\n";
+    let motion = |m: &str| {
+        parse(&with(&format!("{c}motion = {m}\n")))
+            .expect("valid")
+            .contact
+            .expect("contact")
+            .motion
+            .expect("motion")
+    };
+    let m = motion("[0.5, -2]");
+    assert_eq!(
+        (m.value.clone(), m.ramp, m.key),
+        (vec![0.5, -2.0], true, "contact.motion")
+    );
+    // t·m while it ramps, m when held
+    assert_eq!(m.at(0.25), [0.125, -0.5, 0.0]);
+    let held = motion("{ value = [0, 0, -0.1], ramp = false }");
+    assert_eq!(
+        (held.value.clone(), held.ramp),
+        (vec![0.0, 0.0, -0.1], false)
+    );
+    assert_eq!(held.key, "contact.motion.value");
+    assert_eq!(held.at(0.25), [0.0, 0.0, -0.1]);
+    assert!(motion("{ value = [1, 2] }").ramp);
+    // no motion: the obstacle stays
+    let none = parse(&with(c)).unwrap().contact.unwrap().motion;
+    assert_eq!(none, None);
+}
+
+#[test]
+fn reject_bad_motion() {
+    let c = "[contact]\ngroup = \"c\"\nobstacle = { type = \"plane\", point = [0, 0], normal = [0, 1] }\n";
+    for (m, key) in [
+        ("\"up\"", "contact.motion"),
+        ("[0, nan]", "contact.motion[1]"),
+        ("[0, inf]", "contact.motion[1]"),
+        ("[1]", "contact.motion"),
+        ("[1, 2, 3, 4]", "contact.motion"),
+        ("[0, \"a\"]", "contact.motion[1]"),
+        ("{ ramp = false }", "contact.motion.value"),
+        ("{ value = [0, 1], ramp = \"no\" }", "contact.motion.ramp"),
+        ("{ value = [0, 1], speed = 2 }", "contact.motion.speed"),
+    ] {
+        expect_err(&with(&format!("{c}motion = {m}\n")), key, "motion");
+    }
+    // the length is checked against the mesh: 3 components on a 2D mesh, 2 on a 3D one
+    let text = with(&format!("{c}motion = [0, 0, 1]\n"));
+    let e = parse(&text)
+        .unwrap()
+        .check_against_mesh(2, &groups(&[("c", 1)]))
+        .unwrap_err();
+    assert_eq!(e.key.as_deref(), Some("contact.motion"), "{e}");
+    assert_eq!(e.line, Some(line(&text, "motion")), "{e}");
+    assert!(e.message.contains("3 components"), "{e}");
+    let text = with(&format!("{c}motion = {{ value = [0, 1], ramp = false }}\n"));
+    let e = parse(&text)
+        .unwrap()
+        .check_against_mesh(2, &groups(&[("c", 1)]));
+    assert!(e.is_ok(), "{e:?}");
+    let e = replace(&text, "model = \"plane_strain\"\n", "");
+    let e = replace(
+        &e,
+        "point = [0, 0], normal = [0, 1]",
+        "point = [0, 0, 0], normal = [0, 0, 1]",
+    );
+    let e = parse(&e)
+        .unwrap()
+        .check_against_mesh(3, &groups(&[("c", 2)]))
+        .unwrap_err();
+    assert_eq!(e.key.as_deref(), Some("contact.motion.value"), "{e}");
+}

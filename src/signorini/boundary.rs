@@ -5,6 +5,7 @@
 use crate::contact::{Frame, Obstacle};
 use crate::error::{InputError, RunError};
 use crate::fem;
+use crate::geom::dot;
 use crate::mesh::Mesh;
 use crate::par::Ctx;
 use crate::partition::Layout;
@@ -23,7 +24,8 @@ pub struct ContactNode {
     pub local_row: usize,
     pub x: [f64; 3],
     pub frame: Frame,
-    /// Initial normal gap g_h^k (3.3), ≥ 0 outside the obstacle.
+    /// Initial normal gap g_h^k (3.3), ≥ 0 outside the obstacle; against a moving obstacle
+    /// the gap to where it is in this step, g0 − d·n (docs/obstacles.md, "Moving obstacles").
     pub gap: f64,
     /// w_k = ∫_Γc φ_k ds.
     pub weight: f64,
@@ -32,6 +34,8 @@ pub struct ContactNode {
     pub bound: f64,
     /// u_τ of the previous load step (frame components, 2D padded): friction acts on the
     /// increment u_τ − u_ref (docs/friction.md, "Load steps"); 0 for a single static solve.
+    /// A moving obstacle carries the reference along: + the tangential part of its
+    /// displacement since then (d_τ in a single solve).
     pub u_t_ref: [f64; 2],
 }
 
@@ -65,6 +69,7 @@ pub struct ContactBoundary {
     pub on_contact_boundary: Vec<bool>,
     /// Contact nodes dropped because Dirichlet data fix one of their components (global count).
     pub excluded_dirichlet: usize,
+    /// The obstacle as the case gives it (its motion is in the nodes' gaps and references).
     pub obstacle: Obstacle,
 }
 
@@ -217,6 +222,7 @@ pub fn build(
     let ex_all = ctx.sum_usize(excluded);
     ctx.agree(bad.map_or(Ok(()), |e| Err(RunError::Input(e))))?;
     check_depth(ctx, mesh, &nodes, settings)?;
+    move_obstacle(&mut nodes, settings.displacement, settings.friction());
     Ok(ContactBoundary {
         n_global: counts.iter().sum::<u64>() as usize,
         offset: counts[..ctx.rank].iter().sum::<u64>() as usize,
@@ -225,4 +231,21 @@ pub fn build(
         excluded_dirichlet: ex_all,
         obstacle,
     })
+}
+
+/// The obstacle translated by d (docs/obstacles.md, "Moving obstacles"): the node's
+/// displacement relative to it is u − d, so the contact condition (3.3) becomes
+/// u_n + g0 − d·n ≥ 0 (n, g0 of the undeformed node against the obstacle as given: exact for a
+/// planar face while the nearest face stays the same), and with friction the slip is
+/// u_τ − d_τ: the tangential reference is d_τ. Local.
+fn move_obstacle(nodes: &mut [ContactNode], d: [f64; 3], friction: bool) {
+    if d == [0.0; 3] {
+        return;
+    }
+    for k in nodes {
+        k.gap -= dot(d, k.frame.n);
+        if friction {
+            k.u_t_ref = [dot(d, k.frame.t[0]), dot(d, k.frame.t[1])];
+        }
+    }
 }

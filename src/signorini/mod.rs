@@ -94,6 +94,9 @@ pub struct ContactSummary {
     pub active_count: usize,
     pub max_pressure: f64,
     pub total_force: Vec<f64>,
+    /// A moving obstacle (`contact.motion`): its displacement d in this solve.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub obstacle_displacement: Option<Vec<f64>>,
     pub half_width: Option<f64>,
     pub kkt: Kkt,
     #[serde(skip_serializing_if = "Option::is_none")]
@@ -134,6 +137,9 @@ pub struct ContactSolution {
     /// the next load increment to this step's, s > 0: the next solve starts from the linear
     /// extrapolation `self + s · delta` (0: from this solution itself).
     pub predict: f64,
+    /// The obstacle's displacement d in this solve (friction in the next step acts on the slip
+    /// relative to the obstacle's increment since).
+    pub obstacle_displacement: [f64; 3],
 }
 
 /// A load step's change of the contact nodes' values (u, λ in both forms) and of this rank's
@@ -239,10 +245,16 @@ pub fn solve(
     let law = law_of(settings);
     let friction = settings.friction();
     let mut b = boundary::build(ctx, mesh, layout, settings, fixed)?;
-    log_boundary(ctx, &b, &settings.group);
+    log_boundary(ctx, &b, settings, dim);
     check_friction_capacity(ctx, &b, fixed, sys, dim, law)?;
     let prev_u = match previous {
-        Some(prev) => Some(take_reference(ctx, &mut b, prev, friction)?),
+        Some(prev) => Some(take_reference(
+            ctx,
+            &mut b,
+            prev,
+            friction,
+            settings.displacement,
+        )?),
         None => None,
     };
     solver::configure(
@@ -301,7 +313,10 @@ pub fn solve(
             k.bound = mu * (-r.lambda_n).max(0.0);
         }
     }
-    let (contact, table) = final_state(ctx, sys, &b, &nr, friction, dim)?;
+    let (mut contact, table) = final_state(ctx, sys, &b, &nr, friction, dim)?;
+    if settings.motion.is_some() {
+        contact.obstacle_displacement = Some(settings.displacement[..dim].to_vec());
+    }
     let mut newton = newton_summary(settings, solver_section, c, &mut nr, outer_steps, previous);
     if let Some(cs) = condensed_summary {
         // K_p's with the Schur complement, one per round of candidates (the dense steps
@@ -326,6 +341,7 @@ pub fn solve(
         nodes: nr.nodes,
         delta,
         predict: 0.0,
+        obstacle_displacement: settings.displacement,
     })
 }
 
@@ -487,6 +503,7 @@ fn final_state(
         active_count: table.active_count(),
         max_pressure: table.max_pressure(),
         total_force: total_force[..dim].to_vec(),
+        obstacle_displacement: None,
         half_width,
         kkt,
         friction: friction_certificate,
@@ -557,13 +574,17 @@ fn law_of(settings: &ContactSettings) -> Law {
 }
 
 /// A warm start from the previous load step: its u_τ becomes every contact node's reference
-/// (friction acts on the increment); returns this rank's rows of its u. The previous solution
-/// must be of the same mesh and boundary. Collective.
+/// (friction acts on the increment), moved along with the obstacle's tangential displacement
+/// since then (`displacement` = d of this solve; the slip is relative to the obstacle:
+/// u_τ − u_τ^prev − (d − d_prev)_τ); returns
+/// this rank's rows of its u. The previous solution must be of the same mesh and boundary.
+/// Collective.
 fn take_reference(
     ctx: &Ctx,
     b: &mut ContactBoundary,
     prev: &ContactSolution,
     friction: bool,
+    displacement: [f64; 3],
 ) -> Result<Vec<f64>, RunError> {
     let u = prev.u.to_local_vec()?;
     let same = prev.nodes.len() == b.nodes.len()
@@ -581,8 +602,13 @@ fn take_reference(
         )))
     })?;
     if friction {
+        let dd = crate::geom::sub(displacement, prev.obstacle_displacement);
         for (k, r) in b.nodes.iter_mut().zip(&prev.nodes) {
-            k.u_t_ref = r.u_t;
+            let t = &k.frame.t;
+            k.u_t_ref = [
+                r.u_t[0] + crate::geom::dot(dd, t[0]),
+                r.u_t[1] + crate::geom::dot(dd, t[1]),
+            ];
         }
     }
     Ok(u)
@@ -1097,17 +1123,22 @@ fn json<T: Serialize>(v: &T) -> String {
     serde_json::to_value(v).expect("plain data").to_string()
 }
 
-fn log_boundary(ctx: &Ctx, b: &ContactBoundary, group: &str) {
+fn log_boundary(ctx: &Ctx, b: &ContactBoundary, settings: &ContactSettings, dim: usize) {
     say!(
         ctx,
-        "contact: {} nodes on '{}'{}",
+        "contact: {} nodes on '{}'{}{}",
         b.n_global,
-        group,
+        settings.group,
         if b.excluded_dirichlet > 0 {
             format!(
                 " ({} more left to their Dirichlet data)",
                 b.excluded_dirichlet
             )
+        } else {
+            String::new()
+        },
+        if settings.motion.is_some() {
+            format!(", obstacle moved by {:?}", &settings.displacement[..dim])
         } else {
             String::new()
         }

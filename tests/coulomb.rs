@@ -641,7 +641,8 @@ fn the_condensed_coulomb_solve_gives_the_touching_starts_answer_in_one_factorisa
     // node — on the held disk and on the floating one (its free rigid modes balanced in the
     // dense system): one factorisation in all. With a tangential load that only friction holds
     // the frictionless solution tips the floating body: no condensed start, the touching one.
-    // "gap" starts from the touching node on the plain path. All must end in the same state.
+    // "gap" starts from the touching node on the plain path. All must end in the same state,
+    // on 1, 2 and 3 ranks.
     let tmp = tempfile::tempdir().expect("tmp");
     let cases = [
         (held_disk_case(tmp.path()), true),
@@ -649,7 +650,7 @@ fn the_condensed_coulomb_solve_gives_the_touching_starts_answer_in_one_factorisa
         (floating_disk_case(tmp.path(), 0.001), false),
     ];
     for (case, condensed) in &cases {
-        for np in [1, 2] {
+        for np in [1, 2, 3] {
             let auto = converged(np, case, &[]);
             let gap = converged(np, case, &["newton.init=\"gap\""]);
             let expect = if *condensed {

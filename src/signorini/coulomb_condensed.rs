@@ -31,7 +31,7 @@ use super::condensed::Kept;
 use super::dense::guarded;
 use super::newton::{
     add_motion, stalled, ContactProblem, NewtonResult, NewtonSettings, StepInfo, WarmStart,
-    COULOMB_RESIDUAL_STALL, COULOMB_RESIDUAL_TOL, COULOMB_RESIDUAL_ZERO,
+    COULOMB_RESIDUAL_TOL, COULOMB_RESIDUAL_ZERO,
 };
 use super::reduced::{ReducedSystem, SolveKind};
 use super::rigid::FreeModes;
@@ -282,12 +282,16 @@ impl Dense<'_> {
                 residual,
                 t.elapsed().as_secs_f64(),
             ));
-            let still = up.changed == 0 && du_rel < self.tol_u;
-            let stall = stalled(still, last_still, residual, lambda_norm);
-            last_still = still.then_some(residual);
+            // The stall rule without |Δu| < tol_u: on a floating body the dense u carries the
+            // round-off of α, |Δu|/|u| stays above tol_u while the residual sits at its
+            // round-off (measured: the floating Hertz disk at 171 602 unknowns, |C| ~ 3e-11 of
+            // |λ| ~ 8e-4 for 90 steps); the expanded iterate is checked on every node anyway.
+            let unchanged = up.changed == 0;
+            let stall = stalled(unchanged, last_still, residual, lambda_norm);
+            last_still = unchanged.then_some(residual);
             let zero = residual <= COULOMB_RESIDUAL_ZERO * lambda_norm;
-            let small = residual <= COULOMB_RESIDUAL_TOL * lambda_norm || stall;
-            if up.changed == 0 && (zero || (du_rel < self.tol_u && small)) {
+            let small = residual <= COULOMB_RESIDUAL_TOL * lambda_norm;
+            if unchanged && (zero || stall || (du_rel < self.tol_u && small)) {
                 let mut run = self.end(&set, (lam, alpha), steps, Ok(()));
                 run.stalled = residual > COULOMB_RESIDUAL_TOL * lambda_norm;
                 return run;
@@ -605,14 +609,11 @@ pub(super) fn solve(
         false
     };
     summary.expansion_seconds = t.elapsed().as_secs_f64();
-    // the plain path's stop rule: the tolerance, or the stall bound where the dense steps
-    // stopped reducing the residual (the round-off of the dense compliance C = S⁻¹)
-    let bound = if run.stalled {
-        COULOMB_RESIDUAL_STALL
-    } else {
-        COULOMB_RESIDUAL_TOL
-    };
-    let residual_ok = totals.residual <= bound * totals.lambda_norm;
+    // the plain path's tolerance: where the dense steps stalled above it (the round-off of the
+    // dense compliance C = S⁻¹ and of the dense solves; measured: 1e-8 of ‖λ‖₂ on the Hertz
+    // disk at 171 602 unknowns, the friction certificate at 1e-7 of its scale) the plain path
+    // confirms from the expanded iterate: one LU step to round-off
+    let residual_ok = totals.residual <= COULOMB_RESIDUAL_TOL * totals.lambda_norm;
     let u_local = u.to_local_vec()?;
     let result = NewtonResult {
         u,
@@ -640,6 +641,12 @@ pub(super) fn solve(
     }
     let why = if loose {
         "the final set leaves a rigid mode free".to_string()
+    } else if totals.changed == 0 && run.stalled {
+        format!(
+            "the dense steps stopped at their round-off, |C| = {:.3e} of |λ| = {:.3e} on the \
+             expanded u: one plain step confirms",
+            totals.residual, totals.lambda_norm
+        )
     } else {
         format!(
             "on the expanded u {} node(s) change state, |C| = {:.3e} of |λ| = {:.3e}",

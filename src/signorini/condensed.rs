@@ -116,7 +116,22 @@ pub struct CondensedSummary {
     pub coarse_levels: Vec<CoarseLevel>,
     /// Coulomb's generalised Newton on the same candidates (friction, held bodies).
     #[serde(skip_serializing_if = "Option::is_none")]
-    pub coulomb: Option<super::coulomb_condensed::CoulombCondensedSummary>,
+    pub coulomb: Option<CoulombCondensedSummary>,
+}
+
+/// summary.json's `newton.condensed.coulomb`: what the dense Coulomb iteration did.
+#[derive(Debug, Clone, Serialize)]
+pub struct CoulombCondensedSummary {
+    /// "condensed": the expanded iterate passed the check; "start": it became the plain
+    /// path's start (`reason` says why); "fallback": the dense iteration gave up (`reason`).
+    pub outcome: &'static str,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub reason: Option<String>,
+    /// Steps of the dense generalised Newton.
+    pub steps: usize,
+    pub dense_seconds: f64,
+    /// The expansion solve, (3.28) and the check on every contact node [s].
+    pub expansion_seconds: f64,
 }
 
 /// One coarse level of the nested start.

@@ -25,9 +25,11 @@
 //! Collectives: one broadcast (the dense result), the expansion solve, one MatMult and the
 //! update's reduction.
 
-use super::active_set::{threshold_scale, threshold_scale_local, ActiveSet, Iterate, Law};
+use super::active_set::{
+    threshold_scale, threshold_scale_local, ActiveSet, Iterate, Law, StepTotals,
+};
 use super::boundary::{ContactBoundary, ContactNode, NodeResult};
-use super::condensed::Kept;
+use super::condensed::{CoulombCondensedSummary, Kept};
 use super::dense::guarded;
 use super::newton::{
     add_motion, stalled, ContactProblem, NewtonResult, NewtonSettings, StepInfo, WarmStart,
@@ -41,23 +43,7 @@ use crate::par::Ctx;
 use crate::petsc::lapack::DenseLu;
 use crate::say;
 use nalgebra::{DMatrix, DVector};
-use serde::Serialize;
 use std::time::Instant;
-
-/// summary.json's `newton.condensed.coulomb`: what the dense Coulomb iteration did.
-#[derive(Debug, Clone, Serialize)]
-pub struct CoulombCondensedSummary {
-    /// "condensed": the expanded iterate passed the check; "start": it became the plain
-    /// path's start (`reason` says why); "fallback": the dense iteration gave up (`reason`).
-    pub outcome: &'static str,
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub reason: Option<String>,
-    /// Steps of the dense generalised Newton.
-    pub steps: usize,
-    pub dense_seconds: f64,
-    /// The expansion solve, (3.28) and the check on every contact node [s].
-    pub expansion_seconds: f64,
-}
 
 /// What the condensed Coulomb solve returns.
 pub enum CoulombCondensed {
@@ -499,9 +485,7 @@ pub(super) fn solve(
     mut kept: Kept,
     warm: Option<&WarmStart>,
 ) -> Result<CoulombCondensed, RunError> {
-    let (b, dim) = (p.boundary, p.mesh.dim);
     let n = kept.comp.list.len();
-    let mz = kept.free.dirichlet_free().ncols();
     let mut summary = CoulombCondensedSummary {
         outcome: "condensed",
         reason: None,
@@ -510,13 +494,50 @@ pub(super) fn solve(
         expansion_seconds: 0.0,
     };
     let t = Instant::now();
+    let run = dense_phase(ctx, p, ns, &kept, warm);
+    summary.dense_seconds = t.elapsed().as_secs_f64();
+    summary.steps = run.steps.len();
+    let history = record_steps(ctx, &run, n);
+    if let Err(why) = &run.end {
+        return Ok(give_up(ctx, summary, why.clone()));
+    }
+    // w = K_p⁻¹ (f − Q λ): one expansion solve
+    let t = Instant::now();
+    let lam = if ctx.rank == 0 {
+        run.lambda.clone()
+    } else {
+        Vec::new()
+    };
+    let f_root = std::mem::take(&mut kept.f_root);
+    let w = match kept
+        .comp
+        .expand_u(ctx, &kept.cand, (&f_root, kept.n_local), &lam)
+    {
+        Ok(w) => w,
+        Err(why) => return Ok(give_up(ctx, summary, why)),
+    };
+    let checked = check(ctx, p, reduced, ns, &kept, &run, &w)?;
+    summary.expansion_seconds = t.elapsed().as_secs_f64();
+    finish(ctx, reduced, (summary, history, n), checked, &run)
+}
+
+/// The dense generalised Newton on rank 0 (from the warm records of a load step, or the
+/// frictionless solution), its outcome broadcast to every rank. Collective.
+fn dense_phase(
+    ctx: &Ctx,
+    p: &ContactProblem,
+    ns: &NewtonSettings,
+    kept: &Kept,
+    warm: Option<&WarmStart>,
+) -> DenseCoulomb {
+    let (b, dim) = (p.boundary, p.mesh.dim);
+    let n = kept.comp.list.len();
+    let mz = kept.free.dirichlet_free().ncols();
     let warm_records = warm.map(|w| gather_records(ctx, w.nodes));
     let mut packed = Vec::new();
     if ctx.rank == 0 {
         let run = guarded("coulomb-dense-steps", || {
-            let cb = candidate_boundary(&kept, b, dim);
-            let active: Vec<bool> = kept.comp.list.iter().map(|&i| kept.active[i]).collect();
-            let lambda_n: Vec<f64> = kept.comp.list.iter().map(|&i| kept.lambda[i]).collect();
+            let cb = candidate_boundary(kept, b, dim);
             let g = mode_parts(&kept.free, &cb, dim);
             let phi = kept.free.free_load();
             let dense = Dense {
@@ -533,7 +554,12 @@ pub(super) fn solve(
             };
             let (start, u_prev) = match &warm_records {
                 Some(all) => warm_start(all, &kept.comp.list, dim),
-                None => dense.frictionless_start(&active, &lambda_n),
+                None => {
+                    let list = &kept.comp.list;
+                    let active: Vec<bool> = list.iter().map(|&i| kept.active[i]).collect();
+                    let lambda_n: Vec<f64> = list.iter().map(|&i| kept.lambda[i]).collect();
+                    dense.frictionless_start(&active, &lambda_n)
+                }
             };
             dense.run(&start, u_prev)
         });
@@ -542,45 +568,22 @@ pub(super) fn solve(
             .pack();
     }
     ctx.broadcast_f64s(&mut packed);
-    let run = DenseCoulomb::unpack(&packed, n, dim, mz);
-    summary.dense_seconds = t.elapsed().as_secs_f64();
-    summary.steps = run.steps.len();
-    let history = record_steps(ctx, &run, n);
-    if let Err(why) = run.end {
-        say!(
-            ctx,
-            "coulomb: condensed: {why}; the plain path from the frictionless solution"
-        );
-        summary.outcome = "fallback";
-        summary.reason = Some(why);
-        return Ok(CoulombCondensed::Fallback(summary));
-    }
+    DenseCoulomb::unpack(&packed, n, dim, mz)
+}
 
-    // w = K_p⁻¹ (f − Q λ): one expansion solve
-    let t = Instant::now();
-    let lam = if ctx.rank == 0 {
-        run.lambda.clone()
-    } else {
-        Vec::new()
-    };
-    let f_root = std::mem::take(&mut kept.f_root);
-    let w = match kept
-        .comp
-        .expand_u(ctx, &kept.cand, (&f_root, kept.n_local), &lam)
-    {
-        Ok(w) => w,
-        Err(why) => {
-            say!(
-                ctx,
-                "coulomb: condensed: {why}; the plain path from the frictionless solution"
-            );
-            summary.outcome = "fallback";
-            summary.reason = Some(why);
-            return Ok(CoulombCondensed::Fallback(summary));
-        }
-    };
-    ctx.agree(reduced.set_solution_local(&w).map_err(RunError::from))?;
-    // the dense states on this rank's contact nodes (the others inactive, λ = 0)
+/// The condensed solve stops: said in the log, the plain path from the frictionless solution.
+fn give_up(ctx: &Ctx, mut summary: CoulombCondensedSummary, why: String) -> CoulombCondensed {
+    say!(
+        ctx,
+        "coulomb: condensed: {why}; the plain path from the frictionless solution"
+    );
+    summary.outcome = "fallback";
+    summary.reason = Some(why);
+    CoulombCondensed::Fallback(summary)
+}
+
+/// The dense states on this rank's contact nodes (the others inactive, λ = 0). Local.
+fn local_set(kept: &Kept, b: &ContactBoundary, run: &DenseCoulomb) -> ActiveSet {
     let mut pos = vec![usize::MAX; kept.cand.n];
     for (q, &i) in kept.comp.list.iter().enumerate() {
         pos[i] = q;
@@ -590,27 +593,47 @@ pub(super) fn solve(
         q: [0.0; 2],
         r: [0.0; 2],
     };
-    let local: Vec<usize> = (0..b.nodes.len()).map(|i| pos[b.offset + i]).collect();
-    let set = ActiveSet {
-        normal: local
-            .iter()
-            .map(|&q| q != usize::MAX && run.active[q])
-            .collect(),
+    let on = |i: usize| {
+        let q = pos[b.offset + i];
+        (q != usize::MAX && run.active[q]).then_some(q)
+    };
+    ActiveSet {
+        normal: (0..b.nodes.len()).map(|i| on(i).is_some()).collect(),
         tangential: Some(
-            local
-                .iter()
-                .map(|&q| {
-                    let stick = q != usize::MAX && run.active[q] && !run.slip[q];
-                    if stick {
-                        CoulombRow::Stick
-                    } else {
-                        zero
-                    }
+            (0..b.nodes.len())
+                .map(|i| match on(i) {
+                    Some(q) if !run.slip[q] => CoulombRow::Stick,
+                    _ => zero,
                 })
                 .collect(),
         ),
         spring_floor: 0.0,
-    };
+    }
+}
+
+/// An expanded iterate checked on every contact node.
+struct Checked {
+    it: Iterate,
+    u: crate::petsc::Vector,
+    totals: StepTotals,
+    /// The final set leaves a free rigid mode free (the plain path pins it: not unique).
+    loose: bool,
+}
+
+/// u = w + R z α from this rank's rows `w`, (3.28) and the set update (3.23)/(F5) with the
+/// dense states on every contact node, and whether the set holds every free mode. Collective.
+fn check(
+    ctx: &Ctx,
+    p: &ContactProblem,
+    reduced: &mut ReducedSystem,
+    ns: &NewtonSettings,
+    kept: &Kept,
+    run: &DenseCoulomb,
+    w: &[f64],
+) -> Result<Checked, RunError> {
+    let (b, dim) = (p.boundary, p.mesh.dim);
+    ctx.agree(reduced.set_solution_local(w).map_err(RunError::from))?;
+    let set = local_set(kept, b, run);
     let mut it = Iterate::new(b.nodes.len(), w.len(), true);
     reduced.recover(p.sys, b, &set, &mut it)?; // (3.28) on w (A ρ = 0)
                                                // u = w + ρ, ρ = R z α: the free modes' motion
@@ -625,7 +648,6 @@ pub(super) fn solve(
     let scale = threshold_scale(ctx, b, &it.nodes, ns.law, ns.c);
     let up = set.update(&it, b, ns.law, ns.c, scale, dim); // (3.23) / (F5)
     let totals = up.reduce(ctx, b, free.modes(), dim);
-    // a mode the final set leaves free: the plain path pins it (not unique)
     let loose = if z.ncols() > 0 {
         let gram = set.summarise(ctx, b, free.modes(), dim).gram;
         let mut fin = FreeModes::new(
@@ -642,9 +664,30 @@ pub(super) fn solve(
     } else {
         false
     };
-    summary.expansion_seconds = t.elapsed().as_secs_f64();
-    // where the dense steps stalled above DENSE_RESIDUAL_TOL the plain path confirms from the
-    // expanded iterate: one LU step to round-off
+    Ok(Checked {
+        it,
+        u,
+        totals,
+        loose,
+    })
+}
+
+/// The checked iterate as the result (no state changed, ‖R‖₂ ≤ DENSE_RESIDUAL_TOL ‖λ‖₂, every
+/// free mode held), else as the plain path's start — where the dense steps stalled above the
+/// bound, the plain path confirms from it in one LU step to round-off. Collective (log).
+fn finish(
+    ctx: &Ctx,
+    reduced: &ReducedSystem,
+    (mut summary, history, n): (CoulombCondensedSummary, Vec<StepInfo>, usize),
+    checked: Checked,
+    run: &DenseCoulomb,
+) -> Result<CoulombCondensed, RunError> {
+    let Checked {
+        it,
+        u,
+        totals,
+        loose,
+    } = checked;
     let residual_ok = totals.residual <= DENSE_RESIDUAL_TOL * totals.lambda_norm;
     let u_local = u.to_local_vec()?;
     let result = NewtonResult {

@@ -437,14 +437,8 @@ fn run_method(
                         };
                         let mut nr =
                             newton::semismooth_newton(ctx, problem, &mut reduced, ns, Some(&w))?;
-                        // the frictionless steps first in the record (and their factorisations)
-                        let mut history = first.history;
-                        for mut h in std::mem::take(&mut nr.history) {
-                            h.step += history.len();
-                            history.push(h);
-                        }
-                        nr.steps = history.len();
-                        nr.history = history;
+                        // the start's steps first in the record (and their factorisations)
+                        after(first.history, &mut nr);
                         nr
                     }
                     _ => newton::semismooth_newton(ctx, problem, &mut reduced, ns, warm)?,
@@ -685,6 +679,17 @@ fn fixed_point(
     )))
 }
 
+/// `r`'s steps after `first` in its record (numbered on). Local.
+fn after(first: Vec<StepInfo>, r: &mut NewtonResult) {
+    let mut history = first;
+    for mut h in std::mem::take(&mut r.history) {
+        h.step += history.len();
+        history.push(h);
+    }
+    r.steps = history.len();
+    r.history = history;
+}
+
 /// How Coulomb's generalised Newton begins (`coulomb_start`).
 enum Begin {
     /// Solved on the contact unknowns and checked on every contact node (coulomb_condensed).
@@ -787,13 +792,7 @@ fn coulomb_start(
     if let Some(kept) = kept {
         let first = std::mem::take(&mut nr.history);
         let joined = |mut r: NewtonResult| {
-            let mut history = first.clone();
-            for mut h in std::mem::take(&mut r.history) {
-                h.step += history.len();
-                history.push(h);
-            }
-            r.steps = history.len();
-            r.history = history;
+            after(first.clone(), &mut r);
             r
         };
         match coulomb_condensed::solve(ctx, problem, reduced, ns, kept, None)? {

@@ -183,6 +183,11 @@ pub struct ContactSettings {
     /// a motion): the contact condition is u_n + g0 − d·n ≥ 0 and friction acts on u_τ − d_τ
     /// (docs/obstacles.md, "Moving obstacles"). [`ContactSettings::at_factor`] sets it.
     pub displacement: [f64; 3],
+    /// `contact.force` (force control): the force at load factor 1.
+    pub force: Option<case::Motion>,
+    /// The force F of the step being solved (t·F, or F when held); 0 without force control.
+    /// The obstacle's displacement is then δ·F/|F| with the approach δ solved for.
+    pub force_now: [f64; 3],
     /// Tresca threshold g_R (1.44e); `None` without friction or with Coulomb.
     pub tresca_threshold: Option<f64>,
     /// Coulomb friction: the coefficient μ and the algorithm; `None` otherwise.
@@ -205,6 +210,7 @@ impl ContactSettings {
     /// Moves the obstacle to where it is at load factor t ([`case::Motion::at`]).
     pub fn at_factor(&mut self, t: f64) {
         self.displacement = self.motion.as_ref().map_or([0.0; 3], |m| m.at(t));
+        self.force_now = self.force.as_ref().map_or([0.0; 3], |m| m.at(t));
     }
 }
 
@@ -221,6 +227,8 @@ pub fn contact_settings(
         motion: cc.motion.clone(),
         // a single static solve is the problem at factor 1
         displacement: cc.motion.as_ref().map_or([0.0; 3], |m| m.at(1.0)),
+        force: cc.force.clone(),
+        force_now: cc.force.as_ref().map_or([0.0; 3], |m| m.at(1.0)),
         tresca_threshold: match cc.friction {
             Friction::Tresca { threshold } => Some(threshold),
             Friction::None | Friction::Coulomb { .. } => None,

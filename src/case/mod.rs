@@ -445,12 +445,17 @@ pub struct ContactSection {
     /// `contact.motion`: a rigid translation of the obstacle (docs/obstacles.md, "Moving
     /// obstacles"); None: the obstacle stays where it is given.
     pub motion: Option<Motion>,
+    /// `contact.force`: force control (docs/obstacles.md, "Force control"): the obstacle moves
+    /// along F/|F| by the unknown approach δ until the contact force along F/|F| is |F|
+    /// (frictionless only; never together with `motion`). Scaled with `[load]` as a motion.
+    pub force: Option<Motion>,
     pub friction: Friction,
     pub rigid_modes: RigidModeHandling,
 }
 
 /// A rigid translation m of the obstacle, reached at load factor 1: at factor t the obstacle
-/// has moved by t·m (by m in every step with `ramp = false`).
+/// has moved by t·m (by m in every step with `ramp = false`). The same record holds a
+/// prescribed force (`contact.force`), scaled alike.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Motion {
     /// m, one component per dimension.
@@ -460,6 +465,20 @@ pub struct Motion {
     /// The key of the vector in the case file (`contact.motion` or `contact.motion.value`).
     pub key: &'static str,
 }
+
+/// `contact.motion`'s keys: the vector, the vector in a table, what it is.
+const MOTION_KEYS: (&str, &str, &str) = (
+    "contact.motion",
+    "contact.motion.value",
+    "the obstacle's translation",
+);
+
+/// `contact.force`'s keys.
+const FORCE_KEYS: (&str, &str, &str) = (
+    "contact.force",
+    "contact.force.value",
+    "the force pressing the obstacle onto the body",
+);
 
 impl Motion {
     /// The obstacle's displacement at load factor t: t·m, or m when held (padded to 3).
@@ -716,7 +735,7 @@ impl Case {
         if let Some(c) = &self.contact {
             self.check_group("contact.group", &c.group, groups, Some(dim - 1))?;
             self.check_shape("contact.obstacle", &c.obstacle, dim)?;
-            if let Some(m) = &c.motion {
+            for m in [&c.motion, &c.force].into_iter().flatten() {
                 len(m.key.into(), m.value.len())?;
             }
         }
@@ -1076,6 +1095,9 @@ impl Reader<'_> {
                 Some(c) if c.friction != Friction::None => {
                     Some("solves frictionless contact only (use method = \"newton\" with friction)")
                 }
+                Some(c) if c.force.is_some() => {
+                    Some("has no force control (contact.force): use method = \"newton\"")
+                }
                 Some(_) => None,
             };
             if let Some(why) = why {
@@ -1354,7 +1376,14 @@ impl Reader<'_> {
         let t = self.table(
             &k,
             n,
-            &["group", "obstacle", "motion", "friction", "rigid_modes"],
+            &[
+                "group",
+                "obstacle",
+                "motion",
+                "force",
+                "friction",
+                "rigid_modes",
+            ],
         )?;
         let (gk, g) = self.required(&t, "group")?;
         let group = self.name(&gk, g)?;
@@ -1362,11 +1391,30 @@ impl Reader<'_> {
         let obstacle = self.obstacle(&ok, o)?;
         let motion = match t.get("motion") {
             None => None,
-            Some((mk, m)) => Some(self.motion(&mk, m)?),
+            Some((mk, m)) => Some(self.motion(&mk, m, MOTION_KEYS)?),
         };
         let friction = match t.get("friction") {
             None => Friction::None,
             Some((fk, f)) => self.friction(&fk, f)?,
+        };
+        let force = match t.get("force") {
+            None => None,
+            Some((fk, f)) => {
+                let force = self.motion(&fk, f, FORCE_KEYS)?;
+                let why = if motion.is_some() {
+                    Some("prescribes the force instead of the motion: give one of them")
+                } else if friction != Friction::None {
+                    Some("(force control) is frictionless only: remove contact.friction")
+                } else if force.value.iter().all(|&x| x == 0.0) {
+                    Some("is zero: force control needs a direction (a nonzero vector)")
+                } else {
+                    None
+                };
+                if let Some(why) = why {
+                    return Err(self.err(&fk, f.loc, format!("contact.force {why}")));
+                }
+                Some(force)
+            }
         };
         let rigid_modes = match t.get("rigid_modes") {
             None => RigidModeHandling::Auto,
@@ -1383,13 +1431,16 @@ impl Reader<'_> {
             group,
             obstacle,
             motion,
+            force,
             friction,
             rigid_modes,
         }))
     }
 
-    /// `contact.motion`: a vector `[dx, dy(, dz)]`, or a table `{ value = [...], ramp = false }`.
-    fn motion(&self, key: &str, n: &Node) -> Res<Motion> {
+    /// `contact.motion` (`contact.force`): a vector `[dx, dy(, dz)]`, or a table
+    /// `{ value = [...], ramp = false }`; `keys` names the vector and its table entry.
+    fn motion(&self, key: &str, n: &Node, keys: (&'static str, &'static str, &str)) -> Res<Motion> {
+        let (plain, in_table, what) = keys;
         if let Kind::Table(_) = n.kind {
             let t = self.table(key, n, &["value", "ramp"])?;
             let (vk, v) = self.required(&t, "value")?;
@@ -1401,22 +1452,23 @@ impl Reader<'_> {
             return Ok(Motion {
                 value,
                 ramp,
-                key: "contact.motion.value",
+                key: in_table,
             });
         }
-        let value =
-            match n.kind {
-                Kind::Array(_) => self.vector(key, n)?,
-                _ => return Err(self.type_err(
+        let value = match n.kind {
+            Kind::Array(_) => self.vector(key, n)?,
+            _ => {
+                return Err(self.type_err(
                     key,
                     n,
-                    "an array of numbers (the obstacle's translation) or a table { value, ramp }",
-                )),
-            };
+                    &format!("an array of numbers ({what}) or a table {{ value, ramp }}"),
+                ))
+            }
+        };
         Ok(Motion {
             value,
             ramp: true,
-            key: "contact.motion",
+            key: plain,
         })
     }
 

@@ -518,6 +518,7 @@ fn finish(
         rows_seconds: reduced.rows_seconds,
         pinned_final: ex.pins,
         cycle_detected_at: None,
+        approach: None,
     };
     Ok(Condensed::Solved(Box::new(result), summary))
 }

@@ -12,6 +12,7 @@ pub mod condensed;
 pub mod coulomb_condensed;
 pub mod cycle;
 pub mod dense;
+pub mod force;
 pub mod newton;
 pub mod predictor;
 pub mod reduced;
@@ -97,6 +98,10 @@ pub struct ContactSummary {
     /// A moving obstacle (`contact.motion`): its displacement d in this solve.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub obstacle_displacement: Option<Vec<f64>>,
+    /// Force control (`contact.force`): the approach δ solved for (the obstacle moved by
+    /// δ F/|F|).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub approach: Option<f64>,
     pub half_width: Option<f64>,
     pub kkt: Kkt,
     #[serde(skip_serializing_if = "Option::is_none")]
@@ -147,6 +152,8 @@ pub struct ContactSolution {
 pub struct StepDelta {
     pub nodes: Vec<NodeResult>,
     pub u_local: Vec<f64>,
+    /// The obstacle's displacement since the previous step.
+    pub obstacle: [f64; 3],
 }
 
 impl ContactSolution {
@@ -199,7 +206,7 @@ impl ContactSolution {
 /// This solve's change since `prev` (same mesh and boundary). Local.
 fn step_delta(
     prev: &ContactSolution,
-    nodes: &[NodeResult],
+    (nodes, displacement): (&[NodeResult], [f64; 3]),
     u: &[f64],
     u_prev: &[f64],
 ) -> StepDelta {
@@ -221,6 +228,7 @@ fn step_delta(
             })
             .collect(),
         u_local: u.iter().zip(u_prev).map(|(a, b)| a - b).collect(),
+        obstacle: crate::geom::sub(displacement, prev.obstacle_displacement),
     }
 }
 
@@ -265,10 +273,17 @@ pub fn solve(
     )?;
     let coords = solver::near_null_space_coordinates(ctx, mesh, layout, solver_section.preset)?;
     let c = complementarity_parameter(ctx, settings, &b, dim);
+    let force_control = force_control(settings, previous);
     // the start: the previous step's solution, or its extrapolation along its own increment
+    // (under force control against the obstacle where the previous step left it)
+    let at_start = force_control.as_ref().map(|fc| {
+        let mut placed = b.clone();
+        force::Approach::new(&b, fc).place(&mut placed);
+        placed
+    });
     let start = previous
         .zip(prev_u.clone())
-        .map(|(prev, u)| prev.start(&b, u, c));
+        .map(|(prev, u)| prev.start(at_start.as_ref().unwrap_or(&b), u, c));
     let warm = previous
         .zip(start.as_ref())
         .map(|(prev, (nodes, u))| WarmStart {
@@ -283,7 +298,8 @@ pub fn solve(
         sys,
     };
     // the half-space predictor's model: frictionless on the iterative preset only (newton.rs)
-    let predicts = !friction && matches!(solver_section.preset, Preset::Iterative);
+    let predicts =
+        !friction && matches!(solver_section.preset, Preset::Iterative) && force_control.is_none();
     let halfspace = predicts.then(|| predictor::HalfSpace {
         modulus: settings.contact_modulus,
         dim,
@@ -297,6 +313,7 @@ pub fn solve(
         rigid: settings.rigid_modes,
         halfspace: halfspace.as_ref(),
         estimate: false,
+        force: force_control.as_ref(),
     };
     let (mut nr, outer_steps, condensed_summary) = run_method(
         ctx,
@@ -313,10 +330,20 @@ pub fn solve(
             k.bound = mu * (-r.lambda_n).max(0.0);
         }
     }
-    let (mut contact, table) = final_state(ctx, sys, &b, &nr, friction, dim)?;
-    if settings.motion.is_some() {
-        contact.obstacle_displacement = Some(settings.displacement[..dim].to_vec());
+    let mut displacement = settings.displacement;
+    if let Some((delta, fc)) = nr.approach.zip(force_control.as_ref()) {
+        // the obstacle where the force put it: the gaps to it for the certificates and output
+        let e = fc.direction();
+        displacement = e.map(|x| delta * x);
+        for k in b.nodes.iter_mut() {
+            k.gap -= delta * crate::geom::dot(k.frame.n, e);
+        }
     }
+    let (mut contact, table) = final_state(ctx, sys, &b, &nr, friction, dim)?;
+    if settings.motion.is_some() || nr.approach.is_some() {
+        contact.obstacle_displacement = Some(displacement[..dim].to_vec());
+    }
+    contact.approach = nr.approach;
     let mut newton = newton_summary(settings, solver_section, c, &mut nr, outer_steps, previous);
     if let Some(cs) = condensed_summary {
         // K_p's with the Schur complement, one per round of candidates (the dense steps
@@ -325,7 +352,12 @@ pub fn solve(
         newton.condensed = Some(cs);
     }
     let delta = match previous.zip(prev_u) {
-        Some((prev, u_prev)) => Some(step_delta(prev, &nr.nodes, &nr.u.to_local_vec()?, &u_prev)),
+        Some((prev, u_prev)) => Some(step_delta(
+            prev,
+            (&nr.nodes, displacement),
+            &nr.u.to_local_vec()?,
+            &u_prev,
+        )),
         None => None,
     };
     Ok(ContactSolution {
@@ -341,8 +373,33 @@ pub fn solve(
         nodes: nr.nodes,
         delta,
         predict: 0.0,
-        obstacle_displacement: settings.displacement,
+        obstacle_displacement: displacement,
     })
+}
+
+/// Force control of this solve (`contact.force`): the force at this load factor, δ from the
+/// previous load step's obstacle displacement (its component along the force; extrapolated
+/// along that step's increment as the rest of its start, [`ContactSolution::start`]), else 0.
+fn force_control(
+    settings: &ContactSettings,
+    previous: Option<&ContactSolution>,
+) -> Option<force::ForceControl> {
+    settings.force.as_ref()?;
+    let mut fc = force::ForceControl {
+        force: settings.force_now,
+        start: 0.0,
+        file: settings.file.clone(),
+    };
+    if let Some(prev) = previous {
+        let mut d = prev.obstacle_displacement;
+        if let Some(delta) = prev.delta.as_ref().filter(|_| prev.predict > 0.0) {
+            for (x, dx) in d.iter_mut().zip(delta.obstacle) {
+                *x += prev.predict * dx;
+            }
+        }
+        fc.start = crate::geom::dot(d, fc.direction());
+    }
+    Some(fc)
 }
 
 /// The complementarity parameter c: the case's, or E / h_c; said in the log. Collective.
@@ -396,6 +453,7 @@ fn run_method(
             let mut reduced = ReducedSystem::new(ctx, sys, b, coords, dim)?;
             let friction = settings.tresca_threshold.is_some() || settings.coulomb.is_some();
             let condense = !friction
+                && ns.force.is_none()
                 && solver_section.reuse == Reuse::Auto
                 && b.n_global > 0
                 && b.n_global <= condensed::MAX_CONTACT_NODES
@@ -422,7 +480,12 @@ fn run_method(
             if let Begin::Solved(nr) = start {
                 return Ok((nr, None, condensed_summary));
             }
-            reduced.enable_reuse(ctx, solver_section.reuse, friction)?;
+            // force control solves its lift on the step's own factorisation (force.rs)
+            let reuse = match ns.force {
+                Some(_) => Reuse::Never,
+                None => solver_section.reuse,
+            };
+            reduced.enable_reuse(ctx, reuse, friction)?;
             match settings.coulomb {
                 Some((mu, CoulombAlgorithm::FixedPoint)) => {
                     let (nr, outer) = fixed_point(ctx, problem, &mut reduced, ns, mu, warm)?;
@@ -498,6 +561,7 @@ fn final_state(
         max_pressure: table.max_pressure(),
         total_force: total_force[..dim].to_vec(),
         obstacle_displacement: None,
+        approach: None,
         half_width,
         kkt,
         friction: friction_certificate,
@@ -986,6 +1050,7 @@ fn snesvi_solve(
         rows_seconds: r.setup_seconds,
         pinned_final: pins,
         cycle_detected_at: None,
+        approach: None,
     })
 }
 

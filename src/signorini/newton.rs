@@ -14,6 +14,7 @@
 use super::active_set::{threshold_scale, ActiveSet, Iterate, Law, SetSummary, StepTotals};
 use super::boundary::{ContactBoundary, NodeResult};
 use super::cycle::{decide, CycleGuard, Decision, Seen, SetKey};
+use super::force::{self, Approach, Correction, ForceControl};
 use super::predictor::{self, HalfSpace, PredictorStep};
 use super::reduced::{AmgStep, ReducedSystem, ReuseStep, SolveKind, StepSolve};
 use super::rigid::{Balance, FreeModes, Motion, Pin};
@@ -39,6 +40,8 @@ pub struct NewtonSettings<'a> {
     /// A frictionless estimate for a start (condensed path): the pins carry the load in the
     /// modes the set leaves free instead of the balance test ([`super::dense::Dense`]).
     pub estimate: bool,
+    /// Force control (`contact.force`, force.rs): the approach δ is an unknown of the loop.
+    pub force: Option<&'a ForceControl>,
 }
 
 impl NewtonSettings<'_> {
@@ -122,6 +125,8 @@ pub struct NewtonResult {
     pub pinned_final: Vec<Pin>,
     /// Step after which a recurring set switched the iteration to least-index updates.
     pub cycle_detected_at: Option<usize>,
+    /// Force control: the approach δ of the result (the obstacle moved by δ F/|F|).
+    pub approach: Option<f64>,
 }
 
 /// Default c = E / h_c with h_c the mean contact mesh size (w_k^(1/(d−1)) over all contact
@@ -167,6 +172,8 @@ struct Loop<'a> {
     /// The residual of the last step that changed no state and left u unchanged (below
     /// tol_u), for [`COULOMB_RESIDUAL_STALL`].
     last_still_residual: Option<f64>,
+    /// Force control: the approach δ and the gaps it moves.
+    approach: Option<Approach>,
 }
 
 /// The start "auto": the initially touching nodes (the "gap" start), except for a
@@ -196,6 +203,15 @@ pub fn semismooth_newton(
     let (mesh, layout, b, fixed, sys) = (p.mesh, p.layout, p.boundary, p.fixed, p.sys);
     let dim = mesh.dim;
     let free = FreeModes::new(ctx, mesh, layout, fixed, b, &reduced.f_local, s.rigid);
+    let approach = match s.force {
+        Some(fc) if free.floats() => return Err(force::floating(fc)),
+        Some(fc) => Some(Approach::new(b, fc)),
+        None => None,
+    };
+    let mut placed = b.clone();
+    if let Some(ap) = &approach {
+        ap.place(&mut placed); // the gaps at the start's δ
+    }
     reduced.set_pins(sys, layout, free.pins())?; // none yet (the system may be reused)
                                                  // The half-space predictor (iterative preset's reuse path, frictionless, the "auto" start,
                                                  // no warm start): the first solve has no active node (u⁰ = K_p⁻¹ f, the model's d₀),
@@ -211,7 +227,7 @@ pub fn semismooth_newton(
         auto_start(s.section.init, s.friction(), &free)
     };
     let set = match warm {
-        None => ActiveSet::initial(b, init, s.law, s.c, mesh.extent(), dim),
+        None => ActiveSet::initial(&placed, init, s.law, s.c, mesh.extent(), dim),
         Some(w) => {
             let scale = threshold_scale(ctx, b, w.nodes, s.law, s.c);
             ActiveSet::warm(b, w.nodes, s.law, s.c, scale, dim)
@@ -237,8 +253,9 @@ pub fn semismooth_newton(
         guard,
         it,
         rho: [0.0; 6],
-        shifted: b.clone(),
+        shifted: placed,
         last_still_residual: None,
+        approach,
     };
     let mut history = Vec::new();
     let mut converged = false;
@@ -260,6 +277,9 @@ pub fn semismooth_newton(
                 .fit_motion(ctx, b, &lp.set.normal, &lp.summary.gram, mesh);
             lp.free.shift(b, &lp.rho, &mut lp.shifted);
         }
+        if let Some(ap) = &lp.approach {
+            ap.place(&mut lp.shifted); // the gaps at δ_ℓ
+        }
         let bs = &lp.shifted;
         reduced.write(ctx, sys, layout, bs, &lp.set, lp.free.pins())?; // (3.29) / (3.42)
         reduced.set_inexact(!plan.exact);
@@ -271,8 +291,18 @@ pub fn semismooth_newton(
         let reused = solved.reuse.is_some() && solved.kind == SolveKind::Reuse;
         ensure_converged(step, &solved.info)?;
         reduced.recover(sys, bs, &lp.set, &mut lp.it)?; // (3.28)
+        let touch = lp.bordered_step(reduced, step)?;
+        let bs = &lp.shifted;
         let scale = threshold_scale(ctx, bs, &lp.it.nodes, s.law, s.c);
         let mut update = lp.set.update(&lp.it, bs, s.law, s.c, scale, dim); // (3.23) / (3.33) / (F5)
+        if let Some(tag) = touch {
+            for (k, a) in bs.nodes.iter().zip(update.next.normal.iter_mut()) {
+                if k.tag == tag && !*a {
+                    *a = true;
+                    update.changed += 1;
+                }
+            }
+        }
         let mut predicted = None;
         let mut exact_from_prediction = None;
         if let Some(hs) = s.halfspace.filter(|_| plan.predict) {
@@ -326,6 +356,7 @@ pub fn semismooth_newton(
         rows_seconds,
         pinned_final: lp.free.pins().to_vec(),
         cycle_detected_at: lp.guard.detected_at,
+        approach: lp.approach.map(|a| a.delta),
         u,
     })
 }
@@ -658,6 +689,48 @@ impl Loop<'_> {
                 Ok(false)
             }
         }
+    }
+
+    /// Force control: the step's δ from the force balance (force.rs), u and λ moved with it
+    /// and the gaps placed; the tag of the node that touches when no node was active. Logs
+    /// δ and the contact force along F before the step. Collective.
+    fn bordered_step(
+        &mut self,
+        reduced: &mut ReducedSystem,
+        step: usize,
+    ) -> Result<Option<u64>, RunError> {
+        let Some(ap) = self.approach.as_mut() else {
+            return Ok(None);
+        };
+        let before = (ap.delta, ap.force_along(self.ctx, &self.it));
+        let c = force::correct(
+            self.ctx,
+            (self.p.sys, self.p.layout, self.p.mesh.dim),
+            reduced,
+            &self.set,
+            self.free.pins(),
+            self.summary.n_active,
+            &mut self.shifted,
+            ap,
+            &mut self.it,
+        )?;
+        let how = match c {
+            Correction::Bordered => "from the force balance".to_string(),
+            Correction::Touch(tag) => format!("until contact node {tag} touches"),
+        };
+        say!(
+            self.ctx,
+            "force control, step {step}: at δ = {:.6e} the contact force along F is {:.6e} \
+             (|F| = {:.6e}); δ → {:.6e} {how}",
+            before.0,
+            before.1,
+            ap.magnitude,
+            ap.delta
+        );
+        Ok(match c {
+            Correction::Touch(tag) => Some(tag),
+            Correction::Bordered => None,
+        })
     }
 
     fn take(&mut self, set: ActiveSet, summary: SetSummary) {

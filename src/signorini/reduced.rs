@@ -724,26 +724,14 @@ impl ReducedSystem {
         let cmap = ConstraintMap::gather(ctx, layout, b, set, pins, dim);
         let mut rhs_add: Vec<(PInt, f64)> = Vec::new();
         let mut rhs_updates: Vec<(usize, f64)> = Vec::new();
-        // (rows of A, constraint, first local row) of every node this rank rewrites
-        let mut writes: Vec<(&NodeRows, NodeConstraint, usize)> = Vec::new();
-        for (i, (k, r)) in b.nodes.iter().zip(&self.contact_rows).enumerate() {
-            let Some(p) = set.prescribed(b, i, dim) else {
-                continue; // (3.29): rows of inactive frictionless nodes stay as in A
-            };
-            let mut me = cmap
-                .get(layout.node_global[k.node])
-                .expect("gathered")
-                .clone();
-            if let Some(row) = &p.slip {
-                me.add_slip_row(&k.frame, row, dim);
-            }
-            writes.push((r, me, k.local_row));
-        }
-        for (v, r) in &self.pin_rows {
-            let gv = *v;
-            let me = cmap.get(gv).expect("pins are in the map").clone();
-            writes.push((r, me, gv * dim - self.row_lo));
-        }
+        let writes = rewrites(
+            (&self.contact_rows, &self.pin_rows, self.row_lo),
+            layout,
+            b,
+            set,
+            &cmap,
+            dim,
+        );
         if let Some(re) = &mut self.reuser {
             let zero = [[0.0; 3]; 3];
             let springs = writes
@@ -763,7 +751,7 @@ impl ReducedSystem {
         for (r, me, lr) in &writes {
             let fk = &self.f_local[*lr..*lr + dim];
             let rk = write_symmetric_constraint(
-                &mut self.s,
+                Some(&mut self.s),
                 r,
                 me,
                 fk,
@@ -1030,6 +1018,86 @@ impl ReducedSystem {
         self.u.gather(idx)
     }
 
+    /// This rank's rows of the last solution.
+    pub fn solution_local(&self) -> petsc::Result<Vec<f64>> {
+        self.u.to_local_vec()
+    }
+
+    /// The lift of force control (force.rs): the step's system (3.29) with f = 0, no Dirichlet
+    /// values and the values `b` and `set` prescribe (the active normals' u_n = −g_k), solved
+    /// on the last solve's factorisation or preconditioner (S is unchanged since: no new
+    /// factorisation). Returns this rank's rows of the solution u¹ and of A u¹. The plain path
+    /// only (no reuse solver). Collective.
+    pub fn solve_lift(
+        &mut self,
+        ctx: &Ctx,
+        sys: &System,
+        layout: &Layout,
+        b: &ContactBoundary,
+        set: &ActiveSet,
+        pins: &[Pin],
+    ) -> petsc::Result<(Vec<f64>, Vec<f64>)> {
+        assert!(
+            self.reuser.is_none() && self.amg.is_none(),
+            "force control solves on the plain path"
+        );
+        let t = Instant::now();
+        let dim = self.dim;
+        let cmap = ConstraintMap::gather(ctx, layout, b, set, pins, dim);
+        let writes = rewrites(
+            (&self.contact_rows, &self.pin_rows, self.row_lo),
+            layout,
+            b,
+            set,
+            &cmap,
+            dim,
+        );
+        let zero = [0.0; 3];
+        let mut rhs_add: Vec<(PInt, f64)> = Vec::new();
+        let mut rhs_updates: Vec<(usize, f64)> = Vec::new();
+        for (r, me, lr) in &writes {
+            let rk = write_symmetric_constraint(
+                None,
+                r,
+                me,
+                &zero[..dim],
+                dim,
+                |j| cmap.get(j),
+                &mut rhs_add,
+                &mut self.buf,
+            )?;
+            for (a, v) in rk.iter().enumerate().take(dim) {
+                rhs_updates.push((lr + a, *v));
+            }
+        }
+        let mut rhs = self.rhs.duplicate()?;
+        rhs.set_all(0.0)?;
+        let (idx, vals): (Vec<PInt>, Vec<f64>) = rhs_add.into_iter().unzip();
+        crate::par::add_in_rank_order(&mut rhs, &idx, &vals)?;
+        rhs.assemble()?;
+        rhs.write(|x| {
+            for &(i, v) in &rhs_updates {
+                x[i] = v;
+            }
+        })?;
+        self.rows_seconds += t.elapsed().as_secs_f64();
+        let mut x = self.u.duplicate()?;
+        x.set_all(0.0)?;
+        let info = self.ls.solve(&rhs, &mut x)?;
+        if !info.converged() {
+            return Err(petsc::PetscError {
+                code: -1,
+                message: format!(
+                    "the force-control lift did not converge ({} iterations)",
+                    info.iterations
+                ),
+                location: format!("{}:{}", file!(), line!()),
+            });
+        }
+        sys.a.mult(&x, &mut self.au)?;
+        Ok((x.to_local_vec()?, self.au.to_local_vec()?))
+    }
+
     /// Replaces this rank's rows of the solution (what `recover` and `solution` read).
     pub fn set_solution_local(&mut self, v: &[f64]) -> petsc::Result<()> {
         self.u.write(|x| x.copy_from_slice(v))
@@ -1088,6 +1156,40 @@ impl ReducedSystem {
     }
 }
 
+/// (rows of A, constraint, first local row) of every node this rank rewrites: the contact
+/// nodes `set` prescribes (rows of inactive frictionless nodes stay as in A (3.29)) and the
+/// owned pinned nodes. `rows` = (the contact nodes' rows, the pinned nodes' rows, first
+/// global row of this rank).
+fn rewrites<'r>(
+    rows: (&'r [NodeRows], &'r [(usize, NodeRows)], usize),
+    layout: &Layout,
+    b: &ContactBoundary,
+    set: &ActiveSet,
+    cmap: &ConstraintMap,
+    dim: usize,
+) -> Vec<(&'r NodeRows, NodeConstraint, usize)> {
+    let (contact_rows, pin_rows, row_lo) = rows;
+    let mut writes = Vec::new();
+    for (i, (k, r)) in b.nodes.iter().zip(contact_rows).enumerate() {
+        let Some(p) = set.prescribed(b, i, dim) else {
+            continue;
+        };
+        let mut me = cmap
+            .get(layout.node_global[k.node])
+            .expect("gathered")
+            .clone();
+        if let Some(row) = &p.slip {
+            me.add_slip_row(&k.frame, row, dim);
+        }
+        writes.push((r, me, k.local_row));
+    }
+    for (v, r) in pin_rows {
+        let me = cmap.get(*v).expect("pins are in the map").clone();
+        writes.push((r, me, v * dim - row_lo));
+    }
+    writes
+}
+
 fn matmul3(a: &[[f64; 3]; 3], b: &[[f64; 3]; 3], dim: usize) -> [[f64; 3]; 3] {
     let mut c = [[0.0; 3]; 3];
     for i in 0..dim {
@@ -1106,9 +1208,10 @@ fn matmul3(a: &[[f64; 3]; 3], b: &[[f64; 3]; 3], dim: usize) -> [[f64; 3]; 3] {
 /// and symmetric (positive definite without friction), so CG/AMG and Cholesky apply.
 /// `constrained(j)` gives the constraint of global node j, if any. Returns the node's
 /// right-hand side; the neighbour corrections are appended to `rhs_add` (global row, value).
+/// With `s` = None only the right-hand side is formed (S unchanged).
 #[allow(clippy::too_many_arguments)]
 pub fn write_symmetric_constraint<'c>(
-    s: &mut Matrix,
+    mut s: Option<&mut Matrix>,
     rows: &NodeRows,
     me: &NodeConstraint,
     f_k: &[f64],
@@ -1198,7 +1301,9 @@ pub fn write_symmetric_constraint<'c>(
                 buf.extend_from_slice(&row[..dim]);
             }
             let mrows: Vec<PInt> = (0..dim).map(|c| (j * dim + c) as PInt).collect();
-            s.insert_values(&mrows, &mirror_cols[..dim], buf)?;
+            if let Some(s) = s.as_mut() {
+                s.insert_values(&mrows, &mirror_cols[..dim], buf)?;
+            }
             // rhs_j −= A_jk ū_k
             for a in 0..dim {
                 let v: f64 = (0..dim).map(|l| blk[l][a] * uk[l]).sum();
@@ -1209,8 +1314,10 @@ pub fn write_symmetric_constraint<'c>(
         }
         m += dim;
     }
-    for (a, row) in new_rows.iter().enumerate() {
-        s.insert_values(&[(rows.row + a) as PInt], &rows.cols, row)?;
+    if let Some(s) = s.as_mut() {
+        for (a, row) in new_rows.iter().enumerate() {
+            s.insert_values(&[(rows.row + a) as PInt], &rows.cols, row)?;
+        }
     }
     let mut rhs = [0.0; 3];
     let mut ft = [0.0; 3];

@@ -1,0 +1,171 @@
+//! Force control (`contact.force`, docs/obstacles.md "Force control"): the approach δ is an
+//! unknown of the active-set iteration. Prescribing the force that a displacement-controlled
+//! run reports gives back its motion and its solution (1, 2, 3 ranks, both presets); a ramped
+//! force from a gap touches first and ends where the static solve does; bad input is refused
+//! with the key named and exit code 2.
+
+mod common;
+
+use common::*;
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+
+/// The block [-1,1] × [0,1] (2 025 nodes), clamped at its bottom, under the circle of radius
+/// 0.5 centred at (0, 1.49): a gap of 0.01 at the top's centre.
+fn case() -> PathBuf {
+    repo("tests/cases/indent2d_sym.toml")
+}
+
+const AUTO: &str = "newton.init=\"auto\"";
+/// The displacement-controlled run: the circle moved down by 0.03.
+const DEPTH: f64 = 0.03;
+
+fn total_force(s: &Solved) -> Vec<f64> {
+    floats(get(&s.summary, &["contact", "total_force"]))
+}
+
+fn force_key(f: &[f64]) -> String {
+    format!("contact.force=[{:.17e}, {:.17e}]", f[0], f[1])
+}
+
+/// The force F that moving the circle by 0.03 takes, prescribed: δ = 0.03 and the same u and
+/// active set, to the solver's tolerance (1e-8 relative; the direct preset's result agrees to
+/// ~1e-14, the iterative preset's — GMRES to rtol — to ~1e-10), on 1, 2 and 3 ranks.
+#[test]
+fn force_control_inverts_displacement_control() {
+    let moved = solve(1, &case(), &[AUTO, "contact.motion=[0.0, -0.03]"]);
+    moved.assert_converged("displacement control");
+    let f = total_force(&moved);
+    assert!(f[1] < 0.0, "the circle pushes the block down: {f:?}");
+    let active = moved.active_node_ids();
+    assert!(active.len() > 10, "{active:?}");
+    for (np, preset) in [
+        (1, "direct"),
+        (2, "direct"),
+        (3, "direct"),
+        (2, "iterative"),
+    ] {
+        let preset = format!("solver.preset=\"{preset}\"");
+        let forced = solve(np, &case(), &[AUTO, &force_key(&f), &preset]);
+        forced.assert_converged("force control");
+        let delta = forced.f(&["contact", "approach"]);
+        assert!(
+            (delta - DEPTH).abs() <= 1e-8 * DEPTH,
+            "{np} ranks, {preset}: δ = {delta}"
+        );
+        let d = floats(get(&forced.summary, &["contact", "obstacle_displacement"]));
+        assert!(
+            (d[1] + delta).abs() <= 1e-12 * delta && d[0].abs() <= 1e-12 * delta,
+            "{d:?}"
+        );
+        let g = total_force(&forced);
+        assert!(
+            (g[1] - f[1]).abs() <= 1e-8 * f[1].abs(),
+            "{g:?} against {f:?}"
+        );
+        let du = forced.u_rel_diff(&moved);
+        assert!(du <= 1e-8, "{np} ranks, {preset}: |Δu|/|u| = {du:e}");
+        assert_eq!(forced.active_node_ids(), active, "{np} ranks, {preset}");
+    }
+}
+
+/// The circle raised to a gap of 0.11 and the force ramped over three load steps: the first
+/// step moves the circle until it touches, every step carries t·F (history.csv), the circle
+/// goes down step by step, and the last step is the static solve's.
+#[test]
+fn a_ramped_force_from_a_gap_touches_first_and_ends_at_the_static_solution() {
+    let raised = "contact.obstacle.center=[0.0, 1.6]";
+    let f = [0.0, -0.05];
+    let stat = solve(2, &case(), &[AUTO, raised, &force_key(&f)]);
+    stat.assert_converged("static force control");
+    let delta = stat.f(&["contact", "approach"]);
+    assert!(
+        delta > 0.11,
+        "the circle must first close the gap of 0.11: δ = {delta}"
+    );
+    assert!(
+        stat.run.output().contains("touches"),
+        "{}",
+        stat.run.output()
+    );
+    let ramp = solve(2, &case(), &[AUTO, raised, &force_key(&f), "load.steps=3"]);
+    let h = read_csv(&ramp.dir.join("history.csv"));
+    assert_eq!(h.len(), 3);
+    let mut last = 0.0;
+    for (i, r) in h.iter().enumerate() {
+        let t = (i + 1) as f64 / 3.0;
+        let fy = r.f("force_y");
+        assert!(
+            (fy - t * f[1]).abs() <= 1e-8 * f[1].abs(),
+            "step {}: {fy}",
+            i + 1
+        );
+        let y = r.f("obstacle_y");
+        assert!(y < last, "the circle goes down: {h:?}");
+        last = y;
+    }
+    assert!(
+        (-last - delta).abs() <= 1e-8 * delta,
+        "last step {} against the static {delta}",
+        -last
+    );
+    let (u_ramp, u_stat) = (last_step_u(&ramp.dir, 3), stat.displacement());
+    let (diff, scale) = max_diff(&u_ramp, &u_stat);
+    assert!(scale > 0.0, "u = 0: nothing tested");
+    assert!(diff <= 1e-8 * scale, "|Δu| = {diff:e}, |u| = {scale:e}");
+}
+
+/// The displacement of load step `step` (from 1) by node id, from solution.h5.
+fn last_step_u(dir: &Path, step: usize) -> BTreeMap<u64, Vec<f64>> {
+    let v = python_json(
+        r#"
+import sys, json, h5py
+f = h5py.File(sys.argv[1], "r")
+ids = f["mesh/node_id"][:].tolist()
+u = f["step_" + sys.argv[2] + "/nodal/displacement"][:].tolist()
+print("RESULT " + json.dumps({"ids": ids, "u": u}))
+"#,
+        &[&dir.join("solution.h5"), Path::new(&step.to_string())],
+    );
+    let (ids, u) = (v["ids"].as_array().unwrap(), v["u"].as_array().unwrap());
+    ids.iter()
+        .zip(u)
+        .map(|(i, row)| (i.as_u64().unwrap(), floats(row)))
+        .collect()
+}
+
+/// Force control's bad input: with a motion, with friction, a zero force, SNES VI, a force
+/// that pulls the circle away, a body that Dirichlet data leave free. Each is refused with
+/// `contact.force` named, exit code 2 and no summary written.
+#[test]
+fn bad_force_input_is_refused() {
+    let f = "contact.force=[0.0, -0.05]";
+    let cases: [(&[&str], &str); 6] = [
+        (&[f, "contact.motion=[0.0, -0.01]"], "instead of the motion"),
+        (
+            &[f, "contact.friction={law=\"coulomb\", mu=0.3}"],
+            "frictionless only",
+        ),
+        (&["contact.force=[0.0, 0.0]"], "is zero"),
+        (&[f, "solver.method=\"snesvi\""], "no force control"),
+        (&["contact.force=[0.0, 0.05]"], "never reaches the body"),
+        (
+            &[
+                f,
+                "dirichlet.0.value=[\"free\", 0.0]",
+                "contact.rigid_modes=\"auto\"",
+            ],
+            "Dirichlet data hold",
+        ),
+    ];
+    for (sets, says) in cases {
+        let tmp = tempfile::tempdir().expect("tempdir");
+        let out = tmp.path().join("out");
+        let run = run_solver(1, &case(), sets, &out);
+        let text = run.output();
+        assert_eq!(run.code, Some(2), "{sets:?}:\n{text}");
+        assert!(text.contains("contact.force"), "{sets:?}:\n{text}");
+        assert!(text.contains(says), "{sets:?}: expected {says:?}:\n{text}");
+        assert!(!out.join("summary.json").exists(), "{sets:?}");
+    }
+}

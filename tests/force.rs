@@ -30,7 +30,8 @@ fn force_key(f: &[f64]) -> String {
 
 /// The force F that moving the circle by 0.03 takes, prescribed: δ = 0.03 and the same u and
 /// active set, to the solver's tolerance (1e-8 relative; the direct preset's result agrees to
-/// ~1e-14, the iterative preset's — GMRES to rtol — to ~1e-10), on 1, 2 and 3 ranks.
+/// ~1e-14, the iterative preset's — GMRES to rtol — to ~1e-10), on 1, 2 and 3 ranks, on the
+/// condensed path (the default: one factorisation), the plain path and the iterative preset.
 #[test]
 fn force_control_inverts_displacement_control() {
     let moved = solve(1, &case(), &[AUTO, "contact.motion=[0.0, -0.03]"]);
@@ -39,19 +40,24 @@ fn force_control_inverts_displacement_control() {
     assert!(f[1] < 0.0, "the circle pushes the block down: {f:?}");
     let active = moved.active_node_ids();
     assert!(active.len() > 10, "{active:?}");
-    for (np, preset) in [
-        (1, "direct"),
-        (2, "direct"),
-        (3, "direct"),
-        (2, "iterative"),
-    ] {
-        let preset = format!("solver.preset=\"{preset}\"");
-        let forced = solve(np, &case(), &[AUTO, &force_key(&f), &preset]);
+    let direct = "solver.preset=\"direct\"";
+    let runs: [(usize, &[&str]); 5] = [
+        (1, &[direct]),
+        (2, &[direct]),
+        (3, &[direct]),
+        (2, &[direct, "solver.reuse=\"never\""]),
+        (2, &["solver.preset=\"iterative\""]),
+    ];
+    for (np, sets) in runs {
+        let fk = force_key(&f);
+        let mut all = vec![AUTO, fk.as_str()];
+        all.extend_from_slice(sets);
+        let forced = solve(np, &case(), &all);
         forced.assert_converged("force control");
         let delta = forced.f(&["contact", "approach"]);
         assert!(
             (delta - DEPTH).abs() <= 1e-8 * DEPTH,
-            "{np} ranks, {preset}: δ = {delta}"
+            "{np} ranks, {sets:?}: δ = {delta}"
         );
         let d = floats(get(&forced.summary, &["contact", "obstacle_displacement"]));
         assert!(
@@ -64,55 +70,103 @@ fn force_control_inverts_displacement_control() {
             "{g:?} against {f:?}"
         );
         let du = forced.u_rel_diff(&moved);
-        assert!(du <= 1e-8, "{np} ranks, {preset}: |Δu|/|u| = {du:e}");
-        assert_eq!(forced.active_node_ids(), active, "{np} ranks, {preset}");
+        assert!(du <= 1e-8, "{np} ranks, {sets:?}: |Δu|/|u| = {du:e}");
+        assert_eq!(forced.active_node_ids(), active, "{np} ranks, {sets:?}");
+        if sets == [direct] {
+            // the condensed path: one factorisation for the whole iteration
+            let fact = forced.f(&["newton", "factorisations"]);
+            assert_eq!(fact, 1.0, "{np} ranks: {}", forced.run.output());
+        }
+    }
+}
+
+/// 3D: the sphere over the clamped block of tests/cases/sphere3d.toml (a gap of 0.05) moved
+/// down by 0.1; the force's component along the motion, prescribed along it, gives back
+/// δ = 0.1 and u (the lateral force components of the unstructured mesh are not prescribed:
+/// force control holds the force along F/|F| only) — condensed and plain path, 1 and 2 ranks.
+#[test]
+fn force_control_inverts_displacement_control_in_3d() {
+    let case = repo("tests/cases/sphere3d.toml");
+    let moved = solve(1, &case, &[AUTO, "contact.motion=[0.0, 0.0, -0.1]"]);
+    moved.assert_converged("displacement control");
+    let fz = total_force(&moved)[2];
+    assert!(fz < 0.0, "{fz}");
+    let fk = format!("contact.force=[0.0, 0.0, {fz:.17e}]");
+    for (np, path) in [
+        (1, "solver.reuse=\"auto\""),
+        (2, "solver.reuse=\"auto\""),
+        (2, "solver.reuse=\"never\""),
+    ] {
+        let forced = solve(np, &case, &[AUTO, &fk, path]);
+        forced.assert_converged("force control");
+        let delta = forced.f(&["contact", "approach"]);
+        assert!(
+            (delta - 0.1).abs() <= 1e-8 * 0.1,
+            "{np} ranks, {path}: δ = {delta}"
+        );
+        let du = forced.u_rel_diff(&moved);
+        assert!(du <= 1e-8, "{np} ranks, {path}: |Δu|/|u| = {du:e}");
+        assert_eq!(forced.active_node_ids(), moved.active_node_ids());
     }
 }
 
 /// The circle raised to a gap of 0.11 and the force ramped over three load steps: the first
-/// step moves the circle until it touches, every step carries t·F (history.csv), the circle
-/// goes down step by step, and the last step is the static solve's.
+/// step moves the circle until a node touches (on the plain path its first solve has no node
+/// active), every step carries
+/// t·F (history.csv), the circle goes down step by step, and the last step is the static
+/// solve's — on the condensed and on the plain path.
 #[test]
 fn a_ramped_force_from_a_gap_touches_first_and_ends_at_the_static_solution() {
     let raised = "contact.obstacle.center=[0.0, 1.6]";
     let f = [0.0, -0.05];
-    let stat = solve(2, &case(), &[AUTO, raised, &force_key(&f)]);
-    stat.assert_converged("static force control");
-    let delta = stat.f(&["contact", "approach"]);
-    assert!(
-        delta > 0.11,
-        "the circle must first close the gap of 0.11: δ = {delta}"
-    );
-    assert!(
-        stat.run.output().contains("touches"),
-        "{}",
-        stat.run.output()
-    );
-    let ramp = solve(2, &case(), &[AUTO, raised, &force_key(&f), "load.steps=3"]);
-    let h = read_csv(&ramp.dir.join("history.csv"));
-    assert_eq!(h.len(), 3);
-    let mut last = 0.0;
-    for (i, r) in h.iter().enumerate() {
-        let t = (i + 1) as f64 / 3.0;
-        let fy = r.f("force_y");
+    let fk = force_key(&f);
+    for path in ["solver.reuse=\"auto\"", "solver.reuse=\"never\""] {
+        let stat = solve(2, &case(), &[AUTO, raised, &fk, path]);
+        stat.assert_converged("static force control");
+        let delta = stat.f(&["contact", "approach"]);
         assert!(
-            (fy - t * f[1]).abs() <= 1e-8 * f[1].abs(),
-            "step {}: {fy}",
-            i + 1
+            delta > 0.11,
+            "the circle must first close the gap of 0.11: δ = {delta}"
         );
-        let y = r.f("obstacle_y");
-        assert!(y < last, "the circle goes down: {h:?}");
-        last = y;
+        if path.contains("never") {
+            // the plain path's first solve: no node active, then the touch
+            let first = get(&stat.summary, &["newton", "history"])[0]["active"].as_f64();
+            assert_eq!(first, Some(0.0), "{}", stat.run.output());
+            assert!(
+                stat.run.output().contains("touches"),
+                "{}",
+                stat.run.output()
+            );
+        }
+        let ramp = solve(2, &case(), &[AUTO, raised, &fk, path, "load.steps=3"]);
+        let h = read_csv(&ramp.dir.join("history.csv"));
+        assert_eq!(h.len(), 3);
+        let mut last = 0.0;
+        for (i, r) in h.iter().enumerate() {
+            let t = (i + 1) as f64 / 3.0;
+            let fy = r.f("force_y");
+            assert!(
+                (fy - t * f[1]).abs() <= 1e-8 * f[1].abs(),
+                "step {}: {fy}",
+                i + 1
+            );
+            let y = r.f("obstacle_y");
+            assert!(y < last, "the circle goes down: {h:?}");
+            last = y;
+        }
+        assert!(
+            (-last - delta).abs() <= 1e-8 * delta,
+            "{path}: last step {} against the static {delta}",
+            -last
+        );
+        let (u_ramp, u_stat) = (last_step_u(&ramp.dir, 3), stat.displacement());
+        let (diff, scale) = max_diff(&u_ramp, &u_stat);
+        assert!(scale > 0.0, "u = 0: nothing tested");
+        assert!(
+            diff <= 1e-8 * scale,
+            "{path}: |Δu| = {diff:e}, |u| = {scale:e}"
+        );
     }
-    assert!(
-        (-last - delta).abs() <= 1e-8 * delta,
-        "last step {} against the static {delta}",
-        -last
-    );
-    let (u_ramp, u_stat) = (last_step_u(&ramp.dir, 3), stat.displacement());
-    let (diff, scale) = max_diff(&u_ramp, &u_stat);
-    assert!(scale > 0.0, "u = 0: nothing tested");
-    assert!(diff <= 1e-8 * scale, "|Δu| = {diff:e}, |u| = {scale:e}");
 }
 
 /// The displacement of load step `step` (from 1) by node id, from solution.h5.

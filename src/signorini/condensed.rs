@@ -265,6 +265,9 @@ pub(super) fn solve_keeping(
     let dim = p.mesh.dim;
     let mut summary = CondensedSummary::new(p.boundary.n_global);
     let (free, rhs0) = prepare_base(ctx, p, reduced, s)?;
+    if let Some(fc) = s.force.filter(|_| free.floats()) {
+        return Err(super::force::floating(fc));
+    }
     let f_root = ctx.gather_to_root(&rhs0); // f for MUMPS' solve phases, once
     let start = start_set(p, s, &free, warm);
     let cand = Candidates::gather(ctx, p.boundary, &free, &start);
@@ -328,6 +331,9 @@ pub(super) fn solve_keeping(
                     comp.list.len()
                 );
                 continue;
+            }
+            End::NoSupport(_) if s.force.is_some() => {
+                return Err(super::force::never_touches(s.force.expect("checked")))
             }
             End::NoSupport(reaction) => {
                 return Err(free.no_support(run.active.iter().filter(|&&a| a).count(), reaction))
@@ -518,7 +524,7 @@ fn finish(
         rows_seconds: reduced.rows_seconds,
         pinned_final: ex.pins,
         cycle_detected_at: None,
-        approach: None,
+        approach: ex.approach,
     };
     Ok(Condensed::Solved(Box::new(result), summary))
 }
@@ -880,14 +886,24 @@ fn dense_round(
     s: &NewtonSettings,
     (active, nested): (&[bool], bool),
 ) -> DenseRun {
-    let (ns, mz) = (comp.list.len(), cand.mz);
+    // force control: the approach δ is one more free mode, its normal parts −e·n and its load
+    // |F| (force.rs; the body has no other free mode)
+    let force = s.force.map(|fc| (fc.direction(), fc.magnitude()));
+    let (ns, mz) = (comp.list.len(), cand.mz + usize::from(force.is_some()));
     let mut packed: Vec<f64> = Vec::new();
     if ctx.rank == 0 {
         let run = guarded("dense-steps", || {
-            let (_, load_scale) = free.load();
-            let phi = free.free_load();
+            let (_, mut load_scale) = free.load();
+            let mut phi = free.free_load();
             let list = &comp.list;
-            let g = DMatrix::from_fn(ns, mz, |q, c| cand.g(list[q], c));
+            let g = DMatrix::from_fn(ns, mz, |q, c| match force {
+                Some((e, _)) if c == cand.mz => -crate::geom::dot(cand.n(list[q]), e),
+                _ => cand.g(list[q], c),
+            });
+            if let Some((_, magnitude)) = force {
+                phi.push(magnitude);
+                load_scale = load_scale.max(magnitude);
+            }
             let (cmat, d0) = comp.normal_part();
             let d0 = &d0[..];
             let gap: Vec<f64> = list.iter().map(|&i| cand.gap(i)).collect();
@@ -964,6 +980,8 @@ struct Expanded {
     rho: Motion,
     pins: Vec<Pin>,
     changed: Vec<u64>,
+    /// Force control: the approach δ of the round.
+    approach: Option<f64>,
 }
 
 /// Expansion: w = K_p⁻¹ (f − N λ_n) (MUMPS' condensation and expansion with the Schur
@@ -1032,6 +1050,15 @@ fn expand(
     }
     let mut shifted = b.clone();
     free.shift(b, &rho, &mut shifted);
+    // force control: the gaps to the obstacle moved by δ e (δ the last free-mode coefficient)
+    let approach = s.force.map(|fc| {
+        let delta = alpha[z.ncols()];
+        let e = fc.direction();
+        for k in shifted.nodes.iter_mut() {
+            k.gap -= delta * crate::geom::dot(k.frame.n, e);
+        }
+        delta
+    });
     let mut it = Iterate::new(b.nodes.len(), n_local, false);
     reduced.recover(sys, &shifted, &set, &mut it)?; // (3.28)
     let update = set.update(&it, &shifted, Law::Frictionless, s.c, 0.0, dim); // (3.23)
@@ -1048,6 +1075,7 @@ fn expand(
         rho,
         pins: fin.pins().to_vec(),
         changed: ctx.all_gather_varcount(&changed_here),
+        approach,
     }))
 }
 

@@ -79,6 +79,15 @@ pub fn floating(fc: &ForceControl) -> RunError {
     )
 }
 
+/// A force along which the obstacle never reaches the body.
+pub fn never_touches(fc: &ForceControl) -> RunError {
+    RunError::Input(InputError::new(Path::new(&fc.file), NEVER_TOUCHES).with_key("contact.force"))
+}
+
+const NEVER_TOUCHES: &str = "the obstacle, moving along the force, never reaches the body: every \
+     contact node's normal points against the force (the force must push the obstacle onto the \
+     body: along the normals n, from the obstacle into the body)";
+
 /// What a force step did to δ.
 pub enum Correction {
     /// The bordered step: δ from the force balance of this step's set.
@@ -153,12 +162,7 @@ impl Approach {
         }
         let d = ctx.min_f64(best.0);
         if !d.is_finite() {
-            return Err(self.input_error(
-                "the obstacle, moving along the force, never reaches the body: every contact \
-                 node's normal points against the force (the force must push the obstacle \
-                 onto the body: along the normals n, from the obstacle into the body)"
-                    .into(),
-            ));
+            return Err(self.input_error(NEVER_TOUCHES.into()));
         }
         let tag = ctx.min_u64(if best.0 == d { best.1 } else { u64::MAX });
         self.delta += d;

@@ -453,7 +453,6 @@ fn run_method(
             let mut reduced = ReducedSystem::new(ctx, sys, b, coords, dim)?;
             let friction = settings.tresca_threshold.is_some() || settings.coulomb.is_some();
             let condense = !friction
-                && ns.force.is_none()
                 && solver_section.reuse == Reuse::Auto
                 && b.n_global > 0
                 && b.n_global <= condensed::MAX_CONTACT_NODES

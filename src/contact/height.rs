@@ -204,6 +204,29 @@ impl Height {
         }
     }
 
+    /// The one-sided slopes at the foot agree: a kink (a jump of the slope) or a step of h at
+    /// the nearest point has no normal. With the step d = ε^(1/3) s the forward and backward
+    /// differences of a C² function differ by d h'' (≤ 10⁻³ unless the radius of curvature is
+    /// below s/170, where the differences lose their accuracy anyway).
+    fn check_smooth(&self, u: [f64; 2], s: f64, l: &Local) -> Result<(), ObstacleError> {
+        let d = f64::EPSILON.cbrt() * s;
+        for i in 0..self.dim - 1 {
+            let mut v = u;
+            v[i] += d;
+            let fwd = (self.h(v) - l.h) / d;
+            v[i] = u[i] - d;
+            let bwd = (l.h - self.h(v)) / d;
+            let jump = (fwd - bwd).abs();
+            if jump.is_nan() || jump > 1e-3 * (1.0 + l.g[i].abs()) {
+                return Err(ObstacleError::HeightNotSmooth {
+                    x: u[0],
+                    y: (self.dim == 3).then_some(u[1]),
+                });
+            }
+        }
+        Ok(())
+    }
+
     /// ½ |(u, h(u)) − x|² (NaN where h is not finite).
     fn phi(&self, u: [f64; 2], x: [f64; 3]) -> f64 {
         let n = self.dim - 1;
@@ -283,6 +306,7 @@ impl Height {
         let s = if s > 0.0 { s } else { 1.0 };
         let u = self.foot(x, s)?;
         let l = self.local(u, s)?;
+        self.check_smooth(u, s, &l)?;
         // Upward unit normal (−∇h, 1)/√(1 + |∇h|²).
         let mut nv = [0.0; 3];
         let len = (1.0 + l.g[0] * l.g[0] + l.g[1] * l.g[1]).sqrt();
@@ -312,14 +336,14 @@ impl Height {
 /// Cholesky; None when A is not (numerically) positive definite.
 fn solve_spd(a: &[[f64; 2]; 2], b: &[f64; 2], n: usize) -> Option<[f64; 2]> {
     let l00 = a[0][0];
-    if !(l00 > 0.0) {
+    if l00.is_nan() || l00 <= 0.0 {
         return None;
     }
     if n == 1 {
         return Some([-b[0] / l00, 0.0]);
     }
     let det = a[0][0] * a[1][1] - a[0][1] * a[1][0];
-    if !(det > 1e-14 * a[0][0] * a[1][1]) {
+    if det.is_nan() || det <= 1e-14 * a[0][0] * a[1][1] {
         return None;
     }
     Some([

@@ -60,6 +60,8 @@ pub enum ObstacleError {
     HeightNotFinite { x: f64, y: Option<f64> },
     /// The nearest point of a height surface was not found.
     HeightNoConvergence,
+    /// The slope of h jumps at the nearest point (x) or (x, y): a kink or a step.
+    HeightNotSmooth { x: f64, y: Option<f64> },
 }
 
 impl fmt::Display for ObstacleError {
@@ -112,6 +114,18 @@ impl fmt::Display for ObstacleError {
                     "the height expression 'contact.obstacle.expr' is not a finite number at \
                      {at}, near the node (the obstacle's surface must be defined and smooth \
                      under the contact boundary)"
+                )
+            }
+            ObstacleError::HeightNotSmooth { x, y } => {
+                let at = match y {
+                    Some(y) => format!("(x, y) = ({x}, {y})"),
+                    None => format!("x = {x}"),
+                };
+                write!(
+                    f,
+                    "the height surface 'contact.obstacle.expr' has a kink or a step at {at}, \
+                     the nearest point to the node (its slope jumps there): the surface must be \
+                     smooth (C¹) near the body"
                 )
             }
             ObstacleError::HeightNoConvergence => write!(

@@ -1,7 +1,7 @@
 //! The `height` obstacle: the solid below the graph of a function, {y < h(x)} in 2D and
 //! {z < h(x, y)} in 3D, the body above it (docs/obstacles.md, "height").
 //!
-//! h is an expression of the case file, parsed once by `exmex` ([`HeightExpr`]) and evaluated
+//! h is an expression of the case file, parsed once by `evalexpr` ([`HeightExpr`]) and evaluated
 //! at the contact nodes. For a point x the nearest point of the graph is found by a safeguarded
 //! Newton iteration on the squared distance, started at the vertical projection
 //! ([`Height::project`]); the derivatives of h are central differences with steps scaled to
@@ -9,31 +9,136 @@
 //! normal of the graph at the nearest point: the gradient of g0 on both sides.
 
 use super::obstacle::{ObstacleError, Projection};
-use exmex::{Express, FlatEx, FloatOpsFactory, MakeOperators, Operator};
-use std::f64::consts::PI;
+use evalexpr::error::EvalexprResultValue;
+use evalexpr::{
+    build_operator_tree, Context, DefaultNumericTypes, EvalexprError, EvalexprResult,
+    Node, Operator, Value,
+};
+use std::f64::consts::{E, PI};
 use std::fmt;
 
-/// The operators of a height expression: exmex's float operators (`^`, `sin`, `cos`, `tan`,
-/// `sqrt`, `exp`, `ln`, `abs`, `min`, `max`, … and the constants `PI`/`π`, `E`/`e`, `TAU`/`τ`)
-/// and the constant `pi`.
-#[derive(Clone, Debug)]
-pub struct HeightOps;
+type V = Value<DefaultNumericTypes>;
 
-impl MakeOperators<f64> for HeightOps {
-    fn make<'a>() -> Vec<Operator<'a, f64>> {
-        let mut ops = FloatOpsFactory::<f64>::make();
-        ops.push(Operator::make_constant("pi", PI));
-        ops
+/// The functions of a height expression: one argument, or two where noted (`f(a, b)`).
+pub const FUNCTIONS: [&str; 24] = [
+    "sin", "cos", "tan", "asin", "acos", "atan", "atan2", "sinh", "cosh", "tanh", "exp", "ln",
+    "log10", "log2", "sqrt", "cbrt", "abs", "pow", "hypot", "floor", "ceil", "min", "max",
+    "sign",
+];
+
+/// f64 of a number value.
+fn number(v: &V) -> Option<f64> {
+    match v {
+        Value::Float(f) => Some(*f),
+        Value::Int(i) => Some(*i as f64),
+        _ => None,
     }
 }
 
-/// A parsed height expression h(x) (2D) or h(x, y) (3D).
+fn call(name: &str, arg: &V) -> EvalexprResultValue<DefaultNumericTypes> {
+    let name = name.strip_prefix("math::").unwrap_or(name);
+    let bad = || EvalexprError::FunctionIdentifierNotFound(name.to_string());
+    let two = |f: fn(f64, f64) -> f64| -> EvalexprResultValue<DefaultNumericTypes> {
+        match arg {
+            Value::Tuple(t) if t.len() == 2 => match (number(&t[0]), number(&t[1])) {
+                (Some(a), Some(b)) => Ok(Value::Float(f(a, b))),
+                _ => Err(EvalexprError::expected_number(t[0].clone())),
+            },
+            _ => Err(EvalexprError::expected_tuple(arg.clone())),
+        }
+    };
+    let one = |f: fn(f64) -> f64| -> EvalexprResultValue<DefaultNumericTypes> {
+        number(arg)
+            .map(|a| Value::Float(f(a)))
+            .ok_or_else(|| EvalexprError::expected_number(arg.clone()))
+    };
+    match name {
+        "atan2" => two(f64::atan2),
+        "pow" => two(f64::powf),
+        "hypot" => two(f64::hypot),
+        "min" => two(f64::min),
+        "max" => two(f64::max),
+        "sin" => one(f64::sin),
+        "cos" => one(f64::cos),
+        "tan" => one(f64::tan),
+        "asin" => one(f64::asin),
+        "acos" => one(f64::acos),
+        "atan" => one(f64::atan),
+        "sinh" => one(f64::sinh),
+        "cosh" => one(f64::cosh),
+        "tanh" => one(f64::tanh),
+        "exp" => one(f64::exp),
+        "ln" => one(f64::ln),
+        "log10" => one(f64::log10),
+        "log2" => one(f64::log2),
+        "sqrt" => one(f64::sqrt),
+        "cbrt" => one(f64::cbrt),
+        "abs" => one(f64::abs),
+        "floor" => one(f64::floor),
+        "ceil" => one(f64::ceil),
+        "sign" => one(|a| if a == 0.0 { 0.0 } else { a.signum() }),
+        _ => Err(bad()),
+    }
+}
+
+/// The variables x, y and the constants pi, e of one evaluation; only the functions of
+/// [`FUNCTIONS`] (evalexpr's own built-ins are off).
+struct Vars {
+    x: V,
+    y: V,
+    pi: V,
+    e: V,
+}
+
+impl Context for Vars {
+    type NumericTypes = DefaultNumericTypes;
+    fn get_value(&self, identifier: &str) -> Option<&V> {
+        match identifier {
+            "x" => Some(&self.x),
+            "y" => Some(&self.y),
+            "pi" => Some(&self.pi),
+            "e" => Some(&self.e),
+            _ => None,
+        }
+    }
+    fn call_function(
+        &self,
+        identifier: &str,
+        argument: &V,
+    ) -> EvalexprResultValue<DefaultNumericTypes> {
+        call(identifier, argument)
+    }
+    fn are_builtin_functions_disabled(&self) -> bool {
+        true
+    }
+    fn set_builtin_functions_disabled(
+        &mut self,
+        _disabled: bool,
+    ) -> EvalexprResult<(), DefaultNumericTypes> {
+        Ok(())
+    }
+}
+
+/// Every integer literal made a float: `1/2` is 0.5, not evalexpr's integer division.
+fn floats(node: &mut Node<DefaultNumericTypes>) {
+    if let Operator::Const { value } = node.operator_mut() {
+        if let Value::Int(i) = value {
+            *value = Value::Float(*i as f64);
+        }
+    }
+    for c in node.children_mut() {
+        floats(c);
+    }
+}
+
+/// A parsed height expression h(x) (2D) or h(x, y) (3D): evalexpr's syntax (`^` for powers,
+/// `-x^2` = −(x²), scientific notation), all numbers floats, the functions of [`FUNCTIONS`]
+/// and the constants `pi` and `e`.
 pub struct HeightExpr {
     text: String,
-    expr: FlatEx<f64, HeightOps>,
-    /// For each variable of `expr` (exmex's alphabetical order): 0 for x, 1 for y, 2 for
-    /// anything else (rejected by [`HeightExpr::check_variables`]).
-    slots: Vec<usize>,
+    node: Node<DefaultNumericTypes>,
+    /// The variables read, sorted (constants excluded).
+    vars: Vec<String>,
 }
 
 impl fmt::Debug for HeightExpr {
@@ -49,26 +154,66 @@ impl PartialEq for HeightExpr {
 }
 
 impl HeightExpr {
-    /// Parses `text`; the error is exmex's message.
+    /// Parses `text`; the error is a sentence for the user. Checked here: the syntax, only
+    /// known functions, no assignment, a number as the result (at x = y = 0.5).
     pub fn parse(text: &str) -> Result<Self, String> {
         if text.trim().is_empty() {
             return Err("the expression is empty".into());
         }
-        let expr = FlatEx::<f64, HeightOps>::parse(text).map_err(|e| e.to_string())?;
-        let slots = expr
-            .var_names()
-            .iter()
-            .map(|v| match v.as_str() {
-                "x" => 0,
-                "y" => 1,
-                _ => 2,
-            })
+        let mut node = build_operator_tree::<DefaultNumericTypes>(text).map_err(|e| e.to_string())?;
+        floats(&mut node);
+        if node.iter_write_variable_identifiers().next().is_some() {
+            return Err("assignments are not allowed: give an expression of x (and y)".into());
+        }
+        let mut unknown: Vec<&str> = node
+            .iter_function_identifiers()
+            .filter(|f| !FUNCTIONS.contains(&f.strip_prefix("math::").unwrap_or(f)))
             .collect();
-        Ok(HeightExpr {
+        unknown.dedup();
+        if let Some(f) = unknown.first() {
+            return Err(format!(
+                "unknown function '{f}'; the functions are {}",
+                FUNCTIONS.join(", ")
+            ));
+        }
+        let mut vars: Vec<String> = node
+            .iter_read_variable_identifiers()
+            .filter(|v| *v != "pi" && *v != "e")
+            .map(str::to_string)
+            .collect();
+        vars.sort();
+        vars.dedup();
+        let expr = HeightExpr {
             text: text.to_string(),
-            expr,
-            slots,
-        })
+            node,
+            vars,
+        };
+        if expr.vars.iter().all(|v| v == "x" || v == "y") {
+            match expr.node.eval_with_context(&expr.context([0.5, 0.5])) {
+                Ok(v) if number(&v).is_none() => {
+                    return Err(format!(
+                        "the expression gives {}, not a number",
+                        match v {
+                            Value::Boolean(_) => "a boolean",
+                            Value::String(_) => "a string",
+                            Value::Tuple(_) => "a tuple",
+                            _ => "no value",
+                        }
+                    ))
+                }
+                _ => {}
+            }
+        }
+        Ok(expr)
+    }
+
+    fn context(&self, u: [f64; 2]) -> Vars {
+        Vars {
+            x: Value::Float(u[0]),
+            y: Value::Float(u[1]),
+            pi: Value::Float(PI),
+            e: Value::Float(E),
+        }
     }
 
     /// The expression as written.
@@ -76,9 +221,9 @@ impl HeightExpr {
         &self.text
     }
 
-    /// The names of the variables the expression uses (alphabetical).
+    /// The names of the variables the expression reads (sorted; without pi and e).
     pub fn variables(&self) -> &[String] {
-        self.expr.var_names()
+        &self.vars
     }
 
     /// Ok when every variable is x (2D) or x or y (3D); else a message naming the others.
@@ -108,14 +253,13 @@ impl HeightExpr {
         ))
     }
 
-    /// h(u) (u = [x, y]; y is ignored in 2D expressions). NaN where exmex reports an error.
+    /// h(u) (u = [x, y]; y is ignored by 2D expressions). NaN where the evaluation fails or
+    /// gives no number.
     pub fn eval(&self, u: [f64; 2]) -> f64 {
-        let vals: Vec<f64> = self
-            .slots
-            .iter()
-            .map(|&s| if s < 2 { u[s] } else { f64::NAN })
-            .collect();
-        self.expr.eval(&vals).unwrap_or(f64::NAN)
+        match self.node.eval_with_context(&self.context(u)) {
+            Ok(v) => number(&v).unwrap_or(f64::NAN),
+            Err(_) => f64::NAN,
+        }
     }
 }
 
@@ -350,4 +494,205 @@ fn solve_spd(a: &[[f64; 2]; 2], b: &[f64; 2], n: usize) -> Option<[f64; 2]> {
         -(a[1][1] * b[0] - a[0][1] * b[1]) / det,
         -(a[0][0] * b[1] - a[1][0] * b[0]) / det,
     ])
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::contact::obstacle::{Obstacle, Plane};
+    use rand::rngs::StdRng;
+    use rand::{Rng, SeedableRng};
+
+    fn height(text: &str, dim: usize) -> Height {
+        let e: &'static HeightExpr = Box::leak(Box::new(HeightExpr::parse(text).unwrap()));
+        Height::new(e, dim).unwrap()
+    }
+
+    fn norm(a: [f64; 3]) -> f64 {
+        (a[0] * a[0] + a[1] * a[1] + a[2] * a[2]).sqrt()
+    }
+
+    /// x = closest + g n, |n| = 1, n upward, and the FD gradient of g equal to n.
+    fn check_common(h: &Height, x: [f64; 3], q: &Projection, tol: f64) {
+        let dim = h.dim();
+        assert!((norm(q.normal) - 1.0).abs() < 1e-14);
+        assert!(q.normal[dim - 1] > 0.0, "n points up: {:?}", q.normal);
+        for k in 0..dim {
+            assert!((x[k] - q.closest[k] - q.gap * q.normal[k]).abs() < 1e-12);
+        }
+        let e = 1e-6;
+        for k in 0..dim {
+            let (mut a, mut b) = (x, x);
+            a[k] += e;
+            b[k] -= e;
+            let d = (h.project(a).unwrap().gap - h.project(b).unwrap().gap) / (2.0 * e);
+            assert!((d - q.normal[k]).abs() < tol, "dg/dx{k} = {d}, n = {:?}", q.normal);
+        }
+    }
+
+    #[test]
+    fn plane_heights_equal_the_plane() {
+        let mut rng = StdRng::seed_from_u64(3);
+        for (text, dim, normal, point) in [
+            ("0.3*x + 0.1", 2, [-0.3, 1.0, 0.0], [0.0, 0.1, 0.0]),
+            ("0.3*x - 0.2*y + 0.1", 3, [-0.3, 0.2, 1.0], [0.0, 0.0, 0.1]),
+            ("-2", 3, [0.0, 0.0, 1.0], [0.0, 0.0, -2.0]),
+        ] {
+            let h = height(text, dim);
+            let p = Obstacle::Plane(Plane::new(point, normal, dim).unwrap());
+            for _ in 0..500 {
+                let mut x: [f64; 3] = std::array::from_fn(|_| rng.gen_range(-5.0..5.0));
+                if dim == 2 {
+                    x[2] = 0.0;
+                }
+                let (q, r) = (h.project(x).unwrap(), p.project(x).unwrap());
+                // Linear h: the differences are exact up to round-off of the O(5) coordinates.
+                assert!((q.gap - r.gap).abs() < 1e-12, "{text}: {} vs {}", q.gap, r.gap);
+                for k in 0..3 {
+                    assert!((q.normal[k] - r.normal[k]).abs() < 1e-10, "{text}: {q:?} {r:?}");
+                }
+                check_common(&h, x, &q, 1e-6);
+            }
+        }
+    }
+
+    /// The cap h = c_y + √(R² − (x − c_x)²) (2D) or its 3D form against the analytic sphere:
+    /// for points whose radial direction is within 35° of the vertical, the nearest point of
+    /// the circle (sphere) lies on the cap, on both sides.
+    #[test]
+    fn circle_caps_equal_the_sphere() {
+        let (r, c) = (0.7, [0.2, -0.3, 0.4]);
+        let mut rng = StdRng::seed_from_u64(5);
+        for dim in [2, 3] {
+            let text = if dim == 2 {
+                "-0.3 + sqrt(0.49 - (x - 0.2)^2)".to_string()
+            } else {
+                "0.4 + sqrt(0.49 - (x - 0.2)^2 - (y + 0.3)^2)".to_string()
+            };
+            let h = height(&text, dim);
+            let mut below = 0;
+            for _ in 0..500 {
+                let (th, ph) = (rng.gen_range(-0.6..0.6f64), rng.gen_range(0.0..PI));
+                let rad = if dim == 2 {
+                    [th.sin(), th.cos(), 0.0]
+                } else {
+                    [th.sin() * ph.cos(), th.sin() * ph.sin(), th.cos()]
+                };
+                let rho = r * rng.gen_range(0.5..1.5);
+                let mut x = [0.0; 3];
+                for k in 0..dim {
+                    let up = if k == dim - 1 { rad[2 - (3 - dim)] } else { rad[k] };
+                    x[k] = c[k] + rho * up;
+                }
+                let rad = if dim == 2 { [rad[0], rad[1], 0.0] } else { rad };
+                let q = h.project(x).unwrap();
+                // The derivatives are central differences (steps ≈ 6e-6 and 1e-4 times the
+                // O(1) coordinates): the normal carries their truncation error, ≈ 1e-10 for
+                // this unit-size curvature; the gap only its square.
+                assert!((q.gap - (rho - r)).abs() < 1e-11 * r, "{text}: {} vs {}", q.gap, rho - r);
+                for k in 0..3 {
+                    assert!((q.normal[k] - rad[k]).abs() < 1e-8, "{q:?} vs {rad:?}");
+                }
+                check_common(&h, x, &q, 1e-6);
+                below += usize::from(q.gap < 0.0);
+            }
+            assert!(below > 100 && below < 400, "{below} of 500 below");
+        }
+    }
+
+    /// A parabola against the distance found by sampling: the minimum of |x − (u, h(u))| over
+    /// a fine grid, refined by golden sections.
+    #[test]
+    fn parabola_against_sampling() {
+        let h = height("0.5*x^2 - 0.2", 2);
+        let f = |u: f64| 0.5 * u * u - 0.2;
+        let mut rng = StdRng::seed_from_u64(9);
+        for _ in 0..200 {
+            let x = [rng.gen_range(-1.5..1.5), rng.gen_range(-1.0..1.5), 0.0];
+            let d = |u: f64| ((u - x[0]).powi(2) + (f(u) - x[1]).powi(2)).sqrt();
+            let span = (x[1] - f(x[0])).abs() + 1e-3;
+            let m = 20000;
+            let best = (0..=m)
+                .map(|i| x[0] - span + 2.0 * span * i as f64 / m as f64)
+                .min_by(|a, b| d(*a).total_cmp(&d(*b)))
+                .unwrap();
+            let (mut a, mut b) = (best - 2.0 * span / m as f64, best + 2.0 * span / m as f64);
+            let gr = (5f64.sqrt() - 1.0) / 2.0;
+            for _ in 0..80 {
+                let (p, q) = (b - gr * (b - a), a + gr * (b - a));
+                if d(p) < d(q) {
+                    b = q;
+                } else {
+                    a = p;
+                }
+            }
+            let dist = d(0.5 * (a + b));
+            let q = h.project(x).unwrap();
+            let sign = if x[1] > f(x[0]) { 1.0 } else { -1.0 };
+            // The parabola's smallest radius of curvature is 1 (at the vertex); points closer
+            // to the surface than that have one nearest point: the same one, to round-off.
+            if dist < 0.9 {
+                assert!((q.gap - sign * dist).abs() < 1e-10, "{} vs {}", q.gap, sign * dist);
+                check_common(&h, x, &q, 1e-6);
+            }
+            // Always: no farther than the vertical distance, and on the parabola.
+            assert!(q.gap.abs() <= (x[1] - f(x[0])).abs() + 1e-14);
+            let foot = [x[0] - q.gap * q.normal[0], x[1] - q.gap * q.normal[1]];
+            assert!((foot[1] - f(foot[0])).abs() < 1e-9);
+        }
+    }
+
+    #[test]
+    fn syntax_variables_and_constants() {
+        let e = HeightExpr::parse("pi + 2*e^0 - x*0 + 1/2").unwrap();
+        assert!((e.eval([3.0, 4.0]) - (PI + 2.5)).abs() < 1e-15);
+        // A leading minus applies to the power; scientific notation; the plain function names
+        // and the math:: ones.
+        let e = HeightExpr::parse("-x^2 + y + 1e-3 + exp(-x^2) - math::exp(-x^2)").unwrap();
+        assert!((e.eval([3.0, 1.0]) - (-8.0 + 1e-3)).abs() < 1e-15);
+        assert_eq!(e.variables(), ["x", "y"]);
+        assert!(e.check_variables(3).is_ok());
+        let m = e.check_variables(2).unwrap_err();
+        assert!(m.contains("'y'") && m.contains("y = h(x)"), "{m}");
+        let e = HeightExpr::parse("pow(x, 2) + hypot(x, y) + max(x, y) + sqrt(abs(-4))").unwrap();
+        assert!((e.eval([3.0, 4.0]) - (9.0 + 5.0 + 4.0 + 2.0)).abs() < 1e-14);
+        let m = HeightExpr::parse("z + x").unwrap().check_variables(3).unwrap_err();
+        assert!(m.contains("'z'"), "{m}");
+        assert!(HeightExpr::parse("sin(x").is_err());
+        assert!(HeightExpr::parse("  ").is_err());
+        let m = HeightExpr::parse("foo(x)").unwrap_err();
+        assert!(m.contains("unknown function 'foo'") && m.contains("sqrt"), "{m}");
+        assert!(HeightExpr::parse("x = 2").unwrap_err().contains("assignments"));
+        assert!(HeightExpr::parse("x > 2").unwrap_err().contains("a boolean"));
+        let e: &'static HeightExpr = Box::leak(Box::new(HeightExpr::parse("y").unwrap()));
+        assert_eq!(Height::new(e, 2), Err(ObstacleError::HeightVariables));
+    }
+
+    #[test]
+    fn not_finite_and_kinks_are_errors() {
+        // sqrt of a negative number where the node is.
+        let h = height("sqrt(x)", 2);
+        assert!(matches!(
+            h.project([-1.0, 0.0, 0.0]),
+            Err(ObstacleError::HeightNotFinite { x, y: None }) if x == -1.0
+        ));
+        let h = height("1/(x - y)", 3);
+        assert!(matches!(
+            h.project([1.0, 1.0, 0.0]),
+            Err(ObstacleError::HeightNotFinite { y: Some(_), .. })
+        ));
+        // Below the kink of a V, the nearest points are on both arms; the iteration ends at
+        // the kink, which is refused.
+        let h = height("abs(x)", 2);
+        assert!(matches!(
+            h.project([0.0, -1.0, 0.0]),
+            Err(ObstacleError::HeightNotSmooth { .. })
+        ));
+        let h = height("floor(x) + 0.5*abs(y)", 3);
+        assert!(h.project([0.3, 0.0, -1.0]).is_err());
+        // A smooth part of the same V is fine.
+        let h = height("abs(x)", 2);
+        let q = h.project([2.0, 1.0, 0.0]).unwrap();
+        assert!((q.gap - (-1.0 / 2f64.sqrt())).abs() < 1e-12, "{q:?}");
+    }
 }

@@ -11,6 +11,8 @@ mod tree;
 
 #[cfg(test)]
 mod tests;
+#[cfg(test)]
+mod tests_shapes;
 
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};

@@ -189,7 +189,10 @@ impl HeightExpr {
             vars,
         };
         if expr.vars.iter().all(|v| v == "x" || v == "y") {
+            // The functions give NaN outside their domains, never an error: an error here is
+            // a malformed expression (a missing operand, a wrong number of arguments).
             match expr.node.eval_with_context(&expr.context([0.5, 0.5])) {
+                Err(e) => return Err(e.to_string()),
                 Ok(v) if number(&v).is_none() => {
                     return Err(format!(
                         "the expression gives {}, not a number",

@@ -19,7 +19,13 @@ fn box_mesh(dir: &Path) -> PathBuf {
 
 /// A 3D case on `mesh`: E = 1, ν = 0.3, Dirichlet `held` = value on `held_group`, contact on
 /// `contact_group` against `obstacle`.
-fn case_3d(mesh: &Path, held_group: &str, held: &str, contact_group: &str, obstacle: &str) -> String {
+fn case_3d(
+    mesh: &Path,
+    held_group: &str,
+    held: &str,
+    contact_group: &str,
+    obstacle: &str,
+) -> String {
     format!(
         "[mesh]\nfile = {}\n[material]\nyoung = 1.0\npoisson = 0.3\nmodel = \"3d\"\n\
          [[dirichlet]]\ngroup = \"{held_group}\"\nvalue = {held}\n\
@@ -81,7 +87,10 @@ fn height_plane_equals_plane() {
     );
     assert_eq!(height.active_node_ids(), active);
     let (du, df) = (height.u_rel_diff(&plane), force_diff(&height, &plane));
-    println!("2D: |Δu|/|u| = {du:.2e}, |ΔF|/|F| = {df:.2e}, {} of {all} active", active.len());
+    println!(
+        "2D: |Δu|/|u| = {du:.2e}, |ΔF|/|F| = {df:.2e}, {} of {all} active",
+        active.len()
+    );
     assert!(du < 1e-8 && df < 1e-8, "2D: Δu {du:e}, ΔF {df:e}");
 
     let tmp = tempfile::tempdir().unwrap();
@@ -107,10 +116,17 @@ fn height_plane_equals_plane() {
     );
     let active = p.active_node_ids();
     let all = p.contact_rows().len();
-    assert!(!active.is_empty() && active.len() < all, "{} of {all}", active.len());
+    assert!(
+        !active.is_empty() && active.len() < all,
+        "{} of {all}",
+        active.len()
+    );
     assert_eq!(h.active_node_ids(), active);
     let (du, df) = (h.u_rel_diff(&p), force_diff(&h, &p));
-    println!("3D: |Δu|/|u| = {du:.2e}, |ΔF|/|F| = {df:.2e}, {} of {all} active", active.len());
+    println!(
+        "3D: |Δu|/|u| = {du:.2e}, |ΔF|/|F| = {df:.2e}, {} of {all} active",
+        active.len()
+    );
     assert!(du < 1e-8 && df < 1e-8, "3D: Δu {du:e}, ΔF {df:e}");
 }
 
@@ -146,12 +162,17 @@ fn stl_sphere_between_the_analytic_spheres() {
     write_stl_ascii(&mut f, "ball", &tris).unwrap();
     drop(f);
     let held = "[0.0, 0.0, 0.0]";
-    let sphere = |radius: f64| {
-        format!("{{ type = \"sphere\", center = [0, 0, {zc}], radius = {radius} }}")
-    };
+    let sphere =
+        |radius: f64| format!("{{ type = \"sphere\", center = [0, 0, {zc}], radius = {radius} }}");
     let outer = case_3d(&mesh, "bottom", held, "top", &sphere(r));
     let inner = case_3d(&mesh, "bottom", held, "top", &sphere(r - sag));
-    let faceted = case_3d(&mesh, "bottom", held, "top", "{ type = \"surface\", file = \"ball.stl\" }");
+    let faceted = case_3d(
+        &mesh,
+        "bottom",
+        held,
+        "top",
+        "{ type = \"surface\", file = \"ball.stl\" }",
+    );
     let outer = solve_text(1, tmp.path(), "outer", &outer, &[]);
     let inner = solve_text(1, tmp.path(), "inner", &inner, &[]);
     let stl_1 = solve_text(1, tmp.path(), "stl", &faceted, &[]);
@@ -164,7 +185,10 @@ fn stl_sphere_between_the_analytic_spheres() {
         stl_1.active_node_ids().len(),
         inner.active_node_ids().len()
     );
-    assert!(fi > 0.0 && fi < fo, "the smaller sphere presses less: {fi} vs {fo}");
+    assert!(
+        fi > 0.0 && fi < fo,
+        "the smaller sphere presses less: {fi} vs {fo}"
+    );
     assert!(
         fs >= fi * (1.0 - 1e-3) && fs <= fo * (1.0 + 1e-3),
         "STL force {fs} outside [{fi}, {fo}]"
@@ -200,12 +224,19 @@ fn rejected_with_exit_code_2() {
     let stl = tmp.path().join("ball.stl");
     let mut f = std::fs::File::create(&stl).unwrap();
     write_stl_ascii(&mut f, "ball", &icosphere([0.0, -1.0, 0.0], 0.5, 1)).unwrap();
-    let surface = format!("contact.obstacle={{type=\"surface\", file={}}}", toml_path(&stl));
+    let surface = format!(
+        "contact.obstacle={{type=\"surface\", file={}}}",
+        toml_path(&stl)
+    );
     for (set, expect) in [
         // h not defined at the contact nodes (x < 0 on the block's bottom).
         (
             "contact.obstacle={type=\"height\", expr=\"sqrt(x) - 1\"}",
-            vec!["contact.obstacle", "contact.obstacle.expr", "not a finite number"],
+            vec![
+                "contact.obstacle",
+                "contact.obstacle.expr",
+                "not a finite number",
+            ],
         ),
         // y in a 2D expression.
         (
@@ -227,11 +258,19 @@ fn rejected_with_exit_code_2() {
         let out = tmp.path().join("out");
         let r = run_solver(1, &block, &[set], &out);
         r.expect_code(2, set);
-        let errors: Vec<&str> = r.stderr.lines().filter(|l| l.starts_with("error")).collect();
+        let errors: Vec<&str> = r
+            .stderr
+            .lines()
+            .filter(|l| l.starts_with("error"))
+            .collect();
         assert_eq!(errors.len(), 1, "one message for {set}:\n{}", r.stderr);
         println!("rejected: {}", errors[0]);
         for e in &expect {
-            assert!(errors[0].contains(e), "{set}: message lacks {e:?}: {}", errors[0]);
+            assert!(
+                errors[0].contains(e),
+                "{set}: message lacks {e:?}: {}",
+                errors[0]
+            );
         }
         assert!(!out.exists(), "{set}: output written");
     }

@@ -759,10 +759,7 @@ impl Case {
         }
         if let ObstacleSpec::Height { expr } = shape {
             expr.check_variables(dim).map_err(|m| {
-                self.err_at(
-                    &join_key(key, "expr"),
-                    format!("\"{}\": {m}", expr.text()),
-                )
+                self.err_at(&join_key(key, "expr"), format!("\"{}\": {m}", expr.text()))
             })?;
         }
         for (name, n) in shape.vectors() {
@@ -1665,13 +1662,8 @@ impl Reader<'_> {
         let (fk, f) = self.required(&t, "file")?;
         let rel = self.name(&fk, f)?;
         let file = self.file.parent().unwrap_or(Path::new("")).join(rel);
-        let surface = TriSurface::read_stl(&file).map_err(|m| {
-            self.err(
-                &fk,
-                f.loc,
-                format!("surface file {}: {m}", file.display()),
-            )
-        })?;
+        let surface = TriSurface::read_stl(&file)
+            .map_err(|m| self.err(&fk, f.loc, format!("surface file {}: {m}", file.display())))?;
         // Shared for the run: the obstacle built from it is `Copy`.
         let surface: &'static TriSurface = Box::leak(Box::new(surface));
         Ok(ObstacleSpec::Surface { file, surface })

@@ -21,7 +21,10 @@ fn parse_at(text: &str, file: &Path) -> Result<Case, InputError> {
 
 /// 1-based line of the first line containing `needle`.
 fn line(text: &str, needle: &str) -> usize {
-    text.lines().position(|l| l.contains(needle)).expect("test bug") + 1
+    text.lines()
+        .position(|l| l.contains(needle))
+        .expect("test bug")
+        + 1
 }
 
 /// The error names `file` (the case file), `key` and the line of `needle`; one line.
@@ -41,7 +44,10 @@ fn expect_err(text: &str, key: &str, needle: &str) -> InputError {
 
 #[test]
 fn height_parsed_and_checked_against_the_mesh() {
-    let text = case(MINIMAL_2D, "{ type = \"height\", expr = \"0.1*x^2 - 1e-3\" }");
+    let text = case(
+        MINIMAL_2D,
+        "{ type = \"height\", expr = \"0.1*x^2 - 1e-3\" }",
+    );
     let c = parse_at(&text, Path::new(FILE)).unwrap();
     let spec = &c.contact.as_ref().unwrap().obstacle;
     assert_eq!(spec.type_name(), "height");
@@ -60,8 +66,17 @@ fn height_parsed_and_checked_against_the_mesh() {
         .unwrap()
         .check_against_mesh(2, &g2)
         .unwrap_err();
-    check(&e, Path::new(FILE), "contact.obstacle.expr", &text, "obstacle = ");
-    assert!(e.message.contains("'y'") && e.message.contains("y = h(x)"), "{e}");
+    check(
+        &e,
+        Path::new(FILE),
+        "contact.obstacle.expr",
+        &text,
+        "obstacle = ",
+    );
+    assert!(
+        e.message.contains("'y'") && e.message.contains("y = h(x)"),
+        "{e}"
+    );
     // The same expression on a 3D mesh is fine.
     let text = case(MINIMAL_3D, "{ type = \"height\", expr = \"x*y\" }");
     parse_at(&text, Path::new(FILE))
@@ -157,7 +172,11 @@ fn surface_read_relative_to_the_case_file() {
     assert_eq!(file, &d.tmp.path().join("ball.stl"));
     assert_eq!(surface.num_triangles(), 320);
     c.check_against_mesh(3, &[("c".to_string(), 2)]).unwrap();
-    let q = spec.to_obstacle(3).unwrap().project([0.0, 0.0, 0.0]).unwrap();
+    let q = spec
+        .to_obstacle(3)
+        .unwrap()
+        .project([0.0, 0.0, 0.0])
+        .unwrap();
     // The bottom vertex of the icosphere is not a vertex: the gap lies within the chord
     // error (0.5 (1 − cos 16°) < 0.02) above the sphere's 0.5.
     assert!(q.gap >= 0.5 - 1e-12 && q.gap < 0.52, "{q:?}");
@@ -167,7 +186,13 @@ fn surface_read_relative_to_the_case_file() {
     let e = c
         .check_against_mesh(2, &[("c".to_string(), 1)])
         .unwrap_err();
-    check(&e, &d.case_file(), "contact.obstacle.type", &text, "obstacle = ");
+    check(
+        &e,
+        &d.case_file(),
+        "contact.obstacle.type",
+        &text,
+        "obstacle = ",
+    );
     assert!(e.message.contains("in 2D use \"height\""), "{e}");
     assert_eq!(spec.to_obstacle(2), Err(ObstacleError::Only3D("surface")));
 }
@@ -185,7 +210,10 @@ fn reject_bad_surfaces() {
     let mut degenerate = ball.clone();
     degenerate[4][2] = degenerate[4][1];
     d.stl("degenerate.stl", &degenerate);
-    d.text("junk.stl", "solid x\nfacet normal 0 0 1\nouter loop\nvertex 1 2\n");
+    d.text(
+        "junk.stl",
+        "solid x\nfacet normal 0 0 1\nouter loop\nvertex 1 2\n",
+    );
     d.text("empty.stl", "");
     for (file, msg) in [
         ("missing.stl", "cannot read the file"),
@@ -201,7 +229,13 @@ fn reject_bad_surfaces() {
             &format!("{{ type = \"surface\", file = \"{file}\" }}"),
         );
         let e = parse_at(&text, &d.case_file()).expect_err(file);
-        check(&e, &d.case_file(), "contact.obstacle.file", &text, "obstacle = ");
+        check(
+            &e,
+            &d.case_file(),
+            "contact.obstacle.file",
+            &text,
+            "obstacle = ",
+        );
         assert!(e.message.contains(msg), "{file}: {e}");
         assert!(e.message.contains(file), "names the STL file: {e}");
     }

@@ -11,8 +11,8 @@
 use super::obstacle::{ObstacleError, Projection};
 use evalexpr::error::EvalexprResultValue;
 use evalexpr::{
-    build_operator_tree, Context, DefaultNumericTypes, EvalexprError, EvalexprResult,
-    Node, Operator, Value,
+    build_operator_tree, Context, DefaultNumericTypes, EvalexprError, EvalexprResult, Node,
+    Operator, Value,
 };
 use std::f64::consts::{E, PI};
 use std::fmt;
@@ -22,8 +22,7 @@ type V = Value<DefaultNumericTypes>;
 /// The functions of a height expression: one argument, or two where noted (`f(a, b)`).
 pub const FUNCTIONS: [&str; 24] = [
     "sin", "cos", "tan", "asin", "acos", "atan", "atan2", "sinh", "cosh", "tanh", "exp", "ln",
-    "log10", "log2", "sqrt", "cbrt", "abs", "pow", "hypot", "floor", "ceil", "min", "max",
-    "sign",
+    "log10", "log2", "sqrt", "cbrt", "abs", "pow", "hypot", "floor", "ceil", "min", "max", "sign",
 ];
 
 /// f64 of a number value.
@@ -160,7 +159,8 @@ impl HeightExpr {
         if text.trim().is_empty() {
             return Err("the expression is empty".into());
         }
-        let mut node = build_operator_tree::<DefaultNumericTypes>(text).map_err(|e| e.to_string())?;
+        let mut node =
+            build_operator_tree::<DefaultNumericTypes>(text).map_err(|e| e.to_string())?;
         floats(&mut node);
         if node.iter_write_variable_identifiers().next().is_some() {
             return Err("assignments are not allowed: give an expression of x (and y)".into());
@@ -550,7 +550,11 @@ mod tests {
             a[k] += e;
             b[k] -= e;
             let d = (h.project(a).unwrap().gap - h.project(b).unwrap().gap) / (2.0 * e);
-            assert!((d - q.normal[k]).abs() < tol, "dg/dx{k} = {d}, n = {:?}", q.normal);
+            assert!(
+                (d - q.normal[k]).abs() < tol,
+                "dg/dx{k} = {d}, n = {:?}",
+                q.normal
+            );
         }
     }
 
@@ -571,9 +575,17 @@ mod tests {
                 }
                 let (q, r) = (h.project(x).unwrap(), p.project(x).unwrap());
                 // Linear h: the differences are exact up to round-off of the O(5) coordinates.
-                assert!((q.gap - r.gap).abs() < 1e-12, "{text}: {} vs {}", q.gap, r.gap);
+                assert!(
+                    (q.gap - r.gap).abs() < 1e-12,
+                    "{text}: {} vs {}",
+                    q.gap,
+                    r.gap
+                );
                 for k in 0..3 {
-                    assert!((q.normal[k] - r.normal[k]).abs() < 1e-10, "{text}: {q:?} {r:?}");
+                    assert!(
+                        (q.normal[k] - r.normal[k]).abs() < 1e-10,
+                        "{text}: {q:?} {r:?}"
+                    );
                 }
                 check_common(&h, x, &q, 1e-6);
             }
@@ -606,7 +618,11 @@ mod tests {
                 let rho = r * rng.gen_range(0.5..1.5);
                 let mut x = [0.0; 3];
                 for k in 0..dim {
-                    let up = if k == dim - 1 { rad[2 - (3 - dim)] } else { rad[k] };
+                    let up = if k == dim - 1 {
+                        rad[2 - (3 - dim)]
+                    } else {
+                        rad[k]
+                    };
                     x[k] = c[k] + rho * up;
                 }
                 let rad = if dim == 2 { [rad[0], rad[1], 0.0] } else { rad };
@@ -615,7 +631,12 @@ mod tests {
                 // O(1) coordinates): the normal carries their truncation and round-off error,
                 // ≈ 1e-10 for this unit-size curvature (measured: < 1e-10); the gap only its
                 // square, so round-off.
-                assert!((q.gap - (rho - r)).abs() < 1e-13 * r, "{text}: {} vs {}", q.gap, rho - r);
+                assert!(
+                    (q.gap - (rho - r)).abs() < 1e-13 * r,
+                    "{text}: {} vs {}",
+                    q.gap,
+                    rho - r
+                );
                 for k in 0..3 {
                     assert!((q.normal[k] - rad[k]).abs() < 1e-9, "{q:?} vs {rad:?}");
                 }
@@ -665,7 +686,12 @@ mod tests {
             // The parabola's smallest radius of curvature is 1 (at the vertex); points closer
             // to the surface than that have one nearest point: the same one, to round-off.
             if dist < 0.9 {
-                assert!((q.gap - sign * dist).abs() < 1e-10, "{} vs {}", q.gap, sign * dist);
+                assert!(
+                    (q.gap - sign * dist).abs() < 1e-10,
+                    "{} vs {}",
+                    q.gap,
+                    sign * dist
+                );
                 check_common(&h, x, &q, 1e-6);
             }
             // Always: no farther than the vertical distance, and on the parabola.
@@ -689,14 +715,24 @@ mod tests {
         assert!(m.contains("'y'") && m.contains("y = h(x)"), "{m}");
         let e = HeightExpr::parse("pow(x, 2) + hypot(x, y) + max(x, y) + sqrt(abs(-4))").unwrap();
         assert!((e.eval([3.0, 4.0]) - (9.0 + 5.0 + 4.0 + 2.0)).abs() < 1e-14);
-        let m = HeightExpr::parse("z + x").unwrap().check_variables(3).unwrap_err();
+        let m = HeightExpr::parse("z + x")
+            .unwrap()
+            .check_variables(3)
+            .unwrap_err();
         assert!(m.contains("'z'"), "{m}");
         assert!(HeightExpr::parse("sin(x").is_err());
         assert!(HeightExpr::parse("  ").is_err());
         let m = HeightExpr::parse("foo(x)").unwrap_err();
-        assert!(m.contains("unknown function 'foo'") && m.contains("sqrt"), "{m}");
-        assert!(HeightExpr::parse("x = 2").unwrap_err().contains("assignments"));
-        assert!(HeightExpr::parse("x > 2").unwrap_err().contains("a boolean"));
+        assert!(
+            m.contains("unknown function 'foo'") && m.contains("sqrt"),
+            "{m}"
+        );
+        assert!(HeightExpr::parse("x = 2")
+            .unwrap_err()
+            .contains("assignments"));
+        assert!(HeightExpr::parse("x > 2")
+            .unwrap_err()
+            .contains("a boolean"));
         let e: &'static HeightExpr = Box::leak(Box::new(HeightExpr::parse("y").unwrap()));
         assert_eq!(Height::new(e, 2), Err(ObstacleError::HeightVariables));
     }

@@ -143,7 +143,10 @@ impl TriSurface {
         if tris.is_empty() {
             return Err("the file holds no triangles".into());
         }
-        if let Some(t) = tris.iter().position(|t| t.iter().flatten().any(|v| !v.is_finite())) {
+        if let Some(t) = tris
+            .iter()
+            .position(|t| t.iter().flatten().any(|v| !v.is_finite()))
+        {
             return Err(format!(
                 "triangle {} has a coordinate that is not a finite number",
                 t + 1
@@ -187,7 +190,10 @@ impl TriSurface {
                  (reverse its vertex order) so that the normals point out of the obstacle"
             ));
         }
-        let vertices: Vec<Vector> = verts.iter().map(|p| Vector::new(p[0], p[1], p[2])).collect();
+        let vertices: Vec<Vector> = verts
+            .iter()
+            .map(|p| Vector::new(p[0], p[1], p[2]))
+            .collect();
         let mesh = TriMesh::with_flags(vertices, idx, TriMeshFlags::ORIENTED)
             .map_err(|e| format!("the triangle mesh could not be built: {e}"))?;
         Ok(TriSurface { mesh, size, volume })
@@ -424,7 +430,13 @@ mod tests {
     /// The cube c + [−h, h]³ as 12 outward triangles.
     fn cube(c: [f64; 3], h: [f64; 3]) -> Vec<[[f64; 3]; 3]> {
         let p = |i: usize| {
-            let s = |b: usize, k: usize| if i >> b & 1 == 1 { c[k] + h[k] } else { c[k] - h[k] };
+            let s = |b: usize, k: usize| {
+                if i >> b & 1 == 1 {
+                    c[k] + h[k]
+                } else {
+                    c[k] - h[k]
+                }
+            };
             [s(0, 0), s(1, 1), s(2, 2)]
         };
         // Faces as quads (counter-clockwise seen from outside), split into two triangles.
@@ -488,7 +500,11 @@ mod tests {
                     y[k] += e;
                     z[k] -= e;
                     let d = (s.project(y).gap - s.project(z).gap) / (2.0 * e);
-                    assert!((d - q.normal[k]).abs() < 1e-6, "dg/dx{k} {d} vs n {:?}", q.normal);
+                    assert!(
+                        (d - q.normal[k]).abs() < 1e-6,
+                        "dg/dx{k} {d} vs n {:?}",
+                        q.normal
+                    );
                 }
             }
             if g < 0.0 {
@@ -497,7 +513,10 @@ mod tests {
                 outside += 1;
             }
         }
-        assert!(inside > 100 && outside > 100, "{inside} inside, {outside} outside");
+        assert!(
+            inside > 100 && outside > 100,
+            "{inside} inside, {outside} outside"
+        );
     }
 
     #[test]
@@ -546,11 +565,17 @@ mod tests {
                 assert!((x[k] - q.closest[k] - q.gap * q.normal[k]).abs() < 1e-12);
             }
             let y = norm(sub(q.closest, c));
-            assert!(y <= r + 1e-12 && y >= r - sag - 1e-12, "closest at radius {y}");
+            assert!(
+                y <= r + 1e-12 && y >= r - sag - 1e-12,
+                "closest at radius {y}"
+            );
             // n lies in the normal cone of the nearest face, edge or vertex: within the facets'
             // angle of the radial direction (twice, for x and the feature's own radials).
             let angle = dot(q.normal, rad).min(1.0).acos();
-            assert!(angle <= 2.0 * alpha, "normal {angle} rad off radial (alpha {alpha})");
+            assert!(
+                angle <= 2.0 * alpha,
+                "normal {angle} rad off radial (alpha {alpha})"
+            );
         }
     }
 
@@ -596,14 +621,20 @@ mod tests {
     fn bad_stl_text() {
         let e = |t: &str| parse_stl(t.as_bytes()).unwrap_err();
         assert!(e("").contains("empty"));
-        assert!(e("hello\n").contains("starts with 'solid'"), "{}", e("hello\n"));
+        assert!(
+            e("hello\n").contains("starts with 'solid'"),
+            "{}",
+            e("hello\n")
+        );
         let one = "solid s\nfacet normal 0 0 1\nouter loop\nvertex 0 0 0\nvertex 1 0 0\n\
                    endloop\nendfacet\nendsolid s\n";
         assert!(e(one).contains("line 3: a facet needs 3 vertices, this one has 2"));
         let bad = "solid s\nfacet normal 0 0 1\nouter loop\nvertex 0 0 x\n";
         assert!(e(bad).contains("line 4: 'vertex' needs three numbers"));
         assert!(e("solid s\nfacet normal 0 0 1\n").contains("no 'endsolid'"));
-        assert!(parse_stl(&[0xff, 0xfe, 0x00]).unwrap_err().contains("neither binary"));
+        assert!(parse_stl(&[0xff, 0xfe, 0x00])
+            .unwrap_err()
+            .contains("neither binary"));
     }
 
     #[test]

@@ -228,6 +228,13 @@ fn rejected_with_exit_code_2() {
         "contact.obstacle={{type=\"surface\", file={}}}",
         toml_path(&stl)
     );
+    let open_stl = tmp.path().join("open.stl");
+    let mut f = std::fs::File::create(&open_stl).unwrap();
+    write_stl_ascii(&mut f, "open", &icosphere([0.0, -1.0, 0.0], 0.5, 1)[1..]).unwrap();
+    let open = format!(
+        "contact.obstacle={{type=\"surface\", file={}}}",
+        toml_path(&open_stl)
+    );
     for (set, expect) in [
         // h not defined at the contact nodes (x < 0 on the block's bottom).
         (
@@ -254,9 +261,16 @@ fn rejected_with_exit_code_2() {
             surface.as_str(),
             vec!["contact.obstacle.type", "3D", "in 2D use \"height\""],
         ),
+        // An open surface: found when the case is read.
+        (
+            open.as_str(),
+            vec!["contact.obstacle.file", "open.stl", "not closed"],
+        ),
     ] {
         let out = tmp.path().join("out");
-        let r = run_solver(1, &block, &[set], &out);
+        // The errors found at the contact nodes on 2 ranks too: every rank stops, one message.
+        let np = if set.contains("abs(x)") { 2 } else { 1 };
+        let r = run_solver(np, &block, &[set], &out);
         r.expect_code(2, set);
         let errors: Vec<&str> = r
             .stderr

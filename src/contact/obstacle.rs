@@ -15,7 +15,8 @@
 //! the direction in which the penetration decreases fastest inside (x = closest + g0 n in
 //! both cases). Their non-smooth places (apex, edges, and the interior points with several
 //! nearest surface points) get the fixed choices documented on each type and in
-//! docs/obstacles.md.
+//! docs/obstacles.md. [`Height`] (the solid below a graph, `contact::height`) and [`TriSurface`]
+//! (inside a closed STL surface, `contact::surface`) follow the same conventions.
 
 pub use super::height::{Height, HeightExpr};
 pub use super::surface::TriSurface;

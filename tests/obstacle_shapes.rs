@@ -55,7 +55,7 @@ fn force_diff(a: &Solved, b: &Solved) -> f64 {
 /// the central differences' truncation error (zero for a linear h, so round-off of h over the
 /// step, ~1e-11), so the solutions agree to the solver's tolerance (rtol 1e-10). 2D: the block
 /// of cases/blocks/block2d pressed down by its top onto y = 0.02 x − 0.005, partly in contact;
-/// 3D: the box pressed onto z = 0.02 x − 0.01 y − 0.005.
+/// 3D: the box pressed onto z = 0.02 x − 0.01 y − 0.005, also on 2 ranks.
 #[test]
 fn height_plane_equals_plane() {
     let block = repo("tests/cases/block2d_pulled.toml");
@@ -110,8 +110,9 @@ fn height_plane_equals_plane() {
         "bottom",
         "{ type = \"plane\", point = [0, 0, -0.005], normal = [-0.02, 0.01, 1] }",
     );
+    let h_text = h;
     let (h, p) = (
-        solve_text(1, tmp.path(), "height3d", &h, &[]),
+        solve_text(1, tmp.path(), "height3d", &h_text, &[]),
         solve_text(1, tmp.path(), "plane3d", &p, &[]),
     );
     let active = p.active_node_ids();
@@ -128,6 +129,11 @@ fn height_plane_equals_plane() {
         active.len()
     );
     assert!(du < 1e-8 && df < 1e-8, "3D: Δu {du:e}, ΔF {df:e}");
+    let h2 = solve_text(2, tmp.path(), "height3d", &h_text, &[]);
+    let du = h2.u_rel_diff(&h);
+    println!("3D height 1 vs 2 ranks: |Δu|/|u| = {du:.2e}");
+    assert!(du < 1e-8, "1 vs 2 ranks: {du:e}");
+    assert_eq!(h2.active_node_ids(), active);
 }
 
 /// An icosphere (inscribed polyhedron, 20 480 triangles) of radius R pressed 0.04 into the box

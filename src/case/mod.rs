@@ -11,11 +11,15 @@ mod tree;
 
 #[cfg(test)]
 mod tests;
+#[cfg(test)]
+mod tests_shapes;
 
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
-use crate::contact::obstacle::{Cone, Cylinder, Punch, Pyramid, MAX_FACES, MIN_FACES};
+use crate::contact::obstacle::{
+    Cone, Cylinder, Height, HeightExpr, Punch, Pyramid, TriSurface, MAX_FACES, MIN_FACES,
+};
 use crate::contact::{Obstacle, ObstacleError, Plane, Sphere};
 use crate::error::InputError;
 use crate::mesh::Mesh;
@@ -308,6 +312,14 @@ pub enum ObstacleSpec {
         radius: f64,
         edge_radius: f64,
     },
+    /// The solid below the graph y = h(x) (2D) or z = h(x, y) (3D) of a parsed expression.
+    Height { expr: &'static HeightExpr },
+    /// The solid inside the closed triangle surface read from `file` (3D only; resolved
+    /// against the case file's directory).
+    Surface {
+        file: PathBuf,
+        surface: &'static TriSurface,
+    },
 }
 
 impl ObstacleSpec {
@@ -320,6 +332,8 @@ impl ObstacleSpec {
             ObstacleSpec::Cone { .. } => "cone",
             ObstacleSpec::Pyramid { .. } => "pyramid",
             ObstacleSpec::Punch { .. } => "punch",
+            ObstacleSpec::Height { .. } => "height",
+            ObstacleSpec::Surface { .. } => "surface",
         }
     }
 
@@ -339,6 +353,7 @@ impl ObstacleSpec {
             ObstacleSpec::Punch { center, axis, .. } => {
                 vec![("center", center.len()), ("axis", axis.len())]
             }
+            ObstacleSpec::Height { .. } | ObstacleSpec::Surface { .. } => Vec::new(),
         }
     }
 
@@ -347,6 +362,7 @@ impl ObstacleSpec {
         match self {
             ObstacleSpec::Cylinder { .. } => Some("\"sphere\" (a circle)"),
             ObstacleSpec::Pyramid { .. } => Some("\"cone\" (a wedge)"),
+            ObstacleSpec::Surface { .. } => Some("\"height\" (a curve y = h(x))"),
             _ => None,
         }
     }
@@ -397,6 +413,13 @@ impl ObstacleSpec {
                 *edge_radius,
                 dim,
             )?),
+            ObstacleSpec::Height { expr } => Obstacle::Height(Height::new(expr, dim)?),
+            ObstacleSpec::Surface { surface, .. } => {
+                if dim != 3 {
+                    return Err(ObstacleError::Only3D("surface"));
+                }
+                Obstacle::Surface(surface)
+            }
         })
     }
 }
@@ -752,6 +775,11 @@ impl Case {
                     shape.type_name()
                 ),
             ));
+        }
+        if let ObstacleSpec::Height { expr } = shape {
+            expr.check_variables(dim).map_err(|m| {
+                self.err_at(&join_key(key, "expr"), format!("\"{}\": {m}", expr.text()))
+            })?;
         }
         for (name, n) in shape.vectors() {
             if n != dim {
@@ -1154,6 +1182,7 @@ impl Reader<'_> {
             let (gk, g) = self.required(&p, "group")?;
             let group = self.name(&gk, g)?;
             let (sk, sh) = self.required(&p, "shape")?;
+            self.analytic_shape(&sk, sh)?;
             let shape = self.obstacle(&sk, sh)?;
             project.push(Projection { group, shape });
         }
@@ -1484,6 +1513,8 @@ impl Reader<'_> {
             Cone,
             Pyramid,
             Punch,
+            Height,
+            Surface,
         }
         let ty = self.choice(
             &tk,
@@ -1495,6 +1526,8 @@ impl Reader<'_> {
                 ("cone", Ty::Cone),
                 ("pyramid", Ty::Pyramid),
                 ("punch", Ty::Punch),
+                ("height", Ty::Height),
+                ("surface", Ty::Surface),
             ],
         )?;
         match ty {
@@ -1588,35 +1621,104 @@ impl Reader<'_> {
                     azimuth,
                 })
             }
-            Ty::Punch => {
-                let t = self.table(key, n, &["type", "center", "axis", "radius", "edge_radius"])?;
-                let (ck, c) = self.required(&t, "center")?;
-                let center = self.vector(&ck, c)?;
-                let axis = self.axis(&t, "center", center.len())?;
-                let (rk, r) = self.required(&t, "radius")?;
-                let radius = self.positive(&rk, r)?;
-                let edge_radius = match t.get("edge_radius") {
-                    None => 0.0,
-                    Some((ek, e)) => {
-                        let x = self.num(&ek, e)?;
-                        if !(0.0..=radius).contains(&x) {
-                            return Err(self.err(
-                                &ek,
-                                e.loc,
-                                format!("must lie in [0, radius] = [0, {radius}], got {x}"),
-                            ));
-                        }
-                        x
-                    }
-                };
-                Ok(ObstacleSpec::Punch {
-                    center,
-                    axis,
-                    radius,
-                    edge_radius,
-                })
+            Ty::Punch => self.punch(key, n),
+            Ty::Height => self.height(key, n),
+            Ty::Surface => self.surface(key, n),
+        }
+    }
+
+    /// A `[[mesh.project]]` shape must be one of the analytic ones: refinement moves nodes
+    /// onto them (not onto a height graph or a triangle surface).
+    fn analytic_shape(&self, key: &str, n: &Node) -> Res<()> {
+        let t = self.table_any(key, n)?;
+        if let Some((tk, ty)) = t.get("type") {
+            if let Kind::Str(s) = &ty.kind {
+                if s == "height" || s == "surface" {
+                    return Err(self.err(
+                        &tk,
+                        ty.loc,
+                        format!(
+                            "\"{s}\" is a contact obstacle only; [[mesh.project]] takes plane, \
+                             sphere, cylinder, cone, pyramid or punch"
+                        ),
+                    ));
+                }
             }
         }
+        Ok(())
+    }
+
+    /// `type = "punch"`.
+    fn punch(&self, key: &str, n: &Node) -> Res<ObstacleSpec> {
+        let t = self.table(key, n, &["type", "center", "axis", "radius", "edge_radius"])?;
+        let (ck, c) = self.required(&t, "center")?;
+        let center = self.vector(&ck, c)?;
+        let axis = self.axis(&t, "center", center.len())?;
+        let (rk, r) = self.required(&t, "radius")?;
+        let radius = self.positive(&rk, r)?;
+        let edge_radius = match t.get("edge_radius") {
+            None => 0.0,
+            Some((ek, e)) => {
+                let x = self.num(&ek, e)?;
+                if !(0.0..=radius).contains(&x) {
+                    return Err(self.err(
+                        &ek,
+                        e.loc,
+                        format!("must lie in [0, radius] = [0, {radius}], got {x}"),
+                    ));
+                }
+                x
+            }
+        };
+        Ok(ObstacleSpec::Punch {
+            center,
+            axis,
+            radius,
+            edge_radius,
+        })
+    }
+
+    /// `type = "height"`: `expr`, an expression of x (2D) or x and y (3D), parsed here (its
+    /// variables are checked against the mesh's dimension in [`Case::check_against_mesh`]).
+    fn height(&self, key: &str, n: &Node) -> Res<ObstacleSpec> {
+        let t = self.table(key, n, &["type", "expr"])?;
+        let (ek, e) = self.required(&t, "expr")?;
+        let text = self.string(&ek, e)?;
+        let expr = HeightExpr::parse(text).map_err(|m| {
+            self.err(
+                &ek,
+                e.loc,
+                format!("cannot parse the height expression \"{text}\": {m}"),
+            )
+        })?;
+        if let Some(v) = expr.variables().iter().find(|v| *v != "x" && *v != "y") {
+            return Err(self.err(
+                &ek,
+                e.loc,
+                format!(
+                    "unknown variable '{v}' in \"{text}\": the height is y = h(x) in 2D, \
+                     z = h(x, y) in 3D (functions: sin, cos, tan, exp, ln, sqrt, abs, min, max, \
+                     …; powers with ^; constants pi, e)"
+                ),
+            ));
+        }
+        // Shared for the run: the obstacle built from it is `Copy`.
+        let expr: &'static HeightExpr = Box::leak(Box::new(expr));
+        Ok(ObstacleSpec::Height { expr })
+    }
+
+    /// `type = "surface"`: `file`, a closed STL surface (path relative to the case file), read
+    /// and checked here.
+    fn surface(&self, key: &str, n: &Node) -> Res<ObstacleSpec> {
+        let t = self.table(key, n, &["type", "file"])?;
+        let (fk, f) = self.required(&t, "file")?;
+        let rel = self.name(&fk, f)?;
+        let file = self.file.parent().unwrap_or(Path::new("")).join(rel);
+        let surface = TriSurface::read_stl(&file)
+            .map_err(|m| self.err(&fk, f.loc, format!("surface file {}: {m}", file.display())))?;
+        // Shared for the run: the obstacle built from it is `Copy`.
+        let surface: &'static TriSurface = Box::leak(Box::new(surface));
+        Ok(ObstacleSpec::Surface { file, surface })
     }
 
     /// The required `axis` of an obstacle: a nonzero vector with as many components as the

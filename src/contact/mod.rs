@@ -2,7 +2,8 @@
 //! node states and residual certificates. Pure functions on small fixed-size arrays; no
 //! MPI, no PETSc. Equation numbers refer to the thesis / docs/THEORY.md.
 //!
-//! - [`obstacle`]: `Plane`, `Sphere`, `Cylinder`, `Cone`, `Pyramid`, `Punch` (docs/obstacles.md),
+//! - [`obstacle`]: `Plane`, `Sphere`, `Cylinder`, `Cone`, `Pyramid`, `Punch`, `Height`
+//!   ([`height`]), `Surface` ([`surface`]) (docs/obstacles.md),
 //!   `Obstacle::project` → closest point, normal n (into
 //!   the body), gap g0 (3.3).
 //! - [`frame`]: orthonormal frames {n, τ_1 (, τ_2)}; 2D τ = (n_y, −n_x), 3D right-handed.
@@ -25,9 +26,11 @@
 pub mod complementarity;
 pub mod coulomb;
 pub mod frame;
+pub mod height;
 mod linalg;
 pub mod obstacle;
 pub mod residual;
+pub mod surface;
 pub mod tresca;
 
 pub use complementarity::{c_n, c_tau, classify, normal_active, tangential_slip, NodeState};

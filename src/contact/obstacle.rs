@@ -15,8 +15,11 @@
 //! the direction in which the penetration decreases fastest inside (x = closest + g0 n in
 //! both cases). Their non-smooth places (apex, edges, and the interior points with several
 //! nearest surface points) get the fixed choices documented on each type and in
-//! docs/obstacles.md.
+//! docs/obstacles.md. [`Height`] (the solid below a graph, `contact::height`) and [`TriSurface`]
+//! (inside a closed STL surface, `contact::surface`) follow the same conventions.
 
+pub use super::height::{Height, HeightExpr};
+pub use super::surface::TriSurface;
 use crate::error::InputError;
 use crate::geom::{cross, dot, sub};
 use std::f64::consts::{FRAC_1_SQRT_2, PI, TAU};
@@ -52,6 +55,14 @@ pub enum ObstacleError {
     Only3D(&'static str),
     /// Cylinder query on its axis: no defined normal.
     OnAxis,
+    /// A height expression with variables other than x (2D) or x, y (3D).
+    HeightVariables,
+    /// The height h is not a finite number at (x) or (x, y) near a queried point.
+    HeightNotFinite { x: f64, y: Option<f64> },
+    /// The nearest point of a height surface was not found.
+    HeightNoConvergence,
+    /// The slope of h jumps at the nearest point (x) or (x, y): a kink or a step.
+    HeightNotSmooth { x: f64, y: Option<f64> },
 }
 
 impl fmt::Display for ObstacleError {
@@ -89,6 +100,40 @@ impl fmt::Display for ObstacleError {
             ObstacleError::OnAxis => write!(
                 f,
                 "a contact node lies on the axis of the cylinder obstacle: no normal is defined"
+            ),
+            ObstacleError::HeightVariables => write!(
+                f,
+                "the height expression 'contact.obstacle.expr' may use only x (2D) or x and y (3D)"
+            ),
+            ObstacleError::HeightNotFinite { x, y } => {
+                let at = match y {
+                    Some(y) => format!("(x, y) = ({x}, {y})"),
+                    None => format!("x = {x}"),
+                };
+                write!(
+                    f,
+                    "the height expression 'contact.obstacle.expr' is not a finite number at \
+                     {at}, near the node (the obstacle's surface must be defined and smooth \
+                     under the contact boundary)"
+                )
+            }
+            ObstacleError::HeightNotSmooth { x, y } => {
+                let at = match y {
+                    Some(y) => format!("(x, y) = ({x}, {y})"),
+                    None => format!("x = {x}"),
+                };
+                write!(
+                    f,
+                    "the height surface 'contact.obstacle.expr' has a kink or a step at {at}, \
+                     the nearest point to the node (its slope jumps there): the surface must be \
+                     smooth (C¹) near the body"
+                )
+            }
+            ObstacleError::HeightNoConvergence => write!(
+                f,
+                "the nearest point on the height surface 'contact.obstacle.expr' was not found \
+                 (the projection did not converge): the surface must be smooth (C¹) near the \
+                 body, without kinks or steps"
             ),
         }
     }
@@ -136,6 +181,11 @@ pub enum Obstacle {
     Cone(Cone),
     Pyramid(Pyramid),
     Punch(Punch),
+    /// Below the graph of an expression (docs/obstacles.md, "height").
+    Height(Height),
+    /// Inside a closed triangle surface (3D only; docs/obstacles.md, "surface"). The surface is
+    /// read once per run and shared (`Obstacle` is `Copy`).
+    Surface(&'static TriSurface),
 }
 
 fn check_dim(dim: usize) -> Result<(), ObstacleError> {
@@ -770,6 +820,8 @@ impl Obstacle {
             Obstacle::Cylinder(_) | Obstacle::Pyramid(_) => 3,
             Obstacle::Cone(c) => c.dim(),
             Obstacle::Punch(p) => p.dim(),
+            Obstacle::Height(h) => h.dim(),
+            Obstacle::Surface(_) => 3,
         }
     }
     /// Closest point, normal (into the body) and initial gap g0(x) (3.3).
@@ -781,6 +833,14 @@ impl Obstacle {
             Obstacle::Cone(c) => c.project(x),
             Obstacle::Pyramid(p) => p.project(x),
             Obstacle::Punch(p) => p.project(x),
+            Obstacle::Height(h) => h.project(x),
+            Obstacle::Surface(s) => {
+                if x.iter().all(|v| v.is_finite()) {
+                    Ok(s.project(x))
+                } else {
+                    Err(ObstacleError::NotFinite)
+                }
+            }
         }
     }
 }

@@ -86,7 +86,10 @@ impl Shape {
             // vectors have the mesh's dimension (Case::check_projections). A point without a
             // nearest point (on a cylinder's axis) stays, as a sphere's centre does.
             shape => {
-                let dim = shape.vectors()[0].1;
+                // (A height or a surface is refused when the case is read.)
+                let Some(&(_, dim)) = shape.vectors().first() else {
+                    return x;
+                };
                 match shape.to_obstacle(dim).and_then(|o| o.project(x)) {
                     Ok(q) => q.closest,
                     Err(_) => x,

@@ -83,7 +83,8 @@ fn force_control_inverts_displacement_control() {
 /// 3D: the sphere over the clamped block of tests/cases/sphere3d.toml (a gap of 0.05) moved
 /// down by 0.1; the force's component along the motion, prescribed along it, gives back
 /// δ = 0.1 and u (the lateral force components of the unstructured mesh are not prescribed:
-/// force control holds the force along F/|F| only) — condensed and plain path, 1 and 2 ranks.
+/// force control holds the force along F/|F| only) — condensed and plain path, 1 and 2 ranks,
+/// and the iterative preset (its first step predicts the set and δ by the half-space model).
 #[test]
 fn force_control_inverts_displacement_control_in_3d() {
     let case = repo("tests/cases/sphere3d.toml");
@@ -96,6 +97,7 @@ fn force_control_inverts_displacement_control_in_3d() {
         (1, "solver.reuse=\"auto\""),
         (2, "solver.reuse=\"auto\""),
         (2, "solver.reuse=\"never\""),
+        (2, "solver.preset=\"iterative\""),
     ] {
         let forced = solve(np, &case, &[AUTO, &fk, path]);
         forced.assert_converged("force control");

@@ -298,8 +298,7 @@ pub fn solve(
         sys,
     };
     // the half-space predictor's model: frictionless on the iterative preset only (newton.rs)
-    let predicts =
-        !friction && matches!(solver_section.preset, Preset::Iterative) && force_control.is_none();
+    let predicts = !friction && matches!(solver_section.preset, Preset::Iterative);
     let halfspace = predicts.then(|| predictor::HalfSpace {
         modulus: settings.contact_modulus,
         dim,
@@ -479,10 +478,11 @@ fn run_method(
             if let Begin::Solved(nr) = start {
                 return Ok((nr, None, condensed_summary));
             }
-            // force control solves its lift on the step's own factorisation (force.rs)
+            // force control solves its lift on the step's own factorisation (force.rs); the
+            // iterative preset's reuse of preconditioners stays
             let reuse = match ns.force {
-                Some(_) => Reuse::Never,
-                None => solver_section.reuse,
+                Some(_) if reduced.factorises()? => Reuse::Never,
+                _ => solver_section.reuse,
             };
             reduced.enable_reuse(ctx, reuse, friction)?;
             match settings.coulomb {

@@ -306,11 +306,15 @@ pub fn semismooth_newton(
         let mut predicted = None;
         let mut exact_from_prediction = None;
         if let Some(hs) = s.halfspace.filter(|_| plan.predict) {
-            let (set, rec) =
-                predictor::predict(ctx, hs, bs, &lp.it, &lp.free, s.c, s.section.max_steps)?;
+            let force = lp.approach.as_ref().map(|a| (a.dir, a.magnitude));
+            let limits = (s.c, s.section.max_steps);
+            let (set, rec) = predictor::predict(ctx, hs, bs, &lp.it, &lp.free, limits, force)?;
             if let Some(normal) = set {
                 update.replace_normal(&lp.set, normal);
                 exact_from_prediction = Some(!rec.truncated);
+            }
+            if let (Some(ap), Some(d)) = (lp.approach.as_mut(), rec.approach_change) {
+                ap.delta += d; // the next step solves at the predicted approach
             }
             predicted = Some(rec);
         }

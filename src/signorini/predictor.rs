@@ -111,6 +111,9 @@ pub struct PredictorStep {
     /// contact zone may extend beyond the model, and the steps after the prediction stay
     /// inexact while the set moves, as without one.
     pub truncated: bool,
+    /// Force control: the model's change of the approach δ (the second step starts there).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub approach_change: Option<f64>,
     pub seconds: f64,
 }
 
@@ -269,8 +272,8 @@ pub fn predict(
     b: &ContactBoundary,
     it: &Iterate,
     free: &FreeModes,
-    c: f64,
-    max_steps: usize,
+    (c, max_steps): (f64, usize),
+    force: Option<([f64; 3], f64)>,
 ) -> Result<(Option<Vec<bool>>, PredictorStep), RunError> {
     let t = Instant::now();
     let mz = if free.floats() {
@@ -279,26 +282,39 @@ pub fn predict(
         0
     };
     let all = gather_records(ctx, b, it, free);
-    let model = Model::choose(&all);
-    // every rank builds a share of C's columns
-    let share = hs.columns(
-        &model.x,
-        &model.w,
-        column_share(model.m(), ctx.rank, ctx.size),
-    );
-    let packed_c = ctx.gather_to_root(&share);
-    // rank 0: [code, model nodes, model steps, coarse levels, represented, flags of all nodes];
-    // a panic in the model is caught there (code 4) so that the broadcast still happens
-    let mut packed: Vec<f64> = Vec::new();
-    if ctx.rank == 0 {
-        packed = super::dense::guarded("predictor-model", || {
-            model.solve(&all, &packed_c, free, mz, c, max_steps)
-        })
-        .unwrap_or_else(|_| vec![4.0, 0.0, 0.0, 0.0, 0.0]);
-    }
-    ctx.broadcast_f64s(&mut packed);
+    let n = all.len() / REC;
+    // Under force control nothing penetrates before the approach is known: the model grows
+    // from MIN_MODEL_NODES (by MODEL_MARGIN) while its contact zone reaches its border.
+    let mut wanted = force.map(|_| MIN_MODEL_NODES.min(n));
+    let packed = loop {
+        let model = Model::choose(&all, wanted);
+        // every rank builds a share of C's columns
+        let share = hs.columns(
+            &model.x,
+            &model.w,
+            column_share(model.m(), ctx.rank, ctx.size),
+        );
+        let packed_c = ctx.gather_to_root(&share);
+        // rank 0: [code, model nodes, model steps, coarse levels, represented, δ change,
+        // flags of all nodes]; a panic in the model is caught there (code 4) so that the
+        // broadcast still happens
+        let mut packed: Vec<f64> = Vec::new();
+        if ctx.rank == 0 {
+            packed = super::dense::guarded("predictor-model", || {
+                model.solve(&all, &packed_c, free, (mz, c, max_steps), force)
+            })
+            .unwrap_or_else(|_| vec![4.0, 0.0, 0.0, 0.0, 0.0, 0.0]);
+        }
+        ctx.broadcast_f64s(&mut packed);
+        match wanted {
+            Some(w) if packed[0] == 3.0 && w < n.min(MAX_REPRESENTED) => {
+                wanted = Some((MODEL_MARGIN * w).min(n).min(MAX_REPRESENTED));
+            }
+            _ => break packed,
+        }
+    };
     let code = packed[0];
-    let flags_all = &packed[5..];
+    let flags_all = &packed[HEAD..];
     let predicted = code == 0.0 || code == 3.0;
     let mine = predicted.then(|| {
         let o = b.offset;
@@ -321,11 +337,12 @@ pub fn predict(
         model_steps: packed[2] as usize,
         coarse_levels: packed[3] as usize,
         truncated: code == 3.0,
+        approach_change: (predicted && force.is_some()).then_some(packed[5]),
         seconds: t.elapsed().as_secs_f64(),
     };
     say!(
         ctx,
-        "predictor: half-space model (E* = {:.4e}, {} mirror plane(s)) on {} nodes for {} contact nodes: {}{} ({} active, {} steps, {} coarse levels, {:.3} s)",
+        "predictor: half-space model (E* = {:.4e}, {} mirror plane(s)) on {} nodes for {} contact nodes: {}{} ({} active, {} steps, {} coarse levels, {:.3} s){}",
         hs.modulus,
         rec.mirror_planes,
         rec.model_nodes,
@@ -339,10 +356,15 @@ pub fn predict(
         rec.predicted_active,
         rec.model_steps,
         rec.coarse_levels,
-        rec.seconds
+        rec.seconds,
+        rec.approach_change
+            .map_or(String::new(), |d| format!("; the approach changes by {d:.6e}"))
     );
     Ok((mine, rec))
 }
+
+/// Values before the flags in the model's broadcast.
+const HEAD: usize = 6;
 
 /// Every contact node of every rank (rank order, = the boundary's global numbering): x, n,
 /// gap, lumped weight, the first solve's u_n and the free modes' normal parts ([`REC`] values).
@@ -375,14 +397,17 @@ struct Model {
 impl Model {
     /// The represented nodes: those nearest to contact, all of them model nodes while that
     /// covers 1.5 × the penetrating ones (the final set of 3D Hertz: 1.23 ×), else a coarser
-    /// subset of 3 × as many ([`model_nodes`]). Local (the same on every rank).
-    fn choose(all: &[f64]) -> Model {
+    /// subset of 3 × as many ([`model_nodes`]); `wanted` (force control) gives their number.
+    /// Local (the same on every rank).
+    fn choose(all: &[f64], wanted: Option<usize>) -> Model {
         let n = all.len() / REC;
         let r = |i: usize| &all[i * REC..(i + 1) * REC];
         // s⁰ = u_n + g: the first solve's clearance (< 0 penetrates)
         let s0: Vec<f64> = (0..n).map(|i| r(i)[8] + r(i)[6]).collect();
         let pen = s0.iter().filter(|&&s| s < 0.0).count();
-        let wanted = if pen == 0 {
+        let wanted = if let Some(w) = wanted {
+            w.min(n)
+        } else if pen == 0 {
             0
         } else if 2 * MAX_MODEL_NODES >= 3 * pen {
             (MODEL_MARGIN * pen)
@@ -416,32 +441,45 @@ impl Model {
     }
 
     /// Algorithm 1 on the dense model (rank 0): C from the gathered column shares, d₀ = u⁰_n,
-    /// the gaps, the free modes (`mz` of them) and their load. Returns [code (0 predicted, 1 no
-    /// penetration, 2 no convergence, 3 predicted but reaching the border), model nodes, model
-    /// steps, coarse levels, represented nodes, flag of every contact node].
+    /// the gaps, the free modes (`mz` of them) and their load; under force control (`force`:
+    /// e and |F|) the approach as one more free mode (normal parts −e·n, load |F|, as on the
+    /// condensed path). Returns [code (0 predicted, 1 no penetration, 2 no convergence, 3
+    /// predicted but reaching the border), model nodes, model steps, coarse levels,
+    /// represented nodes, the approach's change, flag of every contact node].
     fn solve(
         &self,
         all: &[f64],
         packed_c: &[f64],
         free: &FreeModes,
-        mz: usize,
-        c: f64,
-        max_steps: usize,
+        (mz, c, max_steps): (usize, f64, usize),
+        force: Option<([f64; 3], f64)>,
     ) -> Vec<f64> {
         let n = all.len() / REC;
         let (m, wanted) = (self.m(), self.fine.len());
         let r = |i: usize| &all[i * REC..(i + 1) * REC];
         let mut flags = vec![0.0; n];
-        let (code, steps, levels) = if self.pen == 0 {
+        let mut approach = 0.0;
+        let (code, steps, levels) = if self.pen == 0 && force.is_none() {
             (1.0, 0, 0)
         } else {
             let cmat = assemble(m, packed_c);
             let d0: Vec<f64> = self.pick.iter().map(|&i| r(i)[8]).collect();
             let gap: Vec<f64> = self.pick.iter().map(|&i| r(i)[6]).collect();
-            let g = DMatrix::from_fn(m, mz, |q, cc| r(self.pick[q])[9 + cc]);
-            let (_, load_scale) = free.load();
+            let mzf = mz + usize::from(force.is_some());
+            let g = DMatrix::from_fn(m, mzf, |q, cc| match force {
+                Some((e, _)) if cc == mz => {
+                    let x = r(self.pick[q]);
+                    -(x[3] * e[0] + x[4] * e[1] + x[5] * e[2])
+                }
+                _ => r(self.pick[q])[9 + cc],
+            });
+            let (_, mut load_scale) = free.load();
             let mut phi = free.free_load();
             phi.truncate(mz);
+            if let Some((_, magnitude)) = force {
+                phi.push(magnitude);
+                load_scale = load_scale.max(magnitude);
+            }
             let dense = Dense {
                 cmat: &cmat,
                 d0: &d0,
@@ -455,6 +493,7 @@ impl Model {
             };
             let run = dense.run_nested(vec![false; m], &self.x);
             if run.end == End::Converged {
+                approach = run.alpha.get(mz).copied().unwrap_or(0.0);
                 for (q, &i) in self.fine.iter().enumerate() {
                     if run.active[self.owner[q]] {
                         flags[i] = 1.0;
@@ -471,7 +510,14 @@ impl Model {
                 (2.0, run.steps.len(), run.coarse.len())
             }
         };
-        let mut packed = vec![code, m as f64, steps as f64, levels as f64, wanted as f64];
+        let mut packed = vec![
+            code,
+            m as f64,
+            steps as f64,
+            levels as f64,
+            wanted as f64,
+            approach,
+        ];
         packed.extend_from_slice(&flags);
         packed
     }

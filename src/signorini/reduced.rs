@@ -1026,8 +1026,9 @@ impl ReducedSystem {
     /// The lift of force control (force.rs): the step's system (3.29) with f = 0, no Dirichlet
     /// values and the values `b` and `set` prescribe (the active normals' u_n = −g_k), solved
     /// on the last solve's factorisation or preconditioner (S is unchanged since: no new
-    /// factorisation). Returns this rank's rows of the solution u¹ and of A u¹. The plain path
-    /// only (no reuse solver). Collective.
+    /// factorisation or setup), from zero, to the preset's tolerance (also after an inexact
+    /// step). Returns this rank's rows of the solution u¹ and of A u¹. Not with the direct
+    /// preset's reuse solver (GMRES on an earlier factorisation). Collective.
     pub fn solve_lift(
         &mut self,
         ctx: &Ctx,
@@ -1038,8 +1039,8 @@ impl ReducedSystem {
         pins: &[Pin],
     ) -> petsc::Result<(Vec<f64>, Vec<f64>)> {
         assert!(
-            self.reuser.is_none() && self.amg.is_none(),
-            "force control solves on the plain path"
+            self.reuser.is_none(),
+            "force control does not reuse factorisations"
         );
         let t = Instant::now();
         let dim = self.dim;
@@ -1083,6 +1084,13 @@ impl ReducedSystem {
         self.rows_seconds += t.elapsed().as_secs_f64();
         let mut x = self.u.duplicate()?;
         x.set_all(0.0)?;
+        if let Some(amg) = &self.amg {
+            let ksp = &mut self.ls.ksp;
+            ksp.set_initial_guess_nonzero(false)?;
+            ksp.set_rtol(amg.rtol)?;
+            ksp.set_max_iterations(amg.max_it)?;
+            ksp.set_reuse_preconditioner(true)?;
+        }
         let info = self.ls.solve(&rhs, &mut x)?;
         if !info.converged() {
             return Err(petsc::PetscError {

@@ -201,6 +201,11 @@ impl TriSurface {
 
     /// Reads and checks an STL file (ASCII or binary).
     pub fn read_stl(path: &Path) -> Result<Self, String> {
+        // a device or a pipe (e.g. /dev/zero) would be read without end
+        let meta = std::fs::metadata(path).map_err(|e| format!("cannot read the file: {e}"))?;
+        if !meta.is_file() {
+            return Err("not a regular file".into());
+        }
         let bytes = std::fs::read(path).map_err(|e| format!("cannot read the file: {e}"))?;
         let tris = parse_stl(&bytes)?;
         Self::from_triangles(&tris)
@@ -635,6 +640,15 @@ mod tests {
         assert!(parse_stl(&[0xff, 0xfe, 0x00])
             .unwrap_err()
             .contains("neither binary"));
+    }
+
+    #[test]
+    fn a_directory_or_device_is_not_read() {
+        let dir = std::env::temp_dir();
+        let e = TriSurface::read_stl(&dir).unwrap_err();
+        assert!(e.contains("not a regular file"), "{e}");
+        let e = TriSurface::read_stl(Path::new("/dev/zero")).unwrap_err();
+        assert!(e.contains("not a regular file"), "{e}");
     }
 
     #[test]

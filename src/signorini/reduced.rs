@@ -599,6 +599,9 @@ pub struct ReducedSystem {
     reuser: Option<Reuser>,
     /// The reuse path of the iterative preset (`solver.reuse` not "never").
     amg: Option<AmgReuser>,
+    /// Force control: the last lift u¹, the next lift's start on the iterative preset (the
+    /// lift depends on the set and F/|F| only, which change little from step to step).
+    lift: Option<Vector>,
 }
 
 impl ReducedSystem {
@@ -636,6 +639,7 @@ impl ReducedSystem {
             kind: None,
             reuser: None,
             amg: None,
+            lift: None,
         })
     }
 
@@ -1026,8 +1030,8 @@ impl ReducedSystem {
     /// The lift of force control (force.rs): the step's system (3.29) with f = 0, no Dirichlet
     /// values and the values `b` and `set` prescribe (the active normals' u_n = −g_k), solved
     /// on the last solve's factorisation or preconditioner (S is unchanged since: no new
-    /// factorisation or setup), from zero, to the preset's tolerance (also after an inexact
-    /// step). Returns this rank's rows of the solution u¹ and of A u¹. Not with the direct
+    /// factorisation or setup), to the preset's tolerance — on the iterative preset from the
+    /// last lift, and in an inexact step to [`INEXACT_REDUCTION`] of its right-hand side. Returns this rank's rows of the solution u¹ and of A u¹. Not with the direct
     /// preset's reuse solver (GMRES on an earlier factorisation). Collective.
     pub fn solve_lift(
         &mut self,
@@ -1082,12 +1086,27 @@ impl ReducedSystem {
             }
         })?;
         self.rows_seconds += t.elapsed().as_secs_f64();
-        let mut x = self.u.duplicate()?;
-        x.set_all(0.0)?;
+        let warm = self.amg.is_some() && self.lift.is_some();
+        let mut x = match self.lift.take() {
+            Some(v) if warm => v,
+            _ => {
+                let mut v = self.u.duplicate()?;
+                v.set_all(0.0)?;
+                v
+            }
+        };
         if let Some(amg) = &self.amg {
+            // An inexact step's lift is inexact alike, to INEXACT_REDUCTION of its right-hand
+            // side (not of its start's residual: the lift's error enters u times the step's
+            // change of δ only, so the last lift's start is kept to that accuracy for free).
+            let rtol = if amg.inexact {
+                INEXACT_REDUCTION.max(amg.rtol)
+            } else {
+                amg.rtol
+            };
             let ksp = &mut self.ls.ksp;
-            ksp.set_initial_guess_nonzero(false)?;
-            ksp.set_rtol(amg.rtol)?;
+            ksp.set_initial_guess_nonzero(warm)?;
+            ksp.set_rtol(rtol)?;
             ksp.set_max_iterations(amg.max_it)?;
             ksp.set_reuse_preconditioner(true)?;
         }
@@ -1103,7 +1122,9 @@ impl ReducedSystem {
             });
         }
         sys.a.mult(&x, &mut self.au)?;
-        Ok((x.to_local_vec()?, self.au.to_local_vec()?))
+        let out = (x.to_local_vec()?, self.au.to_local_vec()?);
+        self.lift = Some(x);
+        Ok(out)
     }
 
     /// Replaces this rank's rows of the solution (what `recover` and `solution` read).

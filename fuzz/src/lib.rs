@@ -13,6 +13,9 @@ pub mod case;
 #[path = "../../src/geom.rs"]
 pub mod geom;
 
+/// The obstacle shapes the case reader builds and checks (contact/mod.rs).
+pub mod contact;
+
 /// The one PETSc type `error.rs` names (`RunError::Petsc`); the readers never produce it.
 pub mod petsc {
     #[derive(Debug)]

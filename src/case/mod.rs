@@ -16,6 +16,7 @@ mod tests_shapes;
 
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
+use std::sync::Arc;
 
 use crate::contact::obstacle::{
     Cone, Cylinder, Height, HeightExpr, Punch, Pyramid, TriSurface, MAX_FACES, MIN_FACES,
@@ -313,12 +314,12 @@ pub enum ObstacleSpec {
         edge_radius: f64,
     },
     /// The solid below the graph y = h(x) (2D) or z = h(x, y) (3D) of a parsed expression.
-    Height { expr: &'static HeightExpr },
+    Height { expr: Arc<HeightExpr> },
     /// The solid inside the closed triangle surface read from `file` (3D only; resolved
     /// against the case file's directory).
     Surface {
         file: PathBuf,
-        surface: &'static TriSurface,
+        surface: Arc<TriSurface>,
     },
 }
 
@@ -413,12 +414,12 @@ impl ObstacleSpec {
                 *edge_radius,
                 dim,
             )?),
-            ObstacleSpec::Height { expr } => Obstacle::Height(Height::new(expr, dim)?),
+            ObstacleSpec::Height { expr } => Obstacle::Height(Height::new(expr.clone(), dim)?),
             ObstacleSpec::Surface { surface, .. } => {
                 if dim != 3 {
                     return Err(ObstacleError::Only3D("surface"));
                 }
-                Obstacle::Surface(surface)
+                Obstacle::Surface(surface.clone())
             }
         })
     }
@@ -1702,8 +1703,7 @@ impl Reader<'_> {
                 ),
             ));
         }
-        // Shared for the run: the obstacle built from it is `Copy`.
-        let expr: &'static HeightExpr = Box::leak(Box::new(expr));
+        let expr = Arc::new(expr);
         Ok(ObstacleSpec::Height { expr })
     }
 
@@ -1716,8 +1716,7 @@ impl Reader<'_> {
         let file = self.file.parent().unwrap_or(Path::new("")).join(rel);
         let surface = TriSurface::read_stl(&file)
             .map_err(|m| self.err(&fk, f.loc, format!("surface file {}: {m}", file.display())))?;
-        // Shared for the run: the obstacle built from it is `Copy`.
-        let surface: &'static TriSurface = Box::leak(Box::new(surface));
+        let surface = Arc::new(surface);
         Ok(ObstacleSpec::Surface { file, surface })
     }
 

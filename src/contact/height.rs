@@ -16,6 +16,7 @@ use evalexpr::{
 };
 use std::f64::consts::{E, PI};
 use std::fmt;
+use std::sync::Arc;
 
 type V = Value<DefaultNumericTypes>;
 
@@ -266,11 +267,11 @@ impl HeightExpr {
     }
 }
 
-/// The height obstacle of dimension `dim` (Copy: the expression is shared for the run).
-#[derive(Debug, Clone, Copy, PartialEq)]
+/// The height obstacle of dimension `dim` (the parsed expression shared, not copied).
+#[derive(Debug, Clone, PartialEq)]
 pub struct Height {
     dim: usize,
-    expr: &'static HeightExpr,
+    expr: Arc<HeightExpr>,
 }
 
 /// Most Newton iterations of a projection.
@@ -295,7 +296,7 @@ struct Local {
 impl Height {
     /// The obstacle below h for a mesh of dimension `dim` (2 or 3); the expression must use
     /// only x (2D) or x, y (3D).
-    pub fn new(expr: &'static HeightExpr, dim: usize) -> Result<Self, ObstacleError> {
+    pub fn new(expr: Arc<HeightExpr>, dim: usize) -> Result<Self, ObstacleError> {
         if dim != 2 && dim != 3 {
             return Err(ObstacleError::BadDim(dim));
         }
@@ -309,8 +310,8 @@ impl Height {
         self.dim
     }
 
-    pub fn expr(&self) -> &'static HeightExpr {
-        self.expr
+    pub fn expr(&self) -> &HeightExpr {
+        &self.expr
     }
 
     fn h(&self, u: [f64; 2]) -> f64 {
@@ -528,7 +529,7 @@ mod tests {
     use rand::{Rng, SeedableRng};
 
     fn height(text: &str, dim: usize) -> Height {
-        let e: &'static HeightExpr = Box::leak(Box::new(HeightExpr::parse(text).unwrap()));
+        let e = Arc::new(HeightExpr::parse(text).unwrap());
         Height::new(e, dim).unwrap()
     }
 
@@ -733,7 +734,7 @@ mod tests {
         assert!(HeightExpr::parse("x > 2")
             .unwrap_err()
             .contains("a boolean"));
-        let e: &'static HeightExpr = Box::leak(Box::new(HeightExpr::parse("y").unwrap()));
+        let e = Arc::new(HeightExpr::parse("y").unwrap());
         assert_eq!(Height::new(e, 2), Err(ObstacleError::HeightVariables));
     }
 

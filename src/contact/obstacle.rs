@@ -25,6 +25,7 @@ use crate::geom::{cross, dot, sub};
 use std::f64::consts::{FRAC_1_SQRT_2, PI, TAU};
 use std::fmt;
 use std::path::Path;
+use std::sync::Arc;
 
 /// Invalid obstacle data, or a query point without a defined normal.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -173,7 +174,7 @@ pub struct Sphere {
 }
 
 /// Any supported obstacle.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, PartialEq)]
 pub enum Obstacle {
     Plane(Plane),
     Sphere(Sphere),
@@ -184,8 +185,8 @@ pub enum Obstacle {
     /// Below the graph of an expression (docs/obstacles.md, "height").
     Height(Height),
     /// Inside a closed triangle surface (3D only; docs/obstacles.md, "surface"). The surface is
-    /// read once per run and shared (`Obstacle` is `Copy`).
-    Surface(&'static TriSurface),
+    /// read once per run and shared.
+    Surface(Arc<TriSurface>),
 }
 
 fn check_dim(dim: usize) -> Result<(), ObstacleError> {

@@ -153,7 +153,7 @@ pub fn build(
 ) -> Result<ContactBoundary, RunError> {
     let dim = mesh.dim;
     let file = settings.file.as_path();
-    let obstacle = settings.obstacle;
+    let obstacle = &settings.obstacle;
     let facets = group_facets(mesh, &settings.group);
     let mut weight = vec![0.0f64; mesh.n_nodes()];
     let mut on = vec![false; mesh.n_nodes()];
@@ -229,7 +229,7 @@ pub fn build(
         nodes,
         on_contact_boundary: on,
         excluded_dirichlet: ex_all,
-        obstacle,
+        obstacle: obstacle.clone(),
     })
 }
 

@@ -177,7 +177,7 @@ fn candidate_boundary(kept: &Kept, b: &ContactBoundary, dim: usize) -> ContactBo
         offset: 0,
         on_contact_boundary: Vec::new(),
         excluded_dirichlet: 0,
-        obstacle: b.obstacle,
+        obstacle: b.obstacle.clone(),
     }
 }
 

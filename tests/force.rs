@@ -7,8 +7,7 @@
 mod common;
 
 use common::*;
-use std::collections::BTreeMap;
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 
 /// The block [-1,1] × [0,1] (2 025 nodes), clamped at its bottom, under the circle of radius
 /// 0.5 centred at (0, 1.49): a gap of 0.01 at the top's centre.
@@ -161,7 +160,7 @@ fn a_ramped_force_from_a_gap_touches_first_and_ends_at_the_static_solution() {
             "{path}: last step {} against the static {delta}",
             -last
         );
-        let (u_ramp, u_stat) = (last_step_u(&ramp.dir, 3), stat.displacement());
+        let (u_ramp, u_stat) = (step_displacement(&ramp.dir, 3), stat.displacement());
         let (diff, scale) = max_diff(&u_ramp, &u_stat);
         assert!(scale > 0.0, "u = 0: nothing tested");
         assert!(
@@ -169,25 +168,6 @@ fn a_ramped_force_from_a_gap_touches_first_and_ends_at_the_static_solution() {
             "{path}: |Δu| = {diff:e}, |u| = {scale:e}"
         );
     }
-}
-
-/// The displacement of load step `step` (from 1) by node id, from solution.h5.
-fn last_step_u(dir: &Path, step: usize) -> BTreeMap<u64, Vec<f64>> {
-    let v = python_json(
-        r#"
-import sys, json, h5py
-f = h5py.File(sys.argv[1], "r")
-ids = f["mesh/node_id"][:].tolist()
-u = f["step_" + sys.argv[2] + "/nodal/displacement"][:].tolist()
-print("RESULT " + json.dumps({"ids": ids, "u": u}))
-"#,
-        &[&dir.join("solution.h5"), Path::new(&step.to_string())],
-    );
-    let (ids, u) = (v["ids"].as_array().unwrap(), v["u"].as_array().unwrap());
-    ids.iter()
-        .zip(u)
-        .map(|(i, row)| (i.as_u64().unwrap(), floats(row)))
-        .collect()
 }
 
 /// Force control's bad input: with a motion, with friction, a zero force, SNES VI, a force

@@ -25,25 +25,6 @@ const TOP_MOVED: &str = "dirichlet.0.value=[-0.004, -0.01]";
 const FACTORS: &str = "load.factors=[0.5, 1.0, 0.7]";
 const T: [f64; 3] = [0.5, 1.0, 0.7];
 
-/// The displacement of load step `step` (from 1) by node id, from solution.h5.
-fn step_u(dir: &Path, step: usize) -> BTreeMap<u64, Vec<f64>> {
-    let v = python_json(
-        r#"
-import sys, json, h5py
-f = h5py.File(sys.argv[1], "r")
-ids = f["mesh/node_id"][:].tolist()
-u = f["step_" + sys.argv[2] + "/nodal/displacement"][:].tolist()
-print("RESULT " + json.dumps({"ids": ids, "u": u}))
-"#,
-        &[&dir.join("solution.h5"), Path::new(&step.to_string())],
-    );
-    let (ids, u) = (v["ids"].as_array().unwrap(), v["u"].as_array().unwrap());
-    ids.iter()
-        .zip(u)
-        .map(|(i, row)| (i.as_u64().unwrap(), floats(row)))
-        .collect()
-}
-
 fn history(dir: &Path) -> Vec<Row> {
     read_csv(&dir.join("history.csv"))
 }
@@ -100,8 +81,8 @@ fn moving_the_obstacle_is_moving_the_body() {
                 assert_eq!(rb.f(k), 0.0, "{k}");
             }
             let (d, scale) = shifted_diff(
-                &step_u(&moved.dir, s + 1),
-                &step_u(&body.dir, s + 1),
+                &step_displacement(&moved.dir, s + 1),
+                &step_displacement(&body.dir, s + 1),
                 [t * M[0], t * M[1]],
             );
             assert!(
@@ -173,7 +154,7 @@ fn held_motion_and_the_single_step_summary() {
     );
     let u = stat.displacement();
     for s in 1..=2 {
-        let (d, scale) = shifted_diff(&step_u(&held.dir, s), &u, [0.0, 0.0]);
+        let (d, scale) = shifted_diff(&step_displacement(&held.dir, s), &u, [0.0, 0.0]);
         assert!(scale > 0.0 && d <= 1e-10 * scale, "step {s}: {d:e}");
         let r = &history(&held.dir)[s - 1];
         assert_eq!((r.f("obstacle_x"), r.f("obstacle_y")), (M[0], M[1]));
@@ -208,7 +189,11 @@ fn ranks_agree_on_a_moving_obstacle() {
         }
     }
     for s in 1..=ha.len() {
-        let (d, scale) = shifted_diff(&step_u(&a.dir, s), &step_u(&b.dir, s), [0.0, 0.0]);
+        let (d, scale) = shifted_diff(
+            &step_displacement(&a.dir, s),
+            &step_displacement(&b.dir, s),
+            [0.0, 0.0],
+        );
         assert!(scale > 0.0 && d <= 1e-9 * scale, "step {s}: {d:e}");
     }
 }

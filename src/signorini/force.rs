@@ -173,7 +173,8 @@ impl Approach {
 /// The force step after the solve of `set` at δ_ℓ (`it` recovered from it): the bordered
 /// system's δ by the lift u¹ (one more solve on the same factorisation), u ← u + Δδ u¹ in
 /// `reduced`, λ recovered again (3.28); without an active node the touching δ instead. `b`
-/// gets the gaps at the new δ. Collective.
+/// gets the gaps at the new δ. `force`: the iterate's contact force along e
+/// ([`Approach::force_along`]). Collective.
 #[allow(clippy::too_many_arguments)]
 pub fn correct(
     ctx: &Ctx,
@@ -181,7 +182,7 @@ pub fn correct(
     reduced: &mut ReducedSystem,
     set: &ActiveSet,
     pins: &[Pin],
-    n_active: usize,
+    (n_active, force): (usize, f64),
     b: &mut ContactBoundary,
     ap: &mut Approach,
     it: &mut Iterate,
@@ -191,7 +192,6 @@ pub fn correct(
         ap.place(b);
         return Ok(c);
     }
-    let force = ap.force_along(ctx, it);
     let unit = ap.unit(b);
     let (u1, au1) = reduced.solve_lift(ctx, sys, layout, &unit, set, pins)?;
     let local: f64 = b

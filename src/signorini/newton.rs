@@ -11,7 +11,9 @@
 //! assembly of entries in other ranks' rows), the solve, one MatMult, one Allreduce; rarely a
 //! load-balance test that finds an unbalanced load (two reductions) or a least-index pick.
 
-use super::active_set::{threshold_scale, ActiveSet, Iterate, Law, SetSummary, StepTotals};
+use super::active_set::{
+    threshold_scale, ActiveSet, Iterate, Law, SetSummary, SetUpdate, StepTotals,
+};
 use super::boundary::{ContactBoundary, NodeResult};
 use super::cycle::{decide, CycleGuard, Decision, Seen, SetKey};
 use super::force::{self, Approach, Correction, ForceControl};
@@ -200,63 +202,9 @@ pub fn semismooth_newton(
     s: &NewtonSettings,
     warm: Option<&WarmStart>,
 ) -> Result<NewtonResult, RunError> {
-    let (mesh, layout, b, fixed, sys) = (p.mesh, p.layout, p.boundary, p.fixed, p.sys);
+    let (mesh, layout, b, sys) = (p.mesh, p.layout, p.boundary, p.sys);
     let dim = mesh.dim;
-    let free = FreeModes::new(ctx, mesh, layout, fixed, b, &reduced.f_local, s.rigid);
-    let approach = match s.force {
-        Some(fc) if free.floats() => return Err(force::floating(fc)),
-        Some(fc) => Some(Approach::new(b, fc)),
-        None => None,
-    };
-    let mut placed = b.clone();
-    if let Some(ap) = &approach {
-        ap.place(&mut placed); // the gaps at the start's δ
-    }
-    reduced.set_pins(sys, layout, free.pins())?; // none yet (the system may be reused)
-                                                 // The half-space predictor (iterative preset's reuse path, frictionless, the "auto" start,
-                                                 // no warm start): the first solve has no active node (u⁰ = K_p⁻¹ f, the model's d₀),
-                                                 // also where the "gap" start would clamp the initially touching nodes.
-    let predicting = s.halfspace.is_some()
-        && reduced.inexact_available()
-        && s.law == Law::Frictionless
-        && warm.is_none()
-        && s.section.init == NewtonInit::Auto;
-    let init = if predicting {
-        NewtonInit::AllInactive
-    } else {
-        auto_start(s.section.init, s.friction(), &free)
-    };
-    let set = match warm {
-        None => ActiveSet::initial(&placed, init, s.law, s.c, mesh.extent(), dim),
-        Some(w) => {
-            let scale = threshold_scale(ctx, b, w.nodes, s.law, s.c);
-            ActiveSet::warm(b, w.nodes, s.law, s.c, scale, dim)
-        }
-    };
-    let summary = set.summarise(ctx, b, free.modes(), dim);
-    let guard = CycleGuard::new(
-        s.section.on_cycle,
-        s.friction(),
-        SetKey::new(summary.n_active, summary.fingerprint, None),
-    );
-    let mut it = Iterate::new(b.nodes.len(), reduced.f_local.len(), s.friction());
-    if let Some(w) = warm {
-        it.warm(w.u_local, w.nodes);
-    }
-    let mut lp = Loop {
-        ctx,
-        p,
-        s,
-        set,
-        summary,
-        free,
-        guard,
-        it,
-        rho: [0.0; 6],
-        shifted: placed,
-        last_still_residual: None,
-        approach,
-    };
+    let (mut lp, predicting) = Loop::begin(ctx, p, reduced, s, warm)?;
     let mut history = Vec::new();
     let mut converged = false;
     let mut plan = StepPlan {
@@ -296,29 +244,16 @@ pub fn semismooth_newton(
         let scale = threshold_scale(ctx, bs, &lp.it.nodes, s.law, s.c);
         let mut update = lp.set.update(&lp.it, bs, s.law, s.c, scale, dim); // (3.23) / (3.33) / (F5)
         if let Some(tag) = touch {
-            for (k, a) in bs.nodes.iter().zip(update.next.normal.iter_mut()) {
-                if k.tag == tag && !*a {
-                    *a = true;
-                    update.changed += 1;
-                }
-            }
+            lp.touch(tag, &mut update);
         }
         let mut predicted = None;
         let mut exact_from_prediction = None;
         if let Some(hs) = s.halfspace.filter(|_| plan.predict) {
-            let force = lp.approach.as_ref().map(|a| (a.dir, a.magnitude));
-            let limits = (s.c, s.section.max_steps);
-            let (set, rec) = predictor::predict(ctx, hs, bs, &lp.it, &lp.free, limits, force)?;
-            if let Some(normal) = set {
-                update.replace_normal(&lp.set, normal);
-                exact_from_prediction = Some(!rec.truncated);
-            }
-            if let (Some(ap), Some(d)) = (lp.approach.as_mut(), rec.approach_change) {
-                ap.delta += d; // the next step solves at the predicted approach
-            }
+            let (rec, exact) = lp.predict(hs, &mut update)?;
+            exact_from_prediction = exact;
             predicted = Some(rec);
         }
-        let totals = update.reduce(ctx, bs, lp.free.modes(), dim);
+        let totals = update.reduce(ctx, &lp.shifted, lp.free.modes(), dim);
         history.push(lp.step_info(step, &totals, solved));
         history.last_mut().expect("pushed").predictor = predicted;
         log_step(ctx, history.last().expect("pushed"), &totals);
@@ -347,22 +282,147 @@ pub fn semismooth_newton(
             }
         }
     }
-    let (lambda_seconds, rows_seconds) = (reduced.lambda_seconds, reduced.rows_seconds);
-    let mut u = reduced.solution()?;
-    let mut nodes = lp.it.nodes;
-    add_motion(&lp.free, &lp.rho, p, &mut u, &mut nodes)?;
-    Ok(NewtonResult {
-        nodes,
-        steps: history.len(),
-        history,
-        converged,
-        lambda_seconds,
-        rows_seconds,
-        pinned_final: lp.free.pins().to_vec(),
-        cycle_detected_at: lp.guard.detected_at,
-        approach: lp.approach.map(|a| a.delta),
-        u,
-    })
+    lp.finish(reduced, history, converged)
+}
+
+impl<'a> Loop<'a> {
+    /// The loop's start: the free modes (and force control's approach), the first set — the
+    /// warm one, the case's start, or all inactive for the half-space predictor — and the
+    /// iterate. Returns the loop and whether the first step predicts. Collective.
+    fn begin(
+        ctx: &'a Ctx<'a>,
+        p: &'a ContactProblem<'a>,
+        reduced: &mut ReducedSystem,
+        s: &'a NewtonSettings<'a>,
+        warm: Option<&WarmStart>,
+    ) -> Result<(Loop<'a>, bool), RunError> {
+        let (mesh, layout, b, fixed, sys) = (p.mesh, p.layout, p.boundary, p.fixed, p.sys);
+        let dim = mesh.dim;
+        let free = FreeModes::new(ctx, mesh, layout, fixed, b, &reduced.f_local, s.rigid);
+        let approach = match s.force {
+            Some(fc) if free.floats() => return Err(force::floating(fc)),
+            Some(fc) => Some(Approach::new(b, fc)),
+            None => None,
+        };
+        let mut placed = b.clone();
+        if let Some(ap) = &approach {
+            ap.place(&mut placed); // the gaps at the start's δ
+        }
+        reduced.set_pins(sys, layout, free.pins())?; // none yet (the system may be reused)
+                                                     // The half-space predictor (iterative preset's reuse path, frictionless, the "auto"
+                                                     // start, no warm start): the first solve has no active node (u⁰ = K_p⁻¹ f, the model's
+                                                     // d₀), also where the "gap" start would clamp the initially touching nodes.
+        let predicting = s.halfspace.is_some()
+            && reduced.inexact_available()
+            && s.law == Law::Frictionless
+            && warm.is_none()
+            && s.section.init == NewtonInit::Auto;
+        let init = if predicting {
+            NewtonInit::AllInactive
+        } else {
+            auto_start(s.section.init, s.friction(), &free)
+        };
+        let set = match warm {
+            None => ActiveSet::initial(&placed, init, s.law, s.c, mesh.extent(), dim),
+            Some(w) => {
+                let scale = threshold_scale(ctx, b, w.nodes, s.law, s.c);
+                ActiveSet::warm(b, w.nodes, s.law, s.c, scale, dim)
+            }
+        };
+        let summary = set.summarise(ctx, b, free.modes(), dim);
+        let guard = CycleGuard::new(
+            s.section.on_cycle,
+            s.friction(),
+            SetKey::new(summary.n_active, summary.fingerprint, None),
+        );
+        let mut it = Iterate::new(b.nodes.len(), reduced.f_local.len(), s.friction());
+        if let Some(w) = warm {
+            it.warm(w.u_local, w.nodes);
+        }
+        let lp = Loop {
+            ctx,
+            p,
+            s,
+            set,
+            summary,
+            free,
+            guard,
+            it,
+            rho: [0.0; 6],
+            shifted: placed,
+            last_still_residual: None,
+            approach,
+        };
+        Ok((lp, predicting))
+    }
+
+    /// Force control's first touch: the node `tag` joins the next set (counted as a change).
+    /// Local.
+    fn touch(&self, tag: u64, update: &mut SetUpdate) {
+        for (k, a) in self.shifted.nodes.iter().zip(update.next.normal.iter_mut()) {
+            if k.tag == tag && !*a {
+                *a = true;
+                update.changed += 1;
+            }
+        }
+    }
+
+    /// The half-space predictor after the first solve: the predicted set replaces the next
+    /// one (and, under force control, δ moves to the predicted approach). Returns the record
+    /// and whether the next step is exact (a prediction that reaches the model's border is
+    /// not). Collective.
+    fn predict(
+        &mut self,
+        hs: &HalfSpace,
+        update: &mut SetUpdate,
+    ) -> Result<(PredictorStep, Option<bool>), RunError> {
+        let s = self.s;
+        let force = self.approach.as_ref().map(|a| (a.dir, a.magnitude));
+        let limits = (s.c, s.section.max_steps);
+        let (set, rec) = predictor::predict(
+            self.ctx,
+            hs,
+            &self.shifted,
+            &self.it,
+            &self.free,
+            limits,
+            force,
+        )?;
+        let mut exact = None;
+        if let Some(normal) = set {
+            update.replace_normal(&self.set, normal);
+            exact = Some(!rec.truncated);
+        }
+        if let (Some(ap), Some(d)) = (self.approach.as_mut(), rec.approach_change) {
+            ap.delta += d; // the next step solves at the predicted approach
+        }
+        Ok((rec, exact))
+    }
+
+    /// The result: u = w + ρ (the rigid motion added back), the final iterate and the record.
+    /// Collective.
+    fn finish(
+        self,
+        reduced: &ReducedSystem,
+        history: Vec<StepInfo>,
+        converged: bool,
+    ) -> Result<NewtonResult, RunError> {
+        let mut u = reduced.solution()?;
+        let mut nodes = self.it.nodes;
+        add_motion(&self.free, &self.rho, self.p, &mut u, &mut nodes)?;
+        Ok(NewtonResult {
+            nodes,
+            steps: history.len(),
+            history,
+            converged,
+            lambda_seconds: reduced.lambda_seconds,
+            rows_seconds: reduced.rows_seconds,
+            pinned_final: self.free.pins().to_vec(),
+            cycle_detected_at: self.guard.detected_at,
+            approach: self.approach.map(|a| a.delta),
+            u,
+        })
+    }
 }
 
 /// [`COULOMB_RESIDUAL_STALL`]: this step changed no state and left u unchanged (`still`), so did
@@ -713,7 +773,7 @@ impl Loop<'_> {
             reduced,
             &self.set,
             self.free.pins(),
-            self.summary.n_active,
+            (self.summary.n_active, before.1),
             &mut self.shifted,
             ap,
             &mut self.it,

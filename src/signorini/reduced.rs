@@ -726,8 +726,6 @@ impl ReducedSystem {
         self.s.copy_values_from(&sys.a)?;
         self.rhs.copy_from(&sys.b)?;
         let cmap = ConstraintMap::gather(ctx, layout, b, set, pins, dim);
-        let mut rhs_add: Vec<(PInt, f64)> = Vec::new();
-        let mut rhs_updates: Vec<(usize, f64)> = Vec::new();
         let writes = rewrites(
             (&self.contact_rows, &self.pin_rows, self.row_lo),
             layout,
@@ -752,31 +750,14 @@ impl ReducedSystem {
                 .map(|(_, me, lr)| (*lr, me.projector(dim), me.known()))
                 .collect();
         }
-        for (r, me, lr) in &writes {
-            let fk = &self.f_local[*lr..*lr + dim];
-            let rk = write_symmetric_constraint(
-                Some(&mut self.s),
-                r,
-                me,
-                fk,
-                dim,
-                |j| cmap.get(j),
-                &mut rhs_add,
-                &mut self.buf,
-            )?;
-            for (a, v) in rk.iter().enumerate().take(dim) {
-                rhs_updates.push((lr + a, *v));
-            }
-        }
-        let (idx, vals): (Vec<PInt>, Vec<f64>) = rhs_add.into_iter().unzip();
-        crate::par::add_in_rank_order(&mut self.rhs, &idx, &vals)?; // deterministic order (issue 10)
-        self.rhs.assemble()?;
-        self.s.assemble()?;
-        self.rhs.write(|x| {
-            for &(i, v) in &rhs_updates {
-                x[i] = v;
-            }
-        })?;
+        write_rows(
+            Some(&mut self.s),
+            &mut self.rhs,
+            (&writes, Some(&self.f_local)),
+            &cmap,
+            dim,
+            &mut self.buf,
+        )?;
         self.rows_seconds += t.elapsed().as_secs_f64();
         Ok(())
     }
@@ -1057,34 +1038,9 @@ impl ReducedSystem {
             &cmap,
             dim,
         );
-        let zero = [0.0; 3];
-        let mut rhs_add: Vec<(PInt, f64)> = Vec::new();
-        let mut rhs_updates: Vec<(usize, f64)> = Vec::new();
-        for (r, me, lr) in &writes {
-            let rk = write_symmetric_constraint(
-                None,
-                r,
-                me,
-                &zero[..dim],
-                dim,
-                |j| cmap.get(j),
-                &mut rhs_add,
-                &mut self.buf,
-            )?;
-            for (a, v) in rk.iter().enumerate().take(dim) {
-                rhs_updates.push((lr + a, *v));
-            }
-        }
         let mut rhs = self.rhs.duplicate()?;
         rhs.set_all(0.0)?;
-        let (idx, vals): (Vec<PInt>, Vec<f64>) = rhs_add.into_iter().unzip();
-        crate::par::add_in_rank_order(&mut rhs, &idx, &vals)?;
-        rhs.assemble()?;
-        rhs.write(|x| {
-            for &(i, v) in &rhs_updates {
-                x[i] = v;
-            }
-        })?;
+        write_rows(None, &mut rhs, (&writes, None), &cmap, dim, &mut self.buf)?;
         self.rows_seconds += t.elapsed().as_secs_f64();
         let warm = self.amg.is_some() && self.lift.is_some();
         let mut x = match self.lift.take() {
@@ -1185,6 +1141,9 @@ impl ReducedSystem {
     }
 }
 
+/// A rewritten node: its rows of A, its constraint, its first local row.
+type Rewrite<'r> = (&'r NodeRows, NodeConstraint, usize);
+
 /// (rows of A, constraint, first local row) of every node this rank rewrites: the contact
 /// nodes `set` prescribes (rows of inactive frictionless nodes stay as in A (3.29)) and the
 /// owned pinned nodes. `rows` = (the contact nodes' rows, the pinned nodes' rows, first
@@ -1196,7 +1155,7 @@ fn rewrites<'r>(
     set: &ActiveSet,
     cmap: &ConstraintMap,
     dim: usize,
-) -> Vec<(&'r NodeRows, NodeConstraint, usize)> {
+) -> Vec<Rewrite<'r>> {
     let (contact_rows, pin_rows, row_lo) = rows;
     let mut writes = Vec::new();
     for (i, (k, r)) in b.nodes.iter().zip(contact_rows).enumerate() {
@@ -1217,6 +1176,50 @@ fn rewrites<'r>(
         writes.push((r, me, v * dim - row_lo));
     }
     writes
+}
+
+/// The rows `writes` of the reduced system (3.29) applied symmetrically
+/// ([`write_symmetric_constraint`]): into `s` when given (then assembled), and into `rhs`
+/// (whose other rows stay; the neighbours' corrections added in rank order, issue 10), with f
+/// from `f_local` (this rank's rows) or f = 0. Collective.
+fn write_rows(
+    mut s: Option<&mut Matrix>,
+    rhs: &mut Vector,
+    (writes, f_local): (&[Rewrite], Option<&[f64]>),
+    cmap: &ConstraintMap,
+    dim: usize,
+    buf: &mut Vec<f64>,
+) -> petsc::Result<()> {
+    let zero = [0.0; 3];
+    let mut rhs_add: Vec<(PInt, f64)> = Vec::new();
+    let mut rhs_updates: Vec<(usize, f64)> = Vec::new();
+    for (r, me, lr) in writes {
+        let fk = f_local.map_or(&zero[..dim], |f| &f[*lr..*lr + dim]);
+        let rk = write_symmetric_constraint(
+            s.as_deref_mut(),
+            r,
+            me,
+            fk,
+            dim,
+            |j| cmap.get(j),
+            &mut rhs_add,
+            buf,
+        )?;
+        for (a, v) in rk.iter().enumerate().take(dim) {
+            rhs_updates.push((lr + a, *v));
+        }
+    }
+    let (idx, vals): (Vec<PInt>, Vec<f64>) = rhs_add.into_iter().unzip();
+    crate::par::add_in_rank_order(rhs, &idx, &vals)?; // deterministic order (issue 10)
+    rhs.assemble()?;
+    if let Some(s) = s {
+        s.assemble()?;
+    }
+    rhs.write(|x| {
+        for &(i, v) in &rhs_updates {
+            x[i] = v;
+        }
+    })
 }
 
 fn matmul3(a: &[[f64; 3]; 3], b: &[[f64; 3]; 3], dim: usize) -> [[f64; 3]; 3] {

@@ -208,3 +208,22 @@ print("RESULT " + json.dumps({"ids": f["contact/node_id"][:].tolist(),
         .map(|(i, f)| (i.as_u64().expect("id"), floats(f)[..dim].to_vec()))
         .collect()
 }
+
+/// The displacement of load step `step` (from 1) by node id, from `dir`/solution.h5.
+pub fn step_displacement(dir: &Path, step: usize) -> BTreeMap<u64, Vec<f64>> {
+    let v = python_json(
+        r#"
+import sys, json, h5py
+f = h5py.File(sys.argv[1], "r")
+ids = f["mesh/node_id"][:].tolist()
+u = f["step_" + sys.argv[2] + "/nodal/displacement"][:].tolist()
+print("RESULT " + json.dumps({"ids": ids, "u": u}))
+"#,
+        &[&dir.join("solution.h5"), Path::new(&step.to_string())],
+    );
+    let (ids, u) = (v["ids"].as_array().unwrap(), v["u"].as_array().unwrap());
+    ids.iter()
+        .zip(u)
+        .map(|(i, row)| (i.as_u64().unwrap(), floats(row)))
+        .collect()
+}

@@ -65,9 +65,10 @@ fn run(ctx: &Ctx, a: &Args) -> Result<serde_json::Value, RunError> {
     let solve = |case: &Case, previous: Option<&ContactSolution>| {
         let problem = setup::problem(case, mesh, input.material);
         let sys = assembly::assemble(ctx.comm(), layout, &problem)?;
-        let cc = case.contact.as_ref().expect("a contact case");
-        let settings =
-            ctx.agree(setup::contact_settings(case, cc, mesh.dim).map_err(RunError::from))?;
+        assert!(!case.contacts.is_empty(), "a contact case");
+        let settings = ctx.agree(
+            setup::contact_settings(case, &case.contacts, mesh.dim).map_err(RunError::from),
+        )?;
         signorini::solve(
             ctx,
             &settings,

@@ -40,9 +40,9 @@ pub fn run_case(ctx: &Ctx, case: &Case) -> Result<String, RunError> {
     (clock.t.read, clock.t.partition) = (read_seconds, partition_seconds);
     let partition = log_partition(ctx, &mesh, &layout);
     let friction = case
-        .contact
-        .as_ref()
-        .is_some_and(|c| c.friction != crate::case::Friction::None);
+        .contacts
+        .iter()
+        .any(|c| c.friction != crate::case::Friction::None);
     let (preset, preset_reason) = solver::choose_preset(
         case.solver.preset,
         mesh.dim,

@@ -170,27 +170,46 @@ pub fn problem<'m>(case: &Case, mesh: &'m Mesh, material: Material) -> Problem<'
     }
 }
 
-/// Everything the contact algorithm needs from the case, checked.
-pub struct ContactSettings {
-    /// The case file (named in messages about the contact boundary).
-    pub file: std::path::PathBuf,
+/// One contact pair as the contact algorithm sees it (`[contact]` or one `[[contact]]` table).
+pub struct PairSettings {
+    /// The pair's table in the case file (`contact` or `contact[i]`), named in messages.
+    pub key: String,
     pub group: String,
     /// The obstacle as the case gives it (before any motion).
     pub obstacle: Obstacle,
-    /// `contact.motion`: the obstacle's rigid translation at load factor 1.
+    /// `motion`: the obstacle's rigid translation at load factor 1.
     pub motion: Option<case::Motion>,
     /// The obstacle's displacement d in the step being solved (t·m, or m when held; 0 without
     /// a motion): the contact condition is u_n + g0 − d·n ≥ 0 and friction acts on u_τ − d_τ
     /// (docs/obstacles.md, "Moving obstacles"). [`ContactSettings::at_factor`] sets it.
     pub displacement: [f64; 3],
-    /// `contact.force` (force control): the force at load factor 1.
+    /// `force` (force control): the force at load factor 1.
     pub force: Option<case::Motion>,
     /// The force F of the step being solved (t·F, or F when held); 0 without force control.
     /// The obstacle's displacement is then δ·F/|F| with the approach δ solved for.
     pub force_now: [f64; 3],
-    /// Tresca threshold g_R (1.44e); `None` without friction or with Coulomb.
+    /// Tresca threshold g_R (1.44e) of the pair; 0 on a frictionless pair of a case with
+    /// Tresca pairs (|λ_τ| ≤ 0: no tangential force), `None` in a case without Tresca.
     pub tresca_threshold: Option<f64>,
-    /// Coulomb friction: the coefficient μ and the algorithm; `None` otherwise.
+}
+
+impl PairSettings {
+    /// `KEY.name`, a key of the pair's table.
+    pub fn key(&self, name: &str) -> String {
+        format!("{}.{name}", self.key)
+    }
+}
+
+/// Everything the contact algorithm needs from the case, checked.
+pub struct ContactSettings {
+    /// The case file (named in messages about the contact boundary).
+    pub file: std::path::PathBuf,
+    /// The contact pairs, in the order of the case file (at least one).
+    pub pairs: Vec<PairSettings>,
+    /// Tresca friction on some pair (Algorithm 2; the other pairs have threshold 0).
+    pub tresca: bool,
+    /// Coulomb friction (on every pair): the coefficient μ and the algorithm; `None`
+    /// otherwise.
     pub coulomb: Option<(f64, case::CoulombAlgorithm)>,
     pub rigid_modes: case::RigidModeHandling,
     pub newton: NewtonSection,
@@ -204,40 +223,69 @@ pub struct ContactSettings {
 impl ContactSettings {
     /// True with a friction law: Algorithm 2 and its tangential states.
     pub fn friction(&self) -> bool {
-        self.tresca_threshold.is_some() || self.coulomb.is_some()
+        self.tresca || self.coulomb.is_some()
     }
 
-    /// Moves the obstacle to where it is at load factor t ([`case::Motion::at`]).
+    /// Moves every obstacle to where it is at load factor t ([`case::Motion::at`]).
     pub fn at_factor(&mut self, t: f64) {
-        self.displacement = self.motion.as_ref().map_or([0.0; 3], |m| m.at(t));
-        self.force_now = self.force.as_ref().map_or([0.0; 3], |m| m.at(t));
+        for p in &mut self.pairs {
+            p.displacement = p.motion.as_ref().map_or([0.0; 3], |m| m.at(t));
+            p.force_now = p.force.as_ref().map_or([0.0; 3], |m| m.at(t));
+        }
+    }
+
+    /// The pair under force control (at most one; the case reader checks it), with its index.
+    pub fn force_pair(&self) -> Option<(usize, &PairSettings)> {
+        self.pairs
+            .iter()
+            .enumerate()
+            .find(|(_, p)| p.force.is_some())
+    }
+
+    /// Each pair's obstacle displacement d of the step being solved.
+    pub fn displacements(&self) -> Vec<[f64; 3]> {
+        self.pairs.iter().map(|p| p.displacement).collect()
     }
 }
 
-/// The contact settings of a case.
+/// The contact settings of a case (`contacts` non-empty).
 pub fn contact_settings(
     case: &Case,
-    cc: &ContactSection,
+    contacts: &[ContactSection],
     dim: usize,
 ) -> Result<ContactSettings, InputError> {
+    let tresca = contacts
+        .iter()
+        .any(|c| matches!(c.friction, Friction::Tresca { .. }));
+    let pairs = contacts
+        .iter()
+        .map(|cc| {
+            Ok(PairSettings {
+                key: cc.key.clone(),
+                group: cc.group.clone(),
+                obstacle: obstacle_of(cc, dim, &case.file)?,
+                motion: cc.motion.clone(),
+                // a single static solve is the problem at factor 1
+                displacement: cc.motion.as_ref().map_or([0.0; 3], |m| m.at(1.0)),
+                force: cc.force.clone(),
+                force_now: cc.force.as_ref().map_or([0.0; 3], |m| m.at(1.0)),
+                tresca_threshold: match cc.friction {
+                    Friction::Tresca { threshold } => Some(threshold),
+                    Friction::None if tresca => Some(0.0),
+                    Friction::None | Friction::Coulomb { .. } => None,
+                },
+            })
+        })
+        .collect::<Result<Vec<_>, InputError>>()?;
     Ok(ContactSettings {
         file: case.file.clone(),
-        group: cc.group.clone(),
-        obstacle: obstacle_of(cc, dim, &case.file)?,
-        motion: cc.motion.clone(),
-        // a single static solve is the problem at factor 1
-        displacement: cc.motion.as_ref().map_or([0.0; 3], |m| m.at(1.0)),
-        force: cc.force.clone(),
-        force_now: cc.force.as_ref().map_or([0.0; 3], |m| m.at(1.0)),
-        tresca_threshold: match cc.friction {
-            Friction::Tresca { threshold } => Some(threshold),
-            Friction::None | Friction::Coulomb { .. } => None,
-        },
-        coulomb: match cc.friction {
+        pairs,
+        tresca,
+        coulomb: contacts.iter().find_map(|c| match c.friction {
             Friction::Coulomb { mu, algorithm } => Some((mu, algorithm)),
             Friction::None | Friction::Tresca { .. } => None,
-        },
-        rigid_modes: cc.rigid_modes,
+        }),
+        rigid_modes: contacts[0].rigid_modes,
         newton: case.newton.clone(),
         young: case.material.young,
         contact_modulus: {
@@ -256,5 +304,5 @@ pub fn contact_settings(
 pub fn obstacle_of(c: &ContactSection, dim: usize, file: &Path) -> Result<Obstacle, InputError> {
     c.obstacle
         .to_obstacle(dim)
-        .map_err(|e| e.into_input_error(file, "contact.obstacle"))
+        .map_err(|e| e.into_input_error(file, &format!("{}.obstacle", c.key)))
 }

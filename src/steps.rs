@@ -31,7 +31,7 @@ use crate::petsc::Vector;
 use crate::post;
 use crate::say;
 use crate::setup::{self, ContactSettings};
-use crate::signorini::report::{FrictionCertificate, Kkt};
+use crate::signorini::report::{FrictionCertificate, Kkt, PairSummary};
 use crate::signorini::{self, ContactReport, ContactSolution};
 use crate::solver::{self, LinearSummary};
 use serde::Serialize;
@@ -75,6 +75,9 @@ pub struct StepRecord {
     pub half_width: Option<f64>,
     /// 3D: Σ w_k over the active nodes (the contact area).
     pub contact_area: Option<f64>,
+    /// Several contact pairs: each pair's numbers (history.csv's `pairN_*` columns).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub pairs: Option<Vec<PairSummary>>,
     /// The step's KKT certificate of (3.14) (checked at every step: beyond
     /// `report::CERTIFICATE_TOL` the step is an error).
     #[serde(skip_serializing_if = "Option::is_none")]
@@ -110,6 +113,7 @@ impl StepRecord {
             max_pressure: None,
             half_width: None,
             contact_area: None,
+            pairs: None,
             kkt: None,
             kkt_violation: None,
             friction: None,
@@ -197,11 +201,15 @@ impl Stepper<'_> {
         let (ctx, case) = (self.ctx, self.case);
         let series = case.load.is_some();
         let plan = case.load.clone().unwrap_or_else(LoadSection::single);
-        let mut physics = match &case.contact {
-            None => Physics::Linear,
-            Some(cc) => Physics::Contact(Box::new(ctx.agree(
-                setup::contact_settings(case, cc, self.mesh.dim).map_err(RunError::from),
-            )?)),
+        let mut physics = if case.contacts.is_empty() {
+            Physics::Linear
+        } else {
+            Physics::Contact(Box::new(
+                ctx.agree(
+                    setup::contact_settings(case, &case.contacts, self.mesh.dim)
+                        .map_err(RunError::from),
+                )?,
+            ))
         };
         // f(1), kept to scale from (only with [load]: a single step solves f(1) itself).
         let b_full = if series {
@@ -378,7 +386,10 @@ impl Stepper<'_> {
         rec.newton_steps = Some(r.newton.steps);
         rec.active = Some(r.contact.active_count);
         rec.total_force = Some(r.contact.total_force.clone());
-        rec.obstacle_displacement = Some(c.obstacle_displacement[..self.mesh.dim].to_vec());
+        if let [d] = c.obstacle_displacement.as_slice() {
+            rec.obstacle_displacement = Some(d[..self.mesh.dim].to_vec());
+        }
+        rec.pairs = r.contact.pairs.clone();
         rec.max_pressure = Some(r.contact.max_pressure);
         rec.half_width = r.contact.half_width.filter(|_| self.mesh.dim == 2);
         rec.kkt = Some(r.contact.kkt);
@@ -611,7 +622,27 @@ pub fn history_csv(records: &[StepRecord], dim: usize) -> String {
     out.push_str(",max_pressure,half_width,contact_area");
     out.push_str(",kkt_penetration,kkt_positive_lambda_n,kkt_complementarity,kkt_violation");
     out.push_str(",friction_excess,friction_stick_motion,friction_slip_alignment");
-    out.push_str(",friction_violation\n");
+    out.push_str(",friction_violation");
+    // several pairs: each pair's columns last
+    let n_pairs = records
+        .iter()
+        .filter_map(|r| r.pairs.as_ref().map(Vec::len))
+        .max()
+        .unwrap_or(0);
+    for p in 1..=n_pairs {
+        let _ = write!(out, ",pair{p}_active");
+        for a in &axes[..dim] {
+            let _ = write!(out, ",pair{p}_force_{a}");
+        }
+        for a in &axes[..dim] {
+            let _ = write!(out, ",pair{p}_obstacle_{a}");
+        }
+        let _ = write!(
+            out,
+            ",pair{p}_max_pressure,pair{p}_half_width,pair{p}_contact_area"
+        );
+    }
+    out.push('\n');
     fn opt<T: std::fmt::Display>(v: Option<T>) -> String {
         v.map(|x| x.to_string()).unwrap_or_default()
     }
@@ -657,7 +688,7 @@ pub fn history_csv(records: &[StepRecord], dim: usize) -> String {
             num(r.contact_area)
         );
         let (k, f) = (r.kkt.as_ref(), r.friction.as_ref());
-        let _ = writeln!(
+        let _ = write!(
             out,
             ",{},{},{},{},{},{},{},{}",
             num(k.map(|k| k.max_penetration)),
@@ -669,6 +700,33 @@ pub fn history_csv(records: &[StepRecord], dim: usize) -> String {
             num(f.map(|f| f.max_slip_alignment_defect)),
             num(r.friction_violation)
         );
+        for p in 0..n_pairs {
+            let s = r.pairs.as_ref().and_then(|ps| ps.get(p));
+            let _ = write!(out, ",{}", opt(s.map(|s| s.active_count)));
+            for k in 0..dim {
+                let _ = write!(
+                    out,
+                    ",{}",
+                    num(s.and_then(|s| s.total_force.get(k).copied()))
+                );
+            }
+            for k in 0..dim {
+                let d = s.map(|s| {
+                    s.obstacle_displacement
+                        .as_ref()
+                        .map_or(0.0, |d| d.get(k).copied().unwrap_or(0.0))
+                });
+                let _ = write!(out, ",{}", num(d));
+            }
+            let _ = write!(
+                out,
+                ",{},{},{}",
+                num(s.map(|s| s.max_pressure)),
+                num(s.and_then(|s| s.half_width)),
+                num(s.and_then(|s| s.contact_area))
+            );
+        }
+        out.push('\n');
     }
     out
 }

@@ -462,8 +462,13 @@ pub enum RigidModeHandling {
     None,
 }
 
+/// One contact pair: a boundary group against its obstacle (`[contact]`, or one table of
+/// `[[contact]]`; docs/obstacles.md, "Several contact pairs").
 #[derive(Debug, Clone, PartialEq)]
 pub struct ContactSection {
+    /// The pair's table in the case file: `contact`, or `contact[i]` of `[[contact]]` (every
+    /// message about the pair names its keys under it).
+    pub key: String,
     pub group: String,
     pub obstacle: ObstacleSpec,
     /// `contact.motion`: a rigid translation of the obstacle (docs/obstacles.md, "Moving
@@ -486,23 +491,10 @@ pub struct Motion {
     pub value: Vec<f64>,
     /// Scaled by the load factor of `[load]` (default); `ramp = false` holds it at m.
     pub ramp: bool,
-    /// The key of the vector in the case file (`contact.motion` or `contact.motion.value`).
-    pub key: &'static str,
+    /// The key of the vector in the case file (`contact.motion` or `contact.motion.value`,
+    /// under `contact[i]` with several pairs).
+    pub key: String,
 }
-
-/// `contact.motion`'s keys: the vector, the vector in a table, what it is.
-const MOTION_KEYS: (&str, &str, &str) = (
-    "contact.motion",
-    "contact.motion.value",
-    "the obstacle's translation",
-);
-
-/// `contact.force`'s keys.
-const FORCE_KEYS: (&str, &str, &str) = (
-    "contact.force",
-    "contact.force.value",
-    "the force pressing the obstacle onto the body",
-);
 
 impl Motion {
     /// The obstacle's displacement at load factor t: t·m, or m when held (padded to 3).
@@ -589,7 +581,8 @@ pub struct Case {
     pub body_force: Option<Vec<f64>>,
     pub solver: SolverSection,
     pub output: OutputSection,
-    pub contact: Option<ContactSection>,
+    /// The contact pairs (`[contact]` or `[[contact]]`); empty: a linear case.
+    pub contacts: Vec<ContactSection>,
     pub newton: NewtonSection,
     /// The load history (`[load]`); None: one step at factor 1.
     pub load: Option<LoadSection>,
@@ -756,11 +749,11 @@ impl Case {
         if let Some(b) = &self.body_force {
             len("body_force.value".into(), b.len())?;
         }
-        if let Some(c) = &self.contact {
-            self.check_group("contact.group", &c.group, groups, Some(dim - 1))?;
-            self.check_shape("contact.obstacle", &c.obstacle, dim)?;
+        for c in &self.contacts {
+            self.check_group(&join_key(&c.key, "group"), &c.group, groups, Some(dim - 1))?;
+            self.check_shape(&join_key(&c.key, "obstacle"), &c.obstacle, dim)?;
             for m in [&c.motion, &c.force].into_iter().flatten() {
-                len(m.key.into(), m.value.len())?;
+                len(m.key.clone(), m.value.len())?;
             }
         }
         Ok(())
@@ -839,8 +832,8 @@ impl Case {
                 )
             })
             .collect();
-        if let Some(c) = &self.contact {
-            used.push(("contact.group".into(), c.group.as_str()));
+        for c in &self.contacts {
+            used.push((join_key(&c.key, "group"), c.group.as_str()));
         }
         for (key, group) in used {
             let at = match self.line_of(&key) {
@@ -1115,19 +1108,18 @@ impl Reader<'_> {
         };
         let solver = self.solver(&top)?;
         let output = self.output(&top, output_dir)?;
-        let contact = self.contact(&top)?;
+        let contacts = self.contacts(&top)?;
         let newton = self.newton(&top)?;
         let load = self.load(&top)?;
         if solver.method == Method::SnesVi {
-            let why = match &contact {
-                None => Some("needs a [contact] section"),
-                Some(c) if c.friction != Friction::None => {
-                    Some("solves frictionless contact only (use method = \"newton\" with friction)")
-                }
-                Some(c) if c.force.is_some() => {
-                    Some("has no force control (contact.force): use method = \"newton\"")
-                }
-                Some(_) => None,
+            let why = if contacts.is_empty() {
+                Some("needs a [contact] section")
+            } else if contacts.iter().any(|c| c.friction != Friction::None) {
+                Some("solves frictionless contact only (use method = \"newton\" with friction)")
+            } else if contacts.iter().any(|c| c.force.is_some()) {
+                Some("has no force control (contact.force): use method = \"newton\"")
+            } else {
+                None
             };
             if let Some(why) = why {
                 let (sk, sn) = top.get("solver").expect("method was set in [solver]");
@@ -1149,7 +1141,7 @@ impl Reader<'_> {
             body_force,
             solver,
             output,
-            contact,
+            contacts,
             newton,
             load,
             locs: BTreeMap::new(),
@@ -1399,12 +1391,139 @@ impl Reader<'_> {
         Ok(out)
     }
 
-    fn contact(&self, top: &Tab) -> Res<Option<ContactSection>> {
+    /// The contact pairs: one `[contact]` table or an array `[[contact]]`, checked against each
+    /// other (distinct groups, one friction law the solver can combine, at most one pair under
+    /// force control, one rigid-mode handling).
+    fn contacts(&self, top: &Tab) -> Res<Vec<ContactSection>> {
         let Some((k, n)) = top.get("contact") else {
-            return Ok(None);
+            return Ok(Vec::new());
         };
+        let pairs = match n.kind {
+            Kind::Array(_) => {
+                let elems = self.array(
+                    &k,
+                    n,
+                    "a table ([contact]) or an array of tables ([[contact]])",
+                )?;
+                if elems.is_empty() {
+                    return Err(self.err(
+                        &k,
+                        n.loc,
+                        "is empty: give at least one [[contact]] table",
+                    ));
+                }
+                elems
+                    .iter()
+                    .enumerate()
+                    .map(|(i, e)| self.contact(&join_index(&k, i), e))
+                    .collect::<Res<Vec<_>>>()?
+            }
+            _ => vec![self.contact(&k, n)?],
+        };
+        self.check_pairs(top, &pairs)?;
+        Ok(pairs)
+    }
+
+    /// What several pairs must agree on (docs/obstacles.md, "Several contact pairs").
+    fn check_pairs(&self, top: &Tab, pairs: &[ContactSection]) -> Res<()> {
+        let (_, cn) = top.get("contact").expect("pairs were read");
+        let elems = match cn.kind {
+            Kind::Array(ref a) => a.iter().collect::<Vec<_>>(),
+            _ => vec![cn],
+        };
+        let at = |i: usize, name: &str| -> (String, Loc) {
+            let key = join_key(&pairs[i].key, name);
+            let loc = match elems[i].kind {
+                Kind::Table(ref t) => t
+                    .iter()
+                    .find(|(n, _)| n.as_str() == name)
+                    .map_or(elems[i].loc, |(_, v)| v.loc),
+                _ => elems[i].loc,
+            };
+            (key, loc)
+        };
+        for (j, b) in pairs.iter().enumerate() {
+            if let Some(a) = pairs[..j].iter().find(|a| a.group == b.group) {
+                let (key, loc) = at(j, "group");
+                return Err(self.err(
+                    &key,
+                    loc,
+                    format!(
+                        "\"{}\" is already the group of {}: a contact node belongs to one pair only",
+                        b.group, a.key
+                    ),
+                ));
+            }
+        }
+        if let Some(j) = pairs
+            .iter()
+            .enumerate()
+            .filter(|(_, p)| p.force.is_some())
+            .nth(1)
+            .map(|(j, _)| j)
+        {
+            let (key, loc) = at(j, "force");
+            return Err(self.err(
+                &key,
+                loc,
+                "force control on more than one pair is not implemented: prescribe the force on \
+                 one pair and the motion of the others",
+            ));
+        }
+        if let Some(f) = pairs.iter().position(|p| p.force.is_some()) {
+            if let Some(j) = pairs.iter().position(|p| p.friction != Friction::None) {
+                let (key, loc) = at(j, "friction");
+                return Err(self.err(
+                    &key,
+                    loc,
+                    format!(
+                        "force control ({}.force) is frictionless only: every pair must be \
+                         frictionless",
+                        pairs[f].key
+                    ),
+                ));
+            }
+        }
+        // Tresca pairs combine with frictionless ones (threshold 0); Coulomb is one law with
+        // one coefficient on every pair.
+        let coulomb = pairs
+            .iter()
+            .find(|p| matches!(p.friction, Friction::Coulomb { .. }));
+        if let Some(c) = coulomb {
+            if let Some(j) = pairs.iter().position(|p| p.friction != c.friction) {
+                let (key, loc) = at(j, "friction");
+                return Err(self.err(
+                    &key,
+                    loc,
+                    format!(
+                        "differs from {}.friction: with Coulomb friction every pair needs the \
+                         same law, coefficient and algorithm",
+                        c.key
+                    ),
+                ));
+            }
+        }
+        if let Some(j) = pairs
+            .iter()
+            .position(|p| p.rigid_modes != pairs[0].rigid_modes)
+        {
+            let (key, loc) = at(j, "rigid_modes");
+            return Err(self.err(
+                &key,
+                loc,
+                format!(
+                    "differs from {}.rigid_modes: the body's rigid modes are handled one way",
+                    pairs[0].key
+                ),
+            ));
+        }
+        Ok(())
+    }
+
+    /// One contact pair at `k` (`contact` or `contact[i]`).
+    fn contact(&self, k: &str, n: &Node) -> Res<ContactSection> {
         let t = self.table(
-            &k,
+            k,
             n,
             &[
                 "group",
@@ -1421,7 +1540,7 @@ impl Reader<'_> {
         let obstacle = self.obstacle(&ok, o)?;
         let motion = match t.get("motion") {
             None => None,
-            Some((mk, m)) => Some(self.motion(&mk, m, MOTION_KEYS)?),
+            Some((mk, m)) => Some(self.motion(&mk, m, "the obstacle's translation")?),
         };
         let friction = match t.get("friction") {
             None => Friction::None,
@@ -1430,18 +1549,21 @@ impl Reader<'_> {
         let force = match t.get("force") {
             None => None,
             Some((fk, f)) => {
-                let force = self.motion(&fk, f, FORCE_KEYS)?;
+                let force = self.motion(&fk, f, "the force pressing the obstacle onto the body")?;
                 let why = if motion.is_some() {
-                    Some("prescribes the force instead of the motion: give one of them")
+                    Some("prescribes the force instead of the motion: give one of them".into())
                 } else if friction != Friction::None {
-                    Some("(force control) is frictionless only: remove contact.friction")
+                    Some(format!(
+                        "(force control) is frictionless only: remove {}",
+                        join_key(k, "friction")
+                    ))
                 } else if force.value.iter().all(|&x| x == 0.0) {
-                    Some("is zero: force control needs a direction (a nonzero vector)")
+                    Some("is zero: force control needs a direction (a nonzero vector)".into())
                 } else {
                     None
                 };
                 if let Some(why) = why {
-                    return Err(self.err(&fk, f.loc, format!("contact.force {why}")));
+                    return Err(self.err(&fk, f.loc, format!("{fk} {why}")));
                 }
                 Some(force)
             }
@@ -1457,20 +1579,20 @@ impl Reader<'_> {
                 ],
             )?,
         };
-        Ok(Some(ContactSection {
+        Ok(ContactSection {
+            key: k.to_string(),
             group,
             obstacle,
             motion,
             force,
             friction,
             rigid_modes,
-        }))
+        })
     }
 
     /// `contact.motion` (`contact.force`): a vector `[dx, dy(, dz)]`, or a table
     /// `{ value = [...], ramp = false }`; `keys` names the vector and its table entry.
-    fn motion(&self, key: &str, n: &Node, keys: (&'static str, &'static str, &str)) -> Res<Motion> {
-        let (plain, in_table, what) = keys;
+    fn motion(&self, key: &str, n: &Node, what: &str) -> Res<Motion> {
         if let Kind::Table(_) = n.kind {
             let t = self.table(key, n, &["value", "ramp"])?;
             let (vk, v) = self.required(&t, "value")?;
@@ -1482,7 +1604,7 @@ impl Reader<'_> {
             return Ok(Motion {
                 value,
                 ramp,
-                key: in_table,
+                key: vk,
             });
         }
         let value = match n.kind {
@@ -1498,7 +1620,7 @@ impl Reader<'_> {
         Ok(Motion {
             value,
             ramp: true,
-            key: plain,
+            key: key.to_string(),
         })
     }
 

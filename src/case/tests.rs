@@ -149,7 +149,7 @@ fn full_file_round_trip() {
     // Duplicates dropped, order kept.
     assert_eq!(c.output.fields, OutputField::ALL.to_vec());
     assert!(c.output.wants(OutputField::Rank));
-    let contact = c.contact.as_ref().unwrap();
+    let contact = c.contacts.first().unwrap();
     assert_eq!(contact.group, "contact");
     match &contact.obstacle {
         ObstacleSpec::Plane { point, normal } => {
@@ -196,7 +196,7 @@ fn minimal_file_gets_defaults() {
         ]
     );
     assert!(!c.output.wants(OutputField::Stress));
-    assert_eq!(c.contact, None);
+    assert!(c.contacts.is_empty());
     assert_eq!(c.newton.init, NewtonInit::Auto);
     assert_eq!(c.newton.c, None);
     assert_eq!(c.newton.max_steps, 100);
@@ -209,7 +209,7 @@ fn contact_defaults_and_sphere() {
         "[contact]\ngroup = \"c\"\n[contact.obstacle]\ntype = \"sphere\"\ncenter = [0, 1.5, 0]\nradius = 0.5\n",
     ))
     .unwrap();
-    let k = c.contact.unwrap();
+    let k = c.contacts.into_iter().next().unwrap();
     assert_eq!(k.friction, Friction::None);
     assert_eq!(k.rigid_modes, RigidModeHandling::Auto);
     assert_eq!(
@@ -223,7 +223,10 @@ fn contact_defaults_and_sphere() {
         "[contact]\ngroup = \"c\"\nobstacle = { type = \"plane\", point = [0, 0], normal = [0, -2] }\nfriction = \"none\"\n",
     ))
     .unwrap();
-    assert_eq!(c.contact.unwrap().friction, Friction::None);
+    assert_eq!(
+        c.contacts.into_iter().next().unwrap().friction,
+        Friction::None
+    );
 }
 
 #[test]
@@ -552,8 +555,8 @@ fn coulomb_friction_key() {
     let parse = |f: &str| {
         parse(&with(&format!("{c}friction = {f}\n")))
             .expect("valid")
-            .contact
-            .expect("contact")
+            .contacts
+            .swap_remove(0)
             .friction
     };
     assert_eq!(
@@ -739,7 +742,7 @@ fn overrides_apply() {
     assert_eq!(c.dirichlet[0].group, "clamp2");
     assert_eq!(c.dirichlet[1].value, vec![Some(0.1), Some(-0.5)]);
     assert_eq!(c.material.model, Some(MaterialModel::PlaneStrain));
-    match &c.contact.as_ref().unwrap().obstacle {
+    match &c.contacts.first().unwrap().obstacle {
         ObstacleSpec::Plane { normal, .. } => assert_eq!(normal, &vec![0.0, -1.0]),
         o => panic!("{o:?}"),
     }
@@ -774,7 +777,7 @@ fn overrides_create_sections_and_entries() {
         }]
     );
     assert_eq!(
-        c.contact.unwrap().obstacle,
+        c.contacts.into_iter().next().unwrap().obstacle,
         ObstacleSpec::Sphere {
             center: vec![0.0, 2.0],
             radius: 1.0
@@ -1213,8 +1216,8 @@ fn minimal_3d() -> String {
 fn spec(lines: &str) -> ObstacleSpec {
     parse(&obstacle_case(MINIMAL, lines))
         .unwrap()
-        .contact
-        .unwrap()
+        .contacts
+        .swap_remove(0)
         .obstacle
 }
 
@@ -1282,7 +1285,7 @@ fn indenter_obstacles_parse() {
     ))
     .unwrap();
     assert!(matches!(
-        c.contact.unwrap().obstacle,
+        c.contacts.into_iter().next().unwrap().obstacle,
         ObstacleSpec::Cone { half_angle, .. } if half_angle == 45.0
     ));
     let c = parse_set(
@@ -1291,7 +1294,7 @@ fn indenter_obstacles_parse() {
     )
     .unwrap();
     assert!(matches!(
-        c.contact.unwrap().obstacle,
+        c.contacts.into_iter().next().unwrap().obstacle,
         ObstacleSpec::Cone { half_angle, .. } if half_angle == 30.0
     ));
     let e = parse_set(
@@ -1762,14 +1765,14 @@ fn contact_motion_vector_or_table() {
     let motion = |m: &str| {
         parse(&with(&format!("{c}motion = {m}\n")))
             .expect("valid")
-            .contact
-            .expect("contact")
+            .contacts
+            .swap_remove(0)
             .motion
             .expect("motion")
     };
     let m = motion("[0.5, -2]");
     assert_eq!(
-        (m.value.clone(), m.ramp, m.key),
+        (m.value.clone(), m.ramp, m.key.as_str()),
         (vec![0.5, -2.0], true, "contact.motion")
     );
     // t·m while it ramps, m when held
@@ -1783,7 +1786,13 @@ fn contact_motion_vector_or_table() {
     assert_eq!(held.at(0.25), [0.0, 0.0, -0.1]);
     assert!(motion("{ value = [1, 2] }").ramp);
     // no motion: the obstacle stays
-    let none = parse(&with(c)).unwrap().contact.unwrap().motion;
+    let none = parse(&with(c))
+        .unwrap()
+        .contacts
+        .into_iter()
+        .next()
+        .unwrap()
+        .motion;
     assert_eq!(none, None);
 }
 
@@ -1828,4 +1837,119 @@ fn reject_bad_motion() {
         .check_against_mesh(3, &groups(&[("c", 2)]))
         .unwrap_err();
     assert_eq!(e.key.as_deref(), Some("contact.motion.value"), "{e}");
+}
+
+/// Two `[[contact]]` tables: each pair keeps its keys under `contact[i]`.
+#[test]
+fn several_contact_pairs() {
+    let two = "[[contact]]\ngroup = \"a\"\nobstacle = { type = \"plane\", point = [0, 0], normal = [0, 1] }\n\
+               [[contact]]\ngroup = \"b\"\nobstacle = { type = \"plane\", point = [0, 1], normal = [0, -1] }\n\
+               motion = [0, -0.1]\nfriction = { law = \"tresca\", threshold = 0.2 }\n";
+    let c = parse(&with(two)).expect("valid");
+    assert_eq!(c.contacts.len(), 2);
+    assert_eq!(
+        (c.contacts[0].key.as_str(), c.contacts[0].group.as_str()),
+        ("contact[0]", "a")
+    );
+    assert_eq!(c.contacts[1].key, "contact[1]");
+    assert_eq!(c.contacts[0].friction, Friction::None);
+    assert_eq!(c.contacts[1].friction, Friction::Tresca { threshold: 0.2 });
+    let m = c.contacts[1].motion.as_ref().expect("motion");
+    assert_eq!(
+        (m.value.clone(), m.key.as_str()),
+        (vec![0.0, -0.1], "contact[1].motion")
+    );
+    // the single table stays valid, with its keys under `contact`
+    let one = parse(&with(
+        "[contact]\ngroup = \"a\"\nobstacle = { type = \"plane\", point = [0, 0], normal = [0, 1] }\n",
+    ))
+    .expect("valid");
+    assert_eq!(one.contacts.len(), 1);
+    assert_eq!(one.contacts[0].key, "contact");
+    // every group is checked against the mesh, under its pair's key
+    let e = c.check_against_mesh(2, &groups(&[("a", 1)])).unwrap_err();
+    assert_eq!(e.key.as_deref(), Some("contact[1].group"), "{e}");
+    assert!(c
+        .check_against_mesh(2, &groups(&[("a", 1), ("b", 1)]))
+        .is_ok());
+}
+
+/// What several pairs must agree on, each refusal naming the key of the pair that breaks it.
+#[test]
+fn reject_bad_contact_pairs() {
+    let pair = |group: &str, extra: &str| {
+        format!(
+            "[[contact]]\ngroup = \"{group}\"\nobstacle = {{ type = \"plane\", point = [0, 0], normal = [0, 1] }}\n{extra}"
+        )
+    };
+    let coulomb = "friction = { law = \"coulomb\", mu = 0.3 }\n";
+    for (text, key, needle, what) in [
+        (
+            format!("{}{}", pair("a", ""), pair("a", "")),
+            "contact[1].group",
+            "already the group of contact[0]",
+            None,
+        ),
+        (
+            format!(
+                "{}{}",
+                pair("a", "force = [0, -1]\n"),
+                pair("b", "force = [0, -2]\n")
+            ),
+            "contact[1].force",
+            "more than one pair",
+            Some("force = [0, -2]"),
+        ),
+        (
+            format!(
+                "{}{}",
+                pair("a", "friction = { law = \"tresca\", threshold = 1 }\n"),
+                pair("b", "force = [0, -2]\n")
+            ),
+            "contact[0].friction",
+            "frictionless only",
+            Some("friction"),
+        ),
+        (
+            format!("{}{}", pair("a", coulomb), pair("b", "")),
+            "contact[1].friction",
+            "same law",
+            None,
+        ),
+        (
+            format!(
+                "{}{}",
+                pair("a", coulomb),
+                pair("b", "friction = { law = \"coulomb\", mu = 0.4 }\n")
+            ),
+            "contact[1].friction",
+            "same law",
+            Some("mu = 0.4"),
+        ),
+        (
+            format!("{}{}", pair("a", ""), pair("b", "rigid_modes = \"none\"\n")),
+            "contact[1].rigid_modes",
+            "handled one way",
+            Some("rigid_modes"),
+        ),
+        (
+            format!("{}{}", pair("a", ""), pair("b", "moton = [0, 1]\n")),
+            "contact[1].moton",
+            "",
+            Some("moton"),
+        ),
+    ] {
+        let text = with(&text);
+        let e = parse(&text).expect_err(key);
+        assert_eq!(e.key.as_deref(), Some(key), "{e}");
+        assert!(e.message.contains(needle), "{e}");
+        // the line of the offending key; a key that is missing: its pair's table
+        match what {
+            Some(needle) => assert_eq!(e.line, Some(line(&text, needle)), "{e}"),
+            None => assert!(e.line.is_some(), "{e}"),
+        }
+    }
+    let e = parse(&format!("contact = []\n{MINIMAL}")).expect_err("empty");
+    assert_eq!(e.key.as_deref(), Some("contact"), "{e}");
+    assert!(e.message.contains("at least one"), "{e}");
 }

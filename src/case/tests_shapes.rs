@@ -49,7 +49,7 @@ fn height_parsed_and_checked_against_the_mesh() {
         "{ type = \"height\", expr = \"0.1*x^2 - 1e-3\" }",
     );
     let c = parse_at(&text, Path::new(FILE)).unwrap();
-    let spec = &c.contact.as_ref().unwrap().obstacle;
+    let spec = &c.contacts.first().unwrap().obstacle;
     assert_eq!(spec.type_name(), "height");
     let ObstacleSpec::Height { expr } = spec else {
         panic!("{spec:?}")
@@ -165,7 +165,7 @@ fn surface_read_relative_to_the_case_file() {
     d.stl("ball.stl", &icosphere([0.0, 0.0, 1.0], 0.5, 2));
     let text = case(MINIMAL_3D, "{ type = \"surface\", file = \"ball.stl\" }");
     let c = parse_at(&text, &d.case_file()).unwrap();
-    let spec = &c.contact.as_ref().unwrap().obstacle;
+    let spec = &c.contacts.first().unwrap().obstacle;
     let ObstacleSpec::Surface { file, surface } = spec else {
         panic!("{spec:?}")
     };

@@ -104,7 +104,7 @@ impl fmt::Display for ObstacleError {
             ),
             ObstacleError::HeightVariables => write!(
                 f,
-                "the height expression 'contact.obstacle.expr' may use only x (2D) or x and y (3D)"
+                "the height expression 'expr' may use only x (2D) or x and y (3D)"
             ),
             ObstacleError::HeightNotFinite { x, y } => {
                 let at = match y {
@@ -113,7 +113,7 @@ impl fmt::Display for ObstacleError {
                 };
                 write!(
                     f,
-                    "the height expression 'contact.obstacle.expr' is not a finite number at \
+                    "the height expression 'expr' is not a finite number at \
                      {at}, near the node (the obstacle's surface must be defined and smooth \
                      under the contact boundary)"
                 )
@@ -125,14 +125,14 @@ impl fmt::Display for ObstacleError {
                 };
                 write!(
                     f,
-                    "the height surface 'contact.obstacle.expr' has a kink or a step at {at}, \
+                    "the height surface 'expr' has a kink or a step at {at}, \
                      the nearest point to the node (its slope jumps there): the surface must be \
                      smooth (C¹) near the body"
                 )
             }
             ObstacleError::HeightNoConvergence => write!(
                 f,
-                "the nearest point on the height surface 'contact.obstacle.expr' was not found \
+                "the nearest point on the height surface 'expr' was not found \
                  (the projection did not converge): the surface must be smooth (C¹) near the \
                  body, without kinks or steps"
             ),
@@ -146,6 +146,18 @@ impl ObstacleError {
     /// Wrap as a user-facing [`InputError`] for the case file `file`, key `key`.
     pub fn into_input_error(self, file: &Path, key: &str) -> InputError {
         InputError::new(file, self.to_string()).with_key(key)
+    }
+
+    /// The key of the obstacle's table the error is about: `obstacle.expr` for the height
+    /// expression, else `obstacle`.
+    pub fn key_in_pair(&self) -> &'static str {
+        match self {
+            ObstacleError::HeightVariables
+            | ObstacleError::HeightNotFinite { .. }
+            | ObstacleError::HeightNotSmooth { .. }
+            | ObstacleError::HeightNoConvergence => "obstacle.expr",
+            _ => "obstacle",
+        }
     }
 }
 

@@ -599,6 +599,7 @@ mod tests {
     fn node(bound: f64, u_t_ref: [f64; 2]) -> ContactNode {
         ContactNode {
             node: 0,
+            pair: 0,
             tag: 7,
             row: 0,
             local_row: 0,
@@ -646,9 +647,9 @@ mod tests {
             offset: 0,
             on_contact_boundary: vec![true],
             excluded_dirichlet: 0,
-            obstacle: crate::contact::Obstacle::Plane(
+            obstacles: vec![crate::contact::Obstacle::Plane(
                 crate::contact::Plane::new([0.0; 3], [0.0, 1.0, 0.0], 2).expect("plane"),
-            ),
+            )],
         };
         let p = set.prescribed(&b, 0, 2).expect("rewritten");
         assert_eq!(p.dirs.len(), 2);
@@ -703,9 +704,9 @@ mod tests {
             offset: 0,
             on_contact_boundary: vec![true],
             excluded_dirichlet: 0,
-            obstacle: crate::contact::Obstacle::Plane(
+            obstacles: vec![crate::contact::Obstacle::Plane(
                 crate::contact::Plane::new([0.0; 3], [0.0, 1.0, 0.0], 2).expect("plane"),
-            ),
+            )],
         };
         let mut it = Iterate::new(2, 4, true);
         let limit = at(0.0, -1.0, 0.1 * (1.0 + 1e-12));

@@ -16,6 +16,8 @@ use crate::setup::{group_facets, ContactSettings};
 pub struct ContactNode {
     /// Mesh node index.
     pub node: usize,
+    /// The contact pair of the node (index into the case's pairs; 0 with one pair).
+    pub pair: usize,
     /// Gmsh node tag.
     pub tag: u64,
     /// Global index of the node's first dof (dofs row .. row + dim).
@@ -69,8 +71,16 @@ pub struct ContactBoundary {
     pub on_contact_boundary: Vec<bool>,
     /// Contact nodes dropped because Dirichlet data fix one of their components (global count).
     pub excluded_dirichlet: usize,
-    /// The obstacle as the case gives it (its motion is in the nodes' gaps and references).
-    pub obstacle: Obstacle,
+    /// Each pair's obstacle as the case gives it (its motion is in the nodes' gaps and
+    /// references).
+    pub obstacles: Vec<Obstacle>,
+}
+
+impl ContactBoundary {
+    /// The number of contact pairs.
+    pub fn n_pairs(&self) -> usize {
+        self.obstacles.len()
+    }
 }
 
 /// Builds the owned contact nodes. `fixed` holds the Dirichlet value per mesh dof (NaN = free):
@@ -104,44 +114,98 @@ fn check_depth(
     nodes: &[ContactNode],
     settings: &ContactSettings,
 ) -> Result<(), RunError> {
-    let deepest = nodes
-        .iter()
-        .min_by(|a, b| a.gap.total_cmp(&b.gap).then(a.tag.cmp(&b.tag)));
-    let local = deepest.map_or(f64::INFINITY, |k| k.gap);
-    let min_gap = ctx.min_f64(local);
-    let size = mesh.extent();
-    if min_gap.is_nan() || min_gap >= -DEEP_START_FRACTION * size {
-        return Ok(());
+    for (p, pair) in settings.pairs.iter().enumerate() {
+        let deepest = nodes
+            .iter()
+            .filter(|k| k.pair == p)
+            .min_by(|a, b| a.gap.total_cmp(&b.gap).then(a.tag.cmp(&b.tag)));
+        let local = deepest.map_or(f64::INFINITY, |k| k.gap);
+        let min_gap = ctx.min_f64(local);
+        let size = mesh.extent();
+        if min_gap.is_nan() || min_gap >= -DEEP_START_FRACTION * size {
+            continue;
+        }
+        // The rank holding the deepest node (the smallest tag among equal gaps) names it.
+        let tag = deepest
+            .filter(|k| k.gap == min_gap)
+            .map_or(u64::MAX, |k| k.tag);
+        let tag = ctx.min_u64(tag);
+        let of_pair = || nodes.iter().filter(|k| k.pair == p);
+        let penetrating = ctx.sum_usize(of_pair().filter(|k| k.gap < 0.0).count());
+        let total = ctx.sum_usize(of_pair().count());
+        let hint = if penetrating == total {
+            "every contact node starts inside it: is the obstacle on the wrong side of the body, \
+             or does its normal point away from the body (it must point from the obstacle into \
+             the body)?"
+        } else {
+            "is the obstacle placed where it should be (units, origin, the sign of a coordinate)?"
+        };
+        return Err(RunError::Input(
+            InputError::new(
+                &settings.file,
+                format!(
+                    "the body starts {:.4e} deep inside the obstacle (contact node {tag}; \
+                     {penetrating} of {total} contact nodes inside), {:.0} % of the body's size \
+                     {size:.4e} — beyond what small-deformation contact can close \
+                     ({:.0} %): {hint}",
+                    -min_gap,
+                    -100.0 * min_gap / size,
+                    100.0 * DEEP_START_FRACTION,
+                ),
+            )
+            .with_key(pair.key("obstacle")),
+        ));
     }
-    // The rank holding the deepest node (the smallest tag among equal gaps) names it.
-    let tag = deepest
-        .filter(|k| k.gap == min_gap)
-        .map_or(u64::MAX, |k| k.tag);
-    let tag = ctx.min_u64(tag);
-    let penetrating = ctx.sum_usize(nodes.iter().filter(|k| k.gap < 0.0).count());
-    let total = ctx.sum_usize(nodes.len());
-    let hint = if penetrating == total {
-        "every contact node starts inside it: is the obstacle on the wrong side of the body, or \
-         does its normal point away from the body (it must point from the obstacle into the \
-         body)?"
-    } else {
-        "is the obstacle placed where it should be (units, origin, the sign of a coordinate)?"
-    };
-    Err(RunError::Input(
-        InputError::new(
-            &settings.file,
-            format!(
-                "the body starts {:.4e} deep inside the obstacle (contact node {tag}; \
-                 {penetrating} of {total} contact nodes inside), {:.0} % of the body's size \
-                 {size:.4e} — beyond what small-deformation contact can close \
-                 ({:.0} %): {hint}",
-                -min_gap,
-                -100.0 * min_gap / size,
-                100.0 * DEEP_START_FRACTION,
-            ),
-        )
-        .with_key("contact.obstacle"),
-    ))
+    Ok(())
+}
+
+/// The contact boundary of every pair: per mesh node its lumped weight w_k and its pair; a
+/// node on the facets of two pairs' groups is an input error naming both.
+fn pair_nodes(
+    mesh: &Mesh,
+    settings: &ContactSettings,
+) -> (Vec<f64>, Vec<Option<usize>>, Option<InputError>) {
+    let dim = mesh.dim;
+    let mut weight = vec![0.0f64; mesh.n_nodes()];
+    let mut pair_of: Vec<Option<usize>> = vec![None; mesh.n_nodes()];
+    let mut clash = None;
+    let mut xs: Vec<[f64; 3]> = Vec::with_capacity(3);
+    for (p, pair) in settings.pairs.iter().enumerate() {
+        for f in group_facets(mesh, &pair.group) {
+            let nodes = mesh.facet(f);
+            xs.clear();
+            xs.extend(nodes.iter().map(|&v| mesh.coords[v]));
+            let (_, m) = fem::facet_normal_measure(&xs);
+            for &v in nodes {
+                weight[v] += m / dim as f64;
+                match pair_of[v] {
+                    Some(q) if q != p => {
+                        clash.get_or_insert_with(|| {
+                            let other = &settings.pairs[q];
+                            InputError::new(
+                                &settings.file,
+                                format!(
+                                    "mesh node {} at {:?} lies on the contact groups of two \
+                                     pairs, \"{}\" ({}) and \"{}\" ({}): a contact node belongs \
+                                     to one pair only (split the groups so that they share no \
+                                     node)",
+                                    mesh.node_tags[v],
+                                    &mesh.coords[v][..dim],
+                                    other.group,
+                                    other.key,
+                                    pair.group,
+                                    pair.key
+                                ),
+                            )
+                            .with_key(pair.key("group"))
+                        });
+                    }
+                    _ => pair_of[v] = Some(p),
+                }
+            }
+        }
+    }
+    (weight, pair_of, clash)
 }
 
 pub fn build(
@@ -153,37 +217,24 @@ pub fn build(
 ) -> Result<ContactBoundary, RunError> {
     let dim = mesh.dim;
     let file = settings.file.as_path();
-    let obstacle = &settings.obstacle;
-    let facets = group_facets(mesh, &settings.group);
-    let mut weight = vec![0.0f64; mesh.n_nodes()];
-    let mut on = vec![false; mesh.n_nodes()];
-    let mut xs: Vec<[f64; 3]> = Vec::with_capacity(3);
-    for &f in &facets {
-        let nodes = mesh.facet(f);
-        xs.clear();
-        xs.extend(nodes.iter().map(|&v| mesh.coords[v]));
-        let (_, m) = fem::facet_normal_measure(&xs);
-        for &v in nodes {
-            weight[v] += m / dim as f64;
-            on[v] = true;
-        }
-    }
-    let g_r = settings.tresca_threshold.unwrap_or(0.0);
+    let (weight, pair_of, clash) = pair_nodes(mesh, settings);
+    ctx.agree(clash.map_or(Ok(()), |e| Err(RunError::Input(e))))?;
     let (lo, _) = layout.node_range();
     let mut nodes = Vec::new();
     let mut excluded = 0usize;
     let mut bad: Option<InputError> = None;
     for (i, &v) in layout.owned_nodes.iter().enumerate() {
-        if !on[v] {
+        let Some(p) = pair_of[v] else {
             continue;
-        }
+        };
+        let pair = &settings.pairs[p];
         let x = mesh.coords[v];
         let prescribed = (0..dim).any(|k| !fixed[v * dim + k].is_nan());
         if prescribed && settings.friction() {
             excluded += 1;
             continue;
         }
-        let proj = match obstacle.project(x) {
+        let proj = match pair.obstacle.project(x) {
             Ok(p) => p,
             Err(_) if prescribed => {
                 excluded += 1;
@@ -195,7 +246,7 @@ pub fn build(
                         file,
                         format!("contact node {} at {:?}: {e}", mesh.node_tags[v], &x[..dim]),
                     )
-                    .with_key("contact.obstacle"),
+                    .with_key(pair.key(e.key_in_pair())),
                 );
                 continue;
             }
@@ -207,6 +258,7 @@ pub fn build(
         let frame = Frame::new(proj.normal, dim).expect("obstacle normals are unit vectors");
         nodes.push(ContactNode {
             node: v,
+            pair: p,
             tag: mesh.node_tags[v],
             row: (lo + i) * dim,
             local_row: i * dim,
@@ -214,7 +266,7 @@ pub fn build(
             frame,
             gap: proj.gap,
             weight: weight[v],
-            bound: g_r * weight[v],
+            bound: pair.tresca_threshold.unwrap_or(0.0) * weight[v],
             u_t_ref: [0.0; 2],
         });
     }
@@ -222,27 +274,28 @@ pub fn build(
     let ex_all = ctx.sum_usize(excluded);
     ctx.agree(bad.map_or(Ok(()), |e| Err(RunError::Input(e))))?;
     check_depth(ctx, mesh, &nodes, settings)?;
-    move_obstacle(&mut nodes, settings.displacement, settings.friction());
+    move_obstacles(&mut nodes, &settings.displacements(), settings.friction());
     Ok(ContactBoundary {
         n_global: counts.iter().sum::<u64>() as usize,
         offset: counts[..ctx.rank].iter().sum::<u64>() as usize,
         nodes,
-        on_contact_boundary: on,
+        on_contact_boundary: pair_of.iter().map(Option::is_some).collect(),
         excluded_dirichlet: ex_all,
-        obstacle: obstacle.clone(),
+        obstacles: settings.pairs.iter().map(|p| p.obstacle.clone()).collect(),
     })
 }
 
-/// The obstacle translated by d (docs/obstacles.md, "Moving obstacles"): the node's
+/// Each pair's obstacle translated by its d (`d[pair]`; docs/obstacles.md, "Moving obstacles"): the node's
 /// displacement relative to it is u − d, so the contact condition (3.3) becomes
 /// u_n + g0 − d·n ≥ 0 (n, g0 of the undeformed node against the obstacle as given: exact for a
 /// planar face while the nearest face stays the same), and with friction the slip is
 /// u_τ − d_τ: the tangential reference is d_τ. Local.
-fn move_obstacle(nodes: &mut [ContactNode], d: [f64; 3], friction: bool) {
-    if d == [0.0; 3] {
-        return;
-    }
+fn move_obstacles(nodes: &mut [ContactNode], d: &[[f64; 3]], friction: bool) {
     for k in nodes {
+        let d = d[k.pair];
+        if d == [0.0; 3] {
+            continue;
+        }
         k.gap -= dot(d, k.frame.n);
         if friction {
             k.u_t_ref = [dot(d, k.frame.t[0]), dot(d, k.frame.t[1])];

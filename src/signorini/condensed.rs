@@ -325,7 +325,7 @@ pub(super) fn solve_keeping(
             End::Converged => {}
             End::NoSupport(_) if comp.list.len() < cand.n => {
                 // a node beyond the candidates may still carry the load: all of them
-                growth.take = cand.n;
+                growth.take_all();
                 growth.why = format!(
                     "no support among the {} candidates, so every contact node",
                     comp.list.len()
@@ -389,9 +389,10 @@ pub(super) fn solve_keeping(
 /// `take`, a count, so it also grows where the gaps are ≤ 0 (bodies that start touching or
 /// overlapping).
 struct Growth {
-    /// Every contact node by increasing gap (ties: global order).
-    by_gap: Vec<usize>,
-    take: usize,
+    /// Every contact node of each pair by increasing gap (ties: global order).
+    by_gap: Vec<Vec<usize>>,
+    /// How many of each pair's nodes by gap are candidates.
+    take: Vec<usize>,
     forced: HashSet<usize>,
     active: Vec<bool>,
     /// Why the set has the size it has (for a fallback's reason).
@@ -399,23 +400,46 @@ struct Growth {
 }
 
 impl Growth {
-    /// The first candidates: the nodes with the smallest gaps (an eighth of c_h, at least
-    /// MIN_CANDIDATES, at most half the Schur limit) and every node of the start set (the
-    /// thesis' all-active start: all of them).
+    /// The first candidates: of every contact pair the nodes with the smallest gaps (an
+    /// eighth of the pair's nodes, at least MIN_CANDIDATES, all pairs together at most half
+    /// the Schur limit) — per pair, since the pairs' gaps are not comparable (an obstacle
+    /// moved into the body has the smallest gaps, the one that holds the body may have none
+    /// below them) — and every node of the start set (the thesis' all-active start: all of
+    /// them).
     fn new(cand: &Candidates, per: usize) -> Growth {
         let n = cand.n;
-        let mut by_gap: Vec<usize> = (0..n).collect();
-        by_gap.sort_by(|&a, &b| cand.gap(a).total_cmp(&cand.gap(b)).then(a.cmp(&b)));
-        let first = (n / FIRST_FRACTION)
-            .clamp(MIN_CANDIDATES, MAX_SCHUR_DOFS / (2 * per))
-            .min(n);
+        let pairs = (0..n).map(|i| cand.pair(i) + 1).max().unwrap_or(1);
+        let mut by_gap: Vec<Vec<usize>> = vec![Vec::new(); pairs];
+        for i in 0..n {
+            by_gap[cand.pair(i)].push(i);
+        }
+        for b in &mut by_gap {
+            b.sort_by(|&a, &b| cand.gap(a).total_cmp(&cand.gap(b)).then(a.cmp(&b)));
+        }
+        let limit = (MAX_SCHUR_DOFS / (2 * per * pairs)).max(1);
+        let take: Vec<usize> = by_gap
+            .iter()
+            .map(|b| {
+                (b.len() / FIRST_FRACTION)
+                    .clamp(MIN_CANDIDATES.min(limit), limit)
+                    .min(b.len())
+            })
+            .collect();
+        let first: usize = take.iter().sum();
         let active: Vec<bool> = (0..n).map(|i| cand.start(i)).collect();
         Growth {
             by_gap,
-            take: first,
+            take,
             forced: (0..n).filter(|&i| active[i]).collect(),
             active,
             why: format!("the {first} nodes with the smallest gaps and the start set"),
+        }
+    }
+
+    /// Every contact node a candidate.
+    fn take_all(&mut self) {
+        for (t, b) in self.take.iter_mut().zip(&self.by_gap) {
+            *t = b.len();
         }
     }
 
@@ -427,13 +451,20 @@ impl Growth {
         comp: &Compliance,
         round: usize,
     ) -> Result<Vec<usize>, String> {
-        let take = self.take.clamp(1, cand.n.max(1));
-        let bound = self
+        // each pair's gap bound: the gap of its last node taken
+        let bound: Vec<f64> = self
             .by_gap
-            .get(take - 1)
-            .map_or(f64::NEG_INFINITY, |&i| cand.gap(i));
+            .iter()
+            .zip(&self.take)
+            .map(|(b, &t)| {
+                b.get(t.clamp(1, b.len().max(1)) - 1)
+                    .map_or(f64::NEG_INFINITY, |&i| cand.gap(i))
+            })
+            .collect();
         let new: Vec<usize> = (0..cand.n)
-            .filter(|&i| !comp.in_s[i] && (cand.gap(i) <= bound || self.forced.contains(&i)))
+            .filter(|&i| {
+                !comp.in_s[i] && (cand.gap(i) <= bound[cand.pair(i)] || self.forced.contains(&i))
+            })
             .collect();
         if new.is_empty() && round > 1 {
             return Err("the candidate set cannot grow (internal)".to_string());
@@ -491,12 +522,14 @@ impl Growth {
             self.forced.insert(i as usize);
             self.active[i as usize] = true;
         }
-        self.take = (2 * self.take).max(1);
+        for t in &mut self.take {
+            *t = (2 * *t).max(1);
+        }
         self.why = format!(
             "{} node(s) beyond the candidates came into contact, so the {} nodes with the \
              smallest gaps",
             changed.len(),
-            self.take
+            self.take.iter().sum::<usize>()
         );
         Ok(())
     }
@@ -586,8 +619,8 @@ pub(super) struct Candidates {
     mz: usize,
 }
 
-/// Values per candidate record: row, n (3), gap, start, G (6), x (3), u_τ^ref (2).
-const REC: usize = 17;
+/// Values per candidate record: row, n (3), gap, start, G (6), x (3), u_τ^ref (2), pair.
+const REC: usize = 18;
 
 impl Candidates {
     /// One all-gather. Collective.
@@ -602,6 +635,7 @@ impl Candidates {
             mine.extend_from_slice(&gz);
             mine.extend_from_slice(&k.x);
             mine.extend_from_slice(&k.u_t_ref);
+            mine.push(k.pair as f64);
         }
         let all = ctx.all_gather_varcount(&mine);
         let n = all.len() / REC;
@@ -649,6 +683,10 @@ impl Candidates {
     }
     pub(super) fn n(&self, i: usize) -> [f64; 3] {
         [self.normal(i, 0), self.normal(i, 1), self.normal(i, 2)]
+    }
+    /// The candidate's contact pair.
+    pub(super) fn pair(&self, i: usize) -> usize {
+        self.rec(i)[17] as usize
     }
 }
 
@@ -888,7 +926,7 @@ fn dense_round(
 ) -> DenseRun {
     // force control: the approach δ is one more free mode, its normal parts −e·n and its load
     // |F| (force.rs; the body has no other free mode)
-    let force = s.force.map(|fc| (fc.direction(), fc.magnitude()));
+    let force = s.force.map(|fc| (fc.direction(), fc.magnitude(), fc.pair));
     let (ns, mz) = (comp.list.len(), cand.mz + usize::from(force.is_some()));
     let mut packed: Vec<f64> = Vec::new();
     if ctx.rank == 0 {
@@ -897,10 +935,16 @@ fn dense_round(
             let mut phi = free.free_load();
             let list = &comp.list;
             let g = DMatrix::from_fn(ns, mz, |q, c| match force {
-                Some((e, _)) if c == cand.mz => -crate::geom::dot(cand.n(list[q]), e),
+                Some((e, _, pair)) if c == cand.mz => {
+                    if cand.pair(list[q]) == pair {
+                        -crate::geom::dot(cand.n(list[q]), e)
+                    } else {
+                        0.0 // another pair's obstacle stays
+                    }
+                }
                 _ => cand.g(list[q], c),
             });
-            if let Some((_, magnitude)) = force {
+            if let Some((_, magnitude, _)) = force {
                 phi.push(magnitude);
                 load_scale = load_scale.max(magnitude);
             }
@@ -1053,9 +1097,8 @@ fn expand(
     // force control: the gaps to the obstacle moved by δ e (δ the last free-mode coefficient)
     let approach = s.force.map(|fc| {
         let delta = alpha[z.ncols()];
-        let e = fc.direction();
         for k in shifted.nodes.iter_mut() {
-            k.gap -= delta * crate::geom::dot(k.frame.n, e);
+            k.gap -= delta * fc.weight(k);
         }
         delta
     });

@@ -159,6 +159,7 @@ fn candidate_boundary(kept: &Kept, b: &ContactBoundary, dim: usize) -> ContactBo
             let n = kept.cand.n(i);
             ContactNode {
                 node: 0,
+                pair: 0,
                 tag: i as u64,
                 row: 0,
                 local_row: 0,
@@ -177,7 +178,7 @@ fn candidate_boundary(kept: &Kept, b: &ContactBoundary, dim: usize) -> ContactBo
         offset: 0,
         on_contact_boundary: Vec::new(),
         excluded_dirichlet: 0,
-        obstacle: b.obstacle.clone(),
+        obstacles: b.obstacles.clone(),
     }
 }
 

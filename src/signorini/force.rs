@@ -16,7 +16,7 @@
 //! the problem. Frictionless only (the case reader refuses friction with a force).
 
 use super::active_set::{ActiveSet, Iterate};
-use super::boundary::ContactBoundary;
+use super::boundary::{ContactBoundary, ContactNode};
 use super::reduced::ReducedSystem;
 use super::rigid::Pin;
 use crate::assembly::System;
@@ -35,6 +35,10 @@ pub struct ForceControl {
     pub start: f64,
     /// The case file (named in the diagnoses).
     pub file: std::path::PathBuf,
+    /// The pair under force control: only its obstacle moves, only its nodes' forces count.
+    pub pair: usize,
+    /// Its `force` key (`contact.force` or `contact[i].force`), named in the diagnoses.
+    pub key: String,
 }
 
 impl ForceControl {
@@ -48,6 +52,16 @@ impl ForceControl {
         let m = self.magnitude();
         self.force.map(|x| x / m)
     }
+
+    /// w_k = n_k·e for a node of the pair, 0 for the nodes of the other pairs (their obstacles
+    /// do not move with δ).
+    pub fn weight(&self, k: &ContactNode) -> f64 {
+        if k.pair == self.pair {
+            dot(k.frame.n, self.direction())
+        } else {
+            0.0
+        }
+    }
 }
 
 /// The approach δ of the iteration and what its gaps are made of.
@@ -58,11 +72,16 @@ pub struct Approach {
     pub magnitude: f64,
     /// δ of the current iterate.
     pub delta: f64,
+    /// The pair under force control.
+    pub pair: usize,
     /// The owned nodes' gaps to the obstacle at rest, g0_k.
     g0: Vec<f64>,
-    /// w_k = n_k·e.
+    /// w_k = n_k·e (0 off the pair).
     w: Vec<f64>,
+    /// The node belongs to the pair under force control.
+    in_pair: Vec<bool>,
     file: std::path::PathBuf,
+    key: String,
 }
 
 /// Force control on a body that Dirichlet data leave free in a rigid mode: the loads' balance
@@ -72,16 +91,17 @@ pub fn floating(fc: &ForceControl) -> RunError {
         InputError::new(
             Path::new(&fc.file),
             "force control needs a body that Dirichlet data hold: this body is free in a rigid \
-             mode, so the balance of its loads alone decides the contact force (prescribe the \
-             obstacle's motion instead, or hold the body)",
+             mode, where the balance of its loads decides the contact force (prescribe the \
+             obstacle's motion instead, or hold the body; force control of a body that only \
+             its contact pairs hold is not implemented)",
         )
-        .with_key("contact.force"),
+        .with_key(fc.key.as_str()),
     )
 }
 
 /// A force along which the obstacle never reaches the body.
 pub fn never_touches(fc: &ForceControl) -> RunError {
-    RunError::Input(InputError::new(Path::new(&fc.file), NEVER_TOUCHES).with_key("contact.force"))
+    RunError::Input(InputError::new(Path::new(&fc.file), NEVER_TOUCHES).with_key(fc.key.as_str()))
 }
 
 const NEVER_TOUCHES: &str = "the obstacle, moving along the force, never reaches the body: every \
@@ -105,9 +125,12 @@ impl Approach {
             dir,
             magnitude: fc.magnitude(),
             delta: fc.start,
+            pair: fc.pair,
             g0: b.nodes.iter().map(|k| k.gap).collect(),
-            w: b.nodes.iter().map(|k| dot(k.frame.n, dir)).collect(),
+            w: b.nodes.iter().map(|k| fc.weight(k)).collect(),
+            in_pair: b.nodes.iter().map(|k| k.pair == fc.pair).collect(),
             file: fc.file.clone(),
+            key: fc.key.clone(),
         }
     }
 
@@ -132,15 +155,22 @@ impl Approach {
         u
     }
 
-    /// The contact force along e of an iterate, Σ_k (−λ_k)·e over every rank's contact nodes.
+    /// The contact force along e of an iterate, Σ_k (−λ_k)·e over every rank's contact nodes
+    /// of the pair.
     /// Collective.
     pub fn force_along(&self, ctx: &Ctx, it: &Iterate) -> f64 {
-        let local: f64 = it.nodes.iter().map(|r| -dot(r.lambda, self.dir)).sum();
+        let local: f64 = it
+            .nodes
+            .iter()
+            .zip(&self.in_pair)
+            .filter(|(_, &mine)| mine)
+            .map(|(r, _)| -dot(r.lambda, self.dir))
+            .sum();
         ctx.sum_vec(&[local])[0]
     }
 
     fn input_error(&self, message: String) -> RunError {
-        RunError::Input(InputError::new(Path::new(&self.file), message).with_key("contact.force"))
+        RunError::Input(InputError::new(Path::new(&self.file), message).with_key(self.key.as_str()))
     }
 
     /// No active node: δ grows until the first contact node touches, the one whose gap
@@ -197,7 +227,9 @@ pub fn correct(
     let local: f64 = b
         .nodes
         .iter()
-        .map(|k| {
+        .zip(&ap.in_pair)
+        .filter(|(_, &mine)| mine)
+        .map(|(k, _)| {
             (0..dim)
                 .map(|j| au1[k.local_row + j] * ap.dir[j])
                 .sum::<f64>()

@@ -103,6 +103,9 @@ pub struct ContactSummary {
     #[serde(skip_serializing_if = "Option::is_none")]
     pub approach: Option<f64>,
     pub half_width: Option<f64>,
+    /// Several contact pairs: each pair's numbers (the fields above are over all pairs).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub pairs: Option<Vec<report::PairSummary>>,
     pub kkt: Kkt,
     #[serde(skip_serializing_if = "Option::is_none")]
     pub friction: Option<FrictionCertificate>,
@@ -142,9 +145,9 @@ pub struct ContactSolution {
     /// the next load increment to this step's, s > 0: the next solve starts from the linear
     /// extrapolation `self + s · delta` (0: from this solution itself).
     pub predict: f64,
-    /// The obstacle's displacement d in this solve (friction in the next step acts on the slip
-    /// relative to the obstacle's increment since).
-    pub obstacle_displacement: [f64; 3],
+    /// Each pair's obstacle displacement d in this solve (friction in the next step acts on
+    /// the slip relative to the obstacle's increment since).
+    pub obstacle_displacement: Vec<[f64; 3]>,
 }
 
 /// A load step's change of the contact nodes' values (u, λ in both forms) and of this rank's
@@ -152,8 +155,8 @@ pub struct ContactSolution {
 pub struct StepDelta {
     pub nodes: Vec<NodeResult>,
     pub u_local: Vec<f64>,
-    /// The obstacle's displacement since the previous step.
-    pub obstacle: [f64; 3],
+    /// Each pair's obstacle displacement since the previous step.
+    pub obstacle: Vec<[f64; 3]>,
 }
 
 impl ContactSolution {
@@ -206,7 +209,7 @@ impl ContactSolution {
 /// This solve's change since `prev` (same mesh and boundary). Local.
 fn step_delta(
     prev: &ContactSolution,
-    (nodes, displacement): (&[NodeResult], [f64; 3]),
+    (nodes, displacement): (&[NodeResult], &[[f64; 3]]),
     u: &[f64],
     u_prev: &[f64],
 ) -> StepDelta {
@@ -228,7 +231,11 @@ fn step_delta(
             })
             .collect(),
         u_local: u.iter().zip(u_prev).map(|(a, b)| a - b).collect(),
-        obstacle: crate::geom::sub(displacement, prev.obstacle_displacement),
+        obstacle: displacement
+            .iter()
+            .zip(&prev.obstacle_displacement)
+            .map(|(d, p)| crate::geom::sub(*d, *p))
+            .collect(),
     }
 }
 
@@ -261,7 +268,7 @@ pub fn solve(
             &mut b,
             prev,
             friction,
-            settings.displacement,
+            &settings.displacements(),
         )?),
         None => None,
     };
@@ -329,20 +336,24 @@ pub fn solve(
             k.bound = mu * (-r.lambda_n).max(0.0);
         }
     }
-    let mut displacement = settings.displacement;
+    let mut displacement = settings.displacements();
     if let Some((delta, fc)) = nr.approach.zip(force_control.as_ref()) {
         // the obstacle where the force put it: the gaps to it for the certificates and output
-        let e = fc.direction();
-        displacement = e.map(|x| delta * x);
+        displacement[fc.pair] = fc.direction().map(|x| delta * x);
         for k in b.nodes.iter_mut() {
-            k.gap -= delta * crate::geom::dot(k.frame.n, e);
+            k.gap -= delta * fc.weight(k);
         }
     }
     let (mut contact, table) = final_state(ctx, sys, &b, &nr, friction, dim)?;
-    if settings.motion.is_some() || nr.approach.is_some() {
-        contact.obstacle_displacement = Some(displacement[..dim].to_vec());
-    }
-    contact.approach = nr.approach;
+    report::per_pair(
+        ctx,
+        settings,
+        &b,
+        &nr.nodes,
+        &table,
+        (&displacement, nr.approach),
+        &mut contact,
+    );
     let mut newton = newton_summary(settings, solver_section, c, &mut nr, outer_steps, previous);
     if let Some(cs) = condensed_summary {
         // K_p's with the Schur complement, one per round of candidates (the dense steps
@@ -353,7 +364,7 @@ pub fn solve(
     let delta = match previous.zip(prev_u) {
         Some((prev, u_prev)) => Some(step_delta(
             prev,
-            (&nr.nodes, displacement),
+            (&nr.nodes, &displacement),
             &nr.u.to_local_vec()?,
             &u_prev,
         )),
@@ -383,16 +394,18 @@ fn force_control(
     settings: &ContactSettings,
     previous: Option<&ContactSolution>,
 ) -> Option<force::ForceControl> {
-    settings.force.as_ref()?;
+    let (p, pair) = settings.force_pair()?;
     let mut fc = force::ForceControl {
-        force: settings.force_now,
+        force: pair.force_now,
         start: 0.0,
         file: settings.file.clone(),
+        pair: p,
+        key: pair.key("force"),
     };
     if let Some(prev) = previous {
-        let mut d = prev.obstacle_displacement;
+        let mut d = prev.obstacle_displacement[p];
         if let Some(delta) = prev.delta.as_ref().filter(|_| prev.predict > 0.0) {
-            for (x, dx) in d.iter_mut().zip(delta.obstacle) {
+            for (x, dx) in d.iter_mut().zip(delta.obstacle[p]) {
                 *x += prev.predict * dx;
             }
         }
@@ -450,7 +463,7 @@ fn run_method(
     let nr = match solver_section.method {
         Method::Newton => {
             let mut reduced = ReducedSystem::new(ctx, sys, b, coords, dim)?;
-            let friction = settings.tresca_threshold.is_some() || settings.coulomb.is_some();
+            let friction = settings.friction();
             let condense = !friction
                 && solver_section.reuse == Reuse::Auto
                 && b.n_global > 0
@@ -538,7 +551,10 @@ fn final_state(
 ) -> Result<(ContactSummary, report::Table), RunError> {
     let table = report::gather(ctx, b, &nr.nodes, dim);
     let total_force = report::total_force(ctx, &nr.nodes);
-    let half_width = table.half_width(&b.obstacle);
+    let half_width = match b.obstacles.as_slice() {
+        [one] => table.half_width(one, None),
+        _ => None,
+    };
     let scales = problem_scales(ctx, sys, &nr.u)?;
     let kkt = table.kkt(!friction, &scales);
     let friction_certificate = friction.then(|| table.friction_certificate());
@@ -562,6 +578,7 @@ fn final_state(
         obstacle_displacement: None,
         approach: None,
         half_width,
+        pairs: None,
         kkt,
         friction: friction_certificate,
         scales,
@@ -623,16 +640,16 @@ fn newton_summary(
 
 /// The tangential law of the settings (the fixed point's inner solves are Tresca solves).
 fn law_of(settings: &ContactSettings) -> Law {
-    match (settings.tresca_threshold, settings.coulomb) {
-        (Some(_), _) => Law::Tresca,
-        (None, Some((mu, _))) => Law::Coulomb { mu },
-        (None, None) => Law::Frictionless,
+    match (settings.tresca, settings.coulomb) {
+        (true, _) => Law::Tresca,
+        (false, Some((mu, _))) => Law::Coulomb { mu },
+        (false, None) => Law::Frictionless,
     }
 }
 
 /// A warm start from the previous load step: its u_τ becomes every contact node's reference
 /// (friction acts on the increment), moved along with the obstacle's tangential displacement
-/// since then (`displacement` = d of this solve; the slip is relative to the obstacle:
+/// since then (`displacement` = each pair's d of this solve; the slip is relative to the obstacle:
 /// u_τ − u_τ^prev − (d − d_prev)_τ); returns
 /// this rank's rows of its u. The previous solution must be of the same mesh and boundary.
 /// Collective.
@@ -641,7 +658,7 @@ fn take_reference(
     b: &mut ContactBoundary,
     prev: &ContactSolution,
     friction: bool,
-    displacement: [f64; 3],
+    displacement: &[[f64; 3]],
 ) -> Result<Vec<f64>, RunError> {
     let u = prev.u.to_local_vec()?;
     let same = prev.nodes.len() == b.nodes.len()
@@ -659,8 +676,8 @@ fn take_reference(
         )))
     })?;
     if friction {
-        let dd = crate::geom::sub(displacement, prev.obstacle_displacement);
         for (k, r) in b.nodes.iter_mut().zip(&prev.nodes) {
+            let dd = crate::geom::sub(displacement[k.pair], prev.obstacle_displacement[k.pair]);
             let t = &k.frame.t;
             k.u_t_ref = [
                 r.u_t[0] + crate::geom::dot(dd, t[0]),
@@ -1065,7 +1082,7 @@ fn check_friction_capacity(
     dim: usize,
     law: Law,
 ) -> Result<(), RunError> {
-    let Obstacle::Plane(plane) = b.obstacle else {
+    let [Obstacle::Plane(plane)] = b.obstacles.as_slice() else {
         return Ok(());
     };
     // `fixed` covers this rank's local mesh only: agree on it (every rank reaches this).
@@ -1187,23 +1204,53 @@ fn json<T: Serialize>(v: &T) -> String {
 }
 
 fn log_boundary(ctx: &Ctx, b: &ContactBoundary, settings: &ContactSettings, dim: usize) {
-    say!(
-        ctx,
-        "contact: {} nodes on '{}'{}{}",
-        b.n_global,
-        settings.group,
-        if b.excluded_dirichlet > 0 {
-            format!(
-                " ({} more left to their Dirichlet data)",
-                b.excluded_dirichlet
-            )
+    let several = settings.pairs.len() > 1;
+    if several {
+        say!(
+            ctx,
+            "contact: {} nodes in {} pairs{}",
+            b.n_global,
+            settings.pairs.len(),
+            excluded_note(b)
+        );
+    }
+    for (p, pair) in settings.pairs.iter().enumerate() {
+        let nodes = if several {
+            ctx.sum_usize(b.nodes.iter().filter(|k| k.pair == p).count())
         } else {
-            String::new()
-        },
-        if settings.motion.is_some() {
-            format!(", obstacle moved by {:?}", &settings.displacement[..dim])
-        } else {
-            String::new()
-        }
-    );
+            b.n_global
+        };
+        say!(
+            ctx,
+            "contact{}: {nodes} nodes on '{}'{}{}",
+            if several {
+                format!(" ({})", pair.key)
+            } else {
+                String::new()
+            },
+            pair.group,
+            if several {
+                String::new()
+            } else {
+                excluded_note(b)
+            },
+            match (&pair.motion, &pair.force) {
+                (Some(_), _) => format!(", obstacle moved by {:?}", &pair.displacement[..dim]),
+                (_, Some(_)) => format!(", obstacle pressed by {:?}", &pair.force_now[..dim]),
+                _ => String::new(),
+            }
+        );
+    }
+}
+
+/// " (n more left to their Dirichlet data)", or nothing.
+fn excluded_note(b: &ContactBoundary) -> String {
+    if b.excluded_dirichlet > 0 {
+        format!(
+            " ({} more left to their Dirichlet data)",
+            b.excluded_dirichlet
+        )
+    } else {
+        String::new()
+    }
 }

@@ -377,7 +377,7 @@ impl<'a> Loop<'a> {
         update: &mut SetUpdate,
     ) -> Result<(PredictorStep, Option<bool>), RunError> {
         let s = self.s;
-        let force = self.approach.as_ref().map(|a| (a.dir, a.magnitude));
+        let force = self.approach.as_ref().map(|a| (a.dir, a.magnitude, a.pair));
         let limits = (s.c, s.section.max_steps);
         let (set, rec) = predictor::predict(
             self.ctx,

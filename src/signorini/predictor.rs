@@ -260,7 +260,7 @@ pub fn mirror_planes(ctx: &Ctx, mesh: &Mesh, fixed: &[f64]) -> Vec<(usize, f64)>
 }
 
 /// Values per node record gathered on every rank: x (3), n (3), gap, w, u_n, G (6).
-const REC: usize = 15;
+const REC: usize = 16;
 
 /// The predicted normal set of this rank's contact nodes after the first solve (`it`, on the
 /// boundary `b` as the solve saw it, all nodes inactive), or `None` when the model does not
@@ -273,7 +273,7 @@ pub fn predict(
     it: &Iterate,
     free: &FreeModes,
     (c, max_steps): (f64, usize),
-    force: Option<([f64; 3], f64)>,
+    force: Option<([f64; 3], f64, usize)>,
 ) -> Result<(Option<Vec<bool>>, PredictorStep), RunError> {
     let t = Instant::now();
     let mz = if free.floats() {
@@ -376,6 +376,7 @@ fn gather_records(ctx: &Ctx, b: &ContactBoundary, it: &Iterate, free: &FreeModes
         mine.extend_from_slice(&k.frame.n);
         mine.extend_from_slice(&[k.gap, k.weight, r.u_n]);
         mine.extend_from_slice(&free.normal_parts(&k.x, &k.frame.n));
+        mine.push(k.pair as f64);
     }
     ctx.all_gather_varcount(&mine)
 }
@@ -452,7 +453,7 @@ impl Model {
         packed_c: &[f64],
         free: &FreeModes,
         (mz, c, max_steps): (usize, f64, usize),
-        force: Option<([f64; 3], f64)>,
+        force: Option<([f64; 3], f64, usize)>,
     ) -> Vec<f64> {
         let n = all.len() / REC;
         let (m, wanted) = (self.m(), self.fine.len());
@@ -467,16 +468,20 @@ impl Model {
             let gap: Vec<f64> = self.pick.iter().map(|&i| r(i)[6]).collect();
             let mzf = mz + usize::from(force.is_some());
             let g = DMatrix::from_fn(m, mzf, |q, cc| match force {
-                Some((e, _)) if cc == mz => {
+                Some((e, _, pair)) if cc == mz => {
                     let x = r(self.pick[q]);
-                    -(x[3] * e[0] + x[4] * e[1] + x[5] * e[2])
+                    if x[REC - 1] == pair as f64 {
+                        -(x[3] * e[0] + x[4] * e[1] + x[5] * e[2])
+                    } else {
+                        0.0 // another pair's obstacle stays
+                    }
                 }
                 _ => r(self.pick[q])[9 + cc],
             });
             let (_, mut load_scale) = free.load();
             let mut phi = free.free_load();
             phi.truncate(mz);
-            if let Some((_, magnitude)) = force {
+            if let Some((_, magnitude, _)) = force {
                 phi.push(magnitude);
                 load_scale = load_scale.max(magnitude);
             }

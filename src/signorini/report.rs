@@ -5,10 +5,12 @@ use super::boundary::{ContactBoundary, NodeResult};
 use crate::contact::Obstacle;
 use crate::output::{ContactResult, FieldBuf};
 use crate::par::Ctx;
+use crate::say;
+use crate::setup::ContactSettings;
 use serde::Serialize;
 
 /// Columns of one gathered contact-node row.
-const NCOL: usize = 19;
+const NCOL: usize = 20;
 
 /// Per owned node: the pressure p^k = −λ_n^k / w_k (THEORY §2).
 pub fn pressure(lambda_n: f64, weight: f64) -> f64 {
@@ -52,6 +54,10 @@ pub fn fields(
             r.lambda.iter().map(|l| -l).collect()
         }),
     ];
+    if b.n_pairs() > 1 {
+        // the node's pair, its index from 1 (docs/obstacles.md, "Several contact pairs")
+        out.push(per_node("pair", 1, &|k, _| vec![(k.pair + 1) as f64]));
+    }
     if friction {
         // Tangential state (0 stick, 1 slip), |λ_τ| / b_k, slip displacement (u_τ on slip nodes).
         out.push(per_node("slip_state", 1, &|_, r| {
@@ -110,6 +116,8 @@ const BOUND: usize = 15;
 const SLIP: usize = 16;
 /// The tangential increment u_τ − u_ref friction acts on (= u_τ in a single static solve).
 const DUT: usize = 17;
+/// The node's contact pair.
+const PAIR: usize = 19;
 
 /// Gathers the contact nodes of all ranks (the contact boundary is small).
 pub fn gather(ctx: &Ctx, cs: &ContactBoundary, res: &[NodeResult], dim: usize) -> Table {
@@ -136,6 +144,7 @@ pub fn gather(ctx: &Ctx, cs: &ContactBoundary, res: &[NodeResult], dim: usize) -
             if r.slip { 1.0 } else { 0.0 },
             du_t[0],
             du_t[1],
+            k.pair as f64,
         ];
         mine.extend_from_slice(&row);
     }
@@ -158,8 +167,10 @@ pub fn gather(ctx: &Ctx, cs: &ContactBoundary, res: &[NodeResult], dim: usize) -
 }
 
 impl Table {
-    /// contact_nodes.csv: coordinates first, one row per contact node.
+    /// contact_nodes.csv: coordinates first, one row per contact node (with several pairs a
+    /// last column `pair`, the pair's index from 1).
     pub fn csv(&self) -> String {
+        let several = self.rows.iter().any(|r| r[PAIR] > 0.0);
         let d = self.dim;
         let mut s = String::new();
         let coords = ["x", "y", "z"];
@@ -183,6 +194,9 @@ impl Table {
             "tangential",
         ] {
             head.push(h.into());
+        }
+        if several {
+            head.push("pair".into());
         }
         s.push_str(&head.join(","));
         s.push('\n');
@@ -212,6 +226,9 @@ impl Table {
                 }
                 .into(),
             );
+            if several {
+                v.push(format!("{}", r[PAIR] as usize + 1));
+            }
             s.push_str(&v.join(","));
             s.push('\n');
         }
@@ -228,9 +245,11 @@ impl Table {
 
     /// Half width of the contact zone for a flat obstacle in 2D, from the pressure profile:
     /// least-squares fit of p² = a − κ (s − s_c)² over the active nodes (Hertz: p² is linear
-    /// in s²), s the tangential coordinate, s_c the pressure-weighted centre; b = sqrt(a / κ).
-    /// None with fewer than 3 active nodes or another obstacle / dimension.
-    pub fn half_width(&self, obstacle: &Obstacle) -> Option<f64> {
+    /// in s²), s the tangential coordinate, s_c the pressure-weighted centre — or, when one end
+    /// of the active nodes carries at least half the largest pressure (a zone cut by a mirror
+    /// plane), that end; b = sqrt(a / κ). None with fewer than 3 active nodes or another obstacle /
+    /// dimension. `pair`: only the nodes of that pair.
+    pub fn half_width(&self, obstacle: &Obstacle, pair: Option<usize>) -> Option<f64> {
         let Obstacle::Plane(pl) = obstacle else {
             return None;
         };
@@ -243,13 +262,32 @@ impl Table {
             .rows
             .iter()
             .filter(|r| r[STATE] > 0.5 && r[P] > 0.0)
+            .filter(|r| pair.is_none_or(|p| r[PAIR] == p as f64))
             .map(|r| (r[X] * tau[0] + r[X + 1] * tau[1], r[P]))
             .collect();
         if pts.len() < 3 {
             return None;
         }
-        let sp: f64 = pts.iter().map(|p| p.1).sum();
-        let sc = pts.iter().map(|p| p.0 * p.1).sum::<f64>() / sp;
+        // a Hertz zone's pressure falls to 0 at its edges: an end node that carries at least
+        // half the largest pressure is on a mirror plane through the zone's centre
+        let p_max = pts.iter().map(|p| p.1).fold(0.0, f64::max);
+        let (mut lo, mut hi) = (pts[0], pts[0]);
+        for &p in &pts {
+            if p.0 < lo.0 {
+                lo = p;
+            }
+            if p.0 > hi.0 {
+                hi = p;
+            }
+        }
+        let sc = match (2.0 * lo.1 >= p_max, 2.0 * hi.1 >= p_max) {
+            (true, false) => lo.0,
+            (false, true) => hi.0,
+            _ => {
+                let sp: f64 = pts.iter().map(|p| p.1).sum();
+                pts.iter().map(|p| p.0 * p.1).sum::<f64>() / sp
+            }
+        };
         // p² = a + m z with z = (s − s_c)², m = −κ
         let np = pts.len() as f64;
         let (mut sz, mut sy, mut szz, mut szy) = (0.0, 0.0, 0.0, 0.0);
@@ -371,6 +409,95 @@ pub struct Scales {
 /// move in a load step — e.g. after a fixed point stopped at max|Δb| ≤ 1e-9 max b — has an
 /// increment of solver-tolerance size whose direction means nothing).
 pub const RESTING_SLIP: f64 = CERTIFICATE_TOL;
+
+/// summary.json's `contact.pairs[i]` (cases with several pairs): one pair's numbers.
+#[derive(Debug, Clone, Serialize)]
+pub struct PairSummary {
+    /// The pair's table in the case file (`contact[i]`).
+    pub key: String,
+    pub group: String,
+    pub nodes: usize,
+    pub active_count: usize,
+    pub max_pressure: f64,
+    /// Σ_k −λ^k over the pair's nodes: the force of the body on the obstacle.
+    pub total_force: Vec<f64>,
+    /// The obstacle's displacement d (a pair with `motion` or `force`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub obstacle_displacement: Option<Vec<f64>>,
+    /// Force control: the approach δ solved for.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub approach: Option<f64>,
+    /// 2D, a plane: the half width of the pair's contact zone ([`Table::half_width`]).
+    pub half_width: Option<f64>,
+    /// 3D: Σ w_k over the pair's active nodes.
+    pub contact_area: Option<f64>,
+}
+
+/// Fills summary.json's obstacle displacement and approach of `contact` and, with several
+/// pairs, its per-pair numbers (`displacement`: each pair's d; `approach`: δ of the pair
+/// under force control). Collective.
+pub fn per_pair(
+    ctx: &Ctx,
+    settings: &ContactSettings,
+    b: &ContactBoundary,
+    res: &[NodeResult],
+    table: &Table,
+    (displacement, approach): (&[[f64; 3]], Option<f64>),
+    contact: &mut super::ContactSummary,
+) {
+    let dim = table.dim;
+    let moves = |p: &crate::setup::PairSettings| p.motion.is_some() || p.force.is_some();
+    contact.approach = approach;
+    if let [pair] = settings.pairs.as_slice() {
+        if moves(pair) {
+            contact.obstacle_displacement = Some(displacement[0][..dim].to_vec());
+        }
+        return;
+    }
+    let np = settings.pairs.len();
+    let mut local = vec![0.0; 3 * np];
+    for (k, r) in b.nodes.iter().zip(res) {
+        for c in 0..3 {
+            local[3 * k.pair + c] -= r.lambda[c];
+        }
+    }
+    let force = ctx.sum_vec(&local);
+    let pairs = settings
+        .pairs
+        .iter()
+        .enumerate()
+        .map(|(p, pair)| {
+            let rows = || table.rows.iter().filter(move |r| r[PAIR] == p as f64);
+            let active = || rows().filter(|r| r[STATE] > 0.5);
+            PairSummary {
+                key: pair.key.clone(),
+                group: pair.group.clone(),
+                nodes: rows().count(),
+                active_count: active().count(),
+                max_pressure: rows().map(|r| r[P]).fold(0.0, f64::max),
+                total_force: force[3 * p..3 * p + dim].to_vec(),
+                obstacle_displacement: moves(pair).then(|| displacement[p][..dim].to_vec()),
+                approach: approach.filter(|_| pair.force.is_some()),
+                half_width: table.half_width(&b.obstacles[p], Some(p)),
+                contact_area: (dim == 3).then(|| active().map(|r| r[W]).sum()),
+            }
+        })
+        .collect::<Vec<_>>();
+    for s in &pairs {
+        say!(
+            ctx,
+            "contact ({}): {} active, p_max = {:.6}, total force = {:?}{}",
+            s.key,
+            s.active_count,
+            s.max_pressure,
+            s.total_force,
+            s.approach
+                .map(|d| format!(", approach {d:.6e}"))
+                .unwrap_or_default()
+        );
+    }
+    contact.pairs = Some(pairs);
+}
 
 /// The relative violation of a certificate beyond which a final state is not accepted.
 pub const CERTIFICATE_TOL: f64 = 1e-6;

@@ -1,0 +1,363 @@
+//! Several contact pairs (`[[contact]]`, docs/obstacles.md "Several contact pairs"): a half
+//! disk pressed between two plates, on a mesh that is exactly mirror-symmetric about y = 0
+//! (cases/plates/disk_plates.py), against the model of the same problem by its symmetry (the
+//! bottom quarter with one pair); force control of one pair against its motion; load steps;
+//! Tresca on one pair next to a frictionless one; a node on two pairs' groups refused.
+
+mod common;
+
+use common::*;
+use std::path::{Path, PathBuf};
+use std::process::Command;
+use std::time::Duration;
+
+/// The top plate's motion: the disk is squeezed by 0.02 (its centre moves by −0.01).
+const SQUEEZE: f64 = 0.02;
+
+/// The half disk (and, with `quarter`, its bottom quarter with the same node ids) in `dir`.
+fn disk_mesh(dir: &Path, quarter: bool) -> PathBuf {
+    let out = dir.join(if quarter { "quarter.msh" } else { "half.msh" });
+    let mut cmd = Command::new(PYTHON);
+    cmd.arg(repo("cases/plates/disk_plates.py")).arg(&out);
+    if quarter {
+        cmd.arg("--quarter");
+    }
+    run_with_timeout(cmd, Duration::from_secs(120)).expect_code(0, "disk_plates.py");
+    out
+}
+
+const MATERIAL: &str = "[material]\nyoung = 1.0\npoisson = 0.3\nmodel = \"plane_strain\"\n\n\
+                        [[dirichlet]]\ngroup = \"sym\"\nvalue = [0.0, \"free\"]\n\n";
+
+const BOTTOM: &str = "[[contact]]\ngroup = \"bottom\"\n\
+                      obstacle = { type = \"plane\", point = [0, -1], normal = [0, 1] }\n";
+
+/// The top plate, moved by `top` (e.g. `motion = [0, -0.02]`).
+fn top_pair(top: &str) -> String {
+    format!(
+        "[[contact]]\ngroup = \"top\"\n\
+         obstacle = {{ type = \"plane\", point = [0, 1], normal = [0, -1] }}\n{top}\n"
+    )
+}
+
+fn write(dir: &Path, name: &str, mesh: &Path, body: &str) -> PathBuf {
+    write_case(
+        &dir.join(name),
+        &format!("[mesh]\nfile = {}\n\n{MATERIAL}{body}", toml_path(mesh)),
+    )
+}
+
+fn pair(s: &Solved, i: usize) -> &serde_json::Value {
+    &get(&s.summary, &["contact", "pairs"])[i]
+}
+
+fn pair_force(s: &Solved, i: usize) -> Vec<f64> {
+    floats(&pair(s, i)["total_force"])
+}
+
+fn pair_active(s: &Solved, i: usize) -> u64 {
+    pair(s, i)["active_count"].as_u64().expect("active_count")
+}
+
+/// The disk between a fixed bottom plate and a top plate moved down by 0.02 is the mirror
+/// image of itself about y = 0 moved by −0.01: its bottom pair is the quarter model with
+/// u_y = −0.01 on y = 0 — the same contact force, active set and pressures to round-off, on
+/// 1, 2 and 3 ranks; the top pair carries the opposite force.
+#[test]
+fn two_plates_match_the_symmetric_quarter() {
+    let tmp = tempfile::tempdir().expect("tempdir");
+    let (half, quarter) = (disk_mesh(tmp.path(), false), disk_mesh(tmp.path(), true));
+    let q = write(
+        tmp.path(),
+        "quarter.toml",
+        &quarter,
+        &format!(
+            "[[dirichlet]]\ngroup = \"mid\"\nvalue = [\"free\", {}]\n\n{}",
+            -SQUEEZE / 2.0,
+            BOTTOM.replace("[[contact]]", "[contact]")
+        ),
+    );
+    let model = solve(1, &q, &[]);
+    model.assert_converged("quarter");
+    let f_model = model.total_force()[1];
+    assert!(f_model > 0.0, "the plate pushes the disk up: {f_model}");
+    let p_model: std::collections::BTreeMap<u64, f64> = model
+        .contact_rows_by_id()
+        .iter()
+        .map(|(id, r)| (*id, r.f("pressure")))
+        .collect();
+    let p_max = p_model.values().fold(0.0f64, |m, p| m.max(*p));
+    let both = write(
+        tmp.path(),
+        "plates.toml",
+        &half,
+        &format!(
+            "{BOTTOM}\n{}",
+            top_pair(&format!("motion = [0, {}]", -SQUEEZE))
+        ),
+    );
+    for np in [1, 2, 3] {
+        let s = solve(np, &both, &[]);
+        s.assert_converged("two plates");
+        let (f0, f1) = (pair_force(&s, 0), pair_force(&s, 1));
+        assert!(
+            rel(f0[1], f_model) <= 1e-9,
+            "{np} ranks: {f0:?} vs {f_model}"
+        );
+        assert!(rel(f1[1], -f_model) <= 1e-9, "{np} ranks: {f1:?}");
+        let active = model.active_node_ids().len() as u64;
+        assert!(active >= 3, "{active}");
+        assert_eq!((pair_active(&s, 0), pair_active(&s, 1)), (active, active));
+        assert_eq!(pair(&s, 1)["group"], "top");
+        assert_eq!(
+            floats(&pair(&s, 1)["obstacle_displacement"]),
+            [0.0, -SQUEEZE]
+        );
+        // contact_nodes.csv: the pair of every node; the bottom pair's pressures are the model's
+        let rows = s.contact_rows_by_id();
+        assert_eq!(rows.len(), 2 * p_model.len());
+        for (id, r) in &rows {
+            match (r.s("pair"), p_model.get(id)) {
+                ("1", Some(p)) => {
+                    assert!((r.f("pressure") - p).abs() <= 1e-9 * p_max, "node {id}")
+                }
+                ("2", None) => {}
+                (other, p) => panic!("node {id}: pair {other}, in the quarter: {p:?}"),
+            }
+        }
+    }
+}
+
+/// The same squeeze of a disk held on its side arc: the top plate under the force that its
+/// motion of 0.015 takes gives back the motion (δ) and the solution, on the condensed path,
+/// the plain path and the iterative preset, on 1 to 3 ranks; the bottom pair's force and
+/// motion stay.
+#[test]
+fn force_on_one_pair_returns_its_motion() {
+    let tmp = tempfile::tempdir().expect("tempdir");
+    let half = disk_mesh(tmp.path(), false);
+    let body = |top: &str| {
+        format!(
+            "[[dirichlet]]\ngroup = \"side\"\nvalue = [0.0, 0.0]\n\n{}motion = [0, 0.01]\n\n{}",
+            BOTTOM,
+            top_pair(top)
+        )
+    };
+    let moved = solve(
+        1,
+        &write(
+            tmp.path(),
+            "moved.toml",
+            &half,
+            &body("motion = [0, -0.015]"),
+        ),
+        &[],
+    );
+    moved.assert_converged("motion");
+    let f = pair_force(&moved, 1);
+    assert!(f[1] < 0.0, "{f:?}");
+    let forced = write(
+        tmp.path(),
+        "forced.toml",
+        &half,
+        &body(&format!("force = [0, {:.17e}]", f[1])),
+    );
+    let runs: [(usize, &[&str]); 4] = [
+        (1, &["solver.preset=\"direct\""]),
+        (3, &["solver.preset=\"direct\""]),
+        (2, &["solver.preset=\"direct\"", "solver.reuse=\"never\""]),
+        (2, &["solver.preset=\"iterative\""]),
+    ];
+    for (np, sets) in runs {
+        let s = solve(np, &forced, sets);
+        s.assert_converged("force control");
+        let delta = s.f(&["contact", "approach"]);
+        assert!(
+            (delta - 0.015).abs() <= 1e-8 * 0.015,
+            "{np} {sets:?}: δ = {delta}"
+        );
+        assert_eq!(pair(&s, 1)["approach"].as_f64(), Some(delta));
+        assert!(pair(&s, 0).get("approach").is_none());
+        assert!(rel(pair_force(&s, 0)[1], pair_force(&moved, 0)[1]) <= 1e-8);
+        assert!(s.u_rel_diff(&moved) <= 1e-8, "{np} {sets:?}");
+        assert_eq!(
+            s.active_node_ids(),
+            moved.active_node_ids(),
+            "{np} {sets:?}"
+        );
+    }
+}
+
+/// Load steps move each pair's obstacle with the factor; history.csv has every pair's columns.
+#[test]
+fn pairs_through_load_steps() {
+    let tmp = tempfile::tempdir().expect("tempdir");
+    let half = disk_mesh(tmp.path(), false);
+    let case = write(
+        tmp.path(),
+        "steps.toml",
+        &half,
+        &format!(
+            "{BOTTOM}\n{}\n[load]\nfactors = [0.5, 1.0]\n",
+            top_pair(&format!("motion = [0, {}]", -SQUEEZE))
+        ),
+    );
+    let s = solve(2, &case, &[]);
+    let text = std::fs::read_to_string(s.dir.join("history.csv")).expect("history.csv");
+    let mut lines = text.lines();
+    let head: Vec<&str> = lines.next().expect("header").split(',').collect();
+    let col = |name: &str| {
+        head.iter()
+            .position(|h| *h == name)
+            .unwrap_or_else(|| panic!("no column {name}: {head:?}"))
+    };
+    let rows: Vec<Vec<f64>> = lines
+        .map(|l| {
+            l.split(',')
+                .map(|x| x.parse().unwrap_or(f64::NAN))
+                .collect()
+        })
+        .collect();
+    assert_eq!(rows.len(), 2);
+    for (r, t) in rows.iter().zip([0.5, 1.0]) {
+        assert_eq!(r[col("pair2_obstacle_y")], -SQUEEZE * t);
+        assert_eq!(r[col("pair1_obstacle_y")], 0.0);
+        let (f1, f2) = (r[col("pair1_force_y")], r[col("pair2_force_y")]);
+        assert!(f1 > 0.0 && rel(f1, -f2) <= 1e-9, "{f1} {f2}");
+        assert!(r[col("pair1_active")] >= 1.0 && r[col("pair1_half_width")] > 0.0);
+    }
+    // the second step presses harder
+    assert!(rows[1][col("pair1_force_y")] > rows[0][col("pair1_force_y")]);
+}
+
+/// Tresca on the bottom pair, frictionless on the top one: the top pair's nodes have no
+/// tangential force (to round-off) and no friction bound; the bottom pair's respect theirs.
+#[test]
+fn tresca_next_to_a_frictionless_pair() {
+    let tmp = tempfile::tempdir().expect("tempdir");
+    let half = disk_mesh(tmp.path(), false);
+    let g = 0.01;
+    let case = write(
+        tmp.path(),
+        "tresca.toml",
+        &half,
+        &format!(
+            "{BOTTOM}friction = {{ law = \"tresca\", threshold = {g} }}\n\n{}",
+            top_pair(&format!("motion = [0, {}]", -SQUEEZE))
+        ),
+    );
+    let s = solve(2, &case, &[]);
+    s.assert_converged("tresca");
+    let rows = s.contact_rows_by_id();
+    let scale = rows
+        .values()
+        .map(|r| r.f("lambda_n").abs())
+        .fold(0.0, f64::max);
+    let (mut stuck_or_slipping, mut top) = (0, 0);
+    for r in rows.values() {
+        let lt = r.lambda_t(2)[0].abs();
+        if r.s("pair") == "2" {
+            top += 1;
+            // λ_τ recovered from f − A u (3.28): zero to round-off of the normal forces
+            assert!(
+                lt <= 1e-12 * scale && r.bound() == 0.0,
+                "{lt} {}",
+                r.bound()
+            );
+        } else {
+            assert!(lt <= r.bound() * (1.0 + 1e-9), "{lt} > {}", r.bound());
+            assert!((r.bound() - g * r.f("weight")).abs() <= 1e-12 * g);
+            if r.active() && lt > 0.0 {
+                stuck_or_slipping += 1;
+            }
+        }
+    }
+    assert!(
+        top > 0 && stuck_or_slipping > 0,
+        "{top} {stuck_or_slipping}"
+    );
+}
+
+/// The side arc shares its end nodes with the top arc: contact on both is refused, naming the
+/// second pair's group, with exit code 2 and nothing written.
+#[test]
+fn a_node_on_two_pairs_is_refused() {
+    let tmp = tempfile::tempdir().expect("tempdir");
+    let half = disk_mesh(tmp.path(), false);
+    let case = write(
+        tmp.path(),
+        "clash.toml",
+        &half,
+        &format!(
+            "{}\n[[contact]]\ngroup = \"side\"\nobstacle = {{ type = \"plane\", point = [1.5, 0], normal = [-1, 0] }}\n",
+            top_pair("")
+        ),
+    );
+    let out = tmp.path().join("out");
+    let run = run_solver(2, &case, &[], &out);
+    run.expect_code(2, "a node on two pairs");
+    let text = run.output();
+    assert!(text.contains("contact[1].group"), "{text}");
+    assert!(text.contains("two pairs"), "{text}");
+    assert!(!out.join("summary.json").exists());
+}
+
+/// 3D: the unit cube between a fixed plate under it (y = 0) and one moved down by d on top,
+/// frictionless, held only by the mirror planes x = 0 and z = 0 (u_x = 0, u_z = 0 there): it is
+/// squeezed uniformly (uniaxial stress, which P1 represents exactly), so each plate carries
+/// E d, every contact node is active, and the bottom stays where it is — on the condensed path,
+/// the plain path and the iterative preset (with the half-space predictor), on 1 to 3 ranks.
+#[test]
+fn cube_between_two_plates() {
+    let tmp = tempfile::tempdir().expect("tempdir");
+    let mesh = unit_mesh(tmp.path(), 3, 0.25);
+    let d = 0.01;
+    let case = write_case(
+        &tmp.path().join("cube.toml"),
+        &format!(
+            "[mesh]\nfile = {}\n\n[material]\nyoung = 2.0\npoisson = 0.3\n\n\
+             [[dirichlet]]\ngroup = \"left\"\nvalue = [0.0, \"free\", \"free\"]\n\n\
+             [[dirichlet]]\ngroup = \"front\"\nvalue = [\"free\", \"free\", 0.0]\n\n\
+             [[contact]]\ngroup = \"bottom\"\n\
+             obstacle = {{ type = \"plane\", point = [0, 0, 0], normal = [0, 1, 0] }}\n\n\
+             [[contact]]\ngroup = \"top\"\n\
+             obstacle = {{ type = \"plane\", point = [0, 1, 0], normal = [0, -1, 0] }}\n\
+             motion = [0, {}, 0]\n",
+            toml_path(&mesh),
+            -d
+        ),
+    );
+    let runs: [(usize, &[&str]); 4] = [
+        (1, &["solver.preset=\"direct\""]),
+        (2, &["solver.preset=\"direct\"", "solver.reuse=\"never\""]),
+        (2, &["solver.preset=\"iterative\""]),
+        (3, &["solver.preset=\"direct\""]),
+    ];
+    for (np, sets) in runs {
+        let s = solve(np, &case, sets);
+        s.assert_converged("cube");
+        let e_d = 2.0 * d;
+        let (f0, f1) = (pair_force(&s, 0), pair_force(&s, 1));
+        assert!(rel(f0[1], e_d) <= 1e-8, "{np} {sets:?}: {f0:?}");
+        assert!(rel(f1[1], -e_d) <= 1e-8, "{np} {sets:?}: {f1:?}");
+        for (i, f) in [f0, f1].iter().enumerate() {
+            assert!(f[0].abs() + f[2].abs() <= 1e-10 * e_d, "pair {i}: {f:?}");
+        }
+        let nodes = |i: usize| pair(&s, i)["nodes"].as_u64().expect("nodes");
+        assert_eq!(
+            (pair_active(&s, 0), pair_active(&s, 1)),
+            (nodes(0), nodes(1))
+        );
+        assert!(nodes(0) >= 25, "{}", nodes(0));
+        let rows = s.contact_rows_by_id();
+        // u_n = u·n: 0 on the fixed plate, d under the moved one (n = −e_y, u_y = −d)
+        for (id, r) in &rows {
+            let want = if r.s("pair") == "1" { 0.0 } else { d };
+            assert!(
+                (r.f("u_n") - want).abs() <= 1e-9 * d,
+                "node {id}: {}",
+                r.f("u_n")
+            );
+        }
+    }
+}

@@ -170,7 +170,7 @@ fn a_ramped_force_from_a_gap_touches_first_and_ends_at_the_static_solution() {
     }
 }
 
-/// Force control's bad input: with a motion, with friction, a zero force, SNES VI, a force
+/// Force control's bad input: with a motion, with Coulomb friction, a zero force, SNES VI, a force
 /// that pulls the circle away, a body that Dirichlet data leave free. Each is refused with
 /// `contact.force` named, exit code 2 and no summary written.
 #[test]
@@ -180,7 +180,7 @@ fn bad_force_input_is_refused() {
         (&[f, "contact.motion=[0.0, -0.01]"], "instead of the motion"),
         (
             &[f, "contact.friction={law=\"coulomb\", mu=0.3}"],
-            "frictionless only",
+            "Coulomb friction is not implemented",
         ),
         (&["contact.force=[0.0, 0.0]"], "is zero"),
         (&[f, "solver.method=\"snesvi\""], "no force control"),
@@ -203,5 +203,61 @@ fn bad_force_input_is_refused() {
         assert!(text.contains("contact.force"), "{sets:?}:\n{text}");
         assert!(text.contains(says), "{sets:?}: expected {says:?}:\n{text}");
         assert!(!out.join("summary.json").exists(), "{sets:?}");
+    }
+}
+
+/// Tresca friction under force control: the circle pressed along a slanted force (its
+/// tangential part drags the stick nodes, the slip nodes slide) — the force that a
+/// displacement-controlled run along the same direction reports gives back its approach, u and
+/// the normal and tangential states (1 and 2 ranks, direct and iterative presets).
+#[test]
+fn force_control_with_tresca_friction() {
+    let tresca = "contact.friction={law=\"tresca\", threshold=0.02}";
+    let e = [0.3f64, -1.0];
+    let norm = e[0].hypot(e[1]);
+    let depth = 0.03;
+    let m = [depth * e[0] / norm, depth * e[1] / norm];
+    let motion = format!("contact.motion=[{:.17e}, {:.17e}]", m[0], m[1]);
+    let moved = solve(1, &case(), &[AUTO, tresca, &motion]);
+    moved.assert_converged("displacement control");
+    let f = total_force(&moved);
+    let along = (f[0] * e[0] + f[1] * e[1]) / norm;
+    assert!(
+        along > 0.0,
+        "the circle pushes the block along its motion: {f:?}"
+    );
+    // the force's component along e prescribed: |F| = F·e, direction e
+    let fk = format!(
+        "contact.force=[{:.17e}, {:.17e}]",
+        along * e[0] / norm,
+        along * e[1] / norm
+    );
+    let slips = |s: &Solved| -> Vec<u64> {
+        s.contact_rows_by_id()
+            .iter()
+            .filter(|(_, r)| r.active() && r.tangential() == "slip")
+            .map(|(id, _)| *id)
+            .collect()
+    };
+    let (slip, active) = (slips(&moved).len(), moved.active_node_ids().len());
+    assert!(slip > 0 && active > slip, "slip {slip} of {active} active");
+    let runs: [(usize, &[&str]); 3] = [
+        (1, &["solver.preset=\"direct\""]),
+        (2, &["solver.preset=\"direct\""]),
+        (2, &["solver.preset=\"iterative\""]),
+    ];
+    for (np, sets) in runs {
+        let mut all = vec![AUTO, tresca, fk.as_str()];
+        all.extend_from_slice(sets);
+        let forced = solve(np, &case(), &all);
+        forced.assert_converged("force control with Tresca");
+        let delta = forced.f(&["contact", "approach"]);
+        assert!(
+            (delta - depth).abs() <= 1e-8 * depth,
+            "{np} ranks, {sets:?}: δ = {delta}"
+        );
+        assert!(forced.u_rel_diff(&moved) <= 1e-8, "{np} ranks, {sets:?}");
+        assert_eq!(forced.active_node_ids(), moved.active_node_ids());
+        assert_eq!(slips(&forced), slips(&moved), "{np} ranks, {sets:?}");
     }
 }

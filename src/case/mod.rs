@@ -476,7 +476,7 @@ pub struct ContactSection {
     pub motion: Option<Motion>,
     /// `contact.force`: force control (docs/obstacles.md, "Force control"): the obstacle moves
     /// along F/|F| by the unknown approach δ until the contact force along F/|F| is |F|
-    /// (frictionless only; never together with `motion`). Scaled with `[load]` as a motion.
+    /// (frictionless or Tresca; never together with `motion`). Scaled with `[load]` as a motion.
     pub force: Option<Motion>,
     pub friction: Friction,
     pub rigid_modes: RigidModeHandling,
@@ -1471,14 +1471,15 @@ impl Reader<'_> {
             ));
         }
         if let Some(f) = pairs.iter().position(|p| p.force.is_some()) {
-            if let Some(j) = pairs.iter().position(|p| p.friction != Friction::None) {
+            let coulomb = |p: &ContactSection| matches!(p.friction, Friction::Coulomb { .. });
+            if let Some(j) = pairs.iter().position(coulomb) {
                 let (key, loc) = at(j, "friction");
                 return Err(self.err(
                     &key,
                     loc,
                     format!(
-                        "force control ({}.force) is frictionless only: every pair must be \
-                         frictionless",
+                        "force control ({}.force) with Coulomb friction is not implemented: \
+                         the pairs must be frictionless or Tresca",
                         pairs[f].key
                     ),
                 ));
@@ -1552,9 +1553,10 @@ impl Reader<'_> {
                 let force = self.motion(&fk, f, "the force pressing the obstacle onto the body")?;
                 let why = if motion.is_some() {
                     Some("prescribes the force instead of the motion: give one of them".into())
-                } else if friction != Friction::None {
+                } else if matches!(friction, Friction::Coulomb { .. }) {
                     Some(format!(
-                        "(force control) is frictionless only: remove {}",
+                        "(force control) with Coulomb friction is not implemented: force \
+                         control is frictionless or with Tresca friction ({})",
                         join_key(k, "friction")
                     ))
                 } else if force.value.iter().all(|&x| x == 0.0) {

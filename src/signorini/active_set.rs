@@ -316,6 +316,21 @@ impl ActiveSet {
         })
     }
 
+    /// The set of a force-control lift (force.rs): the same rows with the slip rows'
+    /// constants dropped (−λ_τ + L (u_τ − u_ref) = 0: the lift has no loads, its u_ref is the
+    /// obstacle's tangential motion per unit approach). Tresca rows only (q = 0).
+    pub fn lift(&self) -> ActiveSet {
+        let mut s = self.clone();
+        if let Some(t) = s.tangential.as_mut() {
+            for row in t.iter_mut() {
+                if let CoulombRow::Slip { r, .. } = row {
+                    *r = [0.0; 2];
+                }
+            }
+        }
+        s
+    }
+
     /// Local sums of the per-node hashes of the states (partition-independent when summed).
     fn fingerprint(&self, b: &ContactBoundary) -> (f64, f64) {
         let mut h = (0.0, 0.0);

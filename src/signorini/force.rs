@@ -13,7 +13,11 @@
 //! P¹ = Σ_k (A u¹)_k·e, and the bordered system [S, s; rᵀ, 0] of the step is solved exactly by
 //! this block elimination: one factorisation (or preconditioner) and two solves on it. The set
 //! update (3.23) then sees the iterate at the new δ; when it changes nothing, (u, λ, δ) solves
-//! the problem. Frictionless only (the case reader refuses friction with a force).
+//! the problem. Frictionless or with Tresca friction: a stick node's u_τ = u_ref moves with the
+//! obstacle, u_ref(δ) = u_ref + δ (τ_k·e), so the lift prescribes u¹_τ = τ_k·e there, and a
+//! slip row −λ_τ + L (u_τ − u_ref) = r of the step is affine in δ alike (the lift keeps L,
+//! drops r: [`ActiveSet::lift`]); the slip directions are the step's, so δ settles with the
+//! sets. Coulomb friction is refused by the case reader.
 
 use super::active_set::{ActiveSet, Iterate};
 use super::boundary::{ContactBoundary, ContactNode};
@@ -53,6 +57,16 @@ impl ForceControl {
         self.force.map(|x| x / m)
     }
 
+    /// (τ_k·e) for a node of the pair (its frame's tangents), 0 for the other pairs' nodes.
+    pub fn tangential_weight(&self, k: &ContactNode) -> [f64; 2] {
+        if k.pair == self.pair {
+            let e = self.direction();
+            [dot(k.frame.t[0], e), dot(k.frame.t[1], e)]
+        } else {
+            [0.0; 2]
+        }
+    }
+
     /// w_k = n_k·e for a node of the pair, 0 for the nodes of the other pairs (their obstacles
     /// do not move with δ).
     pub fn weight(&self, k: &ContactNode) -> f64 {
@@ -78,6 +92,11 @@ pub struct Approach {
     g0: Vec<f64>,
     /// w_k = n_k·e (0 off the pair).
     w: Vec<f64>,
+    /// With friction: the tangential references u_ref of the obstacle at rest, and their
+    /// change per unit approach, (τ_k·e) (0 off the pair): the obstacle drags the stick
+    /// nodes along (docs/obstacles.md, "Moving obstacles").
+    t0: Vec<[f64; 2]>,
+    wt: Vec<[f64; 2]>,
     /// The node belongs to the pair under force control.
     in_pair: Vec<bool>,
     file: std::path::PathBuf,
@@ -128,16 +147,22 @@ impl Approach {
             pair: fc.pair,
             g0: b.nodes.iter().map(|k| k.gap).collect(),
             w: b.nodes.iter().map(|k| fc.weight(k)).collect(),
+            t0: b.nodes.iter().map(|k| k.u_t_ref).collect(),
+            wt: b.nodes.iter().map(|k| fc.tangential_weight(k)).collect(),
             in_pair: b.nodes.iter().map(|k| k.pair == fc.pair).collect(),
             file: fc.file.clone(),
             key: fc.key.clone(),
         }
     }
 
-    /// The gaps g0_k − δ w_k of the obstacle moved by δ e, into `b`.
+    /// The gaps g0_k − δ w_k of the obstacle moved by δ e, into `b`; with friction also the
+    /// tangential references u_ref + δ (τ_k·e).
     pub fn place(&self, b: &mut ContactBoundary) {
-        for ((k, g0), w) in b.nodes.iter_mut().zip(&self.g0).zip(&self.w) {
-            k.gap = g0 - self.delta * w;
+        for (i, k) in b.nodes.iter_mut().enumerate() {
+            k.gap = self.g0[i] - self.delta * self.w[i];
+            for j in 0..2 {
+                k.u_t_ref[j] = self.t0[i][j] + self.delta * self.wt[i][j];
+            }
         }
     }
 
@@ -146,11 +171,14 @@ impl Approach {
         self.dir.map(|x| self.delta * x)
     }
 
-    /// The lift's boundary: gaps −w_k, so that an active node prescribes u_n = w_k.
+    /// The lift's boundary: gaps −w_k, so that an active node prescribes u_n = w_k, and
+    /// (friction) the references (τ_k·e), so that a stick node prescribes u_τ = τ_k·e and a
+    /// slip row acts on u_τ − τ_k·e.
     fn unit(&self, b: &ContactBoundary) -> ContactBoundary {
         let mut u = b.clone();
-        for (k, w) in u.nodes.iter_mut().zip(&self.w) {
-            k.gap = -w;
+        for (i, k) in u.nodes.iter_mut().enumerate() {
+            k.gap = -self.w[i];
+            k.u_t_ref = self.wt[i];
         }
         u
     }
@@ -223,7 +251,7 @@ pub fn correct(
         return Ok(c);
     }
     let unit = ap.unit(b);
-    let (u1, au1) = reduced.solve_lift(ctx, sys, layout, &unit, set, pins)?;
+    let (u1, au1) = reduced.solve_lift(ctx, sys, layout, &unit, &set.lift(), pins)?;
     let local: f64 = b
         .nodes
         .iter()

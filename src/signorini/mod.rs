@@ -342,6 +342,12 @@ pub fn solve(
         displacement[fc.pair] = fc.direction().map(|x| delta * x);
         for k in b.nodes.iter_mut() {
             k.gap -= delta * fc.weight(k);
+            if friction {
+                let wt = fc.tangential_weight(k);
+                for j in 0..2 {
+                    k.u_t_ref[j] += delta * wt[j];
+                }
+            }
         }
     }
     let (mut contact, table) = final_state(ctx, sys, &b, &nr, friction, dim)?;

@@ -68,6 +68,10 @@ fn converges_to_the_manufactured_solution_with_the_exact_zone() {
             f("active_exact"),
             s.steps()
         );
+        // The obstacle as the solver sees it: the gap exactly −c on the zone (flat, vertical
+        // normal), u*'s linearised gap positive outside it.
+        assert!(f("gap0_zone_dev") < 1e-12, "{e}");
+        assert!(f("gap_star_min_outside") > 0.0, "{e}");
         h1.push(f("h1"));
         l2.push(f("l2"));
         p.push(f("pressure"));

@@ -109,3 +109,48 @@ fn converges_to_the_manufactured_solution_with_the_exact_zone() {
     // level is within a few per cent in H1 (measured: 5.7 %).
     assert!(h1[2] < 0.1, "H1 error {:?}", h1);
 }
+
+/// `[body_force] expr` scales with the load factor like the other loads: step 1 of two load
+/// steps (factor 1/2) equals one step with the expressions and the Dirichlet data halved, and
+/// the last step equals the one-step solution.
+#[test]
+fn expression_body_force_scales_with_the_load_steps() {
+    let case = repo("cases/manufactured/contact2d.toml");
+    let text = std::fs::read_to_string(&case).unwrap();
+    let toml: toml_edit::DocumentMut = text.parse().unwrap();
+    let exprs: Vec<String> = toml["body_force"]["expr"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|e| format!("\"0.5*({})\"", e.as_str().unwrap()))
+        .collect();
+    let level = "mesh.refine=1";
+    let stepped = solve(2, &case, &[level, "load.steps=2"]);
+    let whole = solve(2, &case, &[level]);
+    let halved_f = format!("body_force.expr=[{}]", exprs.join(", "));
+    let mut halved = vec![level, halved_f.as_str()];
+    let values: Vec<String> = (0..3)
+        .map(|i| format!("dirichlet.{i}.value=[0.0, -0.005]"))
+        .collect();
+    halved.extend(values.iter().map(String::as_str));
+    let half = solve(2, &case, &halved);
+    let rel = |a: &std::collections::BTreeMap<u64, Vec<f64>>,
+               b: &std::collections::BTreeMap<u64, Vec<f64>>| {
+        let scale = b.values().flatten().fold(0.0f64, |m, x| m.max(x.abs()));
+        max_diff(a, b).0 / scale
+    };
+    let first = step_displacement(&stepped.dir, 1);
+    let last = step_displacement(&stepped.dir, 2);
+    let (d_half, d_whole) = (
+        rel(&first, &half.displacement()),
+        rel(&last, &whole.displacement()),
+    );
+    println!(
+        "step 1 against the halved case: {d_half:.1e}; step 2 against one step: {d_whole:.1e}"
+    );
+    // Both are the same discrete problems solved twice: agreement to the solver's round-off.
+    assert!(d_half < 1e-8, "{d_half}");
+    assert!(d_whole < 1e-8, "{d_whole}");
+    // And the halved problem is a different one (the test can fail).
+    assert!(rel(&half.displacement(), &whole.displacement()) > 0.1);
+}

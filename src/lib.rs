@@ -10,6 +10,7 @@ pub mod contact;
 pub mod dist;
 pub mod driver;
 pub mod error;
+pub mod expr;
 pub mod fault;
 pub mod fem;
 pub mod geom;

@@ -2,7 +2,7 @@
 //! below work on (the mesh with its material, the linear problem, the contact settings).
 
 use crate::assembly::{BodyForce, FacetLoad, FacetLoadKind, Problem};
-use crate::case::{self, vec3, Case, ContactSection, Friction, NewtonSection};
+use crate::case::{self, vec3, BodyForceSpec, Case, ContactSection, Friction, NewtonSection};
 use crate::contact::Obstacle;
 use crate::dist;
 use crate::error::{InputError, RunError};
@@ -34,6 +34,7 @@ pub fn read_input(ctx: &Ctx, case: &Case) -> Result<Input, RunError> {
     };
     let d = dist::read_distributed(ctx, &case.mesh.file, &refine)?;
     let material = ctx.agree(check(case, &d.mesh).map_err(RunError::from))?;
+    ctx.agree(check_body_force(case, &d.mesh).map_err(RunError::from))?;
     let input = Input {
         mesh: d.mesh,
         material,
@@ -108,6 +109,44 @@ fn check(case: &Case, mesh: &Mesh) -> Result<Material, InputError> {
     })
 }
 
+/// A body force given by expressions (`body_force.expr`) is finite at every quadrature point
+/// of this rank's cells (the points where assembly evaluates it): else an input error naming
+/// the component and the point.
+fn check_body_force(case: &Case, mesh: &Mesh) -> Result<(), InputError> {
+    let Some(BodyForceSpec::Expr(es)) = &case.body_force else {
+        return Ok(());
+    };
+    let dim = mesh.dim;
+    let bad = std::cell::Cell::new(None);
+    let probe = |p: [f64; 3]| {
+        if bad.get().is_none() {
+            if let Some(i) = es.iter().position(|e| !e.eval(p).is_finite()) {
+                bad.set(Some((i, p)));
+            }
+        }
+        [0.0; 3]
+    };
+    let mut xs: Vec<[f64; 3]> = Vec::with_capacity(4);
+    let mut out = [0.0; 12];
+    for c in 0..mesh.n_cells() {
+        xs.clear();
+        xs.extend(mesh.cell(c).iter().map(|&v| mesh.coords[v]));
+        fem::cell_load_quadrature(&xs, dim, &probe, &mut out[..xs.len() * dim]);
+        if let Some((i, p)) = bad.get() {
+            return Err(case.error_at(
+                &format!("body_force.expr[{i}]"),
+                format!(
+                    "\"{}\" is not a finite number at {:?} (a quadrature point of cell {})",
+                    es[i].text(),
+                    &p[..dim],
+                    mesh.cell_tags[c]
+                ),
+            ));
+        }
+    }
+    Ok(())
+}
+
 /// All groups with this name (a name may label groups of several dimensions).
 fn groups_named<'m>(mesh: &'m Mesh, name: &str) -> impl Iterator<Item = &'m mesh::Group> {
     let name = name.to_string();
@@ -157,7 +196,19 @@ pub fn problem<'m>(case: &Case, mesh: &'m Mesh, material: Material) -> Problem<'
         })
         .collect();
     let body_force = match &case.body_force {
-        Some(f) if f.iter().any(|&x| x != 0.0) => BodyForce::Constant(vec3(f)),
+        Some(BodyForceSpec::Constant(f)) if f.iter().any(|&x| x != 0.0) => {
+            BodyForce::Constant(vec3(f))
+        }
+        Some(BodyForceSpec::Expr(es)) => {
+            let es = es.clone();
+            BodyForce::Function(Box::new(move |p| {
+                let mut f = [0.0; 3];
+                for (v, e) in f.iter_mut().zip(&es) {
+                    *v = e.eval(p);
+                }
+                f
+            }))
+        }
         _ => BodyForce::None,
     };
     Problem {

@@ -590,3 +590,29 @@ fn huge_case_file_and_deep_set_key() {
     r.expect_code(2, "deep --set key path");
     assert!(r.stderr.contains("components"), "{}", r.stderr);
 }
+
+/// A body force expression that is not finite somewhere in the body (here ln(x − 0.5) for
+/// x ≤ 0.5 of the unit square): exit 2 naming the component, on 1 and on 2 ranks (where the
+/// other rank's cells may all be fine).
+#[test]
+fn body_force_expression_not_finite() {
+    let t = case_2d(&square()) + "\n[body_force]\nexpr = [\"0\", \"ln(x - 0.5)\"]\n";
+    for np in [0, 2] {
+        rejected_np(
+            &t,
+            np,
+            &["body_force.expr[1]", "case.toml", "not a finite number"],
+        );
+    }
+    // The same expression shifted out of the body is accepted.
+    let ok = case_2d(&square()) + "\n[body_force]\nexpr = [\"0\", \"ln(x + 0.5)\"]\n";
+    let tmp = tempfile::tempdir().unwrap();
+    run(tmp.path(), &ok, 0, &[]).expect_code(0, "finite body force");
+}
+
+/// A body force expression in z on a 2D mesh: exit 2 naming the component.
+#[test]
+fn body_force_expression_variable_not_in_2d() {
+    let t = case_2d(&square()) + "\n[body_force]\nexpr = [\"z\", \"0\"]\n";
+    rejected(&t, &["body_force.expr[0]", "'z'", "2D"]);
+}

@@ -10,6 +10,9 @@ pub mod mesh;
 #[path = "../../src/case/mod.rs"]
 pub mod case;
 
+#[path = "../../src/expr.rs"]
+pub mod expr;
+
 #[path = "../../src/geom.rs"]
 pub mod geom;
 

@@ -23,6 +23,7 @@ use crate::contact::obstacle::{
 };
 use crate::contact::{Obstacle, ObstacleError, Plane, Sphere};
 use crate::error::InputError;
+use crate::expr::{quoted, Expr, VARIABLES};
 use crate::mesh::Mesh;
 pub use load::LoadSection;
 use tree::{join_index, join_key, Kind, Loc, Node};
@@ -34,6 +35,39 @@ pub fn vec3(v: &[f64]) -> [f64; 3] {
         *o = *x;
     }
     out
+}
+
+/// `[body_force]`: a constant vector (`value`) or one expression per component (`expr`).
+#[derive(Debug, Clone, PartialEq)]
+pub enum BodyForceSpec {
+    /// `value = [fx, fy(, fz)]`.
+    Constant(Vec<f64>),
+    /// `expr = ["fx", "fy"(, "fz")]`: expressions of x, y (, z), evaluated at the quadrature
+    /// points of every cell.
+    Expr(Vec<Arc<Expr>>),
+}
+
+impl BodyForceSpec {
+    /// The number of components.
+    pub fn len(&self) -> usize {
+        match self {
+            BodyForceSpec::Constant(v) => v.len(),
+            BodyForceSpec::Expr(e) => e.len(),
+        }
+    }
+
+    /// Never true (a body force has 2 or 3 components); for clippy's `len_without_is_empty`.
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+
+    /// The key of the components (`body_force.value` or `body_force.expr`).
+    pub fn key(&self) -> &'static str {
+        match self {
+            BodyForceSpec::Constant(_) => "body_force.value",
+            BodyForceSpec::Expr(_) => "body_force.expr",
+        }
+    }
 }
 
 /// Elastic model.
@@ -578,7 +612,7 @@ pub struct Case {
     pub material: MaterialSection,
     pub dirichlet: Vec<Dirichlet>,
     pub neumann: Vec<Neumann>,
-    pub body_force: Option<Vec<f64>>,
+    pub body_force: Option<BodyForceSpec>,
     pub solver: SolverSection,
     pub output: OutputSection,
     /// The contact pairs (`[contact]` or `[[contact]]`); empty: a linear case.
@@ -685,6 +719,11 @@ impl Case {
         }
     }
 
+    /// An input error of the key path `key`, at its line when it came from the file.
+    pub fn error_at(&self, key: &str, msg: impl Into<String>) -> InputError {
+        self.err_at(key, msg)
+    }
+
     fn err_at(&self, key: &str, msg: impl Into<String>) -> InputError {
         let loc = self.locs.get(key).copied().unwrap_or(Loc::Unknown);
         Reader { file: &self.file }.err(key, loc, msg)
@@ -747,7 +786,25 @@ impl Case {
             }
         }
         if let Some(b) = &self.body_force {
-            len("body_force.value".into(), b.len())?;
+            len(b.key().into(), b.len())?;
+            if let BodyForceSpec::Expr(es) = b {
+                for (i, e) in es.iter().enumerate() {
+                    let bad = e.unknown_variables(&VARIABLES[..dim]);
+                    if !bad.is_empty() {
+                        return Err(self.err_at(
+                            &join_index("body_force.expr", i),
+                            format!(
+                                "\"{}\": unknown variable{} {}; the mesh is {dim}D: the \
+                                 variables are {}",
+                                e.text(),
+                                if bad.len() > 1 { "s" } else { "" },
+                                quoted(&bad),
+                                VARIABLES[..dim].join(", ")
+                            ),
+                        ));
+                    }
+                }
+            }
         }
         for c in &self.contacts {
             self.check_group(&join_key(&c.key, "group"), &c.group, groups, Some(dim - 1))?;
@@ -1100,11 +1157,7 @@ impl Reader<'_> {
         let neumann = self.neumann(&top)?;
         let body_force = match top.get("body_force") {
             None => None,
-            Some((k, n)) => {
-                let t = self.table(&k, n, &["value"])?;
-                let (vk, v) = self.required(&t, "value")?;
-                Some(self.vector(&vk, v)?)
-            }
+            Some((k, n)) => Some(self.body_force(&k, n)?),
         };
         let solver = self.solver(&top)?;
         let output = self.output(&top, output_dir)?;
@@ -1146,6 +1199,58 @@ impl Reader<'_> {
             load,
             locs: BTreeMap::new(),
         })
+    }
+
+    /// `[body_force]`: exactly one of `value` (a vector) and `expr` (an array of 2 or 3
+    /// expressions of x, y, z; the variables are checked against the mesh's dimension in
+    /// [`Case::check_against_mesh`]).
+    fn body_force(&self, key: &str, n: &Node) -> Res<BodyForceSpec> {
+        let t = self.table(key, n, &["value", "expr"])?;
+        match (t.get("value"), t.get("expr")) {
+            (Some((vk, v)), None) => Ok(BodyForceSpec::Constant(self.vector(&vk, v)?)),
+            (None, Some((ek, e))) => {
+                let elems = self.array(&ek, e, "an array of expression strings")?;
+                self.check_len(&ek, e, elems.len())?;
+                let mut out = Vec::new();
+                for (i, el) in elems.iter().enumerate() {
+                    let ik = join_index(&ek, i);
+                    let text = self.string(&ik, el)?;
+                    let expr = Expr::parse(text).map_err(|m| {
+                        self.err(
+                            &ik,
+                            el.loc,
+                            format!("cannot parse the body force expression \"{text}\": {m}"),
+                        )
+                    })?;
+                    let bad = expr.unknown_variables(&VARIABLES);
+                    if !bad.is_empty() {
+                        return Err(self.err(
+                            &ik,
+                            el.loc,
+                            format!(
+                                "unknown variable{} {} in \"{text}\": the variables are x, y \
+                                 (and z in 3D) (functions: sin, cos, tan, exp, ln, sqrt, abs, \
+                                 min, max, …; powers with ^; constants pi, e)",
+                                if bad.len() > 1 { "s" } else { "" },
+                                quoted(&bad)
+                            ),
+                        ));
+                    }
+                    out.push(Arc::new(expr));
+                }
+                Ok(BodyForceSpec::Expr(out))
+            }
+            (Some(_), Some((ek, e))) => Err(self.err(
+                &ek,
+                e.loc,
+                "give either value (a constant vector) or expr (expressions), not both",
+            )),
+            (None, None) => Err(self.err(
+                key,
+                n.loc,
+                "missing key: value (a constant vector) or expr (one expression per component)",
+            )),
+        }
     }
 
     fn mesh(&self, top: &Tab) -> Res<MeshSection> {

@@ -141,7 +141,10 @@ fn full_file_round_trip() {
             },
         ]
     );
-    assert_eq!(c.body_force, Some(vec![0.0, -9.81]));
+    assert_eq!(
+        c.body_force,
+        Some(BodyForceSpec::Constant(vec![0.0, -9.81]))
+    );
     assert_eq!(c.solver.preset, Preset::Iterative);
     assert_eq!(c.solver.petsc_options, "-ksp_monitor");
     assert_eq!(c.solver.rtol, 1e-8);
@@ -1948,4 +1951,91 @@ fn reject_bad_contact_pairs() {
     let e = parse(&format!("contact = []\n{MINIMAL}")).expect_err("empty");
     assert_eq!(e.key.as_deref(), Some("contact"), "{e}");
     assert!(e.message.contains("at least one"), "{e}");
+}
+
+#[test]
+fn body_force_expressions() {
+    let c = parse(&with(
+        "[body_force]\nexpr = [\"-x*y\", \"2*sin(pi*x) + y^2\"]\n",
+    ))
+    .unwrap();
+    let Some(BodyForceSpec::Expr(es)) = &c.body_force else {
+        panic!("{:?}", c.body_force)
+    };
+    assert_eq!(es.len(), 2);
+    assert_eq!(es[0].eval([2.0, 3.0, 0.0]), -6.0);
+    assert!((es[1].eval([0.5, 3.0, 0.0]) - 11.0).abs() < 1e-15);
+    assert!(c.check_against_mesh(2, &[]).is_ok());
+    assert_eq!(c.body_force.as_ref().unwrap().key(), "body_force.expr");
+    // A 3D expression may read z.
+    let text = replace(MINIMAL, "model = \"plane_strain\"\n", "")
+        + "[body_force]\nexpr = [\"0\", \"0\", \"-z\"]\n";
+    assert!(parse(&text).unwrap().check_against_mesh(3, &[]).is_ok());
+    // --set reaches the expressions.
+    let c = parse_set(MINIMAL, &["body_force.expr=[\"1\", \"y\"]"]).unwrap();
+    assert!(matches!(&c.body_force, Some(BodyForceSpec::Expr(e)) if e[1].text() == "y"));
+}
+
+#[test]
+fn reject_bad_body_force_expressions() {
+    let e = expect_err(
+        &with("[body_force]\nexpr = [\"x\", \"sin(x\"]\n"),
+        "body_force.expr[1]",
+        "expr = ",
+    );
+    assert!(e.message.contains("cannot parse"), "{e}");
+    let e = expect_err(
+        &with("[body_force]\nexpr = [\"t*x\", \"0\"]\n"),
+        "body_force.expr[0]",
+        "expr = ",
+    );
+    assert!(e.message.contains("unknown variable 't'"), "{e}");
+    let e = expect_err(
+        &with("[body_force]\nexpr = [\"foo(x)\", \"0\"]\n"),
+        "body_force.expr[0]",
+        "expr = ",
+    );
+    assert!(e.message.contains("unknown function 'foo'"), "{e}");
+    let e = expect_err(
+        &with("[body_force]\nexpr = [\"0\"]\n"),
+        "body_force.expr",
+        "expr = ",
+    );
+    assert!(e.message.contains("2 or 3"), "{e}");
+    expect_err(
+        &with("[body_force]\nexpr = [\"0\", 1]\n"),
+        "body_force.expr[1]",
+        "expr = ",
+    );
+    expect_err(
+        &with("[body_force]\nexpr = \"x\"\n"),
+        "body_force.expr",
+        "expr = ",
+    );
+    let e = expect_err(
+        &with("[body_force]\nvalue = [0, 0]\nexpr = [\"0\", \"0\"]\n"),
+        "body_force.expr",
+        "expr = ",
+    );
+    assert!(e.message.contains("not both"), "{e}");
+    let e = expect_err(&with("[body_force]\n"), "body_force", "[body_force]");
+    assert!(
+        e.message.contains("value") && e.message.contains("expr"),
+        "{e}"
+    );
+    // Against the mesh: the number of components, z in 2D.
+    let text = with("[body_force]\nexpr = [\"0\", \"0\", \"1\"]\n");
+    let e = parse(&text)
+        .unwrap()
+        .check_against_mesh(2, &[])
+        .unwrap_err();
+    assert_eq!(e.key.as_deref(), Some("body_force.expr"), "{e}");
+    assert_eq!(e.line, Some(line(&text, "expr = ")));
+    let text = with("[body_force]\nexpr = [\"0\", \"z\"]\n");
+    let e = parse(&text)
+        .unwrap()
+        .check_against_mesh(2, &[])
+        .unwrap_err();
+    assert_eq!(e.key.as_deref(), Some("body_force.expr[1]"), "{e}");
+    assert!(e.message.contains("'z'") && e.message.contains("2D"), "{e}");
 }

@@ -1,244 +1,44 @@
 //! The `height` obstacle: the solid below the graph of a function, {y < h(x)} in 2D and
 //! {z < h(x, y)} in 3D, the body above it (docs/obstacles.md, "height").
 //!
-//! h is an expression of the case file, parsed once by `evalexpr` ([`HeightExpr`]) and evaluated
-//! at the contact nodes. For a point x the nearest point of the graph is found by a safeguarded
+//! h is an expression of the case file, parsed once ([`HeightExpr`], a [`crate::expr::Expr`])
+//! and evaluated at the contact nodes. For a point x the nearest point of the graph is found by a safeguarded
 //! Newton iteration on the squared distance, started at the vertical projection
 //! ([`Height::project`]); the derivatives of h are central differences with steps scaled to
 //! the point's size. g0 is the signed distance (positive above the graph), n the unit upward
 //! normal of the graph at the nearest point: the gradient of g0 on both sides.
 
 use super::obstacle::{ObstacleError, Projection};
-use evalexpr::error::EvalexprResultValue;
-use evalexpr::{
-    build_operator_tree, Context, DefaultNumericTypes, EvalexprError, EvalexprResult, Node,
-    Operator, Value,
-};
-use std::f64::consts::{E, PI};
-use std::fmt;
+use crate::expr::{quoted, Expr};
 use std::sync::Arc;
 
-type V = Value<DefaultNumericTypes>;
+pub use crate::expr::FUNCTIONS;
 
-/// The functions of a height expression: one argument, or two where noted (`f(a, b)`).
-pub const FUNCTIONS: [&str; 24] = [
-    "sin", "cos", "tan", "asin", "acos", "atan", "atan2", "sinh", "cosh", "tanh", "exp", "ln",
-    "log10", "log2", "sqrt", "cbrt", "abs", "pow", "hypot", "floor", "ceil", "min", "max", "sign",
-];
-
-/// f64 of a number value.
-fn number(v: &V) -> Option<f64> {
-    match v {
-        Value::Float(f) => Some(*f),
-        Value::Int(i) => Some(*i as f64),
-        _ => None,
-    }
-}
-
-fn call(name: &str, arg: &V) -> EvalexprResultValue<DefaultNumericTypes> {
-    let name = name.strip_prefix("math::").unwrap_or(name);
-    let bad = || EvalexprError::FunctionIdentifierNotFound(name.to_string());
-    let two = |f: fn(f64, f64) -> f64| -> EvalexprResultValue<DefaultNumericTypes> {
-        match arg {
-            Value::Tuple(t) if t.len() == 2 => match (number(&t[0]), number(&t[1])) {
-                (Some(a), Some(b)) => Ok(Value::Float(f(a, b))),
-                _ => Err(EvalexprError::expected_number(t[0].clone())),
-            },
-            _ => Err(EvalexprError::expected_tuple(arg.clone())),
-        }
-    };
-    let one = |f: fn(f64) -> f64| -> EvalexprResultValue<DefaultNumericTypes> {
-        number(arg)
-            .map(|a| Value::Float(f(a)))
-            .ok_or_else(|| EvalexprError::expected_number(arg.clone()))
-    };
-    match name {
-        "atan2" => two(f64::atan2),
-        "pow" => two(f64::powf),
-        "hypot" => two(f64::hypot),
-        "min" => two(f64::min),
-        "max" => two(f64::max),
-        "sin" => one(f64::sin),
-        "cos" => one(f64::cos),
-        "tan" => one(f64::tan),
-        "asin" => one(f64::asin),
-        "acos" => one(f64::acos),
-        "atan" => one(f64::atan),
-        "sinh" => one(f64::sinh),
-        "cosh" => one(f64::cosh),
-        "tanh" => one(f64::tanh),
-        "exp" => one(f64::exp),
-        "ln" => one(f64::ln),
-        "log10" => one(f64::log10),
-        "log2" => one(f64::log2),
-        "sqrt" => one(f64::sqrt),
-        "cbrt" => one(f64::cbrt),
-        "abs" => one(f64::abs),
-        "floor" => one(f64::floor),
-        "ceil" => one(f64::ceil),
-        "sign" => one(|a| if a == 0.0 { 0.0 } else { a.signum() }),
-        _ => Err(bad()),
-    }
-}
-
-/// The variables x, y and the constants pi, e of one evaluation; only the functions of
-/// [`FUNCTIONS`] (evalexpr's own built-ins are off).
-struct Vars {
-    x: V,
-    y: V,
-    pi: V,
-    e: V,
-}
-
-impl Context for Vars {
-    type NumericTypes = DefaultNumericTypes;
-    fn get_value(&self, identifier: &str) -> Option<&V> {
-        match identifier {
-            "x" => Some(&self.x),
-            "y" => Some(&self.y),
-            "pi" => Some(&self.pi),
-            "e" => Some(&self.e),
-            _ => None,
-        }
-    }
-    fn call_function(
-        &self,
-        identifier: &str,
-        argument: &V,
-    ) -> EvalexprResultValue<DefaultNumericTypes> {
-        call(identifier, argument)
-    }
-    fn are_builtin_functions_disabled(&self) -> bool {
-        true
-    }
-    fn set_builtin_functions_disabled(
-        &mut self,
-        _disabled: bool,
-    ) -> EvalexprResult<(), DefaultNumericTypes> {
-        Ok(())
-    }
-}
-
-/// Every integer literal made a float: `1/2` is 0.5, not evalexpr's integer division.
-fn floats(node: &mut Node<DefaultNumericTypes>) {
-    if let Operator::Const { value } = node.operator_mut() {
-        if let Value::Int(i) = value {
-            *value = Value::Float(*i as f64);
-        }
-    }
-    for c in node.children_mut() {
-        floats(c);
-    }
-}
-
-/// A parsed height expression h(x) (2D) or h(x, y) (3D): evalexpr's syntax (`^` for powers,
-/// `-x^2` = −(x²), scientific notation), all numbers floats, the functions of [`FUNCTIONS`]
-/// and the constants `pi` and `e`.
-pub struct HeightExpr {
-    text: String,
-    node: Node<DefaultNumericTypes>,
-    /// The variables read, sorted (constants excluded).
-    vars: Vec<String>,
-}
-
-impl fmt::Debug for HeightExpr {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        write!(f, "HeightExpr({:?})", self.text)
-    }
-}
-
-impl PartialEq for HeightExpr {
-    fn eq(&self, other: &Self) -> bool {
-        self.text == other.text
-    }
-}
+/// A parsed height expression h(x) (2D) or h(x, y) (3D): an [`Expr`] of the case file (its
+/// syntax, functions and constants) whose variables are x (and y).
+#[derive(Debug, PartialEq)]
+pub struct HeightExpr(Expr);
 
 impl HeightExpr {
-    /// Parses `text`; the error is a sentence for the user. Checked here: the syntax, only
-    /// known functions, no assignment, a number as the result (at x = y = 0.5).
+    /// Parses `text`; the error is a sentence for the user (see [`Expr::parse`]).
     pub fn parse(text: &str) -> Result<Self, String> {
-        if text.trim().is_empty() {
-            return Err("the expression is empty".into());
-        }
-        let mut node =
-            build_operator_tree::<DefaultNumericTypes>(text).map_err(|e| e.to_string())?;
-        floats(&mut node);
-        if node.iter_write_variable_identifiers().next().is_some() {
-            return Err("assignments are not allowed: give an expression of x (and y)".into());
-        }
-        let mut unknown: Vec<&str> = node
-            .iter_function_identifiers()
-            .filter(|f| !FUNCTIONS.contains(&f.strip_prefix("math::").unwrap_or(f)))
-            .collect();
-        unknown.dedup();
-        if let Some(f) = unknown.first() {
-            return Err(format!(
-                "unknown function '{f}'; the functions are {}",
-                FUNCTIONS.join(", ")
-            ));
-        }
-        let mut vars: Vec<String> = node
-            .iter_read_variable_identifiers()
-            .filter(|v| *v != "pi" && *v != "e")
-            .map(str::to_string)
-            .collect();
-        vars.sort();
-        vars.dedup();
-        let expr = HeightExpr {
-            text: text.to_string(),
-            node,
-            vars,
-        };
-        if expr.vars.iter().all(|v| v == "x" || v == "y") {
-            // The functions give NaN outside their domains, never an error: an error here is
-            // a malformed expression (a missing operand, a wrong number of arguments).
-            match expr.node.eval_with_context(&expr.context([0.5, 0.5])) {
-                Err(e) => return Err(e.to_string()),
-                Ok(v) if number(&v).is_none() => {
-                    return Err(format!(
-                        "the expression gives {}, not a number",
-                        match v {
-                            Value::Boolean(_) => "a boolean",
-                            Value::String(_) => "a string",
-                            Value::Tuple(_) => "a tuple",
-                            _ => "no value",
-                        }
-                    ))
-                }
-                _ => {}
-            }
-        }
-        Ok(expr)
-    }
-
-    fn context(&self, u: [f64; 2]) -> Vars {
-        Vars {
-            x: Value::Float(u[0]),
-            y: Value::Float(u[1]),
-            pi: Value::Float(PI),
-            e: Value::Float(E),
-        }
+        Expr::parse(text).map(HeightExpr)
     }
 
     /// The expression as written.
     pub fn text(&self) -> &str {
-        &self.text
+        self.0.text()
     }
 
     /// The names of the variables the expression reads (sorted; without pi and e).
     pub fn variables(&self) -> &[String] {
-        &self.vars
+        self.0.variables()
     }
 
     /// Ok when every variable is x (2D) or x or y (3D); else a message naming the others.
     pub fn check_variables(&self, dim: usize) -> Result<(), String> {
         let allowed: &[&str] = if dim == 2 { &["x"] } else { &["x", "y"] };
-        let bad: Vec<&str> = self
-            .variables()
-            .iter()
-            .map(String::as_str)
-            .filter(|v| !allowed.contains(v))
-            .collect();
+        let bad = self.0.unknown_variables(allowed);
         if bad.is_empty() {
             return Ok(());
         }
@@ -250,20 +50,14 @@ impl HeightExpr {
         Err(format!(
             "unknown variable{} {}; {what}",
             if bad.len() > 1 { "s" } else { "" },
-            bad.iter()
-                .map(|v| format!("'{v}'"))
-                .collect::<Vec<_>>()
-                .join(", ")
+            quoted(&bad)
         ))
     }
 
     /// h(u) (u = [x, y]; y is ignored by 2D expressions). NaN where the evaluation fails or
     /// gives no number.
     pub fn eval(&self, u: [f64; 2]) -> f64 {
-        match self.node.eval_with_context(&self.context(u)) {
-            Ok(v) => number(&v).unwrap_or(f64::NAN),
-            Err(_) => f64::NAN,
-        }
+        self.0.eval([u[0], u[1], 0.0])
     }
 }
 
@@ -527,6 +321,7 @@ mod tests {
     use crate::contact::obstacle::{Obstacle, Plane};
     use rand::rngs::StdRng;
     use rand::{Rng, SeedableRng};
+    use std::f64::consts::PI;
 
     fn height(text: &str, dim: usize) -> Height {
         let e = Arc::new(HeightExpr::parse(text).unwrap());

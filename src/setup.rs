@@ -242,6 +242,8 @@ pub struct PairSettings {
     /// Tresca threshold g_R (1.44e) of the pair; 0 on a frictionless pair of a case with
     /// Tresca pairs (|λ_τ| ≤ 0: no tangential force), `None` in a case without Tresca.
     pub tresca_threshold: Option<f64>,
+    /// Coulomb's μ of the pair; 0 on a frictionless pair and without Coulomb friction.
+    pub coulomb_mu: f64,
 }
 
 impl PairSettings {
@@ -259,7 +261,8 @@ pub struct ContactSettings {
     pub pairs: Vec<PairSettings>,
     /// Tresca friction on some pair (Algorithm 2; the other pairs have threshold 0).
     pub tresca: bool,
-    /// Coulomb friction (on every pair): the coefficient μ and the algorithm; `None`
+    /// Coulomb friction: the coefficient μ of the first Coulomb pair (each node has its
+    /// pair's, [`PairSettings::coulomb_mu`]) and the algorithm (one for all pairs); `None`
     /// otherwise.
     pub coulomb: Option<(f64, case::CoulombAlgorithm)>,
     pub rigid_modes: case::RigidModeHandling,
@@ -324,6 +327,10 @@ pub fn contact_settings(
                     Friction::Tresca { threshold } => Some(threshold),
                     Friction::None if tresca => Some(0.0),
                     Friction::None | Friction::Coulomb { .. } => None,
+                },
+                coulomb_mu: match cc.friction {
+                    Friction::Coulomb { mu, .. } => mu,
+                    Friction::None | Friction::Tresca { .. } => 0.0,
                 },
             })
         })

@@ -361,3 +361,104 @@ fn cube_between_two_plates() {
         }
     }
 }
+
+/// Coulomb pairs with their own μ: μ = 0.5 under the disk, frictionless (no friction key) on
+/// top, the top plate moved down: the top pair carries no tangential force (to
+/// round-off), the bottom pair's respects |λ_τ| ≤ μ (−λ_n) and carries some.
+#[test]
+fn coulomb_pairs_with_their_own_mu() {
+    let tmp = tempfile::tempdir().expect("tempdir");
+    let half = disk_mesh(tmp.path(), false);
+    let mu = 0.5;
+    let case = write(
+        tmp.path(),
+        "coulomb.toml",
+        &half,
+        &format!(
+            "{BOTTOM}friction = {{ law = \"coulomb\", mu = {mu} }}\n\n{}",
+            top_pair(&format!("motion = [0, {}]", -SQUEEZE))
+        ),
+    );
+    let s = solve(2, &case, &[]);
+    s.assert_converged("coulomb");
+    let rows = s.contact_rows_by_id();
+    let scale = rows
+        .values()
+        .map(|r| r.f("lambda_n").abs())
+        .fold(0.0, f64::max);
+    let mut carrying = 0;
+    for (id, r) in &rows {
+        let (lt, ln) = (r.lambda_t(2)[0].abs(), -r.f("lambda_n"));
+        if r.s("pair") == "2" {
+            assert!(lt <= 1e-12 * scale, "top node {id}: λ_τ = {lt}");
+        } else {
+            assert!(
+                lt <= mu * ln.max(0.0) * (1.0 + 1e-9) + 1e-12 * scale,
+                "node {id}"
+            );
+            if r.active() && lt > 1e-6 * scale {
+                carrying += 1;
+            }
+        }
+    }
+    assert!(carrying > 0, "no tangential force under the disk");
+}
+
+/// Coulomb friction (μ = 0.3) on both plates: the two-pair disk is again the mirror image of
+/// itself, its bottom pair the quarter model with the same friction — force, λ_n and λ_τ of
+/// every node to round-off.
+#[test]
+fn coulomb_plates_match_the_symmetric_quarter() {
+    let tmp = tempfile::tempdir().expect("tempdir");
+    let (half, quarter) = (disk_mesh(tmp.path(), false), disk_mesh(tmp.path(), true));
+    let friction = "friction = { law = \"coulomb\", mu = 0.3 }\n";
+    let q = write(
+        tmp.path(),
+        "quarter.toml",
+        &quarter,
+        &format!(
+            "[[dirichlet]]\ngroup = \"mid\"\nvalue = [\"free\", {}]\n\n{}{friction}",
+            -SQUEEZE / 2.0,
+            BOTTOM.replace("[[contact]]", "[contact]")
+        ),
+    );
+    let model = solve(2, &q, &[]);
+    model.assert_converged("quarter");
+    let both = write(
+        tmp.path(),
+        "plates.toml",
+        &half,
+        &format!(
+            "{BOTTOM}{friction}\n{}{friction}",
+            top_pair(&format!("motion = [0, {}]", -SQUEEZE))
+        ),
+    );
+    let s = solve(2, &both, &[]);
+    s.assert_converged("two plates, Coulomb");
+    let f_model = model.total_force()[1];
+    assert!(rel(pair_force(&s, 0)[1], f_model) <= 1e-9);
+    let m = model.contact_rows_by_id();
+    let scale = m
+        .values()
+        .map(|r| r.f("lambda_n").abs())
+        .fold(0.0, f64::max);
+    let mut tangential = 0.0f64;
+    for (id, r) in s
+        .contact_rows_by_id()
+        .iter()
+        .filter(|(_, r)| r.s("pair") == "1")
+    {
+        let q = &m[id];
+        assert!(
+            (r.f("lambda_n") - q.f("lambda_n")).abs() <= 1e-9 * scale,
+            "node {id}"
+        );
+        let (a, b) = (r.lambda_t(2)[0], q.lambda_t(2)[0]);
+        assert!((a - b).abs() <= 1e-9 * scale, "node {id}: {a} {b}");
+        tangential = tangential.max(a.abs());
+    }
+    assert!(
+        tangential > 1e-3 * scale,
+        "friction carries nothing: {tangential}"
+    );
+}

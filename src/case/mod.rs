@@ -1590,20 +1590,28 @@ impl Reader<'_> {
                 ));
             }
         }
-        // Tresca pairs combine with frictionless ones (threshold 0); Coulomb is one law with
-        // one coefficient on every pair.
-        let coulomb = pairs
-            .iter()
-            .find(|p| matches!(p.friction, Friction::Coulomb { .. }));
-        if let Some(c) = coulomb {
-            if let Some(j) = pairs.iter().position(|p| p.friction != c.friction) {
+        // Tresca pairs combine with frictionless ones (threshold 0), Coulomb pairs with
+        // frictionless ones (μ = 0) and with each other (each its μ, one algorithm); Tresca and
+        // Coulomb are two different iterations and do not mix.
+        let coulomb = pairs.iter().find_map(|p| match p.friction {
+            Friction::Coulomb { algorithm, .. } => Some((p, algorithm)),
+            _ => None,
+        });
+        if let Some((c, algorithm)) = coulomb {
+            let clash = pairs.iter().position(|p| match p.friction {
+                Friction::None => false,
+                Friction::Tresca { .. } => true,
+                Friction::Coulomb { algorithm: a, .. } => a != algorithm,
+            });
+            if let Some(j) = clash {
                 let (key, loc) = at(j, "friction");
                 return Err(self.err(
                     &key,
                     loc,
                     format!(
-                        "differs from {}.friction: with Coulomb friction every pair needs the \
-                         same law, coefficient and algorithm",
+                        "does not combine with {}.friction: Coulomb pairs may have their own μ \
+                         but need the same algorithm, and Tresca and Coulomb do not mix \
+                         (frictionless pairs combine with either)",
                         c.key
                     ),
                 ));

@@ -1850,6 +1850,21 @@ fn several_contact_pairs() {
                motion = [0, -0.1]\nfriction = { law = \"tresca\", threshold = 0.2 }\n";
     let c = parse(&with(two)).expect("valid");
     assert_eq!(c.contacts.len(), 2);
+    // Coulomb pairs with their own μ, next to a frictionless one
+    let coulomb = |mu: f64| {
+        format!(
+            "[[contact]]\ngroup = \"g{mu}\"\nobstacle = {{ type = \"plane\", point = [0, 0], normal = [0, 1] }}\n\
+             friction = {{ law = \"coulomb\", mu = {mu} }}\n"
+        )
+    };
+    let mixed = format!(
+        "{}{}[[contact]]\ngroup = \"free\"\nobstacle = {{ type = \"plane\", point = [0, 0], normal = [0, 1] }}\n",
+        coulomb(0.2),
+        coulomb(0.5)
+    );
+    let m = parse(&with(&mixed)).expect("valid");
+    assert_eq!(m.contacts.len(), 3);
+    assert!(matches!(m.contacts[1].friction, Friction::Coulomb { mu, .. } if mu == 0.5));
     assert_eq!(
         (c.contacts[0].key.as_str(), c.contacts[0].group.as_str()),
         ("contact[0]", "a")
@@ -1910,19 +1925,26 @@ fn reject_bad_contact_pairs() {
             Some("friction"),
         ),
         (
-            format!("{}{}", pair("a", coulomb), pair("b", "")),
+            format!(
+                "{}{}",
+                pair("a", coulomb),
+                pair("b", "friction = { law = \"tresca\", threshold = 1 }\n")
+            ),
             "contact[1].friction",
-            "same law",
-            None,
+            "do not mix",
+            Some("threshold = 1"),
         ),
         (
             format!(
                 "{}{}",
                 pair("a", coulomb),
-                pair("b", "friction = { law = \"coulomb\", mu = 0.4 }\n")
+                pair(
+                    "b",
+                    "friction = { law = \"coulomb\", mu = 0.4, algorithm = \"fixed-point\" }\n"
+                )
             ),
             "contact[1].friction",
-            "same law",
+            "same algorithm",
             Some("mu = 0.4"),
         ),
         (

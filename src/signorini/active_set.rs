@@ -14,8 +14,9 @@ pub enum Law {
     Frictionless,
     /// Algorithm 2 with the nodal thresholds b_k of the contact boundary (3.18).
     Tresca,
-    /// The generalised Newton: b = μ max(0, −λ_n − c(u_n + g)) (F1), rows (F5)/(F6).
-    Coulomb { mu: f64 },
+    /// The generalised Newton: b = μ max(0, −λ_n − c(u_n + g)) (F1), rows (F5)/(F6), with each
+    /// node's μ ([`ContactNode::mu`]: its pair's).
+    Coulomb,
 }
 
 impl Law {
@@ -28,8 +29,9 @@ impl Law {
     fn row(self, k: &ContactNode, r: &NodeResult, c: f64, dim: usize) -> CoulombRow<2> {
         let du_t = increment(r, k);
         match self {
-            Law::Coulomb { mu } => {
-                contact::coulomb_row_dyn(dim, r.u_n, r.lambda_n, du_t, r.lambda_t, k.gap, mu, c).row
+            Law::Coulomb => {
+                contact::coulomb_row_dyn(dim, r.u_n, r.lambda_n, du_t, r.lambda_t, k.gap, k.mu, c)
+                    .row
             }
             _ => contact::tangential_row_dyn(dim, du_t, r.lambda_t, k.bound, c).into(),
         }
@@ -40,7 +42,7 @@ impl Law {
         let du_t = increment(r, k);
         let v = [r.lambda_t[0] + c * du_t[0], r.lambda_t[1] + c * du_t[1]];
         let b = match self {
-            Law::Coulomb { mu } => contact::coulomb_threshold(r.u_n, r.lambda_n, k.gap, mu, c),
+            Law::Coulomb => contact::coulomb_threshold(r.u_n, r.lambda_n, k.gap, k.mu, c),
             _ => k.bound,
         };
         (b, v)
@@ -69,14 +71,14 @@ impl Law {
     fn residual2(self, k: &ContactNode, r: &NodeResult, c: f64) -> f64 {
         let du_t = increment(r, k);
         match self {
-            Law::Coulomb { mu } => {
+            Law::Coulomb => {
                 let p = NodePoint {
                     u_n: r.u_n,
                     lam_n: r.lambda_n,
                     u_t: du_t,
                     lam_t: r.lambda_t,
                 };
-                contact::coulomb_residual(&p, k.gap, mu, c)
+                contact::coulomb_residual(&p, k.gap, k.mu, c)
                     .tangential
                     .powi(2)
             }
@@ -615,6 +617,7 @@ mod tests {
         ContactNode {
             node: 0,
             pair: 0,
+            mu: 0.1,
             tag: 7,
             row: 0,
             local_row: 0,
@@ -646,10 +649,7 @@ mod tests {
         assert_eq!(increment(&r, &k), [0.0, 0.0]);
         assert_eq!(Law::Tresca.row(&k, &r, 1.0, 2), CoulombRow::Stick);
         assert!(Law::Tresca.row(&node(0.1, [0.0; 2]), &r, 1.0, 2).is_slip());
-        assert_eq!(
-            Law::Coulomb { mu: 0.1 }.row(&k, &r, 1.0, 2),
-            CoulombRow::Stick
-        );
+        assert_eq!(Law::Coulomb.row(&k, &r, 1.0, 2), CoulombRow::Stick);
         // the stick row prescribes u_τ' = u_ref
         let set = ActiveSet {
             normal: vec![true],
@@ -694,7 +694,7 @@ mod tests {
         let r = at(0.0, -1.0, 0.1 * (1.0 + 1e-12));
         assert!(Law::Tresca.row(&k, &r, c, 2).is_slip());
         assert!(Law::Tresca.stays_stuck(&k, &r, c, 0.1));
-        let coulomb = Law::Coulomb { mu: 0.1 };
+        let coulomb = Law::Coulomb;
         assert!(coulomb.stays_stuck(&k, &r, c, 0.1));
         // clearly beyond the limit: slips
         let r = at(0.0, -1.0, 0.1 * (1.0 + 1e-6));
@@ -767,16 +767,19 @@ mod tests {
 
     #[test]
     fn coulomb_rows_carry_the_coupling() {
-        let k = node(0.0, [0.0; 2]);
+        let k = ContactNode {
+            mu: 0.3,
+            ..node(0.0, [0.0; 2])
+        };
         // pressed (λ_n = −1), slipping fast: S4 with q ≠ 0; free node: zero row
         let r = at(0.5, -1.0, 0.3);
-        let row = Law::Coulomb { mu: 0.3 }.row(&k, &r, 1.0, 2);
+        let row = Law::Coulomb.row(&k, &r, 1.0, 2);
         assert!(row.is_slip() && row.coupled());
         let free = NodeResult {
             u_n: 0.2,
             ..NodeResult::default()
         };
-        let row = Law::Coulomb { mu: 0.3 }.row(&k, &free, 1.0, 2);
+        let row = Law::Coulomb.row(&k, &free, 1.0, 2);
         assert!(row.is_slip() && !row.coupled());
         // Tresca rows never couple
         let t = Law::Tresca.row(&node(0.1, [0.0; 2]), &r, 1.0, 2);

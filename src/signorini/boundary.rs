@@ -18,6 +18,9 @@ pub struct ContactNode {
     pub node: usize,
     /// The contact pair of the node (index into the case's pairs; 0 with one pair).
     pub pair: usize,
+    /// Coulomb's friction coefficient μ of the node's pair (0 on a frictionless pair and
+    /// without Coulomb friction).
+    pub mu: f64,
     /// Gmsh node tag.
     pub tag: u64,
     /// Global index of the node's first dof (dofs row .. row + dim).
@@ -259,6 +262,7 @@ pub fn build(
         nodes.push(ContactNode {
             node: v,
             pair: p,
+            mu: pair.coulomb_mu,
             tag: mesh.node_tags[v],
             row: (lo + i) * dim,
             local_row: i * dim,

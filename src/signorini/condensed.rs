@@ -619,8 +619,8 @@ pub(super) struct Candidates {
     mz: usize,
 }
 
-/// Values per candidate record: row, n (3), gap, start, G (6), x (3), u_τ^ref (2), pair.
-const REC: usize = 18;
+/// Values per candidate record: row, n (3), gap, start, G (6), x (3), u_τ^ref (2), pair, μ.
+const REC: usize = 19;
 
 impl Candidates {
     /// One all-gather. Collective.
@@ -636,6 +636,7 @@ impl Candidates {
             mine.extend_from_slice(&k.x);
             mine.extend_from_slice(&k.u_t_ref);
             mine.push(k.pair as f64);
+            mine.push(k.mu);
         }
         let all = ctx.all_gather_varcount(&mine);
         let n = all.len() / REC;
@@ -687,6 +688,10 @@ impl Candidates {
     /// The candidate's contact pair.
     pub(super) fn pair(&self, i: usize) -> usize {
         self.rec(i)[17] as usize
+    }
+    /// The candidate's Coulomb μ.
+    pub(super) fn mu(&self, i: usize) -> f64 {
+        self.rec(i)[18]
     }
 }
 

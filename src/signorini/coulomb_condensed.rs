@@ -159,7 +159,8 @@ fn candidate_boundary(kept: &Kept, b: &ContactBoundary, dim: usize) -> ContactBo
             let n = kept.cand.n(i);
             ContactNode {
                 node: 0,
-                pair: 0,
+                pair: kept.cand.pair(i),
+                mu: kept.cand.mu(i),
                 tag: i as u64,
                 row: 0,
                 local_row: 0,

@@ -330,10 +330,10 @@ pub fn solve(
         coords.as_ref(),
         warm.as_ref(),
     )?;
-    if let Law::Coulomb { mu } = law {
+    if law == Law::Coulomb {
         // The certificate and the output judge Coulomb's law with b_k = μ(−λ_n^k).
         for (k, r) in b.nodes.iter_mut().zip(&nr.nodes) {
-            k.bound = mu * (-r.lambda_n).max(0.0);
+            k.bound = k.mu * (-r.lambda_n).max(0.0);
         }
     }
     let mut displacement = settings.displacements();
@@ -505,8 +505,8 @@ fn run_method(
             };
             reduced.enable_reuse(ctx, reuse, friction)?;
             match settings.coulomb {
-                Some((mu, CoulombAlgorithm::FixedPoint)) => {
-                    let (nr, outer) = fixed_point(ctx, problem, &mut reduced, ns, mu, warm)?;
+                Some((_, CoulombAlgorithm::FixedPoint)) => {
+                    let (nr, outer) = fixed_point(ctx, problem, &mut reduced, ns, warm)?;
                     outer_steps = Some(outer);
                     nr
                 }
@@ -648,7 +648,7 @@ fn newton_summary(
 fn law_of(settings: &ContactSettings) -> Law {
     match (settings.tresca, settings.coulomb) {
         (true, _) => Law::Tresca,
-        (false, Some((mu, _))) => Law::Coulomb { mu },
+        (false, Some(_)) => Law::Coulomb,
         (false, None) => Law::Frictionless,
     }
 }
@@ -705,7 +705,6 @@ fn fixed_point(
     p: &ContactProblem,
     reduced: &mut ReducedSystem,
     ns: &NewtonSettings,
-    mu: f64,
     warm: Option<&WarmStart>,
 ) -> Result<(NewtonResult, usize), RunError> {
     let tresca = NewtonSettings {
@@ -715,12 +714,15 @@ fn fixed_point(
     let mut b = p.boundary.clone();
     let mut state: Option<(Vec<NodeResult>, Vec<f64>)> =
         warm.map(|w| (w.nodes.to_vec(), w.u_local.to_vec()));
-    let threshold = |r: &NodeResult| mu * (-r.lambda_n).max(0.0);
+    // each node's μ: its pair's
+    let threshold = |k: &boundary::ContactNode, r: &NodeResult| k.mu * (-r.lambda_n).max(0.0);
     // b^0 without a warm start: ‖f‖₁, beyond any nodal friction force, so the first solve
     // sticks (b^0 = 0 would leave a free body with a tangential load without support).
     let stick_all = ctx.sum_f64(reduced.f_local.iter().map(|x| x.abs()).sum());
     for (i, k) in b.nodes.iter_mut().enumerate() {
-        k.bound = state.as_ref().map_or(stick_all, |(n, _)| threshold(&n[i]));
+        k.bound = state
+            .as_ref()
+            .map_or(stick_all, |(n, _)| threshold(&*k, &n[i]));
     }
     let mut history: Vec<StepInfo> = Vec::new();
     for outer in 1..=ns.section.max_steps {
@@ -736,7 +738,7 @@ fn fixed_point(
         }
         let (mut change, mut scale) = (0.0f64, 0.0f64);
         for (k, r) in b.nodes.iter_mut().zip(&nr.nodes) {
-            let next = threshold(r);
+            let next = threshold(&*k, r);
             change = change.max((next - k.bound).abs());
             scale = scale.max(next);
             k.bound = next;
@@ -1101,9 +1103,11 @@ fn check_friction_capacity(
     if !floating {
         return Ok(());
     }
+    // one pair (a plane): its μ, the same on every node
+    let mu = ctx.max_f64(b.nodes.iter().map(|k| k.mu).fold(0.0, f64::max));
     let tresca_capacity = match law {
-        Law::Coulomb { mu } if mu > 0.0 => None,
-        Law::Coulomb { .. } | Law::Frictionless => return Ok(()),
+        Law::Coulomb if mu > 0.0 => None,
+        Law::Coulomb | Law::Frictionless => return Ok(()),
         Law::Tresca => Some(ctx.sum_f64(b.nodes.iter().map(|k| k.bound).sum())),
     };
     if tresca_capacity == Some(0.0) {
@@ -1125,7 +1129,7 @@ fn check_friction_capacity(
         (Some(c), _) => (c, format!("Σ b_k = {c:.6e}, (3.18)")),
         // The load pressing the body onto the plane is −rn (n points into the body); if it
         // pulls the body off, the balance test of the free modes decides.
-        (None, Law::Coulomb { mu }) if rn < 0.0 => (
+        (None, Law::Coulomb) if rn < 0.0 => (
             mu * -rn,
             format!(
                 "μ Σ_k (−λ_n^k) = μ × normal load = {mu} × {:.6e} = {:.6e}, Coulomb",

@@ -234,7 +234,7 @@ pub fn semismooth_newton(
         if plan.predict {
             reduced.set_predictor_solve();
         }
-        let allow_reuse = !matches!(s.law, Law::Coulomb { .. }) && !plan.confirm;
+        let allow_reuse = s.law != Law::Coulomb && !plan.confirm;
         let solved = reduced.solve(ctx, allow_reuse)?;
         let reused = solved.reuse.is_some() && solved.kind == SolveKind::Reuse;
         ensure_converged(step, &solved.info)?;
@@ -646,7 +646,7 @@ impl Loop<'_> {
         let stalled = stalled(still, self.last_still_residual, t.residual, t.lambda_norm);
         self.last_still_residual = still.then_some(t.residual);
         let (residual_ok, residual_zero) = match self.s.law {
-            Law::Coulomb { .. } => (
+            Law::Coulomb => (
                 t.residual <= COULOMB_RESIDUAL_TOL * t.lambda_norm || stalled,
                 t.residual <= COULOMB_RESIDUAL_ZERO * t.lambda_norm,
             ),

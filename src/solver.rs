@@ -97,7 +97,7 @@ pub fn configure(
     preset: Preset,
     rtol: f64,
     symmetric: bool,
-    case_options: &str,
+    (case_options, repeatable): (&str, bool),
 ) -> petsc::Result<()> {
     for (name, value) in split_options(case_options) {
         options::set_default(&name, &value)?;
@@ -113,6 +113,10 @@ pub fn configure(
     // Sequential matrices do not have it (one rank: unchanged).
     if matches!(preset, Preset::Iterative) && crate::par::world_size() > 2 {
         options::set_default("-matptap_via", "allatonce")?;
+    }
+    // solver.repeatable: the direct preset's sparse factorisations on rank 0 alone.
+    if repeatable {
+        options::set_default(petsc::ndfactor::ONE_PROCESS_OPTION, "")?;
     }
     Ok(())
 }
@@ -267,7 +271,7 @@ pub fn linear_solve(
         settings.preset,
         settings.rtol,
         true,
-        &settings.petsc_options,
+        (&settings.petsc_options, settings.repeatable),
     )?;
     let coords = near_null_space_coordinates(ctx, mesh, layout, settings.preset)?;
     let mut ls = LinearSolver::new(ctx.comm(), &mut sys.a, coords.as_ref())?;

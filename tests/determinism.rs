@@ -19,7 +19,9 @@
 //!
 //! What repeats bit for bit with the direct preset is printed (`--nocapture`): with a fixed
 //! partition and the same matrix and right-hand side, u may still vary by round-off (~1e-17)
-//! between runs, because MUMPS schedules its parallel factorisation dynamically.
+//! between runs, because MUMPS on several ranks adds other ranks' contributions as their
+//! messages arrive. `solver.repeatable = true` factorises on rank 0 alone: Coulomb's sparse
+//! LU steps on a floating body then repeat bit for bit (solution.h5 byte for byte).
 
 mod common;
 use common::*;
@@ -365,4 +367,59 @@ fn the_direct_presets_coulomb_default_on_a_held_body_repeats_bit_for_bit() {
         "{:?}",
         o.history
     );
+}
+
+/// The Hertz disk (the shipped case, refined level 4) with Coulomb friction (mu = 0.3) and a
+/// small tangential traction on the loaded arc: a floating body, so the direct preset solves
+/// Coulomb's Newton steps by MUMPS' sparse LU (no Schur complement). `reuse = "never"`: every
+/// step refactorises whatever the run's timings (what "auto" reuses follows them).
+fn floating_coulomb(repeatable: bool) -> (PathBuf, Vec<&'static str>) {
+    let mut sets = vec![
+        "contact.friction={law=\"coulomb\", mu=0.3}",
+        "neumann.1={group=\"load\", traction=[0.002, 0.0]}",
+        "solver.preset=\"direct\"",
+        "solver.reuse=\"never\"",
+    ];
+    if repeatable {
+        sets.push("solver.repeatable=true");
+    }
+    (repo("cases/hertz/hertz.toml"), sets)
+}
+
+#[test]
+fn coulomb_lu_steps_on_a_floating_body_repeat_byte_for_byte_when_repeatable() {
+    // Without solver.repeatable the LU on 2 ranks gave 6 different solution.h5 in 8 runs
+    // (docs/numbers.md, 2026-11-26); on rank 0 alone, one in every run.
+    let case = floating_coulomb(true);
+    let tmp = tempfile::tempdir().expect("tempdir");
+    let mut files = Vec::new();
+    for i in 0..3 {
+        let out = tmp.path().join(format!("run{i}"));
+        run(2, &case, &out);
+        let summary: serde_json::Value = serde_json::from_str(
+            &std::fs::read_to_string(out.join("summary.json")).expect("summary.json"),
+        )
+        .expect("json");
+        // Every Newton step factorised its sparse LU (not the condensed path).
+        let hist = get(&summary, &["newton", "history"])
+            .as_array()
+            .expect("history");
+        assert!(
+            hist.len() > 2 && hist.iter().all(|h| h["solve"] == "factorisation"),
+            "run {i}: not the LU steps: {hist:?}"
+        );
+        assert!(get(&summary, &["newton", "coulomb"]).is_object());
+        files.push(std::fs::read(out.join("solution.h5")).expect("solution.h5"));
+    }
+    for (i, f) in files.iter().enumerate().skip(1) {
+        let differ = f.iter().zip(&files[0]).filter(|(a, b)| a != b).count();
+        assert!(
+            f.len() == files[0].len() && differ == 0,
+            "solution.h5 of run {} vs run 1: {} vs {} bytes, {differ} bytes differ",
+            i + 1,
+            f.len(),
+            files[0].len()
+        );
+    }
+    println!("floating disk, Coulomb, LU on rank 0: 3 runs on 2 ranks, solution.h5 byte for byte");
 }

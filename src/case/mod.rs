@@ -236,6 +236,10 @@ pub struct SolverSection {
     /// Reuse of a factorisation (direct preset) or of the preconditioner, warm starts and
     /// inexact early steps (iterative preset) across Newton steps (contact).
     pub reuse: Reuse,
+    /// The direct preset's sparse factorisations (LU with friction, LDLᵀ on the plain path)
+    /// by MUMPS on rank 0 alone, so that repeated runs on a fixed rank count give the same
+    /// bits (MUMPS on several ranks varies by round-off from run to run).
+    pub repeatable: bool,
 }
 
 impl Default for SolverSection {
@@ -246,6 +250,7 @@ impl Default for SolverSection {
             petsc_options: String::new(),
             rtol: 1e-10,
             reuse: Reuse::Auto,
+            repeatable: false,
         }
     }
 }
@@ -1179,7 +1184,14 @@ impl Reader<'_> {
                 let t = self.table(
                     &sk,
                     sn,
-                    &["preset", "method", "petsc_options", "rtol", "reuse"],
+                    &[
+                        "preset",
+                        "method",
+                        "petsc_options",
+                        "rtol",
+                        "reuse",
+                        "repeatable",
+                    ],
                 )?;
                 let (mk, m) = t.get("method").expect("method was set");
                 return Err(self.err(&mk, m.loc, format!("\"snesvi\" {why}")));
@@ -1411,7 +1423,14 @@ impl Reader<'_> {
         let t = self.table(
             &k,
             n,
-            &["preset", "method", "petsc_options", "rtol", "reuse"],
+            &[
+                "preset",
+                "method",
+                "petsc_options",
+                "rtol",
+                "reuse",
+                "repeatable",
+            ],
         )?;
         if let Some((mk, m)) = t.get("method") {
             s.method = self.choice(
@@ -1442,6 +1461,9 @@ impl Reader<'_> {
                     ("condensed", Reuse::Auto), // the name of auto's direct path
                 ],
             )?;
+        }
+        if let Some((bk, b)) = t.get("repeatable") {
+            s.repeatable = self.boolean(&bk, b)?;
         }
         if let Some((ok, o)) = t.get("petsc_options") {
             s.petsc_options = self.string(&ok, o)?.to_string();

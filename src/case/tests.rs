@@ -475,6 +475,21 @@ fn solver_reuse_values_and_rejection() {
 }
 
 #[test]
+fn solver_repeatable_is_a_boolean_off_by_default() {
+    assert!(!parse(MINIMAL).unwrap().solver.repeatable);
+    let c = parse(&with("[solver]\nrepeatable = true\n")).unwrap();
+    assert!(c.solver.repeatable);
+    let c = parse_set(MINIMAL, &["solver.repeatable=true"]).unwrap();
+    assert!(c.solver.repeatable);
+    let e = expect_err(
+        &with("[solver]\nrepeatable = \"yes\"\n"),
+        "solver.repeatable",
+        "repeatable",
+    );
+    assert!(e.message.contains("boolean"), "{e}");
+}
+
+#[test]
 fn reject_unknown_preset() {
     let e = expect_err(
         &with("[solver]\npreset = \"lu\"\n"),

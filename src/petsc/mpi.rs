@@ -1,6 +1,6 @@
 //! The few raw MPI calls of the binding layer that run inside PETSc callbacks or next to MUMPS,
 //! where no `Ctx` is at hand: agreement on a flag or on the first failing rank's message, a
-//! gather of integers to rank 0.
+//! gather of integers to rank 0 and their broadcast from it.
 
 use std::ffi::c_void;
 use std::os::raw::c_int;
@@ -149,4 +149,21 @@ pub(super) fn gather_u64(comm: MPI_Comm, mine: &[u64]) -> Result<Option<Vec<u64>
         "MPI_Gatherv",
     )?;
     Ok(root.then_some(all))
+}
+
+/// `v` of rank 0 on every rank of `comm` (the same length on every rank). Collective.
+pub(super) fn broadcast_u64(comm: MPI_Comm, v: &mut [u64]) -> Result<()> {
+    // SAFETY: `v.len()` u64 in place, from rank 0, on a valid communicator.
+    mpi_ok(
+        unsafe {
+            ffi::MPI_Bcast(
+                v.as_mut_ptr() as *mut c_void,
+                v.len() as c_int,
+                ffi::RSMPI_UINT64_T,
+                0,
+                comm,
+            )
+        },
+        "MPI_Bcast",
+    )
 }

@@ -482,12 +482,23 @@ pub struct FactorStats {
 /// with an elimination order chosen by the caller: the analysis once per nonzero pattern, the
 /// numeric factorisation per set of values, solves with the right-hand side and the solution
 /// centralised on the host (rank 0 of the communicator).
+///
+/// On more than one rank MUMPS' results vary by round-off from run to run (docs/numbers.md,
+/// 2026-11-26): its forward elimination adds the contributions of a front's children held by
+/// another rank to the right-hand side as their messages arrive (measured with neither type-2
+/// nodes nor a parallel root, LDLᵀ with and without pivoting). With
+/// `one_process` the matrix is gathered on rank 0 and factorised and solved there by a MUMPS
+/// instance of its own (MPI_COMM_SELF): the same bits on every run, the other ranks idle.
 pub struct Factor {
-    inst: Instance,
+    /// MUMPS' instance: on every rank, or with `one_process` on rank 0 only.
+    inst: Option<Instance>,
     comm: MPI_Comm,
+    /// This rank's triplets (with `one_process`: every rank's, gathered on rank 0).
     irn: Vec<i32>,
     jcn: Vec<i32>,
     vals: Vec<f64>,
+    /// This rank's row and column indices as read (`one_process`: what `refactorise` compares).
+    own_pattern: Option<(Vec<i32>, Vec<i32>)>,
     perm: Vec<i32>,
     n: usize,
     root: bool,
@@ -498,13 +509,14 @@ pub struct Factor {
 impl Factor {
     /// The analysis (JOB = 1) of `mat` (global size `n`, this rank's rows read here) with the
     /// elimination order `order` (order[i] = 0-based position of variable i; read on the host
-    /// only, `None` or empty there: MUMPS' own choice). Collective; MUMPS' errors are global.
+    /// only, `None` or empty there: MUMPS' own choice); `one_process`: see [`Factor`].
+    /// Collective; MUMPS' errors are global.
     pub fn analyse(
         comm: MPI_Comm,
         mat: &Matrix,
         n: usize,
         order: Option<&[usize]>,
-        symmetric: bool,
+        (symmetric, one_process): (bool, bool),
         root: bool,
     ) -> Result<Factor> {
         if n >= i32::MAX as usize {
@@ -513,12 +525,28 @@ impl Factor {
             )));
         }
         let (irn, jcn, vals) = agreed(comm, rows(comm, mat, symmetric))?;
+        let sym = if symmetric { 2 } else { 0 };
+        let (inst, own_pattern, (irn, jcn, vals)) = if one_process {
+            let pattern = (irn.clone(), jcn.clone());
+            let all = gathered(comm, (irn, jcn, vals))?;
+            let inst = if root {
+                // SAFETY: reads the handle of MPI_COMM_SELF (set by MPI's initialisation).
+                Some(Instance::new(unsafe { super::ffi::RSMPI_COMM_SELF }, sym))
+            } else {
+                None
+            };
+            let inst = agreed(comm, inst.transpose())?;
+            (inst, Some(pattern), all)
+        } else {
+            (Some(Instance::new(comm, sym)?), None, (irn, jcn, vals))
+        };
         let mut f = Factor {
-            inst: Instance::new(comm, if symmetric { 2 } else { 0 })?,
+            inst,
             comm,
             irn,
             jcn,
             vals,
+            own_pattern,
             perm: match order {
                 Some(o) if root => o.iter().map(|&p| p as i32 + 1).collect(),
                 _ => Vec::new(),
@@ -528,32 +556,77 @@ impl Factor {
             symmetric,
             stats: FactorStats::default(),
         };
-        f.inst.id.n = n as i32;
-        let set = f.inst.set_matrix(&mut f.irn, &mut f.jcn, &mut f.vals);
+        let set = match f.inst.as_mut() {
+            Some(inst) => {
+                inst.id.n = n as i32;
+                inst.set_matrix(&mut f.irn, &mut f.jcn, &mut f.vals)
+            }
+            None => Ok(()),
+        };
         agreed(comm, set)?;
-        f.inst.set_order(root, &mut f.perm, n);
-        f.inst.call(1)?;
-        f.stats.flops = f.inst.id.rinfog[0];
-        f.stats.largest_front = f.inst.id.infog[4] as i64; // INFOG(5), the estimate
+        if let Some(inst) = f.inst.as_mut() {
+            inst.set_order(root, &mut f.perm, n);
+        }
+        f.call(1)?;
         f.stats.given_order = f.perm.len() == n && n > 0;
-        f.inst.id.perm_in = std::ptr::null_mut();
+        if let Some(inst) = f.inst.as_mut() {
+            f.stats.flops = inst.id.rinfog[0];
+            f.stats.largest_front = inst.id.infog[4] as i64; // INFOG(5), the estimate
+            inst.id.perm_in = std::ptr::null_mut();
+        }
+        f.share_stats()?;
         Ok(f)
+    }
+
+    /// `job` on the instance: collective on every rank, or on rank 0 alone with its outcome
+    /// agreed over the communicator (`one_process`).
+    fn call(&mut self, job: i32) -> Result<()> {
+        if self.own_pattern.is_none() {
+            return self
+                .inst
+                .as_mut()
+                .expect("an instance on every rank")
+                .call(job);
+        }
+        let r = self.inst.as_mut().map_or(Ok(()), |i| i.call(job));
+        agreed(self.comm, r)
+    }
+
+    /// With `one_process`, rank 0's statistics on every rank. Collective.
+    fn share_stats(&mut self) -> Result<()> {
+        if self.own_pattern.is_none() {
+            return Ok(());
+        }
+        let s = &mut self.stats;
+        let mut v = [
+            s.flops.to_bits(),
+            s.largest_front as u64,
+            s.factor_entries as u64,
+        ];
+        super::mpi::broadcast_u64(self.comm, &mut v)?;
+        s.flops = f64::from_bits(v[0]);
+        s.largest_front = v[1] as i64;
+        s.factor_entries = v[2] as i64;
+        Ok(())
     }
 
     /// The numeric factorisation (JOB = 2) of the values read by the analysis. Collective.
     pub fn factorise(&mut self) -> Result<()> {
-        let set = self
-            .inst
-            .set_matrix(&mut self.irn, &mut self.jcn, &mut self.vals);
-        agreed(self.comm, set)?;
-        self.inst.call(2)?;
-        let g = &self.inst.id.infog;
-        self.stats.factor_entries = if g[28] != 0 {
-            g[28] as i64
-        } else {
-            g[8] as i64
+        let set = match self.inst.as_mut() {
+            Some(inst) => inst.set_matrix(&mut self.irn, &mut self.jcn, &mut self.vals),
+            None => Ok(()),
         };
-        Ok(())
+        agreed(self.comm, set)?;
+        self.call(2)?;
+        if let Some(inst) = self.inst.as_ref() {
+            let g = &inst.id.infog;
+            self.stats.factor_entries = if g[28] != 0 {
+                g[28] as i64
+            } else {
+                g[8] as i64
+            };
+        }
+        self.share_stats()
     }
 
     /// The numeric factorisation of new values: `mat` is read once; `Ok(false)` (nothing
@@ -561,12 +634,20 @@ impl Factor {
     /// caller analyses anew. Collective.
     pub fn refactorise(&mut self, mat: &Matrix) -> Result<bool> {
         let read = rows(self.comm, mat, self.symmetric);
-        let same = matches!(&read, Ok((i, j, _)) if *i == self.irn && *j == self.jcn);
-        let (_, _, vals) = agreed(self.comm, read)?;
+        let (irn, jcn) = match &self.own_pattern {
+            Some((i, j)) => (i, j),
+            None => (&self.irn, &self.jcn),
+        };
+        let same = matches!(&read, Ok((i, j, _)) if i == irn && j == jcn);
+        let (i, j, vals) = agreed(self.comm, read)?;
         if !super::mpi::all_true(self.comm, same)? {
             return Ok(false);
         }
-        self.vals = vals;
+        self.vals = if self.own_pattern.is_some() {
+            gathered(self.comm, (i, j, vals))?.2
+        } else {
+            vals
+        };
         self.factorise()?;
         Ok(true)
     }
@@ -575,14 +656,19 @@ impl Factor {
     /// overwritten by the solution on the host (a length other than the global size is padded
     /// or cut there, so that no rank leaves the collective call alone). Collective.
     pub fn solve(&mut self, rhs: &mut Vec<f64>) -> Result<()> {
-        if self.root {
-            rhs.resize(self.n, 0.0);
-            self.inst.id.rhs = rhs.as_mut_ptr();
-            self.inst.id.lrhs = self.n as i32;
+        let n = self.n;
+        if let Some(inst) = self.inst.as_mut() {
+            if self.root {
+                rhs.resize(n, 0.0);
+                inst.id.rhs = rhs.as_mut_ptr();
+                inst.id.lrhs = n as i32;
+            }
+            inst.centralised_solve();
         }
-        self.inst.centralised_solve();
-        let done = self.inst.call(3);
-        self.inst.id.rhs = std::ptr::null_mut();
+        let done = self.call(3);
+        if let Some(inst) = self.inst.as_mut() {
+            inst.id.rhs = std::ptr::null_mut();
+        }
         done
     }
 
@@ -590,6 +676,38 @@ impl Factor {
     pub fn stats(&self) -> FactorStats {
         self.stats
     }
+}
+
+/// Every rank's triplets gathered on rank 0 in rank order (empty elsewhere); more entries
+/// than MPI's 32-bit counts allow is an error on every rank. Collective.
+fn gathered(
+    comm: MPI_Comm,
+    (irn, jcn, vals): (Vec<i32>, Vec<i32>, Vec<f64>),
+) -> Result<(Vec<i32>, Vec<i32>, Vec<f64>)> {
+    use super::mpi::gather_u64;
+    let total = gather_u64(comm, &[irn.len() as u64])?.map(|c| c.iter().sum::<u64>());
+    let fits = total.is_none_or(|t| t < i32::MAX as u64);
+    if !super::mpi::all_true(comm, fits)? {
+        return Err(own_error(
+            "MUMPS on one process: the matrix exceeds MPI's 32-bit counts",
+        ));
+    }
+    let ints = |v: &[i32]| v.iter().map(|&x| x as u32 as u64).collect::<Vec<u64>>();
+    let back = |v: Option<Vec<u64>>| {
+        v.unwrap_or_default()
+            .into_iter()
+            .map(|x| x as u32 as i32)
+            .collect::<Vec<i32>>()
+    };
+    let irn = back(gather_u64(comm, &ints(&irn))?);
+    let jcn = back(gather_u64(comm, &ints(&jcn))?);
+    let bits: Vec<u64> = vals.iter().map(|x| x.to_bits()).collect();
+    let vals = gather_u64(comm, &bits)?
+        .unwrap_or_default()
+        .into_iter()
+        .map(f64::from_bits)
+        .collect();
+    Ok((irn, jcn, vals))
 }
 
 /// A fill-reducing ordering of a graph (nested dissection by Scotch's default ordering

@@ -118,6 +118,8 @@ struct Shell {
     comm: MPI_Comm,
     dim: usize,
     symmetric: bool,
+    /// MUMPS on rank 0 alone ([`Factor`]): the same bits on every run.
+    one_process: bool,
     root: bool,
     factor: Option<Factor>,
     record: FactorRecord,
@@ -156,7 +158,7 @@ impl Shell {
                 &mat,
                 m as usize,
                 order,
-                self.symmetric,
+                (self.symmetric, self.one_process),
                 self.root,
             )?;
             self.record.analysis_seconds = ta.elapsed().as_secs_f64();
@@ -291,13 +293,24 @@ unsafe extern "C" fn shell_destroy(pc: ffi::PC) -> ffi::PetscErrorCode {
     0
 }
 
+/// The option (in the database) that puts the factorisation on rank 0 alone, repeatable bit for
+/// bit ([`Factor`]; the case's `solver.repeatable`).
+pub const ONE_PROCESS_OPTION: &str = "-ndfactor_one_process";
+
 /// Makes the PC of `ksp` the MUMPS factorisation with the project's nested-dissection order
-/// (LDLᵀ when `symmetric`, else LU) on matrices of block size `dim`. Collective.
-pub fn install(ksp: &Ksp, comm: MPI_Comm, dim: usize, symmetric: bool) -> Result<()> {
+/// (LDLᵀ when `symmetric`, else LU) on matrices of block size `dim`; `one_process`: MUMPS on
+/// rank 0 alone ([`Factor`]). Collective.
+pub fn install(
+    ksp: &Ksp,
+    comm: MPI_Comm,
+    dim: usize,
+    (symmetric, one_process): (bool, bool),
+) -> Result<()> {
     let shell = Box::new(Shell {
         comm,
         dim: dim.max(1),
         symmetric,
+        one_process,
         root: rank_of(comm)? == 0,
         factor: None,
         record: FactorRecord::default(),
@@ -326,7 +339,8 @@ pub fn install(ksp: &Ksp, comm: MPI_Comm, dim: usize, symmetric: bool) -> Result
 /// After `set_from_options`: when the PC of `ksp` is a MUMPS factorisation (PCCHOLESKY or PCLU
 /// with the solver type "mumps", the direct preset) and no MUMPS ordering was asked for
 /// (`-mat_mumps_icntl_7`, case file or command line), it becomes the shell of [`install`] with
-/// the operator `mat`'s block size. Returns whether it did. Collective.
+/// the operator `mat`'s block size, on rank 0 alone when [`ONE_PROCESS_OPTION`] is set. Returns
+/// whether it did. Collective.
 pub fn install_if_mumps(ksp: &Ksp, comm: MPI_Comm, mat: &Matrix) -> Result<bool> {
     let pc_type = ksp.type_names()?.1;
     if !(pc_type == "cholesky" || pc_type == "lu") || super::options::has("-mat_mumps_icntl_7")? {
@@ -350,7 +364,13 @@ pub fn install_if_mumps(ksp: &Ksp, comm: MPI_Comm, mat: &Matrix) -> Result<bool>
     if solver != "mumps" {
         return Ok(false);
     }
-    install(ksp, comm, bs.max(1) as usize, pc_type == "cholesky")?;
+    let one_process = super::options::has(ONE_PROCESS_OPTION)?;
+    install(
+        ksp,
+        comm,
+        bs.max(1) as usize,
+        (pc_type == "cholesky", one_process),
+    )?;
     Ok(true)
 }
 

@@ -276,7 +276,7 @@ pub fn solve(
         solver_section.preset,
         solver_section.rtol,
         !friction,
-        &solver_section.petsc_options,
+        (&solver_section.petsc_options, solver_section.repeatable),
     )?;
     let coords = solver::near_null_space_coordinates(ctx, mesh, layout, solver_section.preset)?;
     let c = complementarity_parameter(ctx, settings, &b, dim);

@@ -228,6 +228,15 @@ fn pairs_through_load_steps() {
     }
     // the second step presses harder
     assert!(rows[1][col("pair1_force_y")] > rows[0][col("pair1_force_y")]);
+    // scripts/plot-history: one curve, of the moving pair, named by its group
+    let png = s.dir.join("curve.png");
+    let mut cmd = Command::new(repo("scripts/plot-history"));
+    cmd.arg(&s.dir).arg("--out").arg(&png);
+    let r = run_with_timeout(cmd, Duration::from_secs(120));
+    r.expect_code(0, "plot-history");
+    assert!(r.stdout.contains("pair 2 (top)"), "{}", r.stdout);
+    assert!(!r.stdout.contains("pair 1"), "{}", r.stdout);
+    assert!(png.metadata().is_ok_and(|m| m.len() > 1000));
 }
 
 /// Tresca on the bottom pair, frictionless on the top one: the top pair's nodes have no

@@ -199,8 +199,9 @@ impl Method {
 pub enum Reuse {
     /// Direct, frictionless: the condensed path (Algorithm 1 on the contact unknowns, one
     /// factorisation with MUMPS' Schur complement, signorini::condensed; the case file may
-    /// also say "condensed"). Direct with friction: reuse
-    /// when the measured costs say it pays (signorini::reduced), refactorise otherwise.
+    /// also say "condensed"); where it falls back, the plain path reuses a factorisation when
+    /// the measured costs say it pays (signorini::reduced). Direct with friction: every step
+    /// refactorises (the condensed Coulomb path aside).
     /// Iterative: warm starts, inexact early steps, the preconditioner of an earlier step, set
     /// up anew when the Krylov iterations per decade grew by more than 30 % over those after
     /// the last setup, or when a solve on it does not converge.

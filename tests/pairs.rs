@@ -471,3 +471,63 @@ fn coulomb_plates_match_the_symmetric_quarter() {
         "friction carries nothing: {tangential}"
     );
 }
+
+/// A disk held only between its two plates (free vertically but for them), the top plate
+/// under the force that its motion of 0.02 takes: on the condensed path (the direct preset's
+/// default) the approach is one more free mode next to the disk's own, and the run gives back
+/// δ = 0.02 and the motion's solution (1 and 3 ranks). The other paths refuse it (exit 2,
+/// naming `contact[1].force`).
+#[test]
+fn force_on_a_body_held_only_by_its_pairs() {
+    let tmp = tempfile::tempdir().expect("tempdir");
+    let half = disk_mesh(tmp.path(), false);
+    let moved = solve(
+        1,
+        &write(
+            tmp.path(),
+            "moved.toml",
+            &half,
+            &format!(
+                "{BOTTOM}\n{}",
+                top_pair(&format!("motion = [0, {}]", -SQUEEZE))
+            ),
+        ),
+        &[],
+    );
+    moved.assert_converged("motion");
+    let f = pair_force(&moved, 1);
+    let forced = write(
+        tmp.path(),
+        "forced.toml",
+        &half,
+        &format!(
+            "{BOTTOM}\n{}",
+            top_pair(&format!("force = [0, {:.17e}]", f[1]))
+        ),
+    );
+    for np in [1, 3] {
+        let s = solve(np, &forced, &[]);
+        s.assert_converged("force control, floating");
+        let delta = s.f(&["contact", "approach"]);
+        assert!(
+            (delta - SQUEEZE).abs() <= 1e-8 * SQUEEZE,
+            "{np} ranks: δ = {delta}"
+        );
+        assert!(s.u_rel_diff(&moved) <= 1e-8, "{np} ranks");
+        assert_eq!(s.active_node_ids(), moved.active_node_ids());
+    }
+    for sets in [
+        &["solver.reuse=\"never\""][..],
+        &["solver.preset=\"iterative\""][..],
+    ] {
+        let out = tmp.path().join("refused");
+        let run = run_solver(2, &forced, sets, &out);
+        run.expect_code(2, "force control on a floating body off the condensed path");
+        let text = run.output();
+        assert!(
+            text.contains("contact[1].force") && text.contains("condensed path"),
+            "{text}"
+        );
+        assert!(!out.join("summary.json").exists());
+    }
+}

@@ -103,19 +103,22 @@ pub struct Approach {
     key: String,
 }
 
-/// Force control on a body that Dirichlet data leave free in a rigid mode: the loads' balance
-/// fixes its contact force, which can then not be prescribed.
-pub fn floating(fc: &ForceControl) -> RunError {
-    RunError::Input(
-        InputError::new(
-            Path::new(&fc.file),
-            "force control needs a body that Dirichlet data hold: this body is free in a rigid \
-             mode, where the balance of its loads decides the contact force (prescribe the \
-             obstacle's motion instead, or hold the body; force control of a body that only \
-             its contact pairs hold is not implemented)",
-        )
-        .with_key(fc.key.as_str()),
-    )
+/// Force control on a body that Dirichlet data leave free in a rigid mode. With one contact
+/// pair the loads' balance fixes its contact force, which can then not be prescribed; with
+/// several (a body held between obstacles) the approach is solved on the condensed path as one
+/// more free mode, and other paths (`several`) refuse it.
+pub fn floating(fc: &ForceControl, several: bool) -> RunError {
+    let message = if several {
+        "force control of a body that only its contact pairs hold (Dirichlet data leave it free \
+         in a rigid mode) is solved on the condensed path only — the direct preset, frictionless, \
+         solver.reuse = \"auto\" — which did not take this case: prescribe the obstacle's \
+         motion instead, or hold the body"
+    } else {
+        "force control needs a body that Dirichlet data hold: this body is free in a rigid \
+         mode, where the balance of its loads decides the contact force (prescribe the \
+         obstacle's motion instead, or hold the body)"
+    };
+    RunError::Input(InputError::new(Path::new(&fc.file), message).with_key(fc.key.as_str()))
 }
 
 /// A force along which the obstacle never reaches the body.

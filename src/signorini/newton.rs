@@ -300,7 +300,9 @@ impl<'a> Loop<'a> {
         let dim = mesh.dim;
         let free = FreeModes::new(ctx, mesh, layout, fixed, b, &reduced.f_local, s.rigid);
         let approach = match s.force {
-            Some(fc) if free.floats() => return Err(force::floating(fc)),
+            Some(fc) if free.floats() => {
+                return Err(force::floating(fc, b.n_pairs() > 1));
+            }
             Some(fc) => Some(Approach::new(b, fc)),
             None => None,
         };

@@ -7,6 +7,7 @@
 mod common;
 
 use common::*;
+use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 use std::process::Command;
 use std::time::Duration;
@@ -239,29 +240,38 @@ fn pairs_through_load_steps() {
     assert!(png.metadata().is_ok_and(|m| m.len() > 1000));
 }
 
-/// Tresca on the bottom pair, frictionless on the top one: the top pair's nodes have no
-/// tangential force (to round-off) and no friction bound; the bottom pair's respect theirs.
-#[test]
-fn tresca_next_to_a_frictionless_pair() {
+/// The half disk with `friction` on its bottom pair, the top plate frictionless and moved down
+/// by the squeeze, on 2 ranks: the run, its contact rows by node id and the largest |λ_n|.
+fn friction_under_the_disk(friction: &str) -> (Solved, BTreeMap<u64, Row>, f64) {
     let tmp = tempfile::tempdir().expect("tempdir");
     let half = disk_mesh(tmp.path(), false);
-    let g = 0.01;
     let case = write(
         tmp.path(),
-        "tresca.toml",
+        "friction.toml",
         &half,
         &format!(
-            "{BOTTOM}friction = {{ law = \"tresca\", threshold = {g} }}\n\n{}",
+            "{BOTTOM}{friction}\n\n{}",
             top_pair(&format!("motion = [0, {}]", -SQUEEZE))
         ),
     );
     let s = solve(2, &case, &[]);
-    s.assert_converged("tresca");
+    s.assert_converged(friction);
     let rows = s.contact_rows_by_id();
     let scale = rows
         .values()
         .map(|r| r.f("lambda_n").abs())
         .fold(0.0, f64::max);
+    (s, rows, scale)
+}
+
+/// Tresca on the bottom pair, frictionless on the top one: the top pair's nodes have no
+/// tangential force (to round-off) and no friction bound; the bottom pair's respect theirs.
+#[test]
+fn tresca_next_to_a_frictionless_pair() {
+    let g = 0.01;
+    let (_, rows, scale) = friction_under_the_disk(&format!(
+        "friction = {{ law = \"tresca\", threshold = {g} }}"
+    ));
     let (mut stuck_or_slipping, mut top) = (0, 0);
     for r in rows.values() {
         let lt = r.lambda_t(2)[0].abs();
@@ -376,25 +386,9 @@ fn cube_between_two_plates() {
 /// round-off), the bottom pair's respects |λ_τ| ≤ μ (−λ_n) and carries some.
 #[test]
 fn coulomb_pairs_with_their_own_mu() {
-    let tmp = tempfile::tempdir().expect("tempdir");
-    let half = disk_mesh(tmp.path(), false);
     let mu = 0.5;
-    let case = write(
-        tmp.path(),
-        "coulomb.toml",
-        &half,
-        &format!(
-            "{BOTTOM}friction = {{ law = \"coulomb\", mu = {mu} }}\n\n{}",
-            top_pair(&format!("motion = [0, {}]", -SQUEEZE))
-        ),
-    );
-    let s = solve(2, &case, &[]);
-    s.assert_converged("coulomb");
-    let rows = s.contact_rows_by_id();
-    let scale = rows
-        .values()
-        .map(|r| r.f("lambda_n").abs())
-        .fold(0.0, f64::max);
+    let (_, rows, scale) =
+        friction_under_the_disk(&format!("friction = {{ law = \"coulomb\", mu = {mu} }}"));
     let mut carrying = 0;
     for (id, r) in &rows {
         let (lt, ln) = (r.lambda_t(2)[0].abs(), -r.f("lambda_n"));

@@ -647,6 +647,16 @@ fn too_large(file: &Path) -> InputError {
     )
 }
 
+/// The keys of `[solver]`.
+const SOLVER_KEYS: &[&str] = &[
+    "preset",
+    "method",
+    "petsc_options",
+    "rtol",
+    "reuse",
+    "repeatable",
+];
+
 const ROOT_KEYS: &[&str] = &[
     "mesh",
     "material",
@@ -1182,18 +1192,7 @@ impl Reader<'_> {
             };
             if let Some(why) = why {
                 let (sk, sn) = top.get("solver").expect("method was set in [solver]");
-                let t = self.table(
-                    &sk,
-                    sn,
-                    &[
-                        "preset",
-                        "method",
-                        "petsc_options",
-                        "rtol",
-                        "reuse",
-                        "repeatable",
-                    ],
-                )?;
+                let t = self.table(&sk, sn, SOLVER_KEYS)?;
                 let (mk, m) = t.get("method").expect("method was set");
                 return Err(self.err(&mk, m.loc, format!("\"snesvi\" {why}")));
             }
@@ -1421,18 +1420,7 @@ impl Reader<'_> {
         let Some((k, n)) = top.get("solver") else {
             return Ok(s);
         };
-        let t = self.table(
-            &k,
-            n,
-            &[
-                "preset",
-                "method",
-                "petsc_options",
-                "rtol",
-                "reuse",
-                "repeatable",
-            ],
-        )?;
+        let t = self.table(&k, n, SOLVER_KEYS)?;
         if let Some((mk, m)) = t.get("method") {
             s.method = self.choice(
                 &mk,

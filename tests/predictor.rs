@@ -91,6 +91,69 @@ fn hertz_cylinder_2d_starts_near_the_final_set_and_saves_steps() {
     );
 }
 
+/// The full floating ball of cases/ball3d (no Dirichlet data, no symmetry plane): after the
+/// prediction its tangential rigid modes are free; the reuse path removes them as the null
+/// space of the step's matrix instead of pinning a dof each, and the final iterate is still the
+/// pinned plain path's (same active nodes, u within 1e-8), on 1 and 2 ranks.
+#[test]
+fn full_ball_3d_takes_its_free_modes_as_null_space_and_ends_on_the_pinned_answer() {
+    for np in [1, 2] {
+        let (plain, auto) = predicted_against_plain(np, &repo("cases/ball3d/ball3d.toml"), &[], 0);
+        let h = get(&auto.summary, &["newton", "history"]);
+        let steps = h.as_array().unwrap();
+        assert_eq!(
+            steps[0]["amg"]["null_space"],
+            Value::Bool(false),
+            "{}",
+            steps[0]
+        );
+        for st in &steps[1..] {
+            assert_eq!(st["pinned"].as_u64(), Some(3), "{st}");
+            assert_eq!(st["amg"]["null_space"], Value::Bool(true), "{st}");
+        }
+        for st in get(&plain.summary, &["newton", "history"])
+            .as_array()
+            .unwrap()
+        {
+            assert_ne!(st["amg"]["null_space"], Value::Bool(true), "{st}");
+        }
+    }
+}
+
+/// The manufactured strip (a contact zone wide against the body's height: the half-space
+/// model is rough, its first set has 24 of the final 57 nodes at level 3). From the predicted
+/// set on, every exact step whose update (3.23) changes nodes has it corrected by the model
+/// anchored at that step's solution; the iteration still ends as Algorithm 1 does (an exact
+/// step that changes nothing), on the plain path's answer, in no more steps than it.
+#[test]
+fn manufactured_strip_2d_corrects_each_exact_update_by_the_anchored_model() {
+    let case = repo("cases/manufactured/contact2d.toml");
+    let sets = ["mesh.refine=3"];
+    for np in [1, 2] {
+        let plain = run(np, &case, &iterative(&sets, "never"));
+        let auto = run(np, &case, &iterative(&sets, "auto"));
+        assert_eq!(plain.active_node_ids(), auto.active_node_ids());
+        let d = plain.u_rel_diff(&auto);
+        assert!(d <= 1e-8, "|u - u_plain| / max|u| = {d:e}");
+        let h = get(&auto.summary, &["newton", "history"]);
+        let steps = h.as_array().unwrap();
+        assert!(steps.len() >= 3, "{h}");
+        assert!(
+            auto.steps() <= plain.steps(),
+            "{} > {}",
+            auto.steps(),
+            plain.steps()
+        );
+        for st in &steps[1..steps.len() - 1] {
+            assert!(st["changed"].as_u64().unwrap() > 0, "{st}");
+            assert_eq!(st["predictor"]["outcome"], "predicted", "{st}");
+        }
+        let last = &steps[steps.len() - 1];
+        assert_eq!(last["changed"].as_u64(), Some(0), "{last}");
+        assert!(last["predictor"].is_null(), "{last}");
+    }
+}
+
 #[test]
 fn quarter_ball_3d_mirrors_in_its_two_symmetry_planes() {
     let tmp = tempfile::tempdir().unwrap();

@@ -670,6 +670,32 @@ impl Matrix {
             check(ffi::MatNullSpaceDestroy(&mut sp))
         }
     }
+
+    /// Attaches the span of `basis` (orthonormal vectors of this matrix's layout) as its null
+    /// space and transpose null space: Krylov solves remove it from the right-hand side and
+    /// from every preconditioned vector. An empty basis detaches both.
+    pub fn set_null_space(&mut self, comm: MPI_Comm, basis: &[Vector]) -> Result<()> {
+        // SAFETY: the vectors are valid; PETSc references them in the null space object,
+        // which the matrix references in turn; our reference is dropped at once.
+        unsafe {
+            if basis.is_empty() {
+                check(ffi::MatSetNullSpace(self.raw, ptr::null_mut()))?;
+                return check(ffi::MatSetTransposeNullSpace(self.raw, ptr::null_mut()));
+            }
+            let raws: Vec<ffi::Vec> = basis.iter().map(|v| v.raw).collect();
+            let mut sp: ffi::MatNullSpace = ptr::null_mut();
+            check(ffi::MatNullSpaceCreate(
+                comm,
+                ffi::PETSC_FALSE,
+                raws.len() as PInt,
+                raws.as_ptr(),
+                &mut sp,
+            ))?;
+            check(ffi::MatSetNullSpace(self.raw, sp))?;
+            check(ffi::MatSetTransposeNullSpace(self.raw, sp))?;
+            check(ffi::MatNullSpaceDestroy(&mut sp))
+        }
+    }
 }
 
 impl Drop for Matrix {

@@ -176,6 +176,8 @@ struct Loop<'a> {
     last_still_residual: Option<f64>,
     /// Force control: the approach δ and the gaps it moves.
     approach: Option<Approach>,
+    /// The free modes are S's null space instead of pinned ([`Loop::free_modes_by_null_space`]).
+    null_space: bool,
 }
 
 /// The start "auto": the initially touching nodes (the "gap" start), except for a
@@ -211,12 +213,12 @@ pub fn semismooth_newton(
         exact: !(reduced.inexact_available() && s.law == Law::Frictionless),
         predict: s.halfspace.is_some() && predicting,
         confirm: false,
+        correct: false,
     };
     let mut last_changed = usize::MAX;
     for step in 1..=s.section.max_steps {
-        if lp.free.update(ctx, mesh, layout, &lp.summary.gram)? {
-            reduced.set_pins(sys, layout, lp.free.pins())?;
-        }
+        let modes_changed = lp.free.update(ctx, mesh, layout, &lp.summary.gram)?;
+        let null_space = lp.free_modes_by_null_space(reduced, modes_changed)?;
         if !s.friction() {
             // Friction reads u_τ itself (stick rows, slip rows), so only the frictionless
             // solve can leave the rigid motion out.
@@ -229,7 +231,8 @@ pub fn semismooth_newton(
             ap.place(&mut lp.shifted); // the gaps at δ_ℓ
         }
         let bs = &lp.shifted;
-        reduced.write(ctx, sys, layout, bs, &lp.set, lp.free.pins())?; // (3.29) / (3.42)
+        let pins = if null_space { &[][..] } else { lp.free.pins() };
+        reduced.write(ctx, sys, layout, bs, &lp.set, pins)?; // (3.29) / (3.42)
         reduced.set_inexact(!plan.exact);
         if plan.predict {
             reduced.set_predictor_solve();
@@ -238,6 +241,9 @@ pub fn semismooth_newton(
         let solved = reduced.solve(ctx, allow_reuse)?;
         let reused = solved.reuse.is_some() && solved.kind == SolveKind::Reuse;
         ensure_converged(step, &solved.info)?;
+        if null_space {
+            lp.zero_pins(reduced)?;
+        }
         reduced.recover(sys, bs, &lp.set, &mut lp.it)?; // (3.28)
         let touch = lp.bordered_step(reduced, step)?;
         let bs = &lp.shifted;
@@ -252,6 +258,8 @@ pub fn semismooth_newton(
             let (rec, exact) = lp.predict(hs, &mut update)?;
             exact_from_prediction = exact;
             predicted = Some(rec);
+        } else if let Some(hs) = s.halfspace.filter(|_| plan.correct) {
+            predicted = lp.correct(hs, &mut update)?;
         }
         let totals = update.reduce(ctx, &lp.shifted, lp.free.modes(), dim);
         history.push(lp.step_info(step, &totals, solved));
@@ -354,7 +362,9 @@ impl<'a> Loop<'a> {
             shifted: placed,
             last_still_residual: None,
             approach,
+            null_space: false,
         };
+        reduced.set_free_null_space(ctx, None)?; // none left from an earlier solve
         Ok((lp, predicting))
     }
 
@@ -399,6 +409,33 @@ impl<'a> Loop<'a> {
             ap.delta += d; // the next step solves at the predicted approach
         }
         Ok((rec, exact))
+    }
+
+    /// The model's correction of an exact step's set update ([`predictor::correct`]; not
+    /// under force control): when (3.23) changes nodes, the next set is the model's, except
+    /// that every node (3.23) changes keeps its change (so the step counts at least those
+    /// changes, and a correction never stops the iteration); the model's record, or `None`
+    /// when (3.23) changes nothing. Collective.
+    fn correct(
+        &mut self,
+        hs: &HalfSpace,
+        update: &mut SetUpdate,
+    ) -> Result<Option<PredictorStep>, RunError> {
+        let ctx = self.ctx;
+        if self.approach.is_some() || ctx.sum_usize(update.changed) == 0 {
+            return Ok(None);
+        }
+        let limits = (self.s.c, self.s.section.max_steps);
+        let cur = (&self.shifted, &self.it, self.set.normal.as_slice());
+        let (set, rec) = predictor::correct(ctx, hs, cur, &self.free, limits)?;
+        if let Some(model) = set.filter(|_| !rec.truncated) {
+            let next: Vec<bool> = (model.iter().zip(&self.set.normal))
+                .zip(&update.next.normal)
+                .map(|((&m, &now), &plain)| if plain != now { plain } else { m })
+                .collect();
+            update.replace_normal(&self.set, next);
+        }
+        Ok(Some(rec))
     }
 
     /// The result: u = w + ρ (the rigid motion added back), the final iterate and the record.
@@ -447,6 +484,9 @@ struct StepPlan {
     /// The confirming step: the same sets factorised after a stop decided on a step solved by
     /// GMRES on an earlier factorisation (no reuse).
     confirm: bool,
+    /// The half-space model corrects the set update after this step's solve ([`Loop::correct`]):
+    /// the exact steps from a predicted set on.
+    correct: bool,
 }
 
 /// What follows a step: the same sets once more, or the set updated by (3.23)/(3.33); with
@@ -481,6 +521,8 @@ impl StepPlan {
             exact,
             predict: false,
             confirm: self.confirm,
+            // the exact steps from a predicted set on
+            correct: (self.predict || self.correct) && exact,
         };
         if exact {
             return After::Update(next);
@@ -507,6 +549,7 @@ impl StepPlan {
                 exact: true,
                 predict: false,
                 confirm: true,
+                correct: false,
             })
         } else {
             After::Update(self)
@@ -566,7 +609,7 @@ fn log_step(ctx: &Ctx, h: &StepInfo, t: &StepTotals) {
             "no right-hand side, no solve".to_string()
         }
         (_, Some(a)) => format!(
-            "{} its, {}{}, r0 {:.1e}",
+            "{} its, {}{}{}, r0 {:.1e}",
             h.iterations,
             if a.fallback {
                 "PC reused, failed, set up"
@@ -576,6 +619,11 @@ fn log_step(ctx: &Ctx, h: &StepInfo, t: &StepTotals) {
                 "PC reused"
             },
             if a.inexact { ", inexact" } else { "" },
+            if a.null_space {
+                ", free modes as null space"
+            } else {
+                ""
+            },
             a.initial_residual
         ),
         _ => format!("{} its", h.iterations),
@@ -604,6 +652,57 @@ fn log_step(ctx: &Ctx, h: &StepInfo, t: &StepTotals) {
 }
 
 impl Loop<'_> {
+    /// Whether this step removes the free rigid modes by S's null space instead of pins, and
+    /// the null space attached or detached accordingly: on the iterative preset's reuse path,
+    /// frictionless, without force control, when the load is balanced in every free mode (the
+    /// pins would carry nothing; an unbalanced load keeps them: the predictor's first solve,
+    /// the body moved until it touches). The pins' rows are read anew when the modes or this
+    /// choice changed (none with the null space). Collective when it changes.
+    fn free_modes_by_null_space(
+        &mut self,
+        reduced: &mut ReducedSystem,
+        modes_changed: bool,
+    ) -> Result<bool, RunError> {
+        let use_it = reduced.inexact_available()
+            && !self.s.friction()
+            && self.approach.is_none()
+            && !self.free.pins().is_empty()
+            && self.free.balanced();
+        let (mesh, layout) = (self.p.mesh, self.p.layout);
+        if use_it != self.null_space || modes_changed {
+            let pins = if use_it { &[][..] } else { self.free.pins() };
+            reduced.set_pins(self.p.sys, layout, pins)?;
+        }
+        if use_it != self.null_space || (use_it && modes_changed) {
+            let fields = use_it.then(|| self.free.free_fields(mesh, layout, reduced.local_rows()));
+            reduced.set_free_null_space(self.ctx, fields)?;
+            self.null_space = use_it;
+        }
+        Ok(use_it)
+    }
+
+    /// After a solve with the free modes as S's null space: the solution moved by the free
+    /// rigid motion that makes it vanish at the pins, the member of u + Σ α_j r_j that the
+    /// pinned solve gives. Collective.
+    fn zero_pins(&self, reduced: &mut ReducedSystem) -> Result<(), RunError> {
+        let (mesh, layout, dim) = (self.p.mesh, self.p.layout, self.p.mesh.dim);
+        let idx: Vec<crate::petsc::PInt> = (self.free.pins().iter())
+            .map(|&(v, k)| (v * dim + k) as crate::petsc::PInt)
+            .collect();
+        let at = reduced.solution_at(&idx)?;
+        let rho = self.free.motion_to_zero_pins(&at, &[0.0; 6]);
+        let (row_lo, n_local) = reduced.local_rows();
+        let mut delta = vec![0.0; n_local];
+        for &v in &layout.owned_nodes {
+            for k in 0..dim {
+                delta[layout.node_global[v] * dim + k - row_lo] =
+                    self.free.motion_at(&rho, &mesh.coords[v], k);
+            }
+        }
+        reduced.add_to_solution(&delta)?;
+        Ok(())
+    }
+
     fn step_info(&self, step: usize, t: &StepTotals, solved: StepSolve) -> StepInfo {
         StepInfo {
             step,
@@ -838,6 +937,7 @@ mod tests {
         exact: false,
         predict: false,
         confirm: false,
+        correct: false,
     };
 
     #[test]
@@ -897,9 +997,11 @@ mod tests {
             ..LOOSE
         };
         let mut last = usize::MAX;
-        // a set predicted inside the model: exact from here, no second prediction
+        // a set predicted inside the model: exact from here, no second prediction (the
+        // model corrects the updates instead)
         let exact = StepPlan {
             exact: true,
+            correct: true,
             ..LOOSE
         };
         assert_eq!(
@@ -946,5 +1048,37 @@ mod tests {
             confirm.after_solve(true, 2, false, &mut last),
             After::Update(confirm)
         );
+    }
+
+    #[test]
+    fn the_model_corrects_the_exact_steps_from_a_predicted_set_on_only() {
+        let predict = StepPlan {
+            predict: true,
+            ..LOOSE
+        };
+        let mut last = usize::MAX;
+        // the prediction accepted (exact from then on): the next steps are corrected
+        let After::Update(next) = predict.after_solve(true, 40, false, &mut last) else {
+            panic!("a prediction is followed by an update");
+        };
+        assert!(next.correct && next.exact && !next.predict);
+        assert_eq!(
+            next.after_solve(true, 3, false, &mut last),
+            After::Update(next)
+        );
+        // a prediction not accepted (inexact steps follow): no correction
+        let After::Update(loose) = predict.after_solve(false, 40, false, &mut last) else {
+            panic!("an inexact step that changes nodes is followed by an update");
+        };
+        assert!(!loose.correct);
+        // without a prediction, nothing is corrected
+        let exact = StepPlan {
+            exact: true,
+            ..LOOSE
+        };
+        let After::Update(e) = exact.after_solve(true, 3, false, &mut last) else {
+            panic!("an exact step is followed by an update");
+        };
+        assert!(!e.correct);
     }
 }

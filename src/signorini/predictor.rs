@@ -13,6 +13,14 @@
 //! Algorithm 1 goes on on the real system, so the final iterate is Algorithm 1's whatever
 //! the model's error (it only costs steps). The model is that of Hertz' theory: exact for
 //! a small contact zone on a smooth body, rougher for conforming contact or thin bodies.
+//!
+//! After every exact step from the predicted set on whose update (3.23) changes nodes, the
+//! model corrects that update ([`correct`]): anchored at the step's exact solution (d₀ = u_n
+//! + C λ_n), it models only the change of λ, so its error shrinks with the change, and its
+//! Algorithm 1 also moves the nodes that change only after others have (a contact edge that
+//! moves by several nodes, which (3.23) alone moves a node per step). The nodes (3.23)
+//! changes keep their change, so a correction never ends the iteration: it still ends on an
+//! exact step whose update changes nothing.
 
 use super::active_set::Iterate;
 use super::boundary::ContactBoundary;
@@ -22,7 +30,7 @@ use crate::error::RunError;
 use crate::mesh::Mesh;
 use crate::par::Ctx;
 use crate::say;
-use nalgebra::DMatrix;
+use nalgebra::{DMatrix, DVector};
 use serde::Serialize;
 use std::f64::consts::PI;
 use std::time::Instant;
@@ -259,8 +267,12 @@ pub fn mirror_planes(ctx: &Ctx, mesh: &Mesh, fixed: &[f64]) -> Vec<(usize, f64)>
     out
 }
 
-/// Values per node record gathered on every rank: x (3), n (3), gap, w, u_n, G (6).
-const REC: usize = 16;
+/// Values per node record gathered on every rank: x (3), n (3), gap, w, u_n, G (6), pair,
+/// λ_n of an active node (0 off the set).
+const REC: usize = 17;
+/// Where the pair and λ_n are in a record.
+const PAIR: usize = 15;
+const LAMBDA: usize = 16;
 
 /// The predicted normal set of this rank's contact nodes after the first solve (`it`, on the
 /// boundary `b` as the solve saw it, all nodes inactive), or `None` when the model does not
@@ -275,13 +287,42 @@ pub fn predict(
     (c, max_steps): (f64, usize),
     force: Option<([f64; 3], f64, usize)>,
 ) -> Result<(Option<Vec<bool>>, PredictorStep), RunError> {
+    run_model(ctx, hs, (b, it, None), free, (c, max_steps), force)
+}
+
+/// The model as a correction of an exact step (frictionless, no force control): after the
+/// solve of (3.29) on the set `active`, the model is anchored at that solution — d₀ = u_n +
+/// C λ_n, so that at the step's λ_n it gives the step's u_n exactly and only the change of λ
+/// is modelled — and Algorithm 1 on it gives the set that the changes of (3.23) lead to,
+/// including the nodes that change only once the others have (a contact edge that moves
+/// by more than one node). Returns the model's set of this rank's nodes as for [`predict`].
+/// Collective.
+pub fn correct(
+    ctx: &Ctx,
+    hs: &HalfSpace,
+    (b, it, active): (&ContactBoundary, &Iterate, &[bool]),
+    free: &FreeModes,
+    limits: (f64, usize),
+) -> Result<(Option<Vec<bool>>, PredictorStep), RunError> {
+    run_model(ctx, hs, (b, it, Some(active)), free, limits, None)
+}
+
+/// [`predict`] (`active` = None) or [`correct`]. Collective.
+fn run_model(
+    ctx: &Ctx,
+    hs: &HalfSpace,
+    (b, it, active): (&ContactBoundary, &Iterate, Option<&[bool]>),
+    free: &FreeModes,
+    (c, max_steps): (f64, usize),
+    force: Option<([f64; 3], f64, usize)>,
+) -> Result<(Option<Vec<bool>>, PredictorStep), RunError> {
     let t = Instant::now();
     let mz = if free.floats() {
         free.dirichlet_free().ncols()
     } else {
         0
     };
-    let all = gather_records(ctx, b, it, free);
+    let all = gather_records(ctx, b, it, free, active);
     let n = all.len() / REC;
     // Under force control nothing penetrates before the approach is known: the model grows
     // from MIN_MODEL_NODES (by MODEL_MARGIN) while its contact zone reaches its border.
@@ -342,7 +383,12 @@ pub fn predict(
     };
     say!(
         ctx,
-        "predictor: half-space model (E* = {:.4e}, {} mirror plane(s)) on {} nodes for {} contact nodes: {}{} ({} active, {} steps, {} coarse levels, {:.3} s){}",
+        "predictor{}: half-space model (E* = {:.4e}, {} mirror plane(s)) on {} nodes for {} contact nodes: {}{} ({} active, {} steps, {} coarse levels, {:.3} s){}",
+        if active.is_some() {
+            " (correcting the set update of the exact step)"
+        } else {
+            ""
+        },
         hs.modulus,
         rec.mirror_planes,
         rec.model_nodes,
@@ -369,14 +415,22 @@ const HEAD: usize = 6;
 /// Every contact node of every rank (rank order, = the boundary's global numbering): x, n,
 /// gap, lumped weight, the first solve's u_n and the free modes' normal parts ([`REC`] values).
 /// Collective.
-fn gather_records(ctx: &Ctx, b: &ContactBoundary, it: &Iterate, free: &FreeModes) -> Vec<f64> {
+fn gather_records(
+    ctx: &Ctx,
+    b: &ContactBoundary,
+    it: &Iterate,
+    free: &FreeModes,
+    active: Option<&[bool]>,
+) -> Vec<f64> {
     let mut mine = Vec::with_capacity(b.nodes.len() * REC);
-    for (k, r) in b.nodes.iter().zip(&it.nodes) {
+    for (i, (k, r)) in b.nodes.iter().zip(&it.nodes).enumerate() {
         mine.extend_from_slice(&k.x);
         mine.extend_from_slice(&k.frame.n);
         mine.extend_from_slice(&[k.gap, k.weight, r.u_n]);
         mine.extend_from_slice(&free.normal_parts(&k.x, &k.frame.n));
         mine.push(k.pair as f64);
+        let on = active.is_some_and(|a| a[i]);
+        mine.push(if on { r.lambda_n } else { 0.0 });
     }
     ctx.all_gather_varcount(&mine)
 }
@@ -403,8 +457,18 @@ impl Model {
     fn choose(all: &[f64], wanted: Option<usize>) -> Model {
         let n = all.len() / REC;
         let r = |i: usize| &all[i * REC..(i + 1) * REC];
-        // s⁰ = u_n + g: the first solve's clearance (< 0 penetrates)
-        let s0: Vec<f64> = (0..n).map(|i| r(i)[8] + r(i)[6]).collect();
+        // s⁰ = u_n + g: the first solve's clearance (< 0 penetrates); a node that carries a
+        // λ_n (a correction's active node, where u_n + g = 0) counts as penetrating
+        let s0: Vec<f64> = (0..n)
+            .map(|i| {
+                let s = r(i)[8] + r(i)[6];
+                if r(i)[LAMBDA] != 0.0 {
+                    s.min(-f64::MIN_POSITIVE)
+                } else {
+                    s
+                }
+            })
+            .collect();
         let pen = s0.iter().filter(|&&s| s < 0.0).count();
         let wanted = if let Some(w) = wanted {
             w.min(n)
@@ -464,13 +528,21 @@ impl Model {
             (1.0, 0, 0)
         } else {
             let cmat = assemble(m, packed_c);
-            let d0: Vec<f64> = self.pick.iter().map(|&i| r(i)[8]).collect();
+            // a correction: d₀ = u_n + C λ_n, λ_n of a model node the sum of its nodes'
+            let mut lam = DVector::<f64>::zeros(m);
+            for (q, &i) in self.fine.iter().enumerate() {
+                lam[self.owner[q]] += r(i)[LAMBDA];
+            }
+            let clam = &cmat * &lam;
+            let d0: Vec<f64> = (self.pick.iter().enumerate())
+                .map(|(q, &i)| r(i)[8] + clam[q])
+                .collect();
             let gap: Vec<f64> = self.pick.iter().map(|&i| r(i)[6]).collect();
             let mzf = mz + usize::from(force.is_some());
             let g = DMatrix::from_fn(m, mzf, |q, cc| match force {
                 Some((e, _, pair)) if cc == mz => {
                     let x = r(self.pick[q]);
-                    if x[REC - 1] == pair as f64 {
+                    if x[PAIR] == pair as f64 {
                         -(x[3] * e[0] + x[4] * e[1] + x[5] * e[2])
                     } else {
                         0.0 // another pair's obstacle stays

@@ -419,6 +419,9 @@ pub struct AmgStep {
     /// The Krylov solve on the reused preconditioner did not converge: set up anew and solved
     /// again from where it stopped (`iterations` counts both solves).
     pub fallback: bool,
+    /// The free rigid modes were S's null space instead of pinned dofs
+    /// ([`ReducedSystem::set_free_null_space`]).
+    pub null_space: bool,
 }
 
 /// The iterative preset's reuse path (`solver.reuse` "auto" / "always"): warm starts, the
@@ -438,6 +441,8 @@ struct AmgReuser {
     inexact: bool,
     /// This step's solve is the predictor's first ([`ReducedSystem::set_predictor_solve`]).
     predictor: bool,
+    /// The free rigid modes are S's null space ([`ReducedSystem::set_free_null_space`]).
+    null_space: bool,
     /// This rank's prescribed node components of the system written last: (first local row,
     /// projector P onto the free components, prescribed part ū).
     prescribed: Vec<(usize, [[f64; 3]; 3], [f64; 3])>,
@@ -569,6 +574,7 @@ impl AmgReuser {
             initial_residual,
             rate,
             fallback,
+            null_space: self.null_space,
         }
     }
 }
@@ -671,6 +677,7 @@ impl ReducedSystem {
                 rebuild: false,
                 inexact: false,
                 predictor: false,
+                null_space: false,
                 prescribed: Vec::new(),
             });
             return Ok(());
@@ -846,6 +853,59 @@ impl ReducedSystem {
             reuse: Some(step),
             amg: None,
         })
+    }
+
+    /// The free rigid modes as the null space of S instead of pins (`Some(fields)`, this
+    /// rank's rows of each mode; `None` detaches it): the fields are orthonormalised and
+    /// attached to S, and Krylov solves then leave their components alone (the solution is
+    /// one member of the family u + Σ α_j r_j; the Newton loop moves it to the pinned one).
+    /// The iterative preset's use: a mode held by one pinned dof is a point constraint, whose
+    /// stiffness falls with the mesh size, and GMRES + GAMG then needs more iterations per
+    /// decade than on the same body held along a surface. Collective.
+    pub fn set_free_null_space(
+        &mut self,
+        ctx: &Ctx,
+        fields: Option<Vec<Vec<f64>>>,
+    ) -> petsc::Result<()> {
+        let mut basis: Vec<Vector> = Vec::new();
+        let mut done: Vec<Vec<f64>> = Vec::new();
+        for mut f in fields.unwrap_or_default() {
+            // Gram–Schmidt twice against the fields before (global dot products)
+            for _ in 0..2 {
+                let dots: Vec<f64> = done
+                    .iter()
+                    .map(|g| g.iter().zip(&f).map(|(a, b)| a * b).sum())
+                    .collect();
+                let dots = ctx.sum_vec(&dots);
+                for (g, d) in done.iter().zip(&dots) {
+                    f.iter_mut().zip(g).for_each(|(x, y)| *x -= d * y);
+                }
+            }
+            let norm = ctx.sum_vec(&[f.iter().map(|x| x * x).sum::<f64>()])[0].sqrt();
+            if norm == 0.0 {
+                continue;
+            }
+            f.iter_mut().for_each(|x| *x /= norm);
+            let mut v = self.u.duplicate()?;
+            v.write(|x| x.copy_from_slice(&f))?;
+            basis.push(v);
+            done.push(f);
+        }
+        if let Some(amg) = &mut self.amg {
+            amg.null_space = !basis.is_empty();
+        }
+        self.s.set_null_space(ctx.comm(), &basis)
+    }
+
+    /// This rank's first global row and row count.
+    pub fn local_rows(&self) -> (usize, usize) {
+        (self.row_lo, self.f_local.len())
+    }
+
+    /// Adds `delta` (this rank's rows) to the last solution.
+    pub fn add_to_solution(&mut self, delta: &[f64]) -> petsc::Result<()> {
+        self.u
+            .write(|x| x.iter_mut().zip(delta).for_each(|(a, b)| *a += b))
     }
 
     /// Whether the solver may make inexact steps (the iterative preset's reuse path).

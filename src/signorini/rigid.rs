@@ -602,6 +602,43 @@ impl FreeModes {
         }
     }
 
+    /// Whether the load is balanced in every free mode (the pins would carry no reaction:
+    /// the test of [`FreeModes::balance`] before it looks for a touching node). Local.
+    pub fn balanced(&self) -> bool {
+        let (modes, q) = (&self.modes, &self.q);
+        let norm = (0..q.ncols())
+            .map(|c| (0..modes.m).map(|j| q[(j, c)] * self.load[j]).sum::<f64>())
+            .map(|g| g * g)
+            .sum::<f64>()
+            .sqrt();
+        norm <= BALANCE_RTOL * self.load_scale
+    }
+
+    /// The free modes as fields on this rank's rows (`row_lo` its first global row, `n_local`
+    /// its row count): one vector per column of the free-mode basis. Local.
+    pub fn free_fields(
+        &self,
+        mesh: &Mesh,
+        layout: &Layout,
+        (row_lo, n_local): (usize, usize),
+    ) -> Vec<Vec<f64>> {
+        let (dim, m) = (mesh.dim, self.modes.m);
+        (0..self.q.ncols())
+            .map(|c| {
+                let mut f = vec![0.0; n_local];
+                for &v in &layout.owned_nodes {
+                    for k in 0..dim {
+                        let r = layout.node_global[v] * dim + k - row_lo;
+                        f[r] = (0..m)
+                            .map(|j| self.q[(j, c)] * self.modes.value(j, &mesh.coords[v], k))
+                            .sum();
+                    }
+                }
+                f
+            })
+            .collect()
+    }
+
     /// The "no support" diagnosis of an unbalanced load that no contact can carry.
     pub fn no_support(&self, n_active: usize, reaction: f64) -> RunError {
         RunError::Failed(format!(

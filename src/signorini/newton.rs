@@ -178,6 +178,9 @@ struct Loop<'a> {
     approach: Option<Approach>,
     /// The free modes are S's null space instead of pinned ([`Loop::free_modes_by_null_space`]).
     null_space: bool,
+    /// The nodes (3.23) changed in the last step the model corrected ([`Loop::correct`]; the
+    /// corrections stop for good when they do not make this count fall).
+    corrected_changes: Option<usize>,
 }
 
 /// The start "auto": the initially touching nodes (the "gap" start), except for a
@@ -363,6 +366,7 @@ impl<'a> Loop<'a> {
             last_still_residual: None,
             approach,
             null_space: false,
+            corrected_changes: None,
         };
         reduced.set_free_null_space(ctx, None)?; // none left from an earlier solve
         Ok((lp, predicting))
@@ -415,15 +419,25 @@ impl<'a> Loop<'a> {
     /// under force control): when (3.23) changes nodes, the next set is the model's, except
     /// that every node (3.23) changes keeps its change (so the step counts at least those
     /// changes, and a correction never stops the iteration); the model's record, or `None`
-    /// when (3.23) changes nothing. Collective.
+    /// when (3.23) changes nothing. The corrections stop for good once (3.23) changes no fewer
+    /// nodes than after the last corrected step (the model does not converge on this body:
+    /// (3.23) alone goes on, as without a model). Collective.
     fn correct(
         &mut self,
         hs: &HalfSpace,
         update: &mut SetUpdate,
     ) -> Result<Option<PredictorStep>, RunError> {
         let ctx = self.ctx;
-        if self.approach.is_some() || ctx.sum_usize(update.changed) == 0 {
+        let changes = ctx.sum_usize(update.changed);
+        if self.approach.is_some() || changes == 0 {
             return Ok(None);
+        }
+        match self.corrected_changes {
+            Some(last) if changes >= last => {
+                self.corrected_changes = Some(0); // stopped for good
+                return Ok(None);
+            }
+            _ => self.corrected_changes = Some(changes),
         }
         let limits = (self.s.c, self.s.section.max_steps);
         let cur = (&self.shifted, &self.it, self.set.normal.as_slice());

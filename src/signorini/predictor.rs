@@ -15,12 +15,12 @@
 //! a small contact zone on a smooth body, rougher for conforming contact or thin bodies.
 //!
 //! After every exact step from the predicted set on whose update (3.23) changes nodes, the
-//! model corrects that update ([`correct`]): anchored at the step's exact solution (d₀ = u_n
-//! + C λ_n), it models only the change of λ, so its error shrinks with the change, and its
-//! Algorithm 1 also moves the nodes that change only after others have (a contact edge that
-//! moves by several nodes, which (3.23) alone moves a node per step). The nodes (3.23)
-//! changes keep their change, so a correction never ends the iteration: it still ends on an
-//! exact step whose update changes nothing.
+//! model corrects that update ([`correct`]): anchored at the step's exact solution
+//! (d₀ = u_n + C λ_n), it models only the change of λ, so its error shrinks with the change,
+//! and its Algorithm 1 also moves the nodes that change only after others have (a contact
+//! edge that moves by several nodes, which (3.23) alone moves a node per step). The nodes
+//! (3.23) changes keep their change, so a correction never ends the iteration: it still ends
+//! on an exact step whose update changes nothing.
 
 use super::active_set::Iterate;
 use super::boundary::ContactBoundary;

@@ -1508,8 +1508,8 @@ impl Reader<'_> {
     }
 
     /// The contact pairs: one `[contact]` table or an array `[[contact]]`, checked against each
-    /// other (distinct groups, one friction law the solver can combine, at most one pair under
-    /// force control, one rigid-mode handling).
+    /// other (distinct groups, one friction law the solver can combine, force control without
+    /// Coulomb friction, one rigid-mode handling).
     fn contacts(&self, top: &Tab) -> Res<Vec<ContactSection>> {
         let Some((k, n)) = top.get("contact") else {
             return Ok(Vec::new());
@@ -1570,21 +1570,6 @@ impl Reader<'_> {
                     ),
                 ));
             }
-        }
-        if let Some(j) = pairs
-            .iter()
-            .enumerate()
-            .filter(|(_, p)| p.force.is_some())
-            .nth(1)
-            .map(|(j, _)| j)
-        {
-            let (key, loc) = at(j, "force");
-            return Err(self.err(
-                &key,
-                loc,
-                "force control on more than one pair is not implemented: prescribe the force on \
-                 one pair and the motion of the others",
-            ));
         }
         if let Some(f) = pairs.iter().position(|p| p.force.is_some()) {
             let coulomb = |p: &ContactSection| matches!(p.friction, Friction::Coulomb { .. });

@@ -1927,11 +1927,32 @@ fn reject_bad_contact_pairs() {
             format!(
                 "{}{}",
                 pair("a", "force = [0, -1]\n"),
-                pair("b", "force = [0, -2]\n")
+                pair("b", "force = [0, 0]\n")
             ),
             "contact[1].force",
-            "more than one pair",
-            Some("force = [0, -2]"),
+            "is zero",
+            Some("force = [0, 0]"),
+        ),
+        (
+            format!(
+                "{}{}",
+                pair("a", "force = [0, -1]\n"),
+                pair("b", "force = [0, 2]\nmotion = [0, 1]\n")
+            ),
+            "contact[1].force",
+            "instead of the motion",
+            None,
+        ),
+        (
+            format!(
+                "{}{}{}",
+                pair("a", "force = [0, -1]\n"),
+                pair("b", "force = [0, 2]\n"),
+                pair("c", coulomb)
+            ),
+            "contact[2].friction",
+            "Coulomb friction is not implemented",
+            Some("friction"),
         ),
         (
             format!("{}{}", pair("a", coulomb), pair("b", "force = [0, -2]\n")),
@@ -1988,6 +2009,46 @@ fn reject_bad_contact_pairs() {
     let e = parse(&format!("contact = []\n{MINIMAL}")).expect_err("empty");
     assert_eq!(e.key.as_deref(), Some("contact"), "{e}");
     assert!(e.message.contains("at least one"), "{e}");
+}
+
+/// Force control on several pairs: each pair with `force` keeps its own force (and ramp), the
+/// others their motion.
+#[test]
+fn force_control_on_several_pairs() {
+    let pair = |group: &str, extra: &str| {
+        format!(
+            "[[contact]]\ngroup = \"{group}\"\nobstacle = {{ type = \"plane\", point = [0, 0], normal = [0, 1] }}\n{extra}"
+        )
+    };
+    let text = with(&format!(
+        "{}{}{}",
+        pair("a", "force = [0, -1]\n"),
+        pair("b", "force = { value = [0.5, 2], ramp = false }\n"),
+        pair("c", "motion = [0, 0.25]\n")
+    ));
+    let c = parse(&text).unwrap();
+    let forces: Vec<_> = c
+        .contacts
+        .iter()
+        .map(|p| {
+            p.force
+                .as_ref()
+                .map(|m| (m.value.clone(), m.ramp, m.key.clone()))
+        })
+        .collect();
+    assert_eq!(
+        forces,
+        vec![
+            Some((vec![0.0, -1.0], true, "contact[0].force".to_string())),
+            Some((vec![0.5, 2.0], false, "contact[1].force.value".to_string())),
+            None
+        ]
+    );
+    assert!(c.contacts[2].motion.is_some());
+    assert!(c.contacts[..2].iter().all(|p| p.motion.is_none()));
+    assert!(c
+        .check_against_mesh(2, &groups(&[("a", 1), ("b", 1), ("c", 1)]))
+        .is_ok());
 }
 
 #[test]

@@ -18,6 +18,13 @@
 //! slip row −λ_τ + L (u_τ − u_ref) = r of the step is affine in δ alike (the lift keeps L,
 //! drops r: [`ActiveSet::lift`]); the slip directions are the step's, so δ settles with the
 //! sets. Coulomb friction is refused by the case reader.
+//!
+//! Several force-controlled pairs j = 1..k: each has its own δ_j along e_j, moving only its
+//! obstacle (a node belongs to one pair: g_k = g0_k − δ_j w_k with w_k = n_k·e_j of its pair),
+//! and its own equation P_j = |F_j|. u is affine in all δ's, u(δ) = u_ℓ + Σ_j (δ_j − δ_j,ℓ) u¹_j
+//! with one lift per pair, so the bordered system has k border rows and columns and its block
+//! elimination solves k lifts on the step's factorisation and the k × k system
+//! Σ_j P¹_ij Δδ_j = |F_i| − P_i, P¹_ij = Σ_{k ∈ pair i} (A u¹_j)_k·e_i ([`correct`]).
 
 use super::active_set::{ActiveSet, Iterate};
 use super::boundary::{ContactBoundary, ContactNode};

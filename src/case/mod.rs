@@ -1572,15 +1572,26 @@ impl Reader<'_> {
             }
         }
         if let Some(f) = pairs.iter().position(|p| p.force.is_some()) {
-            let coulomb = |p: &ContactSection| matches!(p.friction, Friction::Coulomb { .. });
-            if let Some(j) = pairs.iter().position(coulomb) {
+            // Coulomb friction under force control: the fixed point on Tresca thresholds only
+            let newton = |p: &ContactSection| {
+                matches!(
+                    p.friction,
+                    Friction::Coulomb {
+                        algorithm: CoulombAlgorithm::Newton,
+                        ..
+                    }
+                )
+            };
+            if let Some(j) = pairs.iter().position(newton) {
                 let (key, loc) = at(j, "friction");
                 return Err(self.err(
                     &key,
                     loc,
                     format!(
-                        "force control ({}.force) with Coulomb friction is not implemented: \
-                         the pairs must be frictionless or Tresca",
+                        "force control ({}.force) with Coulomb friction is not implemented for \
+                         the generalised Newton (algorithm = \"newton\", the default): give \
+                         algorithm = \"fixed-point\" (Tresca solves under force control), or \
+                         make the pairs frictionless or Tresca",
                         pairs[f].key
                     ),
                 ));
@@ -1662,10 +1673,18 @@ impl Reader<'_> {
                 let force = self.motion(&fk, f, "the force pressing the obstacle onto the body")?;
                 let why = if motion.is_some() {
                     Some("prescribes the force instead of the motion: give one of them".into())
-                } else if matches!(friction, Friction::Coulomb { .. }) {
+                } else if matches!(
+                    friction,
+                    Friction::Coulomb {
+                        algorithm: CoulombAlgorithm::Newton,
+                        ..
+                    }
+                ) {
                     Some(format!(
-                        "(force control) with Coulomb friction is not implemented: force \
-                         control is frictionless or with Tresca friction ({})",
+                        "(force control) with Coulomb friction is not implemented for the \
+                         generalised Newton (algorithm = \"newton\", the default): give \
+                         algorithm = \"fixed-point\" in {} (Tresca solves under force \
+                         control), or make the pair frictionless or Tresca",
                         join_key(k, "friction")
                     ))
                 } else if force.value.iter().all(|&x| x == 0.0) {

@@ -2051,6 +2051,51 @@ fn force_control_on_several_pairs() {
         .is_ok());
 }
 
+/// Force control with Coulomb friction: the fixed point (Tresca solves under force control) is
+/// accepted, on one pair and next to other force-controlled pairs; the generalised Newton (the
+/// default algorithm) is refused, naming the pair's friction.
+#[test]
+fn force_control_with_coulomb_needs_the_fixed_point() {
+    let fixed = "friction = { law = \"coulomb\", mu = 0.3, algorithm = \"fixed-point\" }\n";
+    let one = with(&format!(
+        "[contact]\ngroup = \"a\"\nobstacle = {{ type = \"plane\", point = [0, 0], normal = [0, 1] }}\nforce = [0, -1]\n{fixed}"
+    ));
+    let c = parse(&one).unwrap();
+    assert!(matches!(
+        c.contacts[0].friction,
+        Friction::Coulomb {
+            algorithm: CoulombAlgorithm::FixedPoint,
+            ..
+        }
+    ));
+    let e = parse(&one.replace(", algorithm = \"fixed-point\"", "")).unwrap_err();
+    assert_eq!(e.key.as_deref(), Some("contact.force"), "{e}");
+    assert!(
+        e.message.contains("fixed-point") && e.message.contains("contact.friction"),
+        "{e}"
+    );
+    let pair = |group: &str, extra: &str| {
+        format!(
+            "[[contact]]\ngroup = \"{group}\"\nobstacle = {{ type = \"plane\", point = [0, 0], normal = [0, 1] }}\n{extra}"
+        )
+    };
+    let two = with(&format!(
+        "{}{}",
+        pair("a", &format!("force = [0, -1]\n{fixed}")),
+        pair("b", &format!("force = [0, 2]\n{fixed}"))
+    ));
+    assert_eq!(parse(&two).unwrap().contacts.len(), 2);
+    let newton = "friction = { law = \"coulomb\", mu = 0.3 }\n";
+    let text = with(&format!(
+        "{}{}",
+        pair("a", &format!("motion = [0, 1]\n{newton}")),
+        pair("b", &format!("force = [0, 2]\n{newton}"))
+    ));
+    let e = parse(&text).unwrap_err();
+    assert_eq!(e.key.as_deref(), Some("contact[1].force"), "{e}");
+    assert!(e.message.contains("fixed-point"), "{e}");
+}
+
 #[test]
 fn body_force_expressions() {
     let c = parse(&with(

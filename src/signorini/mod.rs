@@ -708,9 +708,10 @@ fn take_reference(
 /// Coulomb by the fixed point on Tresca thresholds (docs/friction.md (a)):
 /// b^{m+1}_k = μ max(0, −λ_n^{k,m}), every outer step a Tresca solve (Algorithm 2) warm-started
 /// from the previous one (b^0 from the warm start's λ_n, else ‖f‖₁: all stick); stop when
-/// max_k |b^{m+1} − b^m| ≤ [`FIXED_POINT_TOL`] · max_k b^{m+1}. Returns the last Tresca
-/// result with the history and step count of all outer steps, and the number of outer steps.
-/// Collective.
+/// max_k |b^{m+1} − b^m| ≤ [`FIXED_POINT_TOL`] · max_k b^{m+1}. Under force control every
+/// Tresca solve is force-controlled (force.rs), from the previous one's approaches. Returns
+/// the last Tresca result with the history and step count of all outer steps, and the number
+/// of outer steps. Collective.
 fn fixed_point(
     ctx: &Ctx,
     p: &ContactProblem,
@@ -718,10 +719,8 @@ fn fixed_point(
     ns: &NewtonSettings,
     warm: Option<&WarmStart>,
 ) -> Result<(NewtonResult, usize), RunError> {
-    let tresca = NewtonSettings {
-        law: Law::Tresca,
-        ..*ns
-    };
+    // under force control each Tresca solve starts from the approaches of the previous one
+    let mut force = ns.force.to_vec();
     let mut b = p.boundary.clone();
     let mut state: Option<(Vec<NodeResult>, Vec<f64>)> =
         warm.map(|w| (w.nodes.to_vec(), w.u_local.to_vec()));
@@ -741,7 +740,15 @@ fn fixed_point(
         let start = state
             .as_ref()
             .map(|(nodes, u)| WarmStart { nodes, u_local: u });
+        let tresca = NewtonSettings {
+            law: Law::Tresca,
+            force: &force,
+            ..*ns
+        };
         let mut nr = newton::semismooth_newton(ctx, &pm, reduced, &tresca, start.as_ref())?;
+        for (fc, &delta) in force.iter_mut().zip(&nr.approach) {
+            fc.start = delta;
+        }
         for h in &nr.history {
             let mut h = h.clone();
             h.step = history.len() + 1;

@@ -17,7 +17,9 @@
 //! obstacle, u_ref(δ) = u_ref + δ (τ_k·e), so the lift prescribes u¹_τ = τ_k·e there, and a
 //! slip row −λ_τ + L (u_τ − u_ref) = r of the step is affine in δ alike (the lift keeps L,
 //! drops r: [`ActiveSet::lift`]); the slip directions are the step's, so δ settles with the
-//! sets. Coulomb friction is refused by the case reader.
+//! sets. Coulomb friction by the fixed point is a sequence of such Tresca solves (mod.rs,
+//! `fixed_point`); Coulomb's generalised Newton is refused under force control by the case
+//! reader.
 //!
 //! Several force-controlled pairs j = 1..k: each has its own δ_j along e_j, moving only its
 //! obstacle (a node belongs to one pair: g_k = g0_k − δ_j w_k with w_k = n_k·e_j of its pair),

@@ -312,6 +312,85 @@ fn force_on_two_pairs_through_load_steps() {
     }
 }
 
+/// Tresca friction on both plates of the held disk, the top plate moved along a slanted
+/// direction (its tangential part drags the stick nodes): prescribing each pair's force
+/// component along its motion's direction gives back both motions as approaches, u, the active
+/// and the slip nodes (Algorithm 2 on the plain path: 1 rank direct, 2 ranks iterative).
+#[test]
+fn tresca_force_on_two_pairs_returns_their_motions() {
+    let tmp = tempfile::tempdir().expect("tempdir");
+    let half = disk_mesh(tmp.path(), false);
+    let tresca = "friction = { law = \"tresca\", threshold = 0.03 }\n";
+    let motions = [[0.0, LIFT], [0.004, -PRESS]];
+    let vector = |v: [f64; 2]| format!("[{:.17e}, {:.17e}]", v[0], v[1]);
+    let moved = solve(
+        1,
+        &write(
+            tmp.path(),
+            "moved.toml",
+            &half,
+            &held_disk(
+                &format!("motion = {}\n{tresca}", vector(motions[0])),
+                &format!("motion = {}\n{tresca}", vector(motions[1])),
+            ),
+        ),
+        &[],
+    );
+    moved.assert_converged("motions with Tresca");
+    // the force along each motion's direction e_j, prescribed along e_j
+    let mut length = [0.0; 2];
+    let forces = [0, 1].map(|i| {
+        let m = motions[i];
+        length[i] = m[0].hypot(m[1]);
+        let e = [m[0] / length[i], m[1] / length[i]];
+        let f = pair_force(&moved, i);
+        let along = f[0] * e[0] + f[1] * e[1];
+        [along * e[0], along * e[1]]
+    });
+    let slips = |s: &Solved| -> Vec<u64> {
+        s.contact_rows_by_id()
+            .iter()
+            .filter(|(_, r)| r.active() && r.tangential() == "slip")
+            .map(|(id, _)| *id)
+            .collect()
+    };
+    let (slip, active) = (slips(&moved).len(), moved.active_node_ids().len());
+    eprintln!("motions: slip {slip} of {active} active");
+    assert!(slip > 0 && active > slip, "slip {slip} of {active} active");
+    let forced = write(
+        tmp.path(),
+        "forced.toml",
+        &half,
+        &held_disk(
+            &format!("force = {}\n{tresca}", vector(forces[0])),
+            &format!("force = {}\n{tresca}", vector(forces[1])),
+        ),
+    );
+    let runs: [(usize, &[&str]); 2] = [
+        (1, &["solver.preset=\"direct\""]),
+        (2, &["solver.preset=\"iterative\""]),
+    ];
+    for (np, sets) in runs {
+        let s = solve(np, &forced, sets);
+        s.assert_converged("force control on two pairs with Tresca");
+        let delta = [0, 1].map(|i| pair(&s, i)["approach"].as_f64().expect("approach"));
+        eprintln!(
+            "{np} ranks {sets:?}: {} steps (motions: {}), δ = {delta:?} (|m| = {length:?})",
+            s.steps(),
+            moved.steps()
+        );
+        for (d, want) in delta.iter().zip(length) {
+            assert!(
+                (d - want).abs() <= 1e-8 * want,
+                "{np} {sets:?}: δ = {delta:?}"
+            );
+        }
+        assert!(s.u_rel_diff(&moved) <= 1e-8, "{np} {sets:?}");
+        assert_eq!(s.active_node_ids(), moved.active_node_ids());
+        assert_eq!(slips(&s), slips(&moved), "{np} {sets:?}");
+    }
+}
+
 /// Force control on every pair of a body that only its pairs hold (the disk without its side
 /// arc held): the forces do not fix the disk's position, and the run is refused with exit code
 /// 2 naming the first pair's force, on the condensed and the plain path; a force on the second

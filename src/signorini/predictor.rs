@@ -365,11 +365,12 @@ pub fn predict(
         rec.seconds,
         rec.approach_change.as_ref().map_or(String::new(), |d| {
             let d: Vec<String> = d.iter().map(|d| format!("{d:.6e}")).collect();
-            format!(
-                "; the approach{} changes by {}",
-                if d.len() > 1 { "es" } else { "" },
-                d.join(", ")
-            )
+            let what = if d.len() > 1 {
+                "the approaches change"
+            } else {
+                "the approach changes"
+            };
+            format!("; {what} by {}", d.join(", "))
         })
     );
     Ok((mine, rec))

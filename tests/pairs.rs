@@ -229,6 +229,49 @@ fn force_on_two_pairs_returns_their_motions() {
     }
 }
 
+/// Force control on both pairs with the bottom plate 0.002 below the disk: its approach is
+/// LIFT + 0.002 and the solution the motions' — on the plain path the first step has active
+/// nodes on the top pair only, so the top pair takes its bordered step while the bottom plate
+/// moves until its first node touches (said in the log); also condensed and iterative, 2 ranks.
+#[test]
+fn force_on_two_pairs_from_a_gap() {
+    let tmp = tempfile::tempdir().expect("tempdir");
+    let half = disk_mesh(tmp.path(), false);
+    let (moved, f) = held_disk_moved(tmp.path(), &half);
+    let gap = 0.002;
+    let text =
+        held_disk_forced(f).replace("point = [0, -1]", &format!("point = [0, {}]", -1.0 - gap));
+    assert!(text.contains("-1.002"), "{text}");
+    let forced = write(tmp.path(), "gap.toml", &half, &text);
+    for sets in [
+        &[][..],
+        &["solver.reuse=\"never\""][..],
+        &["solver.preset=\"iterative\""][..],
+    ] {
+        let s = solve(2, &forced, sets);
+        s.assert_converged("force control on two pairs from a gap");
+        let delta = [0, 1].map(|i| pair(&s, i)["approach"].as_f64().expect("approach"));
+        for (d, want) in delta.iter().zip([LIFT + gap, PRESS]) {
+            assert!((d - want).abs() <= 1e-8 * want, "{sets:?}: δ = {delta:?}");
+        }
+        assert!(s.u_rel_diff(&moved) <= 1e-8, "{sets:?}");
+        assert_eq!(s.active_node_ids(), moved.active_node_ids(), "{sets:?}");
+        if sets.is_empty() {
+            continue;
+        }
+        let log = s.run.output();
+        let first: Vec<&str> = log
+            .lines()
+            .filter(|l| l.starts_with("force control (contact[") && l.contains(", step 1:"))
+            .collect();
+        assert_eq!(first.len(), 2, "{log}");
+        assert!(
+            first[0].contains("contact[0].force") && first[0].contains("touches"),
+            "{first:?}"
+        );
+    }
+}
+
 /// Force control on both pairs through load steps: each step's forces are t·F_j
 /// (history.csv's `pairp_force_y`); the last step gives back the motions whose forces F_j are;
 /// the middle step's approaches, prescribed as motions, take the middle step's forces.

@@ -726,6 +726,75 @@ fn cube_between_two_plates() {
     }
 }
 
+/// 3D: the unit cube clamped on its face x = 0, pressed from below and from above by two
+/// force-controlled spheres (radius 0.5, touching the faces' centres) with the forces that
+/// their motions (0.02 up, 0.04 down) take: both approaches give back the motions, and u and
+/// the active set are the motions' — on the condensed path, the plain path and the iterative
+/// preset (with the half-space predictor).
+#[test]
+fn force_on_two_pairs_in_3d() {
+    let tmp = tempfile::tempdir().expect("tempdir");
+    let mesh = unit_mesh(tmp.path(), 3, 0.125);
+    let (lift, press) = (0.02, 0.04);
+    let case = |name: &str, bottom: &str, top: &str| {
+        write_case(
+            &tmp.path().join(name),
+            &format!(
+                "[mesh]\nfile = {}\n\n[material]\nyoung = 2.0\npoisson = 0.3\n\n\
+                 [[dirichlet]]\ngroup = \"left\"\nvalue = [0.0, 0.0, 0.0]\n\n\
+                 [[contact]]\ngroup = \"bottom\"\n\
+                 obstacle = {{ type = \"sphere\", center = [0.5, -0.5, 0.5], radius = 0.5 }}\n{bottom}\n\n\
+                 [[contact]]\ngroup = \"top\"\n\
+                 obstacle = {{ type = \"sphere\", center = [0.5, 1.5, 0.5], radius = 0.5 }}\n{top}\n",
+                toml_path(&mesh),
+            ),
+        )
+    };
+    let moved = solve(
+        1,
+        &case(
+            "moved.toml",
+            &format!("motion = [0, {lift}, 0]"),
+            &format!("motion = [0, {}, 0]", -press),
+        ),
+        &[],
+    );
+    moved.assert_converged("motions, 3D");
+    let f = [pair_force(&moved, 0)[1], pair_force(&moved, 1)[1]];
+    assert!(f[0] > 0.0 && f[1] < 0.0, "{f:?}");
+    let active = [pair_active(&moved, 0), pair_active(&moved, 1)];
+    eprintln!("motions: {} steps, active {active:?}", moved.steps());
+    assert!(active[0] >= 3 && active[1] >= 3, "{active:?}");
+    let forced = case(
+        "forced.toml",
+        &format!("force = [0, {:.17e}, 0]", f[0]),
+        &format!("force = [0, {:.17e}, 0]", f[1]),
+    );
+    let runs: [(usize, &[&str]); 3] = [
+        (2, &["solver.preset=\"direct\""]),
+        (1, &["solver.preset=\"direct\"", "solver.reuse=\"never\""]),
+        (2, &["solver.preset=\"iterative\""]),
+    ];
+    for (np, sets) in runs {
+        let s = solve(np, &forced, sets);
+        s.assert_converged("force control on two pairs, 3D");
+        let delta = [0, 1].map(|i| pair(&s, i)["approach"].as_f64().expect("approach"));
+        eprintln!("{np} ranks {sets:?}: {} steps, δ = {delta:?}", s.steps());
+        for (d, want) in delta.iter().zip([lift, press]) {
+            assert!(
+                (d - want).abs() <= 1e-8 * want,
+                "{np} {sets:?}: δ = {delta:?}"
+            );
+        }
+        assert!(s.u_rel_diff(&moved) <= 1e-8, "{np} {sets:?}");
+        assert_eq!(
+            s.active_node_ids(),
+            moved.active_node_ids(),
+            "{np} {sets:?}"
+        );
+    }
+}
+
 /// Coulomb pairs with their own μ: μ = 0.5 under the disk, frictionless (no friction key) on
 /// top, the top plate moved down: the top pair carries no tangential force (to
 /// round-off), the bottom pair's respects |λ_τ| ≤ μ (−λ_n) and carries some.

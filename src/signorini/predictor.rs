@@ -305,7 +305,7 @@ pub fn correct(
     free: &FreeModes,
     limits: (f64, usize),
 ) -> Result<(Option<Vec<bool>>, PredictorStep), RunError> {
-    run_model(ctx, hs, (b, it, Some(active)), free, limits, None)
+    run_model(ctx, hs, (b, it, Some(active)), free, limits, &[])
 }
 
 /// [`predict`] (`active` = None) or [`correct`]. Collective.
@@ -315,7 +315,7 @@ fn run_model(
     (b, it, active): (&ContactBoundary, &Iterate, Option<&[bool]>),
     free: &FreeModes,
     (c, max_steps): (f64, usize),
-    force: Option<([f64; 3], f64, usize)>,
+    force: &[([f64; 3], f64, usize)],
 ) -> Result<(Option<Vec<bool>>, PredictorStep), RunError> {
     let t = Instant::now();
     let mz = if free.floats() {

@@ -288,12 +288,12 @@ impl ContactSettings {
         }
     }
 
-    /// The pair under force control (at most one; the case reader checks it), with its index.
-    pub fn force_pair(&self) -> Option<(usize, &PairSettings)> {
+    /// The pairs under force control, with their indices, in pair order.
+    pub fn force_pairs(&self) -> impl Iterator<Item = (usize, &PairSettings)> {
         self.pairs
             .iter()
             .enumerate()
-            .find(|(_, p)| p.force.is_some())
+            .filter(|(_, p)| p.force.is_some())
     }
 
     /// Each pair's obstacle displacement d of the step being solved.

@@ -1,8 +1,9 @@
 //! Force control (`contact.force`, docs/obstacles.md "Force control"): the approach δ is an
 //! unknown of the active-set iteration. Prescribing the force that a displacement-controlled
-//! run reports gives back its motion and its solution (1, 2, 3 ranks, both presets); a ramped
-//! force from a gap touches first and ends where the static solve does; bad input is refused
-//! with the key named and exit code 2.
+//! run reports gives back its motion and its solution (1, 2, 3 ranks, both presets; also with
+//! Tresca friction and with Coulomb friction by the fixed point); a ramped force from a gap
+//! touches first and ends where the static solve does; bad input is refused with the key named
+//! and exit code 2.
 
 mod common;
 
@@ -260,4 +261,76 @@ fn force_control_with_tresca_friction() {
         assert_eq!(forced.active_node_ids(), moved.active_node_ids());
         assert_eq!(slips(&forced), slips(&moved), "{np} ranks, {sets:?}");
     }
+}
+
+/// Coulomb friction (μ = 0.3, the fixed point on Tresca thresholds) under force control: the
+/// circle pressed along the slanted direction of the Tresca test — the force that a
+/// displacement-controlled run along that direction reports gives back its approach, u and
+/// the normal and tangential states to 1e-8 (the fixed point's thresholds stop at 1e-9 of the
+/// largest; 1 and 2 ranks, direct and iterative presets). The generalised Newton
+/// (the default algorithm) is refused under force control, naming `contact.friction`.
+#[test]
+fn force_control_with_coulomb_fixed_point() {
+    let coulomb = "contact.friction={law=\"coulomb\", mu=0.3, algorithm=\"fixed-point\"}";
+    let e = [0.3f64, -1.0];
+    let norm = e[0].hypot(e[1]);
+    let depth = 0.03;
+    let m = [depth * e[0] / norm, depth * e[1] / norm];
+    let motion = format!("contact.motion=[{:.17e}, {:.17e}]", m[0], m[1]);
+    let moved = solve(1, &case(), &[AUTO, coulomb, &motion]);
+    moved.assert_converged("displacement control");
+    let f = total_force(&moved);
+    let along = (f[0] * e[0] + f[1] * e[1]) / norm;
+    assert!(along > 0.0, "{f:?}");
+    let fk = format!(
+        "contact.force=[{:.17e}, {:.17e}]",
+        along * e[0] / norm,
+        along * e[1] / norm
+    );
+    let slips = |s: &Solved| -> Vec<u64> {
+        s.contact_rows_by_id()
+            .iter()
+            .filter(|(_, r)| r.active() && r.tangential() == "slip")
+            .map(|(id, _)| *id)
+            .collect()
+    };
+    let (slip, active) = (slips(&moved).len(), moved.active_node_ids().len());
+    assert!(slip > 0 && active > slip, "slip {slip} of {active} active");
+    let runs: [(usize, &[&str]); 3] = [
+        (1, &["solver.preset=\"direct\""]),
+        (2, &["solver.preset=\"direct\""]),
+        (2, &["solver.preset=\"iterative\""]),
+    ];
+    for (np, sets) in runs {
+        let mut all = vec![AUTO, coulomb, fk.as_str()];
+        all.extend_from_slice(sets);
+        let forced = solve(np, &case(), &all);
+        forced.assert_converged("force control with Coulomb");
+        let delta = forced.f(&["contact", "approach"]);
+        let du = forced.u_rel_diff(&moved);
+        eprintln!(
+            "{np} ranks {sets:?}: δ = {delta:.17e}, |Δu|/|u| = {du:.2e}, {} steps (motion: {})",
+            forced.steps(),
+            moved.steps()
+        );
+        assert!(
+            (delta - depth).abs() <= 1e-8 * depth,
+            "{np} ranks, {sets:?}: δ = {delta}"
+        );
+        assert!(du <= 1e-8, "{np} ranks, {sets:?}: {du}");
+        assert_eq!(forced.active_node_ids(), moved.active_node_ids());
+        assert_eq!(slips(&forced), slips(&moved), "{np} ranks, {sets:?}");
+        let rec = get(&forced.summary, &["newton", "coulomb", "algorithm"]);
+        assert_eq!(rec, "fixed-point");
+    }
+    let tmp = tempfile::tempdir().expect("tempdir");
+    let out = tmp.path().join("out");
+    let newton = "contact.friction={law=\"coulomb\", mu=0.3}";
+    let run = run_solver(1, &case(), &[newton, fk.as_str()], &out);
+    let text = run.output();
+    assert_eq!(run.code, Some(2), "{text}");
+    assert!(
+        text.contains("contact.friction") && text.contains("fixed-point"),
+        "{text}"
+    );
 }

@@ -1,8 +1,9 @@
 //! Several contact pairs (`[[contact]]`, docs/obstacles.md "Several contact pairs"): a half
 //! disk pressed between two plates, on a mesh that is exactly mirror-symmetric about y = 0
 //! (cases/plates/disk_plates.py), against the model of the same problem by its symmetry (the
-//! bottom quarter with one pair); force control of one pair against its motion; load steps;
-//! Tresca on one pair next to a frictionless one; a node on two pairs' groups refused.
+//! bottom quarter with one pair); force control of one pair and of both against their motions;
+//! load steps; Tresca on one pair next to a frictionless one; a node on two pairs' groups
+//! refused.
 
 mod common;
 
@@ -129,6 +130,356 @@ fn two_plates_match_the_symmetric_quarter() {
     }
 }
 
+/// The bottom plate's motion in the tests of a disk held on its side arc.
+const LIFT: f64 = 0.01;
+
+/// The top plate's motion in the tests of a disk held on its side arc.
+const PRESS: f64 = 0.015;
+
+/// The half disk held on its side arc (u = 0 there) between the bottom plate, moved or pushed
+/// by `bottom` (e.g. `motion = [0, 0.01]`), and the top plate, by `top`.
+fn held_disk(bottom: &str, top: &str) -> String {
+    format!(
+        "[[dirichlet]]\ngroup = \"side\"\nvalue = [0.0, 0.0]\n\n{BOTTOM}{bottom}\n\n{}",
+        top_pair(top)
+    )
+}
+
+/// The held disk with both plates moved (bottom up by LIFT, top down by PRESS), on 1 rank, and
+/// each pair's force along y, the force that moves it (the body's force on the obstacle as
+/// summary.json reports it).
+fn held_disk_moved(dir: &Path, half: &Path) -> (Solved, [f64; 2]) {
+    let moved = solve(
+        1,
+        &write(
+            dir,
+            "moved.toml",
+            half,
+            &held_disk(
+                &format!("motion = [0, {LIFT}]"),
+                &format!("motion = [0, {}]", -PRESS),
+            ),
+        ),
+        &[],
+    );
+    moved.assert_converged("motions");
+    let f = [pair_force(&moved, 0)[1], pair_force(&moved, 1)[1]];
+    assert!(f[0] > 0.0 && f[1] < 0.0, "{f:?}");
+    (moved, f)
+}
+
+/// The held disk with both plates under force control: the forces `f` along y.
+fn held_disk_forced(f: [f64; 2]) -> String {
+    held_disk(
+        &format!("force = [0, {:.17e}]", f[0]),
+        &format!("force = [0, {:.17e}]", f[1]),
+    )
+}
+
+/// Force control on both pairs: the disk held on its side arc, the bottom plate under the force
+/// that its motion up by LIFT takes and the top plate under the force that its motion down by
+/// PRESS takes (both moved together): each pair's approach δ_j gives back its motion, and u,
+/// the forces and the active set are the motions' solution — on the condensed path, the plain
+/// path and the iterative preset (with the half-space predictor), on 1 to 3 ranks.
+#[test]
+fn force_on_two_pairs_returns_their_motions() {
+    let tmp = tempfile::tempdir().expect("tempdir");
+    let half = disk_mesh(tmp.path(), false);
+    let (moved, f) = held_disk_moved(tmp.path(), &half);
+    let forced = write(tmp.path(), "forced.toml", &half, &held_disk_forced(f));
+    let runs: [(usize, &[&str]); 6] = [
+        (1, &["solver.preset=\"direct\""]),
+        (2, &["solver.preset=\"direct\""]),
+        (1, &["solver.preset=\"direct\"", "solver.reuse=\"never\""]),
+        (3, &["solver.preset=\"direct\"", "solver.reuse=\"never\""]),
+        (1, &["solver.preset=\"iterative\""]),
+        (2, &["solver.preset=\"iterative\""]),
+    ];
+    for (np, sets) in runs {
+        let s = solve(np, &forced, sets);
+        s.assert_converged("force control on two pairs");
+        let delta = [0, 1].map(|i| pair(&s, i)["approach"].as_f64().expect("approach"));
+        eprintln!(
+            "{np} ranks {sets:?}: {} steps, δ = {delta:?} (motions {LIFT}, {PRESS})",
+            s.steps()
+        );
+        for (d, want) in delta.iter().zip([LIFT, PRESS]) {
+            assert!(
+                (d - want).abs() <= 1e-8 * want,
+                "{np} {sets:?}: δ = {delta:?}"
+            );
+        }
+        // each obstacle moved along its force: the bottom one up, the top one down
+        let moved_by = |i: usize| floats(&pair(&s, i)["obstacle_displacement"]);
+        assert!(rel(moved_by(0)[1], LIFT) <= 1e-8 && moved_by(0)[0] == 0.0);
+        assert!(rel(moved_by(1)[1], -PRESS) <= 1e-8 && moved_by(1)[0] == 0.0);
+        // one approach per pair: none for the section as a whole
+        assert!(get(&s.summary, &["contact"]).get("approach").is_none());
+        for i in [0, 1] {
+            let (a, b) = (pair_force(&s, i)[1], f[i]);
+            assert!(rel(a, b) <= 1e-8, "{np} {sets:?}: pair {i}: {a} vs {b}");
+        }
+        assert!(s.u_rel_diff(&moved) <= 1e-8, "{np} {sets:?}");
+        assert_eq!(
+            s.active_node_ids(),
+            moved.active_node_ids(),
+            "{np} {sets:?}"
+        );
+        assert!(pair_active(&s, 0) >= 3 && pair_active(&s, 1) >= 3);
+    }
+}
+
+/// Force control on both pairs with the bottom plate 0.002 below the disk: its approach is
+/// LIFT + 0.002 and the solution the motions' — on the plain path the first step has active
+/// nodes on the top pair only, so the top pair takes its bordered step while the bottom plate
+/// moves until its first node touches (said in the log); also condensed and iterative, 2 ranks.
+#[test]
+fn force_on_two_pairs_from_a_gap() {
+    let tmp = tempfile::tempdir().expect("tempdir");
+    let half = disk_mesh(tmp.path(), false);
+    let (moved, f) = held_disk_moved(tmp.path(), &half);
+    let gap = 0.002;
+    let text =
+        held_disk_forced(f).replace("point = [0, -1]", &format!("point = [0, {}]", -1.0 - gap));
+    assert!(text.contains("-1.002"), "{text}");
+    let forced = write(tmp.path(), "gap.toml", &half, &text);
+    for sets in [
+        &[][..],
+        &["solver.reuse=\"never\""][..],
+        &["solver.preset=\"iterative\""][..],
+    ] {
+        let s = solve(2, &forced, sets);
+        s.assert_converged("force control on two pairs from a gap");
+        let delta = [0, 1].map(|i| pair(&s, i)["approach"].as_f64().expect("approach"));
+        for (d, want) in delta.iter().zip([LIFT + gap, PRESS]) {
+            assert!((d - want).abs() <= 1e-8 * want, "{sets:?}: δ = {delta:?}");
+        }
+        assert!(s.u_rel_diff(&moved) <= 1e-8, "{sets:?}");
+        assert_eq!(s.active_node_ids(), moved.active_node_ids(), "{sets:?}");
+        if sets.is_empty() {
+            continue;
+        }
+        let log = s.run.output();
+        let first: Vec<&str> = log
+            .lines()
+            .filter(|l| l.starts_with("force control (contact[") && l.contains(", step 1:"))
+            .collect();
+        assert_eq!(first.len(), 2, "{log}");
+        assert!(
+            first[0].contains("contact[0].force") && first[0].contains("touches"),
+            "{first:?}"
+        );
+    }
+}
+
+/// Force control on both pairs through load steps: each step's forces are t·F_j
+/// (history.csv's `pairp_force_y`); the last step gives back the motions whose forces F_j are;
+/// the middle step's approaches, prescribed as motions, take the middle step's forces.
+#[test]
+fn force_on_two_pairs_through_load_steps() {
+    let tmp = tempfile::tempdir().expect("tempdir");
+    let half = disk_mesh(tmp.path(), false);
+    let (moved, f) = held_disk_moved(tmp.path(), &half);
+    let case = write(
+        tmp.path(),
+        "steps.toml",
+        &half,
+        &format!("{}\n[load]\nfactors = [0.5, 1.0]\n", held_disk_forced(f)),
+    );
+    for sets in [&[][..], &["solver.reuse=\"never\""][..]] {
+        let s = solve(2, &case, sets);
+        s.assert_converged("force control in load steps");
+        let text = std::fs::read_to_string(s.dir.join("history.csv")).expect("history.csv");
+        let mut lines = text.lines();
+        let head: Vec<&str> = lines.next().expect("header").split(',').collect();
+        let col = |name: &str| {
+            head.iter()
+                .position(|h| *h == name)
+                .unwrap_or_else(|| panic!("no column {name}: {head:?}"))
+        };
+        let rows: Vec<Vec<f64>> = lines
+            .map(|l| {
+                l.split(',')
+                    .map(|x| x.parse().unwrap_or(f64::NAN))
+                    .collect()
+            })
+            .collect();
+        assert_eq!(rows.len(), 2);
+        for (r, t) in rows.iter().zip([0.5, 1.0]) {
+            for (p, fp) in [(1, f[0]), (2, f[1])] {
+                let fy = r[col(&format!("pair{p}_force_y"))];
+                assert!(rel(fy, t * fp) <= 1e-8, "{sets:?} t = {t}: pair {p}: {fy}");
+            }
+        }
+        let obstacle = |r: &Vec<f64>| [r[col("pair1_obstacle_y")], r[col("pair2_obstacle_y")]];
+        let (mid, last) = (obstacle(&rows[0]), obstacle(&rows[1]));
+        assert!(
+            rel(last[0], LIFT) <= 1e-8 && rel(last[1], -PRESS) <= 1e-8,
+            "{last:?}"
+        );
+        assert!(0.0 < mid[0] && mid[0] < last[0], "{mid:?} {last:?}");
+        assert!(last[1] < mid[1] && mid[1] < 0.0, "{mid:?} {last:?}");
+        let (u_last, u_moved) = (step_displacement(&s.dir, 2), moved.displacement());
+        let scale = u_moved
+            .values()
+            .flatten()
+            .fold(0.0f64, |m, x| m.max(x.abs()));
+        let (diff, _) = max_diff(&u_last, &u_moved);
+        assert!(
+            scale > 0.0 && diff <= 1e-8 * scale,
+            "{sets:?}: {diff} of {scale}"
+        );
+        // the middle step as a displacement-controlled solve
+        let m = solve(
+            1,
+            &write(
+                tmp.path(),
+                "mid.toml",
+                &half,
+                &held_disk(
+                    &format!("motion = [0, {:.17e}]", mid[0]),
+                    &format!("motion = [0, {:.17e}]", mid[1]),
+                ),
+            ),
+            &[],
+        );
+        m.assert_converged("the middle step's motions");
+        for i in [0, 1] {
+            let a = pair_force(&m, i)[1];
+            assert!(
+                rel(a, 0.5 * f[i]) <= 1e-8,
+                "{sets:?}: pair {i}: {a} vs {}",
+                0.5 * f[i]
+            );
+        }
+    }
+}
+
+/// Tresca friction on both plates of the held disk, the top plate moved along a slanted
+/// direction (its tangential part drags the stick nodes): prescribing each pair's force
+/// component along its motion's direction gives back both motions as approaches, u, the active
+/// and the slip nodes (Algorithm 2 on the plain path: 1 rank direct, 2 ranks iterative).
+#[test]
+fn tresca_force_on_two_pairs_returns_their_motions() {
+    let tmp = tempfile::tempdir().expect("tempdir");
+    let half = disk_mesh(tmp.path(), false);
+    let tresca = "friction = { law = \"tresca\", threshold = 0.03 }\n";
+    let motions = [[0.0, LIFT], [0.004, -PRESS]];
+    let vector = |v: [f64; 2]| format!("[{:.17e}, {:.17e}]", v[0], v[1]);
+    let moved = solve(
+        1,
+        &write(
+            tmp.path(),
+            "moved.toml",
+            &half,
+            &held_disk(
+                &format!("motion = {}\n{tresca}", vector(motions[0])),
+                &format!("motion = {}\n{tresca}", vector(motions[1])),
+            ),
+        ),
+        &[],
+    );
+    moved.assert_converged("motions with Tresca");
+    // the force along each motion's direction e_j, prescribed along e_j
+    let mut length = [0.0; 2];
+    let forces = [0, 1].map(|i| {
+        let m = motions[i];
+        length[i] = m[0].hypot(m[1]);
+        let e = [m[0] / length[i], m[1] / length[i]];
+        let f = pair_force(&moved, i);
+        let along = f[0] * e[0] + f[1] * e[1];
+        [along * e[0], along * e[1]]
+    });
+    let slips = |s: &Solved| -> Vec<u64> {
+        s.contact_rows_by_id()
+            .iter()
+            .filter(|(_, r)| r.active() && r.tangential() == "slip")
+            .map(|(id, _)| *id)
+            .collect()
+    };
+    let (slip, active) = (slips(&moved).len(), moved.active_node_ids().len());
+    eprintln!("motions: slip {slip} of {active} active");
+    assert!(slip > 0 && active > slip, "slip {slip} of {active} active");
+    let forced = write(
+        tmp.path(),
+        "forced.toml",
+        &half,
+        &held_disk(
+            &format!("force = {}\n{tresca}", vector(forces[0])),
+            &format!("force = {}\n{tresca}", vector(forces[1])),
+        ),
+    );
+    let runs: [(usize, &[&str]); 2] = [
+        (1, &["solver.preset=\"direct\""]),
+        (2, &["solver.preset=\"iterative\""]),
+    ];
+    for (np, sets) in runs {
+        let s = solve(np, &forced, sets);
+        s.assert_converged("force control on two pairs with Tresca");
+        let delta = [0, 1].map(|i| pair(&s, i)["approach"].as_f64().expect("approach"));
+        eprintln!(
+            "{np} ranks {sets:?}: {} steps (motions: {}), δ = {delta:?} (|m| = {length:?})",
+            s.steps(),
+            moved.steps()
+        );
+        for (d, want) in delta.iter().zip(length) {
+            assert!(
+                (d - want).abs() <= 1e-8 * want,
+                "{np} {sets:?}: δ = {delta:?}"
+            );
+        }
+        assert!(s.u_rel_diff(&moved) <= 1e-8, "{np} {sets:?}");
+        assert_eq!(s.active_node_ids(), moved.active_node_ids());
+        assert_eq!(slips(&s), slips(&moved), "{np} {sets:?}");
+    }
+}
+
+/// Force control on every pair of a body that only its pairs hold (the disk without its side
+/// arc held): the forces do not fix the disk's position, and the run is refused with exit code
+/// 2 naming the first pair's force, on the condensed and the plain path; a force on the second
+/// pair that pulls its obstacle away from the body is refused naming that pair's force.
+#[test]
+fn force_on_every_pair_of_a_floating_body_is_refused() {
+    let tmp = tempfile::tempdir().expect("tempdir");
+    let half = disk_mesh(tmp.path(), false);
+    let floating = write(
+        tmp.path(),
+        "floating.toml",
+        &half,
+        &format!(
+            "{BOTTOM}force = [0, 0.001]\n\n{}",
+            top_pair("force = [0, -0.001]")
+        ),
+    );
+    for sets in [&[][..], &["solver.reuse=\"never\""][..]] {
+        let out = tmp.path().join("refused");
+        let run = run_solver(2, &floating, sets, &out);
+        run.expect_code(2, "force control on every pair of a floating body");
+        let text = run.output();
+        assert!(
+            text.contains("contact[0].force") && text.contains("every contact pair"),
+            "{sets:?}: {text}"
+        );
+        assert!(!out.join("summary.json").exists());
+    }
+    let away = write(
+        tmp.path(),
+        "away.toml",
+        &half,
+        &held_disk("force = [0, 0.001]", "force = [0, 0.001]"),
+    );
+    for sets in [&[][..], &["solver.reuse=\"never\""][..]] {
+        let out = tmp.path().join("away");
+        let run = run_solver(1, &away, sets, &out);
+        run.expect_code(2, "a force that pulls the obstacle away");
+        let text = run.output();
+        assert!(
+            text.contains("contact[1].force") && text.contains("never reaches the body"),
+            "{sets:?}: {text}"
+        );
+    }
+}
+
 /// The same squeeze of a disk held on its side arc: the top plate under the force that its
 /// motion of 0.015 takes gives back the motion (δ) and the solution, on the condensed path,
 /// the plain path and the iterative preset, on 1 to 3 ranks; the bottom pair's force and
@@ -137,20 +488,14 @@ fn two_plates_match_the_symmetric_quarter() {
 fn force_on_one_pair_returns_its_motion() {
     let tmp = tempfile::tempdir().expect("tempdir");
     let half = disk_mesh(tmp.path(), false);
-    let body = |top: &str| {
-        format!(
-            "[[dirichlet]]\ngroup = \"side\"\nvalue = [0.0, 0.0]\n\n{}motion = [0, 0.01]\n\n{}",
-            BOTTOM,
-            top_pair(top)
-        )
-    };
+    let body = |top: &str| held_disk(&format!("motion = [0, {LIFT}]"), top);
     let moved = solve(
         1,
         &write(
             tmp.path(),
             "moved.toml",
             &half,
-            &body("motion = [0, -0.015]"),
+            &body(&format!("motion = [0, {}]", -PRESS)),
         ),
         &[],
     );
@@ -378,6 +723,75 @@ fn cube_between_two_plates() {
                 r.f("u_n")
             );
         }
+    }
+}
+
+/// 3D: the unit cube clamped on its face x = 0, pressed from below and from above by two
+/// force-controlled spheres (radius 0.5, touching the faces' centres) with the forces that
+/// their motions (0.02 up, 0.04 down) take: both approaches give back the motions, and u and
+/// the active set are the motions' — on the condensed path, the plain path and the iterative
+/// preset (with the half-space predictor).
+#[test]
+fn force_on_two_pairs_in_3d() {
+    let tmp = tempfile::tempdir().expect("tempdir");
+    let mesh = unit_mesh(tmp.path(), 3, 0.125);
+    let (lift, press) = (0.02, 0.04);
+    let case = |name: &str, bottom: &str, top: &str| {
+        write_case(
+            &tmp.path().join(name),
+            &format!(
+                "[mesh]\nfile = {}\n\n[material]\nyoung = 2.0\npoisson = 0.3\n\n\
+                 [[dirichlet]]\ngroup = \"left\"\nvalue = [0.0, 0.0, 0.0]\n\n\
+                 [[contact]]\ngroup = \"bottom\"\n\
+                 obstacle = {{ type = \"sphere\", center = [0.5, -0.5, 0.5], radius = 0.5 }}\n{bottom}\n\n\
+                 [[contact]]\ngroup = \"top\"\n\
+                 obstacle = {{ type = \"sphere\", center = [0.5, 1.5, 0.5], radius = 0.5 }}\n{top}\n",
+                toml_path(&mesh),
+            ),
+        )
+    };
+    let moved = solve(
+        1,
+        &case(
+            "moved.toml",
+            &format!("motion = [0, {lift}, 0]"),
+            &format!("motion = [0, {}, 0]", -press),
+        ),
+        &[],
+    );
+    moved.assert_converged("motions, 3D");
+    let f = [pair_force(&moved, 0)[1], pair_force(&moved, 1)[1]];
+    assert!(f[0] > 0.0 && f[1] < 0.0, "{f:?}");
+    let active = [pair_active(&moved, 0), pair_active(&moved, 1)];
+    eprintln!("motions: {} steps, active {active:?}", moved.steps());
+    assert!(active[0] >= 3 && active[1] >= 3, "{active:?}");
+    let forced = case(
+        "forced.toml",
+        &format!("force = [0, {:.17e}, 0]", f[0]),
+        &format!("force = [0, {:.17e}, 0]", f[1]),
+    );
+    let runs: [(usize, &[&str]); 3] = [
+        (2, &["solver.preset=\"direct\""]),
+        (1, &["solver.preset=\"direct\"", "solver.reuse=\"never\""]),
+        (2, &["solver.preset=\"iterative\""]),
+    ];
+    for (np, sets) in runs {
+        let s = solve(np, &forced, sets);
+        s.assert_converged("force control on two pairs, 3D");
+        let delta = [0, 1].map(|i| pair(&s, i)["approach"].as_f64().expect("approach"));
+        eprintln!("{np} ranks {sets:?}: {} steps, δ = {delta:?}", s.steps());
+        for (d, want) in delta.iter().zip([lift, press]) {
+            assert!(
+                (d - want).abs() <= 1e-8 * want,
+                "{np} {sets:?}: δ = {delta:?}"
+            );
+        }
+        assert!(s.u_rel_diff(&moved) <= 1e-8, "{np} {sets:?}");
+        assert_eq!(
+            s.active_node_ids(),
+            moved.active_node_ids(),
+            "{np} {sets:?}"
+        );
     }
 }
 

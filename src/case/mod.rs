@@ -1508,8 +1508,8 @@ impl Reader<'_> {
     }
 
     /// The contact pairs: one `[contact]` table or an array `[[contact]]`, checked against each
-    /// other (distinct groups, one friction law the solver can combine, at most one pair under
-    /// force control, one rigid-mode handling).
+    /// other (distinct groups, one friction law the solver can combine, force control without
+    /// Coulomb friction, one rigid-mode handling).
     fn contacts(&self, top: &Tab) -> Res<Vec<ContactSection>> {
         let Some((k, n)) = top.get("contact") else {
             return Ok(Vec::new());
@@ -1571,31 +1571,27 @@ impl Reader<'_> {
                 ));
             }
         }
-        if let Some(j) = pairs
-            .iter()
-            .enumerate()
-            .filter(|(_, p)| p.force.is_some())
-            .nth(1)
-            .map(|(j, _)| j)
-        {
-            let (key, loc) = at(j, "force");
-            return Err(self.err(
-                &key,
-                loc,
-                "force control on more than one pair is not implemented: prescribe the force on \
-                 one pair and the motion of the others",
-            ));
-        }
         if let Some(f) = pairs.iter().position(|p| p.force.is_some()) {
-            let coulomb = |p: &ContactSection| matches!(p.friction, Friction::Coulomb { .. });
-            if let Some(j) = pairs.iter().position(coulomb) {
+            // Coulomb friction under force control: the fixed point on Tresca thresholds only
+            let newton = |p: &ContactSection| {
+                matches!(
+                    p.friction,
+                    Friction::Coulomb {
+                        algorithm: CoulombAlgorithm::Newton,
+                        ..
+                    }
+                )
+            };
+            if let Some(j) = pairs.iter().position(newton) {
                 let (key, loc) = at(j, "friction");
                 return Err(self.err(
                     &key,
                     loc,
                     format!(
-                        "force control ({}.force) with Coulomb friction is not implemented: \
-                         the pairs must be frictionless or Tresca",
+                        "force control ({}.force) with Coulomb friction is not implemented for \
+                         the generalised Newton (algorithm = \"newton\", the default): give \
+                         algorithm = \"fixed-point\" (Tresca solves under force control), or \
+                         make the pairs frictionless or Tresca",
                         pairs[f].key
                     ),
                 ));
@@ -1677,10 +1673,18 @@ impl Reader<'_> {
                 let force = self.motion(&fk, f, "the force pressing the obstacle onto the body")?;
                 let why = if motion.is_some() {
                     Some("prescribes the force instead of the motion: give one of them".into())
-                } else if matches!(friction, Friction::Coulomb { .. }) {
+                } else if matches!(
+                    friction,
+                    Friction::Coulomb {
+                        algorithm: CoulombAlgorithm::Newton,
+                        ..
+                    }
+                ) {
                     Some(format!(
-                        "(force control) with Coulomb friction is not implemented: force \
-                         control is frictionless or with Tresca friction ({})",
+                        "(force control) with Coulomb friction is not implemented for the \
+                         generalised Newton (algorithm = \"newton\", the default): give \
+                         algorithm = \"fixed-point\" in {} (Tresca solves under force \
+                         control), or make the pair frictionless or Tresca",
                         join_key(k, "friction")
                     ))
                 } else if force.value.iter().all(|&x| x == 0.0) {

@@ -1927,11 +1927,32 @@ fn reject_bad_contact_pairs() {
             format!(
                 "{}{}",
                 pair("a", "force = [0, -1]\n"),
-                pair("b", "force = [0, -2]\n")
+                pair("b", "force = [0, 0]\n")
             ),
             "contact[1].force",
-            "more than one pair",
-            Some("force = [0, -2]"),
+            "is zero",
+            Some("force = [0, 0]"),
+        ),
+        (
+            format!(
+                "{}{}",
+                pair("a", "force = [0, -1]\n"),
+                pair("b", "force = [0, 2]\nmotion = [0, 1]\n")
+            ),
+            "contact[1].force",
+            "instead of the motion",
+            None,
+        ),
+        (
+            format!(
+                "{}{}{}",
+                pair("a", "force = [0, -1]\n"),
+                pair("b", "force = [0, 2]\n"),
+                pair("c", coulomb)
+            ),
+            "contact[2].friction",
+            "Coulomb friction is not implemented",
+            Some("friction"),
         ),
         (
             format!("{}{}", pair("a", coulomb), pair("b", "force = [0, -2]\n")),
@@ -1988,6 +2009,91 @@ fn reject_bad_contact_pairs() {
     let e = parse(&format!("contact = []\n{MINIMAL}")).expect_err("empty");
     assert_eq!(e.key.as_deref(), Some("contact"), "{e}");
     assert!(e.message.contains("at least one"), "{e}");
+}
+
+/// Force control on several pairs: each pair with `force` keeps its own force (and ramp), the
+/// others their motion.
+#[test]
+fn force_control_on_several_pairs() {
+    let pair = |group: &str, extra: &str| {
+        format!(
+            "[[contact]]\ngroup = \"{group}\"\nobstacle = {{ type = \"plane\", point = [0, 0], normal = [0, 1] }}\n{extra}"
+        )
+    };
+    let text = with(&format!(
+        "{}{}{}",
+        pair("a", "force = [0, -1]\n"),
+        pair("b", "force = { value = [0.5, 2], ramp = false }\n"),
+        pair("c", "motion = [0, 0.25]\n")
+    ));
+    let c = parse(&text).unwrap();
+    let forces: Vec<_> = c
+        .contacts
+        .iter()
+        .map(|p| {
+            p.force
+                .as_ref()
+                .map(|m| (m.value.clone(), m.ramp, m.key.clone()))
+        })
+        .collect();
+    assert_eq!(
+        forces,
+        vec![
+            Some((vec![0.0, -1.0], true, "contact[0].force".to_string())),
+            Some((vec![0.5, 2.0], false, "contact[1].force.value".to_string())),
+            None
+        ]
+    );
+    assert!(c.contacts[2].motion.is_some());
+    assert!(c.contacts[..2].iter().all(|p| p.motion.is_none()));
+    assert!(c
+        .check_against_mesh(2, &groups(&[("a", 1), ("b", 1), ("c", 1)]))
+        .is_ok());
+}
+
+/// Force control with Coulomb friction: the fixed point (Tresca solves under force control) is
+/// accepted, on one pair and next to other force-controlled pairs; the generalised Newton (the
+/// default algorithm) is refused, naming the pair's friction.
+#[test]
+fn force_control_with_coulomb_needs_the_fixed_point() {
+    let fixed = "friction = { law = \"coulomb\", mu = 0.3, algorithm = \"fixed-point\" }\n";
+    let one = with(&format!(
+        "[contact]\ngroup = \"a\"\nobstacle = {{ type = \"plane\", point = [0, 0], normal = [0, 1] }}\nforce = [0, -1]\n{fixed}"
+    ));
+    let c = parse(&one).unwrap();
+    assert!(matches!(
+        c.contacts[0].friction,
+        Friction::Coulomb {
+            algorithm: CoulombAlgorithm::FixedPoint,
+            ..
+        }
+    ));
+    let e = parse(&one.replace(", algorithm = \"fixed-point\"", "")).unwrap_err();
+    assert_eq!(e.key.as_deref(), Some("contact.force"), "{e}");
+    assert!(
+        e.message.contains("fixed-point") && e.message.contains("contact.friction"),
+        "{e}"
+    );
+    let pair = |group: &str, extra: &str| {
+        format!(
+            "[[contact]]\ngroup = \"{group}\"\nobstacle = {{ type = \"plane\", point = [0, 0], normal = [0, 1] }}\n{extra}"
+        )
+    };
+    let two = with(&format!(
+        "{}{}",
+        pair("a", &format!("force = [0, -1]\n{fixed}")),
+        pair("b", &format!("force = [0, 2]\n{fixed}"))
+    ));
+    assert_eq!(parse(&two).unwrap().contacts.len(), 2);
+    let newton = "friction = { law = \"coulomb\", mu = 0.3 }\n";
+    let text = with(&format!(
+        "{}{}",
+        pair("a", &format!("motion = [0, 1]\n{newton}")),
+        pair("b", &format!("force = [0, 2]\n{newton}"))
+    ));
+    let e = parse(&text).unwrap_err();
+    assert_eq!(e.key.as_deref(), Some("contact[1].force"), "{e}");
+    assert!(e.message.contains("fixed-point"), "{e}");
 }
 
 #[test]

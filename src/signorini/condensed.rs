@@ -266,13 +266,16 @@ pub(super) fn solve_keeping(
     let mut summary = CondensedSummary::new(p.boundary.n_global);
     let (free, rhs0) = prepare_base(ctx, p, reduced, s)?;
     // a floating body under force control: with one pair the load balance fixes the force;
-    // with several, the approach is one more free mode next to the body's own (the dense
-    // iteration's G has a column per mode)
-    if let Some(fc) = s
-        .force
-        .filter(|_| free.floats() && p.boundary.n_pairs() == 1)
-    {
-        return Err(super::force::floating(fc, false));
+    // with several, each approach is one more free mode next to the body's own (the dense
+    // iteration's G has a column per mode), unless every pair is force-controlled (the
+    // approaches and the body's position along them are then not determined)
+    if let (Some(fc), true) = (s.force.first(), free.floats()) {
+        if p.boundary.n_pairs() == 1 {
+            return Err(super::force::floating(fc, false));
+        }
+        if s.force.len() == p.boundary.n_pairs() {
+            return Err(super::force::all_pairs_floating(fc));
+        }
     }
     let f_root = ctx.gather_to_root(&rhs0); // f for MUMPS' solve phases, once
     let start = start_set(p, s, &free, warm);
@@ -338,8 +341,9 @@ pub(super) fn solve_keeping(
                 );
                 continue;
             }
-            End::NoSupport(_) if s.force.is_some() => {
-                return Err(super::force::never_touches(s.force.expect("checked")))
+            End::NoSupport(_) if !s.force.is_empty() => {
+                let fc = super::force::unreached(ctx, p.boundary, s.force);
+                return Err(super::force::never_touches(fc.unwrap_or(&s.force[0])));
             }
             End::NoSupport(reaction) => {
                 return Err(free.no_support(run.active.iter().filter(|&&a| a).count(), reaction))
@@ -935,18 +939,22 @@ fn dense_round(
     s: &NewtonSettings,
     (active, nested): (&[bool], bool),
 ) -> DenseRun {
-    // force control: the approach δ is one more free mode, its normal parts −e·n and its load
-    // |F| (force.rs; the body has no other free mode)
-    let force = s.force.map(|fc| (fc.direction(), fc.magnitude(), fc.pair));
-    let (ns, mz) = (comp.list.len(), cand.mz + usize::from(force.is_some()));
+    // force control: each approach δ_j is one more free mode, its normal parts −e_j·n on its
+    // pair's candidates and its load |F_j| (force.rs)
+    let force: Vec<_> = s
+        .force
+        .iter()
+        .map(|fc| (fc.direction(), fc.magnitude(), fc.pair))
+        .collect();
+    let (ns, mz) = (comp.list.len(), cand.mz + force.len());
     let mut packed: Vec<f64> = Vec::new();
     if ctx.rank == 0 {
         let run = guarded("dense-steps", || {
             let (_, mut load_scale) = free.load();
             let mut phi = free.free_load();
             let list = &comp.list;
-            let g = DMatrix::from_fn(ns, mz, |q, c| match force {
-                Some((e, _, pair)) if c == cand.mz => {
+            let g = DMatrix::from_fn(ns, mz, |q, c| match force.get(c.wrapping_sub(cand.mz)) {
+                Some(&(e, _, pair)) if c >= cand.mz => {
                     if cand.pair(list[q]) == pair {
                         -crate::geom::dot(cand.n(list[q]), e)
                     } else {
@@ -955,7 +963,7 @@ fn dense_round(
                 }
                 _ => cand.g(list[q], c),
             });
-            if let Some((_, magnitude, _)) = force {
+            for &(_, magnitude, _) in &force {
                 phi.push(magnitude);
                 load_scale = load_scale.max(magnitude);
             }
@@ -1035,8 +1043,8 @@ struct Expanded {
     rho: Motion,
     pins: Vec<Pin>,
     changed: Vec<u64>,
-    /// Force control: the approach δ of the round.
-    approach: Option<f64>,
+    /// Force control: the approach δ_j of the round per force-controlled pair.
+    approach: Vec<f64>,
 }
 
 /// Expansion: w = K_p⁻¹ (f − N λ_n) (MUMPS' condensation and expansion with the Schur
@@ -1105,14 +1113,20 @@ fn expand(
     }
     let mut shifted = b.clone();
     free.shift(b, &rho, &mut shifted);
-    // force control: the gaps to the obstacle moved by δ e (δ the last free-mode coefficient)
-    let approach = s.force.map(|fc| {
-        let delta = alpha[z.ncols()];
-        for k in shifted.nodes.iter_mut() {
-            k.gap -= delta * fc.weight(k);
-        }
-        delta
-    });
+    // force control: the gaps to the obstacles moved by δ_j e_j (δ_j the free-mode
+    // coefficients after the body's own)
+    let approach: Vec<f64> = s
+        .force
+        .iter()
+        .enumerate()
+        .map(|(j, fc)| {
+            let delta = alpha[z.ncols() + j];
+            for k in shifted.nodes.iter_mut().filter(|k| k.pair == fc.pair) {
+                k.gap -= delta * fc.weight(k);
+            }
+            delta
+        })
+        .collect();
     let mut it = Iterate::new(b.nodes.len(), n_local, false);
     reduced.recover(sys, &shifted, &set, &mut it)?; // (3.28)
     let update = set.update(&it, &shifted, Law::Frictionless, s.c, 0.0, dim); // (3.23)

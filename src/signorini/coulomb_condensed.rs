@@ -702,7 +702,7 @@ fn finish(
         rows_seconds: reduced.rows_seconds,
         pinned_final: Vec::new(),
         cycle_detected_at: None,
-        approach: None,
+        approach: Vec::new(),
     };
     if totals.changed == 0 && residual_ok && !loose {
         say!(

@@ -17,7 +17,16 @@
 //! obstacle, u_ref(δ) = u_ref + δ (τ_k·e), so the lift prescribes u¹_τ = τ_k·e there, and a
 //! slip row −λ_τ + L (u_τ − u_ref) = r of the step is affine in δ alike (the lift keeps L,
 //! drops r: [`ActiveSet::lift`]); the slip directions are the step's, so δ settles with the
-//! sets. Coulomb friction is refused by the case reader.
+//! sets. Coulomb friction by the fixed point is a sequence of such Tresca solves (mod.rs,
+//! `fixed_point`); Coulomb's generalised Newton is refused under force control by the case
+//! reader.
+//!
+//! Several force-controlled pairs j = 1..k: each has its own δ_j along e_j, moving only its
+//! obstacle (a node belongs to one pair: g_k = g0_k − δ_j w_k with w_k = n_k·e_j of its pair),
+//! and its own equation P_j = |F_j|. u is affine in all δ's, u(δ) = u_ℓ + Σ_j (δ_j − δ_j,ℓ) u¹_j
+//! with one lift per pair, so the bordered system has k border rows and columns and its block
+//! elimination solves k lifts on the step's factorisation and the k × k system
+//! Σ_j P¹_ij Δδ_j = |F_i| − P_i, P¹_ij = Σ_{k ∈ pair i} (A u¹_j)_k·e_i ([`correct`]).
 
 use super::active_set::{ActiveSet, Iterate};
 use super::boundary::{ContactBoundary, ContactNode};
@@ -78,35 +87,52 @@ impl ForceControl {
     }
 }
 
-/// The approach δ of the iteration and what its gaps are made of.
-pub struct Approach {
+/// One force-controlled pair's approach in the iteration.
+#[derive(Clone, Debug)]
+pub struct PairApproach {
     /// e = F/|F|.
     pub dir: [f64; 3],
     /// |F|.
     pub magnitude: f64,
     /// δ of the current iterate.
     pub delta: f64,
-    /// The pair under force control.
+    /// The pair (its index among all pairs).
     pub pair: usize,
-    /// The owned nodes' gaps to the obstacle at rest, g0_k.
+    /// Its `force` key, named in the diagnoses.
+    key: String,
+}
+
+impl PairApproach {
+    /// Its `force` key (`contact.force` or `contact[i].force`).
+    pub fn key(&self) -> &str {
+        &self.key
+    }
+}
+
+/// The approaches δ_j of the iteration, one per force-controlled pair (in pair order), and
+/// what their gaps are made of. Each contact node belongs to one pair, so its gap moves with
+/// that pair's δ only: g_k = g0_k − δ_j(k) w_k.
+pub struct Approach {
+    /// The force-controlled pairs, in pair order.
+    pub pairs: Vec<PairApproach>,
+    /// The owned nodes' gaps to the obstacles at rest, g0_k.
     g0: Vec<f64>,
-    /// w_k = n_k·e (0 off the pair).
+    /// w_k = n_k·e of the node's pair (0 off the force-controlled pairs).
     w: Vec<f64>,
-    /// With friction: the tangential references u_ref of the obstacle at rest, and their
-    /// change per unit approach, (τ_k·e) (0 off the pair): the obstacle drags the stick
-    /// nodes along (docs/obstacles.md, "Moving obstacles").
+    /// With friction: the tangential references u_ref of the obstacles at rest, and their
+    /// change per unit approach, (τ_k·e) (0 off the force-controlled pairs): the obstacle
+    /// drags the stick nodes along (docs/obstacles.md, "Moving obstacles").
     t0: Vec<[f64; 2]>,
     wt: Vec<[f64; 2]>,
-    /// The node belongs to the pair under force control.
-    in_pair: Vec<bool>,
+    /// The index in `pairs` of the node's pair, `None` off the force-controlled pairs.
+    slot: Vec<Option<usize>>,
     file: std::path::PathBuf,
-    key: String,
 }
 
 /// Force control on a body that Dirichlet data leave free in a rigid mode. With one contact
 /// pair the loads' balance fixes its contact force, which can then not be prescribed; with
-/// several (a body held between obstacles) the approach is solved on the condensed path as one
-/// more free mode, and other paths (`several`) refuse it.
+/// several (a body held between obstacles) the approaches are solved on the condensed path as
+/// more free modes, and other paths (`several`) refuse it.
 pub fn floating(fc: &ForceControl, several: bool) -> RunError {
     let message = if several {
         "force control of a body that only its contact pairs hold (Dirichlet data leave it free \
@@ -121,100 +147,172 @@ pub fn floating(fc: &ForceControl, several: bool) -> RunError {
     RunError::Input(InputError::new(Path::new(&fc.file), message).with_key(fc.key.as_str()))
 }
 
+/// Force control on every pair of a body that Dirichlet data leave free in a rigid mode: the
+/// balance of the loads fixes a combination of the prescribed forces and leaves the body's
+/// position along it open, so the problem has no unique solution.
+pub fn all_pairs_floating(fc: &ForceControl) -> RunError {
+    RunError::Input(
+        InputError::new(
+            Path::new(&fc.file),
+            "force control on every contact pair of a body that Dirichlet data leave free in a \
+             rigid mode: the balance of its loads fixes the forces, not the body's position \
+             (prescribe the motion of one pair's obstacle instead, or hold the body)",
+        )
+        .with_key(fc.key.as_str()),
+    )
+}
+
 /// A force along which the obstacle never reaches the body.
 pub fn never_touches(fc: &ForceControl) -> RunError {
     RunError::Input(InputError::new(Path::new(&fc.file), NEVER_TOUCHES).with_key(fc.key.as_str()))
+}
+
+/// The first force control among `fcs` whose obstacle never reaches the body: no contact
+/// node of its pair on any rank has n·e > 0, so moving along e closes no gap. Collective.
+pub fn unreached<'f>(
+    ctx: &Ctx,
+    b: &ContactBoundary,
+    fcs: &'f [ForceControl],
+) -> Option<&'f ForceControl> {
+    if fcs.is_empty() {
+        return None;
+    }
+    let local: Vec<f64> = fcs
+        .iter()
+        .map(|fc| f64::from(u8::from(b.nodes.iter().any(|k| fc.weight(k) > 0.0))))
+        .collect();
+    let reach = ctx.sum_vec(&local);
+    reach.iter().position(|&r| r == 0.0).map(|j| &fcs[j])
 }
 
 const NEVER_TOUCHES: &str = "the obstacle, moving along the force, never reaches the body: every \
      contact node's normal points against the force (the force must push the obstacle onto the \
      body: along the normals n, from the obstacle into the body)";
 
-/// What a force step did to δ.
-pub enum Correction {
-    /// The bordered step: δ from the force balance of this step's set.
-    Bordered,
-    /// No node was active: the obstacle moved until the contact node with this tag touches
-    /// (it joins the next set).
-    Touch(u64),
+/// What a force step did to the approaches.
+pub struct Correction {
+    /// Some pair had active nodes: their δ's from the force balance of this step's set.
+    pub bordered: bool,
+    /// Per force-controlled pair (index in [`Approach::pairs`]) without an active node: the
+    /// obstacle moved until the contact node with this tag touches (it joins the next set).
+    pub touched: Vec<(usize, u64)>,
 }
 
 impl Approach {
-    /// The approach from `b` (the gaps to the obstacle at rest) at δ = `fc.start`.
-    pub fn new(b: &ContactBoundary, fc: &ForceControl) -> Approach {
-        let dir = fc.direction();
+    /// The approaches from `b` (the gaps to the obstacles at rest) at δ_j = `fcs[j].start`.
+    pub fn new(b: &ContactBoundary, fcs: &[ForceControl]) -> Approach {
+        let slot_of = |pair: usize| fcs.iter().position(|fc| fc.pair == pair);
+        let of = |k: &ContactNode| slot_of(k.pair).map(|j| &fcs[j]);
         Approach {
-            dir,
-            magnitude: fc.magnitude(),
-            delta: fc.start,
-            pair: fc.pair,
+            pairs: fcs
+                .iter()
+                .map(|fc| PairApproach {
+                    dir: fc.direction(),
+                    magnitude: fc.magnitude(),
+                    delta: fc.start,
+                    pair: fc.pair,
+                    key: fc.key.clone(),
+                })
+                .collect(),
             g0: b.nodes.iter().map(|k| k.gap).collect(),
-            w: b.nodes.iter().map(|k| fc.weight(k)).collect(),
+            w: b.nodes
+                .iter()
+                .map(|k| of(k).map_or(0.0, |fc| fc.weight(k)))
+                .collect(),
             t0: b.nodes.iter().map(|k| k.u_t_ref).collect(),
-            wt: b.nodes.iter().map(|k| fc.tangential_weight(k)).collect(),
-            in_pair: b.nodes.iter().map(|k| k.pair == fc.pair).collect(),
-            file: fc.file.clone(),
-            key: fc.key.clone(),
+            wt: b
+                .nodes
+                .iter()
+                .map(|k| of(k).map_or([0.0; 2], |fc| fc.tangential_weight(k)))
+                .collect(),
+            slot: b.nodes.iter().map(|k| slot_of(k.pair)).collect(),
+            file: fcs.first().map(|fc| fc.file.clone()).unwrap_or_default(),
         }
     }
 
-    /// The gaps g0_k − δ w_k of the obstacle moved by δ e, into `b`; with friction also the
-    /// tangential references u_ref + δ (τ_k·e).
+    /// The approaches δ_j, in pair order.
+    pub fn deltas(&self) -> Vec<f64> {
+        self.pairs.iter().map(|a| a.delta).collect()
+    }
+
+    /// δ of a node's pair (0 off the force-controlled pairs).
+    fn delta_at(&self, i: usize) -> f64 {
+        self.slot[i].map_or(0.0, |j| self.pairs[j].delta)
+    }
+
+    /// The gaps g0_k − δ_j w_k of the obstacles moved by δ_j e_j, into `b`; with friction also
+    /// the tangential references u_ref + δ_j (τ_k·e_j).
     pub fn place(&self, b: &mut ContactBoundary) {
         for (i, k) in b.nodes.iter_mut().enumerate() {
-            k.gap = self.g0[i] - self.delta * self.w[i];
+            let delta = self.delta_at(i);
+            k.gap = self.g0[i] - delta * self.w[i];
             for j in 0..2 {
-                k.u_t_ref[j] = self.t0[i][j] + self.delta * self.wt[i][j];
+                k.u_t_ref[j] = self.t0[i][j] + delta * self.wt[i][j];
             }
         }
     }
 
-    /// The obstacle's displacement δ e.
-    pub fn displacement(&self) -> [f64; 3] {
-        self.dir.map(|x| self.delta * x)
-    }
-
-    /// The lift's boundary: gaps −w_k, so that an active node prescribes u_n = w_k, and
-    /// (friction) the references (τ_k·e), so that a stick node prescribes u_τ = τ_k·e and a
-    /// slip row acts on u_τ − τ_k·e.
-    fn unit(&self, b: &ContactBoundary) -> ContactBoundary {
+    /// The lift's boundary for a unit approach of the pair `j` (the others at rest): gaps −w_k
+    /// on its nodes (0 elsewhere), so that an active node prescribes u_n = w_k, and (friction)
+    /// the references (τ_k·e), so that a stick node prescribes u_τ = τ_k·e and a slip row acts
+    /// on u_τ − τ_k·e.
+    fn unit(&self, b: &ContactBoundary, j: usize) -> ContactBoundary {
         let mut u = b.clone();
         for (i, k) in u.nodes.iter_mut().enumerate() {
-            k.gap = -self.w[i];
-            k.u_t_ref = self.wt[i];
+            let mine = self.slot[i] == Some(j);
+            k.gap = -(if mine { self.w[i] } else { 0.0 });
+            k.u_t_ref = if mine { self.wt[i] } else { [0.0; 2] };
         }
         u
     }
 
-    /// The contact force along e of an iterate, Σ_k (−λ_k)·e over every rank's contact nodes
-    /// of the pair.
-    /// Collective.
-    pub fn force_along(&self, ctx: &Ctx, it: &Iterate) -> f64 {
-        let local: f64 = it
-            .nodes
-            .iter()
-            .zip(&self.in_pair)
-            .filter(|(_, &mine)| mine)
-            .map(|(r, _)| -dot(r.lambda, self.dir))
-            .sum();
-        ctx.sum_vec(&[local])[0]
+    /// Each force-controlled pair's contact force along its e_j, Σ_k (−λ_k)·e_j over every
+    /// rank's contact nodes of the pair. Collective.
+    pub fn forces_along(&self, ctx: &Ctx, it: &Iterate) -> Vec<f64> {
+        let local: Vec<f64> = (0..self.pairs.len())
+            .map(|j| {
+                let e = self.pairs[j].dir;
+                it.nodes
+                    .iter()
+                    .zip(&self.slot)
+                    .filter(|(_, s)| **s == Some(j))
+                    .map(|(r, _)| -dot(r.lambda, e))
+                    .sum()
+            })
+            .collect();
+        ctx.sum_vec(&local)
     }
 
-    fn input_error(&self, message: String) -> RunError {
-        RunError::Input(InputError::new(Path::new(&self.file), message).with_key(self.key.as_str()))
+    /// The active nodes of each force-controlled pair (over all ranks). Collective.
+    fn active_counts(&self, ctx: &Ctx, set: &ActiveSet) -> Vec<usize> {
+        let mut local = vec![0.0; self.pairs.len()];
+        for (a, s) in set.normal.iter().zip(&self.slot) {
+            if let (true, Some(j)) = (*a, s) {
+                local[*j] += 1.0;
+            }
+        }
+        ctx.sum_vec(&local).iter().map(|&x| x as usize).collect()
     }
 
-    /// No active node: δ grows until the first contact node touches, the one whose gap
-    /// g_k(δ) + u_n closes first along e (the smallest tag among equal distances).
+    fn input_error(&self, j: usize, message: String) -> RunError {
+        RunError::Input(
+            InputError::new(Path::new(&self.file), message).with_key(self.pairs[j].key.as_str()),
+        )
+    }
+
+    /// No active node of the pair `j`: δ_j grows until the first of its contact nodes
+    /// touches, the one whose gap g_k(δ) + u_n closes first along e_j (the smallest tag among
+    /// equal distances). Returns the tag. Collective.
     fn touch(
         &mut self,
         ctx: &Ctx,
         b: &ContactBoundary,
         it: &Iterate,
-    ) -> Result<Correction, RunError> {
+        j: usize,
+    ) -> Result<u64, RunError> {
         let mut best = (f64::INFINITY, u64::MAX);
-        for ((k, r), w) in b.nodes.iter().zip(&it.nodes).zip(&self.w) {
-            if *w > 0.0 {
+        for (((k, r), w), s) in b.nodes.iter().zip(&it.nodes).zip(&self.w).zip(&self.slot) {
+            if *s == Some(j) && *w > 0.0 {
                 let d = (k.gap + r.u_n) / w;
                 if d < best.0 || (d == best.0 && k.tag < best.1) {
                     best = (d, k.tag);
@@ -223,19 +321,50 @@ impl Approach {
         }
         let d = ctx.min_f64(best.0);
         if !d.is_finite() {
-            return Err(self.input_error(NEVER_TOUCHES.into()));
+            return Err(self.input_error(j, NEVER_TOUCHES.into()));
         }
         let tag = ctx.min_u64(if best.0 == d { best.1 } else { u64::MAX });
-        self.delta += d;
-        Ok(Correction::Touch(tag))
+        self.pairs[j].delta += d;
+        Ok(tag)
     }
 }
 
-/// The force step after the solve of `set` at δ_ℓ (`it` recovered from it): the bordered
-/// system's δ by the lift u¹ (one more solve on the same factorisation), u ← u + Δδ u¹ in
-/// `reduced`, λ recovered again (3.28); without an active node the touching δ instead. `b`
-/// gets the gaps at the new δ. `force`: the iterate's contact force along e
-/// ([`Approach::force_along`]). Collective.
+/// Solves the small dense system K x = r by Gaussian elimination with partial pivoting (K is
+/// the k × k derivative of the pairs' forces by their approaches, k the force-controlled pairs
+/// with an active node); `None` if a pivot vanishes. With k = 1: x = r / K. Pure.
+fn solve_small(mut k: Vec<Vec<f64>>, mut r: Vec<f64>) -> Option<Vec<f64>> {
+    let n = r.len();
+    for c in 0..n {
+        let p = (c..n).max_by(|&a, &b| k[a][c].abs().total_cmp(&k[b][c].abs()))?;
+        if k[p][c] == 0.0 || !k[p][c].is_finite() {
+            return None;
+        }
+        k.swap(c, p);
+        r.swap(c, p);
+        for i in c + 1..n {
+            let f = k[i][c] / k[c][c];
+            for j in c..n {
+                k[i][j] -= f * k[c][j];
+            }
+            r[i] -= f * r[c];
+        }
+    }
+    let mut x = vec![0.0; n];
+    for c in (0..n).rev() {
+        let s: f64 = (c + 1..n).map(|j| k[c][j] * x[j]).sum();
+        x[c] = (r[c] - s) / k[c][c];
+    }
+    x.iter().all(|v| v.is_finite()).then_some(x)
+}
+
+/// The force step after the solve of `set` at δ_ℓ (`it` recovered from it), the bordered
+/// system [S, s; rᵀ, 0] of (3.29) with one border row and column per force-controlled pair
+/// that has an active node, solved by block elimination: the lift u¹_j of each such pair (one
+/// more solve on the same factorisation each), the k × k system Σ_j P¹_ij Δδ_j = |F_i| − P_i
+/// with P¹_ij = Σ_{k ∈ pair i} (A u¹_j)_k·e_i for the δ's, u ← u + Σ_j Δδ_j u¹_j in `reduced`,
+/// λ recovered again (3.28). A pair without an active node instead moves to the touching δ.
+/// `b` gets the gaps at the new δ's. `forces`: the iterate's contact forces along the e_j
+/// ([`Approach::forces_along`]). Collective.
 #[allow(clippy::too_many_arguments)]
 pub fn correct(
     ctx: &Ctx,
@@ -243,47 +372,105 @@ pub fn correct(
     reduced: &mut ReducedSystem,
     set: &ActiveSet,
     pins: &[Pin],
-    (n_active, force): (usize, f64),
+    forces: &[f64],
     b: &mut ContactBoundary,
     ap: &mut Approach,
     it: &mut Iterate,
 ) -> Result<Correction, RunError> {
-    if n_active == 0 {
-        let c = ap.touch(ctx, b, it)?;
+    let counts = ap.active_counts(ctx, set);
+    let held: Vec<usize> = (0..ap.pairs.len()).filter(|&j| counts[j] > 0).collect();
+    let mut c = Correction {
+        bordered: !held.is_empty(),
+        touched: Vec::new(),
+    };
+    if c.bordered {
+        let mut lifts = Vec::with_capacity(held.len());
+        let mut local = vec![0.0; held.len() * held.len()];
+        for (q, &j) in held.iter().enumerate() {
+            let unit = ap.unit(b, j);
+            let (u1, au1) = reduced.solve_lift(ctx, j, sys, layout, &unit, &set.lift(), pins)?;
+            // column q: the pairs' forces along their e_i per unit δ_j
+            for (p, &i) in held.iter().enumerate() {
+                let e = ap.pairs[i].dir;
+                local[p * held.len() + q] = b
+                    .nodes
+                    .iter()
+                    .zip(&ap.slot)
+                    .filter(|(_, s)| **s == Some(i))
+                    .map(|(k, _)| (0..dim).map(|d| au1[k.local_row + d] * e[d]).sum::<f64>())
+                    .sum();
+            }
+            lifts.push(u1);
+        }
+        let all = ctx.sum_vec(&local);
+        let n = held.len();
+        let stiffness: Vec<Vec<f64>> = (0..n).map(|p| all[p * n..(p + 1) * n].to_vec()).collect();
+        // P¹_jj = u¹_jᵀ A u¹_j (A u¹_j vanishes off the active rows, where u¹_j is
+        // prescribed): > 0 unless no active node of the pair has a normal component along e_j
+        if let Some(p) = (0..n).find(|&p| stiffness[p][p].is_nan() || stiffness[p][p] <= 0.0) {
+            let j = held[p];
+            return Err(ap.input_error(
+                j,
+                format!(
+                    "the body does not resist the obstacle's motion along the force: with {} \
+                     active contact node(s) the contact force along it does not grow with the \
+                     approach (dP/dδ = {:.3e}): is the body held by Dirichlet data against the \
+                     force?",
+                    counts[j], stiffness[p][p]
+                ),
+            ));
+        }
+        let rhs: Vec<f64> = held
+            .iter()
+            .map(|&j| ap.pairs[j].magnitude - forces[j])
+            .collect();
+        let Some(steps) = solve_small(stiffness, rhs) else {
+            return Err(ap.input_error(
+                held[0],
+                "the forces of the force-controlled pairs do not grow independently with their \
+                 approaches (the system for the approaches is singular): is the body held by \
+                 Dirichlet data against the forces?"
+                    .into(),
+            ));
+        };
+        let mut u = reduced.solution_local()?;
+        for (step, u1) in steps.iter().zip(&lifts) {
+            for (x, y) in u.iter_mut().zip(u1) {
+                *x += step * y;
+            }
+        }
+        reduced.set_solution_local(&u)?;
+        for (&j, step) in held.iter().zip(&steps) {
+            ap.pairs[j].delta += step;
+        }
         ap.place(b);
-        return Ok(c);
+        reduced.recover(sys, b, set, it)?; // (3.28) at the new δ's
     }
-    let unit = ap.unit(b);
-    let (u1, au1) = reduced.solve_lift(ctx, sys, layout, &unit, &set.lift(), pins)?;
-    let local: f64 = b
-        .nodes
-        .iter()
-        .zip(&ap.in_pair)
-        .filter(|(_, &mine)| mine)
-        .map(|(k, _)| {
-            (0..dim)
-                .map(|j| au1[k.local_row + j] * ap.dir[j])
-                .sum::<f64>()
-        })
-        .sum();
-    let stiffness = ctx.sum_vec(&[local])[0];
-    // P¹ = u¹ᵀ A u¹ (A u¹ vanishes off the active normals, where u¹_n = w_k): > 0 unless no
-    // active node's normal has a component along e
-    if stiffness.is_nan() || stiffness <= 0.0 {
-        return Err(ap.input_error(format!(
-            "the body does not resist the obstacle's motion along the force: with {n_active} \
-             active contact node(s) the contact force along it does not grow with the approach \
-             (dP/dδ = {stiffness:.3e}): is the body held by Dirichlet data against the force?"
-        )));
+    for j in (0..ap.pairs.len()).filter(|&j| counts[j] == 0) {
+        let tag = ap.touch(ctx, b, it, j)?;
+        c.touched.push((j, tag));
     }
-    let step = (ap.magnitude - force) / stiffness;
-    let mut u = reduced.solution_local()?;
-    for (x, y) in u.iter_mut().zip(&u1) {
-        *x += step * y;
+    if !c.touched.is_empty() {
+        ap.place(b);
     }
-    reduced.set_solution_local(&u)?;
-    ap.delta += step;
-    ap.place(b);
-    reduced.recover(sys, b, set, it)?; // (3.28) at the new δ
-    Ok(Correction::Bordered)
+    Ok(c)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::solve_small;
+
+    #[test]
+    fn small_system() {
+        assert_eq!(solve_small(vec![vec![4.0]], vec![2.0]), Some(vec![0.5]));
+        let x = solve_small(vec![vec![1.0, 2.0], vec![3.0, 4.0]], vec![5.0, 6.0]).unwrap();
+        assert!(
+            (x[0] + 4.0).abs() < 1e-12 && (x[1] - 4.5).abs() < 1e-12,
+            "{x:?}"
+        );
+        assert_eq!(
+            solve_small(vec![vec![1.0, 2.0], vec![2.0, 4.0]], vec![1.0, 1.0]),
+            None
+        );
+    }
 }

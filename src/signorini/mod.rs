@@ -281,11 +281,14 @@ pub fn solve(
     let coords = solver::near_null_space_coordinates(ctx, mesh, layout, solver_section.preset)?;
     let c = complementarity_parameter(ctx, settings, &b, dim);
     let force_control = force_control(settings, previous);
+    if let Some(fc) = force::unreached(ctx, &b, &force_control) {
+        return Err(force::never_touches(fc));
+    }
     // the start: the previous step's solution, or its extrapolation along its own increment
-    // (under force control against the obstacle where the previous step left it)
-    let at_start = force_control.as_ref().map(|fc| {
+    // (under force control against the obstacles where the previous step left them)
+    let at_start = (!force_control.is_empty()).then(|| {
         let mut placed = b.clone();
-        force::Approach::new(&b, fc).place(&mut placed);
+        force::Approach::new(&b, &force_control).place(&mut placed);
         placed
     });
     let start = previous
@@ -319,7 +322,7 @@ pub fn solve(
         rigid: settings.rigid_modes,
         halfspace: halfspace.as_ref(),
         estimate: false,
-        force: force_control.as_ref(),
+        force: &force_control,
     };
     let (mut nr, outer_steps, condensed_summary) = run_method(
         ctx,
@@ -337,10 +340,12 @@ pub fn solve(
         }
     }
     let mut displacement = settings.displacements();
-    if let Some((delta, fc)) = nr.approach.zip(force_control.as_ref()) {
+    let mut approaches = vec![None; settings.pairs.len()];
+    for (&delta, fc) in nr.approach.iter().zip(&force_control) {
         // the obstacle where the force put it: the gaps to it for the certificates and output
         displacement[fc.pair] = fc.direction().map(|x| delta * x);
-        for k in b.nodes.iter_mut() {
+        approaches[fc.pair] = Some(delta);
+        for k in b.nodes.iter_mut().filter(|k| k.pair == fc.pair) {
             k.gap -= delta * fc.weight(k);
             if friction {
                 let wt = fc.tangential_weight(k);
@@ -357,7 +362,7 @@ pub fn solve(
         &b,
         &nr.nodes,
         &table,
-        (&displacement, nr.approach),
+        (&displacement, &approaches),
         &mut contact,
     );
     let mut newton = newton_summary(settings, solver_section, c, &mut nr, outer_steps, previous);
@@ -393,31 +398,36 @@ pub fn solve(
     })
 }
 
-/// Force control of this solve (`contact.force`): the force at this load factor, δ from the
-/// previous load step's obstacle displacement (its component along the force; extrapolated
-/// along that step's increment as the rest of its start, [`ContactSolution::start`]), else 0.
+/// Force control of this solve (`contact.force`), one per force-controlled pair in pair
+/// order: the force at this load factor, δ from the previous load step's obstacle
+/// displacement (its component along the force; extrapolated along that step's increment as
+/// the rest of its start, [`ContactSolution::start`]), else 0. Empty without force control.
 fn force_control(
     settings: &ContactSettings,
     previous: Option<&ContactSolution>,
-) -> Option<force::ForceControl> {
-    let (p, pair) = settings.force_pair()?;
-    let mut fc = force::ForceControl {
-        force: pair.force_now,
-        start: 0.0,
-        file: settings.file.clone(),
-        pair: p,
-        key: pair.key("force"),
-    };
-    if let Some(prev) = previous {
-        let mut d = prev.obstacle_displacement[p];
-        if let Some(delta) = prev.delta.as_ref().filter(|_| prev.predict > 0.0) {
-            for (x, dx) in d.iter_mut().zip(delta.obstacle[p]) {
-                *x += prev.predict * dx;
+) -> Vec<force::ForceControl> {
+    settings
+        .force_pairs()
+        .map(|(p, pair)| {
+            let mut fc = force::ForceControl {
+                force: pair.force_now,
+                start: 0.0,
+                file: settings.file.clone(),
+                pair: p,
+                key: pair.key("force"),
+            };
+            if let Some(prev) = previous {
+                let mut d = prev.obstacle_displacement[p];
+                if let Some(delta) = prev.delta.as_ref().filter(|_| prev.predict > 0.0) {
+                    for (x, dx) in d.iter_mut().zip(delta.obstacle[p]) {
+                        *x += prev.predict * dx;
+                    }
+                }
+                fc.start = crate::geom::dot(d, fc.direction());
             }
-        }
-        fc.start = crate::geom::dot(d, fc.direction());
-    }
-    Some(fc)
+            fc
+        })
+        .collect()
 }
 
 /// The complementarity parameter c: the case's, or E / h_c; said in the log. Collective.
@@ -499,9 +509,10 @@ fn run_method(
             }
             // force control solves its lift on the step's own factorisation (force.rs); the
             // iterative preset's reuse of preconditioners stays
-            let reuse = match ns.force {
-                Some(_) if reduced.factorises()? => Reuse::Never,
-                _ => solver_section.reuse,
+            let reuse = if !ns.force.is_empty() && reduced.factorises()? {
+                Reuse::Never
+            } else {
+                solver_section.reuse
             };
             reduced.enable_reuse(ctx, reuse, friction)?;
             match settings.coulomb {
@@ -697,9 +708,10 @@ fn take_reference(
 /// Coulomb by the fixed point on Tresca thresholds (docs/friction.md (a)):
 /// b^{m+1}_k = μ max(0, −λ_n^{k,m}), every outer step a Tresca solve (Algorithm 2) warm-started
 /// from the previous one (b^0 from the warm start's λ_n, else ‖f‖₁: all stick); stop when
-/// max_k |b^{m+1} − b^m| ≤ [`FIXED_POINT_TOL`] · max_k b^{m+1}. Returns the last Tresca
-/// result with the history and step count of all outer steps, and the number of outer steps.
-/// Collective.
+/// max_k |b^{m+1} − b^m| ≤ [`FIXED_POINT_TOL`] · max_k b^{m+1}. Under force control every
+/// Tresca solve is force-controlled (force.rs), from the previous one's approaches. Returns
+/// the last Tresca result with the history and step count of all outer steps, and the number
+/// of outer steps. Collective.
 fn fixed_point(
     ctx: &Ctx,
     p: &ContactProblem,
@@ -707,10 +719,8 @@ fn fixed_point(
     ns: &NewtonSettings,
     warm: Option<&WarmStart>,
 ) -> Result<(NewtonResult, usize), RunError> {
-    let tresca = NewtonSettings {
-        law: Law::Tresca,
-        ..*ns
-    };
+    // under force control each Tresca solve starts from the approaches of the previous one
+    let mut force = ns.force.to_vec();
     let mut b = p.boundary.clone();
     let mut state: Option<(Vec<NodeResult>, Vec<f64>)> =
         warm.map(|w| (w.nodes.to_vec(), w.u_local.to_vec()));
@@ -730,7 +740,15 @@ fn fixed_point(
         let start = state
             .as_ref()
             .map(|(nodes, u)| WarmStart { nodes, u_local: u });
+        let tresca = NewtonSettings {
+            law: Law::Tresca,
+            force: &force,
+            ..*ns
+        };
         let mut nr = newton::semismooth_newton(ctx, &pm, reduced, &tresca, start.as_ref())?;
+        for (fc, &delta) in force.iter_mut().zip(&nr.approach) {
+            fc.start = delta;
+        }
         for h in &nr.history {
             let mut h = h.clone();
             h.step = history.len() + 1;
@@ -1074,7 +1092,7 @@ fn snesvi_solve(
         rows_seconds: r.setup_seconds,
         pinned_final: pins,
         cycle_detected_at: None,
-        approach: None,
+        approach: Vec::new(),
     })
 }
 

@@ -16,7 +16,7 @@ use super::active_set::{
 };
 use super::boundary::{ContactBoundary, NodeResult};
 use super::cycle::{decide, CycleGuard, Decision, Seen, SetKey};
-use super::force::{self, Approach, Correction, ForceControl};
+use super::force::{self, Approach, ForceControl};
 use super::predictor::{self, HalfSpace, PredictorStep};
 use super::reduced::{AmgStep, ReducedSystem, ReuseStep, SolveKind, StepSolve};
 use super::rigid::{Balance, FreeModes, Motion, Pin};
@@ -42,8 +42,9 @@ pub struct NewtonSettings<'a> {
     /// A frictionless estimate for a start (condensed path): the pins carry the load in the
     /// modes the set leaves free instead of the balance test ([`super::dense::Dense`]).
     pub estimate: bool,
-    /// Force control (`contact.force`, force.rs): the approach δ is an unknown of the loop.
-    pub force: Option<&'a ForceControl>,
+    /// Force control (`contact.force`, force.rs): one approach δ_j per force-controlled pair
+    /// is an unknown of the loop (empty: no force control).
+    pub force: &'a [ForceControl],
 }
 
 impl NewtonSettings<'_> {
@@ -127,8 +128,9 @@ pub struct NewtonResult {
     pub pinned_final: Vec<Pin>,
     /// Step after which a recurring set switched the iteration to least-index updates.
     pub cycle_detected_at: Option<usize>,
-    /// Force control: the approach δ of the result (the obstacle moved by δ F/|F|).
-    pub approach: Option<f64>,
+    /// Force control: the approach δ_j of the result per force-controlled pair, in pair order
+    /// (its obstacle moved by δ_j F_j/|F_j|); empty without force control.
+    pub approach: Vec<f64>,
 }
 
 /// Default c = E / h_c with h_c the mean contact mesh size (w_k^(1/(d−1)) over all contact
@@ -174,7 +176,7 @@ struct Loop<'a> {
     /// The residual of the last step that changed no state and left u unchanged (below
     /// tol_u), for [`COULOMB_RESIDUAL_STALL`].
     last_still_residual: Option<f64>,
-    /// Force control: the approach δ and the gaps it moves.
+    /// Force control: the approaches δ_j and the gaps they move.
     approach: Option<Approach>,
     /// The free modes are S's null space instead of pinned ([`Loop::free_modes_by_null_space`]).
     null_space: bool,
@@ -252,7 +254,7 @@ pub fn semismooth_newton(
         let bs = &lp.shifted;
         let scale = threshold_scale(ctx, bs, &lp.it.nodes, s.law, s.c);
         let mut update = lp.set.update(&lp.it, bs, s.law, s.c, scale, dim); // (3.23) / (3.33) / (F5)
-        if let Some(tag) = touch {
+        for tag in touch {
             lp.touch(tag, &mut update);
         }
         let mut predicted = None;
@@ -311,11 +313,14 @@ impl<'a> Loop<'a> {
         let dim = mesh.dim;
         let free = FreeModes::new(ctx, mesh, layout, fixed, b, &reduced.f_local, s.rigid);
         let approach = match s.force {
-            Some(fc) if free.floats() => {
+            [] => None,
+            [fc, ..] if free.floats() && s.force.len() == b.n_pairs() && b.n_pairs() > 1 => {
+                return Err(force::all_pairs_floating(fc));
+            }
+            [fc, ..] if free.floats() => {
                 return Err(force::floating(fc, b.n_pairs() > 1));
             }
-            Some(fc) => Some(Approach::new(b, fc)),
-            None => None,
+            fcs => Some(Approach::new(b, fcs)),
         };
         let mut placed = b.clone();
         if let Some(ap) = &approach {
@@ -393,7 +398,12 @@ impl<'a> Loop<'a> {
         update: &mut SetUpdate,
     ) -> Result<(PredictorStep, Option<bool>), RunError> {
         let s = self.s;
-        let force = self.approach.as_ref().map(|a| (a.dir, a.magnitude, a.pair));
+        let force: Vec<_> = self.approach.as_ref().map_or(Vec::new(), |a| {
+            a.pairs
+                .iter()
+                .map(|p| (p.dir, p.magnitude, p.pair))
+                .collect()
+        });
         let limits = (s.c, s.section.max_steps);
         let (set, rec) = predictor::predict(
             self.ctx,
@@ -402,15 +412,17 @@ impl<'a> Loop<'a> {
             &self.it,
             &self.free,
             limits,
-            force,
+            &force,
         )?;
         let mut exact = None;
         if let Some(normal) = set {
             update.replace_normal(&self.set, normal);
             exact = Some(!rec.truncated);
         }
-        if let (Some(ap), Some(d)) = (self.approach.as_mut(), rec.approach_change) {
-            ap.delta += d; // the next step solves at the predicted approach
+        if let (Some(ap), Some(d)) = (self.approach.as_mut(), rec.approach_change.as_ref()) {
+            for (p, d) in ap.pairs.iter_mut().zip(d) {
+                p.delta += d; // the next step solves at the predicted approach
+            }
         }
         Ok((rec, exact))
     }
@@ -472,7 +484,7 @@ impl<'a> Loop<'a> {
             rows_seconds: reduced.rows_seconds,
             pinned_final: self.free.pins().to_vec(),
             cycle_detected_at: self.guard.detected_at,
-            approach: self.approach.map(|a| a.delta),
+            approach: self.approach.map_or(Vec::new(), |a| a.deltas()),
             u,
         })
     }
@@ -870,46 +882,52 @@ impl Loop<'_> {
         }
     }
 
-    /// Force control: the step's δ from the force balance (force.rs), u and λ moved with it
-    /// and the gaps placed; the tag of the node that touches when no node was active. Logs
-    /// δ and the contact force along F before the step. Collective.
+    /// Force control: the step's δ's from the force balance (force.rs), u and λ moved with
+    /// them and the gaps placed; the tags of the nodes that touch for the pairs without an
+    /// active node. Logs each pair's δ and contact force along F before the step. Collective.
     fn bordered_step(
         &mut self,
         reduced: &mut ReducedSystem,
         step: usize,
-    ) -> Result<Option<u64>, RunError> {
+    ) -> Result<Vec<u64>, RunError> {
         let Some(ap) = self.approach.as_mut() else {
-            return Ok(None);
+            return Ok(Vec::new());
         };
-        let before = (ap.delta, ap.force_along(self.ctx, &self.it));
+        let deltas = ap.deltas();
+        let forces = ap.forces_along(self.ctx, &self.it);
         let c = force::correct(
             self.ctx,
             (self.p.sys, self.p.layout, self.p.mesh.dim),
             reduced,
             &self.set,
             self.free.pins(),
-            (self.summary.n_active, before.1),
+            &forces,
             &mut self.shifted,
             ap,
             &mut self.it,
         )?;
-        let how = match c {
-            Correction::Bordered => "from the force balance".to_string(),
-            Correction::Touch(tag) => format!("until contact node {tag} touches"),
-        };
-        say!(
-            self.ctx,
-            "force control, step {step}: at δ = {:.6e} the contact force along F is {:.6e} \
-             (|F| = {:.6e}); δ → {:.6e} {how}",
-            before.0,
-            before.1,
-            ap.magnitude,
-            ap.delta
-        );
-        Ok(match c {
-            Correction::Touch(tag) => Some(tag),
-            Correction::Bordered => None,
-        })
+        let several = ap.pairs.len() > 1;
+        for (j, p) in ap.pairs.iter().enumerate() {
+            let how = match c.touched.iter().find(|(q, _)| *q == j) {
+                Some((_, tag)) => format!("until contact node {tag} touches"),
+                None => "from the force balance".to_string(),
+            };
+            let which = if several {
+                format!(" ({})", p.key())
+            } else {
+                String::new()
+            };
+            say!(
+                self.ctx,
+                "force control{which}, step {step}: at δ = {:.6e} the contact force along F is \
+                 {:.6e} (|F| = {:.6e}); δ → {:.6e} {how}",
+                deltas[j],
+                forces[j],
+                p.magnitude,
+                p.delta
+            );
+        }
+        Ok(c.touched.into_iter().map(|(_, tag)| tag).collect())
     }
 
     fn take(&mut self, set: ActiveSet, summary: SetSummary) {

@@ -119,9 +119,10 @@ pub struct PredictorStep {
     /// contact zone may extend beyond the model, and the steps after the prediction stay
     /// inexact while the set moves, as without one.
     pub truncated: bool,
-    /// Force control: the model's change of the approach δ (the second step starts there).
+    /// Force control: the model's change of each force-controlled pair's approach δ_j, in
+    /// pair order (the second step starts there).
     #[serde(skip_serializing_if = "Option::is_none")]
-    pub approach_change: Option<f64>,
+    pub approach_change: Option<Vec<f64>>,
     pub seconds: f64,
 }
 
@@ -285,7 +286,7 @@ pub fn predict(
     it: &Iterate,
     free: &FreeModes,
     (c, max_steps): (f64, usize),
-    force: Option<([f64; 3], f64, usize)>,
+    force: &[([f64; 3], f64, usize)],
 ) -> Result<(Option<Vec<bool>>, PredictorStep), RunError> {
     run_model(ctx, hs, (b, it, None), free, (c, max_steps), force)
 }
@@ -304,7 +305,7 @@ pub fn correct(
     free: &FreeModes,
     limits: (f64, usize),
 ) -> Result<(Option<Vec<bool>>, PredictorStep), RunError> {
-    run_model(ctx, hs, (b, it, Some(active)), free, limits, None)
+    run_model(ctx, hs, (b, it, Some(active)), free, limits, &[])
 }
 
 /// [`predict`] (`active` = None) or [`correct`]. Collective.
@@ -314,7 +315,7 @@ fn run_model(
     (b, it, active): (&ContactBoundary, &Iterate, Option<&[bool]>),
     free: &FreeModes,
     (c, max_steps): (f64, usize),
-    force: Option<([f64; 3], f64, usize)>,
+    force: &[([f64; 3], f64, usize)],
 ) -> Result<(Option<Vec<bool>>, PredictorStep), RunError> {
     let t = Instant::now();
     let mz = if free.floats() {
@@ -326,7 +327,8 @@ fn run_model(
     let n = all.len() / REC;
     // Under force control nothing penetrates before the approach is known: the model grows
     // from MIN_MODEL_NODES (by MODEL_MARGIN) while its contact zone reaches its border.
-    let mut wanted = force.map(|_| MIN_MODEL_NODES.min(n));
+    let mut wanted = (!force.is_empty()).then(|| MIN_MODEL_NODES.min(n));
+    let head = head(force.len());
     let packed = loop {
         let model = Model::choose(&all, wanted);
         // every rank builds a share of C's columns
@@ -344,7 +346,11 @@ fn run_model(
             packed = super::dense::guarded("predictor-model", || {
                 model.solve(&all, &packed_c, free, (mz, c, max_steps), force)
             })
-            .unwrap_or_else(|_| vec![4.0, 0.0, 0.0, 0.0, 0.0, 0.0]);
+            .unwrap_or_else(|_| {
+                let mut failed = vec![0.0; head];
+                failed[0] = 4.0;
+                failed
+            });
         }
         ctx.broadcast_f64s(&mut packed);
         match wanted {
@@ -355,7 +361,7 @@ fn run_model(
         }
     };
     let code = packed[0];
-    let flags_all = &packed[HEAD..];
+    let flags_all = &packed[head..];
     let predicted = code == 0.0 || code == 3.0;
     let mine = predicted.then(|| {
         let o = b.offset;
@@ -378,7 +384,7 @@ fn run_model(
         model_steps: packed[2] as usize,
         coarse_levels: packed[3] as usize,
         truncated: code == 3.0,
-        approach_change: (predicted && force.is_some()).then_some(packed[5]),
+        approach_change: (predicted && !force.is_empty()).then(|| packed[5..head].to_vec()),
         seconds: t.elapsed().as_secs_f64(),
     };
     say!(
@@ -403,14 +409,24 @@ fn run_model(
         rec.model_steps,
         rec.coarse_levels,
         rec.seconds,
-        rec.approach_change
-            .map_or(String::new(), |d| format!("; the approach changes by {d:.6e}"))
+        rec.approach_change.as_ref().map_or(String::new(), |d| {
+            let d: Vec<String> = d.iter().map(|d| format!("{d:.6e}")).collect();
+            let what = if d.len() > 1 {
+                "the approaches change"
+            } else {
+                "the approach changes"
+            };
+            format!("; {what} by {}", d.join(", "))
+        })
     );
     Ok((mine, rec))
 }
 
-/// Values before the flags in the model's broadcast.
-const HEAD: usize = 6;
+/// Values before the flags in the model's broadcast: five, then the approaches' changes (one
+/// per force-controlled pair, at least one value).
+fn head(force_pairs: usize) -> usize {
+    5 + force_pairs.max(1)
+}
 
 /// Every contact node of every rank (rank order, = the boundary's global numbering): x, n,
 /// gap, lumped weight, the first solve's u_n and the free modes' normal parts ([`REC`] values).
@@ -517,14 +533,14 @@ impl Model {
         packed_c: &[f64],
         free: &FreeModes,
         (mz, c, max_steps): (usize, f64, usize),
-        force: Option<([f64; 3], f64, usize)>,
+        force: &[([f64; 3], f64, usize)],
     ) -> Vec<f64> {
         let n = all.len() / REC;
         let (m, wanted) = (self.m(), self.fine.len());
         let r = |i: usize| &all[i * REC..(i + 1) * REC];
         let mut flags = vec![0.0; n];
-        let mut approach = 0.0;
-        let (code, steps, levels) = if self.pen == 0 && force.is_none() {
+        let mut approach = vec![0.0; force.len().max(1)];
+        let (code, steps, levels) = if self.pen == 0 && force.is_empty() {
             (1.0, 0, 0)
         } else {
             let cmat = assemble(m, packed_c);
@@ -538,9 +554,9 @@ impl Model {
                 .map(|(q, &i)| r(i)[8] + clam[q])
                 .collect();
             let gap: Vec<f64> = self.pick.iter().map(|&i| r(i)[6]).collect();
-            let mzf = mz + usize::from(force.is_some());
-            let g = DMatrix::from_fn(m, mzf, |q, cc| match force {
-                Some((e, _, pair)) if cc == mz => {
+            let mzf = mz + force.len();
+            let g = DMatrix::from_fn(m, mzf, |q, cc| match force.get(cc.wrapping_sub(mz)) {
+                Some(&(e, _, pair)) if cc >= mz => {
                     let x = r(self.pick[q]);
                     if x[PAIR] == pair as f64 {
                         -(x[3] * e[0] + x[4] * e[1] + x[5] * e[2])
@@ -553,7 +569,7 @@ impl Model {
             let (_, mut load_scale) = free.load();
             let mut phi = free.free_load();
             phi.truncate(mz);
-            if let Some((_, magnitude, _)) = force {
+            for &(_, magnitude, _) in force {
                 phi.push(magnitude);
                 load_scale = load_scale.max(magnitude);
             }
@@ -570,7 +586,9 @@ impl Model {
             };
             let run = dense.run_nested(vec![false; m], &self.x);
             if run.end == End::Converged {
-                approach = run.alpha.get(mz).copied().unwrap_or(0.0);
+                for (j, a) in approach.iter_mut().enumerate() {
+                    *a = run.alpha.get(mz + j).copied().unwrap_or(0.0);
+                }
                 for (q, &i) in self.fine.iter().enumerate() {
                     if run.active[self.owner[q]] {
                         flags[i] = 1.0;
@@ -587,14 +605,8 @@ impl Model {
                 (2.0, run.steps.len(), run.coarse.len())
             }
         };
-        let mut packed = vec![
-            code,
-            m as f64,
-            steps as f64,
-            levels as f64,
-            wanted as f64,
-            approach,
-        ];
+        let mut packed = vec![code, m as f64, steps as f64, levels as f64, wanted as f64];
+        packed.extend_from_slice(&approach);
         packed.extend_from_slice(&flags);
         packed
     }

@@ -605,9 +605,10 @@ pub struct ReducedSystem {
     reuser: Option<Reuser>,
     /// The reuse path of the iterative preset (`solver.reuse` not "never").
     amg: Option<AmgReuser>,
-    /// Force control: the last lift u¹, the next lift's start on the iterative preset (the
-    /// lift depends on the set and F/|F| only, which change little from step to step).
-    lift: Option<Vector>,
+    /// Force control: the last lift u¹ of each force-controlled pair, the next lift's start on
+    /// the iterative preset (a lift depends on the set and F/|F| only, which change little
+    /// from step to step).
+    lifts: Vec<Option<Vector>>,
 }
 
 impl ReducedSystem {
@@ -645,7 +646,7 @@ impl ReducedSystem {
             kind: None,
             reuser: None,
             amg: None,
-            lift: None,
+            lifts: Vec::new(),
         })
     }
 
@@ -1072,11 +1073,15 @@ impl ReducedSystem {
     /// values and the values `b` and `set` prescribe (the active normals' u_n = −g_k), solved
     /// on the last solve's factorisation or preconditioner (S is unchanged since: no new
     /// factorisation or setup), to the preset's tolerance — on the iterative preset from the
-    /// last lift, and in an inexact step to [`INEXACT_REDUCTION`] of its right-hand side. Returns this rank's rows of the solution u¹ and of A u¹. Not with the direct
-    /// preset's reuse solver (GMRES on an earlier factorisation). Collective.
+    /// last lift of the same force-controlled pair (`slot`: its index among them), and in an
+    /// inexact step to [`INEXACT_REDUCTION`] of its right-hand side. Returns this rank's rows
+    /// of the solution u¹ and of A u¹. Not with the direct preset's reuse solver (GMRES on an
+    /// earlier factorisation). Collective.
+    #[allow(clippy::too_many_arguments)]
     pub fn solve_lift(
         &mut self,
         ctx: &Ctx,
+        slot: usize,
         sys: &System,
         layout: &Layout,
         b: &ContactBoundary,
@@ -1102,8 +1107,11 @@ impl ReducedSystem {
         rhs.set_all(0.0)?;
         write_rows(None, &mut rhs, (&writes, None), &cmap, dim, &mut self.buf)?;
         self.rows_seconds += t.elapsed().as_secs_f64();
-        let warm = self.amg.is_some() && self.lift.is_some();
-        let mut x = match self.lift.take() {
+        if self.lifts.len() <= slot {
+            self.lifts.resize_with(slot + 1, || None);
+        }
+        let warm = self.amg.is_some() && self.lifts[slot].is_some();
+        let mut x = match self.lifts[slot].take() {
             Some(v) if warm => v,
             _ => {
                 let mut v = self.u.duplicate()?;
@@ -1139,7 +1147,7 @@ impl ReducedSystem {
         }
         sys.a.mult(&x, &mut self.au)?;
         let out = (x.to_local_vec()?, self.au.to_local_vec()?);
-        self.lift = Some(x);
+        self.lifts[slot] = Some(x);
         Ok(out)
     }
 

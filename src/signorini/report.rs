@@ -434,20 +434,24 @@ pub struct PairSummary {
 }
 
 /// Fills summary.json's obstacle displacement and approach of `contact` and, with several
-/// pairs, its per-pair numbers (`displacement`: each pair's d; `approach`: δ of the pair
-/// under force control). Collective.
+/// pairs, its per-pair numbers (`displacement`: each pair's d; `approach`: each pair's δ
+/// under force control, `None` for the others). `contact.approach` is the δ of the one pair
+/// under force control (with several such pairs each has its own in `pairs`). Collective.
 pub fn per_pair(
     ctx: &Ctx,
     settings: &ContactSettings,
     b: &ContactBoundary,
     res: &[NodeResult],
     table: &Table,
-    (displacement, approach): (&[[f64; 3]], Option<f64>),
+    (displacement, approach): (&[[f64; 3]], &[Option<f64>]),
     contact: &mut super::ContactSummary,
 ) {
     let dim = table.dim;
     let moves = |p: &crate::setup::PairSettings| p.motion.is_some() || p.force.is_some();
-    contact.approach = approach;
+    contact.approach = match approach.iter().flatten().collect::<Vec<_>>().as_slice() {
+        [&one] => Some(one),
+        _ => None,
+    };
     if let [pair] = settings.pairs.as_slice() {
         if moves(pair) {
             contact.obstacle_displacement = Some(displacement[0][..dim].to_vec());
@@ -477,7 +481,7 @@ pub fn per_pair(
                 max_pressure: rows().map(|r| r[P]).fold(0.0, f64::max),
                 total_force: force[3 * p..3 * p + dim].to_vec(),
                 obstacle_displacement: moves(pair).then(|| displacement[p][..dim].to_vec()),
-                approach: approach.filter(|_| pair.force.is_some()),
+                approach: approach[p].filter(|_| pair.force.is_some()),
                 half_width: table.half_width(&b.obstacles[p], Some(p)),
                 contact_area: (dim == 3).then(|| active().map(|r| r[W]).sum()),
             }

@@ -107,6 +107,25 @@ fn full_ball_3d_takes_its_free_modes_as_null_space_and_ends_on_the_pinned_answer
             "{}",
             steps[0]
         );
+        // the step after the predictor's solve sets GAMG up with a hierarchy of its own
+        assert_eq!(
+            steps[1]["amg"]["pc_setup"],
+            Value::Bool(true),
+            "{}",
+            steps[1]
+        );
+        assert_eq!(
+            steps[1]["amg"]["new_hierarchy"],
+            Value::Bool(true),
+            "{}",
+            steps[1]
+        );
+        assert_eq!(
+            steps[0]["amg"]["new_hierarchy"],
+            Value::Bool(false),
+            "{}",
+            steps[0]
+        );
         for st in &steps[1..] {
             assert_eq!(st["pinned"].as_u64(), Some(3), "{st}");
             assert_eq!(st["amg"]["null_space"], Value::Bool(true), "{st}");

@@ -819,6 +819,23 @@ impl Ksp {
         unsafe { check(ffi::KSPSetReusePreconditioner(self.raw, flag)) }
     }
 
+    /// PCGAMGSetReuseInterpolation on this KSP's PC: with `false` the next set-up on a changed
+    /// operator builds the aggregates and prolongators anew (PETSc's default keeps them and
+    /// recomputes only the coarse operators). No effect on another PC type.
+    pub fn set_gamg_reuse_interpolation(&mut self, reuse: bool) -> Result<()> {
+        let flag = if reuse {
+            ffi::PETSC_TRUE
+        } else {
+            ffi::PETSC_FALSE
+        };
+        let mut pc: ffi::PC = ptr::null_mut();
+        // SAFETY: valid KSP; the PC is borrowed from it.
+        unsafe {
+            check(ffi::KSPGetPC(self.raw, &mut pc))?;
+            check(ffi::PCGAMGSetReuseInterpolation(pc, flag))
+        }
+    }
+
     /// The maximum number of iterations; the other tolerances stay as they are.
     pub fn set_max_iterations(&mut self, max_it: usize) -> Result<()> {
         let d = ffi::PETSC_DEFAULT;

@@ -180,9 +180,9 @@ struct Loop<'a> {
     approach: Option<Approach>,
     /// The free modes are S's null space instead of pinned ([`Loop::free_modes_by_null_space`]).
     null_space: bool,
-    /// The nodes (3.23) changed in the last step the model corrected ([`Loop::correct`]; the
-    /// corrections stop for good when they do not make this count fall).
-    corrected_changes: Option<usize>,
+    /// The changes of the last step the model corrected, and whether the corrections stopped
+    /// for good ([`Loop::correct`], [`Loop::corrected`]).
+    corrections: (Option<usize>, bool),
 }
 
 /// The start "auto": the initially touching nodes (the "gap" start), except for a
@@ -267,6 +267,9 @@ pub fn semismooth_newton(
             predicted = lp.correct(hs, &mut update)?;
         }
         let totals = update.reduce(ctx, &lp.shifted, lp.free.modes(), dim);
+        if plan.correct && predicted.is_some() {
+            lp.corrected(totals.changed);
+        }
         history.push(lp.step_info(step, &totals, solved));
         history.last_mut().expect("pushed").predictor = predicted;
         log_step(ctx, history.last().expect("pushed"), &totals);
@@ -371,7 +374,7 @@ impl<'a> Loop<'a> {
             last_still_residual: None,
             approach,
             null_space: false,
-            corrected_changes: None,
+            corrections: (None, false),
         };
         reduced.set_free_null_space(ctx, None)?; // none left from an earlier solve
         Ok((lp, predicting))
@@ -431,25 +434,16 @@ impl<'a> Loop<'a> {
     /// under force control): when (3.23) changes nodes, the next set is the model's, except
     /// that every node (3.23) changes keeps its change (so the step counts at least those
     /// changes, and a correction never stops the iteration); the model's record, or `None`
-    /// when (3.23) changes nothing. The corrections stop for good once (3.23) changes no fewer
-    /// nodes than after the last corrected step (the model does not converge on this body:
-    /// (3.23) alone goes on, as without a model). Collective.
+    /// when (3.23) changes nothing or the corrections have stopped ([`Loop::corrected`]).
+    /// Collective.
     fn correct(
         &mut self,
         hs: &HalfSpace,
         update: &mut SetUpdate,
     ) -> Result<Option<PredictorStep>, RunError> {
         let ctx = self.ctx;
-        let changes = ctx.sum_usize(update.changed);
-        if self.approach.is_some() || changes == 0 {
+        if self.approach.is_some() || self.corrections.1 || ctx.sum_usize(update.changed) == 0 {
             return Ok(None);
-        }
-        match self.corrected_changes {
-            Some(last) if changes >= last => {
-                self.corrected_changes = Some(0); // stopped for good
-                return Ok(None);
-            }
-            _ => self.corrected_changes = Some(changes),
         }
         let limits = (self.s.c, self.s.section.max_steps);
         let cur = (&self.shifted, &self.it, self.set.normal.as_slice());
@@ -462,6 +456,15 @@ impl<'a> Loop<'a> {
             update.replace_normal(&self.set, next);
         }
         Ok(Some(rec))
+    }
+
+    /// After a corrected step's update (`changed` nodes, global): the corrections stop for good
+    /// when a corrected step changes no fewer nodes than the one before it (the model does not
+    /// converge on this body; (3.23) alone goes on, as without a model). Local.
+    fn corrected(&mut self, changed: usize) {
+        let (last, _) = self.corrections;
+        let stop = last.is_some_and(|l| changed >= l);
+        self.corrections = (Some(changed), stop);
     }
 
     /// The result: u = w + ρ (the rigid motion added back), the final iterate and the record.

@@ -422,6 +422,9 @@ pub struct AmgStep {
     /// The free rigid modes were S's null space instead of pinned dofs
     /// ([`ReducedSystem::set_free_null_space`]).
     pub null_space: bool,
+    /// The set-up also built GAMG's aggregates and prolongators anew instead of keeping the
+    /// last ones (the step after the predictor's first solve).
+    pub new_hierarchy: bool,
 }
 
 /// The iterative preset's reuse path (`solver.reuse` "auto" / "always"): warm starts, the
@@ -437,6 +440,13 @@ struct AmgReuser {
     built: bool,
     /// The next solve sets the preconditioner up anew ("auto": the rate grew).
     rebuild: bool,
+    /// That set-up also builds GAMG's aggregates and prolongators anew (after the predictor's
+    /// first solve, whose matrix has no active node and the pins of every rigid mode: kept,
+    /// its prolongators cost the exact steps after it half again as many iterations, the full
+    /// ball at 57 k unknowns 36 and 35 against 22 and 19).
+    rebuild_hierarchy: bool,
+    /// The last set-up did so.
+    new_hierarchy: bool,
     /// This step's solve may stop at [`INEXACT_REDUCTION`] of its start's residual.
     inexact: bool,
     /// This step's solve is the predictor's first ([`ReducedSystem::set_predictor_solve`]).
@@ -492,9 +502,17 @@ impl AmgReuser {
         let mut setup_seconds = 0.0;
         if setup {
             ksp.set_reuse_preconditioner(false)?;
+            let hierarchy = std::mem::take(&mut self.rebuild_hierarchy);
+            self.new_hierarchy = hierarchy;
+            if hierarchy {
+                ksp.set_gamg_reuse_interpolation(false)?;
+            }
             let ts = Instant::now();
             ksp.set_up()?;
             setup_seconds += ts.elapsed().as_secs_f64();
+            if hierarchy {
+                ksp.set_gamg_reuse_interpolation(true)?;
+            }
             self.built = true;
             self.rebuild = false;
         } else {
@@ -542,6 +560,7 @@ impl AmgReuser {
         };
         if predictor {
             self.rebuild = self.mode == Reuse::Auto;
+            self.rebuild_hierarchy = self.rebuild;
         } else if measured && !fallback {
             // after a fallback the next measured solve on the new preconditioner is the reference
             if setup || self.fresh_rate.is_none() {
@@ -575,6 +594,7 @@ impl AmgReuser {
             rate,
             fallback,
             null_space: self.null_space,
+            new_hierarchy: pc_setup && self.new_hierarchy,
         }
     }
 }
@@ -676,6 +696,8 @@ impl ReducedSystem {
                 fresh_rate: None,
                 built: false,
                 rebuild: false,
+                rebuild_hierarchy: false,
+                new_hierarchy: false,
                 inexact: false,
                 predictor: false,
                 null_space: false,

@@ -1023,6 +1023,8 @@ fn record_steps(
             states: None,
             du_rel: None,
             predictor: None,
+            change: None,
+            factorisation_seconds: None,
         });
     }
 }

@@ -1031,6 +1031,8 @@ fn record_steps(
             states: None,
             du_rel: None,
             predictor: None,
+            change: None,
+            factorisation_seconds: None,
         });
     }
 }

@@ -805,6 +805,8 @@ fn record_steps(ctx: &Ctx, run: &DenseCoulomb, candidates: usize) -> Vec<StepInf
                 states: None,
                 du_rel: None,
                 predictor: None,
+                change: None,
+                factorisation_seconds: None,
             }
         })
         .collect()

@@ -18,7 +18,7 @@ use super::boundary::{ContactBoundary, NodeResult};
 use super::cycle::{decide, CycleGuard, Decision, Seen, SetKey};
 use super::force::{self, Approach, ForceControl};
 use super::predictor::{self, HalfSpace, PredictorStep};
-use super::reduced::{AmgStep, ReducedSystem, ReuseStep, SolveKind, StepSolve};
+use super::reduced::{AmgStep, ReducedSystem, ReuseStep, RowChange, SolveKind, StepSolve};
 use super::rigid::{Balance, FreeModes, Motion, Pin};
 use crate::assembly::System;
 use crate::case::{self, NewtonInit, NewtonSection};
@@ -111,6 +111,14 @@ pub struct StepInfo {
     /// The half-space predictor after this (first) step (iterative preset, frictionless).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub predictor: Option<PredictorStep>,
+    /// Friction: how this step's matrix differs from the previous step's (absent in the
+    /// first step).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub change: Option<RowChange>,
+    /// A factorising step of the plain path: the seconds of the numeric factorisation alone
+    /// (`solve_seconds` minus these: the solve with it).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub factorisation_seconds: Option<f64>,
 }
 
 /// What Algorithms 1 and 2 return.
@@ -270,7 +278,7 @@ pub fn semismooth_newton(
         if plan.correct && predicted.is_some() {
             lp.corrected(totals.changed);
         }
-        history.push(lp.step_info(step, &totals, solved));
+        history.push(lp.step_info(step, &totals, solved, reduced.change()));
         history.last_mut().expect("pushed").predictor = predicted;
         log_step(ctx, history.last().expect("pushed"), &totals);
         let done = plan;
@@ -732,7 +740,16 @@ impl Loop<'_> {
         Ok(())
     }
 
-    fn step_info(&self, step: usize, t: &StepTotals, solved: StepSolve) -> StepInfo {
+    fn step_info(
+        &self,
+        step: usize,
+        t: &StepTotals,
+        solved: StepSolve,
+        change: Option<RowChange>,
+    ) -> StepInfo {
+        let factorisation_seconds = solved
+            .setup_seconds
+            .filter(|_| solved.kind == SolveKind::Factorisation);
         StepInfo {
             step,
             active: self.summary.n_active,
@@ -747,6 +764,8 @@ impl Loop<'_> {
             states: self.s.friction().then_some(t.states),
             du_rel: self.s.friction().then_some(t.du_rel),
             predictor: None,
+            change,
+            factorisation_seconds,
         }
     }
 

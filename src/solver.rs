@@ -28,11 +28,15 @@ pub fn preset_options(preset: Preset, rtol: f64, symmetric: bool) -> String {
         // GMRES with right preconditioning (the true residual is tested) and smoothed
         // aggregation AMG with the rigid-body near-null space; the symmetrised graph keeps
         // aggregation valid for the unsymmetric reduced systems of friction (Tresca (3.42),
-        // Coulomb (F7) in docs/friction.md, unsymmetric also in 2D).
+        // Coulomb (F7) in docs/friction.md, unsymmetric also in 2D). The coarsest level is
+        // solved by a pseudo-inverse (SVD): a hierarchy built on a matrix with a null space
+        // (a floating body's free rigid modes, reduced.rs) has a singular coarse matrix, on
+        // which LU breaks GMRES down (2D Hertz at ν = 0.4999); on a regular one it is LU's
+        // solve.
         Preset::Iterative => format!(
             "-ksp_type gmres -ksp_pc_side right -ksp_gmres_restart 200 -ksp_rtol {rtol:e} \
              -ksp_max_it 2000 -pc_type gamg -pc_gamg_sym_graph true \
-             -mg_levels_ksp_type chebyshev -mg_levels_pc_type jacobi"
+             -mg_levels_ksp_type chebyshev -mg_levels_pc_type jacobi -mg_coarse_pc_type svd"
         ),
     }
 }

@@ -207,19 +207,17 @@ fn bad_force_input_is_refused() {
     }
 }
 
-/// Tresca friction under force control: the circle pressed along a slanted force (its
-/// tangential part drags the stick nodes, the slip nodes slide) — the force that a
-/// displacement-controlled run along the same direction reports gives back its approach, u and
-/// the normal and tangential states (1 and 2 ranks, direct and iterative presets).
-#[test]
-fn force_control_with_tresca_friction() {
-    let tresca = "contact.friction={law=\"tresca\", threshold=0.02}";
+/// The circle pressed along the slanted direction e = (0.3, −1) by 0.03 with `friction`: a
+/// displacement-controlled run, then the force it reports along e prescribed instead, on 1
+/// and 2 ranks with the direct and 2 with the iterative preset — each run's approach, u, active
+/// and slip nodes against the motion's (1e-8). Returns the force key, for more runs.
+fn slanted_force_gives_back_the_motion(friction: &str, label: &str) -> String {
     let e = [0.3f64, -1.0];
     let norm = e[0].hypot(e[1]);
     let depth = 0.03;
     let m = [depth * e[0] / norm, depth * e[1] / norm];
     let motion = format!("contact.motion=[{:.17e}, {:.17e}]", m[0], m[1]);
-    let moved = solve(1, &case(), &[AUTO, tresca, &motion]);
+    let moved = solve(1, &case(), &[AUTO, friction, &motion]);
     moved.assert_converged("displacement control");
     let f = total_force(&moved);
     let along = (f[0] * e[0] + f[1] * e[1]) / norm;
@@ -233,14 +231,7 @@ fn force_control_with_tresca_friction() {
         along * e[0] / norm,
         along * e[1] / norm
     );
-    let slips = |s: &Solved| -> Vec<u64> {
-        s.contact_rows_by_id()
-            .iter()
-            .filter(|(_, r)| r.active() && r.tangential() == "slip")
-            .map(|(id, _)| *id)
-            .collect()
-    };
-    let (slip, active) = (slips(&moved).len(), moved.active_node_ids().len());
+    let (slip, active) = (moved.slip_node_ids().len(), moved.active_node_ids().len());
     assert!(slip > 0 && active > slip, "slip {slip} of {active} active");
     let runs: [(usize, &[&str]); 3] = [
         (1, &["solver.preset=\"direct\""]),
@@ -248,19 +239,45 @@ fn force_control_with_tresca_friction() {
         (2, &["solver.preset=\"iterative\""]),
     ];
     for (np, sets) in runs {
-        let mut all = vec![AUTO, tresca, fk.as_str()];
+        let mut all = vec![AUTO, friction, fk.as_str()];
         all.extend_from_slice(sets);
         let forced = solve(np, &case(), &all);
-        forced.assert_converged("force control with Tresca");
+        forced.assert_converged(label);
         let delta = forced.f(&["contact", "approach"]);
+        let du = forced.u_rel_diff(&moved);
+        eprintln!(
+            "{label}, {np} ranks {sets:?}: δ = {delta:.17e}, |Δu|/|u| = {du:.2e}, {} steps \
+             (motion: {})",
+            forced.steps(),
+            moved.steps()
+        );
         assert!(
             (delta - depth).abs() <= 1e-8 * depth,
             "{np} ranks, {sets:?}: δ = {delta}"
         );
-        assert!(forced.u_rel_diff(&moved) <= 1e-8, "{np} ranks, {sets:?}");
+        assert!(du <= 1e-8, "{np} ranks, {sets:?}: {du}");
         assert_eq!(forced.active_node_ids(), moved.active_node_ids());
-        assert_eq!(slips(&forced), slips(&moved), "{np} ranks, {sets:?}");
+        assert_eq!(
+            forced.slip_node_ids(),
+            moved.slip_node_ids(),
+            "{np} ranks, {sets:?}"
+        );
+        if friction.contains("coulomb") {
+            let rec = get(&forced.summary, &["newton", "coulomb", "algorithm"]);
+            assert_eq!(rec, "fixed-point");
+        }
     }
+    fk
+}
+
+/// Tresca friction under force control: the circle pressed along a slanted force (its
+/// tangential part drags the stick nodes, the slip nodes slide) — the force that a
+/// displacement-controlled run along the same direction reports gives back its approach, u and
+/// the normal and tangential states (1 and 2 ranks, direct and iterative presets).
+#[test]
+fn force_control_with_tresca_friction() {
+    let tresca = "contact.friction={law=\"tresca\", threshold=0.02}";
+    slanted_force_gives_back_the_motion(tresca, "force control with Tresca");
 }
 
 /// Coulomb friction (μ = 0.3, the fixed point on Tresca thresholds) under force control: the
@@ -272,57 +289,7 @@ fn force_control_with_tresca_friction() {
 #[test]
 fn force_control_with_coulomb_fixed_point() {
     let coulomb = "contact.friction={law=\"coulomb\", mu=0.3, algorithm=\"fixed-point\"}";
-    let e = [0.3f64, -1.0];
-    let norm = e[0].hypot(e[1]);
-    let depth = 0.03;
-    let m = [depth * e[0] / norm, depth * e[1] / norm];
-    let motion = format!("contact.motion=[{:.17e}, {:.17e}]", m[0], m[1]);
-    let moved = solve(1, &case(), &[AUTO, coulomb, &motion]);
-    moved.assert_converged("displacement control");
-    let f = total_force(&moved);
-    let along = (f[0] * e[0] + f[1] * e[1]) / norm;
-    assert!(along > 0.0, "{f:?}");
-    let fk = format!(
-        "contact.force=[{:.17e}, {:.17e}]",
-        along * e[0] / norm,
-        along * e[1] / norm
-    );
-    let slips = |s: &Solved| -> Vec<u64> {
-        s.contact_rows_by_id()
-            .iter()
-            .filter(|(_, r)| r.active() && r.tangential() == "slip")
-            .map(|(id, _)| *id)
-            .collect()
-    };
-    let (slip, active) = (slips(&moved).len(), moved.active_node_ids().len());
-    assert!(slip > 0 && active > slip, "slip {slip} of {active} active");
-    let runs: [(usize, &[&str]); 3] = [
-        (1, &["solver.preset=\"direct\""]),
-        (2, &["solver.preset=\"direct\""]),
-        (2, &["solver.preset=\"iterative\""]),
-    ];
-    for (np, sets) in runs {
-        let mut all = vec![AUTO, coulomb, fk.as_str()];
-        all.extend_from_slice(sets);
-        let forced = solve(np, &case(), &all);
-        forced.assert_converged("force control with Coulomb");
-        let delta = forced.f(&["contact", "approach"]);
-        let du = forced.u_rel_diff(&moved);
-        eprintln!(
-            "{np} ranks {sets:?}: δ = {delta:.17e}, |Δu|/|u| = {du:.2e}, {} steps (motion: {})",
-            forced.steps(),
-            moved.steps()
-        );
-        assert!(
-            (delta - depth).abs() <= 1e-8 * depth,
-            "{np} ranks, {sets:?}: δ = {delta}"
-        );
-        assert!(du <= 1e-8, "{np} ranks, {sets:?}: {du}");
-        assert_eq!(forced.active_node_ids(), moved.active_node_ids());
-        assert_eq!(slips(&forced), slips(&moved), "{np} ranks, {sets:?}");
-        let rec = get(&forced.summary, &["newton", "coulomb", "algorithm"]);
-        assert_eq!(rec, "fixed-point");
-    }
+    let fk = slanted_force_gives_back_the_motion(coulomb, "force control with Coulomb");
     let tmp = tempfile::tempdir().expect("tempdir");
     let out = tmp.path().join("out");
     let newton = "contact.friction={law=\"coulomb\", mu=0.3}";

@@ -289,29 +289,15 @@ fn force_on_two_pairs_through_load_steps() {
     for sets in [&[][..], &["solver.reuse=\"never\""][..]] {
         let s = solve(2, &case, sets);
         s.assert_converged("force control in load steps");
-        let text = std::fs::read_to_string(s.dir.join("history.csv")).expect("history.csv");
-        let mut lines = text.lines();
-        let head: Vec<&str> = lines.next().expect("header").split(',').collect();
-        let col = |name: &str| {
-            head.iter()
-                .position(|h| *h == name)
-                .unwrap_or_else(|| panic!("no column {name}: {head:?}"))
-        };
-        let rows: Vec<Vec<f64>> = lines
-            .map(|l| {
-                l.split(',')
-                    .map(|x| x.parse().unwrap_or(f64::NAN))
-                    .collect()
-            })
-            .collect();
+        let rows = read_csv(&s.dir.join("history.csv"));
         assert_eq!(rows.len(), 2);
         for (r, t) in rows.iter().zip([0.5, 1.0]) {
             for (p, fp) in [(1, f[0]), (2, f[1])] {
-                let fy = r[col(&format!("pair{p}_force_y"))];
+                let fy = r.f(&format!("pair{p}_force_y"));
                 assert!(rel(fy, t * fp) <= 1e-8, "{sets:?} t = {t}: pair {p}: {fy}");
             }
         }
-        let obstacle = |r: &Vec<f64>| [r[col("pair1_obstacle_y")], r[col("pair2_obstacle_y")]];
+        let obstacle = |r: &Row| [r.f("pair1_obstacle_y"), r.f("pair2_obstacle_y")];
         let (mid, last) = (obstacle(&rows[0]), obstacle(&rows[1]));
         assert!(
             rel(last[0], LIFT) <= 1e-8 && rel(last[1], -PRESS) <= 1e-8,
@@ -390,14 +376,7 @@ fn tresca_force_on_two_pairs_returns_their_motions() {
         let along = f[0] * e[0] + f[1] * e[1];
         [along * e[0], along * e[1]]
     });
-    let slips = |s: &Solved| -> Vec<u64> {
-        s.contact_rows_by_id()
-            .iter()
-            .filter(|(_, r)| r.active() && r.tangential() == "slip")
-            .map(|(id, _)| *id)
-            .collect()
-    };
-    let (slip, active) = (slips(&moved).len(), moved.active_node_ids().len());
+    let (slip, active) = (moved.slip_node_ids().len(), moved.active_node_ids().len());
     eprintln!("motions: slip {slip} of {active} active");
     assert!(slip > 0 && active > slip, "slip {slip} of {active} active");
     let forced = write(
@@ -430,7 +409,7 @@ fn tresca_force_on_two_pairs_returns_their_motions() {
         }
         assert!(s.u_rel_diff(&moved) <= 1e-8, "{np} {sets:?}");
         assert_eq!(s.active_node_ids(), moved.active_node_ids());
-        assert_eq!(slips(&s), slips(&moved), "{np} {sets:?}");
+        assert_eq!(s.slip_node_ids(), moved.slip_node_ids(), "{np} {sets:?}");
     }
 }
 
@@ -549,31 +528,17 @@ fn pairs_through_load_steps() {
         ),
     );
     let s = solve(2, &case, &[]);
-    let text = std::fs::read_to_string(s.dir.join("history.csv")).expect("history.csv");
-    let mut lines = text.lines();
-    let head: Vec<&str> = lines.next().expect("header").split(',').collect();
-    let col = |name: &str| {
-        head.iter()
-            .position(|h| *h == name)
-            .unwrap_or_else(|| panic!("no column {name}: {head:?}"))
-    };
-    let rows: Vec<Vec<f64>> = lines
-        .map(|l| {
-            l.split(',')
-                .map(|x| x.parse().unwrap_or(f64::NAN))
-                .collect()
-        })
-        .collect();
+    let rows = read_csv(&s.dir.join("history.csv"));
     assert_eq!(rows.len(), 2);
     for (r, t) in rows.iter().zip([0.5, 1.0]) {
-        assert_eq!(r[col("pair2_obstacle_y")], -SQUEEZE * t);
-        assert_eq!(r[col("pair1_obstacle_y")], 0.0);
-        let (f1, f2) = (r[col("pair1_force_y")], r[col("pair2_force_y")]);
+        assert_eq!(r.f("pair2_obstacle_y"), -SQUEEZE * t);
+        assert_eq!(r.f("pair1_obstacle_y"), 0.0);
+        let (f1, f2) = (r.f("pair1_force_y"), r.f("pair2_force_y"));
         assert!(f1 > 0.0 && rel(f1, -f2) <= 1e-9, "{f1} {f2}");
-        assert!(r[col("pair1_active")] >= 1.0 && r[col("pair1_half_width")] > 0.0);
+        assert!(r.f("pair1_active") >= 1.0 && r.f("pair1_half_width") > 0.0);
     }
     // the second step presses harder
-    assert!(rows[1][col("pair1_force_y")] > rows[0][col("pair1_force_y")]);
+    assert!(rows[1].f("pair1_force_y") > rows[0].f("pair1_force_y"));
     // scripts/plot-history: one curve, of the moving pair, named by its group
     let png = s.dir.join("curve.png");
     let mut cmd = Command::new(repo("scripts/plot-history"));

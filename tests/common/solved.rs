@@ -163,6 +163,15 @@ impl Solved {
     }
 
     /// Rows of contact_nodes.csv, by node id.
+    /// The ids of the active contact nodes that slip (contact_nodes.csv), ascending.
+    pub fn slip_node_ids(&self) -> Vec<u64> {
+        self.contact_rows_by_id()
+            .iter()
+            .filter(|(_, r)| r.active() && r.tangential() == "slip")
+            .map(|(id, _)| *id)
+            .collect()
+    }
+
     pub fn contact_rows_by_id(&self) -> BTreeMap<u64, Row> {
         by_node_id(self.contact_rows())
     }

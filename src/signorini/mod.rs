@@ -339,22 +339,8 @@ pub fn solve(
             k.bound = k.mu * (-r.lambda_n).max(0.0);
         }
     }
-    let mut displacement = settings.displacements();
-    let mut approaches = vec![None; settings.pairs.len()];
-    for (&delta, fc) in nr.approach.iter().zip(&force_control) {
-        // the obstacle where the force put it: the gaps to it for the certificates and output
-        displacement[fc.pair] = fc.direction().map(|x| delta * x);
-        approaches[fc.pair] = Some(delta);
-        for k in b.nodes.iter_mut().filter(|k| k.pair == fc.pair) {
-            k.gap -= delta * fc.weight(k);
-            if friction {
-                let wt = fc.tangential_weight(k);
-                for j in 0..2 {
-                    k.u_t_ref[j] += delta * wt[j];
-                }
-            }
-        }
-    }
+    let (displacement, approaches) =
+        place_at_approaches(&mut b, settings, (&force_control, &nr.approach), friction);
     let (mut contact, table) = final_state(ctx, sys, &b, &nr, friction, dim)?;
     report::per_pair(
         ctx,
@@ -396,6 +382,34 @@ pub fn solve(
         predict: 0.0,
         obstacle_displacement: displacement,
     })
+}
+
+/// Force control's result on the boundary: every force-controlled pair's obstacle where its
+/// approach δ put it (the gaps g0 − δ e·n and, with friction, the tangential references moved
+/// along), for the certificates and the output. Returns every pair's obstacle displacement
+/// and approach (`None` off force control). Local.
+fn place_at_approaches(
+    b: &mut ContactBoundary,
+    settings: &ContactSettings,
+    (force_control, approach): (&[force::ForceControl], &[f64]),
+    friction: bool,
+) -> (Vec<[f64; 3]>, Vec<Option<f64>>) {
+    let mut displacement = settings.displacements();
+    let mut approaches = vec![None; settings.pairs.len()];
+    for (&delta, fc) in approach.iter().zip(force_control) {
+        displacement[fc.pair] = fc.direction().map(|x| delta * x);
+        approaches[fc.pair] = Some(delta);
+        for k in b.nodes.iter_mut().filter(|k| k.pair == fc.pair) {
+            k.gap -= delta * fc.weight(k);
+            if friction {
+                let wt = fc.tangential_weight(k);
+                for j in 0..2 {
+                    k.u_t_ref[j] += delta * wt[j];
+                }
+            }
+        }
+    }
+    (displacement, approaches)
 }
 
 /// Force control of this solve (`contact.force`), one per force-controlled pair in pair

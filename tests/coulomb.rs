@@ -691,3 +691,49 @@ fn the_condensed_coulomb_solve_gives_the_touching_starts_answer_in_one_factorisa
         }
     }
 }
+
+#[test]
+fn a_stalled_dense_iterate_is_accepted_where_its_certificates_hold() {
+    // A complementarity parameter c far above E / h_c (newton.c = 1e7 here against 327) raises
+    // what round-off leaves of the residual (F3), which weighs u by c, far above 1e-8 ‖λ‖₂ (as
+    // a fine mesh does at c = E / h_c: the Hertz disk at 344 620 unknowns), while c does not
+    // change the answer. The stalled dense iterate is accepted where its certificates hold to
+    // 1e-8 of the problem's scales: one factorisation, and the same state as the plain path's
+    // and as the default c's, on 1, 2 and 3 ranks. The dense slip rows must not carry the
+    // normal row's round-off times c (with the term q c (u_n + g) in them: u 2.1e-9 off).
+    let tmp = tempfile::tempdir().expect("tmp");
+    let case = held_disk_case(tmp.path());
+    let c = "newton.c=1e7";
+    let reference = converged(1, &case, &["newton.init=\"gap\""]);
+    for np in [1, 2, 3] {
+        let auto = converged(np, &case, &[c]);
+        let gap = converged(np, &case, &[c, "newton.init=\"gap\""]);
+        assert!(
+            auto.run
+                .stdout
+                .contains("(stalled; the certificates' worst"),
+            "{}",
+            auto.run.output()
+        );
+        let cs = &auto.summary["newton"]["condensed"];
+        assert_eq!(cs["coulomb"]["outcome"], "condensed", "{cs}");
+        assert_eq!(auto.f(&["newton", "factorisations"]), 1.0, "{np} rank(s)");
+        for other in [&gap, &reference] {
+            assert_eq!(
+                auto.active_node_ids(),
+                other.active_node_ids(),
+                "{np} rank(s)"
+            );
+            let (du, dl) = compare(&auto, other);
+            assert!(
+                du <= 1e-9 && dl <= 1e-9,
+                "{np} rank(s): |Δu| {du:e}, |Δλ| {dl:e}"
+            );
+        }
+        assert!(
+            !auto.run.stdout.contains("warning"),
+            "{}",
+            auto.run.output()
+        );
+    }
+}

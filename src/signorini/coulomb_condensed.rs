@@ -60,8 +60,15 @@ pub enum CoulombCondensed {
 /// C = S⁻¹ and of the dense solves, measured at 2e-9 / 5e-9 (the held / floating Hertz disk,
 /// 171 602 unknowns) and 1.5e-8 (held, 344 620) of ‖λ‖₂; accepted at 2e-9 and 5e-9 the
 /// friction certificate ends at 6e-10 and 5e-9 of its scale, within the 1e-8 asked of every
-/// friction solve. Above it one plain step from the expanded iterate confirms.
+/// friction solve. Above it a stalled iteration is accepted where the certificates hold to
+/// [`CERTIFICATE_ROUND_OFF`] (the Hertz disk at 344 620 unknowns, held and floating: u within
+/// 2.8e-12 and 2.4e-11 of the plain path's); else one plain step from the expanded iterate
+/// confirms.
 const DENSE_RESIDUAL_TOL: f64 = 1e-8;
+
+/// The certificates' worst violation, relative to the problem's scales, that a stalled dense
+/// iterate may have to be accepted (the final check's warning level).
+const CERTIFICATE_ROUND_OFF: f64 = 1e-8;
 
 /// The dense generalised Newton on rank 0 and how it ended.
 struct DenseCoulomb {
@@ -328,7 +335,7 @@ impl Dense<'_> {
     /// `None`: singular (e.g. a free mode that the set does not hold).
     #[allow(clippy::type_complexity)]
     fn solve_set(&self, set: &ActiveSet) -> Option<(Vec<f64>, Vec<f64>, Vec<f64>)> {
-        let (d, n, c, mz) = (self.dim, self.cb.nodes.len(), self.c, self.g.ncols());
+        let (d, n, mz) = (self.dim, self.cb.nodes.len(), self.g.ncols());
         let act: Vec<usize> = (0..n).filter(|&q| set.normal[q]).collect();
         let m = d * act.len();
         let (cm, g, w) = (self.cmat, self.g, self.d0);
@@ -367,19 +374,21 @@ impl Dense<'_> {
                     }
                 }
                 row => {
-                    // (F6): −λ_τ + L̃ u_τ − q (λ_n + c (u_n + g)) = r̃ + L̃ u_τ^ref
+                    // (F6) on an active node: −λ_τ + L̃ u_τ − q λ_n = r̃ + L̃ u_τ^ref. Its term
+                    // q c (u_n + g) vanishes by the normal row; kept, it would carry that row's
+                    // round-off times c (u_n = d₀ − C λ cancels to −g) into λ_τ (measured on the
+                    // held disk at c = 1e7: u 2.1e-9 off the plain path's with it, 1.5e-14 without)
                     let CoulombRow::Slip { l, q, r } = row.with_reference(&k.u_t_ref) else {
                         unreachable!("a slip row stays a slip row")
                     };
                     for i in 0..d - 1 {
                         let ri = r0 + 1 + i;
-                        let mut terms: Vec<(usize, f64)> =
+                        let terms: Vec<(usize, f64)> =
                             (0..d - 1).map(|j| (pn + 1 + j, l[i][j])).collect();
-                        terms.push((pn, -c * q[i]));
                         let wi = put_u(&mut a, ri, &terms);
                         a[(ri, r0 + 1 + i)] -= 1.0;
                         a[(ri, r0)] -= q[i];
-                        rhs[ri] = r[i] + c * q[i] * k.gap - wi;
+                        rhs[ri] = r[i] - wi;
                     }
                 }
             }
@@ -620,6 +629,9 @@ struct Checked {
     totals: StepTotals,
     /// The final set leaves a free rigid mode free (the plain path pins it: not unique).
     loose: bool,
+    /// The worst violation of (3.14)/(3.18) relative to the problem's scales
+    /// ([`super::coulomb_certificate_worst`]).
+    certificate: f64,
 }
 
 /// u = w + R z α from this rank's rows `w`, (3.28) and the set update (3.23)/(F5) with the
@@ -666,11 +678,13 @@ fn check(
     } else {
         false
     };
+    let certificate = super::coulomb_certificate_worst(ctx, p.sys, b, &it.nodes, &u, dim)?;
     Ok(Checked {
         it,
         u,
         totals,
         loose,
+        certificate,
     })
 }
 
@@ -689,8 +703,12 @@ fn finish(
         u,
         totals,
         loose,
+        certificate,
     } = checked;
-    let residual_ok = totals.residual <= DENSE_RESIDUAL_TOL * totals.lambda_norm;
+    // a stalled dense iteration is accepted where its certificates hold to round-off (the
+    // bound beyond which the final check warns), as the plain path accepts a stall
+    let residual_ok = totals.residual <= DENSE_RESIDUAL_TOL * totals.lambda_norm
+        || (run.stalled && certificate <= CERTIFICATE_ROUND_OFF);
     let u_local = u.to_local_vec()?;
     let result = NewtonResult {
         u,
@@ -705,10 +723,15 @@ fn finish(
         approach: Vec::new(),
     };
     if totals.changed == 0 && residual_ok && !loose {
+        let stalled = if totals.residual > DENSE_RESIDUAL_TOL * totals.lambda_norm {
+            format!(" (stalled; the certificates' worst {certificate:.3e} of the problem's scales)")
+        } else {
+            String::new()
+        };
         say!(
             ctx,
             "coulomb: condensed: {} dense steps on {n} candidates ({:.3} s), expansion and check \
-             {:.3} s: |C| = {:.3e} of |λ| = {:.3e}",
+             {:.3} s: |C| = {:.3e} of |λ| = {:.3e}{stalled}",
             summary.steps,
             summary.dense_seconds,
             summary.expansion_seconds,
@@ -721,9 +744,10 @@ fn finish(
         "the final set leaves a rigid mode free".to_string()
     } else if totals.changed == 0 && run.stalled {
         format!(
-            "the dense steps stopped at their round-off, |C| = {:.3e} of |λ| = {:.3e} on the \
-             expanded u (above {DENSE_RESIDUAL_TOL:e} of it): one plain step confirms",
-            totals.residual, totals.lambda_norm
+            "the dense steps stalled at |C| = {:.3e} of |λ| = {:.3e} on the expanded u, above \
+             {DENSE_RESIDUAL_TOL:e} of it, the certificates' worst {:.3e} of the problem's \
+             scales: one plain step confirms",
+            totals.residual, totals.lambda_norm, certificate
         )
     } else {
         format!(

@@ -1181,6 +1181,27 @@ fn check_friction_capacity(
     Ok(())
 }
 
+/// The worst violation of (3.14) and of Coulomb's (3.18) with b_k = μ(−λ_n^k) by a state
+/// (`nodes`, `u`) relative to the problem's scales, as [`final_state`] judges the final one (it
+/// warns beyond 1e-8). Collective (one all-gather, two reductions).
+pub(super) fn coulomb_certificate_worst(
+    ctx: &Ctx,
+    sys: &System,
+    b: &ContactBoundary,
+    nodes: &[NodeResult],
+    u: &Vector,
+    dim: usize,
+) -> Result<f64, RunError> {
+    let mut judged = b.clone();
+    for (k, r) in judged.nodes.iter_mut().zip(nodes) {
+        k.bound = k.mu * (-r.lambda_n).max(0.0);
+    }
+    let table = report::gather(ctx, &judged, nodes, dim);
+    let scales = problem_scales(ctx, sys, u)?;
+    let kkt = table.kkt(false, &scales).worst();
+    Ok(kkt.max(table.friction_certificate().worst(&scales)))
+}
+
 /// |f|_∞ and |u|_∞ of the whole problem (two reductions); a non-finite u is an error.
 fn problem_scales(ctx: &Ctx, sys: &System, u: &Vector) -> Result<Scales, RunError> {
     let inf = |v: &[f64]| v.iter().fold(0.0f64, |m, x| m.max(x.abs()));

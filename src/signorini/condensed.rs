@@ -132,6 +132,10 @@ pub struct CoulombCondensedSummary {
     pub dense_seconds: f64,
     /// The expansion solve, (3.28) and the check on every contact node [s].
     pub expansion_seconds: f64,
+    /// The nested start (from the frictionless solution): per coarse level, coarsest first,
+    /// its candidates and dense steps (not in `steps`).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub coarse_levels: Vec<CoarseLevel>,
 }
 
 /// One coarse level of the nested start.

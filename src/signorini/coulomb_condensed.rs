@@ -29,15 +29,15 @@ use super::active_set::{
     threshold_scale, threshold_scale_local, ActiveSet, Iterate, Law, StepTotals,
 };
 use super::boundary::{ContactBoundary, ContactNode, NodeResult};
-use super::condensed::{CoulombCondensedSummary, Kept};
-use super::dense::guarded;
+use super::condensed::{CoarseLevel, CoulombCondensedSummary, Kept};
+use super::dense::{coarsen, guarded};
 use super::newton::{
     add_motion, stalled, ContactProblem, NewtonResult, NewtonSettings, StepInfo, WarmStart,
     COULOMB_RESIDUAL_TOL, COULOMB_RESIDUAL_ZERO,
 };
 use super::reduced::{ReducedSystem, SolveKind};
 use super::rigid::FreeModes;
-use crate::contact::{CoulombRow, Frame};
+use crate::contact::{normal_active, CoulombRow, Frame};
 use crate::error::RunError;
 use crate::par::Ctx;
 use crate::petsc::lapack::DenseLu;
@@ -86,6 +86,8 @@ struct DenseCoulomb {
     /// It stopped by the stall rule (`newton::stalled`: the residual at the round-off of the
     /// dense compliance, above COULOMB_RESIDUAL_TOL).
     stalled: bool,
+    /// The nested start's coarse levels, coarsest first: (nodes, dense steps).
+    coarse: Vec<(usize, usize)>,
 }
 
 impl DenseCoulomb {
@@ -98,6 +100,7 @@ impl DenseCoulomb {
             steps: Vec::new(),
             end: Err(why),
             stalled: false,
+            coarse: Vec::new(),
         }
     }
 
@@ -114,6 +117,10 @@ impl DenseCoulomb {
         let why = self.end.as_ref().err().map_or(&[][..], |w| w.as_bytes());
         v.push(if self.end.is_ok() { 1.0 } else { 0.0 });
         v.push(if self.stalled { 1.0 } else { 0.0 });
+        v.push(self.coarse.len() as f64);
+        for &(nodes, steps) in &self.coarse {
+            v.extend([nodes as f64, steps as f64]);
+        }
         v.push(why.len() as f64);
         v.extend(why.iter().map(|&b| b as f64));
         v
@@ -137,8 +144,13 @@ impl DenseCoulomb {
         at += 5 * ns;
         let ok = v[at] != 0.0;
         let stalled = v[at + 1] != 0.0;
-        let len = v[at + 2] as usize;
-        let bytes: Vec<u8> = v[at + 3..at + 3 + len].iter().map(|&b| b as u8).collect();
+        let nc = v[at + 2] as usize;
+        let coarse = (0..nc)
+            .map(|i| (v[at + 3 + 2 * i] as usize, v[at + 4 + 2 * i] as usize))
+            .collect();
+        at += 3 + 2 * nc;
+        let len = v[at] as usize;
+        let bytes: Vec<u8> = v[at + 1..at + 1 + len].iter().map(|&b| b as u8).collect();
         let end = if ok {
             Ok(())
         } else {
@@ -152,6 +164,7 @@ impl DenseCoulomb {
             steps,
             end,
             stalled,
+            coarse,
         }
     }
 }
@@ -328,7 +341,94 @@ impl Dense<'_> {
             steps,
             end,
             stalled: false,
+            coarse: Vec::new(),
         }
+    }
+
+    /// Nested iteration (as the frictionless [`super::dense::Dense::run_nested`]): the dense
+    /// generalised Newton first on coarse subsets of the candidates (`coarsen`, coarsest
+    /// first; each subset's problem holds the contact conditions at its nodes only, with the
+    /// exact compliance C between them), each level's solution starting the next finer one
+    /// through (3.23) and (F5) evaluated at every candidate (λ = 0 off the subset,
+    /// u = d₀ − C λ + G α); then the iteration on all candidates from there. The result's
+    /// `steps` are the fine ones, `coarse` (nodes, steps) per level. A coarse level that does
+    /// not converge leaves the start as it was. Local.
+    fn run_nested(&self, start: &[NodeResult], u_prev: Vec<f64>) -> DenseCoulomb {
+        let d = self.dim;
+        let x: Vec<[f64; 3]> = self.cb.nodes.iter().map(|k| k.x).collect();
+        let gap: Vec<f64> = self.cb.nodes.iter().map(|k| k.gap).collect();
+        let (mut start, mut u_prev) = (start.to_vec(), u_prev);
+        let mut coarse = Vec::new();
+        for idx in coarsen(&x, &gap).iter().rev() {
+            let dofs: Vec<usize> = idx
+                .iter()
+                .flat_map(|&q| (0..d).map(move |a| q * d + a))
+                .collect();
+            let sub_c =
+                DMatrix::from_fn(dofs.len(), dofs.len(), |r, q| self.cmat[(dofs[r], dofs[q])]);
+            let sub_ct = sub_c.transpose();
+            let sub_g = DMatrix::from_fn(dofs.len(), self.g.ncols(), |r, c| self.g[(dofs[r], c)]);
+            let pick = |v: &[f64]| dofs.iter().map(|&i| v[i]).collect::<Vec<f64>>();
+            let d0 = pick(self.d0);
+            let cb = ContactBoundary {
+                nodes: idx.iter().map(|&q| self.cb.nodes[q].clone()).collect(),
+                n_global: idx.len(),
+                offset: 0,
+                on_contact_boundary: Vec::new(),
+                excluded_dirichlet: 0,
+                obstacles: self.cb.obstacles.clone(),
+            };
+            let sub = Dense {
+                cmat: &sub_c,
+                cmat_t: &sub_ct,
+                d0: &d0,
+                g: &sub_g,
+                cb: &cb,
+                ..*self
+            };
+            let sub_start: Vec<NodeResult> = idx.iter().map(|&q| start[q]).collect();
+            let run = sub.run(&sub_start, pick(&u_prev));
+            coarse.push((idx.len(), run.steps.len()));
+            if run.end.is_err() {
+                continue;
+            }
+            let mut lam = vec![0.0; self.d0.len()];
+            for (r, &i) in dofs.iter().enumerate() {
+                lam[i] = run.lambda[r];
+            }
+            let u = self.u_of(&lam, &run.alpha);
+            let normal = (0..self.cb.nodes.len())
+                .map(|q| normal_active(u[q * d], lam[q * d], self.cb.nodes[q].gap, self.c)) // (3.23)
+                .collect();
+            let set = ActiveSet {
+                normal,
+                tangential: None,
+                spring_floor: 0.0,
+            };
+            self.records(&set, &lam, &u, &mut start);
+            u_prev = u;
+        }
+        let mut run = self.run(&start, u_prev);
+        run.coarse = coarse;
+        run
+    }
+
+    /// u = d₀ − C λ + G α at every candidate (d per node).
+    fn u_of(&self, lam: &[f64], alpha: &[f64]) -> Vec<f64> {
+        let mut u = self.d0.to_vec();
+        for (col, &l) in lam.iter().enumerate() {
+            if l != 0.0 {
+                for (ui, ci) in u.iter_mut().zip(self.cmat.column(col).iter()) {
+                    *ui -= ci * l;
+                }
+            }
+        }
+        for (cz, &al) in alpha.iter().enumerate() {
+            for (ui, gi) in u.iter_mut().zip(self.g.column(cz).iter()) {
+                *ui += gi * al;
+            }
+        }
+        u
     }
 
     /// The step's dense system in the active nodes' λ and the free modes' α (module note;
@@ -444,20 +544,7 @@ impl Dense<'_> {
             lam[col] = x[j];
         }
         let alpha: Vec<f64> = (0..mz).map(|cz| x[m + cz]).collect();
-        let mut u = w.to_vec();
-        for (j, &col) in cols.iter().enumerate() {
-            let xj = x[j];
-            if xj != 0.0 {
-                for (ui, ci) in u.iter_mut().zip(self.cmat.column(col).iter()) {
-                    *ui -= ci * xj;
-                }
-            }
-        }
-        for (cz, &al) in alpha.iter().enumerate() {
-            for (ui, gi) in u.iter_mut().zip(g.column(cz).iter()) {
-                *ui += gi * al;
-            }
-        }
+        let u = self.u_of(&lam, &alpha);
         Some((lam, u, alpha))
     }
 
@@ -512,11 +599,29 @@ pub(super) fn solve(
         steps: 0,
         dense_seconds: 0.0,
         expansion_seconds: 0.0,
+        coarse_levels: Vec::new(),
     };
     let t = Instant::now();
     let run = dense_phase(ctx, p, ns, &kept, warm);
     summary.dense_seconds = t.elapsed().as_secs_f64();
     summary.steps = run.steps.len();
+    if !run.coarse.is_empty() {
+        let levels: Vec<String> = run
+            .coarse
+            .iter()
+            .map(|(nodes, steps)| format!("{nodes} nodes {steps} steps"))
+            .collect();
+        say!(
+            ctx,
+            "coulomb: condensed: nested start on coarse subsets of the candidates: {}",
+            levels.join(", ")
+        );
+        summary.coarse_levels = run
+            .coarse
+            .iter()
+            .map(|&(nodes, steps)| CoarseLevel { nodes, steps })
+            .collect();
+    }
     let history = record_steps(ctx, &run, n);
     if let Err(why) = &run.end {
         return Ok(give_up(ctx, summary, why.clone()));
@@ -574,16 +679,19 @@ fn dense_phase(
                 max_steps: ns.section.max_steps,
                 tol_u: ns.section.tol_u,
             };
-            let (start, u_prev) = match &warm_records {
-                Some(all) => warm_start(all, &kept.comp.list, dim),
+            match &warm_records {
+                Some(all) => {
+                    let (start, u_prev) = warm_start(all, &kept.comp.list, dim);
+                    dense.run(&start, u_prev)
+                }
                 None => {
                     let list = &kept.comp.list;
                     let active: Vec<bool> = list.iter().map(|&i| kept.active[i]).collect();
                     let lambda_n: Vec<f64> = list.iter().map(|&i| kept.lambda[i]).collect();
-                    dense.frictionless_start(&active, &lambda_n)
+                    let (start, u_prev) = dense.frictionless_start(&active, &lambda_n);
+                    dense.run_nested(&start, u_prev)
                 }
-            };
-            dense.run(&start, u_prev)
+            }
         });
         packed = run
             .unwrap_or_else(|why| DenseCoulomb::failed(n, dim, mz, why))
@@ -845,4 +953,126 @@ fn record_steps(ctx: &Ctx, run: &DenseCoulomb, candidates: usize) -> Vec<StepInf
             }
         })
         .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A coupled line of `n` candidates (2D) pressed onto a flat obstacle and pushed sideways:
+    /// normal and tangential compliances C_ij = exp(−|i−j| / 8) (positive definite, uncoupled
+    /// between the directions), d₀ a parabola deepest at the middle along the normal and a
+    /// uniform sideways push `push`; μ = 0.3. The middle sticks, the edges slip (Cattaneo).
+    fn pushed_line(n: usize, push: f64) -> (DMatrix<f64>, Vec<f64>, ContactBoundary) {
+        let k = |i: usize, j: usize| (-(i as f64 - j as f64).abs() / 8.0).exp();
+        let cmat = DMatrix::from_fn(2 * n, 2 * n, |r, q| {
+            if r % 2 == q % 2 {
+                k(r / 2, q / 2)
+            } else {
+                0.0
+            }
+        });
+        let mid = (n / 2) as f64;
+        let d0: Vec<f64> = (0..2 * n)
+            .map(|r| {
+                let t = ((r / 2) as f64 - mid) / mid;
+                if r % 2 == 0 {
+                    -1.0 + 2.0 * t * t
+                } else {
+                    push
+                }
+            })
+            .collect();
+        let nodes = (0..n)
+            .map(|i| ContactNode {
+                node: i,
+                pair: 0,
+                mu: 0.3,
+                tag: i as u64,
+                row: 0,
+                local_row: 0,
+                x: [i as f64, 0.0, 0.0],
+                frame: Frame::new([0.0, 1.0, 0.0], 2).expect("unit normal"),
+                gap: 0.0,
+                weight: 0.0,
+                bound: 0.0,
+                u_t_ref: [0.0; 2],
+            })
+            .collect();
+        let cb = ContactBoundary {
+            nodes,
+            n_global: n,
+            offset: 0,
+            on_contact_boundary: Vec::new(),
+            excluded_dirichlet: 0,
+            obstacles: Vec::new(),
+        };
+        (cmat, d0, cb)
+    }
+
+    #[test]
+    fn nested_coulomb_ends_in_the_plain_runs_solution_in_fewer_fine_steps() {
+        // a stack of its own: a multithreaded BLAS may take more than a test thread's 2 MB
+        std::thread::Builder::new()
+            .stack_size(64 << 20)
+            .spawn(nested_against_plain)
+            .expect("thread")
+            .join()
+            .expect("the test");
+    }
+
+    fn nested_against_plain() {
+        let n = 129;
+        let (cmat, d0, cb) = pushed_line(n, 0.1);
+        let cmat_t = cmat.transpose();
+        let g = DMatrix::<f64>::zeros(2 * n, 0);
+        let dense = Dense {
+            dim: 2,
+            cmat: &cmat,
+            cmat_t: &cmat_t,
+            d0: &d0,
+            g: &g,
+            phi: &[],
+            cb: &cb,
+            law: Law::Coulomb,
+            c: 1.0,
+            max_steps: 100,
+            tol_u: 1e-10,
+        };
+        // the frictionless start: the middle node touching, λ = 0
+        let active: Vec<bool> = (0..n).map(|i| i == n / 2).collect();
+        let (start, u_prev) = dense.frictionless_start(&active, &vec![0.0; n]);
+        let plain = dense.run(&start, u_prev.clone());
+        let nested = dense.run_nested(&start, u_prev);
+        assert!(
+            plain.end.is_ok() && nested.end.is_ok(),
+            "{:?} {:?}",
+            plain.end,
+            nested.end
+        );
+        let (slips, sticks) = (0..n)
+            .filter(|&q| plain.active[q])
+            .fold((0, 0), |(s, k), q| {
+                if plain.slip[q] {
+                    (s + 1, k)
+                } else {
+                    (s, k + 1)
+                }
+            });
+        assert!(
+            slips > 0 && sticks > 0,
+            "partial slip: {slips} slip, {sticks} stick"
+        );
+        let scale = plain.lambda.iter().fold(0.0_f64, |m, x| m.max(x.abs()));
+        for (a, b) in nested.lambda.iter().zip(&plain.lambda) {
+            assert!((a - b).abs() <= 1e-10 * scale, "{a} {b}");
+        }
+        assert!(!nested.coarse.is_empty());
+        assert!(
+            nested.steps.len() < plain.steps.len(),
+            "fine steps: nested {} plain {}",
+            nested.steps.len(),
+            plain.steps.len()
+        );
+    }
 }

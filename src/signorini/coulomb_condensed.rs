@@ -10,20 +10,22 @@
 //! ```text
 //!   k ∈ A_n:            u_n,k = −g_k
 //!   stick (S3):         u_τ,k = u_τ^ref                                          (3.34a)
-//!   slip (S4):          −λ_τ,k + L̃ (u_τ,k − u_τ^ref) − q (λ_n,k + c (u_n,k + g_k)) = r̃   (F6)
+//!   slip (S4):          −λ_τ,k + L̃ (u_τ,k − u_τ^ref) − q λ_n,k = r̃      (F6), u_n,k + g_k = 0
 //!   k ∉ A_n (S2):       λ_k = 0
 //! ```
 //!
 //! with the rows of `contact::coulomb_row_dyn` and the set update (3.23)/(F5) of the plain
-//! path (`ActiveSet::update`, its stick band included), stopped by the same rule. Nodes beyond
+//! path (`ActiveSet::update`, its stick band included), stopped by the same rule, first on
+//! coarse subsets of the candidates (nested iteration, `Dense::run_nested`). Nodes beyond
 //! the candidates stay inactive. At the end one expansion solve gives u = K_p⁻¹ (f − Q λ) +
 //! R z α, and the plain path's recovery (3.28) and set update on every contact node check it:
-//! no state may change, the residual (F3) must pass the plain path's tolerance and the set must
+//! no state may change, the residual (F3) must pass the plain path's tolerance (or, where the
+//! dense steps stalled, the KKT and friction certificates hold to round-off) and the set must
 //! hold every free mode. A check that fails hands the expanded iterate to the plain path as
 //! its start.
 //!
-//! Collectives: one broadcast (the dense result), the expansion solve, one MatMult and the
-//! update's reduction.
+//! Collectives: one broadcast (the dense result), the expansion solve, one MatMult, the
+//! update's reduction and the certificates' all-gather.
 
 use super::active_set::{
     threshold_scale, threshold_scale_local, ActiveSet, Iterate, Law, StepTotals,

@@ -270,6 +270,12 @@ impl Stepper<'_> {
                         break;
                     }
                 };
+                if !series {
+                    // no later load step takes the condensed factorisation: its memory goes now
+                    if let Some(c) = solved.contact.as_ref() {
+                        c.release_factor();
+                    }
+                }
                 let step = records.len() + 1;
                 let t1 = Instant::now();
                 let cells = post::cell_fields(

@@ -737,3 +737,58 @@ fn a_stalled_dense_iterate_is_accepted_where_its_certificates_hold() {
         );
     }
 }
+
+#[test]
+fn load_steps_keep_the_condensed_factorisation() {
+    // The held disk in four load steps: K_p is the same in every step, so the steps after the
+    // first solve on the first step's factorisation (its Schur complement, compliance and
+    // candidates; only d₀ is new) — and end where the plain path from the touching node ends,
+    // step by step, on 1 and 2 ranks.
+    let tmp = tempfile::tempdir().expect("tmp");
+    let case = held_disk_case(tmp.path());
+    for np in [1, 2] {
+        let auto = converged(np, &case, &["load.steps=4"]);
+        let gap = converged(np, &case, &["load.steps=4", "newton.init=\"gap\""]);
+        let kept = auto
+            .run
+            .stdout
+            .matches("the previous load step's factorisation and compliance")
+            .count();
+        assert_eq!(kept, 3, "{np} rank(s): {}", auto.run.output());
+        let cs = &auto.summary["newton"]["condensed"];
+        assert_eq!(cs["factorisation_kept"], true, "{cs}");
+        assert_eq!(cs["coulomb"]["outcome"], "condensed", "{cs}");
+        assert_eq!(auto.f(&["newton", "factorisations"]), 0.0, "{np} rank(s)");
+        let steps = |s: &Solved| -> Vec<serde_json::Value> {
+            get(&s.summary, &["load", "steps"])
+                .as_array()
+                .expect("load.steps")
+                .clone()
+        };
+        for (a, g) in steps(&auto).iter().zip(&steps(&gap)) {
+            assert_eq!(a["active"], g["active"], "{np} rank(s), step {}", a["step"]);
+            let fy = |v: &serde_json::Value| v["total_force"][1].as_f64().expect("force");
+            let d = (fy(a) - fy(g)).abs() / fy(g).abs();
+            assert!(
+                d <= 1e-9,
+                "{np} rank(s), step {}: total force {d:e}",
+                a["step"]
+            );
+        }
+        assert_eq!(
+            auto.active_node_ids(),
+            gap.active_node_ids(),
+            "{np} rank(s)"
+        );
+        for step in 1..=4 {
+            let (du, su) = max_diff(
+                &step_displacement(&auto.dir, step),
+                &step_displacement(&gap.dir, step),
+            );
+            assert!(
+                du <= 1e-9 * su,
+                "{np} rank(s), step {step}: |Δu| {du:e} of {su:e}"
+            );
+        }
+    }
+}

@@ -110,6 +110,9 @@ pub struct CondensedSummary {
     pub expansion_seconds: f64,
     /// Solve phases with the factorisation (condensations, expansions).
     pub solves: usize,
+    /// A load step on the previous load step's factorisation (`factorisations` 0).
+    #[serde(skip_serializing_if = "std::ops::Not::not")]
+    pub factorisation_kept: bool,
     /// The nested start (newton.init = "auto", no warm start): per coarse level, coarsest
     /// first, its nodes and Algorithm 1's steps on it (dense; not counted in newton.steps).
     #[serde(skip_serializing_if = "Vec::is_empty")]
@@ -146,7 +149,7 @@ pub struct CoarseLevel {
 }
 
 impl CondensedSummary {
-    fn new(candidates: usize) -> CondensedSummary {
+    pub(super) fn new(candidates: usize) -> CondensedSummary {
         CondensedSummary {
             outcome: "condensed",
             fallback_reason: None,
@@ -159,6 +162,7 @@ impl CondensedSummary {
             dense_seconds: 0.0,
             expansion_seconds: 0.0,
             solves: 0,
+            factorisation_kept: false,
             coarse_levels: Vec::new(),
             coulomb: None,
         }
@@ -251,6 +255,67 @@ pub(super) struct Kept {
     pub(super) free: FreeModes,
     pub(super) lambda: Vec<f64>,
     pub(super) active: Vec<bool>,
+}
+
+impl Kept {
+    /// A load step on the kept factorisation (K_p is the same matrix in every load step): the
+    /// free modes and f of this step, the candidates' gaps, references and start flags from its
+    /// boundary, and d₀ = C r with r MUMPS' condensation of this step's f (one solve phase).
+    /// `None` where the factorisation does not hold the step: other pins, a candidate's node
+    /// frame changed (a curved obstacle that moved), or a node of the warm set beyond the
+    /// candidates. Collective (the decisions are taken on all-gathered data: the same on every
+    /// rank).
+    pub(super) fn refresh(
+        &mut self,
+        ctx: &Ctx,
+        p: &ContactProblem,
+        reduced: &mut ReducedSystem,
+        s: &NewtonSettings,
+        warm: &WarmStart,
+    ) -> Result<Option<CondensedSummary>, RunError> {
+        let t = Instant::now();
+        let (free, rhs0) = prepare_base(ctx, p, reduced, s)?;
+        if free.pins() != self.free.pins() {
+            return Ok(None);
+        }
+        let start = start_set(p, s, &free, Some(warm));
+        let cand = Candidates::gather(ctx, p.boundary, &free, &start);
+        let (old, comp) = (&self.cand, &self.comp);
+        let same_frames = cand.n == old.n
+            && comp
+                .list
+                .iter()
+                .all(|&i| cand.row(i) == old.row(i) && cand.n(i) == old.n(i));
+        let inside = (0..cand.n).all(|i| !cand.start(i) || comp.in_s[i]);
+        if !(same_frames && inside) {
+            return Ok(None);
+        }
+        let f_root = ctx.gather_to_root(&rhs0);
+        if let Err(why) = self.comp.recondense(ctx, &f_root) {
+            say!(ctx, "newton: condensed: {why}");
+            return Ok(None);
+        }
+        self.active = (0..cand.n).map(|i| cand.start(i)).collect();
+        self.lambda = vec![0.0; cand.n];
+        self.cand = cand;
+        self.f_root = f_root;
+        self.n_local = rhs0.len();
+        self.free = free;
+        let mut summary = CondensedSummary::new(p.boundary.n_global);
+        summary.candidates = self.comp.list.len();
+        summary.schur_dofs = self.comp.list.len() * self.comp.per;
+        summary.solves = 1;
+        summary.schur_seconds = t.elapsed().as_secs_f64();
+        summary.factorisation_kept = true;
+        say!(
+            ctx,
+            "newton: condensed: the previous load step's factorisation and compliance on {} \
+             candidates, d₀ of this step ({:.3} s)",
+            summary.candidates,
+            summary.schur_seconds
+        );
+        Ok(Some(summary))
+    }
 }
 
 /// [`solve`] with `per` Schur variables per candidate (1: the normal dof; d: every dof, for
@@ -862,6 +927,22 @@ impl Compliance {
         let c = DMatrix::from_fn(n, n, |i, j| self.cmat[(i * per, j * per)]);
         let d = (0..n).map(|i| self.d0[i * per]).collect::<Vec<f64>>();
         (Cow::Owned(c), Cow::Owned(d))
+    }
+
+    /// d₀ = C r for a new f on the kept factorisation (`f_root`: f on rank 0), r MUMPS'
+    /// condensation of Qᵀ f. `Err`: the solve phase failed. Collective.
+    fn recondense(&mut self, ctx: &Ctx, f_root: &[f64]) -> Result<(), String> {
+        let rhs = self.rotated(f_root);
+        let factor = self.factor.as_mut().ok_or("no factorisation kept")?;
+        let r = factor
+            .condense(&rhs)
+            .map_err(|e| format!("the condensation of f failed: {e}"))?;
+        if ctx.rank == 0 {
+            self.d0 = (&self.cmat * DVector::from_column_slice(&r))
+                .as_slice()
+                .to_vec();
+        }
+        Ok(())
     }
 
     /// w = K_p⁻¹ (f − N λ), this rank's rows (`n_local`), from MUMPS' condensation and

@@ -591,7 +591,7 @@ pub(super) fn solve(
     p: &ContactProblem,
     reduced: &mut ReducedSystem,
     ns: &NewtonSettings,
-    mut kept: Kept,
+    kept: &mut Kept,
     warm: Option<&WarmStart>,
 ) -> Result<CoulombCondensed, RunError> {
     let n = kept.comp.list.len();
@@ -604,7 +604,7 @@ pub(super) fn solve(
         coarse_levels: Vec::new(),
     };
     let t = Instant::now();
-    let run = dense_phase(ctx, p, ns, &kept, warm);
+    let run = dense_phase(ctx, p, ns, kept, warm);
     summary.dense_seconds = t.elapsed().as_secs_f64();
     summary.steps = run.steps.len();
     if !run.coarse.is_empty() {
@@ -635,15 +635,14 @@ pub(super) fn solve(
     } else {
         Vec::new()
     };
-    let f_root = std::mem::take(&mut kept.f_root);
     let w = match kept
         .comp
-        .expand_u(ctx, &kept.cand, (&f_root, kept.n_local), &lam)
+        .expand_u(ctx, &kept.cand, (&kept.f_root, kept.n_local), &lam)
     {
         Ok(w) => w,
         Err(why) => return Ok(give_up(ctx, summary, why)),
     };
-    let checked = check(ctx, p, reduced, ns, &kept, &run, &w)?;
+    let checked = check(ctx, p, reduced, ns, kept, &run, &w)?;
     summary.expansion_seconds = t.elapsed().as_secs_f64();
     finish(ctx, reduced, (summary, history, n), checked, &run)
 }

@@ -148,6 +148,34 @@ pub struct ContactSolution {
     /// Each pair's obstacle displacement d in this solve (friction in the next step acts on
     /// the slip relative to the obstacle's increment since).
     pub obstacle_displacement: Vec<[f64; 3]>,
+    /// The condensed Coulomb solve's factorisation, compliance and candidates, for the next
+    /// load step (taken by it).
+    kept: KeptFactor,
+}
+
+/// A condensed Coulomb solve's factorisation of K_p with its Schur complement, compliance and
+/// candidates ([`condensed::Kept`]), handed from one load step to the next: K_p does not change
+/// between load steps, so the next step reuses it where the candidates' frames and the pins
+/// are the same (`Kept::refresh`). Empty unless the last step was solved on the contact
+/// unknowns.
+#[derive(Default)]
+pub struct KeptFactor(std::cell::RefCell<Option<condensed::Kept>>);
+
+impl ContactSolution {
+    /// Drops the factorisation kept for a next load step (none follows).
+    pub fn release_factor(&self) {
+        drop(self.kept.take());
+    }
+}
+
+impl KeptFactor {
+    fn take(&self) -> Option<condensed::Kept> {
+        self.0.borrow_mut().take()
+    }
+
+    fn put(&self, kept: condensed::Kept) {
+        *self.0.borrow_mut() = Some(kept);
+    }
 }
 
 /// A load step's change of the contact nodes' values (u, λ in both forms) and of this rank's
@@ -300,12 +328,16 @@ pub fn solve(
             nodes: nodes.as_deref().unwrap_or(&prev.nodes),
             u_local: u,
         });
+    let kept = KeptFactor(std::cell::RefCell::new(
+        previous.and_then(|p| p.kept.take()),
+    ));
     let problem = ContactProblem {
         mesh,
         layout,
         boundary: &b,
         fixed,
         sys,
+        kept: &kept,
     };
     // the half-space predictor's model: frictionless on the iterative preset only (newton.rs)
     let predicts = !friction && matches!(solver_section.preset, Preset::Iterative);
@@ -381,6 +413,7 @@ pub fn solve(
         delta,
         predict: 0.0,
         obstacle_displacement: displacement,
+        kept,
     })
 }
 
@@ -909,15 +942,16 @@ fn coulomb_start(
         "coulomb: the frictionless solution: {} steps, {active} active nodes",
         nr.steps
     );
-    if let Some(kept) = kept {
+    if let Some(mut kept) = kept {
         let first = std::mem::take(&mut nr.history);
         let joined = |mut r: NewtonResult| {
             after(first.clone(), &mut r);
             r
         };
-        match coulomb_condensed::solve(ctx, problem, reduced, ns, kept, None)? {
+        match coulomb_condensed::solve(ctx, problem, reduced, ns, &mut kept, None)? {
             coulomb_condensed::CoulombCondensed::Solved(r, cs) => {
                 summary.coulomb = Some(cs);
+                problem.kept.put(kept);
                 return Ok((Begin::Solved(joined(*r)), Some(summary)));
             }
             coulomb_condensed::CoulombCondensed::Start(r, u, cs) => {
@@ -946,10 +980,11 @@ fn coulomb_start(
 }
 
 /// A load step of Coulomb's generalised Newton (`warm`: the previous step's solution, or its
-/// extrapolation) on the contact unknowns: one factorisation with the Schur complement on
-/// every dof of the candidates (the nodes with the smallest gaps and the warm set), the dense
-/// iteration from the warm states (no frictionless steps), the check on every contact node;
-/// if it gives up, the plain path from the warm start. Collective.
+/// extrapolation) on the contact unknowns: the previous step's factorisation where it still
+/// holds (`Kept::refresh`; only d₀ is new), else one factorisation with the Schur complement
+/// on every dof of the candidates (the nodes with the smallest gaps and the warm set); the
+/// dense iteration from the warm states (no frictionless steps), the check on every contact
+/// node; if it gives up, the plain path from the warm start. Collective.
 fn coulomb_load_step(
     ctx: &Ctx,
     problem: &ContactProblem,
@@ -958,8 +993,27 @@ fn coulomb_load_step(
     warm: &WarmStart,
 ) -> Result<(Begin, Option<condensed::CondensedSummary>), RunError> {
     let dim = problem.mesh.dim;
+    if let Some(mut kept) = problem.kept.take() {
+        // the previous step's factorisation, where K_p and the candidates' frames are the same
+        if let Some(mut summary) = kept.refresh(ctx, problem, reduced, fl, warm)? {
+            let solved =
+                coulomb_condensed::solve(ctx, problem, reduced, ns, &mut kept, Some(warm))?;
+            match solved {
+                coulomb_condensed::CoulombCondensed::Solved(r, cs) => {
+                    summary.coulomb = Some(cs);
+                    problem.kept.put(kept);
+                    return Ok((Begin::Solved(*r), Some(summary)));
+                }
+                _ => say!(
+                    ctx,
+                    "coulomb: the previous load step's factorisation did not solve this step; \
+                     a new one"
+                ),
+            }
+        }
+    }
     let tried = condensed::solve_keeping(ctx, problem, reduced, fl, Some(warm), (dim, false));
-    let (mut summary, kept) = match tried {
+    let (mut summary, mut kept) = match tried {
         Ok((condensed::Condensed::Factorised(s), Some(kept))) => (s, kept),
         Ok((condensed::Condensed::Fallback(s), _))
         | Ok((condensed::Condensed::Factorised(s), None))
@@ -973,9 +1027,10 @@ fn coulomb_load_step(
         }
         Err(e) => return Err(e),
     };
-    let begin = match coulomb_condensed::solve(ctx, problem, reduced, ns, kept, Some(warm))? {
+    let begin = match coulomb_condensed::solve(ctx, problem, reduced, ns, &mut kept, Some(warm))? {
         coulomb_condensed::CoulombCondensed::Solved(r, cs) => {
             summary.coulomb = Some(cs);
+            problem.kept.put(kept);
             Begin::Solved(*r)
         }
         coulomb_condensed::CoulombCondensed::Start(r, u, cs) => {

@@ -165,6 +165,9 @@ pub struct ContactProblem<'a> {
     pub boundary: &'a ContactBoundary,
     pub fixed: &'a [f64],
     pub sys: &'a System,
+    /// The previous load step's condensed Coulomb factorisation on the way in, this solve's on
+    /// the way out.
+    pub kept: &'a super::KeptFactor,
 }
 
 /// The state the loop carries from step to step.

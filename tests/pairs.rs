@@ -1,7 +1,8 @@
 //! Several contact pairs (`[[contact]]`, docs/obstacles.md "Several contact pairs"): a half
 //! disk pressed between two plates, on a mesh that is exactly mirror-symmetric about y = 0
 //! (cases/plates/disk_plates.py), against the model of the same problem by its symmetry (the
-//! bottom quarter with one pair); force control of one pair and of both against their motions;
+//! bottom quarter with one pair); force control of one pair and of both against their motions,
+//! and of the top plate on a disk that only its plates hold (every path, with friction);
 //! load steps; Tresca on one pair next to a frictionless one; a node on two pairs' groups
 //! refused.
 
@@ -885,7 +886,7 @@ fn force_on_a_body_held_only_by_its_pairs() {
     let three = solve(3, &forced, &[]);
     for (np, s) in [(1, &condensed), (3, &three)] {
         s.assert_converged("force control, floating");
-        let delta = approach(&s);
+        let delta = approach(s);
         assert!(
             (delta - SQUEEZE).abs() <= 1e-8 * SQUEEZE,
             "{np} ranks: δ = {delta}"

@@ -27,6 +27,14 @@
 //! with one lift per pair, so the bordered system has k border rows and columns and its block
 //! elimination solves k lifts on the step's factorisation and the k × k system
 //! Σ_j P¹_ij Δδ_j = |F_i| − P_i, P¹_ij = Σ_{k ∈ pair i} (A u¹_j)_k·e_i ([`correct`]).
+//!
+//! A body that Dirichlet data leave free (several pairs, force control on some): the
+//! approaches are more free modes next to the body's rigid modes ρ — the set's rows of pair j
+//! hold under (ρ, δ_j) when cᵀρ(x_k) = δ_j (c·e_j) — so the pins are chosen for the modes that
+//! the set leaves free with the δ's eliminated, and the balance test counts the prescribed
+//! forces as their loads, ρᵀf + Σ_j |F_j| δ_j = 0 ([`Approach::couplings`],
+//! [`super::rigid::FreeModes::couple`]; docs/obstacles.md, "On a body that only its pairs
+//! hold"). With pins the lift is a deformation against them and the bordered step is as above.
 
 use super::active_set::{ActiveSet, Iterate};
 use super::boundary::{ContactBoundary, ContactNode};

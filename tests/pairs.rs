@@ -1,7 +1,8 @@
 //! Several contact pairs (`[[contact]]`, docs/obstacles.md "Several contact pairs"): a half
 //! disk pressed between two plates, on a mesh that is exactly mirror-symmetric about y = 0
 //! (cases/plates/disk_plates.py), against the model of the same problem by its symmetry (the
-//! bottom quarter with one pair); force control of one pair and of both against their motions;
+//! bottom quarter with one pair); force control of one pair and of both against their motions,
+//! and of the top plate on a disk that only its plates hold (every path, with friction);
 //! load steps; Tresca on one pair next to a frictionless one; a node on two pairs' groups
 //! refused.
 
@@ -845,26 +846,32 @@ fn coulomb_plates_match_the_symmetric_quarter() {
     );
 }
 
-/// A disk held only between its two plates (free vertically but for them), the top plate
-/// under the force that its motion of 0.02 takes: on the condensed path (the direct preset's
-/// default) the approach is one more free mode next to the disk's own, and the run gives back
-/// δ = 0.02 and the motion's solution (1 and 3 ranks). The other paths refuse it (exit 2,
-/// naming `contact[1].force`).
+/// The disk held only between its two plates (free vertically but for them: `sym` holds u_x
+/// and with it the rotation), the top plate moved or pushed by `top`, `friction` on both
+/// pairs (empty: frictionless).
+fn floating_disk(top: &str, friction: &str) -> String {
+    format!("{BOTTOM}{friction}\n{}{friction}\n", top_pair(top))
+}
+
+/// The top pair's approach δ of a run (summary.json's `contact.approach`).
+fn approach(s: &Solved) -> f64 {
+    s.f(&["contact", "approach"])
+}
+
+/// The floating disk, the top plate under the force that its motion of 0.02 takes: the
+/// approach δ is one more free mode next to the disk's own rigid mode. The condensed path
+/// (the direct preset's default) gives back δ = 0.02 and the motion's solution (1 and 3 ranks);
+/// the plain path (`solver.reuse = "never"`, and `newton.init = "gap"`) gives the condensed
+/// path's final active set, u within 1e-9 of max|u| and δ within 1e-9 (1, 2 and 3 ranks); the
+/// iterative preset the same set, u and δ within its Krylov tolerance (1e-7; 1 and 2 ranks).
 #[test]
 fn force_on_a_body_held_only_by_its_pairs() {
     let tmp = tempfile::tempdir().expect("tempdir");
     let half = disk_mesh(tmp.path(), false);
+    let motion = format!("motion = [0, {}]", -SQUEEZE);
     let moved = solve(
         1,
-        &write(
-            tmp.path(),
-            "moved.toml",
-            &half,
-            &format!(
-                "{BOTTOM}\n{}",
-                top_pair(&format!("motion = [0, {}]", -SQUEEZE))
-            ),
-        ),
+        &write(tmp.path(), "moved.toml", &half, &floating_disk(&motion, "")),
         &[],
     );
     moved.assert_converged("motion");
@@ -873,15 +880,13 @@ fn force_on_a_body_held_only_by_its_pairs() {
         tmp.path(),
         "forced.toml",
         &half,
-        &format!(
-            "{BOTTOM}\n{}",
-            top_pair(&format!("force = [0, {:.17e}]", f[1]))
-        ),
+        &floating_disk(&format!("force = [0, {:.17e}]", f[1]), ""),
     );
-    for np in [1, 3] {
-        let s = solve(np, &forced, &[]);
+    let condensed = solve(1, &forced, &[]);
+    let three = solve(3, &forced, &[]);
+    for (np, s) in [(1, &condensed), (3, &three)] {
         s.assert_converged("force control, floating");
-        let delta = s.f(&["contact", "approach"]);
+        let delta = approach(s);
         assert!(
             (delta - SQUEEZE).abs() <= 1e-8 * SQUEEZE,
             "{np} ranks: δ = {delta}"
@@ -889,18 +894,159 @@ fn force_on_a_body_held_only_by_its_pairs() {
         assert!(s.u_rel_diff(&moved) <= 1e-8, "{np} ranks");
         assert_eq!(s.active_node_ids(), moved.active_node_ids());
     }
-    for sets in [
-        &["solver.reuse=\"never\""][..],
-        &["solver.preset=\"iterative\""][..],
-    ] {
-        let out = tmp.path().join("refused");
-        let run = run_solver(2, &forced, sets, &out);
-        run.expect_code(2, "force control on a floating body off the condensed path");
-        let text = run.output();
-        assert!(
-            text.contains("contact[1].force") && text.contains("condensed path"),
-            "{text}"
+    let dc = approach(&condensed);
+    let runs: [(usize, &[&str], f64); 6] = [
+        (1, &["solver.reuse=\"never\""], 1e-9),
+        (2, &["solver.reuse=\"never\""], 1e-9),
+        (3, &["solver.reuse=\"never\""], 1e-9),
+        (2, &["newton.init=\"gap\"", "solver.reuse=\"never\""], 1e-9),
+        (1, &["solver.preset=\"iterative\""], 1e-7),
+        (2, &["solver.preset=\"iterative\""], 1e-7),
+    ];
+    for (np, sets, tol) in runs {
+        let s = solve(np, &forced, sets);
+        s.assert_converged("force control, floating, off the condensed path");
+        let (d, du) = (approach(&s), s.u_rel_diff(&condensed));
+        eprintln!(
+            "{np} ranks {sets:?}: {} steps (condensed: {}), δ = {d:.17e} (condensed \
+             {dc:.17e}, rel {:.1e}), |Δu|/max|u| = {du:.1e}",
+            s.steps(),
+            condensed.steps(),
+            rel(d, dc)
         );
-        assert!(!out.join("summary.json").exists());
+        assert!(rel(d, dc) <= tol, "{np} {sets:?}: δ = {d} vs {dc}");
+        assert!(du <= tol, "{np} {sets:?}: {du}");
+        assert_eq!(
+            s.active_node_ids(),
+            condensed.active_node_ids(),
+            "{np} {sets:?}"
+        );
+        assert!(rel(pair_force(&s, 1)[1], f[1]) <= tol, "{np} {sets:?}");
+    }
+}
+
+/// The floating disk with friction `law` on both plates, the top plate under a force: the plain
+/// path (Algorithm 2; the fixed point for Coulomb) finds an approach δ, and the top plate's
+/// motion by δ gives the same u (within `tol` of max|u|), the same force on the top plate, the
+/// same active and slip nodes — on each run's ranks and settings (both runs), `tol` its own.
+/// Returns the slip and the active nodes of the motion's run.
+fn friction_on_a_floating_disk(law: &str, runs: &[(usize, &[&str], f64)]) -> (usize, usize) {
+    let tmp = tempfile::tempdir().expect("tempdir");
+    let half = disk_mesh(tmp.path(), false);
+    let friction = format!("friction = {law}\n");
+    let force = -0.004;
+    let forced = write(
+        tmp.path(),
+        "forced.toml",
+        &half,
+        &floating_disk(&format!("force = [0, {force}]"), &friction),
+    );
+    let (mut slip, mut active) = (0, 0);
+    for &(np, sets, tol) in runs {
+        let s = solve(np, &forced, sets);
+        s.assert_converged(law);
+        let delta = approach(&s);
+        assert!(delta > 0.0, "{np} ranks: δ = {delta}");
+        let moved = solve(
+            np,
+            &write(
+                tmp.path(),
+                "moved.toml",
+                &half,
+                &floating_disk(&format!("motion = [0, {:.17e}]", -delta), &friction),
+            ),
+            sets,
+        );
+        moved.assert_converged(law);
+        let (du, fm) = (s.u_rel_diff(&moved), pair_force(&moved, 1)[1]);
+        (slip, active) = (moved.slip_node_ids().len(), moved.active_node_ids().len());
+        eprintln!(
+            "{law}, {np} ranks {sets:?}: δ = {delta:.17e}, {} steps (the motion: {}), |Δu|/max|u| = \
+             {du:.1e}, the motion's force {fm:.17e} (rel {:.1e}), slip {slip} of {} active",
+            s.steps(),
+            moved.steps(),
+            rel(fm, force),
+            active
+        );
+        assert!(du <= tol, "{law}, {np} {sets:?}: {du}");
+        assert!(
+            rel(fm, force) <= tol,
+            "{law}, {np} {sets:?}: {fm} vs {force}"
+        );
+        assert!(rel(pair_force(&s, 1)[1], force) <= tol, "{np} {sets:?}");
+        assert_eq!(
+            s.active_node_ids(),
+            moved.active_node_ids(),
+            "{np} {sets:?}"
+        );
+        assert_eq!(s.slip_node_ids(), moved.slip_node_ids(), "{np} {sets:?}");
+    }
+    (slip, active)
+}
+
+/// Tresca friction (threshold 0.01: half the active nodes slip) on both plates of the floating
+/// disk under force control of the top plate: the plain path's δ, prescribed as the top
+/// plate's motion, gives the same u (1e-8), force, active and slip nodes, on 1 and 2 ranks;
+/// on the iterative preset to its Krylov tolerance (1e-7; 2 ranks).
+#[test]
+fn tresca_force_on_a_floating_disk() {
+    let law = "{ law = \"tresca\", threshold = 0.01 }";
+    let runs: [(usize, &[&str], f64); 3] = [
+        (1, &[], 1e-8),
+        (2, &[], 1e-8),
+        (2, &["solver.preset=\"iterative\""], 1e-7),
+    ];
+    let (slip, active) = friction_on_a_floating_disk(law, &runs);
+    assert!(slip > 0 && active > slip, "slip {slip} of {active} active");
+}
+
+/// Coulomb friction by the fixed point (μ = 0.3) on both plates of the floating disk under
+/// force control of the top plate: the δ found, prescribed as the top plate's motion, gives the
+/// same u, force, active and slip nodes (1e-8: the fixed point stops when the thresholds
+/// settle to 1e-9), on 1 and 2 ranks.
+#[test]
+fn coulomb_fixed_point_force_on_a_floating_disk() {
+    let law = "{ law = \"coulomb\", mu = 0.3, algorithm = \"fixed-point\" }";
+    let runs: [(usize, &[&str], f64); 2] = [(1, &[], 1e-8), (2, &[], 1e-8)];
+    let (slip, active) = friction_on_a_floating_disk(law, &runs);
+    assert!(slip > 0 && active > slip, "slip {slip} of {active} active");
+}
+
+/// The floating disk with the bottom plate GAP below it, the top plate under a force: the
+/// plain path first presses the disk against its pin (the set leaves the disk's mode, with the
+/// top plate's approach coupled to it, free), finds that mode unbalanced by the prescribed
+/// force and moves the disk with the top plate until the bottom plate's first node touches
+/// (said in the log); the result is the condensed path's (the same set, u within 1e-9 of
+/// max|u|, δ within 1e-9) and the approach is the one without the gap plus GAP — 1 and 2 ranks.
+#[test]
+fn force_on_a_floating_disk_from_a_gap() {
+    const GAP: f64 = 0.05;
+    let tmp = tempfile::tempdir().expect("tempdir");
+    let half = disk_mesh(tmp.path(), false);
+    let top = "force = [0, -0.004]";
+    let touching = write(tmp.path(), "touching.toml", &half, &floating_disk(top, ""));
+    let text =
+        floating_disk(top, "").replace("point = [0, -1]", &format!("point = [0, {}]", -1.0 - GAP));
+    let gap = write(tmp.path(), "gap.toml", &half, &text);
+    let d0 = approach(&solve(1, &touching, &[]));
+    let condensed = solve(1, &gap, &[]);
+    condensed.assert_converged("condensed, from a gap");
+    let dc = approach(&condensed);
+    assert!(rel(dc, d0 + GAP) <= 1e-9, "{dc} vs {d0} + {GAP}");
+    for np in [1, 2] {
+        let s = solve(np, &gap, &["solver.reuse=\"never\""]);
+        s.assert_converged("plain path, from a gap");
+        let (d, du) = (approach(&s), s.u_rel_diff(&condensed));
+        eprintln!(
+            "{np} ranks: {} steps, δ = {d:.17e} (condensed {dc:.17e}), |Δu|/max|u| = {du:.1e}",
+            s.steps()
+        );
+        assert!(rel(d, dc) <= 1e-9 && du <= 1e-9, "{np} ranks: {d} {du}");
+        assert_eq!(s.active_node_ids(), condensed.active_node_ids());
+        assert!(
+            s.run.output().contains("the body moves until contact node"),
+            "{}",
+            s.run.output()
+        );
     }
 }

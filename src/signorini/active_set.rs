@@ -354,9 +354,24 @@ impl ActiveSet {
         let Some(modes) = modes else {
             return g;
         };
+        self.held_rows(b, dim, |i, c| {
+            modes.add_outer(&mut g, &modes.direction_row(&b.nodes[i].x, c))
+        });
+        g
+    }
+
+    /// Calls `row(i, c)` for every constraint row cᵀ u_i of the set at this rank's node i: the
+    /// normal n of an active node; with friction also the tangents τ where the tangential row
+    /// holds u_τ (stick, or a slip row with a spring). Local.
+    pub fn held_rows(
+        &self,
+        b: &ContactBoundary,
+        dim: usize,
+        mut row: impl FnMut(usize, &[f64; 3]),
+    ) {
         for (i, k) in b.nodes.iter().enumerate() {
             if self.normal[i] {
-                modes.add_outer(&mut g, &modes.direction_row(&k.x, &k.frame.n));
+                row(i, &k.frame.n);
             }
             if self
                 .tangential
@@ -364,11 +379,10 @@ impl ActiveSet {
                 .is_some_and(|t| holds_tangent(&t[i], self.spring_floor))
             {
                 for t in &k.frame.t[..dim - 1] {
-                    modes.add_outer(&mut g, &modes.direction_row(&k.x, t));
+                    row(i, t);
                 }
             }
         }
-        g
     }
 
     /// Local part of the summary, packed: |A_n|, fingerprints, Gram.

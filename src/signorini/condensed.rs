@@ -340,7 +340,7 @@ pub(super) fn solve_keeping(
     // approaches and the body's position along them are then not determined)
     if let (Some(fc), true) = (s.force.first(), free.floats()) {
         if p.boundary.n_pairs() == 1 {
-            return Err(super::force::floating(fc, false));
+            return Err(super::force::floating(fc));
         }
         if s.force.len() == p.boundary.n_pairs() {
             return Err(super::force::all_pairs_floating(fc));

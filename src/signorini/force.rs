@@ -27,11 +27,19 @@
 //! with one lift per pair, so the bordered system has k border rows and columns and its block
 //! elimination solves k lifts on the step's factorisation and the k × k system
 //! Σ_j P¹_ij Δδ_j = |F_i| − P_i, P¹_ij = Σ_{k ∈ pair i} (A u¹_j)_k·e_i ([`correct`]).
+//!
+//! A body that Dirichlet data leave free (several pairs, force control on some): the
+//! approaches are more free modes next to the body's rigid modes ρ — the set's rows of pair j
+//! hold under (ρ, δ_j) when cᵀρ(x_k) = δ_j (c·e_j) — so the pins are chosen for the modes that
+//! the set leaves free with the δ's eliminated, and the balance test counts the prescribed
+//! forces as their loads, ρᵀf + Σ_j |F_j| δ_j = 0 ([`Approach::couplings`],
+//! [`super::rigid::FreeModes::couple`]; docs/obstacles.md, "On a body that only its pairs
+//! hold"). With pins the lift is a deformation against them and the bordered step is as above.
 
 use super::active_set::{ActiveSet, Iterate};
 use super::boundary::{ContactBoundary, ContactNode};
 use super::reduced::ReducedSystem;
-use super::rigid::Pin;
+use super::rigid::{ApproachCoupling, Pin, RigidModes};
 use crate::assembly::System;
 use crate::error::{InputError, RunError};
 use crate::geom::dot;
@@ -129,21 +137,14 @@ pub struct Approach {
     file: std::path::PathBuf,
 }
 
-/// Force control on a body that Dirichlet data leave free in a rigid mode. With one contact
-/// pair the loads' balance fixes its contact force, which can then not be prescribed; with
-/// several (a body held between obstacles) the approaches are solved on the condensed path as
-/// more free modes, and other paths (`several`) refuse it.
-pub fn floating(fc: &ForceControl, several: bool) -> RunError {
-    let message = if several {
-        "force control of a body that only its contact pairs hold (Dirichlet data leave it free \
-         in a rigid mode) is solved on the condensed path only — the direct preset, frictionless, \
-         solver.reuse = \"auto\" — which did not take this case: prescribe the obstacle's \
-         motion instead, or hold the body"
-    } else {
-        "force control needs a body that Dirichlet data hold: this body is free in a rigid \
-         mode, where the balance of its loads decides the contact force (prescribe the \
-         obstacle's motion instead, or hold the body)"
-    };
+/// Force control on a body that Dirichlet data leave free in a rigid mode with one contact
+/// pair: the loads' balance fixes its contact force, which can then not be prescribed. (With
+/// several pairs, a body held between obstacles, the approaches are more free modes next to
+/// the body's: [`super::rigid::FreeModes::couple`], the condensed path's dense iteration.)
+pub fn floating(fc: &ForceControl) -> RunError {
+    let message = "force control needs a body that Dirichlet data hold: this body is free in a \
+         rigid mode, where the balance of its loads decides the contact force (prescribe the \
+         obstacle's motion instead, or hold the body)";
     RunError::Input(InputError::new(Path::new(&fc.file), message).with_key(fc.key.as_str()))
 }
 
@@ -292,6 +293,48 @@ impl Approach {
             }
         }
         ctx.sum_vec(&local).iter().map(|&x| x as usize).collect()
+    }
+
+    /// Force control on a floating body: each force-controlled pair's approach tied to the
+    /// rigid modes by the set's held rows on that pair ([`ApproachCoupling`]): b_j = Σ_rows
+    /// (c·e_j) a_row and s_j = Σ_rows (c·e_j)² over every rank's rows (c the row's direction:
+    /// an active node's normal, a held tangent), the pairs without such rows left out.
+    /// Collective (one reduction).
+    pub fn couplings(
+        &self,
+        ctx: &Ctx,
+        b: &ContactBoundary,
+        set: &ActiveSet,
+        modes: &RigidModes,
+        dim: usize,
+    ) -> Vec<ApproachCoupling> {
+        let n = self.pairs.len();
+        let mut local = vec![0.0; n * 7];
+        set.held_rows(b, dim, |i, c| {
+            if let Some(j) = self.slot[i] {
+                let w = dot(*c, self.pairs[j].dir);
+                let a = modes.direction_row(&b.nodes[i].x, c);
+                for (x, y) in local[j * 7..j * 7 + 6].iter_mut().zip(a) {
+                    *x += w * y;
+                }
+                local[j * 7 + 6] += w * w;
+            }
+        });
+        let all = ctx.sum_vec(&local);
+        (0..n)
+            .filter(|&j| all[j * 7 + 6] > 0.0)
+            .map(|j| {
+                let mut bj = [0.0; 6];
+                bj.copy_from_slice(&all[j * 7..j * 7 + 6]);
+                ApproachCoupling {
+                    b: bj,
+                    s: all[j * 7 + 6],
+                    magnitude: self.pairs[j].magnitude,
+                    dir: self.pairs[j].dir,
+                    pair: self.pairs[j].pair,
+                }
+            })
+            .collect()
     }
 
     fn input_error(&self, j: usize, message: String) -> RunError {

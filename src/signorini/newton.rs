@@ -233,9 +233,10 @@ pub fn semismooth_newton(
     };
     let mut last_changed = usize::MAX;
     for step in 1..=s.section.max_steps {
-        let modes_changed = lp.free.update(ctx, mesh, layout, &lp.summary.gram)?;
+        let gram = lp.set_gram();
+        let modes_changed = lp.free.update(ctx, mesh, layout, &gram)?;
         let null_space = lp.free_modes_by_null_space(reduced, modes_changed)?;
-        if !s.friction() {
+        if !s.friction() && lp.approach.is_none() {
             // Friction reads u_τ itself (stick rows, slip rows), so only the frictionless
             // solve can leave the rigid motion out.
             lp.rho = lp
@@ -331,8 +332,8 @@ impl<'a> Loop<'a> {
             [fc, ..] if free.floats() && s.force.len() == b.n_pairs() && b.n_pairs() > 1 => {
                 return Err(force::all_pairs_floating(fc));
             }
-            [fc, ..] if free.floats() => {
-                return Err(force::floating(fc, b.n_pairs() > 1));
+            [fc, ..] if free.floats() && b.n_pairs() == 1 => {
+                return Err(force::floating(fc));
             }
             fcs => Some(Approach::new(b, fcs)),
         };
@@ -389,6 +390,21 @@ impl<'a> Loop<'a> {
         };
         reduced.set_free_null_space(ctx, None)?; // none left from an earlier solve
         Ok((lp, predicting))
+    }
+
+    /// The Gram matrix of the set's rows that the free modes are read from: the set's own, or,
+    /// under force control of a floating body, the one with the approaches eliminated
+    /// ([`FreeModes::couple`]): a rigid motion that the force-controlled obstacles follow is
+    /// free, its balance includes the prescribed forces. Collective under force control of a
+    /// floating body (one reduction).
+    fn set_gram(&mut self) -> super::rigid::Gram {
+        let (Some(ap), Some(modes), true) = (&self.approach, self.free.modes(), self.free.floats())
+        else {
+            return self.summary.gram;
+        };
+        let b = &self.p.boundary;
+        let coupling = ap.couplings(self.ctx, b, &self.set, modes, self.p.mesh.dim);
+        self.free.couple(&self.summary.gram, coupling)
     }
 
     /// Force control's first touch: the node `tag` joins the next set (counted as a change).

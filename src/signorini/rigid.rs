@@ -225,6 +225,26 @@ pub enum Balance {
     NoSupport(f64),
 }
 
+/// Force control on a floating body (force.rs): a force-controlled pair's approach δ_j tied
+/// to the body's rigid modes by the set's rows on that pair. A held row cᵀu_k = cᵀ(u_ref) + δ_j
+/// (c·e_j) of the pair (c the normal of an active node or a held tangent) keeps holding under
+/// the rigid motion ρ with the approach δ_j + cᵀρ(x_k)/(c·e_j); in the least-squares sense over
+/// the pair's rows, δ_j(ρ) = bᵀρ / s with b = Σ_rows (c·e_j) a_row and s = Σ_rows (c·e_j)²,
+/// a_row the row's values on the rigid modes ([`RigidModes::direction_row`]).
+#[derive(Clone, Debug)]
+pub struct ApproachCoupling {
+    /// b (m entries used).
+    pub b: [f64; 6],
+    /// s > 0 (a pair without held rows has no coupling).
+    pub s: f64,
+    /// |F_j|: the load the prescribed force puts on the mode (with δ_j(ρ) as its work).
+    pub magnitude: f64,
+    /// e_j.
+    pub dir: [f64; 3],
+    /// The pair.
+    pub pair: usize,
+}
+
 /// The rigid modes left free by Dirichlet data and the current sets, and the dofs pinned to
 /// remove them.
 pub struct FreeModes {
@@ -249,6 +269,9 @@ pub struct FreeModes {
     /// Σ_i |f_i| ‖R_i‖ over all dofs i: the size of the terms that cancel in `load`, the scale
     /// of the balance test.
     load_scale: f64,
+    /// Force control on a floating body: the approaches the set ties to the rigid modes
+    /// ([`FreeModes::couple`]); empty otherwise.
+    coupling: Vec<ApproachCoupling>,
 }
 
 /// An unbalanced load in the free modes below this fraction of `load_scale` is balanced: the
@@ -319,6 +342,7 @@ impl FreeModes {
             candidate,
             load,
             load_scale: total[6],
+            coupling: Vec::new(),
         }
     }
 
@@ -374,6 +398,55 @@ impl FreeModes {
                     .sum()
             })
             .collect()
+    }
+
+    /// Force control on a floating body (docs/obstacles.md, "Force control on a body that only
+    /// its pairs hold"): the approaches δ_j are more free modes next to the body's, each held
+    /// row of a force-controlled pair reading [a_row, −(c·e_j)] on (ρ, δ_j). The body's part of
+    /// the extended free modes is the null space of the Gram matrix with the δ's eliminated,
+    /// G − Σ_j b_j b_jᵀ / s_j ([`ApproachCoupling`]), returned for [`FreeModes::update`]; the
+    /// couplings are kept for the balance test (the prescribed forces are loads of the extended
+    /// modes). A pair without held rows is not coupled: its δ_j alone is free, and force.rs
+    /// moves it until its first node touches. Local.
+    pub fn couple(&mut self, g_set: &Gram, coupling: Vec<ApproachCoupling>) -> Gram {
+        let m = self.modes.m;
+        let mut g = *g_set;
+        for c in &coupling {
+            for a in 0..m {
+                for b in 0..m {
+                    g[a * m + b] -= c.b[a] * c.b[b] / c.s;
+                }
+            }
+        }
+        self.coupling = coupling;
+        g
+    }
+
+    /// The approach δ_j per unit rigid motion `coef` (mode coefficients) of the coupled pair
+    /// `pair`, 0 for the other pairs: δ_j(ρ) = bᵀρ / s ([`ApproachCoupling`]). Pure.
+    fn approach_of(&self, coef: &[f64], pair: usize) -> Option<(f64, [f64; 3])> {
+        let c = self.coupling.iter().find(|c| c.pair == pair)?;
+        let d: f64 = (0..self.modes.m).map(|j| c.b[j] * coef[j]).sum::<f64>() / c.s;
+        Some((d, c.dir))
+    }
+
+    /// The load in the free modes, φ = Qᵀ (Rᵀ f + Σ_j |F_j| b_j / s_j) (the prescribed forces
+    /// do the work |F_j| δ_j(ρ) on a free extended mode), and the balance test's scale, the
+    /// load's Σ|f_i|‖R_i‖ plus Σ_j |F_j| ‖b_j‖ / s_j. Pure.
+    fn free_mode_load(&self) -> (Vec<f64>, f64) {
+        let (m, q) = (self.modes.m, &self.q);
+        let mut load = self.load;
+        let mut scale = self.load_scale;
+        for c in &self.coupling {
+            for (l, b) in load.iter_mut().zip(&c.b).take(m) {
+                *l += c.magnitude * b / c.s;
+            }
+            scale += c.magnitude * c.b.iter().map(|x| x * x).sum::<f64>().sqrt() / c.s;
+        }
+        let g = (0..q.ncols())
+            .map(|col| (0..m).map(|j| q[(j, col)] * load[j]).sum())
+            .collect();
+        (g, scale)
     }
 
     /// New pins when the Gram matrix of Dirichlet data + the set (`g_set`) changed; `Ok(true)`
@@ -448,11 +521,9 @@ impl FreeModes {
     ) -> Balance {
         let (modes, q) = (&self.modes, &self.q);
         let mf = q.ncols();
-        let g: Vec<f64> = (0..mf)
-            .map(|c| (0..modes.m).map(|j| q[(j, c)] * self.load[j]).sum())
-            .collect();
+        let (g, scale) = self.free_mode_load();
         let norm = g.iter().map(|x| x * x).sum::<f64>().sqrt();
-        if norm <= BALANCE_RTOL * self.load_scale {
+        if norm <= BALANCE_RTOL * scale {
             return Balance::Balanced;
         }
         // Motion per unit α in mode coefficients: Q φ / |φ|.
@@ -465,7 +536,11 @@ impl FreeModes {
                 continue;
             }
             let nr = modes.direction_row(&k.x, &k.frame.n);
-            let speed = -(0..modes.m).map(|j| nr[j] * coef[j]).sum::<f64>();
+            let mut speed = -(0..modes.m).map(|j| nr[j] * coef[j]).sum::<f64>();
+            if let Some((delta, e)) = self.approach_of(&coef, k.pair) {
+                // the coupled obstacle moves with the body: its gap closes by δ_j (n·e_j)
+                speed += delta * crate::geom::dot(k.frame.n, e);
+            }
             if speed <= 1e-12 {
                 continue;
             }
@@ -605,13 +680,9 @@ impl FreeModes {
     /// Whether the load is balanced in every free mode (the pins would carry no reaction:
     /// the test of [`FreeModes::balance`] before it looks for a touching node). Local.
     pub fn balanced(&self) -> bool {
-        let (modes, q) = (&self.modes, &self.q);
-        let norm = (0..q.ncols())
-            .map(|c| (0..modes.m).map(|j| q[(j, c)] * self.load[j]).sum::<f64>())
-            .map(|g| g * g)
-            .sum::<f64>()
-            .sqrt();
-        norm <= BALANCE_RTOL * self.load_scale
+        let (g, scale) = self.free_mode_load();
+        let norm = g.iter().map(|g| g * g).sum::<f64>().sqrt();
+        norm <= BALANCE_RTOL * scale
     }
 
     /// The free modes as fields on this rank's rows (`row_lo` its first global row, `n_local`

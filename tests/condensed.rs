@@ -251,3 +251,38 @@ fn a_body_that_starts_inside_the_obstacle_equals_the_plain_path() {
         assert!(r.f(&["contact", "active_count"]) > 1.0);
     }
 }
+
+#[test]
+fn load_steps_keep_the_factorisation() {
+    // The floating Hertz disk pressed in four load steps: K_p (with the pins of its free rigid
+    // modes) is the same in every step, so the steps after the first solve on the first step's
+    // factorisation and compliance (only d₀ is new) — and end where the plain path ends, step
+    // by step, on 1 and 2 ranks.
+    let (case, mesh) = hertz(4);
+    let plain = solve(1, &case, &[&mesh, "load.steps=4", "solver.reuse=\"never\""]);
+    plain.assert_converged("plain path");
+    for np in [1, 2] {
+        let c = solve(np, &case, &[&mesh, "load.steps=4"]);
+        c.assert_converged("condensed");
+        let kept = c
+            .run
+            .stdout
+            .matches("the previous load step's factorisation and compliance")
+            .count();
+        assert_eq!(kept, 3, "{np} rank(s): {}", c.run.output());
+        let cs = &c.summary["newton"]["condensed"];
+        assert_eq!(cs["factorisation_kept"], true, "{cs}");
+        assert_eq!(c.f(&["newton", "factorisations"]), 0.0, "{np} rank(s)");
+        for step in 1..=4 {
+            let (du, su) = max_diff(
+                &step_displacement(&c.dir, step),
+                &step_displacement(&plain.dir, step),
+            );
+            assert!(
+                du <= 1e-10 * su,
+                "{np} rank(s), step {step}: |Δu| {du:e} of {su:e}"
+            );
+        }
+        assert_eq!(plain.active_node_ids(), c.active_node_ids(), "{np} rank(s)");
+    }
+}

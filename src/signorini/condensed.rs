@@ -180,6 +180,21 @@ impl CondensedSummary {
         self.schur_dofs = comp.list.len() * comp.per;
     }
 
+    /// A load step on the previous step's factorisation into the record and the log: one
+    /// condensation (`seconds`), no factorisation.
+    fn record_kept(&mut self, ctx: &Ctx, comp: &Compliance, seconds: f64) {
+        self.solves += 1;
+        self.schur_seconds += seconds;
+        self.candidates = comp.list.len();
+        self.schur_dofs = comp.list.len() * comp.per;
+        say!(
+            ctx,
+            "newton: condensed: the previous load step's factorisation and compliance on {} \
+             candidates, d₀ of this step ({seconds:.3} s)",
+            self.candidates
+        );
+    }
+
     /// The nested start's coarse levels of a dense round, into the record and the log.
     fn record_coarse(&mut self, ctx: &Ctx, run: &DenseRun) {
         if run.coarse.is_empty() {
@@ -204,14 +219,19 @@ impl CondensedSummary {
 
     /// The closing log line of a converged condensed solve (`n` contact nodes).
     fn log(&self, ctx: &Ctx, n: usize, active: usize) {
+        let factorisation = if self.factorisation_kept {
+            "the previous load step's factorisation".to_string()
+        } else {
+            format!(
+                "factorisation {:.3} s (ordering {:.3} s)",
+                self.factorisation_seconds, self.ordering_seconds
+            )
+        };
         say!(
             ctx,
             "newton: condensed: {} of {n} contact nodes as candidates, {active} active, \
-             factorisation {:.3} s (ordering {:.3} s), Schur complement {:.3} s, dense {:.3} s, \
-             expansion {:.3} s",
+             {factorisation}, Schur complement {:.3} s, dense {:.3} s, expansion {:.3} s",
             self.candidates,
-            self.factorisation_seconds,
-            self.ordering_seconds,
             self.schur_seconds,
             self.dense_seconds,
             self.expansion_seconds
@@ -275,19 +295,10 @@ impl Kept {
     ) -> Result<Option<CondensedSummary>, RunError> {
         let t = Instant::now();
         let (free, rhs0) = prepare_base(ctx, p, reduced, s)?;
-        if free.pins() != self.free.pins() {
-            return Ok(None);
-        }
         let start = start_set(p, s, &free, Some(warm));
         let cand = Candidates::gather(ctx, p.boundary, &free, &start);
-        let (old, comp) = (&self.cand, &self.comp);
-        let same_frames = cand.n == old.n
-            && comp
-                .list
-                .iter()
-                .all(|&i| cand.row(i) == old.row(i) && cand.n(i) == old.n(i));
-        let inside = (0..cand.n).all(|i| !cand.start(i) || comp.in_s[i]);
-        if !(same_frames && inside) {
+        let inside = (0..cand.n).all(|i| !cand.start(i) || self.comp.in_s[i]);
+        if !(self.holds(&free, &cand, p.mesh.dim) && inside) {
             return Ok(None);
         }
         let f_root = ctx.gather_to_root(&rhs0);
@@ -302,19 +313,23 @@ impl Kept {
         self.n_local = rhs0.len();
         self.free = free;
         let mut summary = CondensedSummary::new(p.boundary.n_global);
-        summary.candidates = self.comp.list.len();
-        summary.schur_dofs = self.comp.list.len() * self.comp.per;
-        summary.solves = 1;
-        summary.schur_seconds = t.elapsed().as_secs_f64();
         summary.factorisation_kept = true;
-        say!(
-            ctx,
-            "newton: condensed: the previous load step's factorisation and compliance on {} \
-             candidates, d₀ of this step ({:.3} s)",
-            summary.candidates,
-            summary.schur_seconds
-        );
+        summary.record_kept(ctx, &self.comp, t.elapsed().as_secs_f64());
         Ok(Some(summary))
+    }
+
+    /// The kept factorisation holds a step with free modes `free` and candidates `cand`: the
+    /// same pins, `per` Schur variables per candidate, and the kept candidates' rows and node
+    /// frames (K_p was factorised in them). Local (on all-gathered data).
+    fn holds(&self, free: &FreeModes, cand: &Candidates, per: usize) -> bool {
+        self.comp.per == per
+            && free.pins() == self.free.pins()
+            && self.cand.n == cand.n
+            && self
+                .comp
+                .list
+                .iter()
+                .all(|&i| cand.row(i) == self.cand.row(i) && cand.n(i) == self.cand.n(i))
     }
 }
 
@@ -352,7 +367,15 @@ pub(super) fn solve_keeping(
     let n_rows = p.layout.node_offsets.last().copied().unwrap_or(0) * dim;
     let nested = warm.is_none() && s.section.init == NewtonInit::Auto;
     let mut growth = Growth::new(&cand, per);
-    let mut comp = Compliance::new(cand.n, per);
+    let t = Instant::now();
+    let mut comp = match warm.and_then(|_| reused(ctx, p, (&free, &cand), &f_root, per)) {
+        Some(comp) => {
+            summary.factorisation_kept = true;
+            comp
+        }
+        None => Compliance::new(cand.n, per),
+    };
+    let condensation = t.elapsed().as_secs_f64();
     let mut history: Vec<StepInfo> = Vec::new();
     for round in 1..=MAX_ROUNDS {
         let t = Instant::now();
@@ -360,18 +383,22 @@ pub(super) fn solve_keeping(
             Ok(new) => new,
             Err(why) => return fall(fallback(ctx, summary, why)),
         };
-        let grown = comp.grow(
+        if new.is_empty() && comp.factor.is_some() {
+            // the previous load step's factorisation holds every candidate of this one
+            summary.record_kept(ctx, &comp, condensation + t.elapsed().as_secs_f64());
+        } else if let Err(why) = comp.grow(
             ctx,
             reduced,
             &cand,
             &new,
             (dim, n_rows),
             (&f_root, &growth.why),
-        );
-        if let Err(why) = grown {
+        ) {
             return fall(fallback(ctx, summary, why));
+        } else {
+            summary.factorisation_kept = false;
+            summary.record_factorisation(&comp, t.elapsed().as_secs_f64());
         }
-        summary.record_factorisation(&comp, t.elapsed().as_secs_f64());
         if !steps {
             summary.outcome = "factorised";
             let kept = Kept {
@@ -441,7 +468,7 @@ pub(super) fn solve_keeping(
             let n_active = growth.active.iter().filter(|&&a| a).count();
             summary.log(ctx, cand.n, n_active);
             let solved = finish(p, reduced, &free, ex, history, summary)?;
-            let kept = (per > 1).then(|| Kept {
+            let kept = Kept {
                 comp,
                 cand,
                 n_local: rhs0.len(),
@@ -449,8 +476,12 @@ pub(super) fn solve_keeping(
                 free,
                 lambda,
                 active: growth.active,
-            });
-            return Ok((solved, kept));
+            };
+            if per > 1 {
+                return Ok((solved, Some(kept)));
+            }
+            p.kept.put(kept); // for the next load step
+            return Ok((solved, None));
         }
         if let Err(why) = growth.widen(ctx, &ex.changed, &comp, round) {
             return fall(fallback(ctx, summary, why));
@@ -458,6 +489,32 @@ pub(super) fn solve_keeping(
     }
     let why = format!("no final set in {MAX_ROUNDS} rounds of candidates");
     fall(fallback(ctx, summary, why))
+}
+
+/// A load step's compliance on the previous step's factorisation ([`Kept`], `p.kept`): K_p
+/// is the same matrix in every load step, so where the pins, `per` and the kept candidates'
+/// rows and frames are this step's, only d₀ is new (MUMPS' condensation of this step's f,
+/// `f_root` on rank 0). `None`: nothing kept, or it does not hold (it is dropped). Collective
+/// (the decision is taken on all-gathered data: the same on every rank).
+fn reused(
+    ctx: &Ctx,
+    p: &ContactProblem,
+    (free, cand): (&FreeModes, &Candidates),
+    f_root: &[f64],
+    per: usize,
+) -> Option<Compliance> {
+    let kept = p.kept.take()?;
+    if !kept.holds(free, cand, per) {
+        return None;
+    }
+    let mut comp = kept.comp;
+    match comp.recondense(ctx, f_root) {
+        Ok(()) => Some(comp),
+        Err(why) => {
+            say!(ctx, "newton: condensed: {why}; a new factorisation");
+            None
+        }
+    }
 }
 
 /// The candidate set from round to round: the `take` contact nodes with the smallest gaps and

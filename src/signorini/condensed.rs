@@ -349,18 +349,7 @@ pub(super) fn solve_keeping(
     let dim = p.mesh.dim;
     let mut summary = CondensedSummary::new(p.boundary.n_global);
     let (free, rhs0) = prepare_base(ctx, p, reduced, s)?;
-    // a floating body under force control: with one pair the load balance fixes the force;
-    // with several, each approach is one more free mode next to the body's own (the dense
-    // iteration's G has a column per mode), unless every pair is force-controlled (the
-    // approaches and the body's position along them are then not determined)
-    if let (Some(fc), true) = (s.force.first(), free.floats()) {
-        if p.boundary.n_pairs() == 1 {
-            return Err(super::force::floating(fc));
-        }
-        if s.force.len() == p.boundary.n_pairs() {
-            return Err(super::force::all_pairs_floating(fc));
-        }
-    }
+    refuse_floating_force(p, s, &free)?;
     let f_root = ctx.gather_to_root(&rhs0); // f for MUMPS' solve phases, once
     let start = start_set(p, s, &free, warm);
     let cand = Candidates::gather(ctx, p.boundary, &free, &start);
@@ -489,6 +478,26 @@ pub(super) fn solve_keeping(
     }
     let why = format!("no final set in {MAX_ROUNDS} rounds of candidates");
     fall(fallback(ctx, summary, why))
+}
+
+/// A floating body under force control: with one pair the load balance fixes the force;
+/// with several, each approach is one more free mode next to the body's own (the dense
+/// iteration's G has a column per mode), unless every pair is force-controlled (the
+/// approaches and the body's position along them are then not determined). Local.
+fn refuse_floating_force(
+    p: &ContactProblem,
+    s: &NewtonSettings,
+    free: &FreeModes,
+) -> Result<(), RunError> {
+    if let (Some(fc), true) = (s.force.first(), free.floats()) {
+        if p.boundary.n_pairs() == 1 {
+            return Err(super::force::floating(fc));
+        }
+        if s.force.len() == p.boundary.n_pairs() {
+            return Err(super::force::all_pairs_floating(fc));
+        }
+    }
+    Ok(())
 }
 
 /// A load step's compliance on the previous step's factorisation ([`Kept`], `p.kept`): K_p

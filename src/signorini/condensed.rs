@@ -334,7 +334,9 @@ impl Kept {
 }
 
 /// [`solve`] with `per` Schur variables per candidate (1: the normal dof; d: every dof, for
-/// friction); with `per` > 1 a converged solve also returns what it [`Kept`]. Without `steps`
+/// friction); with `per` > 1 a converged solve also returns what it [`Kept`] (with `per` = 1
+/// it leaves it in `p.kept` for the next load step). A load step (`warm`) starts from the
+/// previous step's factorisation where it holds ([`reused`]). Without `steps`
 /// it stops after the first factorisation (`Factorised`; the start set and λ = 0 kept: a load
 /// step of a friction solve starts from its warm start instead). Collective.
 pub(super) fn solve_keeping(

@@ -148,16 +148,16 @@ pub struct ContactSolution {
     /// Each pair's obstacle displacement d in this solve (friction in the next step acts on
     /// the slip relative to the obstacle's increment since).
     pub obstacle_displacement: Vec<[f64; 3]>,
-    /// The condensed Coulomb solve's factorisation, compliance and candidates, for the next
-    /// load step (taken by it).
+    /// The condensed solve's factorisation, compliance and candidates, for the next load step
+    /// (taken by it).
     kept: KeptFactor,
 }
 
-/// A condensed Coulomb solve's factorisation of K_p with its Schur complement, compliance and
-/// candidates ([`condensed::Kept`]), handed from one load step to the next: K_p does not change
-/// between load steps, so the next step reuses it where the candidates' frames and the pins
-/// are the same (`Kept::refresh`). Empty unless the last step was solved on the contact
-/// unknowns.
+/// A condensed solve's factorisation of K_p with its Schur complement, compliance and
+/// candidates ([`condensed::Kept`]; frictionless or Coulomb), handed from one load step to the
+/// next: K_p does not change between load steps, so the next step reuses it where the
+/// candidates' frames and the pins are the same (`Kept::holds`). Empty unless the last step
+/// was solved on the contact unknowns.
 #[derive(Default)]
 pub struct KeptFactor(std::cell::RefCell<Option<condensed::Kept>>);
 

@@ -1571,32 +1571,6 @@ impl Reader<'_> {
                 ));
             }
         }
-        if let Some(f) = pairs.iter().position(|p| p.force.is_some()) {
-            // Coulomb friction under force control: the fixed point on Tresca thresholds only
-            let newton = |p: &ContactSection| {
-                matches!(
-                    p.friction,
-                    Friction::Coulomb {
-                        algorithm: CoulombAlgorithm::Newton,
-                        ..
-                    }
-                )
-            };
-            if let Some(j) = pairs.iter().position(newton) {
-                let (key, loc) = at(j, "friction");
-                return Err(self.err(
-                    &key,
-                    loc,
-                    format!(
-                        "force control ({}.force) with Coulomb friction is not implemented for \
-                         the generalised Newton (algorithm = \"newton\", the default): give \
-                         algorithm = \"fixed-point\" (Tresca solves under force control), or \
-                         make the pairs frictionless or Tresca",
-                        pairs[f].key
-                    ),
-                ));
-            }
-        }
         // Tresca pairs combine with frictionless ones (threshold 0), Coulomb pairs with
         // frictionless ones (μ = 0) and with each other (each its μ, one algorithm); Tresca and
         // Coulomb are two different iterations and do not mix.
@@ -1672,23 +1646,9 @@ impl Reader<'_> {
             Some((fk, f)) => {
                 let force = self.motion(&fk, f, "the force pressing the obstacle onto the body")?;
                 let why = if motion.is_some() {
-                    Some("prescribes the force instead of the motion: give one of them".into())
-                } else if matches!(
-                    friction,
-                    Friction::Coulomb {
-                        algorithm: CoulombAlgorithm::Newton,
-                        ..
-                    }
-                ) {
-                    Some(format!(
-                        "(force control) with Coulomb friction is not implemented for the \
-                         generalised Newton (algorithm = \"newton\", the default): give \
-                         algorithm = \"fixed-point\" in {} (Tresca solves under force \
-                         control), or make the pair frictionless or Tresca",
-                        join_key(k, "friction")
-                    ))
+                    Some("prescribes the force instead of the motion: give one of them")
                 } else if force.value.iter().all(|&x| x == 0.0) {
-                    Some("is zero: force control needs a direction (a nonzero vector)".into())
+                    Some("is zero: force control needs a direction (a nonzero vector)")
                 } else {
                     None
                 };

@@ -375,7 +375,9 @@ fn force_control_with_coulomb_newton() {
 /// Coulomb's generalised Newton under force control through three load steps: the slanted
 /// force ramped (each step's force along e is t·|F|, 1e-9), each step warm-started from the
 /// previous one's approach and states; every step's approach and u agree with the fixed
-/// point's through the same steps (the same incremental problems, 1e-8), on 1 and 2 ranks.
+/// point's through the same steps (the same incremental problems, 1e-8), on 1 and 2 ranks;
+/// and displacement control through the approaches found (`load.factors` = δ_i/δ_3 of the
+/// motion δ_3 e) takes the forces t·|F| (1e-9) and gives every step's u (1e-8).
 #[test]
 fn force_control_with_coulomb_newton_in_load_steps() {
     let along = 0.047;
@@ -427,5 +429,51 @@ fn force_control_with_coulomb_newton_in_load_steps() {
             newton.steps(),
             fixed.steps()
         );
+        if np == 1 {
+            motion_through_the_approaches(&newton, &h, along);
+        }
     }
+}
+
+/// Displacement control through the approaches δ_i of the force-controlled load steps `h`
+/// (their history.csv) of `forced`: each step's force along e is t_i·`along` (1e-9) and its u
+/// the force-controlled one (1e-8).
+fn motion_through_the_approaches(forced: &Solved, h: &[Row], along: f64) {
+    let norm = SLANT[0].hypot(SLANT[1]);
+    let delta: Vec<f64> = h
+        .iter()
+        .map(|r| (r.f("obstacle_x") * SLANT[0] + r.f("obstacle_y") * SLANT[1]) / norm)
+        .collect();
+    let last = delta[delta.len() - 1];
+    let factors: Vec<String> = delta.iter().map(|d| format!("{:.17e}", d / last)).collect();
+    let factors = format!("load.factors=[{}]", factors.join(", "));
+    let m = SLANT.map(|x| last * x / norm);
+    let motion = format!("contact.motion=[{:.17e}, {:.17e}]", m[0], m[1]);
+    let moved = solve(1, &case(), &[AUTO, COULOMB_NEWTON, &motion, &factors]);
+    moved.assert_converged("displacement control through the approaches");
+    let hm = read_csv(&moved.dir.join("history.csv"));
+    assert_eq!(hm.len(), h.len());
+    for (i, r) in hm.iter().enumerate() {
+        let t = (i + 1) as f64 / h.len() as f64;
+        let p = (r.f("force_x") * SLANT[0] + r.f("force_y") * SLANT[1]) / norm;
+        let (u, um) = (
+            step_displacement(&forced.dir, i + 1),
+            step_displacement(&moved.dir, i + 1),
+        );
+        let (diff, scale) = max_diff(&u, &um);
+        eprintln!(
+            "motion through the approaches, step {}: force along e {:.2e} off, |Δu|/|u| = {:.2e}",
+            i + 1,
+            (p - t * along).abs() / (t * along),
+            diff / scale
+        );
+        assert!(
+            (p - t * along).abs() <= 1e-9 * t * along,
+            "step {}: force along e {p} against {}",
+            i + 1,
+            t * along
+        );
+        assert!(scale > 0.0 && diff <= 1e-8 * scale, "step {}", i + 1);
+    }
+    assert_eq!(moved.slip_node_ids(), forced.slip_node_ids());
 }

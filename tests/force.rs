@@ -353,6 +353,20 @@ fn force_control_with_coulomb_newton() {
         "the condensed Coulomb iteration is not used under force control:\n{}",
         newton[0].run.output()
     );
+    // the plain path's first step starts from the frictionless solution at its approach,
+    // every active node sticking (its rows read the gaps and references at that approach)
+    let history = get(&newton[0].summary, &["newton", "history"]);
+    let first = history
+        .as_array()
+        .expect("history")
+        .iter()
+        .find(|h| h.get("states").is_some())
+        .expect("a friction step");
+    let states = floats(&first["states"]);
+    assert!(
+        states[3] == 0.0 && states[2] == first["active"].as_f64().expect("active"),
+        "the first Coulomb step: states {states:?}, {first}"
+    );
     let fixed = solve(1, &case(), &[AUTO, COULOMB_FIXED_POINT, &fk]);
     fixed.assert_converged("force control with Coulomb (fixed point)");
     let (a, b) = (

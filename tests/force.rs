@@ -396,7 +396,11 @@ fn force_control_with_coulomb_newton() {
 fn force_control_with_coulomb_newton_in_load_steps() {
     let along = 0.047;
     let fk = slanted_force_key(along);
-    let fixed = solve(1, &case(), &[AUTO, COULOMB_FIXED_POINT, &fk, "load.steps=3"]);
+    let fixed = solve(
+        1,
+        &case(),
+        &[AUTO, COULOMB_FIXED_POINT, &fk, "load.steps=3"],
+    );
     fixed.assert_converged("Coulomb fixed point in load steps");
     let hf = read_csv(&fixed.dir.join("history.csv"));
     assert_eq!(hf.len(), 3);

@@ -386,6 +386,58 @@ fn force_control_with_coulomb_newton() {
     assert_eq!(newton[0].slip_node_ids(), fixed.slip_node_ids());
 }
 
+/// 3D: Coulomb's generalised Newton (μ = 0.3) under force control, the sphere of
+/// tests/cases/sphere3d.toml pressed along e = m/|m|, m = (0.03, 0.01, −0.1) (the drag has
+/// components along both tangents of the frames): the force along e that the motion m reports
+/// gives back δ = |m|, u, the active and the slip nodes (1e-8; some slip, some stick) and the
+/// force along e (1e-9), on 1 and 2 ranks.
+#[test]
+fn force_control_with_coulomb_newton_in_3d() {
+    let case = repo("tests/cases/sphere3d.toml");
+    let m = [0.03f64, 0.01, -0.1];
+    let norm = m.iter().map(|x| x * x).sum::<f64>().sqrt();
+    let motion = format!("contact.motion=[{}, {}, {}]", m[0], m[1], m[2]);
+    let moved = solve(1, &case, &[AUTO, COULOMB_NEWTON, &motion]);
+    moved.assert_converged("displacement control");
+    let along_e = |s: &Solved| {
+        let f = total_force(s);
+        (0..3).map(|i| f[i] * m[i]).sum::<f64>() / norm
+    };
+    let along = along_e(&moved);
+    let fk = format!(
+        "contact.force=[{:.17e}, {:.17e}, {:.17e}]",
+        along * m[0] / norm,
+        along * m[1] / norm,
+        along * m[2] / norm
+    );
+    let (slip, active) = (moved.slip_node_ids().len(), moved.active_node_ids().len());
+    assert!(slip > 0 && active > slip, "slip {slip} of {active} active");
+    for np in [1, 2] {
+        let forced = solve(np, &case, &[AUTO, COULOMB_NEWTON, &fk]);
+        forced.assert_converged("force control with Coulomb in 3D");
+        let delta = forced.f(&["contact", "approach"]);
+        let du = forced.u_rel_diff(&moved);
+        let p = along_e(&forced);
+        eprintln!(
+            "3D, {np} ranks: δ = {delta:.17e} for {norm:.17e}, |Δu|/|u| = {du:.2e}, {} steps \
+             (motion: {})",
+            forced.steps(),
+            moved.steps()
+        );
+        assert!(
+            (delta - norm).abs() <= 1e-8 * norm,
+            "{np} ranks: δ = {delta}"
+        );
+        assert!(du <= 1e-8, "{np} ranks: |Δu|/|u| = {du}");
+        assert!(
+            (p - along).abs() <= 1e-9 * along,
+            "{np} ranks: {p} against {along}"
+        );
+        assert_eq!(forced.active_node_ids(), moved.active_node_ids());
+        assert_eq!(forced.slip_node_ids(), moved.slip_node_ids(), "{np} ranks");
+    }
+}
+
 /// Coulomb's generalised Newton under force control through three load steps: the slanted
 /// force ramped (each step's force along e is t·|F|, 1e-9), each step warm-started from the
 /// previous one's approach and states; every step's approach and u agree with the fixed

@@ -956,7 +956,8 @@ fn force_on_a_body_held_only_by_its_pairs() {
 }
 
 /// The floating disk with friction `law` on both plates, the top plate under a force: the plain
-/// path (Algorithm 2; the fixed point for Coulomb) finds an approach δ, and the top plate's
+/// path (Algorithm 2; for Coulomb the fixed point or the generalised Newton) finds an approach
+/// δ, and the top plate's
 /// motion by δ gives the same u (within `tol` of max|u|), the same force on the top plate, the
 /// same active and slip nodes — on each run's ranks and settings (both runs), `tol` its own.
 /// Returns the slip and the active nodes of the motion's run.
@@ -1038,6 +1039,22 @@ fn tresca_force_on_a_floating_disk() {
 fn coulomb_fixed_point_force_on_a_floating_disk() {
     let law = "{ law = \"coulomb\", mu = 0.3, algorithm = \"fixed-point\" }";
     let runs: [(usize, &[&str], f64); 2] = [(1, &[], 1e-8), (2, &[], 1e-8)];
+    let (slip, active) = friction_on_a_floating_disk(law, &runs);
+    assert!(slip > 0 && active > slip, "slip {slip} of {active} active");
+}
+
+/// Coulomb friction by the generalised Newton (μ = 0.3) on both plates of the floating disk
+/// under force control of the top plate (its approach coupled to the disk's free mode): the δ
+/// found, prescribed as the top plate's motion, gives the same u, force, active and slip nodes
+/// (1e-8), on 1 and 2 ranks and on the iterative preset.
+#[test]
+fn coulomb_newton_force_on_a_floating_disk() {
+    let law = "{ law = \"coulomb\", mu = 0.3 }";
+    let runs: [(usize, &[&str], f64); 3] = [
+        (1, &[], 1e-8),
+        (2, &[], 1e-8),
+        (2, &["solver.preset=\"iterative\""], 1e-7),
+    ];
     let (slip, active) = friction_on_a_floating_disk(law, &runs);
     assert!(slip > 0 && active > slip, "slip {slip} of {active} active");
 }

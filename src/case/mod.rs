@@ -516,7 +516,7 @@ pub struct ContactSection {
     pub motion: Option<Motion>,
     /// `contact.force`: force control (docs/obstacles.md, "Force control"): the obstacle moves
     /// along F/|F| by the unknown approach δ until the contact force along F/|F| is |F|
-    /// (frictionless or Tresca; never together with `motion`). Scaled with `[load]` as a motion.
+    /// (any friction law; never together with `motion`). Scaled with `[load]` as a motion.
     pub force: Option<Motion>,
     pub friction: Friction,
     pub rigid_modes: RigidModeHandling,
@@ -1508,8 +1508,8 @@ impl Reader<'_> {
     }
 
     /// The contact pairs: one `[contact]` table or an array `[[contact]]`, checked against each
-    /// other (distinct groups, one friction law the solver can combine, force control without
-    /// Coulomb friction, one rigid-mode handling).
+    /// other (distinct groups, one friction law the solver can combine, one rigid-mode
+    /// handling).
     fn contacts(&self, top: &Tab) -> Res<Vec<ContactSection>> {
         let Some((k, n)) = top.get("contact") else {
             return Ok(Vec::new());

@@ -1945,23 +1945,6 @@ fn reject_bad_contact_pairs() {
         ),
         (
             format!(
-                "{}{}{}",
-                pair("a", "force = [0, -1]\n"),
-                pair("b", "force = [0, 2]\n"),
-                pair("c", coulomb)
-            ),
-            "contact[2].friction",
-            "Coulomb friction is not implemented",
-            Some("friction"),
-        ),
-        (
-            format!("{}{}", pair("a", coulomb), pair("b", "force = [0, -2]\n")),
-            "contact[0].friction",
-            "Coulomb friction is not implemented",
-            Some("friction"),
-        ),
-        (
-            format!(
                 "{}{}",
                 pair("a", coulomb),
                 pair("b", "friction = { law = \"tresca\", threshold = 1 }\n")
@@ -2094,6 +2077,14 @@ fn force_control_with_coulomb_takes_either_algorithm() {
         pair("b", &format!("force = [0, 2]\n{newton}"))
     ));
     assert_eq!(parse(&text).unwrap().contacts.len(), 2);
+    // a Coulomb pair (the generalised Newton) next to frictionless force-controlled pairs
+    let text = with(&format!(
+        "{}{}{}",
+        pair("a", "force = [0, -1]\n"),
+        pair("b", "force = [0, 2]\n"),
+        pair("c", newton)
+    ));
+    assert_eq!(parse(&text).unwrap().contacts.len(), 3);
     let mixed = with(&format!(
         "{}{}",
         pair("a", &format!("force = [0, -1]\n{fixed}")),

@@ -1,9 +1,9 @@
 //! Force control (`contact.force`, docs/obstacles.md "Force control"): the approach δ is an
 //! unknown of the active-set iteration. Prescribing the force that a displacement-controlled
 //! run reports gives back its motion and its solution (1, 2, 3 ranks, both presets; also with
-//! Tresca friction and with Coulomb friction by the fixed point); a ramped force from a gap
-//! touches first and ends where the static solve does; bad input is refused with the key named
-//! and exit code 2.
+//! Tresca friction and with Coulomb friction, by the generalised Newton and by the fixed
+//! point, also through load steps); a ramped force from a gap touches first and ends where the
+//! static solve does; bad input is refused with the key named and exit code 2.
 
 mod common;
 
@@ -171,18 +171,14 @@ fn a_ramped_force_from_a_gap_touches_first_and_ends_at_the_static_solution() {
     }
 }
 
-/// Force control's bad input: with a motion, with Coulomb friction, a zero force, SNES VI, a force
+/// Force control's bad input: with a motion, a zero force, SNES VI, a force
 /// that pulls the circle away, a body that Dirichlet data leave free. Each is refused with
 /// `contact.force` named, exit code 2 and no summary written.
 #[test]
 fn bad_force_input_is_refused() {
     let f = "contact.force=[0.0, -0.05]";
-    let cases: [(&[&str], &str); 6] = [
+    let cases: [(&[&str], &str); 5] = [
         (&[f, "contact.motion=[0.0, -0.01]"], "instead of the motion"),
-        (
-            &[f, "contact.friction={law=\"coulomb\", mu=0.3}"],
-            "Coulomb friction is not implemented",
-        ),
         (&["contact.force=[0.0, 0.0]"], "is zero"),
         (&[f, "solver.method=\"snesvi\""], "no force control"),
         (&["contact.force=[0.0, 0.05]"], "never reaches the body"),
@@ -207,47 +203,67 @@ fn bad_force_input_is_refused() {
     }
 }
 
+/// The slanted direction of the friction tests, e = (0.3, −1) (not normalised), and the depth
+/// of the displacement-controlled run along it.
+const SLANT: [f64; 2] = [0.3, -1.0];
+const SLANT_DEPTH: f64 = 0.03;
+
+/// |e| and a force along e with |F| = `along`, as a `contact.force` key.
+fn slanted_force_key(along: f64) -> String {
+    let norm = SLANT[0].hypot(SLANT[1]);
+    format!(
+        "contact.force=[{:.17e}, {:.17e}]",
+        along * SLANT[0] / norm,
+        along * SLANT[1] / norm
+    )
+}
+
+/// A run's contact force along e: F·e/|e|.
+fn force_along_slant(s: &Solved) -> f64 {
+    let f = total_force(s);
+    (f[0] * SLANT[0] + f[1] * SLANT[1]) / SLANT[0].hypot(SLANT[1])
+}
+
 /// The circle pressed along the slanted direction e = (0.3, −1) by 0.03 with `friction`: a
-/// displacement-controlled run, then the force it reports along e prescribed instead, on 1
-/// and 2 ranks with the direct and 2 with the iterative preset — each run's approach, u, active
-/// and slip nodes against the motion's (1e-8). Returns the force key, for more runs.
-fn slanted_force_gives_back_the_motion(friction: &str, label: &str) -> String {
-    let e = [0.3f64, -1.0];
-    let norm = e[0].hypot(e[1]);
-    let depth = 0.03;
-    let m = [depth * e[0] / norm, depth * e[1] / norm];
+/// displacement-controlled run, then the force it reports along e prescribed instead, on the
+/// ranks and settings of `runs` — each run's approach, u, active and slip nodes against the
+/// motion's (1e-8; some active nodes slip, some stick), its contact force along e against the
+/// prescribed |F| (1e-9), its Coulomb algorithm the one `friction` names. Returns the force
+/// key and the forced runs.
+fn slanted_force_gives_back_the_motion(
+    friction: &str,
+    label: &str,
+    runs: &[(usize, &[&str])],
+) -> (String, Vec<Solved>) {
+    let norm = SLANT[0].hypot(SLANT[1]);
+    let depth = SLANT_DEPTH;
+    let m = SLANT.map(|x| depth * x / norm);
     let motion = format!("contact.motion=[{:.17e}, {:.17e}]", m[0], m[1]);
     let moved = solve(1, &case(), &[AUTO, friction, &motion]);
     moved.assert_converged("displacement control");
-    let f = total_force(&moved);
-    let along = (f[0] * e[0] + f[1] * e[1]) / norm;
+    let along = force_along_slant(&moved);
     assert!(
         along > 0.0,
-        "the circle pushes the block along its motion: {f:?}"
+        "the circle pushes the block along its motion: {:?}",
+        total_force(&moved)
     );
     // the force's component along e prescribed: |F| = F·e, direction e
-    let fk = format!(
-        "contact.force=[{:.17e}, {:.17e}]",
-        along * e[0] / norm,
-        along * e[1] / norm
-    );
+    let fk = slanted_force_key(along);
     let (slip, active) = (moved.slip_node_ids().len(), moved.active_node_ids().len());
     assert!(slip > 0 && active > slip, "slip {slip} of {active} active");
-    let runs: [(usize, &[&str]); 3] = [
-        (1, &["solver.preset=\"direct\""]),
-        (2, &["solver.preset=\"direct\""]),
-        (2, &["solver.preset=\"iterative\""]),
-    ];
+    let mut out = Vec::new();
     for (np, sets) in runs {
         let mut all = vec![AUTO, friction, fk.as_str()];
         all.extend_from_slice(sets);
-        let forced = solve(np, &case(), &all);
+        let forced = solve(*np, &case(), &all);
         forced.assert_converged(label);
         let delta = forced.f(&["contact", "approach"]);
         let du = forced.u_rel_diff(&moved);
+        let p = force_along_slant(&forced);
         eprintln!(
-            "{label}, {np} ranks {sets:?}: δ = {delta:.17e}, |Δu|/|u| = {du:.2e}, {} steps \
-             (motion: {})",
+            "{label}, {np} ranks {sets:?}: δ = {delta:.17e}, |Δu|/|u| = {du:.2e}, force along \
+             e {:.2e} off, {} steps (motion: {})",
+            (p - along).abs() / along,
             forced.steps(),
             moved.steps()
         );
@@ -256,6 +272,10 @@ fn slanted_force_gives_back_the_motion(friction: &str, label: &str) -> String {
             "{np} ranks, {sets:?}: δ = {delta}"
         );
         assert!(du <= 1e-8, "{np} ranks, {sets:?}: {du}");
+        assert!(
+            (p - along).abs() <= 1e-9 * along,
+            "{np} ranks, {sets:?}: force along e {p} against |F| = {along}"
+        );
         assert_eq!(forced.active_node_ids(), moved.active_node_ids());
         assert_eq!(
             forced.slip_node_ids(),
@@ -264,11 +284,23 @@ fn slanted_force_gives_back_the_motion(friction: &str, label: &str) -> String {
         );
         if friction.contains("coulomb") {
             let rec = get(&forced.summary, &["newton", "coulomb", "algorithm"]);
-            assert_eq!(rec, "fixed-point");
+            let want = if friction.contains("fixed-point") {
+                "fixed-point"
+            } else {
+                "newton"
+            };
+            assert_eq!(rec, want, "{np} ranks, {sets:?}");
         }
+        out.push(forced);
     }
-    fk
+    (fk, out)
 }
+
+const ONE_TWO_ITERATIVE: [(usize, &[&str]); 3] = [
+    (1, &["solver.preset=\"direct\""]),
+    (2, &["solver.preset=\"direct\""]),
+    (2, &["solver.preset=\"iterative\""]),
+];
 
 /// Tresca friction under force control: the circle pressed along a slanted force (its
 /// tangential part drags the stick nodes, the slip nodes slide) — the force that a
@@ -277,27 +309,241 @@ fn slanted_force_gives_back_the_motion(friction: &str, label: &str) -> String {
 #[test]
 fn force_control_with_tresca_friction() {
     let tresca = "contact.friction={law=\"tresca\", threshold=0.02}";
-    slanted_force_gives_back_the_motion(tresca, "force control with Tresca");
+    slanted_force_gives_back_the_motion(tresca, "force control with Tresca", &ONE_TWO_ITERATIVE);
 }
+
+const COULOMB_FIXED_POINT: &str =
+    "contact.friction={law=\"coulomb\", mu=0.3, algorithm=\"fixed-point\"}";
+const COULOMB_NEWTON: &str = "contact.friction={law=\"coulomb\", mu=0.3}";
 
 /// Coulomb friction (μ = 0.3, the fixed point on Tresca thresholds) under force control: the
 /// circle pressed along the slanted direction of the Tresca test — the force that a
 /// displacement-controlled run along that direction reports gives back its approach, u and
 /// the normal and tangential states to 1e-8 (the fixed point's thresholds stop at 1e-9 of the
-/// largest; 1 and 2 ranks, direct and iterative presets). The generalised Newton
-/// (the default algorithm) is refused under force control, naming `contact.friction`.
+/// largest; 1 and 2 ranks, direct and iterative presets).
 #[test]
 fn force_control_with_coulomb_fixed_point() {
-    let coulomb = "contact.friction={law=\"coulomb\", mu=0.3, algorithm=\"fixed-point\"}";
-    let fk = slanted_force_gives_back_the_motion(coulomb, "force control with Coulomb");
-    let tmp = tempfile::tempdir().expect("tempdir");
-    let out = tmp.path().join("out");
-    let newton = "contact.friction={law=\"coulomb\", mu=0.3}";
-    let run = run_solver(1, &case(), &[newton, fk.as_str()], &out);
-    let text = run.output();
-    assert_eq!(run.code, Some(2), "{text}");
-    assert!(
-        text.contains("contact.friction") && text.contains("fixed-point"),
-        "{text}"
+    slanted_force_gives_back_the_motion(
+        COULOMB_FIXED_POINT,
+        "force control with Coulomb (fixed point)",
+        &ONE_TWO_ITERATIVE,
     );
+}
+
+/// Coulomb friction (μ = 0.3) by the generalised Newton (the default algorithm) under force
+/// control: the force that the slanted displacement-controlled run reports gives back its
+/// approach, u, the active and the slip nodes (some slip, some stick) to 1e-8 and the force
+/// along e to 1e-9 — on 1, 2 and 3 ranks from the frictionless force-controlled solution
+/// (direct preset), on 2 from the touching nodes (`solver.reuse = "never"`: no condensed
+/// start) and with the iterative preset; and the fixed point under the same force finds the
+/// same δ (1e-8) in more linear solves.
+#[test]
+fn force_control_with_coulomb_newton() {
+    let runs: [(usize, &[&str]); 5] = [
+        (1, &["solver.preset=\"direct\""]),
+        (2, &["solver.preset=\"direct\""]),
+        (3, &["solver.preset=\"direct\""]),
+        (2, &["solver.preset=\"direct\"", "solver.reuse=\"never\""]),
+        (2, &["solver.preset=\"iterative\""]),
+    ];
+    let label = "force control with Coulomb (generalised Newton)";
+    let (fk, newton) = slanted_force_gives_back_the_motion(COULOMB_NEWTON, label, &runs);
+    assert!(
+        newton[0].run.output().contains("the plain path"),
+        "the condensed Coulomb iteration is not used under force control:\n{}",
+        newton[0].run.output()
+    );
+    // the plain path's first step starts from the frictionless solution at its approach,
+    // every active node sticking (its rows read the gaps and references at that approach)
+    let history = get(&newton[0].summary, &["newton", "history"]);
+    let first = history
+        .as_array()
+        .expect("history")
+        .iter()
+        .find(|h| h.get("states").is_some())
+        .expect("a friction step");
+    let states = floats(&first["states"]);
+    assert!(
+        states[3] == 0.0 && states[2] == first["active"].as_f64().expect("active"),
+        "the first Coulomb step: states {states:?}, {first}"
+    );
+    let fixed = solve(1, &case(), &[AUTO, COULOMB_FIXED_POINT, &fk]);
+    fixed.assert_converged("force control with Coulomb (fixed point)");
+    let (a, b) = (
+        newton[0].f(&["contact", "approach"]),
+        fixed.f(&["contact", "approach"]),
+    );
+    let du = newton[0].u_rel_diff(&fixed);
+    eprintln!(
+        "generalised Newton {} steps, fixed point {} steps: δ {a:.17e} against {b:.17e} \
+         ({:.2e} relative), |Δu|/|u| = {du:.2e}",
+        newton[0].steps(),
+        fixed.steps(),
+        (a - b).abs() / b
+    );
+    assert!((a - b).abs() <= 1e-8 * b, "δ: Newton {a}, fixed point {b}");
+    assert!(du <= 1e-8, "|Δu|/|u| = {du}");
+    assert_eq!(newton[0].slip_node_ids(), fixed.slip_node_ids());
+}
+
+/// 3D: Coulomb's generalised Newton (μ = 0.3) under force control, the sphere of
+/// tests/cases/sphere3d.toml pressed along e = m/|m|, m = (0.03, 0.01, −0.1) (the drag has
+/// components along both tangents of the frames): the force along e that the motion m reports
+/// gives back δ = |m|, u, the active and the slip nodes (1e-8; some slip, some stick) and the
+/// force along e (1e-9), on 1 and 2 ranks.
+#[test]
+fn force_control_with_coulomb_newton_in_3d() {
+    let case = repo("tests/cases/sphere3d.toml");
+    let m = [0.03f64, 0.01, -0.1];
+    let norm = m.iter().map(|x| x * x).sum::<f64>().sqrt();
+    let motion = format!("contact.motion=[{}, {}, {}]", m[0], m[1], m[2]);
+    let moved = solve(1, &case, &[AUTO, COULOMB_NEWTON, &motion]);
+    moved.assert_converged("displacement control");
+    let along_e = |s: &Solved| {
+        let f = total_force(s);
+        (0..3).map(|i| f[i] * m[i]).sum::<f64>() / norm
+    };
+    let along = along_e(&moved);
+    let fk = format!(
+        "contact.force=[{:.17e}, {:.17e}, {:.17e}]",
+        along * m[0] / norm,
+        along * m[1] / norm,
+        along * m[2] / norm
+    );
+    let (slip, active) = (moved.slip_node_ids().len(), moved.active_node_ids().len());
+    assert!(slip > 0 && active > slip, "slip {slip} of {active} active");
+    for np in [1, 2] {
+        let forced = solve(np, &case, &[AUTO, COULOMB_NEWTON, &fk]);
+        forced.assert_converged("force control with Coulomb in 3D");
+        let delta = forced.f(&["contact", "approach"]);
+        let du = forced.u_rel_diff(&moved);
+        let p = along_e(&forced);
+        eprintln!(
+            "3D, {np} ranks: δ = {delta:.17e} for {norm:.17e}, |Δu|/|u| = {du:.2e}, {} steps \
+             (motion: {})",
+            forced.steps(),
+            moved.steps()
+        );
+        assert!(
+            (delta - norm).abs() <= 1e-8 * norm,
+            "{np} ranks: δ = {delta}"
+        );
+        assert!(du <= 1e-8, "{np} ranks: |Δu|/|u| = {du}");
+        assert!(
+            (p - along).abs() <= 1e-9 * along,
+            "{np} ranks: {p} against {along}"
+        );
+        assert_eq!(forced.active_node_ids(), moved.active_node_ids());
+        assert_eq!(forced.slip_node_ids(), moved.slip_node_ids(), "{np} ranks");
+    }
+}
+
+/// Coulomb's generalised Newton under force control through three load steps: the slanted
+/// force ramped (each step's force along e is t·|F|, 1e-9), each step warm-started from the
+/// previous one's approach and states; every step's approach and u agree with the fixed
+/// point's through the same steps (the same incremental problems, 1e-8), on 1 and 2 ranks;
+/// and displacement control through the approaches found (`load.factors` = δ_i/δ_3 of the
+/// motion δ_3 e) takes the forces t·|F| (1e-9) and gives every step's u (1e-8).
+#[test]
+fn force_control_with_coulomb_newton_in_load_steps() {
+    let along = 0.047;
+    let fk = slanted_force_key(along);
+    let fixed = solve(
+        1,
+        &case(),
+        &[AUTO, COULOMB_FIXED_POINT, &fk, "load.steps=3"],
+    );
+    fixed.assert_converged("Coulomb fixed point in load steps");
+    let hf = read_csv(&fixed.dir.join("history.csv"));
+    assert_eq!(hf.len(), 3);
+    for np in [1, 2] {
+        let newton = solve(np, &case(), &[AUTO, COULOMB_NEWTON, &fk, "load.steps=3"]);
+        newton.assert_converged("Coulomb generalised Newton in load steps");
+        let (slip, active) = (newton.slip_node_ids().len(), newton.active_node_ids().len());
+        assert!(slip > 0 && active > slip, "slip {slip} of {active} active");
+        let h = read_csv(&newton.dir.join("history.csv"));
+        assert_eq!(h.len(), 3);
+        let norm = SLANT[0].hypot(SLANT[1]);
+        for (i, (r, q)) in h.iter().zip(&hf).enumerate() {
+            let t = (i + 1) as f64 / 3.0;
+            let p = (r.f("force_x") * SLANT[0] + r.f("force_y") * SLANT[1]) / norm;
+            assert!(
+                (p - t * along).abs() <= 1e-9 * t * along,
+                "{np} ranks, step {}: force along e {p}",
+                i + 1
+            );
+            let d = [r.f("obstacle_x"), r.f("obstacle_y")];
+            let dq = [q.f("obstacle_x"), q.f("obstacle_y")];
+            let (delta, delta_fixed) = (d[0].hypot(d[1]), dq[0].hypot(dq[1]));
+            let (u, uq) = (
+                step_displacement(&newton.dir, i + 1),
+                step_displacement(&fixed.dir, i + 1),
+            );
+            let (diff, scale) = max_diff(&u, &uq);
+            eprintln!(
+                "{np} ranks, step {}: δ = {delta:.17e} (fixed point {delta_fixed:.17e}), \
+                 |Δu|/|u| = {:.2e}",
+                i + 1,
+                diff / scale
+            );
+            assert!(
+                (delta - delta_fixed).abs() <= 1e-8 * delta_fixed,
+                "{np} ranks, step {}: δ = {delta}, fixed point {delta_fixed}",
+                i + 1
+            );
+            assert!(scale > 0.0 && diff <= 1e-8 * scale, "step {}", i + 1);
+        }
+        assert_eq!(newton.slip_node_ids(), fixed.slip_node_ids(), "{np} ranks");
+        eprintln!(
+            "{np} ranks: generalised Newton {} steps, fixed point {} steps (3 load steps)",
+            newton.steps(),
+            fixed.steps()
+        );
+        if np == 1 {
+            motion_through_the_approaches(&newton, &h, along);
+        }
+    }
+}
+
+/// Displacement control through the approaches δ_i of the force-controlled load steps `h`
+/// (their history.csv) of `forced`: each step's force along e is t_i·`along` (1e-9) and its u
+/// the force-controlled one (1e-8).
+fn motion_through_the_approaches(forced: &Solved, h: &[Row], along: f64) {
+    let norm = SLANT[0].hypot(SLANT[1]);
+    let delta: Vec<f64> = h
+        .iter()
+        .map(|r| (r.f("obstacle_x") * SLANT[0] + r.f("obstacle_y") * SLANT[1]) / norm)
+        .collect();
+    let last = delta[delta.len() - 1];
+    let factors: Vec<String> = delta.iter().map(|d| format!("{:.17e}", d / last)).collect();
+    let factors = format!("load.factors=[{}]", factors.join(", "));
+    let m = SLANT.map(|x| last * x / norm);
+    let motion = format!("contact.motion=[{:.17e}, {:.17e}]", m[0], m[1]);
+    let moved = solve(1, &case(), &[AUTO, COULOMB_NEWTON, &motion, &factors]);
+    moved.assert_converged("displacement control through the approaches");
+    let hm = read_csv(&moved.dir.join("history.csv"));
+    assert_eq!(hm.len(), h.len());
+    for (i, r) in hm.iter().enumerate() {
+        let t = (i + 1) as f64 / h.len() as f64;
+        let p = (r.f("force_x") * SLANT[0] + r.f("force_y") * SLANT[1]) / norm;
+        let (u, um) = (
+            step_displacement(&forced.dir, i + 1),
+            step_displacement(&moved.dir, i + 1),
+        );
+        let (diff, scale) = max_diff(&u, &um);
+        eprintln!(
+            "motion through the approaches, step {}: force along e {:.2e} off, |Δu|/|u| = {:.2e}",
+            i + 1,
+            (p - t * along).abs() / (t * along),
+            diff / scale
+        );
+        assert!(
+            (p - t * along).abs() <= 1e-9 * t * along,
+            "step {}: force along e {p} against {}",
+            i + 1,
+            t * along
+        );
+        assert!(scale > 0.0 && diff <= 1e-8 * scale, "step {}", i + 1);
+    }
+    assert_eq!(moved.slip_node_ids(), forced.slip_node_ids());
 }

@@ -348,9 +348,37 @@ fn force_on_two_pairs_through_load_steps() {
 /// and the slip nodes (Algorithm 2 on the plain path: 1 rank direct, 2 ranks iterative).
 #[test]
 fn tresca_force_on_two_pairs_returns_their_motions() {
+    let tresca = "friction = { law = \"tresca\", threshold = 0.03 }\n";
+    let runs: [(usize, &[&str]); 2] = [
+        (1, &["solver.preset=\"direct\""]),
+        (2, &["solver.preset=\"iterative\""]),
+    ];
+    friction_force_on_two_pairs(tresca, &runs);
+}
+
+/// Coulomb friction (μ = 0.3, the generalised Newton) on both plates of the held disk, as the
+/// Tresca test: both pairs' forces prescribed give back both motions as approaches (1e-8), u,
+/// the active and the slip nodes — the plain path from the frictionless force-controlled
+/// solution on 1, 2 and 3 ranks (direct preset), and the iterative preset on 2.
+#[test]
+fn coulomb_force_on_two_pairs_returns_their_motions() {
+    let coulomb = "friction = { law = \"coulomb\", mu = 0.3 }\n";
+    let runs: [(usize, &[&str]); 4] = [
+        (1, &["solver.preset=\"direct\""]),
+        (2, &["solver.preset=\"direct\""]),
+        (3, &["solver.preset=\"direct\""]),
+        (2, &["solver.preset=\"iterative\""]),
+    ];
+    friction_force_on_two_pairs(coulomb, &runs);
+}
+
+/// Both plates of the held disk with `friction`, the top plate moved along a slanted direction,
+/// then each pair's force component along its motion's direction prescribed on the `runs`:
+/// the motions as approaches (1e-8), u (1e-8), the active and the slip nodes (some slip, some
+/// stick).
+fn friction_force_on_two_pairs(friction: &str, runs: &[(usize, &[&str])]) {
     let tmp = tempfile::tempdir().expect("tempdir");
     let half = disk_mesh(tmp.path(), false);
-    let tresca = "friction = { law = \"tresca\", threshold = 0.03 }\n";
     let motions = [[0.0, LIFT], [0.004, -PRESS]];
     let vector = |v: [f64; 2]| format!("[{:.17e}, {:.17e}]", v[0], v[1]);
     let moved = solve(
@@ -360,23 +388,22 @@ fn tresca_force_on_two_pairs_returns_their_motions() {
             "moved.toml",
             &half,
             &held_disk(
-                &format!("motion = {}\n{tresca}", vector(motions[0])),
-                &format!("motion = {}\n{tresca}", vector(motions[1])),
+                &format!("motion = {}\n{friction}", vector(motions[0])),
+                &format!("motion = {}\n{friction}", vector(motions[1])),
             ),
         ),
         &[],
     );
-    moved.assert_converged("motions with Tresca");
+    moved.assert_converged("motions with friction");
     // the force along each motion's direction e_j, prescribed along e_j
-    let mut length = [0.0; 2];
-    let forces = [0, 1].map(|i| {
-        let m = motions[i];
-        length[i] = m[0].hypot(m[1]);
-        let e = [m[0] / length[i], m[1] / length[i]];
-        let f = pair_force(&moved, i);
-        let along = f[0] * e[0] + f[1] * e[1];
-        [along * e[0], along * e[1]]
-    });
+    let length = motions.map(|m| m[0].hypot(m[1]));
+    let dirs = [0, 1].map(|i| motions[i].map(|x| x / length[i]));
+    let along_e = |s: &Solved, i: usize| {
+        let f = pair_force(s, i);
+        f[0] * dirs[i][0] + f[1] * dirs[i][1]
+    };
+    let along = [0, 1].map(|i| along_e(&moved, i));
+    let forces = [0, 1].map(|i| dirs[i].map(|x| along[i] * x));
     let (slip, active) = (moved.slip_node_ids().len(), moved.active_node_ids().len());
     eprintln!("motions: slip {slip} of {active} active");
     assert!(slip > 0 && active > slip, "slip {slip} of {active} active");
@@ -385,17 +412,13 @@ fn tresca_force_on_two_pairs_returns_their_motions() {
         "forced.toml",
         &half,
         &held_disk(
-            &format!("force = {}\n{tresca}", vector(forces[0])),
-            &format!("force = {}\n{tresca}", vector(forces[1])),
+            &format!("force = {}\n{friction}", vector(forces[0])),
+            &format!("force = {}\n{friction}", vector(forces[1])),
         ),
     );
-    let runs: [(usize, &[&str]); 2] = [
-        (1, &["solver.preset=\"direct\""]),
-        (2, &["solver.preset=\"iterative\""]),
-    ];
-    for (np, sets) in runs {
+    for &(np, sets) in runs {
         let s = solve(np, &forced, sets);
-        s.assert_converged("force control on two pairs with Tresca");
+        s.assert_converged("force control on two pairs with friction");
         let delta = [0, 1].map(|i| pair(&s, i)["approach"].as_f64().expect("approach"));
         eprintln!(
             "{np} ranks {sets:?}: {} steps (motions: {}), δ = {delta:?} (|m| = {length:?})",
@@ -406,6 +429,13 @@ fn tresca_force_on_two_pairs_returns_their_motions() {
             assert!(
                 (d - want).abs() <= 1e-8 * want,
                 "{np} {sets:?}: δ = {delta:?}"
+            );
+        }
+        for (i, want) in along.iter().enumerate() {
+            let p = along_e(&s, i);
+            assert!(
+                (p - want).abs() <= 1e-9 * want.abs(),
+                "{np} {sets:?}: pair {i}'s force along its e {p}, prescribed {want}"
             );
         }
         assert!(s.u_rel_diff(&moved) <= 1e-8, "{np} {sets:?}");
@@ -926,7 +956,8 @@ fn force_on_a_body_held_only_by_its_pairs() {
 }
 
 /// The floating disk with friction `law` on both plates, the top plate under a force: the plain
-/// path (Algorithm 2; the fixed point for Coulomb) finds an approach δ, and the top plate's
+/// path (Algorithm 2; for Coulomb the fixed point or the generalised Newton) finds an approach
+/// δ, and the top plate's
 /// motion by δ gives the same u (within `tol` of max|u|), the same force on the top plate, the
 /// same active and slip nodes — on each run's ranks and settings (both runs), `tol` its own.
 /// Returns the slip and the active nodes of the motion's run.
@@ -1008,6 +1039,22 @@ fn tresca_force_on_a_floating_disk() {
 fn coulomb_fixed_point_force_on_a_floating_disk() {
     let law = "{ law = \"coulomb\", mu = 0.3, algorithm = \"fixed-point\" }";
     let runs: [(usize, &[&str], f64); 2] = [(1, &[], 1e-8), (2, &[], 1e-8)];
+    let (slip, active) = friction_on_a_floating_disk(law, &runs);
+    assert!(slip > 0 && active > slip, "slip {slip} of {active} active");
+}
+
+/// Coulomb friction by the generalised Newton (μ = 0.3) on both plates of the floating disk
+/// under force control of the top plate (its approach coupled to the disk's free mode): the δ
+/// found, prescribed as the top plate's motion, gives the same u, force, active and slip nodes
+/// (1e-8), on 1 and 2 ranks and on the iterative preset.
+#[test]
+fn coulomb_newton_force_on_a_floating_disk() {
+    let law = "{ law = \"coulomb\", mu = 0.3 }";
+    let runs: [(usize, &[&str], f64); 3] = [
+        (1, &[], 1e-8),
+        (2, &[], 1e-8),
+        (2, &["solver.preset=\"iterative\""], 1e-7),
+    ];
     let (slip, active) = friction_on_a_floating_disk(law, &runs);
     assert!(slip > 0 && active > slip, "slip {slip} of {active} active");
 }

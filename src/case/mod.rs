@@ -516,7 +516,7 @@ pub struct ContactSection {
     pub motion: Option<Motion>,
     /// `contact.force`: force control (docs/obstacles.md, "Force control"): the obstacle moves
     /// along F/|F| by the unknown approach δ until the contact force along F/|F| is |F|
-    /// (frictionless or Tresca; never together with `motion`). Scaled with `[load]` as a motion.
+    /// (any friction law; never together with `motion`). Scaled with `[load]` as a motion.
     pub force: Option<Motion>,
     pub friction: Friction,
     pub rigid_modes: RigidModeHandling,
@@ -1508,8 +1508,8 @@ impl Reader<'_> {
     }
 
     /// The contact pairs: one `[contact]` table or an array `[[contact]]`, checked against each
-    /// other (distinct groups, one friction law the solver can combine, force control without
-    /// Coulomb friction, one rigid-mode handling).
+    /// other (distinct groups, one friction law the solver can combine, one rigid-mode
+    /// handling).
     fn contacts(&self, top: &Tab) -> Res<Vec<ContactSection>> {
         let Some((k, n)) = top.get("contact") else {
             return Ok(Vec::new());
@@ -1567,32 +1567,6 @@ impl Reader<'_> {
                     format!(
                         "\"{}\" is already the group of {}: a contact node belongs to one pair only",
                         b.group, a.key
-                    ),
-                ));
-            }
-        }
-        if let Some(f) = pairs.iter().position(|p| p.force.is_some()) {
-            // Coulomb friction under force control: the fixed point on Tresca thresholds only
-            let newton = |p: &ContactSection| {
-                matches!(
-                    p.friction,
-                    Friction::Coulomb {
-                        algorithm: CoulombAlgorithm::Newton,
-                        ..
-                    }
-                )
-            };
-            if let Some(j) = pairs.iter().position(newton) {
-                let (key, loc) = at(j, "friction");
-                return Err(self.err(
-                    &key,
-                    loc,
-                    format!(
-                        "force control ({}.force) with Coulomb friction is not implemented for \
-                         the generalised Newton (algorithm = \"newton\", the default): give \
-                         algorithm = \"fixed-point\" (Tresca solves under force control), or \
-                         make the pairs frictionless or Tresca",
-                        pairs[f].key
                     ),
                 ));
             }
@@ -1672,23 +1646,9 @@ impl Reader<'_> {
             Some((fk, f)) => {
                 let force = self.motion(&fk, f, "the force pressing the obstacle onto the body")?;
                 let why = if motion.is_some() {
-                    Some("prescribes the force instead of the motion: give one of them".into())
-                } else if matches!(
-                    friction,
-                    Friction::Coulomb {
-                        algorithm: CoulombAlgorithm::Newton,
-                        ..
-                    }
-                ) {
-                    Some(format!(
-                        "(force control) with Coulomb friction is not implemented for the \
-                         generalised Newton (algorithm = \"newton\", the default): give \
-                         algorithm = \"fixed-point\" in {} (Tresca solves under force \
-                         control), or make the pair frictionless or Tresca",
-                        join_key(k, "friction")
-                    ))
+                    Some("prescribes the force instead of the motion: give one of them")
                 } else if force.value.iter().all(|&x| x == 0.0) {
-                    Some("is zero: force control needs a direction (a nonzero vector)".into())
+                    Some("is zero: force control needs a direction (a nonzero vector)")
                 } else {
                     None
                 };

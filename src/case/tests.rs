@@ -1945,23 +1945,6 @@ fn reject_bad_contact_pairs() {
         ),
         (
             format!(
-                "{}{}{}",
-                pair("a", "force = [0, -1]\n"),
-                pair("b", "force = [0, 2]\n"),
-                pair("c", coulomb)
-            ),
-            "contact[2].friction",
-            "Coulomb friction is not implemented",
-            Some("friction"),
-        ),
-        (
-            format!("{}{}", pair("a", coulomb), pair("b", "force = [0, -2]\n")),
-            "contact[0].friction",
-            "Coulomb friction is not implemented",
-            Some("friction"),
-        ),
-        (
-            format!(
                 "{}{}",
                 pair("a", coulomb),
                 pair("b", "friction = { law = \"tresca\", threshold = 1 }\n")
@@ -2051,11 +2034,11 @@ fn force_control_on_several_pairs() {
         .is_ok());
 }
 
-/// Force control with Coulomb friction: the fixed point (Tresca solves under force control) is
-/// accepted, on one pair and next to other force-controlled pairs; the generalised Newton (the
-/// default algorithm) is refused, naming the pair's friction.
+/// Force control with Coulomb friction: the fixed point (Tresca solves under force control)
+/// and the generalised Newton (the default algorithm) are both accepted, on one pair and next
+/// to other force-controlled pairs; pairs that mix the two algorithms are still refused.
 #[test]
-fn force_control_with_coulomb_needs_the_fixed_point() {
+fn force_control_with_coulomb_takes_either_algorithm() {
     let fixed = "friction = { law = \"coulomb\", mu = 0.3, algorithm = \"fixed-point\" }\n";
     let one = with(&format!(
         "[contact]\ngroup = \"a\"\nobstacle = {{ type = \"plane\", point = [0, 0], normal = [0, 1] }}\nforce = [0, -1]\n{fixed}"
@@ -2068,12 +2051,14 @@ fn force_control_with_coulomb_needs_the_fixed_point() {
             ..
         }
     ));
-    let e = parse(&one.replace(", algorithm = \"fixed-point\"", "")).unwrap_err();
-    assert_eq!(e.key.as_deref(), Some("contact.force"), "{e}");
-    assert!(
-        e.message.contains("fixed-point") && e.message.contains("contact.friction"),
-        "{e}"
-    );
+    let c = parse(&one.replace(", algorithm = \"fixed-point\"", "")).unwrap();
+    assert!(matches!(
+        c.contacts[0].friction,
+        Friction::Coulomb {
+            algorithm: CoulombAlgorithm::Newton,
+            ..
+        }
+    ));
     let pair = |group: &str, extra: &str| {
         format!(
             "[[contact]]\ngroup = \"{group}\"\nobstacle = {{ type = \"plane\", point = [0, 0], normal = [0, 1] }}\n{extra}"
@@ -2091,9 +2076,23 @@ fn force_control_with_coulomb_needs_the_fixed_point() {
         pair("a", &format!("motion = [0, 1]\n{newton}")),
         pair("b", &format!("force = [0, 2]\n{newton}"))
     ));
-    let e = parse(&text).unwrap_err();
-    assert_eq!(e.key.as_deref(), Some("contact[1].force"), "{e}");
-    assert!(e.message.contains("fixed-point"), "{e}");
+    assert_eq!(parse(&text).unwrap().contacts.len(), 2);
+    // a Coulomb pair (the generalised Newton) next to frictionless force-controlled pairs
+    let text = with(&format!(
+        "{}{}{}",
+        pair("a", "force = [0, -1]\n"),
+        pair("b", "force = [0, 2]\n"),
+        pair("c", newton)
+    ));
+    assert_eq!(parse(&text).unwrap().contacts.len(), 3);
+    let mixed = with(&format!(
+        "{}{}",
+        pair("a", &format!("force = [0, -1]\n{fixed}")),
+        pair("b", &format!("force = [0, 2]\n{newton}"))
+    ));
+    let e = parse(&mixed).unwrap_err();
+    assert_eq!(e.key.as_deref(), Some("contact[1].friction"), "{e}");
+    assert!(e.message.contains("same algorithm"), "{e}");
 }
 
 #[test]

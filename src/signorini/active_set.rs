@@ -319,8 +319,9 @@ impl ActiveSet {
     }
 
     /// The set of a force-control lift (force.rs): the same rows with the slip rows'
-    /// constants dropped (−λ_τ + L (u_τ − u_ref) = 0: the lift has no loads, its u_ref is the
-    /// obstacle's tangential motion per unit approach). Tresca rows only (q = 0).
+    /// constants dropped (Tresca −λ_τ + L (u_τ − u_ref) = 0, Coulomb (F6)
+    /// −λ_τ + L (u_τ − u_ref) − q λ_n = 0 with its coupling q kept: the lift has no loads, its
+    /// u_ref is the obstacle's tangential motion per unit approach).
     pub fn lift(&self) -> ActiveSet {
         let mut s = self.clone();
         if let Some(t) = s.tangential.as_mut() {

@@ -18,8 +18,13 @@
 //! slip row −λ_τ + L (u_τ − u_ref) = r of the step is affine in δ alike (the lift keeps L,
 //! drops r: [`ActiveSet::lift`]); the slip directions are the step's, so δ settles with the
 //! sets. Coulomb friction by the fixed point is a sequence of such Tresca solves (mod.rs,
-//! `fixed_point`); Coulomb's generalised Newton is refused under force control by the case
-//! reader.
+//! `fixed_point`). Coulomb's generalised Newton: a step's rows are affine in δ alike — a stick
+//! row u_τ' = u_ref(δ), a slip row (F6) −λ_τ' + L (u_τ' − u_ref(δ)) − q λ_n' = r_C, the
+//! normal rows u_n' = −g(δ) — so the lift keeps L and q, drops r_C, and solves with the step's
+//! (nonsymmetric) Coulomb matrix; the bordered step is then the exact Newton step of the
+//! system with δ (docs/obstacles.md, "With Coulomb friction"). The condensed Coulomb iteration
+//! has no δ: under force control the plain path starts from the frictionless
+//! force-controlled solution (mod.rs, `coulomb_start`).
 //!
 //! Several force-controlled pairs j = 1..k: each has its own δ_j along e_j, moving only its
 //! obstacle (a node belongs to one pair: g_k = g0_k − δ_j w_k with w_k = n_k·e_j of its pair),
@@ -93,6 +98,26 @@ impl ForceControl {
             0.0
         }
     }
+}
+
+/// The force controls `fcs` starting from the approaches `deltas` (in pair order; a missing
+/// one keeps its start). Pure.
+pub fn starting_at(fcs: &[ForceControl], deltas: &[f64]) -> Vec<ForceControl> {
+    let mut out = fcs.to_vec();
+    for (fc, &d) in out.iter_mut().zip(deltas) {
+        fc.start = d;
+    }
+    out
+}
+
+/// `b` with the obstacles of `fcs` placed at their starts ([`Approach::place`]); `b` itself
+/// without force control. Local.
+pub fn placed(b: &ContactBoundary, fcs: &[ForceControl]) -> ContactBoundary {
+    let mut out = b.clone();
+    if !fcs.is_empty() {
+        Approach::new(b, fcs).place(&mut out);
+    }
+    out
 }
 
 /// One force-controlled pair's approach in the iteration.

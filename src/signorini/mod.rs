@@ -574,8 +574,14 @@ fn run_method(
                             nodes: &first.nodes,
                             u_local: &u,
                         };
+                        // under force control from the start's approaches
+                        let force = force::starting_at(ns.force, &first.approach);
+                        let ns = NewtonSettings {
+                            force: &force,
+                            ..*ns
+                        };
                         let mut nr =
-                            newton::semismooth_newton(ctx, problem, &mut reduced, ns, Some(&w))?;
+                            newton::semismooth_newton(ctx, problem, &mut reduced, &ns, Some(&w))?;
                         // the start's steps first in the record (and their factorisations)
                         after(first.history, &mut nr);
                         nr
@@ -866,6 +872,9 @@ enum Begin {
 /// find a frictionless set (e.g. a moment that only friction holds tips the frictionless
 /// body). A load step (`warm`) tries the condensed iteration alone (the frictionless set from
 /// the warm one; references u_τ^ref of the previous step) and otherwise keeps its warm start.
+/// Under force control (the dense Coulomb iteration has no approach unknown) the start is the
+/// frictionless force-controlled solution, every active node sticking, at its approaches (the
+/// `approach` of the returned start), and a load step keeps its warm start.
 /// Returns the beginning and the condensed path's record. Collective.
 fn coulomb_start(
     ctx: &Ctx,
@@ -904,14 +913,28 @@ fn coulomb_start(
         );
         return Ok((Begin::Touching, None));
     }
+    let forced = !ns.force.is_empty();
+    if forced {
+        // the dense Coulomb iteration (coulomb_condensed) has no approach unknown
+        say!(
+            ctx,
+            "coulomb: force control: the plain path (the condensed Coulomb iteration has no \
+             approach unknown)"
+        );
+    }
     if let Some(w) = warm {
+        if forced {
+            return Ok((Begin::Touching, None));
+        }
         return coulomb_load_step(ctx, problem, reduced, (ns, &fl), w);
     }
     let dim = problem.mesh.dim;
     // errors are agreed: every rank takes the same branch
-    let mut tried = condensed::solve_keeping(ctx, problem, reduced, &fl, None, (dim, true));
+    // the Coulomb iteration on the candidates needs every dof of them, force control none
+    let per = if forced { 1 } else { dim };
+    let mut tried = condensed::solve_keeping(ctx, problem, reduced, &fl, None, (per, true));
     if let Ok((condensed::Condensed::Fallback(s), _)) = &tried {
-        if s.factorisations == 0 {
+        if s.factorisations == 0 && per > 1 {
             // too many candidates' dofs for the dense tangential compliance: normal only
             say!(
                 ctx,
@@ -942,7 +965,7 @@ fn coulomb_start(
         "coulomb: the frictionless solution: {} steps, {active} active nodes",
         nr.steps
     );
-    if let Some(mut kept) = kept {
+    if let Some(mut kept) = kept.filter(|_| !forced) {
         let first = std::mem::take(&mut nr.history);
         let joined = |mut r: NewtonResult| {
             after(first.clone(), &mut r);
@@ -969,9 +992,11 @@ fn coulomb_start(
         "coulomb: start from the frictionless solution, every active node sticking"
     );
     let u = nr.u.to_local_vec()?;
+    // under force control the references where the frictionless approaches put the obstacles
+    let placed = force::placed(b, &force::starting_at(ns.force, &nr.approach));
     // every active node starts sticking (Δu_τ = 0, λ_τ = 0): the first Coulomb step gives the
     // all-stick λ_τ, and (3.33) lets slip where |λ_τ| exceeds μ(−λ_n)
-    for (k, r) in b.nodes.iter().zip(nr.nodes.iter_mut()) {
+    for (k, r) in placed.nodes.iter().zip(nr.nodes.iter_mut()) {
         r.u_t = k.u_t_ref;
         r.lambda_t = [0.0; 2];
         r.slip = false;

@@ -355,11 +355,13 @@ impl<'a> Loop<'a> {
         } else {
             auto_start(s.section.init, s.friction(), &free)
         };
+        // a warm start's rows against the obstacles at the start's approaches (force control:
+        // Coulomb's threshold (F1) reads the gaps, the increments the moved references)
         let set = match warm {
             None => ActiveSet::initial(&placed, init, s.law, s.c, mesh.extent(), dim),
             Some(w) => {
-                let scale = threshold_scale(ctx, b, w.nodes, s.law, s.c);
-                ActiveSet::warm(b, w.nodes, s.law, s.c, scale, dim)
+                let scale = threshold_scale(ctx, &placed, w.nodes, s.law, s.c);
+                ActiveSet::warm(&placed, w.nodes, s.law, s.c, scale, dim)
             }
         };
         let summary = set.summarise(ctx, b, free.modes(), dim);

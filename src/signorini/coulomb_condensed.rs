@@ -347,8 +347,8 @@ impl Dense<'_> {
         }
     }
 
-    /// Nested iteration (as the frictionless [`super::dense::Dense::run_nested`]; used in 2D): the dense
-    /// generalised Newton first on coarse subsets of the candidates (`coarsen`, coarsest
+    /// Nested iteration (as the frictionless [`super::dense::Dense::run_nested`]; used in 2D):
+    /// the dense generalised Newton first on coarse subsets of the candidates (`coarsen`, coarsest
     /// first; each subset's problem holds the contact conditions at its nodes only, with the
     /// exact compliance C between them), each level's solution starting the next finer one
     /// through (3.23) and (F5) evaluated at every candidate (λ = 0 off the subset,

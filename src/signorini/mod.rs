@@ -924,6 +924,7 @@ fn coulomb_start(
     }
     if let Some(w) = warm {
         if forced {
+            drop(problem.kept.take()); // no Coulomb step uses a kept factorisation here
             return Ok((Begin::Touching, None));
         }
         return coulomb_load_step(ctx, problem, reduced, (ns, &fl), w);
@@ -943,6 +944,9 @@ fn coulomb_start(
             tried = condensed::solve_keeping(ctx, problem, reduced, &fl, None, (1, true));
         }
     }
+    // a frictionless solve on the normal dofs alone keeps its factorisation for a next load
+    // step, which no Coulomb step can use
+    drop(problem.kept.take());
     let (mut nr, mut summary, kept) = match tried {
         Ok((condensed::Condensed::Solved(nr, s), kept)) => (*nr, s, kept),
         Ok((condensed::Condensed::Fallback(s), _))

@@ -282,8 +282,8 @@ impl Kept {
     /// free modes and f of this step, the candidates' gaps, references and start flags from its
     /// boundary, and d₀ = C r with r MUMPS' condensation of this step's f (one solve phase).
     /// `None` where the factorisation does not hold the step: other pins, a candidate's node
-    /// frame changed (a curved obstacle that moved), or a node of the warm set beyond the
-    /// candidates. Collective (the decisions are taken on all-gathered data: the same on every
+    /// frame changed (a safeguard: motion and force control shift the first-order gaps, not the
+    /// frames), or a node of the warm set beyond the candidates. Collective (the decisions are taken on all-gathered data: the same on every
     /// rank).
     pub(super) fn refresh(
         &mut self,

@@ -644,7 +644,7 @@ pub(super) fn solve(
     };
     let checked = check(ctx, p, reduced, ns, kept, &run, &w)?;
     summary.expansion_seconds = t.elapsed().as_secs_f64();
-    finish(ctx, reduced, (summary, history, n), checked, &run)
+    finish(ctx, reduced, (summary, history, n), checked)
 }
 
 /// The dense generalised Newton on rank 0 (from the warm records of a load step, or the
@@ -756,9 +756,10 @@ struct Checked {
     totals: StepTotals,
     /// The final set leaves a free rigid mode free (the plain path pins it: not unique).
     loose: bool,
-    /// The worst violation of (3.14)/(3.18) relative to the problem's scales
-    /// ([`super::coulomb_certificate_worst`]).
-    certificate: f64,
+    /// Where the dense steps stalled with no state changed above DENSE_RESIDUAL_TOL: the worst
+    /// violation of (3.14)/(3.18) relative to the problem's scales
+    /// ([`super::coulomb_certificate_worst`]); not computed otherwise.
+    certificate: Option<f64>,
 }
 
 /// u = w + R z α from this rank's rows `w`, (3.28) and the set update (3.23)/(F5) with the
@@ -805,7 +806,17 @@ fn check(
     } else {
         false
     };
-    let certificate = super::coulomb_certificate_worst(ctx, p.sys, b, &it.nodes, &u, dim)?;
+    // the same on every rank: the totals are reduced, the run broadcast
+    let judged = totals.changed == 0
+        && run.stalled
+        && totals.residual > DENSE_RESIDUAL_TOL * totals.lambda_norm;
+    let certificate = if judged {
+        Some(super::coulomb_certificate_worst(
+            ctx, p.sys, b, &it.nodes, &u, dim,
+        )?)
+    } else {
+        None
+    };
     Ok(Checked {
         it,
         u,
@@ -823,7 +834,6 @@ fn finish(
     reduced: &ReducedSystem,
     (mut summary, history, n): (CoulombCondensedSummary, Vec<StepInfo>, usize),
     checked: Checked,
-    run: &DenseCoulomb,
 ) -> Result<CoulombCondensed, RunError> {
     let Checked {
         it,
@@ -835,7 +845,7 @@ fn finish(
     // a stalled dense iteration is accepted where its certificates hold to round-off (the
     // bound beyond which the final check warns), as the plain path accepts a stall
     let residual_ok = totals.residual <= DENSE_RESIDUAL_TOL * totals.lambda_norm
-        || (run.stalled && certificate <= CERTIFICATE_ROUND_OFF);
+        || certificate.is_some_and(|c| c <= CERTIFICATE_ROUND_OFF);
     let u_local = u.to_local_vec()?;
     let result = NewtonResult {
         u,
@@ -850,11 +860,9 @@ fn finish(
         approach: Vec::new(),
     };
     if totals.changed == 0 && residual_ok && !loose {
-        let stalled = if totals.residual > DENSE_RESIDUAL_TOL * totals.lambda_norm {
-            format!(" (stalled; the certificates' worst {certificate:.3e} of the problem's scales)")
-        } else {
-            String::new()
-        };
+        let stalled = certificate.map_or(String::new(), |c| {
+            format!(" (stalled; the certificates' worst {c:.3e} of the problem's scales)")
+        });
         say!(
             ctx,
             "coulomb: condensed: {} dense steps on {n} candidates ({:.3} s), expansion and check \
@@ -869,12 +877,12 @@ fn finish(
     }
     let why = if loose {
         "the final set leaves a rigid mode free".to_string()
-    } else if totals.changed == 0 && run.stalled {
+    } else if let Some(c) = certificate {
         format!(
             "the dense steps stalled at |C| = {:.3e} of |λ| = {:.3e} on the expanded u, above \
-             {DENSE_RESIDUAL_TOL:e} of it, the certificates' worst {:.3e} of the problem's \
+             {DENSE_RESIDUAL_TOL:e} of it, the certificates' worst {c:.3e} of the problem's \
              scales: one plain step confirms",
-            totals.residual, totals.lambda_norm, certificate
+            totals.residual, totals.lambda_norm
         )
     } else {
         format!(

@@ -367,9 +367,7 @@ pub fn solve(
     )?;
     if law == Law::Coulomb {
         // The certificate and the output judge Coulomb's law with b_k = μ(−λ_n^k).
-        for (k, r) in b.nodes.iter_mut().zip(&nr.nodes) {
-            k.bound = k.mu * (-r.lambda_n).max(0.0);
-        }
+        coulomb_bounds(&mut b, &nr.nodes);
     }
     let (displacement, approaches) =
         place_at_approaches(&mut b, settings, (&force_control, &nr.approach), friction);
@@ -625,9 +623,7 @@ fn final_state(
         [one] => table.half_width(one, None),
         _ => None,
     };
-    let scales = problem_scales(ctx, sys, &nr.u)?;
-    let kkt = table.kkt(!friction, &scales);
-    let friction_certificate = friction.then(|| table.friction_certificate());
+    let (scales, kkt, friction_certificate) = certificates(ctx, sys, &table, &nr.u, friction)?;
     check_certificates(ctx, &kkt, friction_certificate.as_ref(), &scales)?;
     say!(
         ctx,
@@ -1277,13 +1273,33 @@ pub(super) fn coulomb_certificate_worst(
     dim: usize,
 ) -> Result<f64, RunError> {
     let mut judged = b.clone();
-    for (k, r) in judged.nodes.iter_mut().zip(nodes) {
+    coulomb_bounds(&mut judged, nodes);
+    let table = report::gather(ctx, &judged, nodes, dim);
+    let (scales, kkt, friction) = certificates(ctx, sys, &table, u, true)?;
+    let friction = friction.map_or(0.0, |f| f.worst(&scales));
+    Ok(kkt.worst().max(friction))
+}
+
+/// Coulomb's thresholds b_k = μ(−λ_n^k) (F1) at the state `nodes`, by which the certificates
+/// and the output judge Coulomb's law. Local.
+fn coulomb_bounds(b: &mut ContactBoundary, nodes: &[NodeResult]) {
+    for (k, r) in b.nodes.iter_mut().zip(nodes) {
         k.bound = k.mu * (-r.lambda_n).max(0.0);
     }
-    let table = report::gather(ctx, &judged, nodes, dim);
+}
+
+/// The problem's scales, the KKT certificate of (3.14) and, with friction, the friction
+/// certificate of (3.18) of a gathered contact table at u. Collective (two reductions).
+fn certificates(
+    ctx: &Ctx,
+    sys: &System,
+    table: &report::Table,
+    u: &Vector,
+    friction: bool,
+) -> Result<(Scales, report::Kkt, Option<report::FrictionCertificate>), RunError> {
     let scales = problem_scales(ctx, sys, u)?;
-    let kkt = table.kkt(false, &scales).worst();
-    Ok(kkt.max(table.friction_certificate().worst(&scales)))
+    let kkt = table.kkt(!friction, &scales);
+    Ok((scales, kkt, friction.then(|| table.friction_certificate())))
 }
 
 /// |f|_∞ and |u|_∞ of the whole problem (two reductions); a non-finite u is an error.

@@ -278,46 +278,6 @@ pub(super) struct Kept {
 }
 
 impl Kept {
-    /// A load step on the kept factorisation (K_p is the same matrix in every load step): the
-    /// free modes and f of this step, the candidates' gaps, references and start flags from its
-    /// boundary, and d₀ = C r with r MUMPS' condensation of this step's f (one solve phase).
-    /// `None` where the factorisation does not hold the step: other pins, a candidate's node
-    /// frame changed (a safeguard: motion and force control shift the first-order gaps, not the
-    /// frames), or a node of the warm set beyond the candidates. Collective (the decisions are taken on all-gathered data: the same on every
-    /// rank).
-    pub(super) fn refresh(
-        &mut self,
-        ctx: &Ctx,
-        p: &ContactProblem,
-        reduced: &mut ReducedSystem,
-        s: &NewtonSettings,
-        warm: &WarmStart,
-    ) -> Result<Option<CondensedSummary>, RunError> {
-        let t = Instant::now();
-        let (free, rhs0) = prepare_base(ctx, p, reduced, s)?;
-        let start = start_set(p, s, &free, Some(warm));
-        let cand = Candidates::gather(ctx, p.boundary, &free, &start);
-        let inside = (0..cand.n).all(|i| !cand.start(i) || self.comp.in_s[i]);
-        if !(self.holds(&free, &cand, p.mesh.dim) && inside) {
-            return Ok(None);
-        }
-        let f_root = ctx.gather_to_root(&rhs0);
-        if let Err(why) = self.comp.recondense(ctx, &f_root) {
-            say!(ctx, "newton: condensed: {why}");
-            return Ok(None);
-        }
-        self.active = (0..cand.n).map(|i| cand.start(i)).collect();
-        self.lambda = vec![0.0; cand.n];
-        self.cand = cand;
-        self.f_root = f_root;
-        self.n_local = rhs0.len();
-        self.free = free;
-        let mut summary = CondensedSummary::new(p.boundary.n_global);
-        summary.factorisation_kept = true;
-        summary.record_kept(ctx, &self.comp, t.elapsed().as_secs_f64());
-        Ok(Some(summary))
-    }
-
     /// The kept factorisation holds a step with free modes `free` and candidates `cand`: the
     /// same pins, `per` Schur variables per candidate, and the kept candidates' rows and node
     /// frames (K_p was factorised in them). Local (on all-gathered data).

@@ -1006,8 +1006,9 @@ fn coulomb_start(
 
 /// A load step of Coulomb's generalised Newton (`warm`: the previous step's solution, or its
 /// extrapolation) on the contact unknowns: the previous step's factorisation where it still
-/// holds (`Kept::refresh`; only d₀ is new), else one factorisation with the Schur complement
-/// on every dof of the candidates (the nodes with the smallest gaps and the warm set); the
+/// holds (only d₀ is new; grown by a new one where the warm set reaches beyond its
+/// candidates), else one factorisation with the Schur complement on every dof of the
+/// candidates (the nodes with the smallest gaps and the warm set); the
 /// dense iteration from the warm states (no frictionless steps), the check on every contact
 /// node; if it gives up, the plain path from the warm start. Collective.
 fn coulomb_load_step(
@@ -1018,25 +1019,7 @@ fn coulomb_load_step(
     warm: &WarmStart,
 ) -> Result<(Begin, Option<condensed::CondensedSummary>), RunError> {
     let dim = problem.mesh.dim;
-    if let Some(mut kept) = problem.kept.take() {
-        // the previous step's factorisation, where K_p and the candidates' frames are the same
-        if let Some(mut summary) = kept.refresh(ctx, problem, reduced, fl, warm)? {
-            let solved =
-                coulomb_condensed::solve(ctx, problem, reduced, ns, &mut kept, Some(warm))?;
-            match solved {
-                coulomb_condensed::CoulombCondensed::Solved(r, cs) => {
-                    summary.coulomb = Some(cs);
-                    problem.kept.put(kept);
-                    return Ok((Begin::Solved(*r), Some(summary)));
-                }
-                _ => say!(
-                    ctx,
-                    "coulomb: the previous load step's factorisation did not solve this step; \
-                     a new one"
-                ),
-            }
-        }
-    }
+    // the previous step's factorisation where it holds (condensed::reused), else a new one
     let tried = condensed::solve_keeping(ctx, problem, reduced, fl, Some(warm), (dim, false));
     let (mut summary, mut kept) = match tried {
         Ok((condensed::Condensed::Factorised(s), Some(kept))) => (s, kept),

@@ -129,6 +129,45 @@ fn a_tangential_load_beyond_the_friction_capacity_is_refused_before_newton() {
     s.assert_converged("within the capacity");
 }
 
+/// A full disk (no Dirichlet data) between two plates, the top one under a force along its
+/// normal (N = 0.01 on each plate), with a tangential traction on its free sides whose
+/// resultant is 0.003: refused before Newton where the plates' capacity Σ_j μ_j N_j is
+/// 0.1 × 0.01 + 0.1 × 0.01 (1 and 2 ranks; it used to end in "Newton cycling" after 44 steps);
+/// solved where the top plate's μ is 0.3 (capacity 0.004), so each pair's own μ counts.
+#[test]
+fn a_tangential_load_beyond_the_friction_of_two_plates_is_refused_before_newton() {
+    let tmp = tempfile::tempdir().unwrap();
+    let case = |mu_top: f64| {
+        format!(
+            "[mesh]\nfile = {}\n[material]\nyoung = 1.0\npoisson = 0.3\nmodel = \"plane_strain\"\n\
+             [[neumann]]\ngroup = \"free\"\ntraction = [0.000764, 0.0]\n\
+             [[contact]]\ngroup = \"contact\"\n\
+             obstacle = {{ type = \"plane\", point = [0.0, -1.0], normal = [0.0, 1.0] }}\n\
+             friction = {{ law = \"coulomb\", mu = 0.1 }}\n\
+             [[contact]]\ngroup = \"load\"\n\
+             obstacle = {{ type = \"plane\", point = [0.0, 1.0], normal = [0.0, -1.0] }}\n\
+             friction = {{ law = \"coulomb\", mu = {mu_top} }}\nforce = [0.0, -0.01]\n",
+            toml_path(&repo("cases/hertz/meshes/hertz_L3.msh"))
+        )
+    };
+    let beyond = write_case(&tmp.path().join("beyond.toml"), &case(0.1));
+    for np in [1, 2] {
+        let out = tmp.path().join(format!("out{np}"));
+        let r = run_solver(np, &beyond, &[], &out);
+        r.expect_code(1, "beyond the plates' friction capacity");
+        assert!(
+            r.stderr.contains("no equilibrium") && r.stderr.contains("2.000000e-3"),
+            "{}",
+            r.output()
+        );
+        assert!(!r.stdout.contains("newton   1"), "{}", r.output());
+        assert!(!out.exists());
+    }
+    let within = write_case(&tmp.path().join("within.toml"), &case(0.3));
+    let s = solve(2, &within, &[]);
+    s.assert_converged("within the capacity of the two plates");
+}
+
 #[test]
 fn certificates_are_judged_by_the_problems_scales() {
     // The block lifted off the plane (all contact forces ~1e-17) and the iterative preset

@@ -333,10 +333,11 @@ fn force_control_with_coulomb_fixed_point() {
 /// Coulomb friction (μ = 0.3) by the generalised Newton (the default algorithm) under force
 /// control: the force that the slanted displacement-controlled run reports gives back its
 /// approach, u, the active and the slip nodes (some slip, some stick) to 1e-8 and the force
-/// along e to 1e-9 — on 1, 2 and 3 ranks from the frictionless force-controlled solution
-/// (direct preset), on 2 from the touching nodes (`solver.reuse = "never"`: no condensed
-/// start) and with the iterative preset; and the fixed point under the same force finds the
-/// same δ (1e-8) in more linear solves.
+/// along e to 1e-9 — on 1, 2 and 3 ranks on the contact unknowns (direct preset: the
+/// frictionless force-controlled solution, then the dense generalised Newton with δ as one
+/// more unknown, one factorisation), on 2 on the plain path from the touching nodes
+/// (`solver.reuse = "never"`) and with the iterative preset; and the fixed point under the
+/// same force finds the same δ (1e-8) in more linear solves.
 #[test]
 fn force_control_with_coulomb_newton() {
     let runs: [(usize, &[&str]); 5] = [
@@ -348,25 +349,23 @@ fn force_control_with_coulomb_newton() {
     ];
     let label = "force control with Coulomb (generalised Newton)";
     let (fk, newton) = slanted_force_gives_back_the_motion(COULOMB_NEWTON, label, &runs);
-    assert!(
-        newton[0].run.output().contains("the plain path"),
-        "the condensed Coulomb iteration is not used under force control:\n{}",
-        newton[0].run.output()
-    );
-    // the plain path's first step starts from the frictionless solution at its approach,
-    // every active node sticking (its rows read the gaps and references at that approach)
-    let history = get(&newton[0].summary, &["newton", "history"]);
-    let first = history
-        .as_array()
-        .expect("history")
-        .iter()
-        .find(|h| h.get("states").is_some())
-        .expect("a friction step");
-    let states = floats(&first["states"]);
-    assert!(
-        states[3] == 0.0 && states[2] == first["active"].as_f64().expect("active"),
-        "the first Coulomb step: states {states:?}, {first}"
-    );
+    // the direct preset solves on the contact unknowns with the approach as one more
+    // unknown: one factorisation, the dense steps' history (1, 2 and 3 ranks)
+    for (np, s) in newton.iter().enumerate().take(3) {
+        let cs = &s.summary["newton"]["condensed"];
+        assert_eq!(
+            cs["coulomb"]["outcome"],
+            "condensed",
+            "{} rank(s): {cs}",
+            np + 1
+        );
+        assert_eq!(
+            s.f(&["newton", "factorisations"]),
+            1.0,
+            "{} rank(s)",
+            np + 1
+        );
+    }
     let fixed = solve(1, &case(), &[AUTO, COULOMB_FIXED_POINT, &fk]);
     fixed.assert_converged("force control with Coulomb (fixed point)");
     let (a, b) = (
@@ -441,8 +440,9 @@ fn force_control_with_coulomb_newton_in_3d() {
 /// Coulomb's generalised Newton under force control through three load steps: the slanted
 /// force ramped (each step's force along e is t·|F|, 1e-9), each step warm-started from the
 /// previous one's approach and states; every step's approach and u agree with the fixed
-/// point's through the same steps (the same incremental problems, 1e-8), on 1 and 2 ranks;
-/// and displacement control through the approaches found (`load.factors` = δ_i/δ_3 of the
+/// point's through the same steps (the same incremental problems, 1e-8), on 1 and 2 ranks,
+/// the steps after the first on the first one's factorisation (the approach an unknown of the
+/// dense iteration); and displacement control through the approaches found (`load.factors` = δ_i/δ_3 of the
 /// motion δ_3 e) takes the forces t·|F| (1e-9) and gives every step's u (1e-8).
 #[test]
 fn force_control_with_coulomb_newton_in_load_steps() {
@@ -494,6 +494,14 @@ fn force_control_with_coulomb_newton_in_load_steps() {
             assert!(scale > 0.0 && diff <= 1e-8 * scale, "step {}", i + 1);
         }
         assert_eq!(newton.slip_node_ids(), fixed.slip_node_ids(), "{np} ranks");
+        // on the contact unknowns, the approach one more unknown: the steps after the first
+        // on the first step's factorisation (only d₀ is new)
+        let kept = newton
+            .run
+            .stdout
+            .matches("the previous load step's factorisation and compliance")
+            .count();
+        assert_eq!(kept, 2, "{np} ranks: {}", newton.run.output());
         eprintln!(
             "{np} ranks: generalised Newton {} steps, fixed point {} steps (3 load steps)",
             newton.steps(),

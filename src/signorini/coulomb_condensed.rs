@@ -24,6 +24,10 @@
 //! hold every free mode. A check that fails hands the expanded iterate to the plain path as
 //! its start.
 //!
+//! Force control (a held body): each approach δ_j is one more column of G (the relative
+//! displacement of the pair's candidates, −δ_j (n·e_j, τ·e_j)) and one more balance row
+//! (the pair's force along e_j equals |F_j|); the check reads the obstacles at the δ's found.
+//!
 //! Collectives: one broadcast (the dense result), the expansion solve, one MatMult, the
 //! update's reduction and the certificates' all-gather.
 
@@ -33,6 +37,7 @@ use super::active_set::{
 use super::boundary::{ContactBoundary, ContactNode, NodeResult};
 use super::condensed::{CoarseLevel, CoulombCondensedSummary, Kept};
 use super::dense::{coarsen, guarded};
+use super::force::{self, ForceControl};
 use super::newton::{
     add_motion, stalled, ContactProblem, NewtonResult, NewtonSettings, StepInfo, WarmStart,
     COULOMB_RESIDUAL_TOL, COULOMB_RESIDUAL_ZERO,
@@ -41,6 +46,7 @@ use super::reduced::{ReducedSystem, SolveKind};
 use super::rigid::FreeModes;
 use crate::contact::{normal_active, CoulombRow, Frame};
 use crate::error::RunError;
+use crate::geom::dot;
 use crate::par::Ctx;
 use crate::petsc::lapack::DenseLu;
 use crate::say;
@@ -206,16 +212,29 @@ fn candidate_boundary(kept: &Kept, b: &ContactBoundary, dim: usize) -> ContactBo
 }
 
 /// G: the free modes' parts at the candidates, d rows per node (its frame: n, τ₁, τ₂), one
-/// column per free mode (rank 0).
-fn mode_parts(free: &FreeModes, cb: &ContactBoundary, dim: usize) -> DMatrix<f64> {
+/// column per free mode, then (force control) one per force-controlled pair j: its obstacle
+/// moved by δ_j e_j shifts the candidates' relative displacement by −δ_j (n·e_j, τ₁·e_j,
+/// τ₂·e_j) on its nodes (gaps g0 − δ_j n·e_j, references u_τ^ref + δ_j τ·e_j, as
+/// `force::Approach::place`), and its balance row is the pair's force along e_j (rank 0).
+fn mode_parts(
+    free: &FreeModes,
+    force: &[ForceControl],
+    cb: &ContactBoundary,
+    dim: usize,
+) -> DMatrix<f64> {
     let mz = free.dirichlet_free().ncols();
-    let mut g = DMatrix::zeros(cb.nodes.len() * dim, mz);
+    let mut g = DMatrix::zeros(cb.nodes.len() * dim, mz + force.len());
     for (q, k) in cb.nodes.iter().enumerate() {
         let dirs = [k.frame.n, k.frame.t[0], k.frame.t[1]];
         for (a, dir) in dirs.iter().enumerate().take(dim) {
             let parts = free.normal_parts(&k.x, dir);
             for cz in 0..mz {
                 g[(q * dim + a, cz)] = parts[cz];
+            }
+            for (j, fc) in force.iter().enumerate() {
+                if k.pair == fc.pair {
+                    g[(q * dim + a, mz + j)] = -dot(*dir, fc.direction());
+                }
             }
         }
     }
@@ -658,14 +677,15 @@ fn dense_phase(
 ) -> DenseCoulomb {
     let (b, dim) = (p.boundary, p.mesh.dim);
     let n = kept.comp.list.len();
-    let mz = kept.free.dirichlet_free().ncols();
+    let mz = kept.free.dirichlet_free().ncols() + ns.force.len();
     let warm_records = warm.map(|w| gather_records(ctx, w.nodes));
     let mut packed = Vec::new();
     if ctx.rank == 0 {
         let run = guarded("coulomb-dense-steps", || {
             let cb = candidate_boundary(kept, b, dim);
-            let g = mode_parts(&kept.free, &cb, dim);
-            let phi = kept.free.free_load();
+            let g = mode_parts(&kept.free, ns.force, &cb, dim);
+            let mut phi = kept.free.free_load();
+            phi.extend(ns.force.iter().map(|fc| fc.magnitude()));
             let cmat_t = kept.comp.cmat.transpose();
             let dense = Dense {
                 dim,
@@ -682,7 +702,7 @@ fn dense_phase(
             };
             match &warm_records {
                 Some(all) => {
-                    let (start, u_prev) = warm_start(all, &kept.comp.list, dim);
+                    let (start, u_prev) = warm_start(all, &kept.comp.list, (&g, ns.force), dim);
                     dense.run(&start, u_prev)
                 }
                 None => {
@@ -760,6 +780,8 @@ struct Checked {
     /// violation of (3.14)/(3.18) relative to the problem's scales
     /// ([`super::coulomb_certificate_worst`]); not computed otherwise.
     certificate: Option<f64>,
+    /// Force control: each force-controlled pair's approach δ_j.
+    approach: Vec<f64>,
 }
 
 /// u = w + R z α from this rank's rows `w`, (3.28) and the set update (3.23)/(F5) with the
@@ -773,7 +795,14 @@ fn check(
     run: &DenseCoulomb,
     w: &[f64],
 ) -> Result<Checked, RunError> {
-    let (b, dim) = (p.boundary, p.mesh.dim);
+    let dim = p.mesh.dim;
+    // under force control the obstacles at the approaches found (the gaps and references of
+    // the plain path's iterate)
+    let placed = force::placed(
+        p.boundary,
+        &force::starting_at(ns.force, &approaches(kept, run)),
+    );
+    let b = &placed;
     ctx.agree(reduced.set_solution_local(w).map_err(RunError::from))?;
     let set = local_set(kept, b, run);
     let mut it = Iterate::new(b.nodes.len(), w.len(), true);
@@ -823,7 +852,14 @@ fn check(
         totals,
         loose,
         certificate,
+        approach: approaches(kept, run),
     })
+}
+
+/// The force-controlled pairs' approaches δ_j of a dense run (the amplitudes after the free
+/// modes'; empty without force control).
+fn approaches(kept: &Kept, run: &DenseCoulomb) -> Vec<f64> {
+    run.alpha[kept.free.dirichlet_free().ncols()..].to_vec()
 }
 
 /// The checked iterate as the result (no state changed, ‖R‖₂ ≤ DENSE_RESIDUAL_TOL ‖λ‖₂, every
@@ -841,6 +877,7 @@ fn finish(
         totals,
         loose,
         certificate,
+        approach,
     } = checked;
     // a stalled dense iteration is accepted where its certificates hold to round-off (the
     // bound beyond which the final check warns), as the plain path accepts a stall
@@ -857,7 +894,7 @@ fn finish(
         rows_seconds: reduced.rows_seconds,
         pinned_final: Vec::new(),
         cycle_detected_at: None,
-        approach: Vec::new(),
+        approach,
     };
     if totals.changed == 0 && residual_ok && !loose {
         let stalled = certificate.map_or(String::new(), |c| {
@@ -911,14 +948,28 @@ fn gather_records(ctx: &Ctx, nodes: &[NodeResult]) -> Vec<f64> {
 }
 
 /// The dense iteration's start from a load step's warm records (`all`, gathered) at the
-/// candidates `list`: their states and values, u (d per node).
-fn warm_start(all: &[f64], list: &[usize], dim: usize) -> (Vec<NodeResult>, Vec<f64>) {
+/// candidates `list`: their states and values, u (d per node). Under force control u is
+/// taken relative to the obstacles at their starting approaches δ_j (the dense unknowns are
+/// relative: u = d₀ − C λ + G α, G's last columns the approaches', `g`).
+fn warm_start(
+    all: &[f64],
+    list: &[usize],
+    (g, force): (&DMatrix<f64>, &[ForceControl]),
+    dim: usize,
+) -> (Vec<NodeResult>, Vec<f64>) {
     let mut u = vec![0.0; list.len() * dim];
+    let first = g.ncols() - force.len();
     let start = list
         .iter()
         .enumerate()
         .map(|(q, &i)| {
-            let r = &all[i * WARM_REC..(i + 1) * WARM_REC];
+            let mut r = [0.0; WARM_REC];
+            r.copy_from_slice(&all[i * WARM_REC..(i + 1) * WARM_REC]);
+            for (j, fc) in force.iter().enumerate() {
+                for a in 0..dim {
+                    r[a] += fc.start * g[(q * dim + a, first + j)];
+                }
+            }
             u[q * dim] = r[0];
             u[q * dim + 1..(q + 1) * dim].copy_from_slice(&r[1..dim]);
             NodeResult {

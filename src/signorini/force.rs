@@ -22,9 +22,10 @@
 //! row u_τ' = u_ref(δ), a slip row (F6) −λ_τ' + L (u_τ' − u_ref(δ)) − q λ_n' = r_C, the
 //! normal rows u_n' = −g(δ) — so the lift keeps L and q, drops r_C, and solves with the step's
 //! (nonsymmetric) Coulomb matrix; the bordered step is then the exact Newton step of the
-//! system with δ (docs/obstacles.md, "With Coulomb friction"). The condensed Coulomb iteration
-//! has no δ: under force control the plain path starts from the frictionless
-//! force-controlled solution (mod.rs, `coulomb_start`).
+//! system with δ (docs/obstacles.md, "With Coulomb friction"). On the contact unknowns
+//! (coulomb_condensed.rs, a held body) each δ_j is one more unknown of the dense system; on a
+//! body that only its pairs hold the plain path starts from the frictionless force-controlled
+//! solution (mod.rs, `coulomb_start`).
 //!
 //! Several force-controlled pairs j = 1..k: each has its own δ_j along e_j, moving only its
 //! obstacle (a node belongs to one pair: g_k = g0_k − δ_j w_k with w_k = n_k·e_j of its pair),

@@ -868,9 +868,10 @@ enum Begin {
 /// find a frictionless set (e.g. a moment that only friction holds tips the frictionless
 /// body). A load step (`warm`) tries the condensed iteration alone (the frictionless set from
 /// the warm one; references u_τ^ref of the previous step) and otherwise keeps its warm start.
-/// Under force control (the dense Coulomb iteration has no approach unknown) the start is the
-/// frictionless force-controlled solution, every active node sticking, at its approaches (the
-/// `approach` of the returned start), and a load step keeps its warm start.
+/// Under force control the dense Coulomb iteration takes the approaches as unknowns (a held
+/// body); on a body that only its pairs hold the start is the frictionless force-controlled
+/// solution, every active node sticking, at its approaches (the `approach` of the returned
+/// start), and a load step keeps its warm start.
 /// Returns the beginning and the condensed path's record. Collective.
 fn coulomb_start(
     ctx: &Ctx,
@@ -909,13 +910,13 @@ fn coulomb_start(
         );
         return Ok((Begin::Touching, None));
     }
-    let forced = !ns.force.is_empty();
+    // force control on a body that only its pairs hold: the plain path (the dense Coulomb
+    // iteration takes the approaches as unknowns next to a held body's contact unknowns)
+    let forced = !ns.force.is_empty() && floats(ctx, problem, reduced, ns);
     if forced {
-        // the dense Coulomb iteration (coulomb_condensed) has no approach unknown
         say!(
             ctx,
-            "coulomb: force control: the plain path (the condensed Coulomb iteration has no \
-             approach unknown)"
+            "coulomb: force control on a body that only its pairs hold: the plain path"
         );
     }
     if let Some(w) = warm {
@@ -927,7 +928,7 @@ fn coulomb_start(
     }
     let dim = problem.mesh.dim;
     // errors are agreed: every rank takes the same branch
-    // the Coulomb iteration on the candidates needs every dof of them, force control none
+    // the Coulomb iteration on the candidates needs every dof of them, the plain path none
     let per = if forced { 1 } else { dim };
     let mut tried = condensed::solve_keeping(ctx, problem, reduced, &fl, None, (per, true));
     if let Ok((condensed::Condensed::Fallback(s), _)) = &tried {
@@ -1051,6 +1052,27 @@ fn coulomb_load_step(
         }
     };
     Ok((begin, Some(summary)))
+}
+
+/// Dirichlet data leave the body free in a rigid mode (the rigid-mode handling on). Collective
+/// where the free modes are formed (one reduction).
+fn floats(
+    ctx: &Ctx,
+    problem: &ContactProblem,
+    reduced: &ReducedSystem,
+    ns: &NewtonSettings,
+) -> bool {
+    let (mesh, b) = (problem.mesh, problem.boundary);
+    FreeModes::new(
+        ctx,
+        mesh,
+        problem.layout,
+        problem.fixed,
+        b,
+        &reduced.f_local,
+        ns.rigid,
+    )
+    .floats()
 }
 
 /// Why the frictionless problem cannot carry the load, if it cannot: a load in a rigid mode

@@ -437,6 +437,50 @@ fn force_control_with_coulomb_newton_in_3d() {
     }
 }
 
+/// Coulomb (μ = 0.3) under force control from a gap: the circle raised by 0.11 and pushed
+/// along the slanted (0.3, −1). The frictionless start on the contact unknowns must close the
+/// gap (its estimate lets the pins carry only the body's own modes, never the force: a start
+/// with no active node used to be accepted, and the plain path then took 10 factorisations);
+/// then the dense Coulomb iteration with δ: one factorisation, the plain path's δ, u and
+/// active and slip nodes (1e-8), on 1 and 2 ranks.
+#[test]
+fn coulomb_force_from_a_gap_on_the_contact_unknowns() {
+    let raised = "contact.obstacle.center=[0.0, 1.6]";
+    let fk = slanted_force_key(0.05);
+    let base = [AUTO, raised, COULOMB_NEWTON, fk.as_str()];
+    let plain = solve(
+        2,
+        &case(),
+        &[&base[..], &["solver.reuse=\"never\""]].concat(),
+    );
+    plain.assert_converged("the plain path from a gap");
+    let dp = plain.f(&["contact", "approach"]);
+    assert!(dp > 0.11, "the gap is closed first: δ = {dp}");
+    for np in [1, 2] {
+        let s = solve(np, &case(), &base);
+        s.assert_converged("Coulomb force control from a gap");
+        let start = s
+            .run
+            .stdout
+            .lines()
+            .find(|l| l.starts_with("coulomb: the frictionless solution"))
+            .unwrap_or_else(|| panic!("{}", s.run.output()))
+            .to_string();
+        assert!(!start.ends_with(" 0 active nodes"), "{start}");
+        let cs = &s.summary["newton"]["condensed"];
+        assert_eq!(cs["coulomb"]["outcome"], "condensed", "{np} rank(s): {cs}");
+        assert_eq!(s.f(&["newton", "factorisations"]), 1.0, "{np} rank(s)");
+        let (d, du) = (s.f(&["contact", "approach"]), s.u_rel_diff(&plain));
+        eprintln!("{np} rank(s): {start}; δ = {d:.17e} (plain {dp:.17e}), |Δu|/|u| = {du:.2e}");
+        assert!(
+            (d - dp).abs() <= 1e-8 * dp && du <= 1e-8,
+            "{np}: δ {d}, {du}"
+        );
+        assert_eq!(s.active_node_ids(), plain.active_node_ids());
+        assert_eq!(s.slip_node_ids(), plain.slip_node_ids());
+    }
+}
+
 /// Coulomb's generalised Newton under force control through three load steps: the slanted
 /// force ramped (each step's force along e is t·|F|, 1e-9), each step warm-started from the
 /// previous one's approach and states; every step's approach and u agree with the fixed

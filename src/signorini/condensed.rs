@@ -1093,7 +1093,7 @@ fn dense_round(
                 load_scale,
                 c: s.c,
                 max_steps: s.section.max_steps,
-                pins_carry: s.estimate,
+                pins_carry: if s.estimate { cand.mz } else { 0 },
             };
             if nested {
                 let x: Vec<[f64; 3]> = list.iter().map(|&i| cand.x(i)).collect();
@@ -1285,7 +1285,7 @@ mod tests {
             load_scale: 1.0,
             c: 1.0,
             max_steps,
-            pins_carry: false,
+            pins_carry: 0,
         }
     }
 
@@ -1329,7 +1329,7 @@ mod tests {
             load_scale: 1.0,
             c: 1.0,
             max_steps: 20,
-            pins_carry: false,
+            pins_carry: 0,
         };
         let run = dense.run(vec![false; 2]);
         assert_eq!(run.end, End::Converged, "{run:?}");
@@ -1355,7 +1355,7 @@ mod tests {
             load_scale: 1.0,
             c: 1.0,
             max_steps: 20,
-            pins_carry: false,
+            pins_carry: 0,
         };
         let run = dense.run(vec![false]);
         assert!(matches!(run.end, End::NoSupport(_)), "{run:?}");

@@ -25,10 +25,11 @@ pub struct Dense<'a> {
     pub load_scale: f64,
     pub c: f64,
     pub max_steps: usize,
-    /// The pins carry the load in the modes a set leaves free (no balance test): an estimate
-    /// of the contact zone for a start (Coulomb's, where friction holds a tangential load),
-    /// not a solution of the frictionless problem.
-    pub pins_carry: bool,
+    /// The pins carry the load in the first `pins_carry` modes (the body's own) where a set
+    /// leaves them free (no balance test there): an estimate of the contact zone for a start
+    /// (Coulomb's, where friction holds a tangential load), not a solution of the frictionless
+    /// problem. The modes after them (force control's approaches) are always balanced.
+    pub pins_carry: usize,
 }
 
 /// How the dense iteration ended.
@@ -363,10 +364,13 @@ impl Dense<'_> {
         u_n: &[f64],
         vu: &DMatrix<f64>,
     ) -> Option<Result<usize, f64>> {
-        if vu.ncols() == 0 || self.pins_carry {
+        if vu.ncols() == 0 {
             return None;
         }
-        let phi = DVector::from_column_slice(self.phi);
+        let mut phi = DVector::from_column_slice(self.phi);
+        for x in phi.iter_mut().take(self.pins_carry) {
+            *x = 0.0;
+        }
         let pu = vu.transpose() * phi;
         let norm = pu.norm();
         if norm <= BALANCE_RTOL * self.load_scale {

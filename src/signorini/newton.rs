@@ -40,7 +40,8 @@ pub struct NewtonSettings<'a> {
     /// path (predictor.rs); `None`: no prediction.
     pub halfspace: Option<&'a HalfSpace>,
     /// A frictionless estimate for a start (condensed path): the pins carry the load in the
-    /// modes the set leaves free instead of the balance test ([`super::dense::Dense`]).
+    /// body's own modes the set leaves free instead of the balance test (never the prescribed
+    /// forces of force control; [`super::dense::Dense`]).
     pub estimate: bool,
     /// Force control (`contact.force`, force.rs): one approach δ_j per force-controlled pair
     /// is an unknown of the loop (empty: no force control).

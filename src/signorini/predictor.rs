@@ -582,7 +582,7 @@ impl Model {
                 load_scale,
                 c,
                 max_steps,
-                pins_carry: false,
+                pins_carry: 0,
             };
             let run = dense.run_nested(vec![false; m], &self.x);
             if run.end == End::Converged {
@@ -768,7 +768,7 @@ mod tests {
             load_scale: f,
             c: 1.0,
             max_steps: 100,
-            pins_carry: false,
+            pins_carry: 0,
         };
         let run = dense.run_nested(vec![false; n], &x);
         assert_eq!(run.end, End::Converged);

@@ -168,6 +168,34 @@ fn a_tangential_load_beyond_the_friction_of_two_plates_is_refused_before_newton(
     s.assert_converged("within the capacity of the two plates");
 }
 
+/// The Hertz disk (no Dirichlet data) pressed onto a large circle (not a plane: its friction
+/// capacity is not known before the solve) with a tangential traction twice what μ = 0.05
+/// carries: the generalised Newton cannot converge, and the error says why it may not (exit
+/// code 1, 2 ranks).
+#[test]
+fn a_floating_body_beyond_friction_on_a_curved_obstacle_is_told_why() {
+    let tmp = tempfile::tempdir().unwrap();
+    let text = format!(
+        "[mesh]\nfile = {}\n[material]\nyoung = 2.0\npoisson = 0.3\nmodel = \"plane_strain\"\n\
+         [[neumann]]\ngroup = \"load\"\npressure = 0.02\n\
+         [[neumann]]\ngroup = \"load\"\ntraction = [0.002, 0.0]\n\
+         [contact]\ngroup = \"contact\"\n\
+         obstacle = {{ type = \"sphere\", center = [0.0, -101.0], radius = 100.0 }}\n\
+         friction = {{ law = \"coulomb\", mu = 0.05 }}\nrigid_modes = \"auto\"\n",
+        toml_path(&repo("cases/hertz/meshes/hertz_L4.msh"))
+    );
+    let case = write_case(&tmp.path().join("curved.toml"), &text);
+    let out = tmp.path().join("out");
+    let r = run_solver(2, &case, &[], &out);
+    r.expect_code(1, "beyond friction on a curved obstacle");
+    assert!(
+        r.stderr.contains("friction alone holds it tangentially"),
+        "{}",
+        r.output()
+    );
+    assert!(!out.exists());
+}
+
 #[test]
 fn certificates_are_judged_by_the_problems_scales() {
     // The block lifted off the plane (all contact forces ~1e-17) and the iterative preset

@@ -356,6 +356,8 @@ pub fn solve(
         estimate: false,
         force: &force_control,
     };
+    // a failure of a frictional body that only its contact holds says what may be the cause
+    let sliding = friction && !held_anywhere(ctx, fixed);
     let (mut nr, outer_steps, condensed_summary) = run_method(
         ctx,
         &problem,
@@ -364,7 +366,15 @@ pub fn solve(
         solver_section,
         coords.as_ref(),
         warm.as_ref(),
-    )?;
+    )
+    .map_err(|e| match e {
+        RunError::NoConvergence(why) if sliding => RunError::NoConvergence(format!(
+            "{why}; the body has no Dirichlet data, so friction alone holds it tangentially: \
+             beyond the friction capacity of its contact (not known before the solve on curved \
+             or non-parallel obstacles) it has no equilibrium"
+        )),
+        e => e,
+    })?;
     if law == Law::Coulomb {
         // The certificate and the output judge Coulomb's law with b_k = μ(−λ_n^k).
         coulomb_bounds(&mut b, &nr.nodes);
@@ -1213,13 +1223,7 @@ fn check_friction_capacity(
     let Some(planes) = parallel_planes(&b.obstacles) else {
         return Ok(());
     };
-    // `fixed` covers this rank's local mesh only: agree on it (every rank reaches this).
-    let fixed_here = if fixed.iter().any(|x| !x.is_nan()) {
-        1.0
-    } else {
-        0.0
-    };
-    if law == Law::Frictionless || ctx.max_f64(fixed_here) > 0.0 {
+    if law == Law::Frictionless || held_anywhere(ctx, fixed) {
         return Ok(());
     }
     let np = planes.len();
@@ -1291,6 +1295,17 @@ fn check_friction_capacity(
         )));
     }
     Ok(())
+}
+
+/// Some dof of the mesh has Dirichlet data (`fixed` covers each rank's local mesh: agreed by
+/// one reduction). Collective.
+fn held_anywhere(ctx: &Ctx, fixed: &[f64]) -> bool {
+    let here = if fixed.iter().any(|x| !x.is_nan()) {
+        1.0
+    } else {
+        0.0
+    };
+    ctx.max_f64(here) > 0.0
 }
 
 /// The normals (into the body) of the pairs' obstacles if every one is a plane and all are

@@ -253,7 +253,8 @@ pub fn semismooth_newton(
         reduced.write(ctx, sys, layout, bs, &lp.set, pins)?; // (3.29) / (3.42)
         reduced.set_inexact(!plan.exact);
         if plan.predict {
-            reduced.set_predictor_solve();
+            // a floating body: the model predicts from the gaps alone (no first solve)
+            reduced.set_predictor_solve(lp.free.floats() && lp.approach.is_none());
         }
         let allow_reuse = s.law != Law::Coulomb && !plan.confirm;
         let solved = reduced.solve(ctx, allow_reuse)?;
@@ -664,6 +665,9 @@ fn log_step(ctx: &Ctx, h: &StepInfo, t: &StepTotals) {
     let how = match (&h.reuse, &h.amg) {
         (Some(_), _) if h.solve == SolveKind::Reuse => format!("reuse, {} its", h.iterations),
         (Some(r), _) if r.fallback => format!("{} its, refactorised", r.krylov_iterations),
+        (_, Some(a)) if a.skipped => {
+            "no solve: a floating body, the model predicts from the gaps".to_string()
+        }
         (_, Some(a)) if a.initial_residual == 0.0 && h.iterations == 0 && !a.pc_setup => {
             "no right-hand side, no solve".to_string()
         }

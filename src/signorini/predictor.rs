@@ -327,7 +327,10 @@ fn run_model(
     let n = all.len() / REC;
     // Under force control nothing penetrates before the approach is known: the model grows
     // from MIN_MODEL_NODES (by MODEL_MARGIN) while its contact zone reaches its border.
-    let mut wanted = (!force.is_empty()).then(|| MIN_MODEL_NODES.min(n));
+    // A floating body whose first solve was skipped (u⁰ = 0: nothing penetrates) likewise: the
+    // free modes bring it into contact in the model.
+    let grow = !force.is_empty() || (mz > 0 && Model::choose(&all, None).pen == 0);
+    let mut wanted = grow.then(|| MIN_MODEL_NODES.min(n));
     let head = head(force.len());
     let packed = loop {
         let model = Model::choose(&all, wanted);
@@ -344,7 +347,7 @@ fn run_model(
         let mut packed: Vec<f64> = Vec::new();
         if ctx.rank == 0 {
             packed = super::dense::guarded("predictor-model", || {
-                model.solve(&all, &packed_c, free, (mz, c, max_steps), force)
+                model.solve(&all, &packed_c, free, (mz, c, max_steps), (force, grow))
             })
             .unwrap_or_else(|_| {
                 let mut failed = vec![0.0; head];
@@ -533,14 +536,14 @@ impl Model {
         packed_c: &[f64],
         free: &FreeModes,
         (mz, c, max_steps): (usize, f64, usize),
-        force: &[([f64; 3], f64, usize)],
+        (force, grow): (&[([f64; 3], f64, usize)], bool),
     ) -> Vec<f64> {
         let n = all.len() / REC;
         let (m, wanted) = (self.m(), self.fine.len());
         let r = |i: usize| &all[i * REC..(i + 1) * REC];
         let mut flags = vec![0.0; n];
         let mut approach = vec![0.0; force.len().max(1)];
-        let (code, steps, levels) = if self.pen == 0 && force.is_empty() {
+        let (code, steps, levels) = if self.pen == 0 && !grow {
             (1.0, 0, 0)
         } else {
             let cmat = assemble(m, packed_c);

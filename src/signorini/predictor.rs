@@ -275,6 +275,9 @@ const REC: usize = 17;
 const PAIR: usize = 15;
 const LAMBDA: usize = 16;
 
+/// Force control of one pair in the model: the direction e, |F| and the pair.
+type PairForce = ([f64; 3], f64, usize);
+
 /// The predicted normal set of this rank's contact nodes after the first solve (`it`, on the
 /// boundary `b` as the solve saw it, all nodes inactive), or `None` when the model does not
 /// apply (no node penetrates, the dense iteration did not converge); and the record.
@@ -286,7 +289,7 @@ pub fn predict(
     it: &Iterate,
     free: &FreeModes,
     (c, max_steps): (f64, usize),
-    force: &[([f64; 3], f64, usize)],
+    force: &[PairForce],
 ) -> Result<(Option<Vec<bool>>, PredictorStep), RunError> {
     run_model(ctx, hs, (b, it, None), free, (c, max_steps), force)
 }
@@ -315,7 +318,7 @@ fn run_model(
     (b, it, active): (&ContactBoundary, &Iterate, Option<&[bool]>),
     free: &FreeModes,
     (c, max_steps): (f64, usize),
-    force: &[([f64; 3], f64, usize)],
+    force: &[PairForce],
 ) -> Result<(Option<Vec<bool>>, PredictorStep), RunError> {
     let t = Instant::now();
     let mz = if free.floats() {
@@ -536,7 +539,7 @@ impl Model {
         packed_c: &[f64],
         free: &FreeModes,
         (mz, c, max_steps): (usize, f64, usize),
-        (force, grow): (&[([f64; 3], f64, usize)], bool),
+        (force, grow): (&[PairForce], bool),
     ) -> Vec<f64> {
         let n = all.len() / REC;
         let (m, wanted) = (self.m(), self.fine.len());

@@ -922,7 +922,7 @@ fn coulomb_start(
     }
     // force control on a body that only its pairs hold: the plain path (the dense Coulomb
     // iteration takes the approaches as unknowns next to a held body's contact unknowns)
-    let forced = !ns.force.is_empty() && floats(ctx, problem, reduced, ns);
+    let forced = !ns.force.is_empty() && free_modes(ctx, problem, reduced, ns).floats();
     if forced {
         say!(
             ctx,
@@ -1064,14 +1064,14 @@ fn coulomb_load_step(
     Ok((begin, Some(summary)))
 }
 
-/// Dirichlet data leave the body free in a rigid mode (the rigid-mode handling on). Collective
-/// where the free modes are formed (one reduction).
-fn floats(
+/// The body's free rigid modes (those Dirichlet data leave free; none with the rigid-mode
+/// handling off) and their load. Collective (reductions).
+fn free_modes(
     ctx: &Ctx,
     problem: &ContactProblem,
     reduced: &ReducedSystem,
     ns: &NewtonSettings,
-) -> bool {
+) -> FreeModes {
     let (mesh, b) = (problem.mesh, problem.boundary);
     FreeModes::new(
         ctx,
@@ -1082,7 +1082,6 @@ fn floats(
         &reduced.f_local,
         ns.rigid,
     )
-    .floats()
 }
 
 /// Why the frictionless problem cannot carry the load, if it cannot: a load in a rigid mode
@@ -1097,16 +1096,8 @@ fn unsupported_without_friction(
     reduced: &ReducedSystem,
     ns: &NewtonSettings,
 ) -> Option<String> {
-    let (mesh, b) = (problem.mesh, problem.boundary);
-    let free = FreeModes::new(
-        ctx,
-        mesh,
-        problem.layout,
-        problem.fixed,
-        b,
-        &reduced.f_local,
-        ns.rigid,
-    );
+    let b = problem.boundary;
+    let free = free_modes(ctx, problem, reduced, ns);
     let mz = free.dirichlet_free().ncols();
     if !free.floats() || mz == 0 {
         return None;

@@ -367,14 +367,7 @@ pub fn solve(
         coords.as_ref(),
         warm.as_ref(),
     )
-    .map_err(|e| match e {
-        RunError::NoConvergence(why) if sliding => RunError::NoConvergence(format!(
-            "{why}; the body has no Dirichlet data, so friction alone holds it tangentially: \
-             beyond the friction capacity of its contact (not known before the solve on curved \
-             or non-parallel obstacles) it has no equilibrium"
-        )),
-        e => e,
-    })?;
+    .map_err(|e| why_sliding(e, sliding))?;
     if law == Law::Coulomb {
         // The certificate and the output judge Coulomb's law with b_k = μ(−λ_n^k).
         coulomb_bounds(&mut b, &nr.nodes);
@@ -1286,6 +1279,19 @@ fn check_friction_capacity(
         )));
     }
     Ok(())
+}
+
+/// A failed iteration (`NoConvergence`) of a frictional body without Dirichlet data
+/// (`sliding`) says what may be the cause; other errors as they are.
+fn why_sliding(e: RunError, sliding: bool) -> RunError {
+    match e {
+        RunError::NoConvergence(why) if sliding => RunError::NoConvergence(format!(
+            "{why}; the body has no Dirichlet data, so friction alone holds it tangentially: \
+             beyond the friction capacity of its contact (not known before the solve on curved \
+             or non-parallel obstacles) it has no equilibrium"
+        )),
+        e => e,
+    }
 }
 
 /// Some dof of the mesh has Dirichlet data (`fixed` covers each rank's local mesh: agreed by

@@ -749,11 +749,7 @@ fn load_steps_keep_the_condensed_factorisation() {
     for np in [1, 2] {
         let auto = converged(np, &case, &["load.steps=4"]);
         let gap = converged(np, &case, &["load.steps=4", "newton.init=\"gap\""]);
-        let kept = auto
-            .run
-            .stdout
-            .matches("the previous load step's factorisation and compliance")
-            .count();
+        let kept = auto.kept_factorisations();
         assert_eq!(kept, 3, "{np} rank(s): {}", auto.run.output());
         let cs = &auto.summary["newton"]["condensed"];
         assert_eq!(cs["factorisation_kept"], true, "{cs}");

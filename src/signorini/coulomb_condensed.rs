@@ -798,10 +798,8 @@ fn check(
     let dim = p.mesh.dim;
     // under force control the obstacles at the approaches found (the gaps and references of
     // the plain path's iterate)
-    let placed = force::placed(
-        p.boundary,
-        &force::starting_at(ns.force, &approaches(kept, run)),
-    );
+    let approach = approaches(kept, run);
+    let placed = force::placed(p.boundary, &force::starting_at(ns.force, &approach));
     let b = &placed;
     ctx.agree(reduced.set_solution_local(w).map_err(RunError::from))?;
     let set = local_set(kept, b, run);
@@ -852,7 +850,7 @@ fn check(
         totals,
         loose,
         certificate,
-        approach: approaches(kept, run),
+        approach,
     })
 }
 

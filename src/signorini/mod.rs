@@ -903,7 +903,9 @@ fn coulomb_start(
     } else {
         "the touching nodes"
     };
-    if let Some(why) = unsupported_without_friction(ctx, problem, reduced, ns) {
+    // the body's free modes (one construction: both tests below read them)
+    let free = free_modes(ctx, problem, reduced, ns);
+    if let Some(why) = unsupported_without_friction(ctx, problem.boundary, &free) {
         // measured (the floating Hertz disk with a tangential traction, 42 k unknowns): the
         // frictionless steps tip the body, and the touching start of the dense Coulomb steps
         // (one node) leaves a rigid mode free
@@ -915,7 +917,7 @@ fn coulomb_start(
     }
     // force control on a body that only its pairs hold: the plain path (the dense Coulomb
     // iteration takes the approaches as unknowns next to a held body's contact unknowns)
-    let forced = !ns.force.is_empty() && free_modes(ctx, problem, reduced, ns).floats();
+    let forced = !ns.force.is_empty() && free.floats();
     if forced {
         say!(
             ctx,
@@ -1082,15 +1084,13 @@ fn free_modes(
 /// tangential load on a floating body pressed onto a plane) is held by friction alone — its
 /// frictionless estimate tips the body (measured: the Hertz disk with a tangential traction,
 /// 42 k and 172 k unknowns, the dense steps shrink the set to one node and the attempt costs a
-/// factorisation for nothing). `None`: no such load. Collective (one reduction).
+/// factorisation for nothing). `free`: the body's free modes on the boundary `b`. `None`: no
+/// such load. Collective (one reduction).
 fn unsupported_without_friction(
     ctx: &Ctx,
-    problem: &ContactProblem,
-    reduced: &ReducedSystem,
-    ns: &NewtonSettings,
+    b: &ContactBoundary,
+    free: &FreeModes,
 ) -> Option<String> {
-    let b = problem.boundary;
-    let free = free_modes(ctx, problem, reduced, ns);
     let mz = free.dirichlet_free().ncols();
     if !free.floats() || mz == 0 {
         return None;

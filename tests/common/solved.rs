@@ -82,6 +82,14 @@ pub struct Solved {
 }
 
 impl Solved {
+    /// The load steps that took the previous step's factorisation (the log's line for each).
+    pub fn kept_factorisations(&self) -> usize {
+        self.run
+            .stdout
+            .matches("the previous load step's factorisation and compliance")
+            .count()
+    }
+
     /// max |u_self − u_other| / max |u_self| over all nodes (by node id); u = 0 is a failure
     /// (nothing would be tested).
     pub fn u_rel_diff(&self, other: &Solved) -> f64 {

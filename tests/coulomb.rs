@@ -640,25 +640,33 @@ fn the_condensed_coulomb_solve_gives_the_touching_starts_answer_in_one_factorisa
     // Coulomb's Newton on the candidates' dense system, the expanded u checked on every contact
     // node — on the held disk and on the floating one (its free rigid modes balanced in the
     // dense system): one factorisation in all. With a tangential load that only friction holds
-    // the frictionless solution tips the floating body: no condensed start, the touching one.
+    // the disk rolls: the frictionless estimate carries that load by a tangential force at the
+    // contact, and the half-space model locates the zone the candidates are taken from.
     // "gap" starts from the touching node on the plain path. All must end in the same state,
     // on 1, 2 and 3 ranks.
     let tmp = tempfile::tempdir().expect("tmp");
     let cases = [
-        (held_disk_case(tmp.path()), true),
-        (floating_disk_case(tmp.path(), 0.0), true),
-        (floating_disk_case(tmp.path(), 0.001), false),
+        (held_disk_case(tmp.path()), false),
+        (floating_disk_case(tmp.path(), 0.0), false),
+        (floating_disk_case(tmp.path(), 0.001), true),
     ];
-    for (case, condensed) in &cases {
+    for (case, rolls) in &cases {
         for np in [1, 2, 3] {
             let auto = converged(np, case, &[]);
             let gap = converged(np, case, &["newton.init=\"gap\""]);
-            let expect = if *condensed {
-                "coulomb: condensed: "
-            } else {
-                "coulomb: no frictionless start"
-            };
-            assert!(auto.run.stdout.contains(expect), "{}", auto.run.output());
+            assert!(
+                auto.run.stdout.contains("coulomb: condensed: "),
+                "{}",
+                auto.run.output()
+            );
+            assert_eq!(
+                auto.run
+                    .stdout
+                    .contains("the contact zone located by the half-space model"),
+                *rolls,
+                "{}",
+                auto.run.output()
+            );
             assert!(
                 !gap.run.stdout.contains("frictionless"),
                 "{}",
@@ -679,16 +687,58 @@ fn the_condensed_coulomb_solve_gives_the_touching_starts_answer_in_one_factorisa
                 gap.f(&["newton", "factorisations"]),
             );
             let cs = &auto.summary["newton"]["condensed"];
-            if *condensed {
-                assert_eq!(cs["outcome"], "condensed");
-                assert_eq!(cs["coulomb"]["outcome"], "condensed", "{cs}");
-                assert_eq!(fa, 1.0, "{np} rank(s): one factorisation in all");
-                assert!(fg >= 4.0, "{np} rank(s): the touching start took {fg}");
-            } else {
-                assert!(cs.is_null(), "{cs}");
-                assert_eq!(fa, fg, "{np} rank(s): the same path");
-            }
+            assert_eq!(cs["outcome"], "condensed");
+            assert_eq!(cs["coulomb"]["outcome"], "condensed", "{cs}");
+            assert_eq!(fa, 1.0, "{np} rank(s): one factorisation in all");
+            assert!(fg >= 4.0, "{np} rank(s): the touching start took {fg}");
         }
+    }
+}
+
+#[test]
+fn a_rolling_ball_is_solved_on_its_located_zone_in_one_factorisation() {
+    // The full floating ball of cases/ball3d (no Dirichlet data, no symmetry plane), pressed
+    // onto the plane by its top cap with a tangential traction that friction alone holds: the
+    // ball rolls (three rigid modes no contact normal holds, one of them a torsion that one
+    // tangential force cannot carry). The zone located by the half-space model gives the
+    // candidates; one factorisation, and the plain path's answer from the touching node.
+    let tmp = tempfile::tempdir().expect("tmp");
+    let mesh = repo("cases/ball3d/ball3d.msh");
+    let case = write_case(
+        &tmp.path().join("ball.toml"),
+        &format!(
+            "[mesh]\nfile = {}\n[material]\nyoung = 2.0\npoisson = 0.3\nmodel = \"3d\"\n\
+             [[neumann]]\ngroup = \"load\"\npressure = 0.001\n[[neumann]]\ngroup = \"load\"\n\
+             traction = [1e-4, 5e-5, 0.0]\n[contact]\ngroup = \"contact\"\n\
+             obstacle = {{ type = \"plane\", point = [0.0, 0.0, -1.0], normal = [0.0, 0.0, 1.0] }}\n\
+             friction = {{ law = \"coulomb\", mu = 0.3 }}\nrigid_modes = \"auto\"\n\
+             [solver]\npreset = \"direct\"\n[output]\nfields = [\"displacement\", \"contact\"]\n",
+            toml_path(&mesh)
+        ),
+    );
+    let gap = converged(2, &case, &["newton.init=\"gap\""]);
+    for np in [1, 2] {
+        let auto = converged(np, &case, &[]);
+        assert!(
+            auto.run
+                .stdout
+                .contains("the contact zone located by the half-space model"),
+            "{}",
+            auto.run.output()
+        );
+        let cs = &auto.summary["newton"]["condensed"];
+        assert_eq!(cs["coulomb"]["outcome"], "condensed", "{cs}");
+        assert_eq!(auto.f(&["newton", "factorisations"]), 1.0, "{np} rank(s)");
+        assert_eq!(
+            auto.active_node_ids(),
+            gap.active_node_ids(),
+            "{np} rank(s)"
+        );
+        let (du, dl) = compare(&auto, &gap);
+        assert!(
+            du <= 1e-9 && dl <= 1e-9,
+            "{np} rank(s): |Δu| {du:e}, |Δλ| {dl:e}"
+        );
     }
 }
 

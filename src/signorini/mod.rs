@@ -354,6 +354,7 @@ pub fn solve(
         rigid: settings.rigid_modes,
         halfspace: halfspace.as_ref(),
         estimate: false,
+        carried: None,
         force: &force_control,
     };
     // a failure of a frictional body that only its contact holds says what may be the cause
@@ -545,8 +546,14 @@ fn run_method(
             }
             let coulomb_newton = matches!(settings.coulomb, Some((_, CoulombAlgorithm::Newton)));
             let start = if coulomb_newton && ns.section.init == case::NewtonInit::Auto {
-                let (start, cs) =
-                    coulomb_start(ctx, problem, &mut reduced, ns, solver_section, warm)?;
+                let (start, cs) = coulomb_start(
+                    ctx,
+                    problem,
+                    &mut reduced,
+                    (ns, settings.contact_modulus),
+                    solver_section,
+                    warm,
+                )?;
                 condensed_summary = cs;
                 start
             } else {
@@ -867,9 +874,11 @@ enum Begin {
 /// path's start. Else (or if that gives up) the frictionless active set and λ_n give the
 /// thresholds b = μ(−λ_n) of (F1), every active node sticking — instead of a start from the
 /// touching nodes, where the whole load first hangs on them and the set needs many steps to
-/// shrink. `Touching` (said in the log) where the condensed path does not apply or does not
-/// find a frictionless set (e.g. a moment that only friction holds tips the frictionless
-/// body). A load step (`warm`) tries the condensed iteration alone (the frictionless set from
+/// shrink. Where friction alone holds a part of the load (the body rolls), the frictionless
+/// estimate carries that part by a tangential force at the contact and the half-space model
+/// locates the zone the candidates are taken from (`Unheld`, docs/friction.md). `Touching`
+/// (said in the log) where the condensed path does not apply or does not find a frictionless
+/// set. A load step (`warm`) tries the condensed iteration alone (the frictionless set from
 /// the warm one; references u_τ^ref of the previous step) and otherwise keeps its warm start.
 /// Under force control the dense Coulomb iteration takes the approaches as unknowns (a held
 /// body); on a body that only its pairs hold the start is the frictionless force-controlled
@@ -880,7 +889,7 @@ fn coulomb_start(
     ctx: &Ctx,
     problem: &ContactProblem,
     reduced: &mut ReducedSystem,
-    ns: &NewtonSettings,
+    (ns, modulus): (&NewtonSettings, f64),
     solver_section: &SolverSection,
     warm: Option<&WarmStart>,
 ) -> Result<(Begin, Option<condensed::CondensedSummary>), RunError> {
@@ -905,16 +914,28 @@ fn coulomb_start(
     };
     // the body's free modes (one construction: both tests below read them)
     let free = free_modes(ctx, problem, reduced, ns);
-    if let Some(why) = unsupported_without_friction(ctx, problem.boundary, &free) {
-        // measured (the floating Hertz disk with a tangential traction, 42 k unknowns): the
-        // frictionless steps tip the body, and the touching start of the dense Coulomb steps
-        // (one node) leaves a rigid mode free
+    // a load that friction alone holds: the frictionless estimate carries it at the contact
+    let carried = Unheld::of(ctx, b, &free).map(|un| {
         say!(
             ctx,
-            "coulomb: no frictionless start ({why}); starting from {from}"
+            "coulomb: {}; the frictionless estimate carries it by a tangential force at the \
+             contact",
+            un.why()
         );
-        return Ok((Begin::Touching, None));
-    }
+        un.carried_at_contact(ctx, b, &free)
+    });
+    // the half-space model that locates its contact zone (predictor::locate)
+    let model = carried.as_ref().map(|_| predictor::HalfSpace {
+        modulus,
+        dim: problem.mesh.dim,
+        length: 2.0 * problem.mesh.extent(),
+        mirrors: predictor::mirror_planes(ctx, problem.mesh, problem.fixed),
+    });
+    let fl = NewtonSettings {
+        carried: carried.as_deref(),
+        halfspace: model.as_ref(),
+        ..fl
+    };
     // force control on a body that only its pairs hold: the plain path (the dense Coulomb
     // iteration takes the approaches as unknowns next to a held body's contact unknowns)
     let forced = !ns.force.is_empty() && free.floats();
@@ -1079,49 +1100,106 @@ fn free_modes(
     )
 }
 
-/// Why the frictionless problem cannot carry the load, if it cannot: a load in a rigid mode
-/// that Dirichlet data leave free and that moves no contact node along its normal (e.g. a
-/// tangential load on a floating body pressed onto a plane) is held by friction alone — its
-/// frictionless estimate tips the body (measured: the Hertz disk with a tangential traction,
-/// 42 k and 172 k unknowns, the dense steps shrink the set to one node and the attempt costs a
-/// factorisation for nothing). `free`: the body's free modes on the boundary `b`. `None`: no
-/// such load. Collective (one reduction).
-fn unsupported_without_friction(
-    ctx: &Ctx,
-    b: &ContactBoundary,
-    free: &FreeModes,
-) -> Option<String> {
-    let mz = free.dirichlet_free().ncols();
-    if !free.floats() || mz == 0 {
-        return None;
-    }
-    // Σ_k g_k g_kᵀ over every contact node (g_k: the free modes' normal parts at k)
-    let mut gram = vec![0.0; mz * mz];
-    for k in &b.nodes {
-        let g = free.normal_parts(&k.x, &k.frame.n);
-        for i in 0..mz {
-            for j in 0..mz {
-                gram[i * mz + j] += g[i] * g[j];
+/// The part of the body's load that friction alone holds: the load φ = Zᵀ Rᵀ f in the rigid
+/// modes that Dirichlet data leave free and that move no contact node along its normal (e.g. a
+/// tangential load on a floating body pressed onto a plane). `None`: the body is held, or
+/// that part is below [`dense::BALANCE_RTOL`] of the load's scale. Collective (one
+/// reduction).
+struct Unheld {
+    /// An orthonormal basis of those modes (m_z × count, in the coordinates of Z's columns).
+    basis: nalgebra::DMatrix<f64>,
+    /// |Uᵀ φ| and the load's scale.
+    load: f64,
+    scale: f64,
+}
+
+impl Unheld {
+    fn of(ctx: &Ctx, b: &ContactBoundary, free: &FreeModes) -> Option<Unheld> {
+        let mz = free.dirichlet_free().ncols();
+        if !free.floats() || mz == 0 {
+            return None;
+        }
+        // Σ_k g_k g_kᵀ over every contact node (g_k: the free modes' normal parts at k)
+        let mut gram = vec![0.0; mz * mz];
+        for k in &b.nodes {
+            let g = free.normal_parts(&k.x, &k.frame.n);
+            for i in 0..mz {
+                for j in 0..mz {
+                    gram[i * mz + j] += g[i] * g[j];
+                }
             }
         }
+        let gram = nalgebra::DMatrix::from_row_slice(mz, mz, &ctx.sum_vec(&gram));
+        let eig = gram.symmetric_eigen();
+        let top = eig.eigenvalues.iter().fold(0.0_f64, |m, &e| m.max(e));
+        let cols: Vec<_> = (0..mz)
+            .filter(|&i| eig.eigenvalues[i] <= 1e-12 * top)
+            .map(|i| eig.eigenvectors.column(i).into_owned())
+            .collect();
+        if cols.is_empty() {
+            return None;
+        }
+        let basis = nalgebra::DMatrix::from_columns(&cols);
+        let phi = nalgebra::DVector::from_vec(free.free_load());
+        let (_, scale) = free.load();
+        let load = (basis.transpose() * phi).norm();
+        (load > dense::BALANCE_RTOL * scale).then_some(Unheld { basis, load, scale })
     }
-    let gram = nalgebra::DMatrix::from_row_slice(mz, mz, &ctx.sum_vec(&gram));
-    let eig = gram.symmetric_eigen();
-    let top = eig.eigenvalues.iter().fold(0.0_f64, |m, &e| m.max(e));
-    let phi = nalgebra::DVector::from_vec(free.free_load());
-    let (_, load_scale) = free.load();
-    // the load's part in the modes no normal moves
-    let unheld: f64 = (0..mz)
-        .filter(|&i| eig.eigenvalues[i] <= 1e-12 * top)
-        .map(|i| eig.eigenvectors.column(i).dot(&phi).powi(2))
-        .sum::<f64>()
-        .sqrt();
-    (unheld > dense::BALANCE_RTOL * load_scale).then(|| {
+
+    /// Why the frictionless problem cannot carry the load.
+    fn why(&self) -> String {
         format!(
-            "a load of {unheld:.3e} (of {load_scale:.3e}) in rigid modes no contact normal holds: \
-             friction alone carries it"
+            "a load of {:.3e} (of {:.3e}) in rigid modes no contact normal holds: friction \
+             alone carries it",
+            self.load, self.scale
         )
-    })
+    }
+
+    /// The load of Coulomb's frictionless estimate: φ' = φ + P T s, the part only friction
+    /// holds carried by one tangential force T s at the contact node with the smallest gap
+    /// (P: the free modes' motion there, T its tangents), s the least-squares solution of
+    /// Uᵀ φ' = 0 — where the pins would carry it off the contact and tip the body. Friction
+    /// acts in the contact zone, and the moment of a force along a plane does not depend on
+    /// where on the plane it acts: the estimate's moment balance is the friction's (to first
+    /// order on a curved obstacle). What one force cannot carry (a torsion about the normal
+    /// in 3D) the pins carry: it is left out of φ'. Collective (one all-gather).
+    fn carried_at_contact(&self, ctx: &Ctx, b: &ContactBoundary, free: &FreeModes) -> Vec<f64> {
+        let mz = free.dirichlet_free().ncols();
+        let mut phi = free.free_load();
+        // this rank's node with the smallest gap: gap, then the free modes' motion along its
+        // tangents (2 × 6)
+        let mut mine = vec![f64::INFINITY; 13];
+        if let Some(k) = b.nodes.iter().min_by(|a, c| a.gap.total_cmp(&c.gap)) {
+            mine[0] = k.gap;
+            for (i, t) in k.frame.t.iter().enumerate() {
+                mine[1 + 6 * i..7 + 6 * i].copy_from_slice(&free.normal_parts(&k.x, t));
+            }
+        }
+        let all = ctx.all_gather_varcount(&mine);
+        // the smallest gap of all ranks (ties: the lowest rank)
+        let Some(best) = all
+            .chunks(13)
+            .filter(|r| r[0].is_finite())
+            .min_by(|a, c| a[0].total_cmp(&c[0]))
+        else {
+            return phi;
+        };
+        let tangents = nalgebra::DMatrix::from_fn(mz, 2, |c, i| best[1 + 6 * i + c]);
+        let a = self.basis.transpose() * &tangents;
+        let rhs = -(self.basis.transpose() * nalgebra::DVector::from_column_slice(&phi));
+        let svd = a.svd(true, true);
+        let Ok(s) = svd.solve(&rhs, 1e-12 * svd.singular_values.max()) else {
+            return phi;
+        };
+        let moved = tangents * s;
+        for (p, m) in phi.iter_mut().zip(moved.iter()) {
+            *p += m;
+        }
+        // what one force cannot carry is left to the pins: out of φ'
+        let phi = nalgebra::DVector::from_vec(phi);
+        let rest = &self.basis * (self.basis.transpose() * &phi);
+        (phi - rest).as_slice().to_vec()
+    }
 }
 
 /// The fixed point's stopping tolerance on the thresholds, relative to max_k b_k.

@@ -43,6 +43,10 @@ pub struct NewtonSettings<'a> {
     /// body's own modes the set leaves free instead of the balance test (never the prescribed
     /// forces of force control; [`super::dense::Dense`]).
     pub estimate: bool,
+    /// The frictionless estimate's load in the free modes where friction alone holds a part of
+    /// the body's load: that part carried by a tangential force at the contact
+    /// (`carried_at_contact` in mod.rs) instead of by the pins; `None`: the body's load φ.
+    pub carried: Option<&'a [f64]>,
     /// Force control (`contact.force`, force.rs): one approach δ_j per force-controlled pair
     /// is an unknown of the loop (empty: no force control).
     pub force: &'a [ForceControl],

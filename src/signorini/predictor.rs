@@ -50,21 +50,21 @@ pub const MIN_MODEL_NODES: usize = 256;
 pub const MAX_REPRESENTED: usize = 24_000;
 
 /// The model's nodes among the represented ones (`x`, ordered by the first solve's clearance
-/// `s0`): all of them up to [`MAX_MODEL_NODES`], else the finest level of the nested
+/// `s0`): all of them up to `cap` ([`MAX_MODEL_NODES`] for the prediction), else the finest level of the nested
 /// iteration's coarsening (about every second node of a contact line, every fourth of a
 /// surface, per level) with at most that many, each represented node belonging to the nearest
 /// model node (whose weight is the sum of its nodes'; the prediction gives a node its model
 /// node's state). Returns (model nodes as indices into `x`, owner of every node of `x`).
-pub fn model_nodes(x: &[[f64; 3]], s0: &[f64]) -> (Vec<usize>, Vec<usize>) {
+pub fn model_nodes(x: &[[f64; 3]], s0: &[f64], cap: usize) -> (Vec<usize>, Vec<usize>) {
     let n = x.len();
-    if n <= MAX_MODEL_NODES {
+    if n <= cap {
         return ((0..n).collect(), (0..n).collect());
     }
     let levels = coarsen(x, s0);
-    let kept = match levels.iter().find(|l| l.len() <= MAX_MODEL_NODES) {
+    let kept = match levels.iter().find(|l| l.len() <= cap) {
         Some(l) => l.clone(),
         // no level small enough: the nodes nearest to contact alone (a truncated model)
-        None => (0..MAX_MODEL_NODES).collect(),
+        None => (0..cap).collect(),
     };
     let d2 = |a: &[f64; 3], b: &[f64; 3]| (0..3).map(|k| (a[k] - b[k]).powi(2)).sum::<f64>();
     let owner = x
@@ -332,11 +332,11 @@ fn run_model(
     // from MIN_MODEL_NODES (by MODEL_MARGIN) while its contact zone reaches its border.
     // A floating body whose first solve was skipped (u⁰ = 0: nothing penetrates) likewise: the
     // free modes bring it into contact in the model.
-    let grow = !force.is_empty() || (mz > 0 && Model::choose(&all, None).pen == 0);
+    let grow = !force.is_empty() || (mz > 0 && Model::choose(&all, None, MAX_MODEL_NODES).pen == 0);
     let mut wanted = grow.then(|| MIN_MODEL_NODES.min(n));
     let head = head(force.len());
     let packed = loop {
-        let model = Model::choose(&all, wanted);
+        let model = Model::choose(&all, wanted, MAX_MODEL_NODES);
         // every rank builds a share of C's columns
         let share = hs.columns(
             &model.x,
@@ -428,6 +428,76 @@ fn run_model(
     Ok((mine, rec))
 }
 
+/// The model's nodes where it locates a contact zone ([`locate`]): every contact node up to
+/// this many, else a coarse subset (a contact line of 8 193 nodes: every fourth, 0.15 s on 2
+/// ranks). Coarser models were measured to fail in 3D: a floating ball of 1 065 contact nodes
+/// and 20 in contact, modelled by 194, cycles (its zone is four model nodes wide).
+pub const LOCATE_MODEL_NODES: usize = MAX_MODEL_NODES;
+
+/// Where the contact zone of a body that its contact alone holds lies, before anything is
+/// solved: the model's Algorithm 1 (d₀ = 0, the load's own deformation left out) on a coarse
+/// subset of every contact node ([`LOCATE_MODEL_NODES`]) with the free modes' load `phi` (which
+/// the contact normals must hold). The zone may lie far from the smallest gaps: a
+/// tangential load that friction holds rolls a disk on its plane until the pressure's centre
+/// balances the load's moment. Returns the clearance g + G α of this rank's contact nodes
+/// after the model's rigid motion α, and the number of contact nodes the model puts in
+/// contact (those of its active nodes); `None` where the model does not converge. Collective.
+pub fn locate(
+    ctx: &Ctx,
+    hs: &HalfSpace,
+    b: &ContactBoundary,
+    free: &FreeModes,
+    phi: &[f64],
+    (c, max_steps): (f64, usize),
+) -> Result<Option<(Vec<f64>, usize)>, RunError> {
+    let t = Instant::now();
+    let mz = free.dirichlet_free().ncols();
+    let it = Iterate::new(b.nodes.len(), 0, false);
+    let all = gather_records(ctx, b, &it, free, None);
+    let n = all.len() / REC;
+    let model = Model::choose(&all, Some(n), LOCATE_MODEL_NODES);
+    let share = hs.columns(
+        &model.x,
+        &model.w,
+        column_share(model.m(), ctx.rank, ctx.size),
+    );
+    let packed_c = ctx.gather_to_root(&share);
+    // rank 0: [α (m_z), nodes in contact] or nothing (no convergence, or a panic caught)
+    let mut packed: Vec<f64> = Vec::new();
+    if ctx.rank == 0 {
+        packed = super::dense::guarded("locate-model", || {
+            model.locate(&all, &packed_c, free, phi, (c, max_steps))
+        })
+        .unwrap_or_default();
+    }
+    ctx.broadcast_f64s(&mut packed);
+    let on = if packed.len() > mz { packed[mz] } else { 0.0 };
+    say!(
+        ctx,
+        "predictor: the contact zone located by the half-space model on {} of {n} contact nodes: \
+         {} ({:.3} s)",
+        model.m(),
+        if packed.len() > mz {
+            format!("{} nodes in contact", on as usize)
+        } else {
+            "no convergence (the zone by the gaps)".to_string()
+        },
+        t.elapsed().as_secs_f64()
+    );
+    if packed.len() <= mz {
+        return Ok(None);
+    }
+    let clearance = b
+        .nodes
+        .iter()
+        .map(|k| {
+            let g = free.normal_parts(&k.x, &k.frame.n);
+            k.gap + (0..mz).map(|c| g[c] * packed[c]).sum::<f64>()
+        })
+        .collect();
+    Ok(Some((clearance, packed[mz] as usize)))
+}
+
 /// Values before the flags in the model's broadcast: five, then the approaches' changes (one
 /// per force-controlled pair, at least one value).
 fn head(force_pairs: usize) -> usize {
@@ -474,9 +544,9 @@ struct Model {
 impl Model {
     /// The represented nodes: those nearest to contact, all of them model nodes while that
     /// covers 1.5 × the penetrating ones (the final set of 3D Hertz: 1.23 ×), else a coarser
-    /// subset of 3 × as many ([`model_nodes`]); `wanted` (force control) gives their number.
-    /// Local (the same on every rank).
-    fn choose(all: &[f64], wanted: Option<usize>) -> Model {
+    /// subset of 3 × as many ([`model_nodes`]); `wanted` (force control) gives their number,
+    /// `cap` the most model nodes. Local (the same on every rank).
+    fn choose(all: &[f64], wanted: Option<usize>, cap: usize) -> Model {
         let n = all.len() / REC;
         let r = |i: usize| &all[i * REC..(i + 1) * REC];
         // s⁰ = u_n + g: the first solve's clearance (< 0 penetrates); a node that carries a
@@ -508,7 +578,8 @@ impl Model {
         order.truncate(wanted);
         let fine = order;
         let xf: Vec<[f64; 3]> = fine.iter().map(|&i| [r(i)[0], r(i)[1], r(i)[2]]).collect();
-        let (kept, owner) = model_nodes(&xf, &fine.iter().map(|&i| s0[i]).collect::<Vec<_>>());
+        let s0f: Vec<f64> = fine.iter().map(|&i| s0[i]).collect();
+        let (kept, owner) = model_nodes(&xf, &s0f, cap);
         let mut w = vec![0.0; kept.len()];
         for (q, &o) in owner.iter().enumerate() {
             w[o] += r(fine[q])[7];
@@ -525,6 +596,46 @@ impl Model {
 
     fn m(&self) -> usize {
         self.pick.len()
+    }
+
+    /// [`locate`]'s model run (rank 0): [α, the contact nodes of the active model nodes], or
+    /// empty.
+    fn locate(
+        &self,
+        all: &[f64],
+        packed_c: &[f64],
+        free: &FreeModes,
+        phi: &[f64],
+        (c, max_steps): (f64, usize),
+    ) -> Vec<f64> {
+        let m = self.m();
+        let mz = phi.len();
+        let r = |i: usize| &all[i * REC..(i + 1) * REC];
+        let cmat = assemble(m, packed_c);
+        let d0 = vec![0.0; m];
+        let gap: Vec<f64> = self.pick.iter().map(|&i| r(i)[6]).collect();
+        let g = DMatrix::from_fn(m, mz, |q, cc| r(self.pick[q])[9 + cc]);
+        let (_, load_scale) = free.load();
+        let dense = Dense {
+            cmat: &cmat,
+            d0: &d0,
+            gap: &gap,
+            g: &g,
+            phi,
+            load_scale,
+            c,
+            max_steps,
+            pins_carry: 0,
+        };
+        let run = dense.run_nested(vec![false; m], &self.x);
+        if run.end != End::Converged {
+            return Vec::new();
+        }
+        let mut packed = run.alpha.clone();
+        packed.resize(mz, 0.0);
+        let on = self.owner.iter().filter(|&&o| run.active[o]).count();
+        packed.push(on as f64);
+        packed
     }
 
     /// Algorithm 1 on the dense model (rank 0): C from the gathered column shares, d₀ = u⁰_n,
@@ -686,7 +797,7 @@ mod tests {
             .map(|i| [(i % k) as f64 * 0.01, (i / k) as f64 * 0.01, 0.0])
             .collect();
         let s0: Vec<f64> = x.iter().map(|p| p[0] * p[0] + p[1] * p[1]).collect();
-        let (kept, owner) = model_nodes(&x, &s0);
+        let (kept, owner) = model_nodes(&x, &s0, MAX_MODEL_NODES);
         assert!(
             kept.len() <= MAX_MODEL_NODES && kept.len() >= k * k / 8,
             "{}",
@@ -703,7 +814,7 @@ mod tests {
             assert!(d <= 0.02 + 1e-12, "node {q}: {d}");
         }
         // up to the cap: every node is a model node
-        let (kept, owner) = model_nodes(&x[..100], &s0[..100]);
+        let (kept, owner) = model_nodes(&x[..100], &s0[..100], MAX_MODEL_NODES);
         assert_eq!(kept, (0..100).collect::<Vec<_>>());
         assert_eq!(owner, kept);
     }

@@ -428,11 +428,12 @@ fn run_model(
     Ok((mine, rec))
 }
 
-/// The model's nodes where it locates a contact zone ([`locate`]): every contact node up to
-/// this many, else a coarse subset (a contact line of 8 193 nodes: every fourth, 0.15 s on 2
-/// ranks). Coarser models were measured to fail in 3D: a floating ball of 1 065 contact nodes
-/// and 20 in contact, modelled by 194, cycles (its zone is four model nodes wide).
-pub const LOCATE_MODEL_NODES: usize = MAX_MODEL_NODES;
+/// The model's nodes where it locates a contact zone ([`locate`]): a coarse subset of every
+/// contact node first (a contact line of 8 193 nodes: every sixteenth, 0.04 s on 2 ranks),
+/// every node up to [`MAX_MODEL_NODES`] (else their coarse subset) where that does not converge
+/// (measured: a floating ball of 1 065 contact nodes, 20 in contact, modelled by 194 cycles:
+/// its zone is four model nodes wide).
+pub const LOCATE_MODEL_NODES: [usize; 2] = [512, MAX_MODEL_NODES];
 
 /// Where the contact zone of a body that its contact alone holds lies, before anything is
 /// solved: the model's Algorithm 1 (d₀ = 0, the load's own deformation left out) on a coarse
@@ -455,28 +456,40 @@ pub fn locate(
     let it = Iterate::new(b.nodes.len(), 0, false);
     let all = gather_records(ctx, b, &it, free, None);
     let n = all.len() / REC;
-    let model = Model::choose(&all, Some(n), LOCATE_MODEL_NODES);
-    let share = hs.columns(
-        &model.x,
-        &model.w,
-        column_share(model.m(), ctx.rank, ctx.size),
-    );
-    let packed_c = ctx.gather_to_root(&share);
-    // rank 0: [α (m_z), nodes in contact] or nothing (no convergence, or a panic caught)
+    let mut tried = Vec::new();
     let mut packed: Vec<f64> = Vec::new();
-    if ctx.rank == 0 {
-        packed = super::dense::guarded("locate-model", || {
-            model.locate(&all, &packed_c, free, phi, (c, max_steps))
-        })
-        .unwrap_or_default();
+    for cap in LOCATE_MODEL_NODES {
+        let model = Model::choose(&all, Some(n), cap);
+        if tried.last() == Some(&model.m()) {
+            break; // the same model again
+        }
+        tried.push(model.m());
+        let share = hs.columns(
+            &model.x,
+            &model.w,
+            column_share(model.m(), ctx.rank, ctx.size),
+        );
+        let packed_c = ctx.gather_to_root(&share);
+        // rank 0: [α (m_z), nodes in contact] or nothing (no convergence, or a panic caught)
+        packed.clear();
+        if ctx.rank == 0 {
+            packed = super::dense::guarded("locate-model", || {
+                model.locate(&all, &packed_c, free, phi, (c, max_steps))
+            })
+            .unwrap_or_default();
+        }
+        ctx.broadcast_f64s(&mut packed);
+        if packed.len() > mz {
+            break;
+        }
     }
-    ctx.broadcast_f64s(&mut packed);
     let on = if packed.len() > mz { packed[mz] } else { 0.0 };
+    let sizes: Vec<String> = tried.iter().map(|m| m.to_string()).collect();
     say!(
         ctx,
         "predictor: the contact zone located by the half-space model on {} of {n} contact nodes: \
          {} ({:.3} s)",
-        model.m(),
+        sizes.join(", then "),
         if packed.len() > mz {
             format!("{} nodes in contact", on as usize)
         } else {

@@ -88,11 +88,17 @@ fn sphere_on_clamped_block_3d_equals_the_plain_path() {
 
 #[test]
 fn a_wide_contact_zone_grows_the_candidates() {
-    // Hertz L4 with E / 10: the contact zone (~96 of 257 nodes) is wider than the first
-    // candidate set (64 nodes with the smallest gaps), so nodes beyond it come into contact
-    // on the expanded u and the set must grow (two expansion solves at least).
+    // The Hertz L4 disk held at its load arc and pushed down by 0.1: its contact zone (~70 of
+    // 257 nodes) is wider than the first candidate set (64 nodes with the smallest gaps; a
+    // held body's zone is not located before the factorisation), so nodes beyond it come
+    // into contact on the expanded u and the set must grow (two expansion solves at least).
     let (case, mesh) = hertz(4);
-    let runs = same_as_plain(&case, &[&mesh, "material.young=0.2"], &[1, 2]);
+    let held = [
+        mesh.as_str(),
+        "dirichlet=[{group=\"load\", value=[0.0, -0.1]}]",
+        "neumann=[]",
+    ];
+    let runs = same_as_plain(&case, &held, &[1, 2]);
     for r in &runs {
         let cand = r.f(&["newton", "condensed", "candidates"]);
         let active = r.f(&["contact", "active_count"]);
@@ -110,6 +116,27 @@ fn a_wide_contact_zone_grows_the_candidates() {
             "no growth round\n{}",
             r.run.output()
         );
+    }
+}
+
+#[test]
+fn a_floating_bodys_wide_zone_is_located_before_the_factorisation() {
+    // The floating Hertz L4 disk with E / 10: its zone (~96 of 257 nodes) is wider than the
+    // eighth of the nodes with the smallest gaps; the half-space model locates it before
+    // anything is factorised, the candidates hold it: one factorisation, no growth round.
+    let (case, mesh) = hertz(4);
+    let runs = same_as_plain(&case, &[&mesh, "material.young=0.2"], &[1, 2]);
+    for r in &runs {
+        let active = r.f(&["contact", "active_count"]);
+        assert!(active > 64.0, "zone not wider than 64 nodes: {active}");
+        assert!(
+            r.run
+                .stdout
+                .contains("the contact zone located by the half-space model"),
+            "{}",
+            r.run.output()
+        );
+        assert_eq!(r.f(&["newton", "condensed", "factorisations"]), 1.0);
     }
 }
 
@@ -237,6 +264,39 @@ fn a_fallback_after_a_factorisation_gives_the_plain_answer() {
         "|u - u_plain| / max|u| = {d:e}\n{}",
         r.run.output()
     );
+}
+
+#[test]
+fn a_zone_too_wide_for_the_dense_compliance_starts_the_plain_path_from_the_models_set() {
+    // The strip pressed by the tilted plane with the default start: every top node
+    // penetrates, the start set holds them all, and their dense compliance would cost far more
+    // than the strip's factorisation. The plain path then starts from the half-space model's
+    // set (after the first solve) and the model corrects each exact step's update; its answer
+    // must be the plain path's from the touching nodes.
+    let tmp = tempfile::tempdir().unwrap();
+    let extra = "[solver]\npreset = \"direct\"\n";
+    let case = strip_case(tmp.path(), "[0.0005, -1.0]", extra);
+    let plain = solve(2, &case, &["solver.reuse=\"never\""]);
+    plain.assert_converged("plain");
+    for np in [1, 2] {
+        let r = solve(np, &case, &[]);
+        r.assert_converged("tilted punch, predicted");
+        let cs = &r.summary["newton"]["condensed"];
+        assert_eq!(cs["outcome"], "fallback", "{}", r.run.output());
+        assert_eq!(cs["too_wide"], true, "{cs}");
+        assert!(
+            r.run.stdout.contains("predictor: half-space model"),
+            "{}",
+            r.run.output()
+        );
+        assert_eq!(plain.active_node_ids(), r.active_node_ids(), "{np} rank(s)");
+        let d = plain.u_rel_diff(&r);
+        assert!(
+            d <= 1e-10,
+            "{np} rank(s): |u - u_plain| / max|u| = {d:e}\n{}",
+            r.run.output()
+        );
+    }
 }
 
 #[test]

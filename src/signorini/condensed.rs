@@ -128,6 +128,10 @@ pub struct CondensedSummary {
     /// Coulomb's generalised Newton on the same candidates (friction, held bodies).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub coulomb: Option<CoulombCondensedSummary>,
+    /// The fallback came from the dense limits (the candidates' Schur dofs or the dense work
+    /// against the factorisation's): the contact zone is too wide for the dense compliance.
+    #[serde(skip_serializing_if = "std::ops::Not::not")]
+    pub too_wide: bool,
 }
 
 /// summary.json's `newton.condensed.coulomb`: what the dense Coulomb iteration did.
@@ -173,6 +177,7 @@ impl CondensedSummary {
             factorisation_kept: false,
             coarse_levels: Vec::new(),
             coulomb: None,
+            too_wide: false,
         }
     }
 
@@ -322,11 +327,13 @@ pub(super) fn solve_keeping(
     refuse_floating_force(p, s, &free)?;
     let f_root = ctx.gather_to_root(&rhs0); // f for MUMPS' solve phases, once
     let start = start_set(p, s, &free, warm);
-    // where friction alone holds a part of the load, the zone may lie far from the smallest
-    // gaps (the body rolls): the half-space model locates it
-    let located = match (s.carried, s.halfspace, warm) {
-        (Some(phi), Some(hs), None) => {
-            predictor::locate(ctx, hs, p.boundary, &free, phi, (s.c, s.section.max_steps))?
+    // a floating body's zone may lie far from the smallest gaps (it rolls where friction
+    // alone holds a part of the load) and be wider than the dense limits: the half-space
+    // model locates it
+    let located = match (s.model, warm) {
+        (Some(hs), None) if free.floats() && free.dirichlet_free().ncols() > 0 => {
+            let phi = s.carried.map_or_else(|| free.free_load(), <[f64]>::to_vec);
+            predictor::locate(ctx, hs, p.boundary, &free, &phi, (s.c, s.section.max_steps))?
         }
         _ => None,
     };
@@ -349,12 +356,12 @@ pub(super) fn solve_keeping(
         let t = Instant::now();
         let new = match growth.next(&cand, &comp, round) {
             Ok(new) => new,
-            Err(why) => return fall(fallback(ctx, summary, why)),
+            Err(stop) => return fall(fallback_stop(ctx, summary, stop)),
         };
         if new.is_empty() && comp.factor.is_some() {
             // the previous load step's factorisation holds every candidate of this one
             summary.record_kept(ctx, &comp, condensation + t.elapsed().as_secs_f64());
-        } else if let Err(why) = comp.grow(
+        } else if let Err(stop) = comp.grow(
             ctx,
             reduced,
             &cand,
@@ -362,7 +369,7 @@ pub(super) fn solve_keeping(
             (dim, n_rows),
             (&f_root, &growth.why),
         ) {
-            return fall(fallback(ctx, summary, why));
+            return fall(fallback_stop(ctx, summary, stop));
         } else {
             summary.factorisation_kept = false;
             summary.record_factorisation(&comp, t.elapsed().as_secs_f64());
@@ -505,6 +512,29 @@ fn reused(
     }
 }
 
+/// Why a round of candidates stops the condensed path: the zone is too wide for the dense
+/// limits (the plain path then starts from the half-space model's set, mod.rs), or something
+/// failed.
+struct Stop {
+    why: String,
+    too_wide: bool,
+}
+
+impl Stop {
+    fn too_wide(why: String) -> Stop {
+        Stop {
+            why,
+            too_wide: true,
+        }
+    }
+    fn failed(why: String) -> Stop {
+        Stop {
+            why,
+            too_wide: false,
+        }
+    }
+}
+
 /// The candidate set from round to round: the `take` contact nodes with the smallest gaps and
 /// every node whose gap equals the largest of theirs (equal gaps are alike to this rule: a flat
 /// face is taken whole, and when it exceeds the Schur limit the plain path runs before anything
@@ -575,12 +605,7 @@ impl Growth {
 
     /// The nodes this round adds; `Err`: why the plain path takes over (none to add after the
     /// first round, or more Schur dofs than MAX_SCHUR_DOFS).
-    fn next(
-        &self,
-        cand: &Candidates,
-        comp: &Compliance,
-        round: usize,
-    ) -> Result<Vec<usize>, String> {
+    fn next(&self, cand: &Candidates, comp: &Compliance, round: usize) -> Result<Vec<usize>, Stop> {
         // each pair's bound: the key (gap or clearance) of its last node taken
         let bound: Vec<f64> = self
             .by_gap
@@ -597,16 +622,18 @@ impl Growth {
             })
             .collect();
         if new.is_empty() && round > 1 {
-            return Err("the candidate set cannot grow (internal)".to_string());
+            return Err(Stop::failed(
+                "the candidate set cannot grow (internal)".to_string(),
+            ));
         }
         let wanted = comp.list.len() + new.len();
         if wanted * comp.per > MAX_SCHUR_DOFS {
-            return Err(format!(
+            return Err(Stop::too_wide(format!(
                 "{wanted} candidate contact nodes ({}) exceed the dense Schur complement's \
                  limit of {MAX_SCHUR_DOFS} dofs ({} per node; a contact zone this wide costs \
                  less on the plain path)",
                 self.why, comp.per,
-            ));
+            )));
         }
         Ok(new)
     }
@@ -690,6 +717,12 @@ fn finish(
         approach: ex.approach,
     };
     Ok(Condensed::Solved(Box::new(result), summary))
+}
+
+/// [`fallback`] for a round's [`Stop`] (marked in the summary where the zone is too wide).
+fn fallback_stop(ctx: &Ctx, mut summary: CondensedSummary, stop: Stop) -> Condensed {
+    summary.too_wide = stop.too_wide;
+    fallback(ctx, summary, stop.why)
 }
 
 /// The plain path takes over: said in the log and in the summary.
@@ -895,7 +928,7 @@ impl Compliance {
         new: &[usize],
         (dim, n_rows): (usize, usize),
         (f_root, why): (&[f64], &str),
-    ) -> Result<(), String> {
+    ) -> Result<(), Stop> {
         let root = ctx.rank == 0;
         for &i in new {
             self.in_s[i] = true;
@@ -918,7 +951,8 @@ impl Compliance {
         if self.node_order.is_none() {
             // With a Schur complement MUMPS would order by AMD (2.4 × the flops of PORD on a 3D
             // block of 82 584 unknowns, measured): our nested-dissection order instead.
-            let order = node_order(ctx.comm(), reduced.matrix(), dim).map_err(|e| e.to_string())?;
+            let order = node_order(ctx.comm(), reduced.matrix(), dim)
+                .map_err(|e| Stop::failed(e.to_string()))?;
             self.node_order = Some(order);
             self.ordering_seconds = t.elapsed().as_secs_f64();
         }
@@ -935,12 +969,13 @@ impl Compliance {
             root,
         );
         drop(order);
-        let mut factor = factor.map_err(|e| format!("MUMPS' analysis of K_p failed: {e}"))?;
+        let mut factor =
+            factor.map_err(|e| Stop::failed(format!("MUMPS' analysis of K_p failed: {e}")))?;
         // the same numbers on every rank: the same decision
         let dense = (dofs.len() as f64).powi(3);
         let speedup = if dim == 2 { DENSE_SPEEDUP_2D } else { 1.0 };
         if dense > DENSE_FLOOR_FLOPS.max(speedup * factor.flops()) {
-            return Err(format!(
+            return Err(Stop::too_wide(format!(
                 "{} candidate contact nodes ({} Schur dofs; {}): the dense compliance ({:.1e} \
                  flops) would cost more than the factorisation of K_p ({:.1e} flops); a contact zone this \
                  wide costs less on the plain path",
@@ -949,14 +984,14 @@ impl Compliance {
                 why,
                 dense,
                 factor.flops()
-            ));
+            )));
         }
         let done = factor.factorise();
         self.factorisation_seconds = t.elapsed().as_secs_f64();
-        done.map_err(|e| format!("the Schur factorisation of K_p failed: {e}"))?;
+        done.map_err(|e| Stop::failed(format!("the Schur factorisation of K_p failed: {e}")))?;
         let r = factor
             .condense(&self.rotated(f_root))
-            .map_err(|e| format!("the condensation of f failed: {e}"))?;
+            .map_err(|e| Stop::failed(format!("the condensation of f failed: {e}")))?;
         let mut ok = vec![1.0];
         if root {
             // S's one copy, factorised and inverted in place: C = S⁻¹
@@ -973,11 +1008,11 @@ impl Compliance {
         ctx.broadcast_f64s(&mut ok);
         self.factor = Some(factor);
         if ok[0] == 0.0 {
-            return Err(format!(
+            return Err(Stop::failed(format!(
                 "the Schur complement of K_p on the {} candidates' dofs ({per} per node) is not \
                  positive definite",
                 self.list.len()
-            ));
+            )));
         }
         Ok(())
     }

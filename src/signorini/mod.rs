@@ -339,22 +339,25 @@ pub fn solve(
         sys,
         kept: &kept,
     };
-    // the half-space predictor's model: frictionless on the iterative preset only (newton.rs)
-    let predicts = !friction && matches!(solver_section.preset, Preset::Iterative);
-    let halfspace = predicts.then(|| predictor::HalfSpace {
+    // the body's half-space model: the predictor's on the iterative preset (frictionless,
+    // newton.rs), else the condensed path's (locating a floating body's zone; the plain path's
+    // first set where the zone is too wide for the dense limits)
+    let iterative = matches!(solver_section.preset, Preset::Iterative);
+    let model = predictor::HalfSpace {
         modulus: settings.contact_modulus,
         dim,
         length: 2.0 * mesh.extent(),
         mirrors: predictor::mirror_planes(ctx, mesh, fixed),
-    });
+    };
     let ns = NewtonSettings {
         section: &settings.newton,
         c,
         law,
         rigid: settings.rigid_modes,
-        halfspace: halfspace.as_ref(),
+        halfspace: (!friction && iterative).then_some(&model),
         estimate: false,
         carried: None,
+        model: (!iterative).then_some(&model),
         force: &force_control,
     };
     // a failure of a frictional body that only its contact holds says what may be the cause
@@ -539,6 +542,19 @@ fn run_method(
                     condensed::Condensed::Solved(nr, s) => {
                         return Ok((*nr, None, Some(s)));
                     }
+                    condensed::Condensed::Fallback(s) if s.too_wide => {
+                        // a zone too wide for the dense compliance: the plain path from the
+                        // half-space model's set, the model correcting each exact step's update
+                        condensed_summary = Some(s);
+                        let wide = NewtonSettings {
+                            halfspace: ns.model,
+                            ..*ns
+                        };
+                        reduced.enable_reuse(ctx, solver_section.reuse, false)?;
+                        let nr =
+                            newton::semismooth_newton(ctx, problem, &mut reduced, &wide, warm)?;
+                        return Ok((nr, None, condensed_summary));
+                    }
                     condensed::Condensed::Fallback(s) | condensed::Condensed::Factorised(s) => {
                         condensed_summary = Some(s)
                     }
@@ -546,14 +562,8 @@ fn run_method(
             }
             let coulomb_newton = matches!(settings.coulomb, Some((_, CoulombAlgorithm::Newton)));
             let start = if coulomb_newton && ns.section.init == case::NewtonInit::Auto {
-                let (start, cs) = coulomb_start(
-                    ctx,
-                    problem,
-                    &mut reduced,
-                    (ns, settings.contact_modulus),
-                    solver_section,
-                    warm,
-                )?;
+                let (start, cs) =
+                    coulomb_start(ctx, problem, &mut reduced, ns, solver_section, warm)?;
                 condensed_summary = cs;
                 start
             } else {
@@ -889,7 +899,7 @@ fn coulomb_start(
     ctx: &Ctx,
     problem: &ContactProblem,
     reduced: &mut ReducedSystem,
-    (ns, modulus): (&NewtonSettings, f64),
+    ns: &NewtonSettings,
     solver_section: &SolverSection,
     warm: Option<&WarmStart>,
 ) -> Result<(Begin, Option<condensed::CondensedSummary>), RunError> {
@@ -924,16 +934,8 @@ fn coulomb_start(
         );
         un.carried_at_contact(ctx, b, &free)
     });
-    // the half-space model that locates its contact zone (predictor::locate)
-    let model = carried.as_ref().map(|_| predictor::HalfSpace {
-        modulus,
-        dim: problem.mesh.dim,
-        length: 2.0 * problem.mesh.extent(),
-        mirrors: predictor::mirror_planes(ctx, problem.mesh, problem.fixed),
-    });
     let fl = NewtonSettings {
         carried: carried.as_deref(),
-        halfspace: model.as_ref(),
         ..fl
     };
     // force control on a body that only its pairs hold: the plain path (the dense Coulomb

@@ -47,6 +47,11 @@ pub struct NewtonSettings<'a> {
     /// the body's load: that part carried by a tangential force at the contact
     /// (`carried_at_contact` in mod.rs) instead of by the pins; `None`: the body's load φ.
     pub carried: Option<&'a [f64]>,
+    /// The body's half-space model where the condensed path runs (direct preset): it locates
+    /// the contact zone of a floating body before the factorisation
+    /// ([`super::predictor::locate`]), and where that zone is too wide for the dense limits the
+    /// plain path predicts its first set from it (as `halfspace`).
+    pub model: Option<&'a HalfSpace>,
     /// Force control (`contact.force`, force.rs): one approach δ_j per force-controlled pair
     /// is an unknown of the loop (empty: no force control).
     pub force: &'a [ForceControl],
@@ -351,8 +356,10 @@ impl<'a> Loop<'a> {
                                                      // The half-space predictor (iterative preset's reuse path, frictionless, the "auto"
                                                      // start, no warm start): the first solve has no active node (u⁰ = K_p⁻¹ f, the model's
                                                      // d₀), also where the "gap" start would clamp the initially touching nodes.
+                                                     // the iterative preset's reuse path; on the direct preset `halfspace` is given only
+                                                     // where the condensed path found the zone too wide for the dense limits (mod.rs)
         let predicting = s.halfspace.is_some()
-            && reduced.inexact_available()
+            && (reduced.inexact_available() || reduced.factorises()?)
             && s.law == Law::Frictionless
             && warm.is_none()
             && s.section.init == NewtonInit::Auto;

@@ -487,8 +487,8 @@ pub fn locate(
     let sizes: Vec<String> = tried.iter().map(|m| m.to_string()).collect();
     say!(
         ctx,
-        "predictor: the contact zone located by the half-space model on {} of {n} contact nodes: \
-         {} ({:.3} s)",
+        "newton: condensed: the contact zone located by the half-space model on {} of {n} \
+         contact nodes: {} ({:.3} s)",
         sizes.join(", then "),
         if packed.len() > mz {
             format!("{} nodes in contact", on as usize)

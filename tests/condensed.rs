@@ -153,16 +153,16 @@ fn plain_path_stays_selectable() {
     );
 }
 
-/// Nodes on the top of the strip of [`strip_case`]: more than the dense limit of the condensed
-/// path allows where the factorisation is as cheap as a strip's (n³ = 4.7e10 flops of dense
-/// work against ~1e7 for K_p).
+/// Nodes on the top of the strip of [`strip_case`]: more than the dual form's dense compliance
+/// pays for where the factorisation is as cheap as a strip's (n³ = 4.7e10 flops of dense work
+/// against ~1e7 for K_p).
 const STRIP_TOP_NODES: usize = 3601;
 
-/// A strip [0, 4] × [0, 0.02] (a structured gmsh mesh: STRIP_TOP_NODES nodes on the top,
-/// 4 layers, 28 800 triangles) in `dir`, clamped at the bottom, its top pressed by a rigid
-/// plane through (2, 0.02 − 0.002) with the normal `normal` (pointing down, into the strip);
-/// `extra` TOML tables appended. Returns the case file.
-fn strip_case(dir: &Path, normal: &str, extra: &str) -> PathBuf {
+/// A strip [0, 4] × [0, 0.02] (a structured gmsh mesh: `top` nodes on the top, 4 layers,
+/// 8 (top − 1) triangles) in `dir`, clamped at the bottom, its top pressed by a rigid plane
+/// through (2, 0.02 − 0.002) with the normal `normal` (pointing down, into the strip); `extra`
+/// TOML tables appended. Returns the case file.
+fn strip_case(dir: &Path, (top, normal): (usize, &str), extra: &str) -> PathBuf {
     let geo = dir.join("strip.geo");
     std::fs::write(
         &geo,
@@ -170,7 +170,7 @@ fn strip_case(dir: &Path, normal: &str, extra: &str) -> PathBuf {
             "Point(1) = {{0, 0, 0}};\nPoint(2) = {{4, 0, 0}};\nPoint(3) = {{4, 0.02, 0}};\n\
              Point(4) = {{0, 0.02, 0}};\nLine(1) = {{1, 2}};\nLine(2) = {{2, 3}};\n\
              Line(3) = {{3, 4}};\nLine(4) = {{4, 1}};\nCurve Loop(1) = {{1, 2, 3, 4}};\n\
-             Plane Surface(1) = {{1}};\nTransfinite Curve {{1, 3}} = {STRIP_TOP_NODES};\n\
+             Plane Surface(1) = {{1}};\nTransfinite Curve {{1, 3}} = {top};\n\
              Transfinite Curve {{2, 4}} = 5;\nTransfinite Surface {{1}};\n\
              Physical Curve(\"bottom\") = {{1}};\nPhysical Curve(\"top\") = {{3}};\n\
              Physical Surface(\"body\") = {{1}};\n"
@@ -197,103 +197,93 @@ fn strip_case(dir: &Path, normal: &str, extra: &str) -> PathBuf {
     )
 }
 
-#[test]
-fn a_flat_punch_too_wide_for_the_dense_schur_complement_takes_the_plain_path() {
-    // The strip's top pressed flat: every node has the same gap, so all are candidates, and
-    // their dense compliance would cost far more than the strip's factorisation: the plain
-    // path, decided after MUMPS' analysis, before any numeric factorisation.
-    let tmp = tempfile::tempdir().unwrap();
-    let case = strip_case(tmp.path(), "[0.0, -1.0]", "");
-    let r = solve(2, &case, &["solver.preset=\"direct\""]);
-    r.assert_converged("flat punch");
-    let nodes = r.f(&["contact", "nodes"]);
-    assert_eq!(nodes as usize, STRIP_TOP_NODES);
-    let cs = &r.summary["newton"]["condensed"];
-    assert_eq!(cs["outcome"], "fallback", "{}", r.run.output());
-    let why = cs["fallback_reason"].as_str().unwrap();
-    assert!(
-        why.contains("would cost more than the factorisation"),
-        "{why}"
-    );
-    assert!(
-        why.contains(&format!("{STRIP_TOP_NODES} candidate")),
-        "{why}"
-    );
-    assert_eq!(cs["factorisations"], 0);
-    let h = r.summary["newton"]["history"].as_array().unwrap();
-    assert!(h.iter().all(|e| e["solve"] == "factorisation"), "{h:?}");
-    assert_eq!(
-        r.f(&["contact", "active_count"]),
-        nodes,
-        "the whole top presses"
-    );
-}
-
-#[test]
-fn a_fallback_after_a_factorisation_gives_the_plain_answer() {
-    // The strip pressed by a slightly tilted plane (every top node 0.001–0.003 inside), started
-    // with no active node (the "gap" start would force every penetrating node in): the gaps
-    // differ, so the first candidates are the eighth with the smallest gaps; on the expanded u
-    // every other node comes into contact, the set must grow beyond what pays, and the plain
-    // path takes over on a system the condensed path has already factorised and written. Its
-    // answer must be the plain path's.
-    let tmp = tempfile::tempdir().unwrap();
-    let extra = "[newton]\ninit = \"all_inactive\"\n[solver]\npreset = \"direct\"\n";
-    let case = strip_case(tmp.path(), "[0.0005, -1.0]", extra);
-    let plain = solve(2, &case, &["solver.reuse=\"never\""]);
+/// The strip's answer on the condensed path (`sets`) against the plain path's, on 1 and 2
+/// ranks: the same active nodes, u within 1e-10 of max|u|. Returns the condensed runs.
+fn strip_against_plain(case: &Path, sets: &[&str]) -> Vec<Solved> {
+    let mut plain_sets = sets.to_vec();
+    plain_sets.push("solver.reuse=\"never\"");
+    let plain = solve(2, case, &plain_sets);
     plain.assert_converged("plain");
-    let r = solve(2, &case, &[]);
-    r.assert_converged("tilted punch");
-    let cs = &r.summary["newton"]["condensed"];
-    assert_eq!(cs["outcome"], "fallback", "{}", r.run.output());
-    assert!(
-        cs["factorisations"].as_u64().unwrap() >= 1,
-        "fell back before factorising: {cs}"
-    );
-    let why = cs["fallback_reason"].as_str().unwrap();
-    assert!(why.contains("came into contact"), "{why}");
-    assert!(
-        why.contains("would cost more than the factorisation"),
-        "{why}"
-    );
-    assert_eq!(plain.active_node_ids(), r.active_node_ids());
-    assert!(!r.active_node_ids().is_empty());
-    let d = plain.u_rel_diff(&r);
-    assert!(
-        d <= 1e-10,
-        "|u - u_plain| / max|u| = {d:e}\n{}",
-        r.run.output()
-    );
-}
-
-#[test]
-fn a_zone_too_wide_for_the_dense_compliance_starts_the_plain_path_from_the_models_set() {
-    // The strip pressed by the tilted plane with the default start: every top node
-    // penetrates, the start set holds them all, and their dense compliance would cost far more
-    // than the strip's factorisation. The plain path then starts from the half-space model's
-    // set (after the first solve) and the model corrects each exact step's update; its answer
-    // must be the plain path's from the touching nodes.
-    let tmp = tempfile::tempdir().unwrap();
-    let extra = "[solver]\npreset = \"direct\"\n";
-    let case = strip_case(tmp.path(), "[0.0005, -1.0]", extra);
-    let plain = solve(2, &case, &["solver.reuse=\"never\""]);
-    plain.assert_converged("plain");
+    let mut out = Vec::new();
     for np in [1, 2] {
-        let r = solve(np, &case, &[]);
-        r.assert_converged("tilted punch, predicted");
-        let cs = &r.summary["newton"]["condensed"];
-        assert_eq!(cs["outcome"], "fallback", "{}", r.run.output());
-        assert_eq!(cs["too_wide"], true, "{cs}");
-        assert!(
-            r.run.stdout.contains("predictor: half-space model"),
-            "{}",
-            r.run.output()
-        );
+        let r = solve(np, case, sets);
+        r.assert_converged("strip");
         assert_eq!(plain.active_node_ids(), r.active_node_ids(), "{np} rank(s)");
+        assert!(!r.active_node_ids().is_empty());
         let d = plain.u_rel_diff(&r);
         assert!(
             d <= 1e-10,
             "{np} rank(s): |u - u_plain| / max|u| = {d:e}\n{}",
+            r.run.output()
+        );
+        out.push(r);
+    }
+    out
+}
+
+#[test]
+fn a_flat_punch_too_wide_for_the_dense_compliance_runs_in_the_primal_form() {
+    // The strip's top pressed flat: every node has the same gap, so all are candidates, and
+    // their dense compliance C = S⁻¹ would cost far more than the strip's factorisation. The
+    // dense steps run in the primal form on S itself (from every candidate active: no
+    // inactive unknowns): one factorisation, the plain path's answer.
+    let tmp = tempfile::tempdir().unwrap();
+    let case = strip_case(tmp.path(), (STRIP_TOP_NODES, "[0.0, -1.0]"), "");
+    for r in strip_against_plain(&case, &["solver.preset=\"direct\""]) {
+        let nodes = r.f(&["contact", "nodes"]);
+        assert_eq!(nodes as usize, STRIP_TOP_NODES);
+        let cs = &r.summary["newton"]["condensed"];
+        assert_eq!(cs["outcome"], "condensed", "{}", r.run.output());
+        assert_eq!(cs["primal"], true, "{cs}");
+        assert_eq!(cs["factorisations"], 1, "{cs}");
+        assert_eq!(
+            r.f(&["contact", "active_count"]),
+            nodes,
+            "the whole top presses"
+        );
+    }
+}
+
+#[test]
+fn a_set_grown_beyond_the_dual_forms_limit_goes_on_in_the_primal_form() {
+    // The strip pressed by a slightly tilted plane (every top node 0.001–0.003 inside),
+    // started with no active node: the first candidates are the eighth with the smallest
+    // gaps; on the expanded u every other node comes into contact, the set grows beyond what
+    // the dense compliance pays for, and the second round runs in the primal form.
+    let tmp = tempfile::tempdir().unwrap();
+    let extra = "[newton]\ninit = \"all_inactive\"\n[solver]\npreset = \"direct\"\n";
+    let case = strip_case(tmp.path(), (STRIP_TOP_NODES, "[0.0005, -1.0]"), extra);
+    for r in strip_against_plain(&case, &[]) {
+        let cs = &r.summary["newton"]["condensed"];
+        assert_eq!(cs["outcome"], "condensed", "{}", r.run.output());
+        assert_eq!(cs["primal"], true, "{cs}");
+        assert_eq!(cs["factorisations"], 2, "{cs}");
+        assert!(
+            r.run.stdout.contains("come into contact: more candidates"),
+            "{}",
+            r.run.output()
+        );
+    }
+}
+
+#[test]
+fn a_zone_too_wide_for_the_dense_schur_complement_starts_the_plain_path_from_the_models_set() {
+    // A strip with 8 401 top nodes pressed by the tilted plane with the default start: every
+    // top node penetrates, the start set holds them all, beyond the dense Schur complement's
+    // 8 000 dofs. The plain path then starts from the half-space model's set (after the first
+    // solve) and the model corrects each exact step's update; its answer must be the plain
+    // path's from the touching nodes.
+    let tmp = tempfile::tempdir().unwrap();
+    let extra = "[solver]\npreset = \"direct\"\n";
+    let case = strip_case(tmp.path(), (8401, "[0.0005, -1.0]"), extra);
+    for r in strip_against_plain(&case, &[]) {
+        let cs = &r.summary["newton"]["condensed"];
+        assert_eq!(cs["outcome"], "fallback", "{}", r.run.output());
+        assert_eq!(cs["too_wide"], true, "{cs}");
+        assert_eq!(cs["factorisations"], 0, "{cs}");
+        assert!(
+            r.run.stdout.contains("predictor: half-space model"),
+            "{}",
             r.run.output()
         );
     }

@@ -31,7 +31,7 @@
 
 use super::active_set::{ActiveSet, Iterate, Law};
 use super::boundary::ContactBoundary;
-use super::dense::{guarded, Dense, DenseRun, End};
+use super::dense::{guarded, Dense, DenseRun, End, Primal};
 use super::newton::{
     add_motion, ContactProblem, NewtonResult, NewtonSettings, StepInfo, WarmStart,
 };
@@ -128,10 +128,14 @@ pub struct CondensedSummary {
     /// Coulomb's generalised Newton on the same candidates (friction, held bodies).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub coulomb: Option<CoulombCondensedSummary>,
-    /// The fallback came from the dense limits (the candidates' Schur dofs or the dense work
+    /// The fallback came from the dense limits (the candidates' Schur dofs, the dense work
     /// against the factorisation's): the contact zone is too wide for the dense compliance.
     #[serde(skip_serializing_if = "std::ops::Not::not")]
     pub too_wide: bool,
+    /// The dense steps ran in the primal form on S (dense::Primal): C = S⁻¹ would have cost
+    /// more than the factorisation.
+    #[serde(skip_serializing_if = "std::ops::Not::not")]
+    pub primal: bool,
 }
 
 /// summary.json's `newton.condensed.coulomb`: what the dense Coulomb iteration did.
@@ -178,6 +182,7 @@ impl CondensedSummary {
             coarse_levels: Vec::new(),
             coulomb: None,
             too_wide: false,
+            primal: false,
         }
     }
 
@@ -240,10 +245,15 @@ impl CondensedSummary {
                 self.factorisation_seconds, self.ordering_seconds
             )
         };
+        let form = if self.primal {
+            " (primal form on S)"
+        } else {
+            ""
+        };
         say!(
             ctx,
             "newton: condensed: {} of {n} contact nodes as candidates, {active} active, \
-             {factorisation}, Schur complement {:.3} s, dense {:.3} s, expansion {:.3} s",
+             {factorisation}, Schur complement {:.3} s, dense{form} {:.3} s, expansion {:.3} s",
             self.candidates,
             self.schur_seconds,
             self.dense_seconds,
@@ -341,7 +351,7 @@ pub(super) fn solve_keeping(
     let cand = Candidates::gather(ctx, p.boundary, &free, &start, key);
     let n_rows = p.layout.node_offsets.last().copied().unwrap_or(0) * dim;
     let nested = warm.is_none() && s.section.init == NewtonInit::Auto;
-    let mut growth = Growth::new(&cand, per, located.map(|(_, on)| on));
+    let mut growth = Growth::new(&cand, per, located.as_ref().map(|(_, on)| *on));
     let t = Instant::now();
     let mut comp = match warm.and_then(|_| reused(ctx, p, (&free, &cand), &f_root, per)) {
         Some(comp) => {
@@ -372,6 +382,7 @@ pub(super) fn solve_keeping(
             return fall(fallback_stop(ctx, summary, stop));
         } else {
             summary.factorisation_kept = false;
+            summary.primal = comp.primal;
             summary.record_factorisation(&comp, t.elapsed().as_secs_f64());
         }
         if !steps {
@@ -389,14 +400,16 @@ pub(super) fn solve_keeping(
         }
 
         let t = Instant::now();
-        let run = dense_round(
+        let (run, x_s) = dense_round(
             ctx,
             &cand,
             &comp,
             &free,
             s,
             (&growth.active, nested && round == 1),
+            located.as_ref().map(|(_, on)| *on),
         );
+        comp.x_s = x_s;
         summary.dense_seconds += t.elapsed().as_secs_f64();
         summary.record_coarse(ctx, &run);
         record_steps(ctx, &mut history, &run, comp.list.len(), free.pins().len());
@@ -418,6 +431,10 @@ pub(super) fn solve_keeping(
             }
             End::NoSupport(reaction) => {
                 return Err(free.no_support(run.active.iter().filter(|&&a| a).count(), reaction))
+            }
+            // the primal form gives up where the zone is too wide even for it
+            End::Fallback(why) if comp.primal => {
+                return fall(fallback_stop(ctx, summary, Stop::too_wide(why)))
             }
             End::Fallback(why) => return fall(fallback(ctx, summary, why)),
         }
@@ -499,7 +516,7 @@ fn reused(
     per: usize,
 ) -> Option<Compliance> {
     let kept = p.kept.take()?;
-    if !kept.holds(free, cand, per) {
+    if kept.comp.primal || !kept.holds(free, cand, per) {
         return None;
     }
     let mut comp = kept.comp;
@@ -896,6 +913,16 @@ pub(super) struct Compliance {
     factorisation_seconds: f64,
     /// The nested-dissection ordering (graph gathered, Scotch) [s].
     ordering_seconds: f64,
+    /// The primal form (frictionless, where C = S⁻¹ would cost more than the factorisation):
+    /// rank 0 keeps S itself and r (MUMPS' condensation of f), `cmat` and `d0` stay empty,
+    /// and the Schur variables' part of the expansion, S⁻¹ (r − λ) = u − G α, is the dense
+    /// iteration's own (`x_s`).
+    primal: bool,
+    schur: DMatrix<f64>,
+    r: Vec<f64>,
+    x_s: Vec<f64>,
+    /// The dense work that pays (flops): the dense compliance's or a primal step's bound.
+    max_flops: f64,
 }
 
 impl Compliance {
@@ -911,6 +938,11 @@ impl Compliance {
             node_order: None,
             factorisation_seconds: 0.0,
             ordering_seconds: 0.0,
+            primal: false,
+            schur: DMatrix::zeros(0, 0),
+            r: Vec::new(),
+            x_s: Vec::new(),
+            max_flops: 0.0,
         }
     }
 
@@ -974,7 +1006,10 @@ impl Compliance {
         // the same numbers on every rank: the same decision
         let dense = (dofs.len() as f64).powi(3);
         let speedup = if dim == 2 { DENSE_SPEEDUP_2D } else { 1.0 };
-        if dense > DENSE_FLOOR_FLOPS.max(speedup * factor.flops()) {
+        self.max_flops = DENSE_FLOOR_FLOPS.max(speedup * factor.flops());
+        // frictionless: the primal form, whose steps solve for the inactive candidates alone
+        self.primal = dense > self.max_flops && per == 1;
+        if dense > self.max_flops && !self.primal {
             return Err(Stop::too_wide(format!(
                 "{} candidate contact nodes ({} Schur dofs; {}): the dense compliance ({:.1e} \
                  flops) would cost more than the factorisation of K_p ({:.1e} flops); a contact zone this \
@@ -993,7 +1028,18 @@ impl Compliance {
             .condense(&self.rotated(f_root))
             .map_err(|e| Stop::failed(format!("the condensation of f failed: {e}")))?;
         let mut ok = vec![1.0];
-        if root {
+        if root && self.primal {
+            // S itself (its lower triangle, column-major, as LAPACK's Cholesky reads it)
+            let n = dofs.len();
+            let mut s = DMatrix::from_vec(n, n, factor.take_schur());
+            for j in 0..n {
+                for i in 0..j {
+                    s[(i, j)] = s[(j, i)];
+                }
+            }
+            self.schur = s;
+            self.r = r;
+        } else if root {
             // S's one copy, factorised and inverted in place: C = S⁻¹
             match DenseCholesky::factor_owned(dofs.len(), factor.take_schur()) {
                 Some(ch) => {
@@ -1064,10 +1110,14 @@ impl Compliance {
                     rhs[cand.row(i) + a] -= lam[q * self.per + a];
                 }
             }
-            let d0 = DVector::from_column_slice(&self.d0);
-            let x_s = (d0 - &self.cmat * DVector::from_column_slice(lam))
-                .as_slice()
-                .to_vec();
+            let x_s = if self.primal {
+                self.x_s.clone()
+            } else {
+                let d0 = DVector::from_column_slice(&self.d0);
+                (d0 - &self.cmat * DVector::from_column_slice(lam))
+                    .as_slice()
+                    .to_vec()
+            };
             (rhs, x_s)
         } else {
             (Vec::new(), Vec::new())
@@ -1124,7 +1174,8 @@ fn dense_round(
     free: &FreeModes,
     s: &NewtonSettings,
     (active, nested): (&[bool], bool),
-) -> DenseRun {
+    located: Option<usize>,
+) -> (DenseRun, Vec<f64>) {
     // force control: each approach δ_j is one more free mode, its normal parts −e_j·n on its
     // pair's candidates and its load |F_j| (force.rs)
     let force: Vec<_> = s
@@ -1134,6 +1185,8 @@ fn dense_round(
         .collect();
     let (ns, mz) = (comp.list.len(), cand.mz + force.len());
     let mut packed: Vec<f64> = Vec::new();
+    // the primal form's Schur variables' part of the expansion, u − G α (rank 0)
+    let mut x_s = Vec::new();
     if ctx.rank == 0 {
         let run = guarded("dense-steps", || {
             let (_, mut load_scale) = free.load();
@@ -1153,9 +1206,46 @@ fn dense_round(
                 phi.push(magnitude);
                 load_scale = load_scale.max(magnitude);
             }
+            let gap: Vec<f64> = list.iter().map(|&i| cand.gap(i)).collect();
+            if comp.primal {
+                // from as many candidates as the model put in contact, by clearance after the
+                // located rigid motion; else from all of them (no inactive unknowns)
+                let start = match located {
+                    Some(on) => {
+                        let mut by: Vec<usize> = (0..ns).collect();
+                        by.sort_by(|&a, &b| {
+                            cand.key(list[a])
+                                .total_cmp(&cand.key(list[b]))
+                                .then(a.cmp(&b))
+                        });
+                        let mut start = vec![false; ns];
+                        for &q in by.iter().take(on) {
+                            start[q] = true;
+                        }
+                        start
+                    }
+                    None => vec![true; ns],
+                };
+                let primal = Primal {
+                    s: &comp.schur,
+                    r: &comp.r,
+                    gap: &gap,
+                    g: &g,
+                    phi: &phi,
+                    load_scale,
+                    c: s.c,
+                    max_steps: s.section.max_steps,
+                    max_flops: comp.max_flops,
+                };
+                let run = primal.run(start);
+                if run.end == End::Converged {
+                    let ga = &g * DVector::from_column_slice(&run.alpha);
+                    x_s = (0..ns).map(|q| run.u_n[q] - ga[q]).collect();
+                }
+                return run;
+            }
             let (cmat, d0) = comp.normal_part();
             let d0 = &d0[..];
-            let gap: Vec<f64> = list.iter().map(|&i| cand.gap(i)).collect();
             let start: Vec<bool> = list.iter().map(|&i| active[i]).collect();
             let dense = Dense {
                 cmat: &cmat,
@@ -1180,7 +1270,7 @@ fn dense_round(
             .pack(ns, mz);
     }
     ctx.broadcast_f64s(&mut packed);
-    DenseRun::unpack(&packed, ns, mz)
+    (DenseRun::unpack(&packed, ns, mz), x_s)
 }
 
 /// The dense steps of one round into the history (numbered on) and the log.
@@ -1413,6 +1503,71 @@ mod tests {
         assert!((s - -1.0).abs() < 1e-14);
         assert!((run.alpha[0] - -0.75).abs() < 1e-14);
         assert!((run.u_n[0] + gap[0]).abs() < 1e-14 && (run.u_n[1] + gap[1]).abs() < 1e-14);
+    }
+
+    /// The primal form on S ends where the dual form on C = S⁻¹ ends (same set, λ, u, α): a
+    /// line of 40 candidates with a coupled SPD S (a discrete Laplacian plus a diagonal), a
+    /// curved gap, pressed down by a load held by the contact alone (one free translation)
+    /// and, with the translation pinned, by a load through d₀.
+    #[test]
+    fn primal_form_on_s_equals_the_dual_form_on_its_inverse() {
+        let n = 40;
+        let mut sm = DMatrix::<f64>::zeros(n, n);
+        for i in 0..n {
+            sm[(i, i)] = 2.5;
+            if i + 1 < n {
+                sm[(i, i + 1)] = -1.0;
+                sm[(i + 1, i)] = -1.0;
+            }
+        }
+        let cmat = sm.clone().try_inverse().expect("SPD");
+        let gap: Vec<f64> = (0..n)
+            .map(|i| {
+                let x = (i as f64 - 19.5) / 20.0;
+                0.5 * x * x
+            })
+            .collect();
+        for (mz, r) in [(1, vec![0.0; n]), (0, vec![-0.05; n])] {
+            let g = DMatrix::from_element(n, mz, 1.0);
+            let phi = vec![-0.4; mz];
+            let d0 = (&cmat * DVector::from_column_slice(&r)).as_slice().to_vec();
+            let dual = Dense {
+                cmat: &cmat,
+                d0: &d0,
+                gap: &gap,
+                g: &g,
+                phi: &phi,
+                load_scale: 1.0,
+                c: 1.0,
+                max_steps: 50,
+                pins_carry: 0,
+            }
+            .run(vec![false; n]);
+            let primal = Primal {
+                s: &sm,
+                r: &r,
+                gap: &gap,
+                g: &g,
+                phi: &phi,
+                load_scale: 1.0,
+                c: 1.0,
+                max_steps: 50,
+                max_flops: 1e9,
+            }
+            .run(vec![true; n]);
+            assert_eq!(dual.end, End::Converged, "{dual:?}");
+            assert_eq!(primal.end, End::Converged, "{primal:?}");
+            let on = primal.active.iter().filter(|&&a| a).count();
+            assert!(on > 2 && on < n, "{mz} modes: {on} active");
+            assert_eq!(primal.active, dual.active, "{mz} modes");
+            for i in 0..n {
+                assert!((primal.lambda[i] - dual.lambda[i]).abs() < 1e-12, "λ {i}");
+                assert!((primal.u_n[i] - dual.u_n[i]).abs() < 1e-12, "u {i}");
+            }
+            for (a, b) in primal.alpha.iter().zip(&dual.alpha) {
+                assert!((a - b).abs() < 1e-12, "α");
+            }
+        }
     }
 
     #[test]

@@ -171,6 +171,187 @@ impl DenseRun {
     }
 }
 
+/// Algorithm 1 in the primal form on the Schur complement S of the candidates' normal dofs,
+/// for zones too wide for the dual form (`Dense`): there C = S⁻¹ costs n³ flops before the
+/// first step, here each step solves for the inactive candidates' displacements only. With
+/// u the candidates' normal displacements (rigid motion G α included) and r MUMPS' condensation
+/// of the load, λ = r − S (u − G α) (the dual's u = d₀ − C λ + G α multiplied by S). On a set
+/// A: u_A = −g_A, λ_I = 0 on the rest and the free modes balanced, G_Aᵀ λ_A = φ:
+/// [S_II, −(S G)_I; −G_Aᵀ S_AI, G_Aᵀ (S G)_A] [u_I; α] = [r_I − S_IA u_A; φ − G_Aᵀ (r_A − S_AA u_A)],
+/// a step of |I| + m_z unknowns — few where the zone fills the candidates.
+pub struct Primal<'a> {
+    pub s: &'a DMatrix<f64>,
+    pub r: &'a [f64],
+    pub gap: &'a [f64],
+    pub g: &'a DMatrix<f64>,
+    pub phi: &'a [f64],
+    pub load_scale: f64,
+    pub c: f64,
+    pub max_steps: usize,
+    /// Dense work (flops of one step's LU) beyond which the iteration gives up.
+    pub max_flops: f64,
+}
+
+impl Primal<'_> {
+    /// Algorithm 1 from the set `active` (every candidate active is the cheap start: no
+    /// inactive unknowns), (3.23) on λ and u of every candidate, until no node changes; a set
+    /// that leaves a free mode unheld (a singular step) or a step beyond `max_flops` gives up.
+    /// Local.
+    pub fn run(&self, mut active: Vec<bool>) -> DenseRun {
+        let n = self.r.len();
+        let mz = self.g.ncols();
+        let sg = self.s * self.g;
+        let mut seen: HashSet<Vec<bool>> = HashSet::new();
+        seen.insert(active.clone());
+        let mut steps = Vec::new();
+        for step in 1..=self.max_steps {
+            let t = Instant::now();
+            let ni = active.iter().filter(|&&a| !a).count();
+            if 2.0 / 3.0 * ((ni + mz) as f64).powi(3) > self.max_flops {
+                let why = format!(
+                    "step {step} of the primal dense iteration has {ni} inactive candidates: \
+                     beyond the dense work that pays"
+                );
+                return DenseRun::unsolved(active, mz, steps, why);
+            }
+            let Some((lambda, alpha, u)) = self.solve_set(&active, &sg) else {
+                let why = format!(
+                    "the primal dense system of step {step} is singular or leaves a loaded \
+                     rigid mode free"
+                );
+                return DenseRun::unsolved(active, mz, steps, why);
+            };
+            let mut next = active.clone();
+            let mut changed = 0;
+            let mut res2 = 0.0;
+            for i in 0..n {
+                let cn = c_n(u[i], lambda[i], self.gap[i], self.c); // (3.21)
+                res2 += cn * cn;
+                next[i] = normal_active(u[i], lambda[i], self.gap[i], self.c); // (3.23)
+                changed += usize::from(next[i] != active[i]);
+            }
+            let n_active = active.iter().filter(|&&a| a).count();
+            steps.push((
+                step,
+                n_active,
+                changed,
+                res2.sqrt(),
+                t.elapsed().as_secs_f64(),
+            ));
+            if changed == 0 {
+                return DenseRun {
+                    active,
+                    lambda,
+                    alpha,
+                    u_n: u,
+                    steps,
+                    end: End::Converged,
+                    coarse: Vec::new(),
+                };
+            }
+            if !seen.insert(next.clone()) {
+                let why = format!("the set of step {} recurs (cycling)", step + 1);
+                return DenseRun::unsolved(active, mz, steps, why);
+            }
+            active = next;
+        }
+        let why = format!(
+            "no convergence in newton.max_steps = {} primal dense steps",
+            self.max_steps
+        );
+        DenseRun::unsolved(active, mz, steps, why)
+    }
+
+    /// One step on the set `active`: (λ, α, u) of every candidate, or `None` if singular or
+    /// if the load has a part in a free mode the set does not hold (the dual form's balance
+    /// test would move the body: not done here). Only the modes the set holds (V_f, as the
+    /// dual form) take part: α = V_f β.
+    fn solve_set(
+        &self,
+        active: &[bool],
+        sg: &DMatrix<f64>,
+    ) -> Option<(Vec<f64>, Vec<f64>, Vec<f64>)> {
+        let n = self.r.len();
+        let mz = self.g.ncols();
+        let ii: Vec<usize> = (0..n).filter(|&i| !active[i]).collect();
+        let aa: Vec<usize> = (0..n).filter(|&i| active[i]).collect();
+        let ga = DMatrix::from_fn(aa.len(), mz, |r, c| self.g[(aa[r], c)]);
+        let (vf, vu) = split_modes(&(ga.transpose() * &ga), mz);
+        let phi = DVector::from_column_slice(self.phi);
+        if mz > 0 && (vu.transpose() * &phi).norm() > BALANCE_RTOL * self.load_scale {
+            return None;
+        }
+        let nf = vf.ncols();
+        let (g, sg) = if mz > 0 {
+            (self.g * &vf, sg * &vf)
+        } else {
+            (DMatrix::zeros(n, 0), DMatrix::zeros(n, 0))
+        };
+        let pf = if mz > 0 {
+            vf.transpose() * phi
+        } else {
+            DVector::zeros(0)
+        };
+        let ni = ii.len();
+        // u with u_A = −g_A and u_I = 0 (its unknowns), S u of it; G with its rows off A zero
+        let mut u = vec![0.0; n];
+        let mut g_a = DMatrix::<f64>::zeros(n, nf);
+        for &j in &aa {
+            u[j] = -self.gap[j];
+            g_a.set_row(j, &g.row(j));
+        }
+        let su = self.s * DVector::from_column_slice(&u);
+        let s_ga = self.s * &g_a; // S symmetric: (S_IA G_A) on I's rows
+        let dim = ni + nf;
+        let mut m = DMatrix::<f64>::zeros(dim, dim);
+        let mut rhs = DVector::<f64>::zeros(dim);
+        for (q, &j) in ii.iter().enumerate() {
+            for (p, &i) in ii.iter().enumerate() {
+                m[(p, q)] = self.s[(i, j)];
+            }
+        }
+        for (p, &i) in ii.iter().enumerate() {
+            for cz in 0..nf {
+                m[(p, ni + cz)] = -sg[(i, cz)];
+                // −(G_Aᵀ S_AI) = −(S_IA G_A)ᵀ
+                m[(ni + cz, p)] = -s_ga[(i, cz)];
+            }
+            rhs[p] = self.r[i] - su[i];
+        }
+        for cz in 0..nf {
+            for cy in 0..nf {
+                m[(ni + cz, ni + cy)] = aa.iter().map(|&a| g[(a, cz)] * sg[(a, cy)]).sum();
+            }
+            let ga_ra: f64 = aa.iter().map(|&a| g[(a, cz)] * (self.r[a] - su[a])).sum();
+            rhs[ni + cz] = pf[cz] - ga_ra;
+        }
+        let x = if dim == 0 {
+            DVector::zeros(0)
+        } else {
+            DenseLu::factor(&m)?.solve(&rhs)
+        };
+        if !x.iter().all(|v| v.is_finite()) {
+            return None;
+        }
+        for (p, &i) in ii.iter().enumerate() {
+            u[i] = x[p];
+        }
+        let beta = DVector::from_iterator(nf, (0..nf).map(|cz| x[ni + cz]));
+        // λ = r − S (u − G α), zero on I by construction (set exactly)
+        let sw = self.s * (DVector::from_column_slice(&u) - &g * &beta);
+        let mut lambda = vec![0.0; n];
+        for &a in &aa {
+            lambda[a] = self.r[a] - sw[a];
+        }
+        let alpha = if mz > 0 {
+            (&vf * beta).as_slice().to_vec()
+        } else {
+            Vec::new()
+        };
+        Some((lambda, alpha, u))
+    }
+}
+
 impl Dense<'_> {
     /// Algorithm 1 from the set `active`: solve the set's dense system, λ_n and u_n of every
     /// candidate, update by (3.23); stop when no node changes (with the balance test of the

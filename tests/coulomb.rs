@@ -634,6 +634,21 @@ fn floating_disk_case(dir: &Path, traction: f64) -> std::path::PathBuf {
     )
 }
 
+/// The default run ends in the plain path's state from the touching node (`gap`): the same
+/// active nodes, u and λ within 1e-9 (`compare`).
+fn same_final_state(auto: &Solved, gap: &Solved, np: usize) {
+    assert_eq!(
+        auto.active_node_ids(),
+        gap.active_node_ids(),
+        "{np} rank(s)"
+    );
+    let (du, dl) = compare(auto, gap);
+    assert!(
+        du <= 1e-9 && dl <= 1e-9,
+        "{np} rank(s): |Δu| {du:e}, |Δλ| {dl:e}"
+    );
+}
+
 #[test]
 fn the_condensed_coulomb_solve_gives_the_touching_starts_answer_in_one_factorisation() {
     // newton.init = "auto" (the default): the frictionless solution of the condensed path, then
@@ -680,16 +695,7 @@ fn the_condensed_coulomb_solve_gives_the_touching_starts_answer_in_one_factorisa
                 "{}",
                 gap.run.output()
             );
-            assert_eq!(
-                auto.active_node_ids(),
-                gap.active_node_ids(),
-                "{np} rank(s)"
-            );
-            let (du, dl) = compare(&auto, &gap);
-            assert!(
-                du <= 1e-9 && dl <= 1e-9,
-                "{np} rank(s): |Δu| {du:e}, |Δλ| {dl:e}"
-            );
+            same_final_state(&auto, &gap, np);
             let (fa, fg) = (
                 auto.f(&["newton", "factorisations"]),
                 gap.f(&["newton", "factorisations"]),
@@ -737,16 +743,7 @@ fn a_rolling_ball_is_solved_on_its_located_zone_in_one_factorisation() {
         let cs = &auto.summary["newton"]["condensed"];
         assert_eq!(cs["coulomb"]["outcome"], "condensed", "{cs}");
         assert_eq!(auto.f(&["newton", "factorisations"]), 1.0, "{np} rank(s)");
-        assert_eq!(
-            auto.active_node_ids(),
-            gap.active_node_ids(),
-            "{np} rank(s)"
-        );
-        let (du, dl) = compare(&auto, &gap);
-        assert!(
-            du <= 1e-9 && dl <= 1e-9,
-            "{np} rank(s): |Δu| {du:e}, |Δλ| {dl:e}"
-        );
+        same_final_state(&auto, &gap, np);
     }
 }
 

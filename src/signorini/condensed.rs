@@ -339,16 +339,7 @@ pub(super) fn solve_keeping(
     refuse_floating_force(p, s, &free)?;
     let f_root = ctx.gather_to_root(&rhs0); // f for MUMPS' solve phases, once
     let start = start_set(p, s, &free, warm);
-    // a floating body's zone may lie far from the smallest gaps (it rolls where friction
-    // alone holds a part of the load) and be wider than the dense limits: the half-space
-    // model locates it
-    let located = match (s.model, warm) {
-        (Some(hs), None) if free.floats() && free.dirichlet_free().ncols() > 0 => {
-            let phi = s.carried.map_or_else(|| free.free_load(), <[f64]>::to_vec);
-            predictor::locate(ctx, hs, p.boundary, &free, &phi, (s.c, s.section.max_steps))?
-        }
-        _ => None,
-    };
+    let located = locate(ctx, p, s, &free, warm)?;
     let key = located.as_ref().map(|(k, _)| k.as_slice());
     let cand = Candidates::gather(ctx, p.boundary, &free, &start, key);
     let n_rows = p.layout.node_offsets.last().copied().unwrap_or(0) * dim;
@@ -483,6 +474,27 @@ pub(super) fn solve_keeping(
     }
     let why = format!("no final set in {MAX_ROUNDS} rounds of candidates");
     fall(fallback(ctx, summary, why))
+}
+
+/// A floating body's contact zone located by the half-space model before anything is
+/// factorised (the first solve of a case, `s.model` given): it may lie far from the smallest
+/// gaps (the body rolls where friction alone holds a part of the load, `s.carried`) and be
+/// wider than the dense limits. The clearance of this rank's contact nodes after the model's
+/// rigid motion and the nodes it puts in contact ([`predictor::locate`]). Collective.
+fn locate(
+    ctx: &Ctx,
+    p: &ContactProblem,
+    s: &NewtonSettings,
+    free: &FreeModes,
+    warm: Option<&WarmStart>,
+) -> Result<Option<(Vec<f64>, usize)>, RunError> {
+    match (s.model, warm) {
+        (Some(hs), None) if free.floats() && free.dirichlet_free().ncols() > 0 => {
+            let phi = s.carried.map_or_else(|| free.free_load(), <[f64]>::to_vec);
+            predictor::locate(ctx, hs, p.boundary, free, &phi, (s.c, s.section.max_steps))
+        }
+        _ => Ok(None),
+    }
 }
 
 /// A floating body under force control: with one pair the load balance fixes the force;

@@ -1,8 +1,9 @@
 //! Algorithm 1 on a dense model of the contact unknowns, shared by the condensed path
 //! (condensed.rs: the exact compliance from MUMPS' Schur complement) and the half-space
 //! predictor (predictor.rs: a modelled compliance): the dense active-set iteration with the free
-//! rigid modes' balance (`Dense`), its result and how it ended (`DenseRun`, `End`), the saddle
-//! solver of one step, and the coarsening of the nested start.
+//! rigid modes' balance (`Dense`), its primal form on the Schur complement itself for zones too
+//! wide for the compliance (`Primal`), their result and how it ended (`DenseRun`, `End`), the
+//! saddle solver of one step, and the coarsening of the nested start.
 
 use crate::contact::{c_n, normal_active};
 use crate::petsc::lapack::{DenseCholesky, DenseLu};
@@ -171,6 +172,31 @@ impl DenseRun {
     }
 }
 
+/// (3.21) and (3.23) on every candidate from a step's u_n and λ_n on the set `active`: the
+/// next set and how many nodes change; the step's record (step, |A_n|, changed, ‖C_n‖₂, the
+/// seconds since `t`) pushed onto `steps`. Local.
+fn update(
+    active: &[bool],
+    (u_n, lambda): (&[f64], &[f64]),
+    (gap, c): (&[f64], f64),
+    (step, t): (usize, Instant),
+    steps: &mut Vec<(usize, usize, usize, f64, f64)>,
+) -> (Vec<bool>, usize) {
+    let mut next = active.to_vec();
+    let mut changed = 0;
+    let mut res2 = 0.0;
+    for i in 0..active.len() {
+        let cn = c_n(u_n[i], lambda[i], gap[i], c); // (3.21)
+        res2 += cn * cn;
+        next[i] = normal_active(u_n[i], lambda[i], gap[i], c); // (3.23)
+        changed += usize::from(next[i] != active[i]);
+    }
+    let n_active = active.iter().filter(|&&a| a).count();
+    let secs = t.elapsed().as_secs_f64();
+    steps.push((step, n_active, changed, res2.sqrt(), secs));
+    (next, changed)
+}
+
 /// Algorithm 1 in the primal form on the Schur complement S of the candidates' normal dofs,
 /// for zones too wide for the dual form (`Dense`): there C = S⁻¹ costs n³ flops before the
 /// first step, here each step solves for the inactive candidates' displacements only. With
@@ -198,7 +224,6 @@ impl Primal<'_> {
     /// that leaves a free mode unheld (a singular step) or a step beyond `max_flops` gives up.
     /// Local.
     pub fn run(&self, mut active: Vec<bool>) -> DenseRun {
-        let n = self.r.len();
         let mz = self.g.ncols();
         let sg = self.s * self.g;
         let mut seen: HashSet<Vec<bool>> = HashSet::new();
@@ -221,23 +246,13 @@ impl Primal<'_> {
                 );
                 return DenseRun::unsolved(active, mz, steps, why);
             };
-            let mut next = active.clone();
-            let mut changed = 0;
-            let mut res2 = 0.0;
-            for i in 0..n {
-                let cn = c_n(u[i], lambda[i], self.gap[i], self.c); // (3.21)
-                res2 += cn * cn;
-                next[i] = normal_active(u[i], lambda[i], self.gap[i], self.c); // (3.23)
-                changed += usize::from(next[i] != active[i]);
-            }
-            let n_active = active.iter().filter(|&&a| a).count();
-            steps.push((
-                step,
-                n_active,
-                changed,
-                res2.sqrt(),
-                t.elapsed().as_secs_f64(),
-            ));
+            let (next, changed) = update(
+                &active,
+                (&u, &lambda),
+                (self.gap, self.c),
+                (step, t),
+                &mut steps,
+            );
             if changed == 0 {
                 return DenseRun {
                     active,
@@ -357,7 +372,6 @@ impl Dense<'_> {
     /// candidate, update by (3.23); stop when no node changes (with the balance test of the
     /// modes the set leaves free, as the plain path). Local.
     pub fn run(&self, mut active: Vec<bool>) -> DenseRun {
-        let n = self.d0.len();
         let mz = self.g.ncols();
         let mut seen: HashSet<Vec<bool>> = HashSet::new();
         seen.insert(active.clone());
@@ -380,23 +394,13 @@ impl Dense<'_> {
                     return DenseRun::unsolved(active, mz, steps, why);
                 }
             };
-            let mut next = active.clone();
-            let mut changed = 0;
-            let mut res2 = 0.0;
-            for i in 0..n {
-                let cn = c_n(u_n[i], lambda[i], self.gap[i], self.c); // (3.21)
-                res2 += cn * cn;
-                next[i] = normal_active(u_n[i], lambda[i], self.gap[i], self.c); // (3.23)
-                changed += usize::from(next[i] != active[i]);
-            }
-            let n_active = active.iter().filter(|&&a| a).count();
-            steps.push((
-                step,
-                n_active,
-                changed,
-                res2.sqrt(),
-                t.elapsed().as_secs_f64(),
-            ));
+            let (mut next, changed) = update(
+                &active,
+                (&u_n, &lambda),
+                (self.gap, self.c),
+                (step, t),
+                &mut steps,
+            );
             if changed == 0 {
                 match self.balance(&active, &u_n, &free_dirs) {
                     None => return out(active, lambda, alpha, u_n, steps, End::Converged),

@@ -1104,9 +1104,7 @@ fn free_modes(
 
 /// The part of the body's load that friction alone holds: the load φ = Zᵀ Rᵀ f in the rigid
 /// modes that Dirichlet data leave free and that move no contact node along its normal (e.g. a
-/// tangential load on a floating body pressed onto a plane). `None`: the body is held, or
-/// that part is below [`dense::BALANCE_RTOL`] of the load's scale. Collective (one
-/// reduction).
+/// tangential load on a floating body pressed onto a plane).
 struct Unheld {
     /// An orthonormal basis of those modes (m_z × count, in the coordinates of Z's columns).
     basis: nalgebra::DMatrix<f64>,
@@ -1116,6 +1114,8 @@ struct Unheld {
 }
 
 impl Unheld {
+    /// The body's unheld load on the boundary `b`; `None`: the body is held, or that part is
+    /// below [`dense::BALANCE_RTOL`] of the load's scale. Collective (one reduction).
     fn of(ctx: &Ctx, b: &ContactBoundary, free: &FreeModes) -> Option<Unheld> {
         let mz = free.dirichlet_free().ncols();
         if !free.floats() || mz == 0 {

@@ -429,10 +429,10 @@ fn run_model(
 }
 
 /// The model's nodes where it locates a contact zone ([`locate`]): a coarse subset of every
-/// contact node first (a contact line of 8 193 nodes: every thirty-second, 257 model nodes, 0.04 s on 2 ranks),
-/// every node up to [`MAX_MODEL_NODES`] (else their coarse subset) where that does not converge
-/// (measured: a floating ball of 1 065 contact nodes, 20 in contact, modelled by 194 cycles:
-/// its zone is four model nodes wide).
+/// contact node first (a contact line of 8 193 nodes: every thirty-second, 257 model nodes,
+/// 0.04 s on 2 ranks), every node up to [`MAX_MODEL_NODES`] (else their coarse subset) where
+/// that does not converge (measured: a floating ball of 1 065 contact nodes, 20 in contact,
+/// modelled by 194 cycles: its zone is four model nodes wide).
 pub const LOCATE_MODEL_NODES: [usize; 2] = [512, MAX_MODEL_NODES];
 
 /// Where the contact zone of a body that its contact alone holds lies, before anything is

@@ -50,9 +50,9 @@ pub const MIN_MODEL_NODES: usize = 256;
 pub const MAX_REPRESENTED: usize = 24_000;
 
 /// The model's nodes among the represented ones (`x`, ordered by the first solve's clearance
-/// `s0`): all of them up to `cap` ([`MAX_MODEL_NODES`] for the prediction), else the finest level of the nested
-/// iteration's coarsening (about every second node of a contact line, every fourth of a
-/// surface, per level) with at most that many, each represented node belonging to the nearest
+/// `s0`): all of them up to `cap` ([`MAX_MODEL_NODES`] for the prediction), else the finest
+/// level of the nested iteration's coarsening (about every second node of a contact line,
+/// every fourth of a surface, per level) with at most that many, each represented node belonging to the nearest
 /// model node (whose weight is the sum of its nodes'; the prediction gives a node its model
 /// node's state). Returns (model nodes as indices into `x`, owner of every node of `x`).
 pub fn model_nodes(x: &[[f64; 3]], s0: &[f64], cap: usize) -> (Vec<usize>, Vec<usize>) {

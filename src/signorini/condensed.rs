@@ -480,7 +480,8 @@ pub(super) fn solve_keeping(
 /// factorised (the first solve of a case, `s.model` given): it may lie far from the smallest
 /// gaps (the body rolls where friction alone holds a part of the load, `s.carried`) and be
 /// wider than the dense limits. The clearance of this rank's contact nodes after the model's
-/// rigid motion and the nodes it puts in contact ([`predictor::locate`]). Collective.
+/// rigid motion and the nodes it puts in contact ([`predictor::locate`]), computed once per
+/// solve (`p.located`). Collective.
 fn locate(
     ctx: &Ctx,
     p: &ContactProblem,
@@ -490,8 +491,14 @@ fn locate(
 ) -> Result<Option<(Vec<f64>, usize)>, RunError> {
     match (s.model, warm) {
         (Some(hs), None) if free.floats() && free.dirichlet_free().ncols() > 0 => {
+            if let Some(done) = p.located.borrow().as_ref() {
+                return Ok(done.clone()); // the same body, load and model: located once
+            }
             let phi = s.carried.map_or_else(|| free.free_load(), <[f64]>::to_vec);
-            predictor::locate(ctx, hs, p.boundary, free, &phi, (s.c, s.section.max_steps))
+            let zone =
+                predictor::locate(ctx, hs, p.boundary, free, &phi, (s.c, s.section.max_steps))?;
+            *p.located.borrow_mut() = Some(zone.clone());
+            Ok(zone)
         }
         _ => Ok(None),
     }

@@ -161,6 +161,10 @@ pub struct ContactSolution {
 #[derive(Default)]
 pub struct KeptFactor(std::cell::RefCell<Option<condensed::Kept>>);
 
+/// A located contact zone (predictor::locate): this rank's clearances and the nodes the model
+/// puts in contact; `None` where the model did not converge.
+pub(crate) type Located = Option<(Vec<f64>, usize)>;
+
 impl ContactSolution {
     /// Drops the factorisation kept for a next load step (none follows).
     pub fn release_factor(&self) {
@@ -331,6 +335,7 @@ pub fn solve(
     let kept = KeptFactor(std::cell::RefCell::new(
         previous.and_then(|p| p.kept.take()),
     ));
+    let located = std::cell::RefCell::new(None);
     let problem = ContactProblem {
         mesh,
         layout,
@@ -338,6 +343,7 @@ pub fn solve(
         fixed,
         sys,
         kept: &kept,
+        located: &located,
     };
     // the body's half-space model: the predictor's on the iterative preset (frictionless,
     // newton.rs), else the condensed path's (locating a floating body's zone; the plain path's

@@ -178,6 +178,9 @@ pub struct ContactProblem<'a> {
     /// The previous load step's condensed Coulomb factorisation on the way in, this solve's on
     /// the way out.
     pub kept: &'a super::KeptFactor,
+    /// The contact zone the half-space model located in this solve (condensed.rs `locate`),
+    /// once computed: a second condensed attempt (Coulomb's normal dofs alone) takes it again.
+    pub located: &'a std::cell::RefCell<Option<super::Located>>,
 }
 
 /// The state the loop carries from step to step.

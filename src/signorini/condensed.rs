@@ -356,27 +356,16 @@ pub(super) fn solve_keeping(
     let condensation = t.elapsed().as_secs_f64();
     let mut history: Vec<StepInfo> = Vec::new();
     for round in 1..=MAX_ROUNDS {
-        let t = Instant::now();
-        let new = match growth.next(&cand, &comp, round) {
-            Ok(new) => new,
-            Err(stop) => return fall(fallback_stop(ctx, summary, stop)),
-        };
-        if new.is_empty() && comp.factor.is_some() {
-            // the previous load step's factorisation holds every candidate of this one
-            summary.record_kept(ctx, &comp, condensation + t.elapsed().as_secs_f64());
-        } else if let Err(stop) = comp.grow(
+        let grown = factorise_round(
             ctx,
             reduced,
-            &cand,
-            &new,
-            (dim, n_rows),
-            (&f_root, &growth.why),
-        ) {
+            (&cand, &mut comp, &growth),
+            &mut summary,
+            (round, condensation),
+            (dim, n_rows, &f_root),
+        );
+        if let Err(stop) = grown {
             return fall(fallback_stop(ctx, summary, stop));
-        } else {
-            summary.factorisation_kept = false;
-            summary.primal = comp.primal;
-            summary.record_factorisation(&comp, t.elapsed().as_secs_f64());
         }
         if !steps {
             summary.outcome = "factorised";
@@ -407,29 +396,10 @@ pub(super) fn solve_keeping(
         summary.record_coarse(ctx, &run);
         record_steps(ctx, &mut history, &run, comp.list.len(), free.pins().len());
         let lambda = growth.take_dense(&comp, &run);
-        match run.end {
-            End::Converged => {}
-            End::NoSupport(_) if comp.list.len() < cand.n => {
-                // a node beyond the candidates may still carry the load: all of them
-                growth.take_all();
-                growth.why = format!(
-                    "no support among the {} candidates, so every contact node",
-                    comp.list.len()
-                );
-                continue;
-            }
-            End::NoSupport(_) if !s.force.is_empty() => {
-                let fc = super::force::unreached(ctx, p.boundary, s.force);
-                return Err(super::force::never_touches(fc.unwrap_or(&s.force[0])));
-            }
-            End::NoSupport(reaction) => {
-                return Err(free.no_support(run.active.iter().filter(|&&a| a).count(), reaction))
-            }
-            // the primal form gives up where the zone is too wide even for it
-            End::Fallback(why) if comp.primal => {
-                return fall(fallback_stop(ctx, summary, Stop::too_wide(why)))
-            }
-            End::Fallback(why) => return fall(fallback(ctx, summary, why)),
+        match judge(ctx, p, s, (&free, &comp, cand.n), &mut growth, &run)? {
+            Judged::Expand => {}
+            Judged::Again => continue,
+            Judged::Stop(stop) => return fall(fallback_stop(ctx, summary, stop)),
         }
 
         let t = Instant::now();
@@ -474,6 +444,83 @@ pub(super) fn solve_keeping(
     }
     let why = format!("no final set in {MAX_ROUNDS} rounds of candidates");
     fall(fallback(ctx, summary, why))
+}
+
+/// A round's first phase: the nodes it adds (`Growth::next`) and K_p factorised with their
+/// Schur complement (`Compliance::grow`), or the previous load step's factorisation where it
+/// holds every candidate; recorded in `summary`. `Err`: why the condensed path stops.
+/// Collective.
+fn factorise_round(
+    ctx: &Ctx,
+    reduced: &ReducedSystem,
+    (cand, comp, growth): (&Candidates, &mut Compliance, &Growth),
+    summary: &mut CondensedSummary,
+    (round, condensation): (usize, f64),
+    (dim, n_rows, f_root): (usize, usize, &[f64]),
+) -> Result<(), Stop> {
+    let t = Instant::now();
+    let new = growth.next(cand, comp, round)?;
+    if new.is_empty() && comp.factor.is_some() {
+        // the previous load step's factorisation holds every candidate of this one
+        summary.record_kept(ctx, comp, condensation + t.elapsed().as_secs_f64());
+        return Ok(());
+    }
+    comp.grow(
+        ctx,
+        reduced,
+        cand,
+        &new,
+        (dim, n_rows),
+        (f_root, &growth.why),
+    )?;
+    summary.factorisation_kept = false;
+    summary.primal = comp.primal;
+    summary.record_factorisation(comp, t.elapsed().as_secs_f64());
+    Ok(())
+}
+
+/// What a dense round's end means for the condensed path.
+enum Judged {
+    /// Converged: expand and check on every contact node.
+    Expand,
+    /// No support among fewer candidates than contact nodes: every node a candidate, again.
+    Again,
+    Stop(Stop),
+}
+
+/// A round's dense end judged: no support on a body that nothing else can hold is the
+/// case's error (force control: the obstacle never touches); a fallback of the primal form
+/// means the zone is too wide even for it. Collective (force control's check).
+fn judge(
+    ctx: &Ctx,
+    p: &ContactProblem,
+    s: &NewtonSettings,
+    (free, comp, n): (&FreeModes, &Compliance, usize),
+    growth: &mut Growth,
+    run: &DenseRun,
+) -> Result<Judged, RunError> {
+    match &run.end {
+        End::Converged => Ok(Judged::Expand),
+        End::NoSupport(_) if comp.list.len() < n => {
+            // a node beyond the candidates may still carry the load: all of them
+            growth.take_all();
+            growth.why = format!(
+                "no support among the {} candidates, so every contact node",
+                comp.list.len()
+            );
+            Ok(Judged::Again)
+        }
+        End::NoSupport(_) if !s.force.is_empty() => {
+            let fc = super::force::unreached(ctx, p.boundary, s.force);
+            Err(super::force::never_touches(fc.unwrap_or(&s.force[0])))
+        }
+        End::NoSupport(reaction) => {
+            Err(free.no_support(run.active.iter().filter(|&&a| a).count(), *reaction))
+        }
+        // the primal form gives up where the zone is too wide even for it
+        End::Fallback(why) if comp.primal => Ok(Judged::Stop(Stop::too_wide(why.clone()))),
+        End::Fallback(why) => Ok(Judged::Stop(Stop::failed(why.clone()))),
+    }
 }
 
 /// A floating body's contact zone located by the half-space model before anything is

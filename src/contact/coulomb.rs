@@ -306,6 +306,87 @@ pub fn coulomb_row_unregularised<const M: usize>(
     })
 }
 
+/// The Newton row of the projection form C_τ = λ_τ − P_b(λ_τ + c u_τ) (F3) at a slip node
+/// (b > 0, |v| > b), for a node that slipped in the previous step as well (docs/friction.md,
+/// "Settled slip"): with ν = v/|v|, e = b/|v|, the linearisation of P_b(v) = b ν is
+/// e (I − ννᵀ) dv + ν db, so λ_τ' = L u_τ' + ν b' with L = c e/(1 − e) (I − ννᵀ):
+/// l = L, q = μ ν, r = 0. It is the (F5) row evaluated as at a slipping solution (λ_τ = b ν);
+/// in 2D L = 0 and the row λ_τ' = μ(−λ_n') ν depends on the direction alone, so the
+/// iteration is piecewise linear. `None` unless b > 0 and |v| > b.
+pub fn coulomb_row_projected<const M: usize>(
+    p: &NodePoint<M>,
+    g: f64,
+    mu: f64,
+    c: f64,
+) -> Option<CoulombRow<M>> {
+    let b = coulomb_threshold(p.u_n, p.lam_n, g, mu, c);
+    let v = axpy(&p.lam_t, c, &p.u_t);
+    let nv = norm(&v);
+    if !(b > 0.0 && nv > b && nv.is_finite()) {
+        return None;
+    }
+    // 2D: ν = sign v exactly, so that the row repeats bit for bit while the direction holds
+    let nu = if M == 1 {
+        v.map(f64::signum)
+    } else {
+        scale(1.0 / nv, &v)
+    };
+    // c e/(1 − e) = c b/(|v| − b), without the cancellation of 1 − e
+    let k = c * b / (nv - b);
+    let mut l = [[0.0; M]; M];
+    if M > 1 {
+        for (i, row) in l.iter_mut().enumerate() {
+            for (j, x) in row.iter_mut().enumerate() {
+                let delta = if i == j { 1.0 } else { 0.0 };
+                *x = k * (delta - nu[i] * nu[j]);
+            }
+        }
+    }
+    Some(CoulombRow::Slip {
+        l,
+        q: scale(mu, &nu),
+        r: [0.0; M],
+    })
+}
+
+/// [`coulomb_row_projected`] for a runtime dimension `dim` (2 or 3), padded as
+/// [`coulomb_row_dyn`].
+#[allow(clippy::too_many_arguments)]
+pub fn coulomb_row_projected_dyn(
+    dim: usize,
+    u_n: f64,
+    lam_n: f64,
+    u_t: [f64; 2],
+    lam_t: [f64; 2],
+    g: f64,
+    mu: f64,
+    c: f64,
+) -> Option<CoulombRow<2>> {
+    if dim == 3 {
+        let p = NodePoint {
+            u_n,
+            lam_n,
+            u_t,
+            lam_t,
+        };
+        return coulomb_row_projected(&p, g, mu, c);
+    }
+    let p = NodePoint {
+        u_n,
+        lam_n,
+        u_t: [u_t[0]],
+        lam_t: [lam_t[0]],
+    };
+    match coulomb_row_projected(&p, g, mu, c)? {
+        CoulombRow::Slip { q, .. } => Some(CoulombRow::Slip {
+            l: [[0.0; 2]; 2],
+            q: [q[0], 0.0],
+            r: [0.0; 2],
+        }),
+        CoulombRow::Stick => None,
+    }
+}
+
 /// [`coulomb_row`] for a runtime dimension `dim` (2 or 3) with tangential vectors padded to
 /// length 2 (second entry ignored in 2D; the 2D row sits in `l[0][0]`, `q[0]`, `r[0]`).
 #[allow(clippy::too_many_arguments)]
@@ -903,6 +984,81 @@ mod tests {
             assert!(norm(&axpy(&q, -mu, &nu)) <= 1e-12 * mu);
             assert!(norm(&r) <= 1e-12 * mu * pn);
         }
+    }
+
+    /// The projection form's row is the Newton step of C_τ = λ_τ − P_b(λ_τ + c u_τ) at an
+    /// active slip node: λ_τ' = b ν + e (I − ννᵀ)(v' − v) + ν (b' − b) for any new (λ_n', u_τ'),
+    /// with b' of (F1) at u_n' = −g; at a slip solution (λ_τ = b ν) it is the (F5) row.
+    fn projected_row_is_the_projection_forms_newton_step<const M: usize>(seed: u64) {
+        let mut rng = StdRng::seed_from_u64(seed);
+        let mut tested = 0;
+        for (mut p, g, mu, c) in samples::<M>(seed, 4000) {
+            p.u_n = -g;
+            let Some(CoulombRow::Slip { l, q, r }) = coulomb_row_projected(&p, g, mu, c) else {
+                assert!(coulomb_classify(&p, g, mu, c) != NodeState::S4 || p.lam_n >= 0.0);
+                continue;
+            };
+            assert_eq!(r, [0.0; M]);
+            let b = coulomb_threshold(p.u_n, p.lam_n, g, mu, c);
+            let v = axpy(&p.lam_t, c, &p.u_t);
+            let nu = scale(1.0 / norm(&v), &v);
+            let e = b / norm(&v);
+            if e > 1.0 - 1e-6 {
+                continue;
+            }
+            let (ln2, ut2) = (
+                p.lam_n + rng.gen_range(-1.0..1.0),
+                axpy(&p.u_t, 1.0, &rand_vec::<M>(&mut rng, 1.0 / c.max(1.0))),
+            );
+            let b2 = mu * (-ln2);
+            // −λ_τ' + l u_τ' − q λ_n' = r on an active node (F6)
+            let lt2 = axpy(&matvec(&l, &ut2), -ln2, &q);
+            let dv = axpy(&axpy(&lt2, c, &ut2), -1.0, &v);
+            let mut want = scale(b2, &nu);
+            let along = dot(&nu, &dv);
+            for i in 0..M {
+                want[i] += e * (dv[i] - along * nu[i]);
+            }
+            let sc = norm(&lt2) + b.abs() + b2.abs() + e * norm(&dv);
+            assert!(
+                norm(&axpy(&lt2, -1.0, &want)) <= 1e-10 * sc,
+                "{lt2:?} {want:?}"
+            );
+            if M == 1 {
+                assert_eq!(l, [[0.0; M]; M]);
+            }
+            // at the slip solution with the same v the (F5) row is the same row
+            let at_solution = pt(
+                p.u_n,
+                p.lam_n,
+                axpy(&v, -b, &nu).map(|x| x / c),
+                scale(b, &nu),
+            );
+            let Some(CoulombRow::Slip {
+                l: l5,
+                q: q5,
+                r: r5,
+            }) = coulomb_row_unregularised(&at_solution, g, mu, c)
+            else {
+                panic!("a slip solution has a slip row");
+            };
+            let s = 1.0 + max_abs(&l5) / c;
+            assert!(max_abs(&mat_lin(1.0, &l, -1.0, &l5)) <= 1e-9 * s * c);
+            assert!(norm(&axpy(&q, -1.0, &q5)) <= 1e-9 * s * mu);
+            assert!(norm(&r5) <= 1e-9 * s * b);
+            tested += 1;
+        }
+        assert!(tested > 200, "{tested}");
+    }
+
+    #[test]
+    fn projected_row_is_the_projection_forms_newton_step_2d() {
+        projected_row_is_the_projection_forms_newton_step::<1>(61);
+    }
+
+    #[test]
+    fn projected_row_is_the_projection_forms_newton_step_3d() {
+        projected_row_is_the_projection_forms_newton_step::<2>(62);
     }
 
     #[test]

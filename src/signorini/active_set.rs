@@ -128,6 +128,40 @@ pub fn threshold_scale_local(b: &ContactBoundary, nodes: &[NodeResult], law: Law
 /// row (the Newton linearisation is unchanged).
 pub const SPRING_TOL: f64 = 1e-10;
 
+/// Coulomb's row for the next step from the (F5) row `row` of node `k` at `r` and the row
+/// `prev` it was solved with (docs/friction.md, "Settled slip"):
+/// - a node that slipped and slips on in the same direction (q_prev · q > 0) takes the
+///   projection form's row [`contact::coulomb_row_projected_dyn`]: the (F5) row at the slip
+///   solution, exact in 2D (the iteration is then piecewise linear there);
+/// - a node that slipped and whose increment now opposes its force (λ_τ · Δu_τ < 0 with
+///   |λ_τ| ≤ b: at a slip solution λ_τ = b Δu_τ/|Δu_τ|) sticks.
+fn settled(
+    prev: Option<CoulombRow<2>>,
+    row: CoulombRow<2>,
+    k: &ContactNode,
+    r: &NodeResult,
+    c: f64,
+    dim: usize,
+) -> CoulombRow<2> {
+    let (Some(CoulombRow::Slip { q: q0, .. }), CoulombRow::Slip { q: q1, .. }) = (prev, row) else {
+        return row;
+    };
+    let (b, _) = Law::Coulomb.threshold_and_v(k, r, c);
+    if !(b > 0.0 && prev.is_some_and(|p| p.coupled()) && row.coupled()) {
+        return row;
+    }
+    let du = increment(r, k);
+    let against = r.lambda_t[0] * du[0] + r.lambda_t[1] * du[1] < 0.0;
+    if against && r.lambda_t[0].hypot(r.lambda_t[1]) <= b {
+        return CoulombRow::Stick;
+    }
+    if dim != 2 || q0[0] * q1[0] + q0[1] * q1[1] <= 0.0 {
+        return row;
+    }
+    contact::coulomb_row_projected_dyn(dim, r.u_n, r.lambda_n, du, r.lambda_t, k.gap, k.mu, c)
+        .unwrap_or(row)
+}
+
 /// u_τ − u_ref: the tangential increment friction acts on (u_τ itself for u_ref = 0).
 pub fn increment(r: &NodeResult, k: &ContactNode) -> [f64; 2] {
     if k.u_t_ref == [0.0; 2] {
@@ -438,6 +472,9 @@ impl ActiveSet {
                 if t[i].is_slip() && !self.slip(i) && law.stays_stuck(k, r, c, scale) {
                     t[i] = CoulombRow::Stick;
                 }
+                if law == Law::Coulomb {
+                    t[i] = settled(self.tangential.as_ref().map(|p| p[i]), t[i], k, r, c, dim);
+                }
                 flip |= t[i].is_slip() != self.slip(i);
                 residual2 += law.residual2(k, r, c);
                 lambda2 += r.lambda.iter().map(|x| x * x).sum::<f64>();
@@ -699,6 +736,42 @@ mod tests {
             }
         );
         assert_eq!(row.with_reference(&[0.0; 2]), row);
+    }
+
+    #[test]
+    fn a_settled_slip_node_takes_the_projection_row_and_one_slipping_back_sticks() {
+        // μ = 0.1, λ_n = −1: b = 0.1; the node slipped in +τ (its last row's q > 0)
+        let k = node(0.0, [0.0; 2]);
+        let c = 10.0;
+        let prev = Law::Coulomb.row(&k, &at(1.0, -1.0, 0.1), c, 2);
+        assert!(prev.coupled());
+        // it slips on in +τ, λ_τ still short of b: the (F5) row has a spring and a right-hand
+        // side, the settled row λ_τ' = μ(−λ_n') only
+        let r = at(0.5, -1.0, 0.08);
+        let row = Law::Coulomb.row(&k, &r, c, 2);
+        let CoulombRow::Slip { l, r: rhs, .. } = row else {
+            panic!("slips");
+        };
+        assert!(l[0][0] > 0.0 && rhs[0] != 0.0);
+        let want = CoulombRow::Slip {
+            l: [[0.0; 2]; 2],
+            q: [0.1, 0.0],
+            r: [0.0; 2],
+        };
+        assert_eq!(settled(Some(prev), row, &k, &r, c, 2), want);
+        // it now moves against its force (|λ_τ| ≤ b): stick
+        let back = at(-0.5, -1.0, 0.08);
+        let row = Law::Coulomb.row(&k, &back, c, 2);
+        assert!(row.is_slip());
+        assert_eq!(settled(Some(prev), row, &k, &back, c, 2), CoulombRow::Stick);
+        // a node that stuck before, or a 3D node, keeps its (F5) row
+        let row = Law::Coulomb.row(&k, &r, c, 2);
+        assert_eq!(settled(Some(CoulombRow::Stick), row, &k, &r, c, 2), row);
+        assert_eq!(settled(Some(prev), row, &k, &r, c, 3), row);
+        // and so does one whose slip turned round with |λ_τ| beyond its new threshold
+        let turned = at(-0.5, -1.0, -0.09);
+        let row = Law::Coulomb.row(&k, &turned, c, 2);
+        assert_eq!(settled(Some(prev), row, &k, &turned, c, 2), row);
     }
 
     #[test]

@@ -146,6 +146,9 @@ fn settled(
     let (Some(CoulombRow::Slip { q: q0, .. }), CoulombRow::Slip { q: q1, .. }) = (prev, row) else {
         return row;
     };
+    if dim != 2 {
+        return row;
+    }
     let (b, _) = Law::Coulomb.threshold_and_v(k, r, c);
     if !(b > 0.0 && prev.is_some_and(|p| p.coupled()) && row.coupled()) {
         return row;
@@ -155,7 +158,7 @@ fn settled(
     if against && r.lambda_t[0].hypot(r.lambda_t[1]) <= b {
         return CoulombRow::Stick;
     }
-    if dim != 2 || q0[0] * q1[0] + q0[1] * q1[1] <= 0.0 {
+    if q0[0] * q1[0] + q0[1] * q1[1] <= 0.0 {
         return row;
     }
     contact::coulomb_row_projected_dyn(dim, r.u_n, r.lambda_n, du, r.lambda_t, k.gap, k.mu, c)

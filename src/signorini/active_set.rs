@@ -459,6 +459,34 @@ impl ActiveSet {
         scale: f64,
         dim: usize,
     ) -> SetUpdate {
+        self.update_rows(it, b, law, c, scale, dim, false)
+    }
+
+    /// [`ActiveSet::update`] with the rows of settled slip ([`settled`], 2D Coulomb): the
+    /// condensed Coulomb iteration's update (docs/friction.md, "Settled slip"). Local.
+    pub fn update_settling(
+        &self,
+        it: &Iterate,
+        b: &ContactBoundary,
+        law: Law,
+        c: f64,
+        scale: f64,
+        dim: usize,
+    ) -> SetUpdate {
+        self.update_rows(it, b, law, c, scale, dim, true)
+    }
+
+    #[allow(clippy::too_many_arguments)]
+    fn update_rows(
+        &self,
+        it: &Iterate,
+        b: &ContactBoundary,
+        law: Law,
+        c: f64,
+        scale: f64,
+        dim: usize,
+        settle: bool,
+    ) -> SetUpdate {
         let mut next = self.clone();
         let mut changed = 0usize;
         let mut residual2 = 0.0;
@@ -475,7 +503,7 @@ impl ActiveSet {
                 if t[i].is_slip() && !self.slip(i) && law.stays_stuck(k, r, c, scale) {
                     t[i] = CoulombRow::Stick;
                 }
-                if law == Law::Coulomb {
+                if settle && law == Law::Coulomb {
                     t[i] = settled(self.tangential.as_ref().map(|p| p[i]), t[i], k, r, c, dim);
                 }
                 flip |= t[i].is_slip() != self.slip(i);

@@ -257,6 +257,8 @@ struct Dense<'a> {
     c: f64,
     max_steps: usize,
     tol_u: f64,
+    /// The rows of settled slip (`ActiveSet::update_settling`; production: true).
+    settle: bool,
 }
 
 impl Dense<'_> {
@@ -308,7 +310,11 @@ impl Dense<'_> {
             };
             self.records(&set, &lam, &u, &mut it.nodes);
             let scale = threshold_scale_local(self.cb, &it.nodes, law, c);
-            let up = set.update(&it, self.cb, law, c, scale, d); // (3.23) / (F5)
+            let up = if self.settle {
+                set.update_settling(&it, self.cb, law, c, scale, d) // (3.23) / (F5)
+            } else {
+                set.update(&it, self.cb, law, c, scale, d)
+            };
             let (residual, lambda_norm) = (up.residual2.sqrt(), up.lambda2.sqrt());
             let du: f64 = u.iter().zip(&u_prev).map(|(a, b)| (a - b).powi(2)).sum();
             let uu: f64 = u.iter().map(|a| a * a).sum();
@@ -699,6 +705,7 @@ fn dense_phase(
                 c: ns.c,
                 max_steps: ns.section.max_steps,
                 tol_u: ns.section.tol_u,
+                settle: true,
             };
             match &warm_records {
                 Some(all) => {
@@ -1086,6 +1093,60 @@ mod tests {
             .expect("the test");
     }
 
+    /// The settled rows (docs/friction.md, "Settled slip") against the (F5) rows throughout, on
+    /// the pushed line with c = 100 and a push under which every active node but one slips far
+    /// beyond its threshold: the same solution, in fewer fine steps after the nested start.
+    #[test]
+    fn settled_rows_end_a_wide_slip_in_fewer_steps() {
+        std::thread::Builder::new()
+            .stack_size(64 << 20)
+            .spawn(|| {
+                let n = 129;
+                let (cmat, d0, cb) = pushed_line(n, 0.3);
+                let cmat_t = cmat.transpose();
+                let g = DMatrix::<f64>::zeros(2 * n, 0);
+                let settled = Dense {
+                    dim: 2,
+                    cmat: &cmat,
+                    cmat_t: &cmat_t,
+                    d0: &d0,
+                    g: &g,
+                    phi: &[],
+                    cb: &cb,
+                    law: Law::Coulomb,
+                    c: 100.0,
+                    max_steps: 100,
+                    tol_u: 1e-10,
+                    settle: true,
+                };
+                let f5 = Dense {
+                    settle: false,
+                    ..settled
+                };
+                let active: Vec<bool> = (0..n).map(|i| i == n / 2).collect();
+                let (start, u_prev) = settled.frictionless_start(&active, &vec![0.0; n]);
+                let a = settled.run_nested(&start, u_prev.clone());
+                let b = f5.run_nested(&start, u_prev);
+                assert!(a.end.is_ok() && b.end.is_ok(), "{:?} {:?}", a.end, b.end);
+                let slips = (0..n).filter(|&q| a.active[q] && a.slip[q]).count();
+                assert!(slips > 50, "{slips} slipping");
+                assert_eq!((a.active.clone(), a.slip.clone()), (b.active, b.slip));
+                let scale = b.lambda.iter().fold(0.0_f64, |m, x| m.max(x.abs()));
+                for (x, y) in a.lambda.iter().zip(&b.lambda) {
+                    assert!((x - y).abs() <= 1e-10 * scale, "{x} {y}");
+                }
+                assert!(
+                    a.steps.len() < b.steps.len(),
+                    "fine steps: settled {}, (F5) rows {}",
+                    a.steps.len(),
+                    b.steps.len()
+                );
+            })
+            .expect("thread")
+            .join()
+            .expect("the test");
+    }
+
     fn nested_against_plain() {
         let n = 129;
         let (cmat, d0, cb) = pushed_line(n, 0.1);
@@ -1103,6 +1164,7 @@ mod tests {
             c: 1.0,
             max_steps: 100,
             tol_u: 1e-10,
+            settle: true,
         };
         // the frictionless start: the middle node touching, λ = 0
         let active: Vec<bool> = (0..n).map(|i| i == n / 2).collect();

@@ -132,10 +132,14 @@ impl DenseLu {
     /// Factorises `m` (n × n). `None` if singular (a zero pivot) or too large for LAPACK's
     /// 32-bit indices.
     pub fn factor(m: &DMatrix<f64>) -> Option<DenseLu> {
-        let n = m.nrows();
-        assert_eq!(n, m.ncols(), "square matrix");
+        assert_eq!(m.nrows(), m.ncols(), "square matrix");
+        DenseLu::factor_owned(m.nrows(), m.as_slice().to_vec()) // column-major, as LAPACK
+    }
+
+    /// [`DenseLu::factor`] of the n × n matrix `lu` (column-major), factorised in place.
+    pub fn factor_owned(n: usize, mut lu: Vec<f64>) -> Option<DenseLu> {
+        assert_eq!(lu.len(), n * n, "n × n values");
         let ni = c_int::try_from(n).ok()?;
-        let mut lu = m.as_slice().to_vec(); // column-major, as LAPACK
         let mut piv = vec![0 as c_int; n];
         let mut info: c_int = 0;
         if n > 0 {

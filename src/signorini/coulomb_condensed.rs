@@ -505,9 +505,8 @@ impl Dense<'_> {
     }
 
     /// The step's dense system in the active nodes' λ and the free modes' α (module note;
-    /// bordered by the balance Gᵀ λ = φ where Dirichlet data leave rigid modes free), solved by
-    /// LU (LAPACK); returns λ and u = d₀ − C λ + G α of every candidate (d per node) and α.
-    /// `None`: singular (e.g. a free mode that the set does not hold).
+    /// bordered by the balance Gᵀ λ = φ where Dirichlet data leave rigid modes free), its rows
+    /// equilibrated. `None` without tangential rows.
     fn system(&self, set: &ActiveSet) -> Option<System> {
         let (d, n, mz) = (self.dim, self.cb.nodes.len(), self.g.ncols());
         let act: Vec<usize> = (0..n).filter(|&q| set.normal[q]).collect();
@@ -592,12 +591,12 @@ impl Dense<'_> {
         Some(System { a, rhs, cols })
     }
 
-    /// The system's solution by LU (LAPACK), columns equilibrated.
+    /// The system's solution by LU (LAPACK), its columns equilibrated. `None`: singular (e.g. a
+    /// free mode that the set does not hold).
     fn solve_system(&self, sys: &System) -> Option<Vec<f64>> {
-        let (m, mz) = (sys.cols.len(), self.g.ncols());
-        let mut a = sys.a.clone();
-        let mut cmax = vec![0.0_f64; m + mz];
-        for row in a.column_iter() {
+        let n = sys.rhs.len();
+        let mut cmax = vec![0.0_f64; n];
+        for row in sys.a.column_iter() {
             for (c, v) in cmax.iter_mut().zip(row.iter()) {
                 *c = c.max(v.abs());
             }
@@ -606,12 +605,12 @@ impl Dense<'_> {
             .iter()
             .map(|&s| if s > 0.0 { 1.0 / s } else { 1.0 })
             .collect();
-        for mut row in a.column_iter_mut() {
-            for (v, c) in row.iter_mut().zip(&cs) {
-                *v *= c;
-            }
+        // the system column-major (the transpose of the rows-as-columns), columns scaled
+        let mut at = sys.a.transpose();
+        for (mut col, c) in at.column_iter_mut().zip(&cs) {
+            col.scale_mut(*c);
         }
-        let mut x = DenseLu::factor(&a.transpose())?.solve(&sys.rhs);
+        let mut x = DenseLu::factor_owned(n, at.data.into())?.solve(&sys.rhs);
         for (xj, cj) in x.iter_mut().zip(&cs) {
             *xj *= cj;
         }

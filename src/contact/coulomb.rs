@@ -349,44 +349,6 @@ pub fn coulomb_row_projected<const M: usize>(
     })
 }
 
-/// [`coulomb_row_projected`] for a runtime dimension `dim` (2 or 3), padded as
-/// [`coulomb_row_dyn`].
-#[allow(clippy::too_many_arguments)]
-pub fn coulomb_row_projected_dyn(
-    dim: usize,
-    u_n: f64,
-    lam_n: f64,
-    u_t: [f64; 2],
-    lam_t: [f64; 2],
-    g: f64,
-    mu: f64,
-    c: f64,
-) -> Option<CoulombRow<2>> {
-    if dim == 3 {
-        let p = NodePoint {
-            u_n,
-            lam_n,
-            u_t,
-            lam_t,
-        };
-        return coulomb_row_projected(&p, g, mu, c);
-    }
-    let p = NodePoint {
-        u_n,
-        lam_n,
-        u_t: [u_t[0]],
-        lam_t: [lam_t[0]],
-    };
-    match coulomb_row_projected(&p, g, mu, c)? {
-        CoulombRow::Slip { q, .. } => Some(CoulombRow::Slip {
-            l: [[0.0; 2]; 2],
-            q: [q[0], 0.0],
-            r: [0.0; 2],
-        }),
-        CoulombRow::Stick => None,
-    }
-}
-
 /// [`coulomb_row`] for a runtime dimension `dim` (2 or 3) with tangential vectors padded to
 /// length 2 (second entry ignored in 2D; the 2D row sits in `l[0][0]`, `q[0]`, `r[0]`).
 #[allow(clippy::too_many_arguments)]

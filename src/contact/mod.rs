@@ -37,8 +37,8 @@ pub use complementarity::{c_n, c_tau, classify, normal_active, tangential_slip, 
 pub use coulomb::{
     c_tau_coulomb, c_tau_coulomb_derivative, coulomb_block, coulomb_classify,
     coulomb_conditions_hold, coulomb_residual, coulomb_row, coulomb_row_dyn, coulomb_row_projected,
-    coulomb_row_projected_dyn, coulomb_row_unregularised, coulomb_threshold, CoulombBlock,
-    CoulombDerivative, CoulombNewton, CoulombResidual, CoulombRow, NodePoint,
+    coulomb_row_unregularised, coulomb_threshold, CoulombBlock, CoulombDerivative, CoulombNewton,
+    CoulombResidual, CoulombRow, NodePoint,
 };
 pub use frame::{tangent_2d, tangents_3d, Frame};
 pub use obstacle::{Obstacle, ObstacleError, Plane, Projection, Sphere};

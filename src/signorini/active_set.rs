@@ -129,12 +129,12 @@ pub fn threshold_scale_local(b: &ContactBoundary, nodes: &[NodeResult], law: Law
 pub const SPRING_TOL: f64 = 1e-10;
 
 /// Coulomb's row for the next step from the (F5) row `row` of node `k` at `r` and the row
-/// `prev` it was solved with (docs/friction.md, "Settled slip"):
-/// - a node that slipped and slips on in the same direction (q_prev · q > 0) takes the
-///   projection form's row [`contact::coulomb_row_projected_dyn`]: the (F5) row at the slip
-///   solution, exact in 2D (the iteration is then piecewise linear there);
-/// - a node that slipped and whose increment now opposes its force (λ_τ · Δu_τ < 0 with
-///   |λ_τ| ≤ b: at a slip solution λ_τ = b Δu_τ/|Δu_τ|) sticks.
+/// `prev` it was solved with, in 2D (docs/friction.md, "Settled slip"; `row` itself in 3D):
+/// - a node that slipped and slips on in the same direction (the sign of q kept) takes the
+///   projection form's row [`contact::coulomb_row_projected`] λ_τ' = μ(−λ_n') ν: the (F5) row
+///   at the slip solution, exact in 2D (the iteration is then piecewise linear there);
+/// - a node that slipped and whose increment now opposes its force (λ_τ Δu_τ < 0 with
+///   |λ_τ| ≤ b: at a slip solution λ_τ = b sign Δu_τ) sticks.
 fn settled(
     prev: Option<CoulombRow<2>>,
     row: CoulombRow<2>,
@@ -146,23 +146,31 @@ fn settled(
     let (Some(CoulombRow::Slip { q: q0, .. }), CoulombRow::Slip { q: q1, .. }) = (prev, row) else {
         return row;
     };
-    if dim != 2 {
+    let b = Law::Coulomb.threshold(k, r, c);
+    if dim != 2 || !(b > 0.0 && q0[0] != 0.0 && q1[0] != 0.0) {
         return row;
     }
-    let (b, _) = Law::Coulomb.threshold_and_v(k, r, c);
-    if !(b > 0.0 && prev.is_some_and(|p| p.coupled()) && row.coupled()) {
-        return row;
-    }
-    let du = increment(r, k);
-    let against = r.lambda_t[0] * du[0] + r.lambda_t[1] * du[1] < 0.0;
-    if against && r.lambda_t[0].hypot(r.lambda_t[1]) <= b {
+    let du = increment(r, k)[0];
+    if r.lambda_t[0] * du < 0.0 && r.lambda_t[0].abs() <= b {
         return CoulombRow::Stick;
     }
-    if q0[0] * q1[0] + q0[1] * q1[1] <= 0.0 {
+    if q0[0] * q1[0] < 0.0 {
         return row;
     }
-    contact::coulomb_row_projected_dyn(dim, r.u_n, r.lambda_n, du, r.lambda_t, k.gap, k.mu, c)
-        .unwrap_or(row)
+    let p = NodePoint {
+        u_n: r.u_n,
+        lam_n: r.lambda_n,
+        u_t: [du],
+        lam_t: [r.lambda_t[0]],
+    };
+    match contact::coulomb_row_projected(&p, k.gap, k.mu, c) {
+        Some(CoulombRow::Slip { q, .. }) => CoulombRow::Slip {
+            l: [[0.0; 2]; 2],
+            q: [q[0], 0.0],
+            r: [0.0; 2],
+        },
+        _ => row,
+    }
 }
 
 /// u_τ − u_ref: the tangential increment friction acts on (u_τ itself for u_ref = 0).

@@ -807,7 +807,7 @@ mod tests {
         let row = Law::Coulomb.row(&k, &r, c, 2);
         assert_eq!(settled(Some(CoulombRow::Stick), row, &k, &r, c, 2), row);
         assert_eq!(settled(Some(prev), row, &k, &r, c, 3), row);
-        // and so does one whose slip turned round with |λ_τ| beyond its new threshold
+        // and so does one whose slip and force turned round together (a new direction)
         let turned = at(-0.5, -1.0, -0.09);
         let row = Law::Coulomb.row(&k, &turned, c, 2);
         assert_eq!(settled(Some(prev), row, &k, &turned, c, 2), row);

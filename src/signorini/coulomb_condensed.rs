@@ -246,8 +246,37 @@ struct System {
     /// The rows as columns (row ri of the system is column ri).
     a: DMatrix<f64>,
     rhs: DVector<f64>,
-    /// The candidates' dofs whose λ are the first unknowns (the active nodes'); α follow.
-    cols: Vec<usize>,
+    /// The first unknowns: the active nodes' λ; α follow.
+    cols: Vec<Unknown>,
+}
+
+/// One λ unknown of the dense system: λ at the candidates' dof `dof`, and, where a 2D slip row
+/// ties the node's λ_τ to its λ_n (`tied`: λ_τ's dof and factor), λ_τ with it.
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct Unknown {
+    dof: usize,
+    tied: Option<(usize, f64)>,
+}
+
+impl Unknown {
+    /// Σ over the λ dofs this unknown stands for of its factor times `at(dof)`.
+    fn of(&self, at: impl Fn(usize) -> f64) -> f64 {
+        at(self.dof) + self.tied.map_or(0.0, |(t, f)| f * at(t))
+    }
+}
+
+/// The tie λ_τ = −q λ_n of a 2D slip row without spring and right-hand side (the settled row of
+/// `active_set::settled`, −λ_τ' − q λ_n' = 0): λ_τ's dof and −q. Such a node's λ_τ is no unknown
+/// of the dense system, and its tangential row no row (exact).
+fn tie(row: CoulombRow<2>, dof_n: usize, d: usize) -> Option<(usize, f64)> {
+    match row {
+        CoulombRow::Slip { l, q, r }
+            if d == 2 && l == [[0.0; 2]; 2] && r == [0.0; 2] && q[0] != 0.0 =>
+        {
+            Some((dof_n + 1, -q[0]))
+        }
+        _ => None,
+    }
 }
 
 /// max |R (M x − b)| of a system at x, its rows R-equilibrated as built.
@@ -380,7 +409,9 @@ impl Dense<'_> {
             let next = self.system(&up.next);
             let fixed = unchanged
                 && residual <= COULOMB_RESIDUAL_STALL * lambda_norm
-                && next.as_ref().is_some_and(|sn| fixed_point(sn, &x, own));
+                && next
+                    .as_ref()
+                    .is_some_and(|sn| sn.cols == sys_k.cols && fixed_point(sn, &x, own));
             if fixed {
                 let mut run = self.end(&set, (lam, alpha), steps, Ok(()));
                 run.stalled = residual > COULOMB_RESIDUAL_TOL * lambda_norm;
@@ -509,27 +540,36 @@ impl Dense<'_> {
     /// equilibrated. `None` without tangential rows.
     fn system(&self, set: &ActiveSet) -> Option<System> {
         let (d, n, mz) = (self.dim, self.cb.nodes.len(), self.g.ncols());
-        let act: Vec<usize> = (0..n).filter(|&q| set.normal[q]).collect();
-        let m = d * act.len();
         let (cmt, g, w) = (self.cmat_t, self.g, self.d0);
-        // C's columns of the active nodes' dofs
-        let cols: Vec<usize> = act
-            .iter()
-            .flat_map(|&q| (0..d).map(move |b| q * d + b))
-            .collect();
+        let rows = set.tangential.as_ref()?;
+        // the unknowns: per active node λ_n, then λ_τ unless its row ties it to λ_n; `at`: the
+        // position of each active node's λ_n
+        let mut cols: Vec<Unknown> = Vec::new();
+        let mut at = vec![usize::MAX; n];
+        for q in (0..n).filter(|&q| set.normal[q]) {
+            at[q] = cols.len();
+            let tied = tie(rows[q], q * d, d);
+            cols.push(Unknown { dof: q * d, tied });
+            if tied.is_none() {
+                cols.extend((1..d).map(|b| Unknown {
+                    dof: q * d + b,
+                    tied: None,
+                }));
+            }
+        }
+        let m = cols.len();
         // built as its transpose: row ri of the system is column ri here (contiguous, as Cᵀ's
         // column dof is C's row dof; measured on the floating Hertz disk at 344 620 unknowns,
         // 1 875 dense unknowns: 0.15 s a step against 0.18 s built row by row)
         let mut a = DMatrix::<f64>::zeros(m + mz, m + mz);
         let mut rhs = DVector::<f64>::zeros(m + mz);
-        let rows = set.tangential.as_ref()?;
         // row `ri` := Σ_j coef_j · u_(dof_j) (+ constants on the right): u = w − C λ + G α
         let put_u = |a: &mut DMatrix<f64>, ri: usize, terms: &[(usize, f64)]| -> f64 {
             let mut row = a.column_mut(ri);
             for &(dof, f) in terms {
                 let c_row = cmt.column(dof);
-                for (jc, &col) in cols.iter().enumerate() {
-                    row[jc] -= f * c_row[col];
+                for (jc, u) in cols.iter().enumerate() {
+                    row[jc] -= f * u.of(|col| c_row[col]);
                 }
                 for cz in 0..mz {
                     row[m + cz] += f * g[(dof, cz)];
@@ -537,12 +577,13 @@ impl Dense<'_> {
             }
             terms.iter().map(|&(dof, f)| f * w[dof]).sum::<f64>()
         };
-        for (ap, &p) in act.iter().enumerate() {
+        for p in (0..n).filter(|&q| set.normal[q]) {
             let k = &self.cb.nodes[p];
-            let (r0, pn) = (ap * d, p * d);
+            let (r0, pn) = (at[p], p * d);
             // u_n = −g
             rhs[r0] = -k.gap - put_u(&mut a, r0, &[(pn, 1.0)]);
             match rows[p] {
+                _ if cols[r0].tied.is_some() => {} // λ_τ = −q λ_n: its row is the tie
                 CoulombRow::Stick => {
                     // u_τ = u_τ^ref (3.34a)
                     for i in 0..d - 1 {
@@ -572,8 +613,8 @@ impl Dense<'_> {
         }
         // the balance of the free modes: Gᵀ λ = φ (the pins carry nothing)
         for cz in 0..mz {
-            for (jc, &col) in cols.iter().enumerate() {
-                a[(jc, m + cz)] = g[(col, cz)];
+            for (jc, u) in cols.iter().enumerate() {
+                a[(jc, m + cz)] = u.of(|col| g[(col, cz)]);
             }
             rhs[m + cz] = self.phi[cz];
         }
@@ -625,8 +666,11 @@ impl Dense<'_> {
     fn unknowns(&self, sys: &System, x: &[f64]) -> (Vec<f64>, Vec<f64>, Vec<f64>) {
         let (d, n, m) = (self.dim, self.cb.nodes.len(), sys.cols.len());
         let mut lam = vec![0.0; n * d];
-        for (j, &col) in sys.cols.iter().enumerate() {
-            lam[col] = x[j];
+        for (u, &xj) in sys.cols.iter().zip(x) {
+            lam[u.dof] = xj;
+            if let Some((t, f)) = u.tied {
+                lam[t] = f * xj;
+            }
         }
         let alpha: Vec<f64> = x[m..].to_vec();
         let u = self.u_of(&lam, &alpha);
@@ -1151,13 +1195,83 @@ mod tests {
             .expect("the test");
     }
 
+    /// A 2D slip row without spring and right-hand side ties λ_τ = −q λ_n: the node keeps one
+    /// unknown and one row, and the solution still satisfies every row of the set.
+    #[test]
+    fn a_settled_slip_nodes_tangential_force_is_tied_to_its_normal_force() {
+        std::thread::Builder::new()
+            .stack_size(64 << 20)
+            .spawn(|| {
+                let n = 9;
+                let (cmat, d0, cb) = pushed_line(n, 0.1);
+                let cmat_t = cmat.transpose();
+                let g = DMatrix::<f64>::zeros(2 * n, 0);
+                let dense = Dense {
+                    dim: 2,
+                    cmat: &cmat,
+                    cmat_t: &cmat_t,
+                    d0: &d0,
+                    g: &g,
+                    phi: &[],
+                    cb: &cb,
+                    law: Law::Coulomb,
+                    c: 1.0,
+                    max_steps: 100,
+                    tol_u: 1e-10,
+                    settle: true,
+                };
+                // the outer four nodes slip outwards (settled rows), the middle five stick
+                let coef = |q: usize| if q < 2 { -0.3 } else { 0.3 };
+                let row = |q: usize| {
+                    if q < 2 || q >= n - 2 {
+                        CoulombRow::Slip {
+                            l: [[0.0; 2]; 2],
+                            q: [coef(q), 0.0],
+                            r: [0.0; 2],
+                        }
+                    } else {
+                        CoulombRow::Stick
+                    }
+                };
+                let set = ActiveSet {
+                    normal: vec![true; n],
+                    tangential: Some((0..n).map(row).collect()),
+                    spring_floor: 0.0,
+                };
+                let sys = dense.system(&set).expect("rows");
+                assert_eq!(sys.cols.len(), 4 + 2 * 5);
+                let x = dense.solve_system(&sys).expect("regular");
+                let (lam, u, _) = dense.unknowns(&sys, &x);
+                let (su, sl) = (
+                    u.iter().fold(0.0_f64, |m, v| m.max(v.abs())),
+                    lam.iter().fold(0.0_f64, |m, v| m.max(v.abs())),
+                );
+                for q in 0..n {
+                    assert!(
+                        (u[2 * q] + cb.nodes[q].gap).abs() <= 1e-12 * su,
+                        "u_n of {q}"
+                    );
+                    if set.slip(q) {
+                        let tied = lam[2 * q + 1] + coef(q) * lam[2 * q];
+                        assert!(tied.abs() <= 1e-12 * sl, "λ_τ of {q}: {tied}");
+                        assert!(lam[2 * q + 1] != 0.0);
+                    } else {
+                        assert!(u[2 * q + 1].abs() <= 1e-12 * su, "u_τ of {q}");
+                    }
+                }
+            })
+            .expect("thread")
+            .join()
+            .expect("the test");
+    }
+
     #[test]
     fn a_system_that_holds_at_the_iterate_is_a_fixed_point() {
         // rows as columns: [[2, 1], [0, 4]] x = [3, 4] ⇒ x = (1, 1)
         let sys = |a: [[f64; 2]; 2], b: [f64; 2]| System {
             a: DMatrix::from_fn(2, 2, |j, i| a[i][j]),
             rhs: DVector::from_row_slice(&b),
-            cols: vec![0],
+            cols: vec![Unknown { dof: 0, tied: None }],
         };
         let own = sys([[2.0, 1.0], [0.0, 4.0]], [3.0, 4.0]);
         let x = [1.0, 1.0 + 2.0 * f64::EPSILON];

@@ -288,6 +288,35 @@ fn residual_at(sys: &System, x: &[f64]) -> f64 {
         .fold(0.0, f64::max)
 }
 
+/// The system's solution by LU (LAPACK), its columns equilibrated. `None`: singular (e.g. a
+/// free mode that the set does not hold).
+fn solve_system(sys: &System) -> Option<Vec<f64>> {
+    let n = sys.rhs.len();
+    let mut cmax = vec![0.0_f64; n];
+    for row in sys.a.column_iter() {
+        for (c, v) in cmax.iter_mut().zip(row.iter()) {
+            *c = c.max(v.abs());
+        }
+    }
+    let cs: Vec<f64> = cmax
+        .iter()
+        .map(|&s| if s > 0.0 { 1.0 / s } else { 1.0 })
+        .collect();
+    // the system column-major (the transpose of the rows-as-columns), columns scaled
+    let mut at = sys.a.transpose();
+    for (mut col, c) in at.column_iter_mut().zip(&cs) {
+        col.scale_mut(*c);
+    }
+    let mut x = DenseLu::factor_owned(n, at.data.into())?.solve(&sys.rhs);
+    for (xj, cj) in x.iter_mut().zip(&cs) {
+        *xj *= cj;
+    }
+    if x.iter().any(|v| !v.is_finite()) {
+        return None;
+    }
+    Some(x.as_slice().to_vec())
+}
+
 /// The system `next` holds at `x` to the round-off of the solve that gave x (`own`: its
 /// residual in its own system, [`residual_at`]): within FIXED_POINT_SLACK × max(own, ε |b|∞).
 /// Measured on the Hertz disks of 42 k–345 k unknowns: at a fixed point the next residual
@@ -364,11 +393,10 @@ impl Dense<'_> {
         let mut sys = self.system(&set);
         for step in 1..=self.max_steps {
             let t = Instant::now();
-            let Some((x, sys_k)) = sys.and_then(|sk| Some((self.solve_system(&sk)?, sk))) else {
+            let Some((x, sys_k)) = sys.and_then(|sk| Some((solve_system(&sk)?, sk))) else {
                 let why = format!("the dense Coulomb system of step {step} is singular");
                 return self.end(&set, (vec![0.0; n * d], Vec::new()), steps, Err(why));
             };
-            let own = residual_at(&sys_k, &x);
             let (lam, u, alpha) = self.unknowns(&sys_k, &x);
             self.records(&set, &lam, &u, &mut it.nodes);
             let scale = threshold_scale_local(self.cb, &it.nodes, law, c);
@@ -409,9 +437,9 @@ impl Dense<'_> {
             let next = self.system(&up.next);
             let fixed = unchanged
                 && residual <= COULOMB_RESIDUAL_STALL * lambda_norm
-                && next
-                    .as_ref()
-                    .is_some_and(|sn| sn.cols == sys_k.cols && fixed_point(sn, &x, own));
+                && next.as_ref().is_some_and(|sn| {
+                    sn.cols == sys_k.cols && fixed_point(sn, &x, residual_at(&sys_k, &x))
+                });
             if fixed {
                 let mut run = self.end(&set, (lam, alpha), steps, Ok(()));
                 run.stalled = residual > COULOMB_RESIDUAL_TOL * lambda_norm;
@@ -630,35 +658,6 @@ impl Dense<'_> {
             }
         }
         Some(System { a, rhs, cols })
-    }
-
-    /// The system's solution by LU (LAPACK), its columns equilibrated. `None`: singular (e.g. a
-    /// free mode that the set does not hold).
-    fn solve_system(&self, sys: &System) -> Option<Vec<f64>> {
-        let n = sys.rhs.len();
-        let mut cmax = vec![0.0_f64; n];
-        for row in sys.a.column_iter() {
-            for (c, v) in cmax.iter_mut().zip(row.iter()) {
-                *c = c.max(v.abs());
-            }
-        }
-        let cs: Vec<f64> = cmax
-            .iter()
-            .map(|&s| if s > 0.0 { 1.0 / s } else { 1.0 })
-            .collect();
-        // the system column-major (the transpose of the rows-as-columns), columns scaled
-        let mut at = sys.a.transpose();
-        for (mut col, c) in at.column_iter_mut().zip(&cs) {
-            col.scale_mut(*c);
-        }
-        let mut x = DenseLu::factor_owned(n, at.data.into())?.solve(&sys.rhs);
-        for (xj, cj) in x.iter_mut().zip(&cs) {
-            *xj *= cj;
-        }
-        if x.iter().any(|v| !v.is_finite()) {
-            return None;
-        }
-        Some(x.as_slice().to_vec())
     }
 
     /// λ (every candidate, d per node), u = d₀ − C λ + G α and α from a system's solution.
@@ -1184,6 +1183,46 @@ mod tests {
         (cmat, d0, cb)
     }
 
+    /// The pushed line ([`pushed_line`]) with Cᵀ and no free modes.
+    struct Line {
+        cmat: DMatrix<f64>,
+        cmat_t: DMatrix<f64>,
+        d0: Vec<f64>,
+        g: DMatrix<f64>,
+        cb: ContactBoundary,
+    }
+
+    impl Line {
+        fn new(n: usize, push: f64) -> Line {
+            let (cmat, d0, cb) = pushed_line(n, push);
+            Line {
+                cmat_t: cmat.transpose(),
+                cmat,
+                d0,
+                g: DMatrix::zeros(2 * n, 0),
+                cb,
+            }
+        }
+
+        /// Its dense Coulomb iteration (μ = 0.3) with c, the settled rows on.
+        fn dense(&self, c: f64) -> Dense<'_> {
+            Dense {
+                dim: 2,
+                cmat: &self.cmat,
+                cmat_t: &self.cmat_t,
+                d0: &self.d0,
+                g: &self.g,
+                phi: &[],
+                cb: &self.cb,
+                law: Law::Coulomb,
+                c,
+                max_steps: 100,
+                tol_u: 1e-10,
+                settle: true,
+            }
+        }
+    }
+
     #[test]
     fn nested_coulomb_ends_in_the_plain_runs_solution_in_fewer_fine_steps() {
         // a stack of its own: a multithreaded BLAS may take more than a test thread's 2 MB
@@ -1203,23 +1242,8 @@ mod tests {
             .stack_size(64 << 20)
             .spawn(|| {
                 let n = 9;
-                let (cmat, d0, cb) = pushed_line(n, 0.1);
-                let cmat_t = cmat.transpose();
-                let g = DMatrix::<f64>::zeros(2 * n, 0);
-                let dense = Dense {
-                    dim: 2,
-                    cmat: &cmat,
-                    cmat_t: &cmat_t,
-                    d0: &d0,
-                    g: &g,
-                    phi: &[],
-                    cb: &cb,
-                    law: Law::Coulomb,
-                    c: 1.0,
-                    max_steps: 100,
-                    tol_u: 1e-10,
-                    settle: true,
-                };
+                let line = Line::new(n, 0.1);
+                let (dense, cb) = (line.dense(1.0), &line.cb);
                 // the outer four nodes slip outwards (settled rows), the middle five stick
                 let coef = |q: usize| if q < 2 { -0.3 } else { 0.3 };
                 let row = |q: usize| {
@@ -1240,7 +1264,7 @@ mod tests {
                 };
                 let sys = dense.system(&set).expect("rows");
                 assert_eq!(sys.cols.len(), 4 + 2 * 5);
-                let x = dense.solve_system(&sys).expect("regular");
+                let x = solve_system(&sys).expect("regular");
                 let (lam, u, _) = dense.unknowns(&sys, &x);
                 let (su, sl) = (
                     u.iter().fold(0.0_f64, |m, v| m.max(v.abs())),
@@ -1306,23 +1330,8 @@ mod tests {
             .stack_size(64 << 20)
             .spawn(|| {
                 let n = 129;
-                let (cmat, d0, cb) = pushed_line(n, 0.3);
-                let cmat_t = cmat.transpose();
-                let g = DMatrix::<f64>::zeros(2 * n, 0);
-                let settled = Dense {
-                    dim: 2,
-                    cmat: &cmat,
-                    cmat_t: &cmat_t,
-                    d0: &d0,
-                    g: &g,
-                    phi: &[],
-                    cb: &cb,
-                    law: Law::Coulomb,
-                    c: 100.0,
-                    max_steps: 100,
-                    tol_u: 1e-10,
-                    settle: true,
-                };
+                let line = Line::new(n, 0.3);
+                let settled = line.dense(100.0);
                 let f5 = Dense {
                     settle: false,
                     ..settled
@@ -1353,23 +1362,8 @@ mod tests {
 
     fn nested_against_plain() {
         let n = 129;
-        let (cmat, d0, cb) = pushed_line(n, 0.1);
-        let cmat_t = cmat.transpose();
-        let g = DMatrix::<f64>::zeros(2 * n, 0);
-        let dense = Dense {
-            dim: 2,
-            cmat: &cmat,
-            cmat_t: &cmat_t,
-            d0: &d0,
-            g: &g,
-            phi: &[],
-            cb: &cb,
-            law: Law::Coulomb,
-            c: 1.0,
-            max_steps: 100,
-            tol_u: 1e-10,
-            settle: true,
-        };
+        let line = Line::new(n, 0.1);
+        let dense = line.dense(1.0);
         // the frictionless start: the middle node touching, λ = 0
         let active: Vec<bool> = (0..n).map(|i| i == n / 2).collect();
         let (start, u_prev) = dense.frictionless_start(&active, &vec![0.0; n]);

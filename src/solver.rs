@@ -28,7 +28,8 @@ pub fn preset_options(preset: Preset, rtol: f64, symmetric: bool) -> String {
         // GMRES with right preconditioning (the true residual is tested) and smoothed
         // aggregation AMG with the rigid-body near-null space; the symmetrised graph keeps
         // aggregation valid for the unsymmetric reduced systems of friction (Tresca (3.42),
-        // Coulomb (F7) in docs/friction.md, unsymmetric also in 2D). The coarsest level is
+        // Coulomb (F7) in docs/friction.md, unsymmetric also in 2D; for Coulomb the hierarchy
+        // is built on the system without its row mix, reduced.rs `write_unmixed`). The coarsest level is
         // solved by a pseudo-inverse (SVD): a hierarchy built on a matrix with a null space
         // (a floating body's free rigid modes, reduced.rs) has a singular coarse matrix, on
         // which LU breaks GMRES down (2D Hertz at ν = 0.4999); on a regular one it is LU's
@@ -52,10 +53,10 @@ pub const AUTO_ITERATIVE_3D_DOFS: usize = 10_000;
 
 /// The preset to use for `asked` on a mesh of dimension `dim` with `dofs` unknowns and
 /// `friction` (Tresca or Coulomb), and why (for the log and summary.json). With friction the
-/// auto preset is direct at every size: GMRES + GAMG breaks down on the unsymmetric friction
-/// systems of a 3D block held and pushed into a sphere (44 529 and 112 890 unknowns, Coulomb
-/// μ = 0.3: DIVERGED_BREAKDOWN in Newton step 2), while the direct preset solves it for about
-/// one factorisation (bench/results/friction-held.md).
+/// auto preset is direct at every size: on a 3D block held and pushed into a sphere (Coulomb
+/// μ = 0.3, 2 ranks) the iterative preset takes 13–16 Newton steps of GMRES + GAMG, some of
+/// them 200–450 iterations, where the direct preset's condensed path needs one factorisation
+/// (112 890 unknowns: 25 s against 5.4 s; docs/numbers.md, "Coulomb on the iterative preset").
 pub fn choose_preset(asked: Preset, dim: usize, dofs: usize, friction: bool) -> (Preset, String) {
     match asked {
         Preset::Auto if dim == 3 && friction => (

@@ -671,6 +671,20 @@ impl Matrix {
         }
     }
 
+    /// Attaches `other`'s near-null space (if any) to this matrix too (GAMG reads it from the
+    /// matrix it builds its hierarchy on).
+    pub fn copy_near_null_space_from(&mut self, other: &Matrix) -> Result<()> {
+        let mut sp: ffi::MatNullSpace = ptr::null_mut();
+        // SAFETY: both matrices are valid; MatSetNearNullSpace takes its own reference.
+        unsafe {
+            check(ffi::MatGetNearNullSpace(other.raw, &mut sp))?;
+            if sp.is_null() {
+                return Ok(());
+            }
+            check(ffi::MatSetNearNullSpace(self.raw, sp))
+        }
+    }
+
     /// Attaches the span of `basis` (orthonormal vectors of this matrix's layout) as its null
     /// space and transpose null space: Krylov solves remove it from the right-hand side and
     /// from every preconditioned vector. An empty basis detaches both.
@@ -739,6 +753,12 @@ impl Ksp {
     pub fn set_operator(&mut self, a: &Matrix) -> Result<()> {
         // SAFETY: KSP takes a reference on the matrix.
         unsafe { check(ffi::KSPSetOperators(self.raw, a.raw, a.raw)) }
+    }
+
+    /// The operator `a` and the matrix `p` the preconditioner is built from.
+    pub fn set_operators(&mut self, a: &Matrix, p: &Matrix) -> Result<()> {
+        // SAFETY: KSP takes a reference on both matrices.
+        unsafe { check(ffi::KSPSetOperators(self.raw, a.raw, p.raw)) }
     }
 
     /// Applies the options database (preset defaults, case file, command line).

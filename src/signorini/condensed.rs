@@ -150,6 +150,8 @@ pub struct CoulombCondensedSummary {
     pub reason: Option<String>,
     /// Steps of the dense generalised Newton.
     pub steps: usize,
+    /// Of these, the steps solved in the primal form (on S itself; the others on C = S⁻¹).
+    pub primal_steps: usize,
     pub dense_seconds: f64,
     /// The expansion solve, (3.28) and the check on every contact node [s].
     pub expansion_seconds: f64,
@@ -1047,6 +1049,7 @@ impl Compliance {
             .collect();
         self.factor = None; // the old factorisation's memory first
         self.cmat = DMatrix::zeros(0, 0);
+        self.schur = DMatrix::zeros(0, 0);
         let t = Instant::now();
         if self.node_order.is_none() {
             // With a Schur complement MUMPS would order by AMD (2.4 × the flops of PORD on a 3D
@@ -1108,8 +1111,14 @@ impl Compliance {
             self.schur = s;
             self.r = r;
         } else if root {
-            // S's one copy, factorised and inverted in place: C = S⁻¹
-            match DenseCholesky::factor_owned(dofs.len(), factor.take_schur()) {
+            // S's one copy, factorised and inverted in place: C = S⁻¹; with every dof of the
+            // candidates (Coulomb) a copy of S and r too, for the primal form of its dense steps
+            let sv = factor.take_schur();
+            if per > 1 {
+                self.schur = DMatrix::from_vec(dofs.len(), dofs.len(), sv.clone());
+                self.r = r.clone();
+            }
+            match DenseCholesky::factor_owned(dofs.len(), sv) {
                 Some(ch) => {
                     self.cmat = ch.inverse();
                     self.d0 = (&self.cmat * DVector::from_column_slice(&r))
@@ -1156,20 +1165,34 @@ impl Compliance {
             self.d0 = (&self.cmat * DVector::from_column_slice(&r))
                 .as_slice()
                 .to_vec();
+            if self.stiffness().is_some() {
+                self.r = r;
+            }
         }
         Ok(())
+    }
+
+    /// S itself and r (λ = r − S (u − G α) on the candidates' dofs) next to C = S⁻¹, where every
+    /// dof of the candidates is a Schur variable (Coulomb; rank 0): the primal form of the
+    /// dense Coulomb steps (coulomb_condensed.rs). `None` elsewhere.
+    pub(super) fn stiffness(&self) -> Option<(&DMatrix<f64>, &[f64])> {
+        let n = self.list.len() * self.per;
+        (!self.primal && self.per > 1 && n > 0 && self.schur.nrows() == n)
+            .then(|| (&self.schur, &self.r[..]))
     }
 
     /// w = K_p⁻¹ (f − N λ), this rank's rows (`n_local`), from MUMPS' condensation and
     /// expansion with the Schur variables' part S⁻¹ (r − λ) = d₀ − C λ; `lam`: on rank 0 the
     /// candidates' multipliers in C's order (`per` per node, node frame), empty elsewhere;
-    /// `f_root`: f on rank 0. `Err`: MUMPS' solve failed. Collective.
+    /// `x_s`: the Schur variables' part where the caller has it (the primal form of the dense
+    /// Coulomb steps), else empty; `f_root`: f on rank 0. `Err`: MUMPS' solve failed.
+    /// Collective.
     pub(super) fn expand_u(
         &mut self,
         ctx: &Ctx,
         cand: &Candidates,
         (f_root, n_local): (&[f64], usize),
-        lam: &[f64],
+        (lam, x_s): (&[f64], &[f64]),
     ) -> Result<Vec<f64>, String> {
         let (rhs_root, x_s) = if ctx.rank == 0 {
             let mut rhs = self.rotated(f_root);
@@ -1178,7 +1201,9 @@ impl Compliance {
                     rhs[cand.row(i) + a] -= lam[q * self.per + a];
                 }
             }
-            let x_s = if self.primal {
+            let x_s = if !x_s.is_empty() {
+                x_s.to_vec()
+            } else if self.primal {
                 self.x_s.clone()
             } else {
                 let d0 = DVector::from_column_slice(&self.d0);
@@ -1423,7 +1448,7 @@ fn expand(
     } else {
         Vec::new()
     };
-    let w = match comp.expand_u(ctx, cand, (f_root, n_local), &lam) {
+    let w = match comp.expand_u(ctx, cand, (f_root, n_local), (&lam, &[])) {
         Ok(w) => w,
         Err(why) => return Ok(Err(why)),
     };

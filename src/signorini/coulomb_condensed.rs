@@ -96,6 +96,11 @@ struct DenseCoulomb {
     stalled: bool,
     /// The nested start's coarse levels, coarsest first: (nodes, dense steps).
     coarse: Vec<(usize, usize)>,
+    /// Rank 0, where the last step was in the primal form: its u − G α at the candidates' dofs,
+    /// the Schur variables' part of the expansion (else empty: d₀ − C λ). Not broadcast.
+    x_s: Vec<f64>,
+    /// Steps in the primal form ([`Stiff`]).
+    primal_steps: usize,
 }
 
 impl DenseCoulomb {
@@ -109,6 +114,8 @@ impl DenseCoulomb {
             end: Err(why),
             stalled: false,
             coarse: Vec::new(),
+            x_s: Vec::new(),
+            primal_steps: 0,
         }
     }
 
@@ -125,6 +132,7 @@ impl DenseCoulomb {
         let why = self.end.as_ref().err().map_or(&[][..], |w| w.as_bytes());
         v.push(if self.end.is_ok() { 1.0 } else { 0.0 });
         v.push(if self.stalled { 1.0 } else { 0.0 });
+        v.push(self.primal_steps as f64);
         v.push(self.coarse.len() as f64);
         for &(nodes, steps) in &self.coarse {
             v.extend([nodes as f64, steps as f64]);
@@ -152,11 +160,12 @@ impl DenseCoulomb {
         at += 5 * ns;
         let ok = v[at] != 0.0;
         let stalled = v[at + 1] != 0.0;
-        let nc = v[at + 2] as usize;
+        let primal_steps = v[at + 2] as usize;
+        let nc = v[at + 3] as usize;
         let coarse = (0..nc)
-            .map(|i| (v[at + 3 + 2 * i] as usize, v[at + 4 + 2 * i] as usize))
+            .map(|i| (v[at + 4 + 2 * i] as usize, v[at + 5 + 2 * i] as usize))
             .collect();
-        at += 3 + 2 * nc;
+        at += 4 + 2 * nc;
         let len = v[at] as usize;
         let bytes: Vec<u8> = v[at + 1..at + 1 + len].iter().map(|&b| b as u8).collect();
         let end = if ok {
@@ -173,6 +182,8 @@ impl DenseCoulomb {
             end,
             stalled,
             coarse,
+            x_s: Vec::new(),
+            primal_steps,
         }
     }
 }
@@ -246,8 +257,25 @@ struct System {
     /// The rows as columns (row ri of the system is column ri).
     a: DMatrix<f64>,
     rhs: DVector<f64>,
-    /// The first unknowns: the active nodes' λ; α follow.
+    /// The first unknowns: the active nodes' λ (the primal form: the free displacements' dofs);
+    /// α follow.
     cols: Vec<Unknown>,
+    /// The primal form ([`Stiff`]): u at every candidate dof, NaN where it is an unknown;
+    /// `None`: the dual form.
+    known: Option<Vec<f64>>,
+}
+
+/// S itself next to C = S⁻¹ (rank 0; condensed.rs `Compliance::stiffness`): λ = r − S (u − G α)
+/// on the candidates' dofs, with S G and Gᵀ S G. A step's system in the primal form has the
+/// displacements the set leaves free as unknowns — every dof of an inactive candidate, the
+/// tangential dofs of a slipping one — with the rows λ = 0 and the slip rows (F6) in λ
+/// (module note), and the balance Gᵀ λ = φ: where the zone fills the candidates that is far
+/// fewer unknowns than the dual form's λ of every active node.
+struct Stiff<'a> {
+    s: &'a DMatrix<f64>,
+    r: &'a [f64],
+    sg: DMatrix<f64>,
+    gsg: DMatrix<f64>,
 }
 
 /// One λ unknown of the dense system: λ at the candidates' dof `dof`, and, where a 2D slip row
@@ -276,6 +304,20 @@ fn tie(row: CoulombRow<2>, dof_n: usize, d: usize) -> Option<(usize, f64)> {
             Some((dof_n + 1, -q[0]))
         }
         _ => None,
+    }
+}
+
+/// Each row (a column of `a`) and its right-hand side scaled to max |row| = 1: the rows are in
+/// displacement (normal, stick) and force (slip, balance) units, the columns in force (λ) and
+/// displacement (α) units (measured on the Hertz disk at 171 602 unknowns: the residual floor
+/// of the dense steps 10 × lower).
+fn equilibrate(a: &mut DMatrix<f64>, rhs: &mut DVector<f64>) {
+    for (mut row, b) in a.column_iter_mut().zip(rhs.iter_mut()) {
+        let s = row.iter().fold(0.0_f64, |x, v| x.max(v.abs()));
+        if s > 0.0 {
+            row.scale_mut(1.0 / s);
+            *b /= s;
+        }
     }
 }
 
@@ -347,6 +389,8 @@ struct Dense<'a> {
     tol_u: f64,
     /// The rows of settled slip (`ActiveSet::update_settling`; production: true).
     settle: bool,
+    /// S itself: each step in the form with fewer unknowns (`None`: the dual form always).
+    stiff: Option<&'a Stiff<'a>>,
 }
 
 impl Dense<'_> {
@@ -391,11 +435,18 @@ impl Dense<'_> {
         let mut last_still = None;
         let mut steps = Vec::new();
         let mut sys = self.system(&set);
+        let mut primal = 0;
         for step in 1..=self.max_steps {
             let t = Instant::now();
+            primal += sys.as_ref().is_some_and(|s| s.known.is_some()) as usize;
             let Some((x, sys_k)) = sys.and_then(|sk| Some((solve_system(&sk)?, sk))) else {
                 let why = format!("the dense Coulomb system of step {step} is singular");
-                return self.end(&set, (vec![0.0; n * d], Vec::new()), steps, Err(why));
+                return self.end(
+                    &set,
+                    (vec![0.0; n * d], Vec::new()),
+                    (steps, primal),
+                    Err(why),
+                );
             };
             let (lam, u, alpha) = self.unknowns(&sys_k, &x);
             self.records(&set, &lam, &u, &mut it.nodes);
@@ -427,8 +478,10 @@ impl Dense<'_> {
             let zero = residual <= COULOMB_RESIDUAL_ZERO * lambda_norm;
             let small = residual <= COULOMB_RESIDUAL_TOL * lambda_norm;
             if unchanged && (zero || stall || (du_rel < self.tol_u && small)) {
-                let mut run = self.end(&set, (lam, alpha), steps, Ok(()));
+                let x_s = self.primal_x_s(&sys_k, &u, &alpha);
+                let mut run = self.end(&set, (lam, alpha), (steps, primal), Ok(()));
                 run.stalled = residual > COULOMB_RESIDUAL_TOL * lambda_norm;
+                run.x_s = x_s;
                 return run;
             }
             // The next step's system holds at this iterate as well as its own did (states
@@ -438,11 +491,15 @@ impl Dense<'_> {
             let fixed = unchanged
                 && residual <= COULOMB_RESIDUAL_STALL * lambda_norm
                 && next.as_ref().is_some_and(|sn| {
-                    sn.cols == sys_k.cols && fixed_point(sn, &x, residual_at(&sys_k, &x))
+                    sn.cols == sys_k.cols
+                        && sn.known.is_some() == sys_k.known.is_some()
+                        && fixed_point(sn, &x, residual_at(&sys_k, &x))
                 });
             if fixed {
-                let mut run = self.end(&set, (lam, alpha), steps, Ok(()));
+                let x_s = self.primal_x_s(&sys_k, &u, &alpha);
+                let mut run = self.end(&set, (lam, alpha), (steps, primal), Ok(()));
                 run.stalled = residual > COULOMB_RESIDUAL_TOL * lambda_norm;
+                run.x_s = x_s;
                 return run;
             }
             set = up.next;
@@ -453,14 +510,19 @@ impl Dense<'_> {
             "the dense Coulomb iteration did not converge in {} steps",
             self.max_steps
         );
-        self.end(&set, (vec![0.0; n * d], Vec::new()), steps, Err(why))
+        self.end(
+            &set,
+            (vec![0.0; n * d], Vec::new()),
+            (steps, primal),
+            Err(why),
+        )
     }
 
     fn end(
         &self,
         set: &ActiveSet,
         (lambda, mut alpha): (Vec<f64>, Vec<f64>),
-        steps: Vec<(usize, usize, usize, f64, f64)>,
+        (steps, primal_steps): (Vec<(usize, usize, usize, f64, f64)>, usize),
         end: Result<(), String>,
     ) -> DenseCoulomb {
         let n = self.cb.nodes.len();
@@ -474,6 +536,8 @@ impl Dense<'_> {
             end,
             stalled: false,
             coarse: Vec::new(),
+            x_s: Vec::new(),
+            primal_steps,
         }
     }
 
@@ -516,6 +580,7 @@ impl Dense<'_> {
                 d0: &d0,
                 g: &sub_g,
                 cb: &cb,
+                stiff: None,
                 ..*self
             };
             let sub_start: Vec<NodeResult> = idx.iter().map(|&q| start[q]).collect();
@@ -563,10 +628,138 @@ impl Dense<'_> {
         u
     }
 
+    /// The step's dense system in the form with fewer unknowns: the dual form
+    /// ([`Dense::system_dual`]) or, with S at hand, the primal one ([`Dense::system_primal`]).
+    /// Both give the same Newton step. `None` without tangential rows.
+    fn system(&self, set: &ActiveSet) -> Option<System> {
+        let rows = set.tangential.as_ref()?;
+        let Some(st) = self.stiff else {
+            return self.system_dual(set);
+        };
+        let d = self.dim;
+        let (mut dual, mut primal) = (0, 0);
+        for (q, row) in rows.iter().enumerate() {
+            if !set.normal[q] {
+                primal += d;
+            } else {
+                dual += if tie(*row, q * d, d).is_some() { 1 } else { d };
+                if row.is_slip() {
+                    primal += d - 1;
+                }
+            }
+        }
+        if primal < dual {
+            Some(self.system_primal(set, rows, st))
+        } else {
+            self.system_dual(set)
+        }
+    }
+
+    /// The step's dense system in the primal form ([`Stiff`]): the unknowns u at the dofs the
+    /// set leaves free and α; rows λ = 0 (inactive), (F6) −λ_τ + L̃ u_τ − q λ_n = r̃ + L̃ u_τ^ref
+    /// (slip), Gᵀ λ = φ, with λ = r − S (u − G α) and u = −g, u_τ^ref where the set prescribes
+    /// it; rows equilibrated as the dual form's.
+    fn system_primal(&self, set: &ActiveSet, rows: &[CoulombRow<2>], st: &Stiff) -> System {
+        let (d, n, mz) = (self.dim, self.cb.nodes.len(), self.g.ncols());
+        let mut known = vec![f64::NAN; n * d];
+        let mut cols: Vec<Unknown> = Vec::new();
+        let mut at = vec![usize::MAX; n];
+        let free = |dof: usize| Unknown { dof, tied: None };
+        for (q, k) in self.cb.nodes.iter().enumerate() {
+            at[q] = cols.len();
+            if !set.normal[q] {
+                cols.extend((0..d).map(|a| free(q * d + a)));
+                continue;
+            }
+            known[q * d] = -k.gap;
+            if rows[q].is_slip() {
+                cols.extend((1..d).map(|a| free(q * d + a)));
+            } else {
+                known[q * d + 1..q * d + d].copy_from_slice(&k.u_t_ref[..d - 1]);
+            }
+        }
+        let m = cols.len();
+        // λ at u_F = 0, α = 0: r − S u_K
+        let mut base = st.r.to_vec();
+        for (j, &uj) in known.iter().enumerate() {
+            if uj.is_finite() && uj != 0.0 {
+                for (b, sij) in base.iter_mut().zip(st.s.column(j).iter()) {
+                    *b -= sij * uj;
+                }
+            }
+        }
+        let mut a = DMatrix::<f64>::zeros(m + mz, m + mz);
+        let mut rhs = DVector::<f64>::zeros(m + mz);
+        // row `ri` += Σ_t coef_t λ(dof_t); returns its constant part Σ_t coef_t base(dof_t)
+        // (S symmetric: S's row `dof` is its column)
+        let put_lam = |a: &mut DMatrix<f64>, ri: usize, terms: &[(usize, f64)]| -> f64 {
+            let mut row = a.column_mut(ri);
+            for &(dof, f) in terms {
+                let s_row = st.s.column(dof);
+                for (jc, u) in cols.iter().enumerate() {
+                    row[jc] -= f * s_row[u.dof];
+                }
+                for cz in 0..mz {
+                    row[m + cz] += f * st.sg[(dof, cz)];
+                }
+            }
+            terms.iter().map(|&(dof, f)| f * base[dof]).sum::<f64>()
+        };
+        let mut ri = 0;
+        for (q, k) in self.cb.nodes.iter().enumerate() {
+            if !set.normal[q] {
+                // λ = 0
+                for b in 0..d {
+                    rhs[ri] = -put_lam(&mut a, ri, &[(q * d + b, 1.0)]);
+                    ri += 1;
+                }
+                continue;
+            }
+            let CoulombRow::Slip { l, q: qc, r } = rows[q].with_reference(&k.u_t_ref) else {
+                continue; // stick: no unknown, no row
+            };
+            // (F6): −λ_τ − q λ_n + L̃ u_τ = r̃ (+ L̃ u_τ^ref, in r)
+            for i in 0..d - 1 {
+                let c0 = put_lam(&mut a, ri, &[(q * d + 1 + i, -1.0), (q * d, -qc[i])]);
+                for j in 0..d - 1 {
+                    a[(at[q] + j, ri)] += l[i][j];
+                }
+                rhs[ri] = r[i] - c0;
+                ri += 1;
+            }
+        }
+        debug_assert_eq!(ri, m);
+        // the balance of the free modes: Gᵀ λ = φ, λ = base − S u_F + S G α
+        for cz in 0..mz {
+            let mut row = a.column_mut(m + cz);
+            for (jc, u) in cols.iter().enumerate() {
+                row[jc] = -st.sg[(u.dof, cz)];
+            }
+            for c2 in 0..mz {
+                row[m + c2] = st.gsg[(cz, c2)];
+            }
+            let gb: f64 = self
+                .g
+                .column(cz)
+                .iter()
+                .zip(&base)
+                .map(|(g, b)| g * b)
+                .sum();
+            rhs[m + cz] = self.phi[cz] - gb;
+        }
+        equilibrate(&mut a, &mut rhs);
+        System {
+            a,
+            rhs,
+            cols,
+            known: Some(known),
+        }
+    }
+
     /// The step's dense system in the active nodes' λ and the free modes' α (module note;
     /// bordered by the balance Gᵀ λ = φ where Dirichlet data leave rigid modes free), its rows
     /// equilibrated. `None` without tangential rows.
-    fn system(&self, set: &ActiveSet) -> Option<System> {
+    fn system_dual(&self, set: &ActiveSet) -> Option<System> {
         let (d, n, mz) = (self.dim, self.cb.nodes.len(), self.g.ncols());
         let (cmt, g, w) = (self.cmat_t, self.g, self.d0);
         let rows = set.tangential.as_ref()?;
@@ -646,23 +839,21 @@ impl Dense<'_> {
             }
             rhs[m + cz] = self.phi[cz];
         }
-        // rows in displacement (normal, stick) and force (slip, balance) units, columns in force
-        // (λ) and displacement (α) units: equilibrated before the LU (measured on the Hertz
-        // disk at 171 602 unknowns: the residual floor of the dense steps 10 × lower)
-        for i in 0..m + mz {
-            let mut row = a.column_mut(i);
-            let s = row.iter().fold(0.0_f64, |x, v| x.max(v.abs()));
-            if s > 0.0 {
-                row.scale_mut(1.0 / s);
-                rhs[i] /= s;
-            }
-        }
-        Some(System { a, rhs, cols })
+        equilibrate(&mut a, &mut rhs);
+        Some(System {
+            a,
+            rhs,
+            cols,
+            known: None,
+        })
     }
 
     /// λ (every candidate, d per node), u = d₀ − C λ + G α and α from a system's solution.
     #[allow(clippy::type_complexity)]
     fn unknowns(&self, sys: &System, x: &[f64]) -> (Vec<f64>, Vec<f64>, Vec<f64>) {
+        if let (Some(known), Some(st)) = (&sys.known, self.stiff) {
+            return self.unknowns_primal(sys, known, st, x);
+        }
         let (d, n, m) = (self.dim, self.cb.nodes.len(), sys.cols.len());
         let mut lam = vec![0.0; n * d];
         for (u, &xj) in sys.cols.iter().zip(x) {
@@ -673,6 +864,47 @@ impl Dense<'_> {
         }
         let alpha: Vec<f64> = x[m..].to_vec();
         let u = self.u_of(&lam, &alpha);
+        (lam, u, alpha)
+    }
+
+    /// u − G α at the candidates' dofs where `sys` is in the primal form (empty otherwise): the
+    /// Schur variables' part of the expansion, from the step's own unknowns (d₀ − C λ would
+    /// carry λ's round-off through C = S⁻¹: measured on the rolling Hertz disk at 344 620
+    /// unknowns, the expanded residual 1.5e-9 of ‖λ‖ instead of round-off).
+    fn primal_x_s(&self, sys: &System, u: &[f64], alpha: &[f64]) -> Vec<f64> {
+        if sys.known.is_none() {
+            return Vec::new();
+        }
+        (DVector::from_column_slice(u) - self.g * DVector::from_column_slice(alpha))
+            .as_slice()
+            .to_vec()
+    }
+
+    /// [`Dense::unknowns`] of the primal form: u (`known` where the set prescribes it), α, and
+    /// λ = r − S (u − G α), exactly 0 at the inactive candidates (their rows).
+    #[allow(clippy::type_complexity)]
+    fn unknowns_primal(
+        &self,
+        sys: &System,
+        known: &[f64],
+        st: &Stiff,
+        x: &[f64],
+    ) -> (Vec<f64>, Vec<f64>, Vec<f64>) {
+        let (d, m) = (self.dim, sys.cols.len());
+        let mut u = known.to_vec();
+        for (c, &xj) in sys.cols.iter().zip(x) {
+            u[c.dof] = xj;
+        }
+        let alpha: Vec<f64> = x[m..].to_vec();
+        let w = DVector::from_column_slice(&u) - self.g * DVector::from_column_slice(&alpha);
+        let mut lam = (DVector::from_column_slice(st.r) - st.s * w)
+            .as_slice()
+            .to_vec();
+        for (q, l) in lam.chunks_mut(d).enumerate() {
+            if known[q * d].is_nan() {
+                l.fill(0.0);
+            }
+        }
         (lam, u, alpha)
     }
 
@@ -725,6 +957,7 @@ pub(super) fn solve(
         outcome: "condensed",
         reason: None,
         steps: 0,
+        primal_steps: 0,
         dense_seconds: 0.0,
         expansion_seconds: 0.0,
         coarse_levels: Vec::new(),
@@ -733,6 +966,7 @@ pub(super) fn solve(
     let run = dense_phase(ctx, p, ns, kept, warm);
     summary.dense_seconds = t.elapsed().as_secs_f64();
     summary.steps = run.steps.len();
+    summary.primal_steps = run.primal_steps;
     if !run.coarse.is_empty() {
         let levels: Vec<String> = run
             .coarse
@@ -761,10 +995,12 @@ pub(super) fn solve(
     } else {
         Vec::new()
     };
-    let w = match kept
-        .comp
-        .expand_u(ctx, &kept.cand, (&kept.f_root, kept.n_local), &lam)
-    {
+    let w = match kept.comp.expand_u(
+        ctx,
+        &kept.cand,
+        (&kept.f_root, kept.n_local),
+        (&lam, &run.x_s),
+    ) {
         Ok(w) => w,
         Err(why) => return Ok(give_up(ctx, summary, why)),
     };
@@ -787,6 +1023,7 @@ fn dense_phase(
     let mz = kept.free.dirichlet_free().ncols() + ns.force.len();
     let warm_records = warm.map(|w| gather_records(ctx, w.nodes));
     let mut packed = Vec::new();
+    let mut x_s = Vec::new();
     if ctx.rank == 0 {
         let run = guarded("coulomb-dense-steps", || {
             let cb = candidate_boundary(kept, b, dim);
@@ -794,6 +1031,11 @@ fn dense_phase(
             let mut phi = kept.free.free_load();
             phi.extend(ns.force.iter().map(|fc| fc.magnitude()));
             let cmat_t = kept.comp.cmat.transpose();
+            let stiff = kept.comp.stiffness().map(|(s, r)| {
+                let sg = s * &g;
+                let gsg = g.transpose() * &sg;
+                Stiff { s, r, sg, gsg }
+            });
             let dense = Dense {
                 dim,
                 cmat: &kept.comp.cmat,
@@ -807,6 +1049,7 @@ fn dense_phase(
                 max_steps: ns.section.max_steps,
                 tol_u: ns.section.tol_u,
                 settle: true,
+                stiff: stiff.as_ref(),
             };
             match &warm_records {
                 Some(all) => {
@@ -829,12 +1072,14 @@ fn dense_phase(
                 }
             }
         });
-        packed = run
-            .unwrap_or_else(|why| DenseCoulomb::failed(n, dim, mz, why))
-            .pack();
+        let mut run = run.unwrap_or_else(|why| DenseCoulomb::failed(n, dim, mz, why));
+        x_s = std::mem::take(&mut run.x_s);
+        packed = run.pack();
     }
     ctx.broadcast_f64s(&mut packed);
-    DenseCoulomb::unpack(&packed, n, dim, mz)
+    let mut run = DenseCoulomb::unpack(&packed, n, dim, mz);
+    run.x_s = x_s;
+    run
 }
 
 /// The condensed solve stops: said in the log, the plain path from the frictionless solution.
@@ -1008,9 +1253,10 @@ fn finish(
         });
         say!(
             ctx,
-            "coulomb: condensed: {} dense steps on {n} candidates ({:.3} s), expansion and check \
-             {:.3} s: |C| = {:.3e} of |λ| = {:.3e}{stalled}",
+            "coulomb: condensed: {} dense steps ({} in the primal form) on {n} candidates \
+             ({:.3} s), expansion and check {:.3} s: |C| = {:.3e} of |λ| = {:.3e}{stalled}",
             summary.steps,
+            summary.primal_steps,
             summary.dense_seconds,
             summary.expansion_seconds,
             totals.residual,
@@ -1219,6 +1465,7 @@ mod tests {
                 max_steps: 100,
                 tol_u: 1e-10,
                 settle: true,
+                stiff: None,
             }
         }
     }
@@ -1289,6 +1536,65 @@ mod tests {
             .expect("the test");
     }
 
+    /// The primal form (on S = C⁻¹ itself) against the dual form on C, on the pushed line
+    /// pressed in everywhere (every node active: the primal form has the slipping nodes'
+    /// tangential displacements alone as unknowns): the same final states and λ.
+    #[test]
+    fn the_primal_form_ends_where_the_dual_form_ends() {
+        std::thread::Builder::new()
+            .stack_size(64 << 20)
+            .spawn(|| {
+                let n = 65;
+                let mut line = Line::new(n, 0.0);
+                let mid = (n / 2) as f64;
+                for q in 0..n {
+                    let t = (q as f64 - mid) / mid;
+                    line.d0[2 * q] = -1.0 - 0.5 * t * t;
+                    line.d0[2 * q + 1] = 0.6 * t;
+                }
+                let s = line.cmat.clone().try_inverse().expect("SPD");
+                let r = (&s * DVector::from_column_slice(&line.d0))
+                    .as_slice()
+                    .to_vec();
+                let sg = &s * &line.g;
+                let gsg = line.g.transpose() * &sg;
+                let st = Stiff {
+                    s: &s,
+                    r: &r,
+                    sg,
+                    gsg,
+                };
+                let dual = line.dense(100.0);
+                let primal = Dense {
+                    stiff: Some(&st),
+                    ..dual
+                };
+                let (start, u_prev) = dual.frictionless_start(&vec![true; n], &vec![0.0; n]);
+                let a = dual.run(&start, u_prev.clone());
+                let b = primal.run(&start, u_prev);
+                assert!(a.end.is_ok() && b.end.is_ok(), "{:?} {:?}", a.end, b.end);
+                assert_eq!((a.primal_steps, b.primal_steps), (0, b.steps.len()));
+                let slips = (0..n).filter(|&q| b.active[q] && b.slip[q]).count();
+                let sticks = (0..n).filter(|&q| b.active[q] && !b.slip[q]).count();
+                assert!(slips > 5 && sticks > 5, "{slips} slip, {sticks} stick");
+                assert_eq!((a.active.clone(), a.slip.clone()), (b.active, b.slip));
+                let scale = a.lambda.iter().fold(0.0_f64, |m, x| m.max(x.abs()));
+                for (x, y) in a.lambda.iter().zip(&b.lambda) {
+                    assert!((x - y).abs() <= 1e-10 * scale, "{x} {y}");
+                }
+                // the primal iterate's own u − G α: the dual's d₀ − C λ
+                let w = DVector::from_column_slice(&line.d0)
+                    - &line.cmat * DVector::from_column_slice(&a.lambda);
+                let wmax = w.iter().fold(0.0_f64, |m, x| m.max(x.abs()));
+                for (x, y) in w.iter().zip(&b.x_s) {
+                    assert!((x - y).abs() <= 1e-10 * wmax, "{x} {y}");
+                }
+            })
+            .expect("thread")
+            .join()
+            .expect("the test");
+    }
+
     #[test]
     fn a_system_that_holds_at_the_iterate_is_a_fixed_point() {
         // rows as columns: [[2, 1], [0, 4]] x = [3, 4] ⇒ x = (1, 1)
@@ -1296,6 +1602,7 @@ mod tests {
             a: DMatrix::from_fn(2, 2, |j, i| a[i][j]),
             rhs: DVector::from_row_slice(&b),
             cols: vec![Unknown { dof: 0, tied: None }],
+            known: None,
         };
         let own = sys([[2.0, 1.0], [0.0, 4.0]], [3.0, 4.0]);
         let x = [1.0, 1.0 + 2.0 * f64::EPSILON];

@@ -78,6 +78,9 @@ const DENSE_RESIDUAL_TOL: f64 = 1e-8;
 /// iterate may have to be accepted (the final check's warning level).
 const CERTIFICATE_ROUND_OFF: f64 = 1e-8;
 
+/// One dense step's record: step, |A_n|, changed, residual, seconds.
+type DenseStep = (usize, usize, usize, f64, f64);
+
 /// The dense generalised Newton on rank 0 and how it ended.
 struct DenseCoulomb {
     /// λ of every candidate, d per node in C's order (node frame, normal first).
@@ -88,7 +91,7 @@ struct DenseCoulomb {
     active: Vec<bool>,
     slip: Vec<bool>,
     /// Per step: step, |A_n|, changed, residual, seconds.
-    steps: Vec<(usize, usize, usize, f64, f64)>,
+    steps: Vec<DenseStep>,
     /// `Err`: why the iteration gave up.
     end: Result<(), String>,
     /// It stopped by the stall rule (`newton::stalled`: the residual at the round-off of the
@@ -522,7 +525,7 @@ impl Dense<'_> {
         &self,
         set: &ActiveSet,
         (lambda, mut alpha): (Vec<f64>, Vec<f64>),
-        (steps, primal_steps): (Vec<(usize, usize, usize, f64, f64)>, usize),
+        (steps, primal_steps): (Vec<DenseStep>, usize),
         end: Result<(), String>,
     ) -> DenseCoulomb {
         let n = self.cb.nodes.len();

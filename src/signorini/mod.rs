@@ -1029,14 +1029,19 @@ fn coulomb_start(
     let u = nr.u.to_local_vec()?;
     // under force control the references where the frictionless approaches put the obstacles
     let placed = force::placed(b, &force::starting_at(ns.force, &nr.approach));
-    // every active node starts sticking (Δu_τ = 0, λ_τ = 0): the first Coulomb step gives the
-    // all-stick λ_τ, and (3.33) lets slip where |λ_τ| exceeds μ(−λ_n)
-    for (k, r) in placed.nodes.iter().zip(nr.nodes.iter_mut()) {
+    sticking(&mut nr.nodes, &placed);
+    Ok((Begin::Start(nr, u), Some(summary)))
+}
+
+/// Every node of a frictionless solution starts sticking (Δu_τ = 0, λ_τ = 0 against the
+/// references of `b`): the first Coulomb step gives the all-stick λ_τ, and (3.33) lets slip
+/// where |λ_τ| exceeds μ(−λ_n). Local.
+fn sticking(nodes: &mut [NodeResult], b: &ContactBoundary) {
+    for (k, r) in b.nodes.iter().zip(nodes.iter_mut()) {
         r.u_t = k.u_t_ref;
         r.lambda_t = [0.0; 2];
         r.slip = false;
     }
-    Ok((Begin::Start(nr, u), Some(summary)))
 }
 
 /// The start of Coulomb's generalised Newton where no factorisation is there to condense on
@@ -1086,11 +1091,7 @@ fn iterative_start(
         nr.steps
     );
     let u = nr.u.to_local_vec()?;
-    for (k, r) in problem.boundary.nodes.iter().zip(nr.nodes.iter_mut()) {
-        r.u_t = k.u_t_ref;
-        r.lambda_t = [0.0; 2];
-        r.slip = false;
-    }
+    sticking(&mut nr.nodes, problem.boundary);
     Ok((Begin::Start(nr, u), None))
 }
 

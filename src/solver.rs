@@ -29,7 +29,12 @@ pub fn preset_options(preset: Preset, rtol: f64, symmetric: bool) -> String {
         // aggregation AMG with the rigid-body near-null space; the symmetrised graph keeps
         // aggregation valid for the unsymmetric reduced systems of friction (Tresca (3.42),
         // Coulomb (F7) in docs/friction.md, unsymmetric also in 2D; for Coulomb the hierarchy
-        // is built on the system without its row mix, reduced.rs `write_unmixed`). The coarsest level is
+        // is built on the system without its row mix, reduced.rs `write_unmixed`). On those
+        // unsymmetric systems classical Gram–Schmidt loses the Krylov basis' orthogonality in
+        // long solves and GMRES broke down (DIVERGED_BREAKDOWN: the 3D block held and pushed
+        // into a sphere, a floating ball, the hemisphere's load steps; 2 ranks): it is refined
+        // where needed, which also halved the iterations of the longest solves (block at
+        // 112 890 unknowns: 367 → 185). The coarsest level is
         // solved by a pseudo-inverse (SVD): a hierarchy built on a matrix with a null space
         // (a floating body's free rigid modes, reduced.rs) has a singular coarse matrix, on
         // which LU breaks GMRES down (2D Hertz at ν = 0.4999); on a regular one it is LU's
@@ -37,7 +42,12 @@ pub fn preset_options(preset: Preset, rtol: f64, symmetric: bool) -> String {
         Preset::Iterative => format!(
             "-ksp_type gmres -ksp_pc_side right -ksp_gmres_restart 200 -ksp_rtol {rtol:e} \
              -ksp_max_it 2000 -pc_type gamg -pc_gamg_sym_graph true \
-             -mg_levels_ksp_type chebyshev -mg_levels_pc_type jacobi -mg_coarse_pc_type svd"
+             -mg_levels_ksp_type chebyshev -mg_levels_pc_type jacobi -mg_coarse_pc_type svd{}",
+            if symmetric {
+                ""
+            } else {
+                " -ksp_gmres_cgs_refinement_type refine_ifneeded"
+            }
         ),
     }
 }
@@ -54,9 +64,9 @@ pub const AUTO_ITERATIVE_3D_DOFS: usize = 10_000;
 /// The preset to use for `asked` on a mesh of dimension `dim` with `dofs` unknowns and
 /// `friction` (Tresca or Coulomb), and why (for the log and summary.json). With friction the
 /// auto preset is direct at every size: on a 3D block held and pushed into a sphere (Coulomb
-/// μ = 0.3, 2 ranks) the iterative preset takes 13–16 Newton steps of GMRES + GAMG, some of
-/// them 200–450 iterations, where the direct preset's condensed path needs one factorisation
-/// (112 890 unknowns: 25 s against 5.4 s; docs/numbers.md, "Coulomb on the iterative preset").
+/// μ = 0.3, 2 ranks) the iterative preset takes 14 Newton steps of GMRES + GAMG, the longest
+/// 185 iterations, where the direct preset's condensed path needs one factorisation
+/// (112 890 unknowns: 16–18 s against 5.4 s; docs/numbers.md, "Coulomb on the iterative preset").
 pub fn choose_preset(asked: Preset, dim: usize, dofs: usize, friction: bool) -> (Preset, String) {
     match asked {
         Preset::Auto if dim == 3 && friction => (

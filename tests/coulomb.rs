@@ -864,11 +864,11 @@ fn held_block_case(dir: &Path) -> std::path::PathBuf {
 
 #[test]
 fn coulomb_on_the_iterative_preset_in_3d_agrees_with_the_direct_one() {
-    // GMRES with GAMG built on the Coulomb system itself (its (F7) row mix) broke down on this
-    // case on 2 ranks (DIVERGED_BREAKDOWN in Newton step 5); GAMG is now built on the system
-    // without the row mix. Both presets must end in the same state on 1, 2 and 3 ranks: the
-    // same active and slipping nodes, u and λ within 1e-7 of their scales (the Krylov
-    // tolerance; measured 1.2e-9 for u on 2 ranks).
+    // GMRES broke down on this case on 2 ranks (DIVERGED_BREAKDOWN in Newton step 5: classical
+    // Gram–Schmidt without refinement lost the Krylov basis' orthogonality on the unsymmetric
+    // Coulomb systems). Both presets must end in the same state on 1, 2 and 3 ranks: the same
+    // active and slipping nodes, u and λ within 1e-7 of their scales (the Krylov tolerance;
+    // measured 1.2e-9 for u on 2 ranks).
     let tmp = tempfile::tempdir().unwrap();
     let case = held_block_case(tmp.path());
     let slipping = |s: &Solved| -> Vec<u64> {

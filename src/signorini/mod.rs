@@ -1048,10 +1048,10 @@ fn sticking(nodes: &mut [NodeResult], b: &ContactBoundary) {
 /// (the iterative preset): Algorithm 1's frictionless solution on the same Krylov solver,
 /// every active node sticking — for a body that Dirichlet data hold, without force control or
 /// a warm start; else the touching nodes. Measured on the 3D block held and pushed into a
-/// sphere (μ = 0.3, 2 ranks): at 44 529 unknowns 4 frictionless and 8 Coulomb steps, 2.5 s,
-/// against 13 steps and 9.0 s from the touching nodes; at 112 890 unknowns 5 + 9 steps, 24.6 s
-/// against 16 steps and 25–28 s (docs/numbers.md, "Coulomb on the iterative preset").
-/// Collective.
+/// sphere (μ = 0.3, 2 ranks; Newton steps with the frictionless ones, GMRES iterations in all)
+/// at 7 071 / 44 529 / 112 890 unknowns: 11 / 12 / 14 steps, 146 / 223 / 461 iterations,
+/// against 12 / 13 / 16 steps, 173 / 312 / 513 iterations from the touching nodes (the solve
+/// times within 5 %; docs/numbers.md, "Coulomb on the iterative preset"). Collective.
 fn iterative_start(
     ctx: &Ctx,
     problem: &ContactProblem,

@@ -66,7 +66,8 @@ pub const AUTO_ITERATIVE_3D_DOFS: usize = 10_000;
 /// auto preset is direct at every size: on a 3D block held and pushed into a sphere (Coulomb
 /// μ = 0.3, 2 ranks) the iterative preset takes 14 Newton steps of GMRES + GAMG, the longest
 /// 185 iterations, where the direct preset's condensed path needs one factorisation
-/// (112 890 unknowns: 16–18 s against 5.4 s; docs/numbers.md, "Coulomb on the iterative preset").
+/// (112 890 unknowns: 17–18 s against 5.4–5.7 s; docs/numbers.md, "Coulomb on the iterative
+/// preset").
 pub fn choose_preset(asked: Preset, dim: usize, dofs: usize, friction: bool) -> (Preset, String) {
     match asked {
         Preset::Auto if dim == 3 && friction => (

@@ -894,8 +894,9 @@ enum Begin {
 /// estimate carries that part by a tangential force at the contact and the half-space model
 /// locates the zone the candidates are taken from (`Unheld`, docs/friction.md). `Touching`
 /// (said in the log) where the condensed path does not find a frictionless set; where it does
-/// not apply (the iterative preset), [`iterative_start`]. A load step (`warm`) tries the condensed iteration alone (the frictionless set from
-/// the warm one; references u_τ^ref of the previous step) and otherwise keeps its warm start.
+/// not apply (the iterative preset), [`iterative_start`]. A load step (`warm`) tries the
+/// condensed iteration alone (the frictionless set from the warm one; references u_τ^ref of
+/// the previous step) and otherwise keeps its warm start.
 /// Under force control the dense Coulomb iteration takes the approaches as unknowns (a held
 /// body); on a body that only its pairs hold the start is the frictionless force-controlled
 /// solution, every active node sticking, at its approaches (the `approach` of the returned

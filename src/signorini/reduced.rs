@@ -834,8 +834,9 @@ impl ReducedSystem {
             dim,
             &mut self.buf,
         )?;
-        self.unmixed = ctx.any(writes.iter().any(|(_, me, _)| me.row_mix.is_some()))
-            && !self.ls.ksp.factorises()?;
+        // the same solver on every rank: the reduction only on the iterative preset
+        self.unmixed = !self.ls.ksp.factorises()?
+            && ctx.any(writes.iter().any(|(_, me, _)| me.row_mix.is_some()));
         if self.unmixed {
             let made = &mut self.amg_matrix;
             write_unmixed(
@@ -1258,7 +1259,6 @@ impl ReducedSystem {
         self.u.write(|x| x.copy_from_slice(v))
     }
 
-    /// One KSPSolve on the step's matrix (the plain path).
     /// S as the operator, and as the preconditioner's matrix unless this step has one of its
     /// own ([`write_unmixed`]).
     fn set_operators(&mut self) -> petsc::Result<()> {
@@ -1268,6 +1268,7 @@ impl ReducedSystem {
         }
     }
 
+    /// One KSPSolve on the step's matrix (the plain path).
     fn solve_plain(&mut self) -> petsc::Result<StepSolve> {
         let t = Instant::now();
         self.set_operators()?;

@@ -15,8 +15,8 @@
 //! ```
 //!
 //! (or the same step in the primal form on S = C⁻¹ itself where that has fewer unknowns,
-//! [`Stiff`]) with the rows of `contact::coulomb_row_dyn` and the set update (3.23)/(F5) of the plain
-//! path (`ActiveSet::update`, its stick band included), stopped by the same rule, first on
+//! [`Stiff`]) with the rows of `contact::coulomb_row_dyn` and the set update (3.23)/(F5) of the
+//! plain path (`ActiveSet::update`, its stick band included), stopped by the same rule, first on
 //! coarse subsets of the candidates (nested iteration, `Dense::run_nested`). Nodes beyond
 //! the candidates stay inactive. At the end one expansion solve gives u = K_p⁻¹ (f − Q λ) +
 //! R z α, and the plain path's recovery (3.28) and set update on every contact node check it:

@@ -467,25 +467,13 @@ impl ActiveSet {
         scale: f64,
         dim: usize,
     ) -> SetUpdate {
-        self.update_rows(it, b, law, c, scale, dim, false)
+        self.update_with(it, b, law, c, scale, dim, false)
     }
 
-    /// [`ActiveSet::update`] with the rows of settled slip ([`settled`], 2D Coulomb): the
-    /// condensed Coulomb iteration's update (docs/friction.md, "Settled slip"). Local.
-    pub fn update_settling(
-        &self,
-        it: &Iterate,
-        b: &ContactBoundary,
-        law: Law,
-        c: f64,
-        scale: f64,
-        dim: usize,
-    ) -> SetUpdate {
-        self.update_rows(it, b, law, c, scale, dim, true)
-    }
-
+    /// [`ActiveSet::update`], with `settle` the rows of settled slip ([`settled`], 2D Coulomb):
+    /// the condensed Coulomb iteration's update (docs/friction.md, "Settled slip"). Local.
     #[allow(clippy::too_many_arguments)]
-    fn update_rows(
+    pub fn update_with(
         &self,
         it: &Iterate,
         b: &ContactBoundary,

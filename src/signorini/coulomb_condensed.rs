@@ -391,7 +391,7 @@ struct Dense<'a> {
     c: f64,
     max_steps: usize,
     tol_u: f64,
-    /// The rows of settled slip (`ActiveSet::update_settling`; production: true).
+    /// The rows of settled slip (`ActiveSet::update_with`; production: true).
     settle: bool,
     /// S itself: each step in the form with fewer unknowns (`None`: the dual form always).
     stiff: Option<&'a Stiff<'a>>,
@@ -455,11 +455,7 @@ impl Dense<'_> {
             let (lam, u, alpha) = self.unknowns(&sys_k, &x);
             self.records(&set, &lam, &u, &mut it.nodes);
             let scale = threshold_scale_local(self.cb, &it.nodes, law, c);
-            let up = if self.settle {
-                set.update_settling(&it, self.cb, law, c, scale, d) // (3.23) / (F5)
-            } else {
-                set.update(&it, self.cb, law, c, scale, d)
-            };
+            let up = set.update_with(&it, self.cb, law, c, scale, d, self.settle); // (3.23) / (F5)
             let (residual, lambda_norm) = (up.residual2.sqrt(), up.lambda2.sqrt());
             let du: f64 = u.iter().zip(&u_prev).map(|(a, b)| (a - b).powi(2)).sum();
             let uu: f64 = u.iter().map(|a| a * a).sum();
@@ -1474,70 +1470,70 @@ mod tests {
         }
     }
 
-    #[test]
-    fn nested_coulomb_ends_in_the_plain_runs_solution_in_fewer_fine_steps() {
-        // a stack of its own: a multithreaded BLAS may take more than a test thread's 2 MB
+    /// Runs `f` on a thread with a stack of its own: a multithreaded BLAS may take more than a
+    /// test thread's 2 MB.
+    fn on_big_stack(f: impl FnOnce() + Send + 'static) {
         std::thread::Builder::new()
             .stack_size(64 << 20)
-            .spawn(nested_against_plain)
+            .spawn(f)
             .expect("thread")
             .join()
             .expect("the test");
+    }
+
+    #[test]
+    fn nested_coulomb_ends_in_the_plain_runs_solution_in_fewer_fine_steps() {
+        on_big_stack(nested_against_plain);
     }
 
     /// A 2D slip row without spring and right-hand side ties λ_τ = −q λ_n: the node keeps one
     /// unknown and one row, and the solution still satisfies every row of the set.
     #[test]
     fn a_settled_slip_nodes_tangential_force_is_tied_to_its_normal_force() {
-        std::thread::Builder::new()
-            .stack_size(64 << 20)
-            .spawn(|| {
-                let n = 9;
-                let line = Line::new(n, 0.1);
-                let (dense, cb) = (line.dense(1.0), &line.cb);
-                // the outer four nodes slip outwards (settled rows), the middle five stick
-                let coef = |q: usize| if q < 2 { -0.3 } else { 0.3 };
-                let row = |q: usize| {
-                    if q < 2 || q >= n - 2 {
-                        CoulombRow::Slip {
-                            l: [[0.0; 2]; 2],
-                            q: [coef(q), 0.0],
-                            r: [0.0; 2],
-                        }
-                    } else {
-                        CoulombRow::Stick
+        on_big_stack(|| {
+            let n = 9;
+            let line = Line::new(n, 0.1);
+            let (dense, cb) = (line.dense(1.0), &line.cb);
+            // the outer four nodes slip outwards (settled rows), the middle five stick
+            let coef = |q: usize| if q < 2 { -0.3 } else { 0.3 };
+            let row = |q: usize| {
+                if q < 2 || q >= n - 2 {
+                    CoulombRow::Slip {
+                        l: [[0.0; 2]; 2],
+                        q: [coef(q), 0.0],
+                        r: [0.0; 2],
                     }
-                };
-                let set = ActiveSet {
-                    normal: vec![true; n],
-                    tangential: Some((0..n).map(row).collect()),
-                    spring_floor: 0.0,
-                };
-                let sys = dense.system(&set).expect("rows");
-                assert_eq!(sys.cols.len(), 4 + 2 * 5);
-                let x = solve_system(&sys).expect("regular");
-                let (lam, u, _) = dense.unknowns(&sys, &x);
-                let (su, sl) = (
-                    u.iter().fold(0.0_f64, |m, v| m.max(v.abs())),
-                    lam.iter().fold(0.0_f64, |m, v| m.max(v.abs())),
-                );
-                for q in 0..n {
-                    assert!(
-                        (u[2 * q] + cb.nodes[q].gap).abs() <= 1e-12 * su,
-                        "u_n of {q}"
-                    );
-                    if set.slip(q) {
-                        let tied = lam[2 * q + 1] + coef(q) * lam[2 * q];
-                        assert!(tied.abs() <= 1e-12 * sl, "λ_τ of {q}: {tied}");
-                        assert!(lam[2 * q + 1] != 0.0);
-                    } else {
-                        assert!(u[2 * q + 1].abs() <= 1e-12 * su, "u_τ of {q}");
-                    }
+                } else {
+                    CoulombRow::Stick
                 }
-            })
-            .expect("thread")
-            .join()
-            .expect("the test");
+            };
+            let set = ActiveSet {
+                normal: vec![true; n],
+                tangential: Some((0..n).map(row).collect()),
+                spring_floor: 0.0,
+            };
+            let sys = dense.system(&set).expect("rows");
+            assert_eq!(sys.cols.len(), 4 + 2 * 5);
+            let x = solve_system(&sys).expect("regular");
+            let (lam, u, _) = dense.unknowns(&sys, &x);
+            let (su, sl) = (
+                u.iter().fold(0.0_f64, |m, v| m.max(v.abs())),
+                lam.iter().fold(0.0_f64, |m, v| m.max(v.abs())),
+            );
+            for q in 0..n {
+                assert!(
+                    (u[2 * q] + cb.nodes[q].gap).abs() <= 1e-12 * su,
+                    "u_n of {q}"
+                );
+                if set.slip(q) {
+                    let tied = lam[2 * q + 1] + coef(q) * lam[2 * q];
+                    assert!(tied.abs() <= 1e-12 * sl, "λ_τ of {q}: {tied}");
+                    assert!(lam[2 * q + 1] != 0.0);
+                } else {
+                    assert!(u[2 * q + 1].abs() <= 1e-12 * su, "u_τ of {q}");
+                }
+            }
+        });
     }
 
     /// The primal form (on S = C⁻¹ itself) against the dual form on C, on the pushed line
@@ -1545,58 +1541,53 @@ mod tests {
     /// tangential displacements alone as unknowns): the same final states and λ.
     #[test]
     fn the_primal_form_ends_where_the_dual_form_ends() {
-        std::thread::Builder::new()
-            .stack_size(64 << 20)
-            .spawn(|| {
-                let n = 65;
-                let mut line = Line::new(n, 0.0);
-                let mid = (n / 2) as f64;
-                for q in 0..n {
-                    let t = (q as f64 - mid) / mid;
-                    line.d0[2 * q] = -1.0 - 0.5 * t * t;
-                    line.d0[2 * q + 1] = 0.6 * t;
-                }
-                let s = line.cmat.clone().try_inverse().expect("SPD");
-                let r = (&s * DVector::from_column_slice(&line.d0))
-                    .as_slice()
-                    .to_vec();
-                let sg = &s * &line.g;
-                let gsg = line.g.transpose() * &sg;
-                let st = Stiff {
-                    s: &s,
-                    r: &r,
-                    sg,
-                    gsg,
-                };
-                let dual = line.dense(100.0);
-                let primal = Dense {
-                    stiff: Some(&st),
-                    ..dual
-                };
-                let (start, u_prev) = dual.frictionless_start(&vec![true; n], &vec![0.0; n]);
-                let a = dual.run(&start, u_prev.clone());
-                let b = primal.run(&start, u_prev);
-                assert!(a.end.is_ok() && b.end.is_ok(), "{:?} {:?}", a.end, b.end);
-                assert_eq!((a.primal_steps, b.primal_steps), (0, b.steps.len()));
-                let slips = (0..n).filter(|&q| b.active[q] && b.slip[q]).count();
-                let sticks = (0..n).filter(|&q| b.active[q] && !b.slip[q]).count();
-                assert!(slips > 5 && sticks > 5, "{slips} slip, {sticks} stick");
-                assert_eq!((a.active.clone(), a.slip.clone()), (b.active, b.slip));
-                let scale = a.lambda.iter().fold(0.0_f64, |m, x| m.max(x.abs()));
-                for (x, y) in a.lambda.iter().zip(&b.lambda) {
-                    assert!((x - y).abs() <= 1e-10 * scale, "{x} {y}");
-                }
-                // the primal iterate's own u − G α: the dual's d₀ − C λ
-                let w = DVector::from_column_slice(&line.d0)
-                    - &line.cmat * DVector::from_column_slice(&a.lambda);
-                let wmax = w.iter().fold(0.0_f64, |m, x| m.max(x.abs()));
-                for (x, y) in w.iter().zip(&b.x_s) {
-                    assert!((x - y).abs() <= 1e-10 * wmax, "{x} {y}");
-                }
-            })
-            .expect("thread")
-            .join()
-            .expect("the test");
+        on_big_stack(|| {
+            let n = 65;
+            let mut line = Line::new(n, 0.0);
+            let mid = (n / 2) as f64;
+            for q in 0..n {
+                let t = (q as f64 - mid) / mid;
+                line.d0[2 * q] = -1.0 - 0.5 * t * t;
+                line.d0[2 * q + 1] = 0.6 * t;
+            }
+            let s = line.cmat.clone().try_inverse().expect("SPD");
+            let r = (&s * DVector::from_column_slice(&line.d0))
+                .as_slice()
+                .to_vec();
+            let sg = &s * &line.g;
+            let gsg = line.g.transpose() * &sg;
+            let st = Stiff {
+                s: &s,
+                r: &r,
+                sg,
+                gsg,
+            };
+            let dual = line.dense(100.0);
+            let primal = Dense {
+                stiff: Some(&st),
+                ..dual
+            };
+            let (start, u_prev) = dual.frictionless_start(&vec![true; n], &vec![0.0; n]);
+            let a = dual.run(&start, u_prev.clone());
+            let b = primal.run(&start, u_prev);
+            assert!(a.end.is_ok() && b.end.is_ok(), "{:?} {:?}", a.end, b.end);
+            assert_eq!((a.primal_steps, b.primal_steps), (0, b.steps.len()));
+            let slips = (0..n).filter(|&q| b.active[q] && b.slip[q]).count();
+            let sticks = (0..n).filter(|&q| b.active[q] && !b.slip[q]).count();
+            assert!(slips > 5 && sticks > 5, "{slips} slip, {sticks} stick");
+            assert_eq!((a.active.clone(), a.slip.clone()), (b.active, b.slip));
+            let scale = a.lambda.iter().fold(0.0_f64, |m, x| m.max(x.abs()));
+            for (x, y) in a.lambda.iter().zip(&b.lambda) {
+                assert!((x - y).abs() <= 1e-10 * scale, "{x} {y}");
+            }
+            // the primal iterate's own u − G α: the dual's d₀ − C λ
+            let w = DVector::from_column_slice(&line.d0)
+                - &line.cmat * DVector::from_column_slice(&a.lambda);
+            let wmax = w.iter().fold(0.0_f64, |m, x| m.max(x.abs()));
+            for (x, y) in w.iter().zip(&b.x_s) {
+                assert!((x - y).abs() <= 1e-10 * wmax, "{x} {y}");
+            }
+        });
     }
 
     #[test]
@@ -1637,38 +1628,33 @@ mod tests {
     /// beyond its threshold: the same solution, in fewer fine steps after the nested start.
     #[test]
     fn settled_rows_end_a_wide_slip_in_fewer_steps() {
-        std::thread::Builder::new()
-            .stack_size(64 << 20)
-            .spawn(|| {
-                let n = 129;
-                let line = Line::new(n, 0.3);
-                let settled = line.dense(100.0);
-                let f5 = Dense {
-                    settle: false,
-                    ..settled
-                };
-                let active: Vec<bool> = (0..n).map(|i| i == n / 2).collect();
-                let (start, u_prev) = settled.frictionless_start(&active, &vec![0.0; n]);
-                let a = settled.run_nested(&start, u_prev.clone());
-                let b = f5.run_nested(&start, u_prev);
-                assert!(a.end.is_ok() && b.end.is_ok(), "{:?} {:?}", a.end, b.end);
-                let slips = (0..n).filter(|&q| a.active[q] && a.slip[q]).count();
-                assert!(slips > 50, "{slips} slipping");
-                assert_eq!((a.active.clone(), a.slip.clone()), (b.active, b.slip));
-                let scale = b.lambda.iter().fold(0.0_f64, |m, x| m.max(x.abs()));
-                for (x, y) in a.lambda.iter().zip(&b.lambda) {
-                    assert!((x - y).abs() <= 1e-10 * scale, "{x} {y}");
-                }
-                assert!(
-                    a.steps.len() < b.steps.len(),
-                    "fine steps: settled {}, (F5) rows {}",
-                    a.steps.len(),
-                    b.steps.len()
-                );
-            })
-            .expect("thread")
-            .join()
-            .expect("the test");
+        on_big_stack(|| {
+            let n = 129;
+            let line = Line::new(n, 0.3);
+            let settled = line.dense(100.0);
+            let f5 = Dense {
+                settle: false,
+                ..settled
+            };
+            let active: Vec<bool> = (0..n).map(|i| i == n / 2).collect();
+            let (start, u_prev) = settled.frictionless_start(&active, &vec![0.0; n]);
+            let a = settled.run_nested(&start, u_prev.clone());
+            let b = f5.run_nested(&start, u_prev);
+            assert!(a.end.is_ok() && b.end.is_ok(), "{:?} {:?}", a.end, b.end);
+            let slips = (0..n).filter(|&q| a.active[q] && a.slip[q]).count();
+            assert!(slips > 50, "{slips} slipping");
+            assert_eq!((a.active.clone(), a.slip.clone()), (b.active, b.slip));
+            let scale = b.lambda.iter().fold(0.0_f64, |m, x| m.max(x.abs()));
+            for (x, y) in a.lambda.iter().zip(&b.lambda) {
+                assert!((x - y).abs() <= 1e-10 * scale, "{x} {y}");
+            }
+            assert!(
+                a.steps.len() < b.steps.len(),
+                "fine steps: settled {}, (F5) rows {}",
+                a.steps.len(),
+                b.steps.len()
+            );
+        });
     }
 
     fn nested_against_plain() {

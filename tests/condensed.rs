@@ -222,11 +222,11 @@ fn strip_against_plain(case: &Path, sets: &[&str]) -> Vec<Solved> {
 }
 
 #[test]
-fn a_flat_punch_too_wide_for_the_dense_compliance_runs_in_the_primal_form() {
-    // The strip's top pressed flat: every node has the same gap, so all are candidates, and
-    // their dense compliance C = S⁻¹ would cost far more than the strip's factorisation. The
-    // dense steps run in the primal form on S itself (from every candidate active: no
-    // inactive unknowns): one factorisation, the plain path's answer.
+fn a_flat_punch_too_wide_for_the_dense_compliance_holds_the_zones_interior() {
+    // The strip's top pressed flat: every node has the same gap and starts active, a zone whose
+    // dense compliance would cost far more than the strip's factorisation. Its interior is held
+    // on the obstacle in K_p and only an eighth of it is a Schur variable: one factorisation,
+    // the plain path's answer.
     let tmp = tempfile::tempdir().unwrap();
     let case = strip_case(tmp.path(), (STRIP_TOP_NODES, "[0.0, -1.0]"), "");
     for r in strip_against_plain(&case, &["solver.preset=\"direct\""]) {
@@ -234,8 +234,13 @@ fn a_flat_punch_too_wide_for_the_dense_compliance_runs_in_the_primal_form() {
         assert_eq!(nodes as usize, STRIP_TOP_NODES);
         let cs = &r.summary["newton"]["condensed"];
         assert_eq!(cs["outcome"], "condensed", "{}", r.run.output());
-        assert_eq!(cs["primal"], true, "{cs}");
         assert_eq!(cs["factorisations"], 1, "{cs}");
+        let (held, cands) = (
+            cs["held_nodes"].as_f64().unwrap(),
+            r.f(&["newton", "condensed", "candidates"]),
+        );
+        assert!(held >= 0.8 * nodes && cands <= 0.2 * nodes, "{cs}");
+        assert_eq!(held + cands, nodes, "{cs}");
         assert_eq!(
             r.f(&["contact", "active_count"]),
             nodes,
@@ -245,21 +250,21 @@ fn a_flat_punch_too_wide_for_the_dense_compliance_runs_in_the_primal_form() {
 }
 
 #[test]
-fn a_set_grown_beyond_the_dual_forms_limit_goes_on_in_the_primal_form() {
+fn a_set_grown_wide_goes_on_with_its_interior_held() {
     // The strip pressed by a slightly tilted plane (every top node 0.001–0.003 inside),
     // started with no active node: the first candidates are the eighth with the smallest
-    // gaps; on the expanded u every other node comes into contact, the set grows beyond what
-    // the dense compliance pays for, and the second round runs in the primal form.
+    // gaps; on the expanded u every other node comes into contact, a zone too wide for the
+    // dense compliance, so a second pass holds its interior and iterates on its edge.
     let tmp = tempfile::tempdir().unwrap();
     let extra = "[newton]\ninit = \"all_inactive\"\n[solver]\npreset = \"direct\"\n";
     let case = strip_case(tmp.path(), (STRIP_TOP_NODES, "[0.0005, -1.0]"), extra);
     for r in strip_against_plain(&case, &[]) {
         let cs = &r.summary["newton"]["condensed"];
         assert_eq!(cs["outcome"], "condensed", "{}", r.run.output());
-        assert_eq!(cs["primal"], true, "{cs}");
         assert_eq!(cs["factorisations"], 2, "{cs}");
+        assert!(cs["held_nodes"].as_f64().unwrap() > 0.0, "{cs}");
         assert!(
-            r.run.stdout.contains("come into contact: more candidates"),
+            r.run.stdout.contains("the predicted zone again"),
             "{}",
             r.run.output()
         );
@@ -267,26 +272,78 @@ fn a_set_grown_beyond_the_dual_forms_limit_goes_on_in_the_primal_form() {
 }
 
 #[test]
-fn a_zone_too_wide_for_the_dense_schur_complement_starts_the_plain_path_from_the_models_set() {
+fn a_wide_zone_whose_band_exceeds_the_dual_forms_limit_runs_in_the_primal_form() {
     // A strip with 8 401 top nodes pressed by the tilted plane with the default start: every
-    // top node penetrates, the start set holds them all, beyond the dense Schur complement's
-    // 8 000 dofs. The plain path then starts from the half-space model's set (after the first
-    // solve) and the model corrects each exact step's update; its answer must be the plain
-    // path's from the touching nodes.
+    // top node penetrates and starts active. Its interior is held; its band (an eighth,
+    // 1 051 nodes) would still cost more than the dense work allowed for the strip's cheap
+    // factorisation, so the dense steps run on the Schur complement itself: one
+    // factorisation, the plain path's answer.
     let tmp = tempfile::tempdir().unwrap();
     let extra = "[solver]\npreset = \"direct\"\n";
     let case = strip_case(tmp.path(), (8401, "[0.0005, -1.0]"), extra);
     for r in strip_against_plain(&case, &[]) {
         let cs = &r.summary["newton"]["condensed"];
-        assert_eq!(cs["outcome"], "fallback", "{}", r.run.output());
-        assert_eq!(cs["too_wide"], true, "{cs}");
-        assert_eq!(cs["factorisations"], 0, "{cs}");
+        assert_eq!(cs["outcome"], "condensed", "{}", r.run.output());
+        assert_eq!(cs["primal"], true, "{cs}");
+        assert_eq!(cs["factorisations"], 1, "{cs}");
+        assert!(cs["held_nodes"].as_f64().unwrap() > 7000.0, "{cs}");
+    }
+}
+
+#[test]
+fn a_floating_strip_whose_zone_the_half_space_model_misses_is_solved_in_passes() {
+    // A thin floating strip (4 × 0.1, 3 601 bottom nodes) pressed onto a rigid cylinder of
+    // radius 20: it wraps the cylinder over most of its length, while the half-space model
+    // (a half-space does not bend) puts a third of it in contact. Each pass starts from the
+    // set (3.23) gives on the last expanded u, its interior held: the plain path's answer.
+    let tmp = tempfile::tempdir().unwrap();
+    let case = floating_strip_case(tmp.path(), 0.01);
+    for r in strip_against_plain(&case, &["solver.preset=\"direct\""]) {
+        let cs = &r.summary["newton"]["condensed"];
+        assert_eq!(cs["outcome"], "condensed", "{}", r.run.output());
+        assert!(cs["factorisations"].as_f64().unwrap() >= 2.0, "{cs}");
+        assert!(cs["held_nodes"].as_f64().unwrap() > 0.0, "{cs}");
         assert!(
-            r.run.stdout.contains("predictor: half-space model"),
+            r.f(&["contact", "active_count"]) > 3000.0,
             "{}",
             r.run.output()
         );
     }
+}
+
+/// A floating strip [0, 4] × [0, 0.1] (structured: 3 601 bottom nodes, 8 layers), its top
+/// pressed by `pressure` onto a rigid cylinder through (2, −20) of radius 20. Returns the case
+/// file.
+fn floating_strip_case(dir: &Path, pressure: f64) -> PathBuf {
+    let geo = dir.join("fstrip.geo");
+    std::fs::write(
+        &geo,
+        "Point(1) = {0, 0, 0};\nPoint(2) = {4, 0, 0};\nPoint(3) = {4, 0.1, 0};\n\
+         Point(4) = {0, 0.1, 0};\nLine(1) = {1, 2};\nLine(2) = {2, 3};\nLine(3) = {3, 4};\n\
+         Line(4) = {4, 1};\nCurve Loop(1) = {1, 2, 3, 4};\nPlane Surface(1) = {1};\n\
+         Transfinite Curve {1, 3} = 3601;\nTransfinite Curve {2, 4} = 9;\n\
+         Transfinite Surface {1};\nPhysical Curve(\"bottom\") = {1};\n\
+         Physical Curve(\"top\") = {3};\nPhysical Surface(\"body\") = {1};\n",
+    )
+    .unwrap();
+    let mesh = dir.join("fstrip.msh");
+    let mut cmd = std::process::Command::new("gmsh");
+    cmd.arg("-2")
+        .arg(&geo)
+        .args(["-format", "msh41", "-o"])
+        .arg(&mesh);
+    run_with_timeout(cmd, std::time::Duration::from_secs(120)).expect_code(0, "gmsh strip");
+    write_case(
+        &dir.join("fstrip.toml"),
+        &format!(
+            "[mesh]\nfile = {}\n[material]\nyoung = 2.0\npoisson = 0.3\n\
+             model = \"plane_strain\"\n[[neumann]]\ngroup = \"top\"\npressure = {pressure}\n\
+             [contact]\ngroup = \"bottom\"\nobstacle = {{ type = \"sphere\", \
+             center = [2.0, -20.0], radius = 20.0 }}\nfriction = \"none\"\n\
+             [output]\nfields = [\"displacement\"]\n",
+            toml_path(&mesh)
+        ),
+    )
 }
 
 #[test]

@@ -93,6 +93,25 @@ const LOCATED_MARGIN: usize = 8;
 /// Rounds of candidate growth before the plain path takes over.
 const MAX_ROUNDS: usize = 8;
 
+/// A predicted contact zone is wide where the dense compliance of its nodes and their margin
+/// beyond (1/LOCATED_MARGIN more) would cost more than the dense work always allowed
+/// (DENSE_FLOOR_FLOPS, from about 890 nodes): its interior is then held on the obstacle in
+/// the factorised matrix (u_n = −g there, as the plain path's reduced system (3.29) writes an
+/// active node), and only its edge band and the nodes beyond are Schur variables. The Schur
+/// complement's memory and the dense work then grow with the zone's edge, not its area.
+fn wide(zone: usize) -> bool {
+    ((zone + zone / LOCATED_MARGIN) as f64).powi(3) > DENSE_FLOOR_FLOPS
+}
+
+/// The edge band of a held zone: the 1/BAND_FRACTION of its nodes nearest to its edge (in 2D
+/// 1/16 of the zone's width on either side, in 3D an annulus 6 % of a round zone's radius
+/// wide); with the nodes beyond the zone (1/LOCATED_MARGIN of its count) they are the Schur
+/// variables. The half-space model's zone edge was 2.3 % (its coarse levels) and 0.5 % of the
+/// zone's width from the final one on the 2D Hertz disk at 10–50 × its load, 1.5 % of the
+/// radius on the 3D ball; a held node that (3.23) releases, or a node beyond that comes into
+/// contact, starts a new pass from the set (3.23) gives.
+const BAND_FRACTION: usize = 8;
+
 /// summary.json's `newton.condensed`: what the condensed path did.
 #[derive(Debug, Clone, Serialize)]
 pub struct CondensedSummary {
@@ -138,6 +157,13 @@ pub struct CondensedSummary {
     /// more than the factorisation.
     #[serde(skip_serializing_if = "std::ops::Not::not")]
     pub primal: bool,
+    /// A wide zone's interior held on the obstacle in K_p (the last pass; 0: none).
+    #[serde(skip_serializing_if = "is_zero")]
+    pub held_nodes: usize,
+}
+
+fn is_zero(n: &usize) -> bool {
+    *n == 0
 }
 
 /// summary.json's `newton.condensed.coulomb`: what the dense Coulomb iteration did.
@@ -187,6 +213,7 @@ impl CondensedSummary {
             coulomb: None,
             too_wide: false,
             primal: false,
+            held_nodes: 0,
         }
     }
 
@@ -196,7 +223,7 @@ impl CondensedSummary {
         self.factorisations += 1;
         self.solves += 1;
         self.factorisation_seconds += comp.factorisation_seconds;
-        self.ordering_seconds = comp.ordering_seconds;
+        self.ordering_seconds = self.ordering_seconds.max(comp.ordering_seconds);
         self.schur_seconds += seconds - comp.factorisation_seconds;
         self.candidates = comp.list.len();
         self.schur_dofs = comp.list.len() * comp.per;
@@ -335,117 +362,265 @@ pub(super) fn solve_keeping(
     (per, steps): (usize, bool),
 ) -> Result<(Condensed, Option<Kept>), RunError> {
     let fall = |c: Condensed| Ok((c, None));
-    let dim = p.mesh.dim;
-    let mut summary = CondensedSummary::new(p.boundary.n_global);
-    let (free, rhs0) = prepare_base(ctx, p, reduced, s)?;
-    refuse_floating_force(p, s, &free)?;
-    let f_root = ctx.gather_to_root(&rhs0); // f for MUMPS' solve phases, once
-    let start = start_set(p, s, &free, warm);
-    let located = locate(ctx, p, s, &free, warm)?;
+    let (b, dim) = (p.boundary, p.mesh.dim);
+    let mut summary = CondensedSummary::new(b.n_global);
+    let free0 = FreeModes::new(ctx, p.mesh, p.layout, p.fixed, b, &reduced.f_local, s.rigid);
+    refuse_floating_force(p, s, &free0)?;
+    let start = start_set(p, s, &free0, warm);
+    let located = locate(ctx, p, s, &free0, warm)?;
     let key = located.as_ref().map(|(k, _)| k.as_slice());
-    let cand = Candidates::gather(ctx, p.boundary, &free, &start, key);
     let n_rows = p.layout.node_offsets.last().copied().unwrap_or(0) * dim;
     let nested = warm.is_none() && s.section.init == NewtonInit::Auto;
-    let mut growth = Growth::new(&cand, per, located.as_ref().map(|(_, on)| *on));
-    let t = Instant::now();
-    let mut comp = match warm.and_then(|_| reused(ctx, p, (&free, &cand), &f_root, per)) {
-        Some(comp) => {
-            summary.factorisation_kept = true;
-            comp
-        }
-        None => Compliance::new(cand.n, per),
+    // a wide zone's interior held on the obstacle in the factorised matrix (frictionless
+    // solves from the case's start)
+    let splits = per == 1
+        && steps
+        && warm.is_none()
+        && s.force.is_empty()
+        && !s.estimate
+        && s.carried.is_none();
+    let mut zone = if splits {
+        let all = Candidates::gather(ctx, b, &free0, &start, key);
+        first_zone(&all, located.as_ref().map(|(_, on)| *on))
+    } else {
+        None
     };
-    let condensation = t.elapsed().as_secs_f64();
+    let mut order_kept = None;
+    let mut rounds = 0;
     let mut history: Vec<StepInfo> = Vec::new();
-    for round in 1..=MAX_ROUNDS {
-        let grown = factorise_round(
-            ctx,
-            reduced,
-            (&cand, &mut comp, &growth),
-            &mut summary,
-            (round, condensation),
-            (dim, n_rows, &f_root),
-        );
-        if let Err(stop) = grown {
-            return fall(fallback_stop(ctx, summary, stop));
-        }
-        if !steps {
-            summary.outcome = "factorised";
-            let kept = Kept {
-                lambda: vec![0.0; cand.n],
-                comp,
-                cand,
-                n_local: rhs0.len(),
-                f_root,
-                free,
-                active: growth.active,
-            };
-            return Ok((Condensed::Factorised(summary), Some(kept)));
-        }
-
-        let t = Instant::now();
-        let (run, x_s) = dense_round(
-            ctx,
-            &cand,
-            &comp,
-            &free,
-            s,
-            (&growth.active, nested && round == 1),
-            located.as_ref().map(|(_, on)| *on),
-        );
-        comp.x_s = x_s;
-        summary.dense_seconds += t.elapsed().as_secs_f64();
-        summary.record_coarse(ctx, &run);
-        record_steps(ctx, &mut history, &run, comp.list.len(), free.pins().len());
-        let lambda = growth.take_dense(&comp, &run);
-        match judge(ctx, p, s, (&free, &comp, cand.n), &mut growth, &run)? {
-            Judged::Expand => {}
-            Judged::Again => continue,
-            Judged::Stop(stop) => return fall(fallback_stop(ctx, summary, stop)),
-        }
-
-        let t = Instant::now();
-        let set = (lambda.as_slice(), growth.active.as_slice());
-        let f_ref = f_root.as_slice();
-        let ex = match expand(
-            ctx,
-            p,
-            reduced,
-            (s, &free, &mut comp, &cand),
-            (f_ref, rhs0.len()),
-            set,
-            &run.alpha,
-        )? {
-            Ok(ex) => ex,
-            Err(why) => return fall(fallback(ctx, summary, why)),
+    'pass: loop {
+        // a pass: the held nodes (none without a wide zone), K_p with them, its candidates
+        let all_held = zone.as_ref().map(|z| {
+            let all = Candidates::gather(ctx, b, &free0, &start, key);
+            hold(&all, z)
+        });
+        let held = all_held.as_deref().unwrap_or(&[]);
+        let (free, rhs0) = prepare_base(ctx, p, reduced, s, held)?;
+        let f_root = ctx.gather_to_root(&rhs0); // f for MUMPS' solve phases, once per pass
+        let pass_start: Vec<bool> = match &zone {
+            Some(z) => (0..b.nodes.len())
+                .map(|i| z[b.offset + i] && !held[b.offset + i])
+                .collect(),
+            None => start.clone(),
         };
-        summary.solves += 2;
-        summary.expansion_seconds += t.elapsed().as_secs_f64();
-        if ex.changed.is_empty() {
-            let n_active = growth.active.iter().filter(|&&a| a).count();
-            summary.log(ctx, cand.n, n_active);
-            let solved = finish(p, reduced, &free, ex, history, summary)?;
-            let kept = Kept {
-                comp,
-                cand,
-                n_local: rhs0.len(),
-                f_root,
-                free,
-                lambda,
-                active: growth.active,
-            };
-            if per > 1 {
-                return Ok((solved, Some(kept)));
+        let cand = Candidates::gather(ctx, b, &free, &pass_start, key);
+        let want = match &zone {
+            Some(z) => {
+                let on = z.iter().filter(|&&a| a).count();
+                let free_on = on - held.iter().filter(|&&h| h).count();
+                Some(free_on + on / LOCATED_MARGIN)
             }
-            p.kept.put(kept); // for the next load step
-            return Ok((solved, None));
+            None => located.as_ref().map(|(_, on)| on + on / LOCATED_MARGIN),
+        };
+        let mut growth = Growth::new(&cand, per, want, held);
+        summary.held_nodes = growth.held_count;
+        if growth.held_count > 0 {
+            say!(
+                ctx,
+                "newton: condensed: {} nodes inside the predicted contact zone ({} nodes) held \
+                 on the obstacle in K_p; the dense steps on the rest of it and beyond",
+                growth.held_count,
+                zone.as_ref()
+                    .map_or(0, |z| z.iter().filter(|&&a| a).count())
+            );
         }
-        if let Err(why) = growth.widen(ctx, &ex.changed, &comp, round) {
-            return fall(fallback(ctx, summary, why));
+        let t = Instant::now();
+        let kept = match warm {
+            Some(_) if held.is_empty() => reused(ctx, p, (&free, &cand), &f_root, per),
+            _ => None,
+        };
+        let mut comp = match kept {
+            Some(comp) => {
+                summary.factorisation_kept = true;
+                comp
+            }
+            None => Compliance::new(cand.n, per),
+        };
+        if comp.node_order.is_none() {
+            comp.node_order = order_kept.take();
         }
+        let condensation = t.elapsed().as_secs_f64();
+        for round in 1..=MAX_ROUNDS {
+            rounds += 1;
+            if rounds > MAX_ROUNDS {
+                break 'pass;
+            }
+            let grown = factorise_round(
+                ctx,
+                reduced,
+                (&cand, &mut comp, &growth),
+                &mut summary,
+                (round, condensation),
+                (dim, n_rows, &f_root),
+            );
+            if let Err(stop) = grown {
+                return fall(fallback_stop(ctx, summary, stop));
+            }
+            if !steps {
+                summary.outcome = "factorised";
+                let kept = Kept {
+                    lambda: vec![0.0; cand.n],
+                    comp,
+                    cand,
+                    n_local: rhs0.len(),
+                    f_root,
+                    free,
+                    active: growth.active,
+                };
+                return Ok((Condensed::Factorised(summary), Some(kept)));
+            }
+
+            let t = Instant::now();
+            let first = nested && rounds == 1;
+            let (run, x_s) = dense_round(
+                ctx,
+                &cand,
+                &comp,
+                &free,
+                s,
+                (&growth.active, first),
+                located
+                    .as_ref()
+                    .filter(|_| zone.is_none())
+                    .map(|(_, on)| *on),
+            );
+            comp.x_s = x_s;
+            summary.dense_seconds += t.elapsed().as_secs_f64();
+            summary.record_coarse(ctx, &run);
+            record_steps(ctx, &mut history, &run, comp.list.len(), free.pins().len());
+            let lambda = growth.take_dense(&comp, &run);
+            match judge(ctx, p, s, (&free, &comp, cand.n), &mut growth, &run)? {
+                Judged::Expand => {}
+                Judged::Again => continue,
+                Judged::Stop(stop) => return fall(fallback_stop(ctx, summary, stop)),
+            }
+
+            let t = Instant::now();
+            let set = (lambda.as_slice(), growth.active.as_slice());
+            let f_ref = f_root.as_slice();
+            let ex = match expand(
+                ctx,
+                p,
+                reduced,
+                (s, &free, &mut comp, &cand),
+                (f_ref, rhs0.len()),
+                set,
+                &run.alpha,
+            )? {
+                Ok(ex) => ex,
+                Err(why) => return fall(fallback(ctx, summary, why)),
+            };
+            summary.solves += 2;
+            summary.expansion_seconds += t.elapsed().as_secs_f64();
+            if ex.changed.is_empty() {
+                let n_active = growth.active.iter().filter(|&&a| a).count();
+                summary.log(ctx, cand.n, n_active);
+                let solved = finish(p, reduced, &free, ex, history, summary)?;
+                let kept = Kept {
+                    comp,
+                    cand,
+                    n_local: rhs0.len(),
+                    f_root,
+                    free,
+                    lambda,
+                    active: growth.active,
+                };
+                if per > 1 {
+                    return Ok((solved, Some(kept)));
+                }
+                if held.is_empty() {
+                    p.kept.put(kept); // for the next load step
+                }
+                return Ok((solved, None));
+            }
+            if splits {
+                // the set (3.23) gives on the expanded u: a new pass where it is wide or the
+                // held nodes must change
+                let next = growth.next_zone(&ex.changed);
+                let on = next.iter().filter(|&&a| a).count();
+                if growth.held_count > 0 || wide(on) {
+                    say!(
+                        ctx,
+                        "newton: condensed: {} node(s) change on the expanded u, {on} in \
+                         contact: the predicted zone again, a new factorisation",
+                        ex.changed.len()
+                    );
+                    zone = Some(next);
+                    order_kept = comp.node_order.take();
+                    continue 'pass;
+                }
+            }
+            if let Err(why) = growth.widen(ctx, &ex.changed, &comp, round) {
+                return fall(fallback(ctx, summary, why));
+            }
+        }
+        break;
     }
     let why = format!("no final set in {MAX_ROUNDS} rounds of candidates");
     fall(fallback(ctx, summary, why))
+}
+
+/// The predicted contact zone a solve starts from, over every contact node (c_h's global
+/// order), where it is [`wide`]: the nodes the
+/// half-space model put in contact (`located`: the `on` nodes of smallest clearance), else
+/// the start set. `None`: a narrower zone (every candidate a Schur variable). Local (on
+/// all-gathered data).
+fn first_zone(all: &Candidates, located: Option<usize>) -> Option<Vec<bool>> {
+    let zone: Vec<bool> = match located {
+        Some(on) => {
+            let mut by: Vec<usize> = (0..all.n).collect();
+            by.sort_by(|&a, &b| all.key(a).total_cmp(&all.key(b)).then(a.cmp(&b)));
+            let mut z = vec![false; all.n];
+            for &i in by.iter().take(on) {
+                z[i] = true;
+            }
+            z
+        }
+        None => (0..all.n).map(|i| all.start(i)).collect(),
+    };
+    wide(zone.iter().filter(|&&a| a).count()).then_some(zone)
+}
+
+/// The nodes of a predicted contact zone (`zone`, every contact node in c_h's global order)
+/// held on their obstacle in the factorised matrix: per contact pair, all of the pair's zone
+/// but its 1/[`BAND_FRACTION`] nodes nearest to a node of the pair outside the zone (the
+/// zone's edge, where the prediction is uncertain; distance in space, ties: the larger order
+/// key, then c_h's order), at least [`MIN_CANDIDATES`] of them. Local (on all-gathered data).
+fn hold(all: &Candidates, zone: &[bool]) -> Vec<bool> {
+    let pairs = (0..all.n).map(|i| all.pair(i) + 1).max().unwrap_or(1);
+    let mut held = vec![false; all.n];
+    for pair in 0..pairs {
+        let of_pair = |i: &usize| all.pair(*i) == pair;
+        let outside: Vec<[f64; 3]> = (0..all.n)
+            .filter(|i| of_pair(i) && !zone[*i])
+            .map(|i| all.x(i))
+            .collect();
+        let tree = rstar::RTree::bulk_load(outside);
+        let mut inside: Vec<(f64, usize)> = (0..all.n)
+            .filter(|i| of_pair(i) && zone[*i])
+            .map(|i| {
+                let x = all.x(i);
+                let depth = tree.nearest_neighbor(&x).map_or(f64::INFINITY, |y| {
+                    (0..3).map(|a| (x[a] - y[a]).powi(2)).sum::<f64>()
+                });
+                (depth, i)
+            })
+            .collect();
+        inside.sort_by(|a, b| {
+            a.0.total_cmp(&b.0)
+                .then(all.key(b.1).total_cmp(&all.key(a.1)))
+                .then(a.1.cmp(&b.1))
+        });
+        let band = inside
+            .len()
+            .div_ceil(BAND_FRACTION)
+            .max(MIN_CANDIDATES)
+            .min(inside.len());
+        for &(_, i) in &inside[band..] {
+            held[i] = true;
+        }
+    }
+    held
 }
 
 /// A round's first phase: the nodes it adds (`Growth::next`) and K_p factorised with their
@@ -628,48 +803,60 @@ impl Stop {
 /// is factorised), the nodes forced in (the start set, nodes (3.23) activated beyond the
 /// candidates), and the current set of every contact node (c_h's global order). Growth doubles
 /// `take`, a count, so it also grows where the gaps are ≤ 0 (bodies that start touching or
-/// overlapping).
+/// overlapping). Held nodes (K_p holds them on the obstacle) are never candidates and always
+/// in the set.
 struct Growth {
-    /// Every contact node of each pair by increasing gap (ties: global order).
+    /// Every contact node of each pair by increasing gap (ties: global order), the held ones
+    /// left out.
     by_gap: Vec<Vec<usize>>,
     /// How many of each pair's nodes by gap are candidates.
     take: Vec<usize>,
     forced: HashSet<usize>,
     active: Vec<bool>,
+    /// The nodes K_p holds on the obstacle (empty: none).
+    held: Vec<bool>,
+    held_count: usize,
     /// Why the set has the size it has (for a fallback's reason).
     why: String,
 }
 
 impl Growth {
     /// The first candidates: of every contact pair the nodes with the smallest gaps (an
-    /// eighth of the pair's nodes, at least MIN_CANDIDATES, all pairs together at most half
-    /// the Schur limit) — per pair, since the pairs' gaps are not comparable (an obstacle
-    /// moved into the body has the smallest gaps, the one that holds the body may have none
-    /// below them) — and every node of the start set (the thesis' all-active start: all of
-    /// them).
-    fn new(cand: &Candidates, per: usize, located: Option<usize>) -> Growth {
+    /// eighth of the pair's nodes, at least MIN_CANDIDATES and `want` where given, all pairs
+    /// together at most half the Schur limit) — per pair, since the pairs' gaps are not
+    /// comparable (an obstacle moved into the body has the smallest gaps, the one that holds
+    /// the body may have none below them) — and every node of the start set (the thesis'
+    /// all-active start: all of them); `held` (or empty): the nodes K_p holds.
+    fn new(cand: &Candidates, per: usize, want: Option<usize>, held: &[bool]) -> Growth {
         let n = cand.n;
+        let is_held = |i: usize| held.get(i).copied().unwrap_or(false);
         let pairs = (0..n).map(|i| cand.pair(i) + 1).max().unwrap_or(1);
         let mut by_gap: Vec<Vec<usize>> = vec![Vec::new(); pairs];
-        for i in 0..n {
+        for i in (0..n).filter(|&i| !is_held(i)) {
             by_gap[cand.pair(i)].push(i);
         }
         for b in &mut by_gap {
             b.sort_by(|&a, &b| cand.key(a).total_cmp(&cand.key(b)).then(a.cmp(&b)));
         }
         let limit = (MAX_SCHUR_DOFS / (2 * per * pairs)).max(1);
+        // a held zone's band and margin are what it wants
+        let some_held = held.iter().any(|&h| h);
         let take: Vec<usize> = by_gap
             .iter()
             .map(|b| {
-                (b.len() / FIRST_FRACTION)
-                    .max(located.map_or(0, |on| on + on / LOCATED_MARGIN))
-                    .clamp(MIN_CANDIDATES.min(limit), limit)
-                    .min(b.len())
+                (if some_held {
+                    0
+                } else {
+                    b.len() / FIRST_FRACTION
+                })
+                .max(want.unwrap_or(0))
+                .clamp(MIN_CANDIDATES.min(limit), limit)
+                .min(b.len())
             })
             .collect();
         let first: usize = take.iter().sum();
-        let active: Vec<bool> = (0..n).map(|i| cand.start(i)).collect();
-        let by = if located.is_some() {
+        let active: Vec<bool> = (0..n).map(|i| cand.start(i) || is_held(i)).collect();
+        let by = if want.is_some() {
             "clearances after the located rigid motion"
         } else {
             "gaps"
@@ -677,10 +864,22 @@ impl Growth {
         Growth {
             by_gap,
             take,
-            forced: (0..n).filter(|&i| active[i]).collect(),
+            forced: (0..n).filter(|&i| active[i] && !is_held(i)).collect(),
             active,
+            held: (0..n).map(is_held).collect(),
+            held_count: (0..n).filter(|&i| is_held(i)).count(),
             why: format!("the {first} nodes with the smallest {by} and the start set"),
         }
+    }
+
+    /// The set (3.23) gives on the expanded u: the current one with the nodes `changed`
+    /// turned over. Local.
+    fn next_zone(&self, changed: &[u64]) -> Vec<bool> {
+        let mut z = self.active.clone();
+        for &i in changed {
+            z[i as usize] = !z[i as usize];
+        }
+        z
     }
 
     /// Every contact node a candidate.
@@ -705,7 +904,9 @@ impl Growth {
             .collect();
         let new: Vec<usize> = (0..cand.n)
             .filter(|&i| {
-                !comp.in_s[i] && (cand.key(i) <= bound[cand.pair(i)] || self.forced.contains(&i))
+                !comp.in_s[i]
+                    && !self.held[i]
+                    && (cand.key(i) <= bound[cand.pair(i)] || self.forced.contains(&i))
             })
             .collect();
         if new.is_empty() && round > 1 {
@@ -729,7 +930,7 @@ impl Growth {
     /// candidates); the set is kept, λ_n returned.
     fn take_dense(&mut self, comp: &Compliance, run: &DenseRun) -> Vec<f64> {
         let mut lambda = vec![0.0; self.active.len()];
-        self.active.iter_mut().for_each(|a| *a = false);
+        self.active.copy_from_slice(&self.held);
         for (q, &i) in comp.list.iter().enumerate() {
             lambda[i] = run.lambda[q];
             self.active[i] = run.active[q];
@@ -823,22 +1024,33 @@ fn fallback(ctx: &Ctx, mut summary: CondensedSummary, why: String) -> Condensed 
     Condensed::Fallback(summary)
 }
 
-/// K_p: A with every Dirichlet-free rigid mode pinned and no contact row, written into the
-/// reduced system's matrix (factorised later, by MUMPS directly, with the Schur complement).
-/// Returns the free modes (with K_p's pins) and this rank's rows of K_p's right-hand side.
-/// Collective.
+/// K_p: A with every rigid mode that Dirichlet data and the held nodes (`held`: every
+/// contact node in c_h's global order, or empty) leave free pinned, the held nodes' normal
+/// rows written as the reduced system (3.29) writes an active node (u_n = −g) and no other
+/// contact row, into the reduced system's matrix (factorised later, by MUMPS directly, with
+/// the Schur complement). Returns the free modes (with K_p's pins) and this rank's rows of
+/// K_p's right-hand side. Collective.
 fn prepare_base(
     ctx: &Ctx,
     p: &ContactProblem,
     reduced: &mut ReducedSystem,
     s: &NewtonSettings,
+    held: &[bool],
 ) -> Result<(FreeModes, Vec<f64>), RunError> {
     let (mesh, layout, b, sys) = (p.mesh, p.layout, p.boundary, p.sys);
     let mut free = FreeModes::new(ctx, mesh, layout, p.fixed, b, &reduced.f_local, s.rigid);
+    let mine = match held.is_empty() {
+        true => vec![false; b.nodes.len()],
+        false => held[b.offset..b.offset + b.nodes.len()].to_vec(),
+    };
+    let set = ActiveSet::frictionless(mine);
+    if held.iter().any(|&h| h) {
+        let gram = set.summarise(ctx, b, free.modes(), mesh.dim).gram;
+        free.hold_also(&gram);
+    }
     free.update(ctx, mesh, layout, &[0.0; 36])?;
     reduced.set_pins(sys, layout, free.pins())?;
-    let empty = ActiveSet::frictionless(vec![false; b.nodes.len()]);
-    reduced.write(ctx, sys, layout, b, &empty, free.pins())?;
+    reduced.write(ctx, sys, layout, b, &set, free.pins())?;
     Ok((free, reduced.rhs_local()?))
 }
 
@@ -1302,8 +1514,12 @@ fn dense_round(
             let gap: Vec<f64> = list.iter().map(|&i| cand.gap(i)).collect();
             if comp.primal {
                 // from as many candidates as the model put in contact, by clearance after the
-                // located rigid motion; else from all of them (no inactive unknowns)
+                // located rigid motion; else from the start set where it has a candidate, else
+                // from all of them (no inactive unknowns)
                 let start = match located {
+                    None if list.iter().any(|&i| active[i]) => {
+                        list.iter().map(|&i| active[i]).collect()
+                    }
                     Some(on) => {
                         let mut by: Vec<usize> = (0..ns).collect();
                         by.sort_by(|&a, &b| {

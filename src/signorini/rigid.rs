@@ -346,6 +346,24 @@ impl FreeModes {
         }
     }
 
+    /// Counts the rows of `g_set` (the Gram matrix of a set of contact normals, summed over
+    /// the ranks) as Dirichlet data: the condensed path's nodes held on their obstacle in the
+    /// factorised matrix. The free modes, their basis Z and the pins are then those of
+    /// Dirichlet data and that set. Local.
+    pub fn hold_also(&mut self, g_set: &Gram) {
+        if !self.enabled {
+            return;
+        }
+        for (x, y) in self.g_dirichlet.iter_mut().zip(g_set) {
+            *x += y;
+        }
+        self.z = self.modes.free_modes(&self.g_dirichlet);
+        self.key = None;
+        self.q = DMatrix::zeros(self.modes.m, 0);
+        self.pins.clear();
+        self.pin_x.clear();
+    }
+
     /// True when rigid-mode handling is on and Dirichlet data leave some rigid mode free.
     pub fn floats(&self) -> bool {
         self.enabled && self.z.ncols() > 0

@@ -94,13 +94,15 @@ const LOCATED_MARGIN: usize = 8;
 const MAX_ROUNDS: usize = 8;
 
 /// A predicted contact zone is wide where the dense compliance of its nodes and their margin
-/// beyond (1/LOCATED_MARGIN more) would cost more than the dense work always allowed
-/// (DENSE_FLOOR_FLOPS, from about 890 nodes): its interior is then held on the obstacle in
-/// the factorised matrix (u_n = −g there, as the plain path's reduced system (3.29) writes an
-/// active node), and only its edge band and the nodes beyond are Schur variables. The Schur
-/// complement's memory and the dense work then grow with the zone's edge, not its area.
-fn wide(zone: usize) -> bool {
-    ((zone + zone / LOCATED_MARGIN) as f64).powi(3) > DENSE_FLOOR_FLOPS
+/// beyond (1/LOCATED_MARGIN more) would cost more than `max_flops`: before anything is
+/// factorised the dense work always allowed (DENSE_FLOOR_FLOPS, from about 890 nodes), after a
+/// factorisation the dense work that pays against it ([`Compliance::grow`]). Its interior is
+/// then held on the obstacle in the factorised matrix (u_n = −g there, as the plain path's
+/// reduced system (3.29) writes an active node), and only its edge band and the nodes beyond
+/// are Schur variables: the Schur complement's memory and the dense work grow with the zone's
+/// edge, not its area.
+fn wide(zone: usize, max_flops: f64) -> bool {
+    ((zone + zone / LOCATED_MARGIN) as f64).powi(3) > max_flops
 }
 
 /// The edge band of a held zone: the 1/BAND_FRACTION of its nodes nearest to its edge (in 2D
@@ -538,7 +540,7 @@ pub(super) fn solve_keeping(
                 // held nodes must change
                 let next = growth.next_zone(&ex.changed);
                 let on = next.iter().filter(|&&a| a).count();
-                if growth.held_count > 0 || wide(on) {
+                if growth.held_count > 0 || wide(on, comp.max_flops) {
                     say!(
                         ctx,
                         "newton: condensed: {} node(s) change on the expanded u, {on} in \
@@ -578,7 +580,7 @@ fn first_zone(all: &Candidates, located: Option<usize>) -> Option<Vec<bool>> {
         }
         None => (0..all.n).map(|i| all.start(i)).collect(),
     };
-    wide(zone.iter().filter(|&&a| a).count()).then_some(zone)
+    wide(zone.iter().filter(|&&a| a).count(), DENSE_FLOOR_FLOPS).then_some(zone)
 }
 
 /// The nodes of a predicted contact zone (`zone`, every contact node in c_h's global order)

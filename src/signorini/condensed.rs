@@ -391,94 +391,54 @@ pub(super) fn solve_keeping(
     let mut rounds = 0;
     let mut history: Vec<StepInfo> = Vec::new();
     'pass: loop {
-        // a pass: the held nodes (none without a wide zone), K_p with them, its candidates
-        let all_held = zone.as_ref().map(|z| {
-            let all = Candidates::gather(ctx, b, &free0, &start, key);
-            hold(&all, z)
-        });
-        let held = all_held.as_deref().unwrap_or(&[]);
-        let (free, rhs0) = prepare_base(ctx, p, reduced, s, held)?;
-        let f_root = ctx.gather_to_root(&rhs0); // f for MUMPS' solve phases, once per pass
-        let pass_start: Vec<bool> = match &zone {
-            Some(z) => (0..b.nodes.len())
-                .map(|i| z[b.offset + i] && !held[b.offset + i])
-                .collect(),
-            None => start.clone(),
-        };
-        let cand = Candidates::gather(ctx, b, &free, &pass_start, key);
-        let want = match &zone {
-            Some(z) => {
-                let on = z.iter().filter(|&&a| a).count();
-                let free_on = on - held.iter().filter(|&&h| h).count();
-                Some(free_on + on / LOCATED_MARGIN)
-            }
-            None => located.as_ref().map(|(_, on)| on + on / LOCATED_MARGIN),
-        };
-        let mut growth = Growth::new(&cand, per, want, held);
-        summary.held_nodes = growth.held_count;
-        if growth.held_count > 0 {
-            say!(
-                ctx,
-                "newton: condensed: {} nodes inside the predicted contact zone ({} nodes) held \
-                 on the obstacle in K_p; the dense steps on the rest of it and beyond",
-                growth.held_count,
-                zone.as_ref()
-                    .map_or(0, |z| z.iter().filter(|&&a| a).count())
-            );
-        }
-        let t = Instant::now();
-        let kept = match warm {
-            Some(_) if held.is_empty() => reused(ctx, p, (&free, &cand), &f_root, per),
-            _ => None,
-        };
-        let mut comp = match kept {
-            Some(comp) => {
-                summary.factorisation_kept = true;
-                comp
-            }
-            None => Compliance::new(cand.n, per),
-        };
-        if comp.node_order.is_none() {
-            comp.node_order = order_kept.take();
-        }
-        let condensation = t.elapsed().as_secs_f64();
+        let zoned = zone.as_deref();
+        let pass = begin_pass(
+            ctx,
+            (p, &mut *reduced, s, warm),
+            (&free0, &start, located.as_ref(), per),
+            (zoned, order_kept.take()),
+            &mut summary,
+        )?;
+        let mut pass = pass;
         for round in 1..=MAX_ROUNDS {
             rounds += 1;
             if rounds > MAX_ROUNDS {
                 break 'pass;
             }
+            let Pass {
+                cand,
+                growth,
+                comp,
+                condensation,
+                f_root,
+                ..
+            } = &mut pass;
             let grown = factorise_round(
                 ctx,
                 reduced,
-                (&cand, &mut comp, &growth),
+                (cand, comp, growth),
                 &mut summary,
-                (round, condensation),
-                (dim, n_rows, &f_root),
+                (round, *condensation),
+                (dim, n_rows, f_root),
             );
             if let Err(stop) = grown {
                 return fall(fallback_stop(ctx, summary, stop));
             }
             if !steps {
                 summary.outcome = "factorised";
-                let kept = Kept {
-                    lambda: vec![0.0; cand.n],
-                    comp,
-                    cand,
-                    n_local: rhs0.len(),
-                    f_root,
-                    free,
-                    active: growth.active,
-                };
-                return Ok((Condensed::Factorised(summary), Some(kept)));
+                let lambda = vec![0.0; pass.cand.n];
+                return Ok((Condensed::Factorised(summary), Some(pass.keep(lambda))));
             }
 
             let t = Instant::now();
             let first = nested && rounds == 1;
+            let (cand, comp, free, growth) =
+                (&pass.cand, &mut pass.comp, &pass.free, &mut pass.growth);
             let (run, x_s) = dense_round(
                 ctx,
-                &cand,
-                &comp,
-                &free,
+                cand,
+                comp,
+                free,
                 s,
                 (&growth.active, first),
                 located
@@ -490,8 +450,8 @@ pub(super) fn solve_keeping(
             summary.dense_seconds += t.elapsed().as_secs_f64();
             summary.record_coarse(ctx, &run);
             record_steps(ctx, &mut history, &run, comp.list.len(), free.pins().len());
-            let lambda = growth.take_dense(&comp, &run);
-            match judge(ctx, p, s, (&free, &comp, cand.n), &mut growth, &run)? {
+            let lambda = growth.take_dense(comp, &run);
+            match judge(ctx, p, s, (free, comp, cand.n), growth, &run)? {
                 Judged::Expand => {}
                 Judged::Again => continue,
                 Judged::Stop(stop) => return fall(fallback_stop(ctx, summary, stop)),
@@ -499,13 +459,12 @@ pub(super) fn solve_keeping(
 
             let t = Instant::now();
             let set = (lambda.as_slice(), growth.active.as_slice());
-            let f_ref = f_root.as_slice();
             let ex = match expand(
                 ctx,
                 p,
                 reduced,
-                (s, &free, &mut comp, &cand),
-                (f_ref, rhs0.len()),
+                (s, free, comp, cand),
+                (&pass.f_root, pass.rhs0.len()),
                 set,
                 &run.alpha,
             )? {
@@ -517,42 +476,24 @@ pub(super) fn solve_keeping(
             if ex.changed.is_empty() {
                 let n_active = growth.active.iter().filter(|&&a| a).count();
                 summary.log(ctx, cand.n, n_active);
-                let solved = finish(p, reduced, &free, ex, history, summary)?;
-                let kept = Kept {
-                    comp,
-                    cand,
-                    n_local: rhs0.len(),
-                    f_root,
-                    free,
-                    lambda,
-                    active: growth.active,
-                };
-                if per > 1 {
-                    return Ok((solved, Some(kept)));
-                }
-                if held.is_empty() {
-                    p.kept.put(kept); // for the next load step
-                }
-                return Ok((solved, None));
+                let solved = finish(p, reduced, free, ex, history, summary)?;
+                let held = pass.growth.held_count > 0;
+                let kept = pass.keep(lambda);
+                return Ok(match (per > 1, held) {
+                    (true, _) => (solved, Some(kept)),
+                    (false, false) => {
+                        p.kept.put(kept); // for the next load step
+                        (solved, None)
+                    }
+                    (false, true) => (solved, None),
+                });
             }
-            if splits {
-                // the set (3.23) gives on the expanded u: a new pass where it is wide or the
-                // held nodes must change
-                let next = growth.next_zone(&ex.changed);
-                let on = next.iter().filter(|&&a| a).count();
-                if growth.held_count > 0 || wide(on, comp.max_flops) {
-                    say!(
-                        ctx,
-                        "newton: condensed: {} node(s) change on the expanded u, {on} in \
-                         contact: the predicted zone again, a new factorisation",
-                        ex.changed.len()
-                    );
-                    zone = Some(next);
-                    order_kept = comp.node_order.take();
-                    continue 'pass;
-                }
+            if let Some(next) = growth.next_pass(ctx, &ex.changed, comp.max_flops, splits) {
+                zone = Some(next);
+                order_kept = comp.node_order.take();
+                continue 'pass;
             }
-            if let Err(why) = growth.widen(ctx, &ex.changed, &comp, round) {
+            if let Err(why) = growth.widen(ctx, &ex.changed, comp, round) {
                 return fall(fallback(ctx, summary, why));
             }
         }
@@ -560,6 +501,113 @@ pub(super) fn solve_keeping(
     }
     let why = format!("no final set in {MAX_ROUNDS} rounds of candidates");
     fall(fallback(ctx, summary, why))
+}
+
+/// A located zone: the clearance of this rank's contact nodes after the model's rigid motion,
+/// and the number of nodes the model puts in contact ([`predictor::locate`]).
+type Located = (Vec<f64>, usize);
+
+/// One pass of the condensed path: K_p's free modes and right-hand side (this rank's rows and
+/// f on rank 0) with the pass' held nodes, the candidates, their growth (which knows the held
+/// nodes) and compliance, and the seconds of a load step's condensation on a kept
+/// factorisation.
+struct Pass {
+    free: FreeModes,
+    rhs0: Vec<f64>,
+    f_root: Vec<f64>,
+    cand: Candidates,
+    growth: Growth,
+    comp: Compliance,
+    condensation: f64,
+}
+
+impl Pass {
+    /// What the pass keeps for a friction solve or the next load step, with the candidates'
+    /// multipliers `lambda`.
+    fn keep(self, lambda: Vec<f64>) -> Kept {
+        Kept {
+            n_local: self.rhs0.len(),
+            comp: self.comp,
+            cand: self.cand,
+            f_root: self.f_root,
+            free: self.free,
+            lambda,
+            active: self.growth.active,
+        }
+    }
+}
+
+/// A pass begun: the held nodes of the predicted `zone` ([`hold`]; none without one), K_p
+/// written with them, its candidates (the zone's nodes not held start active; else the start
+/// set `start`), the first candidates' count (the zone's band and margin, or the located
+/// zone's margin), and a compliance on the previous load step's factorisation where it holds
+/// ([`reused`]) or a new one with the kept node order `order`. Collective.
+fn begin_pass(
+    ctx: &Ctx,
+    (p, reduced, s, warm): (
+        &ContactProblem,
+        &mut ReducedSystem,
+        &NewtonSettings,
+        Option<&WarmStart>,
+    ),
+    (free0, start, located, per): (&FreeModes, &[bool], Option<&Located>, usize),
+    (zone, order): (Option<&[bool]>, Option<Vec<usize>>),
+    summary: &mut CondensedSummary,
+) -> Result<Pass, RunError> {
+    let b = p.boundary;
+    let key = located.map(|(k, _)| k.as_slice());
+    let held = zone.map_or_else(Vec::new, |z| {
+        hold(&Candidates::gather(ctx, b, free0, start, key), z)
+    });
+    let (free, rhs0) = prepare_base(ctx, p, reduced, s, &held)?;
+    let f_root = ctx.gather_to_root(&rhs0); // f for MUMPS' solve phases, once per pass
+    let pass_start: Vec<bool> = match zone {
+        Some(z) => (0..b.nodes.len())
+            .map(|i| z[b.offset + i] && !held[b.offset + i])
+            .collect(),
+        None => start.to_vec(),
+    };
+    let cand = Candidates::gather(ctx, b, &free, &pass_start, key);
+    let count = |v: &[bool]| v.iter().filter(|&&a| a).count();
+    let want = match zone {
+        Some(z) => Some(count(z) - count(&held) + count(z) / LOCATED_MARGIN),
+        None => located.map(|(_, on)| on + on / LOCATED_MARGIN),
+    };
+    let growth = Growth::new(&cand, per, want, &held);
+    summary.held_nodes = growth.held_count;
+    if growth.held_count > 0 {
+        say!(
+            ctx,
+            "newton: condensed: {} nodes inside the predicted contact zone ({} nodes) held on \
+             the obstacle in K_p; the dense steps on the rest of it and beyond",
+            growth.held_count,
+            zone.map_or(0, count)
+        );
+    }
+    let t = Instant::now();
+    let kept = match warm {
+        Some(_) if held.is_empty() => reused(ctx, p, (&free, &cand), &f_root, per),
+        _ => None,
+    };
+    let mut comp = match kept {
+        Some(comp) => {
+            summary.factorisation_kept = true;
+            comp
+        }
+        None => Compliance::new(cand.n, per),
+    };
+    if comp.node_order.is_none() {
+        comp.node_order = order;
+    }
+    Ok(Pass {
+        free,
+        rhs0,
+        f_root,
+        cand,
+        growth,
+        comp,
+        condensation: t.elapsed().as_secs_f64(),
+    })
 }
 
 /// The predicted contact zone a solve starts from, over every contact node (c_h's global
@@ -874,14 +922,35 @@ impl Growth {
         }
     }
 
-    /// The set (3.23) gives on the expanded u: the current one with the nodes `changed`
-    /// turned over. Local.
-    fn next_zone(&self, changed: &[u64]) -> Vec<bool> {
+    /// Where a new pass starts (`splits`: held zones allowed): the set (3.23) gives on the
+    /// expanded u (the nodes `changed` turned over), where held nodes must change or that set
+    /// is [`wide`] against the dense work that pays (`max_flops`). `None`: the pass goes on
+    /// (more candidates). Collective (log).
+    fn next_pass(
+        &self,
+        ctx: &Ctx,
+        changed: &[u64],
+        max_flops: f64,
+        splits: bool,
+    ) -> Option<Vec<bool>> {
+        if !splits {
+            return None;
+        }
         let mut z = self.active.clone();
         for &i in changed {
             z[i as usize] = !z[i as usize];
         }
-        z
+        let on = z.iter().filter(|&&a| a).count();
+        if self.held_count == 0 && !wide(on, max_flops) {
+            return None;
+        }
+        say!(
+            ctx,
+            "newton: condensed: {} node(s) change on the expanded u, {on} in contact: the \
+             predicted zone again, a new factorisation",
+            changed.len()
+        );
+        Some(z)
     }
 
     /// Every contact node a candidate.

@@ -311,6 +311,39 @@ fn a_floating_strip_whose_zone_the_half_space_model_misses_is_solved_in_passes()
     }
 }
 
+#[test]
+fn load_steps_on_a_wide_zone_hold_its_interior_in_every_step() {
+    // The floating strip on the cylinder pressed in three load steps: the first step holds its
+    // wide zone's interior and keeps no factorisation, so each later step holds the interior
+    // of the step before's set (its warm start) — and ends where the plain path ends, step by
+    // step, on 1 and 2 ranks.
+    let tmp = tempfile::tempdir().unwrap();
+    let case = floating_strip_case(tmp.path(), 0.01);
+    let sets = ["solver.preset=\"direct\"", "load.steps=3"];
+    let plain = solve(1, &case, &[sets[0], sets[1], "solver.reuse=\"never\""]);
+    plain.assert_converged("plain path");
+    for np in [1, 2] {
+        let c = solve(np, &case, &sets);
+        c.assert_converged("condensed");
+        let held = c.run.stdout.matches("held on the obstacle").count();
+        assert!(held >= 3, "{np} rank(s): {}", c.run.output());
+        let cs = &c.summary["newton"]["condensed"];
+        assert_eq!(cs["outcome"], "condensed", "{cs}");
+        assert!(cs["held_nodes"].as_f64().unwrap() > 0.0, "{cs}");
+        for step in 1..=3 {
+            let (du, su) = max_diff(
+                &step_displacement(&c.dir, step),
+                &step_displacement(&plain.dir, step),
+            );
+            assert!(
+                du <= 1e-10 * su,
+                "{np} rank(s), step {step}: |Δu| {du:e} of {su:e}"
+            );
+        }
+        assert_eq!(plain.active_node_ids(), c.active_node_ids(), "{np} rank(s)");
+    }
+}
+
 /// A floating strip [0, 4] × [0, 0.1] (structured: 3 601 bottom nodes, 8 layers), its top
 /// pressed by `pressure` onto a rigid cylinder through (2, −20) of radius 20. Returns the case
 /// file.

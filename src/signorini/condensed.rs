@@ -38,6 +38,7 @@ use super::newton::{
 use super::predictor;
 use super::reduced::{ReducedSystem, SolveKind};
 use super::rigid::{FreeModes, Motion, Pin};
+use super::Located;
 use crate::case::NewtonInit;
 use crate::contact::Frame;
 use crate::error::RunError;
@@ -373,11 +374,11 @@ pub(super) fn solve_keeping(
     let key = located.as_ref().map(|(k, _)| k.as_slice());
     let n_rows = p.layout.node_offsets.last().copied().unwrap_or(0) * dim;
     let nested = warm.is_none() && s.section.init == NewtonInit::Auto;
-    // a wide zone's interior held on the obstacle in the factorised matrix (frictionless
-    // solves from the case's start)
+    // a wide zone's interior held on the obstacle in the factorised matrix (frictionless; a
+    // load step only where the step before kept no factorisation: it held a zone too)
     let splits = per == 1
         && steps
-        && warm.is_none()
+        && (warm.is_none() || p.kept.is_empty())
         && s.force.is_empty()
         && !s.estimate
         && s.carried.is_none();
@@ -387,19 +388,18 @@ pub(super) fn solve_keeping(
     } else {
         None
     };
-    let mut order_kept = None;
+    let mut order_kept = p.kept.take_order(); // a load step after a held zone's
     let mut rounds = 0;
     let mut history: Vec<StepInfo> = Vec::new();
     'pass: loop {
         let zoned = zone.as_deref();
-        let pass = begin_pass(
+        let mut pass = begin_pass(
             ctx,
             (p, &mut *reduced, s, warm),
-            (&free0, &start, located.as_ref(), per),
+            (&free0, &start, &located, per),
             (zoned, order_kept.take()),
             &mut summary,
         )?;
-        let mut pass = pass;
         for round in 1..=MAX_ROUNDS {
             rounds += 1;
             if rounds > MAX_ROUNDS {
@@ -485,7 +485,10 @@ pub(super) fn solve_keeping(
                         p.kept.put(kept); // for the next load step
                         (solved, None)
                     }
-                    (false, true) => (solved, None),
+                    (false, true) => {
+                        p.kept.put_order(kept.comp.node_order); // for the next load step
+                        (solved, None)
+                    }
                 });
             }
             if let Some(next) = growth.next_pass(ctx, &ex.changed, comp.max_flops, splits) {
@@ -502,10 +505,6 @@ pub(super) fn solve_keeping(
     let why = format!("no final set in {MAX_ROUNDS} rounds of candidates");
     fall(fallback(ctx, summary, why))
 }
-
-/// A located zone: the clearance of this rank's contact nodes after the model's rigid motion,
-/// and the number of nodes the model puts in contact ([`predictor::locate`]).
-type Located = (Vec<f64>, usize);
 
 /// One pass of the condensed path: K_p's free modes and right-hand side (this rank's rows and
 /// f on rank 0) with the pass' held nodes, the candidates, their growth (which knows the held
@@ -550,12 +549,12 @@ fn begin_pass(
         &NewtonSettings,
         Option<&WarmStart>,
     ),
-    (free0, start, located, per): (&FreeModes, &[bool], Option<&Located>, usize),
+    (free0, start, located, per): (&FreeModes, &[bool], &Located, usize),
     (zone, order): (Option<&[bool]>, Option<Vec<usize>>),
     summary: &mut CondensedSummary,
 ) -> Result<Pass, RunError> {
     let b = p.boundary;
-    let key = located.map(|(k, _)| k.as_slice());
+    let key = located.as_ref().map(|(k, _)| k.as_slice());
     let held = zone.map_or_else(Vec::new, |z| {
         hold(&Candidates::gather(ctx, b, free0, start, key), z)
     });
@@ -571,7 +570,7 @@ fn begin_pass(
     let count = |v: &[bool]| v.iter().filter(|&&a| a).count();
     let want = match zone {
         Some(z) => Some(count(z) - count(&held) + count(z) / LOCATED_MARGIN),
-        None => located.map(|(_, on)| on + on / LOCATED_MARGIN),
+        None => located.as_ref().map(|(_, on)| on + on / LOCATED_MARGIN),
     };
     let growth = Growth::new(&cand, per, want, &held);
     summary.held_nodes = growth.held_count;

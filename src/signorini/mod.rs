@@ -159,7 +159,12 @@ pub struct ContactSolution {
 /// candidates' frames and the pins are the same (`Kept::holds`). Empty unless the last step
 /// was solved on the contact unknowns.
 #[derive(Default)]
-pub struct KeptFactor(std::cell::RefCell<Option<condensed::Kept>>);
+pub struct KeptFactor {
+    kept: std::cell::RefCell<Option<condensed::Kept>>,
+    /// Rank 0: the nested-dissection order of K_p's node graph (the same graph in every load
+    /// step), where the step kept no factorisation with it (it held a wide zone).
+    order: std::cell::RefCell<Option<Vec<usize>>>,
+}
 
 /// A located contact zone (predictor::locate): this rank's clearances and the nodes the model
 /// puts in contact; `None` where the model did not converge.
@@ -174,11 +179,24 @@ impl ContactSolution {
 
 impl KeptFactor {
     fn take(&self) -> Option<condensed::Kept> {
-        self.0.borrow_mut().take()
+        self.kept.borrow_mut().take()
     }
 
     fn put(&self, kept: condensed::Kept) {
-        *self.0.borrow_mut() = Some(kept);
+        *self.kept.borrow_mut() = Some(kept);
+    }
+
+    /// No factorisation is kept (the previous load step held a wide zone, or there was none).
+    fn is_empty(&self) -> bool {
+        self.kept.borrow().is_none()
+    }
+
+    fn take_order(&self) -> Option<Vec<usize>> {
+        self.order.borrow_mut().take()
+    }
+
+    fn put_order(&self, order: Option<Vec<usize>>) {
+        *self.order.borrow_mut() = order;
     }
 }
 
@@ -332,9 +350,10 @@ pub fn solve(
             nodes: nodes.as_deref().unwrap_or(&prev.nodes),
             u_local: u,
         });
-    let kept = KeptFactor(std::cell::RefCell::new(
-        previous.and_then(|p| p.kept.take()),
-    ));
+    let kept = KeptFactor {
+        kept: std::cell::RefCell::new(previous.and_then(|p| p.kept.take())),
+        order: std::cell::RefCell::new(previous.and_then(|p| p.kept.take_order())),
+    };
     let located = std::cell::RefCell::new(None);
     let problem = ContactProblem {
         mesh,

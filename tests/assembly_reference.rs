@@ -23,8 +23,8 @@ use mpi::traits::*;
 use signorini_mpi::assembly::{self, BodyForce, Problem};
 use signorini_mpi::fem::{Material, Model};
 use signorini_mpi::mesh::{self, Mesh};
-use signorini_mpi::partition;
-use signorini_mpi::petsc::{Petsc, Vector};
+use signorini_mpi::partition::{self, Layout};
+use signorini_mpi::petsc::{MPI_Comm, Petsc, Vector};
 
 const WORKER_ENV: &str = "SIGNORINI_ASSEMBLY_REFERENCE_WORKER";
 
@@ -132,6 +132,62 @@ fn smooth(i: usize) -> f64 {
     (1.3 * i as f64 + 0.7).sin() + 0.25 * (0.37 * i as f64).cos()
 }
 
+/// The energy uᵀ A u of a linear field u (no Dirichlet data: A of the whole mesh) and its exact
+/// value, the volume times λ tr(ε)² + 2μ ε:ε. Collective.
+fn linear_field_energy(
+    world: &mpi::topology::SimpleCommunicator,
+    comm: MPI_Comm,
+    (mesh, layout): (&Mesh, &Layout),
+    material: Material,
+    (lambda, mu): (f64, f64),
+) -> (f64, f64) {
+    let (dim, n_owned) = (mesh.dim, layout.n_owned_nodes());
+    // Energy of a linear field, no Dirichlet data.
+    let bm = [[0.3, -0.2, 0.15], [0.1, 0.25, -0.05], [-0.12, 0.07, 0.2]];
+    let free = Problem {
+        mesh,
+        held_fixed: Vec::new(),
+        material,
+        fixed: vec![f64::NAN; mesh.n_nodes() * dim],
+        facet_loads: vec![],
+        body_force: BodyForce::None,
+    };
+    let sys2 = assembly::assemble(comm, layout, &free).expect("assembly");
+    let mut u = Vector::new_mpi(comm, n_owned * dim, dim).unwrap();
+    u.write(|us| {
+        for (l, &v) in layout.owned_nodes.iter().enumerate() {
+            let p = mesh.coords[v];
+            for i in 0..dim {
+                us[l * dim + i] = (0..dim).map(|j| bm[i][j] * p[j]).sum::<f64>() + 0.1;
+            }
+        }
+    })
+    .unwrap();
+    let mut au = u.duplicate().unwrap();
+    sys2.a.mult(&u, &mut au).unwrap();
+    let (uv, auv) = (u.to_local_vec().unwrap(), au.to_local_vec().unwrap());
+    let local: f64 = uv.iter().zip(&auv).map(|(a, b)| a * b).sum();
+    let mut energy = 0.0;
+    world.all_reduce_into(&local, &mut energy, mpi::collective::SystemOperation::sum());
+    let volume: f64 = (0..mesh.n_cells())
+        .map(|c| mesh.cell_measure(c).abs())
+        .sum();
+    let mut eps = [[0.0; 3]; 3];
+    for i in 0..dim {
+        for j in 0..dim {
+            eps[i][j] = 0.5 * (bm[i][j] + bm[j][i]);
+        }
+    }
+    let tr: f64 = (0..dim).map(|i| eps[i][i]).sum();
+    let ee: f64 = (0..dim)
+        .flat_map(|i| (0..dim).map(move |j| (i, j)))
+        .map(|(i, j)| eps[i][j] * eps[i][j])
+        .sum();
+    let exact = volume * (lambda * tr * tr + 2.0 * mu * ee);
+
+    (energy, exact)
+}
+
 /// Runs the checks on one mesh; returns the JSON line (rank 0 prints it).
 fn check_mesh(world: &mpi::topology::SimpleCommunicator, petsc: &Petsc, path: &str) -> String {
     let mesh: Mesh = mesh::read_msh(std::path::Path::new(path)).expect("test mesh");
@@ -236,48 +292,8 @@ fn check_mesh(world: &mpi::topology::SimpleCommunicator, petsc: &Petsc, path: &s
         }
     }
 
-    // Energy of a linear field, no Dirichlet data.
-    let bm = [[0.3, -0.2, 0.15], [0.1, 0.25, -0.05], [-0.12, 0.07, 0.2]];
-    let free = Problem {
-        mesh: &mesh,
-        held_fixed: Vec::new(),
-        material,
-        fixed: vec![f64::NAN; mesh.n_nodes() * dim],
-        facet_loads: vec![],
-        body_force: BodyForce::None,
-    };
-    let sys2 = assembly::assemble(comm, &layout, &free).expect("assembly");
-    let mut u = Vector::new_mpi(comm, n_owned * dim, dim).unwrap();
-    u.write(|us| {
-        for (l, &v) in layout.owned_nodes.iter().enumerate() {
-            let p = mesh.coords[v];
-            for i in 0..dim {
-                us[l * dim + i] = (0..dim).map(|j| bm[i][j] * p[j]).sum::<f64>() + 0.1;
-            }
-        }
-    })
-    .unwrap();
-    let mut au = u.duplicate().unwrap();
-    sys2.a.mult(&u, &mut au).unwrap();
-    let (uv, auv) = (u.to_local_vec().unwrap(), au.to_local_vec().unwrap());
-    let local: f64 = uv.iter().zip(&auv).map(|(a, b)| a * b).sum();
-    let mut energy = 0.0;
-    world.all_reduce_into(&local, &mut energy, mpi::collective::SystemOperation::sum());
-    let volume: f64 = (0..mesh.n_cells())
-        .map(|c| mesh.cell_measure(c).abs())
-        .sum();
-    let mut eps = [[0.0; 3]; 3];
-    for i in 0..dim {
-        for j in 0..dim {
-            eps[i][j] = 0.5 * (bm[i][j] + bm[j][i]);
-        }
-    }
-    let tr: f64 = (0..dim).map(|i| eps[i][i]).sum();
-    let ee: f64 = (0..dim)
-        .flat_map(|i| (0..dim).map(move |j| (i, j)))
-        .map(|(i, j)| eps[i][j] * eps[i][j])
-        .sum();
-    let exact = volume * (lambda * tr * tr + 2.0 * mu * ee);
+    let (energy, exact) =
+        linear_field_energy(world, comm, (&mesh, &layout), material, (lambda, mu));
 
     // Largest errors over the ranks.
     let mut errs = [err_ax / scale_ax, err_f / scale_f];

@@ -1338,7 +1338,7 @@ fn reject_shape(shape: &str, from: &str, to: &str, key: &str, msg: &str) {
 }
 
 #[test]
-fn reject_bad_indenter_obstacles() {
+fn reject_bad_cylinder_obstacles() {
     reject_shape(
         CYLINDER,
         "point = [0, 0, 1.5]\n",
@@ -1416,6 +1416,10 @@ fn reject_bad_indenter_obstacles() {
         "half_angle",
         "unknown key in [contact.obstacle]; allowed keys: type, point, axis, radius",
     );
+}
+
+#[test]
+fn reject_bad_cone_obstacles() {
     reject_shape(
         CONE,
         "apex = [0, 0.99]\n",
@@ -1493,6 +1497,10 @@ fn reject_bad_indenter_obstacles() {
         "radius",
         "unknown key in [contact.obstacle]; allowed keys: type, apex, axis, half_angle",
     );
+}
+
+#[test]
+fn reject_bad_pyramid_and_punch_obstacles() {
     reject_shape(PYRAMID, "faces = 4\n", "", "faces", "missing required key");
     reject_shape(
         PYRAMID,

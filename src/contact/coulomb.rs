@@ -1099,6 +1099,70 @@ mod tests {
         x
     }
 
+    /// The reduced system of [`reduced_system_rows`] written as the plain path writes it: each
+    /// node's rows left-multiplied by its projector (the slip node's by projector + row mix),
+    /// the prescribed directions' columns eliminated into the right-hand side, the scaled
+    /// identity on the prescribed directions and the slip block's spring. Returns (S, rhs).
+    #[allow(clippy::type_complexity)]
+    fn written_rows(
+        (a, f): (&[Vec<f64>], &[f64]),
+        (proj, known, left, dirs): (
+            &[[[f64; 3]; 3]],
+            &[[f64; 3]],
+            &[[[f64; 3]; 3]],
+            &[Vec<([f64; 3], f64)>],
+        ),
+        blk: &CoulombBlock,
+        dim: usize,
+    ) -> (Vec<Vec<f64>>, Vec<f64>) {
+        let nn = proj.len();
+        let nd = nn * dim;
+        let mut s = vec![vec![0.0; nd]; nd];
+        let mut rhs = vec![0.0; nd];
+        for k in 0..nn {
+            let sk = (0..dim).map(|x| a[k * dim + x][k * dim + x]).sum::<f64>() / dim as f64;
+            let mut fk = [0.0; 3];
+            for x in 0..dim {
+                fk[x] = f[k * dim + x]
+                    - (0..nn)
+                        .map(|j| {
+                            (0..dim)
+                                .map(|y| a[k * dim + x][j * dim + y] * known[j][y])
+                                .sum::<f64>()
+                        })
+                        .sum::<f64>();
+            }
+            for x in 0..dim {
+                rhs[k * dim + x] =
+                    (0..dim).map(|y| left[k][x][y] * fk[y]).sum::<f64>() + sk * known[k][x];
+                if k == 0 {
+                    rhs[x] += blk.spring_rhs[x];
+                }
+                for j in 0..nn {
+                    for y in 0..dim {
+                        // (left_k A_kj P_j)_{xy}
+                        let mut v = 0.0;
+                        for z in 0..dim {
+                            for w in 0..dim {
+                                v += left[k][x][z] * a[k * dim + z][j * dim + w] * proj[j][w][y];
+                            }
+                        }
+                        if j == k {
+                            for (cv, _) in &dirs[k] {
+                                v += sk * cv[x] * cv[y];
+                            }
+                            if k == 0 {
+                                v += blk.spring[x][y];
+                            }
+                        }
+                        s[k * dim + x][j * dim + y] = v;
+                    }
+                }
+            }
+        }
+        (s, rhs)
+    }
+
     /// The block data (F7) written as reduced.rs writes a node (symmetric elimination of the
     /// prescribed directions, own-block spring) produce a system whose solution satisfies the
     /// Newton rows: on a Coulomb slip node u_n = −g and −λ_τ' + l u_τ' − q λ_n' = r with
@@ -1180,50 +1244,7 @@ mod tests {
                     left[0][x][y] += blk.row_mix[x][y];
                 }
             }
-            let mut s = vec![vec![0.0; nd]; nd];
-            let mut rhs = vec![0.0; nd];
-            for k in 0..nn {
-                let sk = (0..dim).map(|x| a[k * dim + x][k * dim + x]).sum::<f64>() / dim as f64;
-                let mut fk = [0.0; 3];
-                for x in 0..dim {
-                    fk[x] = f[k * dim + x]
-                        - (0..nn)
-                            .map(|j| {
-                                (0..dim)
-                                    .map(|y| a[k * dim + x][j * dim + y] * known[j][y])
-                                    .sum::<f64>()
-                            })
-                            .sum::<f64>();
-                }
-                for x in 0..dim {
-                    rhs[k * dim + x] =
-                        (0..dim).map(|y| left[k][x][y] * fk[y]).sum::<f64>() + sk * known[k][x];
-                    if k == 0 {
-                        rhs[x] += blk.spring_rhs[x];
-                    }
-                    for j in 0..nn {
-                        for y in 0..dim {
-                            // (left_k A_kj P_j)_{xy}
-                            let mut v = 0.0;
-                            for z in 0..dim {
-                                for w in 0..dim {
-                                    v +=
-                                        left[k][x][z] * a[k * dim + z][j * dim + w] * proj[j][w][y];
-                                }
-                            }
-                            if j == k {
-                                for (cv, _) in &dirs[k] {
-                                    v += sk * cv[x] * cv[y];
-                                }
-                                if k == 0 {
-                                    v += blk.spring[x][y];
-                                }
-                            }
-                            s[k * dim + x][j * dim + y] = v;
-                        }
-                    }
-                }
-            }
+            let (s, rhs) = written_rows((&a, &f), (&proj, &known, &left, &dirs), &blk, dim);
             let asym = (0..nd)
                 .flat_map(|i| (0..nd).map(move |j| (i, j)))
                 .fold(0.0_f64, |mx, (i, j)| mx.max((s[i][j] - s[j][i]).abs()));

@@ -298,7 +298,19 @@ fn a_floating_strip_whose_zone_the_half_space_model_misses_is_solved_in_passes()
     // set (3.23) gives on the last expanded u, its interior held: the plain path's answer.
     let tmp = tempfile::tempdir().unwrap();
     let case = floating_strip_case(tmp.path(), 0.01);
-    for r in strip_against_plain(&case, &["solver.preset=\"direct\""]) {
+    let mut runs = strip_against_plain(&case, &["solver.preset=\"direct\""]);
+    // and on 3 ranks
+    let three = solve(3, &case, &["solver.preset=\"direct\""]);
+    three.assert_converged("3 ranks");
+    assert_eq!(
+        runs[0].active_node_ids(),
+        three.active_node_ids(),
+        "3 ranks"
+    );
+    let d = runs[0].u_rel_diff(&three);
+    assert!(d <= 1e-10, "3 ranks against 1: {d:e}");
+    runs.push(three);
+    for r in runs {
         let cs = &r.summary["newton"]["condensed"];
         assert_eq!(cs["outcome"], "condensed", "{}", r.run.output());
         assert!(cs["factorisations"].as_f64().unwrap() >= 2.0, "{cs}");

@@ -356,6 +356,42 @@ fn load_steps_on_a_wide_zone_hold_its_interior_in_every_step() {
     }
 }
 
+#[test]
+fn a_wide_zone_in_3d_holds_its_interior() {
+    // The block of cases/blocks/block3d.geo (meshed with h = 0.06: 1 434 top nodes), clamped at
+    // the bottom, its top pressed by a slightly tilted plane 0.001 inside it: every top node
+    // starts in contact, a zone too wide for the dense compliance, so its interior is held
+    // (the distance to its edge in 3D) and about a thousand nodes stay in contact: one
+    // factorisation, the plain path's answer on 1 and 2 ranks.
+    let tmp = tempfile::tempdir().unwrap();
+    let mesh = tmp.path().join("block.msh");
+    let mut cmd = std::process::Command::new("gmsh");
+    cmd.arg("-3")
+        .arg(repo("cases/blocks/block3d.geo"))
+        .args(["-setnumber", "h", "0.06", "-format", "msh41", "-o"])
+        .arg(&mesh);
+    run_with_timeout(cmd, std::time::Duration::from_secs(120)).expect_code(0, "gmsh block");
+    let case = write_case(
+        &tmp.path().join("block.toml"),
+        &format!(
+            "[mesh]\nfile = {}\n[material]\nyoung = 2.0\npoisson = 0.3\nmodel = \"3d\"\n\
+             [[dirichlet]]\ngroup = \"bottom\"\nvalue = [0.0, 0.0, 0.0]\n[contact]\n\
+             group = \"top\"\nobstacle = {{ type = \"plane\", point = [0.0, 0.0, 0.499], \
+             normal = [0.002, 0.001, -1.0] }}\nfriction = \"none\"\nrigid_modes = \"none\"\n\
+             [solver]\npreset = \"direct\"\n[output]\nfields = [\"displacement\"]\n",
+            toml_path(&mesh)
+        ),
+    );
+    for r in strip_against_plain(&case, &[]) {
+        let cs = &r.summary["newton"]["condensed"];
+        assert_eq!(cs["outcome"], "condensed", "{}", r.run.output());
+        assert_eq!(cs["factorisations"], 1, "{cs}");
+        let held = cs["held_nodes"].as_f64().unwrap();
+        let active = r.f(&["contact", "active_count"]);
+        assert!(held > 0.5 * active && active < 1434.0, "{cs}");
+    }
+}
+
 /// A floating strip [0, 4] × [0, 0.1] (structured: 3 601 bottom nodes, 8 layers), its top
 /// pressed by `pressure` onto a rigid cylinder through (2, −20) of radius 20. Returns the case
 /// file.

@@ -382,12 +382,12 @@ pub(super) fn solve_keeping(
         && s.force.is_empty()
         && !s.estimate
         && s.carried.is_none();
-    let mut zone = if splits {
-        let all = Candidates::gather(ctx, b, &free0, &start, key);
-        first_zone(&all, located.as_ref().map(|(_, on)| *on))
-    } else {
-        None
-    };
+    // every contact node as the case starts (the zones' positions and order keys), gathered
+    // once
+    let all0 = splits.then(|| Candidates::gather(ctx, b, &free0, &start, key));
+    let mut zone = all0
+        .as_ref()
+        .and_then(|all| first_zone(all, located.as_ref().map(|(_, on)| *on)));
     let mut order_kept = p.kept.take_order(); // a load step after a held zone's
     let mut rounds = 0;
     let mut history: Vec<StepInfo> = Vec::new();
@@ -396,7 +396,7 @@ pub(super) fn solve_keeping(
         let mut pass = begin_pass(
             ctx,
             (p, &mut *reduced, s, warm),
-            (&free0, &start, &located, per),
+            (all0.as_ref(), &start, &located, per),
             (zoned, order_kept.take()),
             &mut summary,
         )?;
@@ -536,7 +536,8 @@ impl Pass {
     }
 }
 
-/// A pass begun: the held nodes of the predicted `zone` ([`hold`]; none without one), K_p
+/// A pass begun: the held nodes of the predicted `zone` ([`hold`] on `all0`, every contact
+/// node as the case starts; none without a zone), K_p
 /// written with them, its candidates (the zone's nodes not held start active; else the start
 /// set `start`), the first candidates' count (the zone's band and margin, or the located
 /// zone's margin), and a compliance on the previous load step's factorisation where it holds
@@ -549,15 +550,16 @@ fn begin_pass(
         &NewtonSettings,
         Option<&WarmStart>,
     ),
-    (free0, start, located, per): (&FreeModes, &[bool], &Located, usize),
+    (all0, start, located, per): (Option<&Candidates>, &[bool], &Located, usize),
     (zone, order): (Option<&[bool]>, Option<Vec<usize>>),
     summary: &mut CondensedSummary,
 ) -> Result<Pass, RunError> {
     let b = p.boundary;
     let key = located.as_ref().map(|(k, _)| k.as_slice());
-    let held = zone.map_or_else(Vec::new, |z| {
-        hold(&Candidates::gather(ctx, b, free0, start, key), z)
-    });
+    let held = match (zone, all0) {
+        (Some(z), Some(all)) => hold(all, z),
+        _ => Vec::new(),
+    };
     let (free, rhs0) = prepare_base(ctx, p, reduced, s, &held)?;
     let f_root = ctx.gather_to_root(&rhs0); // f for MUMPS' solve phases, once per pass
     let pass_start: Vec<bool> = match zone {

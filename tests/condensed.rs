@@ -178,12 +178,7 @@ fn strip_case(dir: &Path, (top, normal): (usize, &str), extra: &str) -> PathBuf 
     )
     .unwrap();
     let mesh = dir.join("strip.msh");
-    let mut cmd = std::process::Command::new("gmsh");
-    cmd.arg("-2")
-        .arg(&geo)
-        .args(["-format", "msh41", "-o"])
-        .arg(&mesh);
-    run_with_timeout(cmd, std::time::Duration::from_secs(120)).expect_code(0, "gmsh strip");
+    gmsh_file(&geo, 2, &[], &mesh);
     write_case(
         &dir.join("strip.toml"),
         &format!(
@@ -297,10 +292,11 @@ fn a_floating_strip_whose_zone_the_half_space_model_misses_is_solved_in_passes()
     // (a half-space does not bend) puts a third of it in contact. Each pass starts from the
     // set (3.23) gives on the last expanded u, its interior held: the plain path's answer.
     let tmp = tempfile::tempdir().unwrap();
-    let case = floating_strip_case(tmp.path(), 0.01);
-    let mut runs = strip_against_plain(&case, &["solver.preset=\"direct\""]);
+    let (case, [mesh, load]) = floating_strip_case(tmp.path(), 0.01);
+    let sets = ["solver.preset=\"direct\"", mesh.as_str(), load.as_str()];
+    let mut runs = strip_against_plain(&case, &sets);
     // and on 3 ranks
-    let three = solve(3, &case, &["solver.preset=\"direct\""]);
+    let three = solve(3, &case, &sets);
     three.assert_converged("3 ranks");
     assert_eq!(
         runs[0].active_node_ids(),
@@ -330,9 +326,9 @@ fn load_steps_on_a_wide_zone_hold_its_interior_in_every_step() {
     // of the step before's set (its warm start) — and ends where the plain path ends, step by
     // step, on 1 and 2 ranks.
     let tmp = tempfile::tempdir().unwrap();
-    let case = floating_strip_case(tmp.path(), 0.01);
-    let sets = ["solver.preset=\"direct\"", "load.steps=3"];
-    let plain = solve(1, &case, &[sets[0], sets[1], "solver.reuse=\"never\""]);
+    let (case, [mesh, load]) = floating_strip_case(tmp.path(), 0.01);
+    let sets = ["solver.preset=\"direct\"", "load.steps=3", &mesh, &load];
+    let plain = solve(1, &case, &[&sets[..], &["solver.reuse=\"never\""]].concat());
     plain.assert_converged("plain path");
     for np in [1, 2] {
         let c = solve(np, &case, &sets);
@@ -365,12 +361,12 @@ fn a_wide_zone_in_3d_holds_its_interior() {
     // factorisation, the plain path's answer on 1 and 2 ranks.
     let tmp = tempfile::tempdir().unwrap();
     let mesh = tmp.path().join("block.msh");
-    let mut cmd = std::process::Command::new("gmsh");
-    cmd.arg("-3")
-        .arg(repo("cases/blocks/block3d.geo"))
-        .args(["-setnumber", "h", "0.06", "-format", "msh41", "-o"])
-        .arg(&mesh);
-    run_with_timeout(cmd, std::time::Duration::from_secs(120)).expect_code(0, "gmsh block");
+    gmsh_file(
+        &repo("cases/blocks/block3d.geo"),
+        3,
+        &["-setnumber", "h", "0.06"],
+        &mesh,
+    );
     let case = write_case(
         &tmp.path().join("block.toml"),
         &format!(
@@ -392,38 +388,18 @@ fn a_wide_zone_in_3d_holds_its_interior() {
     }
 }
 
-/// A floating strip [0, 4] × [0, 0.1] (structured: 3 601 bottom nodes, 8 layers), its top
-/// pressed by `pressure` onto a rigid cylinder through (2, −20) of radius 20. Returns the case
-/// file.
-fn floating_strip_case(dir: &Path, pressure: f64) -> PathBuf {
-    let geo = dir.join("fstrip.geo");
-    std::fs::write(
-        &geo,
-        "Point(1) = {0, 0, 0};\nPoint(2) = {4, 0, 0};\nPoint(3) = {4, 0.1, 0};\n\
-         Point(4) = {0, 0.1, 0};\nLine(1) = {1, 2};\nLine(2) = {2, 3};\nLine(3) = {3, 4};\n\
-         Line(4) = {4, 1};\nCurve Loop(1) = {1, 2, 3, 4};\nPlane Surface(1) = {1};\n\
-         Transfinite Curve {1, 3} = 3601;\nTransfinite Curve {2, 4} = 9;\n\
-         Transfinite Surface {1};\nPhysical Curve(\"bottom\") = {1};\n\
-         Physical Curve(\"top\") = {3};\nPhysical Surface(\"body\") = {1};\n",
-    )
-    .unwrap();
-    let mesh = dir.join("fstrip.msh");
-    let mut cmd = std::process::Command::new("gmsh");
-    cmd.arg("-2")
-        .arg(&geo)
-        .args(["-format", "msh41", "-o"])
-        .arg(&mesh);
-    run_with_timeout(cmd, std::time::Duration::from_secs(120)).expect_code(0, "gmsh strip");
-    write_case(
-        &dir.join("fstrip.toml"),
-        &format!(
-            "[mesh]\nfile = {}\n[material]\nyoung = 2.0\npoisson = 0.3\n\
-             model = \"plane_strain\"\n[[neumann]]\ngroup = \"top\"\npressure = {pressure}\n\
-             [contact]\ngroup = \"bottom\"\nobstacle = {{ type = \"sphere\", \
-             center = [2.0, -20.0], radius = 20.0 }}\nfriction = \"none\"\n\
-             [output]\nfields = [\"displacement\"]\n",
-            toml_path(&mesh)
-        ),
+/// The floating strip of cases/strip (4 × 0.1, 3 601 bottom nodes, 8 layers; meshed into
+/// `dir`), its top pressed by `pressure` onto a rigid cylinder through (2, −20) of radius 20.
+/// Returns the case file and the settings that point it at the mesh and the pressure.
+fn floating_strip_case(dir: &Path, pressure: f64) -> (PathBuf, [String; 2]) {
+    let mesh = dir.join("strip.msh");
+    gmsh_file(&repo("cases/strip/strip.geo"), 2, &[], &mesh);
+    (
+        repo("cases/strip/strip.toml"),
+        [
+            format!("mesh.file={}", toml_path(&mesh)),
+            format!("neumann.0.pressure={pressure}"),
+        ],
     )
 }
 

@@ -178,14 +178,25 @@ pub fn example(name: &str) -> PathBuf {
 
 /// Generates a mesh with the gmsh CLI from a .geo of tests/meshes (`-setnumber h h`).
 pub fn gmsh(geo: &str, dim: usize, h: f64, out: &Path) {
+    gmsh_file(
+        &mesh_dir().join(geo),
+        dim,
+        &["-setnumber", "h", &h.to_string()],
+        out,
+    );
+}
+
+/// Generates a `dim`-dimensional mesh (MSH 4.1) with the gmsh CLI from the .geo file `geo`,
+/// with the extra arguments `extra` (e.g. `-setnumber h 0.06`).
+pub fn gmsh_file(geo: &Path, dim: usize, extra: &[&str], out: &Path) {
     let mut cmd = Command::new("gmsh");
     cmd.arg(format!("-{dim}"))
-        .arg(mesh_dir().join(geo))
-        .args(["-setnumber", "h", &h.to_string()])
+        .arg(geo)
+        .args(extra)
         .args(["-format", "msh41", "-o"])
         .arg(out);
     let r = run_with_timeout(cmd, Duration::from_secs(120));
-    r.expect_code(0, &format!("gmsh {geo} h={h}"));
+    r.expect_code(0, &format!("gmsh {} {extra:?}", geo.display()));
     assert!(out.exists(), "gmsh wrote no {}", out.display());
 }
 

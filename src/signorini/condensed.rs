@@ -1335,6 +1335,7 @@ impl Compliance {
         self.cmat = DMatrix::zeros(0, 0);
         self.schur = DMatrix::zeros(0, 0);
         let t = Instant::now();
+        self.ordering_seconds = 0.0; // this factorisation's ordering (none where one is kept)
         if self.node_order.is_none() {
             // With a Schur complement MUMPS would order by AMD (2.4 × the flops of PORD on a 3D
             // block of 82 584 unknowns, measured): our nested-dissection order instead.

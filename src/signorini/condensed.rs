@@ -395,8 +395,9 @@ pub(super) fn solve_keeping(
         let zoned = zone.as_deref();
         let mut pass = begin_pass(
             ctx,
-            (p, &mut *reduced, s, warm),
-            (all0.as_ref(), &start, &located, per),
+            (p, &mut *reduced, warm),
+            (&free0, all0.as_ref()),
+            (&start, &located, per),
             (zoned, order_kept.take()),
             &mut summary,
         )?;
@@ -544,13 +545,9 @@ impl Pass {
 /// ([`reused`]) or a new one with the kept node order `order`. Collective.
 fn begin_pass(
     ctx: &Ctx,
-    (p, reduced, s, warm): (
-        &ContactProblem,
-        &mut ReducedSystem,
-        &NewtonSettings,
-        Option<&WarmStart>,
-    ),
-    (all0, start, located, per): (Option<&Candidates>, &[bool], &Located, usize),
+    (p, reduced, warm): (&ContactProblem, &mut ReducedSystem, Option<&WarmStart>),
+    (free0, all0): (&FreeModes, Option<&Candidates>),
+    (start, located, per): (&[bool], &Located, usize),
     (zone, order): (Option<&[bool]>, Option<Vec<usize>>),
     summary: &mut CondensedSummary,
 ) -> Result<Pass, RunError> {
@@ -560,7 +557,7 @@ fn begin_pass(
         (Some(z), Some(all)) => hold(all, z),
         _ => Vec::new(),
     };
-    let (free, rhs0) = prepare_base(ctx, p, reduced, s, &held)?;
+    let (free, rhs0) = prepare_base(ctx, (p, reduced), free0, &held)?;
     let f_root = ctx.gather_to_root(&rhs0); // f for MUMPS' solve phases, once per pass
     let pass_start: Vec<bool> = match zone {
         Some(z) => (0..b.nodes.len())
@@ -1100,17 +1097,16 @@ fn fallback(ctx: &Ctx, mut summary: CondensedSummary, why: String) -> Condensed 
 /// contact node in c_h's global order, or empty) leave free pinned, the held nodes' normal
 /// rows written as the reduced system (3.29) writes an active node (u_n = −g) and no other
 /// contact row, into the reduced system's matrix (factorised later, by MUMPS directly, with
-/// the Schur complement). Returns the free modes (with K_p's pins) and this rank's rows of
-/// K_p's right-hand side. Collective.
+/// the Schur complement). `free0`: the modes Dirichlet data leave free. Returns the free
+/// modes (with K_p's pins) and this rank's rows of K_p's right-hand side. Collective.
 fn prepare_base(
     ctx: &Ctx,
-    p: &ContactProblem,
-    reduced: &mut ReducedSystem,
-    s: &NewtonSettings,
+    (p, reduced): (&ContactProblem, &mut ReducedSystem),
+    free0: &FreeModes,
     held: &[bool],
 ) -> Result<(FreeModes, Vec<f64>), RunError> {
     let (mesh, layout, b, sys) = (p.mesh, p.layout, p.boundary, p.sys);
-    let mut free = FreeModes::new(ctx, mesh, layout, p.fixed, b, &reduced.f_local, s.rigid);
+    let mut free = free0.clone();
     let mine = match held.is_empty() {
         true => vec![false; b.nodes.len()],
         false => held[b.offset..b.offset + b.nodes.len()].to_vec(),

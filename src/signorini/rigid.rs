@@ -38,6 +38,7 @@ pub type Gram = [f64; 36];
 pub type Pin = (usize, usize);
 
 /// The rigid modes of a mesh, in coordinates centred and scaled to O(1).
+#[derive(Clone)]
 pub struct RigidModes {
     pub dim: usize,
     pub m: usize,
@@ -247,6 +248,7 @@ pub struct ApproachCoupling {
 
 /// The rigid modes left free by Dirichlet data and the current sets, and the dofs pinned to
 /// remove them.
+#[derive(Clone)]
 pub struct FreeModes {
     modes: RigidModes,
     enabled: bool,

@@ -50,6 +50,9 @@ pub fn run_case(ctx: &Ctx, case: &Case) -> Result<String, RunError> {
         friction,
     );
     say!(ctx, "solver: preset {} ({preset_reason})", preset.name());
+    if let Some(k) = crate::blas::kernels() {
+        say!(ctx, "blas: {k}");
+    }
     let mut resolved = case.clone();
     resolved.solver.preset = preset;
     let case = &resolved;
@@ -87,6 +90,7 @@ pub fn run_case(ctx: &Ctx, case: &Case) -> Result<String, RunError> {
         dofs: mesh.n_nodes_global() * mesh.dim,
         refine: case.mesh.refine,
         ranks: ctx.size,
+        blas: crate::blas::kernels(),
         preset: PresetChoice {
             asked: asked.name(),
             used: preset.name(),

@@ -5,6 +5,7 @@
 
 pub mod assembly;
 pub mod bigbuf;
+pub mod blas;
 pub mod case;
 pub mod contact;
 pub mod dist;

@@ -64,6 +64,8 @@ fn main() {
     if args.get(1).map(String::as_str) == Some("convert") {
         std::process::exit(convert(&args[2..]));
     }
+    // Before anything loads MPI or PETSc state: OpenBLAS' kernels fit for this CPU.
+    signorini_mpi::blas::restart_with_fitting_kernels();
     let cli = Cli::parse();
     let code = {
         // MPI_THREAD_MULTIPLE where the MPI library grants it (Open MPI does): libraries that

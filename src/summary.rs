@@ -90,6 +90,10 @@ pub struct Summary<S: Serialize> {
     #[serde(skip_serializing_if = "is_zero")]
     pub refine: usize,
     pub ranks: usize,
+    /// The BLAS kernels (OpenBLAS' kernel set, [`crate::blas::kernels`]); absent for
+    /// another BLAS.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub blas: Option<String>,
     /// `solver.preset` as asked and as used (the "auto" choice).
     pub preset: PresetChoice,
     pub partition: PartitionInfo,

@@ -46,6 +46,40 @@ extern "C" {
     );
 }
 
+extern "C" {
+    fn dlsym(
+        handle: *mut std::ffi::c_void,
+        symbol: *const std::ffi::c_char,
+    ) -> *mut std::ffi::c_void;
+}
+
+/// The name of the kernel set OpenBLAS chose for this CPU (`openblas_get_corename`, e.g.
+/// "SkylakeX", "Haswell", "Prescott"), or `None` when the BLAS this process loaded is not
+/// OpenBLAS. Looked up at run time (dlsym on the loaded libraries), so that a reference
+/// BLAS behind libblas.so.3 still links. Local.
+pub fn openblas_core() -> Option<String> {
+    type CoreName = unsafe extern "C" fn() -> *const std::ffi::c_char;
+    // SAFETY: dlsym with RTLD_DEFAULT (the null handle on glibc) only searches the loaded
+    // objects; a non-null result is the address of OpenBLAS' `char *openblas_get_corename()`,
+    // which returns a static NUL-terminated string.
+    unsafe {
+        let f = dlsym(std::ptr::null_mut(), c"openblas_get_corename".as_ptr());
+        if f.is_null() {
+            return None;
+        }
+        let f: CoreName = std::mem::transmute::<*mut std::ffi::c_void, CoreName>(f);
+        let name = f();
+        if name.is_null() {
+            return None;
+        }
+        Some(
+            std::ffi::CStr::from_ptr(name)
+                .to_string_lossy()
+                .into_owned(),
+        )
+    }
+}
+
 /// The Cholesky factor of a symmetric positive definite matrix (its lower triangle is read),
 /// for repeated solves: half the work of [`DenseLu`].
 pub struct DenseCholesky {

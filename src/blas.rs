@@ -1,7 +1,7 @@
 //! OpenBLAS' kernels for this CPU. OpenBLAS built for many CPUs (DYNAMIC_ARCH, as Debian
 //! ships it) picks its kernels by the CPU's model number, once, as the library loads. A
 //! release older than the CPU does not know its model and falls back to a generic SSE3 core
-//! ("Prescott"): Debian 12's OpenBLAS 0.3.21 does so on Intel Sapphire Rapids, where MUMPS'
+//! ("Prescott"): Debian 12's OpenBLAS 0.3.21 does so on Intel Emerald Rapids, where MUMPS'
 //! 3D factorisation of 113 k unknowns then takes 10.7 s instead of 3.9 s with the AVX-512
 //! kernels (docs/numbers.md, "OpenBLAS' kernels"). OPENBLAS_CORETYPE overrides the choice,
 //! but OpenBLAS reads it before `main` runs, so the process restarts itself once with it set

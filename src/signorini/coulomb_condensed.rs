@@ -1643,8 +1643,20 @@ mod tests {
             assert!(a.end.is_ok() && b.end.is_ok(), "{:?} {:?}", a.end, b.end);
             let slips = (0..n).filter(|&q| a.active[q] && a.slip[q]).count();
             assert!(slips > 50, "{slips} slipping");
-            assert_eq!((a.active.clone(), a.slip.clone()), (b.active, b.slip));
             let scale = b.lambda.iter().fold(0.0_f64, |m, x| m.max(x.abs()));
+            // A node on its stick/slip threshold to round-off (|λ_τ| = μ|λ_n|) solves the
+            // problem in either state, so its state is decided by the BLAS kernels' round-off
+            // (measured: the middle node sticks with OpenBLAS' Prescott and Haswell kernels and
+            // slips with SkylakeX and Nehalem): its state is not compared, its λ is.
+            let at_limit = |r: &DenseCoulomb, q: usize| {
+                (r.lambda[2 * q + 1].abs() - 0.3 * r.lambda[2 * q].abs()).abs() <= 1e-8 * scale
+            };
+            for q in 0..n {
+                assert_eq!(a.active[q], b.active[q], "node {q}");
+                if !(at_limit(&a, q) && at_limit(&b, q)) {
+                    assert_eq!(a.slip[q], b.slip[q], "node {q}");
+                }
+            }
             for (x, y) in a.lambda.iter().zip(&b.lambda) {
                 assert!((x - y).abs() <= 1e-10 * scale, "{x} {y}");
             }

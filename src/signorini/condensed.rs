@@ -1883,6 +1883,35 @@ mod tests {
         assert!((run.u_n[0] + gap[0]).abs() < 1e-14 && (run.u_n[1] + gap[1]).abs() < 1e-14);
     }
 
+    /// An estimate (the pins carry the load where the set leaves a mode free, Coulomb's
+    /// frictionless start) from the empty set, with no candidate penetrating at d₀: the load
+    /// still brings the body into contact (the balance test activates the node that touches
+    /// first), instead of the pins carrying all of it with nothing in contact.
+    #[test]
+    fn an_estimate_from_the_empty_set_brings_the_pressed_body_into_contact() {
+        let cmat = DMatrix::<f64>::identity(2, 2);
+        let d0 = [0.0, 0.0];
+        let gap = [0.1, 0.5];
+        let g = DMatrix::from_row_slice(2, 1, &[1.0, 1.0]);
+        let phi = [-1.0];
+        let dense = Dense {
+            cmat: &cmat,
+            d0: &d0,
+            gap: &gap,
+            g: &g,
+            phi: &phi,
+            load_scale: 1.0,
+            c: 1.0,
+            max_steps: 20,
+            pins_carry: 1,
+        };
+        let run = dense.run(vec![false; 2]);
+        assert_eq!(run.end, End::Converged, "{run:?}");
+        assert_eq!(run.active, vec![true, true], "{run:?}");
+        let s: f64 = run.lambda.iter().sum();
+        assert!((s - -1.0).abs() < 1e-14, "{run:?}");
+    }
+
     /// The primal form on S ends where the dual form on C = S⁻¹ ends (same set, λ, u, α): a
     /// line of 40 candidates with a coupled SPD S (a discrete Laplacian plus a diagonal), a
     /// curved gap, pressed down by a load held by the contact alone (one free translation)

@@ -1850,29 +1850,34 @@ mod tests {
         assert!((run.u_n[2] - 0.2).abs() < 1e-15);
     }
 
-    /// A floating "body" of two uncoupled nodes with one free translation along the normal: the
-    /// load φ must be carried by the contact (Σ λ = φ); from the empty set the balance test
-    /// activates the node that touches first, then the set converges.
-    #[test]
-    fn dense_algorithm1_floating_translation() {
+    /// A floating "body" of two uncoupled nodes (C = I, d₀ = 0) with one free translation along
+    /// the normal, which moves both normal displacements equally, pressed by a load of 1
+    /// (Gᵀ λ = φ = −1): the dense iteration from the empty set, the pins carrying the load in
+    /// the first `pins_carry` modes.
+    fn pressed_pair(gap: [f64; 2], pins_carry: usize) -> DenseRun {
         let cmat = DMatrix::<f64>::identity(2, 2);
-        let d0 = [0.0, 0.0];
-        let gap = [0.0, 0.5];
-        // the translation moves both normal displacements equally
         let g = DMatrix::from_row_slice(2, 1, &[1.0, 1.0]);
-        let phi = [-1.0]; // Gᵀ λ = φ: the load presses with 1
         let dense = Dense {
             cmat: &cmat,
-            d0: &d0,
+            d0: &[0.0, 0.0],
             gap: &gap,
             g: &g,
-            phi: &phi,
+            phi: &[-1.0],
             load_scale: 1.0,
             c: 1.0,
             max_steps: 20,
-            pins_carry: 0,
+            pins_carry,
         };
-        let run = dense.run(vec![false; 2]);
+        dense.run(vec![false; 2])
+    }
+
+    /// The pressed pair ([`pressed_pair`]): the load φ must be carried by the contact
+    /// (Σ λ = φ); from the empty set the balance test activates the node that touches first,
+    /// then the set converges.
+    #[test]
+    fn dense_algorithm1_floating_translation() {
+        let gap = [0.0, 0.5];
+        let run = pressed_pair(gap, 0);
         assert_eq!(run.end, End::Converged, "{run:?}");
         // node 0 alone carries λ = −1, u_n,0 = 0 = −λ + α → α = −1; node 1: u_n = α = −1 < −0.5
         // penetrates → both active: λ0 + λ1 = −1, −λ0 + α = 0, −λ1 + α = −0.5 → α = −0.75
@@ -1884,28 +1889,12 @@ mod tests {
     }
 
     /// An estimate (the pins carry the load where the set leaves a mode free, Coulomb's
-    /// frictionless start) from the empty set, with no candidate penetrating at d₀: the load
-    /// still brings the body into contact (the balance test activates the node that touches
-    /// first), instead of the pins carrying all of it with nothing in contact.
+    /// frictionless start) from the empty set, with no node penetrating at d₀: the load still
+    /// brings the body into contact (the balance test activates the node that touches first),
+    /// instead of the pins carrying all of it with nothing in contact.
     #[test]
     fn an_estimate_from_the_empty_set_brings_the_pressed_body_into_contact() {
-        let cmat = DMatrix::<f64>::identity(2, 2);
-        let d0 = [0.0, 0.0];
-        let gap = [0.1, 0.5];
-        let g = DMatrix::from_row_slice(2, 1, &[1.0, 1.0]);
-        let phi = [-1.0];
-        let dense = Dense {
-            cmat: &cmat,
-            d0: &d0,
-            gap: &gap,
-            g: &g,
-            phi: &phi,
-            load_scale: 1.0,
-            c: 1.0,
-            max_steps: 20,
-            pins_carry: 1,
-        };
-        let run = dense.run(vec![false; 2]);
+        let run = pressed_pair([0.1, 0.5], 1);
         assert_eq!(run.end, End::Converged, "{run:?}");
         assert_eq!(run.active, vec![true, true], "{run:?}");
         let s: f64 = run.lambda.iter().sum();

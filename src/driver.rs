@@ -50,7 +50,8 @@ pub fn run_case(ctx: &Ctx, case: &Case) -> Result<String, RunError> {
         friction,
     );
     say!(ctx, "solver: preset {} ({preset_reason})", preset.name());
-    if let Some(k) = crate::blas::kernels() {
+    let blas = crate::blas::kernels();
+    if let Some(k) = &blas {
         say!(ctx, "blas: {k}");
     }
     let mut resolved = case.clone();
@@ -90,7 +91,7 @@ pub fn run_case(ctx: &Ctx, case: &Case) -> Result<String, RunError> {
         dofs: mesh.n_nodes_global() * mesh.dim,
         refine: case.mesh.refine,
         ranks: ctx.size,
-        blas: crate::blas::kernels(),
+        blas,
         preset: PresetChoice {
             asked: asked.name(),
             used: preset.name(),

@@ -338,7 +338,7 @@ fn load_steps_on_a_wide_zone_hold_its_interior_in_every_step() {
         let cs = &c.summary["newton"]["condensed"];
         assert_eq!(cs["outcome"], "condensed", "{cs}");
         assert!(cs["held_nodes"].as_f64().unwrap() > 0.0, "{cs}");
-        same_steps_as_plain(&c, &plain, 3, np);
+        same_steps(&c, &plain, 3, 1e-10, np);
     }
 }
 
@@ -423,22 +423,6 @@ fn load_steps_keep_the_factorisation() {
         let cs = &c.summary["newton"]["condensed"];
         assert_eq!(cs["factorisation_kept"], true, "{cs}");
         assert_eq!(c.f(&["newton", "factorisations"]), 0.0, "{np} rank(s)");
-        same_steps_as_plain(&c, &plain, 4, np);
+        same_steps(&c, &plain, 4, 1e-10, np);
     }
-}
-
-/// A load history `c` on `np` ranks ends where the plain path's `plain` ends, step by step
-/// (u within 1e-10 of max |u| at each of the `steps` steps; the same final active nodes).
-fn same_steps_as_plain(c: &Solved, plain: &Solved, steps: usize, np: usize) {
-    for step in 1..=steps {
-        let (du, su) = max_diff(
-            &step_displacement(&c.dir, step),
-            &step_displacement(&plain.dir, step),
-        );
-        assert!(
-            du <= 1e-10 * su,
-            "{np} rank(s), step {step}: |Δu| {du:e} of {su:e}"
-        );
-    }
-    assert_eq!(plain.active_node_ids(), c.active_node_ids(), "{np} rank(s)");
 }

@@ -826,21 +826,7 @@ fn load_steps_keep_the_condensed_factorisation() {
                 a["step"]
             );
         }
-        assert_eq!(
-            auto.active_node_ids(),
-            gap.active_node_ids(),
-            "{np} rank(s)"
-        );
-        for step in 1..=4 {
-            let (du, su) = max_diff(
-                &step_displacement(&auto.dir, step),
-                &step_displacement(&gap.dir, step),
-            );
-            assert!(
-                du <= 1e-9 * su,
-                "{np} rank(s), step {step}: |Δu| {du:e} of {su:e}"
-            );
-        }
+        same_steps(&auto, &gap, 4, 1e-9, np);
     }
 }
 

@@ -244,3 +244,23 @@ print("RESULT " + json.dumps({"ids": ids, "u": u}))
         .map(|(i, row)| (i.as_u64().unwrap(), floats(row)))
         .collect()
 }
+
+/// A load history `c` on `np` ranks ends where `reference` ends, step by step: u within
+/// `tol` of max |u| at each of the `steps` load steps, and the same final active nodes.
+pub fn same_steps(c: &Solved, reference: &Solved, steps: usize, tol: f64, np: usize) {
+    for step in 1..=steps {
+        let (du, su) = super::compare::max_diff(
+            &step_displacement(&c.dir, step),
+            &step_displacement(&reference.dir, step),
+        );
+        assert!(
+            du <= tol * su,
+            "{np} rank(s), step {step}: |Δu| {du:e} of {su:e}"
+        );
+    }
+    assert_eq!(
+        reference.active_node_ids(),
+        c.active_node_ids(),
+        "{np} rank(s)"
+    );
+}

@@ -748,6 +748,55 @@ fn a_rolling_ball_is_solved_on_its_located_zone_in_one_factorisation() {
 }
 
 #[test]
+fn a_zone_too_wide_for_every_dof_is_held_sticking_inside() {
+    // The 3D block (7 071 unknowns) held at its bottom, its whole top (511 nodes) pressed by a
+    // rigid plane 0.01 into it, μ = 0.3: every top node touches, and the outer part of the top
+    // slips outwards (Poisson). Every dof of 511 candidates is more than the dense limits
+    // allow, so the condensed path holds the zone's interior on the plane, sticking, in K_p, and
+    // runs the dense steps on its edge band; the held nodes that the check on the expanded u
+    // finds slipping become candidates of a new pass, until no state changes. It must end in the
+    // plain path's state from the touching nodes ("gap"), in fewer factorisations, on 1, 2 and
+    // 3 ranks.
+    let tmp = tempfile::tempdir().expect("tmp");
+    let mesh = repo("tests/meshes/block3d_h0.1.msh");
+    let case = write_case(
+        &tmp.path().join("flat.toml"),
+        &format!(
+            "[mesh]\nfile = {}\n[material]\nyoung = 2.0\npoisson = 0.3\n\
+             [[dirichlet]]\ngroup = \"bottom\"\nvalue = [0.0, 0.0, 0.0]\n[contact]\n\
+             group = \"top\"\nobstacle = {{ type = \"plane\", point = [0.0, 0.0, 0.49], \
+             normal = [0.0, 0.0, -1.0] }}\nfriction = {{ law = \"coulomb\", mu = 0.3 }}\n\
+             [output]\nfields = [\"displacement\", \"contact\"]\n",
+            toml_path(&mesh)
+        ),
+    );
+    let gap = converged(2, &case, &["newton.init=\"gap\""]);
+    let (_, slipping) = active_and_slipping(&gap);
+    assert!(slipping.len() > 50, "{} nodes slip", slipping.len());
+    for np in [1, 2, 3] {
+        let auto = converged(np, &case, &[]);
+        let out = auto.run.output();
+        assert!(
+            out.contains("held on the obstacle, sticking, in K_p"),
+            "{out}"
+        );
+        let cs = &auto.summary["newton"]["condensed"];
+        assert_eq!(cs["coulomb"]["outcome"], "condensed", "{cs}");
+        assert!(cs["held_nodes"].as_f64().unwrap_or(0.0) > 0.0, "{cs}");
+        same_final_state(&auto, &gap, np);
+        assert_eq!(active_and_slipping(&auto).1, slipping, "{np} rank(s)");
+        let (fa, fg) = (
+            auto.f(&["newton", "factorisations"]),
+            gap.f(&["newton", "factorisations"]),
+        );
+        assert!(
+            fa < fg,
+            "{np} rank(s): {fa} factorisations, the plain path {fg}"
+        );
+    }
+}
+
+#[test]
 fn a_stalled_dense_iterate_is_accepted_where_its_certificates_hold() {
     // A complementarity parameter c far above E / h_c (newton.c = 1e7 here against 327) raises
     // what round-off leaves of the residual (F3), which weighs u by c, far above 1e-8 ‖λ‖₂ (as

@@ -192,6 +192,10 @@ pub struct ActiveSet {
     pub tangential: Option<Vec<CoulombRow<2>>>,
     /// [`SPRING_TOL`] · c: springs up to this hold no rigid mode.
     pub spring_floor: f64,
+    /// Every node of A_n also sticks (u_τ = u_ref), without friction rows elsewhere: the
+    /// interior of a wide zone held in the factorised matrix of a friction solve
+    /// ([`ActiveSet::held`]).
+    pub stick_active: bool,
 }
 
 /// What one node's rows prescribe: directions c with cᵀu^k = value.
@@ -271,6 +275,7 @@ impl ActiveSet {
             normal,
             tangential,
             spring_floor: SPRING_TOL * c,
+            stick_active: false,
         }
     }
 
@@ -280,6 +285,17 @@ impl ActiveSet {
             normal,
             tangential: None,
             spring_floor: 0.0,
+            stick_active: false,
+        }
+    }
+
+    /// The nodes `held` (this rank's) fixed in the factorised matrix: on the obstacle
+    /// (nᵀu = −g), and with `stick` also sticking (τᵀu = u_ref, (3.34a)); every other node's
+    /// rows as in A. Local.
+    pub fn held(held: Vec<bool>, stick: bool) -> ActiveSet {
+        ActiveSet {
+            stick_active: stick,
+            ..ActiveSet::frictionless(held)
         }
     }
 
@@ -314,6 +330,7 @@ impl ActiveSet {
             normal: nodes.iter().map(|r| r.active).collect(),
             tangential,
             spring_floor: SPRING_TOL * c,
+            stick_active: false,
         }
     }
 
@@ -349,7 +366,7 @@ impl ActiveSet {
         if self.normal[i] {
             dirs.push((k.frame.n, -k.gap));
         }
-        if let Some(CoulombRow::Stick) = row {
+        if matches!(row, Some(CoulombRow::Stick)) || (self.stick_active && self.normal[i]) {
             // u_τ' = u_ref (3.34a) for the increment
             for (t, v) in k.frame.t[..dim - 1].iter().zip(k.u_t_ref) {
                 dirs.push((*t, v));
@@ -419,10 +436,12 @@ impl ActiveSet {
             if self.normal[i] {
                 row(i, &k.frame.n);
             }
-            if self
-                .tangential
-                .as_ref()
-                .is_some_and(|t| holds_tangent(&t[i], self.spring_floor))
+            let sticks = self.stick_active && self.normal[i];
+            if sticks
+                || self
+                    .tangential
+                    .as_ref()
+                    .is_some_and(|t| holds_tangent(&t[i], self.spring_floor))
             {
                 for t in &k.frame.t[..dim - 1] {
                     row(i, t);
@@ -734,6 +753,7 @@ mod tests {
             normal: vec![true],
             tangential: Some(vec![CoulombRow::Stick]),
             spring_floor: 0.0,
+            stick_active: false,
         };
         let b = ContactBoundary {
             nodes: vec![k.clone()],
@@ -850,6 +870,7 @@ mod tests {
             normal: vec![true, true],
             tangential: Some(vec![CoulombRow::Stick, zero]),
             spring_floor: 0.0,
+            stick_active: false,
         };
         let up = set.update(&it, &b, Law::Tresca, c, 0.1, 2);
         let t = up.next.tangential.expect("friction");

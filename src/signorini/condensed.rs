@@ -102,8 +102,8 @@ const MAX_ROUNDS: usize = 8;
 /// reduced system (3.29) writes an active node), and only its edge band and the nodes beyond
 /// are Schur variables: the Schur complement's memory and the dense work grow with the zone's
 /// edge, not its area.
-fn wide(zone: usize, max_flops: f64) -> bool {
-    ((zone + zone / LOCATED_MARGIN) as f64).powi(3) > max_flops
+fn wide(zone: usize, per: usize, max_flops: f64) -> bool {
+    (((zone + zone / LOCATED_MARGIN) * per) as f64).powi(3) > max_flops
 }
 
 /// The edge band of a held zone: the 1/BAND_FRACTION of its nodes nearest to its edge (in 2D
@@ -316,7 +316,7 @@ pub fn solve(
     s: &NewtonSettings,
     warm: Option<&WarmStart>,
 ) -> Result<Condensed, RunError> {
-    solve_keeping(ctx, p, reduced, s, warm, (1, true)).map(|(c, _)| c)
+    solve_keeping(ctx, p, reduced, s, warm, (1, true, None)).map(|(c, _)| c)
 }
 
 /// What a converged condensed solve with every dof of the candidates in the Schur complement
@@ -332,6 +332,10 @@ pub(super) struct Kept {
     pub(super) free: FreeModes,
     pub(super) lambda: Vec<f64>,
     pub(super) active: Vec<bool>,
+    /// The nodes K_p holds on the obstacle, sticking (c_h's global order; empty: none).
+    pub(super) held: Vec<bool>,
+    /// The zone they were held in (c_h's global order; empty: none).
+    pub(super) zone: Vec<bool>,
 }
 
 impl Kept {
@@ -350,19 +354,35 @@ impl Kept {
     }
 }
 
+/// A friction solve's zone held sticking in K_p where every dof of its nodes is too many for
+/// the dense limits ([`solve_keeping`]).
+#[derive(Clone, Copy, Default)]
+pub(super) struct Sticking<'a> {
+    /// The zone of a pass before (c_h's global order; `None`: predicted, where needed).
+    pub zone: Option<&'a [bool]>,
+    /// Nodes never held (c_h's global order; may be empty): a pass before found them slipping
+    /// or leaving the obstacle.
+    pub release: &'a [bool],
+    /// The pass (from 0): a band of 2ᵏ/[`BAND_FRACTION`] of the zone's held part is left free.
+    pub pass: u32,
+}
+
 /// [`solve`] with `per` Schur variables per candidate (1: the normal dof; d: every dof, for
 /// friction); with `per` > 1 a converged solve also returns what it [`Kept`] (with `per` = 1
 /// it leaves it in `p.kept` for the next load step). A load step (`warm`) starts from the
 /// previous step's factorisation where it holds ([`reused`]). Without `steps`
 /// it stops after the first factorisation (`Factorised`; the start set and λ = 0 kept: a load
-/// step of a friction solve starts from its warm start instead). Collective.
+/// step of a friction solve starts from its warm start instead). With `stick` (friction,
+/// `per` > 1) a zone too wide for every dof of its nodes has its interior held on the obstacle
+/// and sticking (u_τ = u_ref), as a frictionless solve holds it on the obstacle, but for the
+/// nodes it releases, which are candidates. Collective.
 pub(super) fn solve_keeping(
     ctx: &Ctx,
     p: &ContactProblem,
     reduced: &mut ReducedSystem,
     s: &NewtonSettings,
     warm: Option<&WarmStart>,
-    (per, steps): (usize, bool),
+    (per, steps, stick): (usize, bool, Option<Sticking>),
 ) -> Result<(Condensed, Option<Kept>), RunError> {
     let fall = |c: Condensed| Ok((c, None));
     let (b, dim) = (p.boundary, p.mesh.dim);
@@ -374,31 +394,52 @@ pub(super) fn solve_keeping(
     let key = located.as_ref().map(|(k, _)| k.as_slice());
     let n_rows = p.layout.node_offsets.last().copied().unwrap_or(0) * dim;
     let nested = warm.is_none() && s.section.init == NewtonInit::Auto;
-    // a wide zone's interior held on the obstacle in the factorised matrix (frictionless; a
-    // load step only where the step before kept no factorisation: it held a zone too)
-    let splits = per == 1
-        && steps
+    // a wide zone's interior held on the obstacle in the factorised matrix (frictionless, or
+    // sticking as well where asked; a load step only where the step before kept no
+    // factorisation: it held a zone too)
+    let splits = steps
         && (warm.is_none() || p.kept.is_empty())
         && s.force.is_empty()
-        && !s.estimate
-        && s.carried.is_none();
+        && if per == 1 {
+            !s.estimate && s.carried.is_none()
+        } else {
+            stick.is_some()
+        };
+    let sticking = stick.unwrap_or_default();
     // every contact node as the case starts (the zones' positions and order keys), gathered
     // once
     let all0 = splits.then(|| Candidates::gather(ctx, b, &free0, &start, key));
-    let mut zone = all0
-        .as_ref()
-        .and_then(|all| first_zone(all, located.as_ref().map(|(_, on)| *on)));
+    let predicted = || {
+        all0.as_ref()
+            .and_then(|all| first_zone(all, located.as_ref().map(|(_, on)| *on), per))
+    };
+    // friction: a zone is held only where every dof of its nodes is too many for the dense
+    // limits (below)
+    let mut zone = match per {
+        1 => predicted(),
+        _ => sticking.zone.filter(|_| splits).map(<[bool]>::to_vec),
+    };
+    // a zone held sticking holds every rigid mode: no load is left for the contact to carry
+    let held_sticking = NewtonSettings {
+        carried: None,
+        ..*s
+    };
+    let given = s;
     let mut order_kept = p.kept.take_order(); // a load step after a held zone's
     let mut rounds = 0;
     let mut history: Vec<StepInfo> = Vec::new();
     'pass: loop {
+        let s = match per > 1 && zone.is_some() {
+            true => &held_sticking,
+            false => given,
+        };
         let zoned = zone.as_deref();
         let mut pass = begin_pass(
             ctx,
             (p, &mut *reduced, warm),
             (&free0, all0.as_ref()),
             (&start, &located, per),
-            (zoned, order_kept.take()),
+            (zoned, order_kept.take(), sticking),
             &mut summary,
         )?;
         for round in 1..=MAX_ROUNDS {
@@ -423,12 +464,26 @@ pub(super) fn solve_keeping(
                 (dim, n_rows, f_root),
             );
             if let Err(stop) = grown {
+                let to_hold = stop.too_wide && per > 1 && splits && zone.is_none();
+                if let Some(z) = predicted().filter(|_| to_hold) {
+                    say!(
+                        ctx,
+                        "newton: condensed: {}; the predicted zone's interior held sticking \
+                         instead",
+                        stop.why
+                    );
+                    zone = Some(z);
+                    continue 'pass;
+                }
                 return fall(fallback_stop(ctx, summary, stop));
             }
             if !steps {
                 summary.outcome = "factorised";
                 let lambda = vec![0.0; pass.cand.n];
-                return Ok((Condensed::Factorised(summary), Some(pass.keep(lambda))));
+                return Ok((
+                    Condensed::Factorised(summary),
+                    Some(pass.keep(lambda, zone)),
+                ));
             }
 
             let t = Instant::now();
@@ -479,7 +534,7 @@ pub(super) fn solve_keeping(
                 summary.log(ctx, cand.n, n_active);
                 let solved = finish(p, reduced, free, ex, history, summary)?;
                 let held = pass.growth.held_count > 0;
-                let kept = pass.keep(lambda);
+                let kept = pass.keep(lambda, zone);
                 return Ok(match (per > 1, held) {
                     (true, _) => (solved, Some(kept)),
                     (false, false) => {
@@ -492,7 +547,9 @@ pub(super) fn solve_keeping(
                     }
                 });
             }
-            if let Some(next) = growth.next_pass(ctx, &ex.changed, comp.max_flops, splits) {
+            if let Some(next) =
+                growth.next_pass(ctx, &ex.changed, (comp.max_flops, comp.per), splits)
+            {
                 zone = Some(next);
                 order_kept = comp.node_order.take();
                 continue 'pass;
@@ -524,7 +581,7 @@ struct Pass {
 impl Pass {
     /// What the pass keeps for a friction solve or the next load step, with the candidates'
     /// multipliers `lambda`.
-    fn keep(self, lambda: Vec<f64>) -> Kept {
+    fn keep(self, lambda: Vec<f64>, zone: Option<Vec<bool>>) -> Kept {
         Kept {
             n_local: self.rhs0.len(),
             comp: self.comp,
@@ -533,6 +590,8 @@ impl Pass {
             free: self.free,
             lambda,
             active: self.growth.active,
+            held: self.growth.held,
+            zone: zone.unwrap_or_default(),
         }
     }
 }
@@ -548,20 +607,24 @@ fn begin_pass(
     (p, reduced, warm): (&ContactProblem, &mut ReducedSystem, Option<&WarmStart>),
     (free0, all0): (&FreeModes, Option<&Candidates>),
     (start, located, per): (&[bool], &Located, usize),
-    (zone, order): (Option<&[bool]>, Option<Vec<usize>>),
+    (zone, order, sticking): (Option<&[bool]>, Option<Vec<usize>>, Sticking),
     summary: &mut CondensedSummary,
 ) -> Result<Pass, RunError> {
     let b = p.boundary;
     let key = located.as_ref().map(|(k, _)| k.as_slice());
+    let released = |i: usize| sticking.release.get(i).copied().unwrap_or(false);
     let held = match (zone, all0) {
-        (Some(z), Some(all)) => hold(all, z),
+        (Some(z), Some(all)) => {
+            let kept_on: Vec<bool> = (0..z.len()).map(|i| z[i] && !released(i)).collect();
+            hold(all, &kept_on, (BAND_FRACTION >> sticking.pass).max(1))
+        }
         _ => Vec::new(),
     };
-    let (free, rhs0) = prepare_base(ctx, (p, reduced), free0, &held)?;
+    let (free, rhs0) = prepare_base(ctx, (p, reduced), free0, (&held, per > 1))?;
     let f_root = ctx.gather_to_root(&rhs0); // f for MUMPS' solve phases, once per pass
     let pass_start: Vec<bool> = match zone {
         Some(z) => (0..b.nodes.len())
-            .map(|i| z[b.offset + i] && !held[b.offset + i])
+            .map(|i| (z[b.offset + i] || released(b.offset + i)) && !held[b.offset + i])
             .collect(),
         None => start.to_vec(),
     };
@@ -577,9 +640,10 @@ fn begin_pass(
         say!(
             ctx,
             "newton: condensed: {} nodes inside the predicted contact zone ({} nodes) held on \
-             the obstacle in K_p; the dense steps on the rest of it and beyond",
+             the obstacle{} in K_p; the dense steps on the rest of it and beyond",
             growth.held_count,
-            zone.map_or(0, count)
+            zone.map_or(0, count),
+            if per > 1 { ", sticking," } else { "" }
         );
     }
     let t = Instant::now();
@@ -613,7 +677,7 @@ fn begin_pass(
 /// half-space model put in contact (`located`: the `on` nodes of smallest clearance), else
 /// the start set. `None`: a narrower zone (every candidate a Schur variable). Local (on
 /// all-gathered data).
-fn first_zone(all: &Candidates, located: Option<usize>) -> Option<Vec<bool>> {
+fn first_zone(all: &Candidates, located: Option<usize>, per: usize) -> Option<Vec<bool>> {
     let zone: Vec<bool> = match located {
         Some(on) => {
             let mut by: Vec<usize> = (0..all.n).collect();
@@ -626,15 +690,15 @@ fn first_zone(all: &Candidates, located: Option<usize>) -> Option<Vec<bool>> {
         }
         None => (0..all.n).map(|i| all.start(i)).collect(),
     };
-    wide(zone.iter().filter(|&&a| a).count(), DENSE_FLOOR_FLOPS).then_some(zone)
+    wide(zone.iter().filter(|&&a| a).count(), per, DENSE_FLOOR_FLOPS).then_some(zone)
 }
 
 /// The nodes of a predicted contact zone (`zone`, every contact node in c_h's global order)
 /// held on their obstacle in the factorised matrix: per contact pair, all of the pair's zone
-/// but its 1/[`BAND_FRACTION`] nodes nearest to a node of the pair outside the zone (the
+/// but its 1/`band` (frictionless: 1/[`BAND_FRACTION`]) nodes nearest to a node of the pair outside the zone (the
 /// zone's edge, where the prediction is uncertain; distance in space, ties: the larger order
 /// key, then c_h's order), at least [`MIN_CANDIDATES`] of them. Local (on all-gathered data).
-fn hold(all: &Candidates, zone: &[bool]) -> Vec<bool> {
+fn hold(all: &Candidates, zone: &[bool], band: usize) -> Vec<bool> {
     let pairs = (0..all.n).map(|i| all.pair(i) + 1).max().unwrap_or(1);
     let mut held = vec![false; all.n];
     for pair in 0..pairs {
@@ -661,7 +725,7 @@ fn hold(all: &Candidates, zone: &[bool]) -> Vec<bool> {
         });
         let band = inside
             .len()
-            .div_ceil(BAND_FRACTION)
+            .div_ceil(band)
             .max(MIN_CANDIDATES)
             .min(inside.len());
         for &(_, i) in &inside[band..] {
@@ -928,7 +992,7 @@ impl Growth {
         &self,
         ctx: &Ctx,
         changed: &[u64],
-        max_flops: f64,
+        (max_flops, per): (f64, usize),
         splits: bool,
     ) -> Option<Vec<bool>> {
         if !splits {
@@ -939,7 +1003,7 @@ impl Growth {
             z[i as usize] = !z[i as usize];
         }
         let on = z.iter().filter(|&&a| a).count();
-        if self.held_count == 0 && !wide(on, max_flops) {
+        if self.held_count == 0 && !wide(on, per, max_flops) {
             return None;
         }
         say!(
@@ -1095,7 +1159,8 @@ fn fallback(ctx: &Ctx, mut summary: CondensedSummary, why: String) -> Condensed 
 
 /// K_p: A with every rigid mode that Dirichlet data and the held nodes (`held`: every
 /// contact node in c_h's global order, or empty) leave free pinned, the held nodes' normal
-/// rows written as the reduced system (3.29) writes an active node (u_n = −g) and no other
+/// rows written as the reduced system (3.29) writes an active node (u_n = −g) — with `stick`
+/// their tangential rows too, as (3.42) writes a sticking node (u_τ = u_ref) — and no other
 /// contact row, into the reduced system's matrix (factorised later, by MUMPS directly, with
 /// the Schur complement). `free0`: the modes Dirichlet data leave free. Returns the free
 /// modes (with K_p's pins) and this rank's rows of K_p's right-hand side. Collective.
@@ -1103,7 +1168,7 @@ fn prepare_base(
     ctx: &Ctx,
     (p, reduced): (&ContactProblem, &mut ReducedSystem),
     free0: &FreeModes,
-    held: &[bool],
+    (held, stick): (&[bool], bool),
 ) -> Result<(FreeModes, Vec<f64>), RunError> {
     let (mesh, layout, b, sys) = (p.mesh, p.layout, p.boundary, p.sys);
     let mut free = free0.clone();
@@ -1111,7 +1176,7 @@ fn prepare_base(
         true => vec![false; b.nodes.len()],
         false => held[b.offset..b.offset + b.nodes.len()].to_vec(),
     };
-    let set = ActiveSet::frictionless(mine);
+    let set = ActiveSet::held(mine, stick);
     if held.iter().any(|&h| h) {
         let gram = set.summarise(ctx, b, free.modes(), mesh.dim).gram;
         free.hold_also(&gram);
@@ -1248,7 +1313,7 @@ pub(super) struct Compliance {
     /// Schur variables per candidate: 1 (the normal dof) or d (every dof, in the node frame,
     /// normal first: C then holds the tangential compliance friction needs).
     pub(super) per: usize,
-    in_s: Vec<bool>,
+    pub(super) in_s: Vec<bool>,
     /// The candidates in the order of C's rows and columns (`per` rows each).
     pub(super) list: Vec<usize>,
     pub(super) cmat: DMatrix<f64>,
@@ -1258,7 +1323,7 @@ pub(super) struct Compliance {
     factor: Option<SchurFactor>,
     /// Rank 0: the nested-dissection order of K_p's node graph (empty: MUMPS' own), made by
     /// the first `grow`.
-    node_order: Option<Vec<usize>>,
+    pub(super) node_order: Option<Vec<usize>>,
     /// The ordering, MUMPS' analysis and factorisation in the last `grow` [s].
     factorisation_seconds: f64,
     /// The nested-dissection ordering (graph gathered, Scotch) [s].

@@ -58,8 +58,15 @@ use std::time::Instant;
 pub enum CoulombCondensed {
     /// The checked solution (the dense steps are its history).
     Solved(Box<NewtonResult>, CoulombCondensedSummary),
-    /// A start for the plain path: every contact node's record and this rank's rows of u.
-    Start(Box<NewtonResult>, Vec<f64>, CoulombCondensedSummary),
+    /// A start for the plain path: every contact node's record and this rank's rows of u; and
+    /// where only nodes beyond the candidates change state on the expanded u, those nodes
+    /// (c_h's global order; K_p's held nodes among them: a new pass may release them).
+    Start(
+        Box<NewtonResult>,
+        Vec<f64>,
+        CoulombCondensedSummary,
+        Vec<usize>,
+    ),
     /// Nothing to start from (the frictionless start then applies).
     Fallback(CoulombCondensedSummary),
 }
@@ -601,6 +608,7 @@ impl Dense<'_> {
                 normal,
                 tangential: None,
                 spring_floor: 0.0,
+                stick_active: false,
             };
             self.records(&set, &lam, &u, &mut start);
             u_prev = u;
@@ -1093,7 +1101,8 @@ fn give_up(ctx: &Ctx, mut summary: CoulombCondensedSummary, why: String) -> Coul
     CoulombCondensed::Fallback(summary)
 }
 
-/// The dense states on this rank's contact nodes (the others inactive, λ = 0). Local.
+/// The dense states on this rank's contact nodes, K_p's held nodes in contact and sticking (the
+/// others inactive, λ = 0). Local.
 fn local_set(kept: &Kept, b: &ContactBoundary, run: &DenseCoulomb) -> ActiveSet {
     let mut pos = vec![usize::MAX; kept.cand.n];
     for (q, &i) in kept.comp.list.iter().enumerate() {
@@ -1108,17 +1117,23 @@ fn local_set(kept: &Kept, b: &ContactBoundary, run: &DenseCoulomb) -> ActiveSet 
         let q = pos[b.offset + i];
         (q != usize::MAX && run.active[q]).then_some(q)
     };
+    // K_p's held nodes: in contact and sticking
+    let held = |i: usize| kept.held.get(b.offset + i).copied().unwrap_or(false);
     ActiveSet {
-        normal: (0..b.nodes.len()).map(|i| on(i).is_some()).collect(),
+        normal: (0..b.nodes.len())
+            .map(|i| on(i).is_some() || held(i))
+            .collect(),
         tangential: Some(
             (0..b.nodes.len())
                 .map(|i| match on(i) {
                     Some(q) if !run.slip[q] => CoulombRow::Stick,
+                    None if held(i) => CoulombRow::Stick,
                     _ => zero,
                 })
                 .collect(),
         ),
         spring_floor: 0.0,
+        stick_active: false,
     }
 }
 
@@ -1135,6 +1150,9 @@ struct Checked {
     certificate: Option<f64>,
     /// Force control: each force-controlled pair's approach δ_j.
     approach: Vec<f64>,
+    /// Where no candidate changes state: the nodes beyond the candidates that do (c_h's global
+    /// order, every rank's); else empty.
+    beyond: Vec<usize>,
 }
 
 /// u = w + R z α from this rank's rows `w`, (3.28) and the set update (3.23)/(F5) with the
@@ -1170,6 +1188,7 @@ fn check(
     let scale = threshold_scale(ctx, b, &it.nodes, ns.law, ns.c);
     let up = set.update(&it, b, ns.law, ns.c, scale, dim); // (3.23) / (F5)
     let totals = up.reduce(ctx, b, free.modes(), dim);
+    let beyond = changed_beyond(ctx, kept, b, (&set, &up.next));
     let loose = if z.ncols() > 0 {
         let gram = set.summarise(ctx, b, free.modes(), dim).gram;
         let mut fin = FreeModes::new(
@@ -1204,7 +1223,36 @@ fn check(
         loose,
         certificate,
         approach,
+        beyond,
     })
+}
+
+/// The nodes whose state changes from `set` to `next` where no candidate's does: every rank's,
+/// in c_h's global order (empty where a candidate changes). Collective.
+fn changed_beyond(
+    ctx: &Ctx,
+    kept: &Kept,
+    b: &ContactBoundary,
+    (set, next): (&ActiveSet, &ActiveSet),
+) -> Vec<usize> {
+    let mut mine = Vec::new();
+    let mut inside = 0usize;
+    for i in 0..b.nodes.len() {
+        if set.state(i) != next.state(i) {
+            let g = b.offset + i;
+            match kept.comp.in_s[g] {
+                true => inside += 1,
+                false => mine.push(g as f64),
+            }
+        }
+    }
+    if ctx.sum_usize(inside) > 0 {
+        return Vec::new();
+    }
+    ctx.all_gather_varcount(&mine)
+        .iter()
+        .map(|&g| g as usize)
+        .collect()
 }
 
 /// The force-controlled pairs' approaches δ_j of a dense run (the amplitudes after the free
@@ -1229,6 +1277,7 @@ fn finish(
         loose,
         certificate,
         approach,
+        beyond,
     } = checked;
     // a stalled dense iteration is accepted where its certificates hold to round-off (the
     // bound beyond which the final check warns), as the plain path accepts a stall
@@ -1279,10 +1328,15 @@ fn finish(
             totals.changed, totals.residual, totals.lambda_norm
         )
     };
-    say!(ctx, "coulomb: condensed: {why}; the plain path from there");
+    say!(ctx, "coulomb: condensed: {why}");
     summary.outcome = "start";
     summary.reason = Some(why);
-    Ok(CoulombCondensed::Start(Box::new(result), u_local, summary))
+    Ok(CoulombCondensed::Start(
+        Box::new(result),
+        u_local,
+        summary,
+        beyond,
+    ))
 }
 
 /// Values per node of a gathered warm record: u_n, u_τ (2), λ_n, λ_τ (2), active, slip.
@@ -1511,6 +1565,7 @@ mod tests {
                 normal: vec![true; n],
                 tangential: Some((0..n).map(row).collect()),
                 spring_floor: 0.0,
+                stick_active: false,
             };
             let sys = dense.system(&set).expect("rows");
             assert_eq!(sys.cols.len(), 4 + 2 * 5);

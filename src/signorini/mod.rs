@@ -980,68 +980,11 @@ fn coulomb_start(
         }
         return coulomb_load_step(ctx, problem, reduced, (ns, &fl), w);
     }
-    let dim = problem.mesh.dim;
-    // errors are agreed: every rank takes the same branch
-    // the Coulomb iteration on the candidates needs every dof of them, the plain path none
-    let per = if forced { 1 } else { dim };
-    let mut tried = condensed::solve_keeping(ctx, problem, reduced, &fl, None, (per, true));
-    if let Ok((condensed::Condensed::Fallback(s), _)) = &tried {
-        if s.factorisations == 0 && per > 1 {
-            // too many candidates' dofs for the dense tangential compliance: normal only
-            say!(
-                ctx,
-                "coulomb: the candidates' normal dofs alone in the Schur complement"
-            );
-            tried = condensed::solve_keeping(ctx, problem, reduced, &fl, None, (1, true));
-        }
-    }
-    // a frictionless solve on the normal dofs alone keeps its factorisation for a next load
-    // step, which no Coulomb step can use
-    drop(problem.kept.take());
-    let (mut nr, mut summary, kept) = match tried {
-        Ok((condensed::Condensed::Solved(nr, s), kept)) => (*nr, s, kept),
-        Ok((condensed::Condensed::Fallback(s), _))
-        | Ok((condensed::Condensed::Factorised(s), _)) => {
-            say!(ctx, "coulomb: no frictionless start; starting from {from}");
-            return Ok((Begin::Touching, Some(s)));
-        }
-        Err(RunError::Failed(why)) => {
-            say!(
-                ctx,
-                "coulomb: no frictionless start ({why}); starting from {from}"
-            );
-            return Ok((Begin::Touching, None));
-        }
-        Err(e) => return Err(e),
+    let (mut nr, summary) = match coulomb_passes(ctx, problem, reduced, (ns, &fl), (forced, from))?
+    {
+        Passes::Done(begin, summary) => return Ok((begin, summary)),
+        Passes::Frictionless(nr, summary) => (nr, summary),
     };
-    let active = ctx.sum_usize(nr.nodes.iter().filter(|r| r.active).count());
-    say!(
-        ctx,
-        "coulomb: the frictionless solution: {} steps, {active} active nodes",
-        nr.steps
-    );
-    if let Some(mut kept) = kept.filter(|_| !forced) {
-        let first = std::mem::take(&mut nr.history);
-        let joined = |mut r: NewtonResult| {
-            after(first.clone(), &mut r);
-            r
-        };
-        match coulomb_condensed::solve(ctx, problem, reduced, ns, &mut kept, None)? {
-            coulomb_condensed::CoulombCondensed::Solved(r, cs) => {
-                summary.coulomb = Some(cs);
-                problem.kept.put(kept);
-                return Ok((Begin::Solved(joined(*r)), Some(summary)));
-            }
-            coulomb_condensed::CoulombCondensed::Start(r, u, cs) => {
-                summary.coulomb = Some(cs);
-                return Ok((Begin::Start(joined(*r), u), Some(summary)));
-            }
-            coulomb_condensed::CoulombCondensed::Fallback(cs) => {
-                summary.coulomb = Some(cs);
-                nr.history = first;
-            }
-        }
-    }
     say!(
         ctx,
         "coulomb: start from the frictionless solution, every active node sticking"
@@ -1051,6 +994,145 @@ fn coulomb_start(
     let placed = force::placed(b, &force::starting_at(ns.force, &nr.approach));
     sticking(&mut nr.nodes, &placed);
     Ok((Begin::Start(nr, u), Some(summary)))
+}
+
+/// What the condensed passes of a Coulomb start end in.
+enum Passes {
+    /// The start's outcome: solved, a start for the plain path, or none (the touching nodes).
+    Done(Begin, Option<condensed::CondensedSummary>),
+    /// The frictionless solution (the condensed Coulomb iteration does not apply or gave up).
+    Frictionless(NewtonResult, condensed::CondensedSummary),
+}
+
+/// [`coulomb_start`] on the condensed path: the frictionless solution by the condensed path
+/// (`fl`; every dof of the candidates in the Schur complement, or, where the zone is too wide
+/// for that, its interior held sticking in K_p), then Coulomb's iteration on its candidates
+/// (coulomb_condensed). Where a held zone's check finds nodes beyond the candidates changing
+/// state, a new pass takes them as candidates (at most [`MAX_STICK_FACTORISATIONS`]
+/// factorisations in all, while fewer change each pass). `forced`: force control on a body
+/// that only its pairs hold (the frictionless solution alone); `from`: the start said where
+/// there is none. Collective.
+fn coulomb_passes(
+    ctx: &Ctx,
+    problem: &ContactProblem,
+    reduced: &mut ReducedSystem,
+    (ns, fl): (&NewtonSettings, &NewtonSettings),
+    (forced, from): (bool, &str),
+) -> Result<Passes, RunError> {
+    let dim = problem.mesh.dim;
+    // errors are agreed: every rank takes the same branch
+    // the Coulomb iteration on the candidates needs every dof of them, the plain path none
+    let per = if forced { 1 } else { dim };
+    let too_wide = |t: &Result<_, RunError>| {
+        let fell = |s: &condensed::CondensedSummary| s.factorisations == 0;
+        matches!(t, Ok((condensed::Condensed::Fallback(s), _)) if fell(s))
+    };
+    // where the zone is too wide for every dof of its nodes: the nodes a held zone releases
+    let (mut release, mut zone): (Vec<bool>, Vec<bool>) = (Vec::new(), Vec::new());
+    let mut earlier = 0; // factorisations of the passes before
+    let mut pass = 0;
+    let mut changed_before = usize::MAX;
+    loop {
+        // too many candidates' dofs for the dense tangential compliance: the predicted zone's
+        // interior held sticking, the dense steps on its edge and beyond (condensed.rs)
+        let held = (per > 1).then(|| condensed::Sticking {
+            zone: (!zone.is_empty()).then_some(zone.as_slice()),
+            release: &release,
+            pass,
+        });
+        let mut tried =
+            condensed::solve_keeping(ctx, problem, reduced, fl, None, (per, true, held));
+        if per > 1 && too_wide(&tried) {
+            // no zone to hold: the candidates' normal dofs alone
+            say!(
+                ctx,
+                "coulomb: the candidates' normal dofs alone in the Schur complement"
+            );
+            tried = condensed::solve_keeping(ctx, problem, reduced, fl, None, (1, true, None));
+        }
+        // a frictionless solve on the normal dofs alone keeps its factorisation for a next
+        // load step, which no Coulomb step can use
+        drop(problem.kept.take());
+        let (mut nr, mut summary, kept) = match tried {
+            Ok((condensed::Condensed::Solved(nr, s), kept)) => (*nr, s, kept),
+            Ok((condensed::Condensed::Fallback(s), _))
+            | Ok((condensed::Condensed::Factorised(s), _)) => {
+                say!(ctx, "coulomb: no frictionless start; starting from {from}");
+                return Ok(Passes::Done(Begin::Touching, Some(s)));
+            }
+            Err(RunError::Failed(why)) => {
+                say!(
+                    ctx,
+                    "coulomb: no frictionless start ({why}); starting from {from}"
+                );
+                return Ok(Passes::Done(Begin::Touching, None));
+            }
+            Err(e) => return Err(e),
+        };
+        summary.factorisations += earlier;
+        let active = ctx.sum_usize(nr.nodes.iter().filter(|r| r.active).count());
+        say!(
+            ctx,
+            "coulomb: the frictionless solution: {} steps, {active} active nodes",
+            nr.steps
+        );
+        let Some(mut kept) = kept.filter(|_| !forced) else {
+            return Ok(Passes::Frictionless(nr, summary));
+        };
+        let first = std::mem::take(&mut nr.history);
+        let joined = |mut r: NewtonResult| {
+            after(first.clone(), &mut r);
+            r
+        };
+        match coulomb_condensed::solve(ctx, problem, reduced, ns, &mut kept, None)? {
+            coulomb_condensed::CoulombCondensed::Solved(r, cs) => {
+                summary.coulomb = Some(cs);
+                // a factorisation with held nodes holds them at this step's references only
+                if !kept.held.iter().any(|&h| h) {
+                    problem.kept.put(kept);
+                }
+                return Ok(Passes::Done(Begin::Solved(joined(*r)), Some(summary)));
+            }
+            coulomb_condensed::CoulombCondensed::Start(r, u, cs, beyond) => {
+                let held_zone = kept.held.iter().any(|&h| h);
+                if held_zone && !beyond.is_empty() {
+                    let progress = beyond.len() < changed_before;
+                    if progress && summary.factorisations < MAX_STICK_FACTORISATIONS {
+                        // the held nodes that slip or leave the obstacle and the nodes beyond
+                        // that come into contact: a new pass takes them as candidates (and
+                        // leaves a wider band of the zone free)
+                        let held = beyond.iter().filter(|&&g| kept.held[g]).count();
+                        say!(
+                            ctx,
+                            "coulomb: condensed: {} node(s) beyond the candidates change state \
+                             on the expanded u, {held} of them held: a new pass with them as \
+                             candidates",
+                            beyond.len()
+                        );
+                        release.resize(kept.cand.n, false);
+                        for &g in &beyond {
+                            release[g] = true;
+                        }
+                        zone = std::mem::take(&mut kept.zone);
+                        earlier = summary.factorisations;
+                        changed_before = beyond.len();
+                        pass += 1;
+                        // the next pass factorises the same graph: its order is kept
+                        problem.kept.put_order(kept.comp.node_order.take());
+                        continue;
+                    }
+                }
+                say!(ctx, "coulomb: the plain path from the expanded iterate");
+                summary.coulomb = Some(cs);
+                return Ok(Passes::Done(Begin::Start(joined(*r), u), Some(summary)));
+            }
+            coulomb_condensed::CoulombCondensed::Fallback(cs) => {
+                summary.coulomb = Some(cs);
+                nr.history = first;
+                return Ok(Passes::Frictionless(nr, summary));
+            }
+        }
+    }
 }
 
 /// Every node of a frictionless solution starts sticking (Δu_τ = 0, λ_τ = 0 against the
@@ -1131,7 +1213,7 @@ fn coulomb_load_step(
 ) -> Result<(Begin, Option<condensed::CondensedSummary>), RunError> {
     let dim = problem.mesh.dim;
     // the previous step's factorisation where it holds (condensed::reused), else a new one
-    let tried = condensed::solve_keeping(ctx, problem, reduced, fl, Some(warm), (dim, false));
+    let tried = condensed::solve_keeping(ctx, problem, reduced, fl, Some(warm), (dim, false, None));
     let (mut summary, mut kept) = match tried {
         Ok((condensed::Condensed::Factorised(s), Some(kept))) => (s, kept),
         Ok((condensed::Condensed::Fallback(s), _))
@@ -1152,7 +1234,8 @@ fn coulomb_load_step(
             problem.kept.put(kept);
             Begin::Solved(*r)
         }
-        coulomb_condensed::CoulombCondensed::Start(r, u, cs) => {
+        coulomb_condensed::CoulombCondensed::Start(r, u, cs, _) => {
+            say!(ctx, "coulomb: the plain path from the expanded iterate");
             summary.coulomb = Some(cs);
             Begin::Start(*r, u)
         }
@@ -1288,6 +1371,13 @@ impl Unheld {
 
 /// The fixed point's stopping tolerance on the thresholds, relative to max_k b_k.
 pub const FIXED_POINT_TOL: f64 = 1e-9;
+
+/// Factorisations of K_p at most in a Coulomb start whose zone's interior is held sticking
+/// (each pass takes the nodes that changed state beyond the candidates as candidates, as long
+/// as fewer change than in the pass before); then the plain path from the last expanded
+/// iterate. About what the plain path costs from the frictionless solution: 9–14 LU steps on
+/// the wide zones of docs/numbers.md ("Wide zones with friction").
+const MAX_STICK_FACTORISATIONS: usize = 8;
 
 /// The same discrete frictionless problem through PETSc's SNES VI (a baseline for Algorithm 1):
 /// the rigid modes that the whole contact boundary cannot fix are pinned once; λ by (3.28).

@@ -739,6 +739,47 @@ mod tests {
         }
     }
 
+    /// A held node's rows (condensed.rs' held zones): on the obstacle, and with `stick` at its
+    /// reference u_τ as well; its constraint rows then hold the tangent too. Other nodes keep
+    /// A's rows.
+    #[test]
+    fn a_held_node_sticks_only_where_asked() {
+        let mut k = node(0.0, [0.3, 0.0]);
+        k.gap = 0.02;
+        let b = ContactBoundary {
+            nodes: vec![k.clone(), k],
+            n_global: 2,
+            offset: 0,
+            on_contact_boundary: vec![true, true],
+            excluded_dirichlet: 0,
+            obstacles: Vec::new(),
+        };
+        for stick in [false, true] {
+            let set = ActiveSet::held(vec![true, false], stick);
+            assert!(!set.friction(), "no friction rows");
+            let p = set.prescribed(&b, 0, 2).expect("held");
+            let dirs: Vec<_> = p.dirs.iter().map(|(c, v)| (c[0], c[1], *v)).collect();
+            let mut want = vec![(0.0, 1.0, -0.02)];
+            if stick {
+                want.push((k_tangent(&b), 0.0, 0.3));
+            }
+            assert_eq!(dirs, want, "stick {stick}");
+            assert!(p.slip.is_none());
+            assert!(set.prescribed(&b, 1, 2).is_none(), "not held: A's rows");
+            let mut rows = 0;
+            set.held_rows(&b, 2, |i, _| {
+                assert_eq!(i, 0);
+                rows += 1;
+            });
+            assert_eq!(rows, 1 + stick as usize);
+        }
+    }
+
+    /// The first tangent's x component of the test nodes' frame (normal +y).
+    fn k_tangent(b: &ContactBoundary) -> f64 {
+        b.nodes[0].frame.t[0][0]
+    }
+
     #[test]
     fn friction_acts_on_the_increment() {
         let k = node(0.1, [0.3, 0.0]);

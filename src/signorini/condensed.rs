@@ -95,8 +95,9 @@ const LOCATED_MARGIN: usize = 8;
 const MAX_ROUNDS: usize = 8;
 
 /// A predicted contact zone is wide where the dense compliance of its nodes and their margin
-/// beyond (1/LOCATED_MARGIN more) would cost more than `max_flops`: before anything is
-/// factorised the dense work always allowed (DENSE_FLOOR_FLOPS, from about 890 nodes), after a
+/// beyond (1/LOCATED_MARGIN more), `per` dofs each, would cost more than `max_flops`: before
+/// anything is factorised the dense work always allowed (DENSE_FLOOR_FLOPS, from about 890
+/// nodes with one dof each), after a
 /// factorisation the dense work that pays against it ([`Compliance::grow`]). Its interior is
 /// then held on the obstacle in the factorised matrix (u_n = −g there, as the plain path's
 /// reduced system (3.29) writes an active node), and only its edge band and the nodes beyond
@@ -365,6 +366,8 @@ pub(super) struct Sticking<'a> {
     pub release: &'a [bool],
     /// The pass (from 0): a band of 2ᵏ/[`BAND_FRACTION`] of the zone's held part is left free.
     pub pass: u32,
+    /// At most this many factorisations in this call (0: no bound); beyond, the plain path.
+    pub factorisations: usize,
 }
 
 /// [`solve`] with `per` Schur variables per candidate (1: the normal dof; d: every dof, for
@@ -550,6 +553,14 @@ pub(super) fn solve_keeping(
             if let Some(next) =
                 growth.next_pass(ctx, &ex.changed, (comp.max_flops, comp.per), splits)
             {
+                let budget = sticking.factorisations;
+                if per > 1 && budget > 0 && summary.factorisations >= budget {
+                    let why = format!(
+                        "the held zone's set still changes after {} factorisations",
+                        summary.factorisations
+                    );
+                    return fall(fallback(ctx, summary, why));
+                }
                 zone = Some(next);
                 order_kept = comp.node_order.take();
                 continue 'pass;
@@ -695,9 +706,10 @@ fn first_zone(all: &Candidates, located: Option<usize>, per: usize) -> Option<Ve
 
 /// The nodes of a predicted contact zone (`zone`, every contact node in c_h's global order)
 /// held on their obstacle in the factorised matrix: per contact pair, all of the pair's zone
-/// but its 1/`band` (frictionless: 1/[`BAND_FRACTION`]) nodes nearest to a node of the pair outside the zone (the
-/// zone's edge, where the prediction is uncertain; distance in space, ties: the larger order
-/// key, then c_h's order), at least [`MIN_CANDIDATES`] of them. Local (on all-gathered data).
+/// but its 1/`band` (frictionless: 1/[`BAND_FRACTION`]) nodes nearest to a node of the pair
+/// outside the zone (the zone's edge, where the prediction is uncertain; distance in space,
+/// ties: the larger order key, then c_h's order), at least [`MIN_CANDIDATES`] of them. Local
+/// (on all-gathered data).
 fn hold(all: &Candidates, zone: &[bool], band: usize) -> Vec<bool> {
     let pairs = (0..all.n).map(|i| all.pair(i) + 1).max().unwrap_or(1);
     let mut held = vec![false; all.n];

@@ -1032,6 +1032,8 @@ fn coulomb_passes(
     let mut earlier = 0; // factorisations of the passes before
     let mut pass = 0;
     let mut changed_before = usize::MAX;
+    // the expanded iterate of the last pass: the plain path's start where the next one fails
+    let mut last: Option<(NewtonResult, Vec<f64>, condensed::CoulombCondensedSummary)> = None;
     loop {
         // too many candidates' dofs for the dense tangential compliance: the predicted zone's
         // interior held sticking, the dense steps on its edge and beyond (condensed.rs)
@@ -1039,9 +1041,33 @@ fn coulomb_passes(
             zone: (!zone.is_empty()).then_some(zone.as_slice()),
             release: &release,
             pass,
+            factorisations: match pass {
+                0 => FIRST_STICK_FACTORISATIONS,
+                _ => MAX_STICK_FACTORISATIONS.saturating_sub(earlier).max(1),
+            },
         });
         let mut tried =
             condensed::solve_keeping(ctx, problem, reduced, fl, None, (per, true, held));
+        if let Some((r, u, cs)) = last.take() {
+            // a later pass: its own frictionless solution, or the plain path from the pass
+            // before
+            let fell = match &tried {
+                Ok((condensed::Condensed::Fallback(s), _))
+                | Ok((condensed::Condensed::Factorised(s), _)) => Some(s.clone()),
+                Err(RunError::Failed(_)) => Some(condensed::CondensedSummary::new(0)),
+                _ => None, // solved, or an error every rank returns (below)
+            };
+            if let Some(mut summary) = fell {
+                drop(problem.kept.take());
+                summary.factorisations += earlier;
+                summary.coulomb = Some(cs);
+                say!(
+                    ctx,
+                    "coulomb: the plain path from the last pass' expanded iterate"
+                );
+                return Ok(Passes::Done(Begin::Start(r, u), Some(summary)));
+            }
+        }
         if per > 1 && too_wide(&tried) {
             // no zone to hold: the candidates' normal dofs alone
             say!(
@@ -1117,6 +1143,7 @@ fn coulomb_passes(
                         earlier = summary.factorisations;
                         changed_before = beyond.len();
                         pass += 1;
+                        last = Some((joined(*r), u, cs));
                         // the next pass factorises the same graph: its order is kept
                         problem.kept.put_order(kept.comp.node_order.take());
                         continue;
@@ -1375,9 +1402,14 @@ pub const FIXED_POINT_TOL: f64 = 1e-9;
 /// Factorisations of K_p at most in a Coulomb start whose zone's interior is held sticking
 /// (each pass takes the nodes that changed state beyond the candidates as candidates, as long
 /// as fewer change than in the pass before); then the plain path from the last expanded
-/// iterate. About what the plain path costs from the frictionless solution: 9–14 LU steps on
-/// the wide zones of docs/numbers.md ("Wide zones with friction").
+/// iterate. Below what the plain path costs: 9–19 LU steps on the wide zones of
+/// docs/numbers.md ("Wide zones with friction").
 const MAX_STICK_FACTORISATIONS: usize = 8;
+
+/// Factorisations at most in a held zone's first pass (the attempt with every candidate
+/// condensed, then the held zone and one pass where its frictionless set moves): a zone whose
+/// frictionless set keeps moving under the held interior goes to the plain path instead.
+const FIRST_STICK_FACTORISATIONS: usize = 3;
 
 /// The same discrete frictionless problem through PETSc's SNES VI (a baseline for Algorithm 1):
 /// the rigid modes that the whole contact boundary cannot fix are pinned once; λ by (3.28).

@@ -761,7 +761,8 @@ mod tests {
             let dirs: Vec<_> = p.dirs.iter().map(|(c, v)| (c[0], c[1], *v)).collect();
             let mut want = vec![(0.0, 1.0, -0.02)];
             if stick {
-                want.push((k_tangent(&b), 0.0, 0.3));
+                // the first tangent, (±1, 0), at u_ref's first component
+                want.push((b.nodes[0].frame.t[0][0], 0.0, 0.3));
             }
             assert_eq!(dirs, want, "stick {stick}");
             assert!(p.slip.is_none());
@@ -773,11 +774,6 @@ mod tests {
             });
             assert_eq!(rows, 1 + stick as usize);
         }
-    }
-
-    /// The first tangent's x component of the test nodes' frame (normal +y).
-    fn k_tangent(b: &ContactBoundary) -> f64 {
-        b.nodes[0].frame.t[0][0]
     }
 
     #[test]

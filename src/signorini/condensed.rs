@@ -467,8 +467,13 @@ pub(super) fn solve_keeping(
                 (dim, n_rows, f_root),
             );
             if let Err(stop) = grown {
+                // friction: the predicted zone, else the set the candidates grew to
                 let to_hold = stop.too_wide && per > 1 && splits && zone.is_none();
-                if let Some(z) = predicted().filter(|_| to_hold) {
+                let grown_to = || {
+                    let on = growth.active.iter().filter(|&&a| a).count();
+                    wide(on, per, DENSE_FLOOR_FLOPS).then(|| growth.active.clone())
+                };
+                if let Some(z) = to_hold.then(|| predicted().or_else(grown_to)).flatten() {
                     say!(
                         ctx,
                         "newton: condensed: {}; the predicted zone's interior held sticking \
@@ -1007,7 +1012,9 @@ impl Growth {
         (max_flops, per): (f64, usize),
         splits: bool,
     ) -> Option<Vec<bool>> {
-        if !splits {
+        // friction holds a zone only once every dof of the candidates is too many (the
+        // candidates grow first, as without a zone: `widen`)
+        if !splits || (per > 1 && self.held_count == 0) {
             return None;
         }
         let mut z = self.active.clone();

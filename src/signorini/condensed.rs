@@ -397,29 +397,15 @@ pub(super) fn solve_keeping(
     let key = located.as_ref().map(|(k, _)| k.as_slice());
     let n_rows = p.layout.node_offsets.last().copied().unwrap_or(0) * dim;
     let nested = warm.is_none() && s.section.init == NewtonInit::Auto;
-    // a wide zone's interior held on the obstacle in the factorised matrix (frictionless, or
-    // sticking as well where asked; a load step only where the step before kept no
-    // factorisation: it held a zone too)
-    let splits = steps
-        && (warm.is_none() || p.kept.is_empty())
-        && s.force.is_empty()
-        && if per == 1 {
-            !s.estimate && s.carried.is_none()
-        } else {
-            stick.is_some()
-        };
+    let splits = splits_zones(p, s, warm, (per, steps, stick.is_some()));
     let sticking = stick.unwrap_or_default();
     // every contact node as the case starts (the zones' positions and order keys), gathered
     // once
     let all0 = splits.then(|| Candidates::gather(ctx, b, &free0, &start, key));
-    let predicted = || {
-        all0.as_ref()
-            .and_then(|all| first_zone(all, located.as_ref().map(|(_, on)| *on), per))
-    };
     // friction: a zone is held only where every dof of its nodes is too many for the dense
     // limits (below)
     let mut zone = match per {
-        1 => predicted(),
+        1 => predicted_zone(all0.as_ref(), &located, per),
         _ => sticking.zone.filter(|_| splits).map(<[bool]>::to_vec),
     };
     // a zone held sticking holds every rigid mode: no load is left for the contact to carry
@@ -467,19 +453,10 @@ pub(super) fn solve_keeping(
                 (dim, n_rows, f_root),
             );
             if let Err(stop) = grown {
-                // friction: the predicted zone, else the set the candidates grew to
                 let to_hold = stop.too_wide && per > 1 && splits && zone.is_none();
-                let grown_to = || {
-                    let on = growth.active.iter().filter(|&&a| a).count();
-                    wide(on, per, DENSE_FLOOR_FLOPS).then(|| growth.active.clone())
-                };
-                if let Some(z) = to_hold.then(|| predicted().or_else(grown_to)).flatten() {
-                    say!(
-                        ctx,
-                        "newton: condensed: {}; the predicted zone's interior held sticking \
-                         instead",
-                        stop.why
-                    );
+                let all = all0.as_ref();
+                let instead = || hold_instead(ctx, &stop, (all, &located, per), &growth.active);
+                if let Some(z) = to_hold.then(instead).flatten() {
                     zone = Some(z);
                     continue 'pass;
                 }
@@ -487,33 +464,17 @@ pub(super) fn solve_keeping(
             }
             if !steps {
                 summary.outcome = "factorised";
-                let lambda = vec![0.0; pass.cand.n];
-                return Ok((
-                    Condensed::Factorised(summary),
-                    Some(pass.keep(lambda, zone)),
-                ));
+                let n = pass.cand.n;
+                let kept = pass.keep(vec![0.0; n], zone);
+                return Ok((Condensed::Factorised(summary), Some(kept)));
             }
 
-            let t = Instant::now();
             let first = nested && rounds == 1;
+            let on = located.as_ref().map(|(_, on)| *on);
+            let on = on.filter(|_| zone.is_none());
+            let run = pass.dense(ctx, s, (first, on), (&mut summary, &mut history));
             let (cand, comp, free, growth) =
                 (&pass.cand, &mut pass.comp, &pass.free, &mut pass.growth);
-            let (run, x_s) = dense_round(
-                ctx,
-                cand,
-                comp,
-                free,
-                s,
-                (&growth.active, first),
-                located
-                    .as_ref()
-                    .filter(|_| zone.is_none())
-                    .map(|(_, on)| *on),
-            );
-            comp.x_s = x_s;
-            summary.dense_seconds += t.elapsed().as_secs_f64();
-            summary.record_coarse(ctx, &run);
-            record_steps(ctx, &mut history, &run, comp.list.len(), free.pins().len());
             let lambda = growth.take_dense(comp, &run);
             match judge(ctx, p, s, (free, comp, cand.n), growth, &run)? {
                 Judged::Expand => {}
@@ -541,29 +502,15 @@ pub(super) fn solve_keeping(
                 let n_active = growth.active.iter().filter(|&&a| a).count();
                 summary.log(ctx, cand.n, n_active);
                 let solved = finish(p, reduced, free, ex, history, summary)?;
-                let held = pass.growth.held_count > 0;
-                let kept = pass.keep(lambda, zone);
-                return Ok(match (per > 1, held) {
-                    (true, _) => (solved, Some(kept)),
-                    (false, false) => {
-                        p.kept.put(kept); // for the next load step
-                        (solved, None)
-                    }
-                    (false, true) => {
-                        p.kept.put_order(kept.comp.node_order); // for the next load step
-                        (solved, None)
-                    }
-                });
+                return Ok(keep_solved(p, solved, pass.keep(lambda, zone), per));
             }
             if let Some(next) =
                 growth.next_pass(ctx, &ex.changed, (comp.max_flops, comp.per), splits)
             {
-                let budget = sticking.factorisations;
-                if per > 1 && budget > 0 && summary.factorisations >= budget {
-                    let why = format!(
-                        "the held zone's set still changes after {} factorisations",
-                        summary.factorisations
-                    );
+                let budget = (per > 1).then_some(sticking.factorisations);
+                if budget.is_some_and(|b| b > 0 && summary.factorisations >= b) {
+                    let n = summary.factorisations;
+                    let why = format!("the held zone's set still changes after {n} factorisations");
                     return fall(fallback(ctx, summary, why));
                 }
                 zone = Some(next);
@@ -578,6 +525,76 @@ pub(super) fn solve_keeping(
     }
     let why = format!("no final set in {MAX_ROUNDS} rounds of candidates");
     fall(fallback(ctx, summary, why))
+}
+
+/// Whether a wide zone's interior may be held on the obstacle in the factorised matrix:
+/// frictionless, or for friction (`per` > 1) sticking as well where `stick` asks; a load step
+/// only where the step before kept no factorisation (it held a zone too); not under force
+/// control. Local.
+fn splits_zones(
+    p: &ContactProblem,
+    s: &NewtonSettings,
+    warm: Option<&WarmStart>,
+    (per, steps, stick): (usize, bool, bool),
+) -> bool {
+    steps
+        && (warm.is_none() || p.kept.is_empty())
+        && s.force.is_empty()
+        && if per == 1 {
+            !s.estimate && s.carried.is_none()
+        } else {
+            stick
+        }
+}
+
+/// The predicted zone of [`first_zone`] on every contact node as the case starts (`all0`,
+/// where zones may be held), with the located zone's node count. Local.
+fn predicted_zone(all0: Option<&Candidates>, located: &Located, per: usize) -> Option<Vec<bool>> {
+    all0.and_then(|all| first_zone(all, located.as_ref().map(|(_, on)| *on), per))
+}
+
+/// Friction, where every dof of the candidates is too many (`stop`): the zone to hold sticking
+/// instead, the predicted one ([`predicted_zone`]) or else the set the candidates grew to
+/// (`grown`), where it is [`wide`]. Local (on all-gathered data; said in the log).
+fn hold_instead(
+    ctx: &Ctx,
+    stop: &Stop,
+    (all0, located, per): (Option<&Candidates>, &Located, usize),
+    grown: &[bool],
+) -> Option<Vec<bool>> {
+    let zone = predicted_zone(all0, located, per).or_else(|| {
+        let on = grown.iter().filter(|&&a| a).count();
+        wide(on, per, DENSE_FLOOR_FLOPS).then(|| grown.to_vec())
+    })?;
+    say!(
+        ctx,
+        "newton: condensed: {}; the predicted zone's interior held sticking instead",
+        stop.why
+    );
+    Some(zone)
+}
+
+/// A converged solve's result and what it keeps: with `per` > 1 the kept compliance for the
+/// friction solve; else, for the next load step, the factorisation (`p.kept`) or, where a
+/// zone was held, its node order. Local.
+fn keep_solved(
+    p: &ContactProblem,
+    solved: Condensed,
+    kept: Kept,
+    per: usize,
+) -> (Condensed, Option<Kept>) {
+    let held = kept.held.iter().any(|&h| h);
+    match (per > 1, held) {
+        (true, _) => (solved, Some(kept)),
+        (false, false) => {
+            p.kept.put(kept); // for the next load step
+            (solved, None)
+        }
+        (false, true) => {
+            p.kept.put_order(kept.comp.node_order); // for the next load step
+            (solved, None)
+        }
+    }
 }
 
 /// One pass of the condensed path: K_p's free modes and right-hand side (this rank's rows and
@@ -595,6 +612,26 @@ struct Pass {
 }
 
 impl Pass {
+    /// A round's dense steps ([`dense_round`]; `first`: nested, `located`: the located zone's
+    /// node count), recorded in `summary` and the step `history`. Collective.
+    fn dense(
+        &mut self,
+        ctx: &Ctx,
+        s: &NewtonSettings,
+        (first, located): (bool, Option<usize>),
+        (summary, history): (&mut CondensedSummary, &mut Vec<StepInfo>),
+    ) -> DenseRun {
+        let t = Instant::now();
+        let (cand, comp, free) = (&self.cand, &mut self.comp, &self.free);
+        let active = &self.growth.active;
+        let (run, x_s) = dense_round(ctx, cand, comp, free, s, (active, first), located);
+        comp.x_s = x_s;
+        summary.dense_seconds += t.elapsed().as_secs_f64();
+        summary.record_coarse(ctx, &run);
+        record_steps(ctx, history, &run, comp.list.len(), free.pins().len());
+        run
+    }
+
     /// What the pass keeps for a friction solve or the next load step, with the candidates'
     /// multipliers `lambda`.
     fn keep(self, lambda: Vec<f64>, zone: Option<Vec<bool>>) -> Kept {

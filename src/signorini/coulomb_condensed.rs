@@ -59,8 +59,8 @@ pub enum CoulombCondensed {
     /// The checked solution (the dense steps are its history).
     Solved(Box<NewtonResult>, CoulombCondensedSummary),
     /// A start for the plain path: every contact node's record and this rank's rows of u; and
-    /// where only nodes beyond the candidates change state on the expanded u, those nodes
-    /// (c_h's global order; K_p's held nodes among them: a new pass may release them).
+    /// on a held zone's pass where only nodes beyond the candidates change state on the
+    /// expanded u, those nodes (c_h's global order; a new pass may take them as candidates).
     Start(
         Box<NewtonResult>,
         Vec<f64>,
@@ -1150,8 +1150,8 @@ struct Checked {
     certificate: Option<f64>,
     /// Force control: each force-controlled pair's approach δ_j.
     approach: Vec<f64>,
-    /// Where no candidate changes state: the nodes beyond the candidates that do (c_h's global
-    /// order, every rank's); else empty.
+    /// On a held zone's pass where no candidate changes state: the nodes beyond the candidates
+    /// that do (c_h's global order, every rank's); else empty.
     beyond: Vec<usize>,
 }
 
@@ -1188,7 +1188,12 @@ fn check(
     let scale = threshold_scale(ctx, b, &it.nodes, ns.law, ns.c);
     let up = set.update(&it, b, ns.law, ns.c, scale, dim); // (3.23) / (F5)
     let totals = up.reduce(ctx, b, free.modes(), dim);
-    let beyond = changed_beyond(ctx, kept, b, (&set, &up.next));
+    // only a held zone's pass uses the nodes beyond (a new pass); the same on every rank
+    let held_zone = kept.held.iter().any(|&h| h);
+    let beyond = match totals.changed > 0 && held_zone {
+        true => changed_beyond(ctx, kept, b, (&set, &up.next)),
+        false => Vec::new(),
+    };
     let loose = if z.ncols() > 0 {
         let gram = set.summarise(ctx, b, free.modes(), dim).gram;
         let mut fin = FreeModes::new(

@@ -322,9 +322,9 @@ fn a_floating_strip_whose_zone_the_half_space_model_misses_is_solved_in_passes()
 #[test]
 fn load_steps_on_a_wide_zone_hold_its_interior_in_every_step() {
     // The floating strip on the cylinder pressed in three load steps: the first step holds its
-    // wide zone's interior and keeps no factorisation, so each later step holds the interior
-    // of the step before's set (its warm start) — and ends where the plain path ends, step by
-    // step, on 1 and 2 ranks.
+    // wide zone's interior, and each later step holds the interior of the step before's set
+    // (its warm start; the kept factorisation only where it held the same nodes) — and ends
+    // where the plain path ends, step by step, on 1 and 2 ranks.
     let tmp = tempfile::tempdir().unwrap();
     let (case, [mesh, load]) = floating_strip_case(tmp.path(), 0.01);
     let sets = ["solver.preset=\"direct\"", "load.steps=3", &mesh, &load];
@@ -375,6 +375,50 @@ fn a_wide_zone_in_3d_holds_its_interior() {
         let held = cs["held_nodes"].as_f64().unwrap();
         let active = r.f(&["contact", "active_count"]);
         assert!(held > 0.5 * active && active < 1434.0, "{cs}");
+    }
+}
+
+#[test]
+fn load_steps_that_hold_the_same_nodes_reuse_the_held_zones_factorisation() {
+    // The block of the test above, its top touched by a level plane that moves 0.003 into it
+    // in three load steps: the whole top stays in contact, every step holds the same interior
+    // nodes, and K_p with them is the same matrix in every step (the held rows' values are in
+    // f). The steps after the first solve on its factorisation (only d₀ is new) and end where
+    // the plain path ends, step by step, on 1 and 2 ranks.
+    let tmp = tempfile::tempdir().unwrap();
+    let mesh = tmp.path().join("block.msh");
+    gmsh_file(
+        &repo("cases/blocks/block3d.geo"),
+        3,
+        &["-setnumber", "h", "0.06"],
+        &mesh,
+    );
+    let case = write_case(
+        &tmp.path().join("block.toml"),
+        &format!(
+            "[mesh]\nfile = {}\n[material]\nyoung = 2.0\npoisson = 0.3\nmodel = \"3d\"\n\
+             [[dirichlet]]\ngroup = \"bottom\"\nvalue = [0.0, 0.0, 0.0]\n[contact]\n\
+             group = \"top\"\nobstacle = {{ type = \"plane\", point = [0.0, 0.0, 0.5], \
+             normal = [0.0, 0.0, -1.0] }}\nmotion = [0.0, 0.0, -0.003]\nfriction = \"none\"\n\
+             rigid_modes = \"none\"\n[load]\nsteps = 3\n[solver]\npreset = \"direct\"\n\
+             [output]\nfields = [\"displacement\"]\n",
+            toml_path(&mesh)
+        ),
+    );
+    let plain = solve(2, &case, &["solver.reuse=\"never\""]);
+    plain.assert_converged("plain path");
+    for np in [1, 2] {
+        let c = solve(np, &case, &[]);
+        c.assert_converged("condensed");
+        let held = c.run.stdout.matches("held on the obstacle in K_p").count();
+        assert!(held >= 3, "{np} rank(s): {}", c.run.output());
+        assert_eq!(
+            c.kept_factorisations(),
+            2,
+            "{np} rank(s): {}",
+            c.run.output()
+        );
+        same_steps(&c, &plain, 3, 1e-10, np);
     }
 }
 

@@ -797,6 +797,57 @@ fn a_zone_too_wide_for_every_dof_is_held_sticking_inside() {
 }
 
 #[test]
+fn load_steps_on_a_zone_too_wide_for_every_dof_hold_it_sticking_and_keep_its_factorisation() {
+    // The block of the test above with the plane from touching its top pressed 0.01 into it
+    // and dragged by (0.003, 0.001) in three load steps. Every step's zone is too wide for every
+    // dof of its nodes: the first step holds its interior sticking (passes, as above); a load
+    // step after it holds the warm set's interior but the nodes that slipped in the step
+    // before, and where it holds the same nodes as the step before (the last step: the
+    // history is proportional from the second step on) it solves on the kept factorisation
+    // (the held rows' values are in f). Every step must end where the plain path from the
+    // touching nodes ends, in fewer factorisations, on 1, 2 and 3 ranks.
+    let tmp = tempfile::tempdir().expect("tmp");
+    let mesh = repo("tests/meshes/block3d_h0.1.msh");
+    let case = write_case(
+        &tmp.path().join("drag.toml"),
+        &format!(
+            "[mesh]\nfile = {}\n[material]\nyoung = 2.0\npoisson = 0.3\n\
+             [[dirichlet]]\ngroup = \"bottom\"\nvalue = [0.0, 0.0, 0.0]\n[contact]\n\
+             group = \"top\"\nobstacle = {{ type = \"plane\", point = [0.0, 0.0, 0.5], \
+             normal = [0.0, 0.0, -1.0] }}\nmotion = [0.003, 0.001, -0.01]\n\
+             friction = {{ law = \"coulomb\", mu = 0.3 }}\n[load]\nsteps = 3\n\
+             [output]\nfields = [\"displacement\", \"contact\"]\n",
+            toml_path(&mesh)
+        ),
+    );
+    let gap = converged(2, &case, &["newton.init=\"gap\""]);
+    let (_, slipping) = active_and_slipping(&gap);
+    assert!(slipping.len() > 50, "{} nodes slip", slipping.len());
+    for np in [1, 2, 3] {
+        let auto = converged(np, &case, &[]);
+        let out = auto.run.output();
+        let held = out
+            .matches("held on the obstacle, sticking, in K_p")
+            .count();
+        assert!(held >= 3, "{np} rank(s): {held} held passes\n{out}");
+        assert!(auto.kept_factorisations() >= 1, "{np} rank(s): {out}");
+        for plain in ["the plain path from", "solving on the plain path"] {
+            assert!(!out.contains(plain), "{np} rank(s): {out}");
+        }
+        same_steps(&auto, &gap, 3, 1e-9, np);
+        assert_eq!(active_and_slipping(&auto).1, slipping, "{np} rank(s)");
+        let (fa, fg) = (
+            auto.f(&["newton", "factorisations"]),
+            gap.f(&["newton", "factorisations"]),
+        );
+        assert!(
+            fa < fg,
+            "{np} rank(s): {fa} factorisations, the plain path {fg}"
+        );
+    }
+}
+
+#[test]
 fn a_stalled_dense_iterate_is_accepted_where_its_certificates_hold() {
     // A complementarity parameter c far above E / h_c (newton.c = 1e7 here against 327) raises
     // what round-off leaves of the residual (F3), which weighs u by c, far above 1e-8 ‖λ‖₂ (as

@@ -528,22 +528,22 @@ pub(super) fn solve_keeping(
 }
 
 /// Whether a wide zone's interior may be held on the obstacle in the factorised matrix:
-/// frictionless, or for friction (`per` > 1) sticking as well where `stick` asks; a load step
-/// only where the step before kept no factorisation (it held a zone too); not under force
-/// control. Local.
+/// frictionless (with the frictionless steps), or for friction (`per` > 1) sticking as well
+/// where `stick` asks (a load step without the frictionless steps: its dense iteration starts
+/// from the warm states); a load step only where the step before kept no factorisation or
+/// one with a held zone; not under force control. Local.
 fn splits_zones(
     p: &ContactProblem,
     s: &NewtonSettings,
     warm: Option<&WarmStart>,
     (per, steps, stick): (usize, bool, bool),
 ) -> bool {
-    steps
-        && (warm.is_none() || p.kept.is_empty())
+    (warm.is_none() || p.kept.is_empty() || p.kept.holds_zone())
         && s.force.is_empty()
         && if per == 1 {
-            !s.estimate && s.carried.is_none()
+            steps && !s.estimate && s.carried.is_none()
         } else {
-            stick
+            stick && (steps || warm.is_some())
         }
 }
 
@@ -575,23 +575,18 @@ fn hold_instead(
 }
 
 /// A converged solve's result and what it keeps: with `per` > 1 the kept compliance for the
-/// friction solve; else, for the next load step, the factorisation (`p.kept`) or, where a
-/// zone was held, its node order. Local.
+/// friction solve; else the factorisation for the next load step (`p.kept`). Local.
 fn keep_solved(
     p: &ContactProblem,
     solved: Condensed,
     kept: Kept,
     per: usize,
 ) -> (Condensed, Option<Kept>) {
-    let held = kept.held.iter().any(|&h| h);
-    match (per > 1, held) {
-        (true, _) => (solved, Some(kept)),
-        (false, false) => {
-            p.kept.put(kept); // for the next load step
-            (solved, None)
-        }
-        (false, true) => {
-            p.kept.put_order(kept.comp.node_order); // for the next load step
+    match per > 1 {
+        true => (solved, Some(kept)),
+        false => {
+            // for the next load step (a held zone's too: its rows' values are in f)
+            p.kept.put(kept);
             (solved, None)
         }
     }
@@ -700,9 +695,9 @@ fn begin_pass(
         );
     }
     let t = Instant::now();
-    let kept = match warm {
-        Some(_) if held.is_empty() => reused(ctx, p, (&free, &cand), &f_root, per),
-        _ => None,
+    let (kept, order_dropped) = match warm {
+        Some(_) => reused(ctx, p, (&free, &cand), &f_root, (per, &held)),
+        None => (None, None),
     };
     let mut comp = match kept {
         Some(comp) => {
@@ -712,7 +707,7 @@ fn begin_pass(
         None => Compliance::new(cand.n, per),
     };
     if comp.node_order.is_none() {
-        comp.node_order = order;
+        comp.node_order = order.or(order_dropped);
     }
     Ok(Pass {
         free,
@@ -915,27 +910,37 @@ fn refuse_floating_force(
 }
 
 /// A load step's compliance on the previous step's factorisation ([`Kept`], `p.kept`): K_p
-/// is the same matrix in every load step, so where the pins, `per` and the kept candidates'
-/// rows and frames are this step's, only d₀ is new (MUMPS' condensation of this step's f,
-/// `f_root` on rank 0). `None`: nothing kept, or it does not hold (it is dropped). Collective
-/// (the decision is taken on all-gathered data: the same on every rank).
+/// is the same matrix in every load step where it holds the same nodes (`held`; their rows'
+/// values, this step's references and gaps, are in f), so where the pins, `per`, the held
+/// nodes and the kept candidates' rows and frames are this step's, only d₀ is new (MUMPS'
+/// condensation of this step's f, `f_root` on rank 0). `None`: nothing kept, or it does not
+/// hold (it is dropped; its node order is returned). Collective (the decision is taken on
+/// all-gathered data: the same on every rank).
 fn reused(
     ctx: &Ctx,
     p: &ContactProblem,
     (free, cand): (&FreeModes, &Candidates),
     f_root: &[f64],
-    per: usize,
-) -> Option<Compliance> {
-    let kept = p.kept.take()?;
-    if kept.comp.primal || !kept.holds(free, cand, per) {
-        return None;
+    (per, held): (usize, &[bool]),
+) -> (Option<Compliance>, Option<Vec<usize>>) {
+    let Some(kept) = p.kept.take() else {
+        return (None, None);
+    };
+    let holding = |h: &[bool]| h.iter().any(|&x| x);
+    let same_held = match (holding(&kept.held), holding(held)) {
+        (false, false) => true,
+        (true, true) => kept.held == held,
+        _ => false,
+    };
+    if kept.comp.primal || !same_held || !kept.holds(free, cand, per) {
+        return (None, kept.comp.node_order);
     }
     let mut comp = kept.comp;
     match comp.recondense(ctx, f_root) {
-        Ok(()) => Some(comp),
+        Ok(()) => (Some(comp), None),
         Err(why) => {
             say!(ctx, "newton: condensed: {why}; a new factorisation");
-            None
+            (None, comp.node_order.take())
         }
     }
 }

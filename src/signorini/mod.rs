@@ -162,7 +162,8 @@ pub struct ContactSolution {
 pub struct KeptFactor {
     kept: std::cell::RefCell<Option<condensed::Kept>>,
     /// Rank 0: the nested-dissection order of K_p's node graph (the same graph in every load
-    /// step), where the step kept no factorisation with it (it held a wide zone).
+    /// step), where the step kept no factorisation with it (a frictionless step that held a
+    /// wide zone, or a held zone's pass before).
     order: std::cell::RefCell<Option<Vec<usize>>>,
 }
 
@@ -186,9 +187,16 @@ impl KeptFactor {
         *self.kept.borrow_mut() = Some(kept);
     }
 
-    /// No factorisation is kept (the previous load step held a wide zone, or there was none).
+    /// No factorisation is kept (the previous load step ran the plain path, or there was
+    /// none).
     fn is_empty(&self) -> bool {
         self.kept.borrow().is_none()
+    }
+
+    /// The kept factorisation holds a wide zone's interior (friction: sticking).
+    fn holds_zone(&self) -> bool {
+        let kept = self.kept.borrow();
+        kept.as_ref().is_some_and(|k| k.held.iter().any(|&h| h))
     }
 
     fn take_order(&self) -> Option<Vec<usize>> {
@@ -1113,10 +1121,8 @@ fn coulomb_passes(
         match coulomb_condensed::solve(ctx, problem, reduced, ns, &mut kept, None)? {
             coulomb_condensed::CoulombCondensed::Solved(r, cs) => {
                 summary.coulomb = Some(cs);
-                // a factorisation with held nodes holds them at this step's references only
-                if !kept.held.iter().any(|&h| h) {
-                    problem.kept.put(kept);
-                }
+                // for the next load step (a held zone's too: its rows' values are in f)
+                problem.kept.put(kept);
                 return Ok(Passes::Done(Begin::Solved(joined(*r)), Some(summary)));
             }
             coulomb_condensed::CoulombCondensed::Start(r, u, cs, beyond) => {
@@ -1228,9 +1234,12 @@ fn iterative_start(
 /// extrapolation) on the contact unknowns: the previous step's factorisation where it still
 /// holds (only d₀ is new; grown by a new one where the warm set reaches beyond its
 /// candidates), else one factorisation with the Schur complement on every dof of the
-/// candidates (the nodes with the smallest gaps and the warm set); the
-/// dense iteration from the warm states (no frictionless steps), the check on every contact
-/// node; if it gives up, the plain path from the warm start. Collective.
+/// candidates (the nodes with the smallest gaps and the warm set); where that is too wide for
+/// the dense limits, the warm set's interior held sticking in K_p but for the nodes that
+/// slipped in the step before (which are candidates), and a new pass for the nodes its check
+/// finds changing beyond the candidates, as in [`coulomb_passes`]. The dense iteration from
+/// the warm states (no frictionless steps), the check on every contact node; if it gives up,
+/// the plain path from the warm start or from the last pass' expanded iterate. Collective.
 fn coulomb_load_step(
     ctx: &Ctx,
     problem: &ContactProblem,
@@ -1239,39 +1248,116 @@ fn coulomb_load_step(
     warm: &WarmStart,
 ) -> Result<(Begin, Option<condensed::CondensedSummary>), RunError> {
     let dim = problem.mesh.dim;
-    // the previous step's factorisation where it holds (condensed::reused), else a new one
-    let tried = condensed::solve_keeping(ctx, problem, reduced, fl, Some(warm), (dim, false, None));
-    let (mut summary, mut kept) = match tried {
-        Ok((condensed::Condensed::Factorised(s), Some(kept))) => (s, kept),
-        Ok((condensed::Condensed::Fallback(s), _))
-        | Ok((condensed::Condensed::Factorised(s), None))
-        | Ok((condensed::Condensed::Solved(_, s), _)) => return Ok((Begin::Touching, Some(s))),
-        Err(RunError::Failed(why)) => {
+    // the nodes that slipped in the step before are never held sticking (c_h's global order)
+    let mut release = gathered(ctx, warm.nodes.iter().map(|r| r.active && r.slip));
+    // where the step before held a zone, this step holds the warm set's (its factorisation
+    // is reused where the held nodes are the same)
+    let mut zone: Vec<bool> = match problem.kept.holds_zone() {
+        true => gathered(ctx, warm.nodes.iter().map(|r| r.active)),
+        false => Vec::new(),
+    };
+    let (mut pass, mut earlier, mut changed_before) = (0, 0, usize::MAX);
+    // the expanded iterate of the last pass: the plain path's start where the next one fails
+    let mut last: Option<(NewtonResult, Vec<f64>)> = None;
+    loop {
+        let held = condensed::Sticking {
+            zone: (!zone.is_empty()).then_some(zone.as_slice()),
+            release: &release,
+            pass,
+            factorisations: 0,
+        };
+        // the previous step's factorisation where it holds (condensed::reused), else a new one
+        let tried = condensed::solve_keeping(
+            ctx,
+            problem,
+            reduced,
+            fl,
+            Some(warm),
+            (dim, false, Some(held)),
+        );
+        let (mut summary, mut kept) = match tried {
+            Ok((condensed::Condensed::Factorised(s), Some(kept))) => (s, kept),
+            Ok((condensed::Condensed::Fallback(mut s), _))
+            | Ok((condensed::Condensed::Factorised(mut s), None))
+            | Ok((condensed::Condensed::Solved(_, mut s), _)) => {
+                s.factorisations += earlier;
+                return Ok((begin_from(ctx, last), Some(s)));
+            }
+            Err(RunError::Failed(why)) => {
+                say!(
+                    ctx,
+                    "coulomb: not condensed ({why}); starting from the previous load step"
+                );
+                return Ok((begin_from(ctx, last), None));
+            }
+            Err(e) => return Err(e),
+        };
+        summary.factorisations += earlier;
+        let held_zone = kept.held.iter().any(|&h| h);
+        let begin =
+            match coulomb_condensed::solve(ctx, problem, reduced, ns, &mut kept, Some(warm))? {
+                coulomb_condensed::CoulombCondensed::Solved(r, cs) => {
+                    summary.coulomb = Some(cs);
+                    problem.kept.put(kept); // for the next load step (a held zone's too)
+                    Begin::Solved(*r)
+                }
+                coulomb_condensed::CoulombCondensed::Start(r, u, cs, beyond) => {
+                    summary.coulomb = Some(cs);
+                    let progress = beyond.len() < changed_before;
+                    if held_zone
+                        && !beyond.is_empty()
+                        && progress
+                        && summary.factorisations < MAX_STICK_FACTORISATIONS
+                    {
+                        say!(
+                            ctx,
+                            "coulomb: condensed: {} node(s) beyond the candidates change state on \
+                         the expanded u: a new pass with them as candidates",
+                            beyond.len()
+                        );
+                        for &g in &beyond {
+                            release[g] = true;
+                        }
+                        zone = std::mem::take(&mut kept.zone);
+                        earlier = summary.factorisations;
+                        changed_before = beyond.len();
+                        pass += 1;
+                        last = Some((*r, u));
+                        problem.kept.put_order(kept.comp.node_order.take());
+                        continue;
+                    }
+                    say!(ctx, "coulomb: the plain path from the expanded iterate");
+                    Begin::Start(*r, u)
+                }
+                coulomb_condensed::CoulombCondensed::Fallback(cs) => {
+                    summary.coulomb = Some(cs);
+                    begin_from(ctx, last)
+                }
+            };
+        return Ok((begin, Some(summary)));
+    }
+}
+
+/// This rank's flags of its contact nodes, all-gathered in c_h's global order. Collective.
+fn gathered(ctx: &Ctx, mine: impl Iterator<Item = bool>) -> Vec<bool> {
+    let mine: Vec<f64> = mine.map(|f| f64::from(u8::from(f))).collect();
+    let all = ctx.all_gather_varcount(&mine);
+    all.iter().map(|&f| f > 0.0).collect()
+}
+
+/// Where a load step's condensed pass gives up: the plain path from the last pass' expanded
+/// iterate, or from the warm start where there was none. Collective (log).
+fn begin_from(ctx: &Ctx, last: Option<(NewtonResult, Vec<f64>)>) -> Begin {
+    match last {
+        Some((r, u)) => {
             say!(
                 ctx,
-                "coulomb: not condensed ({why}); starting from the previous load step"
+                "coulomb: the plain path from the last pass' expanded iterate"
             );
-            return Ok((Begin::Touching, None));
+            Begin::Start(r, u)
         }
-        Err(e) => return Err(e),
-    };
-    let begin = match coulomb_condensed::solve(ctx, problem, reduced, ns, &mut kept, Some(warm))? {
-        coulomb_condensed::CoulombCondensed::Solved(r, cs) => {
-            summary.coulomb = Some(cs);
-            problem.kept.put(kept);
-            Begin::Solved(*r)
-        }
-        coulomb_condensed::CoulombCondensed::Start(r, u, cs, _) => {
-            say!(ctx, "coulomb: the plain path from the expanded iterate");
-            summary.coulomb = Some(cs);
-            Begin::Start(*r, u)
-        }
-        coulomb_condensed::CoulombCondensed::Fallback(cs) => {
-            summary.coulomb = Some(cs);
-            Begin::Touching
-        }
-    };
-    Ok((begin, Some(summary)))
+        None => Begin::Touching,
+    }
 }
 
 /// The body's free rigid modes (those Dirichlet data leave free; none with the rigid-mode

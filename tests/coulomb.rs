@@ -848,6 +848,38 @@ fn load_steps_on_a_zone_too_wide_for_every_dof_hold_it_sticking_and_keep_its_fac
 }
 
 #[test]
+fn a_load_step_whose_zone_grows_beyond_its_candidates_takes_them_in_a_new_pass() {
+    // The held disk pushed 12 × deeper in two load steps: the second step's dense iteration on
+    // the first step's factorisation (64 candidates) ends with 82 nodes in contact, and the
+    // check on the expanded u finds nodes beyond the candidates touching. A new pass takes them
+    // as candidates (one factorisation) instead of the plain path from the expanded iterate;
+    // every step ends where the plain path from the touching node ends, on 1, 2 and 3 ranks.
+    let tmp = tempfile::tempdir().expect("tmp");
+    let case = held_disk_case(tmp.path());
+    let sets = ["dirichlet.0.value=[0.002, -0.12]", "load.steps=2"];
+    let gap = converged(2, &case, &[&sets[..], &["newton.init=\"gap\""]].concat());
+    for np in [1, 2, 3] {
+        let auto = converged(np, &case, &sets);
+        let out = auto.run.output();
+        assert!(
+            out.contains("beyond the candidates change state on the expanded u"),
+            "{np} rank(s): {out}"
+        );
+        assert!(!out.contains("the plain path from"), "{np} rank(s): {out}");
+        same_steps(&auto, &gap, 2, 1e-9, np);
+        assert_eq!(active_and_slipping(&auto), active_and_slipping(&gap));
+        let (fa, fg) = (
+            auto.f(&["newton", "factorisations"]),
+            gap.f(&["newton", "factorisations"]),
+        );
+        assert!(
+            fa < fg,
+            "{np} rank(s): {fa} factorisations, the plain path {fg}"
+        );
+    }
+}
+
+#[test]
 fn a_stalled_dense_iterate_is_accepted_where_its_certificates_hold() {
     // A complementarity parameter c far above E / h_c (newton.c = 1e7 here against 327) raises
     // what round-off leaves of the residual (F3), which weighs u by c, far above 1e-8 ‖λ‖₂ (as

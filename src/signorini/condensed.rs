@@ -361,8 +361,10 @@ impl Kept {
 pub(super) struct Sticking<'a> {
     /// The zone of a pass before (c_h's global order; `None`: predicted, where needed).
     pub zone: Option<&'a [bool]>,
-    /// Nodes never held (c_h's global order; may be empty): a pass before found them slipping
-    /// or leaving the obstacle.
+    /// Nodes never held and always candidates (c_h's global order; may be empty): a pass
+    /// before found them changing state beyond its candidates (a held node that slips or leaves
+    /// the obstacle, a node beyond that touches), or a load step's nodes that slipped in the
+    /// step before.
     pub release: &'a [bool],
     /// The pass (from 0): a band of 2ᵏ/[`BAND_FRACTION`] of the zone's held part is left free.
     pub pass: u32,
@@ -528,20 +530,21 @@ pub(super) fn solve_keeping(
 }
 
 /// Whether a wide zone's interior may be held on the obstacle in the factorised matrix:
-/// frictionless (with the frictionless steps), or for friction (`per` > 1) sticking as well
-/// where `stick` asks (a load step without the frictionless steps: its dense iteration starts
-/// from the warm states); a load step only where the step before kept no factorisation or
-/// one with a held zone; not under force control. Local.
+/// frictionless (with the frictionless steps; a load step only where the step before kept no
+/// factorisation or one with a held zone), or for friction (`per` > 1) sticking as well where
+/// `stick` asks (a load step without the frictionless steps: its dense iteration starts from
+/// the warm states; a zone is held there only where the candidates grow too wide); not under
+/// force control. Local.
 fn splits_zones(
     p: &ContactProblem,
     s: &NewtonSettings,
     warm: Option<&WarmStart>,
     (per, steps, stick): (usize, bool, bool),
 ) -> bool {
-    (warm.is_none() || p.kept.is_empty() || p.kept.holds_zone())
-        && s.force.is_empty()
+    let kept_allows = warm.is_none() || p.kept.is_empty() || p.kept.holds_zone();
+    s.force.is_empty()
         && if per == 1 {
-            steps && !s.estimate && s.carried.is_none()
+            steps && kept_allows && !s.estimate && s.carried.is_none()
         } else {
             stick && (steps || warm.is_some())
         }
@@ -674,7 +677,9 @@ fn begin_pass(
         Some(z) => (0..b.nodes.len())
             .map(|i| (z[b.offset + i] || released(b.offset + i)) && !held[b.offset + i])
             .collect(),
-        None => start.to_vec(),
+        None => (0..b.nodes.len())
+            .map(|i| start[i] || released(b.offset + i))
+            .collect(),
     };
     let cand = Candidates::gather(ctx, b, &free, &pass_start, key);
     let count = |v: &[bool]| v.iter().filter(|&&a| a).count();

@@ -59,8 +59,8 @@ pub enum CoulombCondensed {
     /// The checked solution (the dense steps are its history).
     Solved(Box<NewtonResult>, CoulombCondensedSummary),
     /// A start for the plain path: every contact node's record and this rank's rows of u; and
-    /// on a held zone's pass where only nodes beyond the candidates change state on the
-    /// expanded u, those nodes (c_h's global order; a new pass may take them as candidates).
+    /// where only nodes beyond the candidates change state on the expanded u, those nodes
+    /// (c_h's global order; a new pass may take them as candidates).
     Start(
         Box<NewtonResult>,
         Vec<f64>,
@@ -1150,8 +1150,8 @@ struct Checked {
     certificate: Option<f64>,
     /// Force control: each force-controlled pair's approach δ_j.
     approach: Vec<f64>,
-    /// On a held zone's pass where no candidate changes state: the nodes beyond the candidates
-    /// that do (c_h's global order, every rank's); else empty.
+    /// Where no candidate changes state: the nodes beyond the candidates that do (c_h's global
+    /// order, every rank's); else empty.
     beyond: Vec<usize>,
 }
 
@@ -1188,9 +1188,9 @@ fn check(
     let scale = threshold_scale(ctx, b, &it.nodes, ns.law, ns.c);
     let up = set.update(&it, b, ns.law, ns.c, scale, dim); // (3.23) / (F5)
     let totals = up.reduce(ctx, b, free.modes(), dim);
-    // only a held zone's pass uses the nodes beyond (a new pass); the same on every rank
-    let held_zone = kept.held.iter().any(|&h| h);
-    let beyond = match totals.changed > 0 && held_zone {
+    // the nodes beyond the candidates that change state: a new pass takes them as candidates
+    // (gathered only where a state changed; the same on every rank)
+    let beyond = match totals.changed > 0 {
         true => changed_beyond(ctx, kept, b, (&set, &up.next)),
         false => Vec::new(),
     };

@@ -1126,14 +1126,14 @@ fn coulomb_passes(
                 return Ok(Passes::Done(Begin::Solved(joined(*r)), Some(summary)));
             }
             coulomb_condensed::CoulombCondensed::Start(r, u, cs, beyond) => {
-                let held_zone = kept.held.iter().any(|&h| h);
-                if held_zone && !beyond.is_empty() {
+                if !beyond.is_empty() {
                     let progress = beyond.len() < changed_before;
                     if progress && summary.factorisations < MAX_STICK_FACTORISATIONS {
                         // the held nodes that slip or leave the obstacle and the nodes beyond
                         // that come into contact: a new pass takes them as candidates (and
-                        // leaves a wider band of the zone free)
-                        let held = beyond.iter().filter(|&&g| kept.held[g]).count();
+                        // leaves a wider band of a held zone free)
+                        let held = beyond.iter().filter(|&&g| kept.held.get(g) == Some(&true));
+                        let held = held.count();
                         say!(
                             ctx,
                             "coulomb: condensed: {} node(s) beyond the candidates change state \
@@ -1142,10 +1142,8 @@ fn coulomb_passes(
                             beyond.len()
                         );
                         release.resize(kept.cand.n, false);
-                        for &g in &beyond {
-                            release[g] = true;
-                        }
-                        zone = std::mem::take(&mut kept.zone);
+                        zone = std::mem::take(&mut kept.zone); // empty: none held
+                        next_pass(&mut zone, &mut release, &beyond);
                         earlier = summary.factorisations;
                         changed_before = beyond.len();
                         pass += 1;
@@ -1293,7 +1291,6 @@ fn coulomb_load_step(
             Err(e) => return Err(e),
         };
         summary.factorisations += earlier;
-        let held_zone = kept.held.iter().any(|&h| h);
         let begin =
             match coulomb_condensed::solve(ctx, problem, reduced, ns, &mut kept, Some(warm))? {
                 coulomb_condensed::CoulombCondensed::Solved(r, cs) => {
@@ -1304,8 +1301,9 @@ fn coulomb_load_step(
                 coulomb_condensed::CoulombCondensed::Start(r, u, cs, beyond) => {
                     summary.coulomb = Some(cs);
                     let progress = beyond.len() < changed_before;
-                    if held_zone
-                        && !beyond.is_empty()
+                    // the nodes beyond the candidates that change state (a held zone's that
+                    // slip or leave the obstacle, others that touch): a new pass takes them
+                    if !beyond.is_empty()
                         && progress
                         && summary.factorisations < MAX_STICK_FACTORISATIONS
                     {
@@ -1315,10 +1313,8 @@ fn coulomb_load_step(
                          the expanded u: a new pass with them as candidates",
                             beyond.len()
                         );
-                        for &g in &beyond {
-                            release[g] = true;
-                        }
-                        zone = std::mem::take(&mut kept.zone);
+                        zone = std::mem::take(&mut kept.zone); // empty: none held
+                        next_pass(&mut zone, &mut release, &beyond);
                         earlier = summary.factorisations;
                         changed_before = beyond.len();
                         pass += 1;
@@ -1335,6 +1331,21 @@ fn coulomb_load_step(
                 }
             };
         return Ok((begin, Some(summary)));
+    }
+}
+
+/// A new pass' zone and released nodes from the nodes a check found changing beyond the
+/// candidates (c_h's global order): a node of the held zone (held, or in its band) that slips
+/// or leaves the obstacle is released (a candidate, never held); a node outside the zone that
+/// comes into contact widens the zone (its edge band moves out with it, so that a zone that
+/// grows with the load keeps its interior held); without a zone every such node is released.
+/// Local.
+fn next_pass(zone: &mut [bool], release: &mut [bool], beyond: &[usize]) {
+    for &g in beyond {
+        match zone.get(g) {
+            Some(false) => zone[g] = true,
+            _ => release[g] = true,
+        }
     }
 }
 

@@ -62,6 +62,10 @@ pub struct StepRecord {
     pub cutbacks: usize,
     /// Newton steps (contact) — None for a linear case.
     pub newton_steps: Option<usize>,
+    /// Numeric factorisations of the step (contact, direct preset; 0 where the step solved on
+    /// the previous step's factorisation).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub factorisations: Option<usize>,
     pub active: Option<usize>,
     /// Active nodes sticking / slipping (friction only).
     pub stick: Option<usize>,
@@ -105,6 +109,7 @@ impl StepRecord {
             time: factor,
             cutbacks,
             newton_steps: None,
+            factorisations: None,
             active: None,
             stick: None,
             slip: None,
@@ -390,6 +395,7 @@ impl Stepper<'_> {
             return rec;
         };
         rec.newton_steps = Some(r.newton.steps);
+        rec.factorisations = Some(r.newton.factorisations);
         rec.active = Some(r.contact.active_count);
         rec.total_force = Some(r.contact.total_force.clone());
         if let [d] = c.obstacle_displacement.as_slice() {

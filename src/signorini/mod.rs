@@ -1301,10 +1301,16 @@ fn coulomb_load_step(
                 coulomb_condensed::CoulombCondensed::Start(r, u, cs, beyond) => {
                     summary.coulomb = Some(cs);
                     let progress = beyond.len() < changed_before;
+                    // a held zone: at most WARM_STICK_FACTORISATIONS (where the warm set's
+                    // stick core is no prediction of this step's, a rolling body's, further
+                    // passes cost what the plain path's steps cost)
+                    let held_missed = kept.held.iter().any(|&h| h)
+                        && summary.factorisations >= WARM_STICK_FACTORISATIONS;
                     // the nodes beyond the candidates that change state (a held zone's that
                     // slip or leave the obstacle, others that touch): a new pass takes them
                     if !beyond.is_empty()
                         && progress
+                        && !held_missed
                         && summary.factorisations < MAX_STICK_FACTORISATIONS
                     {
                         say!(
@@ -1507,6 +1513,14 @@ const MAX_STICK_FACTORISATIONS: usize = 8;
 /// condensed, then the held zone and one pass where its frictionless set moves): a zone whose
 /// frictionless set keeps moving under the held interior goes to the plain path instead.
 const FIRST_STICK_FACTORISATIONS: usize = 3;
+
+/// Factorisations at most in a Coulomb load step whose warm set's interior is held sticking
+/// (the pass on the warm set and one more); then the plain path from the last expanded
+/// iterate. Measured on the wide zones of docs/numbers.md ("Load steps on wide zones"): where
+/// the warm set predicts the step (a punch pressed or dragged, a held disk pushed deeper) one
+/// pass solves it; a floating disk rolling under a large traction took 5 passes with the
+/// changes falling 304, 86, 21, 1, 3, about what its 12 plain steps cost.
+const WARM_STICK_FACTORISATIONS: usize = 2;
 
 /// The same discrete frictionless problem through PETSc's SNES VI (a baseline for Algorithm 1):
 /// the rigid modes that the whole contact boundary cannot fix are pinned once; λ by (3.28).

@@ -350,23 +350,10 @@ fn a_wide_zone_in_3d_holds_its_interior() {
     // (the distance to its edge in 3D) and about a thousand nodes stay in contact: one
     // factorisation, the plain path's answer on 1 and 2 ranks.
     let tmp = tempfile::tempdir().unwrap();
-    let mesh = tmp.path().join("block.msh");
-    gmsh_file(
-        &repo("cases/blocks/block3d.geo"),
-        3,
-        &["-setnumber", "h", "0.06"],
-        &mesh,
-    );
-    let case = write_case(
-        &tmp.path().join("block.toml"),
-        &format!(
-            "[mesh]\nfile = {}\n[material]\nyoung = 2.0\npoisson = 0.3\nmodel = \"3d\"\n\
-             [[dirichlet]]\ngroup = \"bottom\"\nvalue = [0.0, 0.0, 0.0]\n[contact]\n\
-             group = \"top\"\nobstacle = {{ type = \"plane\", point = [0.0, 0.0, 0.499], \
-             normal = [0.002, 0.001, -1.0] }}\nfriction = \"none\"\nrigid_modes = \"none\"\n\
-             [solver]\npreset = \"direct\"\n[output]\nfields = [\"displacement\"]\n",
-            toml_path(&mesh)
-        ),
+    let case = pressed_block_case(
+        tmp.path(),
+        "[0.0, 0.0, 0.499], normal = [0.002, 0.001, -1.0]",
+        "",
     );
     for r in strip_against_plain(&case, &[]) {
         let cs = &r.summary["newton"]["condensed"];
@@ -386,25 +373,9 @@ fn load_steps_that_hold_the_same_nodes_reuse_the_held_zones_factorisation() {
     // f). The steps after the first solve on its factorisation (only d₀ is new) and end where
     // the plain path ends, step by step, on 1 and 2 ranks.
     let tmp = tempfile::tempdir().unwrap();
-    let mesh = tmp.path().join("block.msh");
-    gmsh_file(
-        &repo("cases/blocks/block3d.geo"),
-        3,
-        &["-setnumber", "h", "0.06"],
-        &mesh,
-    );
-    let case = write_case(
-        &tmp.path().join("block.toml"),
-        &format!(
-            "[mesh]\nfile = {}\n[material]\nyoung = 2.0\npoisson = 0.3\nmodel = \"3d\"\n\
-             [[dirichlet]]\ngroup = \"bottom\"\nvalue = [0.0, 0.0, 0.0]\n[contact]\n\
-             group = \"top\"\nobstacle = {{ type = \"plane\", point = [0.0, 0.0, 0.5], \
-             normal = [0.0, 0.0, -1.0] }}\nmotion = [0.0, 0.0, -0.003]\nfriction = \"none\"\n\
-             rigid_modes = \"none\"\n[load]\nsteps = 3\n[solver]\npreset = \"direct\"\n\
-             [output]\nfields = [\"displacement\"]\n",
-            toml_path(&mesh)
-        ),
-    );
+    let plane = "[0.0, 0.0, 0.5], normal = [0.0, 0.0, -1.0]";
+    let more = "motion = [0.0, 0.0, -0.003]\n[load]\nsteps = 3\n";
+    let case = pressed_block_case(tmp.path(), plane, more);
     let plain = solve(2, &case, &["solver.reuse=\"never\""]);
     plain.assert_converged("plain path");
     for np in [1, 2] {
@@ -420,6 +391,31 @@ fn load_steps_that_hold_the_same_nodes_reuse_the_held_zones_factorisation() {
         );
         same_steps(&c, &plain, 3, 1e-10, np);
     }
+}
+
+/// The block of cases/blocks/block3d.geo meshed into `dir` with h = 0.06 (1 434 top nodes),
+/// clamped at the bottom, its top the contact boundary under a rigid plane (`plane`: its point
+/// and normal), frictionless, on the direct preset; `more`: further keys of [contact] and
+/// further sections.
+fn pressed_block_case(dir: &Path, plane: &str, more: &str) -> PathBuf {
+    let mesh = dir.join("block.msh");
+    gmsh_file(
+        &repo("cases/blocks/block3d.geo"),
+        3,
+        &["-setnumber", "h", "0.06"],
+        &mesh,
+    );
+    write_case(
+        &dir.join("block.toml"),
+        &format!(
+            "[mesh]\nfile = {}\n[material]\nyoung = 2.0\npoisson = 0.3\nmodel = \"3d\"\n\
+             [[dirichlet]]\ngroup = \"bottom\"\nvalue = [0.0, 0.0, 0.0]\n[contact]\n\
+             group = \"top\"\nobstacle = {{ type = \"plane\", point = {plane} }}\n\
+             friction = \"none\"\nrigid_modes = \"none\"\n{more}\
+             [solver]\npreset = \"direct\"\n[output]\nfields = [\"displacement\"]\n",
+            toml_path(&mesh)
+        ),
+    )
 }
 
 /// The floating strip of cases/strip (4 × 0.1, 3 601 bottom nodes, 8 layers; meshed into

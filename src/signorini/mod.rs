@@ -1036,23 +1036,19 @@ fn coulomb_passes(
         matches!(t, Ok((condensed::Condensed::Fallback(s), _)) if fell(s))
     };
     // where the zone is too wide for every dof of its nodes: the nodes a held zone releases
-    let (mut release, mut zone): (Vec<bool>, Vec<bool>) = (Vec::new(), Vec::new());
-    let mut earlier = 0; // factorisations of the passes before
-    let mut pass = 0;
-    let mut changed_before = usize::MAX;
+    let mut passes = PassLoop::new(Vec::new(), Vec::new());
     // the expanded iterate of the last pass: the plain path's start where the next one fails
     let mut last: Option<(NewtonResult, Vec<f64>, condensed::CoulombCondensedSummary)> = None;
     loop {
         // too many candidates' dofs for the dense tangential compliance: the predicted zone's
         // interior held sticking, the dense steps on its edge and beyond (condensed.rs)
-        let held = (per > 1).then(|| condensed::Sticking {
-            zone: (!zone.is_empty()).then_some(zone.as_slice()),
-            release: &release,
-            pass,
-            factorisations: match pass {
+        let held = (per > 1).then(|| {
+            passes.sticking(match passes.pass {
                 0 => FIRST_STICK_FACTORISATIONS,
-                _ => MAX_STICK_FACTORISATIONS.saturating_sub(earlier).max(1),
-            },
+                _ => MAX_STICK_FACTORISATIONS
+                    .saturating_sub(passes.earlier)
+                    .max(1),
+            })
         });
         let mut tried =
             condensed::solve_keeping(ctx, problem, reduced, fl, None, (per, true, held));
@@ -1067,7 +1063,7 @@ fn coulomb_passes(
             };
             if let Some(mut summary) = fell {
                 drop(problem.kept.take());
-                summary.factorisations += earlier;
+                summary.factorisations += passes.earlier;
                 summary.coulomb = Some(cs);
                 say!(
                     ctx,
@@ -1103,7 +1099,7 @@ fn coulomb_passes(
             }
             Err(e) => return Err(e),
         };
-        summary.factorisations += earlier;
+        summary.factorisations += passes.earlier;
         let active = ctx.sum_usize(nr.nodes.iter().filter(|r| r.active).count());
         say!(
             ctx,
@@ -1126,32 +1122,10 @@ fn coulomb_passes(
                 return Ok(Passes::Done(Begin::Solved(joined(*r)), Some(summary)));
             }
             coulomb_condensed::CoulombCondensed::Start(r, u, cs, beyond) => {
-                if !beyond.is_empty() {
-                    let progress = beyond.len() < changed_before;
-                    if progress && summary.factorisations < MAX_STICK_FACTORISATIONS {
-                        // the held nodes that slip or leave the obstacle and the nodes beyond
-                        // that come into contact: a new pass takes them as candidates (and
-                        // leaves a wider band of a held zone free)
-                        let held = beyond.iter().filter(|&&g| kept.held.get(g) == Some(&true));
-                        let held = held.count();
-                        say!(
-                            ctx,
-                            "coulomb: condensed: {} node(s) beyond the candidates change state \
-                             on the expanded u, {held} of them held: a new pass with them as \
-                             candidates",
-                            beyond.len()
-                        );
-                        release.resize(kept.cand.n, false);
-                        zone = std::mem::take(&mut kept.zone); // empty: none held
-                        next_pass(&mut zone, &mut release, &beyond);
-                        earlier = summary.factorisations;
-                        changed_before = beyond.len();
-                        pass += 1;
-                        last = Some((joined(*r), u, cs));
-                        // the next pass factorises the same graph: its order is kept
-                        problem.kept.put_order(kept.comp.node_order.take());
-                        continue;
-                    }
+                if passes.goes_on(&beyond, summary.factorisations) {
+                    passes.next(ctx, problem, &mut kept, &beyond, summary.factorisations);
+                    last = Some((joined(*r), u, cs));
+                    continue;
                 }
                 say!(ctx, "coulomb: the plain path from the expanded iterate");
                 summary.coulomb = Some(cs);
@@ -1247,23 +1221,18 @@ fn coulomb_load_step(
 ) -> Result<(Begin, Option<condensed::CondensedSummary>), RunError> {
     let dim = problem.mesh.dim;
     // the nodes that slipped in the step before are never held sticking (c_h's global order)
-    let mut release = gathered(ctx, warm.nodes.iter().map(|r| r.active && r.slip));
+    let release = gathered(ctx, warm.nodes.iter().map(|r| r.active && r.slip));
     // where the step before held a zone, this step holds the warm set's (its factorisation
     // is reused where the held nodes are the same)
-    let mut zone: Vec<bool> = match problem.kept.holds_zone() {
+    let zone: Vec<bool> = match problem.kept.holds_zone() {
         true => gathered(ctx, warm.nodes.iter().map(|r| r.active)),
         false => Vec::new(),
     };
-    let (mut pass, mut earlier, mut changed_before) = (0, 0, usize::MAX);
+    let mut passes = PassLoop::new(zone, release);
     // the expanded iterate of the last pass: the plain path's start where the next one fails
     let mut last: Option<(NewtonResult, Vec<f64>)> = None;
     loop {
-        let held = condensed::Sticking {
-            zone: (!zone.is_empty()).then_some(zone.as_slice()),
-            release: &release,
-            pass,
-            factorisations: 0,
-        };
+        let held = passes.sticking(0);
         // the previous step's factorisation where it holds (condensed::reused), else a new one
         let tried = condensed::solve_keeping(
             ctx,
@@ -1278,7 +1247,7 @@ fn coulomb_load_step(
             Ok((condensed::Condensed::Fallback(mut s), _))
             | Ok((condensed::Condensed::Factorised(mut s), None))
             | Ok((condensed::Condensed::Solved(_, mut s), _)) => {
-                s.factorisations += earlier;
+                s.factorisations += passes.earlier;
                 return Ok((begin_from(ctx, last), Some(s)));
             }
             Err(RunError::Failed(why)) => {
@@ -1290,7 +1259,7 @@ fn coulomb_load_step(
             }
             Err(e) => return Err(e),
         };
-        summary.factorisations += earlier;
+        summary.factorisations += passes.earlier;
         let begin =
             match coulomb_condensed::solve(ctx, problem, reduced, ns, &mut kept, Some(warm))? {
                 coulomb_condensed::CoulombCondensed::Solved(r, cs) => {
@@ -1300,32 +1269,14 @@ fn coulomb_load_step(
                 }
                 coulomb_condensed::CoulombCondensed::Start(r, u, cs, beyond) => {
                     summary.coulomb = Some(cs);
-                    let progress = beyond.len() < changed_before;
                     // a held zone: at most WARM_STICK_FACTORISATIONS (where the warm set's
                     // stick core is no prediction of this step's, a rolling body's, further
                     // passes cost what the plain path's steps cost)
                     let held_missed = kept.held.iter().any(|&h| h)
                         && summary.factorisations >= WARM_STICK_FACTORISATIONS;
-                    // the nodes beyond the candidates that change state (a held zone's that
-                    // slip or leave the obstacle, others that touch): a new pass takes them
-                    if !beyond.is_empty()
-                        && progress
-                        && !held_missed
-                        && summary.factorisations < MAX_STICK_FACTORISATIONS
-                    {
-                        say!(
-                            ctx,
-                            "coulomb: condensed: {} node(s) beyond the candidates change state on \
-                         the expanded u: a new pass with them as candidates",
-                            beyond.len()
-                        );
-                        zone = std::mem::take(&mut kept.zone); // empty: none held
-                        next_pass(&mut zone, &mut release, &beyond);
-                        earlier = summary.factorisations;
-                        changed_before = beyond.len();
-                        pass += 1;
+                    if !held_missed && passes.goes_on(&beyond, summary.factorisations) {
+                        passes.next(ctx, problem, &mut kept, &beyond, summary.factorisations);
                         last = Some((*r, u));
-                        problem.kept.put_order(kept.comp.node_order.take());
                         continue;
                     }
                     say!(ctx, "coulomb: the plain path from the expanded iterate");
@@ -1340,18 +1291,79 @@ fn coulomb_load_step(
     }
 }
 
-/// A new pass' zone and released nodes from the nodes a check found changing beyond the
-/// candidates (c_h's global order): a node of the held zone (held, or in its band) that slips
-/// or leaves the obstacle is released (a candidate, never held); a node outside the zone that
-/// comes into contact widens the zone (its edge band moves out with it, so that a zone that
-/// grows with the load keeps its interior held); without a zone every such node is released.
-/// Local.
-fn next_pass(zone: &mut [bool], release: &mut [bool], beyond: &[usize]) {
-    for &g in beyond {
-        match zone.get(g) {
-            Some(false) => zone[g] = true,
-            _ => release[g] = true,
+/// The state of a Coulomb solve's condensed passes ([`coulomb_passes`], [`coulomb_load_step`]):
+/// the held zone and the released nodes (c_h's global order; empty: none), the pass, the
+/// factorisations of the passes before and the count of nodes that changed in the last one.
+struct PassLoop {
+    zone: Vec<bool>,
+    release: Vec<bool>,
+    pass: u32,
+    earlier: usize,
+    changed_before: usize,
+}
+
+impl PassLoop {
+    fn new(zone: Vec<bool>, release: Vec<bool>) -> PassLoop {
+        PassLoop {
+            zone,
+            release,
+            pass: 0,
+            earlier: 0,
+            changed_before: usize::MAX,
         }
+    }
+
+    /// The next pass' held zone, released nodes and band, with at most `factorisations`.
+    fn sticking(&self, factorisations: usize) -> condensed::Sticking<'_> {
+        condensed::Sticking {
+            zone: (!self.zone.is_empty()).then_some(self.zone.as_slice()),
+            release: &self.release,
+            pass: self.pass,
+            factorisations,
+        }
+    }
+
+    /// A new pass follows where nodes beyond the candidates change state (`beyond`), fewer
+    /// than in the pass before, within [`MAX_STICK_FACTORISATIONS`] (`done` so far).
+    fn goes_on(&self, beyond: &[usize], done: usize) -> bool {
+        !beyond.is_empty() && beyond.len() < self.changed_before && done < MAX_STICK_FACTORISATIONS
+    }
+
+    /// The next pass from the nodes the check found changing beyond the candidates (c_h's
+    /// global order): a node of the held zone (held, or in its band) that slips or leaves the
+    /// obstacle is released (a candidate, never held); a node outside the zone that comes into
+    /// contact widens the zone (its edge band moves out with it, so that a zone that grows with
+    /// the load keeps its interior held); without a zone every such node is released. The
+    /// pass's factorisation leaves its node order for the next (the same graph). Collective
+    /// (log).
+    fn next(
+        &mut self,
+        ctx: &Ctx,
+        problem: &ContactProblem,
+        kept: &mut condensed::Kept,
+        beyond: &[usize],
+        done: usize,
+    ) {
+        let held = beyond.iter().filter(|&&g| kept.held.get(g) == Some(&true));
+        say!(
+            ctx,
+            "coulomb: condensed: {} node(s) beyond the candidates change state on the expanded \
+             u, {} of them held: a new pass with them as candidates",
+            beyond.len(),
+            held.count()
+        );
+        self.zone = std::mem::take(&mut kept.zone); // empty: none held
+        self.release.resize(kept.cand.n, false);
+        for &g in beyond {
+            match self.zone.get(g) {
+                Some(false) => self.zone[g] = true,
+                _ => self.release[g] = true,
+            }
+        }
+        self.earlier = done;
+        self.changed_before = beyond.len();
+        self.pass += 1;
+        problem.kept.put_order(kept.comp.node_order.take());
     }
 }
 

@@ -451,6 +451,11 @@ fn predictor_ratio(done: &[StepRecord], factor: f64) -> f64 {
     }
 }
 
+/// A sub-step whose factor comes within this fraction of its increment of the planned factor
+/// lands on it ([`Schedule::next`]): a sum of factors that misses it by round-off is not a
+/// step of its own.
+const LAND_RTOL: f64 = 1e-9;
+
 /// The load factors to solve at, with cutbacks (no solves: the loop asks it what comes next).
 pub struct Schedule<'p> {
     plan: &'p LoadSection,
@@ -482,8 +487,11 @@ impl<'p> Schedule<'p> {
     pub fn next(&self) -> Option<f64> {
         let target = *self.plan.factors.get(self.planned)?;
         let f = self.reached + self.increment;
-        // the last sub-step lands exactly on the planned factor
-        let beyond = (self.increment > 0.0 && f >= target) || (self.increment < 0.0 && f <= target);
+        // the last sub-step lands exactly on the planned factor, also where reached +
+        // increment misses it by round-off (1.0 + (0.3 − 1.0) = 0.30000000000000004)
+        let near = LAND_RTOL * self.increment.abs();
+        let beyond = (self.increment > 0.0 && f >= target - near)
+            || (self.increment < 0.0 && f <= target + near);
         Some(if beyond { target } else { f })
     }
 
@@ -829,6 +837,19 @@ mod tests {
             (times[3] - 1.5).abs() < 1e-15 && (times[4] - 1.8).abs() < 1e-15,
             "{times:?}"
         );
+    }
+
+    #[test]
+    fn a_sum_that_misses_the_planned_factor_by_round_off_lands_on_it() {
+        // 1.0 + (0.3 − 1.0) = 0.30000000000000004: one step, at 0.3 itself
+        for (factors, reach, want) in [
+            (&[1.0, 0.3][..], 1.0, &[1.0, 0.3][..]),
+            (&[1.0, 0.3][..], 0.4, &[0.25, 0.5, 0.75, 1.0, 0.65, 0.3][..]),
+            (&[0.1, 0.7, 0.3][..], 1.0, &[0.1, 0.7, 0.3][..]),
+        ] {
+            let (got, completed, _) = walk(factors, 5, reach);
+            assert!(completed && got == want, "{factors:?}: {got:?}");
+        }
     }
 
     #[test]

@@ -1799,6 +1799,13 @@ fn certificates(
 ) -> Result<(Scales, report::Kkt, Option<report::FrictionCertificate>), RunError> {
     let scales = problem_scales(ctx, sys, u)?;
     let kkt = table.kkt(!friction, &scales);
+    // without a load (a body moved by its Dirichlet data or by the obstacle alone) the force
+    // scale is the contact's own, as the KKT certificate takes it: friction with μ = 0 or
+    // g_R = 0 (b = 0) is judged by it too, not by a zero scale
+    let scales = Scales {
+        force: kkt.force_scale,
+        ..scales
+    };
     Ok((scales, kkt, friction.then(|| table.friction_certificate())))
 }
 

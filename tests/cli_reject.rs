@@ -294,8 +294,14 @@ fn partitioned_msh() {
 
 #[test]
 fn missing_mesh_file() {
+    // the case file's error: its key, and the file it names
     let t = case_2d(&mesh_dir().join("no_such_mesh.msh"));
-    rejected(&t, &["no_such_mesh.msh", "cannot read"]);
+    rejected(
+        &t,
+        &["case.toml", "mesh.file", "no_such_mesh.msh", "cannot read"],
+    );
+    let t = case_2d(&mesh_dir());
+    rejected(&t, &["case.toml", "mesh.file", "is not a file"]);
 }
 
 #[test]

@@ -698,7 +698,26 @@ impl Case {
                 "cannot read the case file: it is not valid UTF-8 text",
             )
         })?;
-        Case::parse(&text, path, overrides, output_dir)
+        let case = Case::parse(&text, path, overrides, output_dir)?;
+        case.check_mesh_file()?;
+        Ok(case)
+    }
+
+    /// A mesh file that is not there is the case file's error, naming `mesh.file` and its
+    /// line; what is wrong inside a mesh file its reader says, naming that file.
+    fn check_mesh_file(&self) -> Result<(), InputError> {
+        let f = &self.mesh.file;
+        match std::fs::metadata(f) {
+            Ok(m) if m.is_file() => Ok(()),
+            Ok(_) => Err(self.err_at(
+                "mesh.file",
+                format!("the mesh file {} is not a file", f.display()),
+            )),
+            Err(e) => Err(self.err_at(
+                "mesh.file",
+                format!("cannot read the mesh file {}: {e}", f.display()),
+            )),
+        }
     }
 
     /// As [`Case::load`], with the file's text already in hand (`file` is used for

@@ -730,6 +730,12 @@ fn load_from_disk_resolves_paths() {
     let dir = tempfile::tempdir().unwrap();
     let path = dir.path().join("beam.toml");
     std::fs::write(&path, MINIMAL).unwrap();
+    // the mesh file must be there: the case file's error, with its key and line
+    let e = Case::load(&path, &[], None).unwrap_err();
+    assert_eq!(e.key.as_deref(), Some("mesh.file"), "{e:?}");
+    assert!(e.line.is_some() && e.message.contains("plate.msh"), "{e:?}");
+    std::fs::create_dir(dir.path().join("meshes")).unwrap();
+    std::fs::write(dir.path().join("meshes/plate.msh"), "").unwrap();
     let c = Case::load(&path, &[], None).unwrap();
     assert_eq!(c.mesh.file, dir.path().join("meshes/plate.msh"));
     assert_eq!(c.output.dir, Path::new("out/beam"));

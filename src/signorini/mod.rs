@@ -411,7 +411,16 @@ pub fn solve(
     }
     let (displacement, approaches) =
         place_at_approaches(&mut b, settings, (&force_control, &nr.approach), friction);
-    let (mut contact, table) = final_state(ctx, sys, &b, &nr, friction, dim)?;
+    // a step whose solution vanishes against the step before's (its load taken back to
+    // nothing) is judged against a floor from that step's scales, as its stopping rule is
+    let floor = previous.map_or(Scales::default(), |p| {
+        let s = p.report.contact.scales;
+        Scales {
+            force: newton::VANISHING * s.force,
+            length: newton::VANISHING * s.length,
+        }
+    });
+    let (mut contact, table) = final_state(ctx, sys, &b, &nr, (friction, dim), floor)?;
     report::per_pair(
         ctx,
         settings,
@@ -594,6 +603,14 @@ fn run_method(
                 }
             }
             let coulomb_newton = matches!(settings.coulomb, Some((_, CoulombAlgorithm::Newton)));
+            if coulomb_newton && solver_section.reuse == Reuse::Always && reduced.factorises()? {
+                say!(
+                    ctx,
+                    "newton: solver.reuse = \"always\" with Coulomb: its rows change the matrix \
+                     in every step, so every Newton step factorises (\"auto\": Coulomb on the \
+                     contact unknowns after one factorisation)"
+                );
+            }
             let start = if coulomb_newton && ns.section.init == case::NewtonInit::Auto {
                 let (start, cs) =
                     coulomb_start(ctx, problem, &mut reduced, ns, solver_section, warm)?;
@@ -649,15 +666,37 @@ fn run_method(
     if !nr.converged {
         return Err(RunError::NoConvergence(match solver_section.method {
             Method::Newton => format!(
-                "Newton did not converge in newton.max_steps = {} steps (active set still \
-                 changing: {} node(s) in the last step)",
+                "Newton did not converge in newton.max_steps = {} steps ({})",
                 settings.newton.max_steps,
-                nr.history.last().map(|h| h.changed).unwrap_or(0)
+                last_step_state(nr.history.last(), settings.newton.tol_u)
             ),
             Method::SnesVi => format!("SNES VI did not converge in {} steps", nr.steps),
         }));
     }
     Ok((nr, outer_steps, condensed_summary))
+}
+
+/// What kept the last step of an unconverged iteration from stopping: nodes that changed
+/// state, or (friction, no state changed) |Δu|/|u| at or above tol_u, or the residual. Local.
+fn last_step_state(last: Option<&StepInfo>, tol_u: f64) -> String {
+    match last {
+        None => "no step".into(),
+        Some(h) if h.changed > 0 => format!(
+            "the sets still changing: {} node(s) in the last step",
+            h.changed
+        ),
+        Some(h) => match h.du_rel {
+            Some(du) if du >= tol_u => format!(
+                "no state changed in the last step, but |Δu|/|u| = {du:.1e} ≥ newton.tol_u = \
+                 {tol_u:e}"
+            ),
+            _ => format!(
+                "no state changed in the last step, but the residual {:.1e} had not reached \
+                 its tolerance",
+                h.residual
+            ),
+        },
+    }
 }
 
 /// The final state: the contact table, the KKT and friction certificates (an error if they
@@ -667,8 +706,8 @@ fn final_state(
     sys: &System,
     b: &ContactBoundary,
     nr: &NewtonResult,
-    friction: bool,
-    dim: usize,
+    (friction, dim): (bool, usize),
+    floor: Scales,
 ) -> Result<(ContactSummary, report::Table), RunError> {
     let table = report::gather(ctx, b, &nr.nodes, dim);
     let total_force = report::total_force(ctx, &nr.nodes);
@@ -676,7 +715,8 @@ fn final_state(
         [one] => table.half_width(one, None),
         _ => None,
     };
-    let (scales, kkt, friction_certificate) = certificates(ctx, sys, &table, &nr.u, friction)?;
+    let (scales, kkt, friction_certificate) =
+        certificates(ctx, sys, &table, &nr.u, friction, floor)?;
     check_certificates(ctx, &kkt, friction_certificate.as_ref(), &scales)?;
     say!(
         ctx,
@@ -1775,7 +1815,7 @@ pub(super) fn coulomb_certificate_worst(
     let mut judged = b.clone();
     coulomb_bounds(&mut judged, nodes);
     let table = report::gather(ctx, &judged, nodes, dim);
-    let (scales, kkt, friction) = certificates(ctx, sys, &table, u, true)?;
+    let (scales, kkt, friction) = certificates(ctx, sys, &table, u, true, Scales::default())?;
     let friction = friction.map_or(0.0, |f| f.worst(&scales));
     Ok(kkt.worst().max(friction))
 }
@@ -1788,23 +1828,27 @@ fn coulomb_bounds(b: &mut ContactBoundary, nodes: &[NodeResult]) {
     }
 }
 
-/// The problem's scales, the KKT certificate of (3.14) and, with friction, the friction
-/// certificate of (3.18) of a gathered contact table at u. Collective (two reductions).
+/// The problem's scales, at least `floor`, the KKT certificate of (3.14) and, with friction,
+/// the friction certificate of (3.18) of a gathered contact table at u. Collective (two
+/// reductions).
 fn certificates(
     ctx: &Ctx,
     sys: &System,
     table: &report::Table,
     u: &Vector,
     friction: bool,
+    floor: Scales,
 ) -> Result<(Scales, report::Kkt, Option<report::FrictionCertificate>), RunError> {
     let scales = problem_scales(ctx, sys, u)?;
-    let kkt = table.kkt(!friction, &scales);
+    let mut kkt = table.kkt(!friction, &scales);
+    kkt.force_scale = kkt.force_scale.max(floor.force);
+    kkt.length_scale = kkt.length_scale.max(floor.length);
     // without a load (a body moved by its Dirichlet data or by the obstacle alone) the force
     // scale is the contact's own, as the KKT certificate takes it: friction with μ = 0 or
     // g_R = 0 (b = 0) is judged by it too, not by a zero scale
     let scales = Scales {
         force: kkt.force_scale,
-        ..scales
+        length: scales.length.max(floor.length),
     };
     Ok((scales, kkt, friction.then(|| table.friction_certificate())))
 }

@@ -397,7 +397,7 @@ impl Table {
 /// The scales of a whole problem: the largest nodal load |f|_∞ and the largest displacement
 /// |u|_∞ (a certificate judged by the contact nodes' own values alone calls round-off a
 /// violation where everything at the contact is tiny, e.g. a block lifted off).
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Copy, Debug, Default)]
 pub struct Scales {
     pub force: f64,
     pub length: f64,

@@ -1887,7 +1887,8 @@ fn check_certificates(
         return Err(RunError::Failed(format!(
             "the final state is not a solution: it violates {} beyond {:e} of the problem's \
              scales (force {:.3e}, length {:.3e}): KKT {}{} — the problem is probably ill-posed \
-             (a load that contact and friction cannot carry) or the linear solves inexact",
+             (a load that contact and friction cannot carry, or a mesh of several bodies that \
+             Dirichlet data do not hold) or the linear solves inexact",
             if fric_bad(report::CERTIFICATE_TOL) {
                 "(3.18)"
             } else {

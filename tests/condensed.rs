@@ -268,14 +268,15 @@ fn a_set_grown_wide_goes_on_with_its_interior_held() {
 
 #[test]
 fn a_wide_zone_whose_band_exceeds_the_dual_forms_limit_runs_in_the_primal_form() {
-    // A strip with 8 401 top nodes pressed by the tilted plane with the default start: every
+    // A strip with 13 001 top nodes pressed by the tilted plane with the default start: every
     // top node penetrates and starts active. Its interior is held; its band (an eighth,
-    // 1 051 nodes) would still cost more than the dense work allowed for the strip's cheap
+    // 1 626 nodes) would still cost more than the dense work allowed for the strip's cheap
     // factorisation, so the dense steps run on the Schur complement itself: one
-    // factorisation, the plain path's answer.
+    // factorisation, the plain path's answer. (With 8 401 top nodes the band's dual form
+    // fits the dense work allowed since 2D may spend 8 × the factorisation's flops.)
     let tmp = tempfile::tempdir().unwrap();
     let extra = "[solver]\npreset = \"direct\"\n";
-    let case = strip_case(tmp.path(), (8401, "[0.0005, -1.0]"), extra);
+    let case = strip_case(tmp.path(), (13001, "[0.0005, -1.0]"), extra);
     for r in strip_against_plain(&case, &[]) {
         let cs = &r.summary["newton"]["condensed"];
         assert_eq!(cs["outcome"], "condensed", "{}", r.run.output());

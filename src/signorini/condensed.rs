@@ -69,12 +69,17 @@ pub const MAX_SCHUR_DOFS: usize = 8000;
 /// K_p (MUMPS' analysis estimate): else the plain path runs.
 const DENSE_FLOOR_FLOPS: f64 = 1e9;
 
-/// In 2D a dense flop costs this fraction of one of MUMPS' (the dense work may be this many
-/// times the factorisation's flops): LAPACK's Cholesky and inversion run at 13.6 GFlop/s on one
-/// core here (n = 3 000 in 2.0 s), MUMPS' factorisation of a 2D body at about 0.8 GFlop/s on 2
-/// ranks (the Hertz disk at 171 602 unknowns: 1.0e9 flops in 1.3 s; small fronts). 3D fronts
-/// are dense enough for BLAS-3 rates: there the ratio stays 1 (not measured beyond).
-const DENSE_SPEEDUP_2D: f64 = 4.0;
+/// In 2D the dense work may be this many times the factorisation's flops: a dense flop costs
+/// a fraction of one of MUMPS' on a 2D body (small fronts). Measured on the held Hertz disk at
+/// 698 352 unknowns with Coulomb (2026-11-27), 2 ranks, OpenBLAS' AVX-512 kernels: K_p's
+/// factorisation 1.1e10 flops, about 1.4 s per plain Newton step; the dense work on 2 000
+/// candidates with every dof (n³ = 6.4e10) 1.6 s, about one factorisation's time (a ratio of
+/// about 6). 8 lets the dense work cost up to about 1.4 factorisations: the path it saves
+/// costs 10 or more (that case: 12 plain steps after the frictionless solution, 34.0 s in
+/// all, against 9.7 s condensed). Earlier (LAPACK at 13.6 GFlop/s on one core against MUMPS'
+/// 0.8 GFlop/s at 171 602 unknowns) it was 4. 3D fronts are dense enough for BLAS-3 rates:
+/// there the ratio stays 1 (not measured beyond).
+const DENSE_SPEEDUP_2D: f64 = 8.0;
 
 /// The first candidate set: the 1/FIRST_FRACTION of the contact nodes with the smallest gaps.
 const FIRST_FRACTION: usize = 8;

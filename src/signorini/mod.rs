@@ -321,16 +321,9 @@ pub fn solve(
     log_boundary(ctx, &b, settings, dim);
     let force_control = force_control(settings, previous);
     check_friction_capacity(ctx, &b, (fixed, sys, dim), law, &force_control)?;
-    let prev_u = match previous {
-        Some(prev) => Some(take_reference(
-            ctx,
-            &mut b,
-            prev,
-            friction,
-            &settings.displacements(),
-        )?),
-        None => None,
-    };
+    let displacements = settings.displacements();
+    let prev_u = (previous.map(|prev| take_reference(ctx, &mut b, prev, friction, &displacements)))
+        .transpose()?;
     solver::configure(
         solver_section.preset,
         solver_section.rtol,
@@ -411,15 +404,7 @@ pub fn solve(
     }
     let (displacement, approaches) =
         place_at_approaches(&mut b, settings, (&force_control, &nr.approach), friction);
-    // a step whose solution vanishes against the step before's (its load taken back to
-    // nothing) is judged against a floor from that step's scales, as its stopping rule is
-    let floor = previous.map_or(Scales::default(), |p| {
-        let s = p.report.contact.scales;
-        Scales {
-            force: newton::VANISHING * s.force,
-            length: newton::VANISHING * s.length,
-        }
-    });
+    let floor = vanishing_floor(previous); // the step before's scales, for a vanishing step
     let (mut contact, table) = final_state(ctx, sys, &b, &nr, (friction, dim), floor)?;
     report::per_pair(
         ctx,
@@ -674,6 +659,19 @@ fn run_method(
         }));
     }
     Ok((nr, outer_steps, condensed_summary))
+}
+
+/// The floor of the scales the final check judges a load step by: a step whose solution
+/// vanishes against the step before's (its load taken back to nothing) is judged against
+/// [`newton::VANISHING`] of that step's scales, as its stopping rule is. Local.
+fn vanishing_floor(previous: Option<&ContactSolution>) -> Scales {
+    previous.map_or(Scales::default(), |p| {
+        let s = p.report.contact.scales;
+        Scales {
+            force: newton::VANISHING * s.force,
+            length: newton::VANISHING * s.length,
+        }
+    })
 }
 
 /// What kept the last step of an unconverged iteration from stopping: nodes that changed

@@ -928,32 +928,36 @@ fn load_steps_keep_the_condensed_factorisation() {
 /// pushed up by 0.02 and sideways by (0.002, 0.001) — into a rigid sphere above its top,
 /// Coulomb with μ = 0.3 (bench/results/friction-held.md's case on a coarse mesh).
 fn held_block_case(dir: &Path) -> std::path::PathBuf {
-    let mesh = repo("tests/meshes/block3d_h0.1.msh");
-    write_case(
-        &dir.join("block.toml"),
-        &format!(
-            "[mesh]\nfile = {}\n[material]\nyoung = 2.0\npoisson = 0.3\n\
-             [[dirichlet]]\ngroup = \"bottom\"\nvalue = [0.002, 0.001, 0.02]\n[contact]\n\
-             group = \"top\"\nobstacle = {{ type = \"sphere\", center = [0.0, 0.0, 2.5], \
-             radius = 2.0 }}\nfriction = {{ law = \"coulomb\", mu = 0.3 }}\n\
-             [output]\nfields = [\"displacement\", \"contact\"]\n",
-            toml_path(&mesh)
-        ),
-    )
+    let sphere = "{ type = \"sphere\", center = [0.0, 0.0, 2.5], radius = 2.0 }";
+    block_case(dir.join("block.toml"), "[0.002, 0.001, 0.02]", sphere, "")
 }
 
 /// The block of tests/meshes/block3d_h0.1.msh (7 071 unknowns) held at its bottom, its whole
 /// top (511 nodes) the contact boundary under a rigid plane through (0, 0, `z`) facing down,
 /// μ = 0.3; `more`: further keys of [contact] and further sections.
 fn flat_block_case(dir: &Path, z: f64, more: &str) -> std::path::PathBuf {
+    let plane =
+        format!("{{ type = \"plane\", point = [0.0, 0.0, {z}], normal = [0.0, 0.0, -1.0] }}");
+    block_case(dir.join("flat.toml"), "[0.0, 0.0, 0.0]", &plane, more)
+}
+
+/// The case file `path` on tests/meshes/block3d_h0.1.msh: its bottom held at `bottom`, its top
+/// the contact boundary against `obstacle`, Coulomb with μ = 0.3; `more` after [contact]'s
+/// keys.
+fn block_case(
+    path: std::path::PathBuf,
+    bottom: &str,
+    obstacle: &str,
+    more: &str,
+) -> std::path::PathBuf {
     let mesh = repo("tests/meshes/block3d_h0.1.msh");
     write_case(
-        &dir.join("flat.toml"),
+        &path,
         &format!(
             "[mesh]\nfile = {}\n[material]\nyoung = 2.0\npoisson = 0.3\n\
-             [[dirichlet]]\ngroup = \"bottom\"\nvalue = [0.0, 0.0, 0.0]\n[contact]\n\
-             group = \"top\"\nobstacle = {{ type = \"plane\", point = [0.0, 0.0, {z}], \
-             normal = [0.0, 0.0, -1.0] }}\nfriction = {{ law = \"coulomb\", mu = 0.3 }}\n\
+             [[dirichlet]]\ngroup = \"bottom\"\nvalue = {bottom}\n[contact]\n\
+             group = \"top\"\nobstacle = {obstacle}\n\
+             friction = {{ law = \"coulomb\", mu = 0.3 }}\n\
              {more}[output]\nfields = [\"displacement\", \"contact\"]\n",
             toml_path(&mesh)
         ),

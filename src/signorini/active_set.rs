@@ -507,6 +507,7 @@ impl ActiveSet {
         let mut residual2 = 0.0;
         let mut lambda2 = 0.0;
         let mut states = [0usize; 4];
+        let mut rows2 = [0.0; 2];
         for (i, (k, r)) in b.nodes.iter().zip(&it.nodes).enumerate() {
             states[self.state(i).number() as usize - 1] += 1;
             next.normal[i] = contact::normal_active(r.u_n, r.lambda_n, k.gap, c);
@@ -522,6 +523,10 @@ impl ActiveSet {
                     t[i] = settled(self.tangential.as_ref().map(|p| p[i]), t[i], k, r, c, dim);
                 }
                 flip |= t[i].is_slip() != self.slip(i);
+                if let (Some(own), true) = (self.tangential.as_ref(), t[i] != CoulombRow::Stick) {
+                    rows2[0] += row_residual2(&own[i], k, r, c);
+                    rows2[1] += row_residual2(&t[i], k, r, c);
+                }
                 residual2 += law.residual2(k, r, c);
                 lambda2 += r.lambda.iter().map(|x| x * x).sum::<f64>();
             }
@@ -537,6 +542,7 @@ impl ActiveSet {
             states,
             du2: it.du2,
             uu: it.uu,
+            rows2,
         }
     }
 }
@@ -642,6 +648,9 @@ pub struct SetUpdate {
     pub states: [usize; 4],
     pub du2: f64,
     pub uu: f64,
+    /// Σ over the slip rows of the next set: each row's residual² at this iterate, in this
+    /// step's row (the solve's round-off) and in the next step's ([`row_residual2`]).
+    pub rows2: [f64; 2],
 }
 
 impl SetUpdate {
@@ -655,6 +664,23 @@ impl SetUpdate {
             .count();
         self.next.normal = normal;
     }
+}
+
+/// The residual² of the tangential row `row` (3.39) / (F6), −λ_τ + L̃ Δu_τ − q (λ_n + c (u_n +
+/// g)) − r̃, at the iterate `r` of node `k` (0 for a stick row, which does not depend on the
+/// iterate). Pure.
+fn row_residual2(row: &CoulombRow<2>, k: &ContactNode, r: &NodeResult, c: f64) -> f64 {
+    let CoulombRow::Slip { l, q, r: rhs } = row else {
+        return 0.0;
+    };
+    let du = increment(r, k);
+    let s = r.lambda_n + c * (r.u_n + k.gap);
+    (0..2)
+        .map(|i| {
+            let v = -r.lambda_t[i] + l[i][0] * du[0] + l[i][1] * du[1] - q[i] * s - rhs[i];
+            v * v
+        })
+        .sum()
 }
 
 /// A step's update as all ranks see it.
@@ -672,6 +698,9 @@ pub struct StepTotals {
     pub du_rel: f64,
     /// ‖u^ℓ‖².
     pub u_norm2: f64,
+    /// The slip rows' residuals at u^ℓ over all contact nodes, (this step's rows, the next
+    /// step's) ([`SetUpdate::rows2`]).
+    pub rows: (f64, f64),
 }
 
 impl SetUpdate {
@@ -688,7 +717,9 @@ impl SetUpdate {
         local.extend(self.states.map(|s| s as f64));
         local.extend(self.next.pack_summary(b, modes, dim));
         local.push(self.lambda2);
+        local.extend(self.rows2);
         let g = ctx.sum_vec(&local);
+        let n = g.len();
         StepTotals {
             changed: g[0] as usize,
             residual: g[1].sqrt(),
@@ -700,7 +731,8 @@ impl SetUpdate {
             u_norm2: g[3],
             states: [0, 1, 2, 3].map(|j| g[4 + j] as usize),
             next: unpack_summary(&g[8..]),
-            lambda_norm: g[g.len() - 1].sqrt(),
+            lambda_norm: g[n - 3].sqrt(),
+            rows: (g[n - 2].sqrt(), g[n - 1].sqrt()),
         }
     }
 }
@@ -708,6 +740,27 @@ impl SetUpdate {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_row_holds_at_the_iterate_it_was_formed_from_where_it_has_settled() {
+        // a 2D Tresca slip row formed at a slip solution (|λ_τ| = b): λ_τ' = ±b, which that
+        // iterate satisfies; a row formed where λ_τ is not yet b does not hold there
+        let k = node(0.1, [0.0; 2]);
+        let at = |lt: f64, ut: f64| NodeResult {
+            u_t: [ut, 0.0],
+            lambda_t: [lt, 0.0],
+            ..NodeResult::default()
+        };
+        let settled = at(0.1, 0.3);
+        let row = Law::Tresca.row(&k, &settled, 1.0, 2);
+        assert!(row.is_slip());
+        assert!(row_residual2(&row, &k, &settled, 1.0) < 1e-30);
+        let moving = at(0.05, 0.3);
+        let row = Law::Tresca.row(&k, &moving, 1.0, 2);
+        assert!(row.is_slip());
+        assert!(row_residual2(&row, &k, &moving, 1.0) > 1e-6);
+        assert_eq!(row_residual2(&CoulombRow::Stick, &k, &moving, 1.0), 0.0);
+    }
 
     use crate::contact::Frame;
 

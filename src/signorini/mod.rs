@@ -327,7 +327,7 @@ pub fn solve(
     solver::configure(
         solver_section.preset,
         solver_section.rtol,
-        !friction,
+        symmetric_rows(settings, dim),
         (&solver_section.petsc_options, solver_section.repeatable),
     )?;
     let coords = solver::near_null_space_coordinates(ctx, mesh, layout, solver_section.preset)?;
@@ -792,6 +792,18 @@ fn newton_summary(
             outer_steps,
             warm_start: previous.is_some(),
         }),
+    }
+}
+
+/// The reduced systems of the case are symmetric: frictionless (3.29) and, in 2D, Tresca's
+/// (3.42) (also the fixed point's inner Tresca solves), both applied symmetrically — a 2D slip
+/// row adds the scalar spring L̃ ≥ 0 of (3.39b) to its node's own tangential diagonal. Not
+/// Coulomb's generalised Newton (its row mix (F7)) nor 3D Tresca (a 2 × 2 L̃ that is not
+/// symmetric). The direct preset then factorises by LDLᵀ instead of LU.
+fn symmetric_rows(settings: &ContactSettings, dim: usize) -> bool {
+    match settings.coulomb {
+        Some((_, CoulombAlgorithm::Newton)) => false,
+        _ => !settings.friction() || dim == 2,
     }
 }
 

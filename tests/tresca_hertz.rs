@@ -256,3 +256,24 @@ fn hertz_tresca_larger_tangential_load_converges_with_default_c() {
         );
     }
 }
+
+/// 2D Tresca's reduced system (3.42) is symmetric (a slip node's L̃ of (3.39b) is a scalar on
+/// its own tangential diagonal), so the direct preset factorises it by LDLᵀ, which reads one
+/// triangle only: an unsymmetric entry would change the answer. LU forced through
+/// `solver.petsc_options` must give the same states and u, on 1 and 2 ranks.
+#[test]
+fn tresca_in_2d_by_ldlt_gives_the_lu_answer() {
+    for np in [1, 2] {
+        let ldlt = solve(np, &case(CASE), &[]);
+        ldlt.assert_converged("LDLᵀ (default)");
+        let lu = solve(np, &case(CASE), &["solver.petsc_options=\"-pc_type lu\""]);
+        lu.assert_converged("LU");
+        let (ra, rb) = (ldlt.contact_rows_by_id(), lu.contact_rows_by_id());
+        for (id, r) in &ra {
+            assert_eq!(r.active(), rb[id].active(), "node {id}: contact state");
+            assert_eq!(r.tangential(), rb[id].tangential(), "node {id}: stick/slip");
+        }
+        let d = ldlt.u_rel_diff(&lu);
+        assert!(d <= 1e-10, "{np} rank(s): |u_LDLᵀ − u_LU| / max|u| = {d:e}");
+    }
+}

@@ -226,8 +226,12 @@ fn hertz_tresca_unique_solution_from_both_starts() {
         du <= 1e-9 * su,
         "the two starts end in different u: {du:e} vs {su:e}"
     );
-    let ra = a.contact_rows_by_id();
-    let rb = b.contact_rows_by_id();
+    same_states(&a, &b);
+}
+
+/// Every contact node in the same contact and stick/slip state in both solutions.
+fn same_states(a: &Solved, b: &Solved) {
+    let (ra, rb) = (a.contact_rows_by_id(), b.contact_rows_by_id());
     for (id, r) in &ra {
         assert_eq!(r.active(), rb[id].active(), "node {id}: contact state");
         assert_eq!(r.tangential(), rb[id].tangential(), "node {id}: stick/slip");
@@ -268,11 +272,7 @@ fn tresca_in_2d_by_ldlt_gives_the_lu_answer() {
         ldlt.assert_converged("LDLᵀ (default)");
         let lu = solve(np, &case(CASE), &["solver.petsc_options=\"-pc_type lu\""]);
         lu.assert_converged("LU");
-        let (ra, rb) = (ldlt.contact_rows_by_id(), lu.contact_rows_by_id());
-        for (id, r) in &ra {
-            assert_eq!(r.active(), rb[id].active(), "node {id}: contact state");
-            assert_eq!(r.tangential(), rb[id].tangential(), "node {id}: stick/slip");
-        }
+        same_states(&ldlt, &lu);
         let d = ldlt.u_rel_diff(&lu);
         assert!(d <= 1e-10, "{np} rank(s): |u_LDLᵀ − u_LU| / max|u| = {d:e}");
     }

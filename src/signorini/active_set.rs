@@ -741,27 +741,6 @@ impl SetUpdate {
 mod tests {
     use super::*;
 
-    #[test]
-    fn a_row_holds_at_the_iterate_it_was_formed_from_where_it_has_settled() {
-        // a 2D Tresca slip row formed at a slip solution (|λ_τ| = b): λ_τ' = ±b, which that
-        // iterate satisfies; a row formed where λ_τ is not yet b does not hold there
-        let k = node(0.1, [0.0; 2]);
-        let at = |lt: f64, ut: f64| NodeResult {
-            u_t: [ut, 0.0],
-            lambda_t: [lt, 0.0],
-            ..NodeResult::default()
-        };
-        let settled = at(0.1, 0.3);
-        let row = Law::Tresca.row(&k, &settled, 1.0, 2);
-        assert!(row.is_slip());
-        assert!(row_residual2(&row, &k, &settled, 1.0) < 1e-30);
-        let moving = at(0.05, 0.3);
-        let row = Law::Tresca.row(&k, &moving, 1.0, 2);
-        assert!(row.is_slip());
-        assert!(row_residual2(&row, &k, &moving, 1.0) > 1e-6);
-        assert_eq!(row_residual2(&CoulombRow::Stick, &k, &moving, 1.0), 0.0);
-    }
-
     use crate::contact::Frame;
 
     fn node(bound: f64, u_t_ref: [f64; 2]) -> ContactNode {
@@ -1017,5 +996,26 @@ mod tests {
         let (x, y) = node_hash(12345);
         assert!(x < (1u64 << 20) as f64 && y < (1u64 << 20) as f64);
         assert_ne!(node_hash(1), node_hash(2));
+    }
+
+    #[test]
+    fn a_row_holds_at_the_iterate_it_was_formed_from_where_it_has_settled() {
+        // a 2D Tresca slip row formed at a slip solution (|λ_τ| = b): λ_τ' = ±b, which that
+        // iterate satisfies; a row formed where λ_τ is not yet b does not hold there
+        let k = node(0.1, [0.0; 2]);
+        let at = |lt: f64, ut: f64| NodeResult {
+            u_t: [ut, 0.0],
+            lambda_t: [lt, 0.0],
+            ..NodeResult::default()
+        };
+        let settled = at(0.1, 0.3);
+        let row = Law::Tresca.row(&k, &settled, 1.0, 2);
+        assert!(row.is_slip());
+        assert!(row_residual2(&row, &k, &settled, 1.0) < 1e-30);
+        let moving = at(0.05, 0.3);
+        let row = Law::Tresca.row(&k, &moving, 1.0, 2);
+        assert!(row.is_slip());
+        assert!(row_residual2(&row, &k, &moving, 1.0) > 1e-6);
+        assert_eq!(row_residual2(&CoulombRow::Stick, &k, &moving, 1.0), 0.0);
     }
 }

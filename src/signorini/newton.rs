@@ -1199,14 +1199,18 @@ mod tests {
     }
 
     #[test]
-    fn a_residual_is_round_off_only_when_still_steps_stop_reducing_it() {
-        // two still steps, the residual not halved, small against ‖λ‖: round-off
-        assert!(stalled(true, Some(9e-13), 8.9e-13, 6e-4));
+    fn the_next_rows_hold_only_within_the_slack_of_the_own_rows_or_the_floor() {
         // the step testing |Δu| is skipped where the next rows hold at the iterate to round-off
         assert!(rows_hold((1e-18, 1e-17), 1e-22));
         assert!(rows_hold((0.0, 1e-21), 1e-22));
         assert!(!rows_hold((1e-18, 1e-15), 1e-22));
         assert!(!rows_hold((0.0, 1e-20), 1e-22));
+    }
+
+    #[test]
+    fn a_residual_is_round_off_only_when_still_steps_stop_reducing_it() {
+        // two still steps, the residual not halved, small against ‖λ‖: round-off
+        assert!(stalled(true, Some(9e-13), 8.9e-13, 6e-4));
         // the first still step: no verdict yet
         assert!(!stalled(true, None, 8.9e-13, 6e-4));
         // still decreasing: Newton is still working

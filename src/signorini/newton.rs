@@ -268,6 +268,9 @@ pub fn semismooth_newton(
         correct: false,
     };
     let mut last_changed = usize::MAX;
+    // GMRES on an earlier step's factorisation counts as factorised for the step not taken
+    // (a stop there is confirmed by a factorised step, `StepPlan::after_stop`)
+    let direct = reduced.factorises()?;
     for step in 1..=s.section.max_steps {
         let gram = lp.set_gram();
         let modes_changed = lp.free.update(ctx, mesh, layout, &gram)?;
@@ -319,10 +322,8 @@ pub fn semismooth_newton(
         if plan.correct && predicted.is_some() {
             lp.corrected(totals.changed);
         }
-        // a factorisation, or GMRES on an earlier one (a stop there is confirmed by a
-        // factorised step, `StepPlan::after_stop`)
-        let factorised = solved.kind == SolveKind::Factorisation
-            || (solved.kind == SolveKind::Reuse && reduced.factorises()?);
+        let factorised =
+            solved.kind == SolveKind::Factorisation || (solved.kind == SolveKind::Reuse && direct);
         history.push(lp.step_info(step, &totals, solved, reduced.change()));
         history.last_mut().expect("pushed").predictor = predicted;
         log_step(ctx, history.last().expect("pushed"), &totals);

@@ -7,7 +7,11 @@
 //! but OpenBLAS reads it before `main` runs, so the process restarts itself once with it set
 //! ([`restart_with_fitting_kernels`]). A user's own OPENBLAS_CORETYPE is left alone.
 
-use crate::petsc::lapack::openblas_core;
+use crate::petsc::lapack::{openblas_core, openblas_threads, set_openblas_threads};
+use mpi::collective::SystemOperation;
+use mpi::topology::SimpleCommunicator;
+use mpi::traits::*;
+use rustix::thread::{sched_getaffinity, sched_setaffinity, CpuSet, Pid};
 
 /// Set in the restarted process: the core OpenBLAS had taken the CPU for.
 const DETECTED: &str = "SIGNORINI_OPENBLAS_DETECTED";
@@ -103,6 +107,134 @@ pub fn kernels() -> Option<String> {
         Ok(detected) => format!("OpenBLAS {core} (OpenBLAS had taken this CPU for {detected})"),
         Err(_) => format!("OpenBLAS {core}"),
     })
+}
+
+/// The smallest dense dimension whose phase runs widened ([`NodeCores::run`]). Measured on 2
+/// cores (docs/numbers.md, "Rank 0's dense phases on the cores of its node"): OpenBLAS' LU
+/// with 2 threads takes 0.91–0.99 of one thread's time from 200 to 700 unknowns and 0.59–0.70
+/// from 1 000 on; the dense Coulomb steps of a 3D case with 286 candidates (about 400–600
+/// unknowns per step) took 1.4 × as long widened, their threads' synchronisation outweighing
+/// the split of small products.
+pub const WIDE_MIN_DIM: usize = 1000;
+
+/// 64-bit words of a CPU set (CpuSet::MAX_CPU bits).
+const CPU_WORDS: usize = CpuSet::MAX_CPU.div_ceil(64);
+
+/// Rank 0's dense work on the cores of its node. The condensed path's dense phases (the inverse
+/// of the Schur complement, the dense Newton steps, the half-space model) run on rank 0 alone;
+/// the other ranks of its node wait for them without spinning ([`crate::par::Ctx::on_root_wide`]),
+/// and rank 0 lets its threads run on every CPU those ranks may use (the union of their
+/// affinity masks: an MPI launcher that binds each rank to a core leaves rank 0 one core) with
+/// as many OpenBLAS threads, restoring both afterwards. MUMPS and everything else keep the
+/// process' own setting (OPENBLAS_NUM_THREADS).
+#[derive(Clone, Copy)]
+pub struct NodeCores {
+    /// Rank 0 with OpenBLAS: the CPUs of the ranks on its node; `None` elsewhere.
+    wide: Option<CpuSet>,
+}
+
+impl NodeCores {
+    /// The CPUs of the ranks that share world rank 0's node (MPI_Comm_split_type shared;
+    /// one OR-reduction of the affinity masks). Collective.
+    pub fn of_root_node(world: &SimpleCommunicator) -> NodeCores {
+        let node = world.split_shared(0);
+        let own = sched_getaffinity(None).ok();
+        let mut words = [0u64; CPU_WORDS];
+        for c in (0..CpuSet::MAX_CPU).filter(|&c| own.is_some_and(|s| s.is_set(c))) {
+            words[c / 64] |= 1 << (c % 64);
+        }
+        let mut union = [0u64; CPU_WORDS];
+        node.all_reduce_into(&words[..], &mut union[..], SystemOperation::bitwise_or());
+        if world.rank() != 0 || own.is_none() || openblas_threads().is_none() {
+            return NodeCores { wide: None };
+        }
+        let mut wide = CpuSet::new();
+        for c in (0..CpuSet::MAX_CPU).filter(|&c| union[c / 64] >> (c % 64) & 1 == 1) {
+            wide.set(c);
+        }
+        NodeCores { wide: Some(wide) }
+    }
+
+    /// Nothing widened (a process that is not rank 0, or a test).
+    pub fn none() -> NodeCores {
+        NodeCores { wide: None }
+    }
+
+    /// The OpenBLAS threads rank 0's dense work runs with: one per CPU of its node's ranks,
+    /// at least the process' own count (1 without OpenBLAS or off rank 0).
+    pub fn threads(&self) -> usize {
+        let own = openblas_threads().unwrap_or(1);
+        self.wide.map_or(own, |w| own.max(w.count() as usize))
+    }
+
+    /// `work`, whose dense matrices are of dimension `dim` at most, with every thread of this
+    /// process allowed on the node's CPUs and OpenBLAS on [`NodeCores::threads`] threads; both
+    /// restored afterwards (also when `work` panics). Where that is no more than the process
+    /// has, or `dim` is below [`WIDE_MIN_DIM`], `work` runs as it is. Local.
+    pub fn run<T>(&self, dim: usize, work: impl FnOnce() -> T) -> T {
+        let (Some(wide), Some(own)) = (self.wide, openblas_threads()) else {
+            return work();
+        };
+        if dim < WIDE_MIN_DIM {
+            return work();
+        }
+        let threads = self.threads();
+        if threads <= own {
+            return work();
+        }
+        let _widened = Widened::new(&wide, own, threads);
+        work()
+    }
+}
+
+/// The threads of this process (/proc/self/task; empty where it cannot be read).
+fn own_threads() -> Vec<Pid> {
+    let Ok(dir) = std::fs::read_dir("/proc/self/task") else {
+        return Vec::new();
+    };
+    dir.filter_map(|e| e.ok()?.file_name().to_str()?.parse().ok())
+        .filter_map(Pid::from_raw)
+        .collect()
+}
+
+/// Widened affinity and OpenBLAS threads, restored on drop ([`NodeCores::run`]).
+struct Widened {
+    saved: Vec<(Pid, CpuSet)>,
+    caller: Option<CpuSet>,
+    threads: usize,
+}
+
+impl Widened {
+    fn new(wide: &CpuSet, own: usize, threads: usize) -> Widened {
+        let saved: Vec<(Pid, CpuSet)> = own_threads()
+            .into_iter()
+            .filter_map(|t| Some((t, sched_getaffinity(Some(t)).ok()?)))
+            .collect();
+        let caller = sched_getaffinity(None).ok();
+        for (t, _) in &saved {
+            // a thread that ended meanwhile, or a set the system refuses: left as it is
+            let _ = sched_setaffinity(Some(*t), wide);
+        }
+        // threads OpenBLAS starts now inherit the caller's widened set
+        set_openblas_threads(threads);
+        Widened {
+            saved,
+            caller,
+            threads: own,
+        }
+    }
+}
+
+impl Drop for Widened {
+    fn drop(&mut self) {
+        set_openblas_threads(self.threads);
+        for t in own_threads() {
+            let back = (self.saved.iter().find(|(s, _)| *s == t).map(|(_, m)| *m)).or(self.caller);
+            if let Some(m) = back {
+                let _ = sched_setaffinity(Some(t), &m);
+            }
+        }
+    }
 }
 
 #[cfg(test)]

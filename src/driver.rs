@@ -51,8 +51,13 @@ pub fn run_case(ctx: &Ctx, case: &Case) -> Result<String, RunError> {
     );
     say!(ctx, "solver: preset {} ({preset_reason})", preset.name());
     let blas = crate::blas::kernels();
+    let dense_threads = ctx.cores.threads(); // rank 0's is the one logged and written
     if let Some(k) = &blas {
-        say!(ctx, "blas: {k}");
+        say!(
+            ctx,
+            "blas: {k}; rank 0's dense phases on {dense_threads} thread(s) (the CPUs of the \
+             ranks on its node)"
+        );
     }
     let mut resolved = case.clone();
     resolved.solver.preset = preset;
@@ -92,6 +97,7 @@ pub fn run_case(ctx: &Ctx, case: &Case) -> Result<String, RunError> {
         refine: case.mesh.refine,
         ranks: ctx.size,
         blas,
+        dense_threads,
         preset: PresetChoice {
             asked: asked.name(),
             used: preset.name(),

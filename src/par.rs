@@ -30,16 +30,46 @@ pub struct Ctx<'a> {
     pub petsc: &'a Petsc,
     pub rank: usize,
     pub size: usize,
+    /// The cores rank 0's dense work may use ([`Ctx::on_root_wide`]).
+    pub cores: crate::blas::NodeCores,
 }
 
 impl<'a> Ctx<'a> {
+    /// Collective (the CPUs of rank 0's node, [`crate::blas::NodeCores::of_root_node`]).
     pub fn new(world: &'a SimpleCommunicator, petsc: &'a Petsc) -> Self {
         Ctx {
             world,
             petsc,
             rank: world.rank() as usize,
             size: world.size() as usize,
+            cores: crate::blas::NodeCores::of_root_node(world),
         }
+    }
+
+    /// `work` on rank 0 alone (`Some` there, `None` elsewhere), for rank 0's dense phases
+    /// whose result a broadcast then shares; `dim`: the largest dimension of its dense
+    /// matrices. From [`crate::blas::WIDE_MIN_DIM`] on, rank 0's BLAS threads get the cores of
+    /// the ranks beside it ([`crate::blas::NodeCores`]), and the other ranks wait in a barrier
+    /// that they test and sleep on instead of spinning. Collective.
+    pub fn on_root_wide<T>(&self, dim: usize, work: impl FnOnce() -> T) -> Option<T> {
+        let out = (self.rank == 0).then(|| self.cores.run(dim, work));
+        if self.size > 1 && dim >= crate::blas::WIDE_MIN_DIM {
+            let mut req = self.world.immediate_barrier();
+            if self.rank == 0 {
+                req.wait();
+            } else {
+                // about 0.1 ms late at most after rank 0 ends, against dense phases of
+                // milliseconds to seconds
+                loop {
+                    match req.test() {
+                        Ok(_) => break,
+                        Err(r) => req = r,
+                    }
+                    std::thread::sleep(std::time::Duration::from_micros(100));
+                }
+            }
+        }
+        out
     }
 
     /// PETSc's communicator (the same as `world`).

@@ -94,6 +94,8 @@ pub struct Summary<S: Serialize> {
     /// another BLAS.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub blas: Option<String>,
+    /// The OpenBLAS threads of rank 0's dense phases ([`crate::blas::NodeCores`]).
+    pub dense_threads: usize,
     /// `solver.preset` as asked and as used (the "auto" choice).
     pub preset: PresetChoice,
     pub partition: PartitionInfo,

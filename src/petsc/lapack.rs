@@ -80,6 +80,40 @@ pub fn openblas_core() -> Option<String> {
     }
 }
 
+/// OpenBLAS' function `name` from the loaded libraries (dlsym with RTLD_DEFAULT), or null.
+fn openblas_symbol(name: &std::ffi::CStr) -> *mut std::ffi::c_void {
+    // SAFETY: dlsym with the null handle (RTLD_DEFAULT on glibc) only searches the loaded
+    // objects and returns an address or null; nothing is called here.
+    unsafe { dlsym(std::ptr::null_mut(), name.as_ptr()) }
+}
+
+/// OpenBLAS' thread count (`openblas_get_num_threads`), or `None` when the BLAS this process
+/// loaded is not OpenBLAS. Local.
+pub fn openblas_threads() -> Option<usize> {
+    type Get = unsafe extern "C" fn() -> c_int;
+    let f = openblas_symbol(c"openblas_get_num_threads");
+    if f.is_null() {
+        return None;
+    }
+    // SAFETY: a non-null result is OpenBLAS' `int openblas_get_num_threads(void)`.
+    let n = unsafe { std::mem::transmute::<*mut std::ffi::c_void, Get>(f)() };
+    Some(n.max(1) as usize)
+}
+
+/// Sets OpenBLAS' thread count (`openblas_set_num_threads`; OpenBLAS starts the threads it
+/// lacks). False when the BLAS this process loaded is not OpenBLAS. Local; call it between
+/// BLAS calls of this process, not from inside one.
+pub fn set_openblas_threads(n: usize) -> bool {
+    type Set = unsafe extern "C" fn(c_int);
+    let f = openblas_symbol(c"openblas_set_num_threads");
+    if f.is_null() {
+        return false;
+    }
+    // SAFETY: a non-null result is OpenBLAS' `void openblas_set_num_threads(int)`.
+    unsafe { std::mem::transmute::<*mut std::ffi::c_void, Set>(f)(n.clamp(1, 4096) as c_int) };
+    true
+}
+
 /// The Cholesky factor of a symmetric positive definite matrix (its lower triangle is read),
 /// for repeated solves: half the work of [`DenseLu`].
 pub struct DenseCholesky {

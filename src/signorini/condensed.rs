@@ -1515,19 +1515,22 @@ impl Compliance {
         let r = factor
             .condense(&self.rotated(f_root))
             .map_err(|e| Stop::failed(format!("the condensation of f failed: {e}")))?;
-        let mut ok = vec![1.0];
-        if root && self.primal {
-            // S itself (its lower triangle, column-major, as LAPACK's Cholesky reads it)
-            let n = dofs.len();
-            let mut s = DMatrix::from_vec(n, n, factor.take_schur());
-            for j in 0..n {
-                for i in 0..j {
-                    s[(i, j)] = s[(j, i)];
+        // S copied (primal) or inverted (dimension: the Schur dofs)
+        let work = if self.primal { 0 } else { dofs.len() };
+        let inverted = ctx.on_root_wide(work, || {
+            if self.primal {
+                // S itself (its lower triangle, column-major, as LAPACK's Cholesky reads it)
+                let n = dofs.len();
+                let mut s = DMatrix::from_vec(n, n, factor.take_schur());
+                for j in 0..n {
+                    for i in 0..j {
+                        s[(i, j)] = s[(j, i)];
+                    }
                 }
+                self.schur = s;
+                self.r = r;
+                return true;
             }
-            self.schur = s;
-            self.r = r;
-        } else if root {
             // S's one copy, factorised and inverted in place: C = S⁻¹; with every dof of the
             // candidates (Coulomb) a copy of S and r too, for the primal form of its dense steps
             let sv = factor.take_schur();
@@ -1535,16 +1538,16 @@ impl Compliance {
                 self.schur = DMatrix::from_vec(dofs.len(), dofs.len(), sv.clone());
                 self.r = r.clone();
             }
-            match DenseCholesky::factor_owned(dofs.len(), sv) {
-                Some(ch) => {
-                    self.cmat = ch.inverse();
-                    self.d0 = (&self.cmat * DVector::from_column_slice(&r))
-                        .as_slice()
-                        .to_vec();
-                }
-                None => ok[0] = 0.0,
-            }
-        }
+            let Some(ch) = DenseCholesky::factor_owned(dofs.len(), sv) else {
+                return false;
+            };
+            self.cmat = ch.inverse();
+            self.d0 = (&self.cmat * DVector::from_column_slice(&r))
+                .as_slice()
+                .to_vec();
+            true
+        });
+        let mut ok = vec![if inverted == Some(false) { 0.0 } else { 1.0 }];
         ctx.broadcast_f64s(&mut ok);
         self.factor = Some(factor);
         if ok[0] == 0.0 {
@@ -1697,7 +1700,7 @@ fn dense_round(
     let mut packed: Vec<f64> = Vec::new();
     // the primal form's Schur variables' part of the expansion, u − G α (rank 0)
     let mut x_s = Vec::new();
-    if ctx.rank == 0 {
+    let root = ctx.on_root_wide(ns + mz, || {
         let run = guarded("dense-steps", || {
             let (_, mut load_scale) = free.load();
             let mut phi = s.carried.map_or_else(|| free.free_load(), <[f64]>::to_vec);
@@ -1779,9 +1782,11 @@ fn dense_round(
                 dense.run(start)
             }
         });
-        packed = run
-            .unwrap_or_else(|why| DenseRun::failed(ns, mz, why))
-            .pack(ns, mz);
+        run.unwrap_or_else(|why| DenseRun::failed(ns, mz, why))
+            .pack(ns, mz)
+    });
+    if let Some(p) = root {
+        packed = p;
     }
     ctx.broadcast_f64s(&mut packed);
     (DenseRun::unpack(&packed, ns, mz), x_s)

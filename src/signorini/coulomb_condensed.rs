@@ -1030,9 +1030,7 @@ fn dense_phase(
     let n = kept.comp.list.len();
     let mz = kept.free.dirichlet_free().ncols() + ns.force.len();
     let warm_records = warm.map(|w| gather_records(ctx, w.nodes));
-    let mut packed = Vec::new();
-    let mut x_s = Vec::new();
-    if ctx.rank == 0 {
+    let root = ctx.on_root_wide(n * dim + mz, || {
         let run = guarded("coulomb-dense-steps", || {
             let cb = candidate_boundary(kept, b, dim);
             let g = mode_parts(&kept.free, ns.force, &cb, dim);
@@ -1081,9 +1079,9 @@ fn dense_phase(
             }
         });
         let mut run = run.unwrap_or_else(|why| DenseCoulomb::failed(n, dim, mz, why));
-        x_s = std::mem::take(&mut run.x_s);
-        packed = run.pack();
-    }
+        (run.pack(), std::mem::take(&mut run.x_s))
+    });
+    let (mut packed, x_s) = root.unwrap_or_default();
     ctx.broadcast_f64s(&mut packed);
     let mut run = DenseCoulomb::unpack(&packed, n, dim, mz);
     run.x_s = x_s;

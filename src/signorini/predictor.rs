@@ -347,17 +347,18 @@ fn run_model(
         // rank 0: [code, model nodes, model steps, coarse levels, represented, δ change,
         // flags of all nodes]; a panic in the model is caught there (code 4) so that the
         // broadcast still happens
-        let mut packed: Vec<f64> = Vec::new();
-        if ctx.rank == 0 {
-            packed = super::dense::guarded("predictor-model", || {
-                model.solve(&all, &packed_c, free, (mz, c, max_steps), (force, grow))
+        let mut packed: Vec<f64> = ctx
+            .on_root_wide(model.m() + mz, || {
+                super::dense::guarded("predictor-model", || {
+                    model.solve(&all, &packed_c, free, (mz, c, max_steps), (force, grow))
+                })
+                .unwrap_or_else(|_| {
+                    let mut failed = vec![0.0; head];
+                    failed[0] = 4.0;
+                    failed
+                })
             })
-            .unwrap_or_else(|_| {
-                let mut failed = vec![0.0; head];
-                failed[0] = 4.0;
-                failed
-            });
-        }
+            .unwrap_or_default();
         ctx.broadcast_f64s(&mut packed);
         match wanted {
             Some(w) if packed[0] == 3.0 && w < n.min(MAX_REPRESENTED) => {
@@ -471,13 +472,14 @@ pub fn locate(
         );
         let packed_c = ctx.gather_to_root(&share);
         // rank 0: [α (m_z), nodes in contact] or nothing (no convergence, or a panic caught)
-        packed.clear();
-        if ctx.rank == 0 {
-            packed = super::dense::guarded("locate-model", || {
-                model.locate(&all, &packed_c, free, phi, (c, max_steps))
+        packed = ctx
+            .on_root_wide(model.m(), || {
+                super::dense::guarded("locate-model", || {
+                    model.locate(&all, &packed_c, free, phi, (c, max_steps))
+                })
+                .unwrap_or_default()
             })
             .unwrap_or_default();
-        }
         ctx.broadcast_f64s(&mut packed);
         if packed.len() > mz {
             break;

@@ -110,11 +110,10 @@ pub fn kernels() -> Option<String> {
 }
 
 /// The smallest dense dimension whose phase runs widened ([`NodeCores::run`]). Measured on 2
-/// cores (docs/numbers.md, "Rank 0's dense phases on the cores of its node"): OpenBLAS' LU
-/// with 2 threads takes 0.91–0.99 of one thread's time from 200 to 700 unknowns and 0.59–0.70
-/// from 1 000 on; the dense Coulomb steps of a 3D case with 286 candidates (about 400–600
-/// unknowns per step) took 1.4 × as long widened, their threads' synchronisation outweighing
-/// the split of small products.
+/// cores (`scripts/bench-dense-threads`, docs/numbers.md, "Rank 0's dense phases on the cores
+/// of its node"): OpenBLAS' LU with 2 threads took 0.91–1.57 of one thread's time from 200 to
+/// 700 unknowns and 0.59–0.84 from 1 000 on (two runs); the dense Coulomb steps of a 3D case
+/// with 286 candidates (about 400–600 unknowns per step) took 1.4 × as long widened.
 pub const WIDE_MIN_DIM: usize = 1000;
 
 /// 64-bit words of a CPU set (CpuSet::MAX_CPU bits).

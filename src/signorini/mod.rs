@@ -1383,9 +1383,11 @@ impl PassLoop {
     /// global order): a node of the held zone (held, or in its band) that slips or leaves the
     /// obstacle is released (a candidate, never held); a node outside the zone that comes into
     /// contact widens the zone (its edge band moves out with it, so that a zone that grows with
-    /// the load keeps its interior held); without a zone every such node is released. The
-    /// pass's factorisation leaves its node order for the next (the same graph). Collective
-    /// (log).
+    /// the load keeps its interior held); without a zone every such node is released, and so
+    /// is every candidate of this pass (the next pass picks its first candidates anew, by gap:
+    /// where the zone has moved, a rolling body's, the gaps alone would drop candidates that
+    /// this pass needed). The pass's factorisation leaves its node order for the next (the
+    /// same graph). Collective (log).
     fn next(
         &mut self,
         ctx: &Ctx,
@@ -1404,6 +1406,11 @@ impl PassLoop {
         );
         self.zone = std::mem::take(&mut kept.zone); // empty: none held
         self.release.resize(kept.cand.n, false);
+        if self.zone.is_empty() {
+            for &g in &kept.comp.list {
+                self.release[g] = true;
+            }
+        }
         for &g in beyond {
             match self.zone.get(g) {
                 Some(false) => self.zone[g] = true,

@@ -1,0 +1,74 @@
+//! A Coulomb load step's condensed passes (src/signorini/mod.rs `PassLoop`): where nodes beyond
+//! a pass' candidates change state on the expanded u, the next pass takes them as candidates
+//! and keeps the pass' own, so that a zone that moves (a floating body that rolls) is not left
+//! for the plain path.
+
+mod common;
+
+use common::process::{gmsh_file, mesh_dir};
+use common::solved::{solve, Solved};
+use std::path::Path;
+
+/// tests/meshes/ellipse_contact.geo (8 916 unknowns), floating: pressed onto the plane y = 0 by
+/// a pressure of 0.02 on its upper half with a tangential traction of 0.001 that friction
+/// alone holds (μ = 0.3), in the load steps 0.5 and 1. In the second step the body rolls: two
+/// nodes beyond the first pass' candidates come into contact.
+fn ellipse_case(dir: &Path) -> std::path::PathBuf {
+    let mesh = dir.join("ellipse.msh");
+    gmsh_file(&mesh_dir().join("ellipse_contact.geo"), 2, &[], &mesh);
+    let case = dir.join("ellipse.toml");
+    let text = format!(
+        "[mesh]\nfile = {:?}\n[material]\nyoung = 2.0\npoisson = 0.3\nmodel = \"plane_strain\"\n\
+         [[neumann]]\ngroup = \"load\"\npressure = 0.02\n[[neumann]]\ngroup = \"load\"\n\
+         traction = [0.001, 0.0]\n[contact]\ngroup = \"contact\"\n\
+         obstacle = {{ type = \"plane\", point = [0.0, 0.0], normal = [0.0, 1.0] }}\n\
+         friction = {{ law = \"coulomb\", mu = 0.3 }}\nrigid_modes = \"auto\"\n\
+         [output]\nfields = [\"displacement\", \"contact\"]\n[load]\nfactors = [0.5, 1.0]\n",
+        mesh.display().to_string()
+    );
+    std::fs::write(&case, text).expect("writing the case");
+    case
+}
+
+/// Summary field of load step `k` (from 0).
+fn step(s: &Solved, k: usize, key: &str) -> u64 {
+    s.summary["load"]["steps"][k][key]
+        .as_u64()
+        .unwrap_or_else(|| panic!("load.steps[{k}].{key}: {}", s.run.output()))
+}
+
+#[test]
+fn a_new_pass_keeps_the_candidates_of_the_pass_before() {
+    let tmp = tempfile::tempdir().expect("tempdir");
+    let case = ellipse_case(tmp.path());
+    let plain = solve(1, &case, &["newton.init=\"gap\""]);
+    for np in [1, 2] {
+        let s = solve(np, &case, &[]);
+        let log = &s.run.stdout;
+        assert!(
+            log.contains("a new pass with them as candidates"),
+            "{np} rank(s): the case needs a second pass\n{}",
+            s.run.output()
+        );
+        assert!(
+            !log.contains("plain path"),
+            "{np} rank(s): the second pass solves the step\n{}",
+            s.run.output()
+        );
+        let f = step(&s, 1, "factorisations");
+        println!("{np} rank(s): load step 2 in {f} factorisations");
+        assert!(f <= 2, "{np} rank(s): {f} factorisations in load step 2");
+        for k in 0..2 {
+            assert_eq!(step(&s, k, "active"), step(&plain, k, "active"), "step {k}");
+            assert_eq!(step(&s, k, "slip"), step(&plain, k, "slip"), "step {k}");
+        }
+        assert_eq!(s.active_node_ids(), plain.active_node_ids(), "{np} rank(s)");
+        assert_eq!(s.slip_node_ids(), plain.slip_node_ids(), "{np} rank(s)");
+        let du = common::solved::step_displacement(&s.dir, 2);
+        let du0 = common::solved::step_displacement(&plain.dir, 2);
+        let scale = du0.values().flatten().fold(0.0f64, |m, x| m.max(x.abs()));
+        let diff = common::compare::max_diff(&du, &du0).0 / scale;
+        println!("{np} rank(s): u against the plain path {diff:.1e}");
+        assert!(diff <= 1e-9, "{np} rank(s): u differs by {diff:.1e}");
+    }
+}

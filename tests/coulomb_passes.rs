@@ -1,11 +1,13 @@
-//! A Coulomb load step's condensed passes (src/signorini/mod.rs `PassLoop`): where nodes beyond
-//! a pass' candidates change state on the expanded u, the next pass takes them as candidates
-//! and keeps the pass' own, so that a zone that moves (a floating body that rolls) is not left
-//! for the plain path.
+//! Coulomb on the condensed path where its iterates are hard: a load step's passes
+//! (src/signorini/mod.rs `PassLoop`: where nodes beyond a pass' candidates change state on the
+//! expanded u, the next pass takes them as candidates and keeps the pass' own, so that a zone
+//! that moves, a floating body's that rolls, is not left for the plain path), and a dense step
+//! whose settled slip rows leave the system singular (coulomb_condensed.rs `Dense::run`: the
+//! step again on the (F5) rows).
 
 mod common;
 
-use common::process::{gmsh_file, mesh_dir};
+use common::process::{gmsh_file, mesh_dir, repo};
 use common::solved::{solve, Solved};
 use std::path::Path;
 
@@ -70,5 +72,55 @@ fn a_new_pass_keeps_the_candidates_of_the_pass_before() {
         let diff = common::compare::max_diff(&du, &du0).0 / scale;
         println!("{np} rank(s): u against the plain path {diff:.1e}");
         assert!(diff <= 1e-9, "{np} rank(s): u differs by {diff:.1e}");
+    }
+}
+
+/// The Hertz disk of the refined family (cases/hertz/meshes/hertz_refined_L4.msh, 12 618
+/// unknowns) floating under the pressure 0.02 and a tangential traction of 0.004 that friction
+/// alone holds (μ = 0.5): at the solution 30 of its 31 contact nodes slip. On the way an
+/// iterate has every active node slipping, on settled rows: its dense system is singular.
+fn rolling_disk_case(dir: &Path) -> std::path::PathBuf {
+    let case = dir.join("disk.toml");
+    let text = format!(
+        "[mesh]\nfile = {:?}\n[material]\nyoung = 2.0\npoisson = 0.3\nmodel = \"plane_strain\"\n\
+         [[neumann]]\ngroup = \"load\"\npressure = 0.02\n[[neumann]]\ngroup = \"load\"\n\
+         traction = [0.004, 0.0]\n[contact]\ngroup = \"contact\"\n\
+         obstacle = {{ type = \"plane\", point = [0.0, -1.0], normal = [0.0, 1.0] }}\n\
+         friction = {{ law = \"coulomb\", mu = 0.5 }}\nrigid_modes = \"auto\"\n\
+         [output]\nfields = [\"displacement\", \"contact\"]\n",
+        repo("cases/hertz/meshes/hertz_refined_L4.msh")
+            .display()
+            .to_string()
+    );
+    std::fs::write(&case, text).expect("writing the case");
+    case
+}
+
+#[test]
+fn a_singular_dense_step_on_settled_slip_rows_is_taken_on_the_f5_rows() {
+    let tmp = tempfile::tempdir().expect("tempdir");
+    let case = rolling_disk_case(tmp.path());
+    let plain = solve(1, &case, &["newton.init=\"gap\""]);
+    plain.assert_converged("plain path");
+    for np in [1, 2] {
+        let s = solve(np, &case, &[]);
+        s.assert_converged("default");
+        assert!(
+            !s.run.stdout.contains("plain path") && !s.run.stdout.contains("singular"),
+            "{np} rank(s): the dense iteration ends the solve\n{}",
+            s.run.output()
+        );
+        let f = s.f(&["newton", "factorisations"]);
+        println!(
+            "{np} rank(s): {} Newton steps, {f} factorisation(s)",
+            s.steps()
+        );
+        assert_eq!(f, 1.0, "{np} rank(s): one factorisation");
+        assert!(!plain.slip_node_ids().is_empty());
+        assert_eq!(s.active_node_ids(), plain.active_node_ids(), "{np} rank(s)");
+        assert_eq!(s.slip_node_ids(), plain.slip_node_ids(), "{np} rank(s)");
+        let du = s.u_rel_diff(&plain);
+        println!("{np} rank(s): u against the plain path {du:.1e}");
+        assert!(du <= 1e-9, "{np} rank(s): u differs by {du:.1e}");
     }
 }

@@ -447,10 +447,31 @@ impl Dense<'_> {
         let mut steps = Vec::new();
         let mut sys = self.system(&set);
         let mut primal = 0;
+        // the set of the step before with every slip node on its (F5) row, for a step whose
+        // settled rows leave the system singular (below); from then on the (F5) rows alone, as
+        // the plain path has them
+        let mut unsettled: Option<ActiveSet> = None;
+        let mut settle = self.settle;
         for step in 1..=self.max_steps {
             let t = Instant::now();
-            primal += sys.as_ref().is_some_and(|s| s.known.is_some()) as usize;
-            let Some((x, sys_k)) = sys.and_then(|sk| Some((solve_system(&sk)?, sk))) else {
+            let mut solved = sys.and_then(|sk| Some((solve_system(&sk)?, sk)));
+            if solved.is_none() {
+                // Settled slip rows (λ_τ = μ(−λ_n) ν, docs/friction.md) give a slipping
+                // node's tangential displacement no stiffness of its own: where every active
+                // node of a floating body slips, its tangential rigid motion is free and the
+                // system singular (an iterate of the way, e.g. a rolling disk whose one sticking
+                // node slips for a step). The (F5) rows keep their spring L̃: the step again on
+                // them, and the iteration on them to its end.
+                if let Some(alt) = unsettled.take() {
+                    settle = false;
+                    set = alt;
+                    solved = self
+                        .system(&set)
+                        .and_then(|sk| Some((solve_system(&sk)?, sk)));
+                }
+            }
+            primal += solved.as_ref().is_some_and(|(_, s)| s.known.is_some()) as usize;
+            let Some((x, sys_k)) = solved else {
                 let why = format!("the dense Coulomb system of step {step} is singular");
                 return self.end(
                     &set,
@@ -462,7 +483,7 @@ impl Dense<'_> {
             let (lam, u, alpha) = self.unknowns(&sys_k, &x);
             self.records(&set, &lam, &u, &mut it.nodes);
             let scale = threshold_scale_local(self.cb, &it.nodes, law, c);
-            let up = set.update_with(&it, self.cb, law, c, scale, d, self.settle); // (3.23) / (F5)
+            let up = set.update_with(&it, self.cb, law, c, scale, d, settle); // (3.23) / (F5)
             let (residual, lambda_norm) = (up.residual2.sqrt(), up.lambda2.sqrt());
             let du: f64 = u.iter().zip(&u_prev).map(|(a, b)| (a - b).powi(2)).sum();
             let uu: f64 = u.iter().map(|a| a * a).sum();
@@ -509,6 +530,9 @@ impl Dense<'_> {
                 run.x_s = x_s;
                 return run;
             }
+            unsettled = settle
+                .then(|| set.update_with(&it, self.cb, law, c, scale, d, false).next)
+                .filter(|alt| *alt != up.next);
             set = up.next;
             u_prev = u;
             sys = next;

@@ -447,10 +447,9 @@ impl Dense<'_> {
         let mut steps = Vec::new();
         let mut sys = self.system(&set);
         let mut primal = 0;
-        // the set of the step before with every slip node on its (F5) row, for a step whose
-        // settled rows leave the system singular (below); from then on the (F5) rows alone, as
-        // the plain path has them
-        let mut unsettled: Option<ActiveSet> = None;
+        // the set the last iterate was solved on, for a step whose settled rows leave the
+        // system singular (below); from then on the (F5) rows alone, as the plain path has them
+        let mut before: Option<ActiveSet> = None;
         let mut settle = self.settle;
         for step in 1..=self.max_steps {
             let t = Instant::now();
@@ -462,7 +461,12 @@ impl Dense<'_> {
                 // system singular (an iterate of the way, e.g. a rolling disk whose one sticking
                 // node slips for a step). The (F5) rows keep their spring L̃: the step again on
                 // them, and the iteration on them to its end.
-                if let Some(alt) = unsettled.take() {
+                // (`it` holds the last iterate until this step's records)
+                let unsettled = before.take().map(|b| {
+                    let scale = threshold_scale_local(self.cb, &it.nodes, law, c);
+                    b.update_with(&it, self.cb, law, c, scale, d, false).next
+                });
+                if let Some(alt) = unsettled.filter(|alt| *alt != set) {
                     settle = false;
                     set = alt;
                     solved = self
@@ -530,10 +534,8 @@ impl Dense<'_> {
                 run.x_s = x_s;
                 return run;
             }
-            unsettled = settle
-                .then(|| set.update_with(&it, self.cb, law, c, scale, d, false).next)
-                .filter(|alt| *alt != up.next);
-            set = up.next;
+            let solved_on = std::mem::replace(&mut set, up.next);
+            before = settle.then_some(solved_on);
             u_prev = u;
             sys = next;
         }

@@ -194,6 +194,13 @@ pub struct CoulombCondensedSummary {
     /// its candidates and dense steps (not in `steps`).
     #[serde(skip_serializing_if = "Vec::is_empty")]
     pub coarse_levels: Vec<CoarseLevel>,
+    /// The dense step whose settled slip rows left its system singular, from which the (F5)
+    /// rows ran (docs/friction.md, "A singular dense step"); absent where none did.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub f5_from: Option<usize>,
+    /// The nested start's coarse levels on which the same happened.
+    #[serde(skip_serializing_if = "is_zero")]
+    pub f5_coarse_levels: usize,
 }
 
 /// One coarse level of the nested start.

@@ -112,6 +112,11 @@ struct DenseCoulomb {
     x_s: Vec<f64>,
     /// Steps in the primal form ([`Stiff`]).
     primal_steps: usize,
+    /// The step whose settled slip rows left the system singular, from which the (F5) rows
+    /// ran (0: none).
+    f5_from: usize,
+    /// The nested start's coarse levels on which that happened.
+    f5_coarse: usize,
 }
 
 impl DenseCoulomb {
@@ -127,6 +132,8 @@ impl DenseCoulomb {
             coarse: Vec::new(),
             x_s: Vec::new(),
             primal_steps: 0,
+            f5_from: 0,
+            f5_coarse: 0,
         }
     }
 
@@ -144,6 +151,8 @@ impl DenseCoulomb {
         v.push(if self.end.is_ok() { 1.0 } else { 0.0 });
         v.push(if self.stalled { 1.0 } else { 0.0 });
         v.push(self.primal_steps as f64);
+        v.push(self.f5_from as f64);
+        v.push(self.f5_coarse as f64);
         v.push(self.coarse.len() as f64);
         for &(nodes, steps) in &self.coarse {
             v.extend([nodes as f64, steps as f64]);
@@ -172,11 +181,13 @@ impl DenseCoulomb {
         let ok = v[at] != 0.0;
         let stalled = v[at + 1] != 0.0;
         let primal_steps = v[at + 2] as usize;
-        let nc = v[at + 3] as usize;
+        let f5_from = v[at + 3] as usize;
+        let f5_coarse = v[at + 4] as usize;
+        let nc = v[at + 5] as usize;
         let coarse = (0..nc)
-            .map(|i| (v[at + 4 + 2 * i] as usize, v[at + 5 + 2 * i] as usize))
+            .map(|i| (v[at + 6 + 2 * i] as usize, v[at + 7 + 2 * i] as usize))
             .collect();
-        at += 4 + 2 * nc;
+        at += 6 + 2 * nc;
         let len = v[at] as usize;
         let bytes: Vec<u8> = v[at + 1..at + 1 + len].iter().map(|&b| b as u8).collect();
         let end = if ok {
@@ -195,6 +206,8 @@ impl DenseCoulomb {
             coarse,
             x_s: Vec::new(),
             primal_steps,
+            f5_from,
+            f5_coarse,
         }
     }
 }
@@ -451,6 +464,7 @@ impl Dense<'_> {
         // system singular (below); from then on the (F5) rows alone, as the plain path has them
         let mut before: Option<ActiveSet> = None;
         let mut settle = self.settle;
+        let mut f5_from = 0;
         for step in 1..=self.max_steps {
             let t = Instant::now();
             let mut solved = sys.and_then(|sk| Some((solve_system(&sk)?, sk)));
@@ -468,6 +482,7 @@ impl Dense<'_> {
                 });
                 if let Some(alt) = unsettled.filter(|alt| *alt != set) {
                     settle = false;
+                    f5_from = step;
                     set = alt;
                     solved = self
                         .system(&set)
@@ -514,6 +529,7 @@ impl Dense<'_> {
                 let mut run = self.end(&set, (lam, alpha), (steps, primal), Ok(()));
                 run.stalled = residual > COULOMB_RESIDUAL_TOL * lambda_norm;
                 run.x_s = x_s;
+                run.f5_from = f5_from;
                 return run;
             }
             // The next step's system holds at this iterate as well as its own did (states
@@ -532,6 +548,7 @@ impl Dense<'_> {
                 let mut run = self.end(&set, (lam, alpha), (steps, primal), Ok(()));
                 run.stalled = residual > COULOMB_RESIDUAL_TOL * lambda_norm;
                 run.x_s = x_s;
+                run.f5_from = f5_from;
                 return run;
             }
             let solved_on = std::mem::replace(&mut set, up.next);
@@ -571,6 +588,8 @@ impl Dense<'_> {
             coarse: Vec::new(),
             x_s: Vec::new(),
             primal_steps,
+            f5_from: 0,
+            f5_coarse: 0,
         }
     }
 
@@ -588,6 +607,7 @@ impl Dense<'_> {
         let gap: Vec<f64> = self.cb.nodes.iter().map(|k| k.gap).collect();
         let (mut start, mut u_prev) = (start.to_vec(), u_prev);
         let mut coarse = Vec::new();
+        let mut f5_coarse = 0;
         for idx in coarsen(&x, &gap).iter().rev() {
             let dofs: Vec<usize> = idx
                 .iter()
@@ -619,6 +639,7 @@ impl Dense<'_> {
             let sub_start: Vec<NodeResult> = idx.iter().map(|&q| start[q]).collect();
             let run = sub.run(&sub_start, pick(&u_prev));
             coarse.push((idx.len(), run.steps.len()));
+            f5_coarse += usize::from(run.f5_from > 0);
             if run.end.is_err() {
                 continue;
             }
@@ -641,6 +662,7 @@ impl Dense<'_> {
         }
         let mut run = self.run(&start, u_prev);
         run.coarse = coarse;
+        run.f5_coarse = f5_coarse;
         run
     }
 
@@ -995,6 +1017,8 @@ pub(super) fn solve(
         dense_seconds: 0.0,
         expansion_seconds: 0.0,
         coarse_levels: Vec::new(),
+        f5_from: None,
+        f5_coarse_levels: 0,
     };
     let t = Instant::now();
     let run = dense_phase(ctx, p, ns, kept, warm);
@@ -1019,6 +1043,26 @@ pub(super) fn solve(
             .collect();
     }
     let history = record_steps(ctx, &run, n);
+    if run.f5_from > 0 || run.f5_coarse > 0 {
+        summary.f5_from = (run.f5_from > 0).then_some(run.f5_from);
+        summary.f5_coarse_levels = run.f5_coarse;
+        let mut at = Vec::new();
+        if run.f5_from > 0 {
+            at.push(format!("from dense step {} on", run.f5_from));
+        }
+        if run.f5_coarse > 0 {
+            at.push(format!(
+                "on {} coarse level(s) of the nested start",
+                run.f5_coarse
+            ));
+        }
+        say!(
+            ctx,
+            "coulomb: condensed: settled slip rows left a dense system singular (every active \
+             node slipping); the (F5) rows instead: {}",
+            at.join("; ")
+        );
+    }
     if let Err(why) = &run.end {
         return Ok(give_up(ctx, summary, why.clone()));
     }

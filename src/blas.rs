@@ -162,7 +162,11 @@ impl NodeCores {
     /// The OpenBLAS threads rank 0's dense work runs with: one per CPU of its node's ranks,
     /// at least the process' own count (1 without OpenBLAS or off rank 0).
     pub fn threads(&self) -> usize {
-        let own = openblas_threads().unwrap_or(1);
+        self.threads_over(openblas_threads().unwrap_or(1))
+    }
+
+    /// [`NodeCores::threads`] for the process' own count `own`.
+    fn threads_over(&self, own: usize) -> usize {
         self.wide.map_or(own, |w| own.max(w.count() as usize))
     }
 
@@ -171,13 +175,13 @@ impl NodeCores {
     /// restored afterwards (also when `work` panics). Where that is no more than the process
     /// has, or `dim` is below [`WIDE_MIN_DIM`], `work` runs as it is. Local.
     pub fn run<T>(&self, dim: usize, work: impl FnOnce() -> T) -> T {
-        let (Some(wide), Some(own)) = (self.wide, openblas_threads()) else {
-            return work();
-        };
         if dim < WIDE_MIN_DIM {
             return work();
         }
-        let threads = self.threads();
+        let (Some(wide), Some(own)) = (self.wide, openblas_threads()) else {
+            return work();
+        };
+        let threads = self.threads_over(own);
         if threads <= own {
             return work();
         }

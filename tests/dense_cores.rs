@@ -6,7 +6,7 @@
 mod common;
 
 use common::compare::max_diff;
-use common::process::{binary, mesh_dir, mpi_env, repo, run_with_timeout, Run};
+use common::process::{binary, mesh_dir, mpirun_with, repo, run_with_timeout, Run};
 use common::solved::{solved, step_displacement, Solved, LIMIT};
 use std::collections::BTreeSet;
 use std::path::Path;
@@ -42,15 +42,10 @@ fn hemisphere_case(dir: &Path) -> std::path::PathBuf {
     case
 }
 
-/// `mpirun -n np --bind-to bind --oversubscribe program args...` with the tests' MPI
+/// `mpirun -n np --oversubscribe --bind-to bind program args...` with the tests' MPI
 /// environment (OPENBLAS_NUM_THREADS = 1 among it).
 fn launch(np: usize, bind: &str, program: &Path, args: &[String]) -> Command {
-    let mut cmd = Command::new("mpirun");
-    cmd.args(["-n", &np.to_string(), "--bind-to", bind, "--oversubscribe"])
-        .arg(program)
-        .args(args);
-    mpi_env(&mut cmd);
-    cmd
+    mpirun_with(np, &["--bind-to", bind], program, args)
 }
 
 /// The CPUs that the ranks of `mpirun -n np --bind-to bind` may run on, together: the union

@@ -59,16 +59,14 @@ extern "C" {
 /// BLAS behind libblas.so.3 still links. Local.
 pub fn openblas_core() -> Option<String> {
     type CoreName = unsafe extern "C" fn() -> *const std::ffi::c_char;
-    // SAFETY: dlsym with RTLD_DEFAULT (the null handle on glibc) only searches the loaded
-    // objects; a non-null result is the address of OpenBLAS' `char *openblas_get_corename()`,
-    // which returns a static NUL-terminated string.
+    let f = openblas_symbol(c"openblas_get_corename");
+    if f.is_null() {
+        return None;
+    }
+    // SAFETY: a non-null result is OpenBLAS' `char *openblas_get_corename()`, which returns a
+    // static NUL-terminated string (or null).
     unsafe {
-        let f = dlsym(std::ptr::null_mut(), c"openblas_get_corename".as_ptr());
-        if f.is_null() {
-            return None;
-        }
-        let f: CoreName = std::mem::transmute::<*mut std::ffi::c_void, CoreName>(f);
-        let name = f();
+        let name = std::mem::transmute::<*mut std::ffi::c_void, CoreName>(f)();
         if name.is_null() {
             return None;
         }

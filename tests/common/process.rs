@@ -125,8 +125,14 @@ fn session_dir() -> PathBuf {
 
 /// `mpirun -n np --oversubscribe program args...` with the MPI environment set.
 pub fn mpirun(np: usize, program: &Path, args: &[String]) -> Command {
+    mpirun_with(np, &[], program, args)
+}
+
+/// [`mpirun`] with options of mpirun's own before the program (e.g. `--bind-to none`).
+pub fn mpirun_with(np: usize, options: &[&str], program: &Path, args: &[String]) -> Command {
     let mut cmd = Command::new("mpirun");
     cmd.args(["-n", &np.to_string(), "--oversubscribe"])
+        .args(options)
         .arg(program)
         .args(args);
     mpi_env(&mut cmd);

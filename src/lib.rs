@@ -6,6 +6,7 @@
 pub mod assembly;
 pub mod bigbuf;
 pub mod blas;
+pub mod bodies;
 pub mod case;
 pub mod contact;
 pub mod dist;

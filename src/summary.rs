@@ -96,6 +96,8 @@ pub struct Summary<S: Serialize> {
     pub blas: Option<String>,
     /// The OpenBLAS threads of rank 0's dense phases ([`crate::blas::NodeCores`]).
     pub dense_threads: usize,
+    /// The mesh's separate bodies ([`crate::bodies`]).
+    pub bodies: crate::bodies::Bodies,
     /// `solver.preset` as asked and as used (the "auto" choice).
     pub preset: PresetChoice,
     pub partition: PartitionInfo,

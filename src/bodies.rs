@@ -1,0 +1,160 @@
+//! The separate bodies of a mesh (its connected parts, cells joined by shared nodes), counted
+//! over the distributed mesh: said in the log where there are several, and written to
+//! summary.json. The contact solver computes the free rigid modes of one body (thesis 4.1), so
+//! a body that no Dirichlet data touch, beside another body, must be held by its contact alone
+//! (README, "Limitations"); the count lets a run say so before it solves.
+//!
+//! Every rank joins its local cells (its own and the ghost cells touching its owned nodes) by a
+//! union-find over its local nodes; a local part is named by its smallest global node number.
+//! The nodes a part shares with another rank's parts — those not owned here, and those of
+//! ghost cells — go to rank 0 with the part's name, and rank 0 joins the parts that share a
+//! node: O(the partition's interfaces) on rank 0, never the mesh.
+
+use crate::mesh::Mesh;
+use crate::par::Ctx;
+use crate::partition::Layout;
+use serde::Serialize;
+use std::collections::HashMap;
+
+/// summary.json's `bodies`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+pub struct Bodies {
+    /// Connected parts of the mesh.
+    pub count: usize,
+    /// Of them, the parts on which no dof has Dirichlet data.
+    pub without_dirichlet: usize,
+}
+
+/// A union-find over `n` items (path halving, union by the smaller index as root).
+struct Joins {
+    parent: Vec<usize>,
+}
+
+impl Joins {
+    fn new(n: usize) -> Joins {
+        Joins {
+            parent: (0..n).collect(),
+        }
+    }
+
+    fn root(&mut self, mut i: usize) -> usize {
+        while self.parent[i] != i {
+            self.parent[i] = self.parent[self.parent[i]];
+            i = self.parent[i];
+        }
+        i
+    }
+
+    fn join(&mut self, a: usize, b: usize) {
+        let (ra, rb) = (self.root(a), self.root(b));
+        if ra != rb {
+            self.parent[ra.max(rb)] = ra.min(rb);
+        }
+    }
+}
+
+/// The bodies of the distributed `mesh` (`fixed`: the prescribed value of every local dof, NaN
+/// where free). Collective; every rank returns the same count.
+pub fn count(ctx: &Ctx, mesh: &Mesh, layout: &Layout, fixed: &[f64]) -> Bodies {
+    let (n, dim) = (mesh.n_nodes(), mesh.dim);
+    let mut joins = Joins::new(n);
+    let mut in_ghost = vec![false; n];
+    // the local mesh has the nodes of boundary elements of other ranks' cells too: only the
+    // nodes of local cells belong to a part here
+    let mut in_cell = vec![false; n];
+    for c in 0..mesh.n_cells() {
+        let cell = mesh.cell(c);
+        let ghost = layout.cell_rank[c] as usize != layout.rank;
+        for &v in cell {
+            joins.join(cell[0], v);
+            in_ghost[v] |= ghost;
+            in_cell[v] = true;
+        }
+    }
+    // every local part's name: its smallest global node number
+    let mut name = vec![u64::MAX; n];
+    for v in (0..n).filter(|&v| in_cell[v]) {
+        let r = joins.root(v);
+        name[r] = name[r].min(layout.node_global[v] as u64);
+    }
+    let mut held = vec![false; n];
+    let mut shared: Vec<u64> = Vec::new(); // (global node, part name) pairs
+    for v in (0..n).filter(|&v| in_cell[v]) {
+        let r = joins.root(v);
+        held[r] |= (0..dim).any(|a| !fixed[v * dim + a].is_nan());
+        if in_ghost[v] || !layout.owns_node(v) {
+            shared.extend_from_slice(&[layout.node_global[v] as u64, name[r]]);
+        }
+    }
+    let parts: Vec<u64> = (0..n)
+        .filter(|&v| in_cell[v] && joins.root(v) == v)
+        .flat_map(|r| [name[r], u64::from(held[r])])
+        .collect();
+    let shared = ctx.gather_to_root(&shared);
+    let parts = ctx.gather_to_root(&parts);
+    let mut counts = vec![0.0; 2];
+    if ctx.rank == 0 {
+        let (count, without) = join_parts(&parts, &shared);
+        counts = vec![count as f64, without as f64];
+    }
+    ctx.broadcast_f64s(&mut counts);
+    Bodies {
+        count: counts[0] as usize,
+        without_dirichlet: counts[1] as usize,
+    }
+}
+
+/// Rank 0: the parts (pairs of name and held flag, from every rank) joined where they share a
+/// node (pairs of global node and part name); returns the bodies and those not held. Local.
+fn join_parts(parts: &[u64], shared: &[u64]) -> (usize, usize) {
+    let mut index: HashMap<u64, usize> = HashMap::new();
+    for p in parts.chunks_exact(2) {
+        let next = index.len();
+        index.entry(p[0]).or_insert(next);
+    }
+    let mut joins = Joins::new(index.len());
+    let mut first: HashMap<u64, usize> = HashMap::new();
+    for s in shared.chunks_exact(2) {
+        let Some(&part) = index.get(&s[1]) else {
+            continue;
+        };
+        let f = *first.entry(s[0]).or_insert(part);
+        joins.join(f, part);
+    }
+    let mut held: HashMap<usize, bool> = HashMap::new();
+    for p in parts.chunks_exact(2) {
+        let r = joins.root(index[&p[0]]);
+        *held.entry(r).or_insert(false) |= p[1] == 1;
+    }
+    let without = held.values().filter(|&&h| !h).count();
+    (held.len(), without)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Two ranks' parts: rank 0 has parts 0 and 10, rank 1 has parts 3 and 20; part 0 and
+    /// part 3 share node 5, part 10 and part 20 share nothing: three bodies.
+    #[test]
+    fn parts_that_share_a_node_are_one_body() {
+        let parts = [0, 1, 10, 0, 3, 0, 20, 0];
+        let shared = [5, 0, 7, 10, 5, 3, 8, 20];
+        assert_eq!(join_parts(&parts, &shared), (3, 2));
+        // node 7 shared by part 10 and part 20 as well: two bodies, one held
+        let shared = [5, 0, 7, 10, 5, 3, 7, 20];
+        assert_eq!(join_parts(&parts, &shared), (2, 1));
+    }
+
+    #[test]
+    fn joins_chain_to_one_root() {
+        let mut j = Joins::new(6);
+        j.join(4, 5);
+        j.join(2, 4);
+        j.join(0, 5);
+        assert_eq!(j.root(5), 0);
+        assert_eq!(j.root(2), 0);
+        assert_ne!(j.root(1), 0);
+        assert_ne!(j.root(3), j.root(1));
+    }
+}

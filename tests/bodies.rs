@@ -1,0 +1,85 @@
+//! The separate bodies of a mesh: counted the same on every rank count (summary.json's
+//! `bodies`), and a mesh with a body that no Dirichlet data touch, beside another, says before
+//! the solve that its contact alone must hold it.
+
+mod common;
+use common::process::{gmsh, run_with_timeout, solver};
+use common::solved::solve;
+use std::path::Path;
+use std::time::Duration;
+
+/// The two squares of tests/meshes/two_squares.geo pressed down on their tops; `held`: the
+/// Dirichlet groups (u = 0); `contact`: their bottoms on the plane y = 0.
+fn case(dir: &Path, held: &[&str], contact: bool) -> std::path::PathBuf {
+    let mesh = dir.join("two_squares.msh");
+    if !mesh.exists() {
+        gmsh("two_squares.geo", 2, 0.1, &mesh);
+    }
+    let mut text = format!(
+        "[mesh]\nfile = {:?}\n[material]\nyoung = 1.0\npoisson = 0.3\nmodel = \"plane_strain\"\n\
+         [[neumann]]\ngroup = \"top\"\npressure = 0.01\n",
+        mesh.display().to_string()
+    );
+    for g in held {
+        text += &format!("[[dirichlet]]\ngroup = \"{g}\"\nvalue = [0.0, 0.0]\n");
+    }
+    if contact {
+        text += "[contact]\ngroup = \"bottom\"\n\
+                 obstacle = { type = \"plane\", point = [0.0, 0.0], normal = [0.0, 1.0] }\n";
+    }
+    text += "[output]\nfields = [\"displacement\"]\n";
+    let path = dir.join(format!("two_{}_{contact}.toml", held.len()));
+    std::fs::write(&path, text).expect("writing the case");
+    path
+}
+
+#[test]
+fn two_squares_are_two_bodies_on_1_2_3_ranks() {
+    let tmp = tempfile::tempdir().expect("tempdir");
+    let c = case(tmp.path(), &["left_a", "left_b"], false);
+    for np in 1..=3 {
+        let s = solve(np, &c, &[]);
+        assert_eq!(
+            s.summary["bodies"]["count"],
+            2,
+            "{np} ranks: {}",
+            s.run.output()
+        );
+        assert_eq!(s.summary["bodies"]["without_dirichlet"], 0, "{np} ranks");
+        let out = s.run.output();
+        assert!(out.contains("mesh: 2 separate bodies"), "{out}");
+        assert!(!out.contains("warning: the free rigid modes"), "{out}");
+    }
+}
+
+#[test]
+fn a_body_without_dirichlet_data_beside_another_is_refused_with_contact() {
+    let tmp = tempfile::tempdir().expect("tempdir");
+    let c = case(tmp.path(), &["left_a"], true);
+    for np in [1, 2] {
+        let dir = tmp.path().join(format!("out{np}"));
+        let args = [
+            c.display().to_string(),
+            "-o".into(),
+            dir.display().to_string(),
+        ];
+        let run = run_with_timeout(solver(np, &args), Duration::from_secs(300));
+        let out = run.output();
+        run.expect_code(2, "two bodies, one without Dirichlet data, with contact");
+        assert!(
+            out.contains(
+                "2 separate bodies (parts that share no node), 1 of them without Dirichlet data"
+            ),
+            "{out}"
+        );
+        assert!(
+            out.contains("two_squares.msh"),
+            "the mesh file named: {out}"
+        );
+        assert!(!dir.exists(), "no output written: {}", dir.display());
+    }
+    // both bodies held, with contact: solved
+    let c = case(tmp.path(), &["left_a", "left_b"], true);
+    let s = solve(2, &c, &[]);
+    assert_eq!(s.summary["bodies"]["without_dirichlet"], 0);
+}

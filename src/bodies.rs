@@ -10,7 +10,7 @@
 //! ghost cells — go to rank 0 with the part's name, and rank 0 joins the parts that share a
 //! node: O(the partition's interfaces) on rank 0, never the mesh.
 
-use crate::mesh::Mesh;
+use crate::mesh::{Mesh, RigidModes};
 use crate::par::Ctx;
 use crate::partition::Layout;
 use serde::Serialize;
@@ -21,8 +21,9 @@ use std::collections::HashMap;
 pub struct Bodies {
     /// Connected parts of the mesh.
     pub count: usize,
-    /// Of them, the parts on which no dof has Dirichlet data.
-    pub without_dirichlet: usize,
+    /// Of them, the parts whose rigid modes their Dirichlet data do not all fix (none, or
+    /// too few: e.g. one symmetry line).
+    pub not_held: usize,
 }
 
 /// A union-find over `n` items (path halving, union by the smaller index as root).
@@ -77,40 +78,55 @@ pub fn count(ctx: &Ctx, mesh: &Mesh, layout: &Layout, fixed: &[f64]) -> Bodies {
         let r = joins.root(v);
         name[r] = name[r].min(layout.node_global[v] as u64);
     }
-    let mut held = vec![false; n];
+    // per part: the Gram matrix of the rigid modes' values at its Dirichlet dofs (owned nodes)
+    let modes = RigidModes::new(mesh);
+    let mm = modes.m * modes.m;
+    let mut gram = vec![0.0; n * mm];
     let mut shared: Vec<u64> = Vec::new(); // (global node, part name) pairs
     for v in (0..n).filter(|&v| in_cell[v]) {
         let r = joins.root(v);
-        held[r] |= (0..dim).any(|a| !fixed[v * dim + a].is_nan());
+        if layout.owns_node(v) {
+            for a in (0..dim).filter(|&a| !fixed[v * dim + a].is_nan()) {
+                let row = modes.dof_row(&mesh.coords[v], a);
+                modes.add_outer(&mut gram[r * mm..(r + 1) * mm], &row);
+            }
+        }
         if in_ghost[v] || !layout.owns_node(v) {
             shared.extend_from_slice(&[layout.node_global[v] as u64, name[r]]);
         }
     }
-    let parts: Vec<u64> = (0..n)
+    let roots: Vec<usize> = (0..n)
         .filter(|&v| in_cell[v] && joins.root(v) == v)
-        .flat_map(|r| [name[r], u64::from(held[r])])
+        .collect();
+    let names: Vec<u64> = roots.iter().map(|&r| name[r]).collect();
+    let grams: Vec<f64> = roots
+        .iter()
+        .flat_map(|&r| gram[r * mm..(r + 1) * mm].iter().copied())
         .collect();
     let shared = ctx.gather_to_root(&shared);
-    let parts = ctx.gather_to_root(&parts);
+    let names = ctx.gather_to_root(&names);
+    let grams = ctx.gather_to_root(&grams);
     let mut counts = vec![0.0; 2];
     if ctx.rank == 0 {
-        let (count, without) = join_parts(&parts, &shared);
+        let (count, without) = join_parts(&names, &grams, &shared, &modes);
         counts = vec![count as f64, without as f64];
     }
     ctx.broadcast_f64s(&mut counts);
     Bodies {
         count: counts[0] as usize,
-        without_dirichlet: counts[1] as usize,
+        not_held: counts[1] as usize,
     }
 }
 
-/// Rank 0: the parts (pairs of name and held flag, from every rank) joined where they share a
-/// node (pairs of global node and part name); returns the bodies and those not held. Local.
-fn join_parts(parts: &[u64], shared: &[u64]) -> (usize, usize) {
+/// Rank 0: the parts (their names and the Gram matrices of their Dirichlet rows, from every
+/// rank) joined where they share a node (pairs of global node and part name); returns the
+/// bodies and those whose Gram matrix leaves a rigid mode free. Local.
+fn join_parts(names: &[u64], grams: &[f64], shared: &[u64], modes: &RigidModes) -> (usize, usize) {
+    let mm = modes.m * modes.m;
     let mut index: HashMap<u64, usize> = HashMap::new();
-    for p in parts.chunks_exact(2) {
+    for &p in names {
         let next = index.len();
-        index.entry(p[0]).or_insert(next);
+        index.entry(p).or_insert(next);
     }
     let mut joins = Joins::new(index.len());
     let mut first: HashMap<u64, usize> = HashMap::new();
@@ -121,13 +137,20 @@ fn join_parts(parts: &[u64], shared: &[u64]) -> (usize, usize) {
         let f = *first.entry(s[0]).or_insert(part);
         joins.join(f, part);
     }
-    let mut held: HashMap<usize, bool> = HashMap::new();
-    for p in parts.chunks_exact(2) {
-        let r = joins.root(index[&p[0]]);
-        *held.entry(r).or_insert(false) |= p[1] == 1;
+    let mut body: HashMap<usize, Vec<f64>> = HashMap::new();
+    for (q, &p) in names.iter().enumerate() {
+        let g = body
+            .entry(joins.root(index[&p]))
+            .or_insert_with(|| vec![0.0; mm]);
+        for (a, b) in g.iter_mut().zip(&grams[q * mm..(q + 1) * mm]) {
+            *a += b;
+        }
     }
-    let without = held.values().filter(|&&h| !h).count();
-    (held.len(), without)
+    let free = body
+        .values()
+        .filter(|g| modes.free_modes(g).ncols() > 0)
+        .count();
+    (body.len(), free)
 }
 
 #[cfg(test)]
@@ -135,15 +158,25 @@ mod tests {
     use super::*;
 
     /// Two ranks' parts: rank 0 has parts 0 and 10, rank 1 has parts 3 and 20; part 0 and
-    /// part 3 share node 5, part 10 and part 20 share nothing: three bodies.
+    /// part 3 share node 5, part 10 and part 20 share nothing: three bodies. Part 0 alone has
+    /// Dirichlet rows that fix every rigid mode (a full Gram matrix), part 20 only some.
     #[test]
     fn parts_that_share_a_node_are_one_body() {
-        let parts = [0, 1, 10, 0, 3, 0, 20, 0];
+        let square =
+            std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/meshes/square_h0.5.msh");
+        let modes = RigidModes::new(&crate::mesh::read_msh(&square).expect("the square"));
+        let mm = 9;
+        let mut grams = vec![0.0; 4 * mm];
+        for k in 0..3 {
+            grams[k * 3 + k] = 1.0; // part 0: every mode fixed
+        }
+        grams[3 * mm] = 1.0; // part 20: the x-translation fixed only
+        let names = [0, 10, 3, 20];
         let shared = [5, 0, 7, 10, 5, 3, 8, 20];
-        assert_eq!(join_parts(&parts, &shared), (3, 2));
-        // node 7 shared by part 10 and part 20 as well: two bodies, one held
+        assert_eq!(join_parts(&names, &grams, &shared, &modes), (3, 2));
+        // node 7 shared by part 10 and part 20 as well: two bodies, the second not held
         let shared = [5, 0, 7, 10, 5, 3, 7, 20];
-        assert_eq!(join_parts(&parts, &shared), (2, 1));
+        assert_eq!(join_parts(&names, &grams, &shared, &modes), (2, 1));
     }
 
     #[test]

@@ -149,11 +149,12 @@ fn log_partition(ctx: &Ctx, mesh: &Mesh, layout: &Layout) -> PartitionInfo {
 }
 
 /// The mesh's separate bodies ([`bodies::count`]): a line where there are several. A body
-/// without Dirichlet data beside another, in a case with contact, is refused: the contact
-/// solver takes the free rigid modes of one body (thesis 4.1), so the rigid position of such a
-/// body would be left to the factorisation's round-off (measured: frictionless, a square
-/// beside a held one, its sideways position 0.0038 or 0.0022 on 1 or 3 ranks) or its solve
-/// would fail. Collective; every rank returns the same.
+/// with a rigid motion its Dirichlet data leave free (none, or too few) beside another, in a
+/// case with contact, is refused: the contact solver takes the free rigid modes of one body
+/// (thesis 4.1), so the rigid position of such a body would be left to the factorisation's
+/// round-off (measured: frictionless, a square beside a held one, moved sideways by about
+/// 0.0038 on 1 rank and 0.0022 on 3) or its solve would fail. Collective; every rank returns
+/// the same.
 fn log_bodies(
     ctx: &Ctx,
     case: &Case,
@@ -165,21 +166,22 @@ fn log_bodies(
     if b.count > 1 {
         say!(
             ctx,
-            "mesh: {} separate bodies (parts that share no node), {} of them without Dirichlet data",
+            "mesh: {} separate bodies (parts that share no node), {} of them with a rigid motion \
+             their Dirichlet data leave free",
             b.count,
-            b.without_dirichlet
+            b.not_held
         );
     }
-    if b.count > 1 && b.without_dirichlet > 0 && !case.contacts.is_empty() {
+    if b.count > 1 && b.not_held > 0 && !case.contacts.is_empty() {
         return Err(RunError::Input(InputError::new(
             &case.mesh.file,
             format!(
                 "the mesh has {} separate bodies (parts that share no node), {} of them \
-                 without Dirichlet data: with contact the solver takes the free rigid modes of \
-                 one body, so the position of such a body would be undetermined or its solve \
-                 fail; hold every body by Dirichlet data, or solve each body that has none from \
-                 a mesh of its own",
-                b.count, b.without_dirichlet
+                 with a rigid motion their Dirichlet data leave free: with contact the solver \
+                 takes the free rigid modes of one body, so the position of such a body would \
+                 be undetermined or its solve fail; hold every body by Dirichlet data, or solve \
+                 each body that they do not hold from a mesh of its own",
+                b.count, b.not_held
             ),
         )));
     }

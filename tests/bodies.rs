@@ -1,6 +1,6 @@
 //! The separate bodies of a mesh: counted the same on every rank count (summary.json's
-//! `bodies`), and a mesh with a body that no Dirichlet data touch, beside another, says before
-//! the solve that its contact alone must hold it.
+//! `bodies`), and a case with contact in which one of several bodies has a rigid motion that
+//! its Dirichlet data leave free is refused before the solve.
 
 mod common;
 use common::process::{gmsh, run_with_timeout, solver};
@@ -9,7 +9,8 @@ use std::path::Path;
 use std::time::Duration;
 
 /// The two squares of tests/meshes/two_squares.geo pressed down on their tops; `held`: the
-/// Dirichlet groups (u = 0); `contact`: their bottoms on the plane y = 0.
+/// Dirichlet groups (u = 0; a group with a trailing `/x`: u_x = 0 alone); `contact`: their
+/// bottoms on the plane y = 0.
 fn case(dir: &Path, held: &[&str], contact: bool) -> std::path::PathBuf {
     let mesh = dir.join("two_squares.msh");
     if !mesh.exists() {
@@ -21,14 +22,21 @@ fn case(dir: &Path, held: &[&str], contact: bool) -> std::path::PathBuf {
         mesh.display().to_string()
     );
     for g in held {
-        text += &format!("[[dirichlet]]\ngroup = \"{g}\"\nvalue = [0.0, 0.0]\n");
+        let (g, value) = match g.strip_suffix("/x") {
+            Some(g) => (g, "[0.0, \"free\"]"),
+            None => (*g, "[0.0, 0.0]"),
+        };
+        text += &format!("[[dirichlet]]\ngroup = \"{g}\"\nvalue = {value}\n");
     }
     if contact {
         text += "[contact]\ngroup = \"bottom\"\n\
                  obstacle = { type = \"plane\", point = [0.0, 0.0], normal = [0.0, 1.0] }\n";
     }
     text += "[output]\nfields = [\"displacement\"]\n";
-    let path = dir.join(format!("two_{}_{contact}.toml", held.len()));
+    let path = dir.join(format!(
+        "two_{}_{contact}.toml",
+        held.join("_").replace('/', "")
+    ));
     std::fs::write(&path, text).expect("writing the case");
     path
 }
@@ -45,7 +53,7 @@ fn two_squares_are_two_bodies_on_1_2_3_ranks() {
             "{np} ranks: {}",
             s.run.output()
         );
-        assert_eq!(s.summary["bodies"]["without_dirichlet"], 0, "{np} ranks");
+        assert_eq!(s.summary["bodies"]["not_held"], 0, "{np} ranks");
         let out = s.run.output();
         assert!(out.contains("mesh: 2 separate bodies"), "{out}");
         assert!(!out.contains("warning: the free rigid modes"), "{out}");
@@ -53,7 +61,7 @@ fn two_squares_are_two_bodies_on_1_2_3_ranks() {
 }
 
 #[test]
-fn a_body_without_dirichlet_data_beside_another_is_refused_with_contact() {
+fn a_body_not_held_data_beside_another_is_refused_with_contact() {
     let tmp = tempfile::tempdir().expect("tempdir");
     let c = case(tmp.path(), &["left_a"], true);
     for np in [1, 2] {
@@ -68,7 +76,7 @@ fn a_body_without_dirichlet_data_beside_another_is_refused_with_contact() {
         run.expect_code(2, "two bodies, one without Dirichlet data, with contact");
         assert!(
             out.contains(
-                "2 separate bodies (parts that share no node), 1 of them without Dirichlet data"
+                "2 separate bodies (parts that share no node), 1 of them with a rigid motion their Dirichlet data leave free"
             ),
             "{out}"
         );
@@ -78,8 +86,24 @@ fn a_body_without_dirichlet_data_beside_another_is_refused_with_contact() {
         );
         assert!(!dir.exists(), "no output written: {}", dir.display());
     }
+    // each square held by u_x = 0 on its left side alone: their rigid motions up and down
+    // (and the rotations) are free, each its own
+    let c = case(tmp.path(), &["left_a/x", "left_b/x"], true);
+    let args = [
+        c.display().to_string(),
+        "-o".into(),
+        tmp.path().join("o").display().to_string(),
+    ];
+    let run = run_with_timeout(solver(2, &args), Duration::from_secs(300));
+    run.expect_code(2, "two bodies held by u_x alone");
+    assert!(
+        run.output()
+            .contains("2 of them with a rigid motion their Dirichlet data leave free"),
+        "{}",
+        run.output()
+    );
     // both bodies held, with contact: solved
     let c = case(tmp.path(), &["left_a", "left_b"], true);
     let s = solve(2, &c, &[]);
-    assert_eq!(s.summary["bodies"]["without_dirichlet"], 0);
+    assert_eq!(s.summary["bodies"]["not_held"], 0);
 }

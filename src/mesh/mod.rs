@@ -44,6 +44,8 @@ mod facets;
 pub mod h5;
 mod quiet;
 mod raw;
+mod rigid_modes;
+pub use rigid_modes::RigidModes;
 #[cfg(test)]
 mod tests;
 

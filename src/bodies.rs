@@ -78,31 +78,33 @@ pub fn count(ctx: &Ctx, mesh: &Mesh, layout: &Layout, fixed: &[f64]) -> Bodies {
         let r = joins.root(v);
         name[r] = name[r].min(layout.node_global[v] as u64);
     }
+    // the local parts, numbered by their roots
+    let roots: Vec<usize> = (0..n)
+        .filter(|&v| in_cell[v] && joins.root(v) == v)
+        .collect();
+    let mut part = vec![usize::MAX; n];
+    for (q, &r) in roots.iter().enumerate() {
+        part[r] = q;
+    }
+    let names: Vec<u64> = roots.iter().map(|&r| name[r]).collect();
     // per part: the Gram matrix of the rigid modes' values at its Dirichlet dofs (owned nodes)
     let modes = RigidModes::new(mesh);
     let mm = modes.m * modes.m;
-    let mut gram = vec![0.0; n * mm];
+    let mut grams = vec![0.0; roots.len() * mm];
     let mut shared: Vec<u64> = Vec::new(); // (global node, part name) pairs
     for v in (0..n).filter(|&v| in_cell[v]) {
         let r = joins.root(v);
         if layout.owns_node(v) {
+            let q = part[r];
             for a in (0..dim).filter(|&a| !fixed[v * dim + a].is_nan()) {
                 let row = modes.dof_row(&mesh.coords[v], a);
-                modes.add_outer(&mut gram[r * mm..(r + 1) * mm], &row);
+                modes.add_outer(&mut grams[q * mm..(q + 1) * mm], &row);
             }
         }
         if in_ghost[v] || !layout.owns_node(v) {
             shared.extend_from_slice(&[layout.node_global[v] as u64, name[r]]);
         }
     }
-    let roots: Vec<usize> = (0..n)
-        .filter(|&v| in_cell[v] && joins.root(v) == v)
-        .collect();
-    let names: Vec<u64> = roots.iter().map(|&r| name[r]).collect();
-    let grams: Vec<f64> = roots
-        .iter()
-        .flat_map(|&r| gram[r * mm..(r + 1) * mm].iter().copied())
-        .collect();
     let shared = ctx.gather_to_root(&shared);
     let names = ctx.gather_to_root(&names);
     let grams = ctx.gather_to_root(&grams);

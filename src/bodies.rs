@@ -1,8 +1,8 @@
 //! The separate bodies of a mesh (its connected parts, cells joined by shared nodes), counted
-//! over the distributed mesh: said in the log where there are several, and written to
-//! summary.json. The contact solver computes the free rigid modes of one body (thesis 4.1), so
-//! a body that no Dirichlet data touch, beside another body, must be held by its contact alone
-//! (README, "Limitations"); the count lets a run say so before it solves.
+//! over the distributed mesh, with those that their Dirichlet data do not hold in every rigid
+//! mode: said in the log where there are several, and written to summary.json. The contact
+//! solver computes the free rigid modes of one body (thesis 4.1), so the driver refuses a case
+//! with contact in which one of several bodies is free in a rigid mode (README, "Limitations").
 //!
 //! Every rank joins its local cells (its own and the ghost cells touching its owned nodes) by a
 //! union-find over its local nodes; a local part is named by its smallest global node number.

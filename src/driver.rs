@@ -64,7 +64,7 @@ pub fn run_case(ctx: &Ctx, case: &Case) -> Result<String, RunError> {
     resolved.solver.preset = preset;
     let case = &resolved;
     let problem = setup::problem(case, &mesh, material);
-    let bodies = log_bodies(ctx, case, &mesh, &layout, &problem.fixed)?;
+    let bodies = check_bodies(ctx, case, &mesh, &layout, &problem.fixed)?;
     let mut sys = assembly::assemble(ctx.comm(), &layout, &problem)?;
     clock.t.assembly = clock.lap();
     let assembly = check_assembly(ctx, &sys, clock.t.assembly)?;
@@ -155,7 +155,7 @@ fn log_partition(ctx: &Ctx, mesh: &Mesh, layout: &Layout) -> PartitionInfo {
 /// round-off (measured: frictionless, a square beside a held one, moved sideways by about
 /// 0.0038 on 1 rank and 0.0022 on 3) or its solve would fail. Collective; every rank returns
 /// the same.
-fn log_bodies(
+fn check_bodies(
     ctx: &Ctx,
     case: &Case,
     mesh: &Mesh,

@@ -110,8 +110,8 @@ pub fn count(ctx: &Ctx, mesh: &Mesh, layout: &Layout, fixed: &[f64]) -> Bodies {
     let grams = ctx.gather_to_root(&grams);
     let mut counts = vec![0.0; 2];
     if ctx.rank == 0 {
-        let (count, without) = join_parts(&names, &grams, &shared, &modes);
-        counts = vec![count as f64, without as f64];
+        let (count, not_held) = join_parts(&names, &grams, &shared, &modes);
+        counts = vec![count as f64, not_held as f64];
     }
     ctx.broadcast_f64s(&mut counts);
     Bodies {

@@ -60,20 +60,31 @@ fn two_squares_are_two_bodies_on_1_2_3_ranks() {
     }
 }
 
+/// Runs `case` on `np` ranks into `dir` and expects the refusal (exit code 2).
+fn refused(np: usize, case: &Path, dir: &Path, what: &str) -> common::process::Run {
+    let args = [
+        case.display().to_string(),
+        "-o".into(),
+        dir.display().to_string(),
+    ];
+    let run = run_with_timeout(solver(np, &args), Duration::from_secs(300));
+    run.expect_code(2, what);
+    run
+}
+
 #[test]
-fn a_body_not_held_data_beside_another_is_refused_with_contact() {
+fn a_body_not_held_beside_another_is_refused_with_contact() {
     let tmp = tempfile::tempdir().expect("tempdir");
     let c = case(tmp.path(), &["left_a"], true);
     for np in [1, 2] {
         let dir = tmp.path().join(format!("out{np}"));
-        let args = [
-            c.display().to_string(),
-            "-o".into(),
-            dir.display().to_string(),
-        ];
-        let run = run_with_timeout(solver(np, &args), Duration::from_secs(300));
+        let run = refused(
+            np,
+            &c,
+            &dir,
+            "two bodies, one without Dirichlet data, with contact",
+        );
         let out = run.output();
-        run.expect_code(2, "two bodies, one without Dirichlet data, with contact");
         assert!(
             out.contains(
                 "2 separate bodies (parts that share no node), 1 of them with a rigid motion their Dirichlet data leave free"
@@ -89,13 +100,7 @@ fn a_body_not_held_data_beside_another_is_refused_with_contact() {
     // each square held by u_x = 0 on its left side alone: their rigid motions up and down
     // (and the rotations) are free, each its own
     let c = case(tmp.path(), &["left_a/x", "left_b/x"], true);
-    let args = [
-        c.display().to_string(),
-        "-o".into(),
-        tmp.path().join("o").display().to_string(),
-    ];
-    let run = run_with_timeout(solver(2, &args), Duration::from_secs(300));
-    run.expect_code(2, "two bodies held by u_x alone");
+    let run = refused(2, &c, &tmp.path().join("o"), "two bodies held by u_x alone");
     assert!(
         run.output()
             .contains("2 of them with a rigid motion their Dirichlet data leave free"),

@@ -3,6 +3,7 @@
 
 #![allow(clippy::needless_range_loop)] // index loops read like the tensor formulas
 
+pub mod abort;
 pub mod assembly;
 pub mod bigbuf;
 pub mod blas;

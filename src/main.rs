@@ -78,6 +78,9 @@ fn main() {
             std::process::exit(1);
         };
         let world = universe.world();
+        // From here a panic on any rank ends every rank (no collective destructor runs on one
+        // rank while the others wait).
+        signorini_mpi::abort::install_panic_hook();
         // PETSc is initialised after MPI and finalised before the universe is dropped.
         match Petsc::init(&cli.petsc) {
             Err(e) => {
@@ -102,9 +105,13 @@ fn run(cli: &Cli, world: &mpi::topology::SimpleCommunicator, petsc: &Petsc) -> i
     match result {
         Ok(_) => 0,
         Err(e @ RunError::Petsc(_)) => {
-            // A PETSc failure may be local to this rank: end every rank.
-            eprintln!("error (rank {}): {e}", ctx.rank);
-            world.abort(1);
+            // A PETSc failure may be local to this rank: end every rank (PETSc's and MPI's
+            // finalisations are collective).
+            signorini_mpi::abort::end_every_rank(&e.to_string(), 1);
+        }
+        Err(e) if signorini_mpi::abort::pending().is_some() => {
+            // a failure of this rank that no agreement covered
+            signorini_mpi::abort::end_every_rank(&e.to_string(), e.exit_code());
         }
         // Agreed errors: every rank has the same one; rank 0 says it.
         Err(e) => {

@@ -4,7 +4,8 @@
 //! The rule that keeps ranks from hanging: every rank enters the same collectives in the same
 //! order on every path. A check that may fail on some ranks only therefore collects its result
 //! locally, lets the collectives of the stage run, and then calls [`Ctx::agree`], which gives
-//! every rank the same `Err` (the lowest failing rank's message and kind).
+//! every rank the same `Err` (the lowest failing rank's message and kind). A failure that no
+//! agreement covers ends every rank at this rank's next collective ([`crate::abort`]).
 
 use crate::error::{InputError, RunError};
 use crate::petsc::{self, MPI_Comm, PInt, Petsc, Vector};
@@ -54,6 +55,7 @@ impl<'a> Ctx<'a> {
     pub fn on_root_wide<T>(&self, dim: usize, work: impl FnOnce() -> T) -> Option<T> {
         let out = (self.rank == 0).then(|| self.cores.run(dim, work));
         if self.size > 1 && dim >= crate::blas::WIDE_MIN_DIM {
+            crate::abort::before_collective();
             let mut req = self.world.immediate_barrier();
             if self.rank == 0 {
                 req.wait();
@@ -84,6 +86,7 @@ impl<'a> Ctx<'a> {
 
     /// One value reduced over all ranks by `op` (one Allreduce).
     fn reduce<T: Equivalence + Default>(&self, v: T, op: SystemOperation) -> T {
+        crate::abort::before_collective();
         let mut out = T::default();
         self.world.all_reduce_into(&v, &mut out, op);
         out
@@ -111,6 +114,7 @@ impl<'a> Ctx<'a> {
 
     /// Element-wise sum over ranks of a packed vector (one Allreduce).
     pub fn sum_vec(&self, local: &[f64]) -> Vec<f64> {
+        crate::abort::before_collective();
         let mut out = vec![0.0f64; local.len()];
         self.world
             .all_reduce_into(local, &mut out[..], SystemOperation::sum());
@@ -124,6 +128,7 @@ impl<'a> Ctx<'a> {
 
     /// One value per rank, on every rank (one Allgather).
     pub fn gather<T: Equivalence + Default + Clone>(&self, v: T) -> Vec<T> {
+        crate::abort::before_collective();
         let mut out = vec![T::default(); self.size];
         self.world.all_gather_into(&v, &mut out[..]);
         out
@@ -148,6 +153,7 @@ impl<'a> Ctx<'a> {
     /// Every rank's count `n` gathered on rank 0, with the offsets: `Some((counts,
     /// displacements))` there, `None` elsewhere (one Gather). Collective.
     fn counts_at_root(&self, n: usize) -> Option<(Vec<i32>, Vec<i32>)> {
+        crate::abort::before_collective();
         let root = self.world.process_at_rank(0);
         let n = n as i32;
         if self.rank != 0 {
@@ -195,6 +201,7 @@ impl<'a> Ctx<'a> {
 
     /// Rank 0's vector on every rank (two broadcasts: the length, the values). Collective.
     pub fn broadcast_f64s(&self, v: &mut Vec<f64>) {
+        crate::abort::before_collective();
         let root = self.world.process_at_rank(0);
         let mut len = v.len() as u64;
         root.broadcast_into(&mut len);
@@ -202,9 +209,42 @@ impl<'a> Ctx<'a> {
         root.broadcast_into(&mut v[..]);
     }
 
+    /// Every rank gets `Err` (the lowest failing rank's message) if any rank has one: the
+    /// agreement that must come before a local failure turns into a fallback. Collective.
+    pub fn agree_message<T, E: std::fmt::Display>(&self, local: Result<T, E>) -> Result<T, String> {
+        let mine = local.as_ref().err().map(|e| e.to_string());
+        match first_error(self.world, mine) {
+            None => local.map_err(|e| e.to_string()),
+            Some((_, text)) => Err(text),
+        }
+    }
+
+    /// [`Ctx::agree`] after rank 0's irreversible last step (the results put in place): shares
+    /// rank 0's outcome; no fault is injected here (nothing else can fail on a rank at this
+    /// point). Collective.
+    pub fn agree_after_commit(&self, local: Result<(), RunError>) -> Result<(), RunError> {
+        self.agree_counted(local, false)
+    }
+
     /// Every rank gets `Err` if any rank has one: the lowest failing rank's error, with its kind
     /// (input: exit code 2; anything else: exit code 1) and message. Collective.
     pub fn agree<T>(&self, local: Result<T, RunError>) -> Result<T, RunError> {
+        self.agree_counted(local, true)
+    }
+
+    /// [`Ctx::agree`]; `inject`: a test-only fault may strike here (`crate::fault`).
+    fn agree_counted<T>(&self, local: Result<T, RunError>, inject: bool) -> Result<T, RunError> {
+        let fault = if inject {
+            crate::fault::counted("agree", || self.rank)
+        } else {
+            None
+        };
+        let local = match fault {
+            None => local,
+            Some((m, crate::fault::Kind::Panic)) => panic!("{m}"),
+            Some((m, crate::fault::Kind::Error)) => Err(RunError::Failed(m)),
+            Some((m, crate::fault::Kind::Petsc)) => Err(petsc::raised_error(m).into()),
+        };
         let mine = match &local {
             Ok(_) => None,
             Err(e) => Some(encode(e)),
@@ -225,6 +265,8 @@ pub fn first_error<C: Communicator>(comm: &C, local: Option<String>) -> Option<(
     let mine = if local.is_some() { comm.rank() } else { size };
     let mut first = size;
     comm.all_reduce_into(&mine, &mut first, SystemOperation::min());
+    // every rank now knows whether one failed: nothing of this rank's is pending alone
+    crate::abort::covered();
     if first == size {
         return None;
     }

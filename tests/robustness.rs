@@ -276,6 +276,15 @@ fn an_obstacle_deep_inside_the_body_is_refused_naming_the_key() {
     assert!(s.f(&["contact", "active_count"]) > 0.0);
 }
 
+/// The fault-injection tests (here and tests/faults.rs) need the test-only feature: without it
+/// the suite fails here instead of skipping them.
+#[cfg(not(feature = "fault-injection"))]
+#[test]
+fn the_suite_is_built_with_fault_injection() {
+    panic!("build the tests with `--features fault-injection` (scripts/test does)");
+}
+
+#[cfg(feature = "fault-injection")]
 #[test]
 fn a_failure_on_one_rank_ends_every_rank_alike() {
     // Test-only fault injection (src/fault.rs, SIGNORINI_TEST_FAULT=STAGE@RANK) in the stages
@@ -308,6 +317,7 @@ fn a_failure_on_one_rank_ends_every_rank_alike() {
     }
 }
 
+#[cfg(feature = "fault-injection")]
 #[test]
 fn a_panic_in_rank_0s_dense_work_is_caught_and_every_rank_goes_on_alike() {
     // The dense steps of the condensed path and the predictor's model run on rank 0 while the

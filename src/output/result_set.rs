@@ -262,7 +262,7 @@ impl ResultSet {
             Ok(())
         };
         self.committed = true;
-        ctx.agree(local)?;
+        ctx.agree_after_commit(local)?;
         say!(
             ctx,
             "output: {} ({:.3} s)",

@@ -48,6 +48,12 @@ pub type Result<T> = std::result::Result<T, PetscError>;
 /// Converts a PETSc return code into a `Result`, naming the Rust caller.
 #[track_caller]
 fn check(code: ffi::PetscErrorCode) -> Result<()> {
+    if let Some((m, kind)) = crate::fault::counted("petsc-call", crate::abort::world_rank) {
+        match kind {
+            crate::fault::Kind::Panic => panic!("{m}"),
+            _ => return Err(own_error(m)),
+        }
+    }
     if code == 0 {
         return Ok(());
     }
@@ -62,6 +68,7 @@ fn check(code: ffi::PetscErrorCode) -> Result<()> {
             CStr::from_ptr(text).to_string_lossy().into_owned()
         }
     };
+    crate::abort::raised(&message);
     Err(PetscError {
         code,
         message,
@@ -69,9 +76,25 @@ fn check(code: ffi::PetscErrorCode) -> Result<()> {
     })
 }
 
-/// An error raised by our own checks in this layer (not by a PETSc call).
+/// An error raised by our own checks in this layer (not by a PETSc call), on this rank alone
+/// until an agreement covers it ([`crate::abort::raised`]).
 #[track_caller]
 fn own_error(message: impl Into<String>) -> PetscError {
+    let e = agreed_error(message);
+    crate::abort::raised(&e.message);
+    e
+}
+
+/// A PETSc error raised on this rank alone (the test-only fault injection, `crate::fault`).
+#[track_caller]
+pub fn raised_error(message: impl Into<String>) -> PetscError {
+    own_error(message)
+}
+
+/// An error that every rank has alike (after an agreement, or from MUMPS' INFOG, which is the
+/// same on every rank).
+#[track_caller]
+fn agreed_error(message: impl Into<String>) -> PetscError {
     let loc = Location::caller();
     PetscError {
         code: -1,
@@ -367,6 +390,7 @@ impl Vector {
 
 impl Drop for Vector {
     fn drop(&mut self) {
+        crate::abort::before_collective();
         // SAFETY: destroys the vector we own.
         unsafe {
             ffi::VecDestroy(&mut self.raw);
@@ -714,6 +738,7 @@ impl Matrix {
 
 impl Drop for Matrix {
     fn drop(&mut self) {
+        crate::abort::before_collective();
         // SAFETY: destroys the matrix we own; its CSR arrays (if any) are dropped after this,
         // with the other fields.
         unsafe {
@@ -957,6 +982,7 @@ impl Ksp {
 
 impl Drop for Ksp {
     fn drop(&mut self) {
+        crate::abort::before_collective();
         // SAFETY: destroys the KSP we own.
         unsafe {
             ffi::KSPDestroy(&mut self.raw);
@@ -1062,6 +1088,7 @@ struct ScotchRun {
 
 impl Drop for ScotchRun {
     fn drop(&mut self) {
+        crate::abort::before_collective();
         // SAFETY: each object is present only if its init call succeeded; the bound graph
         // container needs no exit of its own.
         unsafe {

@@ -40,6 +40,8 @@ pub(super) fn first_message(comm: MPI_Comm, local: Option<&str>) -> Result<Optio
         "MPI_Comm_size",
     )?;
     let first = min_i32(comm, if local.is_some() { rank } else { size })?;
+    // every rank now knows whether one failed: nothing of this rank's is pending alone
+    crate::abort::covered();
     if first >= size {
         return Ok(None);
     }

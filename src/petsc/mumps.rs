@@ -20,7 +20,7 @@ mod raw {
     include!(concat!(env!("OUT_DIR"), "/mumps_bindings.rs"));
 }
 
-use super::{own_error, MPI_Comm, Matrix, Result};
+use super::{agreed_error, own_error, MPI_Comm, Matrix, Result};
 
 /// Per cent of workspace over MUMPS' estimate (ICNTL(14)), as the direct preset gives PETSc.
 const WORKSPACE_PERCENT: i32 = 40;
@@ -278,7 +278,7 @@ impl Instance {
         unsafe { raw::dmumps_c(&mut *self.id) };
         let (i1, i2) = (self.id.infog[0], self.id.infog[1]);
         if i1 < 0 {
-            return Err(own_error(format!(
+            return Err(agreed_error(format!(
                 "MUMPS (JOB = {job}) failed: INFOG(1) = {i1}, INFOG(2) = {i2}"
             )));
         }
@@ -288,6 +288,7 @@ impl Instance {
 
 impl Drop for Instance {
     fn drop(&mut self) {
+        crate::abort::before_collective();
         if self.initialised {
             self.id.job = -2;
             // SAFETY: frees MUMPS' own data of an initialised instance (collective, as its
@@ -304,7 +305,7 @@ fn agreed<T>(comm: MPI_Comm, local: Result<T>) -> Result<T> {
     let msg = local.as_ref().err().map(|e| e.message.clone());
     match super::mpi::first_message(comm, msg.as_deref())? {
         None => local,
-        Some(m) => Err(own_error(m)),
+        Some(m) => Err(agreed_error(m)),
     }
 }
 

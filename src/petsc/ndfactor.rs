@@ -16,7 +16,7 @@ use std::time::Instant;
 
 use super::mpi::{all_true, first_message, gather_u64, rank_of, say_root};
 use super::mumps::{nested_dissection, Factor, FactorStats};
-use super::{check, cstring, ffi, own_error, Ksp, MPI_Comm, Matrix, Result};
+use super::{agreed_error, check, cstring, ffi, own_error, Ksp, MPI_Comm, Matrix, Result};
 
 /// The name of the preconditioner (PCShellSetName), by which [`is_ours`] knows it.
 pub const SHELL_NAME: &str = "mumps with nested-dissection order";
@@ -85,7 +85,7 @@ pub fn node_order(comm: MPI_Comm, mat: &Matrix, dim: usize) -> Result<Vec<usize>
     // A failed read on one rank fails every rank (with its message), before any gathering.
     let local = read.as_ref().err().map(|e| e.message.clone());
     if let Some(m) = first_message(comm, local.as_deref())? {
-        return Err(own_error(m));
+        return Err(agreed_error(m));
     }
     let fits = adj.len() < i32::MAX as usize && hi % dim == 0 && lo % dim == 0;
     if !all_true(comm, fits)? {
@@ -107,6 +107,8 @@ pub fn node_order(comm: MPI_Comm, mat: &Matrix, dim: usize) -> Result<Vec<usize>
     match nested_dissection(&xadj, &adj) {
         Ok(perm) => Ok(perm),
         Err(e) => {
+            // rank 0's own fallback: MUMPS orders (the other ranks pass no order either way)
+            crate::abort::handled();
             println!("factorisation: no nested-dissection order ({e}); MUMPS orders");
             Ok(Vec::new())
         }
@@ -233,6 +235,7 @@ impl Shell {
 
 impl Drop for Shell {
     fn drop(&mut self) {
+        crate::abort::before_collective();
         // SAFETY: objects made by `apply` (or null: the destroy calls accept null handles).
         unsafe {
             ffi::VecScatterDestroy(&mut self.scatter);

@@ -64,6 +64,11 @@ pub const MAX_CONTACT_NODES: usize = 100_000;
 /// DENSE_FLOOR_FLOPS).
 pub const MAX_SCHUR_DOFS: usize = 8000;
 
+/// [`MAX_SCHUR_DOFS`], or the test-only limit that replaces it (`crate::fault::limit`).
+fn max_schur_dofs() -> usize {
+    crate::fault::limit("MAX_SCHUR_DOFS", MAX_SCHUR_DOFS)
+}
+
 /// Dense work (n³ flops for the compliance of n candidates) always allowed: about 0.1 s of
 /// LAPACK on one core. Beyond it the candidates must cost no more than the factorisation of
 /// K_p (MUMPS' analysis estimate): else the plain path runs.
@@ -1026,7 +1031,7 @@ impl Growth {
         for b in &mut by_gap {
             b.sort_by(|&a, &b| cand.key(a).total_cmp(&cand.key(b)).then(a.cmp(&b)));
         }
-        let limit = (MAX_SCHUR_DOFS / (2 * per * pairs)).max(1);
+        let limit = (max_schur_dofs() / (2 * per * pairs)).max(1);
         // a held zone's band and margin are what it wants
         let some_held = held.iter().any(|&h| h);
         let take: Vec<usize> = by_gap
@@ -1126,10 +1131,11 @@ impl Growth {
             ));
         }
         let wanted = comp.list.len() + new.len();
-        if wanted * comp.per > MAX_SCHUR_DOFS {
+        let max_dofs = max_schur_dofs();
+        if wanted * comp.per > max_dofs {
             return Err(Stop::too_wide(format!(
                 "{wanted} candidate contact nodes ({}) exceed the dense Schur complement's \
-                 limit of {MAX_SCHUR_DOFS} dofs ({} per node; a contact zone this wide costs \
+                 limit of {max_dofs} dofs ({} per node; a contact zone this wide costs \
                  less on the plain path)",
                 self.why, comp.per,
             )));
@@ -1478,8 +1484,11 @@ impl Compliance {
         if self.node_order.is_none() {
             // With a Schur complement MUMPS would order by AMD (2.4 × the flops of PORD on a 3D
             // block of 82 584 unknowns, measured): our nested-dissection order instead.
-            let order = node_order(ctx.comm(), reduced.matrix(), dim)
-                .map_err(|e| Stop::failed(e.to_string()))?;
+            // agreed before it may turn into a fallback (a failure on one rank alone ends
+            // every rank instead)
+            let order = ctx
+                .agree_message(node_order(ctx.comm(), reduced.matrix(), dim))
+                .map_err(Stop::failed)?;
             self.node_order = Some(order);
             self.ordering_seconds = t.elapsed().as_secs_f64();
         }
@@ -1496,8 +1505,9 @@ impl Compliance {
             root,
         );
         drop(order);
-        let mut factor =
-            factor.map_err(|e| Stop::failed(format!("MUMPS' analysis of K_p failed: {e}")))?;
+        let mut factor = ctx
+            .agree_message(factor)
+            .map_err(|e| Stop::failed(format!("MUMPS' analysis of K_p failed: {e}")))?;
         // the same numbers on every rank: the same decision
         let dense = (dofs.len() as f64).powi(3);
         let speedup = if dim == 2 { DENSE_SPEEDUP_2D } else { 1.0 };
@@ -1518,9 +1528,10 @@ impl Compliance {
         }
         let done = factor.factorise();
         self.factorisation_seconds = t.elapsed().as_secs_f64();
-        done.map_err(|e| Stop::failed(format!("the Schur factorisation of K_p failed: {e}")))?;
-        let r = factor
-            .condense(&self.rotated(f_root))
+        ctx.agree_message(done)
+            .map_err(|e| Stop::failed(format!("the Schur factorisation of K_p failed: {e}")))?;
+        let r = ctx
+            .agree_message(factor.condense(&self.rotated(f_root)))
             .map_err(|e| Stop::failed(format!("the condensation of f failed: {e}")))?;
         // S copied (primal) or inverted (dimension: the Schur dofs)
         let work = if self.primal { 0 } else { dofs.len() };
@@ -1585,8 +1596,8 @@ impl Compliance {
     fn recondense(&mut self, ctx: &Ctx, f_root: &[f64]) -> Result<(), String> {
         let rhs = self.rotated(f_root);
         let factor = self.factor.as_mut().ok_or("no factorisation kept")?;
-        let r = factor
-            .condense(&rhs)
+        let r = ctx
+            .agree_message(factor.condense(&rhs))
             .map_err(|e| format!("the condensation of f failed: {e}"))?;
         if ctx.rank == 0 {
             self.d0 = (&self.cmat * DVector::from_column_slice(&r))
@@ -1643,8 +1654,8 @@ impl Compliance {
             (Vec::new(), Vec::new())
         };
         let factor = self.factor.as_mut().expect("factorised by grow");
-        let mut w_root = factor
-            .expand(&rhs_root, &x_s)
+        let mut w_root = ctx
+            .agree_message(factor.expand(&rhs_root, &x_s))
             .map_err(|e| format!("the expansion solve failed: {e}"))?;
         self.bases.to_global(&mut w_root);
         Ok(ctx.scatter_from_root(&w_root, n_local))

@@ -61,19 +61,17 @@ pub struct DenseRun {
 /// so that rank 0 still broadcasts and every rank learns of the failure (the parallel rule).
 /// The test-only fault stage `stage` (`crate::fault`) panics inside. Local.
 pub(super) fn guarded<T>(stage: &str, f: impl FnOnce() -> T) -> Result<T, String> {
-    let run = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+    let run = crate::abort::catching(|| {
         if let Some(m) = crate::fault::injected(stage, 0) {
             panic!("{m}");
         }
         f()
-    }));
+    });
     run.map_err(|e| {
-        let what = e
-            .downcast_ref::<String>()
-            .cloned()
-            .or_else(|| e.downcast_ref::<&str>().map(|s| s.to_string()))
-            .unwrap_or_else(|| "a panic".to_string());
-        format!("the dense computation on rank 0 failed: {what}")
+        format!(
+            "the dense computation on rank 0 failed: {}",
+            crate::abort::panic_message(&*e)
+        )
     })
 }
 

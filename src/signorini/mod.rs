@@ -532,6 +532,22 @@ fn complementarity_parameter(
     c
 }
 
+/// The plain path's reuse of factorisations, one rule for every branch that enters it: force
+/// control solves its lift on the step's own factorisation (force.rs), so a factorising
+/// solver never reuses one under force control; the iterative preset's reuse of
+/// preconditioners stays. Local.
+fn plain_reuse(
+    ns: &NewtonSettings,
+    section: &SolverSection,
+    reduced: &ReducedSystem,
+) -> Result<Reuse, RunError> {
+    Ok(if !ns.force.is_empty() && reduced.factorises()? {
+        Reuse::Never
+    } else {
+        section.reuse
+    })
+}
+
 /// Runs the method of the case (Algorithm 1/2 or Coulomb's generalised Newton, the fixed
 /// point on Tresca thresholds, or SNES VI) to convergence; a run that does not converge is
 /// [`RunError::NoConvergence`]. Returns the result and the fixed point's outer steps.
@@ -577,7 +593,8 @@ fn run_method(
                             halfspace: ns.model,
                             ..*ns
                         };
-                        reduced.enable_reuse(ctx, solver_section.reuse, false)?;
+                        let reuse = plain_reuse(ns, solver_section, &reduced)?;
+                        reduced.enable_reuse(ctx, reuse, false)?;
                         let nr =
                             newton::semismooth_newton(ctx, problem, &mut reduced, &wide, warm)?;
                         return Ok((nr, None, condensed_summary));
@@ -607,13 +624,7 @@ fn run_method(
             if let Begin::Solved(nr) = start {
                 return Ok((nr, None, condensed_summary));
             }
-            // force control solves its lift on the step's own factorisation (force.rs); the
-            // iterative preset's reuse of preconditioners stays
-            let reuse = if !ns.force.is_empty() && reduced.factorises()? {
-                Reuse::Never
-            } else {
-                solver_section.reuse
-            };
+            let reuse = plain_reuse(ns, solver_section, &reduced)?;
             reduced.enable_reuse(ctx, reuse, friction)?;
             match settings.coulomb {
                 Some((_, CoulombAlgorithm::FixedPoint)) => {

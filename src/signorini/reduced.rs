@@ -1191,10 +1191,16 @@ impl ReducedSystem {
         set: &ActiveSet,
         pins: &[Pin],
     ) -> petsc::Result<(Vec<f64>, Vec<f64>)> {
-        assert!(
-            self.reuser.is_none(),
-            "force control does not reuse factorisations"
-        );
+        if self.reuser.is_some() {
+            // the plain path's one reuse rule (signorini::plain_reuse) keeps this from happening
+            return Err(petsc::PetscError {
+                code: -1,
+                message: "internal: the force-control lift on a reused factorisation (force \
+                          control takes no reuse)"
+                    .to_string(),
+                location: format!("{}:{}", file!(), line!()),
+            });
+        }
         let t = Instant::now();
         let dim = self.dim;
         let cmap = ConstraintMap::gather(ctx, layout, b, set, pins, dim);

@@ -198,3 +198,33 @@ fn a_symmetric_indentation_takes_the_same_path_on_every_rank_count() {
     let sets = [mu.as_str(), "newton.init=\"auto\""];
     same_path("symmetric indentation, Coulomb", &case, &sets, "condensed");
 }
+
+#[test]
+fn a_flat_punch_in_3d_holds_the_same_nodes_on_every_rank_count() {
+    // The block of cases/blocks/block3d.geo (h = 0.06: 1 434 top nodes), clamped at the bottom, its top pressed
+    // flat 0.001 deep: every top node has the same gap and starts in contact, a zone too wide
+    // for the dense compliance with no node outside it. The ranks split the top face into
+    // regions, so c_h's rank-major order is not the order of one rank.
+    let tmp = tempfile::tempdir().unwrap();
+    let mesh = tmp.path().join("block.msh");
+    gmsh_file(
+        &repo("cases/blocks/block3d.geo"),
+        3,
+        &["-setnumber", "h", "0.06"],
+        &mesh,
+    );
+    let case = write_case(
+        &tmp.path().join("block.toml"),
+        &format!(
+            "[mesh]\nfile = {}\n[material]\nyoung = 2.0\npoisson = 0.3\nmodel = \"3d\"\n\
+             [[dirichlet]]\ngroup = \"bottom\"\nvalue = [0.0, 0.0, 0.0]\n[contact]\n\
+             group = \"top\"\nobstacle = {{ type = \"plane\", point = [0.0, 0.0, 0.499], \
+             normal = [0.0, 0.0, -1.0] }}\nfriction = \"none\"\nrigid_modes = \"none\"\n\
+             [solver]\npreset = \"direct\"\n[output]\nfields = [\"displacement\", \
+             \"contact\"]\n",
+            toml_path(&mesh)
+        ),
+    );
+    let one = same_path("3D flat punch", &case, &[], "condensed");
+    assert!(one.f(&["newton", "condensed", "held_nodes"]) > 0.0);
+}

@@ -174,6 +174,24 @@ pub struct CondensedSummary {
     /// A wide zone's interior held on the obstacle in K_p (the last pass; 0: none).
     #[serde(skip_serializing_if = "is_zero")]
     pub held_nodes: usize,
+    /// Which nodes: [`tag_key`] of their gmsh tags (the last pass; absent: none).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub held_key: Option<u64>,
+    /// Which nodes were the candidates (the last round): [`tag_key`] of their gmsh tags.
+    pub candidates_key: u64,
+}
+
+/// A key of a set of contact nodes that does not depend on the partition or on the order the
+/// nodes come in: the wrapping sum of a mix (splitmix64's finaliser) of their gmsh tags. Two
+/// runs that held or took different nodes differ in it (but for a 2⁻⁶⁴ chance). Local.
+pub fn tag_key(tags: impl Iterator<Item = u64>) -> u64 {
+    tags.map(|t| {
+        let mut z = t.wrapping_add(0x9E37_79B9_7F4A_7C15);
+        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+        z ^ (z >> 31)
+    })
+    .fold(0u64, u64::wrapping_add)
 }
 
 fn is_zero(n: &usize) -> bool {
@@ -235,27 +253,31 @@ impl CondensedSummary {
             too_wide: false,
             primal: false,
             held_nodes: 0,
+            held_key: None,
+            candidates_key: 0,
         }
     }
 
     /// A round's factorisation into the record: `seconds` of the round so far, of which
     /// `comp.factorisation_seconds` the ordering, analysis and factorisation.
-    fn record_factorisation(&mut self, comp: &Compliance, seconds: f64) {
+    fn record_factorisation(&mut self, comp: &Compliance, cand: &Candidates, seconds: f64) {
         self.factorisations += 1;
         self.solves += 1;
         self.factorisation_seconds += comp.factorisation_seconds;
         self.ordering_seconds = self.ordering_seconds.max(comp.ordering_seconds);
         self.schur_seconds += seconds - comp.factorisation_seconds;
         self.candidates = comp.list.len();
+        self.candidates_key = tag_key(comp.list.iter().map(|&i| cand.tag(i)));
         self.schur_dofs = comp.list.len() * comp.per;
     }
 
     /// A load step on the previous step's factorisation into the record and the log: one
     /// condensation (`seconds`), no factorisation.
-    fn record_kept(&mut self, ctx: &Ctx, comp: &Compliance, seconds: f64) {
+    fn record_kept(&mut self, ctx: &Ctx, comp: &Compliance, cand: &Candidates, seconds: f64) {
         self.solves += 1;
         self.schur_seconds += seconds;
         self.candidates = comp.list.len();
+        self.candidates_key = tag_key(comp.list.iter().map(|&i| cand.tag(i)));
         self.schur_dofs = comp.list.len() * comp.per;
         say!(
             ctx,
@@ -706,6 +728,10 @@ fn begin_pass(
     };
     let growth = Growth::new(&cand, per, want, &held);
     summary.held_nodes = growth.held_count;
+    summary.held_key = (growth.held_count > 0).then(|| {
+        let held = (0..cand.n).filter(|&i| growth.held[i]);
+        tag_key(held.map(|i| cand.tag(i)))
+    });
     if growth.held_count > 0 {
         say!(
             ctx,
@@ -751,7 +777,7 @@ fn first_zone(all: &Candidates, located: Option<usize>, per: usize) -> Option<Ve
     let zone: Vec<bool> = match located {
         Some(on) => {
             let mut by: Vec<usize> = (0..all.n).collect();
-            by.sort_by(|&a, &b| all.key(a).total_cmp(&all.key(b)).then(a.cmp(&b)));
+            by.sort_by(|&a, &b| all.by_key(a, b));
             let mut z = vec![false; all.n];
             for &i in by.iter().take(on) {
                 z[i] = true;
@@ -767,7 +793,7 @@ fn first_zone(all: &Candidates, located: Option<usize>, per: usize) -> Option<Ve
 /// held on their obstacle in the factorised matrix: per contact pair, all of the pair's zone
 /// but its 1/`band` (frictionless: 1/[`BAND_FRACTION`]) nodes nearest to a node of the pair
 /// outside the zone (the zone's edge, where the prediction is uncertain; distance in space,
-/// ties: the larger order key, then c_h's order), at least [`MIN_CANDIDATES`] of them. Local
+/// ties: the larger order key, then the gmsh tag), at least [`MIN_CANDIDATES`] of them. Local
 /// (on all-gathered data).
 fn hold(all: &Candidates, zone: &[bool], band: usize) -> Vec<bool> {
     let pairs = (0..all.n).map(|i| all.pair(i) + 1).max().unwrap_or(1);
@@ -792,7 +818,7 @@ fn hold(all: &Candidates, zone: &[bool], band: usize) -> Vec<bool> {
         inside.sort_by(|a, b| {
             a.0.total_cmp(&b.0)
                 .then(all.key(b.1).total_cmp(&all.key(a.1)))
-                .then(a.1.cmp(&b.1))
+                .then(all.tag(a.1).cmp(&all.tag(b.1)))
         });
         let band = inside
             .len()
@@ -822,7 +848,7 @@ fn factorise_round(
     let new = growth.next(cand, comp, round)?;
     if new.is_empty() && comp.factor.is_some() {
         // the previous load step's factorisation holds every candidate of this one
-        summary.record_kept(ctx, comp, condensation + t.elapsed().as_secs_f64());
+        summary.record_kept(ctx, comp, cand, condensation + t.elapsed().as_secs_f64());
         return Ok(());
     }
     comp.grow(
@@ -835,7 +861,7 @@ fn factorise_round(
     )?;
     summary.factorisation_kept = false;
     summary.primal = comp.primal;
-    summary.record_factorisation(comp, t.elapsed().as_secs_f64());
+    summary.record_factorisation(comp, cand, t.elapsed().as_secs_f64());
     Ok(())
 }
 
@@ -999,7 +1025,7 @@ impl Stop {
 /// overlapping). Held nodes (K_p holds them on the obstacle) are never candidates and always
 /// in the set.
 struct Growth {
-    /// Every contact node of each pair by increasing gap (ties: global order), the held ones
+    /// Every contact node of each pair by increasing gap (ties: the gmsh tag), the held ones
     /// left out.
     by_gap: Vec<Vec<usize>>,
     /// How many of each pair's nodes by gap are candidates.
@@ -1029,7 +1055,7 @@ impl Growth {
             by_gap[cand.pair(i)].push(i);
         }
         for b in &mut by_gap {
-            b.sort_by(|&a, &b| cand.key(a).total_cmp(&cand.key(b)).then(a.cmp(&b)));
+            b.sort_by(|&a, &b| cand.by_key(a, b));
         }
         let limit = (max_schur_dofs() / (2 * per * pairs)).max(1);
         // a held zone's band and margin are what it wants
@@ -1118,13 +1144,16 @@ impl Growth {
                     .map_or(f64::NEG_INFINITY, |&i| cand.key(i))
             })
             .collect();
-        let new: Vec<usize> = (0..cand.n)
+        let mut new: Vec<usize> = (0..cand.n)
             .filter(|&i| {
                 !comp.in_s[i]
                     && !self.held[i]
                     && (cand.key(i) <= bound[cand.pair(i)] || self.forced.contains(&i))
             })
             .collect();
+        // by tag: the dense systems' order (C's rows, the nested start's coarsening, the
+        // balance test's and the dense Coulomb iteration's ties) the same on every partition
+        new.sort_by_key(|&i| cand.tag(i));
         if new.is_empty() && round > 1 {
             return Err(Stop::failed(
                 "the candidate set cannot grow (internal)".to_string(),
@@ -1299,8 +1328,8 @@ pub(super) struct Candidates {
 }
 
 /// Values per candidate record: row, n (3), gap, start, G (6), x (3), u_τ^ref (2), pair, μ,
-/// the order key.
-const REC: usize = 20;
+/// the order key, the gmsh tag (exact in f64 below 2⁵³).
+const REC: usize = 21;
 
 impl Candidates {
     /// One all-gather. `key`: what orders this rank's nodes for the first candidates (the
@@ -1326,6 +1355,7 @@ impl Candidates {
             mine.push(k.pair as f64);
             mine.push(k.mu);
             mine.push(key.map_or(k.gap, |key| key[i]));
+            mine.push(k.tag as f64);
         }
         let all = ctx.all_gather_varcount(&mine);
         let n = all.len() / REC;
@@ -1386,6 +1416,17 @@ impl Candidates {
     /// rigid motion.
     fn key(&self, i: usize) -> f64 {
         self.rec(i)[19]
+    }
+    /// The node's gmsh tag: what breaks ties between nodes, the same on every partition (c_h's
+    /// global order is rank-major).
+    pub(super) fn tag(&self, i: usize) -> u64 {
+        self.rec(i)[20] as u64
+    }
+    /// `a` before `b` by the order key, ties by the gmsh tag. Local.
+    fn by_key(&self, a: usize, b: usize) -> std::cmp::Ordering {
+        self.key(a)
+            .total_cmp(&self.key(b))
+            .then(self.tag(a).cmp(&self.tag(b)))
     }
 }
 
@@ -1748,11 +1789,7 @@ fn dense_round(
                     }
                     Some(on) => {
                         let mut by: Vec<usize> = (0..ns).collect();
-                        by.sort_by(|&a, &b| {
-                            cand.key(list[a])
-                                .total_cmp(&cand.key(list[b]))
-                                .then(a.cmp(&b))
-                        });
+                        by.sort_by(|&a, &b| cand.by_key(list[a], list[b]));
                         let mut start = vec![false; ns];
                         for &q in by.iter().take(on) {
                             start[q] = true;

@@ -224,7 +224,7 @@ fn candidate_boundary(kept: &Kept, b: &ContactBoundary, dim: usize) -> ContactBo
                 node: 0,
                 pair: kept.cand.pair(i),
                 mu: kept.cand.mu(i),
-                tag: i as u64,
+                tag: kept.cand.tag(i),
                 row: 0,
                 local_row: 0,
                 x: kept.cand.x(i),

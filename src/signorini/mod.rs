@@ -1534,8 +1534,8 @@ impl Unheld {
 
     /// The load of Coulomb's frictionless estimate: φ' = φ + P T s, the part only friction
     /// holds carried by one tangential force T s at the contact node with the smallest gap
-    /// (P: the free modes' motion there, T its tangents), s the least-squares solution of
-    /// Uᵀ φ' = 0 — where the pins would carry it off the contact and tip the body. Friction
+    /// (ties: the smallest gmsh tag; P: the free modes' motion there, T its tangents), s the
+    /// least-squares solution of Uᵀ φ' = 0 — where the pins would carry it off the contact and tip the body. Friction
     /// acts in the contact zone, and the moment of a force along a plane does not depend on
     /// where on the plane it acts: the estimate's moment balance is the friction's (to first
     /// order on a curved obstacle). What one force cannot carry (a torsion about the normal
@@ -1543,25 +1543,30 @@ impl Unheld {
     fn carried_at_contact(&self, ctx: &Ctx, b: &ContactBoundary, free: &FreeModes) -> Vec<f64> {
         let mz = free.dirichlet_free().ncols();
         let mut phi = free.free_load();
-        // this rank's node with the smallest gap: gap, then the free modes' motion along its
-        // tangents (2 × 6)
-        let mut mine = vec![f64::INFINITY; 13];
-        if let Some(k) = b.nodes.iter().min_by(|a, c| a.gap.total_cmp(&c.gap)) {
+        // this rank's node with the smallest gap (ties: the smallest gmsh tag): gap, tag, then
+        // the free modes' motion along its tangents (2 × 6)
+        let mut mine = vec![f64::INFINITY; 14];
+        let nearest = b
+            .nodes
+            .iter()
+            .min_by(|a, c| a.gap.total_cmp(&c.gap).then(a.tag.cmp(&c.tag)));
+        if let Some(k) = nearest {
             mine[0] = k.gap;
+            mine[1] = k.tag as f64;
             for (i, t) in k.frame.t.iter().enumerate() {
-                mine[1 + 6 * i..7 + 6 * i].copy_from_slice(&free.normal_parts(&k.x, t));
+                mine[2 + 6 * i..8 + 6 * i].copy_from_slice(&free.normal_parts(&k.x, t));
             }
         }
         let all = ctx.all_gather_varcount(&mine);
-        // the smallest gap of all ranks (ties: the lowest rank)
+        // the smallest gap of all ranks (ties: the smallest tag, on every partition)
         let Some(best) = all
-            .chunks(13)
+            .chunks(14)
             .filter(|r| r[0].is_finite())
-            .min_by(|a, c| a[0].total_cmp(&c[0]))
+            .min_by(|a, c| a[0].total_cmp(&c[0]).then(a[1].total_cmp(&c[1])))
         else {
             return phi;
         };
-        let tangents = nalgebra::DMatrix::from_fn(mz, 2, |c, i| best[1 + 6 * i + c]);
+        let tangents = nalgebra::DMatrix::from_fn(mz, 2, |c, i| best[2 + 6 * i + c]);
         let a = self.basis.transpose() * &tangents;
         let rhs = -(self.basis.transpose() * nalgebra::DVector::from_column_slice(&phi));
         let svd = a.svd(true, true);

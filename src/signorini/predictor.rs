@@ -269,11 +269,12 @@ pub fn mirror_planes(ctx: &Ctx, mesh: &Mesh, fixed: &[f64]) -> Vec<(usize, f64)>
 }
 
 /// Values per node record gathered on every rank: x (3), n (3), gap, w, u_n, G (6), pair,
-/// λ_n of an active node (0 off the set).
-const REC: usize = 17;
-/// Where the pair and λ_n are in a record.
+/// λ_n of an active node (0 off the set), the gmsh tag (exact in f64 below 2⁵³).
+const REC: usize = 18;
+/// Where the pair, λ_n and the tag are in a record.
 const PAIR: usize = 15;
 const LAMBDA: usize = 16;
+const TAG: usize = 17;
 
 /// Force control of one pair in the model: the direction e, |F| and the pair.
 type PairForce = ([f64; 3], f64, usize);
@@ -520,7 +521,8 @@ fn head(force_pairs: usize) -> usize {
 }
 
 /// Every contact node of every rank (rank order, = the boundary's global numbering): x, n,
-/// gap, lumped weight, the first solve's u_n and the free modes' normal parts ([`REC`] values).
+/// gap, lumped weight, the first solve's u_n, the free modes' normal parts, pair, λ_n and tag
+/// ([`REC`] values). Rank order depends on the partition: decisions order by the tag.
 /// Collective.
 fn gather_records(
     ctx: &Ctx,
@@ -538,6 +540,7 @@ fn gather_records(
         mine.push(k.pair as f64);
         let on = active.is_some_and(|a| a[i]);
         mine.push(if on { r.lambda_n } else { 0.0 });
+        mine.push(k.tag as f64);
     }
     ctx.all_gather_varcount(&mine)
 }
@@ -589,7 +592,13 @@ impl Model {
             (MODEL_MARGIN * pen).min(MAX_REPRESENTED).min(n)
         };
         let mut order: Vec<usize> = (0..n).collect();
-        order.sort_by(|&a, &b| s0[a].total_cmp(&s0[b]).then(a.cmp(&b)));
+        // ties by the gmsh tag: the model's nodes and their order (its coarsening, its dense
+        // steps) the same on every partition
+        order.sort_by(|&a, &b| {
+            s0[a]
+                .total_cmp(&s0[b])
+                .then(r(a)[TAG].total_cmp(&r(b)[TAG]))
+        });
         order.truncate(wanted);
         let fine = order;
         let xf: Vec<[f64; 3]> = fine.iter().map(|&i| [r(i)[0], r(i)[1], r(i)[2]]).collect();

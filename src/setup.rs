@@ -269,6 +269,8 @@ pub struct ContactSettings {
     pub newton: NewtonSection,
     /// Young's modulus (the default c = E / h_c).
     pub young: f64,
+    /// The material (the final certificate's reactions at the Dirichlet nodes).
+    pub material: Material,
     /// The contact modulus E* = E / (1 − ν²) (3D, plane strain) or E (plane stress): the
     /// half-space predictor's (predictor.rs).
     pub contact_modulus: f64,
@@ -346,6 +348,15 @@ pub fn contact_settings(
         rigid_modes: contacts[0].rigid_modes,
         newton: case.newton.clone(),
         young: case.material.young,
+        material: Material {
+            young: case.material.young,
+            poisson: case.material.poisson,
+            model: match case.model(dim)? {
+                case::MaterialModel::PlaneStrain => fem::Model::PlaneStrain,
+                case::MaterialModel::PlaneStress => fem::Model::PlaneStress,
+                case::MaterialModel::ThreeD => fem::Model::Solid,
+            },
+        },
         contact_modulus: {
             let (e, nu) = (case.material.young, case.material.poisson);
             match case.model(dim)? {

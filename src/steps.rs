@@ -31,6 +31,7 @@ use crate::petsc::Vector;
 use crate::post;
 use crate::say;
 use crate::setup::{self, ContactSettings};
+use crate::signorini::certificate::Certificate;
 use crate::signorini::report::{FrictionCertificate, Kkt, PairSummary};
 use crate::signorini::{self, ContactReport, ContactSolution};
 use crate::solver::{self, LinearSummary};
@@ -95,6 +96,10 @@ pub struct StepRecord {
     /// Its worst violation relative to its scale (`FrictionCertificate::worst`).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub friction_violation: Option<f64>,
+    /// The step's certificate (signorini/certificate.rs): its stop rule, violations,
+    /// equilibrium and force balance.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub certificate: Option<Certificate>,
     /// Seconds of the step (solve, post-processing, output).
     pub seconds: f64,
 }
@@ -123,6 +128,7 @@ impl StepRecord {
             kkt_violation: None,
             friction: None,
             friction_violation: None,
+            certificate: None,
             seconds: 0.0,
         }
     }
@@ -318,7 +324,12 @@ impl Stepper<'_> {
                 last = Some(solved);
             }
         }
-        let last = last.expect("a step converged, or the run returned its error");
+        let mut last = last.expect("a step converged, or the run returned its error");
+        if let (true, SolveReport::Contact(r)) = (series, &mut last.report) {
+            if let Some(worst) = worst_certificate(&records) {
+                r.certificate = worst;
+            }
+        }
         let contact_csv = last.contact.as_ref().map(|c| c.result.csv.clone());
         let history_csv = series.then(|| history_csv(&records, self.mesh.dim));
         let load = series.then(|| LoadReport {
@@ -408,6 +419,7 @@ impl Stepper<'_> {
         rec.kkt_violation = Some(r.contact.kkt.worst());
         rec.friction = r.contact.friction;
         rec.friction_violation = r.contact.friction.map(|f| f.worst(&r.contact.scales));
+        rec.certificate = Some(r.certificate.clone());
         let (stick, slip, area) = contact_counts(&c.result);
         let sums = self.ctx.sum_vec(&[stick, slip, area]);
         if c.result.fields.iter().any(|f| f.name == "slip_state") {
@@ -629,6 +641,22 @@ fn log_step(ctx: &Ctx, r: &StepRecord, planned: usize) {
     say!(ctx, "{line}");
 }
 
+/// A load series' certificate block: every value's worst over the steps, the stop rule the
+/// first loosened one, `worst_step` the step of the largest relative value. `None` without a
+/// contact step. Pure.
+fn worst_certificate(records: &[StepRecord]) -> Option<Certificate> {
+    let mut steps = records
+        .iter()
+        .filter_map(|r| r.certificate.as_ref().map(|c| (r.step, c)));
+    let (first, c) = steps.next()?;
+    let mut block = c.clone();
+    block.worst_step = Some(first);
+    for (step, c) in steps {
+        block.merge(c, step);
+    }
+    Some(block)
+}
+
 /// history.csv: one row per converged step; empty cells where a value does not apply.
 pub fn history_csv(records: &[StepRecord], dim: usize) -> String {
     let axes = ["x", "y", "z"];
@@ -643,6 +671,7 @@ pub fn history_csv(records: &[StepRecord], dim: usize) -> String {
     out.push_str(",kkt_penetration,kkt_positive_lambda_n,kkt_complementarity,kkt_violation");
     out.push_str(",friction_excess,friction_stick_motion,friction_slip_alignment");
     out.push_str(",friction_violation");
+    out.push_str(",stop_rule,equilibrium_residual,equilibrium_relative,certificate_worst");
     // several pairs: each pair's columns last
     let n_pairs = records
         .iter()
@@ -719,6 +748,17 @@ pub fn history_csv(records: &[StepRecord], dim: usize) -> String {
             num(f.map(|f| f.max_stick_motion)),
             num(f.map(|f| f.max_slip_alignment_defect)),
             num(r.friction_violation)
+        );
+        let c = r.certificate.as_ref();
+        let _ = write!(
+            out,
+            ",{},{},{},{}",
+            opt(c
+                .and_then(|c| serde_json::to_value(c.stop_rule).ok())
+                .and_then(|v| v.as_str().map(str::to_string))),
+            num(c.map(|c| c.equilibrium.residual_norm)),
+            num(c.map(|c| c.equilibrium.relative)),
+            num(c.map(|c| c.worst))
         );
         for p in 0..n_pairs {
             let s = r.pairs.as_ref().and_then(|ps| ps.get(p));

@@ -595,6 +595,9 @@ pub struct NewtonSection {
     pub c: Option<f64>,
     pub max_steps: usize,
     pub tol_u: f64,
+    /// `newton.strict`: a run that stops by a loosened acceptance, or whose certificate has a
+    /// relative value above `signorini::certificate::STRICT_TOL`, is an error (exit 1).
+    pub strict: bool,
 }
 
 impl Default for NewtonSection {
@@ -605,6 +608,7 @@ impl Default for NewtonSection {
             c: None,
             max_steps: 100,
             tol_u: 1e-10,
+            strict: false,
         }
     }
 }
@@ -2071,7 +2075,11 @@ impl Reader<'_> {
         let Some((k, n)) = top.get("newton") else {
             return Ok(s);
         };
-        let t = self.table(&k, n, &["init", "c", "max_steps", "tol_u", "on_cycle"])?;
+        let t = self.table(
+            &k,
+            n,
+            &["init", "c", "max_steps", "tol_u", "on_cycle", "strict"],
+        )?;
         if let Some((ok, o)) = t.get("on_cycle") {
             s.on_cycle = self.choice(
                 &ok,
@@ -2108,6 +2116,9 @@ impl Reader<'_> {
         }
         if let Some((tk, tol)) = t.get("tol_u") {
             s.tol_u = self.positive(&tk, tol)?;
+        }
+        if let Some((sk, st)) = t.get("strict") {
+            s.strict = self.boolean(&sk, st)?;
         }
         Ok(s)
     }

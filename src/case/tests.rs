@@ -204,6 +204,7 @@ fn minimal_file_gets_defaults() {
     assert_eq!(c.newton.c, None);
     assert_eq!(c.newton.max_steps, 100);
     assert_eq!(c.newton.tol_u, 1e-10);
+    assert!(!c.newton.strict);
 }
 
 #[test]
@@ -709,6 +710,24 @@ fn reject_bad_newton_settings() {
         "max_steps",
     );
     expect_err(&with("[newton]\ntol_u = 0.0\n"), "newton.tol_u", "tol_u");
+    expect_err(&with("[newton]\nstrict = 1\n"), "newton.strict", "strict");
+    expect_err(
+        &with("[newton]\nstrict = \"yes\"\n"),
+        "newton.strict",
+        "strict",
+    );
+    assert!(
+        parse(&with("[newton]\nstrict = true\n"))
+            .unwrap()
+            .newton
+            .strict
+    );
+    assert!(
+        parse_set(MINIMAL, &["newton.strict=true"])
+            .unwrap()
+            .newton
+            .strict
+    );
     let e = expect_err(
         &with("[newton]\ninit = \"active\"\n"),
         "newton.init",

@@ -1249,6 +1249,7 @@ fn finish(
         pinned_final: ex.pins,
         cycle_detected_at: None,
         approach: ex.approach,
+        stop: super::certificate::StopRule::ActiveSet,
     };
     Ok(Condensed::Solved(Box::new(result), summary))
 }

@@ -1368,6 +1368,12 @@ fn finish(
         pinned_final: Vec::new(),
         cycle_detected_at: None,
         approach,
+        // accepted by its certificates alone above DENSE_RESIDUAL_TOL: loosened
+        stop: if totals.residual <= DENSE_RESIDUAL_TOL * totals.lambda_norm {
+            super::certificate::StopRule::ActiveSet
+        } else {
+            super::certificate::StopRule::CondensedCoulombStall
+        },
     };
     if totals.changed == 0 && residual_ok && !loose {
         let stalled = certificate.map_or(String::new(), |c| {

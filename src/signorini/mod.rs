@@ -8,6 +8,7 @@
 
 pub mod active_set;
 pub mod boundary;
+pub mod certificate;
 pub mod condensed;
 pub mod coulomb_condensed;
 pub mod cycle;
@@ -126,6 +127,8 @@ pub struct ContactReport {
     pub newton: NewtonSummary,
     pub contact: ContactSummary,
     pub linear_solver: PresetOnly,
+    /// The final state's certificate (a load series: the worst over its steps).
+    pub certificate: certificate::Certificate,
 }
 
 /// A solved contact problem.
@@ -415,6 +418,13 @@ pub fn solve(
         (&displacement, &approaches),
         &mut contact,
     );
+    let certificate = certify(
+        ctx,
+        (settings, mesh, layout, fixed, sys),
+        (&b, &table, &contact),
+        &nr,
+        &force_control,
+    )?;
     let mut newton = newton_summary(settings, solver_section, c, &mut nr, outer_steps, previous);
     if let Some(cs) = condensed_summary {
         // K_p's with the Schur complement, one per round of candidates (the dense steps
@@ -440,6 +450,7 @@ pub fn solve(
             linear_solver: PresetOnly {
                 preset: solver_section.preset.name(),
             },
+            certificate,
         },
         nodes: nr.nodes,
         delta,
@@ -754,6 +765,44 @@ fn final_state(
     Ok((contact, table))
 }
 
+/// The final state's certificate (certificate.rs): the stop rule, (3.14), (3.18), the global
+/// equilibrium and each force-controlled pair's balance, said in one log line; with
+/// `newton.strict` an error where the rule is loosened or a relative value above
+/// [`certificate::STRICT_TOL`]. Collective.
+fn certify(
+    ctx: &Ctx,
+    (settings, mesh, layout, fixed, sys): (&ContactSettings, &Mesh, &Layout, &[f64], &System),
+    (b, table, contact): (&ContactBoundary, &report::Table, &ContactSummary),
+    nr: &NewtonResult,
+    force_control: &[force::ForceControl],
+) -> Result<certificate::Certificate, RunError> {
+    let (equilibrium, lambdas) = certificate::equilibrium(
+        ctx,
+        (mesh, layout, &settings.material),
+        fixed,
+        sys,
+        b,
+        &nr.u,
+    )?;
+    let force_balance = (!force_control.is_empty())
+        .then(|| certificate::force_balance(ctx, b, &lambdas, force_control));
+    let cert = certificate::Certificate::new(certificate::Parts {
+        stop: nr.stop,
+        strict: settings.newton.strict,
+        kkt: &contact.kkt,
+        friction: contact.friction.as_ref(),
+        scales: &contact.scales,
+        mesh_size: table.mesh_size(),
+        equilibrium,
+        force_balance,
+    });
+    say!(ctx, "{}", cert.line());
+    match cert.strict_failure().filter(|_| cert.strict) {
+        Some(why) => Err(RunError::Failed(why)),
+        None => Ok(cert),
+    }
+}
+
 /// summary.json's "newton" section; takes the step history out of `nr`.
 fn newton_summary(
     settings: &ContactSettings,
@@ -898,6 +947,7 @@ fn fixed_point(
             .map_or(stick_all, |(n, _)| threshold(&*k, &n[i]));
     }
     let mut history: Vec<StepInfo> = Vec::new();
+    let mut stop = certificate::StopRule::ActiveSet;
     for outer in 1..=ns.section.max_steps {
         let pm = ContactProblem { boundary: &b, ..*p };
         let start = state
@@ -909,6 +959,8 @@ fn fixed_point(
             ..*ns
         };
         let mut nr = newton::semismooth_newton(ctx, &pm, reduced, &tresca, start.as_ref())?;
+        stop = stop.worse(nr.stop);
+        nr.stop = stop;
         for (fc, &delta) in force.iter_mut().zip(&nr.approach) {
             fc.start = delta;
         }
@@ -1666,6 +1718,7 @@ fn snesvi_solve(
         pinned_final: pins,
         cycle_detected_at: None,
         approach: Vec::new(),
+        stop: certificate::StopRule::SnesVi,
     })
 }
 

@@ -159,6 +159,8 @@ pub struct NewtonResult {
     /// Force control: the approach δ_j of the result per force-controlled pair, in pair order
     /// (its obstacle moved by δ_j F_j/|F_j|); empty without force control.
     pub approach: Vec<f64>,
+    /// The rule that stopped the iteration (the exact criterion or a loosened acceptance).
+    pub stop: super::certificate::StopRule,
 }
 
 /// Default c = E / h_c with h_c the mean contact mesh size (w_k^(1/(d−1)) over all contact
@@ -221,6 +223,8 @@ struct Loop<'a> {
     /// the floors of the norms Algorithm 2's stopping rule divides by ([`Loop::floored`]); 0
     /// without.
     floors: (f64, f64),
+    /// The rule of the last stop decided ([`Loop::next`]).
+    stop: super::certificate::StopRule,
 }
 
 /// A load step whose solution vanishes against its warm start's (the load and the obstacle's
@@ -440,6 +444,7 @@ impl<'a> Loop<'a> {
             rho: [0.0; 6],
             shifted: placed,
             last_still_residual: None,
+            stop: super::certificate::StopRule::ActiveSet,
             approach,
             null_space: false,
             corrections: (None, false),
@@ -572,6 +577,7 @@ impl<'a> Loop<'a> {
             pinned_final: self.free.pins().to_vec(),
             cycle_detected_at: self.guard.detected_at,
             approach: self.approach.map_or(Vec::new(), |a| a.deltas()),
+            stop: self.stop,
             u,
         })
     }
@@ -906,6 +912,7 @@ impl Loop<'_> {
                 "newton: u and λ below {VANISHING:e} of the warm start's: the step's solution \
                  vanishes (its states are round-off)"
             );
+            self.stop = super::certificate::StopRule::Vanishing;
             return Ok(true);
         }
         let t = &self.floored(t);
@@ -981,7 +988,16 @@ impl Loop<'_> {
             }
         }
         match decision {
-            Decision::Converged => Ok(true),
+            Decision::Converged => {
+                // Coulomb accepted by the stall rule alone: a loosened acceptance
+                let loose =
+                    self.s.law == Law::Coulomb && t.residual > COULOMB_RESIDUAL_TOL * t.lambda_norm;
+                self.stop = match loose {
+                    true => super::certificate::StopRule::CoulombStall,
+                    false => super::certificate::StopRule::ActiveSet,
+                };
+                Ok(true)
+            }
             Decision::SameSets => {
                 // Same sets, but the slip rows are a linearisation: iterate on with the new rows.
                 // A slip row may start or stop holding u_τ (L̃ ≠ 0, e.g. Coulomb's b turning
@@ -1008,6 +1024,7 @@ impl Loop<'_> {
                             step + 1,
                             t.du_rel
                         );
+                        self.stop = super::certificate::StopRule::RecurringSet;
                         return Ok(true);
                     }
                     other => other?,

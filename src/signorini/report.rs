@@ -235,6 +235,19 @@ impl Table {
         s
     }
 
+    /// The mean contact mesh size h_c: the mean of w_k^(1/(d−1)) over the contact nodes (0
+    /// without any).
+    pub fn mesh_size(&self) -> f64 {
+        let e = 1.0 / (self.dim - 1) as f64;
+        let n = self.rows.len();
+        let s: f64 = self.rows.iter().map(|r| r[W].max(0.0).powf(e)).sum();
+        if n > 0 {
+            s / n as f64
+        } else {
+            0.0
+        }
+    }
+
     pub fn active_count(&self) -> usize {
         self.rows.iter().filter(|r| r[STATE] > 0.5).count()
     }

@@ -317,8 +317,7 @@ pub fn solve(
     let dim = mesh.dim;
     let law = law_of(settings);
     let friction = settings.friction();
-    let mut b = boundary::build(ctx, mesh, layout, settings, fixed)?;
-    log_boundary(ctx, &b, settings, dim);
+    let mut b = contact_boundary(ctx, settings, mesh, layout, fixed)?;
     let force_control = force_control(settings, previous);
     check_friction_capacity(ctx, &b, (fixed, sys, dim), law, &force_control)?;
     let displacements = settings.displacements();
@@ -332,9 +331,6 @@ pub fn solve(
     )?;
     let coords = solver::near_null_space_coordinates(ctx, mesh, layout, solver_section.preset)?;
     let c = complementarity_parameter(ctx, settings, &b, dim);
-    if let Some(fc) = force::unreached(ctx, &b, &force_control) {
-        return Err(force::never_touches(fc));
-    }
     // the start: the previous step's solution, or its extrapolation along its own increment
     // (under force control against the obstacles where the previous step left them)
     let at_start = (!force_control.is_empty()).then(|| {
@@ -447,6 +443,25 @@ pub fn solve(
         obstacle_displacement: displacement,
         kept,
     })
+}
+
+/// The contact boundary of a solve, logged, with the checks that come before the solve (every
+/// node projected, the depth of the start, a force that never reaches the body). Collective;
+/// every rank returns the same `Ok` / `Err` kind.
+pub fn contact_boundary(
+    ctx: &Ctx,
+    settings: &ContactSettings,
+    mesh: &Mesh,
+    layout: &Layout,
+    fixed: &[f64],
+) -> Result<ContactBoundary, RunError> {
+    let b = boundary::build(ctx, mesh, layout, settings, fixed)?;
+    log_boundary(ctx, &b, settings, mesh.dim);
+    // the approaches' starts do not matter here: only the forces' directions
+    if let Some(fc) = force::unreached(ctx, &b, &force_control(settings, None)) {
+        return Err(force::never_touches(fc));
+    }
+    Ok(b)
 }
 
 /// Force control's result on the boundary: every force-controlled pair's obstacle where its

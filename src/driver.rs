@@ -6,7 +6,7 @@ use crate::assembly::{self, System};
 use crate::bodies::{self, Body};
 use crate::case::Case;
 use crate::case::Preset;
-use crate::error::{InputError, RunError};
+use crate::error::RunError;
 use crate::fem::Material;
 use crate::mesh::Mesh;
 use crate::output::ResultSet;
@@ -337,15 +337,17 @@ fn check_bodies(
         );
     }
     if b.count > 1 && b.not_held > 0 && !case.contacts.is_empty() {
-        return Err(RunError::Input(InputError::new(
-            &case.mesh.file,
+        return Err(RunError::Input(case.error_at(
+            "dirichlet",
             format!(
-                "the mesh has {} separate bodies (parts that share no node), {} of them \
+                "the mesh {} has {} separate bodies (parts that share no node), {} of them \
                  with a rigid motion their Dirichlet data leave free: with contact the solver \
                  takes the free rigid modes of one body, so the position of such a body would \
                  be undetermined or its solve fail; hold every body by Dirichlet data, or solve \
                  each body that they do not hold from a mesh of its own",
-                b.count, b.not_held
+                case.mesh.file.display(),
+                b.count,
+                b.not_held
             ),
         )));
     }

@@ -156,3 +156,32 @@ fn check_refuses_a_broken_case_naming_the_key() {
         assert_eq!(listing(tmp.path()), ["case.toml"]);
     }
 }
+
+/// A linear solver that does not converge in a Newton step names the case's solver keys.
+#[test]
+fn linear_solver_failure_names_the_solver_keys() {
+    let tmp = tempfile::tempdir().unwrap();
+    let text = hertz_case(-1.0, "contact")
+        + "[solver]\npreset = \"iterative\"\npetsc_options = \"-ksp_max_it 1\"\n";
+    let case = write_case(&tmp.path().join("case.toml"), &text);
+    let args = [
+        case.display().to_string(),
+        "-o".into(),
+        tmp.path().join("out").display().to_string(),
+    ];
+    let r = run_with_timeout(solver(0, &args), Duration::from_secs(120));
+    r.expect_code(1, "one Krylov iteration");
+    let msg = r
+        .stderr
+        .lines()
+        .find(|l| l.starts_with("error"))
+        .unwrap_or("");
+    for want in [
+        "the linear solver did not converge",
+        "case.toml",
+        "'solver.preset' = \"iterative\"",
+        "'solver.petsc_options' = \"-ksp_max_it 1\"",
+    ] {
+        assert!(msg.contains(want), "no {want:?}:\n{}", r.output());
+    }
+}

@@ -318,6 +318,7 @@ pub fn solve(
     let law = law_of(settings);
     let friction = settings.friction();
     let mut b = contact_boundary(ctx, settings, mesh, layout, fixed)?;
+    b.keys.solver = solver_keys(solver_section);
     let force_control = force_control(settings, previous);
     check_friction_capacity(ctx, &b, (fixed, sys, dim), law, &force_control)?;
     let displacements = settings.displacements();
@@ -462,6 +463,21 @@ pub fn contact_boundary(
         return Err(force::never_touches(fc));
     }
     Ok(b)
+}
+
+/// The linear solver's keys of a case with their values, for the diagnoses.
+fn solver_keys(s: &SolverSection) -> String {
+    let mut keys = vec![format!("'solver.preset' = \"{}\"", s.preset.name())];
+    if s.preset == Preset::Iterative {
+        keys.push(format!("'solver.rtol' = {:e}", s.rtol));
+    }
+    if !s.petsc_options.trim().is_empty() {
+        keys.push(format!(
+            "'solver.petsc_options' = {:?}",
+            s.petsc_options.trim()
+        ));
+    }
+    keys.join(", ")
 }
 
 /// Force control's result on the boundary: every force-controlled pair's obstacle where its
@@ -730,7 +746,7 @@ fn final_state(
     };
     let (scales, kkt, friction_certificate) =
         certificates(ctx, sys, &table, &nr.u, friction, floor)?;
-    check_certificates(ctx, &kkt, friction_certificate.as_ref(), &scales)?;
+    check_certificates(ctx, &kkt, friction_certificate.as_ref(), &scales, &b.keys)?;
     say!(
         ctx,
         "contact: {} active, p_max = {:.6}, half width = {}, total force = {:?}",
@@ -1913,6 +1929,7 @@ fn check_certificates(
     kkt: &Kkt,
     friction: Option<&FrictionCertificate>,
     scales: &Scales,
+    keys: &boundary::CaseKeys,
 ) -> Result<(), RunError> {
     let fric_bad = |rel: f64| friction.is_some_and(|f| f.beyond(rel, scales));
     if kkt.beyond(report::CERTIFICATE_TOL) || fric_bad(report::CERTIFICATE_TOL) {
@@ -1920,7 +1937,7 @@ fn check_certificates(
             "the final state is not a solution: it violates {} beyond {:e} of the problem's \
              scales (force {:.3e}, length {:.3e}): KKT {}{} — the problem is probably ill-posed \
              (a load that contact and friction cannot carry, or a mesh of several bodies that \
-             Dirichlet data do not hold) or the linear solves inexact",
+             Dirichlet data do not hold: {}) or the linear solves inexact ({})",
             if fric_bad(report::CERTIFICATE_TOL) {
                 "(3.18)"
             } else {
@@ -1932,7 +1949,9 @@ fn check_certificates(
             json(kkt),
             friction
                 .map(|f| format!(", friction {}", json(f)))
-                .unwrap_or_default()
+                .unwrap_or_default(),
+            keys.named(&["dirichlet", "neumann", ".obstacle", ".friction"]),
+            keys.solver
         )));
     }
     if kkt.beyond(1e-8) || fric_bad(1e-8) {

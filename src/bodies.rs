@@ -26,6 +26,17 @@ pub struct Bodies {
     pub not_held: usize,
 }
 
+/// One body of the mesh, for `signorini-mpi check`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Body {
+    /// Its smallest Gmsh node tag (names it whatever the rank count).
+    pub first_tag: u64,
+    /// Its nodes.
+    pub nodes: usize,
+    /// Its rigid modes that its Dirichlet data leave free (0: held).
+    pub free_modes: usize,
+}
+
 /// A union-find over `n` items (path halving, union by the smaller index as root).
 struct Joins {
     parent: Vec<usize>,
@@ -57,6 +68,20 @@ impl Joins {
 /// The bodies of the distributed `mesh` (`fixed`: the prescribed value of every local dof, NaN
 /// where free). Collective; every rank returns the same count.
 pub fn count(ctx: &Ctx, mesh: &Mesh, layout: &Layout, fixed: &[f64]) -> Bodies {
+    summed(&survey(ctx, mesh, layout, fixed))
+}
+
+/// The count of `bodies`.
+pub fn summed(bodies: &[Body]) -> Bodies {
+    Bodies {
+        count: bodies.len(),
+        not_held: bodies.iter().filter(|b| b.free_modes > 0).count(),
+    }
+}
+
+/// Every body of the distributed `mesh`, by its first node tag. Collective; every rank
+/// returns the same list.
+pub fn survey(ctx: &Ctx, mesh: &Mesh, layout: &Layout, fixed: &[f64]) -> Vec<Body> {
     let (n, dim) = (mesh.n_nodes(), mesh.dim);
     let mut joins = Joins::new(n);
     let mut in_ghost = vec![false; n];
@@ -87,6 +112,14 @@ pub fn count(ctx: &Ctx, mesh: &Mesh, layout: &Layout, fixed: &[f64]) -> Bodies {
         part[r] = q;
     }
     let names: Vec<u64> = roots.iter().map(|&r| name[r]).collect();
+    // per part: its smallest node tag and its owned nodes
+    let mut tags = vec![u64::MAX; roots.len()];
+    let mut owned = vec![0u64; roots.len()];
+    for v in (0..n).filter(|&v| in_cell[v]) {
+        let q = part[joins.root(v)];
+        tags[q] = tags[q].min(mesh.node_tags[v]);
+        owned[q] += u64::from(layout.owns_node(v));
+    }
     // per part: the Gram matrix of the rigid modes' values at its Dirichlet dofs (owned nodes)
     let modes = RigidModes::new(mesh);
     let mm = modes.m * modes.m;
@@ -108,22 +141,36 @@ pub fn count(ctx: &Ctx, mesh: &Mesh, layout: &Layout, fixed: &[f64]) -> Bodies {
     let shared = ctx.gather_to_root(&shared);
     let names = ctx.gather_to_root(&names);
     let grams = ctx.gather_to_root(&grams);
-    let mut counts = vec![0.0; 2];
+    let tags = ctx.gather_to_root(&tags);
+    let owned = ctx.gather_to_root(&owned);
+    // three numbers per body (the tag as f64: exact below 2^53)
+    let mut list = Vec::new();
     if ctx.rank == 0 {
-        let (count, not_held) = join_parts(&names, &grams, &shared, &modes);
-        counts = vec![count as f64, not_held as f64];
+        for b in join_parts(&names, &grams, &shared, &modes, (&tags, &owned)) {
+            list.extend([b.first_tag as f64, b.nodes as f64, b.free_modes as f64]);
+        }
     }
-    ctx.broadcast_f64s(&mut counts);
-    Bodies {
-        count: counts[0] as usize,
-        not_held: counts[1] as usize,
-    }
+    ctx.broadcast_f64s(&mut list);
+    list.chunks_exact(3)
+        .map(|c| Body {
+            first_tag: c[0] as u64,
+            nodes: c[1] as usize,
+            free_modes: c[2] as usize,
+        })
+        .collect()
 }
 
 /// Rank 0: the parts (their names and the Gram matrices of their Dirichlet rows, from every
 /// rank) joined where they share a node (pairs of global node and part name); returns the
-/// bodies and those whose Gram matrix leaves a rigid mode free. Local.
-fn join_parts(names: &[u64], grams: &[f64], shared: &[u64], modes: &RigidModes) -> (usize, usize) {
+/// bodies (`parts`: each part's smallest tag and owned nodes), in the order of their first
+/// tags. Local.
+fn join_parts(
+    names: &[u64],
+    grams: &[f64],
+    shared: &[u64],
+    modes: &RigidModes,
+    (tags, owned): (&[u64], &[u64]),
+) -> Vec<Body> {
     let mm = modes.m * modes.m;
     let mut index: HashMap<u64, usize> = HashMap::new();
     for &p in names {
@@ -139,20 +186,27 @@ fn join_parts(names: &[u64], grams: &[f64], shared: &[u64], modes: &RigidModes) 
         let f = *first.entry(s[0]).or_insert(part);
         joins.join(f, part);
     }
-    let mut body: HashMap<usize, Vec<f64>> = HashMap::new();
+    let mut body: HashMap<usize, (Vec<f64>, u64, u64)> = HashMap::new();
     for (q, &p) in names.iter().enumerate() {
-        let g = body
+        let (g, tag, nodes) = body
             .entry(joins.root(index[&p]))
-            .or_insert_with(|| vec![0.0; mm]);
+            .or_insert_with(|| (vec![0.0; mm], u64::MAX, 0));
         for (a, b) in g.iter_mut().zip(&grams[q * mm..(q + 1) * mm]) {
             *a += b;
         }
+        *tag = (*tag).min(tags[q]);
+        *nodes += owned[q];
     }
-    let free = body
+    let mut list: Vec<Body> = body
         .values()
-        .filter(|g| modes.free_modes(g).ncols() > 0)
-        .count();
-    (body.len(), free)
+        .map(|(g, tag, nodes)| Body {
+            first_tag: *tag,
+            nodes: *nodes as usize,
+            free_modes: modes.free_modes(g).ncols(),
+        })
+        .collect();
+    list.sort_by_key(|b| b.first_tag);
+    list
 }
 
 #[cfg(test)]
@@ -174,11 +228,28 @@ mod tests {
         }
         grams[3 * mm] = 1.0; // part 20: the x-translation fixed only
         let names = [0, 10, 3, 20];
+        let parts = ([1, 11, 4, 21].as_slice(), [2, 3, 4, 5].as_slice());
+        let counted = |shared: &[u64]| {
+            let list = join_parts(&names, &grams, shared, &modes, parts);
+            let b = summed(&list);
+            (b.count, b.not_held, list)
+        };
         let shared = [5, 0, 7, 10, 5, 3, 8, 20];
-        assert_eq!(join_parts(&names, &grams, &shared, &modes), (3, 2));
+        let (count, not_held, list) = counted(&shared);
+        assert_eq!((count, not_held), (3, 2));
+        assert_eq!(
+            list[0],
+            Body {
+                first_tag: 1,
+                nodes: 6,
+                free_modes: 0
+            }
+        );
         // node 7 shared by part 10 and part 20 as well: two bodies, the second not held
         let shared = [5, 0, 7, 10, 5, 3, 7, 20];
-        assert_eq!(join_parts(&names, &grams, &shared, &modes), (2, 1));
+        let (count, not_held, list) = counted(&shared);
+        assert_eq!((count, not_held), (2, 1));
+        assert_eq!((list[1].first_tag, list[1].nodes), (11, 8));
     }
 
     #[test]

@@ -3,14 +3,17 @@
 //! and the result set put in place, one line per stage.
 
 use crate::assembly::{self, System};
-use crate::bodies::{self, Bodies};
+use crate::bodies::{self, Body};
 use crate::case::Case;
-use crate::error::{InputError, RunError};
+use crate::case::Preset;
+use crate::error::RunError;
+use crate::fem::Material;
 use crate::mesh::Mesh;
 use crate::output::ResultSet;
 use crate::par::Ctx;
 use crate::partition::Layout;
 use crate::say;
+use crate::setup::ContactSettings;
 use crate::setup::{self, Input};
 use crate::solver;
 use crate::steps::{LoadReport, SolveReport, Stepper};
@@ -26,8 +29,35 @@ struct SolveSections {
     load: Option<LoadReport>,
 }
 
+/// A case set up up to its solve: read, partitioned and checked (the run's input errors all
+/// found), nothing assembled or written.
+pub struct Prepared {
+    /// The case with its preset resolved.
+    pub case: Case,
+    /// The preset the case asked for, and why the one used was chosen.
+    pub asked: Preset,
+    pub preset_reason: String,
+    pub mesh: Mesh,
+    pub material: Material,
+    pub layout: Layout,
+    pub partition: PartitionInfo,
+    /// The mesh's bodies, by their first node tags.
+    pub bodies: Vec<Body>,
+    /// The contact settings (`None` without contact).
+    pub contact: Option<ContactSettings>,
+    blas: Option<String>,
+    dense_threads: usize,
+    clock: Clock,
+}
+
 /// Runs a whole case. Returns summary.json's text (the same on every rank).
 pub fn run_case(ctx: &Ctx, case: &Case) -> Result<String, RunError> {
+    solve(ctx, prepare(ctx, case)?)
+}
+
+/// The set-up stage of a run: mesh, partition, preset, bodies, contact settings. Collective;
+/// every rank returns the same `Ok` / `Err` kind.
+pub fn prepare(ctx: &Ctx, case: &Case) -> Result<Prepared, RunError> {
     let asked = case.solver.preset;
     let mut clock = Clock::start();
     let Input {
@@ -60,11 +90,55 @@ pub fn run_case(ctx: &Ctx, case: &Case) -> Result<String, RunError> {
              ranks on its node)"
         );
     }
-    let mut resolved = case.clone();
-    resolved.solver.preset = preset;
-    let case = &resolved;
+    let mut case = case.clone();
+    case.solver.preset = preset;
+    let problem = setup::problem(&case, &mesh, material);
+    let bodies = check_bodies(ctx, &case, &mesh, &layout, &problem.fixed)?;
+    drop(problem);
+    let contact = if case.contacts.is_empty() {
+        None
+    } else {
+        Some(ctx.agree(
+            setup::contact_settings(&case, &case.contacts, mesh.dim).map_err(RunError::from),
+        )?)
+    };
+    ResultSet::check(ctx, &case.output.dir, &case.file)?;
+    Ok(Prepared {
+        case,
+        asked,
+        preset_reason,
+        mesh,
+        material,
+        layout,
+        partition,
+        bodies,
+        contact,
+        blas,
+        dense_threads,
+        clock,
+    })
+}
+
+/// The solve stage of a run: assembly, the load steps, summary.json and the result set.
+/// Returns summary.json's text (the same on every rank). Collective.
+pub fn solve(ctx: &Ctx, prepared: Prepared) -> Result<String, RunError> {
+    let Prepared {
+        case,
+        asked,
+        preset_reason,
+        mesh,
+        material,
+        layout,
+        partition,
+        bodies,
+        contact,
+        blas,
+        dense_threads,
+        mut clock,
+    } = prepared;
+    let case = &case;
+    let preset = case.solver.preset;
     let problem = setup::problem(case, &mesh, material);
-    let bodies = check_bodies(ctx, case, &mesh, &layout, &problem.fixed)?;
     let mut sys = assembly::assemble(ctx.comm(), &layout, &problem)?;
     clock.t.assembly = clock.lap();
     let assembly = check_assembly(ctx, &sys, clock.t.assembly)?;
@@ -78,6 +152,7 @@ pub fn run_case(ctx: &Ctx, case: &Case) -> Result<String, RunError> {
         material: &material,
         fixed: &problem.fixed,
         held_fixed: &problem.held_fixed,
+        contact: contact.as_ref(),
         out: &out,
     };
     let stepped = stepper.run(&mut sys)?;
@@ -100,7 +175,7 @@ pub fn run_case(ctx: &Ctx, case: &Case) -> Result<String, RunError> {
         ranks: ctx.size,
         blas,
         dense_threads,
-        bodies,
+        bodies: bodies::summed(&bodies),
         preset: PresetChoice {
             asked: asked.name(),
             used: preset.name(),
@@ -127,6 +202,94 @@ pub fn run_case(ctx: &Ctx, case: &Case) -> Result<String, RunError> {
             case.output.dir.display()
         ))),
     }
+}
+
+/// `signorini-mpi check`: the set-up stage of a run and its contact boundary (every input
+/// error a run finds before its solve), then what the run would do, on rank 0's stdout.
+/// Solves, assembles and writes nothing. Collective.
+pub fn check_case(ctx: &Ctx, case: &Case) -> Result<(), RunError> {
+    let p = prepare(ctx, case)?;
+    let (mesh, case) = (&p.mesh, &p.case);
+    let problem = setup::problem(case, mesh, p.material);
+    let modes = if mesh.dim == 2 { 3 } else { 6 };
+    say!(ctx, "check: bodies: {}", p.bodies.len());
+    for (i, b) in p.bodies.iter().enumerate() {
+        let held = match (b.free_modes, &p.contact) {
+            (0, _) => "held by its Dirichlet data".to_string(),
+            (m, Some(c)) => format!(
+                "free in {m} of its {modes} rigid modes (Dirichlet data too few or none): \
+                 the contact solver takes them ({})",
+                c.pairs[0].key("rigid_modes")
+            ),
+            (m, None) => {
+                format!("free in {m} of its {modes} rigid modes (Dirichlet data too few or none)")
+            }
+        };
+        say!(
+            ctx,
+            "check:   body {}: {} nodes from node tag {}, {held}",
+            i + 1,
+            b.nodes,
+            b.first_tag
+        );
+    }
+    say!(ctx, "check: groups: {}", mesh.groups.len());
+    for (i, g) in mesh.groups.iter().enumerate() {
+        say!(
+            ctx,
+            "check:   '{}' ({}D): {} elements",
+            g.name,
+            g.dim,
+            mesh.group_size_global(i)
+        );
+    }
+    if let Some(settings) = &p.contact {
+        let mut settings = settings.clone();
+        let first = case.load.as_ref().and_then(|l| l.factors.first().copied());
+        settings.at_factor(first.unwrap_or(1.0));
+        let b =
+            crate::signorini::contact_boundary(ctx, &settings, mesh, &p.layout, &problem.fixed)?;
+        for (j, pair) in settings.pairs.iter().enumerate() {
+            let mine = || b.nodes.iter().filter(|k| k.pair == j);
+            let nodes = ctx.sum_usize(mine().count());
+            let inside = ctx.sum_usize(mine().filter(|k| k.gap < 0.0).count());
+            let min_gap = ctx.min_f64(mine().map(|k| k.gap).fold(f64::INFINITY, f64::min));
+            let max_gap = ctx.max_f64(mine().map(|k| k.gap).fold(f64::NEG_INFINITY, f64::max));
+            let gaps = if nodes == 0 {
+                "no contact node".to_string()
+            } else if inside == 0 {
+                format!("none starts penetrating (gaps {min_gap:.6e} to {max_gap:.6e})")
+            } else {
+                format!(
+                    "{inside} start(s) penetrating the obstacle, by up to {:.6e} (gaps \
+                     {min_gap:.6e} to {max_gap:.6e})",
+                    -min_gap
+                )
+            };
+            say!(
+                ctx,
+                "check: contact pair {} on '{}': {nodes} nodes; {gaps}",
+                pair.key,
+                pair.group
+            );
+        }
+    } else {
+        say!(ctx, "check: contact: none (a linear solve)");
+    }
+    say!(
+        ctx,
+        "check: preset: {} (asked {}; {})",
+        case.solver.preset.name(),
+        p.asked.name(),
+        p.preset_reason
+    );
+    say!(
+        ctx,
+        "check: {} is valid; nothing solved or written (results would go to {})",
+        case.file.display(),
+        case.output.dir.display()
+    );
+    Ok(())
 }
 
 /// The partition line and its summary record.
@@ -161,8 +324,9 @@ fn check_bodies(
     mesh: &Mesh,
     layout: &Layout,
     fixed: &[f64],
-) -> Result<Bodies, RunError> {
-    let b = bodies::count(ctx, mesh, layout, fixed);
+) -> Result<Vec<Body>, RunError> {
+    let list = bodies::survey(ctx, mesh, layout, fixed);
+    let b = bodies::summed(&list);
     if b.count > 1 {
         say!(
             ctx,
@@ -173,19 +337,21 @@ fn check_bodies(
         );
     }
     if b.count > 1 && b.not_held > 0 && !case.contacts.is_empty() {
-        return Err(RunError::Input(InputError::new(
-            &case.mesh.file,
+        return Err(RunError::Input(case.error_at(
+            "dirichlet",
             format!(
-                "the mesh has {} separate bodies (parts that share no node), {} of them \
+                "the mesh {} has {} separate bodies (parts that share no node), {} of them \
                  with a rigid motion their Dirichlet data leave free: with contact the solver \
                  takes the free rigid modes of one body, so the position of such a body would \
                  be undetermined or its solve fail; hold every body by Dirichlet data, or solve \
                  each body that they do not hold from a mesh of its own",
-                b.count, b.not_held
+                case.mesh.file.display(),
+                b.count,
+                b.not_held
             ),
         )));
     }
-    Ok(b)
+    Ok(list)
 }
 
 /// The assembly line; a malloc during assembly means a wrong preallocation (a bug).

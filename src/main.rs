@@ -1,6 +1,8 @@
-//! `signorini-mpi CASE.toml [--set key=value]... [-o DIR] [-- PETSc options]`
+//! `signorini-mpi CASE.toml [--set key=value]... [-o DIR] [-- PETSc options]`,
+//! `signorini-mpi check CASE.toml [--set key=value]... [-o DIR]`,
+//! `signorini-mpi convert MESH.msh MESH.h5`.
 
-use clap::Parser;
+use clap::{Args, Parser, Subcommand};
 use mpi::traits::*;
 use mpi::Threading;
 use signorini_mpi::case::Case;
@@ -12,10 +14,40 @@ use std::path::PathBuf;
 
 /// Static contact of linear-elastic bodies with a rigid obstacle (semismooth Newton, MPI + PETSc).
 #[derive(Parser, Debug)]
-#[command(name = "signorini-mpi", version)]
+#[command(
+    name = "signorini-mpi",
+    version,
+    args_conflicts_with_subcommands = true,
+    subcommand_negates_reqs = true
+)]
 struct Cli {
+    #[command(subcommand)]
+    command: Option<Command>,
+    /// Without a subcommand: solve the case.
+    #[command(flatten)]
+    run: CaseArgs,
+}
+
+#[derive(Subcommand, Debug)]
+enum Command {
+    /// Read and check a case and its mesh and say what a run would do, without solving or
+    /// writing anything.
+    Check(CaseArgs),
+    /// Convert an MSH mesh to an HDF5 mesh (+ .xdmf), serial.
+    Convert {
+        /// The Gmsh mesh (.msh).
+        msh: PathBuf,
+        /// The HDF5 mesh to write (.h5).
+        h5: PathBuf,
+    },
+}
+
+/// A case and its overrides.
+#[derive(Args, Debug)]
+struct CaseArgs {
     /// The case file (TOML).
-    case: PathBuf,
+    #[arg(required = true)]
+    case: Option<PathBuf>,
     /// Override a case key, e.g. --set mesh.file=fine.msh --set newton.c=10 (repeatable).
     #[arg(long = "set", value_name = "KEY=VALUE")]
     set: Vec<String>,
@@ -27,28 +59,36 @@ struct Cli {
     petsc: Vec<String>,
 }
 
+impl Cli {
+    /// The case to solve or check (`true`: check); `None` for `convert`.
+    fn job(&self) -> Option<(&CaseArgs, bool)> {
+        match &self.command {
+            None => Some((&self.run, false)),
+            Some(Command::Check(args)) => Some((args, true)),
+            Some(Command::Convert { .. }) => None,
+        }
+    }
+}
+
 /// `signorini-mpi convert MESH.msh MESH.h5`: the MSH file as an HDF5 mesh (+ .xdmf), serial.
-fn convert(args: &[String]) -> i32 {
-    let [src, dst] = args else {
-        eprintln!("usage: signorini-mpi convert MESH.msh MESH.h5");
-        return 2;
-    };
-    let mesh = match signorini_mpi::mesh::read_msh(std::path::Path::new(src)) {
+fn convert(src: &std::path::Path, dst: &std::path::Path) -> i32 {
+    let mesh = match signorini_mpi::mesh::read_msh(src) {
         Ok(m) => m,
         Err(e) => {
             eprintln!("error: {e}");
             return 2;
         }
     };
-    match signorini_mpi::mesh::h5::write_h5(&mesh, std::path::Path::new(dst)) {
+    match signorini_mpi::mesh::h5::write_h5(&mesh, dst) {
         Ok(()) => {
             println!(
-                "{dst}: {}D, {} nodes, {} cells, {} groups (and {})",
+                "{}: {}D, {} nodes, {} cells, {} groups (and {})",
+                dst.display(),
                 mesh.dim,
                 mesh.n_nodes(),
                 mesh.n_cells(),
                 mesh.groups.len(),
-                std::path::Path::new(dst).with_extension("xdmf").display()
+                dst.with_extension("xdmf").display()
             );
             0
         }
@@ -60,13 +100,15 @@ fn convert(args: &[String]) -> i32 {
 }
 
 fn main() {
-    let args: Vec<String> = std::env::args().collect();
-    if args.get(1).map(String::as_str) == Some("convert") {
-        std::process::exit(convert(&args[2..]));
+    let cli = Cli::parse();
+    if let Some(Command::Convert { msh, h5 }) = &cli.command {
+        std::process::exit(convert(msh, h5));
     }
     // Before anything loads MPI or PETSc state: OpenBLAS' kernels fit for this CPU.
     signorini_mpi::blas::restart_with_fitting_kernels();
-    let cli = Cli::parse();
+    let Some((args, _)) = cli.job() else {
+        unreachable!("convert returned above")
+    };
     let code = {
         // MPI_THREAD_MULTIPLE where the MPI library grants it (Open MPI does): libraries that
         // run PT-Scotch with its default context (one thread per core, threads that call MPI
@@ -82,7 +124,7 @@ fn main() {
         // rank while the others wait).
         signorini_mpi::abort::install_panic_hook();
         // PETSc is initialised after MPI and finalised before the universe is dropped.
-        match Petsc::init(&cli.petsc) {
+        match Petsc::init(&args.petsc) {
             Err(e) => {
                 eprintln!("error: PETSc could not be initialised: {e}");
                 world.abort(1);
@@ -99,9 +141,16 @@ fn main() {
 
 fn run(cli: &Cli, world: &mpi::topology::SimpleCommunicator, petsc: &Petsc) -> i32 {
     let ctx = Ctx::new(world, petsc);
+    let Some((args, check)) = cli.job() else {
+        return 2;
+    };
+    let case_file = args.case.as_deref().expect("clap requires the case");
     let result = ctx
-        .agree(Case::load(&cli.case, &cli.set, cli.output.as_deref()).map_err(RunError::from))
-        .and_then(|case| driver::run_case(&ctx, &case));
+        .agree(Case::load(case_file, &args.set, args.output.as_deref()).map_err(RunError::from))
+        .and_then(|case| match check {
+            false => driver::run_case(&ctx, &case).map(drop),
+            true => driver::check_case(&ctx, &case),
+        });
     match result {
         Ok(_) => 0,
         Err(e @ RunError::Petsc(_)) => {

@@ -222,6 +222,7 @@ pub fn problem<'m>(case: &Case, mesh: &'m Mesh, material: Material) -> Problem<'
 }
 
 /// One contact pair as the contact algorithm sees it (`[contact]` or one `[[contact]]` table).
+#[derive(Clone)]
 pub struct PairSettings {
     /// The pair's table in the case file (`contact` or `contact[i]`), named in messages.
     pub key: String,
@@ -254,6 +255,7 @@ impl PairSettings {
 }
 
 /// Everything the contact algorithm needs from the case, checked.
+#[derive(Clone)]
 pub struct ContactSettings {
     /// The case file (named in messages about the contact boundary).
     pub file: std::path::PathBuf,

@@ -30,7 +30,7 @@ use crate::partition::Layout;
 use crate::petsc::Vector;
 use crate::post;
 use crate::say;
-use crate::setup::{self, ContactSettings};
+use crate::setup::ContactSettings;
 use crate::signorini::certificate::Certificate;
 use crate::signorini::report::{FrictionCertificate, Kkt, PairSummary};
 use crate::signorini::{self, ContactReport, ContactSolution};
@@ -177,6 +177,8 @@ pub struct Stepper<'a> {
     pub fixed: &'a [f64],
     /// Per dof: held at full value in every step (`ramp = false`); empty = none held.
     pub held_fixed: &'a [bool],
+    /// The contact settings (`None`: a linear case).
+    pub contact: Option<&'a ContactSettings>,
     pub out: &'a ResultSet,
 }
 
@@ -212,15 +214,9 @@ impl Stepper<'_> {
         let (ctx, case) = (self.ctx, self.case);
         let series = case.load.is_some();
         let plan = case.load.clone().unwrap_or_else(LoadSection::single);
-        let mut physics = if case.contacts.is_empty() {
-            Physics::Linear
-        } else {
-            Physics::Contact(Box::new(
-                ctx.agree(
-                    setup::contact_settings(case, &case.contacts, self.mesh.dim)
-                        .map_err(RunError::from),
-                )?,
-            ))
+        let mut physics = match self.contact {
+            None => Physics::Linear,
+            Some(c) => Physics::Contact(Box::new(c.clone())),
         };
         // f(1), kept to scale from (only with [load]: a single step solves f(1) itself).
         let b_full = if series {

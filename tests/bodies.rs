@@ -95,6 +95,10 @@ fn a_body_not_held_beside_another_is_refused_with_contact() {
             out.contains("two_squares.msh"),
             "the mesh file named: {out}"
         );
+        assert!(
+            out.contains("two_left_a_true.toml") && out.contains("key 'dirichlet'"),
+            "the case file and its key named: {out}"
+        );
         assert!(!dir.exists(), "no output written: {}", dir.display());
     }
     // each square held by u_x = 0 on its left side alone: their rigid motions up and down

@@ -173,19 +173,25 @@ impl ResultSet {
     /// Checks (before the solve) that the output directory can be written; a directory that
     /// cannot is an input error of the case's `output.dir`. Collective.
     pub fn begin(ctx: &Ctx, dir: &Path, case_file: &Path) -> Result<ResultSet, RunError> {
-        let local = if ctx.rank == 0 {
-            check_writable(dir)
-                .map_err(|m| RunError::Input(InputError::new(case_file, m).with_key("output.dir")))
-        } else {
-            Ok(())
-        };
-        ctx.agree(local)?;
+        Self::check(ctx, dir, case_file)?;
         Ok(ResultSet {
             dir: dir.to_path_buf(),
             staging: staging_dir(dir),
             committed: false,
             rank: ctx.rank,
         })
+    }
+
+    /// Whether results could go to `dir` (an input error naming `output.dir` if not), writing
+    /// nothing. Collective.
+    pub fn check(ctx: &Ctx, dir: &Path, case_file: &Path) -> Result<(), RunError> {
+        let local = if ctx.rank == 0 {
+            check_writable(dir)
+                .map_err(|m| RunError::Input(InputError::new(case_file, m).with_key("output.dir")))
+        } else {
+            Ok(())
+        };
+        ctx.agree(local)
     }
 
     /// The directory the results go to.

@@ -785,6 +785,7 @@ mod tests {
             on_contact_boundary: vec![true, true],
             excluded_dirichlet: 0,
             obstacles: Vec::new(),
+            keys: Default::default(),
         };
         for stick in [false, true] {
             let set = ActiveSet::held(vec![true, false], stick);
@@ -833,6 +834,7 @@ mod tests {
             obstacles: vec![crate::contact::Obstacle::Plane(
                 crate::contact::Plane::new([0.0; 3], [0.0, 1.0, 0.0], 2).expect("plane"),
             )],
+            keys: Default::default(),
         };
         let p = set.prescribed(&b, 0, 2).expect("rewritten");
         assert_eq!(p.dirs.len(), 2);
@@ -926,6 +928,7 @@ mod tests {
             obstacles: vec![crate::contact::Obstacle::Plane(
                 crate::contact::Plane::new([0.0; 3], [0.0, 1.0, 0.0], 2).expect("plane"),
             )],
+            keys: Default::default(),
         };
         let mut it = Iterate::new(2, 4, true);
         let limit = at(0.0, -1.0, 0.1 * (1.0 + 1e-12));

@@ -77,6 +77,33 @@ pub struct ContactBoundary {
     /// Each pair's obstacle as the case gives it (its motion is in the nodes' gaps and
     /// references).
     pub obstacles: Vec<Obstacle>,
+    /// The case file and keys that the diagnoses of the solve name.
+    pub keys: CaseKeys,
+}
+
+/// The case file and the keys a failed solve names, so the user knows what to change.
+#[derive(Clone, Debug, Default)]
+pub struct CaseKeys {
+    pub file: std::path::PathBuf,
+    /// Each pair's table (`contact` or `contact[i]`).
+    pub pairs: Vec<String>,
+    /// The linear solver's keys the case sets (`solver.preset = "iterative"`, ...).
+    pub solver: String,
+}
+
+impl CaseKeys {
+    /// "FILE: keys 'a', 'b'" for the keys `names` (each pair's `KEY.name` for a name that
+    /// starts with '.').
+    pub fn named(&self, names: &[&str]) -> String {
+        let mut keys = Vec::new();
+        for n in names {
+            match n.strip_prefix('.') {
+                Some(n) => keys.extend(self.pairs.iter().map(|p| format!("'{p}.{n}'"))),
+                None => keys.push(format!("'{n}'")),
+            }
+        }
+        format!("{}: keys {}", self.file.display(), keys.join(", "))
+    }
 }
 
 impl ContactBoundary {
@@ -286,6 +313,11 @@ pub fn build(
         on_contact_boundary: pair_of.iter().map(Option::is_some).collect(),
         excluded_dirichlet: ex_all,
         obstacles: settings.pairs.iter().map(|p| p.obstacle.clone()).collect(),
+        keys: CaseKeys {
+            file: settings.file.clone(),
+            pairs: settings.pairs.iter().map(|p| p.key.clone()).collect(),
+            solver: String::new(),
+        },
     })
 }
 

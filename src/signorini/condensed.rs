@@ -896,11 +896,12 @@ fn judge(
             );
             Ok(Judged::Again)
         }
-        End::NoSupport(_) if !s.force.is_empty() => {
-            let fc = super::force::unreached(ctx, p.boundary, s.force);
-            Err(super::force::never_touches(fc.unwrap_or(&s.force[0])))
-        }
         End::NoSupport(reaction) => {
+            // under force control: the pair whose obstacle never reaches the body, if one
+            // does not; else no support as without force control
+            if let Some(fc) = super::force::unreached(ctx, p.boundary, s.force) {
+                return Err(super::force::never_touches(fc));
+            }
             Err(free.no_support(run.active.iter().filter(|&&a| a).count(), *reaction))
         }
         // the primal form gives up where the zone is too wide even for it

@@ -243,6 +243,7 @@ fn candidate_boundary(kept: &Kept, b: &ContactBoundary, dim: usize) -> ContactBo
         on_contact_boundary: Vec::new(),
         excluded_dirichlet: 0,
         obstacles: b.obstacles.clone(),
+        keys: b.keys.clone(),
     }
 }
 
@@ -626,6 +627,7 @@ impl Dense<'_> {
                 on_contact_boundary: Vec::new(),
                 excluded_dirichlet: 0,
                 obstacles: self.cb.obstacles.clone(),
+                keys: self.cb.keys.clone(),
             };
             let sub = Dense {
                 cmat: &sub_c,
@@ -1558,6 +1560,7 @@ mod tests {
             on_contact_boundary: Vec::new(),
             excluded_dirichlet: 0,
             obstacles: Vec::new(),
+            keys: Default::default(),
         };
         (cmat, d0, cb)
     }

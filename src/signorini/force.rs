@@ -363,6 +363,31 @@ impl Approach {
             .collect()
     }
 
+    /// The pair `j`'s force does not grow with its approach (dP/dδ = `slope` ≤ 0 with
+    /// `active` active nodes): without friction the body is not held against the force (an
+    /// input error); with friction the step's slip rows may do it to valid input, so the
+    /// solve failed (a load step is cut back).
+    fn unresisting(&self, j: usize, active: usize, slope: f64, friction: bool) -> RunError {
+        if friction {
+            return RunError::NoConvergence(format!(
+                "force control ({}: key '{}'): with {active} active contact node(s) and the \
+                 step's stick and slip rows the contact force along the force does not grow \
+                 with the approach (dP/dδ = {slope:.3e}): no Newton step for the approach",
+                self.file.display(),
+                self.pairs[j].key
+            ));
+        }
+        self.input_error(
+            j,
+            format!(
+                "the body does not resist the obstacle's motion along the force: with {active} \
+                 active contact node(s) the contact force along it does not grow with the \
+                 approach (dP/dδ = {slope:.3e}): is the body held by Dirichlet data against the \
+                 force?"
+            ),
+        )
+    }
+
     fn input_error(&self, j: usize, message: String) -> RunError {
         RunError::Input(
             InputError::new(Path::new(&self.file), message).with_key(self.pairs[j].key.as_str()),
@@ -474,20 +499,12 @@ pub fn correct(
         let all = ctx.sum_vec(&local);
         let n = held.len();
         let stiffness: Vec<Vec<f64>> = (0..n).map(|p| all[p * n..(p + 1) * n].to_vec()).collect();
-        // P¹_jj = u¹_jᵀ A u¹_j (A u¹_j vanishes off the active rows, where u¹_j is
-        // prescribed): > 0 unless no active node of the pair has a normal component along e_j
+        // frictionless, P¹_jj = u¹_jᵀ A u¹_j (A u¹_j vanishes off the active rows, where u¹_j
+        // is prescribed): > 0 unless no active node of the pair has a normal component along
+        // e_j; with friction the lift's tangential rows may make it ≤ 0 on valid input
         if let Some(p) = (0..n).find(|&p| stiffness[p][p].is_nan() || stiffness[p][p] <= 0.0) {
             let j = held[p];
-            return Err(ap.input_error(
-                j,
-                format!(
-                    "the body does not resist the obstacle's motion along the force: with {} \
-                     active contact node(s) the contact force along it does not grow with the \
-                     approach (dP/dδ = {:.3e}): is the body held by Dirichlet data against the \
-                     force?",
-                    counts[j], stiffness[p][p]
-                ),
-            ));
+            return Err(ap.unresisting(j, counts[j], stiffness[p][p], set.tangential.is_some()));
         }
         let rhs: Vec<f64> = held
             .iter()
@@ -527,7 +544,37 @@ pub fn correct(
 
 #[cfg(test)]
 mod tests {
-    use super::solve_small;
+    use super::*;
+
+    /// dP/dδ ≤ 0: an input error without friction, a failed solve (exit 1) with it, each
+    /// naming the pair's `force` key.
+    #[test]
+    fn unresisting_force_is_input_only_without_friction() {
+        let b = ContactBoundary {
+            nodes: Vec::new(),
+            n_global: 0,
+            offset: 0,
+            on_contact_boundary: Vec::new(),
+            excluded_dirichlet: 0,
+            obstacles: Vec::new(),
+            keys: Default::default(),
+        };
+        let fc = |pair: usize| ForceControl {
+            force: [0.0, -1.0, 0.0],
+            start: 0.0,
+            file: "case.toml".into(),
+            pair,
+            key: format!("contact[{pair}].force"),
+        };
+        let ap = Approach::new(&b, &[fc(0), fc(2)]);
+        let e = ap.unresisting(1, 3, -0.5, false);
+        assert_eq!(e.exit_code(), 2, "{e}");
+        assert!(e.to_string().contains("key 'contact[2].force'"), "{e}");
+        let e = ap.unresisting(1, 3, -0.5, true);
+        assert!(matches!(e, RunError::NoConvergence(_)), "{e}");
+        assert_eq!(e.exit_code(), 1);
+        assert!(e.to_string().contains("key 'contact[2].force'"), "{e}");
+    }
 
     #[test]
     fn small_system() {

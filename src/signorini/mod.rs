@@ -320,8 +320,8 @@ pub fn solve(
     let dim = mesh.dim;
     let law = law_of(settings);
     let friction = settings.friction();
-    let mut b = boundary::build(ctx, mesh, layout, settings, fixed)?;
-    log_boundary(ctx, &b, settings, dim);
+    let mut b = contact_boundary(ctx, settings, mesh, layout, fixed)?;
+    b.keys.solver = solver_keys(solver_section);
     let force_control = force_control(settings, previous);
     check_friction_capacity(ctx, &b, (fixed, sys, dim), law, &force_control)?;
     let displacements = settings.displacements();
@@ -335,9 +335,6 @@ pub fn solve(
     )?;
     let coords = solver::near_null_space_coordinates(ctx, mesh, layout, solver_section.preset)?;
     let c = complementarity_parameter(ctx, settings, &b, dim);
-    if let Some(fc) = force::unreached(ctx, &b, &force_control) {
-        return Err(force::never_touches(fc));
-    }
     // the start: the previous step's solution, or its extrapolation along its own increment
     // (under force control against the obstacles where the previous step left them)
     let at_start = (!force_control.is_empty()).then(|| {
@@ -458,6 +455,40 @@ pub fn solve(
         obstacle_displacement: displacement,
         kept,
     })
+}
+
+/// The contact boundary of a solve, logged, with the checks that come before the solve (every
+/// node projected, the depth of the start, a force that never reaches the body). Collective;
+/// every rank returns the same `Ok` / `Err` kind.
+pub fn contact_boundary(
+    ctx: &Ctx,
+    settings: &ContactSettings,
+    mesh: &Mesh,
+    layout: &Layout,
+    fixed: &[f64],
+) -> Result<ContactBoundary, RunError> {
+    let b = boundary::build(ctx, mesh, layout, settings, fixed)?;
+    log_boundary(ctx, &b, settings, mesh.dim);
+    // the approaches' starts do not matter here: only the forces' directions
+    if let Some(fc) = force::unreached(ctx, &b, &force_control(settings, None)) {
+        return Err(force::never_touches(fc));
+    }
+    Ok(b)
+}
+
+/// The linear solver's keys of a case with their values, for the diagnoses.
+fn solver_keys(s: &SolverSection) -> String {
+    let mut keys = vec![format!("'solver.preset' = \"{}\"", s.preset.name())];
+    if s.preset == Preset::Iterative {
+        keys.push(format!("'solver.rtol' = {:e}", s.rtol));
+    }
+    if !s.petsc_options.trim().is_empty() {
+        keys.push(format!(
+            "'solver.petsc_options' = {:?}",
+            s.petsc_options.trim()
+        ));
+    }
+    keys.join(", ")
 }
 
 /// Force control's result on the boundary: every force-controlled pair's obstacle where its
@@ -737,7 +768,7 @@ fn final_state(
     };
     let (scales, kkt, friction_certificate) =
         certificates(ctx, sys, &table, &nr.u, friction, floor)?;
-    check_certificates(ctx, &kkt, friction_certificate.as_ref(), &scales)?;
+    check_certificates(ctx, &kkt, friction_certificate.as_ref(), &scales, &b.keys)?;
     say!(
         ctx,
         "contact: {} active, p_max = {:.6}, half width = {}, total force = {:?}",
@@ -1967,6 +1998,7 @@ fn check_certificates(
     kkt: &Kkt,
     friction: Option<&FrictionCertificate>,
     scales: &Scales,
+    keys: &boundary::CaseKeys,
 ) -> Result<(), RunError> {
     let fric_bad = |rel: f64| friction.is_some_and(|f| f.beyond(rel, scales));
     if kkt.beyond(report::CERTIFICATE_TOL) || fric_bad(report::CERTIFICATE_TOL) {
@@ -1974,7 +2006,7 @@ fn check_certificates(
             "the final state is not a solution: it violates {} beyond {:e} of the problem's \
              scales (force {:.3e}, length {:.3e}): KKT {}{} — the problem is probably ill-posed \
              (a load that contact and friction cannot carry, or a mesh of several bodies that \
-             Dirichlet data do not hold) or the linear solves inexact",
+             Dirichlet data do not hold: {}) or the linear solves inexact ({})",
             if fric_bad(report::CERTIFICATE_TOL) {
                 "(3.18)"
             } else {
@@ -1986,7 +2018,9 @@ fn check_certificates(
             json(kkt),
             friction
                 .map(|f| format!(", friction {}", json(f)))
-                .unwrap_or_default()
+                .unwrap_or_default(),
+            keys.named(&["dirichlet", "neumann", ".obstacle", ".friction"]),
+            keys.solver
         )));
     }
     if kkt.beyond(1e-8) || fric_bad(1e-8) {

@@ -301,7 +301,7 @@ pub fn semismooth_newton(
         let allow_reuse = s.law != Law::Coulomb && !plan.confirm;
         let solved = reduced.solve(ctx, allow_reuse)?;
         let reused = solved.reuse.is_some() && solved.kind == SolveKind::Reuse;
-        ensure_converged(step, &solved.info)?;
+        ensure_converged(step, &solved.info, &b.keys)?;
         if null_space {
             lp.zero_pins(reduced)?;
         }
@@ -709,13 +709,22 @@ pub(super) fn add_motion(
     Ok(())
 }
 
-fn ensure_converged(step: usize, info: &SolveInfo) -> Result<(), RunError> {
+/// A linear solve that did not converge is an error naming the solver settings of the case.
+fn ensure_converged(
+    step: usize,
+    info: &SolveInfo,
+    keys: &super::boundary::CaseKeys,
+) -> Result<(), RunError> {
     if info.converged() {
         return Ok(());
     }
     Err(RunError::Failed(format!(
-        "Newton step {step}: the linear solver did not converge ({} after {} iterations)",
-        info.reason_name, info.iterations
+        "Newton step {step}: the linear solver did not converge ({} after {} iterations); \
+         {}: it is set by {} (and PETSc options after --)",
+        info.reason_name,
+        info.iterations,
+        keys.file.display(),
+        keys.solver
     )))
 }
 

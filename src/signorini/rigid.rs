@@ -23,7 +23,7 @@
 //! order ε‖A‖‖u‖·√n when u carries a large rigid motion (an obstacle far below the body), or
 //! the Krylov tolerance of the iterative preset — both produced false "no support" diagnoses.
 
-use super::boundary::{ContactBoundary, NodeResult};
+use super::boundary::{CaseKeys, ContactBoundary, NodeResult};
 use crate::case;
 use crate::error::RunError;
 use crate::mesh::Mesh;
@@ -186,6 +186,8 @@ pub struct FreeModes {
     /// Force control on a floating body: the approaches the set ties to the rigid modes
     /// ([`FreeModes::couple`]); empty otherwise.
     coupling: Vec<ApproachCoupling>,
+    /// The case file and keys its diagnoses name.
+    keys: CaseKeys,
 }
 
 /// An unbalanced load in the free modes below this fraction of `load_scale` is balanced: the
@@ -257,6 +259,7 @@ impl FreeModes {
             load,
             load_scale: total[6],
             coupling: Vec::new(),
+            keys: b.keys.clone(),
         }
     }
 
@@ -406,7 +409,10 @@ impl FreeModes {
             .pins(ctx, mesh, layout, &q, |v| self.candidate[v]);
         if pins.len() < q.ncols() {
             return Err(RunError::Failed(format!(
-                "{} free rigid mode(s) but only {} dof(s) available to fix them",
+                "{}: {} free rigid mode(s) but only {} dof(s) available to fix them (nodes off \
+                 the contact boundary without Dirichlet data): hold the body by Dirichlet data \
+                 or leave nodes off the contact group",
+                self.keys.named(&["dirichlet", ".group", ".rigid_modes"]),
                 q.ncols(),
                 pins.len()
             )));
@@ -645,11 +651,12 @@ impl FreeModes {
     /// The "no support" diagnosis of an unbalanced load that no contact can carry.
     pub fn no_support(&self, n_active: usize, reaction: f64) -> RunError {
         RunError::Failed(format!(
-            "no support: the body has {} rigid mode(s) fixed neither by Dirichlet data nor by \
+            "{}: no support: the body has {} rigid mode(s) fixed neither by Dirichlet data nor by \
              contact ({} active contact node(s)), the load is not balanced in them (unbalanced \
              load {:.3e} against a total load of {:.3e}) and moving along it brings no \
              contact node closer to the obstacle: there is no equilibrium — add Dirichlet data \
              or move the obstacle into the body's way",
+            self.keys.named(&["dirichlet", ".obstacle"]),
             self.pins.len(),
             n_active,
             reaction,

@@ -26,9 +26,9 @@ use super::{own_error, MPI_Comm, Matrix, Result};
 const WORKSPACE_PERCENT: i32 = 40;
 
 /// A MUMPS instance holding the LLᵀ factorisation (SYM = 1: the matrix must be symmetric
-/// positive definite; no pivoting, so repeated runs on a fixed rank count give the same bits,
-/// which SYM = 2's pivots under MUMPS' dynamic scheduling did not) of a matrix whose Schur
-/// complement on a list of variables was computed instead of factorised.
+/// positive definite; no pivoting, whose choices under MUMPS' dynamic scheduling with SYM = 2
+/// varied between runs) of a matrix whose Schur complement on a list of variables was
+/// computed instead of factorised.
 ///
 /// On more than one rank MUMPS' factorisation and solve phases add contributions received from
 /// other ranks in the order their messages arrive: measured on the Hertz disk at 171 602

@@ -130,7 +130,8 @@ pub fn configure(
     if matches!(preset, Preset::Iterative) && crate::par::world_size() > 2 {
         options::set_default("-matptap_via", "allatonce")?;
     }
-    // solver.repeatable: the direct preset's sparse factorisations on rank 0 alone.
+    // solver.repeatable: the direct preset's MUMPS work (the plain path's factorisations, the
+    // condensed path's Schur factorisation and solve phases) on rank 0 alone.
     if repeatable {
         options::set_default(petsc::ndfactor::ONE_PROCESS_OPTION, "")?;
     }

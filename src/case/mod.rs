@@ -237,9 +237,10 @@ pub struct SolverSection {
     /// Reuse of a factorisation (direct preset) or of the preconditioner, warm starts and
     /// inexact early steps (iterative preset) across Newton steps (contact).
     pub reuse: Reuse,
-    /// The direct preset's sparse factorisations (LU with friction, LDLᵀ on the plain path)
-    /// by MUMPS on rank 0 alone, so that repeated runs on a fixed rank count give the same
-    /// bits (MUMPS on several ranks varies by round-off from run to run).
+    /// The direct preset's MUMPS work (LU with friction, LDLᵀ on the plain path, and the
+    /// condensed path's LLᵀ with the Schur complement and its solve phases) on rank 0 alone,
+    /// so that repeated runs on a fixed rank count give the same bits (MUMPS on several ranks
+    /// adds other ranks' contributions as their messages arrive: round-off from run to run).
     pub repeatable: bool,
 }
 

@@ -26,11 +26,21 @@ use super::{agreed_error, own_error, MPI_Comm, Matrix, Result};
 const WORKSPACE_PERCENT: i32 = 40;
 
 /// A MUMPS instance holding the LLᵀ factorisation (SYM = 1: the matrix must be symmetric
-/// positive definite; no pivoting, so repeated runs on a fixed rank count give the same bits,
-/// which SYM = 2's pivots under MUMPS' dynamic scheduling did not) of a matrix whose Schur
-/// complement on a list of variables was computed instead of factorised.
+/// positive definite; no pivoting, whose choices under MUMPS' dynamic scheduling with SYM = 2
+/// varied between runs) of a matrix whose Schur complement on a list of variables was
+/// computed instead of factorised.
+///
+/// On more than one rank MUMPS' factorisation and solve phases add contributions received from
+/// other ranks in the order their messages arrive: measured on the Hertz disk at 171 602
+/// unknowns on 3 ranks, both S and the expansion's u varied from run to run (docs/numbers.md,
+/// "The condensed path's repeatability"). With `one_process` (the case's `solver.repeatable`,
+/// [`super::ndfactor::ONE_PROCESS_OPTION`]) the matrix is gathered on rank 0 in rank order and
+/// factorised and solved there by a MUMPS instance on MPI_COMM_SELF, as [`Factor`] does.
 pub struct SchurFactor {
-    inst: Instance,
+    /// MUMPS' instance: on every rank, or with `one_process` on rank 0 only.
+    inst: Option<Instance>,
+    comm: MPI_Comm,
+    one_process: bool,
     irn: Vec<i32>,
     jcn: Vec<i32>,
     vals: Vec<f64>,
@@ -42,6 +52,8 @@ pub struct SchurFactor {
     n: usize,
     size_schur: usize,
     root: bool,
+    /// RINFOG(1) of the analysis (the same on every rank).
+    flops: f64,
 }
 
 impl SchurFactor {
@@ -72,9 +84,24 @@ impl SchurFactor {
         }
         let read = rows(comm, mat, true).and_then(|t| bases.rotate(mat, t));
         let (irn, jcn, vals) = agreed(comm, read)?;
+        let one_process = super::options::has(super::ndfactor::ONE_PROCESS_OPTION)?;
+        let (inst, (irn, jcn, vals)) = if one_process {
+            let all = gathered(comm, (irn, jcn, vals))?;
+            let inst = if root {
+                // SAFETY: reads the handle of MPI_COMM_SELF (set by MPI's initialisation).
+                Some(Instance::new(unsafe { super::ffi::RSMPI_COMM_SELF }, 1))
+            } else {
+                None
+            };
+            (agreed(comm, inst.transpose())?, all)
+        } else {
+            (Some(Instance::new(comm, 1)?), (irn, jcn, vals))
+        };
         let size_schur = schur_rows.len();
         let mut f = SchurFactor {
-            inst: Instance::new(comm, 1)?,
+            inst,
+            comm,
+            one_process,
             irn,
             jcn,
             vals,
@@ -93,33 +120,61 @@ impl SchurFactor {
             n,
             size_schur,
             root,
+            flops: 0.0,
         };
-        f.inst.id.icntl[18] = 1; // ICNTL(19): Schur complement, centralised on the host
-        f.inst.id.n = n as i32;
-        let set = f.inst.set_matrix(&mut f.irn, &mut f.jcn, &mut f.vals);
+        let set = match f.inst.as_mut() {
+            Some(inst) => {
+                inst.id.icntl[18] = 1; // ICNTL(19): Schur complement, centralised on the host
+                inst.id.n = n as i32;
+                inst.set_matrix(&mut f.irn, &mut f.jcn, &mut f.vals)
+            }
+            None => Ok(()),
+        };
         agreed(comm, set)?;
-        let id = &mut f.inst.id;
-        id.size_schur = size_schur as i32;
-        id.listvar_schur = f.listvar.as_mut_ptr();
-        if root {
-            id.schur = f.schur.as_mut_ptr();
-            id.schur_lld = size_schur as i32;
+        if let Some(inst) = f.inst.as_mut() {
+            let id = &mut inst.id;
+            id.size_schur = size_schur as i32;
+            id.listvar_schur = f.listvar.as_mut_ptr();
+            if root {
+                id.schur = f.schur.as_mut_ptr();
+                id.schur_lld = size_schur as i32;
+            }
+            inst.set_order(root, &mut f.perm, n);
         }
-        f.inst.set_order(root, &mut f.perm, n);
-        f.inst.call(1)?; // analysis
+        f.call(1)?; // analysis
+                    // RINFOG(1): rank 0's on every rank where MUMPS ran there alone
+        let mut flops = [f.inst.as_ref().map_or(0.0, |i| i.id.rinfog[0]).to_bits()];
+        if one_process {
+            super::mpi::broadcast_u64(comm, &mut flops)?;
+        }
+        f.flops = f64::from_bits(flops[0]);
         Ok(f)
+    }
+
+    /// `job` on the instance: collective on every rank, or on rank 0 alone with its outcome
+    /// agreed over the communicator (`one_process`).
+    fn call(&mut self, job: i32) -> Result<()> {
+        if !self.one_process {
+            return self
+                .inst
+                .as_mut()
+                .expect("an instance on every rank")
+                .call(job);
+        }
+        let r = self.inst.as_mut().map_or(Ok(()), |i| i.call(job));
+        agreed(self.comm, r)
     }
 
     /// RINFOG(1) of the analysis: the flops of eliminating the variables outside the Schur
     /// list (the same on every rank).
     pub fn flops(&self) -> f64 {
-        self.inst.id.rinfog[0]
+        self.flops
     }
 
     /// The numeric factorisation after [`SchurFactor::analyse`], which fills the Schur
     /// complement. Collective.
     pub fn factorise(&mut self) -> Result<()> {
-        self.inst.call(2)?;
+        self.call(2)?;
         // MUMPS returns the lower triangle by rows for a symmetric matrix: mirrored once.
         let s = self.size_schur;
         for i in 0..if self.root { s } else { 0 } {
@@ -130,10 +185,12 @@ impl SchurFactor {
         let f = self;
         // The solve phase does not read the matrix (no iterative refinement, ICNTL(10) = 0):
         // its copy is freed.
-        f.inst.id.irn_loc = std::ptr::null_mut();
-        f.inst.id.jcn_loc = std::ptr::null_mut();
-        f.inst.id.a_loc = std::ptr::null_mut();
-        f.inst.id.perm_in = std::ptr::null_mut();
+        if let Some(inst) = f.inst.as_mut() {
+            inst.id.irn_loc = std::ptr::null_mut();
+            inst.id.jcn_loc = std::ptr::null_mut();
+            inst.id.a_loc = std::ptr::null_mut();
+            inst.id.perm_in = std::ptr::null_mut();
+        }
         f.irn = Vec::new();
         f.jcn = Vec::new();
         f.vals = Vec::new();
@@ -144,7 +201,9 @@ impl SchurFactor {
     /// The Schur complement S (size_schur², symmetric, column-major = row-major) on the host,
     /// empty elsewhere; handed over (the solve phases do not read it).
     pub fn take_schur(&mut self) -> Vec<f64> {
-        self.inst.id.schur = std::ptr::null_mut();
+        if let Some(inst) = self.inst.as_mut() {
+            inst.id.schur = std::ptr::null_mut();
+        }
         std::mem::take(&mut self.schur)
     }
 
@@ -152,9 +211,8 @@ impl SchurFactor {
     /// ignored elsewhere) reduced onto the Schur variables, b_s − K_sr K_rr⁻¹ b_r, returned on
     /// the host (empty elsewhere). Collective.
     pub fn condense(&mut self, rhs: &[f64]) -> Result<Vec<f64>> {
-        self.prepare_solve(rhs, None);
-        self.inst.id.icntl[25] = 1;
-        self.inst.call(3)?;
+        self.prepare_solve(rhs, None, 1);
+        self.call(3)?;
         Ok(if self.root {
             self.redrhs.clone()
         } else {
@@ -170,9 +228,8 @@ impl SchurFactor {
     /// Collective.
     pub fn expand(&mut self, rhs: &[f64], x_s: &[f64]) -> Result<Vec<f64>> {
         self.condense(rhs)?;
-        self.prepare_solve(rhs, Some(x_s));
-        self.inst.id.icntl[25] = 2;
-        self.inst.call(3)?;
+        self.prepare_solve(rhs, Some(x_s), 2);
+        self.call(3)?;
         Ok(if self.root {
             std::mem::take(&mut self.rhs)
         } else {
@@ -183,20 +240,24 @@ impl SchurFactor {
     /// The solve phase's arrays on the host, of exactly the sizes MUMPS reads (`rhs` and
     /// `x_s` are built so by the caller; a wrong length is cut or padded with zeros here rather
     /// than read out of bounds or answered on the host alone, which would leave the other
-    /// ranks waiting in MUMPS).
-    fn prepare_solve(&mut self, rhs: &[f64], x_s: Option<&[f64]>) {
+    /// ranks waiting in MUMPS); `phase`: ICNTL(26).
+    fn prepare_solve(&mut self, rhs: &[f64], x_s: Option<&[f64]>, phase: i32) {
+        let Some(inst) = self.inst.as_mut() else {
+            return;
+        };
+        inst.id.icntl[25] = phase;
         if self.root {
             debug_assert!(rhs.len() == self.n && x_s.is_none_or(|x| x.len() == self.size_schur));
             self.rhs = rhs.to_vec();
             self.rhs.resize(self.n, 0.0);
             self.redrhs = x_s.map(<[f64]>::to_vec).unwrap_or_default();
             self.redrhs.resize(self.size_schur, 0.0);
-            self.inst.id.rhs = self.rhs.as_mut_ptr();
-            self.inst.id.lrhs = self.n as i32;
-            self.inst.id.redrhs = self.redrhs.as_mut_ptr();
-            self.inst.id.lredrhs = self.size_schur as i32;
+            inst.id.rhs = self.rhs.as_mut_ptr();
+            inst.id.lrhs = self.n as i32;
+            inst.id.redrhs = self.redrhs.as_mut_ptr();
+            inst.id.lredrhs = self.size_schur as i32;
         }
-        self.inst.centralised_solve();
+        inst.centralised_solve();
     }
 }
 

@@ -15,6 +15,22 @@ fn first_code_span(line: &str) -> Option<&str> {
     Some(&line[start..start + len])
 }
 
+/// The cells of a table row: split at every `|` that is not escaped (`\|` stays in its cell).
+fn cells(line: &str) -> Vec<String> {
+    let inner = line.trim().trim_start_matches('|');
+    let inner = inner.strip_suffix('|').unwrap_or(inner);
+    let mut out = vec![String::new()];
+    let mut escaped = false;
+    for c in inner.chars() {
+        match c {
+            '|' if !escaped => out.push(String::new()),
+            _ => out.last_mut().expect("a cell").push(c),
+        }
+        escaped = c == '\\';
+    }
+    out.iter().map(|c| c.trim().to_string()).collect()
+}
+
 /// Section name → the keys of its `| key | …` tables, in document order; every key table
 /// belongs to the last heading above it, which must name a section.
 fn documented_keys(doc: &str) -> BTreeMap<String, Vec<String>> {
@@ -40,7 +56,8 @@ fn documented_keys(doc: &str) -> BTreeMap<String, Vec<String>> {
             in_table = false;
             continue;
         }
-        let cells: Vec<&str> = line.trim_matches('|').split('|').map(str::trim).collect();
+        let cells = cells(line);
+        let cells: Vec<&str> = cells.iter().map(String::as_str).collect();
         if cells.first() == Some(&"key") {
             let name = section.clone().unwrap_or_else(|| {
                 panic!("docs/case-file.md:{line_no}: a key table under a heading without a section name in a code span")
@@ -113,7 +130,7 @@ fn the_case_file_reference_lists_exactly_the_accepted_keys() {
 #[test]
 fn the_parser_reads_key_tables_by_heading() {
     let doc = "# Title\n\n## `[a]`\n\n| key | type | default | meaning |\n|---|---|---|---|\n\
-               | `x` | number | 1 | the x |\n| `y` | string | — | the y, with `code` |\n\n\
+               | `x` | number | 1 | the x, \\|x\\| |\n| `y` | string | — | the y, with `code` |\n\n\
                ```toml\n| key | not | a | table |\n```\n\n| other | table |\n|---|---|\n| `z` | no |\n";
     let got = documented_keys(doc);
     assert_eq!(got.len(), 1, "{got:?}");

@@ -2,7 +2,7 @@
 // Hertz's line contact, in plane strain. The flat top is held; the flat below moves up.
 R = 1.0;      // radius
 h0 = 0.002;   // element size at the lowest point (0, -R), where contact starts
-g = 0.1;       // growth of the element size with the distance from that point
+g = 0.1;      // growth of the element size with the distance from that point
 
 Point(1) = {0, 0, 0};                    // centre of the arc
 Point(2) = {-R, 0, 0};

@@ -61,7 +61,7 @@ impl Reader<'_> {
         let Some((k, n)) = top.get("load") else {
             return Ok(None);
         };
-        let t = self.table(&k, n, &["steps", "factors", "max_cutbacks"])?;
+        let t = self.table(&k, n, super::keys::LOAD)?;
         let factors = match (t.get("steps"), t.get("factors")) {
             (Some((sk, s)), None) => {
                 let steps = self.count(&sk, s, 1, MAX_STEPS)?;

@@ -6,6 +6,7 @@
 //! names the file, the key path (`material.poisson`, `dirichlet[1].value`, `neumann[0]`)
 //! and the line of that key, or says "(from --set)".
 
+pub mod keys;
 mod load;
 mod tree;
 
@@ -652,29 +653,6 @@ fn too_large(file: &Path) -> InputError {
     )
 }
 
-/// The keys of `[solver]`.
-const SOLVER_KEYS: &[&str] = &[
-    "preset",
-    "method",
-    "petsc_options",
-    "rtol",
-    "reuse",
-    "repeatable",
-];
-
-const ROOT_KEYS: &[&str] = &[
-    "mesh",
-    "material",
-    "dirichlet",
-    "neumann",
-    "body_force",
-    "solver",
-    "output",
-    "contact",
-    "newton",
-    "load",
-];
-
 impl Case {
     /// Reads and validates the case file. `overrides` are `key.path=value` strings from
     /// `--set` (the value is parsed as a TOML value, falling back to a plain string; a
@@ -1190,7 +1168,7 @@ impl Reader<'_> {
     }
 
     fn case(&self, root: &Node, output_dir: Option<&Path>) -> Res<Case> {
-        let top = self.table("", root, ROOT_KEYS)?;
+        let top = self.table("", root, keys::ROOT)?;
         let mesh = self.mesh(&top)?;
         let material = self.material(&top)?;
         let dirichlet = self.dirichlet(&top)?;
@@ -1216,7 +1194,7 @@ impl Reader<'_> {
             };
             if let Some(why) = why {
                 let (sk, sn) = top.get("solver").expect("method was set in [solver]");
-                let t = self.table(&sk, sn, SOLVER_KEYS)?;
+                let t = self.table(&sk, sn, keys::SOLVER)?;
                 let (mk, m) = t.get("method").expect("method was set");
                 return Err(self.err(&mk, m.loc, format!("\"snesvi\" {why}")));
             }
@@ -1241,7 +1219,7 @@ impl Reader<'_> {
     /// expressions of x, y, z; the variables are checked against the mesh's dimension in
     /// [`Case::check_against_mesh`]).
     fn body_force(&self, key: &str, n: &Node) -> Res<BodyForceSpec> {
-        let t = self.table(key, n, &["value", "expr"])?;
+        let t = self.table(key, n, keys::BODY_FORCE)?;
         match (t.get("value"), t.get("expr")) {
             (Some((vk, v)), None) => Ok(BodyForceSpec::Constant(self.vector(&vk, v)?)),
             (None, Some((ek, e))) => {
@@ -1291,7 +1269,7 @@ impl Reader<'_> {
 
     fn mesh(&self, top: &Tab) -> Res<MeshSection> {
         let (k, n) = self.required(top, "mesh")?;
-        let t = self.table(&k, n, &["file", "refine", "project"])?;
+        let t = self.table(&k, n, keys::MESH)?;
         let (fk, f) = self.required(&t, "file")?;
         let rel = self.name(&fk, f)?;
         let dir = self.file.parent().unwrap_or(Path::new(""));
@@ -1312,7 +1290,7 @@ impl Reader<'_> {
             }
         };
         let mut project = Vec::new();
-        for p in self.tables(&t, "project", &["group", "shape"])? {
+        for p in self.tables(&t, "project", keys::MESH_PROJECT)? {
             let (gk, g) = self.required(&p, "group")?;
             let group = self.name(&gk, g)?;
             let (sk, sh) = self.required(&p, "shape")?;
@@ -1329,7 +1307,7 @@ impl Reader<'_> {
 
     fn material(&self, top: &Tab) -> Res<MaterialSection> {
         let (k, n) = self.required(top, "material")?;
-        let t = self.table(&k, n, &["young", "poisson", "model"])?;
+        let t = self.table(&k, n, keys::MATERIAL)?;
         let (yk, y) = self.required(&t, "young")?;
         let young = self.positive(&yk, y)?;
         let (pk, p) = self.required(&t, "poisson")?;
@@ -1375,7 +1353,7 @@ impl Reader<'_> {
 
     fn dirichlet(&self, top: &Tab) -> Res<Vec<Dirichlet>> {
         let mut out = Vec::new();
-        for t in self.tables(top, "dirichlet", &["group", "value", "ramp"])? {
+        for t in self.tables(top, "dirichlet", keys::DIRICHLET)? {
             let (gk, g) = self.required(&t, "group")?;
             let group = self.name(&gk, g)?;
             let (vk, v) = self.required(&t, "value")?;
@@ -1408,7 +1386,7 @@ impl Reader<'_> {
 
     fn neumann(&self, top: &Tab) -> Res<Vec<Neumann>> {
         let mut out = Vec::new();
-        for t in self.tables(top, "neumann", &["group", "pressure", "traction", "ramp"])? {
+        for t in self.tables(top, "neumann", keys::NEUMANN)? {
             let (gk, g) = self.required(&t, "group")?;
             let group = self.name(&gk, g)?;
             let load = match (t.get("pressure"), t.get("traction")) {
@@ -1444,7 +1422,7 @@ impl Reader<'_> {
         let Some((k, n)) = top.get("solver") else {
             return Ok(s);
         };
-        let t = self.table(&k, n, SOLVER_KEYS)?;
+        let t = self.table(&k, n, keys::SOLVER)?;
         if let Some((mk, m)) = t.get("method") {
             s.method = self.choice(
                 &mk,
@@ -1500,7 +1478,7 @@ impl Reader<'_> {
             fields: DEFAULT_FIELDS.to_vec(),
         };
         if let Some((k, n)) = top.get("output") {
-            let t = self.table(&k, n, &["dir", "fields"])?;
+            let t = self.table(&k, n, keys::OUTPUT)?;
             if let Some((dk, d)) = t.get("dir") {
                 out.dir = PathBuf::from(self.name(&dk, d)?);
             }
@@ -1641,18 +1619,7 @@ impl Reader<'_> {
 
     /// One contact pair at `k` (`contact` or `contact[i]`).
     fn contact(&self, k: &str, n: &Node) -> Res<ContactSection> {
-        let t = self.table(
-            k,
-            n,
-            &[
-                "group",
-                "obstacle",
-                "motion",
-                "force",
-                "friction",
-                "rigid_modes",
-            ],
-        )?;
+        let t = self.table(k, n, keys::CONTACT)?;
         let (gk, g) = self.required(&t, "group")?;
         let group = self.name(&gk, g)?;
         let (ok, o) = self.required(&t, "obstacle")?;
@@ -1708,7 +1675,7 @@ impl Reader<'_> {
     /// `{ value = [...], ramp = false }`; `keys` names the vector and its table entry.
     fn motion(&self, key: &str, n: &Node, what: &str) -> Res<Motion> {
         if let Kind::Table(_) = n.kind {
-            let t = self.table(key, n, &["value", "ramp"])?;
+            let t = self.table(key, n, keys::MOTION)?;
             let (vk, v) = self.required(&t, "value")?;
             let value = self.vector(&vk, v)?;
             let ramp = match t.get("ramp") {
@@ -1769,7 +1736,7 @@ impl Reader<'_> {
         )?;
         match ty {
             Ty::Plane => {
-                let t = self.table(key, n, &["type", "point", "normal"])?;
+                let t = self.table(key, n, keys::PLANE)?;
                 let (pk, p) = self.required(&t, "point")?;
                 let point = self.vector(&pk, p)?;
                 let (nk, nn) = self.required(&t, "normal")?;
@@ -1793,7 +1760,7 @@ impl Reader<'_> {
                 Ok(ObstacleSpec::Plane { point, normal })
             }
             Ty::Sphere => {
-                let t = self.table(key, n, &["type", "center", "radius"])?;
+                let t = self.table(key, n, keys::SPHERE)?;
                 let (ck, c) = self.required(&t, "center")?;
                 let center = self.vector(&ck, c)?;
                 let (rk, r) = self.required(&t, "radius")?;
@@ -1801,7 +1768,7 @@ impl Reader<'_> {
                 Ok(ObstacleSpec::Sphere { center, radius })
             }
             Ty::Cylinder => {
-                let t = self.table(key, n, &["type", "point", "axis", "radius"])?;
+                let t = self.table(key, n, keys::CYLINDER)?;
                 let (pk, p) = self.required(&t, "point")?;
                 let point = self.vector(&pk, p)?;
                 let axis = self.axis(&t, "point", point.len())?;
@@ -1814,7 +1781,7 @@ impl Reader<'_> {
                 })
             }
             Ty::Cone => {
-                let t = self.table(key, n, &["type", "apex", "axis", "half_angle"])?;
+                let t = self.table(key, n, keys::CONE)?;
                 let (pk, p) = self.required(&t, "apex")?;
                 let apex = self.vector(&pk, p)?;
                 let axis = self.axis(&t, "apex", apex.len())?;
@@ -1826,11 +1793,7 @@ impl Reader<'_> {
                 })
             }
             Ty::Pyramid => {
-                let t = self.table(
-                    key,
-                    n,
-                    &["type", "apex", "axis", "half_angle", "faces", "azimuth"],
-                )?;
+                let t = self.table(key, n, keys::PYRAMID)?;
                 let (pk, p) = self.required(&t, "apex")?;
                 let apex = self.vector(&pk, p)?;
                 let axis = self.axis(&t, "apex", apex.len())?;
@@ -1887,7 +1850,7 @@ impl Reader<'_> {
 
     /// `type = "punch"`.
     fn punch(&self, key: &str, n: &Node) -> Res<ObstacleSpec> {
-        let t = self.table(key, n, &["type", "center", "axis", "radius", "edge_radius"])?;
+        let t = self.table(key, n, keys::PUNCH)?;
         let (ck, c) = self.required(&t, "center")?;
         let center = self.vector(&ck, c)?;
         let axis = self.axis(&t, "center", center.len())?;
@@ -1918,7 +1881,7 @@ impl Reader<'_> {
     /// `type = "height"`: `expr`, an expression of x (2D) or x and y (3D), parsed here (its
     /// variables are checked against the mesh's dimension in [`Case::check_against_mesh`]).
     fn height(&self, key: &str, n: &Node) -> Res<ObstacleSpec> {
-        let t = self.table(key, n, &["type", "expr"])?;
+        let t = self.table(key, n, keys::HEIGHT)?;
         let (ek, e) = self.required(&t, "expr")?;
         let text = self.string(&ek, e)?;
         let expr = HeightExpr::parse(text).map_err(|m| {
@@ -1946,7 +1909,7 @@ impl Reader<'_> {
     /// `type = "surface"`: `file`, a closed STL surface (path relative to the case file), read
     /// and checked here.
     fn surface(&self, key: &str, n: &Node) -> Res<ObstacleSpec> {
-        let t = self.table(key, n, &["type", "file"])?;
+        let t = self.table(key, n, keys::SURFACE)?;
         let (fk, f) = self.required(&t, "file")?;
         let rel = self.name(&fk, f)?;
         let file = self.file.parent().unwrap_or(Path::new("")).join(rel);
@@ -2010,7 +1973,7 @@ impl Reader<'_> {
                 format!("unknown value \"{s}\"; allowed: {FORMS}"),
             )),
             Kind::Table(_) => {
-                let t = self.table(key, n, &["law", "threshold", "mu", "algorithm"])?;
+                let t = self.table(key, n, keys::FRICTION_ANY)?;
                 let (lk, l) = self.required(&t, "law")?;
                 #[derive(Clone, Copy)]
                 enum Law {
@@ -2029,11 +1992,11 @@ impl Reader<'_> {
                 )?;
                 match law {
                     Law::None => {
-                        self.table(key, n, &["law"])?;
+                        self.table(key, n, keys::FRICTION_NONE)?;
                         Ok(Friction::None)
                     }
                     Law::Tresca => {
-                        self.table(key, n, &["law", "threshold"])?;
+                        self.table(key, n, keys::FRICTION_TRESCA)?;
                         let (hk, h) = self.required(&t, "threshold")?;
                         let threshold = self.num(&hk, h)?;
                         if threshold < 0.0 {
@@ -2046,7 +2009,7 @@ impl Reader<'_> {
                         Ok(Friction::Tresca { threshold })
                     }
                     Law::Coulomb => {
-                        self.table(key, n, &["law", "mu", "algorithm"])?;
+                        self.table(key, n, keys::FRICTION_COULOMB)?;
                         let (mk, m) = self.required(&t, "mu")?;
                         let mu = self.num(&mk, m)?;
                         if mu < 0.0 {
@@ -2076,11 +2039,7 @@ impl Reader<'_> {
         let Some((k, n)) = top.get("newton") else {
             return Ok(s);
         };
-        let t = self.table(
-            &k,
-            n,
-            &["init", "c", "max_steps", "tol_u", "on_cycle", "strict"],
-        )?;
+        let t = self.table(&k, n, keys::NEWTON)?;
         if let Some((ok, o)) = t.get("on_cycle") {
             s.on_cycle = self.choice(
                 &ok,

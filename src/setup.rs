@@ -292,6 +292,24 @@ impl ContactSettings {
         }
     }
 
+    /// True when every pair's motion and force change from factor `last` to `next` by `s`
+    /// times their change from `before` to `last` (the load predictor's assumption, steps.rs):
+    /// always for a ramped or held vector, not across a corner of a `table`.
+    pub fn increments_parallel(&self, before: f64, last: f64, next: f64, s: f64) -> bool {
+        self.pairs.iter().all(|p| {
+            [&p.motion, &p.force].into_iter().flatten().all(|m| {
+                if m.table.is_empty() {
+                    return true;
+                }
+                let (b, l, n) = (m.at(before), m.at(last), m.at(next));
+                let scale = (0..3)
+                    .map(|k| (n[k] - l[k]).abs().max((l[k] - b[k]).abs()))
+                    .fold(0.0, f64::max);
+                (0..3).all(|k| ((n[k] - l[k]) - s * (l[k] - b[k])).abs() <= 1e-9 * scale)
+            })
+        })
+    }
+
     /// The pairs under force control, with their indices, in pair order.
     pub fn force_pairs(&self) -> impl Iterator<Item = (usize, &PairSettings)> {
         self.pairs

@@ -246,6 +246,19 @@ impl Stepper<'_> {
                 }
                 if let Some(c) = last.as_mut().and_then(|s| s.contact.as_mut()) {
                     c.predict = predictor_ratio(&records, factor);
+                    // a corner of a motion / force table: the increments are not parallel
+                    if let (Physics::Contact(settings), [.., before, done]) =
+                        (&physics, records.as_slice())
+                    {
+                        if !settings.increments_parallel(
+                            before.factor,
+                            done.factor,
+                            factor,
+                            c.predict,
+                        ) {
+                            c.predict = 0.0;
+                        }
+                    }
                 }
                 let previous = last.as_ref().and_then(|s| s.contact.as_ref());
                 let solved = self.solve_once(&physics, &fixed, sys, previous);

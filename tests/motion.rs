@@ -237,3 +237,123 @@ fn plot_history_draws_the_curve() {
     assert_ne!(r.code, Some(0));
     assert!(r.stderr.contains("history.csv"), "{}", r.stderr);
 }
+
+/// `motion = { table = [[0, 0, 0], [1, m]] }` is the ramped motion m: the same steps to the
+/// bit; a table with a corner (indent, then slide) puts the obstacle at its interpolation.
+#[test]
+fn a_motion_table_is_piecewise_linear_in_the_factor() {
+    let law = "contact.friction={law=\"coulomb\", mu=0.3}";
+    let ramped = solve(1, &block(), &[TOP_AT_REST, MOVE, FACTORS, law]);
+    let table = solve(
+        1,
+        &block(),
+        &[
+            TOP_AT_REST,
+            "contact.motion={table=[[0.0, 0.0, 0.0], [1.2, 0.0048, 0.012]]}",
+            FACTORS,
+            law,
+        ],
+    );
+    let (a, b) = (history(&ramped.dir), history(&table.dir));
+    for (ra, rb) in a.iter().zip(&b) {
+        for k in [
+            "obstacle_x",
+            "obstacle_y",
+            "force_x",
+            "force_y",
+            "stick",
+            "slip",
+        ] {
+            let (x, y) = (ra.f(k), rb.f(k));
+            assert!((x - y).abs() <= 1e-15 + 1e-12 * x.abs(), "{k}: {x} vs {y}");
+        }
+    }
+    // a corner at 0.5: up by 0.01, then sideways by 0.004 with the height held
+    let corner = solve(
+        1,
+        &block(),
+        &[
+            TOP_AT_REST,
+            "contact.motion={table=[[0, 0, 0], [0.5, 0, 0.01], [1, 0.004, 0.01]]}",
+            "load.factors=[0.25, 0.5, 0.75, 1.0]",
+            law,
+        ],
+    );
+    let expected = [[0.0, 0.005], [0.0, 0.01], [0.002, 0.01], [0.004, 0.01]];
+    let h = history(&corner.dir);
+    assert_eq!(h.len(), 4);
+    for (r, [x, y]) in h.iter().zip(expected) {
+        assert!(
+            (r.f("obstacle_x") - x).abs() < 1e-15,
+            "{}",
+            r.f("obstacle_x")
+        );
+        assert!(
+            (r.f("obstacle_y") - y).abs() < 1e-15,
+            "{}",
+            r.f("obstacle_y")
+        );
+    }
+    // the slide after the corner pulls the block sideways: Q grows, P stays nearly
+    assert!(h[3].f("force_x") > h[2].f("force_x") && h[2].f("force_x") > h[1].f("force_x"));
+}
+
+/// scripts/plot-history writes its PNG beside the result folder (DIR.force_displacement.png),
+/// so the next run into DIR is not refused; with --analytic it says why nothing is overlaid
+/// in 2D, and overlays Hertz' sphere in 3D (the printed numbers are the formula's).
+#[test]
+fn plot_history_beside_the_folder_with_the_analytic_curve() {
+    let sets = [TOP_AT_REST, MOVE, "load.factors=[0.5, 1.0]"];
+    let run = solve(1, &block(), &sets);
+    let mut cmd = std::process::Command::new(repo("scripts/plot-history"));
+    cmd.arg(&run.dir)
+        .arg("--analytic")
+        .arg("--case")
+        .arg(block());
+    let r = run_with_timeout(cmd, std::time::Duration::from_secs(120));
+    r.expect_code(0, "plot-history");
+    let png = PathBuf::from(format!("{}.force_displacement.png", run.dir.display()));
+    assert!(png.metadata().is_ok_and(|m| m.len() > 1000), "{}", r.stdout);
+    assert!(
+        r.stdout.contains(&png.display().to_string()),
+        "{}",
+        r.stdout
+    );
+    assert!(r.stdout.contains("none overlaid in 2D"), "{}", r.stdout);
+    // the same run into the same folder again: nothing foreign in it
+    run_solver(1, &block(), &sets, &run.dir).expect_code(0, "a second run into the folder");
+
+    // 3D: a sphere (R = 1, E* = 2/(1 − 0.09)) touching the top of block3d, moved down
+    let tmp = tempfile::tempdir().expect("tempdir");
+    let case = write_case(
+        &tmp.path().join("sphere.toml"),
+        &format!(
+            "[mesh]\nfile = {}\n[material]\nyoung = 2.0\npoisson = 0.3\nmodel = \"3d\"\n\
+             [[dirichlet]]\ngroup = \"bottom\"\nvalue = [0.0, 0.0, 0.0]\n[contact]\n\
+             group = \"top\"\nobstacle = {{ type = \"sphere\", center = [0.0, 0.0, 1.5], radius = 1.0 }}\n\
+             motion = {{ table = [[0, 0, 0, 0], [1, 0, 0, -0.01]] }}\nfriction = \"none\"\n\
+             [load]\nsteps = 2\n",
+            toml_path(&repo("cases/blocks/block3d.msh"))
+        ),
+    );
+    let out = tmp.path().join("out");
+    run_solver(1, &case, &[], &out).expect_code(0, "the sphere");
+    let mut cmd = std::process::Command::new(repo("scripts/plot-history"));
+    cmd.arg(&out)
+        .arg("--analytic")
+        .arg("--case")
+        .arg(&case)
+        .arg("--fraction")
+        .arg("0.5");
+    let r = run_with_timeout(cmd, std::time::Duration::from_secs(120));
+    r.expect_code(0, "plot-history --analytic");
+    let estar = 2.0 / (1.0 - 0.09);
+    let lines: Vec<&str> = r.stdout.lines().filter(|l| l.contains(" h = ")).collect();
+    assert_eq!(lines.len(), 2, "{}", r.stdout);
+    for (l, h) in lines.iter().zip([0.005f64, 0.01]) {
+        let analytic: f64 = l.rsplit(' ').next().unwrap().parse().expect("a number");
+        let p = 0.5 * 4.0 / 3.0 * estar * h.powf(1.5);
+        assert!(rel(analytic, p) < 1e-5, "{l}: {p}");
+    }
+    assert!(tmp.path().join("out.force_displacement.png").exists());
+}

@@ -37,7 +37,7 @@ pub const CONTACT: &[&str] = &[
     "rigid_modes",
 ];
 /// `contact.motion` or `contact.force` given as a table.
-pub const MOTION: &[&str] = &["value", "ramp"];
+pub const MOTION: &[&str] = &["value", "ramp", "table"];
 /// The obstacles (`contact.obstacle`, `[[mesh.project]] shape`), by `type`.
 pub const PLANE: &[&str] = &["type", "point", "normal"];
 pub const SPHERE: &[&str] = &["type", "center", "radius"];

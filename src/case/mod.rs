@@ -525,22 +525,32 @@ pub struct ContactSection {
 }
 
 /// A rigid translation m of the obstacle, reached at load factor 1: at factor t the obstacle
-/// has moved by t·m (by m in every step with `ramp = false`). The same record holds a
-/// prescribed force (`contact.force`), scaled alike.
+/// has moved by t·m (by m in every step with `ramp = false`), or, given as a `table` of rows
+/// `[t_i, m_i…]`, by the piecewise-linear interpolation of the rows at t (docs/load_steps.md,
+/// "Load histories"). The same record holds a prescribed force (`contact.force`), scaled alike.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Motion {
-    /// m, one component per dimension.
+    /// m, one component per dimension; with a table, the components of its last row.
     pub value: Vec<f64>,
-    /// Scaled by the load factor of `[load]` (default); `ramp = false` holds it at m.
+    /// Scaled by the load factor of `[load]` (default); `ramp = false` holds it at m. True
+    /// with a table (unused).
     pub ramp: bool,
-    /// The key of the vector in the case file (`contact.motion` or `contact.motion.value`,
-    /// under `contact[i]` with several pairs).
+    /// `KEY.table`: the rows (load factor, components), the factors increasing from 0; empty
+    /// for the vector form.
+    pub table: Vec<(f64, Vec<f64>)>,
+    /// The key of the vector in the case file (`contact.motion`, `contact.motion.value` or
+    /// `contact.motion.table`, under `contact[i]` with several pairs).
     pub key: String,
 }
 
 impl Motion {
-    /// The obstacle's displacement at load factor t: t·m, or m when held (padded to 3).
+    /// The obstacle's displacement at load factor t: t·m, m when held, or the table's
+    /// piecewise-linear interpolation at t (its last row beyond its last factor: the case
+    /// reader refuses a run whose factors go beyond it) (padded to 3).
     pub fn at(&self, t: f64) -> [f64; 3] {
+        if !self.table.is_empty() {
+            return table_at(&self.table, t);
+        }
         let m = vec3(&self.value);
         if self.ramp {
             m.map(|x| t * x)
@@ -548,6 +558,28 @@ impl Motion {
             m
         }
     }
+
+    /// The largest load factor the motion is defined at (`None`: every factor).
+    pub fn last_factor(&self) -> Option<f64> {
+        self.table.last().map(|(t, _)| *t)
+    }
+}
+
+/// The piecewise-linear interpolation of `rows` (factors increasing) at t, held at the first
+/// and the last row outside them.
+fn table_at(rows: &[(f64, Vec<f64>)], t: f64) -> [f64; 3] {
+    let (first, last) = (&rows[0], &rows[rows.len() - 1]);
+    if t <= first.0 {
+        return vec3(&first.1);
+    }
+    if t >= last.0 {
+        return vec3(&last.1);
+    }
+    let i = rows.partition_point(|(ti, _)| *ti <= t).max(1);
+    let ((t0, a), (t1, b)) = (&rows[i - 1], &rows[i]);
+    let w = (t - t0) / (t1 - t0);
+    let (a, b) = (vec3(a), vec3(b));
+    std::array::from_fn(|k| a[k] + w * (b[k] - a[k]))
 }
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -725,6 +757,7 @@ impl Case {
         tree::collect_locs(&root, "", &mut locs);
         let mut case = cx.case(&root, output_dir)?;
         case.locs = locs;
+        case.check_histories()?;
         Ok(case)
     }
 
@@ -770,6 +803,51 @@ impl Case {
                 format!("the mesh has dimension {dim}; only 2D and 3D meshes are supported"),
             )),
         }
+    }
+
+    /// Every table of `contact.motion` / `contact.force` covers every load factor of the run
+    /// (the largest of `load.factors`, 1 without `[load]`): a table is not extrapolated. A
+    /// force table gives a nonzero force at every planned factor (force control needs a
+    /// direction).
+    fn check_histories(&self) -> Result<(), InputError> {
+        let factors = self
+            .load
+            .as_ref()
+            .map_or_else(|| vec![1.0], |l| l.factors.clone());
+        let reach = factors.iter().copied().fold(0.0, f64::max);
+        let plan = if self.load.is_some() {
+            "load.factors reaches"
+        } else {
+            "a run without [load] solves at"
+        };
+        for c in &self.contacts {
+            for m in [&c.motion, &c.force].into_iter().flatten() {
+                let Some(last) = m.last_factor() else {
+                    continue;
+                };
+                if last < reach {
+                    return Err(self.err_at(
+                        &m.key,
+                        format!(
+                            "covers the load factors 0 to {last}, but {plan} {reach}: \
+                             add a row at a factor ≥ {reach} (a table is not extrapolated)"
+                        ),
+                    ));
+                }
+            }
+            if let Some(f) = c.force.as_ref().filter(|f| !f.table.is_empty()) {
+                if let Some(t) = factors.iter().find(|&&t| f.at(t).iter().all(|&x| x == 0.0)) {
+                    return Err(self.err_at(
+                        &f.key,
+                        format!(
+                            "gives a zero force at the load factor {t} of the run: force \
+                             control needs a direction (a nonzero force) in every step"
+                        ),
+                    ));
+                }
+            }
+        }
+        Ok(())
     }
 
     /// Checks the case against the mesh: model vs dimension, vector lengths = `dim`,
@@ -828,7 +906,22 @@ impl Case {
             self.check_group(&join_key(&c.key, "group"), &c.group, groups, Some(dim - 1))?;
             self.check_shape(&join_key(&c.key, "obstacle"), &c.obstacle, dim)?;
             for m in [&c.motion, &c.force].into_iter().flatten() {
-                len(m.key.clone(), m.value.len())?;
+                if m.table.is_empty() {
+                    len(m.key.clone(), m.value.len())?;
+                }
+                for (i, (_, row)) in m.table.iter().enumerate() {
+                    if row.len() != dim {
+                        return Err(self.err_at(
+                            &join_index(&m.key, i),
+                            format!(
+                                "a row of {} numbers, but the mesh is {dim}D: each row is \
+                                 [load factor, {}] (1 + {dim} numbers)",
+                                1 + row.len(),
+                                ["x", "y", "z"][..dim].join(", ")
+                            ),
+                        ));
+                    }
+                }
             }
         }
         Ok(())
@@ -1638,7 +1731,7 @@ impl Reader<'_> {
                 let force = self.motion(&fk, f, "the force pressing the obstacle onto the body")?;
                 let why = if motion.is_some() {
                     Some("prescribes the force instead of the motion: give one of them")
-                } else if force.value.iter().all(|&x| x == 0.0) {
+                } else if force.table.is_empty() && force.value.iter().all(|&x| x == 0.0) {
                     Some("is zero: force control needs a direction (a nonzero vector)")
                 } else {
                     None
@@ -1671,11 +1764,28 @@ impl Reader<'_> {
         })
     }
 
-    /// `contact.motion` (`contact.force`): a vector `[dx, dy(, dz)]`, or a table
-    /// `{ value = [...], ramp = false }`; `keys` names the vector and its table entry.
+    /// `contact.motion` (`contact.force`): a vector `[dx, dy(, dz)]`, a table
+    /// `{ value = [...], ramp = false }`, or `{ table = [[t, dx, dy(, dz)], ...] }`; `keys`
+    /// names the vector and its table entry.
     fn motion(&self, key: &str, n: &Node, what: &str) -> Res<Motion> {
         if let Kind::Table(_) = n.kind {
             let t = self.table(key, n, keys::MOTION)?;
+            if let Some((tk, tn)) = t.get("table") {
+                if let Some((ok, o)) = t.get("value").or_else(|| t.get("ramp")) {
+                    return Err(self.err(
+                        &ok,
+                        o.loc,
+                        format!("{tk} gives the whole history: no '{ok}' beside it"),
+                    ));
+                }
+                let table = self.history_table(&tk, tn, what)?;
+                return Ok(Motion {
+                    value: table.last().expect("two rows or more").1.clone(),
+                    ramp: true,
+                    table,
+                    key: tk,
+                });
+            }
             let (vk, v) = self.required(&t, "value")?;
             let value = self.vector(&vk, v)?;
             let ramp = match t.get("ramp") {
@@ -1685,6 +1795,7 @@ impl Reader<'_> {
             return Ok(Motion {
                 value,
                 ramp,
+                table: Vec::new(),
                 key: vk,
             });
         }
@@ -1694,15 +1805,95 @@ impl Reader<'_> {
                 return Err(self.type_err(
                     key,
                     n,
-                    &format!("an array of numbers ({what}) or a table {{ value, ramp }}"),
+                    &format!(
+                        "an array of numbers ({what}), a table {{ value, ramp }} or {{ table }}"
+                    ),
                 ))
             }
         };
         Ok(Motion {
             value,
             ramp: true,
+            table: Vec::new(),
             key: key.to_string(),
         })
+    }
+
+    /// `KEY.table`: at least two rows `[load factor, x, y(, z)]`, all of one length (3 in 2D,
+    /// 4 in 3D; checked against the mesh later), the first factor 0, the factors increasing.
+    fn history_table(&self, key: &str, n: &Node, what: &str) -> Res<Vec<(f64, Vec<f64>)>> {
+        let expected = format!("an array of rows [load factor, x, y(, z)] ({what})");
+        let rows = self.array(key, n, &expected)?;
+        if rows.len() < 2 {
+            return Err(self.err(
+                key,
+                n.loc,
+                format!(
+                    "needs at least two rows [load factor, x, y(, z)], got {} (a value held in \
+                     every step is {{ value = [...], ramp = false }})",
+                    rows.len()
+                ),
+            ));
+        }
+        if rows.len() > load::MAX_STEPS {
+            return Err(self.err(
+                key,
+                n.loc,
+                format!("at most {} rows, got {}", load::MAX_STEPS, rows.len()),
+            ));
+        }
+        let mut out: Vec<(f64, Vec<f64>)> = Vec::with_capacity(rows.len());
+        for (i, r) in rows.iter().enumerate() {
+            let rk = join_index(key, i);
+            let elems = self.array(&rk, r, "a row [load factor, x, y(, z)]")?;
+            let width = out.first().map(|(_, v)| v.len() + 1);
+            if !(elems.len() == 3 || elems.len() == 4) || width.is_some_and(|w| w != elems.len()) {
+                let need = match width {
+                    Some(w) => format!("{w} like the first row"),
+                    None => "3 (2D) or 4 (3D)".to_string(),
+                };
+                return Err(self.err(
+                    &rk,
+                    r.loc,
+                    format!(
+                        "a row is [load factor, x, y(, z)]: 1 + one number per dimension, \
+                         {need}; got {}",
+                        elems.len()
+                    ),
+                ));
+            }
+            let nums = elems
+                .iter()
+                .enumerate()
+                .map(|(j, e)| self.num(&join_index(&rk, j), e))
+                .collect::<Res<Vec<f64>>>()?;
+            let t = nums[0];
+            match out.last() {
+                None if t != 0.0 => {
+                    return Err(self.err(
+                        &join_index(&rk, 0),
+                        r.loc,
+                        format!(
+                            "the first row's load factor must be 0 (the history starts at the \
+                             unloaded state; its values there may be nonzero), got {t}"
+                        ),
+                    ))
+                }
+                Some((prev, _)) if t <= *prev => {
+                    return Err(self.err(
+                        &join_index(&rk, 0),
+                        r.loc,
+                        format!(
+                            "load factor {t} is not above the row before's ({prev}): the \
+                             factors of a table must increase"
+                        ),
+                    ))
+                }
+                _ => {}
+            }
+            out.push((t, nums[1..].to_vec()));
+        }
+        Ok(out)
     }
 
     fn obstacle(&self, key: &str, n: &Node) -> Res<ObstacleSpec> {

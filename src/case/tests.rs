@@ -1890,6 +1890,131 @@ fn reject_bad_motion() {
     assert_eq!(e.key.as_deref(), Some("contact.motion.value"), "{e}");
 }
 
+/// `motion = { table = [[t, x, y], ...] }`: piecewise linear in the load factor, per component.
+#[test]
+fn contact_motion_table() {
+    let c = "[contact]\ngroup = \"c\"\nobstacle = { type = \"plane\", point = [0, 0], normal = [0, 1] }\n";
+    let text = with(&format!(
+        "{c}motion = {{ table = [[0.0, 0.0, 0.0], [0.5, 0.0, -0.01], [1.0, 0.005, -0.01]] }}\n"
+    ));
+    let case = parse(&text).expect("valid");
+    let m = case.contacts[0].motion.clone().expect("motion");
+    assert_eq!(m.key, "contact.motion.table");
+    assert_eq!(m.table.len(), 3);
+    assert_eq!(m.last_factor(), Some(1.0));
+    assert_eq!(m.at(0.0), [0.0, 0.0, 0.0]);
+    assert_eq!(m.at(0.25), [0.0, -0.005, 0.0]);
+    assert_eq!(m.at(0.5), [0.0, -0.01, 0.0]);
+    assert_eq!(m.at(0.75), [0.0025, -0.01, 0.0]);
+    assert_eq!(m.at(1.0), [0.005, -0.01, 0.0]);
+    case.check_against_mesh(2, &groups(&[("c", 1)])).unwrap();
+    // 3D rows on a 2D mesh: the row is named
+    let e = parse(&replace(
+        &text,
+        "[[0.0, 0.0, 0.0], [0.5, 0.0, -0.01], [1.0, 0.005, -0.01]]",
+        "[[0, 0, 0, 0], [1, 0, 0, -0.01]]",
+    ))
+    .unwrap()
+    .check_against_mesh(2, &groups(&[("c", 1)]))
+    .unwrap_err();
+    assert_eq!(e.key.as_deref(), Some("contact.motion.table[0]"), "{e}");
+    assert!(e.message.contains("1 + 2 numbers"), "{e}");
+    // a force table too; under [load] it covers every factor, a force never zero at one
+    let f = "[contact]\ngroup = \"c\"\nobstacle = { type = \"plane\", point = [0, 0], normal = [0, 1] }\n\
+             force = { table = [[0, 0, -1], [1, 0.3, -1]] }\n";
+    let case = parse(&with(f)).expect("valid");
+    assert_eq!(
+        case.contacts[0].force.as_ref().unwrap().at(0.5),
+        [0.15, -1.0, 0.0]
+    );
+}
+
+#[test]
+fn reject_bad_motion_table() {
+    let c = "[contact]\ngroup = \"c\"\nobstacle = { type = \"plane\", point = [0, 0], normal = [0, 1] }\n";
+    for (m, key, why) in [
+        (
+            "{ table = [[0, 0, 0]] }",
+            "contact.motion.table",
+            "at least two rows",
+        ),
+        (
+            "{ table = [] }",
+            "contact.motion.table",
+            "at least two rows",
+        ),
+        ("{ table = [0, 1] }", "contact.motion.table[0]", "row"),
+        (
+            "{ table = [[0, 0], [1, 0]] }",
+            "contact.motion.table[0]",
+            "got 2",
+        ),
+        (
+            "{ table = [[0, 0, 0], [1, 0, 0, 0]] }",
+            "contact.motion.table[1]",
+            "like the first row",
+        ),
+        (
+            "{ table = [[0.1, 0, 0], [1, 0, 0]] }",
+            "contact.motion.table[0][0]",
+            "must be 0",
+        ),
+        (
+            "{ table = [[0, 0, 0], [0.5, 0, 0], [0.5, 0, 1]] }",
+            "contact.motion.table[2][0]",
+            "must increase",
+        ),
+        (
+            "{ table = [[0, 0, 0], [1, 0, 0], [0.5, 0, 1]] }",
+            "contact.motion.table[2][0]",
+            "must increase",
+        ),
+        (
+            "{ table = [[0, 0, 0], [1, 0, nan]] }",
+            "contact.motion.table[1][2]",
+            "",
+        ),
+        (
+            "{ table = [[0, 0, 0], [1, 0, \"a\"]] }",
+            "contact.motion.table[1][2]",
+            "",
+        ),
+        (
+            "{ table = [[0, 0, 0], [1, 0, 1]], ramp = false }",
+            "contact.motion.ramp",
+            "no 'contact.motion.ramp'",
+        ),
+        (
+            "{ table = [[0, 0, 0], [1, 0, 1]], value = [0, 1] }",
+            "contact.motion.value",
+            "whole history",
+        ),
+        // without [load] the run solves at factor 1: the table must reach it
+        (
+            "{ table = [[0, 0, 0], [0.5, 0, 1]] }",
+            "contact.motion.table",
+            "not extrapolated",
+        ),
+    ] {
+        let e = expect_err(&with(&format!("{c}motion = {m}\n")), key, "motion");
+        assert!(e.message.contains(why), "{m}: {e}");
+    }
+    // under [load], the largest factor counts
+    let text = with(&format!(
+        "{c}motion = {{ table = [[0, 0, 0], [1, 0, 1]] }}\n[load]\nfactors = [0.5, 1.2, 0.4]\n"
+    ));
+    let e = expect_err(&text, "contact.motion.table", "motion");
+    assert!(e.message.contains("load.factors reaches 1.2"), "{e}");
+    parse(&replace(&text, "[1, 0, 1]", "[1.2, 0, 1]")).expect("covers 1.2");
+    // a force table that is zero at a planned factor
+    let text = with(&format!(
+        "{c}force = {{ table = [[0, 0, 0], [1, 0, -1]] }}\n[load]\nfactors = [0.0, 0.5, 1.0]\n"
+    ));
+    let e = expect_err(&text, "contact.force.table", "force");
+    assert!(e.message.contains("zero force at the load factor 0"), "{e}");
+    parse(&replace(&text, "[0.0, 0.5, 1.0]", "[0.5, 1.0]")).expect("not solved at 0");
+}
+
 /// Two `[[contact]]` tables: each pair keeps its keys under `contact[i]`.
 #[test]
 fn several_contact_pairs() {

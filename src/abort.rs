@@ -42,6 +42,14 @@ impl Pending {
         self.set.store(true, Ordering::Release);
     }
 
+    fn reword(&self, message: &str) {
+        if self.set.load(Ordering::Acquire) {
+            if let Ok(mut m) = self.message.lock() {
+                *m = message.to_string();
+            }
+        }
+    }
+
     fn cover(&self) {
         self.set.store(false, Ordering::Release);
     }
@@ -67,6 +75,12 @@ thread_local! {
 /// covers it, a collective on this rank ends every rank. Local.
 pub fn raised(message: &str) {
     PENDING.raise(message);
+}
+
+/// The pending failure, if any, said better (e.g. PETSc's "Error in external library" as the
+/// library's own message). Local.
+pub fn reworded(message: &str) {
+    PENDING.reword(message);
 }
 
 /// An agreement has shared this rank's failure with every rank (or every rank learned that
@@ -166,8 +180,11 @@ mod tests {
         assert_eq!(p.get().as_deref(), Some("first"));
         p.cover();
         assert!(p.get().is_none());
+        p.reword("not pending: ignored");
+        assert!(p.get().is_none());
         p.raise("third");
-        assert_eq!(p.get().as_deref(), Some("third"));
+        p.reword("third, said better");
+        assert_eq!(p.get().as_deref(), Some("third, said better"));
     }
 
     #[test]

@@ -827,6 +827,7 @@ impl Ksp {
     /// message replaces PETSc's generic one.
     fn explain(&self, mut e: PetscError) -> PetscError {
         if let Ok(Some((_, Some(m)))) = ndfactor::record(self) {
+            crate::abort::reworded(&m);
             e.message = m;
         }
         e

@@ -243,3 +243,37 @@ fn a_node_held_by_dirichlet_data_is_on_the_surface_with_code_minus_1() {
     let v = one_and_two(&case, &[], 0);
     assert_eq!(v[0]["state"]["-1"], 1, "{}", v[0]);
 }
+
+/// A distributed mesh (an HDF5 mesh: no rank holds the whole of it) writes the same contact
+/// surface as the whole mesh read on one rank.
+#[test]
+fn distributed_mesh_writes_the_same_surface() {
+    let tmp = tempfile::tempdir().unwrap();
+    let msh = repo("cases/hertz/meshes/hertz_refined_L2.msh");
+    let h5 = tmp.path().join("hertz.h5");
+    run_with_timeout(
+        solver(
+            0,
+            &[
+                "convert".into(),
+                msh.display().to_string(),
+                h5.display().to_string(),
+            ],
+        ),
+        std::time::Duration::from_secs(60),
+    )
+    .expect_code(0, "convert");
+    let hertz = repo("cases/hertz/hertz.toml");
+    let v: Vec<Value> = [(1, &msh), (2, &h5)]
+        .iter()
+        .map(|&(np, mesh)| {
+            let set = format!("mesh.file={}", toml_path(mesh));
+            let s = solve(np, &hertz, &[&set, "solver.reuse=\"never\""]);
+            read(&s.dir, 0)
+        })
+        .collect();
+    for k in ["nodes", "facets", "surface", "facet_nodes", "state_by_id"] {
+        assert_eq!(v[0][k], v[1][k], "{k}: whole mesh vs distributed");
+    }
+    assert!(v[1]["state"]["1"].as_u64().unwrap() > 0, "{}", v[1]);
+}

@@ -10,8 +10,11 @@
 //! Fields (x, y, z the node or cell-centroid coordinates):
 //!   nodal  displacement = (x + 2y, xy − z, z/2 + x²), temperature = 3x − y + z
 //!   cell   stress[k] = x + 10k + k·y (k = 0..9), von_mises = x² + y, pair = (x, y), rank
-//!   contact nodes: the nodes with y = 0 (2D) or z = 0 (3D), in node order;
-//!          gap = x + 0.1, traction = (x, −x, 2x + y)
+//!   contact surface: the nodes with y = 0 (2D) or z = 0 (3D), in node order, b their index
+//!          on that side (x fastest); facets the segments (b, b + 1) (2D) or the triangles
+//!          (b, b + 1, b + m + 1), (b, b + m, b + m + 1) of each square (3D, m = N + 1),
+//!          square by square, facet f with tag 1000 + f;
+//!          gap = x + 0.1, traction = (x, −x, 2x + y), code = b mod 3 − 1 (an integer field)
 //! --empty-last: the last rank owns nothing (exercises zero-row ranks).
 //! --time: rank 0 prints `write_seconds=…`.
 
@@ -210,6 +213,27 @@ fn main() -> ExitCode {
         .iter()
         .flat_map(|&[x, y, _]| [x, -x, 2.0 * x + y])
         .collect();
+    let code: Vec<f64> = (c_off..c_off + c_cnt)
+        .map(|b| (b % 3) as f64 - 1.0)
+        .collect();
+    // facets of the bottom side (surface node numbers = bottom indices)
+    let m = n + 1;
+    let all_facets: Vec<[usize; 3]> = if dim == 2 {
+        (0..n).map(|i| [i, i + 1, 0]).collect()
+    } else {
+        (0..n * n)
+            .flat_map(|q| {
+                let b = (q / n) * m + q % n;
+                [[b, b + 1, b + m + 1], [b, b + m, b + m + 1]]
+            })
+            .collect()
+    };
+    let (f_off, f_cnt) = block(all_facets.len(), parts, rank);
+    let facets: Vec<usize> = all_facets[f_off..f_off + f_cnt]
+        .iter()
+        .flat_map(|f| f[..dim].to_vec())
+        .collect();
+    let facet_ids: Vec<u64> = (f_off..f_off + f_cnt).map(|f| 1000 + f as u64).collect();
 
     let piece = Piece {
         dim,
@@ -226,11 +250,13 @@ fn main() -> ExitCode {
                 name: "displacement",
                 ncomp: 3,
                 data: &displacement,
+                codes: None,
             },
             Field {
                 name: "temperature",
                 ncomp: 1,
                 data: &temperature,
+                codes: None,
             },
         ],
         cellwise: vec![
@@ -238,21 +264,25 @@ fn main() -> ExitCode {
                 name: "stress",
                 ncomp: 9,
                 data: &stress,
+                codes: None,
             },
             Field {
                 name: "von_mises",
                 ncomp: 1,
                 data: &von_mises,
+                codes: None,
             },
             Field {
                 name: "pair",
                 ncomp: 2,
                 data: &pair,
+                codes: None,
             },
             Field {
                 name: "rank",
                 ncomp: 1,
                 data: &rank_field,
+                codes: None,
             },
         ],
         contact: args.contact.then(|| ContactPiece {
@@ -260,16 +290,28 @@ fn main() -> ExitCode {
             offset: c_off,
             coords: &c_coords,
             node_ids: &c_ids,
+            n_facets_global: all_facets.len(),
+            facet_offset: f_off,
+            facets: &facets,
+            facet_ids: &facet_ids,
             fields: vec![
                 Field {
                     name: "gap",
                     ncomp: 1,
                     data: &gap,
+                    codes: None,
                 },
                 Field {
                     name: "traction",
                     ncomp: 3,
                     data: &traction,
+                    codes: None,
+                },
+                Field {
+                    name: "code",
+                    ncomp: 1,
+                    data: &code,
+                    codes: Some("the bottom index mod 3, minus 1"),
                 },
             ],
         }),

@@ -31,6 +31,9 @@ pub fn local_cell_values(
     Ok((nodes, vals))
 }
 
+/// What the cell field `rank` holds (the `codes` attribute of /cell/rank).
+pub const RANK_CODES: &str = "the MPI rank (0, 1, ...) that held the cell in the solve";
+
 /// Stresses, von Mises values and the owning rank of the local cells — only what `fields`
 /// asks for, in the order stress, von_mises, von_mises_thesis, rank. Collective.
 pub fn cell_fields(
@@ -78,7 +81,7 @@ pub fn cell_fields(
         ];
         for (want, name, ncomp, data) in wanted {
             if want {
-                fields.push(FieldBuf { name, ncomp, data });
+                fields.push(FieldBuf::float(name, ncomp, data));
             }
         }
     }
@@ -87,6 +90,7 @@ pub fn cell_fields(
             name: "rank",
             ncomp: 1,
             data: vec![layout.rank as f64; nlc],
+            codes: Some(RANK_CODES),
         });
     }
     Ok(fields)
@@ -105,14 +109,13 @@ pub fn solution_fields(
     let mut nodal = Vec::new();
     if out.wants(OutputField::Displacement) {
         let uo = u.to_local_vec()?;
-        nodal.push(FieldBuf {
-            name: "displacement",
-            ncomp: 3,
-            data: uo
-                .chunks_exact(dim)
+        nodal.push(FieldBuf::float(
+            "displacement",
+            3,
+            uo.chunks_exact(dim)
                 .flat_map(|c| (0..3).map(move |k| if k < dim { c[k] } else { 0.0 }))
                 .collect(),
-        });
+        ));
     }
     let (node_offset, _) = layout.node_range();
     Ok(SolutionFields {

@@ -589,8 +589,9 @@ fn scale(
     Ok(())
 }
 
-/// This rank's active nodes that stick and slip, and their Σ w_k, from the contact grid's
-/// fields `state` (1 active), `slip_state` (0 stick, 1 slip) and `weight`.
+/// This rank's active nodes that stick and slip, and their Σ w_k, from the contact surface's
+/// fields `state` (1 in contact; report::STATE_CODES), `slip_state` (0 stick, 1 slip on nodes
+/// in contact) and `weight`.
 fn contact_counts(r: &ContactResult) -> (f64, f64, f64) {
     let field = |name: &str| r.fields.iter().find(|f| f.name == name);
     let (Some(state), weight) = (field("state"), field("weight")) else {

@@ -17,44 +17,44 @@ fn hertz() -> PathBuf {
 /// between load factors 0.5 and 0.75).
 const HERTZ_L2: &str = "mesh.file=meshes/hertz_L2.msh";
 
-/// Reads a load history's output: the times of both temporal collections and, per step, the
-/// displacement by node id — through the paths the XDMF names (so they must be right) and
-/// through meshio's time-series reader (each collection in its own file).
+/// Reads a load history's output: the times of both temporal collections (solution.xdmf's
+/// "mesh", contact.xdmf's "contact") and, per step, the displacement by node id — through the
+/// paths the XDMF names (so they must be right) and through meshio's time-series reader on
+/// each file as written.
 const SERIES_PY: &str = r#"
 import sys, os, json
 import xml.etree.ElementTree as ET
 import h5py, meshio
 d = sys.argv[1]
-root = ET.parse(os.path.join(d, "solution.xdmf")).getroot()
-dom = root.find("Domain")
 f = h5py.File(os.path.join(d, "solution.h5"), "r")
 out = {"collections": {}, "steps": []}
-for g in dom.findall("Grid"):
+for name, fname in [("mesh", "solution.xdmf"), ("contact", "contact.xdmf")]:
+    path = os.path.join(d, fname)
+    if not os.path.exists(path):
+        continue
+    dom = ET.parse(path).getroot().find("Domain")
+    gs = dom.findall("Grid")
+    assert len(gs) == 1 and gs[0].get("Name") == name, fname
+    g = gs[0]
     assert g.get("GridType") == "Collection" and g.get("CollectionType") == "Temporal", g.attrib
     kids = g.findall("Grid")
-    out["collections"][g.get("Name")] = [float(k.find("Time").get("Value")) for k in kids]
-    if g.get("Name") == "mesh":
+    out["collections"][name] = [float(k.find("Time").get("Value")) for k in kids]
+    if name == "mesh":
         ids = f["mesh/node_id"][:].tolist()
         for k in kids:
             a = [x for x in k.findall("Attribute") if x.get("Name") == "displacement"][0]
-            path = a.find("DataItem").text.split(":", 1)[1]
+            path_u = a.find("DataItem").text.split(":", 1)[1]
             geo = k.find("Geometry").find("DataItem").text.split(":", 1)[1]
             assert geo == "/mesh/geometry", geo
-            out["steps"].append({"path": path, "u": dict(zip(map(str, ids), f[path][:].tolist()))})
-    # meshio: the collection alone in a file next to the original (HDF paths stay valid)
-    x = ET.Element("Xdmf", Version="3.0")
-    ET.SubElement(x, "Domain").append(g)
-    p = os.path.join(d, "_only_" + g.get("Name") + ".xdmf")
-    ET.ElementTree(x).write(p)
-    r = meshio.xdmf.TimeSeriesReader(p)
-    pts, cells = r.read_points_cells()
-    times = []
-    for k in range(r.num_steps):
-        t, pd, cd = r.read_data(k)
-        times.append(float(t))
-        assert len(pd) > 0 and all(len(v) == len(pts) for v in pd.values()), list(pd)
-    out["collections"][g.get("Name") + "_meshio"] = times
-    os.remove(p)
+            out["steps"].append({"path": path_u, "u": dict(zip(map(str, ids), f[path_u][:].tolist()))})
+    with meshio.xdmf.TimeSeriesReader(path) as r:
+        pts, cells = r.read_points_cells()
+        times = []
+        for k in range(r.num_steps):
+            t, pd, cd = r.read_data(k)
+            times.append(float(t))
+            assert len(pd) > 0 and all(len(v) == len(pts) for v in pd.values()), list(pd)
+    out["collections"][name + "_meshio"] = times
 print("RESULT " + json.dumps(out))
 "#;
 

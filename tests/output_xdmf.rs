@@ -1,7 +1,8 @@
 //! Runs examples/output_demo under mpirun with 1, 2 and 3 ranks and reads the result back
-//! with meshio (and h5py) through Debian's /usr/bin/python3. The Python side recomputes the
-//! known fields from the coordinates it read, so the writer's numbering, hyperslabs and
-//! XDMF description all have to be right for the checks to pass.
+//! with meshio (and h5py) through Debian's /usr/bin/python3: solution.xdmf (the mesh) and
+//! contact.xdmf (the contact surface) each opened directly with `meshio.read`. The Python side
+//! recomputes the known fields from the coordinates it read, so the writer's numbering,
+//! hyperslabs and XDMF description all have to be right for the checks to pass.
 
 mod common;
 
@@ -19,22 +20,21 @@ import numpy as np
 import meshio
 
 def grids(d):
-    """Read every Grid of solution.xdmf with meshio (meshio reads one grid per file, so each
-    grid is copied into its own XDMF file next to the original: the HDF paths stay valid)."""
-    root = ET.parse(os.path.join(d, "solution.xdmf")).getroot()
-    assert root.tag == "Xdmf" and root.get("Version").startswith("3")
-    doms = root.findall("Domain")
-    assert len(doms) == 1
-    out = {}
-    names = []
-    for g in doms[0].findall("Grid"):
-        name = g.get("Name")
+    """Every XDMF file of the output read directly with meshio.read: each holds one Domain
+    with one Uniform Grid (meshio reads no more); contact.xdmf only with a contact surface."""
+    out, names = {}, []
+    for name, fname in [("mesh", "solution.xdmf"), ("contact", "contact.xdmf")]:
+        path = os.path.join(d, fname)
+        if not os.path.exists(path):
+            continue
+        root = ET.parse(path).getroot()
+        assert root.tag == "Xdmf" and root.get("Version").startswith("3")
+        doms = root.findall("Domain")
+        assert len(doms) == 1
+        gs = doms[0].findall("Grid")
+        assert [(g.get("Name"), g.get("GridType")) for g in gs] == [(name, "Uniform")], fname
         names.append(name)
-        x = ET.Element("Xdmf", Version="3.0")
-        ET.SubElement(x, "Domain").append(g)
-        p = os.path.join(d, "_only_" + name + ".xdmf")
-        ET.ElementTree(x).write(p)
-        out[name] = meshio.read(p)
+        out[name] = meshio.read(path)
     return names, out
 
 def disp(p):
@@ -55,10 +55,6 @@ def cell_block(mesh):
 def check(d, dim, n, contact):
     names, gs = grids(d)
     assert names == (["mesh", "contact"] if contact else ["mesh"]), names
-    if not contact:
-        # a single grid: meshio must read the original file directly
-        direct = meshio.read(os.path.join(d, "solution.xdmf"))
-        assert len(direct.points) == len(gs["mesh"].points)
     m = gs["mesh"]
     p = m.points
     npts = (n + 1) ** dim
@@ -104,17 +100,48 @@ def check(d, dim, n, contact):
         q = cm.points
         K = (n + 1) ** (dim - 1)
         assert q.shape == (K, 3), q.shape
-        vb = cell_block(cm)
-        assert vb.type == "vertex"
-        assert (vb.data.ravel() == np.arange(K)).all()
         assert np.allclose(q[:, dim - 1], 0.0, atol=0)   # bottom side
         gq = lex(q, dim, n)
-        assert sorted(gq.tolist()) == sorted(set(gq.tolist()))
+        assert sorted(gq.tolist()) == list(range(K))     # every bottom node once
+        # the facets: segments of length 1/n (2D), triangles tiling the bottom square (3D)
+        fb = cell_block(cm)
+        assert fb.type == ("line" if dim == 2 else "triangle"), fb.type
+        nf = n if dim == 2 else 2 * n * n
+        assert fb.data.shape == (nf, dim), fb.data.shape
+        fv = q[fb.data]
+        if dim == 2:
+            meas = np.linalg.norm(fv[:, 1] - fv[:, 0], axis=1)
+            assert np.allclose(meas, 1.0 / n, rtol=0, atol=1e-14), meas
+        else:
+            meas = 0.5 * np.linalg.norm(np.cross(fv[:, 1] - fv[:, 0], fv[:, 2] - fv[:, 0]), axis=1)
+            assert np.allclose(meas, 0.5 / n ** 2, rtol=0, atol=1e-14), meas
+        assert abs(meas.sum() - 1.0) < 1e-12
+        ccd = {k: v[0] for k, v in cm.cell_data.items()}
+        assert sorted(ccd) == ["facet_id"], sorted(ccd)
+        assert (ccd["facet_id"] == 1000 + np.arange(nf)).all()
         assert (cm.point_data["node_id"] == 5 + 3 * gq).all()
         assert np.allclose(cm.point_data["gap"], q[:, 0] + 0.1, rtol=0, atol=1e-14)
         assert np.allclose(cm.point_data["traction"],
                            np.stack([q[:, 0], -q[:, 0], 2 * q[:, 0] + q[:, 1]], axis=1), rtol=0, atol=1e-14)
+        # an integer field: Int in the XDMF, i64 in the HDF5 file with its codes
+        code = cm.point_data["code"]
+        assert code.dtype.kind == "i", code.dtype
+        assert (code == gq % 3 - 1).all()
+        import h5py
+        with h5py.File(os.path.join(d, "solution.h5"), "r") as f:
+            assert f["contact/code"].dtype == np.int64
+            assert f["contact/code"].attrs["codes"] == "the bottom index mod 3, minus 1"
+            # meshio's arrays are the HDF5 datasets
+            for k in ["geometry", "topology", "node_id", "facet_id", "gap", "traction", "code"]:
+                h = f["contact/" + k][:]
+                mine = {"geometry": q, "topology": fb.data, "facet_id": ccd["facet_id"]}.get(k)
+                if mine is None:
+                    mine = cm.point_data[k]
+                assert np.array_equal(h, mine), k
+        text = open(os.path.join(d, "contact.xdmf")).read()
+        assert "<!--" in text and "code: the bottom index mod 3, minus 1" in text
         summary["contact_points"] = int(K)
+        summary["contact_facets"] = int(nf)
         summary["contact_data"] = sorted(cm.point_data)
     print(json.dumps(summary))
 
@@ -143,6 +170,14 @@ def compare(a, b):
                 return by_id(cd["cell_id"], conn, *[cd[k] for k in keys])
             for x, y in zip(cells(A), cells(B)):
                 assert np.array_equal(x, y)
+        else:
+            # facets as sets of node ids, sorted by facet_id
+            def facets(M):
+                nid = M.point_data["node_id"]
+                fid = M.cell_data["facet_id"][0]
+                return by_id(fid, np.sort(nid[M.cells[0].data], axis=1))
+            for x, y in zip(facets(A), facets(B)):
+                assert np.array_equal(x, y)
     print("same")
 
 if sys.argv[1] == "check":
@@ -151,26 +186,41 @@ else:
     compare(sys.argv[2], sys.argv[3])
 "#;
 
-/// ParaView check (pvbatch): both legacy XDMFReader and Xdmf3ReaderT must give a multiblock
-/// with the blocks "mesh" and "contact", and the displacement must equal f(points).
+/// ParaView check (pvbatch): both the legacy XDMFReader and Xdmf3ReaderT read solution.xdmf
+/// (the mesh) and contact.xdmf (the contact surface), each one data set (or a multiblock of
+/// one leaf), and the displacement equals f(points).
 const PARAVIEW_PY: &str = r#"
-import sys, json
+import sys, json, os
 import numpy as np
 from paraview.simple import XDMFReader, Xdmf3ReaderT
 from paraview import servermanager as sm
 from vtkmodules.util.numpy_support import vtk_to_numpy
-f = sys.argv[1]
+from vtkmodules.vtkCommonDataModel import vtkDataObjectTreeIterator
+d = sys.argv[1]
+
+def leaves(data):
+    if not data.IsA("vtkCompositeDataSet"):
+        return [data]
+    out = []
+    it = vtkDataObjectTreeIterator()
+    it.SetDataSet(data)
+    it.VisitOnlyLeavesOn()
+    it.InitTraversal()
+    while not it.IsDoneWithTraversal():
+        out.append(it.GetCurrentDataObject())
+        it.GoToNextItem()
+    return out
+
 out = {}
-for name, make in [("XDMFReader", lambda: XDMFReader(FileNames=[f])),
-                   ("Xdmf3ReaderT", lambda: Xdmf3ReaderT(FileName=[f]))]:
-    r = make()
-    r.UpdatePipeline()
-    d = sm.Fetch(r)
-    assert d.IsA("vtkMultiBlockDataSet"), d.GetClassName()
-    blocks = {}
-    for i in range(d.GetNumberOfBlocks()):
-        b = d.GetBlock(i)
-        bname = d.GetMetaData(i).Get(d.NAME())
+for name, fname in [("mesh", "solution.xdmf"), ("contact", "contact.xdmf")]:
+    f = os.path.join(d, fname)
+    for reader, make in [("XDMFReader", lambda: XDMFReader(FileNames=[f])),
+                         ("Xdmf3ReaderT", lambda: Xdmf3ReaderT(FileName=[f]))]:
+        r = make()
+        r.UpdatePipeline()
+        ls = leaves(sm.Fetch(r))
+        assert len(ls) == 1, (fname, reader, len(ls))
+        b = ls[0]
         p = vtk_to_numpy(b.GetPoints().GetData())
         pd = b.GetPointData()
         cd = b.GetCellData()
@@ -180,13 +230,12 @@ for name, make in [("XDMFReader", lambda: XDMFReader(FileNames=[f])),
                                  for j in range(pd.GetNumberOfArrays())},
                 "cell_arrays": {cd.GetArrayName(j): cd.GetArray(j).GetNumberOfComponents()
                                 for j in range(cd.GetNumberOfArrays())}}
-        if bname == "mesh":
+        if name == "mesh":
             u = vtk_to_numpy(pd.GetArray("displacement"))
             x, y, z = p[:, 0], p[:, 1], p[:, 2]
             info["displacement_ok"] = bool(np.allclose(
                 u, np.stack([x + 2 * y, x * y - z, 0.5 * z + x * x], 1), atol=1e-14, rtol=0))
-        blocks[bname] = info
-    out[name] = blocks
+        out.setdefault(reader, {})[name] = info
 print("RESULT " + json.dumps(out))
 "#;
 
@@ -258,9 +307,10 @@ fn triangles_with_contact_1_and_2_ranks() {
     assert_eq!(s[0]["cell_type"], "triangle");
     assert_eq!(s[0]["grids"], serde_json::json!(["mesh", "contact"]));
     assert_eq!(s[0]["contact_points"], 8);
+    assert_eq!(s[0]["contact_facets"], 7);
     assert_eq!(
         s[0]["contact_data"],
-        serde_json::json!(["gap", "node_id", "traction"])
+        serde_json::json!(["code", "gap", "node_id", "traction"])
     );
     assert_eq!(s[0]["ranks_seen"], serde_json::json!([0]));
     assert_eq!(s[1]["ranks_seen"], serde_json::json!([0, 1]));
@@ -273,6 +323,7 @@ fn tetrahedra_with_contact_1_and_3_ranks() {
     assert_eq!(s[1]["n_cells"], 162);
     assert_eq!(s[1]["cell_type"], "tetra");
     assert_eq!(s[1]["contact_points"], 16);
+    assert_eq!(s[1]["contact_facets"], 18);
     assert_eq!(s[1]["ranks_seen"], serde_json::json!([0, 1, 2]));
 }
 
@@ -284,6 +335,7 @@ fn rank_without_rows_and_no_contact() {
     assert_eq!(s[1]["ranks_seen"], serde_json::json!([0]));
     let s = one_vs_many(2, 3, 2, &["--empty-last", "--contact"]);
     assert_eq!(s[1]["contact_points"], 9);
+    assert_eq!(s[1]["contact_facets"], 8);
 }
 
 #[test]
@@ -309,7 +361,7 @@ fn missing_directory_is_an_error_on_every_rank() {
 }
 
 #[test]
-fn paraview_reads_mesh_and_contact_blocks() {
+fn paraview_reads_the_mesh_and_the_contact_surface() {
     let pvbatch = Path::new("/usr/bin/pvbatch");
     if !pvbatch.exists() {
         eprintln!("skipped: /usr/bin/pvbatch not installed");
@@ -321,7 +373,7 @@ fn paraview_reads_mesh_and_contact_blocks() {
     std::fs::write(&script, PARAVIEW_PY).unwrap();
     let out = Command::new(pvbatch)
         .arg(&script)
-        .arg(t.path().join("solution.xdmf"))
+        .arg(t.path())
         .output()
         .expect("pvbatch");
     let stdout = String::from_utf8_lossy(&out.stdout);
@@ -346,8 +398,10 @@ fn paraview_reads_mesh_and_contact_blocks() {
         assert_eq!(mesh["displacement_ok"], true, "{reader}");
         let contact = &v[reader]["contact"];
         assert_eq!(contact["points"], 9, "{reader}");
-        assert_eq!(contact["cells"], 9, "{reader}");
-        assert_eq!(contact["cell_types"], serde_json::json!([2]), "{reader}"); // VTK_POLY_VERTEX
+        assert_eq!(contact["cells"], 8, "{reader}");
+        assert_eq!(contact["cell_types"], serde_json::json!([5]), "{reader}"); // VTK_TRIANGLE
         assert_eq!(contact["point_arrays"]["traction"], 3, "{reader}");
+        assert_eq!(contact["point_arrays"]["code"], 1, "{reader}");
+        assert_eq!(contact["cell_arrays"]["facet_id"], 1, "{reader}");
     }
 }

@@ -188,6 +188,9 @@ def errors(out_dir):
         w = f["contact/weight"][:].ravel()
         state = f["contact/state"][:].ravel()
         g0 = f["contact/gap0"][:].ravel()
+    # the contact nodes only: a surface node held by Dirichlet data has state -1 and NaN fields
+    keep = state != -1
+    cx, p, w, state, g0 = cx[keep], p[keep], w[keep], state[keep], g0[keep]
     v = xyz[cells]  # cells x (d+1) x d
     J = np.stack([v[:, k + 1] - v[:, 0] for k in range(d)], axis=2)  # columns: edges
     det = np.linalg.det(J)

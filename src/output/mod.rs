@@ -11,19 +11,24 @@
 //! | /mesh/cell_id        | M            | gmsh element tags                        |
 //! | /nodal/NAME          | N × ncomp    | (N when ncomp = 1)                       |
 //! | /cell/NAME           | M × ncomp    |                                          |
-//! | /contact/geometry    | K × 3 f64    | only when K > 0                          |
-//! | /contact/topology    | K × 1        | 0, 1, …, K−1 (Polyvertex cells)          |
-//! | /contact/node_id     | K            |                                          |
+//! | /contact/geometry    | K × 3 f64    | contact surface nodes, only when K > 0   |
+//! | /contact/topology    | F × dim      | its facets: rows of /contact/geometry    |
+//! | /contact/node_id     | K            | gmsh node tags                           |
+//! | /contact/facet_id    | F            | gmsh element tags of the facets          |
 //! | /contact/NAME        | K × ncomp    |                                          |
 //!
-//! `solution.xdmf` (XDMF 3, written by rank 0) has one Domain with the Grid "mesh" and, when
-//! K > 0, the Grid "contact"; `node_id` / `cell_id` appear there as Int attributes.
+//! A field with codes ([`Field::codes`]) is stored as i64 with a string attribute `codes`
+//! saying what its values mean; every other field as f64.
+//!
+//! `solution.xdmf` (XDMF 3, written by rank 0) holds the one Grid "mesh", `contact.xdmf`
+//! (when K > 0) the one Grid "contact" (see [`xdmf`]); `node_id`, `cell_id` and `facet_id`
+//! appear there as Int attributes.
 //!
 //! A load history (several solutions on one mesh, [`Slot::Step`]) keeps `/mesh/*` and
-//! `/contact/{geometry,topology,node_id}` (written with the first step) and puts the fields of
-//! step s (1, 2, …) under `/step_s/nodal/NAME`, `/step_s/cell/NAME`, `/step_s/contact/NAME`.
-//! Its XDMF has two temporal collections ("mesh", "contact"), one Uniform grid per step with
-//! `<Time Value>` = the step's load factor, every step pointing at the same mesh datasets.
+//! `/contact/{geometry,topology,node_id,facet_id}` (written with the first step) and puts the
+//! fields of step s (1, 2, …) under `/step_s/nodal/NAME`, `/step_s/cell/NAME`,
+//! `/step_s/contact/NAME`. Each XDMF file then holds one temporal collection, one Uniform grid
+//! per step with `<Time Value>` = the step's time, every step pointing at the same geometry.
 //!
 //! Error handling: every check that could differ between ranks is agreed on by all ranks
 //! before the next collective step, so a bad piece on one rank gives the same `Err` on all
@@ -34,7 +39,10 @@ mod xdmf;
 
 pub use result_set::{ContactResult, ResultSet, SolutionFields};
 
-pub use xdmf::{attribute_type, xdmf_series_text, xdmf_text, FieldMeta, Meta};
+pub use xdmf::{
+    attribute_type, contact_series_text, contact_xdmf_text, xdmf_series_text, xdmf_text, FieldMeta,
+    Meta,
+};
 
 use std::path::Path;
 
@@ -53,6 +61,9 @@ const RESERVE_FILE: &str = ".reserve";
 const RESERVE_BYTES: usize = 32 * 1024;
 /// Name of the XDMF file inside the output directory.
 pub const XDMF_FILE: &str = "solution.xdmf";
+/// Name of the contact surface's XDMF file inside the output directory (its data is in
+/// [`H5_FILE`] under `/contact`).
+pub const CONTACT_XDMF_FILE: &str = "contact.xdmf";
 
 /// An owned field, as the stages above produce it ([`FieldBuf::view`] lends it to a [`Piece`]).
 #[derive(Debug, Clone, PartialEq)]
@@ -60,14 +71,27 @@ pub struct FieldBuf {
     pub name: &'static str,
     pub ncomp: usize,
     pub data: Vec<f64>,
+    /// An integer field: what its values mean (see [`Field::codes`]).
+    pub codes: Option<&'static str>,
 }
 
 impl FieldBuf {
+    /// A float field.
+    pub fn float(name: &'static str, ncomp: usize, data: Vec<f64>) -> FieldBuf {
+        FieldBuf {
+            name,
+            ncomp,
+            data,
+            codes: None,
+        }
+    }
+
     pub fn view(&self) -> Field<'_> {
         Field {
             name: self.name,
             ncomp: self.ncomp,
             data: &self.data,
+            codes: self.codes,
         }
     }
 }
@@ -78,6 +102,10 @@ pub struct Field<'a> {
     pub name: &'a str,
     pub ncomp: usize,
     pub data: &'a [f64],
+    /// `Some(meaning)`: an integer field (its values, whole numbers, are written as i64) and
+    /// what they mean, e.g. "0 open, 1 in contact" (the `codes` attribute of its dataset and a
+    /// comment in the XDMF file). `None`: a float field.
+    pub codes: Option<&'a str>,
 }
 
 /// What one rank contributes. Nodes and cells are numbered globally and contiguously by rank:
@@ -105,13 +133,20 @@ pub struct Piece<'a> {
     pub contact: Option<ContactPiece<'a>>,
 }
 
-/// Contact nodes as their own point grid ("contact").
+/// The contact surface as its own grid ("contact"): nodes numbered globally and contiguously
+/// by rank like the mesh's, and facets (`dim` nodes each: lines in 2D, triangles in 3D).
 #[derive(Debug, Clone)]
 pub struct ContactPiece<'a> {
     pub n_global: usize,
     pub offset: usize,
     pub coords: &'a [[f64; 3]],
     pub node_ids: &'a [u64],
+    pub n_facets_global: usize,
+    pub facet_offset: usize,
+    /// `dim` GLOBAL surface node numbers (rows of the contact geometry) per owned facet.
+    pub facets: &'a [usize],
+    /// Gmsh element tag of each owned facet.
+    pub facet_ids: &'a [u64],
     pub fields: Vec<Field<'a>>,
 }
 
@@ -123,6 +158,7 @@ impl Piece<'_> {
                 .map(|f| FieldMeta {
                     name: f.name.to_string(),
                     ncomp: f.ncomp,
+                    codes: f.codes.map(str::to_string),
                 })
                 .collect()
         };
@@ -133,6 +169,11 @@ impl Piece<'_> {
             nodal: fm(&self.nodal),
             cellwise: fm(&self.cellwise),
             n_contact: self.contact.as_ref().map_or(0, |c| c.n_global),
+            n_contact_facets: self
+                .contact
+                .as_ref()
+                .filter(|c| c.n_global > 0)
+                .map_or(0, |c| c.n_facets_global),
             contact: self
                 .contact
                 .as_ref()
@@ -207,11 +248,34 @@ impl Piece<'_> {
                     c.n_global
                 ));
             }
+            let nf = c.facet_ids.len();
+            if c.facets.len() != nf * self.dim {
+                return Err(format!(
+                    "contact facets have {} entries, expected {nf} facets × {}",
+                    c.facets.len(),
+                    self.dim
+                ));
+            }
+            if c.facet_offset + nf > c.n_facets_global {
+                return Err(format!(
+                    "contact facets {}..{} exceed the global facet count {}",
+                    c.facet_offset,
+                    c.facet_offset + nf,
+                    c.n_facets_global
+                ));
+            }
+            if let Some(&bad) = c.facets.iter().find(|&&v| v >= c.n_global) {
+                return Err(format!(
+                    "a contact facet refers to node {bad}, but the contact surface has only {} \
+                     nodes",
+                    c.n_global
+                ));
+            }
             check_fields(
                 "contact",
                 &c.fields,
                 k,
-                &["node_id", "geometry", "topology"],
+                &["node_id", "facet_id", "geometry", "topology"],
             )?;
         }
         Ok(())
@@ -248,6 +312,15 @@ fn check_fields(
         }
         if f.ncomp == 0 {
             return Err(format!("{kind} field '{}' has 0 components", f.name));
+        }
+        if let Some(bad) = f
+            .codes
+            .and_then(|_| f.data.iter().find(|&&v| v.fract() != 0.0 || !v.is_finite()))
+        {
+            return Err(format!(
+                "{kind} field '{}' holds integer codes, but has the value {bad}",
+                f.name
+            ));
         }
         if f.data.len() != rows * f.ncomp {
             return Err(format!(
@@ -311,7 +384,7 @@ impl Writer<'_> {
         ncomp: usize,
         offset: usize,
         data: &[T],
-    ) -> Result<(), String> {
+    ) -> Result<hdf5::Dataset, String> {
         let builder = group.new_dataset::<F>().fill_time(FillTime::Never);
         let ds = if ncomp == 1 {
             builder.shape([rows]).create(name)
@@ -327,7 +400,7 @@ impl Writer<'_> {
         })?;
         let local = data.len() / ncomp;
         if local == 0 || self.local_err.is_some() {
-            return Ok(());
+            return Ok(ds);
         }
         let res = if ncomp == 1 {
             ArrayView1::from(data)
@@ -356,7 +429,44 @@ impl Writer<'_> {
                 group.name()
             ));
         }
-        Ok(())
+        Ok(ds)
+    }
+
+    /// Collective: a field's dataset (`rows` × its components from `offset`): f64, or i64
+    /// with the string attribute `codes` for a field with codes.
+    fn field(
+        &mut self,
+        group: &Group,
+        f: &Field,
+        rows: usize,
+        offset: usize,
+    ) -> Result<(), String> {
+        let Some(codes) = f.codes else {
+            self.rows::<f64, f64>(group, f.name, rows, f.ncomp, offset, f.data)?;
+            return Ok(());
+        };
+        // whole numbers (validated)
+        let ints: Vec<i64> = f.data.iter().map(|&v| v as i64).collect();
+        let ds = self.rows::<i64, i64>(group, f.name, rows, f.ncomp, offset, &ints)?;
+        let text: hdf5::types::VarLenUnicode = codes.parse().map_err(|e| {
+            format!(
+                "{}: the codes of {}/{} are not text HDF5 takes: {e}",
+                self.path,
+                group.name(),
+                f.name
+            )
+        })?;
+        ds.new_attr::<hdf5::types::VarLenUnicode>()
+            .create("codes")
+            .and_then(|a| a.write_scalar(&text))
+            .map_err(|e| {
+                format!(
+                    "{}: cannot write the attribute codes of {}/{}: {e}",
+                    self.path,
+                    group.name(),
+                    f.name
+                )
+            })
     }
 }
 
@@ -429,13 +539,13 @@ fn write_datasets(
 
     let nodal = create_group(root, path, "nodal")?;
     for f in &p.nodal {
-        w.rows::<f64, f64>(&nodal, f.name, n, f.ncomp, p.node_offset, f.data)?;
+        w.field(&nodal, f, n, p.node_offset)?;
     }
     drop(nodal);
 
     let cell = create_group(root, path, "cell")?;
     for f in &p.cellwise {
-        w.rows::<f64, f64>(&cell, f.name, m, f.ncomp, p.cell_offset, f.data)?;
+        w.field(&cell, f, m, p.cell_offset)?;
     }
     drop(cell);
 
@@ -443,10 +553,11 @@ fn write_datasets(
         let k = meta.n_contact;
         let fields_group = if slot.creates() {
             let g = create_group(file, path, "contact")?;
+            let (nf, d) = (meta.n_contact_facets, meta.dim);
             w.rows::<f64, f64>(&g, "geometry", k, 3, c.offset, c.coords.as_flattened())?;
-            let topo: Vec<u64> = (c.offset as u64..(c.offset + c.coords.len()) as u64).collect();
-            w.rows::<i64, u64>(&g, "topology", k, 1, c.offset, &topo)?;
+            w.rows::<i64, usize>(&g, "topology", nf, d, c.facet_offset, c.facets)?;
             w.rows::<i64, u64>(&g, "node_id", k, 1, c.offset, c.node_ids)?;
+            w.rows::<i64, u64>(&g, "facet_id", nf, 1, c.facet_offset, c.facet_ids)?;
             match step {
                 None => g,
                 Some(_) => create_group(root, path, "contact")?,
@@ -455,7 +566,7 @@ fn write_datasets(
             create_group(root, path, "contact")?
         };
         for f in &c.fields {
-            w.rows::<f64, f64>(&fields_group, f.name, k, f.ncomp, c.offset, f.data)?;
+            w.field(&fields_group, f, k, c.offset)?;
         }
     }
     Ok(())
@@ -481,11 +592,22 @@ fn file_bytes(meta: &Meta, with_mesh: bool) -> u64 {
         values += k * comps(&meta.contact);
         datasets += meta.contact.len();
         if with_mesh {
-            values += k * (3 + 1 + 1);
-            datasets += 3;
+            let f = meta.n_contact_facets as u64;
+            values += k * (3 + 1) + f * (meta.dim as u64 + 1);
+            datasets += 4;
         }
     }
-    8 * values + 16 * 1024 + 2048 * datasets as u64
+    // an integer field's attribute `codes`: its text and its header
+    let codes = |v: &[FieldMeta]| {
+        v.iter()
+            .filter_map(|f| f.codes.as_ref().map(|c| c.len() as u64 + 512))
+            .sum::<u64>()
+    };
+    let mut attrs = codes(&meta.nodal) + codes(&meta.cellwise);
+    if k > 0 {
+        attrs += codes(&meta.contact);
+    }
+    8 * values + 16 * 1024 + 2048 * datasets as u64 + attrs
 }
 
 /// Allocates the disk blocks of `path` up to `bytes` without changing its size or contents
@@ -511,20 +633,20 @@ fn release_unused(path: &Path) {
 }
 
 /// Collective over `comm`: writes `dir/solution.h5` (all ranks, MPI-IO) and
-/// `dir/solution.xdmf` (rank 0). `dir` must exist. Returns the same `Err` on every rank if
+/// `dir/solution.xdmf` and, with a contact surface, `dir/contact.xdmf` (rank 0). `dir` must exist. Returns the same `Err` on every rank if
 /// any rank's piece is inconsistent or any write fails.
 pub fn write_xdmf_hdf5<C>(comm: &C, dir: &Path, piece: &Piece) -> Result<(), String>
 where
     C: Communicator + AsRaw<Raw = mpi::ffi::MPI_Comm>,
 {
     write_piece(comm, dir, piece, Slot::Static, |meta| {
-        xdmf_text(meta, H5_FILE)
+        (xdmf_text(meta, H5_FILE), contact_xdmf_text(meta, H5_FILE))
     })
 }
 
 /// Collective over `comm`: step `index` (1, 2, …; step 1 creates the files) of a load history
-/// into `dir/solution.h5`, and `dir/solution.xdmf` rewritten (rank 0) as the temporal
-/// collection of the steps so far, `times[s − 1]` being the time (load factor) of step s. Every
+/// into `dir/solution.h5`, and `dir/solution.xdmf` (and with a contact surface
+/// `dir/contact.xdmf`) rewritten (rank 0) as the temporal collection of the steps so far, `times[s − 1]` being the time (load factor) of step s. Every
 /// step's piece must describe the same mesh and fields. The same `Err` on every rank.
 pub fn write_step_xdmf_hdf5<C>(
     comm: &C,
@@ -537,18 +659,22 @@ where
     C: Communicator + AsRaw<Raw = mpi::ffi::MPI_Comm>,
 {
     write_piece(comm, dir, piece, Slot::Step { index }, |meta| {
-        xdmf_series_text(meta, H5_FILE, times)
+        (
+            xdmf_series_text(meta, H5_FILE, times),
+            contact_series_text(meta, H5_FILE, times),
+        )
     })
 }
 
 /// The common body of [`write_xdmf_hdf5`] and [`write_step_xdmf_hdf5`]: checks, the HDF5 data
-/// into `slot`, then the XDMF text `xdmf` makes of the description.
+/// into `slot`, then the XDMF texts `xdmf` makes of the description (solution.xdmf and, if
+/// any, contact.xdmf).
 fn write_piece<C>(
     comm: &C,
     dir: &Path,
     piece: &Piece,
     slot: Slot,
-    xdmf: impl FnOnce(&Meta) -> String,
+    xdmf: impl FnOnce(&Meta) -> (String, Option<String>),
 ) -> Result<(), String>
 where
     C: Communicator + AsRaw<Raw = mpi::ffi::MPI_Comm>,
@@ -568,23 +694,32 @@ where
         ));
     }
     let contact = piece.contact.as_ref();
-    let mine: [u64; 6] = [
+    let mine: [u64; 8] = [
         piece.node_offset as u64,
         piece.coords.len() as u64,
         piece.cell_offset as u64,
         piece.cell_ids.len() as u64,
         contact.map_or(0, |c| c.offset as u64),
         contact.map_or(0, |c| c.coords.len() as u64),
+        contact.map_or(0, |c| c.facet_offset as u64),
+        contact.map_or(0, |c| c.facet_ids.len() as u64),
     ];
-    let mut all = vec![0u64; 6 * comm.size() as usize];
+    let mut all = vec![0u64; 8 * comm.size() as usize];
     comm.all_gather_into(&mine[..], &mut all[..]);
     if local.is_ok() {
         let blocks = |j: usize| -> Vec<(u64, u64)> {
-            all.chunks_exact(6).map(|r| (r[j], r[j + 1])).collect()
+            all.chunks_exact(8).map(|r| (r[j], r[j + 1])).collect()
         };
         local = check_tiling("nodes", &mut blocks(0), meta.n_nodes as u64)
             .and_then(|()| check_tiling("cells", &mut blocks(2), meta.n_cells as u64))
-            .and_then(|()| check_tiling("contact nodes", &mut blocks(4), meta.n_contact as u64));
+            .and_then(|()| check_tiling("contact nodes", &mut blocks(4), meta.n_contact as u64))
+            .and_then(|()| {
+                check_tiling(
+                    "contact facets",
+                    &mut blocks(6),
+                    meta.n_contact_facets as u64,
+                )
+            });
     }
     agree(comm, local.map_err(|e| format!("{h5_name}: {e}")))?;
 
@@ -681,9 +816,15 @@ where
 
     // 3. The XDMF description (rank 0), after the data it points to is complete.
     if comm.rank() == 0 && local.is_ok() {
-        let text = xdmf(&meta);
-        if let Err(e) = std::fs::write(&xdmf_path, text) {
-            local = Err(format!("{}: cannot write: {e}", xdmf_path.display()));
+        let (text, contact_text) = xdmf(&meta);
+        let contact_path = dir.join(CONTACT_XDMF_FILE);
+        for (path, text) in [(&xdmf_path, Some(text)), (&contact_path, contact_text)] {
+            if let Some(text) = text {
+                if let Err(e) = std::fs::write(path, text) {
+                    local = Err(format!("{}: cannot write: {e}", path.display()));
+                    break;
+                }
+            }
         }
     }
     agree(comm, local)
@@ -730,6 +871,7 @@ mod tests {
             name: "u",
             ncomp: 2,
             data: &d,
+            codes: None,
         });
         assert_eq!(p.validate(), Ok(()));
     }
@@ -766,6 +908,7 @@ mod tests {
                 name,
                 ncomp,
                 data: &d[..len],
+                codes: None,
             });
             assert!(p.validate().is_err(), "{name} {ncomp} {len}");
         }
@@ -775,12 +918,52 @@ mod tests {
                 name: "u",
                 ncomp: 2,
                 data: &d,
+                codes: None,
             });
         }
         assert!(p.validate().unwrap_err().contains("twice"));
         // offsets beyond the global count
         let mut p = piece(&C, &ids, &conn, &[7, 8]);
         p.node_offset = 1;
+        assert!(p.validate().is_err());
+    }
+
+    #[test]
+    fn validate_checks_codes_and_contact_facets() {
+        let ids = [1, 2, 3, 4];
+        let conn = [0, 1, 2, 1, 3, 2];
+        let mut p = piece(&C, &ids, &conn, &[7, 8]);
+        let ok = [1.0, 0.0, -1.0, 2.0];
+        let bad = [1.0, 0.5, -1.0, 2.0];
+        let nan = [1.0, f64::NAN, -1.0, 2.0];
+        for (data, good) in [(&ok, true), (&bad, false), (&nan, false)] {
+            p.nodal = vec![Field {
+                name: "state",
+                ncomp: 1,
+                data,
+                codes: Some("codes"),
+            }];
+            assert_eq!(p.validate().is_ok(), good, "{data:?}");
+        }
+        p.nodal.clear();
+        let xs = [C[0], C[1]];
+        let contact = |facets: &'static [usize], facet_ids: &'static [u64]| ContactPiece {
+            n_global: 2,
+            offset: 0,
+            coords: &xs,
+            node_ids: &[1, 2],
+            n_facets_global: facet_ids.len(),
+            facet_offset: 0,
+            facets,
+            facet_ids,
+            fields: vec![],
+        };
+        p.contact = Some(contact(&[0, 1], &[9]));
+        assert_eq!(p.validate(), Ok(()));
+        assert_eq!(p.meta().n_contact_facets, 1);
+        p.contact = Some(contact(&[0, 2], &[9]));
+        assert!(p.validate().unwrap_err().contains("node 2"));
+        p.contact = Some(contact(&[0, 1, 1], &[9]));
         assert!(p.validate().is_err());
     }
 
@@ -803,10 +986,15 @@ mod tests {
             offset: 0,
             coords: &[],
             node_ids: &[],
+            n_facets_global: 0,
+            facet_offset: 0,
+            facets: &[],
+            facet_ids: &[],
             fields: vec![Field {
                 name: "gap",
                 ncomp: 1,
                 data: &d,
+                codes: None,
             }],
         });
         let m = p.meta();

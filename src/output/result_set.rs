@@ -1,10 +1,11 @@
 //! The result set of a run: written into a staging directory next to the output directory and
 //! put in place as a whole at the end, so the output directory holds exactly what one run wrote
-//! (or, if the run fails, what was there before). Knows nothing of contact: the contact grid
-//! and its table arrive as plain fields and text.
+//! (or, if the run fails, what was there before). Knows nothing of contact: the contact
+//! surface and its table arrive as plain grid, fields and text.
 
 use super::{
-    write_step_xdmf_hdf5, write_xdmf_hdf5, ContactPiece, Field, FieldBuf, Piece, XDMF_FILE,
+    write_step_xdmf_hdf5, write_xdmf_hdf5, ContactPiece, Field, FieldBuf, Piece, CONTACT_XDMF_FILE,
+    XDMF_FILE,
 };
 use crate::error::{InputError, RunError};
 use crate::par::Ctx;
@@ -24,6 +25,7 @@ pub const HISTORY_CSV: &str = "history.csv";
 pub const RESULT_FILES: &[&str] = &[
     super::H5_FILE,
     XDMF_FILE,
+    CONTACT_XDMF_FILE,
     SUMMARY_FILE,
     CONTACT_CSV,
     HISTORY_CSV,
@@ -44,13 +46,19 @@ pub struct SolutionFields {
     pub cellwise: Vec<FieldBuf>,
 }
 
-/// The contact nodes of this rank as a point grid with fields, and the whole table (CSV text,
-/// the same on every rank).
+/// This rank's part of the contact surface (its nodes and facets, numbered globally like
+/// [`ContactPiece`]'s) with the fields on its nodes, and the whole table of the contact nodes
+/// (CSV text, the same on every rank).
 pub struct ContactResult {
     pub n_global: usize,
     pub offset: usize,
     pub coords: Vec<[f64; 3]>,
     pub node_ids: Vec<u64>,
+    pub n_facets_global: usize,
+    pub facet_offset: usize,
+    /// `dim` global surface node numbers per owned facet.
+    pub facets: Vec<usize>,
+    pub facet_ids: Vec<u64>,
     pub fields: Vec<FieldBuf>,
     pub csv: String,
 }
@@ -79,6 +87,10 @@ impl SolutionFields {
                 offset: c.offset,
                 coords: &c.coords,
                 node_ids: &c.node_ids,
+                n_facets_global: c.n_facets_global,
+                facet_offset: c.facet_offset,
+                facets: &c.facets,
+                facet_ids: &c.facet_ids,
                 fields: views(&c.fields),
             }),
         }

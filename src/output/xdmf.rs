@@ -1,12 +1,23 @@
-//! The XDMF 3 text that describes the datasets of `solution.h5` (written by rank 0 only).
+//! The XDMF 3 texts that describe the datasets of `solution.h5` (written by rank 0 only).
 //!
-//! Layout: one `Domain` holding the Uniform Grid "mesh" and, when contact nodes exist, a
-//! second Uniform Grid "contact" (Polyvertex cells, one per contact node). ParaView's
-//! XDMF readers turn two grids of one Domain into a multiblock data set with two blocks.
+//! Two files, one grid each, so that every reader opens them (meshio reads one grid per
+//! file; ParaView and VisIt read either):
 //!
-//! A load history ([`xdmf_series_text`]): the same two grids, each a temporal collection
-//! (`GridType="Collection" CollectionType="Temporal"`) of one Uniform grid per step with its
-//! `<Time Value>`; ParaView's time slider walks the steps.
+//! - `solution.xdmf`: the Uniform Grid "mesh" (triangles / tetrahedra, the body's nodal and
+//!   cell fields);
+//! - `contact.xdmf` (when the run has a contact boundary): the Uniform Grid "contact", the
+//!   boundary facets of the contact groups (Polyline cells of 2 nodes in 2D, Triangle cells
+//!   in 3D) with the contact fields on their nodes.
+//!
+//! A load history ([`xdmf_series_text`], [`contact_series_text`]): each file holds one
+//! temporal collection (`GridType="Collection" CollectionType="Temporal"`) of one Uniform
+//! grid per step with its `<Time Value>`, every step pointing at the same geometry and
+//! topology — the layout meshio's `TimeSeriesReader` reads (it takes the points and cells of
+//! the first step) and ParaView's time slider walks.
+//!
+//! Integer fields (codes, [`FieldMeta::codes`]) are written as `DataType="Int"`; what their
+//! values mean is in an XML comment at the top of the file (readers skip comments) and in the
+//! `codes` attribute of their HDF5 dataset.
 
 use std::fmt::Write;
 
@@ -15,6 +26,8 @@ use std::fmt::Write;
 pub struct FieldMeta {
     pub name: String,
     pub ncomp: usize,
+    /// An integer field: what its values mean (`None`: a float field).
+    pub codes: Option<String>,
 }
 
 /// Global sizes and fields of everything written to the HDF5 file.
@@ -25,8 +38,10 @@ pub struct Meta {
     pub n_cells: usize,
     pub nodal: Vec<FieldMeta>,
     pub cellwise: Vec<FieldMeta>,
-    /// Number of contact nodes (0: no contact grid) and their fields.
+    /// Number of nodes of the contact surface (0: no contact grid) and their fields.
     pub n_contact: usize,
+    /// Number of facets of the contact surface (`dim` nodes each).
+    pub n_contact_facets: usize,
     pub contact: Vec<FieldMeta>,
 }
 
@@ -35,18 +50,22 @@ impl Meta {
     pub fn signature(&self) -> String {
         let list = |v: &[FieldMeta]| {
             v.iter()
-                .map(|f| format!("{}:{}", f.name, f.ncomp))
+                .map(|f| {
+                    let int = if f.codes.is_some() { ":int" } else { "" };
+                    format!("{}:{}{int}", f.name, f.ncomp)
+                })
                 .collect::<Vec<_>>()
                 .join(",")
         };
         format!(
-            "dim={} nodes={} cells={} nodal=[{}] cell=[{}] contact={} contact_fields=[{}]",
+            "dim={} nodes={} cells={} nodal=[{}] cell=[{}] contact={}/{} contact_fields=[{}]",
             self.dim,
             self.n_nodes,
             self.n_cells,
             list(&self.nodal),
             list(&self.cellwise),
             self.n_contact,
+            self.n_contact_facets,
             list(&self.contact)
         )
     }
@@ -115,53 +134,97 @@ fn escape(s: &str) -> String {
         .replace('"', "&quot;")
 }
 
-/// The whole XDMF document; `h5` is the HDF5 file name relative to the XDMF file.
+/// `solution.xdmf` of a single solve: the Uniform grid "mesh" (fields under `/nodal`,
+/// `/cell`); `h5` is the HDF5 file name relative to the XDMF file.
 pub fn xdmf_text(meta: &Meta, h5: &str) -> String {
-    let mut out = String::with_capacity(4096);
-    head(&mut out);
-    mesh_grid(&mut out, meta, h5, "", None);
-    if meta.n_contact > 0 {
-        contact_grid(&mut out, meta, h5, "/contact", None);
-    }
-    tail(&mut out);
-    out
+    document(meta, h5, Grid::Mesh, None)
 }
 
-/// The XDMF document of a load history: the grids "mesh" and (with contact nodes) "contact"
-/// as temporal collections, step s (1, 2, …) at time `times[s − 1]` with its fields under
-/// `/step_s/`; every step points at the one `/mesh` and `/contact` geometry.
+/// `solution.xdmf` of a load history: the temporal collection "mesh", step s (1, 2, …) at
+/// time `times[s − 1]` with its fields under `/step_s/`, every step on the one `/mesh`.
 pub fn xdmf_series_text(meta: &Meta, h5: &str, times: &[f64]) -> String {
-    let mut out = String::with_capacity(4096 * (times.len() + 1));
-    head(&mut out);
-    let mut grids = vec!["mesh"];
-    if meta.n_contact > 0 {
-        grids.push("contact");
-    }
-    for name in grids {
-        let _ = writeln!(
-            out,
-            "    <Grid Name=\"{name}\" GridType=\"Collection\" CollectionType=\"Temporal\">"
-        );
-        for (i, &t) in times.iter().enumerate() {
-            let mut g = String::with_capacity(4096);
-            let step = format!("/step_{}", i + 1);
-            if name == "mesh" {
-                mesh_grid(&mut g, meta, h5, &step, Some(t));
-            } else {
-                contact_grid(&mut g, meta, h5, &format!("{step}/contact"), Some(t));
-            }
-            for line in g.lines() {
-                let _ = writeln!(out, "  {line}");
-            }
+    document(meta, h5, Grid::Mesh, Some(times))
+}
+
+/// `contact.xdmf` of a single solve: the Uniform grid "contact" (the contact surface, fields
+/// under `/contact`); `None` without a contact surface.
+pub fn contact_xdmf_text(meta: &Meta, h5: &str) -> Option<String> {
+    (meta.n_contact > 0).then(|| document(meta, h5, Grid::Contact, None))
+}
+
+/// `contact.xdmf` of a load history: the temporal collection "contact", step s with its
+/// fields under `/step_s/contact`, every step on the one `/contact` surface.
+pub fn contact_series_text(meta: &Meta, h5: &str, times: &[f64]) -> Option<String> {
+    (meta.n_contact > 0).then(|| document(meta, h5, Grid::Contact, Some(times)))
+}
+
+#[derive(Clone, Copy, PartialEq, Eq)]
+enum Grid {
+    Mesh,
+    Contact,
+}
+
+impl Grid {
+    fn name(self) -> &'static str {
+        match self {
+            Grid::Mesh => "mesh",
+            Grid::Contact => "contact",
         }
-        out.push_str("    </Grid>\n");
+    }
+}
+
+/// One file: the grid alone (`times` None) or its temporal collection.
+fn document(meta: &Meta, h5: &str, which: Grid, times: Option<&[f64]>) -> String {
+    let steps = times.map_or(1, <[f64]>::len);
+    let mut out = String::with_capacity(4096 * (steps + 1));
+    head(&mut out, meta, which);
+    let grid = |out: &mut String, fields: &str, t: Option<f64>| match which {
+        Grid::Mesh => mesh_grid(out, meta, h5, fields, t),
+        Grid::Contact => contact_grid(out, meta, h5, &format!("{fields}/contact"), t),
+    };
+    match times {
+        None => grid(&mut out, "", None),
+        Some(times) => {
+            let _ = writeln!(
+                out,
+                "    <Grid Name=\"{}\" GridType=\"Collection\" CollectionType=\"Temporal\">",
+                which.name()
+            );
+            for (i, &t) in times.iter().enumerate() {
+                let mut g = String::with_capacity(4096);
+                grid(&mut g, &format!("/step_{}", i + 1), Some(t));
+                for line in g.lines() {
+                    let _ = writeln!(out, "  {line}");
+                }
+            }
+            out.push_str("    </Grid>\n");
+        }
     }
     tail(&mut out);
     out
 }
 
-fn head(out: &mut String) {
+/// The XML declaration, a comment with the meaning of the grid's integer fields (if any), the
+/// root and the Domain.
+fn head(out: &mut String, meta: &Meta, which: Grid) {
     out.push_str("<?xml version=\"1.0\" encoding=\"utf-8\"?>\n");
+    let fields: Vec<&FieldMeta> = match which {
+        Grid::Mesh => meta.nodal.iter().chain(&meta.cellwise).collect(),
+        Grid::Contact => meta.contact.iter().collect(),
+    };
+    let coded: Vec<(&str, &str)> = fields
+        .iter()
+        .filter_map(|f| f.codes.as_deref().map(|c| (f.name.as_str(), c)))
+        .collect();
+    if !coded.is_empty() {
+        out.push_str("<!--\n  Integer fields (the attribute 'codes' of their HDF5 datasets says the same):\n");
+        for (name, codes) in coded {
+            // "--" may not appear inside an XML comment
+            let text = codes.replace("--", "- -");
+            let _ = writeln!(out, "  {}: {text}", name.replace("--", "- -"));
+        }
+        out.push_str("-->\n");
+    }
     out.push_str("<Xdmf Version=\"3.0\" xmlns:xi=\"http://www.w3.org/2001/XInclude\">\n");
     out.push_str("  <Domain>\n");
 }
@@ -175,6 +238,22 @@ fn tail(out: &mut String) {
 fn time(out: &mut String, t: Option<f64>) {
     if let Some(t) = t {
         let _ = writeln!(out, "      <Time Value=\"{t:?}\"/>");
+    }
+}
+
+/// The attributes of `fields` (rows of `rows`) under `{at}/NAME`.
+fn field_attributes(
+    out: &mut String,
+    h5: &str,
+    fields: &[FieldMeta],
+    center: &str,
+    at: &str,
+    rows: usize,
+) {
+    for f in fields {
+        let path = format!("{at}/{}", f.name);
+        let float = f.codes.is_none();
+        attribute(out, h5, &f.name, f.ncomp, center, &path, rows, float);
     }
 }
 
@@ -215,35 +294,43 @@ fn mesh_grid(out: &mut String, meta: &Meta, h5: &str, fields: &str, t: Option<f6
         meta.n_cells,
         false,
     );
-    for f in &meta.nodal {
-        let path = format!("{fields}/nodal/{}", f.name);
-        attribute(out, h5, &f.name, f.ncomp, "Node", &path, meta.n_nodes, true);
-    }
-    for f in &meta.cellwise {
-        let path = format!("{fields}/cell/{}", f.name);
-        attribute(out, h5, &f.name, f.ncomp, "Cell", &path, meta.n_cells, true);
-    }
+    let nodal = format!("{fields}/nodal");
+    field_attributes(out, h5, &meta.nodal, "Node", &nodal, meta.n_nodes);
+    let cell = format!("{fields}/cell");
+    field_attributes(out, h5, &meta.cellwise, "Cell", &cell, meta.n_cells);
     out.push_str("    </Grid>\n");
 }
 
-/// Grid "contact": one Polyvertex cell per contact node; its fields under `fields`.
+/// Grid "contact": the contact surface's facets (Polyline of 2 nodes in 2D, Triangle in 3D)
+/// with its nodes' fields under `fields`.
 fn contact_grid(out: &mut String, meta: &Meta, h5: &str, fields: &str, t: Option<f64>) {
-    let k = meta.n_contact;
+    let (k, nf, npe) = (meta.n_contact, meta.n_contact_facets, meta.dim);
+    let topo = if meta.dim == 3 {
+        "Triangle"
+    } else {
+        "Polyline"
+    };
     out.push_str("    <Grid Name=\"contact\" GridType=\"Uniform\">\n");
     time(out, t);
     let _ = writeln!(
         out,
-        "      <Topology TopologyType=\"Polyvertex\" NumberOfElements=\"{k}\" NodesPerElement=\"1\">"
+        "      <Topology TopologyType=\"{topo}\" NumberOfElements=\"{nf}\" NodesPerElement=\"{npe}\">"
     );
-    // K × 1 connectivity 0, 1, …, K−1 (Polyvertex wants an explicit second dimension)
-    data_item(out, h5, "/contact/topology", &format!("{k} 1"), false);
+    data_item(out, h5, "/contact/topology", &dims(nf, npe), false);
     out.push_str("      </Topology>\n");
     geometry(out, h5, "/contact/geometry", k);
     attribute(out, h5, "node_id", 1, "Node", "/contact/node_id", k, false);
-    for f in &meta.contact {
-        let path = format!("{fields}/{}", f.name);
-        attribute(out, h5, &f.name, f.ncomp, "Node", &path, k, true);
-    }
+    attribute(
+        out,
+        h5,
+        "facet_id",
+        1,
+        "Cell",
+        "/contact/facet_id",
+        nf,
+        false,
+    );
+    field_attributes(out, h5, &meta.contact, "Node", fields, k);
     out.push_str("    </Grid>\n");
 }
 
@@ -251,34 +338,31 @@ fn contact_grid(out: &mut String, meta: &Meta, h5: &str, fields: &str, t: Option
 mod tests {
     use super::*;
 
+    fn fm(name: &str, ncomp: usize, codes: Option<&str>) -> FieldMeta {
+        FieldMeta {
+            name: name.into(),
+            ncomp,
+            codes: codes.map(str::to_string),
+        }
+    }
+
     fn meta(n_contact: usize) -> Meta {
         Meta {
             dim: 2,
             n_nodes: 10,
             n_cells: 7,
-            nodal: vec![FieldMeta {
-                name: "displacement".into(),
-                ncomp: 3,
-            }],
+            nodal: vec![fm("displacement", 3, None)],
             cellwise: vec![
-                FieldMeta {
-                    name: "stress".into(),
-                    ncomp: 9,
-                },
-                FieldMeta {
-                    name: "von_mises".into(),
-                    ncomp: 1,
-                },
-                FieldMeta {
-                    name: "strain2".into(),
-                    ncomp: 4,
-                },
+                fm("stress", 9, None),
+                fm("von_mises", 1, None),
+                fm("strain2", 4, None),
             ],
             n_contact,
-            contact: vec![FieldMeta {
-                name: "pressure".into(),
-                ncomp: 1,
-            }],
+            n_contact_facets: n_contact.saturating_sub(1),
+            contact: vec![
+                fm("pressure", 1, None),
+                fm("state", 1, Some("1 in contact, 0 open")),
+            ],
         }
     }
 
@@ -293,7 +377,7 @@ mod tests {
 
     #[test]
     fn mesh_grid_text() {
-        let t = xdmf_text(&meta(0), "solution.h5");
+        let t = xdmf_text(&meta(4), "solution.h5");
         assert!(t.contains("TopologyType=\"Triangle\" NumberOfElements=\"7\""));
         assert!(t.contains("Dimensions=\"7 3\" DataType=\"Int\""));
         assert!(t.contains(">solution.h5:/mesh/topology<"));
@@ -305,8 +389,11 @@ mod tests {
         assert!(t.contains("Dimensions=\"7\" DataType=\"Float\""));
         assert!(t.contains("Name=\"strain2\" AttributeType=\"Matrix\""));
         assert!(t.contains("Dimensions=\"7 4\""));
+        // the mesh alone, whatever the contact: one Uniform grid, no time, no comment
         assert!(!t.contains("contact"));
+        assert!(!t.contains("<Time") && !t.contains("<!--"));
         assert_eq!(t.matches("<Grid ").count(), 1);
+        assert!(t.contains("<Grid Name=\"mesh\" GridType=\"Uniform\">"));
         assert_eq!(
             t.matches("<Attribute ").count(),
             t.matches("</Attribute>").count()
@@ -315,58 +402,75 @@ mod tests {
 
     #[test]
     fn contact_grid_text() {
+        assert!(contact_xdmf_text(&meta(0), "solution.h5").is_none());
+        let t = contact_xdmf_text(&meta(4), "solution.h5").unwrap();
+        assert_eq!(t.matches("<Grid ").count(), 1);
+        assert!(t.contains("<Grid Name=\"contact\" GridType=\"Uniform\">"));
+        assert!(
+            t.contains("TopologyType=\"Polyline\" NumberOfElements=\"3\" NodesPerElement=\"2\"")
+        );
+        assert!(t.contains("Dimensions=\"3 2\" DataType=\"Int\" Precision=\"8\" Format=\"HDF\">solution.h5:/contact/topology<"));
+        assert!(t.contains("Dimensions=\"4 3\" DataType=\"Float\" Precision=\"8\" Format=\"HDF\">solution.h5:/contact/geometry<"));
+        assert!(t.contains("Dimensions=\"4\" DataType=\"Float\" Precision=\"8\" Format=\"HDF\">solution.h5:/contact/pressure<"));
+        assert!(t.contains("Dimensions=\"4\" DataType=\"Int\" Precision=\"8\" Format=\"HDF\">solution.h5:/contact/state<"));
+        assert!(t.contains("Name=\"facet_id\" AttributeType=\"Scalar\" Center=\"Cell\""));
+        assert!(t.contains(">solution.h5:/contact/facet_id<"));
+        assert!(!t.contains("mesh"));
+        // the codes in a comment before the root element
+        let c = t.find("<!--").unwrap();
+        assert!(c < t.find("<Xdmf").unwrap());
+        assert!(t.contains("  state: 1 in contact, 0 open\n"));
+        // 3D: triangles
         let mut m = meta(4);
         m.dim = 3;
-        let t = xdmf_text(&m, "solution.h5");
-        assert!(t.contains("TopologyType=\"Tetrahedron\""));
-        assert!(t.contains("Dimensions=\"7 4\" DataType=\"Int\""));
-        assert_eq!(t.matches("<Grid ").count(), 2);
-        assert!(t.contains("<Grid Name=\"contact\""));
+        let t = contact_xdmf_text(&m, "solution.h5").unwrap();
         assert!(
-            t.contains("TopologyType=\"Polyvertex\" NumberOfElements=\"4\" NodesPerElement=\"1\"")
+            t.contains("TopologyType=\"Triangle\" NumberOfElements=\"3\" NodesPerElement=\"3\"")
         );
-        assert!(t.contains("Dimensions=\"4 1\" DataType=\"Int\" Precision=\"8\" Format=\"HDF\">solution.h5:/contact/topology<"));
-        assert!(t.contains(">solution.h5:/contact/geometry<"));
-        assert!(t.contains(">solution.h5:/contact/pressure<"));
-        // the contact grid comes after the mesh grid and both sit in the one Domain
-        let mesh = t.find("Name=\"mesh\"").unwrap();
-        let contact = t.find("Name=\"contact\"").unwrap();
-        assert!(mesh < contact && contact < t.find("</Domain>").unwrap());
+        assert!(t.contains("Dimensions=\"3 3\" DataType=\"Int\""));
     }
 
     #[test]
     fn series_text() {
-        let t = xdmf_series_text(&meta(4), "solution.h5", &[0.25, 0.5, 1.0]);
-        assert_eq!(
-            t.matches("GridType=\"Collection\" CollectionType=\"Temporal\"")
-                .count(),
-            2
-        );
-        assert_eq!(
-            t.matches("<Grid Name=\"mesh\" GridType=\"Uniform\"")
-                .count(),
-            3
-        );
-        assert_eq!(
-            t.matches("<Grid Name=\"contact\" GridType=\"Uniform\"")
-                .count(),
-            3
-        );
-        for (s, v) in [(1, "0.25"), (2, "0.5"), (3, "1.0")] {
-            assert_eq!(t.matches(&format!("<Time Value=\"{v}\"/>")).count(), 2);
+        let times = [0.25, 0.5, 1.0];
+        let t = xdmf_series_text(&meta(4), "solution.h5", &times);
+        let c = contact_series_text(&meta(4), "solution.h5", &times).unwrap();
+        for (doc, name) in [(&t, "mesh"), (&c, "contact")] {
+            assert_eq!(
+                doc.matches("GridType=\"Collection\" CollectionType=\"Temporal\"")
+                    .count(),
+                1
+            );
+            assert!(doc.contains(&format!(
+                "<Grid Name=\"{name}\" GridType=\"Collection\" CollectionType=\"Temporal\">"
+            )));
+            assert_eq!(
+                doc.matches(&format!("<Grid Name=\"{name}\" GridType=\"Uniform\""))
+                    .count(),
+                3
+            );
+            assert_eq!(doc.matches("<Grid ").count(), 4);
+            assert_eq!(
+                doc.matches("<Grid ").count(),
+                doc.matches("</Grid>").count()
+            );
+            for v in ["0.25", "0.5", "1.0"] {
+                assert_eq!(doc.matches(&format!("<Time Value=\"{v}\"/>")).count(), 1);
+            }
+        }
+        for s in 1..=3 {
             assert!(t.contains(&format!(">solution.h5:/step_{s}/nodal/displacement<")));
             assert!(t.contains(&format!(">solution.h5:/step_{s}/cell/stress<")));
-            assert!(t.contains(&format!(">solution.h5:/step_{s}/contact/pressure<")));
+            assert!(c.contains(&format!(">solution.h5:/step_{s}/contact/pressure<")));
+            assert!(c.contains(&format!(">solution.h5:/step_{s}/contact/state<")));
         }
-        // the mesh and the contact geometry once in the file, referenced by every step
+        // the mesh and the contact surface once in the file, referenced by every step
         assert_eq!(t.matches(">solution.h5:/mesh/geometry<").count(), 3);
-        assert_eq!(t.matches(">solution.h5:/contact/geometry<").count(), 3);
-        assert!(!t.contains(">solution.h5:/nodal/"));
-        assert_eq!(t.matches("<Grid ").count(), t.matches("</Grid>").count());
-        // without contact nodes one collection
-        let t = xdmf_series_text(&meta(0), "solution.h5", &[1.0]);
-        assert_eq!(t.matches("CollectionType=\"Temporal\"").count(), 1);
-        assert!(!t.contains("contact"));
+        assert_eq!(c.matches(">solution.h5:/contact/geometry<").count(), 3);
+        assert_eq!(c.matches(">solution.h5:/contact/topology<").count(), 3);
+        assert!(!t.contains(">solution.h5:/nodal/") && !t.contains("contact"));
+        // without contact nodes no contact file
+        assert!(contact_series_text(&meta(0), "solution.h5", &[1.0]).is_none());
     }
 
     #[test]
@@ -375,6 +479,12 @@ mod tests {
         let mut b = meta(0);
         b.nodal[0].ncomp = 2;
         assert_ne!(a.signature(), b.signature());
+        let mut c = meta(0);
+        c.nodal[0].codes = Some("x".into());
+        assert_ne!(a.signature(), c.signature());
+        let mut d = meta(0);
+        d.n_contact_facets = 9;
+        assert_ne!(a.signature(), d.signature());
         assert_eq!(a.signature(), meta(0).signature());
     }
 }

@@ -439,7 +439,14 @@ pub fn solve(
         None => None,
     };
     Ok(ContactSolution {
-        result: report::contact_result(&b, &nr.nodes, dim, friction, &table),
+        result: report::contact_result(
+            ctx,
+            (mesh, layout, settings),
+            &b,
+            &nr.nodes,
+            friction,
+            &table,
+        ),
         u: nr.u,
         report: ContactReport {
             newton,

@@ -1,12 +1,14 @@
 //! Contact results: per-node fields (output), the gathered table (contact_nodes.csv), the
 //! summary numbers (pressure, total force, half width) and the KKT certificate of (3.14).
 
-use super::boundary::{ContactBoundary, NodeResult};
+use super::boundary::{ContactBoundary, ContactNode, NodeResult};
 use crate::contact::Obstacle;
+use crate::mesh::Mesh;
 use crate::output::{ContactResult, FieldBuf};
 use crate::par::Ctx;
+use crate::partition::Layout;
 use crate::say;
-use crate::setup::ContactSettings;
+use crate::setup::{self, ContactSettings};
 use serde::Serialize;
 
 /// Columns of one gathered contact-node row.
@@ -21,75 +23,205 @@ pub fn pressure(lambda_n: f64, weight: f64) -> f64 {
     }
 }
 
-/// The contact grid of this rank's contact nodes (for the XDMF "contact" grid); with friction
-/// also the tangential state, |λ_τ| / b_k and the slip displacement.
+/// What the contact field `state` holds (docs/output.md; the `codes` attribute of its dataset).
+pub const STATE_CODES: &str = "1 in contact (in the active set); 0 open (not in contact); -1 not \
+     a contact node (a node of the contact surface whose displacement Dirichlet data prescribe: \
+     no contact unknowns, its float fields are NaN)";
+/// What the contact field `slip_state` holds (friction only).
+pub const SLIP_STATE_CODES: &str = "0 stick, 1 slip (nodes in contact, state 1); -1 no \
+     tangential state (open nodes and nodes that are not contact nodes, state 0 or -1)";
+/// What the contact field `pair` holds (several contact pairs only).
+pub const PAIR_CODES: &str = "the node's contact pair: 1, 2, ... in the order of the case's \
+     contact tables (contact[0] is 1); 0 not a contact node";
+
+/// The contact surface of this rank: the mesh nodes on the facets of the contact groups that
+/// it owns, numbered globally and contiguously by rank (in the order of the global node
+/// numbers), and the facets it writes (each by the owner of its node with the smallest global
+/// number, who holds every facet at its nodes).
+pub struct Surface {
+    pub n_global: usize,
+    pub offset: usize,
+    /// Mesh indices of the owned surface nodes, in owned (global) order.
+    pub nodes: Vec<usize>,
+    pub n_facets_global: usize,
+    pub facet_offset: usize,
+    /// `dim` global surface node numbers per owned facet.
+    pub facets: Vec<usize>,
+    /// Gmsh element tag of each owned facet.
+    pub facet_ids: Vec<u64>,
+}
+
+/// The contact surface of `groups` (the pairs' groups); `on` marks the mesh nodes on their
+/// facets. Collective.
+pub fn surface(ctx: &Ctx, mesh: &Mesh, layout: &Layout, groups: &[&str], on: &[bool]) -> Surface {
+    let nodes: Vec<usize> = layout
+        .owned_nodes
+        .iter()
+        .copied()
+        .filter(|&v| on[v])
+        .collect();
+    let mine: Vec<u64> = nodes
+        .iter()
+        .map(|&v| layout.node_global[v] as u64)
+        .collect();
+    // every surface node's global node number, ascending (ranks own ascending blocks)
+    let all = ctx.all_gather_varcount(&mine);
+    let counts: Vec<u64> = ctx.gather(nodes.len() as u64);
+    let offset = counts[..ctx.rank].iter().sum::<u64>() as usize;
+    let mut owned: Vec<usize> = groups
+        .iter()
+        .flat_map(|g| setup::group_facets(mesh, g))
+        .filter(|&f| {
+            let first = mesh
+                .facet(f)
+                .iter()
+                .min_by_key(|&&v| layout.node_global[v])
+                .expect("a facet has nodes");
+            layout.owns_node(*first)
+        })
+        .collect();
+    owned.sort_unstable();
+    owned.dedup();
+    let mut facets = Vec::with_capacity(owned.len() * mesh.dim);
+    for &f in &owned {
+        for &v in mesh.facet(f) {
+            let g = layout.node_global[v] as u64;
+            let k = all
+                .binary_search(&g)
+                .expect("a facet's nodes are on the contact surface of their owner");
+            facets.push(k);
+        }
+    }
+    let facet_counts: Vec<u64> = ctx.gather(owned.len() as u64);
+    Surface {
+        n_global: all.len(),
+        offset,
+        nodes,
+        n_facets_global: facet_counts.iter().sum::<u64>() as usize,
+        facet_offset: facet_counts[..ctx.rank].iter().sum::<u64>() as usize,
+        facets,
+        facet_ids: owned.iter().map(|&f| mesh.facet_tags[f]).collect(),
+    }
+}
+
+/// The fields of this rank's contact surface nodes (`nodes`, mesh indices in owned order; the
+/// contact nodes `b.nodes` are among them, in the same order): the normal and tangential
+/// values, pressure, gap, the state codes ([`STATE_CODES`]); with several pairs the pair; with
+/// friction the tangential state ([`SLIP_STATE_CODES`]), |λ_τ| / b_k (on nodes in contact; 0
+/// on open ones) and the slip displacement (u_τ on slip nodes, else 0). A surface node that is
+/// not a contact node has NaN in every float field and the code −1 (0 for `pair`).
 pub fn fields(
     b: &ContactBoundary,
     res: &[NodeResult],
+    nodes: &[usize],
     dim: usize,
     friction: bool,
 ) -> Vec<FieldBuf> {
     let nt = dim - 1;
-    let per_node =
-        |name: &'static str,
-         ncomp: usize,
-         f: &dyn Fn(&super::boundary::ContactNode, &NodeResult) -> Vec<f64>| {
-            FieldBuf {
-                name,
-                ncomp,
-                data: b.nodes.iter().zip(res).flat_map(|(k, r)| f(k, r)).collect(),
-            }
+    // per surface node its contact node, if it is one
+    let mut of: Vec<Option<(&ContactNode, &NodeResult)>> = Vec::with_capacity(nodes.len());
+    let mut j = 0;
+    for &v in nodes {
+        if j < b.nodes.len() && b.nodes[j].node == v {
+            of.push(Some((&b.nodes[j], &res[j])));
+            j += 1;
+        } else {
+            of.push(None);
+        }
+    }
+    debug_assert_eq!(j, b.nodes.len(), "every contact node is a surface node");
+    let float =
+        |name: &'static str, ncomp: usize, f: &dyn Fn(&ContactNode, &NodeResult) -> Vec<f64>| {
+            let data = of
+                .iter()
+                .flat_map(|o| match o {
+                    Some((k, r)) => f(k, r),
+                    None => vec![f64::NAN; ncomp],
+                })
+                .collect();
+            FieldBuf::float(name, ncomp, data)
         };
+    let coded = |name: &'static str,
+                 codes: &'static str,
+                 none: f64,
+                 f: &dyn Fn(&ContactNode, &NodeResult) -> f64| FieldBuf {
+        name,
+        ncomp: 1,
+        data: of
+            .iter()
+            .map(|o| o.map_or(none, |(k, r)| f(k, r)))
+            .collect(),
+        codes: Some(codes),
+    };
     let mut out = vec![
-        per_node("u_n", 1, &|_, r| vec![r.u_n]),
-        per_node("u_t", nt, &|_, r| r.u_t[..nt].to_vec()),
-        per_node("lambda_n", 1, &|_, r| vec![r.lambda_n]),
-        per_node("lambda_t", nt, &|_, r| r.lambda_t[..nt].to_vec()),
-        per_node("pressure", 1, &|k, r| vec![pressure(r.lambda_n, k.weight)]),
-        per_node("gap", 1, &|k, r| vec![r.u_n + k.gap]),
-        per_node("gap0", 1, &|k, _| vec![k.gap]),
-        per_node("state", 1, &|_, r| vec![if r.active { 1.0 } else { 0.0 }]),
-        per_node("weight", 1, &|k, _| vec![k.weight]),
-        per_node("contact_force", 3, &|_, r| {
+        float("u_n", 1, &|_, r| vec![r.u_n]),
+        float("u_t", nt, &|_, r| r.u_t[..nt].to_vec()),
+        float("lambda_n", 1, &|_, r| vec![r.lambda_n]),
+        float("lambda_t", nt, &|_, r| r.lambda_t[..nt].to_vec()),
+        float("pressure", 1, &|k, r| vec![pressure(r.lambda_n, k.weight)]),
+        float("gap", 1, &|k, r| vec![r.u_n + k.gap]),
+        float("gap0", 1, &|k, _| vec![k.gap]),
+        coded("state", STATE_CODES, -1.0, &|_, r| {
+            f64::from(u8::from(r.active))
+        }),
+        float("weight", 1, &|k, _| vec![k.weight]),
+        float("contact_force", 3, &|_, r| {
             r.lambda.iter().map(|l| -l).collect()
         }),
     ];
     if b.n_pairs() > 1 {
         // the node's pair, its index from 1 (docs/obstacles.md, "Several contact pairs")
-        out.push(per_node("pair", 1, &|k, _| vec![(k.pair + 1) as f64]));
+        out.push(coded("pair", PAIR_CODES, 0.0, &|k, _| (k.pair + 1) as f64));
     }
     if friction {
-        // Tangential state (0 stick, 1 slip), |λ_τ| / b_k, slip displacement (u_τ on slip nodes).
-        out.push(per_node("slip_state", 1, &|_, r| {
-            vec![if r.slip { 1.0 } else { 0.0 }]
+        let slipping = |r: &NodeResult| r.active && r.slip;
+        out.push(coded("slip_state", SLIP_STATE_CODES, -1.0, &|_, r| {
+            if !r.active {
+                -1.0
+            } else {
+                f64::from(u8::from(r.slip))
+            }
         }));
-        out.push(per_node("friction_ratio", 1, &|k, r| {
-            let lt = (r.lambda_t[0].powi(2) + r.lambda_t[1].powi(2)).sqrt();
-            vec![if k.bound > 0.0 { lt / k.bound } else { 0.0 }]
+        // |λ_τ| / b_k where the node is in contact; on an open node both are round-off
+        out.push(float("friction_ratio", 1, &|k, r| {
+            let lt = r.lambda_t[0].hypot(r.lambda_t[1]);
+            vec![if r.active && k.bound > 0.0 {
+                lt / k.bound
+            } else {
+                0.0
+            }]
         }));
-        out.push(per_node("slip", nt, &|_, r| {
+        out.push(float("slip", nt, &|_, r| {
             (0..nt)
-                .map(|i| if r.slip { r.u_t[i] } else { 0.0 })
+                .map(|i| if slipping(r) { r.u_t[i] } else { 0.0 })
                 .collect()
         }));
     }
     out
 }
 
-/// The contact result set of this rank for the output layer: grid, fields, the whole table.
+/// The contact result of this rank for the output layer: the contact surface of the pairs'
+/// groups, the fields on its nodes, the whole table. Collective.
 pub fn contact_result(
+    ctx: &Ctx,
+    (mesh, layout, settings): (&Mesh, &Layout, &ContactSettings),
     b: &ContactBoundary,
     res: &[NodeResult],
-    dim: usize,
     friction: bool,
     table: &Table,
 ) -> ContactResult {
+    let groups: Vec<&str> = settings.pairs.iter().map(|p| p.group.as_str()).collect();
+    let s = surface(ctx, mesh, layout, &groups, &b.on_contact_boundary);
     ContactResult {
-        n_global: b.n_global,
-        offset: b.offset,
-        coords: b.nodes.iter().map(|k| k.x).collect(),
-        node_ids: b.nodes.iter().map(|k| k.tag).collect(),
-        fields: fields(b, res, dim, friction),
+        n_global: s.n_global,
+        offset: s.offset,
+        coords: s.nodes.iter().map(|&v| mesh.coords[v]).collect(),
+        node_ids: s.nodes.iter().map(|&v| mesh.node_tags[v]).collect(),
+        fields: fields(b, res, &s.nodes, mesh.dim, friction),
+        n_facets_global: s.n_facets_global,
+        facet_offset: s.facet_offset,
+        facets: s.facets,
+        facet_ids: s.facet_ids,
         csv: table.csv(),
     }
 }

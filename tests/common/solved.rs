@@ -207,14 +207,16 @@ print("RESULT " + json.dumps({"ids": ids, "u": u}))
 }
 
 /// Contact force −λ^k in global coordinates (solution.h5 /contact/contact_force), by
-/// node id, the first `dim` components.
+/// node id, the first `dim` components; the contact nodes only (the surface's nodes held by
+/// Dirichlet data, state −1, have none).
 pub fn contact_forces(s: &Solved, dim: usize) -> BTreeMap<u64, Vec<f64>> {
     let v = python_json(
         r#"
 import sys, json, h5py
 f = h5py.File(sys.argv[1], "r")
-print("RESULT " + json.dumps({"ids": f["contact/node_id"][:].tolist(),
-                          "force": f["contact/contact_force"][:].tolist()}))
+keep = f["contact/state"][:] != -1
+print("RESULT " + json.dumps({"ids": f["contact/node_id"][:][keep].tolist(),
+                          "force": f["contact/contact_force"][:][keep].tolist()}))
 "#,
         &[&s.dir.join("solution.h5")],
     );

@@ -10,6 +10,7 @@ use crate::mesh::Mesh;
 use crate::par::Ctx;
 use crate::partition::Layout;
 use crate::setup::{group_facets, ContactSettings};
+use crate::warnings::{self, Place, Warning};
 
 /// One owned contact node.
 #[derive(Clone, Debug)]
@@ -137,13 +138,16 @@ pub const DEEP_START_FRACTION: f64 = 0.1;
 
 /// The deepest initial penetration over every rank's contact nodes against
 /// [`DEEP_START_FRACTION`] of the body's size: an input error naming `contact.obstacle`, with
-/// the node and the likely mistake. Collective.
+/// the node and the likely mistake. A start deeper than
+/// [`warnings::START_INSIDE_FRACTION`] of the body's size but within the error's limit is a
+/// warning (the list returned). Collective.
 fn check_depth(
     ctx: &Ctx,
     mesh: &Mesh,
     nodes: &[ContactNode],
     settings: &ContactSettings,
-) -> Result<(), RunError> {
+) -> Result<Vec<Warning>, RunError> {
+    let mut list = Vec::new();
     for (p, pair) in settings.pairs.iter().enumerate() {
         let deepest = nodes
             .iter()
@@ -152,7 +156,7 @@ fn check_depth(
         let local = deepest.map_or(f64::INFINITY, |k| k.gap);
         let min_gap = ctx.min_f64(local);
         let size = mesh.extent();
-        if min_gap.is_nan() || min_gap >= -DEEP_START_FRACTION * size {
+        if min_gap.is_nan() || min_gap >= -warnings::START_INSIDE_FRACTION * size {
             continue;
         }
         // The rank holding the deepest node (the smallest tag among equal gaps) names it.
@@ -170,6 +174,35 @@ fn check_depth(
         } else {
             "is the obstacle placed where it should be (units, origin, the sign of a coordinate)?"
         };
+        if min_gap >= -DEEP_START_FRACTION * size {
+            let mine = of_pair().find(|k| k.tag == tag).map_or([0.0; 3], |k| k.x);
+            let x = ctx.sum_vec(&mine)[..mesh.dim].to_vec();
+            list.push(Warning {
+                code: warnings::START_INSIDE,
+                message: format!(
+                    "{}: the body starts {:.4e} inside the obstacle (contact node {tag} at {}; \
+                     {penetrating} of {total} contact nodes inside), {:.2} % of the body's size \
+                     {size:.4e} (warned above {} %): {hint} (key '{}')",
+                    pair.key,
+                    -min_gap,
+                    warnings::coords(&x),
+                    -100.0 * min_gap / size,
+                    100.0 * warnings::START_INSIDE_FRACTION,
+                    pair.key("obstacle")
+                ),
+                key: Some(pair.key("obstacle")),
+                pair: Some(pair.key.clone()),
+                value: -min_gap / size,
+                threshold: warnings::START_INSIDE_FRACTION,
+                at: Some(Place {
+                    node: Some(tag),
+                    cell: None,
+                    x,
+                }),
+                steps: Vec::new(),
+            });
+            continue;
+        }
         return Err(RunError::Input(
             InputError::new(
                 &settings.file,
@@ -186,7 +219,7 @@ fn check_depth(
             .with_key(pair.key("obstacle")),
         ));
     }
-    Ok(())
+    Ok(list)
 }
 
 /// The contact boundary of every pair: per mesh node its lumped weight w_k and its pair; a
@@ -238,13 +271,14 @@ fn pair_nodes(
     (weight, pair_of, clash)
 }
 
+/// The contact boundary and the warnings of its start ([`check_depth`]). Collective.
 pub fn build(
     ctx: &Ctx,
     mesh: &Mesh,
     layout: &Layout,
     settings: &ContactSettings,
     fixed: &[f64],
-) -> Result<ContactBoundary, RunError> {
+) -> Result<(ContactBoundary, Vec<Warning>), RunError> {
     let dim = mesh.dim;
     let file = settings.file.as_path();
     let (weight, pair_of, clash) = pair_nodes(mesh, settings);
@@ -304,9 +338,9 @@ pub fn build(
     let counts: Vec<u64> = ctx.gather(nodes.len() as u64);
     let ex_all = ctx.sum_usize(excluded);
     ctx.agree(bad.map_or(Ok(()), |e| Err(RunError::Input(e))))?;
-    check_depth(ctx, mesh, &nodes, settings)?;
+    let warned = check_depth(ctx, mesh, &nodes, settings)?;
     move_obstacles(&mut nodes, &settings.displacements(), settings.friction());
-    Ok(ContactBoundary {
+    let b = ContactBoundary {
         n_global: counts.iter().sum::<u64>() as usize,
         offset: counts[..ctx.rank].iter().sum::<u64>() as usize,
         nodes,
@@ -318,7 +352,8 @@ pub fn build(
             pairs: settings.pairs.iter().map(|p| p.key.clone()).collect(),
             solver: String::new(),
         },
-    })
+    };
+    Ok((b, warned))
 }
 
 /// Each pair's obstacle translated by its d (`d[pair]`; docs/obstacles.md, "Moving obstacles"): the node's

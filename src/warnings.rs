@@ -28,6 +28,11 @@ pub const START_INSIDE_FRACTION: f64 = 1e-3;
 /// case's contact zone while its largest strain stays below 0.05 (docs/warnings.md).
 pub const LARGE_STRAIN: f64 = 0.05;
 
+/// A strain counts as above [`LARGE_STRAIN`] from (1 + this) times it on: a strain of 0.05
+/// itself (the uniaxial strain p / E of cases/blocks/block2d.toml in plane stress and of
+/// block3d.toml, p = E / 20) is not warned about, whatever its round-off.
+pub const STRAIN_RTOL: f64 = 1e-6;
+
 /// A pair's contact force is warned about when the part of it that pulls the body's surface
 /// outward exceeds this fraction of its normal part.
 pub const PULL_FRACTION: f64 = 0.1;

@@ -24,46 +24,46 @@ fn text<'a>(w: &'a Value, key: &str) -> &'a str {
     w.get(key).and_then(Value::as_str).unwrap_or("")
 }
 
-/// Solves `case` on 1, 2 and 3 ranks; each run exits 0 with exactly one warning of `code`,
-/// logged on one `warning:` line, naming `key`; returns the runs' warnings. The same code,
-/// key, pair and (to 1e-6) value on every rank count.
+/// Solves `case` on 1, 2 and 3 ranks; each run exits 0 with the warnings `codes` (in order),
+/// each logged on one `warning:` line; returns each run's warning of `codes[0]`, which names
+/// `key`. The same codes, keys, pairs and (to 1e-6) values on every rank count.
 fn warned_alike(
     case: &std::path::Path,
     sets: &[&str],
-    code: &str,
+    codes: &[&str],
     key: Option<&str>,
 ) -> Vec<Value> {
-    let mut seen = Vec::new();
+    let mut runs: Vec<Vec<Value>> = Vec::new();
     for np in [1, 2, 3] {
         let s = solve(np, case, sets);
         let list = warnings(&s);
-        assert_eq!(list.len(), 1, "{np} ranks: {list:#?}\n{}", s.run.output());
-        let w = list[0].clone();
-        assert_eq!(text(&w, "code"), code, "{w:#?}");
-        assert_eq!(w.get("key").and_then(Value::as_str), key, "{w:#?}");
+        let got: Vec<&str> = list.iter().map(|w| text(w, "code")).collect();
+        assert_eq!(got, codes, "{np} ranks: {list:#?}\n{}", s.run.output());
         let lines: Vec<&str> = (s.run.stdout.lines())
             .filter(|l| l.starts_with("warning:"))
             .collect();
-        assert_eq!(lines.len(), 1, "{}", s.run.output());
-        assert!(lines[0].contains(text(&w, "message")), "{}", lines[0]);
-        let (value, threshold) = (
-            w["value"].as_f64().unwrap(),
-            w["threshold"].as_f64().unwrap(),
-        );
-        assert!(value > threshold, "{w:#?}");
-        seen.push(w);
-    }
-    for w in &seen[1..] {
-        for k in ["code", "key", "pair"] {
-            assert_eq!(w.get(k), seen[0].get(k), "{seen:#?}");
+        assert_eq!(lines.len(), list.len(), "{}", s.run.output());
+        for (w, line) in list.iter().zip(&lines) {
+            assert!(line.contains(text(w, "message")), "{line}");
+            let (value, threshold) = (
+                w["value"].as_f64().unwrap(),
+                w["threshold"].as_f64().unwrap(),
+            );
+            assert!(value > threshold, "{w:#?}");
         }
-        let (a, b) = (
-            w["value"].as_f64().unwrap(),
-            seen[0]["value"].as_f64().unwrap(),
-        );
-        assert!((a - b).abs() <= 1e-6 * b.abs(), "{seen:#?}");
+        assert_eq!(list[0].get("key").and_then(Value::as_str), key, "{list:#?}");
+        runs.push(list);
     }
-    seen
+    for list in &runs[1..] {
+        for (w, w0) in list.iter().zip(&runs[0]) {
+            for k in ["code", "key", "pair"] {
+                assert_eq!(w.get(k), w0.get(k), "{runs:#?}");
+            }
+            let (a, b) = (w["value"].as_f64().unwrap(), w0["value"].as_f64().unwrap());
+            assert!((a - b).abs() <= 1e-6 * b.abs(), "{runs:#?}");
+        }
+    }
+    runs.into_iter().map(|mut l| l.remove(0)).collect()
 }
 
 #[test]
@@ -72,7 +72,7 @@ fn a_pressed_plate_that_touches_nothing_is_warned_about() {
     let seen = warned_alike(
         &warnings_case("plate_pressed.toml"),
         &[],
-        "pressed_without_contact",
+        &["pressed_without_contact"],
         Some("contact.obstacle"),
     );
     for w in &seen {
@@ -89,7 +89,7 @@ fn a_contact_force_that_lifts_the_surface_is_warned_about() {
     let seen = warned_alike(
         &warnings_case("plate_pulling.toml"),
         &[],
-        "pulling_contact_force",
+        &["pulling_contact_force"],
         Some("contact.obstacle"),
     );
     // every active node pulls: the whole normal force
@@ -100,17 +100,40 @@ fn a_contact_force_that_lifts_the_surface_is_warned_about() {
 }
 
 #[test]
-fn a_start_inside_the_obstacle_is_warned_about() {
+fn a_start_on_the_obstacles_far_side_is_warned_about() {
+    // the plate, normal the wrong way, 0.005 inside: the top face is lifted as well
     let seen = warned_alike(
         &warnings_case("plate_inside.toml"),
         &[],
-        "start_inside_obstacle",
+        &["start_inside_obstacle", "pulling_contact_force"],
         Some("contact.obstacle"),
     );
-    // 0.005 of the block's size 2
+    // 0.005 of the block's size 2, on the far side
     for w in &seen {
         let v = w["value"].as_f64().unwrap();
         assert!((v - 0.0025).abs() < 1e-9, "{w:#?}");
+        assert!(text(w, "message").contains("far side"), "{w:#?}");
+    }
+}
+
+#[test]
+fn a_start_deeper_than_a_small_overlap_is_warned_about() {
+    // cases/blocks/indent2d.toml (the ball 0.01 into the block: an overlap that prescribes
+    // the indentation, no warning) with the ball 0.06 into it, 3 % of the block's size 2
+    let ball = "contact.obstacle={type=\"sphere\",center=[0.0,1.44],radius=0.5}";
+    let case = repo("cases/blocks/indent2d.toml");
+    let quiet = solve(1, &case, &[]);
+    assert!(warnings(&quiet).is_empty(), "{}", quiet.run.output());
+    let seen = warned_alike(
+        &case,
+        &[ball],
+        &["start_inside_obstacle", "large_deformation"],
+        Some("contact.obstacle"),
+    );
+    for w in &seen {
+        let v = w["value"].as_f64().unwrap();
+        assert!((v - 0.03).abs() < 1e-9, "{w:#?}");
+        assert!(text(w, "message").contains("small overlap"), "{w:#?}");
     }
 }
 
@@ -120,7 +143,7 @@ fn a_strain_beyond_small_deformations_is_warned_about() {
     let seen = warned_alike(
         &repo("cases/blocks/block2d.toml"),
         &["neumann.0.pressure=10.0"],
-        "large_deformation",
+        &["large_deformation"],
         None,
     );
     for w in &seen {

@@ -10,7 +10,7 @@ use crate::mesh::Mesh;
 use crate::par::Ctx;
 use crate::partition::Layout;
 use crate::setup::{group_facets, ContactSettings};
-use crate::warnings::{self, Place, Warning};
+use crate::warnings::Warning;
 
 /// One owned contact node.
 #[derive(Clone, Debug)]
@@ -138,16 +138,13 @@ pub const DEEP_START_FRACTION: f64 = 0.1;
 
 /// The deepest initial penetration over every rank's contact nodes against
 /// [`DEEP_START_FRACTION`] of the body's size: an input error naming `contact.obstacle`, with
-/// the node and the likely mistake. A start deeper than
-/// [`warnings::START_INSIDE_FRACTION`] of the body's size but within the error's limit is a
-/// warning (the list returned). Collective.
+/// the node and the likely mistake. Collective.
 fn check_depth(
     ctx: &Ctx,
     mesh: &Mesh,
     nodes: &[ContactNode],
     settings: &ContactSettings,
-) -> Result<Vec<Warning>, RunError> {
-    let mut list = Vec::new();
+) -> Result<(), RunError> {
     for (p, pair) in settings.pairs.iter().enumerate() {
         let deepest = nodes
             .iter()
@@ -156,7 +153,7 @@ fn check_depth(
         let local = deepest.map_or(f64::INFINITY, |k| k.gap);
         let min_gap = ctx.min_f64(local);
         let size = mesh.extent();
-        if min_gap.is_nan() || min_gap >= -warnings::START_INSIDE_FRACTION * size {
+        if min_gap.is_nan() || min_gap >= -DEEP_START_FRACTION * size {
             continue;
         }
         // The rank holding the deepest node (the smallest tag among equal gaps) names it.
@@ -174,35 +171,6 @@ fn check_depth(
         } else {
             "is the obstacle placed where it should be (units, origin, the sign of a coordinate)?"
         };
-        if min_gap >= -DEEP_START_FRACTION * size {
-            let mine = of_pair().find(|k| k.tag == tag).map_or([0.0; 3], |k| k.x);
-            let x = ctx.sum_vec(&mine)[..mesh.dim].to_vec();
-            list.push(Warning {
-                code: warnings::START_INSIDE,
-                message: format!(
-                    "{}: the body starts {:.4e} inside the obstacle (contact node {tag} at {}; \
-                     {penetrating} of {total} contact nodes inside), {:.2} % of the body's size \
-                     {size:.4e} (warned above {} %): {hint} (key '{}')",
-                    pair.key,
-                    -min_gap,
-                    warnings::coords(&x),
-                    -100.0 * min_gap / size,
-                    100.0 * warnings::START_INSIDE_FRACTION,
-                    pair.key("obstacle")
-                ),
-                key: Some(pair.key("obstacle")),
-                pair: Some(pair.key.clone()),
-                value: -min_gap / size,
-                threshold: warnings::START_INSIDE_FRACTION,
-                at: Some(Place {
-                    node: Some(tag),
-                    cell: None,
-                    x,
-                }),
-                steps: Vec::new(),
-            });
-            continue;
-        }
         return Err(RunError::Input(
             InputError::new(
                 &settings.file,
@@ -219,7 +187,7 @@ fn check_depth(
             .with_key(pair.key("obstacle")),
         ));
     }
-    Ok(list)
+    Ok(())
 }
 
 /// The contact boundary of every pair: per mesh node its lumped weight w_k and its pair; a
@@ -271,7 +239,8 @@ fn pair_nodes(
     (weight, pair_of, clash)
 }
 
-/// The contact boundary and the warnings of its start ([`check_depth`]). Collective.
+/// The contact boundary and the warnings of its start ([`super::warn::start_warnings`]).
+/// Collective.
 pub fn build(
     ctx: &Ctx,
     mesh: &Mesh,
@@ -338,7 +307,8 @@ pub fn build(
     let counts: Vec<u64> = ctx.gather(nodes.len() as u64);
     let ex_all = ctx.sum_usize(excluded);
     ctx.agree(bad.map_or(Ok(()), |e| Err(RunError::Input(e))))?;
-    let warned = check_depth(ctx, mesh, &nodes, settings)?;
+    check_depth(ctx, mesh, &nodes, settings)?;
+    let warned = super::warn::start_warnings(ctx, (mesh, layout, settings), &nodes);
     move_obstacles(&mut nodes, &settings.displacements(), settings.friction());
     let b = ContactBoundary {
         n_global: counts.iter().sum::<u64>() as usize,

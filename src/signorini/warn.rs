@@ -5,7 +5,7 @@
 //! from their cells): a normal given the wrong way round makes them point the same way.
 //! One pass over the contact facets and one gather of a few numbers per pair and rank.
 
-use super::boundary::{ContactBoundary, NodeResult};
+use super::boundary::{ContactBoundary, ContactNode, NodeResult};
 use crate::assembly::{facet_cell, outward_normal};
 use crate::geom::dot;
 use crate::mesh::Mesh;
@@ -25,21 +25,16 @@ const FACING: f64 = 0.5;
 const CROSSED_RTOL: f64 = 1e-9;
 
 /// The unit outward normal of the body at every owned contact node (in the order of
-/// `b.nodes`): the measure-weighted mean of its contact facets' outward normals; zero where
+/// `nodes`): the measure-weighted mean of its contact facets' outward normals; zero where
 /// none is found. Local.
 pub fn outward_normals(
     mesh: &Mesh,
     layout: &Layout,
     settings: &ContactSettings,
-    b: &ContactBoundary,
+    nodes: &[ContactNode],
 ) -> Vec<[f64; 3]> {
-    let index: HashMap<usize, usize> = b
-        .nodes
-        .iter()
-        .enumerate()
-        .map(|(i, k)| (k.node, i))
-        .collect();
-    let mut out = vec![[0.0; 3]; b.nodes.len()];
+    let index: HashMap<usize, usize> = nodes.iter().enumerate().map(|(i, k)| (k.node, i)).collect();
+    let mut out = vec![[0.0; 3]; nodes.len()];
     for pair in &settings.pairs {
         for f in group_facets(mesh, &pair.group) {
             let nodes = mesh.facet(f);
@@ -84,7 +79,7 @@ pub fn contact_warnings(
 ) -> Vec<Warning> {
     let dim = mesh.dim;
     let size = mesh.extent();
-    let outward = outward_normals(mesh, layout, settings, b);
+    let outward = outward_normals(mesh, layout, settings, &b.nodes);
     let np = settings.pairs.len();
     // per pair: [active, crossed h, its tag, x(3), pull, push, active with a pull, largest
     // pull, its tag, x(3)]
@@ -204,6 +199,111 @@ pub fn contact_warnings(
                 &t[11..14],
             ));
         }
+    }
+    list
+}
+
+/// The warnings of a pair's start ([`warnings::START_INSIDE`]), from the gaps g0 of `nodes`
+/// (before any motion): contact nodes that start on the obstacle's far side — inside it where
+/// its normal points out of the body (n·o ≥ 1/2), by more than [`CROSSED_RTOL`] of the body's
+/// size —, or inside it by more than [`warnings::START_INSIDE_FRACTION`] of the body's size
+/// wherever they are (an indenter placed into the body by a small overlap is the usual way to
+/// prescribe its depth: no warning). Collective (one gather); the same on every rank.
+pub fn start_warnings(
+    ctx: &Ctx,
+    (mesh, layout, settings): (&Mesh, &Layout, &ContactSettings),
+    nodes: &[ContactNode],
+) -> Vec<Warning> {
+    let dim = mesh.dim;
+    let size = mesh.extent();
+    let outward = outward_normals(mesh, layout, settings, nodes);
+    let np = settings.pairs.len();
+    // per pair and kind (far side, any): [depth, tag, x(3)], then [inside, nodes]
+    const R: usize = 12;
+    let mut local = vec![0.0; R * np];
+    for r in local.chunks_exact_mut(R) {
+        r[0] = f64::NEG_INFINITY;
+        r[5] = f64::NEG_INFINITY;
+    }
+    for (k, o) in nodes.iter().zip(&outward) {
+        let rec = &mut local[R * k.pair..R * (k.pair + 1)];
+        rec[11] += 1.0;
+        if k.gap >= 0.0 {
+            continue;
+        }
+        rec[10] += 1.0;
+        let far = dot(k.frame.n, *o) >= FACING;
+        for (base, judged) in [(0, far), (5, true)] {
+            let depth = -k.gap;
+            let r = &mut rec[base..base + 5];
+            if judged && (depth > r[0] || (depth == r[0] && (k.tag as f64) < r[1])) {
+                r[0] = depth;
+                r[1] = k.tag as f64;
+                r[2..5].copy_from_slice(&k.x);
+            }
+        }
+    }
+    let all = ctx.all_gather_varcount(&local);
+    let mut list = Vec::new();
+    for (p, pair) in settings.pairs.iter().enumerate() {
+        let mut t = [0.0; R];
+        t[0] = f64::NEG_INFINITY;
+        t[5] = f64::NEG_INFINITY;
+        for r in all.chunks_exact(R * np).map(|r| &r[R * p..R * (p + 1)]) {
+            t[10] += r[10];
+            t[11] += r[11];
+            for b in [0, 5] {
+                if r[b] > t[b] || (r[b] == t[b] && r[b + 1] < t[b + 1]) {
+                    t[b..b + 5].copy_from_slice(&r[b..b + 5]);
+                }
+            }
+        }
+        let (inside, total) = (t[10] as usize, t[11] as usize);
+        let (base, threshold, why) = if t[0] > CROSSED_RTOL * size {
+            (
+                0,
+                CROSSED_RTOL,
+                "on the obstacle's far side: inside it where its normal points out of the body \
+                 — does the normal point from the obstacle into the body, and is the obstacle \
+                 on the body's side?",
+            )
+        } else if t[5] > warnings::START_INSIDE_FRACTION * size {
+            (
+                5,
+                warnings::START_INSIDE_FRACTION,
+                "deeper than a small overlap — is the obstacle placed where it should be \
+                 (units, origin, the sign of a coordinate)?",
+            )
+        } else {
+            continue;
+        };
+        let (depth, tag, x) = (
+            t[base],
+            t[base + 1] as u64,
+            t[base + 2..base + 2 + dim].to_vec(),
+        );
+        list.push(Warning {
+            code: warnings::START_INSIDE,
+            message: format!(
+                "{}: the body starts {depth:.4e} inside the obstacle ({:.2} % of the body's size \
+                 {size:.4e}; contact node {tag} at {}; {inside} of {total} contact nodes inside), \
+                 {why} (key '{}')",
+                pair.key,
+                100.0 * depth / size,
+                warnings::coords(&x),
+                pair.key("obstacle")
+            ),
+            key: Some(pair.key("obstacle")),
+            pair: Some(pair.key.clone()),
+            value: depth / size,
+            threshold,
+            at: Some(Place {
+                node: Some(tag),
+                cell: None,
+                x,
+            }),
+            steps: Vec::new(),
+        });
     }
     list
 }

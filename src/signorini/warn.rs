@@ -18,11 +18,11 @@ use std::collections::HashMap;
 /// A node is judged by the pressed test only where the obstacle's normal lies within 60° of
 /// the line of the body's outward normal (|n·o| ≥ 1/2): elsewhere the two directions do not
 /// say on which side of the surface the body is.
-const FACING: f64 = 0.5;
+pub const FACING: f64 = 0.5;
 
 /// A node counts as pressed through the obstacle's surface when it ends beyond it by more
 /// than this fraction of the body's size (far above round-off, far below any real press).
-const CROSSED_RTOL: f64 = 1e-9;
+pub const CROSSED_RTOL: f64 = 1e-9;
 
 /// The unit outward normal of the body at every owned contact node (in the order of
 /// `nodes`): the measure-weighted mean of its contact facets' outward normals; zero where

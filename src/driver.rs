@@ -185,6 +185,7 @@ pub fn solve(ctx: &Ctx, prepared: Prepared) -> Result<String, RunError> {
         assembly,
         peak_memory_bytes_per_rank: summary::peak_memory_and_log(ctx, &timings),
         timings,
+        warnings: stepped.warnings,
         solve: SolveSections {
             solve: stepped.report,
             load: stepped.load,
@@ -247,8 +248,11 @@ pub fn check_case(ctx: &Ctx, case: &Case) -> Result<(), RunError> {
         let mut settings = settings.clone();
         let first = case.load.as_ref().and_then(|l| l.factors.first().copied());
         settings.at_factor(first.unwrap_or(1.0));
-        let b =
+        let (b, warned) =
             crate::signorini::contact_boundary(ctx, &settings, mesh, &p.layout, &problem.fixed)?;
+        for w in &warned {
+            say!(ctx, "check: warning: {}", w.message);
+        }
         for (j, pair) in settings.pairs.iter().enumerate() {
             let mine = || b.nodes.iter().filter(|k| k.pair == j);
             let nodes = ctx.sum_usize(mine().count());

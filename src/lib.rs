@@ -28,3 +28,4 @@ pub mod signorini;
 pub mod solver;
 pub mod steps;
 pub mod summary;
+pub mod warnings;

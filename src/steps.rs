@@ -35,6 +35,7 @@ use crate::signorini::certificate::Certificate;
 use crate::signorini::report::{FrictionCertificate, Kkt, PairSummary};
 use crate::signorini::{self, ContactReport, ContactSolution};
 use crate::solver::{self, LinearSummary};
+use crate::warnings::{self, Warning};
 use serde::Serialize;
 use std::fmt::Write;
 use std::time::Instant;
@@ -100,6 +101,9 @@ pub struct StepRecord {
     /// equilibrium and force balance.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub certificate: Option<Certificate>,
+    /// The step's warnings (docs/warnings.md).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub warnings: Vec<Warning>,
     /// Seconds of the step (solve, post-processing, output).
     pub seconds: f64,
 }
@@ -129,6 +133,7 @@ impl StepRecord {
             friction: None,
             friction_violation: None,
             certificate: None,
+            warnings: Vec::new(),
             seconds: 0.0,
         }
     }
@@ -161,6 +166,8 @@ pub struct Stepped {
     pub history_csv: Option<String>,
     /// The error that ended the run after some steps converged (their output is written).
     pub failure: Option<RunError>,
+    /// The run's warnings (docs/warnings.md); a series': every step's, each once.
+    pub warnings: Vec<Warning>,
     pub solve_seconds: f64,
     pub post_seconds: f64,
     pub output_seconds: f64,
@@ -233,6 +240,7 @@ impl Stepper<'_> {
         let mut times: Vec<f64> = Vec::new();
         let (mut solve_s, mut post_s, mut output_s) = (0.0, 0.0, 0.0);
         let mut failure = None;
+        let mut collected = warnings::Collected::default();
         let mut schedule = Schedule::new(&plan);
         while let Some(factor) = schedule.next() {
             {
@@ -298,13 +306,19 @@ impl Stepper<'_> {
                 }
                 let step = records.len() + 1;
                 let t1 = Instant::now();
-                let cells = post::cell_fields(
+                let values = post::local_cell_values(self.mesh, self.layout, solved.u())?;
+                let cells =
+                    post::cell_fields(self.mesh, self.layout, self.material, &values, &case.output);
+                let mut warned = (solved.contact.as_ref())
+                    .map(|c| c.warnings.clone())
+                    .unwrap_or_default();
+                warned.extend(post::deformation_warning(
+                    ctx,
                     self.mesh,
                     self.layout,
-                    self.material,
-                    solved.u(),
-                    &case.output,
-                )?;
+                    &values,
+                ));
+                drop(values);
                 let fields =
                     post::solution_fields(self.mesh, self.layout, solved.u(), cells, &case.output)?;
                 post_s += t1.elapsed().as_secs_f64();
@@ -327,7 +341,13 @@ impl Stepper<'_> {
                 rec.seconds = t0.elapsed().as_secs_f64();
                 if series {
                     log_step(ctx, &rec, plan.factors.len());
+                    let new = collected.add(step, &warned);
+                    warnings::log(ctx, &new, &format!("load step {p}: "));
+                } else {
+                    warnings::log(ctx, &warned, "");
+                    collected.list = warned.clone();
                 }
+                rec.warnings = warned;
                 records.push(rec);
                 schedule.converged(factor);
                 last = Some(solved);
@@ -355,6 +375,7 @@ impl Stepper<'_> {
             load,
             history_csv,
             failure,
+            warnings: collected.list,
             solve_seconds: solve_s,
             post_seconds: post_s,
             output_seconds: output_s,

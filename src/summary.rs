@@ -104,6 +104,8 @@ pub struct Summary<S: Serialize> {
     pub assembly: AssemblyInfo,
     pub timings: Timings,
     pub peak_memory_bytes_per_rank: Vec<f64>,
+    /// Runs that succeed but look wrong (docs/warnings.md); empty for a run without any.
+    pub warnings: Vec<crate::warnings::Warning>,
     #[serde(flatten)]
     pub solve: S,
 }

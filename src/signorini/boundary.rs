@@ -10,6 +10,7 @@ use crate::mesh::Mesh;
 use crate::par::Ctx;
 use crate::partition::Layout;
 use crate::setup::{group_facets, ContactSettings};
+use crate::warnings::Warning;
 
 /// One owned contact node.
 #[derive(Clone, Debug)]
@@ -238,13 +239,15 @@ fn pair_nodes(
     (weight, pair_of, clash)
 }
 
+/// The contact boundary and the warnings of its start ([`super::warn::start_warnings`]).
+/// Collective.
 pub fn build(
     ctx: &Ctx,
     mesh: &Mesh,
     layout: &Layout,
     settings: &ContactSettings,
     fixed: &[f64],
-) -> Result<ContactBoundary, RunError> {
+) -> Result<(ContactBoundary, Vec<Warning>), RunError> {
     let dim = mesh.dim;
     let file = settings.file.as_path();
     let (weight, pair_of, clash) = pair_nodes(mesh, settings);
@@ -305,8 +308,9 @@ pub fn build(
     let ex_all = ctx.sum_usize(excluded);
     ctx.agree(bad.map_or(Ok(()), |e| Err(RunError::Input(e))))?;
     check_depth(ctx, mesh, &nodes, settings)?;
+    let warned = super::warn::start_warnings(ctx, (mesh, layout, settings), &nodes);
     move_obstacles(&mut nodes, &settings.displacements(), settings.friction());
-    Ok(ContactBoundary {
+    let b = ContactBoundary {
         n_global: counts.iter().sum::<u64>() as usize,
         offset: counts[..ctx.rank].iter().sum::<u64>() as usize,
         nodes,
@@ -318,7 +322,8 @@ pub fn build(
             pairs: settings.pairs.iter().map(|p| p.key.clone()).collect(),
             solver: String::new(),
         },
-    })
+    };
+    Ok((b, warned))
 }
 
 /// Each pair's obstacle translated by its d (`d[pair]`; docs/obstacles.md, "Moving obstacles"): the node's

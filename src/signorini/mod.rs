@@ -20,6 +20,7 @@ pub mod reduced;
 pub mod report;
 pub mod rigid;
 pub mod snesvi;
+pub mod warn;
 
 use crate::assembly::System;
 use crate::case::{self, CoulombAlgorithm, Method, Preset, Reuse, SolverSection};
@@ -33,6 +34,7 @@ use crate::petsc::Vector;
 use crate::say;
 use crate::setup::ContactSettings;
 use crate::solver;
+use crate::warnings::Warning;
 use active_set::{ActiveSet, Iterate, Law};
 use boundary::{ContactBoundary, NodeResult};
 use newton::{ContactProblem, NewtonResult, NewtonSettings, StepInfo, WarmStart};
@@ -154,6 +156,8 @@ pub struct ContactSolution {
     /// The condensed solve's factorisation, compliance and candidates, for the next load step
     /// (taken by it).
     kept: KeptFactor,
+    /// The warnings of this solve (docs/warnings.md; the same on every rank, not logged yet).
+    pub warnings: Vec<Warning>,
 }
 
 /// A condensed solve's factorisation of K_p with its Schur complement, compliance and
@@ -320,7 +324,7 @@ pub fn solve(
     let dim = mesh.dim;
     let law = law_of(settings);
     let friction = settings.friction();
-    let mut b = contact_boundary(ctx, settings, mesh, layout, fixed)?;
+    let (mut b, mut warned) = contact_boundary(ctx, settings, mesh, layout, fixed)?;
     b.keys.solver = solver_keys(solver_section);
     let force_control = force_control(settings, previous);
     check_friction_capacity(ctx, &b, (fixed, sys, dim), law, &force_control)?;
@@ -429,6 +433,13 @@ pub fn solve(
         newton.factorisations += cs.factorisations;
         newton.condensed = Some(cs);
     }
+    warned.extend(warn::contact_warnings(
+        ctx,
+        (mesh, layout, settings),
+        &b,
+        &nr.nodes,
+        &displacement,
+    ));
     let delta = match previous.zip(prev_u) {
         Some((prev, u_prev)) => Some(step_delta(
             prev,
@@ -461,26 +472,28 @@ pub fn solve(
         predict: 0.0,
         obstacle_displacement: displacement,
         kept,
+        warnings: warned,
     })
 }
 
 /// The contact boundary of a solve, logged, with the checks that come before the solve (every
-/// node projected, the depth of the start, a force that never reaches the body). Collective;
-/// every rank returns the same `Ok` / `Err` kind.
+/// node projected, the depth of the start, a force that never reaches the body) and the
+/// warnings of its start (not logged). Collective; every rank returns the same `Ok` / `Err`
+/// kind.
 pub fn contact_boundary(
     ctx: &Ctx,
     settings: &ContactSettings,
     mesh: &Mesh,
     layout: &Layout,
     fixed: &[f64],
-) -> Result<ContactBoundary, RunError> {
-    let b = boundary::build(ctx, mesh, layout, settings, fixed)?;
+) -> Result<(ContactBoundary, Vec<Warning>), RunError> {
+    let (b, warned) = boundary::build(ctx, mesh, layout, settings, fixed)?;
     log_boundary(ctx, &b, settings, mesh.dim);
     // the approaches' starts do not matter here: only the forces' directions
     if let Some(fc) = force::unreached(ctx, &b, &force_control(settings, None)) {
         return Err(force::never_touches(fc));
     }
-    Ok(b)
+    Ok((b, warned))
 }
 
 /// The linear solver's keys of a case with their values, for the diagnoses.

@@ -1036,7 +1036,8 @@ impl Loop<'_> {
                         self.stop = super::certificate::StopRule::RecurringSet;
                         return Ok(true);
                     }
-                    other => other?,
+                    Err(e) => return Err(self.cycle_error(e)),
+                    Ok(seen) => seen,
                 };
                 if let Seen::SwitchToLeastIndex { prev } = seen {
                     say!(
@@ -1051,13 +1052,25 @@ impl Loop<'_> {
                     least_index_step(ctx, b, &self.set, &mut next);
                     summary = next.summarise(ctx, b, self.free.modes(), dim);
                     key = self.key(&summary, t);
-                    self.guard.check_safeguarded(step, key)?;
+                    if let Err(e) = self.guard.check_safeguarded(step, key) {
+                        return Err(self.cycle_error(e));
+                    }
                 }
                 self.guard.record(key);
                 self.take(next, summary);
                 Ok(false)
             }
         }
+    }
+
+    /// A cycle of a frictionless body that the contact cannot hold
+    /// ([`FreeModes::unpressable`]) is reported as its "no support"; any other cycle as it
+    /// is. Collective (every rank meets the same cycle).
+    fn cycle_error(&self, e: RunError) -> RunError {
+        if !self.s.friction() && self.free.unpressable(self.ctx, self.p.boundary) {
+            return self.free.no_support_unpressed();
+        }
+        e
     }
 
     /// Force control: the step's δ's from the force balance (force.rs), u and λ moved with

@@ -648,6 +648,87 @@ impl FreeModes {
             .collect()
     }
 
+    /// Whether the contact can carry no force in the rigid modes that Dirichlet data leave
+    /// free: there are such modes, the load has no component in them, and the contact normals
+    /// of every contact node (any set) push the body from one side only in them — each node's
+    /// normal row on those modes a_k = Zᵀ R(x_k)ᵀ n_k has a positive product with one common
+    /// direction (the sum of the rows, or of their translation parts), so no forces λ_k ≥ 0
+    /// but zero balance there. A pressed obstacle then has no equilibrium but the body
+    /// moving off it (its position undetermined): a "no support" case the active-set
+    /// iteration meets as cycling on nodes whose force and gap are both zero. Off with
+    /// force control. Collective when Dirichlet data leave modes free (the same on every
+    /// rank).
+    pub fn unpressable(&self, ctx: &Ctx, b: &ContactBoundary) -> bool {
+        let (m, dim, z) = (self.modes.m, self.modes.dim, &self.z);
+        if !self.floats() || !self.coupling.is_empty() {
+            return false;
+        }
+        let lz: f64 = (0..z.ncols())
+            .map(|c| {
+                (0..m)
+                    .map(|j| z[(j, c)] * self.load[j])
+                    .sum::<f64>()
+                    .powi(2)
+            })
+            .sum::<f64>()
+            .sqrt();
+        if lz > BALANCE_RTOL * self.load_scale {
+            return false;
+        }
+        let rows: Vec<[f64; 6]> = (b.nodes.iter())
+            .map(|k| self.modes.direction_row(&k.x, &k.frame.n))
+            .collect();
+        let mut sum = [0.0; 6];
+        for r in &rows {
+            for (s, x) in sum.iter_mut().zip(r) {
+                *s += x;
+            }
+        }
+        let sum = ctx.sum_vec(&sum);
+        let in_z = |full: &[f64]| -> Vec<f64> {
+            (0..z.ncols())
+                .map(|c| (0..m).map(|j| z[(j, c)] * full[j]).sum())
+                .collect()
+        };
+        let unit = |v: Vec<f64>| {
+            let n = v.iter().map(|x| x * x).sum::<f64>().sqrt();
+            v.into_iter()
+                .map(|x| if n > 0.0 { x / n } else { 0.0 })
+                .collect::<Vec<f64>>()
+        };
+        let mut translation = sum.clone();
+        translation[dim..].iter_mut().for_each(|x| *x = 0.0);
+        let directions = [unit(in_z(&sum)), unit(in_z(&translation))];
+        let mut worst = [f64::INFINITY; 2];
+        for r in &rows {
+            let a = unit(in_z(r));
+            if a.iter().all(|&x| x == 0.0) {
+                continue;
+            }
+            for (w, v) in worst.iter_mut().zip(&directions) {
+                *w = w.min(a.iter().zip(v).map(|(x, y)| x * y).sum());
+            }
+        }
+        let n = ctx.sum_usize(rows.len());
+        n > 0 && worst.iter().any(|&w| ctx.min_f64(w) > 1e-9)
+    }
+
+    /// The "no support" diagnosis of a body that the contact cannot hold
+    /// ([`FreeModes::unpressable`]).
+    pub fn no_support_unpressed(&self) -> RunError {
+        RunError::Failed(format!(
+            "{}: no support: the body has {} rigid mode(s) that no Dirichlet data fix, no load \
+             pushes it against the obstacle in them (total load {:.3e}) and the obstacle can \
+             only push it from one side: the contact can carry no force, so the obstacle pushes \
+             the body away and its position is undetermined (the active-set iteration cycles on \
+             nodes whose force and gap are both zero) — add Dirichlet data that hold the body, \
+             or a load that presses it against the obstacle",
+            self.keys.named(&["dirichlet", ".obstacle"]),
+            self.z.ncols(),
+            self.load_scale
+        ))
+    }
+
     /// The "no support" diagnosis of an unbalanced load that no contact can carry.
     pub fn no_support(&self, n_active: usize, reaction: f64) -> RunError {
         RunError::Failed(format!(

@@ -1,0 +1,309 @@
+//! The warnings of a converged contact solve (docs/warnings.md) that the body's geometry
+//! reveals: a pressed obstacle that ends with no active node, and a contact force that pulls
+//! the body's surface outward. Both compare the obstacle's normal n_k at a contact node with
+//! the body's own outward normal o_k there (the facets of the contact group, oriented away
+//! from their cells): a normal given the wrong way round makes them point the same way.
+//! One pass over the contact facets and one gather of a few numbers per pair and rank.
+
+use super::boundary::{ContactBoundary, ContactNode, NodeResult};
+use crate::assembly::{facet_cell, outward_normal};
+use crate::geom::dot;
+use crate::mesh::Mesh;
+use crate::par::Ctx;
+use crate::partition::Layout;
+use crate::setup::{group_facets, ContactSettings};
+use crate::warnings::{self, Place, Warning};
+use std::collections::HashMap;
+
+/// A node is judged by the pressed test only where the obstacle's normal lies within 60° of
+/// the line of the body's outward normal (|n·o| ≥ 1/2): elsewhere the two directions do not
+/// say on which side of the surface the body is.
+pub const FACING: f64 = 0.5;
+
+/// A node counts as pressed through the obstacle's surface when it ends beyond it by more
+/// than this fraction of the body's size (far above round-off, far below any real press).
+pub const CROSSED_RTOL: f64 = 1e-9;
+
+/// The unit outward normal of the body at every owned contact node (in the order of
+/// `nodes`): the measure-weighted mean of its contact facets' outward normals; zero where
+/// none is found. Local.
+pub fn outward_normals(
+    mesh: &Mesh,
+    layout: &Layout,
+    settings: &ContactSettings,
+    nodes: &[ContactNode],
+) -> Vec<[f64; 3]> {
+    let index: HashMap<usize, usize> = nodes.iter().enumerate().map(|(i, k)| (k.node, i)).collect();
+    let mut out = vec![[0.0; 3]; nodes.len()];
+    for pair in &settings.pairs {
+        for f in group_facets(mesh, &pair.group) {
+            let nodes = mesh.facet(f);
+            if !nodes.iter().any(|v| index.contains_key(v)) {
+                continue;
+            }
+            let Some((_, opp)) = facet_cell(mesh, layout, f) else {
+                continue;
+            };
+            let (n, m) = outward_normal(mesh, f, opp);
+            for v in nodes {
+                if let Some(&i) = index.get(v) {
+                    for c in 0..3 {
+                        out[i][c] += m * n[c];
+                    }
+                }
+            }
+        }
+    }
+    for o in &mut out {
+        let len = dot(*o, *o).sqrt();
+        if len > 0.0 {
+            o.iter_mut().for_each(|x| *x /= len);
+        }
+    }
+    out
+}
+
+/// One pair's numbers on one rank (gathered, then combined in rank order on every rank).
+const REC: usize = 14;
+
+/// The contact warnings of a converged solve: per pair, a pressed obstacle without an active
+/// node ([`warnings::PRESSED_WITHOUT_CONTACT`]) and a pulling contact force
+/// ([`warnings::PULLING_FORCE`]). `displacement`: each pair's obstacle displacement d in the
+/// solve (the gaps of `b` are g0 − d·n). Collective (one gather); the same list on every rank.
+pub fn contact_warnings(
+    ctx: &Ctx,
+    (mesh, layout, settings): (&Mesh, &Layout, &ContactSettings),
+    b: &ContactBoundary,
+    res: &[NodeResult],
+    displacement: &[[f64; 3]],
+) -> Vec<Warning> {
+    let dim = mesh.dim;
+    let size = mesh.extent();
+    let outward = outward_normals(mesh, layout, settings, &b.nodes);
+    let np = settings.pairs.len();
+    // per pair: [active, crossed h, its tag, x(3), pull, push, active with a pull, largest
+    // pull, its tag, x(3)]
+    let mut local = vec![0.0; REC * np];
+    for r in local.chunks_exact_mut(REC) {
+        r[1] = f64::NEG_INFINITY;
+        r[9] = f64::NEG_INFINITY;
+    }
+    for ((k, r), o) in b.nodes.iter().zip(res).zip(&outward) {
+        let rec = &mut local[REC * k.pair..REC * (k.pair + 1)];
+        let along = dot(k.frame.n, *o);
+        if r.active {
+            rec[0] += 1.0;
+            // the contact force on the body, −λ, along the body's outward normal
+            let f_out = -dot(r.lambda, *o);
+            rec[6] += f_out.max(0.0);
+            rec[7] += (-f_out).max(0.0);
+            if f_out > 0.0 {
+                rec[8] += 1.0;
+                if f_out > rec[9] || (f_out == rec[9] && (k.tag as f64) < rec[10]) {
+                    rec[9] = f_out;
+                    rec[10] = k.tag as f64;
+                    rec[11..14].copy_from_slice(&k.x);
+                }
+            }
+        }
+        if along.abs() < FACING {
+            continue;
+        }
+        // s = +1: the obstacle's normal points out of the body (the wrong way round)
+        let s = along.signum();
+        let g0 = k.gap + dot(displacement[k.pair], k.frame.n);
+        // beyond the obstacle's surface on the side the body faces: before, and at the end
+        let h = s * (k.gap + r.u_n);
+        if s * g0 <= 0.0 && (h > rec[1] || (h == rec[1] && (k.tag as f64) < rec[2])) {
+            rec[1] = h;
+            rec[2] = k.tag as f64;
+            rec[3..6].copy_from_slice(&k.x);
+        }
+    }
+    let all = ctx.all_gather_varcount(&local);
+    let mut list = Vec::new();
+    for (p, pair) in settings.pairs.iter().enumerate() {
+        let mut t = [0.0; REC];
+        t[1] = f64::NEG_INFINITY;
+        t[9] = f64::NEG_INFINITY;
+        for r in all
+            .chunks_exact(REC * np)
+            .map(|r| &r[REC * p..REC * (p + 1)])
+        {
+            for i in [0, 6, 7, 8] {
+                t[i] += r[i];
+            }
+            for (v, rest) in [(1, 2..6), (9, 10..14)] {
+                if r[v] > t[v] || (r[v] == t[v] && r[rest.start] < t[rest.start]) {
+                    t[v] = r[v];
+                    t[rest.clone()].copy_from_slice(&r[rest]);
+                }
+            }
+        }
+        let obstacle = pair.key("obstacle");
+        let warning = |code, message: String, value, threshold, tag: f64, x: &[f64]| Warning {
+            code,
+            message,
+            key: Some(obstacle.clone()),
+            pair: Some(pair.key.clone()),
+            value,
+            threshold,
+            at: Some(Place {
+                node: Some(tag as u64),
+                cell: None,
+                x: x[..dim].to_vec(),
+            }),
+            steps: Vec::new(),
+        };
+        if t[0] == 0.0 && t[1] > CROSSED_RTOL * size {
+            let msg = format!(
+                "{}: the obstacle is pressed into the body, yet no contact node is active (total \
+                 force 0): contact node {} at {} ends {:.4e} beyond the obstacle's surface, on \
+                 the side the body faces, without touching it — does the obstacle's normal point \
+                 from the obstacle into the body, and do its motion or force and the loads point \
+                 the way intended? (key '{obstacle}')",
+                pair.key,
+                t[2] as u64,
+                warnings::coords(&t[3..3 + dim]),
+                t[1]
+            );
+            list.push(warning(
+                warnings::PRESSED_WITHOUT_CONTACT,
+                msg,
+                t[1] / size,
+                CROSSED_RTOL,
+                t[2],
+                &t[3..6],
+            ));
+        }
+        let normal = t[6] + t[7];
+        if t[6] > 0.0 && t[6] > warnings::PULL_FRACTION * normal {
+            let msg = format!(
+                "{}: the contact force pulls the body's surface outward at {} of its {} active \
+                 node(s), {:.1} % of the normal contact force (the most at contact node {} at \
+                 {}): contact can only push — does the obstacle's normal point from the \
+                 obstacle into the body? (key '{obstacle}')",
+                pair.key,
+                t[8] as usize,
+                t[0] as usize,
+                100.0 * t[6] / normal,
+                t[10] as u64,
+                warnings::coords(&t[11..11 + dim])
+            );
+            list.push(warning(
+                warnings::PULLING_FORCE,
+                msg,
+                t[6] / normal,
+                warnings::PULL_FRACTION,
+                t[10],
+                &t[11..14],
+            ));
+        }
+    }
+    list
+}
+
+/// The warnings of a pair's start ([`warnings::START_INSIDE`]), from the gaps g0 of `nodes`
+/// (before any motion): contact nodes that start on the obstacle's far side — inside it where
+/// its normal points out of the body (n·o ≥ 1/2), by more than [`CROSSED_RTOL`] of the body's
+/// size —, or inside it by more than [`warnings::START_INSIDE_FRACTION`] of the body's size
+/// wherever they are (an indenter placed into the body by a small overlap is the usual way to
+/// prescribe its depth: no warning). Collective (one gather); the same on every rank.
+pub fn start_warnings(
+    ctx: &Ctx,
+    (mesh, layout, settings): (&Mesh, &Layout, &ContactSettings),
+    nodes: &[ContactNode],
+) -> Vec<Warning> {
+    let dim = mesh.dim;
+    let size = mesh.extent();
+    let outward = outward_normals(mesh, layout, settings, nodes);
+    let np = settings.pairs.len();
+    // per pair and kind (far side, any): [depth, tag, x(3)], then [inside, nodes]
+    const R: usize = 12;
+    let mut local = vec![0.0; R * np];
+    for r in local.chunks_exact_mut(R) {
+        r[0] = f64::NEG_INFINITY;
+        r[5] = f64::NEG_INFINITY;
+    }
+    for (k, o) in nodes.iter().zip(&outward) {
+        let rec = &mut local[R * k.pair..R * (k.pair + 1)];
+        rec[11] += 1.0;
+        if k.gap >= 0.0 {
+            continue;
+        }
+        rec[10] += 1.0;
+        let far = dot(k.frame.n, *o) >= FACING;
+        for (base, judged) in [(0, far), (5, true)] {
+            let depth = -k.gap;
+            let r = &mut rec[base..base + 5];
+            if judged && (depth > r[0] || (depth == r[0] && (k.tag as f64) < r[1])) {
+                r[0] = depth;
+                r[1] = k.tag as f64;
+                r[2..5].copy_from_slice(&k.x);
+            }
+        }
+    }
+    let all = ctx.all_gather_varcount(&local);
+    let mut list = Vec::new();
+    for (p, pair) in settings.pairs.iter().enumerate() {
+        let mut t = [0.0; R];
+        t[0] = f64::NEG_INFINITY;
+        t[5] = f64::NEG_INFINITY;
+        for r in all.chunks_exact(R * np).map(|r| &r[R * p..R * (p + 1)]) {
+            t[10] += r[10];
+            t[11] += r[11];
+            for b in [0, 5] {
+                if r[b] > t[b] || (r[b] == t[b] && r[b + 1] < t[b + 1]) {
+                    t[b..b + 5].copy_from_slice(&r[b..b + 5]);
+                }
+            }
+        }
+        let (inside, total) = (t[10] as usize, t[11] as usize);
+        let (base, threshold, why) = if t[0] > CROSSED_RTOL * size {
+            (
+                0,
+                CROSSED_RTOL,
+                "on the obstacle's far side: inside it where its normal points out of the body \
+                 — does the normal point from the obstacle into the body, and is the obstacle \
+                 on the body's side?",
+            )
+        } else if t[5] > warnings::START_INSIDE_FRACTION * size {
+            (
+                5,
+                warnings::START_INSIDE_FRACTION,
+                "deeper than a small overlap — is the obstacle placed where it should be \
+                 (units, origin, the sign of a coordinate)?",
+            )
+        } else {
+            continue;
+        };
+        let (depth, tag, x) = (
+            t[base],
+            t[base + 1] as u64,
+            t[base + 2..base + 2 + dim].to_vec(),
+        );
+        list.push(Warning {
+            code: warnings::START_INSIDE,
+            message: format!(
+                "{}: the body starts {depth:.4e} inside the obstacle ({:.2} % of the body's size \
+                 {size:.4e}; contact node {tag} at {}; {inside} of {total} contact nodes inside), \
+                 {why} (key '{}')",
+                pair.key,
+                100.0 * depth / size,
+                warnings::coords(&x),
+                pair.key("obstacle")
+            ),
+            key: Some(pair.key("obstacle")),
+            pair: Some(pair.key.clone()),
+            value: depth / size,
+            threshold,
+            at: Some(Place {
+                node: Some(tag),
+                cell: None,
+                x,
+            }),
+            steps: Vec::new(),
+        });
+    }
+    list
+}

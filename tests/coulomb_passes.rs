@@ -119,8 +119,9 @@ fn a_singular_dense_step_on_settled_slip_rows_is_taken_on_the_f5_rows() {
             "{np} rank(s): the (F5) rows from dense step {}, on {} coarse level(s)",
             cs["f5_from"], cs["f5_coarse_levels"]
         );
+        // (each key absent where it is none; measured: 3 coarse levels on 1, 2, 3 and 4 ranks)
         let fine = cs["f5_from"].as_u64();
-        let coarse = cs["f5_coarse_levels"].as_u64().expect("f5_coarse_levels");
+        let coarse = cs["f5_coarse_levels"].as_u64().unwrap_or(0);
         assert!(
             fine.is_some_and(|k| k >= 1) || coarse >= 1,
             "{np} rank(s): no dense step on the (F5) rows: {cs}\n{}",

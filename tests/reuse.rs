@@ -313,7 +313,6 @@ fn auto_after_a_condensed_fallback_decides_from_counts() {
         }
     }
     println!("auto tried the reuse in {tried} of {} steps", a.steps());
-    check_history(&a, true);
     assert_eq!(plain.active_node_ids(), a.active_node_ids());
     let d = plain.u_rel_diff(&a);
     assert!(d <= 1e-10, "|u - u_plain| / max|u| = {d:e}");

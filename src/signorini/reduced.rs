@@ -348,7 +348,7 @@ impl ReuseCosts {
             e => e as f64,
         };
         let per_entry = if stats.symmetric { 4.0 } else { 2.0 };
-        (stats.flops > 0.0 && entries > 0.0).then(|| ReuseCosts {
+        (stats.flops > 0.0 && entries > 0.0).then_some(ReuseCosts {
             factorisation: stats.flops,
             solve: SOLVE_FLOP_COST * per_entry * entries,
         })

@@ -125,11 +125,14 @@ const CPU_WORDS: usize = CpuSet::MAX_CPU.div_ceil(64);
 /// and rank 0 lets its threads run on every CPU those ranks may use (the union of their
 /// affinity masks: an MPI launcher that binds each rank to a core leaves rank 0 one core) with
 /// as many OpenBLAS threads, restoring both afterwards. MUMPS and everything else keep the
-/// process' own setting (OPENBLAS_NUM_THREADS).
+/// process' own setting (OPENBLAS_NUM_THREADS). `solver.dense_threads = N` fixes the count
+/// whatever the binding ([`NodeCores::with`]).
 #[derive(Clone, Copy)]
 pub struct NodeCores {
     /// Rank 0 with OpenBLAS: the CPUs of the ranks on its node; `None` elsewhere.
     wide: Option<CpuSet>,
+    /// The thread count asked for by the case (`None`: one per CPU of `wide`).
+    fixed: Option<usize>,
 }
 
 impl NodeCores {
@@ -145,29 +148,51 @@ impl NodeCores {
         let mut union = [0u64; CPU_WORDS];
         node.all_reduce_into(&words[..], &mut union[..], SystemOperation::bitwise_or());
         if world.rank() != 0 || own.is_none() || openblas_threads().is_none() {
-            return NodeCores { wide: None };
+            return NodeCores::none();
         }
         let mut wide = CpuSet::new();
         for c in (0..CpuSet::MAX_CPU).filter(|&c| union[c / 64] >> (c % 64) & 1 == 1) {
             wide.set(c);
         }
-        NodeCores { wide: Some(wide) }
+        NodeCores {
+            wide: Some(wide),
+            fixed: None,
+        }
     }
 
     /// Nothing widened (a process that is not rank 0, or a test).
     pub fn none() -> NodeCores {
-        NodeCores { wide: None }
+        NodeCores {
+            wide: None,
+            fixed: None,
+        }
+    }
+
+    /// These cores with the case's `solver.dense_threads`: "auto" one thread per CPU of the
+    /// node's ranks (as the launcher bound them), `N` exactly N threads on rank 0 (with
+    /// OpenBLAS; on those CPUs) whatever the binding. Local.
+    pub fn with(self, threads: crate::case::DenseThreads) -> NodeCores {
+        let fixed = match threads {
+            crate::case::DenseThreads::Auto => None,
+            crate::case::DenseThreads::Fixed(n) => Some(n.max(1)),
+        };
+        NodeCores { fixed, ..self }
     }
 
     /// The OpenBLAS threads rank 0's dense work runs with: one per CPU of its node's ranks,
-    /// at least the process' own count (1 without OpenBLAS or off rank 0).
+    /// at least the process' own count, or the case's fixed count (1 without OpenBLAS or off
+    /// rank 0).
     pub fn threads(&self) -> usize {
         self.threads_over(openblas_threads().unwrap_or(1))
     }
 
     /// [`NodeCores::threads`] for the process' own count `own`.
     fn threads_over(&self, own: usize) -> usize {
-        self.wide.map_or(own, |w| own.max(w.count() as usize))
+        match (self.wide, self.fixed) {
+            (None, _) => own,
+            (Some(_), Some(n)) => n,
+            (Some(w), None) => own.max(w.count() as usize),
+        }
     }
 
     /// `work`, whose dense matrices are of dimension `dim` at most, with every thread of this
@@ -182,7 +207,7 @@ impl NodeCores {
             return work();
         };
         let threads = self.threads_over(own);
-        if threads <= own {
+        if threads == own {
             return work();
         }
         let _widened = Widened::new(&wide, own, threads);

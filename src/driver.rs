@@ -4,8 +4,8 @@
 
 use crate::assembly::{self, System};
 use crate::bodies::{self, Body};
-use crate::case::Case;
 use crate::case::Preset;
+use crate::case::{Case, DenseThreads};
 use crate::error::RunError;
 use crate::fem::Material;
 use crate::mesh::Mesh;
@@ -52,6 +52,7 @@ pub struct Prepared {
 
 /// Runs a whole case. Returns summary.json's text (the same on every rank).
 pub fn run_case(ctx: &Ctx, case: &Case) -> Result<String, RunError> {
+    let ctx = &ctx.with_dense_threads(case.solver.dense_threads);
     solve(ctx, prepare(ctx, case)?)
 }
 
@@ -86,8 +87,11 @@ pub fn prepare(ctx: &Ctx, case: &Case) -> Result<Prepared, RunError> {
     if let Some(k) = &blas {
         say!(
             ctx,
-            "blas: {k}; rank 0's dense phases on {dense_threads} thread(s) (the CPUs of the \
-             ranks on its node)"
+            "blas: {k}; rank 0's dense phases on {dense_threads} thread(s) ({})",
+            match case.solver.dense_threads {
+                DenseThreads::Auto => "the CPUs of the ranks on its node",
+                DenseThreads::Fixed(_) => "solver.dense_threads",
+            }
         );
     }
     let mut case = case.clone();
@@ -175,6 +179,7 @@ pub fn solve(ctx: &Ctx, prepared: Prepared) -> Result<String, RunError> {
         ranks: ctx.size,
         blas,
         dense_threads,
+        dense_threads_asked: case.solver.dense_threads.name(),
         bodies: bodies::summed(&bodies),
         preset: PresetChoice {
             asked: asked.name(),

@@ -47,6 +47,14 @@ impl<'a> Ctx<'a> {
         }
     }
 
+    /// This context with the case's `solver.dense_threads` for rank 0's dense phases. Local.
+    pub fn with_dense_threads(&self, threads: crate::case::DenseThreads) -> Ctx<'a> {
+        Ctx {
+            cores: self.cores.with(threads),
+            ..*self
+        }
+    }
+
     /// `work` on rank 0 alone (`Some` there, `None` elsewhere), for rank 0's dense phases
     /// whose result a broadcast then shares; `dim`: the largest dimension of its dense
     /// matrices. From [`crate::blas::WIDE_MIN_DIM`] on, rank 0's BLAS threads get the cores of

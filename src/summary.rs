@@ -96,6 +96,9 @@ pub struct Summary<S: Serialize> {
     pub blas: Option<String>,
     /// The OpenBLAS threads of rank 0's dense phases ([`crate::blas::NodeCores`]).
     pub dense_threads: usize,
+    /// `solver.dense_threads` as asked: "auto" (one per CPU of the ranks on rank 0's node, as
+    /// the launcher bound them) or the fixed count.
+    pub dense_threads_asked: String,
     /// The mesh's separate bodies ([`crate::bodies`]).
     pub bodies: crate::bodies::Bodies,
     /// `solver.preset` as asked and as used (the "auto" choice).

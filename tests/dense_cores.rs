@@ -8,7 +8,6 @@ mod common;
 use common::compare::max_diff;
 use common::process::{binary, mesh_dir, mpirun_with, repo, run_with_timeout, Run};
 use common::solved::{solved, step_displacement, Solved, LIMIT};
-use std::collections::BTreeSet;
 use std::path::Path;
 use std::process::Command;
 
@@ -48,23 +47,36 @@ fn launch(np: usize, bind: &str, program: &Path, args: &[String]) -> Command {
     mpirun_with(np, &["--bind-to", bind], program, args)
 }
 
-/// The CPUs that the ranks of `mpirun -n np --bind-to bind` may run on, together: the union
-/// of each rank's Cpus_allowed_list, read by the same launcher.
+/// The CPUs that the ranks of `mpirun -n np --bind-to bind` on this one node may run on,
+/// together, from the machine and the launcher's documented binding alone (not from the
+/// solver's way of finding them, the union of the ranks' affinity masks): unbound, every
+/// CPU this test may use (`nproc`); bound to cores, one core per rank (its hardware threads,
+/// /sys's thread siblings of CPU 0), at most every CPU.
 fn cpus_of_ranks(np: usize, bind: &str) -> usize {
-    let args = ["Cpus_allowed_list".to_string(), "/proc/self/status".into()];
-    let run = run_with_timeout(launch(np, bind, Path::new("grep"), &args), LIMIT);
-    run.expect_code(0, "reading the ranks' CPU lists");
-    let mut cpus = BTreeSet::new();
-    for line in run.stdout.lines() {
-        let list = line.split_whitespace().nth(1).expect("a CPU list");
-        for part in list.split(',') {
-            let (a, b) = part.split_once('-').unwrap_or((part, part));
-            let (a, b): (usize, usize) = (a.parse().expect("CPU"), b.parse().expect("CPU"));
-            cpus.extend(a..=b);
-        }
+    // (nproc would take OMP_NUM_THREADS, which the tests' MPI environment sets to 1, for a limit)
+    let mut nproc = Command::new("nproc");
+    nproc
+        .env_remove("OMP_NUM_THREADS")
+        .env_remove("OMP_THREAD_LIMIT");
+    let run = run_with_timeout(nproc, LIMIT);
+    run.expect_code(0, "nproc");
+    let online: usize = run.stdout.trim().parse().expect("nproc's count");
+    let siblings =
+        std::fs::read_to_string("/sys/devices/system/cpu/cpu0/topology/thread_siblings_list")
+            .expect("CPU 0's thread siblings");
+    let per_core: usize = siblings
+        .trim()
+        .split(',')
+        .map(|part| match part.split_once('-') {
+            Some((a, b)) => b.parse::<usize>().unwrap() - a.parse::<usize>().unwrap() + 1,
+            None => 1,
+        })
+        .sum();
+    match bind {
+        "none" => online,
+        "core" => (np * per_core).min(online),
+        other => panic!("no expectation for --bind-to {other}"),
     }
-    assert_eq!(run.stdout.lines().count(), np, "{}", run.output());
-    cpus.len()
 }
 
 /// The hemisphere on `np` ranks bound by `bind`.
@@ -146,5 +158,46 @@ fn rank_zeros_dense_phases_take_the_cpus_of_the_ranks_beside_it_and_the_answer_s
             println!("{what} against 1 rank bound to a core, load step {step}: u {du:.1e}");
             assert!(du <= tol, "{what}, load step {step}: u differs by {du:.1e}");
         }
+    }
+}
+
+/// `solver.dense_threads = N` fixes rank 0's dense threads whatever the launcher's binding
+/// ("auto" follows it): summary.json's `dense_threads` and `dense_threads_asked`, and the log.
+#[test]
+fn solver_dense_threads_fixes_the_count_whatever_the_binding() {
+    let hertz = repo("cases/hertz/hertz.toml");
+    for (bind, set, want, asked) in [
+        ("none", None, cpus_of_ranks(1, "none"), "auto"),
+        ("core", None, cpus_of_ranks(1, "core"), "auto"),
+        ("none", Some("solver.dense_threads=1"), 1, "1"),
+        ("core", Some("solver.dense_threads=3"), 3, "3"),
+    ] {
+        let tmp = tempfile::tempdir().expect("tempdir");
+        let dir = tmp.path().join("out");
+        let mut args = vec![hertz.display().to_string()];
+        if let Some(s) = set {
+            args.extend(["--set".to_string(), s.to_string()]);
+        }
+        args.extend(["-o".to_string(), dir.display().to_string()]);
+        let s = solved(
+            run_with_timeout(launch(1, bind, &binary(), &args), LIMIT),
+            tmp,
+            dir,
+        );
+        let what = format!("--bind-to {bind}, {set:?}");
+        assert_eq!(s.f(&["dense_threads"]) as usize, want, "{what}");
+        assert_eq!(s.summary["dense_threads_asked"], asked, "{what}");
+        let from = if set.is_some() {
+            "solver.dense_threads"
+        } else {
+            "the CPUs of the ranks on its node"
+        };
+        assert!(
+            s.run
+                .stdout
+                .contains(&format!("dense phases on {want} thread(s) ({from})")),
+            "{what}: {}",
+            s.run.output()
+        );
     }
 }

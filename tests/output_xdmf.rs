@@ -360,13 +360,18 @@ fn missing_directory_is_an_error_on_every_rank() {
     );
 }
 
+/// ParaView is large and not installed by scripts/setup (scripts/check-paraview installs it):
+/// the test is ignored, reported as such by cargo test, and run with
+/// `cargo test --release --features fault-injection --test output_xdmf -- --ignored`; where it
+/// runs, a missing pvbatch fails it.
 #[test]
+#[ignore = "needs ParaView (scripts/check-paraview installs it): run with --ignored"]
 fn paraview_reads_the_mesh_and_the_contact_surface() {
     let pvbatch = Path::new("/usr/bin/pvbatch");
-    if !pvbatch.exists() {
-        eprintln!("skipped: /usr/bin/pvbatch not installed");
-        return;
-    }
+    assert!(
+        pvbatch.exists(),
+        "/usr/bin/pvbatch not installed (scripts/check-paraview installs ParaView)"
+    );
     let t = tempfile::tempdir().unwrap();
     write(2, t.path(), 3, 2, &["--contact"]);
     let script = t.path().join("pv_check.py");

@@ -236,3 +236,84 @@ fn bad_reuse_value_is_an_input_error() {
     );
     assert!(!out.exists(), "nothing written");
 }
+
+/// Hertz refined L4 (12 618 dofs) started with no node active, on the plain path after the
+/// condensed path fell back (a zone too wide for the test-only limit of 8 Schur dofs), with
+/// "auto": its choice to reuse comes from MUMPS' counts of the factored matrix, never from
+/// timings. Two runs take the same path step by step (the kinds of solve, the ranks, budgets,
+/// Krylov iterations and costs recorded), every choice follows the recorded costs by the
+/// documented rule (reuse when rank < budget and (rank + 2) iterations cost at most 3/4 of a
+/// factorisation step, the budget the iterations that one step costs, minus one, at most 200),
+/// and the answer is the plain path's.
+#[cfg(feature = "fault-injection")]
+#[test]
+fn auto_after_a_condensed_fallback_decides_from_counts() {
+    let (case, mesh) = hertz(4);
+    let run = |reuse: &str| {
+        let tmp = tempfile::tempdir().unwrap();
+        let out = tmp.path().join("out");
+        let sets = [
+            mesh.as_str(),
+            "newton.init=\"all_inactive\"",
+            &format!("solver.reuse=\"{reuse}\""),
+        ];
+        let mut cmd = solver_command(1, &case, &sets, &out);
+        cmd.env("SIGNORINI_TEST_LIMIT_MAX_SCHUR_DOFS", "8");
+        let s = solved(run_with_timeout(cmd, LIMIT), tmp, out);
+        s.assert_converged(reuse);
+        s
+    };
+    let (a, b, plain) = (run("auto"), run("auto"), run("never"));
+    let cs = &a.summary["newton"]["condensed"];
+    assert_eq!(
+        cs["too_wide"], true,
+        "the plain path after the fallback: {cs}"
+    );
+    let record = |s: &Solved| -> Vec<Value> {
+        history(s)
+            .iter()
+            .map(|e| {
+                let r = &e["reuse"];
+                serde_json::json!([
+                    e["solve"],
+                    e["iterations"],
+                    r["rank"],
+                    r["budget"],
+                    r["krylov_iterations"],
+                    r["fallback"],
+                    r["cost_factorisation"],
+                    r["cost_iteration"]
+                ])
+            })
+            .collect()
+    };
+    assert_eq!(record(&a), record(&b), "two runs, two paths");
+    let mut tried = 0;
+    for (i, e) in history(&a).iter().enumerate() {
+        let r = &e["reuse"];
+        let num = |k: &str| r[k].as_f64().unwrap_or_else(|| panic!("reuse.{k}: {e}"));
+        let (step, it) = (num("cost_factorisation"), num("cost_iteration"));
+        if i == 0 {
+            assert_eq!(
+                (step, it),
+                (0.0, 0.0),
+                "nothing factored before step 1: {e}"
+            );
+            continue;
+        }
+        assert!(step > 0.0 && it > 0.0, "step {}: costs {e}", i + 1);
+        let budget = (((step / it).floor() as usize).saturating_sub(1)).min(200);
+        let rank = num("rank") as usize;
+        let pays = rank < budget && (rank + 2) as f64 * it <= 0.75 * step;
+        let took = num("budget") as usize;
+        assert_eq!(took > 0, pays, "step {}: {e}", i + 1);
+        if pays {
+            assert_eq!(took, budget, "step {}: {e}", i + 1);
+            tried += 1;
+        }
+    }
+    println!("auto tried the reuse in {tried} of {} steps", a.steps());
+    assert_eq!(plain.active_node_ids(), a.active_node_ids());
+    let d = plain.u_rel_diff(&a);
+    assert!(d <= 1e-10, "|u - u_plain| / max|u| = {d:e}");
+}

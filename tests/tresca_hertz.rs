@@ -272,6 +272,13 @@ fn tresca_in_2d_by_ldlt_gives_the_lu_answer() {
         ldlt.assert_converged("LDLᵀ (default)");
         let lu = solve(np, &case(CASE), &["solver.petsc_options=\"-pc_type lu\""]);
         lu.assert_converged("LU");
+        // the factorisation each run used, as PETSc reports the steps' PC (MUMPS with the
+        // project's nested-dissection order): LDLᵀ by default, LU where asked
+        for (s, want) in [(&ldlt, "cholesky-mumps-nd"), (&lu, "lu-mumps-nd")] {
+            let ls = get(&s.summary, &["linear_solver"]);
+            assert_eq!(ls["pc_type"], want, "{np} rank(s): {ls}");
+            assert_eq!(ls["ksp_type"], "preonly", "{np} rank(s): {ls}");
+        }
         same_states(&ldlt, &lu);
         let d = ldlt.u_rel_diff(&lu);
         assert!(d <= 1e-10, "{np} rank(s): |u_LDLᵀ − u_LU| / max|u| = {d:e}");

@@ -63,6 +63,7 @@ pub const SOLVER: &[&str] = &[
     "rtol",
     "reuse",
     "repeatable",
+    "dense_threads",
 ];
 /// `[load]`.
 pub const LOAD: &[&str] = &["steps", "factors", "max_cutbacks"];

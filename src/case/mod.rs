@@ -201,7 +201,8 @@ pub enum Reuse {
     /// Direct, frictionless: the condensed path (Algorithm 1 on the contact unknowns, one
     /// factorisation with MUMPS' Schur complement, signorini::condensed; the case file may
     /// also say "condensed"); where it falls back, the plain path reuses a factorisation when
-    /// the measured costs say it pays (signorini::reduced). Direct with friction: every step
+    /// MUMPS' counts say it pays (flops of the factorisation against those of its solves,
+    /// signorini::reduced `ReuseCosts`; never timings). Direct with friction: every step
     /// refactorises (the condensed Coulomb path aside).
     /// Iterative: warm starts, inexact early steps, the preconditioner of an earlier step, set
     /// up anew when the Krylov iterations per decade grew by more than 30 % over those after
@@ -226,6 +227,26 @@ impl Reuse {
     }
 }
 
+/// `solver.dense_threads`: the OpenBLAS threads of rank 0's dense phases (the condensed
+/// path's dense work from [`crate::blas::WIDE_MIN_DIM`] unknowns on, crate::blas::NodeCores).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum DenseThreads {
+    /// One per CPU that the ranks on rank 0's node may use (the launcher's binding decides).
+    Auto,
+    /// This many, whatever the binding (on the CPUs of the ranks on rank 0's node).
+    Fixed(usize),
+}
+
+impl DenseThreads {
+    /// "auto" or the count, for summary.json and the log.
+    pub fn name(self) -> String {
+        match self {
+            DenseThreads::Auto => "auto".into(),
+            DenseThreads::Fixed(n) => n.to_string(),
+        }
+    }
+}
+
 #[derive(Debug, Clone, PartialEq)]
 pub struct SolverSection {
     pub preset: Preset,
@@ -243,6 +264,8 @@ pub struct SolverSection {
     /// so that repeated runs on a fixed rank count give the same bits (MUMPS on several ranks
     /// adds other ranks' contributions as their messages arrive: round-off from run to run).
     pub repeatable: bool,
+    /// The threads of rank 0's dense phases.
+    pub dense_threads: DenseThreads,
 }
 
 impl Default for SolverSection {
@@ -254,6 +277,7 @@ impl Default for SolverSection {
             rtol: 1e-10,
             reuse: Reuse::Auto,
             repeatable: false,
+            dense_threads: DenseThreads::Auto,
         }
     }
 }
@@ -1548,6 +1572,16 @@ impl Reader<'_> {
         }
         if let Some((bk, b)) = t.get("repeatable") {
             s.repeatable = self.boolean(&bk, b)?;
+        }
+        if let Some((dk, d)) = t.get("dense_threads") {
+            s.dense_threads = match &d.kind {
+                Kind::Int(v) if (1..=1024).contains(v) => DenseThreads::Fixed(*v as usize),
+                Kind::Int(v) => {
+                    return Err(self.err(&dk, d.loc, format!("must be 1 to 1024, got {v}")));
+                }
+                Kind::Str(_) => self.choice(&dk, d, &[("auto", DenseThreads::Auto)])?,
+                _ => return Err(self.type_err(&dk, d, "\"auto\" or an integer from 1 to 1024")),
+            };
         }
         if let Some((ok, o)) = t.get("petsc_options") {
             s.petsc_options = self.string(&ok, o)?.to_string();

@@ -491,6 +491,25 @@ fn solver_repeatable_is_a_boolean_off_by_default() {
 }
 
 #[test]
+fn solver_dense_threads_is_auto_or_a_count() {
+    assert_eq!(
+        parse(MINIMAL).unwrap().solver.dense_threads,
+        DenseThreads::Auto
+    );
+    let c = parse(&with("[solver]\ndense_threads = 2\n")).unwrap();
+    assert_eq!(c.solver.dense_threads, DenseThreads::Fixed(2));
+    let c = parse_set(MINIMAL, &["solver.dense_threads=\"auto\""]).unwrap();
+    assert_eq!(c.solver.dense_threads, DenseThreads::Auto);
+    for bad in ["0", "-1", "2000", "\"all\"", "1.5"] {
+        expect_err(
+            &with(&format!("[solver]\ndense_threads = {bad}\n")),
+            "solver.dense_threads",
+            "dense_threads",
+        );
+    }
+}
+
+#[test]
 fn reject_unknown_preset() {
     let e = expect_err(
         &with("[solver]\npreset = \"lu\"\n"),

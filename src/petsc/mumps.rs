@@ -538,6 +538,9 @@ pub struct FactorStats {
     pub factor_entries: i64,
     /// The order was ours (ICNTL(7) = 1), not MUMPS' own.
     pub given_order: bool,
+    /// LDLᵀ (SYM = 2), not LU: the factor entries are L's alone.
+    #[serde(skip)]
+    pub symmetric: bool,
 }
 
 /// An LDLᵀ (symmetric, SYM = 2) or LU (SYM = 0) factorisation of a distributed matrix by MUMPS
@@ -616,7 +619,10 @@ impl Factor {
             n,
             root,
             symmetric,
-            stats: FactorStats::default(),
+            stats: FactorStats {
+                symmetric,
+                ..FactorStats::default()
+            },
         };
         let set = match f.inst.as_mut() {
             Some(inst) => {

@@ -117,10 +117,16 @@ pub struct ContactSummary {
     pub scales: Scales,
 }
 
-/// summary.json's "linear_solver" section of a contact run.
+/// summary.json's "linear_solver" section of a contact run: the preset, and the Newton steps'
+/// KSP and PC types as PETSc has them after the options (the project's MUMPS factorisation
+/// with its nested-dissection order: "cholesky-mumps-nd" or "lu-mumps-nd"; absent for SNES VI).
 #[derive(Debug, Clone, Serialize)]
 pub struct PresetOnly {
     pub preset: &'static str,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub ksp_type: Option<String>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub pc_type: Option<String>,
 }
 
 /// What a contact solve reports in summary.json.
@@ -392,14 +398,14 @@ pub fn solve(
     };
     // a failure of a frictional body that only its contact holds says what may be the cause
     let sliding = friction && !held_anywhere(ctx, fixed);
+    let mut types = None;
     let (mut nr, outer_steps, condensed_summary) = run_method(
         ctx,
         &problem,
         &ns,
-        settings,
-        solver_section,
-        coords.as_ref(),
-        warm.as_ref(),
+        (settings, solver_section),
+        (coords.as_ref(), warm.as_ref()),
+        &mut types,
     )
     .map_err(|e| why_sliding(e, sliding))?;
     if law == Law::Coulomb {
@@ -464,6 +470,8 @@ pub fn solve(
             contact,
             linear_solver: PresetOnly {
                 preset: solver_section.preset.name(),
+                ksp_type: types.as_ref().map(|t| t.0.clone()),
+                pc_type: types.map(|t| t.1),
             },
             certificate,
         },
@@ -612,16 +620,15 @@ fn plain_reuse(
 
 /// Runs the method of the case (Algorithm 1/2 or Coulomb's generalised Newton, the fixed
 /// point on Tresca thresholds, or SNES VI) to convergence; a run that does not converge is
-/// [`RunError::NoConvergence`]. Returns the result and the fixed point's outer steps.
-/// Collective.
+/// [`RunError::NoConvergence`]. Returns the result and the fixed point's outer steps;
+/// `types`: the Newton steps' KSP and PC types. Collective.
 fn run_method(
     ctx: &Ctx,
     problem: &ContactProblem,
     ns: &NewtonSettings,
-    settings: &ContactSettings,
-    solver_section: &SolverSection,
-    coords: Option<&Vector>,
-    warm: Option<&WarmStart>,
+    (settings, solver_section): (&ContactSettings, &SolverSection),
+    (coords, warm): (Option<&Vector>, Option<&WarmStart>),
+    types: &mut Option<(String, String)>,
 ) -> Result<
     (
         NewtonResult,
@@ -636,6 +643,7 @@ fn run_method(
     let nr = match solver_section.method {
         Method::Newton => {
             let mut reduced = ReducedSystem::new(ctx, sys, b, coords, dim)?;
+            *types = Some(reduced.solver_types()?);
             let friction = settings.friction();
             let condense = !friction
                 && solver_section.reuse == Reuse::Auto

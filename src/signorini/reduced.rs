@@ -288,8 +288,14 @@ pub struct ReuseStep {
     pub krylov_iterations: usize,
     /// The Krylov solve did not reach its tolerance within the budget: refactorised.
     pub fallback: bool,
-    /// Seconds of this step's numeric factorisation (0 without one).
+    /// Seconds of this step's numeric factorisation (0 without one; a record only: no
+    /// choice depends on it).
     pub factorisation_seconds: f64,
+    /// The costs "auto" weighs ([`ReuseCosts`], in flops of the factorisation; recorded in
+    /// every mode) of the factored matrix' numeric factorisation with its solve, and of one
+    /// Krylov iteration on it (0: nothing factored yet, or no MUMPS statistics).
+    pub cost_factorisation: f64,
+    pub cost_iteration: f64,
 }
 
 /// One step's solve: the solver's report of the solve that produced u, how it was made, the
@@ -306,20 +312,76 @@ pub struct StepSolve {
 }
 
 /// "always": Krylov iterations a reuse may make before the step refactorises (fixed, so that
-/// runs and tests are reproducible; "auto" takes its budget from the measured costs).
+/// runs and tests are reproducible; "auto" takes its budget from the factorisation's counts).
 pub const ALWAYS_BUDGET: usize = 30;
 
 /// "auto" reuses only if the expected Krylov solve costs at most this fraction of a
-/// factorisation step: room for the estimate of one iteration and for timing noise.
+/// factorisation step: room for the estimate of one iteration.
 pub const AUTO_MARGIN: f64 = 0.75;
 
-/// Before any reuse step has measured it, the cost of one Krylov iteration is estimated as
-/// this multiple of one triangular solve pair (MatSolve; plus MatMult and orthogonalisation).
+/// The cost of one Krylov iteration on the factorisation as this multiple of one triangular
+/// solve pair (MatSolve; plus MatMult and orthogonalisation).
 pub const ITERATION_PER_SOLVE: f64 = 1.25;
 
+/// The cost of one flop of a triangular solve pair (sparse, memory-bound, one vector) in flops
+/// of the numeric factorisation (dense fronts, BLAS 3): a fixed ratio, so that "auto"'s choice
+/// depends on the run's counts alone, never on its timings. Measured on the plain path of
+/// the Hertz disk (docs/numbers.md, "solver.reuse = auto from counts").
+pub const SOLVE_FLOP_COST: f64 = 4.0;
+
+/// What "auto" weighs, in flops of the numeric factorisation, from MUMPS' global statistics
+/// of the last factorisation (the same on every rank): the factorisation (RINFOG(1)) and one
+/// triangular solve pair (2 flops per factor entry and substitution: L and U once each, or
+/// LDLᵀ's L twice), weighted by [`SOLVE_FLOP_COST`].
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ReuseCosts {
+    pub factorisation: f64,
+    pub solve: f64,
+}
+
+impl ReuseCosts {
+    /// From a factorisation's statistics; `None` without flops or entries.
+    pub fn of(stats: &petsc::mumps::FactorStats) -> Option<ReuseCosts> {
+        // INFOG(29) < 0: millions of entries
+        let entries = match stats.factor_entries {
+            e if e < 0 => -(e as f64) * 1e6,
+            e => e as f64,
+        };
+        let per_entry = if stats.symmetric { 4.0 } else { 2.0 };
+        (stats.flops > 0.0 && entries > 0.0).then_some(ReuseCosts {
+            factorisation: stats.flops,
+            solve: SOLVE_FLOP_COST * per_entry * entries,
+        })
+    }
+
+    /// One Krylov iteration on the factorisation.
+    pub fn iteration(&self) -> f64 {
+        ITERATION_PER_SOLVE * self.solve
+    }
+
+    /// "auto"'s rule: reuse when the expected `rank` + 2 Krylov iterations (the first applies
+    /// M⁻¹ to b; one per rank of S_k − S_j, as GMRES needs at most) cost at most
+    /// [`AUTO_MARGIN`] of a factorisation step (the factorisation and its solve), with the
+    /// budget of iterations that cost one such step (beyond it the reuse no longer pays), at
+    /// most GMRES' restart. Counts only: the same choice on every run.
+    pub fn plan(&self, rank: usize) -> Option<usize> {
+        let step = self.factorisation + self.solve;
+        let it = self.iteration();
+        if it <= 0.0 || !step.is_finite() {
+            return None;
+        }
+        // (budget + 1) iterations cost at most one factorisation step
+        let budget = ((step / it).floor() as usize)
+            .saturating_sub(1)
+            .min(solver::REUSE_RESTART);
+        let expected = (rank + 2) as f64 * it;
+        (rank < budget && expected <= AUTO_MARGIN * step).then_some(budget)
+    }
+}
+
 /// The reuse path of the direct preset: a GMRES solver on the shared factorisation, the
-/// constraints of the factored matrix S_j and of the system written last, and the costs
-/// measured in this run (seconds on this rank; the ranks agree on their means per step).
+/// constraints of the factored matrix S_j and of the system written last, and S_j's costs
+/// from MUMPS' counts (the same on every rank).
 struct Reuser {
     mode: Reuse,
     ksp: Ksp,
@@ -327,43 +389,20 @@ struct Reuser {
     factored: Option<(Directions, Springs)>,
     /// The same of the system written last.
     current: (Directions, Springs),
-    /// Numeric factorisation (KSPSetUp) and one solve with it (KSPSolve, preonly), last
-    /// factorisation step.
-    t_factor: f64,
-    t_solve: f64,
-    /// One Krylov iteration of the last successful reuse (seconds / (iterations + 1)).
-    t_iteration: Option<f64>,
+    /// The costs of the factored matrix' factorisation (`None`: no MUMPS statistics, e.g.
+    /// a preconditioner given by `solver.petsc_options`: "auto" then never reuses).
+    costs: Option<ReuseCosts>,
 }
 
 impl Reuser {
     /// Whether to try the reuse, and its budget: "always" whenever a factorisation exists;
-    /// "auto" when the expected rank + 1 iterations of the Krylov solve cost at most
-    /// [`AUTO_MARGIN`] of the numeric factorisation and its solve, both measured in this run;
-    /// the budget is what a factorisation step costs (beyond it the reuse no longer pays).
-    /// `costs` = the ranks' mean (t_factor, t_solve, t_iteration).
-    fn plan(&self, rank: usize, costs: [f64; 3]) -> Option<usize> {
+    /// "auto" by [`ReuseCosts::plan`] on the factored matrix' counts.
+    fn plan(&self, rank: usize) -> Option<usize> {
         self.factored.as_ref()?;
         match self.mode {
             Reuse::Never => None,
             Reuse::Always => Some(ALWAYS_BUDGET),
-            Reuse::Auto => {
-                let [t_factor, t_solve, t_it] = costs;
-                let t_it = if t_it > 0.0 {
-                    t_it
-                } else {
-                    ITERATION_PER_SOLVE * t_solve
-                };
-                if t_it <= 0.0 {
-                    return None;
-                }
-                // (budget + 1) iterations (the first applies M⁻¹ to b) cost at most one
-                // factorisation step
-                let budget = ((t_factor + t_solve) / t_it).floor() as usize;
-                let budget = budget.saturating_sub(1).min(solver::REUSE_RESTART);
-                // the expected rank + 1 iterations (+ the first M⁻¹ b) well within the cost
-                let expected = (rank + 2) as f64 * t_it;
-                (rank < budget && expected <= AUTO_MARGIN * (t_factor + t_solve)).then_some(budget)
-            }
+            Reuse::Auto => self.costs?.plan(rank),
         }
     }
 }
@@ -737,9 +776,7 @@ impl ReducedSystem {
             ksp,
             factored: None,
             current: (Directions::new(), Springs::new()),
-            t_factor: 0.0,
-            t_solve: 0.0,
-            t_iteration: None,
+            costs: None,
         });
         Ok(())
     }
@@ -867,8 +904,8 @@ impl ReducedSystem {
         let t = Instant::now();
         let dim = self.dim;
         let re = self.reuser.as_mut().expect("checked");
-        // One Allreduce: the slip blocks changed on every rank and the ranks' mean costs,
-        // so that every rank takes the same path.
+        // One Allreduce: the slip blocks changed on every rank, so that every rank takes the
+        // same path (the costs are MUMPS' global counts, the same on every rank).
         let (dirs, springs) = match &re.factored {
             Some((d, sp)) => (
                 direction_changes(d, &re.current.0),
@@ -876,26 +913,22 @@ impl ReducedSystem {
             ),
             None => (0, 0),
         };
-        let g = ctx.sum_vec(&[
-            springs as f64,
-            re.t_factor,
-            re.t_solve,
-            re.t_iteration.unwrap_or(0.0),
-        ]);
-        let n = ctx.size as f64;
+        let g = ctx.sum_vec(&[springs as f64]);
         let rank = 2 * dirs + (dim - 1) * (g[0].round() as usize);
+        let weighed = match (&re.factored, re.costs) {
+            (Some(_), Some(c)) => (c.factorisation + c.solve, c.iteration()),
+            _ => (0.0, 0.0),
+        };
         let mut step = ReuseStep {
             rank,
             budget: 0,
             krylov_iterations: 0,
             fallback: false,
             factorisation_seconds: 0.0,
+            cost_factorisation: weighed.0,
+            cost_iteration: weighed.1,
         };
-        let plan = if allow_reuse {
-            re.plan(rank, [g[1] / n, g[2] / n, g[3] / n])
-        } else {
-            None
-        };
+        let plan = if allow_reuse { re.plan(rank) } else { None };
         if let Some(budget) = plan {
             re.ksp.set_operator(&self.s)?;
             re.ksp.set_reuse_preconditioner(true)?;
@@ -905,7 +938,6 @@ impl ReducedSystem {
             step.krylov_iterations = info.iterations;
             if info.converged() {
                 let secs = t.elapsed().as_secs_f64();
-                re.t_iteration = Some(secs / (info.iterations + 1) as f64);
                 return Ok(StepSolve {
                     info,
                     kind: SolveKind::Reuse,
@@ -923,12 +955,11 @@ impl ReducedSystem {
         self.ls.ksp.set_operator(&self.s)?;
         let tf = Instant::now();
         self.ls.ksp.set_up()?;
-        re.t_factor = tf.elapsed().as_secs_f64();
-        let ts = Instant::now();
+        step.factorisation_seconds = tf.elapsed().as_secs_f64();
         let info = self.ls.solve(&self.rhs, &mut self.u)?;
-        re.t_solve = ts.elapsed().as_secs_f64();
+        re.costs =
+            petsc::ndfactor::record(&self.ls.ksp)?.and_then(|(r, _)| ReuseCosts::of(&r.stats));
         re.factored = Some(re.current.clone());
-        step.factorisation_seconds = re.t_factor;
         Ok(StepSolve {
             info,
             kind: SolveKind::Factorisation,
@@ -1149,6 +1180,11 @@ impl ReducedSystem {
     /// True when the solver factorises (direct preset: PCLU / PCCHOLESKY). Local.
     pub fn factorises(&self) -> petsc::Result<bool> {
         self.ls.ksp.factorises()
+    }
+
+    /// The KSP and PC types of the steps' solver ([`Ksp::type_names`]). Local.
+    pub fn solver_types(&self) -> petsc::Result<(String, String)> {
+        self.ls.ksp.type_names()
     }
 
     /// The matrix written last (the condensed path hands K_p to MUMPS directly).
@@ -1678,5 +1714,39 @@ mod tests {
         assert_eq!(slip_block_changes(&old, &new), (4, 3));
         assert_eq!(slip_block_changes(&new, &old), (4, 3));
         assert_eq!(slip_block_changes(&new, &new), (0, 0));
+    }
+
+    #[test]
+    fn auto_reuses_by_counts_alone() {
+        use crate::petsc::mumps::FactorStats;
+        let stats = |flops: f64, entries: i64, symmetric: bool| FactorStats {
+            flops,
+            factor_entries: entries,
+            symmetric,
+            ..FactorStats::default()
+        };
+        // 1e9 flops, 1e6 LDLᵀ entries: a solve pair weighs 4e6 × SOLVE_FLOP_COST
+        let c = ReuseCosts::of(&stats(1e9, 1_000_000, true)).unwrap();
+        assert_eq!(c.solve, 4e6 * SOLVE_FLOP_COST);
+        assert_eq!(c, ReuseCosts::of(&stats(1e9, 1_000_000, true)).unwrap());
+        // LU counts L and U: 2 flops per entry; INFOG(29) < 0 counts millions
+        let lu = ReuseCosts::of(&stats(1e9, -2, false)).unwrap();
+        assert_eq!(lu.solve, 2.0 * 2e6 * SOLVE_FLOP_COST);
+        let step = c.factorisation + c.solve;
+        let budget = ((step / c.iteration()).floor() as usize - 1).min(solver::REUSE_RESTART);
+        assert!(budget > 2);
+        assert_eq!(c.plan(0), Some(budget));
+        assert_eq!(c.plan(1), c.plan(1), "the same counts, the same choice");
+        // beyond the budget, or the expected iterations beyond the margin: refactorise
+        assert_eq!(c.plan(budget), None);
+        let most = (0..budget).filter(|&r| c.plan(r).is_some()).max().unwrap();
+        assert!((most + 2) as f64 * c.iteration() <= AUTO_MARGIN * step);
+        assert!((most + 3) as f64 * c.iteration() > AUTO_MARGIN * step || most + 1 == budget);
+        // a factorisation as cheap as a few solves is never worth a Krylov solve
+        let cheap = ReuseCosts::of(&stats(1e3 * SOLVE_FLOP_COST, 1000, true)).unwrap();
+        assert_eq!(cheap.plan(0), None);
+        // no statistics: no costs
+        assert_eq!(ReuseCosts::of(&stats(0.0, 1000, true)), None);
+        assert_eq!(ReuseCosts::of(&stats(1e9, 0, true)), None);
     }
 }

@@ -1,4 +1,5 @@
-//! A small tmpfs for tests of a full disk (root only).
+//! A small tmpfs for tests of a full disk (root only: scripts/test and CI run as root; a test
+//! that cannot mount one fails, it does not pass untested).
 
 use std::path::PathBuf;
 use std::process::Command;
@@ -10,18 +11,25 @@ pub struct SmallDisk {
 }
 
 impl SmallDisk {
-    /// Mounts a tmpfs of `size` (e.g. "900k"); `None` where mounting is not allowed.
-    pub fn mount(size: &str) -> Option<SmallDisk> {
-        let tmp = tempfile::tempdir().ok()?;
+    /// Mounts a tmpfs of `size` (e.g. "900k"); panics, with mount's own message, where it
+    /// cannot (not root, or no permission to mount).
+    pub fn mount(size: &str) -> SmallDisk {
+        let tmp = tempfile::tempdir().expect("tempdir");
         let path = tmp.path().join("disk");
-        std::fs::create_dir(&path).ok()?;
-        let ok = Command::new("mount")
+        std::fs::create_dir(&path).expect("the mount point");
+        let out = Command::new("mount")
             .args(["-t", "tmpfs", "-o", &format!("size={size}"), "tmpfs"])
             .arg(&path)
             .output()
-            .map(|o| o.status.success())
-            .unwrap_or(false);
-        ok.then_some(SmallDisk { _tmp: tmp, path })
+            .unwrap_or_else(|e| panic!("cannot run mount: {e}"));
+        assert!(
+            out.status.success(),
+            "cannot mount a tmpfs of {size} at {} (the full-disk tests need root, as \
+             scripts/test and CI have): {}",
+            path.display(),
+            String::from_utf8_lossy(&out.stderr)
+        );
+        SmallDisk { _tmp: tmp, path }
     }
 }
 

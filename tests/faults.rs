@@ -128,6 +128,26 @@ fn tresca_and_coulomb() {
     assert!(sweep(&block, &[coulomb], "petsc-call", &[""]) >= 5);
 }
 
+/// Two bodies in one mesh (tests/meshes/two_squares.geo), each held at its left side, pressed
+/// onto the plane y = 0: the bodies' count and their Dirichlet Gram matrices are agreed stages.
+#[test]
+fn two_bodies() {
+    let tmp = tempfile::tempdir().unwrap();
+    let mesh = tmp.path().join("two_squares.msh");
+    common::process::gmsh("two_squares.geo", 2, 0.1, &mesh);
+    let text = format!(
+        "[mesh]\nfile = {:?}\n[material]\nyoung = 1.0\npoisson = 0.3\nmodel = \"plane_strain\"\n\
+         [[neumann]]\ngroup = \"top\"\npressure = 0.01\n\
+         [[dirichlet]]\ngroup = \"left_a\"\nvalue = [0.0, 0.0]\n\
+         [[dirichlet]]\ngroup = \"left_b\"\nvalue = [0.0, 0.0]\n\
+         [contact]\ngroup = \"bottom\"\n\
+         obstacle = {{ type = \"plane\", point = [0.0, 0.0], normal = [0.0, 1.0] }}\n",
+        mesh.display().to_string()
+    );
+    let case = common::process::write_case(&tmp.path().join("two.toml"), &text);
+    assert!(sweep(&case, &[], "agree", &KINDS) >= 5);
+}
+
 /// The block under the circle of tests/cases/indent2d_sym.toml, pushed by the force that a
 /// motion of 0.03 takes (measured by a run first).
 fn force_sets() -> (PathBuf, String) {

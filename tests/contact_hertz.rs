@@ -276,6 +276,13 @@ fn hertz_without_support_fails_cleanly() {
             "init {init}: no 'no support' message\n{}",
             r.output()
         );
+        // the message names the case file and the keys to change
+        assert!(
+            r.stderr
+                .contains("hertz.toml: keys 'dirichlet', 'contact.obstacle'"),
+            "init {init}: the keys not named\n{}",
+            r.output()
+        );
         assert!(!out.exists(), "init {init}: output directory left behind");
     }
 }

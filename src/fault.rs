@@ -4,13 +4,11 @@
 //! it: [`injected`] is then `None` and [`limit`] the default, both constant).
 //!
 //! `SIGNORINI_TEST_FAULT=STAGE@RANK` makes [`injected`] report a failure at the stage named
-//! STAGE on rank RANK only; `STAGE@RANK:panic` makes [`strike`] panic there instead and
-//! `STAGE@RANK:petsc` return a PETSc error raised on that rank alone. Stages: "mumps-rows" (a
+//! STAGE on rank RANK only (a counted stage, below, also as `:panic` or `:petsc`). Stages: "mumps-rows" (a
 //! rank hands its matrix rows to MUMPS), "nd-graph" (a rank reads its part of the node graph
 //! for the nested-dissection order), "condensed-expand" (a rank takes its part of the
 //! condensed path's expanded solution), "dense-steps" and "predictor-model" (rank 0 only: a
-//! panic in the dense computation that the other ranks wait for), and the stages named by
-//! [`strike`]'s callers (grep `fault::strike`).
+//! panic in the dense computation that the other ranks wait for).
 //!
 //! `SIGNORINI_TEST_FAULT=agree#N@RANK[:KIND]` strikes at the N-th agreement on that rank (every
 //! guarded stage of every path ends in one), `petsc-call#N@RANK[:KIND]` at its N-th checked
@@ -50,18 +48,6 @@ pub fn injected_kind(stage: &str, rank: usize) -> Option<(String, Kind)> {
 #[inline(always)]
 pub fn injected_kind(_stage: &str, _rank: usize) -> Option<(String, Kind)> {
     None
-}
-
-/// At a guarded stage whose own failure is a `RunError` on this rank: `Err` with the injected
-/// message (kind `Error`), a panic (`panic`), or a PETSc error raised on this rank alone
-/// (`petsc`); `Ok` otherwise. Local.
-pub fn strike(stage: &str, rank: usize) -> Result<(), crate::error::RunError> {
-    match injected_kind(stage, rank) {
-        None => Ok(()),
-        Some((m, Kind::Error)) => Err(crate::error::RunError::Failed(m)),
-        Some((m, Kind::Panic)) => panic!("{m}"),
-        Some((m, Kind::Petsc)) => Err(crate::petsc::raised_error(m).into()),
-    }
 }
 
 /// At the `n`-th pass of this rank through the counted stage `stage` ("agree": an agreement of

@@ -246,3 +246,26 @@ pub fn partition<C: Communicator>(
         node_orig: (0..n_nodes).collect(),
     })
 }
+
+/// The sorted, distinct nodes of `cells` and the values of the distributed nodal vector `u`
+/// (`dim` per node) there, gathered from their owners. Collective.
+pub fn values_at_cells(
+    mesh: &Mesh,
+    layout: &Layout,
+    cells: &[usize],
+    u: &petsc::Vector,
+) -> petsc::Result<(Vec<usize>, Vec<f64>)> {
+    let dim = mesh.dim;
+    let mut nodes: Vec<usize> = cells
+        .iter()
+        .flat_map(|&c| mesh.cell(c).iter().copied())
+        .collect();
+    nodes.sort_unstable();
+    nodes.dedup();
+    let idx: Vec<PInt> = nodes
+        .iter()
+        .flat_map(|&v| (0..dim).map(move |k| (layout.node_global[v] * dim + k) as PInt))
+        .collect();
+    let vals = u.gather(&idx)?;
+    Ok((nodes, vals))
+}

@@ -7,7 +7,7 @@ use crate::mesh::Mesh;
 use crate::output::{FieldBuf, SolutionFields};
 use crate::par::Ctx;
 use crate::partition::Layout;
-use crate::petsc::{self, PInt, Vector};
+use crate::petsc::{self, Vector};
 use crate::warnings::{self, Place, Warning};
 
 /// The values of a nodal vector (dim per node) at every node of this rank's cells, owned or
@@ -17,20 +17,7 @@ pub fn local_cell_values(
     layout: &Layout,
     u: &Vector,
 ) -> petsc::Result<(Vec<usize>, Vec<f64>)> {
-    let dim = mesh.dim;
-    let mut nodes: Vec<usize> = layout
-        .local_cells
-        .iter()
-        .flat_map(|&c| mesh.cell(c).iter().copied())
-        .collect();
-    nodes.sort_unstable();
-    nodes.dedup();
-    let idx: Vec<PInt> = nodes
-        .iter()
-        .flat_map(|&v| (0..dim).map(move |k| (layout.node_global[v] * dim + k) as PInt))
-        .collect();
-    let vals = u.gather(&idx)?;
-    Ok((nodes, vals))
+    crate::partition::values_at_cells(mesh, layout, &layout.local_cells, u)
 }
 
 /// What the cell field `rank` holds (the `codes` attribute of /cell/rank).

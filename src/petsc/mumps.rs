@@ -154,15 +154,7 @@ impl SchurFactor {
     /// `job` on the instance: collective on every rank, or on rank 0 alone with its outcome
     /// agreed over the communicator (`one_process`).
     fn call(&mut self, job: i32) -> Result<()> {
-        if !self.one_process {
-            return self
-                .inst
-                .as_mut()
-                .expect("an instance on every rank")
-                .call(job);
-        }
-        let r = self.inst.as_mut().map_or(Ok(()), |i| i.call(job));
-        agreed(self.comm, r)
+        call_on(self.comm, &mut self.inst, self.one_process, job)
     }
 
     /// RINFOG(1) of the analysis: the flops of eliminating the variables outside the Schur
@@ -357,6 +349,16 @@ impl Drop for Instance {
             unsafe { raw::dmumps_c(&mut *self.id) };
         }
     }
+}
+
+/// `job` on `inst`: collective on every rank, or (`one_process`) on rank 0's instance alone
+/// with its outcome agreed over `comm`.
+fn call_on(comm: MPI_Comm, inst: &mut Option<Instance>, one_process: bool, job: i32) -> Result<()> {
+    if !one_process {
+        return inst.as_mut().expect("an instance on every rank").call(job);
+    }
+    let r = inst.as_mut().map_or(Ok(()), |i| i.call(job));
+    agreed(comm, r)
 }
 
 /// A rank-local result agreed over `comm` before the next collective MUMPS call: `Ok` only if
@@ -649,15 +651,7 @@ impl Factor {
     /// `job` on the instance: collective on every rank, or on rank 0 alone with its outcome
     /// agreed over the communicator (`one_process`).
     fn call(&mut self, job: i32) -> Result<()> {
-        if self.own_pattern.is_none() {
-            return self
-                .inst
-                .as_mut()
-                .expect("an instance on every rank")
-                .call(job);
-        }
-        let r = self.inst.as_mut().map_or(Ok(()), |i| i.call(job));
-        agreed(self.comm, r)
+        call_on(self.comm, &mut self.inst, self.own_pattern.is_some(), job)
     }
 
     /// With `one_process`, rank 0's statistics on every rank. Collective.

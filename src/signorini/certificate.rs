@@ -435,17 +435,7 @@ pub fn equilibrium(
         .copied()
         .filter(|&c| mesh.cell(c).iter().any(|&v| is_fixed(v)))
         .collect();
-    let mut nodes: Vec<usize> = cells
-        .iter()
-        .flat_map(|&c| mesh.cell(c).iter().copied())
-        .collect();
-    nodes.sort_unstable();
-    nodes.dedup();
-    let idx: Vec<PInt> = nodes
-        .iter()
-        .flat_map(|&v| (0..dim).map(move |k| (layout.node_global[v] * dim + k) as PInt))
-        .collect();
-    let uvals = u.gather(&idx)?;
+    let (nodes, uvals) = crate::partition::values_at_cells(mesh, layout, &cells, u)?;
     let (lambda, mu) = material.lame();
     let (mut vi, mut vv): (Vec<PInt>, Vec<f64>) = (Vec::new(), Vec::new());
     let mut ke = [0.0; 144];

@@ -77,18 +77,37 @@ pub fn contact_warnings(
     res: &[NodeResult],
     displacement: &[[f64; 3]],
 ) -> Vec<Warning> {
-    let dim = mesh.dim;
-    let size = mesh.extent();
     let outward = outward_normals(mesh, layout, settings, &b.nodes);
     let np = settings.pairs.len();
-    // per pair: [active, crossed h, its tag, x(3), pull, push, active with a pull, largest
-    // pull, its tag, x(3)]
-    let mut local = vec![0.0; REC * np];
-    for r in local.chunks_exact_mut(REC) {
-        r[1] = f64::NEG_INFINITY;
-        r[9] = f64::NEG_INFINITY;
+    let local = local_records(b, res, &outward, displacement, np);
+    let all = ctx.all_gather_varcount(&local);
+    let mut list = Vec::new();
+    for (p, pair) in settings.pairs.iter().enumerate() {
+        let t = combined(&all, p, np);
+        pair_warnings(pair, &t, mesh.dim, mesh.extent(), &mut list);
     }
-    for ((k, r), o) in b.nodes.iter().zip(res).zip(&outward) {
+    list
+}
+
+/// An empty record: sums 0, the largest values −∞.
+fn empty_record() -> [f64; REC] {
+    let mut r = [0.0; REC];
+    r[1] = f64::NEG_INFINITY;
+    r[9] = f64::NEG_INFINITY;
+    r
+}
+
+/// This rank's records, `REC` numbers per pair: [active, crossed h, its tag, x(3), pull, push,
+/// active with a pull, largest pull, its tag, x(3)]. Local.
+fn local_records(
+    b: &ContactBoundary,
+    res: &[NodeResult],
+    outward: &[[f64; 3]],
+    displacement: &[[f64; 3]],
+    np: usize,
+) -> Vec<f64> {
+    let mut local: Vec<f64> = (0..np).flat_map(|_| empty_record()).collect();
+    for ((k, r), o) in b.nodes.iter().zip(res).zip(outward) {
         let rec = &mut local[REC * k.pair..REC * (k.pair + 1)];
         let along = dot(k.frame.n, *o);
         if r.active {
@@ -120,87 +139,98 @@ pub fn contact_warnings(
             rec[3..6].copy_from_slice(&k.x);
         }
     }
-    let all = ctx.all_gather_varcount(&local);
-    let mut list = Vec::new();
-    for (p, pair) in settings.pairs.iter().enumerate() {
-        let mut t = [0.0; REC];
-        t[1] = f64::NEG_INFINITY;
-        t[9] = f64::NEG_INFINITY;
-        for r in all
-            .chunks_exact(REC * np)
-            .map(|r| &r[REC * p..REC * (p + 1)])
-        {
-            for i in [0, 6, 7, 8] {
-                t[i] += r[i];
-            }
-            for (v, rest) in [(1, 2..6), (9, 10..14)] {
-                if r[v] > t[v] || (r[v] == t[v] && r[rest.start] < t[rest.start]) {
-                    t[v] = r[v];
-                    t[rest.clone()].copy_from_slice(&r[rest]);
-                }
-            }
+    local
+}
+
+/// Pair `p`'s record over every rank's (`all`: the ranks' records in rank order, `np` pairs
+/// each): sums added, the largest values kept with their node (ties: the smaller tag). Local.
+fn combined(all: &[f64], p: usize, np: usize) -> [f64; REC] {
+    let mut t = empty_record();
+    for r in all
+        .chunks_exact(REC * np)
+        .map(|r| &r[REC * p..REC * (p + 1)])
+    {
+        for i in [0, 6, 7, 8] {
+            t[i] += r[i];
         }
-        let obstacle = pair.key("obstacle");
-        let warning = |code, message: String, value, threshold, tag: f64, x: &[f64]| Warning {
-            code,
-            message,
-            key: Some(obstacle.clone()),
-            pair: Some(pair.key.clone()),
-            value,
-            threshold,
-            at: Some(Place {
-                node: Some(tag as u64),
-                cell: None,
-                x: x[..dim].to_vec(),
-            }),
-            steps: Vec::new(),
-        };
-        if t[0] == 0.0 && t[1] > CROSSED_RTOL * size {
-            let msg = format!(
-                "{}: the obstacle is pressed into the body, yet no contact node is active (total \
-                 force 0): contact node {} at {} ends {:.4e} beyond the obstacle's surface, on \
-                 the side the body faces, without touching it — does the obstacle's normal point \
-                 from the obstacle into the body, and do its motion or force and the loads point \
-                 the way intended? (key '{obstacle}')",
-                pair.key,
-                t[2] as u64,
-                warnings::coords(&t[3..3 + dim]),
-                t[1]
-            );
-            list.push(warning(
-                warnings::PRESSED_WITHOUT_CONTACT,
-                msg,
-                t[1] / size,
-                CROSSED_RTOL,
-                t[2],
-                &t[3..6],
-            ));
-        }
-        let normal = t[6] + t[7];
-        if t[6] > 0.0 && t[6] > warnings::PULL_FRACTION * normal {
-            let msg = format!(
-                "{}: the contact force pulls the body's surface outward at {} of its {} active \
-                 node(s), {:.1} % of the normal contact force (the most at contact node {} at \
-                 {}): contact can only push — does the obstacle's normal point from the \
-                 obstacle into the body? (key '{obstacle}')",
-                pair.key,
-                t[8] as usize,
-                t[0] as usize,
-                100.0 * t[6] / normal,
-                t[10] as u64,
-                warnings::coords(&t[11..11 + dim])
-            );
-            list.push(warning(
-                warnings::PULLING_FORCE,
-                msg,
-                t[6] / normal,
-                warnings::PULL_FRACTION,
-                t[10],
-                &t[11..14],
-            ));
+        for (v, rest) in [(1, 2..6), (9, 10..14)] {
+            if r[v] > t[v] || (r[v] == t[v] && r[rest.start] < t[rest.start]) {
+                t[v] = r[v];
+                t[rest.clone()].copy_from_slice(&r[rest]);
+            }
         }
     }
-    list
+    t
+}
+
+/// The warnings of one pair's combined record `t` (`size`: the body's extent), pushed on
+/// `list`. Local.
+fn pair_warnings(
+    pair: &crate::setup::PairSettings,
+    t: &[f64; REC],
+    dim: usize,
+    size: f64,
+    list: &mut Vec<Warning>,
+) {
+    let obstacle = pair.key("obstacle");
+    let warning = |code, message: String, value, threshold, tag: f64, x: &[f64]| Warning {
+        code,
+        message,
+        key: Some(obstacle.clone()),
+        pair: Some(pair.key.clone()),
+        value,
+        threshold,
+        at: Some(Place {
+            node: Some(tag as u64),
+            cell: None,
+            x: x[..dim].to_vec(),
+        }),
+        steps: Vec::new(),
+    };
+    if t[0] == 0.0 && t[1] > CROSSED_RTOL * size {
+        let msg = format!(
+            "{}: the obstacle is pressed into the body, yet no contact node is active (total \
+             force 0): contact node {} at {} ends {:.4e} beyond the obstacle's surface, on \
+             the side the body faces, without touching it — does the obstacle's normal point \
+             from the obstacle into the body, and do its motion or force and the loads point \
+             the way intended? (key '{obstacle}')",
+            pair.key,
+            t[2] as u64,
+            warnings::coords(&t[3..3 + dim]),
+            t[1]
+        );
+        list.push(warning(
+            warnings::PRESSED_WITHOUT_CONTACT,
+            msg,
+            t[1] / size,
+            CROSSED_RTOL,
+            t[2],
+            &t[3..6],
+        ));
+    }
+    let normal = t[6] + t[7];
+    if t[6] > 0.0 && t[6] > warnings::PULL_FRACTION * normal {
+        let msg = format!(
+            "{}: the contact force pulls the body's surface outward at {} of its {} active \
+             node(s), {:.1} % of the normal contact force (the most at contact node {} at \
+             {}): contact can only push — does the obstacle's normal point from the \
+             obstacle into the body? (key '{obstacle}')",
+            pair.key,
+            t[8] as usize,
+            t[0] as usize,
+            100.0 * t[6] / normal,
+            t[10] as u64,
+            warnings::coords(&t[11..11 + dim])
+        );
+        list.push(warning(
+            warnings::PULLING_FORCE,
+            msg,
+            t[6] / normal,
+            warnings::PULL_FRACTION,
+            t[10],
+            &t[11..14],
+        ));
+    }
 }
 
 /// The warnings of a pair's start ([`warnings::START_INSIDE`]), from the gaps g0 of `nodes`

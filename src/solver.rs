@@ -87,6 +87,20 @@ pub fn choose_preset(asked: Preset, dim: usize, dofs: usize, friction: bool) -> 
     }
 }
 
+/// The coarsest level's zero singular values, relative to the matrix' largest diagonal entry
+/// (PETSc's absolute default, for a matrix of unit size).
+pub const SVD_ZERO_RELATIVE: f64 = 1e-12;
+
+/// The largest |diagonal entry| of `a` over all ranks: the size the iterative preset's
+/// coarse-level threshold is measured against ([`configure`]). Collective.
+pub fn matrix_scale(ctx: &Ctx, a: &Matrix) -> petsc::Result<f64> {
+    let (lo, hi) = a.ownership_range()?;
+    let mut d = Vector::new_mpi(ctx.comm(), hi - lo, 1)?;
+    a.diagonal(&mut d)?;
+    let local = d.read(|x| x.iter().fold(0.0_f64, |m, v| m.max(v.abs())))?;
+    Ok(ctx.max_f64(local))
+}
+
 /// Splits "-a 1 -b -c x" into (name, value) pairs; a token that starts with '-' and is not a
 /// number begins a new option.
 pub fn split_options(s: &str) -> Vec<(String, String)> {
@@ -109,17 +123,32 @@ pub fn split_options(s: &str) -> Vec<(String, String)> {
 
 /// Puts preset and case options into the database without overriding the command line:
 /// command line > case file `petsc_options` > preset.
+///
+/// `scale` is the largest |diagonal entry| of the stiffness matrix ([`matrix_scale`]). PETSc's
+/// SVD treats singular values below an absolute 1e-12 as zero; the iterative preset's coarsest
+/// level is singular when a floating body's free rigid modes are S's null space, and its null
+/// singular values sit at round-off of the matrix' own size. The threshold is therefore
+/// 1e-12 × `scale`: on a body with E = 1e9 (block3d, 2 ranks) the absolute default inverted
+/// those round-off singular values and GMRES stalled at 1.4e-4 ‖b‖ (DIVERGED_BREAKDOWN)
+/// where E = 2 converged in 18 iterations; the run is now the same in any unit system.
 pub fn configure(
     preset: Preset,
     rtol: f64,
     symmetric: bool,
     (case_options, repeatable): (&str, bool),
+    scale: f64,
 ) -> petsc::Result<()> {
     for (name, value) in split_options(case_options) {
         options::set_default(&name, &value)?;
     }
     for (name, value) in split_options(&preset_options(preset, rtol, symmetric)) {
         options::set_default(&name, &value)?;
+    }
+    if matches!(preset, Preset::Iterative) && scale > 0.0 {
+        options::set_default(
+            "-mg_coarse_pc_svd_zero_sing",
+            &format!("{:e}", SVD_ZERO_RELATIVE * scale),
+        )?;
     }
     // Issue 10 (repeatable runs): on 3 or more ranks GAMG's Galerkin products PᵀAP by the
     // all-at-once algorithm, whose off-process sums do not depend on message arrival (the
@@ -284,11 +313,13 @@ pub fn linear_solve(
     settings: &SolverSection,
 ) -> Result<(Vector, LinearReport), RunError> {
     let t = Instant::now();
+    let scale = matrix_scale(ctx, &sys.a)?;
     configure(
         settings.preset,
         settings.rtol,
         true,
         (&settings.petsc_options, settings.repeatable),
+        scale,
     )?;
     let coords = near_null_space_coordinates(ctx, mesh, layout, settings.preset)?;
     let mut ls = LinearSolver::new(ctx.comm(), &mut sys.a, coords.as_ref())?;

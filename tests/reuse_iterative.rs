@@ -210,3 +210,36 @@ fn tresca_makes_no_inexact_steps() {
     let d = plain.u_rel_diff(&s);
     assert!(d <= 1e-8, "Tresca: |u - u_plain| / max|u| = {d:e}");
 }
+
+/// The iterative preset does not depend on the unit system: the floating 3D block (its free
+/// rigid modes as S's null space, a singular coarsest level) with E and p both scaled by 1e9
+/// takes the same Newton steps and GMRES iterations, and the same u, as with E = 2, p = 0.1,
+/// on 2 ranks. Before the coarse SVD's threshold was made relative to the matrix (solver.rs
+/// `configure`), PETSc's absolute 1e-12 inverted the round-off singular values at E = 2e9 and
+/// GMRES broke down after 400 iterations.
+#[test]
+fn the_iterative_preset_is_the_same_in_any_unit_system() {
+    let case = repo("cases/blocks/block3d.toml");
+    let preset = "solver.preset=\"iterative\"";
+    let unit = solve(2, &case, &[preset]);
+    unit.assert_converged("E = 2");
+    let big = solve(
+        2,
+        &case,
+        &[preset, "material.young=2e9", "neumann.0.pressure=1e8"],
+    );
+    big.assert_converged("E = 2e9");
+    assert_eq!(unit.steps(), big.steps(), "{}", big.run.output());
+    let its = |s: &Solved| -> Vec<u64> {
+        history(s)
+            .iter()
+            .map(|e| e["iterations"].as_u64().unwrap())
+            .collect()
+    };
+    // GMRES on the same matrix times 1e9: the same iterations up to one either way
+    for (a, b) in its(&unit).iter().zip(its(&big)) {
+        assert!(a.abs_diff(b) <= 1, "iterations {:?} vs {:?}", its(&unit), its(&big));
+    }
+    let d = unit.u_rel_diff(&big);
+    assert!(d < 1e-8, "u differs by {d:e} of max |u|");
+}

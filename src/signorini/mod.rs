@@ -342,6 +342,7 @@ pub fn solve(
         solver_section.rtol,
         symmetric_rows(settings, dim),
         (&solver_section.petsc_options, solver_section.repeatable),
+        solver::matrix_scale(ctx, &sys.a)?,
     )?;
     let coords = solver::near_null_space_coordinates(ctx, mesh, layout, solver_section.preset)?;
     let c = complementarity_parameter(ctx, settings, &b, dim);

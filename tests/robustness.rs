@@ -366,3 +366,58 @@ fn a_panic_in_rank_0s_dense_work_is_caught_and_every_rank_goes_on_alike() {
         }
     }
 }
+
+#[test]
+fn a_floating_body_with_too_few_pins_is_told_which_keys_to_change() {
+    // A unit square of four triangles around one interior node, its whole boundary the contact
+    // group, resting on y = 0 under a pressure on top: three free rigid modes but only the
+    // interior node's two dofs off the contact boundary to pin them. Every rank count ends with
+    // the same message naming the keys that hold the body, exit 1, nothing written.
+    let tmp = tempfile::tempdir().unwrap();
+    let geo = tmp.path().join("sq.geo");
+    std::fs::write(
+        &geo,
+        "Point(1) = {0, 0, 0, 2}; Point(2) = {1, 0, 0, 2}; Point(3) = {1, 1, 0, 2};\n\
+         Point(4) = {0, 1, 0, 2};\n\
+         Line(1) = {1, 2}; Line(2) = {2, 3}; Line(3) = {3, 4}; Line(4) = {4, 1};\n\
+         Curve Loop(1) = {1, 2, 3, 4}; Plane Surface(1) = {1};\n\
+         Physical Curve(\"all\") = {1, 2, 3, 4}; Physical Curve(\"top\") = {3};\n\
+         Physical Surface(\"body\") = {1};\n",
+    )
+    .unwrap();
+    let msh = tmp.path().join("sq.msh");
+    gmsh_file(&geo, 2, &[], &msh);
+    let case = write_case(
+        &tmp.path().join("sq.toml"),
+        &format!(
+            "[mesh]\nfile = {}\n[material]\nyoung = 1.0\npoisson = 0.3\nmodel = \"plane_strain\"\n\
+             [[neumann]]\ngroup = \"top\"\npressure = 0.01\n[contact]\ngroup = \"all\"\n\
+             obstacle = {{ type = \"plane\", point = [0.0, 0.0], normal = [0.0, 1.0] }}\n\
+             rigid_modes = \"auto\"\n",
+            toml_path(&msh)
+        ),
+    );
+    let mut lines = Vec::new();
+    for np in [1, 2] {
+        let out = tmp.path().join(format!("out{np}"));
+        let r = run_solver(np, &case, &[], &out);
+        r.expect_code(1, &format!("{np} ranks"));
+        let line = r
+            .stderr
+            .lines()
+            .find(|l| l.starts_with("error:"))
+            .unwrap_or_else(|| panic!("no error line:\n{}", r.output()))
+            .to_string();
+        for want in [
+            "3 free rigid mode(s) but only 2 dof(s)",
+            "'dirichlet'",
+            "'contact.group'",
+            "'contact.rigid_modes'",
+        ] {
+            assert!(line.contains(want), "{want:?} missing: {line}");
+        }
+        assert!(!out.exists(), "nothing written");
+        lines.push(line);
+    }
+    assert_eq!(lines[0], lines[1]);
+}

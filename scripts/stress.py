@@ -67,11 +67,25 @@ def load_data(path):
     except (OSError, tomllib.TOMLDecodeError) as e:
         print(f"stress: error: {path}: {e}", file=sys.stderr)
         sys.exit(2)
+    def bad(msg):
+        print(f"stress: error: {path}: {msg}", file=sys.stderr)
+        sys.exit(2)
+
     cases = {}
     for name, c in data.get("cases", {}).items():
+        if "file" not in c:
+            bad(f"cases.{name} has no file")
         cases[name] = Case(name, c["file"], c.get("sets", ()), c.get("young", 2.0),
                            c.get("tresca"))
-    return cases, data.get("rows", [])
+    rows = data.get("rows", [])
+    for i, row in enumerate(rows):
+        missing = [k for k in ("family", "case", "var", "ranks") if k not in row]
+        if missing:
+            bad(f"rows[{i}] has no {', '.join(missing)}")
+        for c in [row["case"]] + [d["case"] for d in row.get("check", []) if "case" in d]:
+            if c not in cases:
+                bad(f"rows[{i}] names the case {c!r}, which [cases] does not define")
+    return cases, rows
 
 
 CASES, ROW_DATA = load_data(DATA)
@@ -344,10 +358,6 @@ def first_words(r, n=9):
 # ---------------------------------------------------------------------------------------
 # The checks a row names (scripts/stress.toml): each returns a function of the run giving a
 # list of problems (empty: fine) and a detail string.
-def ref(case, sets=(), np_=1):
-    return execute(case, sets, np_)
-
-
 def against(row_case, case=None, sets=(), ranks=1, what="ref", states=True, translation=False,
             **kw):
     """The answer equals that of `case` (default the row's) run with `sets` on `ranks` ranks."""

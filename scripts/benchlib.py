@@ -150,7 +150,7 @@ def block_mesh(h, directory=MESHES):
                 3, [("h", h)])
 
 
-def md_table(head, rows):
+def md_table(head, rows=()):
     """A markdown table: the header cells, the separator, one line per row of cells."""
     lines = ["| " + " | ".join(head) + " |", "|" + "---|" * len(head)]
     lines += ["| " + " | ".join(str(c) for c in r) + " |" for r in rows]

@@ -1,6 +1,8 @@
 //! Cattaneo–Mindlin with a load history (`contact.motion = { table = ... }`,
 //! examples/cattaneo_mindlin.toml): the rigid plane indents the Hertz disk, then slides with the
-//! indentation held. Cattaneo's stick zone in plane strain: c/a = √(1 − Q/(μP)).
+//! indentation held. Cattaneo's stick zone in plane strain: c/a = √(1 − Q/(μP)) — on the
+//! example's mesh within its discretisation and coupling error, on a finer mesh within 6 % at
+//! ν = 0.49, and 5 % short, off-centre, at ν = 0.45 (the normal–tangential coupling).
 
 mod common;
 
@@ -93,14 +95,62 @@ fn cattaneo_mindlin_stick_zone_of_a_motion_table() {
         "slip grows from the edges"
     );
 
-    // the last step: c/a against √(1 − Q/(μP)), Q and P its total contact forces
-    let (q, p) = (last.f("force_x").abs(), last.f("force_y"));
-    let ratio = q / (MU * p);
-    assert!(
-        (0.3..0.8).contains(&ratio),
-        "Q/(μP) = {ratio}: partial slip"
-    );
-    let theory = (1.0 - ratio).sqrt();
+    // the last step: c/a against √(1 − Q/(μP)). On the example's mesh (hertz_refined_L4: 21
+    // active nodes, h/a = 0.1) the stick zone is 15 % short: about 10 % discretisation and
+    // 5 % the normal–tangential coupling the formula neglects (ν = 0.45: Dundurs' β = 0.09),
+    // measured in docs/numbers.md (Cattaneo: mesh, a/R, ν); the fine-mesh test below checks
+    // each part.
+    let m = measure(&s);
+    eprintln!("{}", m.text());
+    assert!((0.3..0.8).contains(&m.ratio), "partial slip: {}", m.text());
+    assert!(m.h / m.a > 0.08 && m.h / m.a < 0.12, "{}", m.text());
+    assert!((-0.20..=0.0).contains(&m.deviation()), "{}", m.text());
+}
+
+/// c/a, Q/(μP) and the rest read from a run's last step.
+struct Measured {
+    a: f64,
+    c: f64,
+    /// The stick zone's centre.
+    centre: f64,
+    /// The largest node spacing around the zones' edges.
+    h: f64,
+    /// Q/(μP), Q and P the total contact forces of the last step (history.csv).
+    ratio: f64,
+}
+
+impl Measured {
+    fn theory(&self) -> f64 {
+        (1.0 - self.ratio).sqrt()
+    }
+
+    /// (c/a) / √(1 − Q/(μP)) − 1.
+    fn deviation(&self) -> f64 {
+        self.c / self.a / self.theory() - 1.0
+    }
+
+    fn text(&self) -> String {
+        format!(
+            "a = {:.5}, c = {:.5} (centre {:+.3} a), h/a = {:.3}, Q/(μP) = {:.4}: c/a = {:.4}, \
+             √(1 − Q/(μP)) = {:.4}, deviation {:+.2} %",
+            self.a,
+            self.c,
+            self.centre / self.a,
+            self.h / self.a,
+            self.ratio,
+            self.c / self.a,
+            self.theory(),
+            100.0 * self.deviation()
+        )
+    }
+}
+
+/// The contact zone |x| < a and the stick zone (centre ± c) of the last step, edges
+/// interpolated as scripts/bench-cattaneo does, and Q/(μP).
+fn measure(s: &Solved) -> Measured {
+    let history = csv::read_csv(&s.dir.join("history.csv"));
+    let last = history.last().expect("steps");
+    let ratio = last.f("force_x").abs() / (MU * last.f("force_y"));
     let mut nodes = csv::read_csv(&s.dir.join("contact_nodes.csv"));
     nodes.sort_by(|a, b| a.f("x").total_cmp(&b.f("x")));
     let all: Vec<&csv::Row> = nodes.iter().collect();
@@ -111,19 +161,55 @@ fn cattaneo_mindlin_stick_zone_of_a_motion_table() {
     let reserve =
         |n: &csv::Row| (MU * pressure(n) - n.f("lambda_t1").abs() / n.f("weight")).max(0.0);
     let (c, centre, hc) = zone(&active, |n| n.tangential() == "stick", reserve);
-    // Tolerance from the mesh: each of the four edges lies within one node spacing h, so c/a
-    // is known to h (1 + c/a) / a; plus the normal–tangential coupling the formula neglects
-    // (a rigid plane, ν = 0.45: Dundurs' β = 0.09), measured converged in h at −6.5 % of c/a
-    // (bench/results/cattaneo.md, levels 5–7): 0.05.
-    let h = ha.max(hc);
-    let tol = h * (1.0 + theory) / a + 0.05;
-    let msg = format!(
-        "a = {a:.5}, c = {c:.5} (centre {centre:+.5}), h = {h:.5}, Q/(μP) = {ratio:.4}: \
-         c/a = {:.4}, √(1 − Q/(μP)) = {theory:.4}, tolerance {tol:.3}",
-        c / a
+    Measured {
+        a,
+        c,
+        centre,
+        h: ha.max(hc),
+        ratio,
+    }
+}
+
+/// The example on a finer mesh (hertz_refined.geo with L = 3, R = 5, Z = 0.12: contact
+/// spacing 0.0015, h/a = 0.024, 83 active nodes), 1 rank: near incompressibility (ν = 0.49,
+/// β = 0.02) c/a is √(1 − Q/(μP)) within 6 % (measured −3.8 %; −0.5 % at h/a = 0.012) with the
+/// stick zone centred; at the example's ν = 0.45 (β = 0.09) it stays 5 % short (measured
+/// −5.0 %, −5.4 % at h/a = 0.012: converged) with the stick zone's centre a quarter of a off
+/// the axis — the coupling's signature, not the mesh's (docs/numbers.md, Cattaneo).
+#[test]
+fn cattaneo_stick_zone_on_a_fine_mesh() {
+    let tmp = tempfile::tempdir().expect("tempdir");
+    let mesh = tmp.path().join("hertz_refined_L3_R5_Z0p12.msh");
+    gmsh_file(
+        &repo("cases/hertz/hertz_refined.geo"),
+        2,
+        &[
+            "-setnumber",
+            "L",
+            "3",
+            "-setnumber",
+            "R",
+            "5",
+            "-setnumber",
+            "Z",
+            "0.12",
+        ],
+        &mesh,
     );
-    eprintln!("{msg}");
-    assert!(((c / a) - theory).abs() <= tol, "{msg}");
-    // and the resolution is fine enough for the check to mean something
-    assert!(tol < 0.25, "{msg}");
+    let file = format!("mesh.file={}", toml_path(&mesh));
+    let case = repo("examples/cattaneo_mindlin.toml");
+    let check = |nu: &str,
+                 deviation: std::ops::RangeInclusive<f64>,
+                 offset: std::ops::RangeInclusive<f64>| {
+        let poisson = format!("material.poisson={nu}");
+        let s = solve(1, &case, &[&file, &poisson]);
+        assert_eq!(s.summary["load"]["completed"], true, "{}", s.run.output());
+        let m = measure(&s);
+        eprintln!("ν = {nu}: {}", m.text());
+        assert!(m.h / m.a < 0.03, "ν = {nu}: {}", m.text());
+        assert!(deviation.contains(&m.deviation()), "ν = {nu}: {}", m.text());
+        assert!(offset.contains(&(m.centre / m.a)), "ν = {nu}: {}", m.text());
+    };
+    check("0.49", -0.06..=0.06, -0.08..=0.08);
+    check("0.45", -0.08..=-0.02, -0.30..=-0.15);
 }

@@ -595,3 +595,110 @@ fn motion_through_the_approaches(forced: &Solved, h: &[Row], along: f64) {
     }
     assert_eq!(moved.slip_node_ids(), forced.slip_node_ids());
 }
+
+/// The force history of the table test: loaded to 0.04 by the load factor 0.5, held to 0.75,
+/// then unloaded part-way, to 0.02 at 1.
+const FORCE_TABLE: &str = "contact.force={table=[[0.0, 0.0, 0.0], [0.5, 0.0, -0.04], \
+                           [0.75, 0.0, -0.04], [1.0, 0.0, -0.02]]}";
+const TABLE_FACTORS: [f64; 6] = [0.25, 0.5, 0.625, 0.75, 0.875, 1.0];
+
+/// The table's y component at the load factor t (the rows of [`FORCE_TABLE`]).
+fn force_table_y(t: f64) -> f64 {
+    let rows = [(0.0, 0.0), (0.5, -0.04), (0.75, -0.04), (1.0, -0.02)];
+    let i = rows.iter().position(|r| r.0 >= t).expect("covered").max(1);
+    let ((t0, f0), (t1, f1)) = (rows[i - 1], rows[i]);
+    f0 + (t - t0) / (t1 - t0) * (f1 - f0)
+}
+
+/// `contact.force = { table = ... }` with a kink (load, hold, unload part-way), the circle
+/// from its gap of 0.01: every load step carries the table's interpolated force (history.csv,
+/// to the force balance's 1e-8), the last one also in summary.json; the circle goes down
+/// while loading, stays while the force is held, comes back up while unloading; frictionless,
+/// the state depends on the force only, so the unloaded step at 0.02 is the loading one at
+/// 0.02 (factor 0.25). 1 and 2 ranks agree.
+#[test]
+fn a_force_table_is_followed_step_by_step() {
+    let factors = format!("load.factors={TABLE_FACTORS:?}");
+    let mut first: Option<Vec<Row>> = None;
+    for np in [1, 2] {
+        let s = solve(np, &case(), &[AUTO, FORCE_TABLE, &factors]);
+        s.assert_converged("force table");
+        let h = read_csv(&s.dir.join("history.csv"));
+        assert_eq!(h.len(), TABLE_FACTORS.len(), "{}", s.run.output());
+        for (r, &t) in h.iter().zip(&TABLE_FACTORS) {
+            let want = force_table_y(t);
+            let fy = r.f("force_y");
+            assert!(
+                (fy - want).abs() <= 1e-8 * want.abs(),
+                "{np} ranks, factor {t}: force_y {fy}, the table {want}"
+            );
+            assert_eq!(r.f("obstacle_x"), 0.0, "moved along the force only");
+        }
+        let y: Vec<f64> = h.iter().map(|r| r.f("obstacle_y")).collect();
+        let same = |a: f64, b: f64| (a - b).abs() <= 1e-8 * b.abs();
+        assert!(y[0] < 0.0 && y[1] < y[0], "loading goes down: {y:?}");
+        assert!(same(y[2], y[1]) && same(y[3], y[1]), "held: {y:?}");
+        assert!(y[4] > y[3] && y[5] > y[4], "unloading goes up: {y:?}");
+        assert!(same(y[5], y[0]), "0.02 unloaded is 0.02 loaded: {y:?}");
+        let (u_first, u_last) = (step_displacement(&s.dir, 1), step_displacement(&s.dir, 6));
+        let (diff, scale) = max_diff(&u_last, &u_first);
+        assert!(scale > 0.0 && diff <= 1e-8 * scale, "|Δu| = {diff:e}");
+        let f = total_force(&s);
+        assert!((f[1] + 0.02).abs() <= 1e-8 * 0.02, "summary.json: {f:?}");
+        match &first {
+            None => first = Some(h),
+            Some(h1) => {
+                for (a, b) in h.iter().zip(h1) {
+                    for k in ["force_y", "obstacle_y"] {
+                        assert!(same(a.f(k), b.f(k)), "2 vs 1 rank, {k}");
+                    }
+                }
+            }
+        }
+    }
+}
+
+/// A bad force table is an input error naming the key (and the row): exit 2, nothing
+/// written — factors not increasing, rows of different lengths, a 3D row in 2D, a table
+/// that stops before the run's last factor, a force zero at a factor of the run.
+#[test]
+fn a_bad_force_table_is_refused() {
+    let factors = "load.factors=[0.5, 1.0]";
+    let cases: [(&str, &str, &str); 5] = [
+        (
+            "contact.force={table=[[0, 0, 0], [0.5, 0, -0.04], [0.5, 0, -0.02]]}",
+            "contact.force.table[2][0]",
+            "must increase",
+        ),
+        (
+            "contact.force={table=[[0, 0, -0.01], [1, 0, -0.02, 0]]}",
+            "contact.force.table[1]",
+            "like the first row",
+        ),
+        (
+            "contact.force={table=[[0, 0, 0, -0.01], [1, 0, 0, -0.02]]}",
+            "contact.force.table",
+            "2D",
+        ),
+        (
+            "contact.force={table=[[0, 0, 0], [0.5, 0, -0.04]]}",
+            "contact.force.table",
+            "not extrapolated",
+        ),
+        (
+            "contact.force={table=[[0, 0, 0], [0.5, 0, -0.04], [1, 0, 0]]}",
+            "contact.force.table",
+            "zero force at the load factor 1",
+        ),
+    ];
+    for (np, (set, key, says)) in [1, 2].into_iter().flat_map(|np| cases.map(|c| (np, c))) {
+        let tmp = tempfile::tempdir().expect("tempdir");
+        let out = tmp.path().join("out");
+        let run = run_solver(np, &case(), &[AUTO, set, factors], &out);
+        let text = run.output();
+        assert_eq!(run.code, Some(2), "{np} ranks, {set}:\n{text}");
+        assert!(text.contains(key), "{set}: expected {key}:\n{text}");
+        assert!(text.contains(says), "{set}: expected {says:?}:\n{text}");
+        assert!(!out.join("summary.json").exists(), "{set}");
+    }
+}

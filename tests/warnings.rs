@@ -1,8 +1,10 @@
 //! Warnings for runs that succeed but look wrong (issue 50, item 1; docs/warnings.md): one log
 //! line `warning: ...` each, summary.json's `warnings` list, exit 0 — the same warnings on 1, 2
 //! and 3 ranks; a body that the contact cannot hold is "no support", not "Newton cycling".
-//! The cases: tests/cases/warnings/*.toml (the 2D block of cases/blocks) and cases/blocks,
-//! cases/hertz.
+//! The cases: tests/cases/warnings/*.toml (the 2D and 3D blocks of cases/blocks) and
+//! cases/blocks, cases/hertz, tests/cases/sphere3d.toml. Each warning also in 3D, on the second
+//! of two contact pairs (2D and 3D), and under force control (a forced pair always ends in
+//! contact: no pressed_without_contact for it).
 
 mod common;
 use common::*;
@@ -206,4 +208,162 @@ fn a_body_that_nothing_holds_is_no_support_not_cycling() {
         lines.push(line);
     }
     assert!(lines.iter().all(|l| *l == lines[0]), "{lines:#?}");
+}
+
+/// Each warning in 3D (the box of cases/blocks/block3d.msh): the plate of plate_pressed.toml
+/// pressed down (pressed_without_contact, the top nodes 0.01 = 0.5 % of the size 2 beyond it),
+/// moved up (pulling_contact_force, all of it) and placed 0.005 inside the box (a start on the
+/// far side); tests/cases/sphere3d.toml, its sphere 0.0483 into the box at its deepest node
+/// (2.4 % of 2: start_inside_obstacle, and large_deformation at 0.15); cases/blocks/
+/// block3d.toml under a pressure of E/2: the uniaxial strain p/E = 0.5, exact for P1.
+#[test]
+fn each_warning_in_3d() {
+    let plate = warnings_case("plate3d_pressed.toml");
+    for w in warned_alike(
+        &plate,
+        &[],
+        &["pressed_without_contact"],
+        Some("contact.obstacle"),
+    ) {
+        assert!(
+            (w["value"].as_f64().unwrap() - 0.005).abs() < 1e-9,
+            "{w:#?}"
+        );
+        let x = w["at"]["x"].as_array().unwrap();
+        assert_eq!(x.len(), 3, "{w:#?}");
+        assert_eq!(x[2].as_f64(), Some(0.5), "a node of the top face: {w:#?}");
+    }
+    let up = "contact.motion=[0.0, 0.0, 0.01]";
+    for w in warned_alike(
+        &plate,
+        &[up],
+        &["pulling_contact_force"],
+        Some("contact.obstacle"),
+    ) {
+        assert_eq!(w["value"].as_f64(), Some(1.0), "{w:#?}");
+    }
+    let inside = [
+        "contact.obstacle.point=[0.0, 0.0, 0.505]",
+        "contact.motion=[0.0, 0.0, 0.0]",
+    ];
+    for w in warned_alike(
+        &plate,
+        &inside,
+        &["start_inside_obstacle", "pulling_contact_force"],
+        Some("contact.obstacle"),
+    ) {
+        assert!(
+            (w["value"].as_f64().unwrap() - 0.0025).abs() < 1e-9,
+            "{w:#?}"
+        );
+        assert!(text(&w, "message").contains("far side"), "{w:#?}");
+    }
+    for w in warned_alike(
+        &repo("tests/cases/sphere3d.toml"),
+        &[],
+        &["start_inside_obstacle", "large_deformation"],
+        Some("contact.obstacle"),
+    ) {
+        let v = w["value"].as_f64().unwrap();
+        assert!(v > 0.02 && v < 0.025, "{w:#?}");
+        assert!(text(&w, "message").contains("small overlap"), "{w:#?}");
+    }
+    for w in warned_alike(
+        &repo("cases/blocks/block3d.toml"),
+        &["neumann.0.pressure=1.0"],
+        &["large_deformation"],
+        None,
+    ) {
+        assert!((w["value"].as_f64().unwrap() - 0.5).abs() < 1e-6, "{w:#?}");
+        assert_eq!(w["at"]["x"].as_array().map(Vec::len), Some(3), "{w:#?}");
+    }
+}
+
+/// The active nodes of pair `i` in summary.json.
+fn pair_active(s: &Solved, i: usize) -> u64 {
+    get(&s.summary, &["contact", "pairs"])[i]["active_count"]
+        .as_u64()
+        .expect("active_count")
+}
+
+/// Two pairs, 2D (the top plate under force control) and 3D (both plates moved): each
+/// contact warning is the second pair's — its code, `contact[1]`, `contact[1].obstacle` —
+/// never the first's, which presses the body as it should (active nodes; in 2D its force
+/// the prescribed one). The wrong-way plate under the bottom moved up: pressed_without_contact;
+/// moved down: pulling_contact_force; placed inside: start_inside_obstacle (far side).
+#[test]
+fn each_contact_warning_on_the_second_of_two_pairs() {
+    let key = Some("contact[1].obstacle");
+    for (case, up, down, inside) in [
+        (
+            "two_plates.toml",
+            "contact.1.motion=[0.0, 0.01]",
+            "contact.1.motion=[0.0, -0.005]",
+            [
+                "contact.1.motion=[0.0, 0.0]",
+                "contact.1.obstacle.point=[0.0, -0.005]",
+            ],
+        ),
+        (
+            "two_plates3d.toml",
+            "contact.1.motion=[0.0, 0.0, 0.005]",
+            "contact.1.motion=[0.0, 0.0, -0.005]",
+            [
+                "contact.1.motion=[0.0, 0.0, 0.0]",
+                "contact.1.obstacle.point=[0.0, 0.0, -0.005]",
+            ],
+        ),
+    ] {
+        let path = warnings_case(case);
+        for (sets, codes) in [
+            (vec![up], &["pressed_without_contact"][..]),
+            (vec![down], &["pulling_contact_force"][..]),
+            (
+                inside.to_vec(),
+                &["start_inside_obstacle", "pulling_contact_force"][..],
+            ),
+        ] {
+            for w in warned_alike(&path, &sets, codes, key) {
+                assert_eq!(text(&w, "pair"), "contact[1]", "{case} {sets:?}: {w:#?}");
+                assert!(text(&w, "message").starts_with("contact[1]: "), "{w:#?}");
+            }
+            let s = solve(2, &path, &sets);
+            for w in warnings(&s) {
+                assert_eq!(text(&w, "pair"), "contact[1]", "{case} {sets:?}: {w:#?}");
+            }
+            assert!(pair_active(&s, 0) > 0, "{case} {sets:?}");
+            if case == "two_plates.toml" {
+                let f = floats(&get(&s.summary, &["contact", "pairs"])[0]["total_force"]);
+                assert!((f[1] + 0.01).abs() <= 1e-8 * 0.01, "{f:?}");
+            }
+        }
+    }
+}
+
+/// Force control: the force balance of a forced pair needs active nodes, so a forced pair
+/// cannot end with none (no pressed_without_contact for it: tests/cases/warnings/two_plates.toml
+/// raises it for its pair under motion, next to the forced one); the plate of plate_forced.toml,
+/// its normal the wrong way, forced along that normal, ends with every top node active and
+/// pulling (pulling_contact_force); forced the other way it never reaches the body: exit 2.
+#[test]
+fn force_control_ends_in_contact_and_warns_of_a_pulling_force() {
+    let case = warnings_case("plate_forced.toml");
+    for w in warned_alike(
+        &case,
+        &[],
+        &["pulling_contact_force"],
+        Some("contact.obstacle"),
+    ) {
+        assert_eq!(w["value"].as_f64(), Some(1.0), "{w:#?}");
+    }
+    let tmp = tempfile::tempdir().unwrap();
+    let out = tmp.path().join("out");
+    let r = run_solver(2, &case, &["contact.force=[0.0, -0.01]"], &out);
+    r.expect_code(2, "the force away from the body");
+    assert!(
+        r.stderr.contains("never reaches the body"),
+        "{}",
+        r.output()
+    );
+    assert!(r.stderr.contains("'contact.force'"), "{}", r.output());
 }

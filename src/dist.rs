@@ -22,10 +22,10 @@
 //! numbers, numbered along the Morton curve of the whole mesh's bounding box (ties by mesh
 //! order), local cells ordered by their lowest global node number.
 //!
-//! The phases live in submodules: [`comm`] (row blocks, the all-to-all-v exchange),
-//! [`blocks`] (reading the blocks), [`graph`] (the dual graph), [`parts`] (the partition),
-//! [`groups`] (group memberships), [`cells`] (migration of cells, ghosts, boundary elements),
-//! [`nodes`] (node data, numbering, the local mesh), [`read`] (the pipeline), [`refine`]
+//! The phases live in submodules: `comm` (row blocks, the all-to-all-v exchange),
+//! `blocks` (reading the blocks), `graph` (the dual graph), `parts` (the partition),
+//! `groups` (group memberships), `cells` (migration of cells, ghosts, boundary elements),
+//! `nodes` (node data, numbering, the local mesh), `read` (the pipeline), `refine`
 //! (`mesh.refine` on the blocks before the partition).
 
 mod blocks;

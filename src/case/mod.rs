@@ -6,10 +6,10 @@
 //! names the file, the key path (`material.poisson`, `dirichlet[1].value`, `neumann[0]`)
 //! and the line of that key, or says "(from --set)".
 //!
-//! The sections' types and their readers live by topic: [`body`] (mesh, material, boundary
-//! conditions, body force), [`solver`] (`[solver]`, `[newton]`), [`output`], [`contact`]
-//! (pairs, histories, friction), [`shape`] (obstacle shapes), [`load`] (`[load]`); [`file`]
-//! holds the validated [`Case`], [`against_mesh`] its checks against the mesh, [`reader`] the
+//! The sections' types and their readers live by topic: `body` (mesh, material, boundary
+//! conditions, body force), `solver` (`[solver]`, `[newton]`), `output`, `contact`
+//! (pairs, histories, friction), `shape` (obstacle shapes), `load` (`[load]`); `file`
+//! holds the validated [`Case`], `against_mesh` its checks against the mesh, `reader` the
 //! typed reading of the value tree.
 
 mod against_mesh;

@@ -18,9 +18,9 @@
 //! docs/obstacles.md. [`Height`] (the solid below a graph, `contact::height`) and [`TriSurface`]
 //! (inside a closed STL surface, `contact::surface`) follow the same conventions.
 //!
-//! By role and shape family: [`error`] (invalid data), [`shape`] (the [`Obstacle`] of a pair and
-//! the [`Projection`] a query returns), [`plane_sphere`], [`axisymmetric`] (cylinder, cone,
-//! punch), [`pyramid`], and [`vec3`] (the vector and axis helpers they share).
+//! By role and shape family: `error` (invalid data), `shape` (the [`Obstacle`] of a pair and
+//! the [`Projection`] a query returns), `plane_sphere`, `axisymmetric` (cylinder, cone,
+//! punch), `pyramid`, and `vec3` (the vector and axis helpers they share).
 
 mod axisymmetric;
 mod error;

@@ -213,14 +213,79 @@ enum Physics {
     Contact(Box<ContactSettings>),
 }
 
+/// What a run of load steps carries from step to step.
+struct Progress {
+    /// The prescribed displacements at the current factor.
+    fixed: Vec<f64>,
+    /// The last converged step.
+    last: Option<Solved>,
+    records: Vec<StepRecord>,
+    /// The XDMF times of the steps written.
+    times: Vec<f64>,
+    solve_s: f64,
+    post_s: f64,
+    output_s: f64,
+    collected: warnings::Collected,
+}
+
+impl Progress {
+    fn new(fixed: &[f64]) -> Progress {
+        Progress {
+            fixed: fixed.to_vec(),
+            last: None,
+            records: Vec::new(),
+            times: Vec::new(),
+            solve_s: 0.0,
+            post_s: 0.0,
+            output_s: 0.0,
+            collected: warnings::Collected::default(),
+        }
+    }
+
+    /// Logs converged step `rec` (with `[load]`: its progress line and its new warnings; the
+    /// planned steps `of`) and keeps it with its warnings.
+    fn push(&mut self, ctx: &Ctx, mut rec: StepRecord, warned: Vec<Warning>, of: Option<usize>) {
+        if let Some(planned) = of {
+            log_step(ctx, &rec, planned);
+            let new = self.collected.add(rec.step, &warned);
+            warnings::log(ctx, &new, &format!("load step {}: ", rec.planned));
+        } else {
+            warnings::log(ctx, &warned, "");
+            self.collected.list = warned.clone();
+        }
+        rec.warnings = warned;
+        self.records.push(rec);
+    }
+}
+
+/// The error of a failed step that could not be cut back: with `[load]`, a non-converged
+/// solve names the planned step `p`, its factor and the cutbacks made.
+fn step_failure(
+    e: RunError,
+    series: bool,
+    plan: &LoadSection,
+    p: usize,
+    factor: f64,
+    halvings: usize,
+) -> RunError {
+    match e {
+        RunError::NoConvergence(why) if series => RunError::Failed(format!(
+            "load step {p}: factor {factor} did not converge after {halvings} \
+             cutback(s) of its increment (load.max_cutbacks = {}): {why}",
+            plan.max_cutbacks
+        )),
+        e => e,
+    }
+}
+
 impl Stepper<'_> {
     /// Solves every load step (one at factor 1 without `[load]`), writing each converged one.
     /// An `Err` means nothing was written; a failure after some steps converged comes back in
     /// [`Stepped::failure`] with the converged steps written.
     pub fn run(&self, sys: &mut System) -> Result<Stepped, RunError> {
-        let (ctx, case) = (self.ctx, self.case);
-        let series = case.load.is_some();
-        let plan = case.load.clone().unwrap_or_else(LoadSection::single);
+        let ctx = self.ctx;
+        let series = self.case.load.is_some();
+        let plan = self.case.load.clone().unwrap_or_else(LoadSection::single);
         let mut physics = match self.contact {
             None => Physics::Linear,
             Some(c) => Physics::Contact(Box::new(c.clone())),
@@ -234,125 +299,147 @@ impl Stepper<'_> {
         } else {
             None
         };
-        let mut fixed = self.fixed.to_vec();
-        let mut last: Option<Solved> = None;
-        let mut records: Vec<StepRecord> = Vec::new();
-        let mut times: Vec<f64> = Vec::new();
-        let (mut solve_s, mut post_s, mut output_s) = (0.0, 0.0, 0.0);
+        let mut run = Progress::new(self.fixed);
         let mut failure = None;
-        let mut collected = warnings::Collected::default();
         let mut schedule = Schedule::new(&plan);
         while let Some(factor) = schedule.next() {
+            let t0 = Instant::now();
+            let (p, halvings) = (schedule.planned(), schedule.halvings());
+            self.prepare_step(sys, b_full.as_ref(), &mut physics, &mut run, factor)?;
+            let previous = run.last.as_ref().and_then(|s| s.contact.as_ref());
+            let solved = self.solve_once(&physics, &run.fixed, sys, previous);
+            run.solve_s += t0.elapsed().as_secs_f64();
+            let solved = match solved {
+                Ok(s) => s,
+                Err(RunError::NoConvergence(why)) if schedule.can_cut_back() => {
+                    let retry = schedule.cut_back();
+                    say!(
+                        ctx,
+                        "load step {p}: factor {factor} failed ({why}), cut back to {retry}"
+                    );
+                    continue;
+                }
+                Err(e) => {
+                    let e = step_failure(e, series, &plan, p, factor, halvings);
+                    if run.records.is_empty() {
+                        return Err(e);
+                    }
+                    failure = Some(e);
+                    break;
+                }
+            };
+            if !series {
+                // no later load step takes the condensed factorisation: its memory goes now
+                if let Some(c) = solved.contact.as_ref() {
+                    c.release_factor();
+                }
+            }
+            let step = run.records.len() + 1;
+            let (warned, time) = self.write_step(&solved, &mut run, series, step, factor)?;
+            let mut rec = self.record(&solved, step, p, factor, halvings);
+            rec.time = time;
+            rec.seconds = t0.elapsed().as_secs_f64();
+            run.push(ctx, rec, warned, series.then_some(plan.factors.len()));
+            schedule.converged(factor);
+            run.last = Some(solved);
+        }
+        Ok(self.finish(run, &plan, series, schedule.cutbacks, failure))
+    }
+
+    /// Before the solve at `factor`: the loads and prescribed displacements scaled (with
+    /// `[load]`), the contact settings at the factor, and the predictor of the previous step's
+    /// solution (none at a corner of a motion / force table).
+    fn prepare_step(
+        &self,
+        sys: &mut System,
+        b_full: Option<&Vector>,
+        physics: &mut Physics,
+        run: &mut Progress,
+        factor: f64,
+    ) -> Result<(), RunError> {
+        if let Some(b) = b_full {
+            scale(sys, b, self.fixed, self.held_fixed, &mut run.fixed, factor)?;
+        }
+        if let Physics::Contact(settings) = physics {
+            settings.at_factor(factor);
+        }
+        if let Some(c) = run.last.as_mut().and_then(|s| s.contact.as_mut()) {
+            c.predict = predictor_ratio(&run.records, factor);
+            // a corner of a motion / force table: the increments are not parallel
+            if let (Physics::Contact(settings), [.., before, done]) =
+                (&*physics, run.records.as_slice())
             {
-                let t0 = Instant::now();
-                let (p, halvings) = (schedule.planned(), schedule.halvings());
-                if let Some(b) = &b_full {
-                    scale(sys, b, self.fixed, self.held_fixed, &mut fixed, factor)?;
+                if !settings.increments_parallel(before.factor, done.factor, factor, c.predict) {
+                    c.predict = 0.0;
                 }
-                if let Physics::Contact(settings) = &mut physics {
-                    settings.at_factor(factor);
-                }
-                if let Some(c) = last.as_mut().and_then(|s| s.contact.as_mut()) {
-                    c.predict = predictor_ratio(&records, factor);
-                    // a corner of a motion / force table: the increments are not parallel
-                    if let (Physics::Contact(settings), [.., before, done]) =
-                        (&physics, records.as_slice())
-                    {
-                        if !settings.increments_parallel(
-                            before.factor,
-                            done.factor,
-                            factor,
-                            c.predict,
-                        ) {
-                            c.predict = 0.0;
-                        }
-                    }
-                }
-                let previous = last.as_ref().and_then(|s| s.contact.as_ref());
-                let solved = self.solve_once(&physics, &fixed, sys, previous);
-                let ts = t0.elapsed().as_secs_f64();
-                solve_s += ts;
-                let solved = match solved {
-                    Ok(s) => s,
-                    Err(RunError::NoConvergence(why)) if schedule.can_cut_back() => {
-                        let retry = schedule.cut_back();
-                        say!(
-                            ctx,
-                            "load step {p}: factor {factor} failed ({why}), cut back to {retry}"
-                        );
-                        continue;
-                    }
-                    Err(e) => {
-                        let e = match e {
-                            RunError::NoConvergence(why) if series => RunError::Failed(format!(
-                                "load step {p}: factor {factor} did not converge after {halvings} \
-                                 cutback(s) of its increment (load.max_cutbacks = {}): {why}",
-                                plan.max_cutbacks
-                            )),
-                            e => e,
-                        };
-                        if records.is_empty() {
-                            return Err(e);
-                        }
-                        failure = Some(e);
-                        break;
-                    }
-                };
-                if !series {
-                    // no later load step takes the condensed factorisation: its memory goes now
-                    if let Some(c) = solved.contact.as_ref() {
-                        c.release_factor();
-                    }
-                }
-                let step = records.len() + 1;
-                let t1 = Instant::now();
-                let values = post::local_cell_values(self.mesh, self.layout, solved.u())?;
-                let cells =
-                    post::cell_fields(self.mesh, self.layout, self.material, &values, &case.output);
-                let mut warned = (solved.contact.as_ref())
-                    .map(|c| c.warnings.clone())
-                    .unwrap_or_default();
-                warned.extend(post::deformation_warning(
-                    ctx,
-                    self.mesh,
-                    self.layout,
-                    &values,
-                ));
-                drop(values);
-                let fields =
-                    post::solution_fields(self.mesh, self.layout, solved.u(), cells, &case.output)?;
-                post_s += t1.elapsed().as_secs_f64();
-                let grid = solved
-                    .contact
-                    .as_ref()
-                    .map(|c| &c.result)
-                    .filter(|_| case.output.wants(OutputField::Contact));
-                let piece = fields.piece(grid);
-                let time = step_time(&records, factor);
-                output_s += if series {
-                    times.push(time);
-                    self.out.write_step(ctx, &piece, step, &times)?
-                } else {
-                    self.out.write_solution(ctx, &piece)?
-                };
-                drop(fields);
-                let mut rec = self.record(&solved, step, p, factor, halvings);
-                rec.time = time;
-                rec.seconds = t0.elapsed().as_secs_f64();
-                if series {
-                    log_step(ctx, &rec, plan.factors.len());
-                    let new = collected.add(step, &warned);
-                    warnings::log(ctx, &new, &format!("load step {p}: "));
-                } else {
-                    warnings::log(ctx, &warned, "");
-                    collected.list = warned.clone();
-                }
-                rec.warnings = warned;
-                records.push(rec);
-                schedule.converged(factor);
-                last = Some(solved);
             }
         }
+        Ok(())
+    }
+
+    /// The post-processing and output of converged step `step` at `factor`: returns its
+    /// warnings and its XDMF time.
+    fn write_step(
+        &self,
+        solved: &Solved,
+        run: &mut Progress,
+        series: bool,
+        step: usize,
+        factor: f64,
+    ) -> Result<(Vec<Warning>, f64), RunError> {
+        let (ctx, case) = (self.ctx, self.case);
+        let t1 = Instant::now();
+        let values = post::local_cell_values(self.mesh, self.layout, solved.u())?;
+        let cells = post::cell_fields(self.mesh, self.layout, self.material, &values, &case.output);
+        let mut warned = (solved.contact.as_ref())
+            .map(|c| c.warnings.clone())
+            .unwrap_or_default();
+        warned.extend(post::deformation_warning(
+            ctx,
+            self.mesh,
+            self.layout,
+            &values,
+        ));
+        drop(values);
+        let fields =
+            post::solution_fields(self.mesh, self.layout, solved.u(), cells, &case.output)?;
+        run.post_s += t1.elapsed().as_secs_f64();
+        let grid = solved
+            .contact
+            .as_ref()
+            .map(|c| &c.result)
+            .filter(|_| case.output.wants(OutputField::Contact));
+        let piece = fields.piece(grid);
+        let time = step_time(&run.records, factor);
+        run.output_s += if series {
+            run.times.push(time);
+            self.out.write_step(ctx, &piece, step, &run.times)?
+        } else {
+            self.out.write_solution(ctx, &piece)?
+        };
+        drop(fields);
+        Ok((warned, time))
+    }
+
+    /// The solve stage's product from the steps run: the last converged step's report (with
+    /// `[load]`, its certificate the worst over the steps), the tables and the load report.
+    fn finish(
+        &self,
+        run: Progress,
+        plan: &LoadSection,
+        series: bool,
+        cutbacks: usize,
+        failure: Option<RunError>,
+    ) -> Stepped {
+        let Progress {
+            last,
+            records,
+            solve_s,
+            post_s,
+            output_s,
+            collected,
+            ..
+        } = run;
         let mut last = last.expect("a step converged, or the run returned its error");
         if let (true, SolveReport::Contact(r)) = (series, &mut last.report) {
             if let Some(worst) = worst_certificate(&records) {
@@ -365,11 +452,11 @@ impl Stepper<'_> {
             factors: plan.factors.clone(),
             max_cutbacks: plan.max_cutbacks,
             completed: failure.is_none(),
-            cutbacks: schedule.cutbacks,
+            cutbacks,
             failure: failure.as_ref().map(|e| e.to_string()),
             steps: records,
         });
-        Ok(Stepped {
+        Stepped {
             report: last.report,
             contact_csv,
             load,
@@ -379,7 +466,7 @@ impl Stepper<'_> {
             solve_seconds: solve_s,
             post_seconds: post_s,
             output_seconds: output_s,
-        })
+        }
     }
 
     /// One linear solve, or the contact algorithm from the previous step's state.
@@ -690,6 +777,25 @@ fn worst_certificate(records: &[StepRecord]) -> Option<Certificate> {
 
 /// history.csv: one row per converged step; empty cells where a value does not apply.
 pub fn history_csv(records: &[StepRecord], dim: usize) -> String {
+    // several pairs: each pair's columns last
+    let n_pairs = records
+        .iter()
+        .filter_map(|r| r.pairs.as_ref().map(Vec::len))
+        .max()
+        .unwrap_or(0);
+    let mut out = history_header(dim, n_pairs);
+    for r in records {
+        history_row(&mut out, r, dim);
+        for p in 0..n_pairs {
+            pair_columns(&mut out, r.pairs.as_ref().and_then(|ps| ps.get(p)), dim);
+        }
+        out.push('\n');
+    }
+    out
+}
+
+/// history.csv's header line (with its newline): the step's columns, then `n_pairs` pairs'.
+fn history_header(dim: usize, n_pairs: usize) -> String {
     let axes = ["x", "y", "z"];
     let mut out = String::from("step,planned,factor,time,cutbacks,newton_steps,active,stick,slip");
     for a in &axes[..dim] {
@@ -703,12 +809,6 @@ pub fn history_csv(records: &[StepRecord], dim: usize) -> String {
     out.push_str(",friction_excess,friction_stick_motion,friction_slip_alignment");
     out.push_str(",friction_violation");
     out.push_str(",stop_rule,equilibrium_residual,equilibrium_relative,certificate_worst");
-    // several pairs: each pair's columns last
-    let n_pairs = records
-        .iter()
-        .filter_map(|r| r.pairs.as_ref().map(Vec::len))
-        .max()
-        .unwrap_or(0);
     for p in 1..=n_pairs {
         let _ = write!(out, ",pair{p}_active");
         for a in &axes[..dim] {
@@ -723,103 +823,111 @@ pub fn history_csv(records: &[StepRecord], dim: usize) -> String {
         );
     }
     out.push('\n');
-    fn opt<T: std::fmt::Display>(v: Option<T>) -> String {
-        v.map(|x| x.to_string()).unwrap_or_default()
-    }
-    fn num(v: Option<f64>) -> String {
-        v.map(|x| format!("{x:.17e}")).unwrap_or_default()
-    }
-    for r in records {
-        let _ = write!(
-            out,
-            "{},{},{:.17e},{:.17e},{},{},{},{},{}",
-            r.step,
-            r.planned,
-            r.factor,
-            r.time,
-            r.cutbacks,
-            opt(r.newton_steps),
-            opt(r.active),
-            opt(r.stick),
-            opt(r.slip)
-        );
-        for k in 0..dim {
-            let _ = write!(
-                out,
-                ",{}",
-                num(r.total_force.as_ref().and_then(|f| f.get(k).copied()))
-            );
-        }
-        for k in 0..dim {
-            let _ = write!(
-                out,
-                ",{}",
-                num(r
-                    .obstacle_displacement
-                    .as_ref()
-                    .and_then(|d| d.get(k).copied()))
-            );
-        }
-        let _ = write!(
-            out,
-            ",{},{},{}",
-            num(r.max_pressure),
-            num(r.half_width),
-            num(r.contact_area)
-        );
-        let (k, f) = (r.kkt.as_ref(), r.friction.as_ref());
-        let _ = write!(
-            out,
-            ",{},{},{},{},{},{},{},{}",
-            num(k.map(|k| k.max_penetration)),
-            num(k.map(|k| k.max_positive_lambda_n)),
-            num(k.map(|k| k.max_complementarity)),
-            num(r.kkt_violation),
-            num(f.map(|f| f.max_excess)),
-            num(f.map(|f| f.max_stick_motion)),
-            num(f.map(|f| f.max_slip_alignment_defect)),
-            num(r.friction_violation)
-        );
-        let c = r.certificate.as_ref();
-        let _ = write!(
-            out,
-            ",{},{},{},{}",
-            opt(c
-                .and_then(|c| serde_json::to_value(c.stop_rule).ok())
-                .and_then(|v| v.as_str().map(str::to_string))),
-            num(c.map(|c| c.equilibrium.residual_norm)),
-            num(c.map(|c| c.equilibrium.relative)),
-            num(c.map(|c| c.worst))
-        );
-        for p in 0..n_pairs {
-            let s = r.pairs.as_ref().and_then(|ps| ps.get(p));
-            let _ = write!(out, ",{}", opt(s.map(|s| s.active_count)));
-            for k in 0..dim {
-                let _ = write!(
-                    out,
-                    ",{}",
-                    num(s.and_then(|s| s.total_force.get(k).copied()))
-                );
-            }
-            for k in 0..dim {
-                let d = s.map(|s| {
-                    s.obstacle_displacement
-                        .as_ref()
-                        .map_or(0.0, |d| d.get(k).copied().unwrap_or(0.0))
-                });
-                let _ = write!(out, ",{}", num(d));
-            }
-            let _ = write!(
-                out,
-                ",{},{},{}",
-                num(s.map(|s| s.max_pressure)),
-                num(s.and_then(|s| s.half_width)),
-                num(s.and_then(|s| s.contact_area))
-            );
-        }
-        out.push('\n');
-    }
     out
+}
+
+/// A history.csv cell: the value, or empty.
+fn csv_opt<T: std::fmt::Display>(v: Option<T>) -> String {
+    v.map(|x| x.to_string()).unwrap_or_default()
+}
+
+/// A history.csv number cell (17 significant digits), or empty.
+fn csv_num(v: Option<f64>) -> String {
+    v.map(|x| format!("{x:.17e}")).unwrap_or_default()
+}
+
+/// The step's columns of its history.csv row (without the pairs' columns and the newline).
+fn history_row(out: &mut String, r: &StepRecord, dim: usize) {
+    let _ = write!(
+        out,
+        "{},{},{:.17e},{:.17e},{},{},{},{},{}",
+        r.step,
+        r.planned,
+        r.factor,
+        r.time,
+        r.cutbacks,
+        csv_opt(r.newton_steps),
+        csv_opt(r.active),
+        csv_opt(r.stick),
+        csv_opt(r.slip)
+    );
+    for k in 0..dim {
+        let _ = write!(
+            out,
+            ",{}",
+            csv_num(r.total_force.as_ref().and_then(|f| f.get(k).copied()))
+        );
+    }
+    for k in 0..dim {
+        let _ = write!(
+            out,
+            ",{}",
+            csv_num(
+                r.obstacle_displacement
+                    .as_ref()
+                    .and_then(|d| d.get(k).copied())
+            )
+        );
+    }
+    let _ = write!(
+        out,
+        ",{},{},{}",
+        csv_num(r.max_pressure),
+        csv_num(r.half_width),
+        csv_num(r.contact_area)
+    );
+    let (k, f) = (r.kkt.as_ref(), r.friction.as_ref());
+    let _ = write!(
+        out,
+        ",{},{},{},{},{},{},{},{}",
+        csv_num(k.map(|k| k.max_penetration)),
+        csv_num(k.map(|k| k.max_positive_lambda_n)),
+        csv_num(k.map(|k| k.max_complementarity)),
+        csv_num(r.kkt_violation),
+        csv_num(f.map(|f| f.max_excess)),
+        csv_num(f.map(|f| f.max_stick_motion)),
+        csv_num(f.map(|f| f.max_slip_alignment_defect)),
+        csv_num(r.friction_violation)
+    );
+    let c = r.certificate.as_ref();
+    let _ = write!(
+        out,
+        ",{},{},{},{}",
+        csv_opt(
+            c.and_then(|c| serde_json::to_value(c.stop_rule).ok())
+                .and_then(|v| v.as_str().map(str::to_string))
+        ),
+        csv_num(c.map(|c| c.equilibrium.residual_norm)),
+        csv_num(c.map(|c| c.equilibrium.relative)),
+        csv_num(c.map(|c| c.worst))
+    );
+}
+
+/// One pair's columns of a history.csv row (empty cells for a pair the step does not have).
+fn pair_columns(out: &mut String, s: Option<&PairSummary>, dim: usize) {
+    let _ = write!(out, ",{}", csv_opt(s.map(|s| s.active_count)));
+    for k in 0..dim {
+        let _ = write!(
+            out,
+            ",{}",
+            csv_num(s.and_then(|s| s.total_force.get(k).copied()))
+        );
+    }
+    for k in 0..dim {
+        let d = s.map(|s| {
+            s.obstacle_displacement
+                .as_ref()
+                .map_or(0.0, |d| d.get(k).copied().unwrap_or(0.0))
+        });
+        let _ = write!(out, ",{}", csv_num(d));
+    }
+    let _ = write!(
+        out,
+        ",{},{},{}",
+        csv_num(s.map(|s| s.max_pressure)),
+        csv_num(s.and_then(|s| s.half_width)),
+        csv_num(s.and_then(|s| s.contact_area))
+    );
 }
 
 #[cfg(test)]

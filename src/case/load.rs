@@ -12,8 +12,8 @@
 //! a row differ, and the history may go up and down (unloading matters with friction) and
 //! end anywhere: the run's final state is the one at the last factor.
 
+use super::reader::{Reader, Res, Tab};
 use super::tree::{join_index, Kind, Node};
-use super::{Reader, Res, Tab};
 
 /// Default of `load.max_cutbacks`.
 pub const DEFAULT_MAX_CUTBACKS: usize = 5;

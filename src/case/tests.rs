@@ -1,6 +1,7 @@
 //! Unit tests of the case file: every rejection names the key and its line.
 
 use super::*;
+use crate::error::InputError;
 use std::path::Path;
 
 const FILE: &str = "/cases/plate.toml";

@@ -3,7 +3,9 @@
 
 use super::*;
 use crate::contact::surface::{icosphere, write_stl_ascii};
-use std::path::Path;
+use crate::contact::ObstacleError;
+use crate::error::InputError;
+use std::path::{Path, PathBuf};
 
 const FILE: &str = "/cases/plate.toml";
 

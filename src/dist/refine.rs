@@ -19,7 +19,9 @@
 //!   edge's elements); old nodes never move; new node tags continue after the largest tag;
 //! - everything is then sent to the standard blocks of the refined counts.
 
-use super::{blk, block_of, element_groups, gathered_offsets, rank_size, Blocks};
+use super::blocks::Blocks;
+use super::comm::{blk, block_of, gathered_offsets, rank_size};
+use super::groups::element_groups;
 use crate::case::{vec3, ObstacleSpec, Projection};
 use crate::error::{InputError, RunError};
 use crate::par::Ctx;
@@ -741,10 +743,10 @@ fn refined_members(world: &SimpleCommunicator, b: &Blocks, kinds: &[usize]) -> V
 }
 
 /// One all-to-all-v of per-rank rows (`send[r]` goes to rank r) through dist's flat
-/// [`super::exchange`]; returns the data received (in rank order) and the count from each rank.
+/// [`super::comm::exchange`]; returns the data received (in rank order) and the count from each rank.
 /// Collective.
 fn exchange_counted(world: &SimpleCommunicator, send: Vec<Vec<u64>>) -> (Vec<u64>, Vec<usize>) {
-    let recv = super::exchange(world, |p| {
+    let recv = super::comm::exchange(world, |p| {
         for (r, v) in send.iter().enumerate() {
             p.to(r).extend(v);
         }

@@ -208,6 +208,80 @@ pub struct H5Mesh {
     pub group_offsets: Vec<usize>,
 }
 
+/// The rows of dataset `/name` of `f`, checked to be 1-D (`ncomp` ≤ 1) or of `ncomp` columns.
+fn dataset_rows(f: &hdf5::File, name: &str, ncomp: usize) -> Result<usize, String> {
+    let ds = f
+        .dataset(name)
+        .map_err(|_| format!("HDF5 mesh without dataset /{name}"))?;
+    let shape = ds.shape();
+    let ok = if ncomp <= 1 {
+        shape.len() == 1
+    } else {
+        shape.len() == 2 && shape[1] == ncomp
+    };
+    if !ok {
+        return Err(format!(
+            "dataset /{name} has shape {shape:?}, expected [n{}]",
+            if ncomp > 1 {
+                format!(", {ncomp}")
+            } else {
+                String::new()
+            }
+        ));
+    }
+    Ok(shape[0])
+}
+
+/// The groups of `f` (name, dimension, tag; members not read) and the CSR offsets of their
+/// members, checked against each other and against the mesh dimension `dim`.
+fn read_groups(f: &hdf5::File, dim: usize) -> Result<(Vec<Group>, Vec<usize>), String> {
+    let read_all = |name: &str| -> Result<Vec<u64>, String> {
+        f.dataset(name)
+            .and_then(|d| d.read_raw::<u64>())
+            .map_err(|e| format!("cannot read /{name}: {e}"))
+    };
+    let names = f
+        .dataset("groups/names")
+        .and_then(|d| d.read_raw::<u8>())
+        .map_err(|e| format!("cannot read /groups/names: {e}"))?;
+    let dims = read_all("groups/dim")?;
+    let tags = f
+        .dataset("groups/tag")
+        .and_then(|d| d.read_raw::<i64>())
+        .map_err(|e| format!("cannot read /groups/tag: {e}"))?;
+    let offsets: Vec<usize> = read_all("groups/offsets")?
+        .into_iter()
+        .map(|x| x as usize)
+        .collect();
+    let names: Vec<String> = names
+        .split(|&b| b == 0)
+        .map(|s| String::from_utf8_lossy(s).into_owned())
+        .collect();
+    let ng = dims.len();
+    let n_members = dataset_rows(f, "groups/members", 1)?;
+    if tags.len() != ng
+        || offsets.len() != ng + 1
+        || names.len() != ng + 1
+        || offsets[0] != 0
+        || offsets.windows(2).any(|w| w[0] > w[1])
+        || offsets[ng] != n_members
+    {
+        return Err("inconsistent /groups datasets".into());
+    }
+    let groups = (0..ng)
+        .map(|g| Group {
+            name: names[g].clone(),
+            dim: dims[g] as usize,
+            tag: tags[g] as i32,
+            elements: Vec::new(),
+        })
+        .collect::<Vec<_>>();
+    if groups.iter().any(|g| g.dim > dim) {
+        return Err("a group's dimension exceeds the mesh dimension".into());
+    }
+    Ok((groups, offsets))
+}
+
 impl H5Mesh {
     /// Opens the file (read only, independently on each rank) and reads its header.
     pub fn open(path: &Path) -> Result<H5Mesh, String> {
@@ -227,28 +301,7 @@ impl H5Mesh {
         if dim != 2 && dim != 3 {
             return Err(format!("HDF5 mesh of dimension {dim} (2 or 3 expected)"));
         }
-        let rows = |name: &str, ncomp: usize| -> Result<usize, String> {
-            let ds = f
-                .dataset(name)
-                .map_err(|_| format!("HDF5 mesh without dataset /{name}"))?;
-            let shape = ds.shape();
-            let ok = if ncomp <= 1 {
-                shape.len() == 1
-            } else {
-                shape.len() == 2 && shape[1] == ncomp
-            };
-            if !ok {
-                return Err(format!(
-                    "dataset /{name} has shape {shape:?}, expected [n{}]",
-                    if ncomp > 1 {
-                        format!(", {ncomp}")
-                    } else {
-                        String::new()
-                    }
-                ));
-            }
-            Ok(shape[0])
-        };
+        let rows = |name: &str, ncomp: usize| dataset_rows(&f, name, ncomp);
         let n_nodes = rows("coordinates", 3)?;
         let n_cells = rows("cells", dim + 1)?;
         let n_facets = rows("facets", dim)?;
@@ -265,50 +318,7 @@ impl H5Mesh {
                 return Err(format!("dataset /{name} has the wrong length"));
             }
         }
-        let read_all = |name: &str| -> Result<Vec<u64>, String> {
-            f.dataset(name)
-                .and_then(|d| d.read_raw::<u64>())
-                .map_err(|e| format!("cannot read /{name}: {e}"))
-        };
-        let names = f
-            .dataset("groups/names")
-            .and_then(|d| d.read_raw::<u8>())
-            .map_err(|e| format!("cannot read /groups/names: {e}"))?;
-        let dims = read_all("groups/dim")?;
-        let tags = f
-            .dataset("groups/tag")
-            .and_then(|d| d.read_raw::<i64>())
-            .map_err(|e| format!("cannot read /groups/tag: {e}"))?;
-        let offsets: Vec<usize> = read_all("groups/offsets")?
-            .into_iter()
-            .map(|x| x as usize)
-            .collect();
-        let names: Vec<String> = names
-            .split(|&b| b == 0)
-            .map(|s| String::from_utf8_lossy(s).into_owned())
-            .collect();
-        let ng = dims.len();
-        let n_members = rows("groups/members", 1)?;
-        if tags.len() != ng
-            || offsets.len() != ng + 1
-            || names.len() != ng + 1
-            || offsets[0] != 0
-            || offsets.windows(2).any(|w| w[0] > w[1])
-            || offsets[ng] != n_members
-        {
-            return Err("inconsistent /groups datasets".into());
-        }
-        let groups = (0..ng)
-            .map(|g| Group {
-                name: names[g].clone(),
-                dim: dims[g] as usize,
-                tag: tags[g] as i32,
-                elements: Vec::new(),
-            })
-            .collect::<Vec<_>>();
-        if groups.iter().any(|g| g.dim > dim) {
-            return Err("a group's dimension exceeds the mesh dimension".into());
-        }
+        let (groups, group_offsets) = read_groups(&f, dim)?;
         Ok(H5Mesh {
             file: f,
             dim,
@@ -318,7 +328,7 @@ impl H5Mesh {
             n_edges,
             n_points,
             groups,
-            group_offsets: offsets,
+            group_offsets,
         })
     }
 

@@ -685,6 +685,55 @@ where
 
     // 1. Same global description everywhere, valid local piece, blocks tile the global ranges.
     let meta = piece.meta();
+    check_piece(comm, piece, &meta, &h5_name)?;
+
+    // 2. The shared HDF5 file (creation, dataset creation and close are collective), with a
+    //    reserve of disk space beside it that a failed write gives back for the close.
+    let reserve_path = dir.join(RESERVE_FILE);
+    let file = open_h5(comm, &h5_path, &h5_name, &reserve_path, &meta, slot)?;
+    let mut w = Writer {
+        path: &h5_name,
+        local_err: None,
+    };
+    let collective = write_datasets(&file, &mut w, piece, &meta, slot);
+    let closed = file
+        .close()
+        .map_err(|e| format!("{h5_name}: closing failed: {e}"));
+    if comm.rank() == 0 {
+        let _ = std::fs::remove_file(&reserve_path);
+        if closed.is_ok() {
+            release_unused(&h5_path);
+        }
+    }
+    let mut local = collective.and(closed);
+    if local.is_ok() {
+        if let Some(e) = w.local_err.take() {
+            local = Err(e);
+        }
+    }
+
+    // 3. The XDMF description (rank 0), after the data it points to is complete.
+    if comm.rank() == 0 && local.is_ok() {
+        let (text, contact_text) = xdmf(&meta);
+        let contact_path = dir.join(CONTACT_XDMF_FILE);
+        for (path, text) in [(&xdmf_path, Some(text)), (&contact_path, contact_text)] {
+            if let Some(text) = text {
+                if let Err(e) = std::fs::write(path, text) {
+                    local = Err(format!("{}: cannot write: {e}", path.display()));
+                    break;
+                }
+            }
+        }
+    }
+    agree(comm, local)
+}
+
+/// Step 1 of [`write_piece`]: the same global description on every rank, a valid local piece,
+/// and the ranks' blocks tiling the global ranges. Collective; the same `Err` on every rank.
+fn check_piece<C>(comm: &C, piece: &Piece, meta: &Meta, h5_name: &str) -> Result<(), String>
+where
+    C: Communicator,
+{
     let sig = meta.signature();
     let sig0 = crate::par::broadcast_string(comm, 0, &sig);
     let mut local = piece.validate();
@@ -721,13 +770,25 @@ where
                 )
             });
     }
-    agree(comm, local.map_err(|e| format!("{h5_name}: {e}")))?;
+    agree(comm, local.map_err(|e| format!("{h5_name}: {e}")))
+}
 
-    // 2. The shared HDF5 file (creation, dataset creation and close are collective), with a
-    //    reserve of disk space beside it that a failed write gives back for the close.
-    let reserve_path = dir.join(RESERVE_FILE);
+/// Step 2 of [`write_piece`]: the reserve beside the HDF5 file, then the file created (or, for
+/// a later step, opened) and its disk space reserved for the data of `meta`. Collective; the
+/// same `Err` on every rank, with the reserve removed.
+fn open_h5<C>(
+    comm: &C,
+    h5_path: &Path,
+    h5_name: &str,
+    reserve_path: &Path,
+    meta: &Meta,
+    slot: Slot,
+) -> Result<hdf5::File, String>
+where
+    C: Communicator + AsRaw<Raw = mpi::ffi::MPI_Comm>,
+{
     let reserved = if comm.rank() == 0 {
-        std::fs::write(&reserve_path, vec![0u8; RESERVE_BYTES]).map_err(|e| {
+        std::fs::write(reserve_path, vec![0u8; RESERVE_BYTES]).map_err(|e| {
             format!("{h5_name}: cannot create: {e} (reserving {RESERVE_BYTES} bytes beside it)")
         })
     } else {
@@ -735,7 +796,7 @@ where
     };
     if let Err(e) = agree(comm, reserved) {
         if comm.rank() == 0 {
-            let _ = std::fs::remove_file(&reserve_path);
+            let _ = std::fs::remove_file(reserve_path);
         }
         return Err(e);
     }
@@ -745,15 +806,15 @@ where
     let mut before = 0;
     let created = if slot.creates() {
         builder
-            .create(&h5_path)
+            .create(h5_path)
             .map_err(|e| format!("{h5_name}: cannot create: {e}"))
     } else {
-        before = std::fs::metadata(&h5_path).map_or(0, |m| m.len());
+        before = std::fs::metadata(h5_path).map_or(0, |m| m.len());
         builder
-            .open_rw(&h5_path)
+            .open_rw(h5_path)
             .map_err(|e| format!("{h5_name}: cannot open to add step {slot:?}: {e}"))
     };
-    let file = match created {
+    match created {
         Ok(f) => {
             agree(comm, Ok(()))?;
             // Reserve the file's disk space before any of it is written. A full disk found
@@ -762,9 +823,9 @@ where
             // a live id, and the library's shutdown inside MPI_Finalize then crashes
             // (segfault after the error line). Here the file is still empty: give the reserve
             // back, close it (its first metadata fits) and stop with the reason.
-            let need = before + file_bytes(&meta, slot.creates());
+            let need = before + file_bytes(meta, slot.creates());
             let reserved = if comm.rank() == 0 {
-                preallocate(&h5_path, need).map_err(|e| {
+                preallocate(h5_path, need).map_err(|e| {
                     format!(
                         "{h5_name}: cannot reserve {need} bytes for the results ({e}): not \
                          enough free disk space?"
@@ -776,58 +837,23 @@ where
             if let Err(e) = agree(comm, reserved) {
                 if comm.rank() == 0 {
                     // A partial reservation (some file systems keep it) and the reserve go.
-                    release_unused(&h5_path);
-                    let _ = std::fs::remove_file(&reserve_path);
+                    release_unused(h5_path);
+                    let _ = std::fs::remove_file(reserve_path);
                 }
                 let _ = f.close();
                 return Err(e);
             }
-            f
+            Ok(f)
         }
         Err(e) => {
             // Every rank returns here (MPI_File_open is collective, so it fails everywhere).
             if comm.rank() == 0 {
-                let _ = std::fs::remove_file(&reserve_path);
+                let _ = std::fs::remove_file(reserve_path);
             }
             agree(comm, Err(e.clone()))?;
-            return Err(e);
-        }
-    };
-    let mut w = Writer {
-        path: &h5_name,
-        local_err: None,
-    };
-    let collective = write_datasets(&file, &mut w, piece, &meta, slot);
-    let closed = file
-        .close()
-        .map_err(|e| format!("{h5_name}: closing failed: {e}"));
-    if comm.rank() == 0 {
-        let _ = std::fs::remove_file(&reserve_path);
-        if closed.is_ok() {
-            release_unused(&h5_path);
+            Err(e)
         }
     }
-    let mut local = collective.and(closed);
-    if local.is_ok() {
-        if let Some(e) = w.local_err.take() {
-            local = Err(e);
-        }
-    }
-
-    // 3. The XDMF description (rank 0), after the data it points to is complete.
-    if comm.rank() == 0 && local.is_ok() {
-        let (text, contact_text) = xdmf(&meta);
-        let contact_path = dir.join(CONTACT_XDMF_FILE);
-        for (path, text) in [(&xdmf_path, Some(text)), (&contact_path, contact_text)] {
-            if let Some(text) = text {
-                if let Err(e) = std::fs::write(path, text) {
-                    local = Err(format!("{}: cannot write: {e}", path.display()));
-                    break;
-                }
-            }
-        }
-    }
-    agree(comm, local)
 }
 
 #[cfg(test)]

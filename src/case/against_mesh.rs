@@ -1,0 +1,217 @@
+//! Checks of the case against the mesh read.
+
+use super::body::{BodyForceSpec, Load};
+use super::file::Case;
+use super::shape::ObstacleSpec;
+use super::tree::{join_index, join_key};
+use crate::error::InputError;
+use crate::expr::{quoted, VARIABLES};
+use crate::mesh::Mesh;
+
+impl Case {
+    /// Checks the case against the mesh: model vs dimension, vector lengths = `dim`,
+    /// group names exist, Neumann/contact groups are boundary groups (dimension `dim - 1`).
+    /// `groups` lists the mesh's physical groups as (name, dimension).
+    pub fn check_against_mesh(
+        &self,
+        dim: usize,
+        groups: &[(String, usize)],
+    ) -> Result<(), InputError> {
+        self.model(dim)?;
+        let len = |key: String, n: usize| -> Result<(), InputError> {
+            if n == dim {
+                Ok(())
+            } else {
+                Err(self.err_at(
+                    &key,
+                    format!("has {n} components, but the mesh is {dim}D and needs {dim}"),
+                ))
+            }
+        };
+        for (i, d) in self.dirichlet.iter().enumerate() {
+            let k = join_index("dirichlet", i);
+            self.check_group(&join_key(&k, "group"), &d.group, groups, None)?;
+            len(join_key(&k, "value"), d.value.len())?;
+        }
+        for (i, n) in self.neumann.iter().enumerate() {
+            let k = join_index("neumann", i);
+            self.check_group(&join_key(&k, "group"), &n.group, groups, Some(dim - 1))?;
+            if let Load::Traction(t) = &n.load {
+                len(join_key(&k, "traction"), t.len())?;
+            }
+        }
+        if let Some(b) = &self.body_force {
+            len(b.key().into(), b.len())?;
+            if let BodyForceSpec::Expr(es) = b {
+                for (i, e) in es.iter().enumerate() {
+                    let bad = e.unknown_variables(&VARIABLES[..dim]);
+                    if !bad.is_empty() {
+                        return Err(self.err_at(
+                            &join_index("body_force.expr", i),
+                            format!(
+                                "\"{}\": unknown variable{} {}; the mesh is {dim}D: the \
+                                 variables are {}",
+                                e.text(),
+                                if bad.len() > 1 { "s" } else { "" },
+                                quoted(&bad),
+                                VARIABLES[..dim].join(", ")
+                            ),
+                        ));
+                    }
+                }
+            }
+        }
+        for c in &self.contacts {
+            self.check_group(&join_key(&c.key, "group"), &c.group, groups, Some(dim - 1))?;
+            self.check_shape(&join_key(&c.key, "obstacle"), &c.obstacle, dim)?;
+            for m in [&c.motion, &c.force].into_iter().flatten() {
+                if m.table.is_empty() {
+                    len(m.key.clone(), m.value.len())?;
+                }
+                for (i, (_, row)) in m.table.iter().enumerate() {
+                    if row.len() != dim {
+                        return Err(self.err_at(
+                            &join_index(&m.key, i),
+                            format!(
+                                "a row of {} numbers, but the mesh is {dim}D: each row is \
+                                 [load factor, {}] (1 + {dim} numbers)",
+                                1 + row.len(),
+                                ["x", "y", "z"][..dim].join(", ")
+                            ),
+                        ));
+                    }
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// A 3D-only shape needs a 3D mesh; every vector of the shape needs `dim` components.
+    fn check_shape(&self, key: &str, shape: &ObstacleSpec, dim: usize) -> Result<(), InputError> {
+        if let (2, Some(instead)) = (dim, shape.in_2d_use()) {
+            return Err(self.err_at(
+                &join_key(key, "type"),
+                format!(
+                    "\"{}\" is a 3D obstacle, but the mesh is 2D; in 2D use {instead}",
+                    shape.type_name()
+                ),
+            ));
+        }
+        if let ObstacleSpec::Height { expr } = shape {
+            expr.check_variables(dim).map_err(|m| {
+                self.err_at(&join_key(key, "expr"), format!("\"{}\": {m}", expr.text()))
+            })?;
+        }
+        for (name, n) in shape.vectors() {
+            if n != dim {
+                return Err(self.err_at(
+                    &join_key(key, name),
+                    format!("has {n} components, but the mesh is {dim}D and needs {dim}"),
+                ));
+            }
+        }
+        Ok(())
+    }
+
+    /// Checks `[[mesh.project]]` against the mesh read (before it is refined): every group
+    /// exists and has facets (dimension `dim - 1`) or, in 3D, edges; the shape's vectors have
+    /// `dim` components. `groups` lists the mesh's physical groups as (name, dimension).
+    pub fn check_projections(
+        &self,
+        dim: usize,
+        groups: &[(String, usize)],
+    ) -> Result<(), InputError> {
+        for (i, p) in self.mesh.project.iter().enumerate() {
+            let k = join_index("mesh.project", i);
+            let gk = join_key(&k, "group");
+            self.check_group(&gk, &p.group, groups, None)?;
+            if !groups
+                .iter()
+                .any(|(g, d)| g == &p.group && *d >= 1 && *d < dim)
+            {
+                return Err(self.err_at(
+                    &gk,
+                    format!(
+                        "physical group \"{}\" has no facets{}: only new nodes on the \
+                         boundary can be projected",
+                        p.group,
+                        if dim == 3 { " or edges" } else { "" }
+                    ),
+                ));
+            }
+            self.check_shape(&join_key(&k, "shape"), &p.shape, dim)?;
+        }
+        Ok(())
+    }
+
+    /// Checks the facets of every group that carries a load (`neumann`) or the contact
+    /// condition: no degenerate facet, every facet on the boundary of the body (see
+    /// [`Mesh::check_boundary_group`]). Call after [`Case::check_against_mesh`].
+    pub fn check_facet_groups(&self, mesh: &Mesh) -> Result<(), InputError> {
+        let mut used: Vec<(String, &str)> = self
+            .neumann
+            .iter()
+            .enumerate()
+            .map(|(i, n)| {
+                (
+                    join_key(&join_index("neumann", i), "group"),
+                    n.group.as_str(),
+                )
+            })
+            .collect();
+        for c in &self.contacts {
+            used.push((join_key(&c.key, "group"), c.group.as_str()));
+        }
+        for (key, group) in used {
+            let at = match self.line_of(&key) {
+                Some(l) => format!("{key} at {}:{l}", self.file.display()),
+                None => format!("{key} of {}", self.file.display()),
+            };
+            mesh.check_boundary_group(&self.mesh.file, group, &at)?;
+        }
+        Ok(())
+    }
+
+    fn check_group(
+        &self,
+        key: &str,
+        name: &str,
+        groups: &[(String, usize)],
+        need_dim: Option<usize>,
+    ) -> Result<(), InputError> {
+        let dims: Vec<usize> = groups
+            .iter()
+            .filter(|(g, _)| g == name)
+            .map(|(_, d)| *d)
+            .collect();
+        if dims.is_empty() {
+            let avail = if groups.is_empty() {
+                "the mesh has no named physical groups".to_string()
+            } else {
+                let list: Vec<String> = groups
+                    .iter()
+                    .map(|(g, d)| format!("\"{g}\" (dim {d})"))
+                    .collect();
+                format!("the mesh has: {}", list.join(", "))
+            };
+            return Err(self.err_at(
+                key,
+                format!("physical group \"{name}\" is not in the mesh; {avail}"),
+            ));
+        }
+        if let Some(nd) = need_dim {
+            if !dims.contains(&nd) {
+                let have: Vec<String> = dims.iter().map(|d| d.to_string()).collect();
+                return Err(self.err_at(
+                    key,
+                    format!(
+                        "physical group \"{name}\" has dimension {}, but a boundary group \
+                         (dimension {nd}) is needed here",
+                        have.join("/")
+                    ),
+                ));
+            }
+        }
+        Ok(())
+    }
+}

@@ -134,7 +134,7 @@ fn h5_and_msh_agree_and_no_rank_holds_the_whole_mesh() {
 /// Two texts agree token by token; numbers to |a − b| ≤ 1e-12 + 1e-9 max(|a|, |b|).
 fn same_to_roundoff(a: &str, b: &str, what: &str) {
     let split = |t: &str| -> Vec<String> {
-        t.split(|c: char| c.is_whitespace() || ",[]()".contains(c))
+        t.split(|c: char| c.is_whitespace() || ",;=[]()".contains(c))
             .filter(|w| !w.is_empty())
             .map(str::to_string)
             .collect()

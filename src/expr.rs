@@ -1,5 +1,5 @@
 //! Expressions of the case file in x, y and z: the `height` obstacle's h (contact/height.rs)
-//! and the body force `[body_force] expr` (case/mod.rs).
+//! and the body force `[body_force] expr` (case/body.rs).
 //!
 //! An expression is parsed once by `evalexpr` ([`Expr::parse`]): its syntax (`^` for powers,
 //! `-x^2` = −(x²), scientific notation), every integer literal made a float, only the

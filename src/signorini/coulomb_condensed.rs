@@ -1216,7 +1216,7 @@ struct Checked {
     loose: bool,
     /// Where the dense steps stalled with no state changed above DENSE_RESIDUAL_TOL: the worst
     /// violation of (3.14)/(3.18) relative to the problem's scales
-    /// ([`super::coulomb_certificate_worst`]); not computed otherwise.
+    /// ([`super::final_state::coulomb_certificate_worst`]); not computed otherwise.
     certificate: Option<f64>,
     /// Force control: each force-controlled pair's approach δ_j.
     approach: Vec<f64>,
@@ -1285,7 +1285,7 @@ fn check(
         && run.stalled
         && totals.residual > DENSE_RESIDUAL_TOL * totals.lambda_norm;
     let certificate = if judged {
-        Some(super::coulomb_certificate_worst(
+        Some(super::final_state::coulomb_certificate_worst(
             ctx, p.sys, b, &it.nodes, &u, dim,
         )?)
     } else {

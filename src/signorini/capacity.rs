@@ -1,9 +1,9 @@
 //! A frictional body's friction capacity checked before the solve (a floating body against
 //! parallel planes), and what a failed iteration of a sliding body says.
 
-use super::active_set::Law;
 use super::boundary::ContactBoundary;
 use super::force;
+use super::law::{FloatingLoad, Law};
 use crate::assembly::System;
 use crate::contact::Obstacle;
 use crate::error::RunError;
@@ -27,7 +27,7 @@ pub fn check_friction_capacity(
     let Some(planes) = parallel_planes(&b.obstacles) else {
         return Ok(());
     };
-    if law == Law::Frictionless || held_anywhere(ctx, fixed) {
+    if !law.friction() || held_anywhere(ctx, fixed) {
         return Ok(());
     }
     let np = planes.len();
@@ -58,38 +58,15 @@ pub fn check_friction_capacity(
         .map(|k| (r[k] - rn * n0[k]).powi(2))
         .sum::<f64>()
         .sqrt();
-    let (capacity, what) = if law == Law::Tresca {
-        let c: f64 = bounds.iter().sum();
-        if c == 0.0 {
-            return Ok(()); // frictionless: the balance test of the free modes decides
-        }
-        (c, format!("Σ b_k = {c:.6e}, (3.18)"))
-    } else {
-        let Some(normal) = normal_forces(&planes, rn, forces) else {
-            return Ok(());
-        };
-        let c: f64 = normal.iter().zip(&mu).map(|(n, m)| n * m).sum();
-        if c <= 0.0 {
-            return Ok(()); // no friction, or no normal load: the balance test decides
-        }
-        let terms: Vec<String> = normal
-            .iter()
-            .zip(&mu)
-            .filter(|(n, _)| **n > 0.0)
-            .map(|(n, m)| format!("{m} × {n:.6e}"))
-            .collect();
-        let what = if np == 1 {
-            format!(
-                "μ Σ_k (−λ_n^k) = μ × normal load = {} = {c:.6e}, Coulomb",
-                terms.join("")
-            )
-        } else {
-            format!(
-                "Σ_j μ_j N_j over the pairs, N_j their normal forces = {} = {c:.6e}, Coulomb",
-                terms.join(" + ")
-            )
-        };
-        (c, what)
+    let load = FloatingLoad {
+        planes: &planes,
+        rn,
+        forces,
+        mu: &mu,
+        bounds: &bounds,
+    };
+    let Some((capacity, what)) = law.rules().capacity(&load) else {
+        return Ok(()); // not known before the solve: the balance test and the iteration decide
     };
     if rt > capacity * (1.0 + 1e-9) + 1e-14 * r.iter().map(|x| x.abs()).sum::<f64>() {
         return Err(RunError::Failed(format!(
@@ -142,68 +119,9 @@ fn parallel_planes(obstacles: &[Obstacle]) -> Option<Vec<[f64; 3]>> {
         .then_some(normals)
 }
 
-/// The pairs' normal forces N_j ≥ 0 on a floating body between parallel planes (normals
-/// `planes`, n_j = s_j n_0), from the load's normal resultant `rn` (along n_0) and the forces
-/// under control: Σ_j s_j N_j + rn = 0, N_j = |F_j| on a pair pushed along its normal. `None`
-/// if a force is not along its plane's normal, if more than one pair's force is unknown, or
-/// if the balance asks for a pull (N < 0: the body leaves the plane, the balance test decides).
-fn normal_forces(planes: &[[f64; 3]], rn: f64, forces: &[force::ForceControl]) -> Option<Vec<f64>> {
-    let n0 = planes[0];
-    let s: Vec<f64> = planes
-        .iter()
-        .map(|n| crate::geom::dot(*n, n0).signum())
-        .collect();
-    let mut normal = vec![f64::NAN; planes.len()];
-    for fc in forces {
-        let along = crate::geom::dot(fc.direction(), planes[fc.pair]);
-        if along < 1.0 - 1e-12 {
-            return None;
-        }
-        normal[fc.pair] = fc.magnitude();
-    }
-    let unknown: Vec<usize> = (0..planes.len()).filter(|&j| normal[j].is_nan()).collect();
-    let known: f64 = (0..planes.len())
-        .filter(|&j| !normal[j].is_nan())
-        .map(|j| s[j] * normal[j])
-        .sum();
-    match unknown.as_slice() {
-        [] => {}
-        [u] => normal[*u] = -(rn + known) / s[*u],
-        _ => return None,
-    }
-    normal.iter().all(|&n| n >= 0.0).then_some(normal)
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    fn pushed(pair: usize, force: [f64; 3]) -> force::ForceControl {
-        force::ForceControl {
-            force,
-            start: 0.0,
-            file: "case.toml".into(),
-            pair,
-            key: format!("contact[{pair}].force"),
-        }
-    }
-
-    /// The normal forces of a body between a plate below (n = +y) and one above (n = −y).
-    #[test]
-    fn normal_forces_between_two_plates() {
-        let plates = [[0.0, 1.0, 0.0], [0.0, -1.0, 0.0]];
-        // the top plate pushed down by 0.01, a body load of 0.002 downwards (rn = −0.002)
-        let top = [pushed(1, [0.0, -0.01, 0.0])];
-        let n = normal_forces(&plates, -0.002, &top).expect("known");
-        assert!((n[0] - 0.012).abs() < 1e-15 && n[1] == 0.01, "{n:?}");
-        // one plane, no force: N = −rn; a pull leaves it to the balance test
-        assert_eq!(normal_forces(&plates[..1], -0.5, &[]), Some(vec![0.5]));
-        assert_eq!(normal_forces(&plates[..1], 0.5, &[]), None);
-        // two unknown normal forces, or a slanted force: not known before the solve
-        assert_eq!(normal_forces(&plates, -0.002, &[]), None);
-        let slanted = [pushed(1, [0.001, -0.01, 0.0])];
-        assert_eq!(normal_forces(&plates, -0.002, &slanted), None);
-    }
 
     #[test]
     fn only_parallel_planes_have_a_capacity_before_the_solve() {

@@ -5,6 +5,7 @@
 use super::boundary::{CaseKeys, ContactBoundary, NodeResult};
 use super::certificate;
 use super::force;
+use super::law::{Coulomb, FrictionLaw};
 use super::newton::NewtonResult;
 use super::report::{self, ContactSummary, FrictionCertificate, Kkt, Scales};
 use crate::assembly::System;
@@ -113,18 +114,18 @@ pub fn coulomb_certificate_worst(
     dim: usize,
 ) -> Result<f64, RunError> {
     let mut judged = b.clone();
-    coulomb_bounds(&mut judged, nodes);
+    judged_bounds(&Coulomb, &mut judged, nodes);
     let table = report::gather(ctx, &judged, nodes, dim);
     let (scales, kkt, friction) = certificates(ctx, sys, &table, u, true, Scales::default())?;
     let friction = friction.map_or(0.0, |f| f.worst(&scales));
     Ok(kkt.worst().max(friction))
 }
 
-/// Coulomb's thresholds b_k = μ(−λ_n^k) (F1) at the state `nodes`, by which the certificates
-/// and the output judge Coulomb's law. Local.
-pub fn coulomb_bounds(b: &mut ContactBoundary, nodes: &[NodeResult]) {
+/// The thresholds b_k by which the certificates and the output judge the law `law` at the
+/// state `nodes` (Coulomb: b_k = μ(−λ_n^k) (F1); the boundary's own otherwise). Local.
+pub fn judged_bounds(law: &dyn FrictionLaw, b: &mut ContactBoundary, nodes: &[NodeResult]) {
     for (k, r) in b.nodes.iter_mut().zip(nodes) {
-        k.bound = k.mu * (-r.lambda_n).max(0.0);
+        k.bound = law.judged_bound(k, r);
     }
 }
 

@@ -17,6 +17,7 @@ pub mod cycle;
 pub mod dense;
 pub mod final_state;
 pub mod force;
+pub mod law;
 pub mod newton;
 pub mod plain;
 pub mod predictor;
@@ -313,7 +314,7 @@ pub fn solve(
     previous: Option<&ContactSolution>,
 ) -> Result<ContactSolution, RunError> {
     let dim = mesh.dim;
-    let law = law_of(settings);
+    let law = Law::of(settings);
     let friction = settings.friction();
     let (mut b, warned) = contact_boundary(ctx, settings, mesh, layout, fixed)?;
     b.keys.solver = solver_keys(solver_section);
@@ -469,10 +470,8 @@ fn report_solution(
         prev_u,
         force_control,
     } = solved;
-    if law == Law::Coulomb {
-        // The certificate and the output judge Coulomb's law with b_k = μ(−λ_n^k).
-        final_state::coulomb_bounds(&mut b, &nr.nodes);
-    }
+    // the certificate and the output judge Coulomb's law with b_k = μ(−λ_n^k)
+    final_state::judged_bounds(law.rules(), &mut b, &nr.nodes);
     let (displacement, approaches) =
         place_at_approaches(&mut b, settings, (force_control, &nr.approach), friction);
     let floor = vanishing_floor(previous); // the step before's scales, for a vanishing step
@@ -870,15 +869,6 @@ fn symmetric_rows(settings: &ContactSettings, dim: usize) -> bool {
     match settings.coulomb {
         Some((_, CoulombAlgorithm::Newton)) => false,
         _ => !settings.friction() || dim == 2,
-    }
-}
-
-/// The tangential law of the settings (the fixed point's inner solves are Tresca solves).
-fn law_of(settings: &ContactSettings) -> Law {
-    match (settings.tresca, settings.coulomb) {
-        (true, _) => Law::Tresca,
-        (false, Some(_)) => Law::Coulomb,
-        (false, None) => Law::Frictionless,
     }
 }
 

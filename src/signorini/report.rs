@@ -255,7 +255,7 @@ const PAIR: usize = 19;
 pub fn gather(ctx: &Ctx, cs: &ContactBoundary, res: &[NodeResult], dim: usize) -> Table {
     let mut mine: Vec<f64> = Vec::with_capacity(cs.nodes.len() * NCOL);
     for (k, r) in cs.nodes.iter().zip(res) {
-        let du_t = super::active_set::increment(r, k);
+        let du_t = super::law::increment(r, k);
         let row = [
             k.x[0],
             k.x[1],

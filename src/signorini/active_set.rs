@@ -532,6 +532,12 @@ impl SetUpdate {
     }
 }
 
+/// A system (rows, or the dense Coulomb system) holds at an iterate as well as the one it was
+/// solved with where its residual there is within this factor of that one's (or of the
+/// round-off floor): the iterate is its fixed point, no further step is taken
+/// (newton.rs `rows_hold`, coulomb_condensed.rs `fixed_point`).
+pub const FIXED_POINT_SLACK: f64 = 16.0;
+
 /// The residual² of the tangential row `row` (3.39) / (F6), −λ_τ + L̃ Δu_τ − q (λ_n + c (u_n +
 /// g)) − r̃, at the iterate `r` of node `k` (0 for a stick row, which does not depend on the
 /// iterate). Pure.

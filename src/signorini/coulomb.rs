@@ -7,14 +7,13 @@
 use super::active_set::Law;
 use super::boundary::{self, ContactBoundary, NodeResult};
 use super::certificate;
-use super::condensed::{self, CoulombCondensedSummary};
-use super::coulomb_condensed;
-use super::dense;
+use super::condensed;
+use super::coulomb_condensed::{self, CoulombCondensedSummary};
 use super::force;
 use super::newton::{self, ContactProblem, NewtonResult, NewtonSettings, StepInfo, WarmStart};
 use super::plain;
 use super::reduced::ReducedSystem;
-use super::rigid::FreeModes;
+use super::rigid::{self, FreeModes};
 use crate::case::{self, CoulombAlgorithm, Reuse, SolverSection};
 use crate::error::RunError;
 use crate::par::Ctx;
@@ -731,7 +730,7 @@ struct Unheld {
 
 impl Unheld {
     /// The body's unheld load on the boundary `b`; `None`: the body is held, or that part is
-    /// below [`dense::BALANCE_RTOL`] of the load's scale. Collective (one reduction).
+    /// below [`rigid::BALANCE_RTOL`] of the load's scale. Collective (one reduction).
     fn of(ctx: &Ctx, b: &ContactBoundary, free: &FreeModes) -> Option<Unheld> {
         let mz = free.dirichlet_free().ncols();
         if !free.floats() || mz == 0 {
@@ -761,7 +760,7 @@ impl Unheld {
         let phi = nalgebra::DVector::from_vec(free.free_load());
         let (_, scale) = free.load();
         let load = (basis.transpose() * phi).norm();
-        (load > dense::BALANCE_RTOL * scale).then_some(Unheld { basis, load, scale })
+        (load > rigid::BALANCE_RTOL * scale).then_some(Unheld { basis, load, scale })
     }
 
     /// Why the frictionless problem cannot carry the load.

@@ -17,6 +17,7 @@ pub mod cycle;
 pub mod dense;
 pub mod final_state;
 pub mod force;
+pub mod kept;
 pub mod law;
 pub mod newton;
 pub mod plain;
@@ -42,6 +43,7 @@ use crate::warnings::Warning;
 use active_set::{ActiveSet, Iterate, Law};
 use boundary::{ContactBoundary, NodeResult};
 use coulomb::Outcome;
+use kept::KeptFactor;
 use newton::{ContactProblem, NewtonResult, NewtonSettings, StepInfo, WarmStart};
 use reduced::ReducedSystem;
 use report::{ContactSummary, Scales};
@@ -144,66 +146,10 @@ pub struct ContactSolution {
     pub warnings: Vec<Warning>,
 }
 
-/// A condensed solve's factorisation of K_p with its Schur complement, compliance and
-/// candidates ([`condensed::Kept`]; frictionless or Coulomb), handed from one load step to the
-/// next: K_p does not change between load steps, so the next step reuses it where the
-/// candidates' frames and the pins are the same (`Kept::holds`). Empty unless the last step
-/// was solved on the contact unknowns.
-#[derive(Default)]
-pub struct KeptFactor {
-    kept: std::cell::RefCell<Option<condensed::Kept>>,
-    /// Rank 0: the nested-dissection order of K_p's node graph (the same graph in every load
-    /// step), where the step kept no factorisation with it (a frictionless step that held a
-    /// wide zone, or a held zone's pass before).
-    order: std::cell::RefCell<Option<Vec<usize>>>,
-}
-
-/// A located contact zone (predictor::locate): this rank's clearances and the nodes the model
-/// puts in contact; `None` where the model did not converge.
-pub(crate) type Located = Option<(Vec<f64>, usize)>;
-
 impl ContactSolution {
     /// Drops the factorisation kept for a next load step (none follows).
     pub fn release_factor(&self) {
         drop(self.kept.take());
-    }
-}
-
-impl KeptFactor {
-    /// What the previous load step kept (taken from it); empty without one.
-    fn from_previous(previous: Option<&ContactSolution>) -> KeptFactor {
-        KeptFactor {
-            kept: std::cell::RefCell::new(previous.and_then(|p| p.kept.take())),
-            order: std::cell::RefCell::new(previous.and_then(|p| p.kept.take_order())),
-        }
-    }
-
-    fn take(&self) -> Option<condensed::Kept> {
-        self.kept.borrow_mut().take()
-    }
-
-    fn put(&self, kept: condensed::Kept) {
-        *self.kept.borrow_mut() = Some(kept);
-    }
-
-    /// No factorisation is kept (the previous load step ran the plain path, or there was
-    /// none).
-    fn is_empty(&self) -> bool {
-        self.kept.borrow().is_none()
-    }
-
-    /// The kept factorisation holds a wide zone's interior (friction: sticking).
-    fn holds_zone(&self) -> bool {
-        let kept = self.kept.borrow();
-        kept.as_ref().is_some_and(|k| k.held.iter().any(|&h| h))
-    }
-
-    fn take_order(&self) -> Option<Vec<usize>> {
-        self.order.borrow_mut().take()
-    }
-
-    fn put_order(&self, order: Option<Vec<usize>>) {
-        *self.order.borrow_mut() = order;
     }
 }
 
@@ -339,7 +285,7 @@ pub fn solve(
             nodes: nodes.as_deref().unwrap_or(&prev.nodes),
             u_local: u,
         });
-    let kept = KeptFactor::from_previous(previous);
+    let kept = KeptFactor::taken_from(previous.map(|p| &p.kept));
     let located = std::cell::RefCell::new(None);
     let problem = ContactProblem {
         mesh,

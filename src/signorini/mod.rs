@@ -1,10 +1,13 @@
 //! The distributed contact algorithm (MPI + PETSc): the contact boundary c_h, the sets and
 //! iterates of Algorithms 1 and 2, the reduced systems (3.29)/(3.42), the free rigid modes,
 //! the cycle guard, the Newton loop and the report of the final state. The pointwise contact
-//! law it applies lives in `crate::contact` (pure, no MPI).
+//! law it applies lives in `crate::contact` (pure, no MPI); the tangential laws as the
+//! algorithm sees them in `law` (one file per law), Coulomb's strategy in `coulomb`.
 //!
-//! Floors inside: `cycle`, `boundary` → `rigid`, `active_set`, `report` → `reduced` →
-//! `newton` → this file's [`solve`].
+//! Floors inside: `cycle`, `boundary` → `rigid`, `law`, `active_set`, `report` → `reduced` →
+//! `newton` → `condensed`, `coulomb_condensed` → `coulomb` → this file's [`solve`] (the
+//! phases of a solve; the checks before it in `capacity`, the judged final state in
+//! `final_state`).
 
 pub mod active_set;
 pub mod boundary;

@@ -4,100 +4,16 @@
 use super::boundary::{ContactBoundary, ContactNode, NodeResult};
 use super::rigid::{Gram, RigidModes};
 use crate::case::NewtonInit;
-use crate::contact::{self, CoulombRow, NodePoint, NodeState};
+use crate::contact::{self, CoulombRow, NodeState};
 use crate::par::Ctx;
 
-/// The tangential law of a solve: which rows the set update forms (docs/friction.md).
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub enum Law {
-    /// Algorithm 1: no tangential state.
-    Frictionless,
-    /// Algorithm 2 with the nodal thresholds b_k of the contact boundary (3.18).
-    Tresca,
-    /// The generalised Newton: b = μ max(0, −λ_n − c(u_n + g)) (F1), rows (F5)/(F6), with each
-    /// node's μ ([`ContactNode::mu`]: its pair's).
-    Coulomb,
-}
-
-impl Law {
-    pub fn friction(self) -> bool {
-        self != Law::Frictionless
-    }
-
-    /// The tangential rows of node `k` at the iterate `r` (increment u_τ − u_ref): Tresca
-    /// (3.33)/(3.39) or Coulomb (F5). Local.
-    fn row(self, k: &ContactNode, r: &NodeResult, c: f64, dim: usize) -> CoulombRow<2> {
-        let du_t = increment(r, k);
-        match self {
-            Law::Coulomb => {
-                contact::coulomb_row_dyn(dim, r.u_n, r.lambda_n, du_t, r.lambda_t, k.gap, k.mu, c)
-                    .row
-            }
-            _ => contact::tangential_row_dyn(dim, du_t, r.lambda_t, k.bound, c).into(),
-        }
-    }
-
-    /// The threshold b and v = λ_τ + c Δu_τ of node `k` at `r` (Tresca: b_k; Coulomb (F1)).
-    fn threshold_and_v(self, k: &ContactNode, r: &NodeResult, c: f64) -> (f64, [f64; 2]) {
-        let du_t = increment(r, k);
-        let v = [r.lambda_t[0] + c * du_t[0], r.lambda_t[1] + c * du_t[1]];
-        let b = match self {
-            Law::Coulomb => contact::coulomb_threshold(r.u_n, r.lambda_n, k.gap, k.mu, c),
-            _ => k.bound,
-        };
-        (b, v)
-    }
-
-    /// A stick node stays stick while |v| ≤ b + [`STICK_TOL`] · max(b, `scale`), b > 0, with
-    /// `scale` the largest threshold on the whole boundary ([`threshold_scale`]): the hysteresis
-    /// of (3.33) that keeps a node at the stick/slip limit (|λ_τ| = b, Δu_τ = 0: every slip node
-    /// of a warm start from its own solution) from flipping on round-off. The band is measured
-    /// against the problem's threshold scale, not against the node's own b: a node with a small
-    /// b (the edge of the contact zone) sees the same round-off in λ_τ as every other node, and a
-    /// fixed point on Tresca thresholds leaves b within 1e-9 · max b of μ(−λ_n), not within
-    /// 1e-9 · b.
-    fn stays_stuck(self, k: &ContactNode, r: &NodeResult, c: f64, scale: f64) -> bool {
-        let (b, v) = self.threshold_and_v(k, r, c);
-        b > 0.0 && v[0].hypot(v[1]) <= b + STICK_TOL * b.max(scale)
-    }
-
-    /// The threshold of node `k` at `r`: b_k (Tresca), μ max(0, −λ_n − c(u_n + g)) (Coulomb).
-    fn threshold(self, k: &ContactNode, r: &NodeResult, c: f64) -> f64 {
-        self.threshold_and_v(k, r, c).0
-    }
-
-    /// The squared tangential residual of node `k` at `r`: ‖C_τ‖² (3.31) for Tresca, the
-    /// natural residual of (F3) squared for Coulomb (C_n is added by the caller).
-    fn residual2(self, k: &ContactNode, r: &NodeResult, c: f64) -> f64 {
-        let du_t = increment(r, k);
-        match self {
-            Law::Coulomb => {
-                let p = NodePoint {
-                    u_n: r.u_n,
-                    lam_n: r.lambda_n,
-                    u_t: du_t,
-                    lam_t: r.lambda_t,
-                };
-                contact::coulomb_residual(&p, k.gap, k.mu, c)
-                    .tangential
-                    .powi(2)
-            }
-            _ => {
-                let ct = contact::c_tau(&du_t, &r.lambda_t, k.bound, c);
-                ct[0] * ct[0] + ct[1] * ct[1]
-            }
-        }
-    }
-}
-
-/// Relative tolerance of the stick → slip test (3.33) for a node that sticks (see
-/// `Law::stays_stuck`): a stick node may end with |λ_τ| ≤ b + STICK_TOL · max_k b_k, at the
-/// warning level of the friction certificate (1e-8 of the problem's scales) at most.
-pub const STICK_TOL: f64 = 1e-8;
+use super::law::increment;
+/// The law of a solve (law/: one type per law).
+pub use super::law::Law;
 
 /// The largest threshold b over every rank's contact nodes at the iterate `nodes` (Tresca: the
-/// given b_k; Coulomb: (F1)): the scale of the stick band of [`Law::stays_stuck`]. 0 without
-/// friction. Collective (one reduction) with friction.
+/// given b_k; Coulomb: (F1)): the scale of the stick band of each law's `stays_stuck`
+/// (law/rules.rs). 0 without friction. Collective (one reduction) with friction.
 pub fn threshold_scale(
     ctx: &Ctx,
     b: &ContactBoundary,
@@ -116,7 +32,7 @@ pub fn threshold_scale_local(b: &ContactBoundary, nodes: &[NodeResult], law: Law
     b.nodes
         .iter()
         .zip(nodes)
-        .map(|(k, r)| law.threshold(k, r, c))
+        .map(|(k, r)| law.rules().threshold(k, r, c))
         .filter(|x| x.is_finite())
         .fold(0.0, f64::max)
 }
@@ -127,59 +43,6 @@ pub fn threshold_scale_local(b: &ContactBoundary, nodes: &[NodeResult], law: Law
 /// makes the system singular to round-off: the pins take it instead. The spring stays in the
 /// row (the Newton linearisation is unchanged).
 pub const SPRING_TOL: f64 = 1e-10;
-
-/// Coulomb's row for the next step from the (F5) row `row` of node `k` at `r` and the row
-/// `prev` it was solved with, in 2D (docs/friction.md, "Settled slip"; `row` itself in 3D):
-/// - a node that slipped and slips on in the same direction (the sign of q kept) takes the
-///   projection form's row [`contact::coulomb_row_projected`] λ_τ' = μ(−λ_n') ν: the (F5) row
-///   at the slip solution, exact in 2D (the iteration is then piecewise linear there);
-/// - a node that slipped and whose increment now opposes its force (λ_τ Δu_τ < 0 with
-///   |λ_τ| ≤ b: at a slip solution λ_τ = b sign Δu_τ) sticks.
-fn settled(
-    prev: Option<CoulombRow<2>>,
-    row: CoulombRow<2>,
-    k: &ContactNode,
-    r: &NodeResult,
-    c: f64,
-    dim: usize,
-) -> CoulombRow<2> {
-    let (Some(CoulombRow::Slip { q: q0, .. }), CoulombRow::Slip { q: q1, .. }) = (prev, row) else {
-        return row;
-    };
-    let b = Law::Coulomb.threshold(k, r, c);
-    if dim != 2 || !(b > 0.0 && q0[0] != 0.0 && q1[0] != 0.0) {
-        return row;
-    }
-    let du = increment(r, k)[0];
-    if r.lambda_t[0] * du < 0.0 && r.lambda_t[0].abs() <= b {
-        return CoulombRow::Stick;
-    }
-    if q0[0] * q1[0] < 0.0 {
-        return row;
-    }
-    let p = NodePoint {
-        u_n: r.u_n,
-        lam_n: r.lambda_n,
-        u_t: [du],
-        lam_t: [r.lambda_t[0]],
-    };
-    match contact::coulomb_row_projected(&p, k.gap, k.mu, c) {
-        Some(CoulombRow::Slip { q, .. }) => CoulombRow::Slip {
-            l: [[0.0; 2]; 2],
-            q: [q[0], 0.0],
-            r: [0.0; 2],
-        },
-        _ => row,
-    }
-}
-
-/// u_τ − u_ref: the tangential increment friction acts on (u_τ itself for u_ref = 0).
-pub fn increment(r: &NodeResult, k: &ContactNode) -> [f64; 2] {
-    if k.u_t_ref == [0.0; 2] {
-        return r.u_t;
-    }
-    [r.u_t[0] - k.u_t_ref[0], r.u_t[1] - k.u_t_ref[1]]
-}
 
 /// A_n (and, with friction, the tangential row of every node: stick, or slip with L̃, r̃ (3.39)
 /// and, for Coulomb, the λ_n coupling q (F6)) on this rank's contact nodes.
@@ -267,7 +130,7 @@ impl ActiveSet {
                         u_t: k.u_t_ref,
                         ..NodeResult::default()
                     };
-                    law.row(k, &zero, c, dim)
+                    law.rules().row(k, &zero, c, dim)
                 })
                 .collect()
         });
@@ -317,8 +180,8 @@ impl ActiveSet {
                 .map(|(k, r)| {
                     // Δu_τ = 0: a node at the slip limit starts as stick (the first solve then
                     // tells whether the new load makes it slip, with a well-defined direction).
-                    let row = law.row(k, r, c, dim);
-                    if row.is_slip() && law.stays_stuck(k, r, c, scale) {
+                    let row = law.rules().row(k, r, c, dim);
+                    if row.is_slip() && law.rules().stays_stuck(k, r, c, scale) {
                         CoulombRow::Stick
                     } else {
                         row
@@ -489,8 +352,9 @@ impl ActiveSet {
         self.update_with(it, b, law, c, scale, dim, false)
     }
 
-    /// [`ActiveSet::update`], with `settle` the rows of settled slip ([`settled`], 2D Coulomb):
-    /// the condensed Coulomb iteration's update (docs/friction.md, "Settled slip"). Local.
+    /// [`ActiveSet::update`], with `settle` the rows of settled slip (the law's `settled`, 2D
+    /// Coulomb): the condensed Coulomb iteration's update (docs/friction.md, "Settled slip").
+    /// Local.
     #[allow(clippy::too_many_arguments)]
     pub fn update_with(
         &self,
@@ -508,6 +372,7 @@ impl ActiveSet {
         let mut lambda2 = 0.0;
         let mut states = [0usize; 4];
         let mut rows2 = [0.0; 2];
+        let rules = law.rules();
         for (i, (k, r)) in b.nodes.iter().zip(&it.nodes).enumerate() {
             states[self.state(i).number() as usize - 1] += 1;
             next.normal[i] = contact::normal_active(r.u_n, r.lambda_n, k.gap, c);
@@ -515,19 +380,20 @@ impl ActiveSet {
             let cn = contact::c_n(r.u_n, r.lambda_n, k.gap, c);
             residual2 += cn * cn;
             if let Some(t) = next.tangential.as_mut() {
-                t[i] = law.row(k, r, c, dim);
-                if t[i].is_slip() && !self.slip(i) && law.stays_stuck(k, r, c, scale) {
+                t[i] = rules.row(k, r, c, dim);
+                if t[i].is_slip() && !self.slip(i) && rules.stays_stuck(k, r, c, scale) {
                     t[i] = CoulombRow::Stick;
                 }
-                if settle && law == Law::Coulomb {
-                    t[i] = settled(self.tangential.as_ref().map(|p| p[i]), t[i], k, r, c, dim);
+                if settle {
+                    let prev = self.tangential.as_ref().map(|p| p[i]);
+                    t[i] = rules.settled(prev, t[i], k, r, c, dim);
                 }
                 flip |= t[i].is_slip() != self.slip(i);
                 if let (Some(own), true) = (self.tangential.as_ref(), t[i] != CoulombRow::Stick) {
                     rows2[0] += row_residual2(&own[i], k, r, c);
                     rows2[1] += row_residual2(&t[i], k, r, c);
                 }
-                residual2 += law.residual2(k, r, c);
+                residual2 += rules.residual2(k, r, c);
                 lambda2 += r.lambda.iter().map(|x| x * x).sum::<f64>();
             }
             if flip {
@@ -666,6 +532,12 @@ impl SetUpdate {
     }
 }
 
+/// A system (rows, or the dense Coulomb system) holds at an iterate as well as the one it was
+/// solved with where its residual there is within this factor of that one's (or of the
+/// round-off floor): the iterate is its fixed point, no further step is taken
+/// (newton.rs `rows_hold`, coulomb_condensed.rs `fixed_point`).
+pub const FIXED_POINT_SLACK: f64 = 16.0;
+
 /// The residual² of the tangential row `row` (3.39) / (F6), −λ_τ + L̃ Δu_τ − q (λ_n + c (u_n +
 /// g)) − r̃, at the iterate `r` of node `k` (0 for a stick row, which does not depend on the
 /// iterate). Pure.
@@ -740,6 +612,7 @@ impl SetUpdate {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::signorini::law::{Coulomb, FrictionLaw, Tresca};
 
     use crate::contact::Frame;
 
@@ -815,9 +688,9 @@ mod tests {
         // u_τ = u_ref: no increment, |λ_τ| < b: stick (the row of u_τ itself would slip)
         let r = at(0.3, -1.0, 0.05);
         assert_eq!(increment(&r, &k), [0.0, 0.0]);
-        assert_eq!(Law::Tresca.row(&k, &r, 1.0, 2), CoulombRow::Stick);
-        assert!(Law::Tresca.row(&node(0.1, [0.0; 2]), &r, 1.0, 2).is_slip());
-        assert_eq!(Law::Coulomb.row(&k, &r, 1.0, 2), CoulombRow::Stick);
+        assert_eq!(Tresca.row(&k, &r, 1.0, 2), CoulombRow::Stick);
+        assert!(Tresca.row(&node(0.1, [0.0; 2]), &r, 1.0, 2).is_slip());
+        assert_eq!(Coulomb.row(&k, &r, 1.0, 2), CoulombRow::Stick);
         // the stick row prescribes u_τ' = u_ref
         let set = ActiveSet {
             normal: vec![true],
@@ -861,12 +734,12 @@ mod tests {
         // μ = 0.1, λ_n = −1: b = 0.1; the node slipped in +τ (its last row's q > 0)
         let k = node(0.0, [0.0; 2]);
         let c = 10.0;
-        let prev = Law::Coulomb.row(&k, &at(1.0, -1.0, 0.1), c, 2);
+        let prev = Coulomb.row(&k, &at(1.0, -1.0, 0.1), c, 2);
         assert!(prev.coupled());
         // it slips on in +τ, λ_τ still short of b: the (F5) row has a spring and a right-hand
         // side, the settled row λ_τ' = μ(−λ_n') only
         let r = at(0.5, -1.0, 0.08);
-        let row = Law::Coulomb.row(&k, &r, c, 2);
+        let row = Coulomb.row(&k, &r, c, 2);
         let CoulombRow::Slip { l, r: rhs, .. } = row else {
             panic!("slips");
         };
@@ -876,20 +749,26 @@ mod tests {
             q: [0.1, 0.0],
             r: [0.0; 2],
         };
-        assert_eq!(settled(Some(prev), row, &k, &r, c, 2), want);
+        assert_eq!(Coulomb.settled(Some(prev), row, &k, &r, c, 2), want);
         // it now moves against its force (|λ_τ| ≤ b): stick
         let back = at(-0.5, -1.0, 0.08);
-        let row = Law::Coulomb.row(&k, &back, c, 2);
+        let row = Coulomb.row(&k, &back, c, 2);
         assert!(row.is_slip());
-        assert_eq!(settled(Some(prev), row, &k, &back, c, 2), CoulombRow::Stick);
+        assert_eq!(
+            Coulomb.settled(Some(prev), row, &k, &back, c, 2),
+            CoulombRow::Stick
+        );
         // a node that stuck before, or a 3D node, keeps its (F5) row
-        let row = Law::Coulomb.row(&k, &r, c, 2);
-        assert_eq!(settled(Some(CoulombRow::Stick), row, &k, &r, c, 2), row);
-        assert_eq!(settled(Some(prev), row, &k, &r, c, 3), row);
+        let row = Coulomb.row(&k, &r, c, 2);
+        assert_eq!(
+            Coulomb.settled(Some(CoulombRow::Stick), row, &k, &r, c, 2),
+            row
+        );
+        assert_eq!(Coulomb.settled(Some(prev), row, &k, &r, c, 3), row);
         // and so does one whose slip and force turned round together (a new direction)
         let turned = at(-0.5, -1.0, -0.09);
-        let row = Law::Coulomb.row(&k, &turned, c, 2);
-        assert_eq!(settled(Some(prev), row, &k, &turned, c, 2), row);
+        let row = Coulomb.row(&k, &turned, c, 2);
+        assert_eq!(Coulomb.settled(Some(prev), row, &k, &turned, c, 2), row);
     }
 
     #[test]
@@ -898,13 +777,13 @@ mod tests {
         let c = 1.0;
         // |λ_τ| = b (1 + 1e-12), no motion: slips by (3.33), stays stuck with the tolerance
         let r = at(0.0, -1.0, 0.1 * (1.0 + 1e-12));
-        assert!(Law::Tresca.row(&k, &r, c, 2).is_slip());
-        assert!(Law::Tresca.stays_stuck(&k, &r, c, 0.1));
-        let coulomb = Law::Coulomb;
+        assert!(Tresca.row(&k, &r, c, 2).is_slip());
+        assert!(Tresca.stays_stuck(&k, &r, c, 0.1));
+        let coulomb = Coulomb;
         assert!(coulomb.stays_stuck(&k, &r, c, 0.1));
         // clearly beyond the limit: slips
         let r = at(0.0, -1.0, 0.1 * (1.0 + 1e-6));
-        assert!(!Law::Tresca.stays_stuck(&k, &r, c, 0.1));
+        assert!(!Tresca.stays_stuck(&k, &r, c, 0.1));
         assert!(!coulomb.stays_stuck(&k, &r, c, 0.1));
         // b = 0 (Coulomb, free node): never stuck
         let r = at(0.0, 0.0, 0.0);
@@ -913,10 +792,10 @@ mod tests {
         // scale, so λ_τ exceeding b by 1e-9 · 10 (1e-4 of b) is round-off; by 1e-6 · 10 not
         let small = node(1e-3, [0.0; 2]);
         let r = at(0.0, -1.0, 1e-3 + 1e-8);
-        assert!(!Law::Tresca.stays_stuck(&small, &r, c, 0.0));
-        assert!(Law::Tresca.stays_stuck(&small, &r, c, 10.0));
+        assert!(!Tresca.stays_stuck(&small, &r, c, 0.0));
+        assert!(Tresca.stays_stuck(&small, &r, c, 10.0));
         let r = at(0.0, -1.0, 1e-3 + 1e-5);
-        assert!(!Law::Tresca.stays_stuck(&small, &r, c, 10.0));
+        assert!(!Tresca.stays_stuck(&small, &r, c, 10.0));
         // in the set update: a stick node at the limit keeps its state, a slip node does not
         // go back for it
         let b = ContactBoundary {
@@ -964,11 +843,11 @@ mod tests {
         let floor = SPRING_TOL * c;
         // slipping far beyond a tiny threshold: L̃ ≈ c b/|v| = 2e-12 c, round-off: holds nothing
         let r = at(1.0, -1.0, 0.0);
-        let tiny = Law::Tresca.row(&node(2e-12, [0.0; 2]), &r, c, 2);
+        let tiny = Tresca.row(&node(2e-12, [0.0; 2]), &r, c, 2);
         assert!(tiny.is_slip());
         assert!(holds_tangent(&tiny, 0.0) && !holds_tangent(&tiny, floor));
         // a real spring (b/|v| = 0.05) holds u_τ
-        let real = Law::Tresca.row(&node(0.1, [0.0; 2]), &r, c, 2);
+        let real = Tresca.row(&node(0.1, [0.0; 2]), &r, c, 2);
         assert!(real.is_slip() && holds_tangent(&real, floor));
         assert!(holds_tangent(&CoulombRow::Stick, floor));
     }
@@ -981,16 +860,16 @@ mod tests {
         };
         // pressed (λ_n = −1), slipping fast: S4 with q ≠ 0; free node: zero row
         let r = at(0.5, -1.0, 0.3);
-        let row = Law::Coulomb.row(&k, &r, 1.0, 2);
+        let row = Coulomb.row(&k, &r, 1.0, 2);
         assert!(row.is_slip() && row.coupled());
         let free = NodeResult {
             u_n: 0.2,
             ..NodeResult::default()
         };
-        let row = Law::Coulomb.row(&k, &free, 1.0, 2);
+        let row = Coulomb.row(&k, &free, 1.0, 2);
         assert!(row.is_slip() && !row.coupled());
         // Tresca rows never couple
-        let t = Law::Tresca.row(&node(0.1, [0.0; 2]), &r, 1.0, 2);
+        let t = Tresca.row(&node(0.1, [0.0; 2]), &r, 1.0, 2);
         assert!(!t.coupled());
     }
 
@@ -1012,11 +891,11 @@ mod tests {
             ..NodeResult::default()
         };
         let settled = at(0.1, 0.3);
-        let row = Law::Tresca.row(&k, &settled, 1.0, 2);
+        let row = Tresca.row(&k, &settled, 1.0, 2);
         assert!(row.is_slip());
         assert!(row_residual2(&row, &k, &settled, 1.0) < 1e-30);
         let moving = at(0.05, 0.3);
-        let row = Law::Tresca.row(&k, &moving, 1.0, 2);
+        let row = Tresca.row(&k, &moving, 1.0, 2);
         assert!(row.is_slip());
         assert!(row_residual2(&row, &k, &moving, 1.0) > 1e-6);
         assert_eq!(row_residual2(&CoulombRow::Stick, &k, &moving, 1.0), 0.0);

@@ -31,14 +31,14 @@
 
 use super::active_set::{ActiveSet, Iterate, Law};
 use super::boundary::ContactBoundary;
+use super::coulomb_condensed::CoulombCondensedSummary;
 use super::dense::{guarded, Dense, DenseRun, End, Primal};
 use super::newton::{
     add_motion, ContactProblem, NewtonResult, NewtonSettings, StepInfo, WarmStart,
 };
-use super::predictor;
+use super::predictor::{self, Located};
 use super::reduced::{ReducedSystem, SolveKind};
 use super::rigid::{FreeModes, Motion, Pin};
-use super::Located;
 use crate::case::NewtonInit;
 use crate::contact::Frame;
 use crate::error::RunError;
@@ -194,36 +194,8 @@ pub fn tag_key(tags: impl Iterator<Item = u64>) -> u64 {
     .fold(0u64, u64::wrapping_add)
 }
 
-fn is_zero(n: &usize) -> bool {
+pub(super) fn is_zero(n: &usize) -> bool {
     *n == 0
-}
-
-/// summary.json's `newton.condensed.coulomb`: what the dense Coulomb iteration did.
-#[derive(Debug, Clone, Serialize)]
-pub struct CoulombCondensedSummary {
-    /// "condensed": the expanded iterate passed the check; "start": it became the plain
-    /// path's start (`reason` says why); "fallback": the dense iteration gave up (`reason`).
-    pub outcome: &'static str,
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub reason: Option<String>,
-    /// Steps of the dense generalised Newton.
-    pub steps: usize,
-    /// Of these, the steps solved in the primal form (on S itself; the others on C = S⁻¹).
-    pub primal_steps: usize,
-    pub dense_seconds: f64,
-    /// The expansion solve, (3.28) and the check on every contact node [s].
-    pub expansion_seconds: f64,
-    /// The nested start (from the frictionless solution): per coarse level, coarsest first,
-    /// its candidates and dense steps (not in `steps`).
-    #[serde(skip_serializing_if = "Vec::is_empty")]
-    pub coarse_levels: Vec<CoarseLevel>,
-    /// The dense step whose settled slip rows left its system singular, from which the (F5)
-    /// rows ran (docs/friction.md, "A singular dense step"); absent where none did.
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub f5_from: Option<usize>,
-    /// The nested start's coarse levels on which the same happened.
-    #[serde(skip_serializing_if = "is_zero")]
-    pub f5_coarse_levels: usize,
 }
 
 /// One coarse level of the nested start.
@@ -665,7 +637,8 @@ impl Pass {
         comp.x_s = x_s;
         summary.dense_seconds += t.elapsed().as_secs_f64();
         summary.record_coarse(ctx, &run);
-        record_steps(ctx, history, &run, comp.list.len(), free.pins().len());
+        let round = (comp.list.len(), free.pins().len());
+        record_steps(ctx, history, &run.steps, ("C_n", "condensed"), round);
         run
     }
 
@@ -1263,13 +1236,28 @@ fn fallback_stop(ctx: &Ctx, mut summary: CondensedSummary, stop: Stop) -> Conden
 
 /// The plain path takes over: said in the log and in the summary.
 fn fallback(ctx: &Ctx, mut summary: CondensedSummary, why: String) -> Condensed {
-    say!(
+    let record = (&mut summary.outcome, &mut summary.fallback_reason);
+    fall_back(
         ctx,
-        "newton: condensed path: {why}; solving on the plain path"
+        ("newton: condensed path", "solving on the plain path"),
+        record,
+        why,
     );
-    summary.outcome = "fallback";
-    summary.fallback_reason = Some(why);
     Condensed::Fallback(summary)
+}
+
+/// A condensed solve gives up for the plain path: said in the log (`what` gave up, `then`
+/// where the plain path starts), its record's `outcome` "fallback" with the `reason` `why`.
+/// Collective (log).
+pub(super) fn fall_back(
+    ctx: &Ctx,
+    (what, then): (&str, &str),
+    (outcome, reason): (&mut &'static str, &mut Option<String>),
+    why: String,
+) {
+    say!(ctx, "{what}: {why}; {then}");
+    *outcome = "fallback";
+    *reason = Some(why);
 }
 
 /// K_p: A with every rigid mode that Dirichlet data and the held nodes (`held`: every
@@ -1849,20 +1837,22 @@ fn dense_round(
     (DenseRun::unpack(&packed, ns, mz), x_s)
 }
 
-/// The dense steps of one round into the history (numbered on) and the log.
-fn record_steps(
+/// The dense steps of one round (`steps`: number, |A_n|, changed, residual, seconds) into the
+/// history (numbered on) and the log, which names the residual and the path (`residual`,
+/// `path`: "C_n", "condensed"; "C", "condensed Coulomb"). Collective (log).
+pub(super) fn record_steps(
     ctx: &Ctx,
     history: &mut Vec<StepInfo>,
-    run: &DenseRun,
-    candidates: usize,
-    pinned: usize,
+    steps: &[(usize, usize, usize, f64, f64)],
+    (residual, path): (&str, &str),
+    (candidates, pinned): (usize, usize),
 ) {
     let base = history.len();
-    for h in &run.steps {
+    for h in steps {
         say!(
             ctx,
-            "newton {:3}: |A_n| = {:6}  changed {:6}  |C_n| = {:.3e}  condensed, {candidates} \
-             candidates ({:.4} s)",
+            "newton {:3}: |A_n| = {:6}  changed {:6}  |{residual}| = {:.3e}  {path}, \
+             {candidates} candidates ({:.4} s)",
             base + h.0,
             h.1,
             h.2,

@@ -33,17 +33,17 @@
 //! update's reduction and the certificates' all-gather.
 
 use super::active_set::{
-    threshold_scale, threshold_scale_local, ActiveSet, Iterate, Law, StepTotals,
+    threshold_scale, threshold_scale_local, ActiveSet, Iterate, Law, StepTotals, FIXED_POINT_SLACK,
 };
 use super::boundary::{ContactBoundary, ContactNode, NodeResult};
-use super::condensed::{CoarseLevel, CoulombCondensedSummary, Kept};
+use super::condensed::{fall_back, is_zero, record_steps, CoarseLevel, Kept};
 use super::dense::{coarsen, guarded};
 use super::force::{self, ForceControl};
 use super::newton::{
     add_motion, stalled, ContactProblem, NewtonResult, NewtonSettings, StepInfo, WarmStart,
     COULOMB_RESIDUAL_STALL, COULOMB_RESIDUAL_TOL, COULOMB_RESIDUAL_ZERO,
 };
-use super::reduced::{ReducedSystem, SolveKind};
+use super::reduced::ReducedSystem;
 use super::rigid::FreeModes;
 use crate::contact::{normal_active, CoulombRow, Frame};
 use crate::error::RunError;
@@ -52,6 +52,7 @@ use crate::par::Ctx;
 use crate::petsc::lapack::DenseLu;
 use crate::say;
 use nalgebra::{DMatrix, DVector};
+use serde::Serialize;
 use std::time::Instant;
 
 /// What the condensed Coulomb solve returns.
@@ -69,6 +70,34 @@ pub enum CoulombCondensed {
     ),
     /// Nothing to start from (the frictionless start then applies).
     Fallback(CoulombCondensedSummary),
+}
+
+/// summary.json's `newton.condensed.coulomb`: what the dense Coulomb iteration did.
+#[derive(Debug, Clone, Serialize)]
+pub struct CoulombCondensedSummary {
+    /// "condensed": the expanded iterate passed the check; "start": it became the plain
+    /// path's start (`reason` says why); "fallback": the dense iteration gave up (`reason`).
+    pub outcome: &'static str,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub reason: Option<String>,
+    /// Steps of the dense generalised Newton.
+    pub steps: usize,
+    /// Of these, the steps solved in the primal form (on S itself; the others on C = S⁻¹).
+    pub primal_steps: usize,
+    pub dense_seconds: f64,
+    /// The expansion solve, (3.28) and the check on every contact node [s].
+    pub expansion_seconds: f64,
+    /// The nested start (from the frictionless solution): per coarse level, coarsest first,
+    /// its candidates and dense steps (not in `steps`).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub coarse_levels: Vec<CoarseLevel>,
+    /// The dense step whose settled slip rows left its system singular, from which the (F5)
+    /// rows ran (docs/friction.md, "A singular dense step"); absent where none did.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub f5_from: Option<usize>,
+    /// The nested start's coarse levels on which the same happened.
+    #[serde(skip_serializing_if = "is_zero")]
+    pub f5_coarse_levels: usize,
 }
 
 /// The residual ‖R‖₂ (F3) of the expanded iterate accepted, relative to ‖λ‖₂ (the plain path:
@@ -392,9 +421,6 @@ fn fixed_point(next: &System, x: &[f64], own: f64) -> bool {
     let b = next.rhs.iter().fold(0.0_f64, |m, v| m.max(v.abs()));
     residual_at(next, x) <= FIXED_POINT_SLACK * own.max(f64::EPSILON * b)
 }
-
-/// See [`fixed_point`].
-const FIXED_POINT_SLACK: f64 = 16.0;
 
 /// The generalised Newton of docs/friction.md on the candidates' dense system (module note).
 struct Dense<'a> {
@@ -1044,7 +1070,14 @@ pub(super) fn solve(
             .map(|&(nodes, steps)| CoarseLevel { nodes, steps })
             .collect();
     }
-    let history = record_steps(ctx, &run, n);
+    let mut history = Vec::new();
+    record_steps(
+        ctx,
+        &mut history,
+        &run.steps,
+        ("C", "condensed Coulomb"),
+        (n, 0),
+    );
     if run.f5_from > 0 || run.f5_coarse > 0 {
         summary.f5_from = (run.f5_from > 0).then_some(run.f5_from);
         summary.f5_coarse_levels = run.f5_coarse;
@@ -1162,12 +1195,9 @@ fn dense_phase(
 
 /// The condensed solve stops: said in the log, the plain path from the frictionless solution.
 fn give_up(ctx: &Ctx, mut summary: CoulombCondensedSummary, why: String) -> CoulombCondensed {
-    say!(
-        ctx,
-        "coulomb: condensed: {why}; the plain path from the frictionless solution"
-    );
-    summary.outcome = "fallback";
-    summary.reason = Some(why);
+    let then = "the plain path from the frictionless solution";
+    let record = (&mut summary.outcome, &mut summary.reason);
+    fall_back(ctx, ("coulomb: condensed", then), record, why);
     CoulombCondensed::Fallback(summary)
 }
 
@@ -1216,7 +1246,7 @@ struct Checked {
     loose: bool,
     /// Where the dense steps stalled with no state changed above DENSE_RESIDUAL_TOL: the worst
     /// violation of (3.14)/(3.18) relative to the problem's scales
-    /// ([`super::coulomb_certificate_worst`]); not computed otherwise.
+    /// ([`super::final_state::coulomb_certificate_worst`]); not computed otherwise.
     certificate: Option<f64>,
     /// Force control: each force-controlled pair's approach δ_j.
     approach: Vec<f64>,
@@ -1285,7 +1315,7 @@ fn check(
         && run.stalled
         && totals.residual > DENSE_RESIDUAL_TOL * totals.lambda_norm;
     let certificate = if judged {
-        Some(super::coulomb_certificate_worst(
+        Some(super::final_state::coulomb_certificate_worst(
             ctx, p.sys, b, &it.nodes, &u, dim,
         )?)
     } else {
@@ -1471,42 +1501,6 @@ fn warm_start(
         })
         .collect();
     (start, u)
-}
-
-/// The dense steps into the log and a history (numbered from 1).
-fn record_steps(ctx: &Ctx, run: &DenseCoulomb, candidates: usize) -> Vec<StepInfo> {
-    run.steps
-        .iter()
-        .map(|h| {
-            say!(
-                ctx,
-                "newton {:3}: |A_n| = {:6}  changed {:6}  |C| = {:.3e}  condensed Coulomb, \
-                 {candidates} candidates ({:.4} s)",
-                h.0,
-                h.1,
-                h.2,
-                h.3,
-                h.4
-            );
-            StepInfo {
-                step: h.0,
-                active: h.1,
-                changed: h.2,
-                residual: h.3,
-                solve_seconds: h.4,
-                solve: SolveKind::Condensed,
-                iterations: 0,
-                reuse: None,
-                amg: None,
-                pinned: 0,
-                states: None,
-                du_rel: None,
-                predictor: None,
-                change: None,
-                factorisation_seconds: None,
-            }
-        })
-        .collect()
 }
 
 #[cfg(test)]

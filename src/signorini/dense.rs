@@ -5,15 +5,14 @@
 //! wide for the compliance (`Primal`), their result and how it ended (`DenseRun`, `End`), the
 //! saddle solver of one step, and the coarsening of the nested start.
 
+// an unbalanced load in the set's free modes below this fraction of the load's scale is
+// balanced (as in rigid.rs's balance test)
+use super::rigid::BALANCE_RTOL;
 use crate::contact::{c_n, normal_active};
 use crate::petsc::lapack::{DenseCholesky, DenseLu};
 use nalgebra::{DMatrix, DVector, SymmetricEigen};
 use std::collections::HashSet;
 use std::time::Instant;
-
-/// An unbalanced load in the set's free modes below this fraction of the load's scale is
-/// balanced (as [`super::rigid`]'s balance test).
-pub(super) const BALANCE_RTOL: f64 = 1e-10;
 
 /// Algorithm 1 on the condensed system (module note): C (n × n), d₀, the gaps, the free
 /// modes' normal parts G (n × m_z), the load in them φ = zᵀ Rᵀ f and its scale, c.

@@ -81,7 +81,7 @@ pub const COULOMB_RESIDUAL_ZERO: f64 = 1e-12;
 pub const COULOMB_RESIDUAL_STALL: f64 = 1e-6;
 
 /// See [`Loop::fixed_point`] (as the condensed Coulomb iteration's step not taken).
-const FIXED_POINT_SLACK: f64 = 16.0;
+use super::active_set::FIXED_POINT_SLACK;
 
 /// The next step's tangential rows hold at the iterate as well as this step's did: `rows` =
 /// (‖this step's rows' residuals‖, ‖the next step's‖) at the iterate, `floor` the round-off of
@@ -189,10 +189,10 @@ pub struct ContactProblem<'a> {
     pub sys: &'a System,
     /// The previous load step's condensed Coulomb factorisation on the way in, this solve's on
     /// the way out.
-    pub kept: &'a super::KeptFactor,
+    pub kept: &'a super::kept::KeptFactor,
     /// The contact zone the half-space model located in this solve (condensed.rs `locate`),
     /// once computed: a second condensed attempt (Coulomb's normal dofs alone) takes it again.
-    pub located: &'a std::cell::RefCell<Option<super::Located>>,
+    pub located: &'a std::cell::RefCell<Option<super::predictor::Located>>,
 }
 
 /// The state the loop carries from step to step.

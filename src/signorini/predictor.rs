@@ -437,6 +437,10 @@ fn run_model(
 /// modelled by 194 cycles: its zone is four model nodes wide).
 pub const LOCATE_MODEL_NODES: [usize; 2] = [512, MAX_MODEL_NODES];
 
+/// A located contact zone ([`locate`]): this rank's clearances and the nodes the model puts in
+/// contact; `None` where the model did not converge.
+pub type Located = Option<(Vec<f64>, usize)>;
+
 /// Where the contact zone of a body that its contact alone holds lies, before anything is
 /// solved: the model's Algorithm 1 (d₀ = 0, the load's own deformation left out) on a coarse
 /// subset of every contact node ([`LOCATE_MODEL_NODES`]) with the free modes' load `phi` (which

@@ -255,7 +255,7 @@ const PAIR: usize = 19;
 pub fn gather(ctx: &Ctx, cs: &ContactBoundary, res: &[NodeResult], dim: usize) -> Table {
     let mut mine: Vec<f64> = Vec::with_capacity(cs.nodes.len() * NCOL);
     for (k, r) in cs.nodes.iter().zip(res) {
-        let du_t = super::active_set::increment(r, k);
+        let du_t = super::law::increment(r, k);
         let row = [
             k.x[0],
             k.x[1],
@@ -555,6 +555,33 @@ pub struct Scales {
 /// increment of solver-tolerance size whose direction means nothing).
 pub const RESTING_SLIP: f64 = CERTIFICATE_TOL;
 
+/// summary.json's "contact" section.
+#[derive(Debug, Clone, Serialize)]
+pub struct ContactSummary {
+    pub nodes: usize,
+    pub excluded_dirichlet: usize,
+    pub active_count: usize,
+    pub max_pressure: f64,
+    pub total_force: Vec<f64>,
+    /// A moving obstacle (`contact.motion`): its displacement d in this solve.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub obstacle_displacement: Option<Vec<f64>>,
+    /// Force control (`contact.force`): the approach δ solved for (the obstacle moved by
+    /// δ F/|F|).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub approach: Option<f64>,
+    pub half_width: Option<f64>,
+    /// Several contact pairs: each pair's numbers (the fields above are over all pairs).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub pairs: Option<Vec<PairSummary>>,
+    pub kkt: Kkt,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub friction: Option<FrictionCertificate>,
+    /// The problem's scales the certificates were judged by (not written).
+    #[serde(skip)]
+    pub scales: Scales,
+}
+
 /// summary.json's `contact.pairs[i]` (cases with several pairs): one pair's numbers.
 #[derive(Debug, Clone, Serialize)]
 pub struct PairSummary {
@@ -589,7 +616,7 @@ pub fn per_pair(
     res: &[NodeResult],
     table: &Table,
     (displacement, approach): (&[[f64; 3]], &[Option<f64>]),
-    contact: &mut super::ContactSummary,
+    contact: &mut ContactSummary,
 ) {
     let dim = table.dim;
     let moves = |p: &crate::setup::PairSettings| p.motion.is_some() || p.force.is_some();

@@ -191,8 +191,9 @@ pub struct FreeModes {
 }
 
 /// An unbalanced load in the free modes below this fraction of `load_scale` is balanced: the
-/// sum Rᵀ f itself is exact to about √n·ε of it, far below.
-const BALANCE_RTOL: f64 = 1e-10;
+/// sum Rᵀ f itself is exact to about √n·ε of it, far below (also the dense steps' balance,
+/// dense.rs, and Coulomb's unheld load, coulomb.rs).
+pub const BALANCE_RTOL: f64 = 1e-10;
 
 impl FreeModes {
     /// Collective (two reductions).

@@ -1,0 +1,223 @@
+//! The final state judged: the contact table, the KKT certificate of (3.14) and, with friction,
+//! the friction certificate of (3.18) against the problem's scales, and the final certificate
+//! (certificate.rs) of a solve.
+
+use super::boundary::{CaseKeys, ContactBoundary, NodeResult};
+use super::certificate;
+use super::force;
+use super::law::{Coulomb, FrictionLaw};
+use super::newton::NewtonResult;
+use super::report::{self, ContactSummary, FrictionCertificate, Kkt, Scales};
+use crate::assembly::System;
+use crate::error::RunError;
+use crate::mesh::Mesh;
+use crate::par::Ctx;
+use crate::partition::Layout;
+use crate::petsc::Vector;
+use crate::say;
+use crate::setup::ContactSettings;
+use serde::Serialize;
+
+/// The final state: the contact table, the KKT and friction certificates (an error if they
+/// fail), the contact line of the log and summary.json's "contact" section. Collective.
+pub fn final_state(
+    ctx: &Ctx,
+    sys: &System,
+    b: &ContactBoundary,
+    nr: &NewtonResult,
+    (friction, dim): (bool, usize),
+    floor: Scales,
+) -> Result<(ContactSummary, report::Table), RunError> {
+    let table = report::gather(ctx, b, &nr.nodes, dim);
+    let total_force = report::total_force(ctx, &nr.nodes);
+    let half_width = match b.obstacles.as_slice() {
+        [one] => table.half_width(one, None),
+        _ => None,
+    };
+    let (scales, kkt, friction_certificate) =
+        certificates(ctx, sys, &table, &nr.u, friction, floor)?;
+    check_certificates(ctx, &kkt, friction_certificate.as_ref(), &scales, &b.keys)?;
+    say!(
+        ctx,
+        "contact: {} active, p_max = {:.6}, half width = {}, total force = {:?}",
+        table.active_count(),
+        table.max_pressure(),
+        half_width
+            .map(|b| format!("{b:.6}"))
+            .unwrap_or_else(|| "n/a".into()),
+        &total_force[..dim]
+    );
+    let contact = ContactSummary {
+        nodes: b.n_global,
+        excluded_dirichlet: b.excluded_dirichlet,
+        active_count: table.active_count(),
+        max_pressure: table.max_pressure(),
+        total_force: total_force[..dim].to_vec(),
+        obstacle_displacement: None,
+        approach: None,
+        half_width,
+        pairs: None,
+        kkt,
+        friction: friction_certificate,
+        scales,
+    };
+    Ok((contact, table))
+}
+
+/// The final state's certificate (certificate.rs): the stop rule, (3.14), (3.18), the global
+/// equilibrium and each force-controlled pair's balance, said in one log line; with
+/// `newton.strict` an error where the rule is loosened or a relative value above
+/// [`certificate::STRICT_TOL`]. Collective.
+pub fn certify(
+    ctx: &Ctx,
+    (settings, mesh, layout, fixed, sys): (&ContactSettings, &Mesh, &Layout, &[f64], &System),
+    (b, table, contact): (&ContactBoundary, &report::Table, &ContactSummary),
+    nr: &NewtonResult,
+    force_control: &[force::ForceControl],
+) -> Result<certificate::Certificate, RunError> {
+    let (equilibrium, lambdas) = certificate::equilibrium(
+        ctx,
+        (mesh, layout, &settings.material),
+        fixed,
+        sys,
+        b,
+        &nr.u,
+    )?;
+    let force_balance = (!force_control.is_empty())
+        .then(|| certificate::force_balance(ctx, b, &lambdas, force_control));
+    let cert = certificate::Certificate::new(certificate::Parts {
+        stop: nr.stop,
+        strict: settings.newton.strict,
+        kkt: &contact.kkt,
+        friction: contact.friction.as_ref(),
+        scales: &contact.scales,
+        mesh_size: table.mesh_size(),
+        equilibrium,
+        force_balance,
+    });
+    say!(ctx, "{}", cert.line());
+    match cert.strict_failure().filter(|_| cert.strict) {
+        Some(why) => Err(RunError::Failed(why)),
+        None => Ok(cert),
+    }
+}
+
+/// The worst violation of (3.14) and of Coulomb's (3.18) with b_k = μ(−λ_n^k) by a state
+/// (`nodes`, `u`) relative to the problem's scales, as [`final_state`] judges the final one (it
+/// warns beyond 1e-8). Collective (one all-gather, two reductions).
+pub fn coulomb_certificate_worst(
+    ctx: &Ctx,
+    sys: &System,
+    b: &ContactBoundary,
+    nodes: &[NodeResult],
+    u: &Vector,
+    dim: usize,
+) -> Result<f64, RunError> {
+    let mut judged = b.clone();
+    judged_bounds(&Coulomb, &mut judged, nodes);
+    let table = report::gather(ctx, &judged, nodes, dim);
+    let (scales, kkt, friction) = certificates(ctx, sys, &table, u, true, Scales::default())?;
+    let friction = friction.map_or(0.0, |f| f.worst(&scales));
+    Ok(kkt.worst().max(friction))
+}
+
+/// The thresholds b_k by which the certificates and the output judge the law `law` at the
+/// state `nodes` (Coulomb: b_k = μ(−λ_n^k) (F1); the boundary's own otherwise). Local.
+pub fn judged_bounds(law: &dyn FrictionLaw, b: &mut ContactBoundary, nodes: &[NodeResult]) {
+    for (k, r) in b.nodes.iter_mut().zip(nodes) {
+        k.bound = law.judged_bound(k, r);
+    }
+}
+
+/// The problem's scales, at least `floor`, the KKT certificate of (3.14) and, with friction,
+/// the friction certificate of (3.18) of a gathered contact table at u. Collective (two
+/// reductions).
+fn certificates(
+    ctx: &Ctx,
+    sys: &System,
+    table: &report::Table,
+    u: &Vector,
+    friction: bool,
+    floor: Scales,
+) -> Result<(Scales, report::Kkt, Option<report::FrictionCertificate>), RunError> {
+    let scales = problem_scales(ctx, sys, u)?;
+    let mut kkt = table.kkt(!friction, &scales);
+    kkt.force_scale = kkt.force_scale.max(floor.force);
+    kkt.length_scale = kkt.length_scale.max(floor.length);
+    // without a load (a body moved by its Dirichlet data or by the obstacle alone) the force
+    // scale is the contact's own, as the KKT certificate takes it: friction with μ = 0 or
+    // g_R = 0 (b = 0) is judged by it too, not by a zero scale
+    let scales = Scales {
+        force: kkt.force_scale,
+        length: scales.length.max(floor.length),
+    };
+    Ok((scales, kkt, friction.then(|| table.friction_certificate())))
+}
+
+/// |f|_∞ and |u|_∞ of the whole problem (two reductions); a non-finite u is an error.
+fn problem_scales(ctx: &Ctx, sys: &System, u: &Vector) -> Result<Scales, RunError> {
+    let inf = |v: &[f64]| v.iter().fold(0.0f64, |m, x| m.max(x.abs()));
+    let u_local = u.to_local_vec()?;
+    let length = ctx.max_f64(if u_local.iter().all(|x| x.is_finite()) {
+        inf(&u_local)
+    } else {
+        f64::INFINITY
+    });
+    if !length.is_finite() {
+        return Err(RunError::Failed(
+            "the final displacement is not finite (the reduced system was singular or the \
+             iteration diverged)"
+                .into(),
+        ));
+    }
+    let force = ctx.max_f64(inf(&sys.b.to_local_vec()?));
+    Ok(Scales { force, length })
+}
+
+/// The final state against (3.14) (and (3.18) with friction): beyond 1e-8 of the problem's
+/// scales a warning (an inexact linear solve), beyond [`report::CERTIFICATE_TOL`] an error —
+/// such a state is not a solution, whatever the iteration's stopping rule said.
+fn check_certificates(
+    ctx: &Ctx,
+    kkt: &Kkt,
+    friction: Option<&FrictionCertificate>,
+    scales: &Scales,
+    keys: &CaseKeys,
+) -> Result<(), RunError> {
+    let fric_bad = |rel: f64| friction.is_some_and(|f| f.beyond(rel, scales));
+    if kkt.beyond(report::CERTIFICATE_TOL) || fric_bad(report::CERTIFICATE_TOL) {
+        return Err(RunError::Failed(format!(
+            "the final state is not a solution: it violates {} beyond {:e} of the problem's \
+             scales (force {:.3e}, length {:.3e}): KKT {}{} — the problem is probably ill-posed \
+             (a load that contact and friction cannot carry, or a mesh of several bodies that \
+             Dirichlet data do not hold: {}) or the linear solves inexact ({})",
+            if fric_bad(report::CERTIFICATE_TOL) {
+                "(3.18)"
+            } else {
+                "(3.14)"
+            },
+            report::CERTIFICATE_TOL,
+            scales.force,
+            scales.length,
+            json(kkt),
+            friction
+                .map(|f| format!(", friction {}", json(f)))
+                .unwrap_or_default(),
+            keys.named(&["dirichlet", "neumann", ".obstacle", ".friction"]),
+            keys.solver
+        )));
+    }
+    if kkt.beyond(1e-8) || fric_bad(1e-8) {
+        say!(
+            ctx,
+            "warning: the final state violates (3.14) beyond round-off: {}",
+            json(kkt)
+        );
+    }
+    Ok(())
+}
+
+/// Compact JSON of a certificate (sorted keys).
+fn json<T: Serialize>(v: &T) -> String {
+    serde_json::to_value(v).expect("plain data").to_string()
+}

@@ -238,7 +238,12 @@ fn the_iterative_preset_is_the_same_in_any_unit_system() {
     };
     // GMRES on the same matrix times 1e9: the same iterations up to one either way
     for (a, b) in its(&unit).iter().zip(its(&big)) {
-        assert!(a.abs_diff(b) <= 1, "iterations {:?} vs {:?}", its(&unit), its(&big));
+        assert!(
+            a.abs_diff(b) <= 1,
+            "iterations {:?} vs {:?}",
+            its(&unit),
+            its(&big)
+        );
     }
     let d = unit.u_rel_diff(&big);
     assert!(d < 1e-8, "u differs by {d:e} of max |u|");

@@ -1545,7 +1545,7 @@ impl Compliance {
             (n_rows, &dofs),
             order.as_deref(),
             &self.bases,
-            root,
+            (root, reduced.one_process()),
         );
         drop(order);
         let mut factor = ctx

@@ -26,6 +26,7 @@ use crate::assembly::System;
 use crate::case::{self, CoulombAlgorithm, Method, Preset, Reuse, SolverSection};
 use crate::contact::Obstacle;
 use crate::error::RunError;
+use crate::linsolve::{LinearSetup, SolverKind};
 use crate::mesh::Mesh;
 use crate::output::ContactResult;
 use crate::par::Ctx;
@@ -337,14 +338,13 @@ pub fn solve(
     let displacements = settings.displacements();
     let prev_u = (previous.map(|prev| take_reference(ctx, &mut b, prev, friction, &displacements)))
         .transpose()?;
-    solver::configure(
-        solver_section.preset,
-        solver_section.rtol,
+    let setup = LinearSetup::for_section(
+        ctx,
+        (mesh, layout),
+        solver_section,
         symmetric_rows(settings, dim),
-        (&solver_section.petsc_options, solver_section.repeatable),
         solver::matrix_scale(ctx, &sys.a)?,
     )?;
-    let coords = solver::near_null_space_coordinates(ctx, mesh, layout, solver_section.preset)?;
     let c = complementarity_parameter(ctx, settings, &b, dim);
     // the start: the previous step's solution, or its extrapolation along its own increment
     // (under force control against the obstacles where the previous step left them)
@@ -379,7 +379,7 @@ pub fn solve(
     // the body's half-space model: the predictor's on the iterative preset (frictionless,
     // newton.rs), else the condensed path's (locating a floating body's zone; the plain path's
     // first set where the zone is too wide for the dense limits)
-    let iterative = matches!(solver_section.preset, Preset::Iterative);
+    let iterative = setup.kind() == SolverKind::Iterative;
     let model = predictor::HalfSpace {
         modulus: settings.contact_modulus,
         dim,
@@ -405,7 +405,7 @@ pub fn solve(
         &problem,
         &ns,
         (settings, solver_section),
-        (coords.as_ref(), warm.as_ref()),
+        (&setup, warm.as_ref()),
         &mut types,
     )
     .map_err(|e| why_sliding(e, sliding))?;
@@ -628,7 +628,7 @@ fn run_method(
     problem: &ContactProblem,
     ns: &NewtonSettings,
     (settings, solver_section): (&ContactSettings, &SolverSection),
-    (coords, warm): (Option<&Vector>, Option<&WarmStart>),
+    (setup, warm): (&LinearSetup, Option<&WarmStart>),
     types: &mut Option<(String, String)>,
 ) -> Result<
     (
@@ -643,7 +643,7 @@ fn run_method(
     let mut condensed_summary = None;
     let nr = match solver_section.method {
         Method::Newton => {
-            let mut reduced = ReducedSystem::new(ctx, sys, b, coords, dim)?;
+            let mut reduced = ReducedSystem::new(ctx, sys, b, setup, dim)?;
             *types = Some(reduced.solver_types()?);
             let friction = settings.friction();
             let condense = !friction
@@ -727,7 +727,7 @@ fn run_method(
         }
         Method::SnesVi => {
             let f_local = sys.b.to_local_vec()?;
-            snesvi_solve(ctx, problem, &f_local, settings.rigid_modes)?
+            setup.scoped(|| snesvi_solve(ctx, problem, &f_local, settings.rigid_modes))??
         }
     };
     if !nr.converged {

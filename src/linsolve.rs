@@ -172,7 +172,7 @@ impl LinearSetup {
     /// (DIVERGED_BREAKDOWN) where E = 2 converged in 18 iterations; the run is now the same in
     /// any unit system.
     pub fn new(req: &SolverRequest) -> petsc::Result<LinearSetup> {
-        let db = OptionsDb::new()?;
+        let mut db = OptionsDb::new()?;
         let iterative = matches!(req.preset, Preset::Iterative);
         for (name, value) in split_options(&preset_options(req.preset, req.rtol, req.symmetric)) {
             db.set(&name, &value)?;
@@ -201,7 +201,7 @@ impl LinearSetup {
         for (name, value) in split_options(req.case_options) {
             db.set(&name, &value)?;
         }
-        db.insert(&OptionsDb::global_text()?)?;
+        db.insert_global()?;
         Self::resolved(db)
     }
 

@@ -20,6 +20,8 @@ use super::ffi;
 /// An options database of its own. Not shared between threads.
 pub struct OptionsDb {
     raw: ffi::PetscOptions,
+    /// The names copied from the global database ([`OptionsDb::insert_global`]).
+    copied: Vec<String>,
 }
 
 thread_local! {
@@ -33,7 +35,10 @@ impl OptionsDb {
         let mut raw: ffi::PetscOptions = ptr::null_mut();
         // SAFETY: creates an object owned by the returned wrapper.
         unsafe { check(ffi::PetscOptionsCreate(&mut raw))? };
-        Ok(OptionsDb { raw })
+        Ok(OptionsDb {
+            raw,
+            copied: Vec::new(),
+        })
     }
 
     pub(super) fn raw(&self) -> ffi::PetscOptions {
@@ -107,9 +112,24 @@ impl OptionsDb {
         }
     }
 
-    /// The global database's options as command-line text (PetscOptionsGetAll): the command
-    /// line after `--`, PETSC_OPTIONS and the options files PETSc read at start. Local.
-    pub fn global_text() -> Result<String> {
+    /// Inserts the global database's options (the command line after `--`, PETSC_OPTIONS and
+    /// the options files PETSc read at start), replacing earlier values. The ones this database
+    /// uses count as used in the global one too (for `-options_left`) when it is dropped.
+    /// Local.
+    pub fn insert_global(&mut self) -> Result<()> {
+        let text = Self::global_text()?;
+        self.insert(&text)?;
+        let is_name = |t: &&str| t.starts_with('-') && t[1..].starts_with(char::is_alphabetic);
+        self.copied = text
+            .split_whitespace()
+            .filter(is_name)
+            .map(str::to_string)
+            .collect();
+        Ok(())
+    }
+
+    /// The global database's options as command-line text (PetscOptionsGetAll). Local.
+    fn global_text() -> Result<String> {
         let mut text: *mut c_char = ptr::null_mut();
         // SAFETY: PETSc allocates the string (PetscMalloc); it is copied, then freed.
         unsafe {
@@ -160,9 +180,20 @@ impl OptionsDb {
 
 impl Drop for OptionsDb {
     fn drop(&mut self) {
-        // SAFETY: destroys the database we own; no object that reads it outlives its owners
-        // (every KSP holding it keeps the wrapper alive).
+        // SAFETY: queries of valid databases (a lookup marks the option used); then destroys
+        // the database we own: no object that reads it outlives its owners (every KSP holding
+        // it keeps the wrapper alive).
         unsafe {
+            for name in &self.copied {
+                // PetscOptionsUsed takes the name without its '-'
+                let (n, bare) = (cstring(name), cstring(&name[1..]));
+                let mut used: ffi::PetscBool = ffi::PETSC_FALSE;
+                let mut set: ffi::PetscBool = ffi::PETSC_FALSE;
+                ffi::PetscOptionsUsed(self.raw, bare.as_ptr(), &mut used);
+                if used == ffi::PETSC_TRUE {
+                    ffi::PetscOptionsHasName(ptr::null_mut(), ptr::null(), n.as_ptr(), &mut set);
+                }
+            }
             ffi::PetscOptionsDestroy(&mut self.raw);
         }
     }

@@ -11,6 +11,7 @@ use crate::case::{Preset, SolverSection};
 use crate::mesh::Mesh;
 use crate::par::Ctx;
 use crate::partition::Layout;
+use crate::petsc::mumps::{NodeBases, SchurFactor};
 use crate::petsc::optdb::OptionsDb;
 use crate::petsc::{self, ndfactor, Ksp, MPI_Comm, Matrix, SolveInfo, Vector};
 use std::rc::Rc;
@@ -308,12 +309,6 @@ impl LinearSolver {
         self.kind
     }
 
-    /// MUMPS' work on rank 0 alone (`solver.repeatable`): also for the factorisations made
-    /// outside the KSP (the condensed path's Schur complement). Local.
-    pub fn one_process(&self) -> bool {
-        self.one_process
-    }
-
     /// A Krylov solver that applies this solver's preconditioner (its factorisation, shared,
     /// not copied), with the options prefix [`REUSE_PREFIX`]: the solver of the steps that
     /// reuse a factorisation. Collective.
@@ -323,6 +318,83 @@ impl LinearSolver {
         ksp.set_from_options()?;
         ksp.share_pc_of(&self.ksp)?;
         Ok(ksp)
+    }
+}
+
+impl LinearSolver {
+    /// The symbolic factorisation of `mat` (global size `n`, symmetric: its lower triangle)
+    /// with a Schur complement on the global rows `schur_rows` (the same list on every rank),
+    /// in the elimination order `order` (read on rank 0, `root`; `None`: MUMPS' own) and
+    /// the node frames `bases` ([`SchurFactor::analyse`]): MUMPS with this solver's settings
+    /// (`solver.repeatable`: on rank 0 alone). Only for a kind that factorises. Collective.
+    pub fn analyse_schur(
+        &self,
+        comm: MPI_Comm,
+        mat: &Matrix,
+        (n, schur_rows): (usize, &[usize]),
+        (order, bases): (Option<&[usize]>, &NodeBases),
+        root: bool,
+    ) -> petsc::Result<SymbolicSchur> {
+        if !self.kind.factorises() {
+            return Err(petsc::raised_error(
+                "a Schur complement asked of a solver that does not factorise",
+            ));
+        }
+        let f = SchurFactor::analyse(
+            comm,
+            mat,
+            (n, schur_rows),
+            order,
+            bases,
+            (root, self.one_process),
+        )?;
+        Ok(SymbolicSchur(f))
+    }
+}
+
+/// The symbolic factorisation with a Schur complement (the order and MUMPS' analysis):
+/// [`SymbolicSchur::factorise`] makes the numeric one of it.
+pub struct SymbolicSchur(SchurFactor);
+
+impl SymbolicSchur {
+    /// The analysis' estimate of the flops of eliminating the variables outside the Schur
+    /// list (the same on every rank).
+    pub fn flops(&self) -> f64 {
+        self.0.flops()
+    }
+
+    /// The numeric factorisation, which fills the Schur complement. Collective.
+    pub fn factorise(mut self) -> petsc::Result<NumericSchur> {
+        self.0.factorise()?;
+        Ok(NumericSchur(self.0))
+    }
+}
+
+/// The numeric factorisation with a Schur complement: the complement itself (once) and the
+/// solve phases on the rest.
+pub struct NumericSchur(SchurFactor);
+
+impl NumericSchur {
+    /// The analysis' estimate of the factorisation's flops.
+    pub fn flops(&self) -> f64 {
+        self.0.flops()
+    }
+
+    /// The Schur complement S on rank 0 (column-major), empty elsewhere; handed over.
+    pub fn take_schur(&mut self) -> Vec<f64> {
+        self.0.take_schur()
+    }
+
+    /// `rhs` (on rank 0) condensed onto the Schur variables ([`SchurFactor::condense`]).
+    /// Collective.
+    pub fn condense(&mut self, rhs: &[f64]) -> petsc::Result<Vec<f64>> {
+        self.0.condense(rhs)
+    }
+
+    /// The whole system's solution from the Schur variables' `x_s` ([`SchurFactor::expand`]).
+    /// Collective.
+    pub fn expand(&mut self, rhs: &[f64], x_s: &[f64]) -> petsc::Result<Vec<f64>> {
+        self.0.expand(rhs, x_s)
     }
 }
 

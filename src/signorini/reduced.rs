@@ -13,9 +13,10 @@ use super::rigid::Pin;
 use crate::assembly::System;
 use crate::case::Reuse;
 use crate::contact::{coulomb_block, CoulombRow, Frame, TangentialRow};
-use crate::linsolve::{self, LinearSetup, LinearSolver, SolverKind};
+use crate::linsolve::{self, LinearSetup, LinearSolver, SolverKind, SymbolicSchur};
 use crate::par::Ctx;
 use crate::partition::Layout;
+use crate::petsc::mumps::NodeBases;
 use crate::petsc::{self, Ksp, Matrix, PInt, SolveInfo, Vector};
 use std::collections::HashMap;
 use std::time::Instant;
@@ -1187,9 +1188,17 @@ impl ReducedSystem {
         self.ls.kind()
     }
 
-    /// MUMPS' work on rank 0 alone (`solver.repeatable`), also outside the KSP. Local.
-    pub fn one_process(&self) -> bool {
-        self.ls.one_process()
+    /// The symbolic factorisation of the matrix written last with a Schur complement on
+    /// `schur_rows`, by the steps' solver ([`LinearSolver::analyse_schur`]). Collective.
+    pub fn analyse_schur(
+        &self,
+        ctx: &Ctx,
+        (n, schur_rows): (usize, &[usize]),
+        (order, bases): (Option<&[usize]>, &NodeBases),
+    ) -> petsc::Result<SymbolicSchur> {
+        let root = ctx.rank == 0;
+        let ls = &self.ls;
+        ls.analyse_schur(ctx.comm(), &self.s, (n, schur_rows), (order, bases), root)
     }
 
     /// The KSP and PC types of the steps' solver ([`Ksp::type_names`]). Local.

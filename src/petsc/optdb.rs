@@ -164,12 +164,14 @@ impl OptionsDb {
         if PUSHED.with(|p| p.get()) == self.raw {
             return Ok(f());
         }
-        let before = PUSHED.with(|p| p.replace(self.raw));
         // SAFETY: the database lives until its wrapper is dropped, after this call.
-        if let Err(e) = unsafe { check(ffi::PetscOptionsPush(self.raw)) } {
-            PUSHED.with(|p| p.set(before));
-            return Err(e);
+        let code = unsafe { ffi::PetscOptionsPush(self.raw) };
+        if code != 0 {
+            // (only a failed push is checked: a fault injected into a successful one would
+            // leave it without its pop)
+            check(code)?;
         }
+        let before = PUSHED.with(|p| p.replace(self.raw));
         let out = f();
         PUSHED.with(|p| p.set(before));
         // SAFETY: pops the push above (pushes and pops nest with the Rust calls).

@@ -23,7 +23,7 @@ use std::process::ExitCode;
 use mpi::traits::*;
 use serde_json::json;
 use signorini_mpi::petsc::mumps::{nested_dissection, NodeBases, SchurFactor};
-use signorini_mpi::petsc::{ndfactor, options, Matrix, PInt, Petsc};
+use signorini_mpi::petsc::{Matrix, PInt, Petsc};
 
 /// FNV-1a over the bits of `v`, as hex.
 fn hash(v: &[f64]) -> String {
@@ -65,9 +65,7 @@ fn run(
         .first()
         .and_then(|a| a.parse().ok())
         .ok_or("usage: schur_repeat N [one_process]")?;
-    if args.get(1).is_some_and(|a| a == "one_process") {
-        options::set_default(ndfactor::ONE_PROCESS_OPTION, "").map_err(|e| e.to_string())?;
-    }
+    let one_process = args.get(1).is_some_and(|a| a == "one_process");
     let total = n * n;
     let (rank, size) = (world.rank() as usize, world.size() as usize);
     let (lo, hi) = (total * rank / size, total * (rank + 1) / size);
@@ -120,7 +118,7 @@ fn run(
         (total, &schur),
         order.as_deref(),
         &bases,
-        rank == 0,
+        (rank == 0, one_process),
     )
     .map_err(|e| e.to_string())?;
     f.factorise().map_err(|e| e.to_string())?;

@@ -17,6 +17,7 @@ pub mod expr;
 pub mod fault;
 pub mod fem;
 pub mod geom;
+pub mod linsolve;
 pub mod mesh;
 pub mod output;
 pub mod par;

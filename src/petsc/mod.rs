@@ -4,108 +4,29 @@
 //! and PETSc error codes turned into Rust errors that carry PETSc's message and the Rust
 //! caller's location. Everything here is collective where the PETSc call is collective.
 
+mod error;
 pub mod ffi;
 pub mod lapack;
 mod mpi;
 pub mod mumps;
 pub mod ndfactor;
+pub mod optdb;
 pub mod snes;
 
 use std::ffi::{CStr, CString};
-use std::fmt;
 use std::os::raw::{c_char, c_int};
-use std::panic::Location;
 use std::ptr;
+use std::rc::Rc;
 
 use crate::bigbuf::BigVec;
+use optdb::OptionsDb;
 
 pub use ffi::MPI_Comm;
 /// PETSc's index type (32-bit in Debian's build).
 pub type PInt = ffi::PetscInt;
 
-/// A failed PETSc call: PETSc's own message plus where in our code it was called.
-#[derive(Debug, Clone)]
-pub struct PetscError {
-    pub code: i32,
-    pub message: String,
-    pub location: String,
-}
-
-impl fmt::Display for PetscError {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        write!(
-            f,
-            "PETSc error {} ({}) at {}",
-            self.code, self.message, self.location
-        )
-    }
-}
-
-impl std::error::Error for PetscError {}
-
-pub type Result<T> = std::result::Result<T, PetscError>;
-
-/// Converts a PETSc return code into a `Result`, naming the Rust caller.
-#[track_caller]
-fn check(code: ffi::PetscErrorCode) -> Result<()> {
-    if let Some((m, kind)) = crate::fault::counted("petsc-call", crate::abort::world_rank) {
-        match kind {
-            crate::fault::Kind::Panic => panic!("{m}"),
-            _ => return Err(own_error(m)),
-        }
-    }
-    if code == 0 {
-        return Ok(());
-    }
-    let loc = Location::caller();
-    let mut text: *const c_char = ptr::null();
-    // SAFETY: PetscErrorMessage writes a pointer to a static string (or leaves it null).
-    let message = unsafe {
-        ffi::PetscErrorMessage(code, &mut text, ptr::null_mut());
-        if text.is_null() {
-            String::from("unknown error")
-        } else {
-            CStr::from_ptr(text).to_string_lossy().into_owned()
-        }
-    };
-    crate::abort::raised(&message);
-    Err(PetscError {
-        code,
-        message,
-        location: format!("{}:{}", loc.file(), loc.line()),
-    })
-}
-
-/// An error raised by our own checks in this layer (not by a PETSc call), on this rank alone
-/// until an agreement covers it ([`crate::abort::raised`]).
-#[track_caller]
-fn own_error(message: impl Into<String>) -> PetscError {
-    let e = agreed_error(message);
-    crate::abort::raised(&e.message);
-    e
-}
-
-/// A PETSc error raised on this rank alone (the test-only fault injection, `crate::fault`).
-#[track_caller]
-pub fn raised_error(message: impl Into<String>) -> PetscError {
-    own_error(message)
-}
-
-/// An error that every rank has alike (after an agreement, or from MUMPS' INFOG, which is the
-/// same on every rank).
-#[track_caller]
-fn agreed_error(message: impl Into<String>) -> PetscError {
-    let loc = Location::caller();
-    PetscError {
-        code: -1,
-        message: message.into(),
-        location: format!("{}:{}", loc.file(), loc.line()),
-    }
-}
-
-fn cstring(s: &str) -> CString {
-    CString::new(s.replace('\0', " ")).expect("no interior NUL after replace")
-}
+use error::{agreed_error, check, cstring, own_error};
+pub use error::{raised_error, PetscError, Result};
 
 /// The PETSc library, initialised once per process after MPI (rsmpi) and finalised on drop,
 /// before the rsmpi `Universe` is dropped. Owns the argv strings PETSc keeps pointers to.
@@ -162,30 +83,10 @@ impl Drop for Petsc {
     }
 }
 
-/// The options database.
+/// The default options database: the global one (the command line), or the private one of a
+/// solver while it is set up or run ([`optdb::OptionsDb::scoped`]).
 pub mod options {
     use super::*;
-
-    /// Sets one option only if the user did not set it (so command-line options win).
-    pub fn set_default(name: &str, value: &str) -> Result<()> {
-        if has(name)? {
-            return Ok(());
-        }
-        let n = cstring(name);
-        let v = cstring(value);
-        // SAFETY: PETSc copies both strings.
-        unsafe {
-            check(ffi::PetscOptionsSetValue(
-                ptr::null_mut(),
-                n.as_ptr(),
-                if value.is_empty() {
-                    ptr::null()
-                } else {
-                    v.as_ptr()
-                },
-            ))
-        }
-    }
 
     /// True when the option is present in the database.
     pub fn has(name: &str) -> Result<bool> {
@@ -747,9 +648,11 @@ impl Drop for Matrix {
     }
 }
 
-/// A Krylov solver (with its preconditioner).
+/// A Krylov solver (with its preconditioner) reading its options from a private database.
 pub struct Ksp {
     raw: ffi::KSP,
+    /// Kept alive while the KSP (and its PC, which may be shared) can read it.
+    options: Rc<OptionsDb>,
 }
 
 /// How a linear solve ended.
@@ -767,11 +670,24 @@ impl SolveInfo {
 }
 
 impl Ksp {
-    pub fn new(comm: MPI_Comm) -> Result<Ksp> {
+    /// A KSP whose options (and its PC's) come from `options`, not the global database.
+    pub fn new(comm: MPI_Comm, options: Rc<OptionsDb>) -> Result<Ksp> {
         let mut raw: ffi::KSP = ptr::null_mut();
-        // SAFETY: creation of an owned KSP.
-        unsafe { check(ffi::KSPCreate(comm, &mut raw))? };
-        Ok(Ksp { raw })
+        // SAFETY: creation of an owned KSP; the database outlives it (held in `options`).
+        unsafe {
+            check(ffi::KSPCreate(comm, &mut raw))?;
+            let ksp = Ksp { raw, options };
+            check(ffi::PetscObjectSetOptions(
+                raw as ffi::PetscObject,
+                ksp.options.raw(),
+            ))?;
+            Ok(ksp)
+        }
+    }
+
+    /// The options database this KSP reads.
+    pub fn options(&self) -> Rc<OptionsDb> {
+        self.options.clone()
     }
 
     /// Operator and preconditioning matrix (the same here).
@@ -786,10 +702,11 @@ impl Ksp {
         unsafe { check(ffi::KSPSetOperators(self.raw, a.raw, p.raw)) }
     }
 
-    /// Applies the options database (preset defaults, case file, command line).
+    /// Applies the KSP's options database (preset defaults, case file, command line).
     pub fn set_from_options(&mut self) -> Result<()> {
         // SAFETY: valid KSP.
-        unsafe { check(ffi::KSPSetFromOptions(self.raw)) }
+        self.options
+            .scoped(|| unsafe { check(ffi::KSPSetFromOptions(self.raw)) })?
     }
 
     /// Solves A x = b; returns iterations and PETSc's converged reason.
@@ -799,7 +716,10 @@ impl Ksp {
         let mut name: *const c_char = ptr::null();
         // SAFETY: valid objects; the reason name is a static string.
         unsafe {
-            check(ffi::KSPSolve(self.raw, b.raw, x.raw)).map_err(|e| self.explain(e))?;
+            let raw = self.raw;
+            self.options
+                .scoped(|| check(ffi::KSPSolve(raw, b.raw, x.raw)))?
+                .map_err(|e| self.explain(e))?;
             check(ffi::KSPGetIterationNumber(self.raw, &mut its))?;
             check(ffi::KSPGetConvergedReason(self.raw, &mut reason))?;
             check(ffi::KSPGetConvergedReasonString(self.raw, &mut name))?;
@@ -820,7 +740,9 @@ impl Ksp {
     /// numeric factorisation, after the symbolic one the first time) without solving.
     pub fn set_up(&mut self) -> Result<()> {
         // SAFETY: valid KSP with operators set.
-        unsafe { check(ffi::KSPSetUp(self.raw)).map_err(|e| self.explain(e)) }
+        self.options
+            .scoped(|| unsafe { check(ffi::KSPSetUp(self.raw)) })?
+            .map_err(|e| self.explain(e))
     }
 
     /// A failure inside our MUMPS preconditioner reaches PETSc as an error code only: its
@@ -971,13 +893,6 @@ impl Ksp {
             }
             Ok((s(kt), pc_type))
         }
-    }
-
-    /// Whether the PC factorises the operator (PCLU, PCCHOLESKY, or the MUMPS factorisation
-    /// with our order, [`ndfactor`]). Local.
-    pub fn factorises(&self) -> Result<bool> {
-        let pc = self.type_names()?.1;
-        Ok(pc == "lu" || pc == "cholesky" || pc.ends_with("-mumps-nd"))
     }
 }
 

@@ -68,14 +68,15 @@ impl SchurFactor {
     /// variables last), or `None` on the host for MUMPS' own choice (with a Schur complement
     /// that is AMD whatever ICNTL(7) asks; measured).
     /// `bases`: the matrix is read as Qᵀ A Q (see [`NodeBases`]); the Schur rows and the
-    /// vectors of the solve phases are then in the rotated dofs.
+    /// vectors of the solve phases are then in the rotated dofs. `one_process`: MUMPS works on
+    /// rank 0 alone (`solver.repeatable`, [`super::ndfactor::ONE_PROCESS_OPTION`]).
     pub fn analyse(
         comm: MPI_Comm,
         mat: &Matrix,
         (n, schur_rows): (usize, &[usize]),
         order: Option<&[usize]>,
         bases: &NodeBases,
-        root: bool,
+        (root, one_process): (bool, bool),
     ) -> Result<SchurFactor> {
         if n >= i32::MAX as usize {
             return Err(own_error(format!(
@@ -84,7 +85,6 @@ impl SchurFactor {
         }
         let read = rows(comm, mat, true).and_then(|t| bases.rotate(mat, t));
         let (irn, jcn, vals) = agreed(comm, read)?;
-        let one_process = super::options::has(super::ndfactor::ONE_PROCESS_OPTION)?;
         let (inst, (irn, jcn, vals)) = if one_process {
             let all = gathered(comm, (irn, jcn, vals))?;
             let inst = if root {

@@ -339,42 +339,21 @@ pub fn install(
     Ok(())
 }
 
-/// After `set_from_options`: when the PC of `ksp` is a MUMPS factorisation (PCCHOLESKY or PCLU
-/// with the solver type "mumps", the direct preset) and no MUMPS ordering was asked for
-/// (`-mat_mumps_icntl_7`, case file or command line), it becomes the shell of [`install`] with
-/// the operator `mat`'s block size, on rank 0 alone when [`ONE_PROCESS_OPTION`] is set. Returns
-/// whether it did. Collective.
-pub fn install_if_mumps(ksp: &Ksp, comm: MPI_Comm, mat: &Matrix) -> Result<bool> {
-    let pc_type = ksp.type_names()?.1;
-    if !(pc_type == "cholesky" || pc_type == "lu") || super::options::has("-mat_mumps_icntl_7")? {
-        return Ok(false);
-    }
-    // SAFETY: reads the PC's factor solver type (a PETSc-owned string) and the block size.
-    let (solver, bs) = unsafe {
-        let mut pc: ffi::PC = ptr::null_mut();
-        check(ffi::KSPGetPC(ksp.raw, &mut pc))?;
-        let mut t: ffi::MatSolverType = ptr::null();
-        check(ffi::PCFactorGetMatSolverType(pc, &mut t))?;
-        let solver = if t.is_null() {
-            String::new()
-        } else {
-            std::ffi::CStr::from_ptr(t).to_string_lossy().into_owned()
-        };
-        let mut bs = 1;
-        check(ffi::MatGetBlockSize(mat.raw, &mut bs))?;
-        (solver, bs)
-    };
-    if solver != "mumps" {
-        return Ok(false);
-    }
-    let one_process = super::options::has(ONE_PROCESS_OPTION)?;
-    install(
-        ksp,
-        comm,
-        bs.max(1) as usize,
-        (pc_type == "cholesky", one_process),
-    )?;
-    Ok(true)
+/// After `set_from_options`, for a solver whose options ask for a MUMPS factorisation
+/// (PCCHOLESKY or PCLU with the solver type "mumps") and no MUMPS ordering
+/// (`-mat_mumps_icntl_7`): the PC of `ksp` becomes the shell of [`install`] with the operator
+/// `mat`'s block size, `symmetric` (Cholesky), on rank 0 alone with `one_process`
+/// ([`ONE_PROCESS_OPTION`]). Collective.
+pub fn install_on(
+    ksp: &Ksp,
+    comm: MPI_Comm,
+    mat: &Matrix,
+    (symmetric, one_process): (bool, bool),
+) -> Result<()> {
+    let mut bs = 1;
+    // SAFETY: reads the block size of a valid matrix.
+    unsafe { check(ffi::MatGetBlockSize(mat.raw, &mut bs))? };
+    install(ksp, comm, bs.max(1) as usize, (symmetric, one_process))
 }
 
 /// For a PC of type "shell": `Some(symmetric)` when it is the shell of [`install`]. Local.

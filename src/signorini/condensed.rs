@@ -42,9 +42,10 @@ use super::rigid::{FreeModes, Motion, Pin};
 use crate::case::NewtonInit;
 use crate::contact::Frame;
 use crate::error::RunError;
+use crate::linsolve::NumericSchur;
 use crate::par::Ctx;
 use crate::petsc::lapack::DenseCholesky;
-use crate::petsc::mumps::{NodeBases, SchurFactor};
+use crate::petsc::mumps::NodeBases;
 use crate::petsc::ndfactor::node_order;
 use crate::petsc::PInt;
 use crate::say;
@@ -1435,7 +1436,7 @@ pub(super) struct Compliance {
     pub(super) d0: Vec<f64>,
     /// The candidates' node frames (normal first): K_p is factorised as Qᵀ K_p Q.
     bases: NodeBases,
-    factor: Option<SchurFactor>,
+    factor: Option<NumericSchur>,
     /// Rank 0: the nested-dissection order of K_p's node graph (empty: MUMPS' own), made by
     /// the first `grow`.
     pub(super) node_order: Option<Vec<usize>>,
@@ -1527,22 +1528,15 @@ impl Compliance {
             Some(o) if root && !o.is_empty() => Some(dof_order(o, &dofs, dim, n_rows)),
             _ => None,
         };
-        let factor = SchurFactor::analyse(
-            ctx.comm(),
-            reduced.matrix(),
-            (n_rows, &dofs),
-            order.as_deref(),
-            &self.bases,
-            root,
-        );
+        let factor = reduced.analyse_schur(ctx, (n_rows, &dofs), (order.as_deref(), &self.bases));
         drop(order);
-        let mut factor = ctx
+        let symbolic = ctx
             .agree_message(factor)
             .map_err(|e| Stop::failed(format!("MUMPS' analysis of K_p failed: {e}")))?;
         // the same numbers on every rank: the same decision
         let dense = (dofs.len() as f64).powi(3);
         let speedup = if dim == 2 { DENSE_SPEEDUP_2D } else { 1.0 };
-        self.max_flops = DENSE_FLOOR_FLOPS.max(speedup * factor.flops());
+        self.max_flops = DENSE_FLOOR_FLOPS.max(speedup * symbolic.flops());
         // frictionless: the primal form, whose steps solve for the inactive candidates alone
         self.primal = dense > self.max_flops && per == 1;
         if dense > self.max_flops && !self.primal {
@@ -1554,12 +1548,13 @@ impl Compliance {
                 dofs.len(),
                 why,
                 dense,
-                factor.flops()
+                symbolic.flops()
             )));
         }
-        let done = factor.factorise();
+        let done = symbolic.factorise();
         self.factorisation_seconds = t.elapsed().as_secs_f64();
-        ctx.agree_message(done)
+        let mut factor = ctx
+            .agree_message(done)
             .map_err(|e| Stop::failed(format!("the Schur factorisation of K_p failed: {e}")))?;
         let r = ctx
             .agree_message(factor.condense(&self.rotated(f_root)))

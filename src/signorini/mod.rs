@@ -34,6 +34,7 @@ pub mod warn;
 use crate::assembly::System;
 use crate::case::{self, CoulombAlgorithm, Method, Preset, Reuse, SolverSection};
 use crate::error::RunError;
+use crate::linsolve::{LinearSetup, SolverKind};
 use crate::mesh::Mesh;
 use crate::output::ContactResult;
 use crate::par::Ctx;
@@ -272,14 +273,13 @@ pub fn solve(
     let displacements = settings.displacements();
     let prev_u = (previous.map(|prev| take_reference(ctx, &mut b, prev, friction, &displacements)))
         .transpose()?;
-    solver::configure(
-        solver_section.preset,
-        solver_section.rtol,
+    let setup = LinearSetup::for_section(
+        ctx,
+        (mesh, layout),
+        solver_section,
         symmetric_rows(settings, dim),
-        (&solver_section.petsc_options, solver_section.repeatable),
         solver::matrix_scale(ctx, &sys.a)?,
     )?;
-    let coords = solver::near_null_space_coordinates(ctx, mesh, layout, solver_section.preset)?;
     let c = complementarity_parameter(ctx, settings, &b, dim);
     let start = warm_start(previous, prev_u.as_deref(), &b, &force_control, c);
     let warm = previous
@@ -308,7 +308,7 @@ pub fn solve(
         length: 2.0 * mesh.extent(),
         mirrors: predictor::mirror_planes(ctx, mesh, fixed),
     };
-    let iterative = matches!(solver_section.preset, Preset::Iterative);
+    let iterative = setup.kind() == SolverKind::Iterative;
     let ns = newton_settings(settings, (c, law), (&model, iterative), &force_control);
     // a failure of a frictional body that only its contact holds says what may be the cause
     let sliding = friction && !capacity::held_anywhere(ctx, fixed);
@@ -318,7 +318,7 @@ pub fn solve(
         &problem,
         &ns,
         (settings, solver_section),
-        (coords.as_ref(), warm.as_ref()),
+        (&setup, warm.as_ref()),
         &mut types,
     )
     .map_err(|e| capacity::why_sliding(e, sliding))?;
@@ -620,13 +620,13 @@ fn run_method(
     problem: &ContactProblem,
     ns: &NewtonSettings,
     (settings, solver_section): (&ContactSettings, &SolverSection),
-    (coords, warm): (Option<&Vector>, Option<&WarmStart>),
+    (setup, warm): (&LinearSetup, Option<&WarmStart>),
     types: &mut Option<(String, String)>,
 ) -> Result<Ran, RunError> {
     let (sys, b, dim) = (problem.sys, problem.boundary, problem.mesh.dim);
     let (nr, outer_steps, condensed_summary) = match solver_section.method {
         Method::Newton => {
-            let mut reduced = ReducedSystem::new(ctx, sys, b, coords, dim)?;
+            let mut reduced = ReducedSystem::new(ctx, sys, b, setup, dim)?;
             *types = Some(reduced.solver_types()?);
             let outcome = match settings.coulomb {
                 Some((_, algorithm)) => coulomb::solve(
@@ -653,7 +653,8 @@ fn run_method(
         }
         Method::SnesVi => {
             let f_local = sys.b.to_local_vec()?;
-            let nr = snesvi_solve(ctx, problem, &f_local, settings.rigid_modes)?;
+            let nr =
+                setup.scoped(|| snesvi_solve(ctx, problem, &f_local, settings.rigid_modes))??;
             (nr, None, None)
         }
     };

@@ -274,7 +274,7 @@ pub fn semismooth_newton(
     let mut last_changed = usize::MAX;
     // GMRES on an earlier step's factorisation counts as factorised for the step not taken
     // (a stop there is confirmed by a factorised step, `StepPlan::after_stop`)
-    let direct = reduced.factorises()?;
+    let direct = reduced.kind().factorises();
     for step in 1..=s.section.max_steps {
         let gram = lp.set_gram();
         let modes_changed = lp.free.update(ctx, mesh, layout, &gram)?;
@@ -395,7 +395,7 @@ impl<'a> Loop<'a> {
                                                      // the iterative preset's reuse path; on the direct preset `halfspace` is given only
                                                      // where the condensed path found the zone too wide for the dense limits (mod.rs)
         let predicting = s.halfspace.is_some()
-            && (reduced.inexact_available() || reduced.factorises()?)
+            && (reduced.inexact_available() || reduced.kind().factorises())
             && s.law == Law::Frictionless
             && warm.is_none()
             && s.section.init == NewtonInit::Auto;

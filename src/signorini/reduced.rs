@@ -13,10 +13,11 @@ use super::rigid::Pin;
 use crate::assembly::System;
 use crate::case::Reuse;
 use crate::contact::{coulomb_block, CoulombRow, Frame, TangentialRow};
+use crate::linsolve::{self, LinearSetup, LinearSolver, SolverKind, SymbolicSchur};
 use crate::par::Ctx;
 use crate::partition::Layout;
+use crate::petsc::mumps::NodeBases;
 use crate::petsc::{self, Ksp, Matrix, PInt, SolveInfo, Vector};
-use crate::solver::{self, LinearSolver};
 use std::collections::HashMap;
 use std::time::Instant;
 
@@ -373,7 +374,7 @@ impl ReuseCosts {
         // (budget + 1) iterations cost at most one factorisation step
         let budget = ((step / it).floor() as usize)
             .saturating_sub(1)
-            .min(solver::REUSE_RESTART);
+            .min(linsolve::REUSE_RESTART);
         let expected = (rank + 2) as f64 * it;
         (rank < budget && expected <= AUTO_MARGIN * step).then_some(budget)
     }
@@ -693,7 +694,7 @@ impl ReducedSystem {
         ctx: &Ctx,
         sys: &System,
         b: &ContactBoundary,
-        coords: Option<&Vector>,
+        setup: &LinearSetup,
         dim: usize,
     ) -> petsc::Result<ReducedSystem> {
         let contact_rows = b
@@ -703,7 +704,7 @@ impl ReducedSystem {
             .collect::<Result<_, _>>()?;
         let f_local = sys.b.to_local_vec()?;
         let mut s = sys.a.duplicate()?;
-        let ls = LinearSolver::new(ctx.comm(), &mut s, coords)?;
+        let ls = setup.solver(ctx.comm(), &mut s)?;
         let (row_lo, _) = sys.a.ownership_range()?;
         Ok(ReducedSystem {
             s,
@@ -739,7 +740,7 @@ impl ReducedSystem {
     /// run ends as cycling (seen on 2 ranks: tests/coulomb.rs, warm start of the fixed point,
     /// whenever the timings made "auto" reuse). "always" still reuses. Collective.
     pub fn enable_reuse(&mut self, ctx: &Ctx, mode: Reuse, friction: bool) -> petsc::Result<()> {
-        let factorises = self.ls.ksp.factorises()?;
+        let factorises = self.ls.kind().factorises();
         self.amg = None;
         if mode == Reuse::Never {
             self.reuser = None;
@@ -770,7 +771,7 @@ impl ReducedSystem {
             self.reuser = None;
             return Ok(());
         }
-        let ksp = solver::reuse_solver(ctx.comm(), &self.ls.ksp)?;
+        let ksp = self.ls.reuse_solver(ctx.comm())?;
         self.reuser = Some(Reuser {
             mode,
             ksp,
@@ -872,7 +873,7 @@ impl ReducedSystem {
             &mut self.buf,
         )?;
         // the same solver on every rank: the reduction only on the iterative preset
-        self.unmixed = !self.ls.ksp.factorises()?
+        self.unmixed = !self.ls.kind().factorises()
             && ctx.any(writes.iter().any(|(_, me, _)| me.row_mix.is_some()));
         if self.unmixed {
             let made = &mut self.amg_matrix;
@@ -1177,9 +1178,27 @@ impl ReducedSystem {
         Ok((r0, bnorm, first))
     }
 
-    /// True when the solver factorises (direct preset: PCLU / PCCHOLESKY). Local.
+    /// True when the solver factorises (its kind, decided once by [`LinearSetup`]). Local.
     pub fn factorises(&self) -> petsc::Result<bool> {
-        self.ls.ksp.factorises()
+        Ok(self.kind().factorises())
+    }
+
+    /// What the steps' solver runs. Local.
+    pub fn kind(&self) -> SolverKind {
+        self.ls.kind()
+    }
+
+    /// The symbolic factorisation of the matrix written last with a Schur complement on
+    /// `schur_rows`, by the steps' solver ([`LinearSolver::analyse_schur`]). Collective.
+    pub fn analyse_schur(
+        &self,
+        ctx: &Ctx,
+        (n, schur_rows): (usize, &[usize]),
+        (order, bases): (Option<&[usize]>, &NodeBases),
+    ) -> petsc::Result<SymbolicSchur> {
+        let root = ctx.rank == 0;
+        let ls = &self.ls;
+        ls.analyse_schur(ctx.comm(), &self.s, (n, schur_rows), (order, bases), root)
     }
 
     /// The KSP and PC types of the steps' solver ([`Ksp::type_names`]). Local.
@@ -1323,7 +1342,7 @@ impl ReducedSystem {
             Some(k) => k,
             None => {
                 // The solver's type does not change between steps: asked once.
-                let k = if self.ls.ksp.factorises()? {
+                let k = if self.ls.kind().factorises() {
                     SolveKind::Factorisation
                 } else {
                     SolveKind::Krylov
@@ -1733,7 +1752,7 @@ mod tests {
         let lu = ReuseCosts::of(&stats(1e9, -2, false)).unwrap();
         assert_eq!(lu.solve, 2.0 * 2e6 * SOLVE_FLOP_COST);
         let step = c.factorisation + c.solve;
-        let budget = ((step / c.iteration()).floor() as usize - 1).min(solver::REUSE_RESTART);
+        let budget = ((step / c.iteration()).floor() as usize - 1).min(linsolve::REUSE_RESTART);
         assert!(budget > 2);
         assert_eq!(c.plan(0), Some(budget));
         assert_eq!(c.plan(1), c.plan(1), "the same counts, the same choice");

@@ -529,7 +529,7 @@ pub fn assemble(comm: MPI_Comm, layout: &Layout, p: &Problem) -> petsc::Result<S
     let mut bidx: Vec<PInt> = Vec::new();
     let mut bval: Vec<f64> = Vec::new();
     load_entries(p, layout, false, &mut bidx, &mut bval);
-    crate::par::add_in_rank_order(&mut b, &bidx, &bval)?; // deterministic order (issue 10)
+    crate::par::add_in_rank_order(&mut b, &bidx, &bval)?; // deterministic order: repeatable runs
     b.assemble()?;
     b.write(|bv| {
         for &(i, v) in &fixed_rhs {
@@ -608,7 +608,7 @@ fn held_loads(
     h.write(|x| x.iter_mut().for_each(|v| *v = 0.0))?;
     let (mut idx, mut val) = (Vec::new(), Vec::new());
     load_entries(p, layout, true, &mut idx, &mut val);
-    crate::par::add_in_rank_order(&mut h, &idx, &val)?; // deterministic order (issue 10)
+    crate::par::add_in_rank_order(&mut h, &idx, &val)?; // deterministic order: repeatable runs
     h.assemble()?;
     h.write(|x| {
         for &(i, _) in fixed_rhs {

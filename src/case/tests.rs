@@ -1022,7 +1022,7 @@ fn override_unquoted_array_hint() {
     assert!(e.message.contains("quote"), "{e}");
 }
 
-// ---- sizes bounded (issue 11, item 5) ------------------------------------------------------
+// ---- sizes bounded -----------------------------------------------------------------
 
 #[test]
 fn reject_huge_case_file_before_building_its_tree() {

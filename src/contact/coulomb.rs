@@ -1,6 +1,6 @@
 //! Node-wise Coulomb friction for ONE generalised semismooth Newton method in which λ_n and the
 //! slip rows move together (docs/friction.md; equation labels (F1)–(F8) refer to it, the others
-//! to the thesis / docs/THEORY.md). M = d − 1 tangential components, as in [`super::tresca`].
+//! to the thesis). M = d − 1 tangential components, as in [`super::tresca`].
 //!
 //! Threshold (F1): b = μ max(0, −λ_n − c (u_n + g)); at a point with C_n = 0 (3.21) it equals
 //! μ(−λ_n), the Coulomb threshold, and it is 0 off the contact.

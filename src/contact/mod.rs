@@ -1,6 +1,6 @@
 //! Contact algebra: obstacles, frames, complementarity functions, Tresca regularisation,
 //! node states and residual certificates. Pure functions on small fixed-size arrays; no
-//! MPI, no PETSc. Equation numbers refer to the thesis / docs/THEORY.md.
+//! MPI, no PETSc. Equation numbers refer to the thesis (docs/method.md).
 //!
 //! - [`obstacle`]: `Plane`, `Sphere`, `Cylinder`, `Cone`, `Pyramid`, `Punch`, `Height`
 //!   ([`height`]), `Surface` ([`surface`]) (docs/obstacles.md),

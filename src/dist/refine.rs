@@ -1,4 +1,4 @@
-//! `mesh.refine = k`: uniform refinement of the distributed mesh (issue 10, item 3).
+//! `mesh.refine = k`: uniform refinement of the distributed mesh.
 //!
 //! The refinement works on the blocks every rank holds after the distributed read, before the
 //! partition: each level turns the blocks of a mesh into the blocks of its refined mesh, so the

@@ -535,7 +535,7 @@ fn big_binary_mesh_timing() {
     assert!((area - 1.0).abs() < 1e-9);
 }
 
-// ---- counts bounded by the file size (issue 11, item 5) ---------------------------------
+// ---- counts bounded by the file size ------------------------------------------------------
 
 /// `bytes` with the first occurrence of `from` replaced by `to`.
 fn patched(bytes: &[u8], from: &[u8], to: &[u8]) -> Vec<u8> {
@@ -703,7 +703,7 @@ fn too_many_physical_tags_per_entity_rejected() {
     assert!(e.message.contains("too many physical tags"), "{e}");
 }
 
-// ---- load and contact groups on the boundary (issue 11, item 5; STRUCTURE.md §4.7) -------
+// ---- load and contact groups on the boundary ---------------------------------------------
 
 #[test]
 fn degenerate_interior_and_stray_facets_named() {

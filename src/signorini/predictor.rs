@@ -1,4 +1,4 @@
-//! The half-space predictor of the frictionless active set (issue 9, iterative preset).
+//! The half-space predictor of the frictionless active set (iterative preset).
 //!
 //! On the iterative preset every Newton step is a Krylov solve of the whole body, and the
 //! steps Algorithm 1 makes from the all-inactive start (grow past the final set, then shrink

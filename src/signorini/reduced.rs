@@ -1482,7 +1482,7 @@ fn rewrites<'r>(
 
 /// The rows `writes` of the reduced system (3.29) applied symmetrically
 /// ([`write_symmetric_constraint`]): into `s` when given (then assembled), and into `rhs`
-/// (whose other rows stay; the neighbours' corrections added in rank order, issue 10), with f
+/// (whose other rows stay; the neighbours' corrections added in rank order: repeatable runs), with f
 /// from `f_local` (this rank's rows) or f = 0. Collective.
 fn write_rows(
     mut s: Option<&mut Matrix>,
@@ -1512,7 +1512,7 @@ fn write_rows(
         }
     }
     let (idx, vals): (Vec<PInt>, Vec<f64>) = rhs_add.into_iter().unzip();
-    crate::par::add_in_rank_order(rhs, &idx, &vals)?; // deterministic order (issue 10)
+    crate::par::add_in_rank_order(rhs, &idx, &vals)?; // deterministic order: repeatable runs
     rhs.assemble()?;
     if let Some(s) = s {
         s.assemble()?;

@@ -1,4 +1,4 @@
-//! Rigid body modes that neither Dirichlet data nor the current sets fix (THEORY.md §5;
+//! Rigid body modes that neither Dirichlet data nor the current sets fix (docs/method.md;
 //! thesis 4.1, where V*_h removes only the tangential translation).
 //!
 //! Mechanism: the rigid modes r_1..r_m (m = 3 in 2D, 6 in 3D) are tested against the

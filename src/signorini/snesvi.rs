@@ -1,7 +1,7 @@
 //! The frictionless contact problem through PETSc's SNES VI, as an in-binary baseline for
-//! Algorithm 1 (issue 9, item 4).
+//! Algorithm 1.
 //!
-//! The problem is the one Algorithm 1 solves (THEORY.md §2–3): minimise ½ uᵀAu − fᵀu subject
+//! The problem is the one Algorithm 1 solves (docs/method.md, "The method in brief"): minimise ½ uᵀAu − fᵀu subject
 //! to n_kᵀu_k ≥ −g_k at every contact node k (3.3), whose optimality conditions are (3.14)
 //! with λ = f − A u (3.28). SNES VI bounds act on single variables, so the dofs of every
 //! contact node are rotated into its frame {n, τ₁, τ₂}:

@@ -4,21 +4,14 @@
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
-use super::file::MAX_REFINE;
 use super::keys;
 use super::reader::{Reader, Res, Tab};
 use super::shape::ObstacleSpec;
 use super::tree::{join_index, Kind, Node};
 use crate::expr::{quoted, Expr, VARIABLES};
 
-/// A vector of the case file (2 or 3 entries) as 3 components, z = 0 in 2D.
-pub fn vec3(v: &[f64]) -> [f64; 3] {
-    let mut out = [0.0; 3];
-    for (o, x) in out.iter_mut().zip(v) {
-        *o = *x;
-    }
-    out
-}
+/// The largest `mesh.refine` (each level multiplies the cells by 4 in 2D, 8 in 3D).
+pub const MAX_REFINE: usize = 10;
 
 /// `[body_force]`: a constant vector (`value`) or one expression per component (`expr`).
 #[derive(Debug, Clone, PartialEq)]

@@ -1,9 +1,9 @@
 //! `[contact]` / `[[contact]]`: pairs, motions and forces with their histories, friction.
 
-use super::body::vec3;
 use super::keys;
 use super::load;
 use super::reader::{Reader, Res, Tab};
+use super::shape::vec3;
 use super::shape::ObstacleSpec;
 use super::tree::{join_index, join_key, Kind, Loc, Node};
 

@@ -4,12 +4,13 @@ use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
 use super::body::{BodyForceSpec, Dirichlet, MaterialModel, MaterialSection, MeshSection, Neumann};
-use super::contact::ContactSection;
+use super::contact::{ContactSection, Friction};
+use super::keys;
 use super::load::LoadSection;
 use super::output::OutputSection;
-use super::reader::Reader;
-use super::solver::{NewtonSection, SolverSection};
-use super::tree::{self, Loc};
+use super::reader::{Reader, Res};
+use super::solver::{Method, NewtonSection, SolverSection};
+use super::tree::{self, Loc, Node};
 use crate::error::InputError;
 
 /// A validated case: defaults filled in, paths resolved.
@@ -32,9 +33,6 @@ pub struct Case {
     /// Where every key path came from, for errors found after loading.
     pub(super) locs: BTreeMap<String, Loc>,
 }
-
-/// The largest `mesh.refine` (each level multiplies the cells by 4 in 2D, 8 in 3D).
-pub const MAX_REFINE: usize = 10;
 
 /// The largest case file read (a case file is a few hundred bytes; the bound keeps a wrong
 /// file from costing gigabytes of memory for its value tree).
@@ -213,5 +211,56 @@ impl Case {
             }
         }
         Ok(())
+    }
+}
+
+impl Reader<'_> {
+    /// The whole case: every section read, then the checks across sections.
+    pub(super) fn case(&self, root: &Node, output_dir: Option<&Path>) -> Res<Case> {
+        let top = self.table("", root, keys::ROOT)?;
+        let mesh = self.mesh(&top)?;
+        let material = self.material(&top)?;
+        let dirichlet = self.dirichlet(&top)?;
+        let neumann = self.neumann(&top)?;
+        let body_force = match top.get("body_force") {
+            None => None,
+            Some((k, n)) => Some(self.body_force(&k, n)?),
+        };
+        let solver = self.solver(&top)?;
+        let output = self.output(&top, output_dir)?;
+        let contacts = self.contacts(&top)?;
+        let newton = self.newton(&top)?;
+        let load = self.load(&top)?;
+        if solver.method == Method::SnesVi {
+            let why = if contacts.is_empty() {
+                Some("needs a [contact] section")
+            } else if contacts.iter().any(|c| c.friction != Friction::None) {
+                Some("solves frictionless contact only (use method = \"newton\" with friction)")
+            } else if contacts.iter().any(|c| c.force.is_some()) {
+                Some("has no force control (contact.force): use method = \"newton\"")
+            } else {
+                None
+            };
+            if let Some(why) = why {
+                let (sk, sn) = top.get("solver").expect("method was set in [solver]");
+                let t = self.table(&sk, sn, keys::SOLVER)?;
+                let (mk, m) = t.get("method").expect("method was set");
+                return Err(self.err(&mk, m.loc, format!("\"snesvi\" {why}")));
+            }
+        }
+        Ok(Case {
+            file: self.file.to_path_buf(),
+            mesh,
+            material,
+            dirichlet,
+            neumann,
+            body_force,
+            solver,
+            output,
+            contacts,
+            newton,
+            load,
+            locs: BTreeMap::new(),
+        })
     }
 }

@@ -30,14 +30,14 @@ mod tests;
 mod tests_shapes;
 
 pub use body::{
-    vec3, BodyForceSpec, Dirichlet, Load, MaterialModel, MaterialSection, MeshSection, Neumann,
+    BodyForceSpec, Dirichlet, Load, MaterialModel, MaterialSection, MeshSection, Neumann,
     Projection,
 };
 pub use contact::{ContactSection, CoulombAlgorithm, Friction, Motion, RigidModeHandling};
-pub use file::{Case, MAX_CASE_BYTES, MAX_REFINE};
+pub use file::{Case, MAX_CASE_BYTES};
 pub use load::LoadSection;
 pub use output::{OutputField, OutputSection, DEFAULT_FIELDS};
-pub use shape::ObstacleSpec;
+pub use shape::{vec3, ObstacleSpec};
 pub use solver::{
     DenseThreads, Method, NewtonInit, NewtonSection, OnCycle, Preset, Reuse, SolverSection,
 };

@@ -1,12 +1,7 @@
 //! The validation context: typed reading of the value tree, errors naming the key.
 
-use std::collections::BTreeMap;
 use std::path::Path;
 
-use super::contact::Friction;
-use super::file::Case;
-use super::keys;
-use super::solver::Method;
 use super::tree::{join_index, join_key, Kind, Loc, Node};
 use crate::error::InputError;
 
@@ -211,53 +206,5 @@ impl Reader<'_> {
             .enumerate()
             .map(|(i, e)| self.num(&join_index(key, i), e))
             .collect()
-    }
-
-    pub(super) fn case(&self, root: &Node, output_dir: Option<&Path>) -> Res<Case> {
-        let top = self.table("", root, keys::ROOT)?;
-        let mesh = self.mesh(&top)?;
-        let material = self.material(&top)?;
-        let dirichlet = self.dirichlet(&top)?;
-        let neumann = self.neumann(&top)?;
-        let body_force = match top.get("body_force") {
-            None => None,
-            Some((k, n)) => Some(self.body_force(&k, n)?),
-        };
-        let solver = self.solver(&top)?;
-        let output = self.output(&top, output_dir)?;
-        let contacts = self.contacts(&top)?;
-        let newton = self.newton(&top)?;
-        let load = self.load(&top)?;
-        if solver.method == Method::SnesVi {
-            let why = if contacts.is_empty() {
-                Some("needs a [contact] section")
-            } else if contacts.iter().any(|c| c.friction != Friction::None) {
-                Some("solves frictionless contact only (use method = \"newton\" with friction)")
-            } else if contacts.iter().any(|c| c.force.is_some()) {
-                Some("has no force control (contact.force): use method = \"newton\"")
-            } else {
-                None
-            };
-            if let Some(why) = why {
-                let (sk, sn) = top.get("solver").expect("method was set in [solver]");
-                let t = self.table(&sk, sn, keys::SOLVER)?;
-                let (mk, m) = t.get("method").expect("method was set");
-                return Err(self.err(&mk, m.loc, format!("\"snesvi\" {why}")));
-            }
-        }
-        Ok(Case {
-            file: self.file.to_path_buf(),
-            mesh,
-            material,
-            dirichlet,
-            neumann,
-            body_force,
-            solver,
-            output,
-            contacts,
-            newton,
-            load,
-            locs: BTreeMap::new(),
-        })
     }
 }

@@ -3,7 +3,6 @@
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
-use super::body::vec3;
 use super::keys;
 use super::reader::{Reader, Res, Tab};
 use super::tree::{Kind, Node};
@@ -11,6 +10,15 @@ use crate::contact::obstacle::{
     Cone, Cylinder, Height, HeightExpr, Punch, Pyramid, TriSurface, MAX_FACES, MIN_FACES,
 };
 use crate::contact::{Obstacle, ObstacleError, Plane, Sphere};
+
+/// A vector of the case file (2 or 3 entries) as 3 components, z = 0 in 2D.
+pub fn vec3(v: &[f64]) -> [f64; 3] {
+    let mut out = [0.0; 3];
+    for (o, x) in out.iter_mut().zip(v) {
+        *o = *x;
+    }
+    out
+}
 
 /// A rigid obstacle (or a `[[mesh.project]]` shape) as the case file gives it: vectors with
 /// 2 or 3 components (their number checked against the mesh later), axes and normals unit

@@ -25,6 +25,7 @@
 mod axisymmetric;
 mod error;
 mod plane_sphere;
+mod projection;
 mod pyramid;
 mod shape;
 mod vec3;
@@ -37,6 +38,7 @@ pub use super::surface::TriSurface;
 pub use axisymmetric::{Cone, Cylinder, Punch};
 pub use error::ObstacleError;
 pub use plane_sphere::{Plane, Sphere};
+pub use projection::Projection;
 pub use pyramid::{Pyramid, MAX_FACES, MIN_FACES};
-pub use shape::{Obstacle, Projection};
+pub use shape::Obstacle;
 pub use vec3::reference_direction;

@@ -1,7 +1,7 @@
 //! The indenters with an axis of revolution: cylinder, cone, flat punch.
 
 use super::error::ObstacleError;
-use super::shape::Projection;
+use super::projection::Projection;
 use super::vec3::{
     add, axpy, check_axis, check_dim, finite, flat, meridian, norm, reference_direction, scale,
 };

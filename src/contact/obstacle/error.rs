@@ -1,9 +1,14 @@
 //! Invalid obstacle data, or a query point without a defined normal.
 
-use super::pyramid::{MAX_FACES, MIN_FACES};
 use crate::error::InputError;
 use std::fmt;
 use std::path::Path;
+
+/// Fewest faces of a pyramid (`Pyramid`).
+pub const MIN_FACES: usize = 3;
+/// Most faces of a pyramid (`Pyramid`) (a pyramid with many more faces is a cone (`Cone`); the queries cost
+/// O(faces)).
+pub const MAX_FACES: usize = 64;
 
 /// Invalid obstacle data, or a query point without a defined normal.
 #[derive(Debug, Clone, Copy, PartialEq)]

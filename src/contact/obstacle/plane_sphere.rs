@@ -1,7 +1,7 @@
 //! The smooth elementary obstacles: half-space and ball (disk).
 
 use super::error::ObstacleError;
-use super::shape::Projection;
+use super::projection::Projection;
 use super::vec3::{check_dim, finite, flat};
 use crate::geom::{dot, sub};
 

@@ -1,16 +1,11 @@
 //! The regular pyramid.
 
 use super::error::ObstacleError;
-use super::shape::Projection;
+pub use super::error::{MAX_FACES, MIN_FACES};
+use super::projection::Projection;
 use super::vec3::{add, axpy, check_axis, check_dim, finite, norm, reference_direction, scale};
 use crate::geom::{cross, dot, sub};
 use std::f64::consts::{PI, TAU};
-
-/// Fewest faces of a [`Pyramid`].
-pub const MIN_FACES: usize = 3;
-/// Most faces of a [`Pyramid`] (a pyramid with many more faces is a [`Cone`]; the queries cost
-/// O(faces)).
-pub const MAX_FACES: usize = 64;
 
 /// Regular pyramid (3D only): the intersection of the `faces` half-spaces
 /// {x : (x − apex)·m_k ≤ 0}, k = 0 .. N − 1, each face through the apex at the angle β (the

@@ -1,20 +1,13 @@
-//! The obstacle of a contact pair ([`Obstacle`]) and what a query returns ([`Projection`]).
+//! The obstacle of a contact pair ([`Obstacle`]).
 
 use super::axisymmetric::{Cone, Cylinder, Punch};
 use super::error::ObstacleError;
 use super::plane_sphere::{Plane, Sphere};
+use super::projection::Projection;
 use super::pyramid::Pyramid;
 use crate::contact::height::Height;
 use crate::contact::surface::TriSurface;
 use std::sync::Arc;
-
-/// Closest point, normal (unit, into the body) and initial gap g0 of a point x.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Projection {
-    pub closest: [f64; 3],
-    pub normal: [f64; 3],
-    pub gap: f64,
-}
 
 /// Any supported obstacle.
 #[derive(Debug, Clone, PartialEq)]

@@ -7,12 +7,10 @@
 //! Smaller buffers, or a map the system refuses, use a plain `Vec`. Safe code only: the map
 //! is viewed as `[T]` through `bytemuck` (a map is page-aligned).
 
+use crate::tuning::MAP_FROM;
 use bytemuck::Pod;
 use memmap2::{Advice, MmapMut, MmapOptions};
 use std::marker::PhantomData;
-
-/// Buffers at least this large (bytes) are memory maps with the huge-page advice.
-const MAP_FROM: usize = 2 << 20;
 
 enum Store<T> {
     Vec(Vec<T>),

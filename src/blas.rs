@@ -8,6 +8,7 @@
 //! ([`restart_with_fitting_kernels`]). A user's own OPENBLAS_CORETYPE is left alone.
 
 use crate::petsc::lapack::{openblas_core, openblas_threads, set_openblas_threads};
+use crate::tuning::WIDE_MIN_DIM;
 use mpi::collective::SystemOperation;
 use mpi::topology::SimpleCommunicator;
 use mpi::traits::*;
@@ -108,13 +109,6 @@ pub fn kernels() -> Option<String> {
         Err(_) => format!("OpenBLAS {core}"),
     })
 }
-
-/// The smallest dense dimension whose phase runs widened ([`NodeCores::run`]). Measured on 2
-/// cores (`scripts/bench-dense-threads`, docs/numbers.md, "Rank 0's dense phases on the cores
-/// of its node"): OpenBLAS' LU with 2 threads took 0.91–1.57 of one thread's time from 200 to
-/// 700 unknowns and 0.59–0.84 from 1 000 on (two runs); the dense Coulomb steps of a 3D case
-/// with 286 candidates (about 400–600 unknowns per step) took 1.4 × as long widened.
-pub const WIDE_MIN_DIM: usize = 1000;
 
 /// 64-bit words of a CPU set (CpuSet::MAX_CPU bits).
 const CPU_WORDS: usize = CpuSet::MAX_CPU.div_ceil(64);

@@ -29,4 +29,5 @@ pub mod signorini;
 pub mod solver;
 pub mod steps;
 pub mod summary;
+pub mod tuning;
 pub mod warnings;

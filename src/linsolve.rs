@@ -14,6 +14,8 @@ use crate::partition::Layout;
 use crate::petsc::mumps::{NodeBases, SchurFactor};
 use crate::petsc::optdb::OptionsDb;
 use crate::petsc::{self, ndfactor, Ksp, MPI_Comm, Matrix, SolveInfo, Vector};
+pub use crate::tuning::REUSE_RESTART;
+use crate::tuning::{ALLATONCE_MIN_RANKS, ITERATIVE_MAX_IT, ITERATIVE_RESTART, WORKSPACE_PERCENT};
 use std::rc::Rc;
 
 /// What the linear solves run, as the solver's options resolve it.
@@ -48,11 +50,10 @@ impl SolverKind {
 /// Cholesky (LDLᵀ), about half the work and memory of LU; Tresca's (3.42) needs LU.
 pub fn preset_options(preset: Preset, rtol: f64, symmetric: bool) -> String {
     match preset {
-        // ICNTL(14) = 40: 40 % workspace slack over MUMPS' estimate (a 2-rank 3D Cholesky of
-        // 396k unknowns failed once with the default; the estimate depends on the partition).
+        // ICNTL(14): workspace slack over MUMPS' estimate (tuning::WORKSPACE_PERCENT).
         Preset::Direct | Preset::Auto => format!(
             "-ksp_type preonly -pc_type {} -pc_factor_mat_solver_type mumps \
-             -mat_mumps_icntl_14 40",
+             -mat_mumps_icntl_14 {WORKSPACE_PERCENT}",
             if symmetric { "cholesky" } else { "lu" }
         ),
         // GMRES with right preconditioning (the true residual is tested) and smoothed
@@ -70,8 +71,8 @@ pub fn preset_options(preset: Preset, rtol: f64, symmetric: bool) -> String {
         // which LU breaks GMRES down (2D Hertz at ν = 0.4999); on a regular one it is LU's
         // solve.
         Preset::Iterative => format!(
-            "-ksp_type gmres -ksp_pc_side right -ksp_gmres_restart 200 -ksp_rtol {rtol:e} \
-             -ksp_max_it 2000 -pc_type gamg -pc_gamg_sym_graph true \
+            "-ksp_type gmres -ksp_pc_side right -ksp_gmres_restart {ITERATIVE_RESTART} \
+             -ksp_rtol {rtol:e} -ksp_max_it {ITERATIVE_MAX_IT} -pc_type gamg -pc_gamg_sym_graph true \
              -mg_levels_ksp_type chebyshev -mg_levels_pc_type jacobi -mg_coarse_pc_type svd{}",
             if symmetric {
                 ""
@@ -108,9 +109,6 @@ pub fn split_options(s: &str) -> Vec<(String, String)> {
 
 /// Options prefix of the Krylov solver that reuses a factorisation (`-reuse_ksp_monitor`, ...).
 pub const REUSE_PREFIX: &str = "reuse_";
-
-/// GMRES restart of the reuse solver: no budget exceeds it, so GMRES never restarts.
-pub const REUSE_RESTART: usize = 200;
 
 /// Relative tolerance of the reuse solver on the preconditioned residual ‖M⁻¹(b − S x)‖ with
 /// x₀ = 0: M = S_j (the factored matrix) is close to S, so this bounds the relative error of
@@ -188,7 +186,7 @@ impl LinearSetup {
         // It also needs less memory (L7 on 4 ranks: 256 vs 326 MB peak per rank) but was ~30 %
         // slower on 2 ranks, where one partner per rank keeps the default repeatable.
         // Sequential matrices do not have it (one rank: unchanged).
-        if iterative && crate::par::world_size() > 2 {
+        if iterative && crate::par::world_size() >= ALLATONCE_MIN_RANKS {
             db.set("-matptap_via", "allatonce")?;
         }
         // solver.repeatable: the direct preset's MUMPS work (the plain path's factorisations,

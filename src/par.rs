@@ -57,12 +57,12 @@ impl<'a> Ctx<'a> {
 
     /// `work` on rank 0 alone (`Some` there, `None` elsewhere), for rank 0's dense phases
     /// whose result a broadcast then shares; `dim`: the largest dimension of its dense
-    /// matrices. From [`crate::blas::WIDE_MIN_DIM`] on, rank 0's BLAS threads get the cores of
+    /// matrices. From [`crate::tuning::WIDE_MIN_DIM`] on, rank 0's BLAS threads get the cores of
     /// the ranks beside it ([`crate::blas::NodeCores`]), and the other ranks wait in a barrier
     /// that they test and sleep on instead of spinning. Collective.
     pub fn on_root_wide<T>(&self, dim: usize, work: impl FnOnce() -> T) -> Option<T> {
         let out = (self.rank == 0).then(|| self.cores.run(dim, work));
-        if self.size > 1 && dim >= crate::blas::WIDE_MIN_DIM {
+        if self.size > 1 && dim >= crate::tuning::WIDE_MIN_DIM {
             crate::abort::before_collective();
             let mut req = self.world.immediate_barrier();
             if self.rank == 0 {

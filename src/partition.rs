@@ -134,9 +134,7 @@ fn morton_keys(mesh: &Mesh) -> Vec<u64> {
 }
 
 pub use crate::geom::morton_key;
-
-/// Load imbalance PT-Scotch may leave between the parts (PETSc's default, 1 %).
-const SCOTCH_IMBALANCE: f64 = 0.01;
+use crate::tuning::SCOTCH_IMBALANCE;
 
 /// Partitions the mesh over the ranks of `comm` (`ptype`: "ptscotch", or another PETSc
 /// MatPartitioning type, e.g. "parmetis" where PETSc has it). PT-Scotch is called directly

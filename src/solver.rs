@@ -12,16 +12,8 @@ use crate::partition::Layout;
 use crate::petsc::ndfactor::FactorRecord;
 use crate::petsc::{self, Matrix, SolveInfo, Vector};
 use crate::say;
+use crate::tuning::AUTO_ITERATIVE_3D_DOFS;
 use std::time::Instant;
-
-/// Under `solver.preset = "auto"`, 3D meshes from this many unknowns are solved by the
-/// iterative preset: a 3D factorisation's fill grows as n^(4/3) and its flops as n², so GMRES
-/// with AMG overtakes it early (bench/results/ordering.md, 2 ranks, the full floating ball in
-/// contact: 12 063 unknowns 0.34 s direct, 0.29 s iterative; 17 856: 0.79 / 0.50 s; 126 801:
-/// 31.5 / 6.0 s). Below it both take a fraction of a second and the direct solve is the more
-/// robust (no Krylov tolerance, nearly incompressible materials). 2D meshes stay direct at
-/// every size measured (2D Hertz, 561 112 unknowns: contact 4.0 s direct, 4.6 s iterative).
-pub const AUTO_ITERATIVE_3D_DOFS: usize = 10_000;
 
 /// The preset to use for `asked` on a mesh of dimension `dim` with `dofs` unknowns and
 /// `friction` (Tresca or Coulomb), and why (for the log and summary.json). With friction the

@@ -125,7 +125,7 @@ fn rank_zeros_dense_phases_take_the_cpus_of_the_ranks_beside_it_and_the_answer_s
     let schur_dofs = base.summary["newton"]["condensed"]["schur_dofs"].as_u64();
     let schur_dofs = schur_dofs.expect("newton.condensed.schur_dofs") as usize;
     assert!(
-        schur_dofs >= signorini_mpi::blas::WIDE_MIN_DIM,
+        schur_dofs >= signorini_mpi::tuning::WIDE_MIN_DIM,
         "the dense phases run widened: {schur_dofs} Schur dofs"
     );
     assert!(!base.active_node_ids().is_empty(), "some node in contact");

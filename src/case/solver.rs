@@ -80,7 +80,7 @@ impl Reuse {
 }
 
 /// `solver.dense_threads`: the OpenBLAS threads of rank 0's dense phases (the condensed
-/// path's dense work from [`crate::blas::WIDE_MIN_DIM`] unknowns on, crate::blas::NodeCores).
+/// path's dense work from [`crate::tuning::WIDE_MIN_DIM`] unknowns on, crate::blas::NodeCores).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum DenseThreads {
     /// One per CPU that the ranks on rank 0's node may use (the launcher's binding decides).

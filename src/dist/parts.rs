@@ -8,12 +8,10 @@ use super::read::Phases;
 use crate::error::RunError;
 use crate::petsc;
 use crate::petsc::{MPI_Comm, PInt};
+use crate::tuning::{AGGREGATE_CELLS, COARSE_PER_PART, SCOTCH_IMBALANCE};
 use mpi::datatype::PartitionMut;
 use mpi::topology::SimpleCommunicator;
 use mpi::traits::*;
-
-/// Load imbalance PT-Scotch may leave between the parts (PETSc's default, 1 %).
-pub(super) const SCOTCH_IMBALANCE: f64 = 0.01;
 
 /// Phase 1: the rank of every cell of this block. PT-Scotch partitions the coarse graph of
 /// [`aggregate`]'s aggregates (vertex weight: cells, edge weight: facets), which makes its
@@ -63,11 +61,6 @@ pub(super) fn partition_cells(
     }
     Ok(part)
 }
-
-/// Most cells in one aggregate of the coarse graph that PT-Scotch partitions.
-pub(super) const AGGREGATE_CELLS: usize = 16;
-/// Fewest coarse vertices per part: smaller meshes get smaller aggregates.
-pub(super) const COARSE_PER_PART: usize = 256;
 
 /// Cells per aggregate for `n_cells` cells on `size` parts: [`AGGREGATE_CELLS`], less where
 /// that would leave fewer than [`COARSE_PER_PART`] coarse vertices per part (1: the dual

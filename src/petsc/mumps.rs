@@ -21,9 +21,7 @@ mod raw {
 }
 
 use super::{agreed_error, own_error, MPI_Comm, Matrix, Result};
-
-/// Per cent of workspace over MUMPS' estimate (ICNTL(14)), as the direct preset gives PETSc.
-const WORKSPACE_PERCENT: i32 = 40;
+use crate::tuning::WORKSPACE_PERCENT;
 
 /// A MUMPS instance holding the LLᵀ factorisation (SYM = 1: the matrix must be symmetric
 /// positive definite; no pivoting, whose choices under MUMPS' dynamic scheduling with SYM = 2

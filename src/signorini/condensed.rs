@@ -33,12 +33,12 @@ use super::active_set::{ActiveSet, Iterate, Law};
 use super::boundary::ContactBoundary;
 use super::coulomb_condensed::CoulombCondensedSummary;
 use super::dense::{guarded, Dense, DenseRun, End, Primal};
+use super::halfspace::{self, Located};
 use super::newton::{
     add_motion, ContactProblem, NewtonResult, NewtonSettings, StepInfo, WarmStart,
 };
-use super::predictor::{self, Located};
-use super::reduced::{ReducedSystem, SolveKind};
 use super::rigid::{FreeModes, Motion, Pin};
+use super::step_system::{ReducedSystem, SolveKind};
 use crate::case::NewtonInit;
 use crate::contact::Frame;
 use crate::error::RunError;
@@ -93,7 +93,7 @@ const FIRST_FRACTION: usize = 8;
 /// The first candidate set holds at least this many contact nodes (all if fewer).
 const MIN_CANDIDATES: usize = 64;
 
-/// Where the half-space model located the contact zone (predictor::locate), the first
+/// Where the half-space model located the contact zone (halfspace::locate), the first
 /// candidates hold at least (1 + 1/LOCATED_MARGIN) times the nodes it put in contact: its zone
 /// is that of a coarse model without the load's own deformation (measured: the rolling Hertz
 /// disk, 42 k to 345 k unknowns, 124 / 496 / 992 located, 124 / 495 / 991 in the final
@@ -888,7 +888,7 @@ fn judge(
 /// factorised (the first solve of a case, `s.model` given): it may lie far from the smallest
 /// gaps (the body rolls where friction alone holds a part of the load, `s.carried`) and be
 /// wider than the dense limits. The clearance of this rank's contact nodes after the model's
-/// rigid motion and the nodes it puts in contact ([`predictor::locate`]), computed once per
+/// rigid motion and the nodes it puts in contact ([`halfspace::locate`]), computed once per
 /// solve (`p.located`). Collective.
 fn locate(
     ctx: &Ctx,
@@ -904,7 +904,7 @@ fn locate(
             }
             let phi = s.carried.map_or_else(|| free.free_load(), <[f64]>::to_vec);
             let zone =
-                predictor::locate(ctx, hs, p.boundary, free, &phi, (s.c, s.section.max_steps))?;
+                halfspace::locate(ctx, hs, p.boundary, free, &phi, (s.c, s.section.max_steps))?;
             *p.located.borrow_mut() = Some(zone.clone());
             Ok(zone)
         }
@@ -1324,7 +1324,7 @@ const REC: usize = 21;
 
 impl Candidates {
     /// One all-gather. `key`: what orders this rank's nodes for the first candidates (the
-    /// clearance after a located rigid motion, [`super::predictor::locate`]); `None`: the gap.
+    /// clearance after a located rigid motion, [`super::halfspace::locate`]); `None`: the gap.
     /// Collective.
     fn gather(
         ctx: &Ctx,

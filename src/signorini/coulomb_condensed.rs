@@ -43,8 +43,8 @@ use super::newton::{
     add_motion, stalled, ContactProblem, NewtonResult, NewtonSettings, StepInfo, WarmStart,
     COULOMB_RESIDUAL_STALL, COULOMB_RESIDUAL_TOL, COULOMB_RESIDUAL_ZERO,
 };
-use super::reduced::ReducedSystem;
 use super::rigid::FreeModes;
+use super::step_system::ReducedSystem;
 use crate::contact::{normal_active, CoulombRow, Frame};
 use crate::error::RunError;
 use crate::geom::dot;

@@ -44,8 +44,8 @@
 
 use super::active_set::{ActiveSet, Iterate};
 use super::boundary::{ContactBoundary, ContactNode};
-use super::reduced::ReducedSystem;
 use super::rigid::{ApproachCoupling, Pin, RigidModes};
+use super::step_system::ReducedSystem;
 use crate::assembly::System;
 use crate::error::{InputError, RunError};
 use crate::geom::dot;

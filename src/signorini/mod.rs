@@ -20,15 +20,15 @@ pub mod cycle;
 pub mod dense;
 pub mod final_state;
 pub mod force;
+pub mod halfspace;
 pub mod kept;
 pub mod law;
 pub mod newton;
 pub mod plain;
-pub mod predictor;
-pub mod reduced;
 pub mod report;
 pub mod rigid;
 pub mod snesvi;
+pub mod step_system;
 pub mod warn;
 
 use crate::assembly::System;
@@ -49,11 +49,11 @@ use boundary::{ContactBoundary, NodeResult};
 use coulomb::Outcome;
 use kept::KeptFactor;
 use newton::{ContactProblem, NewtonResult, NewtonSettings, StepInfo, WarmStart};
-use reduced::ReducedSystem;
 use report::{ContactSummary, Scales};
 use rigid::FreeModes;
 use serde::Serialize;
 use std::time::Instant;
+use step_system::ReducedSystem;
 
 /// summary.json's "newton" section.
 #[derive(Debug, Clone, Serialize)]
@@ -302,11 +302,11 @@ pub fn solve(
     // the body's half-space model: the predictor's on the iterative preset (frictionless,
     // newton.rs), else the condensed path's (locating a floating body's zone; the plain path's
     // first set where the zone is too wide for the dense limits)
-    let model = predictor::HalfSpace {
+    let model = halfspace::HalfSpace {
         modulus: settings.contact_modulus,
         dim,
         length: 2.0 * mesh.extent(),
-        mirrors: predictor::mirror_planes(ctx, mesh, fixed),
+        mirrors: halfspace::mirror_planes(ctx, mesh, fixed),
     };
     let iterative = setup.kind() == SolverKind::Iterative;
     let ns = newton_settings(settings, (c, law), (&model, iterative), &force_control);
@@ -348,7 +348,7 @@ pub fn solve(
 fn newton_settings<'a>(
     settings: &'a ContactSettings,
     (c, law): (f64, Law),
-    (model, iterative): (&'a predictor::HalfSpace, bool),
+    (model, iterative): (&'a halfspace::HalfSpace, bool),
     force: &'a [force::ForceControl],
 ) -> NewtonSettings<'a> {
     NewtonSettings {
@@ -771,7 +771,7 @@ fn newton_summary(
         Method::Newton => nr
             .history
             .iter()
-            .filter(|h| h.solve == reduced::SolveKind::Factorisation)
+            .filter(|h| h.solve == step_system::SolveKind::Factorisation)
             .count(),
         // rsls factors every reduced system of its steps with the direct preset
         Method::SnesVi if solver_section.preset == Preset::Direct => nr.steps,

@@ -17,9 +17,9 @@ use super::active_set::{
 use super::boundary::{ContactBoundary, NodeResult};
 use super::cycle::{decide, CycleGuard, Decision, Seen, SetKey};
 use super::force::{self, Approach, ForceControl};
-use super::predictor::{self, HalfSpace, PredictorStep};
-use super::reduced::{AmgStep, ReducedSystem, ReuseStep, RowChange, SolveKind, StepSolve};
+use super::halfspace::{self, HalfSpace, PredictorStep};
 use super::rigid::{Balance, FreeModes, Motion, Pin};
+use super::step_system::{AmgStep, ReducedSystem, ReuseStep, RowChange, SolveKind, StepSolve};
 use crate::assembly::System;
 use crate::case::{self, NewtonInit, NewtonSection};
 use crate::error::RunError;
@@ -49,7 +49,7 @@ pub struct NewtonSettings<'a> {
     pub carried: Option<&'a [f64]>,
     /// The body's half-space model where the condensed path runs (direct preset): it locates
     /// the contact zone of a floating body before the factorisation
-    /// ([`super::predictor::locate`]), and where that zone is too wide for the dense limits the
+    /// ([`super::halfspace::locate`]), and where that zone is too wide for the dense limits the
     /// plain path predicts its first set from it (as `halfspace`).
     pub model: Option<&'a HalfSpace>,
     /// Force control (`contact.force`, force.rs): one approach δ_j per force-controlled pair
@@ -192,7 +192,7 @@ pub struct ContactProblem<'a> {
     pub kept: &'a super::kept::KeptFactor,
     /// The contact zone the half-space model located in this solve (condensed.rs `locate`),
     /// once computed: a second condensed attempt (Coulomb's normal dofs alone) takes it again.
-    pub located: &'a std::cell::RefCell<Option<super::predictor::Located>>,
+    pub located: &'a std::cell::RefCell<Option<super::halfspace::Located>>,
 }
 
 /// The state the loop carries from step to step.
@@ -497,7 +497,7 @@ impl<'a> Loop<'a> {
                 .collect()
         });
         let limits = (s.c, s.section.max_steps);
-        let (set, rec) = predictor::predict(
+        let (set, rec) = halfspace::predict(
             self.ctx,
             hs,
             &self.shifted,
@@ -519,7 +519,7 @@ impl<'a> Loop<'a> {
         Ok((rec, exact))
     }
 
-    /// The model's correction of an exact step's set update ([`predictor::correct`]; not
+    /// The model's correction of an exact step's set update ([`halfspace::correct`]; not
     /// under force control): when (3.23) changes nodes, the next set is the model's, except
     /// that every node (3.23) changes keeps its change (so the step counts at least those
     /// changes, and a correction never stops the iteration); the model's record, or `None`
@@ -536,7 +536,7 @@ impl<'a> Loop<'a> {
         }
         let limits = (self.s.c, self.s.section.max_steps);
         let cur = (&self.shifted, &self.it, self.set.normal.as_slice());
-        let (set, rec) = predictor::correct(ctx, hs, cur, &self.free, limits)?;
+        let (set, rec) = halfspace::correct(ctx, hs, cur, &self.free, limits)?;
         if let Some(model) = set.filter(|_| !rec.truncated) {
             let next: Vec<bool> = (model.iter().zip(&self.set.normal))
                 .zip(&update.next.normal)
@@ -596,7 +596,7 @@ pub(super) fn stalled(still: bool, last: Option<f64>, residual: f64, lambda_norm
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 struct StepPlan {
     /// Solved to the preset's tolerance (else inexact: frictionless, iterative preset's reuse
-    /// path, the solve stops at `reduced::INEXACT_REDUCTION` of its start's residual).
+    /// path, the solve stops at `step_system::reuse::INEXACT_REDUCTION` of its start's residual).
     exact: bool,
     /// The half-space model predicts the set after this step's solve (its first step).
     predict: bool,

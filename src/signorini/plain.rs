@@ -2,7 +2,7 @@
 //! reduced system), one rule for every branch that enters it.
 
 use super::newton::NewtonSettings;
-use super::reduced::ReducedSystem;
+use super::step_system::ReducedSystem;
 use crate::case::{Reuse, SolverSection};
 use crate::error::RunError;
 use crate::par::Ctx;

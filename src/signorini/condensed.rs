@@ -34,7 +34,7 @@ use super::boundary::ContactBoundary;
 use super::coulomb_condensed::CoulombCondensedSummary;
 use super::dense::{guarded, Dense, DenseRun, End, Primal};
 use super::halfspace::{self, Located};
-use super::newton::{
+use super::plain_path::{
     add_motion, ContactProblem, NewtonResult, NewtonSettings, StepInfo, WarmStart,
 };
 use super::rigid::{FreeModes, Motion, Pin};
@@ -1302,7 +1302,7 @@ fn start_set(
     match warm {
         Some(w) => w.nodes.iter().map(|r| r.active).collect(),
         None => {
-            let init = super::newton::auto_start(s.section.init, false, free);
+            let init = super::plain_path::auto_start(s.section.init, false, free);
             let (b, dim) = (p.boundary, p.mesh.dim);
             ActiveSet::initial(b, init, Law::Frictionless, s.c, p.mesh.extent(), dim).normal
         }

@@ -10,8 +10,7 @@ use super::certificate;
 use super::condensed;
 use super::coulomb_condensed::{self, CoulombCondensedSummary};
 use super::force;
-use super::newton::{self, ContactProblem, NewtonResult, NewtonSettings, StepInfo, WarmStart};
-use super::plain;
+use super::plain_path::{self, ContactProblem, NewtonResult, NewtonSettings, StepInfo, WarmStart};
 use super::rigid::{self, FreeModes};
 use super::step_system::ReducedSystem;
 use crate::case::{self, CoulombAlgorithm, Reuse, SolverSection};
@@ -63,7 +62,7 @@ pub fn solve(
     if let Begin::Solved(nr) = start {
         return Ok(Outcome::Checked(nr, condensed_summary));
     }
-    plain::enable_reuse(ctx, ns, solver_section, reduced, true)?;
+    plain_path::enable_reuse(ctx, ns, solver_section, reduced, true)?;
     if algorithm == CoulombAlgorithm::FixedPoint {
         let (nr, outer) = fixed_point(ctx, problem, reduced, ns, warm)?;
         return Ok(Outcome::Iterated(nr, Some(outer), condensed_summary));
@@ -80,12 +79,12 @@ pub fn solve(
                 force: &force,
                 ..*ns
             };
-            let mut nr = newton::semismooth_newton(ctx, problem, reduced, &ns, Some(&w))?;
+            let mut nr = plain_path::semismooth_newton(ctx, problem, reduced, &ns, Some(&w))?;
             // the start's steps first in the record (and their factorisations)
             after(first.history, &mut nr);
             nr
         }
-        _ => newton::semismooth_newton(ctx, problem, reduced, ns, warm)?,
+        _ => plain_path::semismooth_newton(ctx, problem, reduced, ns, warm)?,
     };
     Ok(Outcome::Iterated(nr, None, condensed_summary))
 }
@@ -131,7 +130,7 @@ fn fixed_point(
             force: &force,
             ..*ns
         };
-        let mut nr = newton::semismooth_newton(ctx, &pm, reduced, &tresca, start.as_ref())?;
+        let mut nr = plain_path::semismooth_newton(ctx, &pm, reduced, &tresca, start.as_ref())?;
         stop = stop.worse(nr.stop);
         nr.stop = stop;
         for (fc, &delta) in force.iter_mut().zip(&nr.approach) {
@@ -470,7 +469,7 @@ fn iterative_start(
         halfspace: None,
         ..*ns
     };
-    let mut nr = match newton::semismooth_newton(ctx, problem, reduced, &fl, None) {
+    let mut nr = match plain_path::semismooth_newton(ctx, problem, reduced, &fl, None) {
         Ok(nr) => nr,
         Err(RunError::Failed(why)) => {
             say!(

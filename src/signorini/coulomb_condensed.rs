@@ -39,9 +39,11 @@ use super::boundary::{ContactBoundary, ContactNode, NodeResult};
 use super::condensed::{fall_back, is_zero, record_steps, CoarseLevel, Kept};
 use super::dense::{coarsen, guarded};
 use super::force::{self, ForceControl};
-use super::newton::{
-    add_motion, stalled, ContactProblem, NewtonResult, NewtonSettings, StepInfo, WarmStart,
+use super::plain_path::iteration::{
     COULOMB_RESIDUAL_STALL, COULOMB_RESIDUAL_TOL, COULOMB_RESIDUAL_ZERO,
+};
+use super::plain_path::{
+    add_motion, stalled, ContactProblem, NewtonResult, NewtonSettings, StepInfo, WarmStart,
 };
 use super::rigid::FreeModes;
 use super::step_system::ReducedSystem;
@@ -131,7 +133,7 @@ struct DenseCoulomb {
     steps: Vec<DenseStep>,
     /// `Err`: why the iteration gave up.
     end: Result<(), String>,
-    /// It stopped by the stall rule (`newton::stalled`: the residual at the round-off of the
+    /// It stopped by the stall rule (`plain_path::stalled`: the residual at the round-off of the
     /// dense compliance, above COULOMB_RESIDUAL_TOL).
     stalled: bool,
     /// The nested start's coarse levels, coarsest first: (nodes, dense steps).

@@ -23,8 +23,7 @@ pub mod force;
 pub mod halfspace;
 pub mod kept;
 pub mod law;
-pub mod newton;
-pub mod plain;
+pub mod plain_path;
 pub mod report;
 pub mod rigid;
 pub mod snesvi;
@@ -48,7 +47,7 @@ use active_set::{ActiveSet, Iterate, Law};
 use boundary::{ContactBoundary, NodeResult};
 use coulomb::Outcome;
 use kept::KeptFactor;
-use newton::{ContactProblem, NewtonResult, NewtonSettings, StepInfo, WarmStart};
+use plain_path::{ContactProblem, NewtonResult, NewtonSettings, StepInfo, WarmStart};
 use report::{ContactSummary, Scales};
 use rigid::FreeModes;
 use serde::Serialize;
@@ -597,7 +596,7 @@ fn complementarity_parameter(
 ) -> f64 {
     let c = match settings.newton.c {
         Some(c) => c,
-        None => newton::default_c(ctx, b, dim, settings.young),
+        None => plain_path::default_c(ctx, b, dim, settings.young),
     };
     say!(
         ctx,
@@ -708,8 +707,8 @@ fn normal_and_tresca(
                     halfspace: ns.model,
                     ..*ns
                 };
-                plain::enable_reuse(ctx, ns, solver_section, reduced, false)?;
-                let nr = newton::semismooth_newton(ctx, problem, reduced, &wide, warm)?;
+                plain_path::enable_reuse(ctx, ns, solver_section, reduced, false)?;
+                let nr = plain_path::semismooth_newton(ctx, problem, reduced, &wide, warm)?;
                 return Ok(Outcome::Checked(nr, Some(s)));
             }
             condensed::Condensed::Fallback(s) | condensed::Condensed::Factorised(s) => {
@@ -717,20 +716,20 @@ fn normal_and_tresca(
             }
         }
     }
-    plain::enable_reuse(ctx, ns, solver_section, reduced, friction)?;
-    let nr = newton::semismooth_newton(ctx, problem, reduced, ns, warm)?;
+    plain_path::enable_reuse(ctx, ns, solver_section, reduced, friction)?;
+    let nr = plain_path::semismooth_newton(ctx, problem, reduced, ns, warm)?;
     Ok(Outcome::Iterated(nr, None, condensed_summary))
 }
 
 /// The floor of the scales the final check judges a load step by: a step whose solution
 /// vanishes against the step before's (its load taken back to nothing) is judged against
-/// [`newton::VANISHING`] of that step's scales, as its stopping rule is. Local.
+/// [`plain_path::VANISHING`] of that step's scales, as its stopping rule is. Local.
 fn vanishing_floor(previous: Option<&ContactSolution>) -> Scales {
     previous.map_or(Scales::default(), |p| {
         let s = p.report.contact.scales;
         Scales {
-            force: newton::VANISHING * s.force,
-            length: newton::VANISHING * s.length,
+            force: plain_path::VANISHING * s.force,
+            length: plain_path::VANISHING * s.length,
         }
     })
 }

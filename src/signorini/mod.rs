@@ -13,9 +13,7 @@ pub mod active_set;
 pub mod boundary;
 pub mod capacity;
 pub mod certificate;
-pub mod condensed;
 pub mod coulomb;
-pub mod coulomb_condensed;
 pub mod cycle;
 pub mod dense;
 pub mod final_state;
@@ -26,6 +24,7 @@ pub mod law;
 pub mod plain_path;
 pub mod report;
 pub mod rigid;
+pub mod schur;
 pub mod snesvi;
 pub mod step_system;
 pub mod warn;
@@ -83,7 +82,7 @@ pub struct NewtonSummary {
     pub coulomb: Option<CoulombSummary>,
     /// The condensed path (frictionless, direct preset), when it was tried.
     #[serde(skip_serializing_if = "Option::is_none")]
-    pub condensed: Option<condensed::CondensedSummary>,
+    pub condensed: Option<schur::CondensedSummary>,
 }
 
 /// summary.json's "newton"."coulomb": how Coulomb friction was solved. `steps` of the
@@ -672,11 +671,7 @@ fn run_method(
 
 /// What [`run_method`] returns: the result, the fixed point's outer steps and the condensed
 /// path's record.
-type Ran = (
-    NewtonResult,
-    Option<usize>,
-    Option<condensed::CondensedSummary>,
-);
+type Ran = (NewtonResult, Option<usize>, Option<schur::CondensedSummary>);
 
 /// Algorithm 1 (frictionless: on the contact unknowns where the condensed path applies) or
 /// Algorithm 2 (Tresca, `friction`) on the plain path. Collective.
@@ -693,14 +688,14 @@ fn normal_and_tresca(
     let condense = !friction
         && solver_section.reuse == Reuse::Auto
         && b.n_global > 0
-        && b.n_global <= condensed::MAX_CONTACT_NODES
+        && b.n_global <= schur::MAX_CONTACT_NODES
         && reduced.factorises()?;
     if condense {
-        match condensed::solve(ctx, problem, reduced, ns, warm)? {
-            condensed::Condensed::Solved(nr, s) => {
+        match schur::frictionless::solve(ctx, problem, reduced, ns, warm)? {
+            schur::Condensed::Solved(nr, s) => {
                 return Ok(Outcome::Checked(*nr, Some(s)));
             }
-            condensed::Condensed::Fallback(s) if s.too_wide => {
+            schur::Condensed::Fallback(s) if s.too_wide => {
                 // a zone too wide for the dense compliance: the plain path from the
                 // half-space model's set, the model correcting each exact step's update
                 let wide = NewtonSettings {
@@ -711,7 +706,7 @@ fn normal_and_tresca(
                 let nr = plain_path::semismooth_newton(ctx, problem, reduced, &wide, warm)?;
                 return Ok(Outcome::Checked(nr, Some(s)));
             }
-            condensed::Condensed::Fallback(s) | condensed::Condensed::Factorised(s) => {
+            schur::Condensed::Fallback(s) | schur::Condensed::Factorised(s) => {
                 condensed_summary = Some(s)
             }
         }

@@ -29,12 +29,10 @@
 //! three solve phases (the right-hand sides gathered on rank 0, the solution scattered back),
 //! two broadcasts (S's definiteness, the dense result), one MatMult.
 
-use super::outcome::finish;
-use super::outcome::{fallback, fallback_stop, keep_solved, Condensed, Kept, Stop};
-use super::round::dof_order;
-use super::round::reused;
-use super::round::{expand, factorise_round, judge, locate, refuse_floating_force, Judged};
-use super::start::{predicted_zone, prepare_base, splits_zones, start_set, Pass};
+use super::outcome::{fallback, fallback_stop, finish, keep_solved, Condensed, Kept, Stop};
+use super::round::{dof_order, expand, factorise_round, judge, locate, refuse_floating_force};
+use super::round::{reused, Expansion, Judged, Pass, Shape};
+use super::start::{predicted_zone, prepare_base, splits_zones, start_set, PassPlan, SolveStart};
 use super::summary::{tag_key, CondensedSummary};
 use crate::case::NewtonInit;
 use crate::contact::Frame;
@@ -47,7 +45,6 @@ use crate::petsc::ndfactor::node_order;
 use crate::say;
 use crate::signorini::boundary::ContactBoundary;
 use crate::signorini::dense::DenseRun;
-use crate::signorini::halfspace::Located;
 use crate::signorini::plain_path::{ContactProblem, NewtonSettings, StepInfo, WarmStart};
 use crate::signorini::rigid::FreeModes;
 use crate::signorini::step_system::ReducedSystem;
@@ -185,6 +182,7 @@ pub(crate) fn solve_keeping(
     let located = locate(ctx, p, s, &free0, warm)?;
     let key = located.as_ref().map(|(k, _)| k.as_slice());
     let n_rows = p.layout.node_offsets.last().copied().unwrap_or(0) * dim;
+    let shape = Shape { dim, n_rows };
     let nested = warm.is_none() && s.section.init == NewtonInit::Auto;
     let splits = splits_zones(p, s, warm, (per, steps, stick.is_some()));
     let sticking = stick.unwrap_or_default();
@@ -212,39 +210,31 @@ pub(crate) fn solve_keeping(
             false => given,
         };
         let zoned = zone.as_deref();
-        let mut pass = begin_pass(
-            ctx,
-            (p, &mut *reduced, warm),
-            (&free0, all0.as_ref()),
-            (&start, &located, per),
-            (zoned, order_kept.take(), sticking),
-            &mut summary,
-        )?;
+        let at = SolveStart {
+            p,
+            warm,
+            free0: &free0,
+            all0: all0.as_ref(),
+            start: &start,
+            located: &located,
+            per,
+        };
+        let plan = PassPlan {
+            zone: zoned,
+            order: order_kept.take(),
+            sticking,
+        };
+        let mut pass = begin_pass(ctx, &at, reduced, plan, &mut summary)?;
         for round in 1..=MAX_ROUNDS {
             rounds += 1;
             if rounds > MAX_ROUNDS {
                 break 'pass;
             }
-            let Pass {
-                cand,
-                growth,
-                comp,
-                condensation,
-                f_root,
-                ..
-            } = &mut pass;
-            let grown = factorise_round(
-                ctx,
-                reduced,
-                (cand, comp, growth),
-                &mut summary,
-                (round, *condensation),
-                (dim, n_rows, f_root),
-            );
+            let grown = factorise_round(ctx, reduced, &mut pass, &mut summary, round, &shape);
             if let Err(stop) = grown {
                 let to_hold = stop.too_wide && per > 1 && splits && zone.is_none();
-                let all = all0.as_ref();
-                let instead = || hold_instead(ctx, &stop, (all, &located, per), &growth.active);
+                let active = &pass.growth.active;
+                let instead = || hold_instead(ctx, &stop, &at, active);
                 if let Some(z) = to_hold.then(instead).flatten() {
                     zone = Some(z);
                     continue 'pass;
@@ -273,15 +263,15 @@ pub(crate) fn solve_keeping(
 
             let t = Instant::now();
             let set = (lambda.as_slice(), growth.active.as_slice());
-            let ex = match expand(
-                ctx,
-                p,
-                reduced,
-                (s, free, comp, cand),
-                (&pass.f_root, pass.rhs0.len()),
-                set,
-                &run.alpha,
-            )? {
+            let expansion = Expansion {
+                s,
+                free,
+                comp,
+                cand,
+                f_root: &pass.f_root,
+                n_local: pass.rhs0.len(),
+            };
+            let ex = match expand(ctx, p, reduced, expansion, set, &run.alpha)? {
                 Ok(ex) => ex,
                 Err(why) => return fall(fallback(ctx, summary, why)),
             };
@@ -319,13 +309,9 @@ pub(crate) fn solve_keeping(
 /// Friction, where every dof of the candidates is too many (`stop`): the zone to hold sticking
 /// instead, the predicted one ([`predicted_zone`]) or else the set the candidates grew to
 /// (`grown`), where it is [`wide`]. Local (on all-gathered data; said in the log).
-fn hold_instead(
-    ctx: &Ctx,
-    stop: &Stop,
-    (all0, located, per): (Option<&Candidates>, &Located, usize),
-    grown: &[bool],
-) -> Option<Vec<bool>> {
-    let zone = predicted_zone(all0, located, per).or_else(|| {
+fn hold_instead(ctx: &Ctx, stop: &Stop, at: &SolveStart, grown: &[bool]) -> Option<Vec<bool>> {
+    let per = at.per;
+    let zone = predicted_zone(at.all0, at.located, per).or_else(|| {
         let on = grown.iter().filter(|&&a| a).count();
         wide(on, per, DENSE_FLOOR_FLOPS).then(|| grown.to_vec())
     })?;
@@ -345,12 +331,25 @@ fn hold_instead(
 /// ([`reused`]) or a new one with the kept node order `order`. Collective.
 fn begin_pass(
     ctx: &Ctx,
-    (p, reduced, warm): (&ContactProblem, &mut ReducedSystem, Option<&WarmStart>),
-    (free0, all0): (&FreeModes, Option<&Candidates>),
-    (start, located, per): (&[bool], &Located, usize),
-    (zone, order, sticking): (Option<&[bool]>, Option<Vec<usize>>, Sticking),
+    at: &SolveStart,
+    reduced: &mut ReducedSystem,
+    plan: PassPlan,
     summary: &mut CondensedSummary,
 ) -> Result<Pass, RunError> {
+    let SolveStart {
+        p,
+        warm,
+        free0,
+        all0,
+        start,
+        located,
+        per,
+    } = *at;
+    let PassPlan {
+        zone,
+        order,
+        sticking,
+    } = plan;
     let b = p.boundary;
     let key = located.as_ref().map(|(k, _)| k.as_slice());
     let released = |i: usize| sticking.release.get(i).copied().unwrap_or(false);
@@ -395,7 +394,7 @@ fn begin_pass(
     }
     let t = Instant::now();
     let (kept, order_dropped) = match warm {
-        Some(_) => reused(ctx, p, (&free, &cand), &f_root, (per, &held)),
+        Some(_) => reused(ctx, at, (&free, &cand), &f_root, &held),
         None => (None, None),
     };
     let mut comp = match kept {

@@ -3,7 +3,9 @@
 //! judgement of its set on the full system.
 
 use super::frictionless::{Candidates, Compliance, Growth};
-use super::outcome::Stop;
+use super::outcome::{Kept, Stop};
+use super::start::SolveStart;
+use super::summary::record_steps;
 use super::summary::CondensedSummary;
 use crate::error::RunError;
 use crate::par::Ctx;
@@ -12,11 +14,70 @@ use crate::say;
 use crate::signorini::active_set::{ActiveSet, Iterate, Law};
 use crate::signorini::dense::{guarded, Dense, DenseRun, End, Primal};
 use crate::signorini::halfspace::{self};
-use crate::signorini::plain_path::{ContactProblem, NewtonSettings, WarmStart};
+use crate::signorini::plain_path::{ContactProblem, NewtonSettings, StepInfo, WarmStart};
 use crate::signorini::rigid::{FreeModes, Motion, Pin};
 use crate::signorini::step_system::ReducedSystem;
 use nalgebra::{DMatrix, DVector};
 use std::time::Instant;
+
+/// One pass of the condensed path: K_p's free modes and right-hand side (this rank's rows and
+/// f on rank 0) with the pass' held nodes, the candidates, their growth (which knows the held
+/// nodes) and compliance, and the seconds of a load step's condensation on a kept
+/// factorisation.
+pub(super) struct Pass {
+    pub(super) free: FreeModes,
+    pub(super) rhs0: Vec<f64>,
+    pub(super) f_root: Vec<f64>,
+    pub(super) cand: Candidates,
+    pub(super) growth: Growth,
+    pub(super) comp: Compliance,
+    pub(super) condensation: f64,
+}
+
+impl Pass {
+    /// A round's dense steps ([`dense_round`]; `first`: nested, `located`: the located zone's
+    /// node count), recorded in `summary` and the step `history`. Collective.
+    pub(super) fn dense(
+        &mut self,
+        ctx: &Ctx,
+        s: &NewtonSettings,
+        (first, located): (bool, Option<usize>),
+        (summary, history): (&mut CondensedSummary, &mut Vec<StepInfo>),
+    ) -> DenseRun {
+        let t = Instant::now();
+        let (cand, comp, free) = (&self.cand, &mut self.comp, &self.free);
+        let active = &self.growth.active;
+        let (run, x_s) = dense_round(ctx, cand, comp, free, s, (active, first), located);
+        comp.x_s = x_s;
+        summary.dense_seconds += t.elapsed().as_secs_f64();
+        summary.record_coarse(ctx, &run);
+        let round = (comp.list.len(), free.pins().len());
+        record_steps(ctx, history, &run.steps, ("C_n", "condensed"), round);
+        run
+    }
+
+    /// What the pass keeps for a friction solve or the next load step, with the candidates'
+    /// multipliers `lambda`.
+    pub(super) fn keep(self, lambda: Vec<f64>, zone: Option<Vec<bool>>) -> Kept {
+        Kept {
+            n_local: self.rhs0.len(),
+            comp: self.comp,
+            cand: self.cand,
+            f_root: self.f_root,
+            free: self.free,
+            lambda,
+            active: self.growth.active,
+            held: self.growth.held,
+            zone: zone.unwrap_or_default(),
+        }
+    }
+}
+
+/// The size of the system a solve condenses: the dimension and the global number of rows.
+pub(super) struct Shape {
+    pub(super) dim: usize,
+    pub(super) n_rows: usize,
+}
 
 /// A round's first phase: the nodes it adds (`Growth::next`) and K_p factorised with their
 /// Schur complement (`Compliance::grow`), or the previous load step's factorisation where it
@@ -25,11 +86,21 @@ use std::time::Instant;
 pub(super) fn factorise_round(
     ctx: &Ctx,
     reduced: &ReducedSystem,
-    (cand, comp, growth): (&Candidates, &mut Compliance, &Growth),
+    pass: &mut Pass,
     summary: &mut CondensedSummary,
-    (round, condensation): (usize, f64),
-    (dim, n_rows, f_root): (usize, usize, &[f64]),
+    round: usize,
+    shape: &Shape,
 ) -> Result<(), Stop> {
+    let Pass {
+        cand,
+        growth,
+        comp,
+        condensation,
+        f_root,
+        ..
+    } = pass;
+    let (cand, growth, condensation) = (&*cand, &*growth, *condensation);
+    let (dim, n_rows) = (shape.dim, shape.n_rows);
     let t = Instant::now();
     let new = growth.next(cand, comp, round)?;
     if new.is_empty() && comp.factor.is_some() {
@@ -43,7 +114,7 @@ pub(super) fn factorise_round(
         cand,
         &new,
         (dim, n_rows),
-        (f_root, &growth.why),
+        (&f_root[..], &growth.why),
     )?;
     summary.factorisation_kept = false;
     summary.primal = comp.primal;
@@ -153,11 +224,12 @@ pub(super) fn refuse_floating_force(
 /// all-gathered data: the same on every rank).
 pub(super) fn reused(
     ctx: &Ctx,
-    p: &ContactProblem,
+    at: &SolveStart,
     (free, cand): (&FreeModes, &Candidates),
     f_root: &[f64],
-    (per, held): (usize, &[bool]),
+    held: &[bool],
 ) -> (Option<Compliance>, Option<Vec<usize>>) {
+    let (p, per) = (at.p, at.per);
     let Some(kept) = p.kept.take() else {
         return (None, None);
     };
@@ -333,6 +405,17 @@ pub(super) struct Expanded {
     pub(super) approach: Vec<f64>,
 }
 
+/// What the expansion of a round's dense result works on: the settings, the pass' free modes,
+/// compliance and candidates, f on rank 0 and this rank's number of rows.
+pub(super) struct Expansion<'a> {
+    pub(super) s: &'a NewtonSettings<'a>,
+    pub(super) free: &'a FreeModes,
+    pub(super) comp: &'a mut Compliance,
+    pub(super) cand: &'a Candidates,
+    pub(super) f_root: &'a [f64],
+    pub(super) n_local: usize,
+}
+
 /// Expansion: w = K_p⁻¹ (f − N λ_n) (MUMPS' condensation and expansion with the Schur
 /// variables' part S⁻¹ (r − N_s λ_n) = x₀ − S⁻¹N_s λ_n; w goes into `reduced`),
 /// ρ = R z α normalised at the pins the plain path chooses for the set (the modes the set
@@ -344,11 +427,18 @@ pub(super) fn expand(
     ctx: &Ctx,
     p: &ContactProblem,
     reduced: &mut ReducedSystem,
-    (s, free, comp, cand): (&NewtonSettings, &FreeModes, &mut Compliance, &Candidates),
-    (f_root, n_local): (&[f64], usize),
+    at: Expansion,
     (lambda, active): (&[f64], &[bool]),
     alpha: &[f64],
 ) -> Result<Result<Expanded, String>, RunError> {
+    let Expansion {
+        s,
+        free,
+        comp,
+        cand,
+        f_root,
+        n_local,
+    } = at;
     let (mesh, layout, b, sys) = (p.mesh, p.layout, p.boundary, p.sys);
     let (dim, off) = (mesh.dim, b.offset);
     // On rank 0, in the candidates' frames: Qᵀ (f − N λ_n) (λ_n vanishes off the candidates:

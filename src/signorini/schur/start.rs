@@ -1,20 +1,14 @@
 //! The start of a frictionless pass: the base system, the first set and the split of the
 //! candidates into zones.
 
-use super::frictionless::{first_zone, Candidates, Compliance, Growth};
-use super::outcome::Kept;
-use super::round::dense_round;
-use super::summary::record_steps;
-use super::summary::CondensedSummary;
+use super::frictionless::{first_zone, Candidates, Sticking};
 use crate::error::RunError;
 use crate::par::Ctx;
 use crate::signorini::active_set::{ActiveSet, Law};
-use crate::signorini::dense::DenseRun;
 use crate::signorini::halfspace::Located;
-use crate::signorini::plain_path::{ContactProblem, NewtonSettings, StepInfo, WarmStart};
+use crate::signorini::plain_path::{ContactProblem, NewtonSettings, WarmStart};
 use crate::signorini::rigid::FreeModes;
 use crate::signorini::step_system::ReducedSystem;
-use std::time::Instant;
 
 /// Whether a wide zone's interior may be held on the obstacle in the factorised matrix:
 /// frictionless (with the frictionless steps; a load step only where the step before kept no
@@ -47,57 +41,26 @@ pub(super) fn predicted_zone(
     all0.and_then(|all| first_zone(all, located.as_ref().map(|(_, on)| *on), per))
 }
 
-/// One pass of the condensed path: K_p's free modes and right-hand side (this rank's rows and
-/// f on rank 0) with the pass' held nodes, the candidates, their growth (which knows the held
-/// nodes) and compliance, and the seconds of a load step's condensation on a kept
-/// factorisation.
-pub(super) struct Pass {
-    pub(super) free: FreeModes,
-    pub(super) rhs0: Vec<f64>,
-    pub(super) f_root: Vec<f64>,
-    pub(super) cand: Candidates,
-    pub(super) growth: Growth,
-    pub(super) comp: Compliance,
-    pub(super) condensation: f64,
+/// What every pass of one solve starts from (fixed for the solve): the problem and its warm
+/// start, the modes Dirichlet data leave free, every contact node as the case starts (`all0`,
+/// where zones may be held), the start set, the located zone and the Schur variables per
+/// candidate.
+pub(super) struct SolveStart<'a> {
+    pub(super) p: &'a ContactProblem<'a>,
+    pub(super) warm: Option<&'a WarmStart<'a>>,
+    pub(super) free0: &'a FreeModes,
+    pub(super) all0: Option<&'a Candidates>,
+    pub(super) start: &'a [bool],
+    pub(super) located: &'a Located,
+    pub(super) per: usize,
 }
 
-impl Pass {
-    /// A round's dense steps ([`dense_round`]; `first`: nested, `located`: the located zone's
-    /// node count), recorded in `summary` and the step `history`. Collective.
-    pub(super) fn dense(
-        &mut self,
-        ctx: &Ctx,
-        s: &NewtonSettings,
-        (first, located): (bool, Option<usize>),
-        (summary, history): (&mut CondensedSummary, &mut Vec<StepInfo>),
-    ) -> DenseRun {
-        let t = Instant::now();
-        let (cand, comp, free) = (&self.cand, &mut self.comp, &self.free);
-        let active = &self.growth.active;
-        let (run, x_s) = dense_round(ctx, cand, comp, free, s, (active, first), located);
-        comp.x_s = x_s;
-        summary.dense_seconds += t.elapsed().as_secs_f64();
-        summary.record_coarse(ctx, &run);
-        let round = (comp.list.len(), free.pins().len());
-        record_steps(ctx, history, &run.steps, ("C_n", "condensed"), round);
-        run
-    }
-
-    /// What the pass keeps for a friction solve or the next load step, with the candidates'
-    /// multipliers `lambda`.
-    pub(super) fn keep(self, lambda: Vec<f64>, zone: Option<Vec<bool>>) -> Kept {
-        Kept {
-            n_local: self.rhs0.len(),
-            comp: self.comp,
-            cand: self.cand,
-            f_root: self.f_root,
-            free: self.free,
-            lambda,
-            active: self.growth.active,
-            held: self.growth.held,
-            zone: zone.unwrap_or_default(),
-        }
-    }
+/// What one pass is asked to hold: the predicted `zone` (or none), the node order kept from a
+/// pass before, and the sticking zone's settings.
+pub(super) struct PassPlan<'a> {
+    pub(super) zone: Option<&'a [bool]>,
+    pub(super) order: Option<Vec<usize>>,
+    pub(super) sticking: Sticking<'a>,
 }
 
 /// K_p: A with every rigid mode that Dirichlet data and the held nodes (`held`: every

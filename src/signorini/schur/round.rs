@@ -283,6 +283,65 @@ pub(super) fn dof_order(
     order
 }
 
+/// Force control's approaches as free modes: each pair's direction e_j, load |F_j| and pair.
+type ForceModes = Vec<([f64; 3], f64, usize)>;
+
+/// The dense system's free-mode columns G (the free modes' normal parts at the candidates, then
+/// each force-controlled approach δ_j's, −e_j·n on its pair's candidates), their loads φ and
+/// the load scale. Local (rank 0).
+fn mode_columns(
+    cand: &Candidates,
+    comp: &Compliance,
+    free: &FreeModes,
+    s: &NewtonSettings,
+    force: &ForceModes,
+) -> (DMatrix<f64>, Vec<f64>, f64) {
+    let (ns, mz) = (comp.list.len(), cand.mz + force.len());
+    let (_, mut load_scale) = free.load();
+    let mut phi = s.carried.map_or_else(|| free.free_load(), <[f64]>::to_vec);
+    let list = &comp.list;
+    let g = DMatrix::from_fn(ns, mz, |q, c| match force.get(c.wrapping_sub(cand.mz)) {
+        Some(&(e, _, pair)) if c >= cand.mz => {
+            if cand.pair(list[q]) == pair {
+                -crate::geom::dot(cand.n(list[q]), e)
+            } else {
+                0.0 // another pair's obstacle stays
+            }
+        }
+        _ => cand.g(list[q], c),
+    });
+    for &(_, magnitude, _) in force {
+        phi.push(magnitude);
+        load_scale = load_scale.max(magnitude);
+    }
+    (g, phi, load_scale)
+}
+
+/// The primal form's start set over the Schur candidates `list`: as many candidates as the
+/// model put in contact (`located`), by clearance after the located rigid motion; else the
+/// start set `active` where it has a candidate, else all of them (no inactive unknowns). Local.
+fn primal_start(
+    cand: &Candidates,
+    list: &[usize],
+    active: &[bool],
+    located: Option<usize>,
+) -> Vec<bool> {
+    let ns = list.len();
+    match located {
+        None if list.iter().any(|&i| active[i]) => list.iter().map(|&i| active[i]).collect(),
+        Some(on) => {
+            let mut by: Vec<usize> = (0..ns).collect();
+            by.sort_by(|&a, &b| cand.by_key(list[a], list[b]));
+            let mut start = vec![false; ns];
+            for &q in by.iter().take(on) {
+                start[q] = true;
+            }
+            start
+        }
+        None => vec![true; ns],
+    }
+}
+
 /// Algorithm 1 on the candidates' dense system, from `active`, on rank 0; the outcome
 /// broadcast to every rank. Collective.
 pub(super) fn dense_round(
@@ -296,7 +355,7 @@ pub(super) fn dense_round(
 ) -> (DenseRun, Vec<f64>) {
     // force control: each approach δ_j is one more free mode, its normal parts −e_j·n on its
     // pair's candidates and its load |F_j| (force.rs)
-    let force: Vec<_> = s
+    let force: ForceModes = s
         .force
         .iter()
         .map(|fc| (fc.direction(), fc.magnitude(), fc.pair))
@@ -307,43 +366,14 @@ pub(super) fn dense_round(
     let mut x_s = Vec::new();
     let root = ctx.on_root_wide(ns + mz, || {
         let run = guarded("dense-steps", || {
-            let (_, mut load_scale) = free.load();
-            let mut phi = s.carried.map_or_else(|| free.free_load(), <[f64]>::to_vec);
+            let (g, phi, load_scale) = mode_columns(cand, comp, free, s, &force);
             let list = &comp.list;
-            let g = DMatrix::from_fn(ns, mz, |q, c| match force.get(c.wrapping_sub(cand.mz)) {
-                Some(&(e, _, pair)) if c >= cand.mz => {
-                    if cand.pair(list[q]) == pair {
-                        -crate::geom::dot(cand.n(list[q]), e)
-                    } else {
-                        0.0 // another pair's obstacle stays
-                    }
-                }
-                _ => cand.g(list[q], c),
-            });
-            for &(_, magnitude, _) in &force {
-                phi.push(magnitude);
-                load_scale = load_scale.max(magnitude);
-            }
             let gap: Vec<f64> = list.iter().map(|&i| cand.gap(i)).collect();
             if comp.primal {
                 // from as many candidates as the model put in contact, by clearance after the
                 // located rigid motion; else from the start set where it has a candidate, else
                 // from all of them (no inactive unknowns)
-                let start = match located {
-                    None if list.iter().any(|&i| active[i]) => {
-                        list.iter().map(|&i| active[i]).collect()
-                    }
-                    Some(on) => {
-                        let mut by: Vec<usize> = (0..ns).collect();
-                        by.sort_by(|&a, &b| cand.by_key(list[a], list[b]));
-                        let mut start = vec![false; ns];
-                        for &q in by.iter().take(on) {
-                            start[q] = true;
-                        }
-                        start
-                    }
-                    None => vec![true; ns],
-                };
+                let start = primal_start(cand, list, active, located);
                 let primal = Primal {
                     s: &comp.schur,
                     r: &comp.r,

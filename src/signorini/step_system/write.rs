@@ -204,19 +204,7 @@ pub fn write_symmetric_constraint<'c>(
     let n = rows.cols.len();
     let node_k = rows.row / dim;
     let pk = me.projector(dim);
-    // The left factor of the node's rows: P_k, plus E for a Coulomb slip row (F7).
-    let left = match me.row_mix {
-        None => pk,
-        Some(e) => {
-            let mut l = pk;
-            for a in 0..dim {
-                for b in 0..dim {
-                    l[a][b] += e[a][b];
-                }
-            }
-            l
-        }
-    };
+    let left = left_factor(me, pk, dim);
     let uk = me.known();
     let sk = (0..dim).map(|j| rows.diag(j)).sum::<f64>() / dim as f64;
     let mut new_rows = vec![vec![0.0; n]; dim];
@@ -251,18 +239,7 @@ pub fn write_symmetric_constraint<'c>(
         }
         let mut nb = matmul3(&left, &matmul3(&blk, &pj, dim), dim);
         if j == node_k {
-            for (cvec, _) in &me.dirs {
-                for a in 0..dim {
-                    for b in 0..dim {
-                        nb[a][b] += sk * cvec[a] * cvec[b];
-                    }
-                }
-            }
-            for a in 0..dim {
-                for b in 0..dim {
-                    nb[a][b] += me.spring[a][b];
-                }
-            }
+            add_own_terms(&mut nb, me, sk, dim);
         }
         for a in 0..dim {
             for b in 0..dim {
@@ -300,6 +277,52 @@ pub fn write_symmetric_constraint<'c>(
             s.insert_values(&[(rows.row + a) as PInt], &rows.cols, row)?;
         }
     }
+    Ok(node_rhs(me, &left, (f_k, &t), sk, dim))
+}
+
+/// The left factor of a constrained node's rows: P_k, plus E for a Coulomb slip row (F7).
+fn left_factor(me: &NodeConstraint, pk: [[f64; 3]; 3], dim: usize) -> [[f64; 3]; 3] {
+    match me.row_mix {
+        None => pk,
+        Some(e) => {
+            let mut l = pk;
+            for a in 0..dim {
+                for b in 0..dim {
+                    l[a][b] += e[a][b];
+                }
+            }
+            l
+        }
+    }
+}
+
+/// The node's own block of (3.29) / (3.42): s_k Σ c cᵀ over its prescribed directions and its
+/// spring (a Tresca or Coulomb slip block), added to P_k A_kk P_k in `nb`.
+fn add_own_terms(nb: &mut [[f64; 3]; 3], me: &NodeConstraint, sk: f64, dim: usize) {
+    for (cvec, _) in &me.dirs {
+        for a in 0..dim {
+            for b in 0..dim {
+                nb[a][b] += sk * cvec[a] * cvec[b];
+            }
+        }
+    }
+    for a in 0..dim {
+        for b in 0..dim {
+            nb[a][b] += me.spring[a][b];
+        }
+    }
+}
+
+/// The node's right-hand side P_k (f_k − Σ_j A_kj ū_j) + s_k ū_k (plus the spring's part):
+/// `(f_k, t)` = the node's load and Σ_j A_kj ū_j, `left` its left factor.
+fn node_rhs(
+    me: &NodeConstraint,
+    left: &[[f64; 3]; 3],
+    (f_k, t): (&[f64], &[f64; 3]),
+    sk: f64,
+    dim: usize,
+) -> [f64; 3] {
+    let uk = me.known();
     let mut rhs = [0.0; 3];
     let mut ft = [0.0; 3];
     for a in 0..dim {
@@ -308,7 +331,7 @@ pub fn write_symmetric_constraint<'c>(
     for a in 0..dim {
         rhs[a] = (0..dim).map(|b| left[a][b] * ft[b]).sum::<f64>() + sk * uk[a] + me.spring_rhs[a];
     }
-    Ok(rhs)
+    rhs
 }
 
 #[cfg(test)]

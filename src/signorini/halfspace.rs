@@ -395,10 +395,17 @@ fn run_model(
         approach_change: (predicted && !force.is_empty()).then(|| packed[5..head].to_vec()),
         seconds: t.elapsed().as_secs_f64(),
     };
+    log_model(ctx, hs, &rec, active.is_some());
+    Ok((mine, rec))
+}
+
+/// The model's progress line (`correcting`: a correction of an exact step's set update).
+/// Rank 0.
+fn log_model(ctx: &Ctx, hs: &HalfSpace, rec: &PredictorStep, correcting: bool) {
     say!(
         ctx,
         "predictor{}: half-space model (E* = {:.4e}, {} mirror plane(s)) on {} nodes for {} contact nodes: {}{} ({} active, {} steps, {} coarse levels, {:.3} s){}",
-        if active.is_some() {
+        if correcting {
             " (correcting the set update of the exact step)"
         } else {
             ""
@@ -427,7 +434,6 @@ fn run_model(
             format!("; {what} by {}", d.join(", "))
         })
     );
-    Ok((mine, rec))
 }
 
 /// The model's nodes where it locates a contact zone ([`locate`]): a coarse subset of every

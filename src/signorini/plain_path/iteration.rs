@@ -109,7 +109,7 @@ pub fn semismooth_newton(
     s: &NewtonSettings,
     warm: Option<&WarmStart>,
 ) -> Result<NewtonResult, RunError> {
-    let (mesh, layout, b, sys) = (p.mesh, p.layout, p.boundary, p.sys);
+    let (mesh, sys) = (p.mesh, p.sys);
     let dim = mesh.dim;
     let (mut lp, predicting) = Loop::begin(ctx, p, reduced, s, warm)?;
     let mut history = Vec::new();
@@ -125,36 +125,9 @@ pub fn semismooth_newton(
     // (a stop there is confirmed by a factorised step, `StepPlan::after_stop`)
     let direct = reduced.kind().factorises();
     for step in 1..=s.section.max_steps {
-        let gram = lp.set_gram();
-        let modes_changed = lp.free.update(ctx, mesh, layout, &gram)?;
-        let null_space = lp.free_modes_by_null_space(reduced, modes_changed)?;
-        if !s.friction() && lp.approach.is_none() {
-            // Friction reads u_τ itself (stick rows, slip rows), so only the frictionless
-            // solve can leave the rigid motion out.
-            lp.rho = lp
-                .free
-                .fit_motion(ctx, b, &lp.set.normal, &lp.summary.gram, mesh);
-            lp.free.shift(b, &lp.rho, &mut lp.shifted);
-        }
-        if let Some(ap) = &lp.approach {
-            ap.place(&mut lp.shifted); // the gaps at δ_ℓ
-        }
-        let bs = &lp.shifted;
-        let pins = if null_space { &[][..] } else { lp.free.pins() };
-        reduced.write(ctx, sys, layout, bs, &lp.set, pins)?; // (3.29) / (3.42)
-        reduced.set_inexact(!plan.exact);
-        if plan.predict {
-            // a floating body: the model predicts from the gaps alone (no first solve)
-            reduced.set_predictor_solve(lp.free.floats() && lp.approach.is_none());
-        }
-        let allow_reuse = s.law != Law::Coulomb && !plan.confirm;
-        let solved = reduced.solve(ctx, allow_reuse)?;
+        let solved = lp.write_and_solve(ctx, p, reduced, s, (plan, step))?;
         let reused = solved.reuse.is_some() && solved.kind == SolveKind::Reuse;
-        ensure_converged(step, &solved.info, &b.keys)?;
-        if null_space {
-            lp.zero_pins(reduced)?;
-        }
-        reduced.recover(sys, bs, &lp.set, &mut lp.it)?; // (3.28)
+        reduced.recover(sys, &lp.shifted, &lp.set, &mut lp.it)?; // (3.28)
         let touch = lp.bordered_step(reduced, step)?;
         let bs = &lp.shifted;
         let scale = threshold_scale(ctx, bs, &lp.it.nodes, s.law, s.c);
@@ -207,6 +180,55 @@ pub fn semismooth_newton(
         }
     }
     lp.finish(reduced, history, converged)
+}
+
+impl Loop<'_> {
+    /// A step's first phase: the free rigid modes' pins (or a null space), the rigid motion
+    /// taken out of a frictionless solve, the gaps at the approach, and the step system
+    /// (3.29) / (3.42) written and solved as `plan` says. Collective.
+    fn write_and_solve(
+        &mut self,
+        ctx: &Ctx,
+        p: &ContactProblem,
+        reduced: &mut ReducedSystem,
+        s: &NewtonSettings,
+        (plan, step): (StepPlan, usize),
+    ) -> Result<StepSolve, RunError> {
+        let (mesh, layout, b, sys) = (p.mesh, p.layout, p.boundary, p.sys);
+        let gram = self.set_gram();
+        let modes_changed = self.free.update(ctx, mesh, layout, &gram)?;
+        let null_space = self.free_modes_by_null_space(reduced, modes_changed)?;
+        if !s.friction() && self.approach.is_none() {
+            // Friction reads u_τ itself (stick rows, slip rows), so only the frictionless
+            // solve can leave the rigid motion out.
+            self.rho = self
+                .free
+                .fit_motion(ctx, b, &self.set.normal, &self.summary.gram, mesh);
+            self.free.shift(b, &self.rho, &mut self.shifted);
+        }
+        if let Some(ap) = &self.approach {
+            ap.place(&mut self.shifted); // the gaps at δ_ℓ
+        }
+        let bs = &self.shifted;
+        let pins = if null_space {
+            &[][..]
+        } else {
+            self.free.pins()
+        };
+        reduced.write(ctx, sys, layout, bs, &self.set, pins)?; // (3.29) / (3.42)
+        reduced.set_inexact(!plan.exact);
+        if plan.predict {
+            // a floating body: the model predicts from the gaps alone (no first solve)
+            reduced.set_predictor_solve(self.free.floats() && self.approach.is_none());
+        }
+        let allow_reuse = s.law != Law::Coulomb && !plan.confirm;
+        let solved = reduced.solve(ctx, allow_reuse)?;
+        ensure_converged(step, &solved.info, &b.keys)?;
+        if null_space {
+            self.zero_pins(reduced)?;
+        }
+        Ok(solved)
+    }
 }
 
 impl<'a> Loop<'a> {

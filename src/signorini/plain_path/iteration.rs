@@ -670,13 +670,7 @@ impl Loop<'_> {
         }
         match decision {
             Decision::Converged => {
-                // Coulomb accepted by the stall rule alone: a loosened acceptance
-                let loose =
-                    self.s.law == Law::Coulomb && t.residual > COULOMB_RESIDUAL_TOL * t.lambda_norm;
-                self.stop = match loose {
-                    true => crate::signorini::certificate::StopRule::CoulombStall,
-                    false => crate::signorini::certificate::StopRule::ActiveSet,
-                };
+                self.stop = self.stop_rule(t);
                 Ok(true)
             }
             Decision::SameSets => {
@@ -688,51 +682,74 @@ impl Loop<'_> {
                 Ok(false)
             }
             Decision::TestBalance => unreachable!("the balance test was made above"),
-            Decision::NewSets => {
-                let mut summary = t.next;
-                let mut key = self.key(&summary, t);
-                let seen = match self.guard.check(step, key) {
-                    Err(_) if self.s.friction() && t.du_rel < self.s.section.tol_u => {
-                        // A recurring set while the iterate no longer moves: the nodes that
-                        // flip sit on the stick/slip threshold to round-off (both states hold
-                        // the same u and λ; several ranks' solver round-off differs from run
-                        // to run). Stop here; the KKT and friction certificates that follow
-                        // decide whether this iterate is a solution.
-                        say!(
-                            ctx,
-                            "newton: the set of step {} recurs while |Δu|/|u| = {:.1e} < tol_u: nodes on the \
-                             stick/slip threshold to round-off; stopping",
-                            step + 1,
-                            t.du_rel
-                        );
-                        self.stop = crate::signorini::certificate::StopRule::RecurringSet;
-                        return Ok(true);
-                    }
-                    Err(e) => return Err(self.cycle_error(e)),
-                    Ok(seen) => seen,
-                };
-                if let Seen::SwitchToLeastIndex { prev } = seen {
-                    say!(
-                        ctx,
-                        "newton: cycling detected (the set of step {prev} recurs at step {}): \
-                         continuing with single-node updates (penetrating nodes first, least \
-                         index first)",
-                        step + 1
-                    );
-                }
-                if self.guard.least_index() {
-                    least_index_step(ctx, b, &self.set, &mut next);
-                    summary = next.summarise(ctx, b, self.free.modes(), dim);
-                    key = self.key(&summary, t);
-                    if let Err(e) = self.guard.check_safeguarded(step, key) {
-                        return Err(self.cycle_error(e));
-                    }
-                }
-                self.guard.record(key);
-                self.take(next, summary);
-                Ok(false)
+            Decision::NewSets => self.new_sets(step, next, t),
+        }
+    }
+
+    /// How a converged iteration stopped: Coulomb accepted by the stall rule alone is a
+    /// loosened acceptance. Local.
+    fn stop_rule(&self, t: &StepTotals) -> crate::signorini::certificate::StopRule {
+        let loose = self.s.law == Law::Coulomb && t.residual > COULOMB_RESIDUAL_TOL * t.lambda_norm;
+        match loose {
+            true => crate::signorini::certificate::StopRule::CoulombStall,
+            false => crate::signorini::certificate::StopRule::ActiveSet,
+        }
+    }
+
+    /// New sets after step `step`: the cycle guard's check (a recurring set while the iterate
+    /// no longer moves stops a friction solve; cycling switches to single-node updates), then
+    /// the next step's sets taken; `Ok(true)` = stopped. Collective (the guard's keys and the
+    /// least-index pick are global).
+    fn new_sets(
+        &mut self,
+        step: usize,
+        mut next: ActiveSet,
+        t: &StepTotals,
+    ) -> Result<bool, RunError> {
+        let (ctx, dim) = (self.ctx, self.p.mesh.dim);
+        let b = &self.shifted;
+        let mut summary = t.next;
+        let mut key = self.key(&summary, t);
+        let seen = match self.guard.check(step, key) {
+            Err(_) if self.s.friction() && t.du_rel < self.s.section.tol_u => {
+                // A recurring set while the iterate no longer moves: the nodes that
+                // flip sit on the stick/slip threshold to round-off (both states hold
+                // the same u and λ; several ranks' solver round-off differs from run
+                // to run). Stop here; the KKT and friction certificates that follow
+                // decide whether this iterate is a solution.
+                say!(
+                    ctx,
+                    "newton: the set of step {} recurs while |Δu|/|u| = {:.1e} < tol_u: nodes on the \
+                     stick/slip threshold to round-off; stopping",
+                    step + 1,
+                    t.du_rel
+                );
+                self.stop = crate::signorini::certificate::StopRule::RecurringSet;
+                return Ok(true);
+            }
+            Err(e) => return Err(self.cycle_error(e)),
+            Ok(seen) => seen,
+        };
+        if let Seen::SwitchToLeastIndex { prev } = seen {
+            say!(
+                ctx,
+                "newton: cycling detected (the set of step {prev} recurs at step {}): \
+                 continuing with single-node updates (penetrating nodes first, least \
+                 index first)",
+                step + 1
+            );
+        }
+        if self.guard.least_index() {
+            least_index_step(ctx, b, &self.set, &mut next);
+            summary = next.summarise(ctx, b, self.free.modes(), dim);
+            key = self.key(&summary, t);
+            if let Err(e) = self.guard.check_safeguarded(step, key) {
+                return Err(self.cycle_error(e));
             }
         }
+        self.guard.record(key);
+        self.take(next, summary);
+        Ok(false)
     }
 
     /// A cycle of a frictionless body that the contact cannot hold

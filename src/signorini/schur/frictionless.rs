@@ -869,6 +869,46 @@ impl Compliance {
         }
     }
 
+    /// Adds the candidates `new` (their bases for MUMPS' node frames) and returns the Schur
+    /// dofs: `per` dofs of every candidate, in the node frame the normal displacement first.
+    /// Local.
+    fn add_candidates(&mut self, cand: &Candidates, new: &[usize], dim: usize) -> Vec<usize> {
+        for &i in new {
+            self.in_s[i] = true;
+        }
+        self.list.extend_from_slice(new);
+        for &i in new {
+            self.bases.q.insert(cand.row(i) / dim, cand.basis(i, dim));
+        }
+        self.bases.dim = dim;
+        let per = self.per;
+        self.list
+            .iter()
+            .flat_map(|&i| (0..per).map(move |a| cand.row(i) + a))
+            .collect()
+    }
+
+    /// The node order for MUMPS where none is kept: with a Schur complement MUMPS would order
+    /// by AMD (2.4 × the flops of PORD on a 3D block of 82 584 unknowns, measured), our
+    /// nested-dissection order instead; agreed before it may turn into a fallback (a failure
+    /// on one rank alone ends every rank instead). Collective.
+    fn order_nodes(
+        &mut self,
+        ctx: &Ctx,
+        reduced: &ReducedSystem,
+        dim: usize,
+        t: Instant,
+    ) -> Result<(), Stop> {
+        if self.node_order.is_none() {
+            let order = ctx
+                .agree_message(node_order(ctx.comm(), reduced.matrix(), dim))
+                .map_err(Stop::failed)?;
+            self.node_order = Some(order);
+            self.ordering_seconds = t.elapsed().as_secs_f64();
+        }
+        Ok(())
+    }
+
     /// Adds the candidates `new` and factorises K_p (the reduced system's matrix, global size
     /// `n_rows`) anew in the candidates' frames with the Schur complement on their normal dofs;
     /// then C and d₀ (`f_root`: f on rank 0, empty elsewhere; `why`: how the set came about,
@@ -885,37 +925,14 @@ impl Compliance {
         (f_root, why): (&[f64], &str),
     ) -> Result<(), Stop> {
         let root = ctx.rank == 0;
-        for &i in new {
-            self.in_s[i] = true;
-        }
-        self.list.extend_from_slice(new);
-        for &i in new {
-            self.bases.q.insert(cand.row(i) / dim, cand.basis(i, dim));
-        }
-        self.bases.dim = dim;
-        // in the node frame the normal displacement is the node's first dof
+        let dofs = self.add_candidates(cand, new, dim);
         let per = self.per;
-        let dofs: Vec<usize> = self
-            .list
-            .iter()
-            .flat_map(|&i| (0..per).map(move |a| cand.row(i) + a))
-            .collect();
         self.factor = None; // the old factorisation's memory first
         self.cmat = DMatrix::zeros(0, 0);
         self.schur = DMatrix::zeros(0, 0);
         let t = Instant::now();
         self.ordering_seconds = 0.0; // this factorisation's ordering (none where one is kept)
-        if self.node_order.is_none() {
-            // With a Schur complement MUMPS would order by AMD (2.4 × the flops of PORD on a 3D
-            // block of 82 584 unknowns, measured): our nested-dissection order instead.
-            // agreed before it may turn into a fallback (a failure on one rank alone ends
-            // every rank instead)
-            let order = ctx
-                .agree_message(node_order(ctx.comm(), reduced.matrix(), dim))
-                .map_err(Stop::failed)?;
-            self.node_order = Some(order);
-            self.ordering_seconds = t.elapsed().as_secs_f64();
-        }
+        self.order_nodes(ctx, reduced, dim, t)?;
         let order = match &self.node_order {
             Some(o) if root && !o.is_empty() => Some(dof_order(o, &dofs, dim, n_rows)),
             _ => None,

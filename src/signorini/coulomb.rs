@@ -1,6 +1,6 @@
 //! Coulomb friction's strategy (docs/friction.md): the generalised Newton's start (the
 //! frictionless solution on the contact unknowns, the condensed passes, a load step on the
-//! previous step's factorisation; [`coulomb_condensed`](super::coulomb_condensed) runs the
+//! previous step's factorisation; [`schur::coulomb`](super::schur::coulomb) runs the
 //! dense steps) and the fixed point on Tresca thresholds, each ending on the plain path where
 //! the contact unknowns do not settle it.
 
@@ -10,6 +10,7 @@ use super::certificate;
 use super::force;
 use super::plain_path::{self, ContactProblem, NewtonResult, NewtonSettings, StepInfo, WarmStart};
 use super::rigid::{self, FreeModes};
+use super::schur::frictionless::{solve_keeping, Sticking};
 use super::schur::{self, CoulombCondensedSummary};
 use super::step_system::ReducedSystem;
 use crate::case::{self, CoulombAlgorithm, Reuse, SolverSection};
@@ -180,7 +181,7 @@ fn after(first: Vec<StepInfo>, r: &mut NewtonResult) {
 
 /// How Coulomb's generalised Newton begins (`coulomb_start`).
 enum Begin {
-    /// Solved on the contact unknowns and checked on every contact node (coulomb_condensed).
+    /// Solved on the contact unknowns and checked on every contact node (schur::coulomb).
     Solved(NewtonResult),
     /// A start for the plain path: the records of every contact node, this rank's rows of u.
     Start(NewtonResult, Vec<f64>),
@@ -193,7 +194,7 @@ enum Begin {
 /// the condensed path (about one factorisation; the pins carry a load in the modes only
 /// friction can hold, e.g. a tangential load on a floating body). For a body that Dirichlet
 /// data hold, the Schur complement takes every dof of the candidates and Coulomb's iteration
-/// runs on them (coulomb_condensed): its checked result, or its expanded iterate as the plain
+/// runs on them (schur::coulomb): its checked result, or its expanded iterate as the plain
 /// path's start. Else (or if that gives up) the frictionless active set and λ_n give the
 /// thresholds b = μ(−λ_n) of (F1), every active node sticking — instead of a start from the
 /// touching nodes, where the whole load first hangs on them and the set needs many steps to
@@ -295,7 +296,7 @@ enum Passes {
 /// [`coulomb_start`] on the condensed path: the frictionless solution by the condensed path
 /// (`fl`; every dof of the candidates in the Schur complement, or, where the zone is too wide
 /// for that, its interior held sticking in K_p), then Coulomb's iteration on its candidates
-/// (coulomb_condensed). Where a held zone's check finds nodes beyond the candidates changing
+/// (schur::coulomb). Where a held zone's check finds nodes beyond the candidates changing
 /// state, a new pass takes them as candidates (at most [`MAX_STICK_FACTORISATIONS`]
 /// factorisations in all, while fewer change each pass). `forced`: force control on a body
 /// that only its pairs hold (the frictionless solution alone); `from`: the start said where
@@ -321,10 +322,9 @@ fn coulomb_passes(
     let mut last: Option<(NewtonResult, Vec<f64>, CoulombCondensedSummary)> = None;
     loop {
         // too many candidates' dofs for the dense tangential compliance: the predicted zone's
-        // interior held sticking, the dense steps on its edge and beyond (condensed.rs)
+        // interior held sticking, the dense steps on its edge and beyond (schur/frictionless.rs)
         let held = (per > 1).then(|| passes.start_sticking());
-        let mut tried =
-            schur::frictionless::solve_keeping(ctx, problem, reduced, fl, None, (per, true, held));
+        let mut tried = solve_keeping(ctx, problem, reduced, fl, None, (per, true, held));
         if let Some(last) = last.take() {
             if let Some(done) = from_last_pass(ctx, problem, &tried, last, passes.earlier) {
                 return Ok(done);
@@ -336,14 +336,7 @@ fn coulomb_passes(
                 ctx,
                 "coulomb: the candidates' normal dofs alone in the Schur complement"
             );
-            tried = schur::frictionless::solve_keeping(
-                ctx,
-                problem,
-                reduced,
-                fl,
-                None,
-                (1, true, None),
-            );
+            tried = solve_keeping(ctx, problem, reduced, fl, None, (1, true, None));
         }
         // a frictionless solve on the normal dofs alone keeps its factorisation for a next
         // load step, which no Coulomb step can use
@@ -525,8 +518,8 @@ fn coulomb_load_step(
     let mut last: Option<(NewtonResult, Vec<f64>)> = None;
     loop {
         let held = passes.sticking(0);
-        // the previous step's factorisation where it holds (schur::frictionless::reused), else a new one
-        let tried = schur::frictionless::solve_keeping(
+        // the previous step's factorisation where it holds (schur::round::reused), else a new one
+        let tried = solve_keeping(
             ctx,
             problem,
             reduced,
@@ -605,8 +598,8 @@ impl PassLoop {
     }
 
     /// The next pass' held zone, released nodes and band, with at most `factorisations`.
-    fn sticking(&self, factorisations: usize) -> schur::frictionless::Sticking<'_> {
-        schur::frictionless::Sticking {
+    fn sticking(&self, factorisations: usize) -> Sticking<'_> {
+        Sticking {
             zone: (!self.zone.is_empty()).then_some(self.zone.as_slice()),
             release: &self.release,
             pass: self.pass,
@@ -617,7 +610,7 @@ impl PassLoop {
     /// A start's next pass ([`coulomb_passes`]): its held zone, released nodes and band, with
     /// at most [`FIRST_STICK_FACTORISATIONS`] in the first pass, else what is left of
     /// [`MAX_STICK_FACTORISATIONS`] (one at least).
-    fn start_sticking(&self) -> schur::frictionless::Sticking<'_> {
+    fn start_sticking(&self) -> Sticking<'_> {
         self.sticking(match self.pass {
             0 => FIRST_STICK_FACTORISATIONS,
             _ => MAX_STICK_FACTORISATIONS.saturating_sub(self.earlier).max(1),

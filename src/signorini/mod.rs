@@ -4,8 +4,8 @@
 //! law it applies lives in `crate::contact` (pure, no MPI); the tangential laws as the
 //! algorithm sees them in `law` (one file per law), Coulomb's strategy in `coulomb`.
 //!
-//! Floors inside: `cycle`, `boundary` → `rigid`, `law`, `active_set`, `report` → `reduced` →
-//! `newton` → `condensed`, `coulomb_condensed` → `coulomb` → this file's [`solve`] (the
+//! Floors inside: `cycle`, `boundary` → `rigid`, `law`, `active_set`, `report` →
+//! `step_system` → `plain_path` → `schur` → `coulomb` → this file's [`solve`] (the
 //! phases of a solve; the checks before it in `capacity`, the judged final state in
 //! `final_state`).
 
@@ -298,7 +298,7 @@ pub fn solve(
         located: &located,
     };
     // the body's half-space model: the predictor's on the iterative preset (frictionless,
-    // newton.rs), else the condensed path's (locating a floating body's zone; the plain path's
+    // plain_path/), else the condensed path's (locating a floating body's zone; the plain path's
     // first set where the zone is too wide for the dense limits)
     let model = halfspace::HalfSpace {
         modulus: settings.contact_modulus,

@@ -228,7 +228,7 @@ pub fn coulomb_row_dyn(
 
 /// What a Coulomb slip row (F5) puts into the reduced system, in global components (3×3,
 /// only the leading d×d used), for an ACTIVE node whose normal is eliminated (u_n = −g) as in
-/// reduced.rs (F7). With P_k = Σ τ_i τ_iᵀ the node's rows become `(P_k + E) A_kj P_j` for
+/// step_system/write.rs (F7). With P_k = Σ τ_i τ_iᵀ the node's rows become `(P_k + E) A_kj P_j` for
 /// every column block j of the node's rows of A, plus `s_k n nᵀ + S` on the node's own block,
 /// and its right-hand side `(P_k + E)(f_k − Σ_j A_kj ū_j) + s_k ū_k + ρ`.
 ///

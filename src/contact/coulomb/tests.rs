@@ -724,7 +724,7 @@ fn written_rows(
     (s, rhs)
 }
 
-/// The block data (F7) written as reduced.rs writes a node (symmetric elimination of the
+/// The block data (F7) written as step_system/write.rs writes a node (symmetric elimination of the
 /// prescribed directions, own-block spring) produce a system whose solution satisfies the
 /// Newton rows: on a Coulomb slip node u_n = −g and −λ_τ' + l u_τ' − q λ_n' = r with
 /// λ' = f − A u' (3.28); on a stick node u^k = −g n; free nodes are in equilibrium. The

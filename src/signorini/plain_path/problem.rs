@@ -22,7 +22,7 @@ pub struct NewtonSettings<'a> {
     pub law: Law,
     pub rigid: case::RigidModeHandling,
     /// The half-space model of the body for the first set of the iterative preset's reuse
-    /// path (predictor.rs); `None`: no prediction.
+    /// path (halfspace.rs); `None`: no prediction.
     pub halfspace: Option<&'a HalfSpace>,
     /// A frictionless estimate for a start (condensed path): the pins carry the load in the
     /// body's own modes the set leaves free instead of the balance test (never the prescribed
@@ -147,7 +147,7 @@ pub struct ContactProblem<'a> {
     /// The previous load step's condensed Coulomb factorisation on the way in, this solve's on
     /// the way out.
     pub kept: &'a crate::signorini::kept::KeptFactor,
-    /// The contact zone the half-space model located in this solve (condensed.rs `locate`),
+    /// The contact zone the half-space model located in this solve (schur/round.rs `locate`),
     /// once computed: a second condensed attempt (Coulomb's normal dofs alone) takes it again.
     pub located: &'a std::cell::RefCell<Option<crate::signorini::halfspace::Located>>,
 }

@@ -1,6 +1,6 @@
 //! Coulomb's generalised Newton (docs/friction.md (F1)–(F6)) on the contact unknowns alone
 //! (direct preset): the frictionless condensed solve with every dof of its candidates in the
-//! Schur complement (condensed.rs, `per` = d) leaves the compliance C = Qᵀ K_p⁻¹ Q of the
+//! Schur complement (frictionless.rs, `per` = d) leaves the compliance C = Qᵀ K_p⁻¹ Q of the
 //! candidates' dofs in their node frames (normal first) and d₀ = Qᵀ K_p⁻¹ f there. With λ the
 //! candidates' multipliers (3.28), α the amplitudes of the rigid modes Dirichlet data leave free
 //! (K_p pins them) and G their parts at the candidates, u = d₀ − C λ + G α, and every Newton

@@ -30,7 +30,7 @@ struct System {
     known: Option<Vec<f64>>,
 }
 
-/// S itself next to C = S⁻¹ (rank 0; condensed.rs `Compliance::stiffness`): λ = r − S (u − G α)
+/// S itself next to C = S⁻¹ (rank 0; frictionless.rs `Compliance::stiffness`): λ = r − S (u − G α)
 /// on the candidates' dofs, with S G and Gᵀ S G. A step's system in the primal form has the
 /// displacements the set leaves free as unknowns — every dof of an inactive candidate, the
 /// tangential dofs of a slipping one — with the rows λ = 0 and the slip rows (F6) in λ

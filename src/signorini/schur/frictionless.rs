@@ -1047,7 +1047,7 @@ impl Compliance {
 
     /// S itself and r (λ = r − S (u − G α) on the candidates' dofs) next to C = S⁻¹, where every
     /// dof of the candidates is a Schur variable (Coulomb; rank 0): the primal form of the
-    /// dense Coulomb steps (coulomb_condensed.rs). `None` elsewhere.
+    /// dense Coulomb steps (schur/coulomb.rs). `None` elsewhere.
     pub(super) fn stiffness(&self) -> Option<(&DMatrix<f64>, &[f64])> {
         let n = self.list.len() * self.per;
         (!self.primal && self.per > 1 && n > 0 && self.schur.nrows() == n)

@@ -1,6 +1,6 @@
 //! Coulomb friction's strategy (docs/friction.md): the generalised Newton's start (the
 //! frictionless solution on the contact unknowns, the condensed passes, a load step on the
-//! previous step's factorisation; [`schur::coulomb`](super::schur::coulomb) runs the
+//! previous step's factorisation; [`schur::coulomb`] runs the
 //! dense steps) and the fixed point on Tresca thresholds, each ending on the plain path where
 //! the contact unknowns do not settle it.
 

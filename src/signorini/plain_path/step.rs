@@ -33,7 +33,7 @@ pub(super) struct StepPlan {
     /// The confirming step: the same sets factorised after a stop decided on a step solved by
     /// GMRES on an earlier factorisation (no reuse).
     pub(super) confirm: bool,
-    /// The half-space model corrects the set update after this step's solve ([`Loop::correct`]):
+    /// The half-space model corrects the set update after this step's solve (`Loop::correct`):
     /// the exact steps from a predicted set on.
     pub(super) correct: bool,
 }

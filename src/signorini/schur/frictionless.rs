@@ -7,8 +7,9 @@
 //! active nodes' block; at the end MUMPS' condensation and expansion solves give u.
 //!
 //! The step count: with newton.init = "auto" and no warm start, Algorithm 1 first runs on
-//! coarse subsets of the candidates (nested iteration, [`Dense::run_nested`]), each level
-//! starting the next; the steps on the candidates themselves are those counted.
+//! coarse subsets of the candidates (nested iteration,
+//! [`Dense::run_nested`](crate::signorini::dense::Dense::run_nested)), each level starting the
+//! next; the steps on the candidates themselves are those counted.
 //!
 //! Why it is Algorithm 1: with u = w + ρ (ρ a rigid motion Dirichlet data leave free, zero in
 //! K_p's pins) and K_p w = f − N λ_n, the reduced system (3.29) of a set A is, eliminated onto

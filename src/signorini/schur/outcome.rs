@@ -15,8 +15,8 @@ use crate::signorini::step_system::ReducedSystem;
 pub enum Condensed {
     Solved(Box<NewtonResult>, CondensedSummary),
     Fallback(CondensedSummary),
-    /// [`solve_keeping`] without the frictionless steps: K_p factorised with the first
-    /// candidates' Schur complement, nothing solved.
+    /// [`solve_keeping`](super::frictionless::solve_keeping) without the frictionless steps: K_p
+    /// factorised with the first candidates' Schur complement, nothing solved.
     Factorised(CondensedSummary),
 }
 

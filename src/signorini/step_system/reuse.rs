@@ -211,13 +211,13 @@ pub struct AmgStep {
     /// again from where it stopped (`iterations` counts both solves).
     pub fallback: bool,
     /// The free rigid modes were S's null space instead of pinned dofs
-    /// ([`ReducedSystem::set_free_null_space`]).
+    /// ([`ReducedSystem::set_free_null_space`](super::system::ReducedSystem::set_free_null_space)).
     pub null_space: bool,
     /// The set-up also built GAMG's aggregates and prolongators anew instead of keeping the
     /// last ones (the step after the predictor's first solve).
     pub new_hierarchy: bool,
     /// No solve: the predictor's first solve of a floating body, u⁰ = 0
-    /// ([`ReducedSystem::set_predictor_solve`]).
+    /// ([`ReducedSystem::set_predictor_solve`](super::system::ReducedSystem::set_predictor_solve)).
     pub skipped: bool,
 }
 
@@ -243,11 +243,13 @@ pub(super) struct AmgReuser {
     pub(super) new_hierarchy: bool,
     /// This step's solve may stop at [`INEXACT_REDUCTION`] of its start's residual.
     pub(super) inexact: bool,
-    /// This step's solve is the predictor's first ([`ReducedSystem::set_predictor_solve`]).
+    /// This step's solve is the predictor's first
+    /// ([`ReducedSystem::set_predictor_solve`](super::system::ReducedSystem::set_predictor_solve)).
     pub(super) predictor: bool,
     /// ... and is skipped (u = 0, no setup).
     pub(super) skip: bool,
-    /// The free rigid modes are S's null space ([`ReducedSystem::set_free_null_space`]).
+    /// The free rigid modes are S's null space
+    /// ([`ReducedSystem::set_free_null_space`](super::system::ReducedSystem::set_free_null_space)).
     pub(super) null_space: bool,
     /// This rank's prescribed node components of the system written last: (first local row,
     /// projector P onto the free components, prescribed part ū).

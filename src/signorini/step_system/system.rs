@@ -419,10 +419,11 @@ impl ReducedSystem {
     }
 
     /// The half-space predictor's first solve (halfspace.rs): the next solve, inexact, stops
-    /// at [`PREDICTOR_REDUCTION`] of its start's residual, and ("auto") the solve after it sets
-    /// the preconditioner up on its own matrix (the first matrix has no active node, a poor
-    /// preconditioner for the predicted set's: 30 instead of 13 iterations at 527 k unknowns,
-    /// and an iterate whose set update flipped 115 edge nodes instead of 8).
+    /// at [`PREDICTOR_REDUCTION`](super::reuse::PREDICTOR_REDUCTION) of its start's residual, and
+    /// ("auto") the solve after it sets the preconditioner up on its own matrix (the first matrix
+    /// has no active node, a poor preconditioner for the predicted set's: 30 instead of 13
+    /// iterations at 527 k unknowns, and an iterate whose set update flipped 115 edge nodes instead
+    /// of 8).
     ///
     /// `skip`: no solve at all, u⁰ = 0 (a body that Dirichlet data leave free in a rigid mode:
     /// its pinned u⁰ is the load's deformation against arbitrary pins, and the model, whose free
@@ -453,10 +454,10 @@ impl ReducedSystem {
     /// The iterative preset's reuse path: the previous step's u as the start, its prescribed
     /// components set exactly (u_k ← P_k u_k + ū_k); the preconditioner set up in the first
     /// step and reused, set up anew when [`AmgReuser`]'s rule asks for it ("auto": the
-    /// iterations per decade grew beyond [`REBUILD_GROWTH`] × those after the last setup) or
-    /// when a solve on the reused one does not converge; the tolerance of an inexact step when
-    /// the Newton loop says so. Every decision is taken from global quantities (iteration
-    /// counts, norms), the same on every rank. Collective.
+    /// iterations per decade grew beyond [`REBUILD_GROWTH`](super::reuse::REBUILD_GROWTH) × those
+    /// after the last setup) or when a solve on the reused one does not converge; the tolerance of
+    /// an inexact step when the Newton loop says so. Every decision is taken from global quantities
+    /// (iteration counts, norms), the same on every rank. Collective.
     fn solve_amg(&mut self, ctx: &Ctx) -> petsc::Result<StepSolve> {
         let t = Instant::now();
         let (r0, bnorm, zero_start) = self.warm_start(ctx)?;
@@ -576,7 +577,8 @@ impl ReducedSystem {
         ls.analyse_schur(ctx.comm(), &self.s, (n, schur_rows), (order, bases), root)
     }
 
-    /// The KSP and PC types of the steps' solver ([`Ksp::type_names`]). Local.
+    /// The KSP and PC types of the steps' solver
+    /// ([`Ksp::type_names`](crate::petsc::Ksp::type_names)). Local.
     pub fn solver_types(&self) -> petsc::Result<(String, String)> {
         self.ls.ksp.type_names()
     }

@@ -133,6 +133,31 @@ fn fixed_point(next: &System, x: &[f64], own: f64) -> bool {
     residual_at(next, x) <= FIXED_POINT_SLACK * own.max(f64::EPSILON * b)
 }
 
+/// An accepted iterate of the dense iteration: its system and u, λ and α, the steps taken
+/// (`primal`: of them in the primal form), whether the stall rule accepted it, and the step
+/// from which the (F5) rows ran.
+struct Accepted<'s> {
+    sys: &'s System,
+    u: &'s [f64],
+    lam: Vec<f64>,
+    alpha: Vec<f64>,
+    steps: Vec<DenseStep>,
+    primal: usize,
+    stalled: bool,
+    f5_from: usize,
+}
+
+/// |u − u_prev| / |u| (0 for u = 0). Pure.
+fn relative_change(u: &[f64], u_prev: &[f64]) -> f64 {
+    let du: f64 = u.iter().zip(u_prev).map(|(a, b)| (a - b).powi(2)).sum();
+    let uu: f64 = u.iter().map(|a| a * a).sum();
+    if uu > 0.0 {
+        (du / uu).sqrt()
+    } else {
+        0.0
+    }
+}
+
 /// The generalised Newton of docs/friction.md on the candidates' dense system (module note).
 pub(super) struct DenseIteration<'a> {
     pub(super) dim: usize,
@@ -211,17 +236,7 @@ impl DenseIteration<'_> {
             let t = Instant::now();
             let mut solved = sys.and_then(|sk| Some((solve_system(&sk)?, sk)));
             if solved.is_none() {
-                // Settled slip rows (λ_τ = μ(−λ_n) ν, docs/friction.md) give a slipping
-                // node's tangential displacement no stiffness of its own: where every active
-                // node of a floating body slips, its tangential rigid motion is free and the
-                // system singular (an iterate of the way, e.g. a rolling disk whose one sticking
-                // node slips for a step). The (F5) rows keep their spring L̃: the step again on
-                // them, and the iteration on them to its end.
-                // (`it` holds the last iterate until this step's records)
-                let unsettled = before.take().map(|b| {
-                    let scale = threshold_scale_local(self.cb, &it.nodes, law, c);
-                    b.update_with(&it, self.cb, law, c, scale, d, false).next
-                });
+                let unsettled = before.take().map(|b| self.unsettled(b, &it));
                 if let Some(alt) = unsettled.filter(|alt| *alt != set) {
                     settle = false;
                     f5_from = step;
@@ -246,17 +261,9 @@ impl DenseIteration<'_> {
             let scale = threshold_scale_local(self.cb, &it.nodes, law, c);
             let up = set.update_with(&it, self.cb, law, c, scale, d, settle); // (3.23) / (F5)
             let (residual, lambda_norm) = (up.residual2.sqrt(), up.lambda2.sqrt());
-            let du: f64 = u.iter().zip(&u_prev).map(|(a, b)| (a - b).powi(2)).sum();
-            let uu: f64 = u.iter().map(|a| a * a).sum();
-            let du_rel = if uu > 0.0 { (du / uu).sqrt() } else { 0.0 };
-            let n_active = set.local_active();
-            steps.push((
-                step,
-                n_active,
-                up.changed,
-                residual,
-                t.elapsed().as_secs_f64(),
-            ));
+            let du_rel = relative_change(&u, &u_prev);
+            let seconds = t.elapsed().as_secs_f64();
+            steps.push((step, set.local_active(), up.changed, residual, seconds));
             // The stall rule without |Δu| < tol_u: on a floating body the dense u carries the
             // round-off of α, |Δu|/|u| stays above tol_u while the residual sits at its
             // round-off (measured: the floating Hertz disk at 171 602 unknowns, |C| ~ 3e-11 of
@@ -266,32 +273,33 @@ impl DenseIteration<'_> {
             last_still = unchanged.then_some(residual);
             let zero = residual <= COULOMB_RESIDUAL_ZERO * lambda_norm;
             let small = residual <= COULOMB_RESIDUAL_TOL * lambda_norm;
-            if unchanged && (zero || stall || (du_rel < self.tol_u && small)) {
-                let x_s = self.primal_x_s(&sys_k, &u, &alpha);
-                let mut run = self.end(&set, (lam, alpha), (steps, primal), Ok(()));
-                run.stalled = residual > COULOMB_RESIDUAL_TOL * lambda_norm;
-                run.x_s = x_s;
-                run.f5_from = f5_from;
-                return run;
-            }
+            let accept = unchanged && (zero || stall || (du_rel < self.tol_u && small));
             // The next step's system holds at this iterate as well as its own did (states
             // unchanged, and the rows that changed hold at it to round-off): the next step would
             // return the same iterate, so it is not taken
-            let next = self.system(&up.next);
-            let fixed = unchanged
+            let next = if accept { None } else { self.system(&up.next) };
+            let fixed = !accept
+                && unchanged
                 && residual <= COULOMB_RESIDUAL_STALL * lambda_norm
                 && next.as_ref().is_some_and(|sn| {
                     sn.cols == sys_k.cols
                         && sn.known.is_some() == sys_k.known.is_some()
                         && fixed_point(sn, &x, residual_at(&sys_k, &x))
                 });
-            if fixed {
-                let x_s = self.primal_x_s(&sys_k, &u, &alpha);
-                let mut run = self.end(&set, (lam, alpha), (steps, primal), Ok(()));
-                run.stalled = residual > COULOMB_RESIDUAL_TOL * lambda_norm;
-                run.x_s = x_s;
-                run.f5_from = f5_from;
-                return run;
+            if accept || fixed {
+                let stalled = residual > COULOMB_RESIDUAL_TOL * lambda_norm;
+                let (sys, u) = (&sys_k, &u[..]);
+                let at = Accepted {
+                    sys,
+                    u,
+                    lam,
+                    alpha,
+                    steps,
+                    primal,
+                    stalled,
+                    f5_from,
+                };
+                return self.accepted(&set, at);
             }
             let solved_on = std::mem::replace(&mut set, up.next);
             before = settle.then_some(solved_on);
@@ -308,6 +316,33 @@ impl DenseIteration<'_> {
             (steps, primal),
             Err(why),
         )
+    }
+
+    /// The set `before` updated at the iterate `it` (the last iterate: a singular step has no
+    /// records of its own) with unsettled (F5) slip rows: the rows a step whose settled rows
+    /// left its system singular is taken again on. Settled slip rows
+    /// (λ_τ = μ(−λ_n) ν, docs/friction.md) give a slipping node's tangential displacement no
+    /// stiffness of its own: where every active node of a floating body slips, its tangential
+    /// rigid motion is free and the system singular (an iterate of the way, e.g. a rolling disk
+    /// whose one sticking node slips for a step). The (F5) rows keep their spring L̃: the step
+    /// again on them, and the iteration on them to its end. Local (rank 0).
+    fn unsettled(&self, before: ActiveSet, it: &Iterate) -> ActiveSet {
+        let (d, law, c) = (self.dim, self.law, self.c);
+        let scale = threshold_scale_local(self.cb, &it.nodes, law, c);
+        before
+            .update_with(it, self.cb, law, c, scale, d, false)
+            .next
+    }
+
+    /// The run's end at an accepted iterate: its result with the primal form's Schur part and
+    /// whether it was accepted by the stall rule. Local (rank 0).
+    fn accepted(&self, set: &ActiveSet, at: Accepted) -> DenseCoulomb {
+        let x_s = self.primal_x_s(at.sys, at.u, &at.alpha);
+        let mut run = self.end(set, (at.lam, at.alpha), (at.steps, at.primal), Ok(()));
+        run.stalled = at.stalled;
+        run.x_s = x_s;
+        run.f5_from = at.f5_from;
+        run
     }
 
     fn end(

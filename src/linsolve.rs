@@ -60,14 +60,14 @@ pub fn preset_options(preset: Preset, rtol: f64, symmetric: bool) -> String {
         // aggregation AMG with the rigid-body near-null space; the symmetrised graph keeps
         // aggregation valid for the unsymmetric reduced systems of friction (Tresca (3.42),
         // Coulomb (F7) in docs/friction.md, unsymmetric also in 2D; for Coulomb the hierarchy
-        // is built on the system without its row mix, reduced.rs `write_unmixed`). On those
+        // is built on the system without its row mix, step_system/write.rs `write_unmixed`). On those
         // unsymmetric systems classical Gram–Schmidt loses the Krylov basis' orthogonality in
         // long solves and GMRES broke down (DIVERGED_BREAKDOWN: the 3D block held and pushed
         // into a sphere, a floating ball, the hemisphere's load steps; 2 ranks): it is refined
         // where needed, which also halved the iterations of the longest solves (block at
         // 112 890 unknowns: 367 → 185). The coarsest level is
         // solved by a pseudo-inverse (SVD): a hierarchy built on a matrix with a null space
-        // (a floating body's free rigid modes, reduced.rs) has a singular coarse matrix, on
+        // (a floating body's free rigid modes, step_system/) has a singular coarse matrix, on
         // which LU breaks GMRES down (2D Hertz at ν = 0.4999); on a regular one it is LU's
         // solve.
         Preset::Iterative => format!(

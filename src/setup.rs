@@ -274,7 +274,7 @@ pub struct ContactSettings {
     /// The material (the final certificate's reactions at the Dirichlet nodes).
     pub material: Material,
     /// The contact modulus E* = E / (1 − ν²) (3D, plane strain) or E (plane stress): the
-    /// half-space predictor's (predictor.rs).
+    /// half-space predictor's (halfspace.rs).
     pub contact_modulus: f64,
 }
 

@@ -2,7 +2,7 @@
 //! (src/signorini/mod.rs `PassLoop`: where nodes beyond a pass' candidates change state on the
 //! expanded u, the next pass takes them as candidates and keeps the pass' own, so that a zone
 //! that moves, a floating body's that rolls, is not left for the plain path), and a dense step
-//! whose settled slip rows leave the system singular (coulomb_condensed.rs `Dense::run`: the
+//! whose settled slip rows leave the system singular (schur/coulomb_dense.rs `DenseIteration::run`: the
 //! step again on the (F5) rows).
 
 mod common;

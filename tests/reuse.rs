@@ -54,7 +54,7 @@ fn check_history(s: &Solved, with_reuse: bool) -> (usize, usize, usize) {
     assert_eq!(s.f(&["newton", "factorisations"]) as usize, fact);
     assert_eq!(h[0]["solve"], "factorisation");
     // The final iterate is a factorised one: a stop decided on a reuse step is confirmed by
-    // one more step on the same sets, factorised (newton.rs).
+    // one more step on the same sets, factorised (plain_path/iteration.rs).
     assert_eq!(
         h[h.len() - 1]["solve"],
         "factorisation",
@@ -90,7 +90,7 @@ fn same_as_plain(np: usize, case: &Path, sets: &[&str], mode: &str) -> (usize, u
     assert_eq!((pf, pr), (plain.steps(), 0));
     let (_, reuses, fallbacks) = check_history(&reuse, true);
     // A stop decided on a reuse step is checked by one more step on the same sets, factorised
-    // (newton.rs): then the history is the plain one plus that step.
+    // (plain_path/iteration.rs): then the history is the plain one plus that step.
     let (ph, mut rh) = (plain.active_history(), reuse.active_history());
     if rh.len() == ph.len() + 1 {
         let h = reuse.summary["newton"]["history"].as_array().unwrap();

@@ -10,3 +10,6 @@
 pub use mpi_sys::*;
 
 include!(concat!(env!("OUT_DIR"), "/petsc_bindings.rs"));
+
+/// PETSc's index type (32-bit in Debian's build).
+pub type PInt = PetscInt;

@@ -66,7 +66,7 @@ pub struct ActiveSet {
 pub struct Prescribed {
     pub dirs: Vec<([f64; 3], f64)>,
     /// A slip row (3.39) / (F6) for the increment: L̃, r̃ go to the node's own block, a
-    /// Coulomb coupling q to its rows (reduced.rs).
+    /// Coulomb coupling q to its rows (step_system/).
     pub slip: Option<CoulombRow<2>>,
 }
 
@@ -535,7 +535,7 @@ impl SetUpdate {
 /// A system (rows, or the dense Coulomb system) holds at an iterate as well as the one it was
 /// solved with where its residual there is within this factor of that one's (or of the
 /// round-off floor): the iterate is its fixed point, no further step is taken
-/// (newton.rs `rows_hold`, coulomb_condensed.rs `fixed_point`).
+/// (plain_path/iteration.rs `rows_hold`, schur/coulomb_dense.rs `fixed_point`).
 pub const FIXED_POINT_SLACK: f64 = 16.0;
 
 /// The residual² of the tangential row `row` (3.39) / (F6), −λ_τ + L̃ Δu_τ − q (λ_n + c (u_n +
@@ -644,7 +644,7 @@ mod tests {
         }
     }
 
-    /// A held node's rows (condensed.rs' held zones): on the obstacle, and with `stick` at its
+    /// A held node's rows (schur/frictionless.rs' held zones): on the obstacle, and with `stick` at its
     /// reference u_τ as well; its constraint rows then hold the tangent too. Other nodes keep
     /// A's rows.
     #[test]

@@ -27,7 +27,7 @@ pub enum StopRule {
     ActiveSet,
     /// PETSc SNES VI's own convergence test (`solver.method = "snesvi"`).
     SnesVi,
-    /// Loosened: Coulomb's residual stalled between 1e-9 and 1e-6 of ‖λ‖ (newton.rs
+    /// Loosened: Coulomb's residual stalled between 1e-9 and 1e-6 of ‖λ‖ (plain_path/iteration.rs
     /// `COULOMB_RESIDUAL_STALL`).
     CoulombStall,
     /// Loosened: a friction set recurred while |Δu|/|u| < tol_u (nodes on the stick/slip
@@ -36,7 +36,7 @@ pub enum StopRule {
     /// Loosened: the condensed Coulomb iteration stalled and was accepted because its
     /// certificates hold to 1e-8 of the problem's scales.
     CondensedCoulombStall,
-    /// Loosened: a load step's u and λ vanish below 1e-6 of the warm start's (newton.rs
+    /// Loosened: a load step's u and λ vanish below 1e-6 of the warm start's (plain_path/iteration.rs
     /// `VANISHING`); the states are round-off.
     Vanishing,
 }

@@ -1,19 +1,18 @@
 //! Coulomb friction's strategy (docs/friction.md): the generalised Newton's start (the
 //! frictionless solution on the contact unknowns, the condensed passes, a load step on the
-//! previous step's factorisation; [`coulomb_condensed`](super::coulomb_condensed) runs the
+//! previous step's factorisation; [`schur::coulomb`] runs the
 //! dense steps) and the fixed point on Tresca thresholds, each ending on the plain path where
 //! the contact unknowns do not settle it.
 
 use super::active_set::Law;
 use super::boundary::{self, ContactBoundary, NodeResult};
 use super::certificate;
-use super::condensed;
-use super::coulomb_condensed::{self, CoulombCondensedSummary};
 use super::force;
-use super::newton::{self, ContactProblem, NewtonResult, NewtonSettings, StepInfo, WarmStart};
-use super::plain;
-use super::reduced::ReducedSystem;
+use super::plain_path::{self, ContactProblem, NewtonResult, NewtonSettings, StepInfo, WarmStart};
 use super::rigid::{self, FreeModes};
+use super::schur::frictionless::{solve_keeping, Sticking};
+use super::schur::{self, CoulombCondensedSummary};
+use super::step_system::ReducedSystem;
 use crate::case::{self, CoulombAlgorithm, Reuse, SolverSection};
 use crate::error::RunError;
 use crate::par::Ctx;
@@ -23,15 +22,11 @@ use crate::say;
 pub enum Outcome {
     /// Solved on the contact unknowns and checked on every contact node (taken as it is), with
     /// the condensed path's record.
-    Checked(NewtonResult, Option<condensed::CondensedSummary>),
+    Checked(NewtonResult, Option<schur::CondensedSummary>),
     /// An iteration on the plain path, whose convergence the caller judges: the result, the
     /// fixed point's outer steps (`None` for the generalised Newton) and the condensed path's
     /// record.
-    Iterated(
-        NewtonResult,
-        Option<usize>,
-        Option<condensed::CondensedSummary>,
-    ),
+    Iterated(NewtonResult, Option<usize>, Option<schur::CondensedSummary>),
 }
 
 /// Coulomb friction by `algorithm` on the reduced system: the generalised Newton (under
@@ -63,7 +58,7 @@ pub fn solve(
     if let Begin::Solved(nr) = start {
         return Ok(Outcome::Checked(nr, condensed_summary));
     }
-    plain::enable_reuse(ctx, ns, solver_section, reduced, true)?;
+    plain_path::enable_reuse(ctx, ns, solver_section, reduced, true)?;
     if algorithm == CoulombAlgorithm::FixedPoint {
         let (nr, outer) = fixed_point(ctx, problem, reduced, ns, warm)?;
         return Ok(Outcome::Iterated(nr, Some(outer), condensed_summary));
@@ -80,12 +75,12 @@ pub fn solve(
                 force: &force,
                 ..*ns
             };
-            let mut nr = newton::semismooth_newton(ctx, problem, reduced, &ns, Some(&w))?;
+            let mut nr = plain_path::semismooth_newton(ctx, problem, reduced, &ns, Some(&w))?;
             // the start's steps first in the record (and their factorisations)
             after(first.history, &mut nr);
             nr
         }
-        _ => newton::semismooth_newton(ctx, problem, reduced, ns, warm)?,
+        _ => plain_path::semismooth_newton(ctx, problem, reduced, ns, warm)?,
     };
     Ok(Outcome::Iterated(nr, None, condensed_summary))
 }
@@ -131,7 +126,7 @@ fn fixed_point(
             force: &force,
             ..*ns
         };
-        let mut nr = newton::semismooth_newton(ctx, &pm, reduced, &tresca, start.as_ref())?;
+        let mut nr = plain_path::semismooth_newton(ctx, &pm, reduced, &tresca, start.as_ref())?;
         stop = stop.worse(nr.stop);
         nr.stop = stop;
         for (fc, &delta) in force.iter_mut().zip(&nr.approach) {
@@ -186,7 +181,7 @@ fn after(first: Vec<StepInfo>, r: &mut NewtonResult) {
 
 /// How Coulomb's generalised Newton begins (`coulomb_start`).
 enum Begin {
-    /// Solved on the contact unknowns and checked on every contact node (coulomb_condensed).
+    /// Solved on the contact unknowns and checked on every contact node (schur::coulomb).
     Solved(NewtonResult),
     /// A start for the plain path: the records of every contact node, this rank's rows of u.
     Start(NewtonResult, Vec<f64>),
@@ -199,7 +194,7 @@ enum Begin {
 /// the condensed path (about one factorisation; the pins carry a load in the modes only
 /// friction can hold, e.g. a tangential load on a floating body). For a body that Dirichlet
 /// data hold, the Schur complement takes every dof of the candidates and Coulomb's iteration
-/// runs on them (coulomb_condensed): its checked result, or its expanded iterate as the plain
+/// runs on them (schur::coulomb): its checked result, or its expanded iterate as the plain
 /// path's start. Else (or if that gives up) the frictionless active set and λ_n give the
 /// thresholds b = μ(−λ_n) of (F1), every active node sticking — instead of a start from the
 /// touching nodes, where the whole load first hangs on them and the set needs many steps to
@@ -222,7 +217,7 @@ fn coulomb_start(
     ns: &NewtonSettings,
     solver_section: &SolverSection,
     warm: Option<&WarmStart>,
-) -> Result<(Begin, Option<condensed::CondensedSummary>), RunError> {
+) -> Result<(Begin, Option<schur::CondensedSummary>), RunError> {
     let fl = NewtonSettings {
         law: Law::Frictionless,
         halfspace: None,
@@ -232,7 +227,7 @@ fn coulomb_start(
     let b = problem.boundary;
     let condense = solver_section.reuse == Reuse::Auto
         && b.n_global > 0
-        && b.n_global <= condensed::MAX_CONTACT_NODES
+        && b.n_global <= schur::MAX_CONTACT_NODES
         && reduced.factorises()?;
     if !condense {
         return iterative_start(ctx, problem, reduced, ns, warm);
@@ -293,15 +288,15 @@ fn coulomb_start(
 /// What the condensed passes of a Coulomb start end in.
 enum Passes {
     /// The start's outcome: solved, a start for the plain path, or none (the touching nodes).
-    Done(Begin, Option<condensed::CondensedSummary>),
+    Done(Begin, Option<schur::CondensedSummary>),
     /// The frictionless solution (the condensed Coulomb iteration does not apply or gave up).
-    Frictionless(NewtonResult, condensed::CondensedSummary),
+    Frictionless(NewtonResult, schur::CondensedSummary),
 }
 
 /// [`coulomb_start`] on the condensed path: the frictionless solution by the condensed path
 /// (`fl`; every dof of the candidates in the Schur complement, or, where the zone is too wide
 /// for that, its interior held sticking in K_p), then Coulomb's iteration on its candidates
-/// (coulomb_condensed). Where a held zone's check finds nodes beyond the candidates changing
+/// (schur::coulomb). Where a held zone's check finds nodes beyond the candidates changing
 /// state, a new pass takes them as candidates (at most [`MAX_STICK_FACTORISATIONS`]
 /// factorisations in all, while fewer change each pass). `forced`: force control on a body
 /// that only its pairs hold (the frictionless solution alone); `from`: the start said where
@@ -318,8 +313,8 @@ fn coulomb_passes(
     // the Coulomb iteration on the candidates needs every dof of them, the plain path none
     let per = if forced { 1 } else { dim };
     let too_wide = |t: &Result<_, RunError>| {
-        let fell = |s: &condensed::CondensedSummary| s.factorisations == 0;
-        matches!(t, Ok((condensed::Condensed::Fallback(s), _)) if fell(s))
+        let fell = |s: &schur::CondensedSummary| s.factorisations == 0;
+        matches!(t, Ok((schur::Condensed::Fallback(s), _)) if fell(s))
     };
     // where the zone is too wide for every dof of its nodes: the nodes a held zone releases
     let mut passes = PassLoop::new(Vec::new(), Vec::new());
@@ -327,10 +322,9 @@ fn coulomb_passes(
     let mut last: Option<(NewtonResult, Vec<f64>, CoulombCondensedSummary)> = None;
     loop {
         // too many candidates' dofs for the dense tangential compliance: the predicted zone's
-        // interior held sticking, the dense steps on its edge and beyond (condensed.rs)
+        // interior held sticking, the dense steps on its edge and beyond (schur/frictionless.rs)
         let held = (per > 1).then(|| passes.start_sticking());
-        let mut tried =
-            condensed::solve_keeping(ctx, problem, reduced, fl, None, (per, true, held));
+        let mut tried = solve_keeping(ctx, problem, reduced, fl, None, (per, true, held));
         if let Some(last) = last.take() {
             if let Some(done) = from_last_pass(ctx, problem, &tried, last, passes.earlier) {
                 return Ok(done);
@@ -342,15 +336,14 @@ fn coulomb_passes(
                 ctx,
                 "coulomb: the candidates' normal dofs alone in the Schur complement"
             );
-            tried = condensed::solve_keeping(ctx, problem, reduced, fl, None, (1, true, None));
+            tried = solve_keeping(ctx, problem, reduced, fl, None, (1, true, None));
         }
         // a frictionless solve on the normal dofs alone keeps its factorisation for a next
         // load step, which no Coulomb step can use
         drop(problem.kept.take());
         let (mut nr, mut summary, kept) = match tried {
-            Ok((condensed::Condensed::Solved(nr, s), kept)) => (*nr, s, kept),
-            Ok((condensed::Condensed::Fallback(s), _))
-            | Ok((condensed::Condensed::Factorised(s), _)) => {
+            Ok((schur::Condensed::Solved(nr, s), kept)) => (*nr, s, kept),
+            Ok((schur::Condensed::Fallback(s), _)) | Ok((schur::Condensed::Factorised(s), _)) => {
                 say!(ctx, "coulomb: no frictionless start; starting from {from}");
                 return Ok(Passes::Done(Begin::Touching, Some(s)));
             }
@@ -378,14 +371,14 @@ fn coulomb_passes(
             after(first.clone(), &mut r);
             r
         };
-        match coulomb_condensed::solve(ctx, problem, reduced, ns, &mut kept, None)? {
-            coulomb_condensed::CoulombCondensed::Solved(r, cs) => {
+        match schur::coulomb::solve(ctx, problem, reduced, ns, &mut kept, None)? {
+            schur::CoulombCondensed::Solved(r, cs) => {
                 summary.coulomb = Some(cs);
                 // for the next load step (a held zone's too: its rows' values are in f)
                 problem.kept.put(kept);
                 return Ok(Passes::Done(Begin::Solved(joined(*r)), Some(summary)));
             }
-            coulomb_condensed::CoulombCondensed::Start(r, u, cs, beyond) => {
+            schur::CoulombCondensed::Start(r, u, cs, beyond) => {
                 if passes.goes_on(&beyond, summary.factorisations) {
                     passes.next(ctx, problem, &mut kept, &beyond, summary.factorisations);
                     last = Some((joined(*r), u, cs));
@@ -395,7 +388,7 @@ fn coulomb_passes(
                 summary.coulomb = Some(cs);
                 return Ok(Passes::Done(Begin::Start(joined(*r), u), Some(summary)));
             }
-            coulomb_condensed::CoulombCondensed::Fallback(cs) => {
+            schur::CoulombCondensed::Fallback(cs) => {
                 summary.coulomb = Some(cs);
                 nr.history = first;
                 return Ok(Passes::Frictionless(nr, summary));
@@ -411,14 +404,15 @@ fn coulomb_passes(
 fn from_last_pass(
     ctx: &Ctx,
     problem: &ContactProblem,
-    tried: &Result<(condensed::Condensed, Option<condensed::Kept>), RunError>,
+    tried: &Result<(schur::Condensed, Option<schur::Kept>), RunError>,
     (r, u, cs): (NewtonResult, Vec<f64>, CoulombCondensedSummary),
     earlier: usize,
 ) -> Option<Passes> {
     let mut summary = match tried {
-        Ok((condensed::Condensed::Fallback(s), _))
-        | Ok((condensed::Condensed::Factorised(s), _)) => s.clone(),
-        Err(RunError::Failed(_)) => condensed::CondensedSummary::new(0),
+        Ok((schur::Condensed::Fallback(s), _)) | Ok((schur::Condensed::Factorised(s), _)) => {
+            s.clone()
+        }
+        Err(RunError::Failed(_)) => schur::CondensedSummary::new(0),
         _ => return None, // solved, or an error every rank returns (the caller's)
     };
     drop(problem.kept.take());
@@ -456,7 +450,7 @@ fn iterative_start(
     reduced: &mut ReducedSystem,
     ns: &NewtonSettings,
     warm: Option<&WarmStart>,
-) -> Result<(Begin, Option<condensed::CondensedSummary>), RunError> {
+) -> Result<(Begin, Option<schur::CondensedSummary>), RunError> {
     let plain = warm.is_some()
         || !ns.force.is_empty()
         || problem.boundary.n_global == 0
@@ -470,7 +464,7 @@ fn iterative_start(
         halfspace: None,
         ..*ns
     };
-    let mut nr = match newton::semismooth_newton(ctx, problem, reduced, &fl, None) {
+    let mut nr = match plain_path::semismooth_newton(ctx, problem, reduced, &fl, None) {
         Ok(nr) => nr,
         Err(RunError::Failed(why)) => {
             say!(
@@ -509,7 +503,7 @@ fn coulomb_load_step(
     reduced: &mut ReducedSystem,
     (ns, fl): (&NewtonSettings, &NewtonSettings),
     warm: &WarmStart,
-) -> Result<(Begin, Option<condensed::CondensedSummary>), RunError> {
+) -> Result<(Begin, Option<schur::CondensedSummary>), RunError> {
     let dim = problem.mesh.dim;
     // the nodes that slipped in the step before are never held sticking (c_h's global order)
     let release = gathered(ctx, warm.nodes.iter().map(|r| r.active && r.slip));
@@ -524,8 +518,8 @@ fn coulomb_load_step(
     let mut last: Option<(NewtonResult, Vec<f64>)> = None;
     loop {
         let held = passes.sticking(0);
-        // the previous step's factorisation where it holds (condensed::reused), else a new one
-        let tried = condensed::solve_keeping(
+        // the previous step's factorisation where it holds (schur::round::reused), else a new one
+        let tried = solve_keeping(
             ctx,
             problem,
             reduced,
@@ -534,10 +528,10 @@ fn coulomb_load_step(
             (dim, false, Some(held)),
         );
         let (mut summary, mut kept) = match tried {
-            Ok((condensed::Condensed::Factorised(s), Some(kept))) => (s, kept),
-            Ok((condensed::Condensed::Fallback(mut s), _))
-            | Ok((condensed::Condensed::Factorised(mut s), None))
-            | Ok((condensed::Condensed::Solved(_, mut s), _)) => {
+            Ok((schur::Condensed::Factorised(s), Some(kept))) => (s, kept),
+            Ok((schur::Condensed::Fallback(mut s), _))
+            | Ok((schur::Condensed::Factorised(mut s), None))
+            | Ok((schur::Condensed::Solved(_, mut s), _)) => {
                 s.factorisations += passes.earlier;
                 return Ok((begin_from(ctx, last), Some(s)));
             }
@@ -551,33 +545,32 @@ fn coulomb_load_step(
             Err(e) => return Err(e),
         };
         summary.factorisations += passes.earlier;
-        let begin =
-            match coulomb_condensed::solve(ctx, problem, reduced, ns, &mut kept, Some(warm))? {
-                coulomb_condensed::CoulombCondensed::Solved(r, cs) => {
-                    summary.coulomb = Some(cs);
-                    problem.kept.put(kept); // for the next load step (a held zone's too)
-                    Begin::Solved(*r)
+        let begin = match schur::coulomb::solve(ctx, problem, reduced, ns, &mut kept, Some(warm))? {
+            schur::CoulombCondensed::Solved(r, cs) => {
+                summary.coulomb = Some(cs);
+                problem.kept.put(kept); // for the next load step (a held zone's too)
+                Begin::Solved(*r)
+            }
+            schur::CoulombCondensed::Start(r, u, cs, beyond) => {
+                summary.coulomb = Some(cs);
+                // a held zone: at most WARM_STICK_FACTORISATIONS (where the warm set's
+                // stick core is no prediction of this step's, a rolling body's, further
+                // passes cost what the plain path's steps cost)
+                let held_missed = kept.held.iter().any(|&h| h)
+                    && summary.factorisations >= WARM_STICK_FACTORISATIONS;
+                if !held_missed && passes.goes_on(&beyond, summary.factorisations) {
+                    passes.next(ctx, problem, &mut kept, &beyond, summary.factorisations);
+                    last = Some((*r, u));
+                    continue;
                 }
-                coulomb_condensed::CoulombCondensed::Start(r, u, cs, beyond) => {
-                    summary.coulomb = Some(cs);
-                    // a held zone: at most WARM_STICK_FACTORISATIONS (where the warm set's
-                    // stick core is no prediction of this step's, a rolling body's, further
-                    // passes cost what the plain path's steps cost)
-                    let held_missed = kept.held.iter().any(|&h| h)
-                        && summary.factorisations >= WARM_STICK_FACTORISATIONS;
-                    if !held_missed && passes.goes_on(&beyond, summary.factorisations) {
-                        passes.next(ctx, problem, &mut kept, &beyond, summary.factorisations);
-                        last = Some((*r, u));
-                        continue;
-                    }
-                    say!(ctx, "coulomb: the plain path from the expanded iterate");
-                    Begin::Start(*r, u)
-                }
-                coulomb_condensed::CoulombCondensed::Fallback(cs) => {
-                    summary.coulomb = Some(cs);
-                    begin_from(ctx, last)
-                }
-            };
+                say!(ctx, "coulomb: the plain path from the expanded iterate");
+                Begin::Start(*r, u)
+            }
+            schur::CoulombCondensed::Fallback(cs) => {
+                summary.coulomb = Some(cs);
+                begin_from(ctx, last)
+            }
+        };
         return Ok((begin, Some(summary)));
     }
 }
@@ -605,8 +598,8 @@ impl PassLoop {
     }
 
     /// The next pass' held zone, released nodes and band, with at most `factorisations`.
-    fn sticking(&self, factorisations: usize) -> condensed::Sticking<'_> {
-        condensed::Sticking {
+    fn sticking(&self, factorisations: usize) -> Sticking<'_> {
+        Sticking {
             zone: (!self.zone.is_empty()).then_some(self.zone.as_slice()),
             release: &self.release,
             pass: self.pass,
@@ -617,7 +610,7 @@ impl PassLoop {
     /// A start's next pass ([`coulomb_passes`]): its held zone, released nodes and band, with
     /// at most [`FIRST_STICK_FACTORISATIONS`] in the first pass, else what is left of
     /// [`MAX_STICK_FACTORISATIONS`] (one at least).
-    fn start_sticking(&self) -> condensed::Sticking<'_> {
+    fn start_sticking(&self) -> Sticking<'_> {
         self.sticking(match self.pass {
             0 => FIRST_STICK_FACTORISATIONS,
             _ => MAX_STICK_FACTORISATIONS.saturating_sub(self.earlier).max(1),
@@ -643,7 +636,7 @@ impl PassLoop {
         &mut self,
         ctx: &Ctx,
         problem: &ContactProblem,
-        kept: &mut condensed::Kept,
+        kept: &mut schur::Kept,
         beyond: &[usize],
         done: usize,
     ) {

@@ -6,7 +6,7 @@ use super::boundary::{CaseKeys, ContactBoundary, NodeResult};
 use super::certificate;
 use super::force;
 use super::law::{Coulomb, FrictionLaw};
-use super::newton::NewtonResult;
+use super::plain_path::NewtonResult;
 use super::report::{self, ContactSummary, FrictionCertificate, Kkt, Scales};
 use crate::assembly::System;
 use crate::error::RunError;

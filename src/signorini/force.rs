@@ -23,7 +23,7 @@
 //! normal rows u_n' = −g(δ) — so the lift keeps L and q, drops r_C, and solves with the step's
 //! (nonsymmetric) Coulomb matrix; the bordered step is then the exact Newton step of the
 //! system with δ (docs/obstacles.md, "With Coulomb friction"). On the contact unknowns
-//! (coulomb_condensed.rs, a held body) each δ_j is one more unknown of the dense system; on a
+//! (schur/coulomb.rs, a held body) each δ_j is one more unknown of the dense system; on a
 //! body that only its pairs hold the plain path starts from the frictionless force-controlled
 //! solution (mod.rs, `coulomb_start`).
 //!
@@ -44,8 +44,8 @@
 
 use super::active_set::{ActiveSet, Iterate};
 use super::boundary::{ContactBoundary, ContactNode};
-use super::reduced::ReducedSystem;
 use super::rigid::{ApproachCoupling, Pin, RigidModes};
+use super::step_system::ReducedSystem;
 use crate::assembly::System;
 use crate::error::{InputError, RunError};
 use crate::geom::dot;

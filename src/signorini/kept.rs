@@ -1,6 +1,6 @@
 //! The factorisation a condensed solve hands from one load step to the next ([`KeptFactor`]).
 
-use super::condensed::Kept;
+use super::schur::Kept;
 use std::cell::RefCell;
 
 /// A condensed solve's factorisation of K_p with its Schur complement, compliance and

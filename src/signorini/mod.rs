@@ -4,8 +4,8 @@
 //! law it applies lives in `crate::contact` (pure, no MPI); the tangential laws as the
 //! algorithm sees them in `law` (one file per law), Coulomb's strategy in `coulomb`.
 //!
-//! Floors inside: `cycle`, `boundary` → `rigid`, `law`, `active_set`, `report` → `reduced` →
-//! `newton` → `condensed`, `coulomb_condensed` → `coulomb` → this file's [`solve`] (the
+//! Floors inside: `cycle`, `boundary` → `rigid`, `law`, `active_set`, `report` →
+//! `step_system` → `plain_path` → `schur` → `coulomb` → this file's [`solve`] (the
 //! phases of a solve; the checks before it in `capacity`, the judged final state in
 //! `final_state`).
 
@@ -13,22 +13,20 @@ pub mod active_set;
 pub mod boundary;
 pub mod capacity;
 pub mod certificate;
-pub mod condensed;
 pub mod coulomb;
-pub mod coulomb_condensed;
 pub mod cycle;
 pub mod dense;
 pub mod final_state;
 pub mod force;
+pub mod halfspace;
 pub mod kept;
 pub mod law;
-pub mod newton;
-pub mod plain;
-pub mod predictor;
-pub mod reduced;
+pub mod plain_path;
 pub mod report;
 pub mod rigid;
+pub mod schur;
 pub mod snesvi;
+pub mod step_system;
 pub mod warn;
 
 use crate::assembly::System;
@@ -48,12 +46,12 @@ use active_set::{ActiveSet, Iterate, Law};
 use boundary::{ContactBoundary, NodeResult};
 use coulomb::Outcome;
 use kept::KeptFactor;
-use newton::{ContactProblem, NewtonResult, NewtonSettings, StepInfo, WarmStart};
-use reduced::ReducedSystem;
+use plain_path::{ContactProblem, NewtonResult, NewtonSettings, StepInfo, WarmStart};
 use report::{ContactSummary, Scales};
 use rigid::FreeModes;
 use serde::Serialize;
 use std::time::Instant;
+use step_system::ReducedSystem;
 
 /// summary.json's "newton" section.
 #[derive(Debug, Clone, Serialize)]
@@ -84,7 +82,7 @@ pub struct NewtonSummary {
     pub coulomb: Option<CoulombSummary>,
     /// The condensed path (frictionless, direct preset), when it was tried.
     #[serde(skip_serializing_if = "Option::is_none")]
-    pub condensed: Option<condensed::CondensedSummary>,
+    pub condensed: Option<schur::CondensedSummary>,
 }
 
 /// summary.json's "newton"."coulomb": how Coulomb friction was solved. `steps` of the
@@ -300,13 +298,13 @@ pub fn solve(
         located: &located,
     };
     // the body's half-space model: the predictor's on the iterative preset (frictionless,
-    // newton.rs), else the condensed path's (locating a floating body's zone; the plain path's
+    // plain_path/), else the condensed path's (locating a floating body's zone; the plain path's
     // first set where the zone is too wide for the dense limits)
-    let model = predictor::HalfSpace {
+    let model = halfspace::HalfSpace {
         modulus: settings.contact_modulus,
         dim,
         length: 2.0 * mesh.extent(),
-        mirrors: predictor::mirror_planes(ctx, mesh, fixed),
+        mirrors: halfspace::mirror_planes(ctx, mesh, fixed),
     };
     let iterative = setup.kind() == SolverKind::Iterative;
     let ns = newton_settings(settings, (c, law), (&model, iterative), &force_control);
@@ -348,7 +346,7 @@ pub fn solve(
 fn newton_settings<'a>(
     settings: &'a ContactSettings,
     (c, law): (f64, Law),
-    (model, iterative): (&'a predictor::HalfSpace, bool),
+    (model, iterative): (&'a halfspace::HalfSpace, bool),
     force: &'a [force::ForceControl],
 ) -> NewtonSettings<'a> {
     NewtonSettings {
@@ -597,7 +595,7 @@ fn complementarity_parameter(
 ) -> f64 {
     let c = match settings.newton.c {
         Some(c) => c,
-        None => newton::default_c(ctx, b, dim, settings.young),
+        None => plain_path::default_c(ctx, b, dim, settings.young),
     };
     say!(
         ctx,
@@ -673,11 +671,7 @@ fn run_method(
 
 /// What [`run_method`] returns: the result, the fixed point's outer steps and the condensed
 /// path's record.
-type Ran = (
-    NewtonResult,
-    Option<usize>,
-    Option<condensed::CondensedSummary>,
-);
+type Ran = (NewtonResult, Option<usize>, Option<schur::CondensedSummary>);
 
 /// Algorithm 1 (frictionless: on the contact unknowns where the condensed path applies) or
 /// Algorithm 2 (Tresca, `friction`) on the plain path. Collective.
@@ -694,43 +688,43 @@ fn normal_and_tresca(
     let condense = !friction
         && solver_section.reuse == Reuse::Auto
         && b.n_global > 0
-        && b.n_global <= condensed::MAX_CONTACT_NODES
+        && b.n_global <= schur::MAX_CONTACT_NODES
         && reduced.factorises()?;
     if condense {
-        match condensed::solve(ctx, problem, reduced, ns, warm)? {
-            condensed::Condensed::Solved(nr, s) => {
+        match schur::frictionless::solve(ctx, problem, reduced, ns, warm)? {
+            schur::Condensed::Solved(nr, s) => {
                 return Ok(Outcome::Checked(*nr, Some(s)));
             }
-            condensed::Condensed::Fallback(s) if s.too_wide => {
+            schur::Condensed::Fallback(s) if s.too_wide => {
                 // a zone too wide for the dense compliance: the plain path from the
                 // half-space model's set, the model correcting each exact step's update
                 let wide = NewtonSettings {
                     halfspace: ns.model,
                     ..*ns
                 };
-                plain::enable_reuse(ctx, ns, solver_section, reduced, false)?;
-                let nr = newton::semismooth_newton(ctx, problem, reduced, &wide, warm)?;
+                plain_path::enable_reuse(ctx, ns, solver_section, reduced, false)?;
+                let nr = plain_path::semismooth_newton(ctx, problem, reduced, &wide, warm)?;
                 return Ok(Outcome::Checked(nr, Some(s)));
             }
-            condensed::Condensed::Fallback(s) | condensed::Condensed::Factorised(s) => {
+            schur::Condensed::Fallback(s) | schur::Condensed::Factorised(s) => {
                 condensed_summary = Some(s)
             }
         }
     }
-    plain::enable_reuse(ctx, ns, solver_section, reduced, friction)?;
-    let nr = newton::semismooth_newton(ctx, problem, reduced, ns, warm)?;
+    plain_path::enable_reuse(ctx, ns, solver_section, reduced, friction)?;
+    let nr = plain_path::semismooth_newton(ctx, problem, reduced, ns, warm)?;
     Ok(Outcome::Iterated(nr, None, condensed_summary))
 }
 
 /// The floor of the scales the final check judges a load step by: a step whose solution
 /// vanishes against the step before's (its load taken back to nothing) is judged against
-/// [`newton::VANISHING`] of that step's scales, as its stopping rule is. Local.
+/// [`plain_path::VANISHING`] of that step's scales, as its stopping rule is. Local.
 fn vanishing_floor(previous: Option<&ContactSolution>) -> Scales {
     previous.map_or(Scales::default(), |p| {
         let s = p.report.contact.scales;
         Scales {
-            force: newton::VANISHING * s.force,
-            length: newton::VANISHING * s.length,
+            force: plain_path::VANISHING * s.force,
+            length: plain_path::VANISHING * s.length,
         }
     })
 }
@@ -771,7 +765,7 @@ fn newton_summary(
         Method::Newton => nr
             .history
             .iter()
-            .filter(|h| h.solve == reduced::SolveKind::Factorisation)
+            .filter(|h| h.solve == step_system::SolveKind::Factorisation)
             .count(),
         // rsls factors every reduced system of its steps with the direct preset
         Method::SnesVi if solver_section.preset == Preset::Direct => nr.steps,

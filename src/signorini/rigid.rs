@@ -7,7 +7,7 @@
 //! m×m Gram matrix G = Σ (C r)ᵀ (C r). Its null space is exactly the set of free modes: no
 //! fewer are removed (the system would be singular) and no more (that would change the
 //! answer). Each free mode is removed by pinning one dof, eliminated symmetrically like the
-//! contact constraints (reduced.rs). The pinned dofs are chosen from the whole mesh by a
+//! contact constraints (step_system/). The pinned dofs are chosen from the whole mesh by a
 //! pivoted Gram–Schmidt on the free modes' values, away from the contact boundary and the
 //! Dirichlet data, identically on every rank (so the result does not depend on the number of
 //! ranks). Pinning selects one member of the family u + Σ α_j r_j, which all have the same

@@ -3,13 +3,13 @@
 //! On the iterative preset every Newton step is a Krylov solve of the whole body, and the
 //! steps Algorithm 1 makes from the all-inactive start (grow past the final set, then shrink
 //! by about half the excess per step) cost 5–8 such solves. The direct preset avoids them with
-//! the exact compliance C = Nᵀ K_p⁻¹ N on the candidates (condensed.rs); the iterative preset
+//! the exact compliance C = Nᵀ K_p⁻¹ N on the candidates (schur/frictionless.rs); the iterative preset
 //! has no factorisation to take it from. This module replaces C by the compliance of an
 //! elastic half-space with the body's contact modulus E* (Boussinesq in 3D, Flamant in 2D),
 //! with mirror images in the body's symmetry planes, and keeps the rest exact: d₀ = the
 //! normal displacements of the first solve (no active node, u⁰ = K_p⁻¹ f), the gaps, the
 //! free rigid modes and their load balance. Algorithm 1 on that dense model (the nested
-//! iteration of condensed.rs) gives the set the second Newton step starts from; from there
+//! iteration of schur/frictionless.rs) gives the set the second Newton step starts from; from there
 //! Algorithm 1 goes on on the real system, so the final iterate is Algorithm 1's whatever
 //! the model's error (it only costs steps). The model is that of Hertz' theory: exact for
 //! a small contact zone on a smooth body, rougher for conforming contact or thin bodies.
@@ -395,10 +395,17 @@ fn run_model(
         approach_change: (predicted && !force.is_empty()).then(|| packed[5..head].to_vec()),
         seconds: t.elapsed().as_secs_f64(),
     };
+    log_model(ctx, hs, &rec, active.is_some());
+    Ok((mine, rec))
+}
+
+/// The model's progress line (`correcting`: a correction of an exact step's set update).
+/// Rank 0.
+fn log_model(ctx: &Ctx, hs: &HalfSpace, rec: &PredictorStep, correcting: bool) {
     say!(
         ctx,
         "predictor{}: half-space model (E* = {:.4e}, {} mirror plane(s)) on {} nodes for {} contact nodes: {}{} ({} active, {} steps, {} coarse levels, {:.3} s){}",
-        if active.is_some() {
+        if correcting {
             " (correcting the set update of the exact step)"
         } else {
             ""
@@ -427,7 +434,6 @@ fn run_model(
             format!("; {what} by {}", d.join(", "))
         })
     );
-    Ok((mine, rec))
 }
 
 /// The model's nodes where it locates a contact zone ([`locate`]): a coarse subset of every

@@ -1,67 +1,19 @@
-//! The semismooth Newton method in its exact active-set form: Algorithm 1 (frictionless,
-//! reduced system (3.29)) and Algorithm 2 (Tresca, (3.42) with the regularised slip rows
-//! (3.39)/(3.40)). One step: update the pins of free rigid modes, write the reduced system,
-//! solve, recover λ (3.28), update the sets (3.23)/(3.33), one reduction, log, decide.
-//!
-//! Collectives per step: with the reuse path one Allreduce of 4 values (its costs and changed
-//! slip blocks, `ReducedSystem::solve`), with the iterative preset's reuse path one MatMult and
-//! one Allreduce of 2 values (the warm start's residual); without friction one Allreduce of m values (the rigid motion fitted to
-//! the active gaps, taken out of the solve: u = ρ + w, see `FreeModes::fit_motion`), the
-//! writing of the reduced system (one all-gather of the rewritten nodes' directions, PETSc's
-//! assembly of entries in other ranks' rows), the solve, one MatMult, one Allreduce; rarely a
-//! load-balance test that finds an unbalanced load (two reductions) or a least-index pick.
+//! The plain path's Newton loop on the full step system: the state carried from step to step,
+//! the step itself (pins, system, solve, λ, set update, reduction, log) and its stopping rules.
 
-use super::active_set::{
+use crate::case::NewtonInit;
+use crate::error::RunError;
+use crate::par::Ctx;
+use crate::say;
+use crate::signorini::active_set::{
     threshold_scale, ActiveSet, Iterate, Law, SetSummary, SetUpdate, StepTotals,
 };
-use super::boundary::{ContactBoundary, NodeResult};
-use super::cycle::{decide, CycleGuard, Decision, Seen, SetKey};
-use super::force::{self, Approach, ForceControl};
-use super::predictor::{self, HalfSpace, PredictorStep};
-use super::reduced::{AmgStep, ReducedSystem, ReuseStep, RowChange, SolveKind, StepSolve};
-use super::rigid::{Balance, FreeModes, Motion, Pin};
-use crate::assembly::System;
-use crate::case::{self, NewtonInit, NewtonSection};
-use crate::error::RunError;
-use crate::mesh::Mesh;
-use crate::par::Ctx;
-use crate::partition::Layout;
-use crate::petsc::{SolveInfo, Vector};
-use crate::say;
-
-/// What the loop needs from the case.
-pub struct NewtonSettings<'a> {
-    pub section: &'a NewtonSection,
-    /// The complementarity parameter c > 0 used.
-    pub c: f64,
-    pub law: Law,
-    pub rigid: case::RigidModeHandling,
-    /// The half-space model of the body for the first set of the iterative preset's reuse
-    /// path (predictor.rs); `None`: no prediction.
-    pub halfspace: Option<&'a HalfSpace>,
-    /// A frictionless estimate for a start (condensed path): the pins carry the load in the
-    /// body's own modes the set leaves free instead of the balance test (never the prescribed
-    /// forces of force control; [`super::dense::Dense`]).
-    pub estimate: bool,
-    /// The frictionless estimate's load in the free modes where friction alone holds a part of
-    /// the body's load: that part carried by a tangential force at the contact
-    /// (`carried_at_contact` in mod.rs) instead of by the pins; `None`: the body's load φ.
-    pub carried: Option<&'a [f64]>,
-    /// The body's half-space model where the condensed path runs (direct preset): it locates
-    /// the contact zone of a floating body before the factorisation
-    /// ([`super::predictor::locate`]), and where that zone is too wide for the dense limits the
-    /// plain path predicts its first set from it (as `halfspace`).
-    pub model: Option<&'a HalfSpace>,
-    /// Force control (`contact.force`, force.rs): one approach δ_j per force-controlled pair
-    /// is an unknown of the loop (empty: no force control).
-    pub force: &'a [ForceControl],
-}
-
-impl NewtonSettings<'_> {
-    pub fn friction(&self) -> bool {
-        self.law.friction()
-    }
-}
+use crate::signorini::boundary::ContactBoundary;
+use crate::signorini::cycle::{decide, CycleGuard, Decision, Seen, SetKey};
+use crate::signorini::force::{self, Approach};
+use crate::signorini::halfspace::{self, HalfSpace, PredictorStep};
+use crate::signorini::rigid::{Balance, FreeModes, Motion};
+use crate::signorini::step_system::{ReducedSystem, RowChange, SolveKind, StepSolve};
 
 /// Coulomb (generalised Newton): the residual (F3) over all contact nodes must be below this
 /// fraction of ‖λ‖₂ over all contact nodes, besides Algorithm 2's rule (no state changed,
@@ -80,119 +32,16 @@ pub const COULOMB_RESIDUAL_ZERO: f64 = 1e-12;
 /// fraction of ‖λ‖₂.
 pub const COULOMB_RESIDUAL_STALL: f64 = 1e-6;
 
+use super::problem::{ContactProblem, NewtonResult, NewtonSettings, StepInfo, WarmStart};
+use super::step::{add_motion, ensure_converged, log_step, stalled, After, StepPlan};
 /// See [`Loop::fixed_point`] (as the condensed Coulomb iteration's step not taken).
-use super::active_set::FIXED_POINT_SLACK;
+use crate::signorini::active_set::FIXED_POINT_SLACK;
 
 /// The next step's tangential rows hold at the iterate as well as this step's did: `rows` =
 /// (‖this step's rows' residuals‖, ‖the next step's‖) at the iterate, `floor` the round-off of
 /// a row. Pure.
 fn rows_hold((own, next): (f64, f64), floor: f64) -> bool {
     next <= FIXED_POINT_SLACK * own.max(floor)
-}
-
-/// A warm start: the converged state of a previous solve on the same mesh and boundary
-/// (the contact nodes' iterate with their final normal set in `active`, this rank's rows of u).
-pub struct WarmStart<'a> {
-    pub nodes: &'a [NodeResult],
-    pub u_local: &'a [f64],
-}
-
-/// One Newton step, for the history.
-#[derive(Clone, Debug, serde::Serialize)]
-pub struct StepInfo {
-    pub step: usize,
-    /// |A_n^ℓ|: active nodes used in this step's solve.
-    pub active: usize,
-    /// Nodes whose state changed in the update after this solve.
-    pub changed: usize,
-    /// ‖C_n(u^ℓ, λ^ℓ)‖₂ over all contact nodes (3.21); with friction also C_τ (3.31).
-    pub residual: f64,
-    pub solve_seconds: f64,
-    /// A numeric factorisation (direct preset), Krylov iterations (iterative preset), or
-    /// Krylov iterations on an earlier step's factorisation (direct preset, reuse).
-    pub solve: SolveKind,
-    pub iterations: usize,
-    /// The reuse path's record of the step (direct preset, `solver.reuse` not "never").
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub reuse: Option<ReuseStep>,
-    /// The iterative preset's reuse path: PC setup or reuse, tolerance, warm start (iterative
-    /// preset, `solver.reuse` not "never").
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub amg: Option<AmgStep>,
-    /// Number of rigid modes pinned in this step.
-    pub pinned: usize,
-    /// Tresca: nodes in S1..S4 (inactive/stick, inactive/slip, active/stick, active/slip) in
-    /// this step's solve.
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub states: Option<[usize; 4]>,
-    /// Tresca: |u^ℓ − u^{ℓ−1}| / |u^ℓ|.
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub du_rel: Option<f64>,
-    /// The half-space predictor after this (first) step (iterative preset, frictionless).
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub predictor: Option<PredictorStep>,
-    /// Friction: how this step's matrix differs from the previous step's (absent in the
-    /// first step).
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub change: Option<RowChange>,
-    /// A factorising step of the plain path: the seconds of the numeric factorisation alone
-    /// (`solve_seconds` minus these: the solve with it).
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub factorisation_seconds: Option<f64>,
-}
-
-/// What Algorithms 1 and 2 return.
-pub struct NewtonResult {
-    pub u: Vector,
-    pub nodes: Vec<NodeResult>,
-    pub history: Vec<StepInfo>,
-    pub converged: bool,
-    /// Linear solves (Newton steps).
-    pub steps: usize,
-    /// Seconds spent in λ recovery (MatMult + local work), all steps.
-    pub lambda_seconds: f64,
-    /// Seconds spent writing the reduced systems, all steps.
-    pub rows_seconds: f64,
-    pub pinned_final: Vec<Pin>,
-    /// Step after which a recurring set switched the iteration to least-index updates.
-    pub cycle_detected_at: Option<usize>,
-    /// Force control: the approach δ_j of the result per force-controlled pair, in pair order
-    /// (its obstacle moved by δ_j F_j/|F_j|); empty without force control.
-    pub approach: Vec<f64>,
-    /// The rule that stopped the iteration (the exact criterion or a loosened acceptance).
-    pub stop: super::certificate::StopRule,
-}
-
-/// Default c = E / h_c with h_c the mean contact mesh size (w_k^(1/(d−1)) over all contact
-/// nodes): c u then has the size of a nodal force, as λ (measured in bench/results/tresca_c.md).
-pub fn default_c(ctx: &Ctx, b: &ContactBoundary, dim: usize, young: f64) -> f64 {
-    let local: f64 = b
-        .nodes
-        .iter()
-        .map(|k| k.weight.powf(1.0 / (dim - 1) as f64))
-        .sum();
-    let out = ctx.sum_vec(&[local, b.nodes.len() as f64]);
-    if out[1] > 0.0 && out[0] > 0.0 {
-        young / (out[0] / out[1])
-    } else {
-        young
-    }
-}
-
-/// The data of a contact solve: the mesh and its partition, the contact boundary, the
-/// Dirichlet values per dof (NaN = free), the assembled system (A, f).
-pub struct ContactProblem<'a> {
-    pub mesh: &'a Mesh,
-    pub layout: &'a Layout,
-    pub boundary: &'a ContactBoundary,
-    pub fixed: &'a [f64],
-    pub sys: &'a System,
-    /// The previous load step's condensed Coulomb factorisation on the way in, this solve's on
-    /// the way out.
-    pub kept: &'a super::kept::KeptFactor,
-    /// The contact zone the half-space model located in this solve (condensed.rs `locate`),
-    /// once computed: a second condensed attempt (Coulomb's normal dofs alone) takes it again.
-    pub located: &'a std::cell::RefCell<Option<super::predictor::Located>>,
 }
 
 /// The state the loop carries from step to step.
@@ -224,7 +73,7 @@ struct Loop<'a> {
     /// without.
     floors: (f64, f64),
     /// The rule of the last stop decided ([`Loop::next`]).
-    stop: super::certificate::StopRule,
+    stop: crate::signorini::certificate::StopRule,
 }
 
 /// A load step whose solution vanishes against its warm start's (the load and the obstacle's
@@ -234,15 +83,15 @@ struct Loop<'a> {
 /// the plain path): the iterate shrank by about 200 × per step while round-off flipped the
 /// states of the nodes at a zero gap, |Δu|/|u| stayed at 200, and the last step took 37, 14
 /// and 24 Newton steps on 1, 2 and 3 ranks (|C_n| down to 1e-157, then NaN in the log); 2 now.
-pub(super) const VANISHING: f64 = 1e-6;
+pub(crate) const VANISHING: f64 = 1e-6;
 
 /// The start "auto": the initially touching nodes (the "gap" start), except for a
 /// frictionless body that Dirichlet data leave floating, which starts with no active node:
 /// its first solve then places the body by a pin away from the contact and the balance
-/// shift ([`super::rigid`]) instead of hanging the whole load on the touching point, whose
+/// shift ([`crate::signorini::rigid`]) instead of hanging the whole load on the touching point, whose
 /// point support inflates the first penetration (3D Hertz: 6 instead of 20 Newton steps;
 /// 2D Hertz: 1–2 steps fewer, README).
-pub(super) fn auto_start(init: NewtonInit, friction: bool, free: &FreeModes) -> NewtonInit {
+pub(crate) fn auto_start(init: NewtonInit, friction: bool, free: &FreeModes) -> NewtonInit {
     if init == NewtonInit::Auto && !friction && free.floats() {
         NewtonInit::AllInactive
     } else {
@@ -260,7 +109,7 @@ pub fn semismooth_newton(
     s: &NewtonSettings,
     warm: Option<&WarmStart>,
 ) -> Result<NewtonResult, RunError> {
-    let (mesh, layout, b, sys) = (p.mesh, p.layout, p.boundary, p.sys);
+    let (mesh, sys) = (p.mesh, p.sys);
     let dim = mesh.dim;
     let (mut lp, predicting) = Loop::begin(ctx, p, reduced, s, warm)?;
     let mut history = Vec::new();
@@ -276,36 +125,9 @@ pub fn semismooth_newton(
     // (a stop there is confirmed by a factorised step, `StepPlan::after_stop`)
     let direct = reduced.kind().factorises();
     for step in 1..=s.section.max_steps {
-        let gram = lp.set_gram();
-        let modes_changed = lp.free.update(ctx, mesh, layout, &gram)?;
-        let null_space = lp.free_modes_by_null_space(reduced, modes_changed)?;
-        if !s.friction() && lp.approach.is_none() {
-            // Friction reads u_τ itself (stick rows, slip rows), so only the frictionless
-            // solve can leave the rigid motion out.
-            lp.rho = lp
-                .free
-                .fit_motion(ctx, b, &lp.set.normal, &lp.summary.gram, mesh);
-            lp.free.shift(b, &lp.rho, &mut lp.shifted);
-        }
-        if let Some(ap) = &lp.approach {
-            ap.place(&mut lp.shifted); // the gaps at δ_ℓ
-        }
-        let bs = &lp.shifted;
-        let pins = if null_space { &[][..] } else { lp.free.pins() };
-        reduced.write(ctx, sys, layout, bs, &lp.set, pins)?; // (3.29) / (3.42)
-        reduced.set_inexact(!plan.exact);
-        if plan.predict {
-            // a floating body: the model predicts from the gaps alone (no first solve)
-            reduced.set_predictor_solve(lp.free.floats() && lp.approach.is_none());
-        }
-        let allow_reuse = s.law != Law::Coulomb && !plan.confirm;
-        let solved = reduced.solve(ctx, allow_reuse)?;
+        let solved = lp.write_and_solve(ctx, p, reduced, s, (plan, step))?;
         let reused = solved.reuse.is_some() && solved.kind == SolveKind::Reuse;
-        ensure_converged(step, &solved.info, &b.keys)?;
-        if null_space {
-            lp.zero_pins(reduced)?;
-        }
-        reduced.recover(sys, bs, &lp.set, &mut lp.it)?; // (3.28)
+        reduced.recover(sys, &lp.shifted, &lp.set, &mut lp.it)?; // (3.28)
         let touch = lp.bordered_step(reduced, step)?;
         let bs = &lp.shifted;
         let scale = threshold_scale(ctx, bs, &lp.it.nodes, s.law, s.c);
@@ -358,6 +180,55 @@ pub fn semismooth_newton(
         }
     }
     lp.finish(reduced, history, converged)
+}
+
+impl Loop<'_> {
+    /// A step's first phase: the free rigid modes' pins (or a null space), the rigid motion
+    /// taken out of a frictionless solve, the gaps at the approach, and the step system
+    /// (3.29) / (3.42) written and solved as `plan` says. Collective.
+    fn write_and_solve(
+        &mut self,
+        ctx: &Ctx,
+        p: &ContactProblem,
+        reduced: &mut ReducedSystem,
+        s: &NewtonSettings,
+        (plan, step): (StepPlan, usize),
+    ) -> Result<StepSolve, RunError> {
+        let (mesh, layout, b, sys) = (p.mesh, p.layout, p.boundary, p.sys);
+        let gram = self.set_gram();
+        let modes_changed = self.free.update(ctx, mesh, layout, &gram)?;
+        let null_space = self.free_modes_by_null_space(reduced, modes_changed)?;
+        if !s.friction() && self.approach.is_none() {
+            // Friction reads u_τ itself (stick rows, slip rows), so only the frictionless
+            // solve can leave the rigid motion out.
+            self.rho = self
+                .free
+                .fit_motion(ctx, b, &self.set.normal, &self.summary.gram, mesh);
+            self.free.shift(b, &self.rho, &mut self.shifted);
+        }
+        if let Some(ap) = &self.approach {
+            ap.place(&mut self.shifted); // the gaps at δ_ℓ
+        }
+        let bs = &self.shifted;
+        let pins = if null_space {
+            &[][..]
+        } else {
+            self.free.pins()
+        };
+        reduced.write(ctx, sys, layout, bs, &self.set, pins)?; // (3.29) / (3.42)
+        reduced.set_inexact(!plan.exact);
+        if plan.predict {
+            // a floating body: the model predicts from the gaps alone (no first solve)
+            reduced.set_predictor_solve(self.free.floats() && self.approach.is_none());
+        }
+        let allow_reuse = s.law != Law::Coulomb && !plan.confirm;
+        let solved = reduced.solve(ctx, allow_reuse)?;
+        ensure_converged(step, &solved.info, &b.keys)?;
+        if null_space {
+            self.zero_pins(reduced)?;
+        }
+        Ok(solved)
+    }
 }
 
 impl<'a> Loop<'a> {
@@ -444,7 +315,7 @@ impl<'a> Loop<'a> {
             rho: [0.0; 6],
             shifted: placed,
             last_still_residual: None,
-            stop: super::certificate::StopRule::ActiveSet,
+            stop: crate::signorini::certificate::StopRule::ActiveSet,
             approach,
             null_space: false,
             corrections: (None, false),
@@ -459,7 +330,7 @@ impl<'a> Loop<'a> {
     /// ([`FreeModes::couple`]): a rigid motion that the force-controlled obstacles follow is
     /// free, its balance includes the prescribed forces. Collective under force control of a
     /// floating body (one reduction).
-    fn set_gram(&mut self) -> super::rigid::Gram {
+    fn set_gram(&mut self) -> crate::signorini::rigid::Gram {
         let (Some(ap), Some(modes), true) = (&self.approach, self.free.modes(), self.free.floats())
         else {
             return self.summary.gram;
@@ -497,7 +368,7 @@ impl<'a> Loop<'a> {
                 .collect()
         });
         let limits = (s.c, s.section.max_steps);
-        let (set, rec) = predictor::predict(
+        let (set, rec) = halfspace::predict(
             self.ctx,
             hs,
             &self.shifted,
@@ -519,7 +390,7 @@ impl<'a> Loop<'a> {
         Ok((rec, exact))
     }
 
-    /// The model's correction of an exact step's set update ([`predictor::correct`]; not
+    /// The model's correction of an exact step's set update ([`halfspace::correct`]; not
     /// under force control): when (3.23) changes nodes, the next set is the model's, except
     /// that every node (3.23) changes keeps its change (so the step counts at least those
     /// changes, and a correction never stops the iteration); the model's record, or `None`
@@ -536,7 +407,7 @@ impl<'a> Loop<'a> {
         }
         let limits = (self.s.c, self.s.section.max_steps);
         let cur = (&self.shifted, &self.it, self.set.normal.as_slice());
-        let (set, rec) = predictor::correct(ctx, hs, cur, &self.free, limits)?;
+        let (set, rec) = halfspace::correct(ctx, hs, cur, &self.free, limits)?;
         if let Some(model) = set.filter(|_| !rec.truncated) {
             let next: Vec<bool> = (model.iter().zip(&self.set.normal))
                 .zip(&update.next.normal)
@@ -580,205 +451,6 @@ impl<'a> Loop<'a> {
             stop: self.stop,
             u,
         })
-    }
-}
-
-/// [`COULOMB_RESIDUAL_STALL`]: this step changed no state and left u unchanged (`still`), so did
-/// the step before it (`last`: its residual), the residual did not halve, and it is below
-/// COULOMB_RESIDUAL_STALL · ‖λ‖₂. Pure.
-pub(super) fn stalled(still: bool, last: Option<f64>, residual: f64, lambda_norm: f64) -> bool {
-    still
-        && last.is_some_and(|r| residual >= 0.5 * r)
-        && residual <= COULOMB_RESIDUAL_STALL * lambda_norm
-}
-
-/// What a Newton step is, decided before it runs: the per-step record the loop's rules read.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-struct StepPlan {
-    /// Solved to the preset's tolerance (else inexact: frictionless, iterative preset's reuse
-    /// path, the solve stops at `reduced::INEXACT_REDUCTION` of its start's residual).
-    exact: bool,
-    /// The half-space model predicts the set after this step's solve (its first step).
-    predict: bool,
-    /// The confirming step: the same sets factorised after a stop decided on a step solved by
-    /// GMRES on an earlier factorisation (no reuse).
-    confirm: bool,
-    /// The half-space model corrects the set update after this step's solve ([`Loop::correct`]):
-    /// the exact steps from a predicted set on.
-    correct: bool,
-}
-
-/// What follows a step: the same sets once more, or the set updated by (3.23)/(3.33); with
-/// the next step's plan.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-enum After {
-    Repeat(StepPlan),
-    Update(StepPlan),
-}
-
-impl StepPlan {
-    /// After the solve and the update (before the stop rule). `exact`: whether the next steps
-    /// are exact as far as this step knows (its own plan, or the prediction's verdict: from a
-    /// predicted set every step is exact — the inexact steps, a residual reduction of 1e-6,
-    /// flip edge nodes whose λ_n or gap is near 0, 3D Hertz at 527 k unknowns: changes 18, 17,
-    /// 0 and an exact step after them, exact: 6, 0 — unless the set reached the model's
-    /// border). Inexact steps run while the set changes; the first that changes no node (or
-    /// leads back to a set seen before, `recurs`) is repeated exactly on the same set, and from
-    /// then on every step is exact, so the iteration ends as Algorithm 1 does: an exact solve
-    /// whose update changes no node. An inexact step that changes at least as many nodes as
-    /// the one before it (`last_changed`) makes no progress (the set chatters): exact from
-    /// then on as well.
-    fn after_solve(
-        self,
-        exact: bool,
-        changed: usize,
-        recurs: bool,
-        last_changed: &mut usize,
-    ) -> After {
-        // a confirming step keeps every later step factorised
-        let next = StepPlan {
-            exact,
-            predict: false,
-            confirm: self.confirm,
-            // the exact steps from a predicted set on
-            correct: (self.predict || self.correct) && exact,
-        };
-        if exact {
-            return After::Update(next);
-        }
-        if changed == 0 || recurs {
-            return After::Repeat(StepPlan {
-                exact: true,
-                ..next
-            });
-        }
-        let exact = changed >= *last_changed;
-        *last_changed = changed;
-        After::Update(StepPlan { exact, ..next })
-    }
-
-    /// After the stop rule said stop: a stop decided on a step solved by GMRES on an earlier
-    /// factorisation (`reused`, direct preset) carries the Krylov tolerance in u (~1e-10 of u
-    /// where A is ill-conditioned, ν → ½; 7e-8 in λ_t measured on block2d at ν = 0.4999), so
-    /// the same sets once more, factorised, and the final iterate is Algorithm 1's; else the
-    /// end (`Update`).
-    fn after_stop(self, reused: bool) -> After {
-        if reused && !self.confirm {
-            After::Repeat(StepPlan {
-                exact: true,
-                predict: false,
-                confirm: true,
-                correct: false,
-            })
-        } else {
-            After::Update(self)
-        }
-    }
-}
-
-/// u = w + ρ: the rigid motion taken out of the solve, added back to the solution and to the
-/// contact nodes' displacements. Collective when ρ ≠ 0 (the same ρ on every rank).
-pub(super) fn add_motion(
-    free: &FreeModes,
-    rho: &Motion,
-    p: &ContactProblem,
-    u: &mut Vector,
-    nodes: &mut [NodeResult],
-) -> Result<(), RunError> {
-    if rho.iter().all(|&x| x == 0.0) {
-        return Ok(());
-    }
-    let (mesh, layout, dim) = (p.mesh, p.layout, p.mesh.dim);
-    let mut idx = Vec::with_capacity(layout.owned_nodes.len() * dim);
-    let mut vals = Vec::with_capacity(idx.capacity());
-    for &v in &layout.owned_nodes {
-        for k in 0..dim {
-            idx.push((layout.node_global[v] * dim + k) as crate::petsc::PInt);
-            vals.push(free.motion_at(rho, &mesh.coords[v], k));
-        }
-    }
-    u.set_values(&idx, &vals, true)?;
-    u.assemble()?;
-    for (k, r) in p.boundary.nodes.iter().zip(nodes.iter_mut()) {
-        for c in 0..dim {
-            r.u[c] += free.motion_at(rho, &k.x, c);
-        }
-        r.u_n = k.frame.normal_part(&r.u);
-        r.u_t = k.frame.tangential_part(&r.u);
-    }
-    Ok(())
-}
-
-/// A linear solve that did not converge is an error naming the solver settings of the case.
-fn ensure_converged(
-    step: usize,
-    info: &SolveInfo,
-    keys: &super::boundary::CaseKeys,
-) -> Result<(), RunError> {
-    if info.converged() {
-        return Ok(());
-    }
-    Err(RunError::Failed(format!(
-        "Newton step {step}: the linear solver did not converge ({} after {} iterations); \
-         {}: it is set by {} (and PETSc options after --)",
-        info.reason_name,
-        info.iterations,
-        keys.file.display(),
-        keys.solver
-    )))
-}
-
-/// The rank-0 progress lines of a step.
-fn log_step(ctx: &Ctx, h: &StepInfo, t: &StepTotals) {
-    let how = match (&h.reuse, &h.amg) {
-        (Some(_), _) if h.solve == SolveKind::Reuse => format!("reuse, {} its", h.iterations),
-        (Some(r), _) if r.fallback => format!("{} its, refactorised", r.krylov_iterations),
-        (_, Some(a)) if a.skipped => {
-            "no solve: a floating body, the model predicts from the gaps".to_string()
-        }
-        (_, Some(a)) if a.initial_residual == 0.0 && h.iterations == 0 && !a.pc_setup => {
-            "no right-hand side, no solve".to_string()
-        }
-        (_, Some(a)) => format!(
-            "{} its, {}{}{}, r0 {:.1e}",
-            h.iterations,
-            if a.fallback {
-                "PC reused, failed, set up"
-            } else if a.pc_setup {
-                "PC set up"
-            } else {
-                "PC reused"
-            },
-            if a.inexact { ", inexact" } else { "" },
-            if a.null_space {
-                ", free modes as null space"
-            } else {
-                ""
-            },
-            a.initial_residual
-        ),
-        _ => format!("{} its", h.iterations),
-    };
-    say!(
-        ctx,
-        "newton {:3}: |A_n| = {:6}  changed {:6}  |C_n| = {:.3e}  pinned {}  solve {:.3} s ({how})",
-        h.step,
-        h.active,
-        h.changed,
-        h.residual,
-        h.pinned,
-        h.solve_seconds,
-    );
-    if let Some(s) = h.states {
-        say!(
-            ctx,
-            "            S1 {} S2 {} S3 {} S4 {}  |du|/|u| = {:.3e}",
-            s[0],
-            s[1],
-            s[2],
-            s[3],
-            t.du_rel
-        );
     }
 }
 
@@ -921,7 +593,7 @@ impl Loop<'_> {
                 "newton: u and λ below {VANISHING:e} of the warm start's: the step's solution \
                  vanishes (its states are round-off)"
             );
-            self.stop = super::certificate::StopRule::Vanishing;
+            self.stop = crate::signorini::certificate::StopRule::Vanishing;
             return Ok(true);
         }
         let t = &self.floored(t);
@@ -998,13 +670,7 @@ impl Loop<'_> {
         }
         match decision {
             Decision::Converged => {
-                // Coulomb accepted by the stall rule alone: a loosened acceptance
-                let loose =
-                    self.s.law == Law::Coulomb && t.residual > COULOMB_RESIDUAL_TOL * t.lambda_norm;
-                self.stop = match loose {
-                    true => super::certificate::StopRule::CoulombStall,
-                    false => super::certificate::StopRule::ActiveSet,
-                };
+                self.stop = self.stop_rule(t);
                 Ok(true)
             }
             Decision::SameSets => {
@@ -1016,51 +682,74 @@ impl Loop<'_> {
                 Ok(false)
             }
             Decision::TestBalance => unreachable!("the balance test was made above"),
-            Decision::NewSets => {
-                let mut summary = t.next;
-                let mut key = self.key(&summary, t);
-                let seen = match self.guard.check(step, key) {
-                    Err(_) if self.s.friction() && t.du_rel < self.s.section.tol_u => {
-                        // A recurring set while the iterate no longer moves: the nodes that
-                        // flip sit on the stick/slip threshold to round-off (both states hold
-                        // the same u and λ; several ranks' solver round-off differs from run
-                        // to run). Stop here; the KKT and friction certificates that follow
-                        // decide whether this iterate is a solution.
-                        say!(
-                            ctx,
-                            "newton: the set of step {} recurs while |Δu|/|u| = {:.1e} < tol_u: nodes on the \
-                             stick/slip threshold to round-off; stopping",
-                            step + 1,
-                            t.du_rel
-                        );
-                        self.stop = super::certificate::StopRule::RecurringSet;
-                        return Ok(true);
-                    }
-                    Err(e) => return Err(self.cycle_error(e)),
-                    Ok(seen) => seen,
-                };
-                if let Seen::SwitchToLeastIndex { prev } = seen {
-                    say!(
-                        ctx,
-                        "newton: cycling detected (the set of step {prev} recurs at step {}): \
-                         continuing with single-node updates (penetrating nodes first, least \
-                         index first)",
-                        step + 1
-                    );
-                }
-                if self.guard.least_index() {
-                    least_index_step(ctx, b, &self.set, &mut next);
-                    summary = next.summarise(ctx, b, self.free.modes(), dim);
-                    key = self.key(&summary, t);
-                    if let Err(e) = self.guard.check_safeguarded(step, key) {
-                        return Err(self.cycle_error(e));
-                    }
-                }
-                self.guard.record(key);
-                self.take(next, summary);
-                Ok(false)
+            Decision::NewSets => self.new_sets(step, next, t),
+        }
+    }
+
+    /// How a converged iteration stopped: Coulomb accepted by the stall rule alone is a
+    /// loosened acceptance. Local.
+    fn stop_rule(&self, t: &StepTotals) -> crate::signorini::certificate::StopRule {
+        let loose = self.s.law == Law::Coulomb && t.residual > COULOMB_RESIDUAL_TOL * t.lambda_norm;
+        match loose {
+            true => crate::signorini::certificate::StopRule::CoulombStall,
+            false => crate::signorini::certificate::StopRule::ActiveSet,
+        }
+    }
+
+    /// New sets after step `step`: the cycle guard's check (a recurring set while the iterate
+    /// no longer moves stops a friction solve; cycling switches to single-node updates), then
+    /// the next step's sets taken; `Ok(true)` = stopped. Collective (the guard's keys and the
+    /// least-index pick are global).
+    fn new_sets(
+        &mut self,
+        step: usize,
+        mut next: ActiveSet,
+        t: &StepTotals,
+    ) -> Result<bool, RunError> {
+        let (ctx, dim) = (self.ctx, self.p.mesh.dim);
+        let b = &self.shifted;
+        let mut summary = t.next;
+        let mut key = self.key(&summary, t);
+        let seen = match self.guard.check(step, key) {
+            Err(_) if self.s.friction() && t.du_rel < self.s.section.tol_u => {
+                // A recurring set while the iterate no longer moves: the nodes that
+                // flip sit on the stick/slip threshold to round-off (both states hold
+                // the same u and λ; several ranks' solver round-off differs from run
+                // to run). Stop here; the KKT and friction certificates that follow
+                // decide whether this iterate is a solution.
+                say!(
+                    ctx,
+                    "newton: the set of step {} recurs while |Δu|/|u| = {:.1e} < tol_u: nodes on the \
+                     stick/slip threshold to round-off; stopping",
+                    step + 1,
+                    t.du_rel
+                );
+                self.stop = crate::signorini::certificate::StopRule::RecurringSet;
+                return Ok(true);
+            }
+            Err(e) => return Err(self.cycle_error(e)),
+            Ok(seen) => seen,
+        };
+        if let Seen::SwitchToLeastIndex { prev } = seen {
+            say!(
+                ctx,
+                "newton: cycling detected (the set of step {prev} recurs at step {}): \
+                 continuing with single-node updates (penetrating nodes first, least \
+                 index first)",
+                step + 1
+            );
+        }
+        if self.guard.least_index() {
+            least_index_step(ctx, b, &self.set, &mut next);
+            summary = next.summarise(ctx, b, self.free.modes(), dim);
+            key = self.key(&summary, t);
+            if let Err(e) = self.guard.check_safeguarded(step, key) {
+                return Err(self.cycle_error(e));
             }
         }
+        self.guard.record(key);
+        self.take(next, summary);
+        Ok(false)
     }
 
     /// A cycle of a frictionless body that the contact cannot hold

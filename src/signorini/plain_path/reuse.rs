@@ -1,11 +1,11 @@
 //! The plain path's reuse of factorisations (Algorithms 1/2 and Coulomb's steps on the whole
 //! reduced system), one rule for every branch that enters it.
 
-use super::newton::NewtonSettings;
-use super::reduced::ReducedSystem;
+use super::problem::NewtonSettings;
 use crate::case::{Reuse, SolverSection};
 use crate::error::RunError;
 use crate::par::Ctx;
+use crate::signorini::step_system::ReducedSystem;
 
 /// Sets up the reuse of factorisations (or preconditioners) of the plain path: force control
 /// solves its lift on the step's own factorisation (force.rs), so a factorising solver never

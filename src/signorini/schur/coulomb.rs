@@ -1,0 +1,756 @@
+//! Coulomb's generalised Newton (docs/friction.md (F1)–(F6)) on the contact unknowns alone
+//! (direct preset): the frictionless condensed solve with every dof of its candidates in the
+//! Schur complement (frictionless.rs, `per` = d) leaves the compliance C = Qᵀ K_p⁻¹ Q of the
+//! candidates' dofs in their node frames (normal first) and d₀ = Qᵀ K_p⁻¹ f there. With λ the
+//! candidates' multipliers (3.28), α the amplitudes of the rigid modes Dirichlet data leave free
+//! (K_p pins them) and G their parts at the candidates, u = d₀ − C λ + G α, and every Newton
+//! step of the plain path is, on the candidates, one dense system in the active nodes' λ and α
+//! (with the balance Gᵀ λ = φ, the load in those modes):
+//!
+//! ```text
+//!   k ∈ A_n:            u_n,k = −g_k
+//!   stick (S3):         u_τ,k = u_τ^ref                                          (3.34a)
+//!   slip (S4):          −λ_τ,k + L̃ (u_τ,k − u_τ^ref) − q λ_n,k = r̃      (F6), u_n,k + g_k = 0
+//!   k ∉ A_n (S2):       λ_k = 0
+//! ```
+//!
+//! (or the same step in the primal form on S = C⁻¹ itself where that has fewer unknowns,
+//! [`Stiff`]) with the rows of `contact::coulomb_row_dyn` and the set update (3.23)/(F5) of the
+//! plain path (`ActiveSet::update`, its stick band included), stopped by the same rule, first on
+//! coarse subsets of the candidates (nested iteration, `DenseIteration::run_nested`). Nodes beyond
+//! the candidates stay inactive. At the end one expansion solve gives u = K_p⁻¹ (f − Q λ) +
+//! R z α, and the plain path's recovery (3.28) and set update on every contact node check it:
+//! no state may change, the residual (F3) must pass the plain path's tolerance (or, where the
+//! dense steps stalled, the KKT and friction certificates hold to round-off) and the set must
+//! hold every free mode. A check that fails hands the expanded iterate to the plain path as
+//! its start.
+//!
+//! Force control (a held body): each approach δ_j is one more column of G (the relative
+//! displacement of the pair's candidates, −δ_j (n·e_j, τ·e_j)) and one more balance row
+//! (the pair's force along e_j equals |F_j|); the check reads the obstacles at the δ's found.
+//!
+//! Collectives: one broadcast (the dense result), the expansion solve, one MatMult, the
+//! update's reduction and the certificates' all-gather.
+
+use super::coulomb_dense::DenseIteration;
+use super::coulomb_dense::Stiff;
+use super::outcome::fall_back;
+use super::outcome::Kept;
+use super::summary::record_steps;
+use super::summary::{CoarseLevel, CoulombCondensedSummary};
+use crate::contact::{CoulombRow, Frame};
+use crate::error::RunError;
+use crate::geom::dot;
+use crate::par::Ctx;
+use crate::say;
+use crate::signorini::active_set::{threshold_scale, ActiveSet, Iterate, StepTotals};
+use crate::signorini::boundary::{ContactBoundary, ContactNode, NodeResult};
+use crate::signorini::dense::guarded;
+use crate::signorini::force::{self, ForceControl};
+use crate::signorini::plain_path::{
+    add_motion, ContactProblem, NewtonResult, NewtonSettings, StepInfo, WarmStart,
+};
+use crate::signorini::rigid::FreeModes;
+use crate::signorini::step_system::ReducedSystem;
+use nalgebra::DMatrix;
+use std::time::Instant;
+
+/// What the condensed Coulomb solve returns.
+pub enum CoulombCondensed {
+    /// The checked solution (the dense steps are its history).
+    Solved(Box<NewtonResult>, CoulombCondensedSummary),
+    /// A start for the plain path: every contact node's record and this rank's rows of u; and
+    /// where only nodes beyond the candidates change state on the expanded u, those nodes
+    /// (c_h's global order; a new pass may take them as candidates).
+    Start(
+        Box<NewtonResult>,
+        Vec<f64>,
+        CoulombCondensedSummary,
+        Vec<usize>,
+    ),
+    /// Nothing to start from (the frictionless start then applies).
+    Fallback(CoulombCondensedSummary),
+}
+
+/// The residual ‖R‖₂ (F3) of the expanded iterate accepted, relative to ‖λ‖₂ (the plain path:
+/// `COULOMB_RESIDUAL_TOL` = 1e-9): the dense steps stall at the round-off of the compliance
+/// C = S⁻¹ and of the dense solves, measured at 2e-9 / 5e-9 (the held / floating Hertz disk,
+/// 171 602 unknowns) and 1.5e-8 (held, 344 620) of ‖λ‖₂; accepted at 2e-9 and 5e-9 the
+/// friction certificate ends at 6e-10 and 5e-9 of its scale, within the 1e-8 asked of every
+/// friction solve. Above it a stalled iteration is accepted where the certificates hold to
+/// [`CERTIFICATE_ROUND_OFF`] (the Hertz disk at 344 620 unknowns, held and floating: u within
+/// 2.8e-12 and 2.4e-11 of the plain path's); else one plain step from the expanded iterate
+/// confirms.
+const DENSE_RESIDUAL_TOL: f64 = 1e-8;
+
+/// The certificates' worst violation, relative to the problem's scales, that a stalled dense
+/// iterate may have to be accepted (the final check's warning level).
+const CERTIFICATE_ROUND_OFF: f64 = 1e-8;
+
+/// One dense step's record: step, |A_n|, changed, residual, seconds.
+pub(super) type DenseStep = (usize, usize, usize, f64, f64);
+
+/// The dense generalised Newton on rank 0 and how it ended.
+pub(super) struct DenseCoulomb {
+    /// λ of every candidate, d per node in C's order (node frame, normal first).
+    pub(super) lambda: Vec<f64>,
+    /// The free modes' amplitudes α (u = w + R z α).
+    pub(super) alpha: Vec<f64>,
+    /// Per candidate: in A_n, slipping.
+    pub(super) active: Vec<bool>,
+    pub(super) slip: Vec<bool>,
+    /// Per step: step, |A_n|, changed, residual, seconds.
+    pub(super) steps: Vec<DenseStep>,
+    /// `Err`: why the iteration gave up.
+    pub(super) end: Result<(), String>,
+    /// It stopped by the stall rule (`plain_path::stalled`: the residual at the round-off of the
+    /// dense compliance, above COULOMB_RESIDUAL_TOL).
+    pub(super) stalled: bool,
+    /// The nested start's coarse levels, coarsest first: (nodes, dense steps).
+    pub(super) coarse: Vec<(usize, usize)>,
+    /// Rank 0, where the last step was in the primal form: its u − G α at the candidates' dofs,
+    /// the Schur variables' part of the expansion (else empty: d₀ − C λ). Not broadcast.
+    pub(super) x_s: Vec<f64>,
+    /// Steps in the primal form ([`Stiff`]).
+    pub(super) primal_steps: usize,
+    /// The step whose settled slip rows left the system singular, from which the (F5) rows
+    /// ran (0: none).
+    pub(super) f5_from: usize,
+    /// The nested start's coarse levels on which that happened.
+    pub(super) f5_coarse: usize,
+}
+
+impl DenseCoulomb {
+    fn failed(n: usize, dim: usize, mz: usize, why: String) -> DenseCoulomb {
+        DenseCoulomb {
+            lambda: vec![0.0; n * dim],
+            alpha: vec![0.0; mz],
+            active: vec![false; n],
+            slip: vec![false; n],
+            steps: Vec::new(),
+            end: Err(why),
+            stalled: false,
+            coarse: Vec::new(),
+            x_s: Vec::new(),
+            primal_steps: 0,
+            f5_from: 0,
+            f5_coarse: 0,
+        }
+    }
+
+    /// All fields as one f64 vector (the broadcast); the reason travels as UTF-8 bytes.
+    fn pack(&self) -> Vec<f64> {
+        let mut v = self.lambda.clone();
+        v.extend_from_slice(&self.alpha);
+        v.extend(self.active.iter().map(|&a| a as u8 as f64));
+        v.extend(self.slip.iter().map(|&a| a as u8 as f64));
+        v.push(self.steps.len() as f64);
+        for s in &self.steps {
+            v.extend([s.0 as f64, s.1 as f64, s.2 as f64, s.3, s.4]);
+        }
+        let why = self.end.as_ref().err().map_or(&[][..], |w| w.as_bytes());
+        v.push(if self.end.is_ok() { 1.0 } else { 0.0 });
+        v.push(if self.stalled { 1.0 } else { 0.0 });
+        v.push(self.primal_steps as f64);
+        v.push(self.f5_from as f64);
+        v.push(self.f5_coarse as f64);
+        v.push(self.coarse.len() as f64);
+        for &(nodes, steps) in &self.coarse {
+            v.extend([nodes as f64, steps as f64]);
+        }
+        v.push(why.len() as f64);
+        v.extend(why.iter().map(|&b| b as f64));
+        v
+    }
+
+    fn unpack(v: &[f64], n: usize, dim: usize, mz: usize) -> DenseCoulomb {
+        let lambda = v[..n * dim].to_vec();
+        let alpha = v[n * dim..n * dim + mz].to_vec();
+        let nl = n * dim + mz;
+        let active = v[nl..nl + n].iter().map(|&x| x != 0.0).collect();
+        let slip = v[nl + n..nl + 2 * n].iter().map(|&x| x != 0.0).collect();
+        let mut at = nl + 2 * n;
+        let ns = v[at] as usize;
+        at += 1;
+        let steps = (0..ns)
+            .map(|i| {
+                let s = &v[at + 5 * i..at + 5 * i + 5];
+                (s[0] as usize, s[1] as usize, s[2] as usize, s[3], s[4])
+            })
+            .collect();
+        at += 5 * ns;
+        let ok = v[at] != 0.0;
+        let stalled = v[at + 1] != 0.0;
+        let primal_steps = v[at + 2] as usize;
+        let f5_from = v[at + 3] as usize;
+        let f5_coarse = v[at + 4] as usize;
+        let nc = v[at + 5] as usize;
+        let coarse = (0..nc)
+            .map(|i| (v[at + 6 + 2 * i] as usize, v[at + 7 + 2 * i] as usize))
+            .collect();
+        at += 6 + 2 * nc;
+        let len = v[at] as usize;
+        let bytes: Vec<u8> = v[at + 1..at + 1 + len].iter().map(|&b| b as u8).collect();
+        let end = if ok {
+            Ok(())
+        } else {
+            Err(String::from_utf8_lossy(&bytes).into_owned())
+        };
+        DenseCoulomb {
+            lambda,
+            alpha,
+            active,
+            slip,
+            steps,
+            end,
+            stalled,
+            coarse,
+            x_s: Vec::new(),
+            primal_steps,
+            f5_from,
+            f5_coarse,
+        }
+    }
+}
+
+/// The candidates as contact nodes of their own boundary (rank 0): frames, gaps, references.
+fn candidate_boundary(kept: &Kept, b: &ContactBoundary, dim: usize) -> ContactBoundary {
+    let nodes = kept
+        .comp
+        .list
+        .iter()
+        .map(|&i| {
+            let n = kept.cand.n(i);
+            ContactNode {
+                node: 0,
+                pair: kept.cand.pair(i),
+                mu: kept.cand.mu(i),
+                tag: kept.cand.tag(i),
+                row: 0,
+                local_row: 0,
+                x: kept.cand.x(i),
+                frame: Frame::new(n, dim).expect("obstacle normals are unit vectors"),
+                gap: kept.cand.gap(i),
+                weight: 0.0,
+                bound: 0.0,
+                u_t_ref: kept.cand.u_t_ref(i),
+            }
+        })
+        .collect();
+    ContactBoundary {
+        nodes,
+        n_global: kept.comp.list.len(),
+        offset: 0,
+        on_contact_boundary: Vec::new(),
+        excluded_dirichlet: 0,
+        obstacles: b.obstacles.clone(),
+        keys: b.keys.clone(),
+    }
+}
+
+/// G: the free modes' parts at the candidates, d rows per node (its frame: n, τ₁, τ₂), one
+/// column per free mode, then (force control) one per force-controlled pair j: its obstacle
+/// moved by δ_j e_j shifts the candidates' relative displacement by −δ_j (n·e_j, τ₁·e_j,
+/// τ₂·e_j) on its nodes (gaps g0 − δ_j n·e_j, references u_τ^ref + δ_j τ·e_j, as
+/// `force::Approach::place`), and its balance row is the pair's force along e_j (rank 0).
+fn mode_parts(
+    free: &FreeModes,
+    force: &[ForceControl],
+    cb: &ContactBoundary,
+    dim: usize,
+) -> DMatrix<f64> {
+    let mz = free.dirichlet_free().ncols();
+    let mut g = DMatrix::zeros(cb.nodes.len() * dim, mz + force.len());
+    for (q, k) in cb.nodes.iter().enumerate() {
+        let dirs = [k.frame.n, k.frame.t[0], k.frame.t[1]];
+        for (a, dir) in dirs.iter().enumerate().take(dim) {
+            let parts = free.normal_parts(&k.x, dir);
+            for cz in 0..mz {
+                g[(q * dim + a, cz)] = parts[cz];
+            }
+            for (j, fc) in force.iter().enumerate() {
+                if k.pair == fc.pair {
+                    g[(q * dim + a, mz + j)] = -dot(*dir, fc.direction());
+                }
+            }
+        }
+    }
+    g
+}
+
+/// Coulomb with friction coefficient `mu` condensed onto the candidates that the frictionless
+/// condensed solve `first` (its result) left in `kept` (module note). Collective.
+pub(crate) fn solve(
+    ctx: &Ctx,
+    p: &ContactProblem,
+    reduced: &mut ReducedSystem,
+    ns: &NewtonSettings,
+    kept: &mut Kept,
+    warm: Option<&WarmStart>,
+) -> Result<CoulombCondensed, RunError> {
+    let n = kept.comp.list.len();
+    let mut summary = CoulombCondensedSummary {
+        outcome: "condensed",
+        reason: None,
+        steps: 0,
+        primal_steps: 0,
+        dense_seconds: 0.0,
+        expansion_seconds: 0.0,
+        coarse_levels: Vec::new(),
+        f5_from: None,
+        f5_coarse_levels: 0,
+    };
+    let t = Instant::now();
+    let run = dense_phase(ctx, p, ns, kept, warm);
+    summary.dense_seconds = t.elapsed().as_secs_f64();
+    summary.steps = run.steps.len();
+    summary.primal_steps = run.primal_steps;
+    if !run.coarse.is_empty() {
+        let levels: Vec<String> = run
+            .coarse
+            .iter()
+            .map(|(nodes, steps)| format!("{nodes} nodes {steps} steps"))
+            .collect();
+        say!(
+            ctx,
+            "coulomb: condensed: nested start on coarse subsets of the candidates: {}",
+            levels.join(", ")
+        );
+        summary.coarse_levels = run
+            .coarse
+            .iter()
+            .map(|&(nodes, steps)| CoarseLevel { nodes, steps })
+            .collect();
+    }
+    let mut history = Vec::new();
+    record_steps(
+        ctx,
+        &mut history,
+        &run.steps,
+        ("C", "condensed Coulomb"),
+        (n, 0),
+    );
+    if run.f5_from > 0 || run.f5_coarse > 0 {
+        summary.f5_from = (run.f5_from > 0).then_some(run.f5_from);
+        summary.f5_coarse_levels = run.f5_coarse;
+        let mut at = Vec::new();
+        if run.f5_from > 0 {
+            at.push(format!("from dense step {} on", run.f5_from));
+        }
+        if run.f5_coarse > 0 {
+            at.push(format!(
+                "on {} coarse level(s) of the nested start",
+                run.f5_coarse
+            ));
+        }
+        say!(
+            ctx,
+            "coulomb: condensed: settled slip rows left a dense system singular (every active \
+             node slipping); the (F5) rows instead: {}",
+            at.join("; ")
+        );
+    }
+    if let Err(why) = &run.end {
+        return Ok(give_up(ctx, summary, why.clone()));
+    }
+    // w = K_p⁻¹ (f − Q λ): one expansion solve
+    let t = Instant::now();
+    let lam = if ctx.rank == 0 {
+        run.lambda.clone()
+    } else {
+        Vec::new()
+    };
+    let w = match kept.comp.expand_u(
+        ctx,
+        &kept.cand,
+        (&kept.f_root, kept.n_local),
+        (&lam, &run.x_s),
+    ) {
+        Ok(w) => w,
+        Err(why) => return Ok(give_up(ctx, summary, why)),
+    };
+    let checked = check(ctx, p, reduced, ns, kept, &run, &w)?;
+    summary.expansion_seconds = t.elapsed().as_secs_f64();
+    finish(ctx, reduced, (summary, history, n), checked)
+}
+
+/// The dense generalised Newton on rank 0 (from the warm records of a load step, or the
+/// frictionless solution), its outcome broadcast to every rank. Collective.
+fn dense_phase(
+    ctx: &Ctx,
+    p: &ContactProblem,
+    ns: &NewtonSettings,
+    kept: &Kept,
+    warm: Option<&WarmStart>,
+) -> DenseCoulomb {
+    let (b, dim) = (p.boundary, p.mesh.dim);
+    let n = kept.comp.list.len();
+    let mz = kept.free.dirichlet_free().ncols() + ns.force.len();
+    let warm_records = warm.map(|w| gather_records(ctx, w.nodes));
+    let root = ctx.on_root_wide(n * dim + mz, || {
+        let run = guarded("coulomb-dense-steps", || {
+            let cb = candidate_boundary(kept, b, dim);
+            let g = mode_parts(&kept.free, ns.force, &cb, dim);
+            let mut phi = kept.free.free_load();
+            phi.extend(ns.force.iter().map(|fc| fc.magnitude()));
+            let cmat_t = kept.comp.cmat.transpose();
+            let stiff = kept.comp.stiffness().map(|(s, r)| {
+                let sg = s * &g;
+                let gsg = g.transpose() * &sg;
+                Stiff { s, r, sg, gsg }
+            });
+            let dense = DenseIteration {
+                dim,
+                cmat: &kept.comp.cmat,
+                cmat_t: &cmat_t,
+                d0: &kept.comp.d0,
+                g: &g,
+                phi: &phi,
+                cb: &cb,
+                law: ns.law,
+                c: ns.c,
+                max_steps: ns.section.max_steps,
+                tol_u: ns.section.tol_u,
+                settle: true,
+                stiff: stiff.as_ref(),
+            };
+            match &warm_records {
+                Some(all) => {
+                    let (start, u_prev) = warm_start(all, &kept.comp.list, (&g, ns.force), dim);
+                    dense.run(&start, u_prev)
+                }
+                None => {
+                    let list = &kept.comp.list;
+                    let active: Vec<bool> = list.iter().map(|&i| kept.active[i]).collect();
+                    let lambda_n: Vec<f64> = list.iter().map(|&i| kept.lambda[i]).collect();
+                    let (start, u_prev) = dense.frictionless_start(&active, &lambda_n);
+                    // nested in 2D only: on surfaces (every fourth node a coarse one) it took
+                    // as many fine steps or more (docs/numbers.md: the 3D block, 12 against 7
+                    // and 8 against 8; the hemisphere, 14 against 13)
+                    if dim == 2 {
+                        dense.run_nested(&start, u_prev)
+                    } else {
+                        dense.run(&start, u_prev)
+                    }
+                }
+            }
+        });
+        let mut run = run.unwrap_or_else(|why| DenseCoulomb::failed(n, dim, mz, why));
+        (run.pack(), std::mem::take(&mut run.x_s))
+    });
+    let (mut packed, x_s) = root.unwrap_or_default();
+    ctx.broadcast_f64s(&mut packed);
+    let mut run = DenseCoulomb::unpack(&packed, n, dim, mz);
+    run.x_s = x_s;
+    run
+}
+
+/// The condensed solve stops: said in the log, the plain path from the frictionless solution.
+fn give_up(ctx: &Ctx, mut summary: CoulombCondensedSummary, why: String) -> CoulombCondensed {
+    let then = "the plain path from the frictionless solution";
+    let record = (&mut summary.outcome, &mut summary.reason);
+    fall_back(ctx, ("coulomb: condensed", then), record, why);
+    CoulombCondensed::Fallback(summary)
+}
+
+/// The dense states on this rank's contact nodes, K_p's held nodes in contact and sticking (the
+/// others inactive, λ = 0). Local.
+fn local_set(kept: &Kept, b: &ContactBoundary, run: &DenseCoulomb) -> ActiveSet {
+    let mut pos = vec![usize::MAX; kept.cand.n];
+    for (q, &i) in kept.comp.list.iter().enumerate() {
+        pos[i] = q;
+    }
+    let zero = CoulombRow::Slip {
+        l: [[0.0; 2]; 2],
+        q: [0.0; 2],
+        r: [0.0; 2],
+    };
+    let on = |i: usize| {
+        let q = pos[b.offset + i];
+        (q != usize::MAX && run.active[q]).then_some(q)
+    };
+    // K_p's held nodes: in contact and sticking
+    let held = |i: usize| kept.held.get(b.offset + i).copied().unwrap_or(false);
+    ActiveSet {
+        normal: (0..b.nodes.len())
+            .map(|i| on(i).is_some() || held(i))
+            .collect(),
+        tangential: Some(
+            (0..b.nodes.len())
+                .map(|i| match on(i) {
+                    Some(q) if !run.slip[q] => CoulombRow::Stick,
+                    None if held(i) => CoulombRow::Stick,
+                    _ => zero,
+                })
+                .collect(),
+        ),
+        spring_floor: 0.0,
+        stick_active: false,
+    }
+}
+
+/// An expanded iterate checked on every contact node.
+struct Checked {
+    it: Iterate,
+    u: crate::petsc::Vector,
+    totals: StepTotals,
+    /// The final set leaves a free rigid mode free (the plain path pins it: not unique).
+    loose: bool,
+    /// Where the dense steps stalled with no state changed above DENSE_RESIDUAL_TOL: the worst
+    /// violation of (3.14)/(3.18) relative to the problem's scales
+    /// ([`crate::signorini::final_state::coulomb_certificate_worst`]); not computed otherwise.
+    certificate: Option<f64>,
+    /// Force control: each force-controlled pair's approach δ_j.
+    approach: Vec<f64>,
+    /// Where no candidate changes state: the nodes beyond the candidates that do (c_h's global
+    /// order, every rank's); else empty.
+    beyond: Vec<usize>,
+}
+
+/// u = w + R z α from this rank's rows `w`, (3.28) and the set update (3.23)/(F5) with the
+/// dense states on every contact node, and whether the set holds every free mode. Collective.
+fn check(
+    ctx: &Ctx,
+    p: &ContactProblem,
+    reduced: &mut ReducedSystem,
+    ns: &NewtonSettings,
+    kept: &Kept,
+    run: &DenseCoulomb,
+    w: &[f64],
+) -> Result<Checked, RunError> {
+    let dim = p.mesh.dim;
+    // under force control the obstacles at the approaches found (the gaps and references of
+    // the plain path's iterate)
+    let approach = approaches(kept, run);
+    let placed = force::placed(p.boundary, &force::starting_at(ns.force, &approach));
+    let b = &placed;
+    ctx.agree(reduced.set_solution_local(w).map_err(RunError::from))?;
+    let set = local_set(kept, b, run);
+    let mut it = Iterate::new(b.nodes.len(), w.len(), true);
+    reduced.recover(p.sys, b, &set, &mut it)?; // (3.28) on w (A ρ = 0)
+                                               // u = w + ρ, ρ = R z α: the free modes' motion
+    let free = &kept.free;
+    let z = free.dirichlet_free();
+    let mut rho = [0.0; 6];
+    for (j, r) in rho.iter_mut().enumerate().take(free.rigid_modes().m) {
+        *r = (0..z.ncols()).map(|c| z[(j, c)] * run.alpha[c]).sum();
+    }
+    let mut u = reduced.solution()?;
+    add_motion(free, &rho, p, &mut u, &mut it.nodes)?;
+    let scale = threshold_scale(ctx, b, &it.nodes, ns.law, ns.c);
+    let up = set.update(&it, b, ns.law, ns.c, scale, dim); // (3.23) / (F5)
+    let totals = up.reduce(ctx, b, free.modes(), dim);
+    // the nodes beyond the candidates that change state: a new pass takes them as candidates
+    // (gathered only where a state changed; the same on every rank)
+    let beyond = match totals.changed > 0 {
+        true => changed_beyond(ctx, kept, b, (&set, &up.next)),
+        false => Vec::new(),
+    };
+    let loose = if z.ncols() > 0 {
+        let gram = set.summarise(ctx, b, free.modes(), dim).gram;
+        let mut fin = FreeModes::new(
+            ctx,
+            p.mesh,
+            p.layout,
+            p.fixed,
+            b,
+            &reduced.f_local,
+            ns.rigid,
+        );
+        fin.update(ctx, p.mesh, p.layout, &gram)?;
+        !fin.pins().is_empty()
+    } else {
+        false
+    };
+    // the same on every rank: the totals are reduced, the run broadcast
+    let judged = totals.changed == 0
+        && run.stalled
+        && totals.residual > DENSE_RESIDUAL_TOL * totals.lambda_norm;
+    let certificate = if judged {
+        Some(crate::signorini::final_state::coulomb_certificate_worst(
+            ctx, p.sys, b, &it.nodes, &u, dim,
+        )?)
+    } else {
+        None
+    };
+    Ok(Checked {
+        it,
+        u,
+        totals,
+        loose,
+        certificate,
+        approach,
+        beyond,
+    })
+}
+
+/// The nodes whose state changes from `set` to `next` where no candidate's does: every rank's,
+/// in c_h's global order (empty where a candidate changes). Collective.
+fn changed_beyond(
+    ctx: &Ctx,
+    kept: &Kept,
+    b: &ContactBoundary,
+    (set, next): (&ActiveSet, &ActiveSet),
+) -> Vec<usize> {
+    let mut mine = Vec::new();
+    let mut inside = 0usize;
+    for i in 0..b.nodes.len() {
+        if set.state(i) != next.state(i) {
+            let g = b.offset + i;
+            match kept.comp.in_s[g] {
+                true => inside += 1,
+                false => mine.push(g as f64),
+            }
+        }
+    }
+    if ctx.sum_usize(inside) > 0 {
+        return Vec::new();
+    }
+    ctx.all_gather_varcount(&mine)
+        .iter()
+        .map(|&g| g as usize)
+        .collect()
+}
+
+/// The force-controlled pairs' approaches δ_j of a dense run (the amplitudes after the free
+/// modes'; empty without force control).
+fn approaches(kept: &Kept, run: &DenseCoulomb) -> Vec<f64> {
+    run.alpha[kept.free.dirichlet_free().ncols()..].to_vec()
+}
+
+/// The checked iterate as the result (no state changed, ‖R‖₂ ≤ DENSE_RESIDUAL_TOL ‖λ‖₂, every
+/// free mode held), else as the plain path's start — where the dense steps stalled above the
+/// bound, the plain path confirms from it in one LU step to round-off. Collective (log).
+fn finish(
+    ctx: &Ctx,
+    reduced: &ReducedSystem,
+    (mut summary, history, n): (CoulombCondensedSummary, Vec<StepInfo>, usize),
+    checked: Checked,
+) -> Result<CoulombCondensed, RunError> {
+    let Checked {
+        it,
+        u,
+        totals,
+        loose,
+        certificate,
+        approach,
+        beyond,
+    } = checked;
+    // a stalled dense iteration is accepted where its certificates hold to round-off (the
+    // bound beyond which the final check warns), as the plain path accepts a stall
+    let residual_ok = totals.residual <= DENSE_RESIDUAL_TOL * totals.lambda_norm
+        || certificate.is_some_and(|c| c <= CERTIFICATE_ROUND_OFF);
+    let u_local = u.to_local_vec()?;
+    let result = NewtonResult {
+        u,
+        nodes: it.nodes,
+        steps: history.len(),
+        history,
+        converged: true,
+        lambda_seconds: reduced.lambda_seconds,
+        rows_seconds: reduced.rows_seconds,
+        pinned_final: Vec::new(),
+        cycle_detected_at: None,
+        approach,
+        // accepted by its certificates alone above DENSE_RESIDUAL_TOL: loosened
+        stop: if totals.residual <= DENSE_RESIDUAL_TOL * totals.lambda_norm {
+            crate::signorini::certificate::StopRule::ActiveSet
+        } else {
+            crate::signorini::certificate::StopRule::CondensedCoulombStall
+        },
+    };
+    if totals.changed == 0 && residual_ok && !loose {
+        let stalled = certificate.map_or(String::new(), |c| {
+            format!(" (stalled; the certificates' worst {c:.3e} of the problem's scales)")
+        });
+        say!(
+            ctx,
+            "coulomb: condensed: {} dense steps ({} in the primal form) on {n} candidates \
+             ({:.3} s), expansion and check {:.3} s: |C| = {:.3e} of |λ| = {:.3e}{stalled}",
+            summary.steps,
+            summary.primal_steps,
+            summary.dense_seconds,
+            summary.expansion_seconds,
+            totals.residual,
+            totals.lambda_norm
+        );
+        return Ok(CoulombCondensed::Solved(Box::new(result), summary));
+    }
+    let why = if loose {
+        "the final set leaves a rigid mode free".to_string()
+    } else if let Some(c) = certificate {
+        format!(
+            "the dense steps stalled at |C| = {:.3e} of |λ| = {:.3e} on the expanded u, above \
+             {DENSE_RESIDUAL_TOL:e} of it, the certificates' worst {c:.3e} of the problem's \
+             scales: one plain step confirms",
+            totals.residual, totals.lambda_norm
+        )
+    } else {
+        format!(
+            "on the expanded u {} node(s) change state, |C| = {:.3e} of |λ| = {:.3e}",
+            totals.changed, totals.residual, totals.lambda_norm
+        )
+    };
+    say!(ctx, "coulomb: condensed: {why}");
+    summary.outcome = "start";
+    summary.reason = Some(why);
+    Ok(CoulombCondensed::Start(
+        Box::new(result),
+        u_local,
+        summary,
+        beyond,
+    ))
+}
+
+/// Values per node of a gathered warm record: u_n, u_τ (2), λ_n, λ_τ (2), active, slip.
+const WARM_REC: usize = 8;
+
+/// Every rank's warm-start records in c_h's global order (one all-gather). Collective.
+fn gather_records(ctx: &Ctx, nodes: &[NodeResult]) -> Vec<f64> {
+    let mut mine = Vec::with_capacity(nodes.len() * WARM_REC);
+    for r in nodes {
+        mine.extend_from_slice(&[r.u_n, r.u_t[0], r.u_t[1], r.lambda_n]);
+        mine.extend_from_slice(&[r.lambda_t[0], r.lambda_t[1]]);
+        mine.extend_from_slice(&[r.active as u8 as f64, r.slip as u8 as f64]);
+    }
+    ctx.all_gather_varcount(&mine)
+}
+
+/// The dense iteration's start from a load step's warm records (`all`, gathered) at the
+/// candidates `list`: their states and values, u (d per node). Under force control u is
+/// taken relative to the obstacles at their starting approaches δ_j (the dense unknowns are
+/// relative: u = d₀ − C λ + G α, G's last columns the approaches', `g`).
+fn warm_start(
+    all: &[f64],
+    list: &[usize],
+    (g, force): (&DMatrix<f64>, &[ForceControl]),
+    dim: usize,
+) -> (Vec<NodeResult>, Vec<f64>) {
+    let mut u = vec![0.0; list.len() * dim];
+    let first = g.ncols() - force.len();
+    let start = list
+        .iter()
+        .enumerate()
+        .map(|(q, &i)| {
+            let mut r = [0.0; WARM_REC];
+            r.copy_from_slice(&all[i * WARM_REC..(i + 1) * WARM_REC]);
+            for (j, fc) in force.iter().enumerate() {
+                for a in 0..dim {
+                    r[a] += fc.start * g[(q * dim + a, first + j)];
+                }
+            }
+            u[q * dim] = r[0];
+            u[q * dim + 1..(q + 1) * dim].copy_from_slice(&r[1..dim]);
+            NodeResult {
+                u_n: r[0],
+                u_t: [r[1], r[2]],
+                lambda_n: r[3],
+                lambda_t: [r[4], r[5]],
+                active: r[6] != 0.0,
+                slip: r[7] != 0.0,
+                ..NodeResult::default()
+            }
+        })
+        .collect();
+    (start, u)
+}

@@ -1,0 +1,157 @@
+//! How a pass of the Schur path ends: solved, factorised (kept for the next load step) or
+//! fallen back to the plain path, with the reason.
+
+use super::frictionless::{Candidates, Compliance};
+use super::round::Expanded;
+use super::summary::CondensedSummary;
+use crate::error::RunError;
+use crate::par::Ctx;
+use crate::say;
+use crate::signorini::plain_path::{add_motion, ContactProblem, NewtonResult, StepInfo};
+use crate::signorini::rigid::FreeModes;
+use crate::signorini::step_system::ReducedSystem;
+
+/// What the condensed path returns: the solution, or the reason to run the plain path.
+pub enum Condensed {
+    Solved(Box<NewtonResult>, CondensedSummary),
+    Fallback(CondensedSummary),
+    /// [`solve_keeping`](super::frictionless::solve_keeping) without the frictionless steps: K_p
+    /// factorised with the first candidates' Schur complement, nothing solved.
+    Factorised(CondensedSummary),
+}
+
+/// What a converged condensed solve with every dof of the candidates in the Schur complement
+/// (`per` = d) leaves for a friction solve on the same candidates: the compliance with its
+/// factorisation, the candidates, f on rank 0, the free modes (K_p's pins) and the
+/// frictionless set and λ_n
+/// over every contact node (c_h's global order).
+pub struct Kept {
+    pub(crate) comp: Compliance,
+    pub(crate) cand: Candidates,
+    pub(crate) f_root: Vec<f64>,
+    pub(crate) n_local: usize,
+    pub(crate) free: FreeModes,
+    pub(crate) lambda: Vec<f64>,
+    pub(crate) active: Vec<bool>,
+    /// The nodes K_p holds on the obstacle, sticking (c_h's global order; empty: none).
+    pub(crate) held: Vec<bool>,
+    /// The zone they were held in (c_h's global order; empty: none).
+    pub(crate) zone: Vec<bool>,
+}
+
+impl Kept {
+    /// The kept factorisation holds a step with free modes `free` and candidates `cand`: the
+    /// same pins, `per` Schur variables per candidate, and the kept candidates' rows and node
+    /// frames (K_p was factorised in them). Local (on all-gathered data).
+    pub(super) fn holds(&self, free: &FreeModes, cand: &Candidates, per: usize) -> bool {
+        self.comp.per == per
+            && free.pins() == self.free.pins()
+            && self.cand.n == cand.n
+            && self
+                .comp
+                .list
+                .iter()
+                .all(|&i| cand.row(i) == self.cand.row(i) && cand.n(i) == self.cand.n(i))
+    }
+}
+
+/// A converged solve's result and what it keeps: with `per` > 1 the kept compliance for the
+/// friction solve; else the factorisation for the next load step (`p.kept`). Local.
+pub(super) fn keep_solved(
+    p: &ContactProblem,
+    solved: Condensed,
+    kept: Kept,
+    per: usize,
+) -> (Condensed, Option<Kept>) {
+    match per > 1 {
+        true => (solved, Some(kept)),
+        false => {
+            // for the next load step (a held zone's too: its rows' values are in f)
+            p.kept.put(kept);
+            (solved, None)
+        }
+    }
+}
+
+/// Why a round of candidates stops the condensed path: the zone is too wide for the dense
+/// limits (the plain path then starts from the half-space model's set, mod.rs), or something
+/// failed.
+pub(super) struct Stop {
+    pub(super) why: String,
+    pub(super) too_wide: bool,
+}
+
+impl Stop {
+    pub(super) fn too_wide(why: String) -> Stop {
+        Stop {
+            why,
+            too_wide: true,
+        }
+    }
+    pub(super) fn failed(why: String) -> Stop {
+        Stop {
+            why,
+            too_wide: false,
+        }
+    }
+}
+
+/// The converged condensed solve as the plain path's result: u = w + ρ (λ and the set were
+/// taken on w, as the plain path does). Collective.
+pub(super) fn finish(
+    p: &ContactProblem,
+    reduced: &ReducedSystem,
+    free: &FreeModes,
+    mut ex: Expanded,
+    history: Vec<StepInfo>,
+    summary: CondensedSummary,
+) -> Result<Condensed, RunError> {
+    let mut u = reduced.solution()?;
+    add_motion(free, &ex.rho, p, &mut u, &mut ex.it.nodes)?;
+    let result = NewtonResult {
+        u,
+        nodes: ex.it.nodes,
+        steps: history.len(),
+        history,
+        converged: true,
+        lambda_seconds: reduced.lambda_seconds,
+        rows_seconds: reduced.rows_seconds,
+        pinned_final: ex.pins,
+        cycle_detected_at: None,
+        approach: ex.approach,
+        stop: crate::signorini::certificate::StopRule::ActiveSet,
+    };
+    Ok(Condensed::Solved(Box::new(result), summary))
+}
+
+/// [`fallback`] for a round's [`Stop`] (marked in the summary where the zone is too wide).
+pub(super) fn fallback_stop(ctx: &Ctx, mut summary: CondensedSummary, stop: Stop) -> Condensed {
+    summary.too_wide = stop.too_wide;
+    fallback(ctx, summary, stop.why)
+}
+
+/// The plain path takes over: said in the log and in the summary.
+pub(super) fn fallback(ctx: &Ctx, mut summary: CondensedSummary, why: String) -> Condensed {
+    let record = (&mut summary.outcome, &mut summary.fallback_reason);
+    fall_back(
+        ctx,
+        ("newton: condensed path", "solving on the plain path"),
+        record,
+        why,
+    );
+    Condensed::Fallback(summary)
+}
+
+/// A condensed solve gives up for the plain path: said in the log (`what` gave up, `then`
+/// where the plain path starts), its record's `outcome` "fallback" with the `reason` `why`.
+/// Collective (log).
+pub(crate) fn fall_back(
+    ctx: &Ctx,
+    (what, then): (&str, &str),
+    (outcome, reason): (&mut &'static str, &mut Option<String>),
+    why: String,
+) {
+    say!(ctx, "{what}: {why}; {then}");
+    *outcome = "fallback";
+    *reason = Some(why);
+}

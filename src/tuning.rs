@@ -62,12 +62,12 @@ pub const ALLATONCE_MIN_RANKS: usize = 3;
 /// An inexact step reduces its warm start's residual by this factor. Measured on 3D Hertz,
 /// 2 ranks: a fixed 1e-4 ‖b‖ made the set chatter (79 k unknowns: no convergence in 100
 /// steps); a fixed 1e-6 ‖b‖ followed the plain path's sets at 79 k but not at 526 k (11 steps
-/// instead of 7) (reduced.rs). The 2-core AMD EPYC. Not machine-specific (step counts).
+/// instead of 7) (step_system/reuse.rs). The 2-core AMD EPYC. Not machine-specific (step counts).
 pub const INEXACT_REDUCTION: f64 = 1e-6;
 
 /// The half-space predictor's first solve reduces its residual by this factor. Measured at
 /// 527 k unknowns (3D Hertz, 2 ranks): 1e-3, 1e-2, 1e-1 took 7, 5, 4 iterations and gave
-/// predicted sets of 1 579, 1 578, 1 578 nodes (final set 1 576) (reduced.rs). The 2-core
+/// predicted sets of 1 579, 1 578, 1 578 nodes (final set 1 576) (step_system/reuse.rs). The 2-core
 /// AMD EPYC. Not machine-specific (iteration counts).
 pub const PREDICTOR_REDUCTION: f64 = 1e-2;
 
@@ -138,7 +138,7 @@ pub const MAX_CONTACT_NODES: usize = 100_000;
 pub const MAX_SCHUR_DOFS: usize = 8000;
 
 /// Dense work (n³ flops) always allowed; beyond it the dense work must pay against K_p's
-/// factorisation. Not measured as a value: "about 0.1 s of LAPACK on one core" (condensed.rs;
+/// factorisation. Not measured as a value: "about 0.1 s of LAPACK on one core" (schur/frictionless.rs;
 /// LAPACK ran at 13.6 GFlop/s on one core there, at 40 GFlop/s with AVX-512 kernels,
 /// docs/friction.md); machine not named. Machine-specific (a dense flop rate); on another
 /// machine: `scripts/bench-dense-threads`, the 1-thread LU time at n = 1 000.
@@ -162,13 +162,11 @@ pub const FIRST_FRACTION: usize = 8;
 pub const MIN_CANDIDATES: usize = 64;
 
 /// All pairs' first candidates together hold at most 1/FIRST_SCHUR_SHARE of the Schur limit,
-/// leaving room for growth (condensed.rs `Growth::new`, `max_schur_dofs() / (2 * per *
-/// pairs)`). Measured effect: the floating disk at 698 352 unknowns capped at 2 000 nodes
+/// leaving room for growth (schur/frictionless.rs `Growth::new`). Measured effect: the floating disk at 698 352 unknowns capped at 2 000 nodes
 /// where its zone asked for 2 232, then a second pass (docs/numbers.md). Not machine-specific.
 pub const FIRST_SCHUR_SHARE: usize = 2;
 
-/// A growth round multiplies every pair's number of candidates by this (condensed.rs
-/// `*t = (2 * *t).max(1)`). Not measured; not machine-specific.
+/// A growth round multiplies every pair's number of candidates by this (schur/frictionless.rs). Not measured; not machine-specific.
 pub const CANDIDATE_GROWTH: usize = 2;
 
 /// Where the half-space model located the zone, the first candidates hold (1 +
@@ -185,7 +183,7 @@ pub const MAX_ROUNDS: usize = 8;
 /// A wide zone's Schur variables: the 1/BAND_FRACTION of its nodes nearest its edge (the band
 /// doubles each pass). Justified by the model's zone edge: 2.3 % and 0.5 % of the zone's width from
 /// the final one on the 2D Hertz disk at 10–50 × its load, 1.5 % of the radius on the 3D
-/// ball (condensed.rs). Not machine-specific (geometry).
+/// ball (schur/frictionless.rs). Not machine-specific (geometry).
 pub const BAND_FRACTION: usize = 8;
 
 /// The nested iteration's coarsest level has at least this many points. Not measured; not
@@ -221,7 +219,7 @@ pub const MAX_MODEL_NODES: usize = 3000;
 /// final set of 3D Hertz is 1.2 × it), at least MIN_MODEL_NODES, at most MAX_MODEL_NODES
 /// while these cover FINE_MODEL_COVER of them, else at most MAX_REPRESENTED by a coarser
 /// subset. Measured: 3D Hertz, 527 k unknowns: 4 steps from a coarse model of 3 840 nodes,
-/// 3 from the fine one of 3 000 (predictor.rs). The 2-core AMD EPYC. Not machine-specific.
+/// 3 from the fine one of 3 000 (halfspace.rs). The 2-core AMD EPYC. Not machine-specific.
 pub const MODEL_MARGIN: usize = 3;
 /// See [`MODEL_MARGIN`]. Not measured.
 pub const MIN_MODEL_NODES: usize = 256;
@@ -229,12 +227,12 @@ pub const MIN_MODEL_NODES: usize = 256;
 pub const MAX_REPRESENTED: usize = 24_000;
 
 /// The fine model is used while FINE_MODEL_COVER[0] / FINE_MODEL_COVER[1] × the penetrating
-/// nodes fit in MAX_MODEL_NODES (predictor.rs `2 * MAX_MODEL_NODES >= 3 * pen`). Not
+/// nodes fit in MAX_MODEL_NODES (halfspace.rs). Not
 /// measured; not machine-specific.
 pub const FINE_MODEL_COVER: [usize; 2] = [3, 2];
 
 /// The model's solution counts as truncated where a node of the last 1/MODEL_BORDER_PART
-/// of its nodes (by clearance) comes into contact (predictor.rs `wanted - wanted / 10`).
+/// of its nodes (by clearance) comes into contact (halfspace.rs).
 /// Not measured; not machine-specific.
 pub const MODEL_BORDER_PART: usize = 10;
 
@@ -244,7 +242,7 @@ pub const MODEL_BORDER_PART: usize = 10;
 /// wide). The 2-core AMD EPYC. Not machine-specific (counts).
 pub const LOCATE_MODEL_NODES: [usize; 2] = [512, MAX_MODEL_NODES];
 
-/// The dense compliance's lower triangle is mirrored in tiles of this size (predictor.rs
+/// The dense compliance's lower triangle is mirrored in tiles of this size (halfspace.rs
 /// `assemble`). Not measured; cache-dependent, so machine-specific in principle.
 pub const MIRROR_TILE: usize = 64;
 

@@ -17,6 +17,9 @@ use crate::case::{self, CoulombAlgorithm, Reuse, SolverSection};
 use crate::error::RunError;
 use crate::par::Ctx;
 use crate::say;
+use crate::tuning::{
+    FIRST_STICK_FACTORISATIONS, MAX_STICK_FACTORISATIONS, WARM_STICK_FACTORISATIONS,
+};
 
 /// How a Coulomb solve ends.
 pub enum Outcome {
@@ -227,7 +230,7 @@ fn coulomb_start(
     let b = problem.boundary;
     let condense = solver_section.reuse == Reuse::Auto
         && b.n_global > 0
-        && b.n_global <= schur::MAX_CONTACT_NODES
+        && b.n_global <= crate::tuning::MAX_CONTACT_NODES
         && reduced.factorises()?;
     if !condense {
         return iterative_start(ctx, problem, reduced, ns, warm);
@@ -820,22 +823,8 @@ impl Unheld {
 /// The fixed point's stopping tolerance on the thresholds, relative to max_k b_k.
 pub const FIXED_POINT_TOL: f64 = 1e-9;
 
-/// Factorisations of K_p at most in a Coulomb start whose zone's interior is held sticking
-/// (each pass takes the nodes that changed state beyond the candidates as candidates, as long
-/// as fewer change than in the pass before); then the plain path from the last expanded
-/// iterate. Below what the plain path costs: 9–19 LU steps on the wide zones of
-/// docs/numbers.md ("Wide zones with friction").
-const MAX_STICK_FACTORISATIONS: usize = 8;
-
-/// Factorisations at most in a held zone's first pass (the attempt with every candidate
-/// condensed, then the held zone and one pass where its frictionless set moves): a zone whose
-/// frictionless set keeps moving under the held interior goes to the plain path instead.
-const FIRST_STICK_FACTORISATIONS: usize = 3;
-
-/// Factorisations at most in a Coulomb load step whose warm set's interior is held sticking
-/// (the pass on the warm set and one more); then the plain path from the last expanded
-/// iterate. Measured on the wide zones of docs/numbers.md ("Load steps on wide zones"): where
-/// the warm set predicts the step (a punch pressed or dragged, a held disk pushed deeper) one
-/// pass solves it; a floating disk rolling under a large traction took 5 passes with the
-/// changes falling 304, 86, 21, 1, 3, about what its 12 plain steps cost.
-const WARM_STICK_FACTORISATIONS: usize = 2;
+// tuning::MAX_STICK_FACTORISATIONS: Factorisations of K_p at most in a Coulomb start whose zone's interior is held sticking
+// (each pass takes the nodes that changed state beyond the candidates as candidates, as long
+// as fewer change than in the pass before); then the plain path from the last expanded
+// iterate. Below what the plain path costs: 9–19 LU steps on the wide zones of
+// docs/numbers.md ("Wide zones with friction").

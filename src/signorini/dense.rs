@@ -10,6 +10,7 @@
 use super::rigid::BALANCE_RTOL;
 use crate::contact::{c_n, normal_active};
 use crate::petsc::lapack::{DenseCholesky, DenseLu};
+use crate::tuning::{COARSEN_KEEP, COARSEN_RADIUS, COARSEST, SPACING_SAMPLES};
 use nalgebra::{DMatrix, DVector, SymmetricEigen};
 use std::collections::HashSet;
 use std::time::Instant;
@@ -661,7 +662,7 @@ pub(super) fn coarsen(x: &[[f64; 3]], gap: &[f64]) -> Vec<Vec<usize>> {
         return Vec::new();
     }
     let d2 = |a: &[f64; 3], b: &[f64; 3]| (0..3).map(|k| (a[k] - b[k]).powi(2)).sum::<f64>();
-    let step = (n / 256).max(1);
+    let step = (n / SPACING_SAMPLES).max(1);
     let mut nn: Vec<f64> = (0..n)
         .step_by(step)
         .map(|i| {
@@ -681,7 +682,7 @@ pub(super) fn coarsen(x: &[[f64; 3]], gap: &[f64]) -> Vec<Vec<usize>> {
     order.sort_by(|&a, &b| gap[a].total_cmp(&gap[b]).then(a.cmp(&b)));
     let mut levels: Vec<Vec<usize>> = Vec::new();
     let mut prev: Vec<usize> = order; // level 0: every point, by gap
-    let mut r = 0.99 * h;
+    let mut r = COARSEN_RADIUS * h;
     loop {
         r *= 2.0;
         let mut kept: Vec<usize> = Vec::new();
@@ -693,16 +694,13 @@ pub(super) fn coarsen(x: &[[f64; 3]], gap: &[f64]) -> Vec<Vec<usize>> {
         if kept.len() < COARSEST {
             break;
         }
-        if 4 * kept.len() <= 3 * prev.len() {
+        if COARSEN_KEEP[1] * kept.len() <= COARSEN_KEEP[0] * prev.len() {
             levels.push(kept.clone());
             prev = kept;
         }
     }
     levels
 }
-
-/// The nested iteration's coarsest level has at least this many points.
-pub(super) const COARSEST: usize = 8;
 
 /// The modes (columns of the m_z × m_z identity's eigenbasis of the Gram matrix `gram`) that
 /// a set fixes (eigenvalue above 1e-9 of the largest, at least 1e-9) and those it leaves free.

@@ -30,24 +30,14 @@ use crate::error::RunError;
 use crate::mesh::Mesh;
 use crate::par::Ctx;
 use crate::say;
+use crate::tuning::{
+    FINE_MODEL_COVER, LOCATE_MODEL_NODES, MAX_MODEL_NODES, MAX_REPRESENTED, MIN_MODEL_NODES,
+    MIRROR_TILE, MODEL_BORDER_PART, MODEL_MARGIN,
+};
 use nalgebra::{DMatrix, DVector};
 use serde::Serialize;
 use std::f64::consts::PI;
 use std::time::Instant;
-
-/// The model holds at most this many contact nodes (those nearest to contact after the first
-/// solve): its dense compliance has this squared entries on rank 0.
-pub const MAX_MODEL_NODES: usize = 3000;
-
-/// The model represents this multiple of the nodes that penetrate after the first solve (the
-/// final set of 3D Hertz is 1.2 × it), at least [`MIN_MODEL_NODES`], at most
-/// [`MAX_MODEL_NODES`] while these cover 1.5 × the penetrating nodes, else at most
-/// [`MAX_REPRESENTED`] by a coarser subset ([`model_nodes`]): a coarse model's contact edge is
-/// a coarse node wide (3D Hertz, 527 k unknowns: 4 steps from a coarse model of 3 840 nodes,
-/// 3 from the fine one of 3 000).
-pub const MODEL_MARGIN: usize = 3;
-pub const MIN_MODEL_NODES: usize = 256;
-pub const MAX_REPRESENTED: usize = 24_000;
 
 /// The model's nodes among the represented ones (`x`, ordered by the first solve's clearance
 /// `s0`): all of them up to `cap` ([`MAX_MODEL_NODES`] for the prediction), else the finest
@@ -215,7 +205,7 @@ pub fn assemble(n: usize, packed: &[f64]) -> DMatrix<f64> {
             .copy_from_slice(&packed[p..p + j + 1]);
         p += j + 1;
     }
-    const T: usize = 64;
+    const T: usize = MIRROR_TILE;
     for bj in (0..n).step_by(T) {
         for bi in (bj..n).step_by(T) {
             for j in bj..(bj + T).min(n) {
@@ -436,13 +426,6 @@ fn log_model(ctx: &Ctx, hs: &HalfSpace, rec: &PredictorStep, correcting: bool) {
     );
 }
 
-/// The model's nodes where it locates a contact zone ([`locate`]): a coarse subset of every
-/// contact node first (a contact line of 8 193 nodes: every thirty-second, 257 model nodes,
-/// 0.04 s on 2 ranks), every node up to [`MAX_MODEL_NODES`] (else their coarse subset) where
-/// that does not converge (measured: a floating ball of 1 065 contact nodes, 20 in contact,
-/// modelled by 194 cycles: its zone is four model nodes wide).
-pub const LOCATE_MODEL_NODES: [usize; 2] = [512, MAX_MODEL_NODES];
-
 /// A located contact zone ([`locate`]): this rank's clearances and the nodes the model puts in
 /// contact; `None` where the model did not converge.
 pub type Located = Option<(Vec<f64>, usize)>;
@@ -594,7 +577,7 @@ impl Model {
             w.min(n)
         } else if pen == 0 {
             0
-        } else if 2 * MAX_MODEL_NODES >= 3 * pen {
+        } else if FINE_MODEL_COVER[1] * MAX_MODEL_NODES >= FINE_MODEL_COVER[0] * pen {
             (MODEL_MARGIN * pen)
                 .clamp(MIN_MODEL_NODES, MAX_MODEL_NODES)
                 .min(n)
@@ -745,7 +728,7 @@ impl Model {
                         flags[i] = 1.0;
                     }
                 }
-                let border = wanted - wanted / 10;
+                let border = wanted - wanted / MODEL_BORDER_PART;
                 let truncated = wanted < n && self.fine[border..].iter().any(|&i| flags[i] != 0.0);
                 (
                     if truncated { 3.0 } else { 0.0 },

@@ -688,7 +688,7 @@ fn normal_and_tresca(
     let condense = !friction
         && solver_section.reuse == Reuse::Auto
         && b.n_global > 0
-        && b.n_global <= schur::MAX_CONTACT_NODES
+        && b.n_global <= crate::tuning::MAX_CONTACT_NODES
         && reduced.factorises()?;
     if condense {
         match schur::frictionless::solve(ctx, problem, reduced, ns, warm)? {

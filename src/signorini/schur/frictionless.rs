@@ -49,60 +49,19 @@ use crate::signorini::dense::DenseRun;
 use crate::signorini::plain_path::{ContactProblem, NewtonSettings, StepInfo, WarmStart};
 use crate::signorini::rigid::FreeModes;
 use crate::signorini::step_system::ReducedSystem;
+use crate::tuning::{
+    BAND_FRACTION, CANDIDATE_GROWTH, DENSE_FLOOR_FLOPS, DENSE_SPEEDUP_2D, FIRST_FRACTION,
+    FIRST_SCHUR_SHARE, LOCATED_MARGIN, MAX_ROUNDS, MAX_SCHUR_DOFS, MIN_CANDIDATES,
+};
 use nalgebra::{DMatrix, DVector};
 use std::borrow::Cow;
 use std::collections::HashSet;
 use std::time::Instant;
 
-/// More contact nodes than this and the condensed path is not tried (every rank holds a
-/// record of 15 values per contact node).
-pub const MAX_CONTACT_NODES: usize = 100_000;
-
-/// More Schur variables (the candidates' normal dofs: one per candidate) than this and the
-/// plain path takes over before anything is factorised: rank 0 holds S (then C) as one dense
-/// matrix of their square (8 000: 512 MB), and the dense work grows as their cube (see also
-/// DENSE_FLOOR_FLOPS).
-pub const MAX_SCHUR_DOFS: usize = 8000;
-
 /// [`MAX_SCHUR_DOFS`], or the test-only limit that replaces it (`crate::fault::limit`).
 fn max_schur_dofs() -> usize {
     crate::fault::limit("MAX_SCHUR_DOFS", MAX_SCHUR_DOFS)
 }
-
-/// Dense work (n³ flops for the compliance of n candidates) always allowed: about 0.1 s of
-/// LAPACK on one core. Beyond it the candidates must cost no more than the factorisation of
-/// K_p (MUMPS' analysis estimate): else the plain path runs.
-const DENSE_FLOOR_FLOPS: f64 = 1e9;
-
-/// In 2D the dense work may be this many times the factorisation's flops: a dense flop costs
-/// a fraction of one of MUMPS' on a 2D body (small fronts). Measured on the held Hertz disk at
-/// 698 352 unknowns with Coulomb (2026-11-27), 2 ranks, OpenBLAS' AVX-512 kernels: K_p's
-/// factorisation 1.1e10 flops, about 1.4 s per plain Newton step; the dense work on 2 000
-/// candidates with every dof (n³ = 6.4e10) 1.6 s, about one factorisation's time (a ratio of
-/// about 6). 8 lets the dense work cost up to about 1.4 factorisations: the path it saves
-/// costs 10 or more (that case: 12 plain steps after the frictionless solution, 34.0 s in
-/// all, against 9.7 s condensed). Earlier (LAPACK at 13.6 GFlop/s on one core against MUMPS'
-/// 0.8 GFlop/s at 171 602 unknowns) it was 4. 3D fronts are dense enough for BLAS-3 rates:
-/// there the ratio stays 1 (not measured beyond).
-const DENSE_SPEEDUP_2D: f64 = 8.0;
-
-/// The first candidate set: the 1/FIRST_FRACTION of the contact nodes with the smallest gaps.
-const FIRST_FRACTION: usize = 8;
-
-/// The first candidate set holds at least this many contact nodes (all if fewer).
-const MIN_CANDIDATES: usize = 64;
-
-/// Where the half-space model located the contact zone (halfspace::locate), the first
-/// candidates hold at least (1 + 1/LOCATED_MARGIN) times the nodes it put in contact: its zone
-/// is that of a coarse model without the load's own deformation (measured: the rolling Hertz
-/// disk, 42 k to 345 k unknowns, 124 / 496 / 992 located, 124 / 495 / 991 in the final
-/// Coulomb set; the floating Hertz disk at 345 k, 993 located, 969 frictionless and 947 with
-/// Coulomb), and the dense compliance costs the cube of the candidates' dofs (with a fourth
-/// more, the floating disk's Coulomb candidates at 345 k exceed what pays: the plain path).
-const LOCATED_MARGIN: usize = 8;
-
-/// Rounds of candidate growth before the plain path takes over.
-const MAX_ROUNDS: usize = 8;
 
 /// A predicted contact zone is wide where the dense compliance of its nodes and their margin
 /// beyond (1/LOCATED_MARGIN more), `per` dofs each, would cost more than `max_flops`: before
@@ -117,14 +76,13 @@ fn wide(zone: usize, per: usize, max_flops: f64) -> bool {
     (((zone + zone / LOCATED_MARGIN) * per) as f64).powi(3) > max_flops
 }
 
-/// The edge band of a held zone: the 1/BAND_FRACTION of its nodes nearest to its edge (in 2D
-/// 1/16 of the zone's width on either side, in 3D an annulus 6 % of a round zone's radius
-/// wide); with the nodes beyond the zone (1/LOCATED_MARGIN of its count) they are the Schur
-/// variables. The half-space model's zone edge was 2.3 % (its coarse levels) and 0.5 % of the
-/// zone's width from the final one on the 2D Hertz disk at 10–50 × its load, 1.5 % of the
-/// radius on the 3D ball; a held node that (3.23) releases, or a node beyond that comes into
-/// contact, starts a new pass from the set (3.23) gives.
-const BAND_FRACTION: usize = 8;
+// tuning::BAND_FRACTION: The edge band of a held zone: the 1/BAND_FRACTION of its nodes nearest to its edge (in 2D
+// 1/16 of the zone's width on either side, in 3D an annulus 6 % of a round zone's radius
+// wide); with the nodes beyond the zone (1/LOCATED_MARGIN of its count) they are the Schur
+// variables. The half-space model's zone edge was 2.3 % (its coarse levels) and 0.5 % of the
+// zone's width from the final one on the 2D Hertz disk at 10–50 × its load, 1.5 % of the
+// radius on the 3D ball; a held node that (3.23) releases, or a node beyond that comes into
+// contact, starts a new pass from the set (3.23) gives.
 
 /// Runs Algorithm 1 condensed onto the contact unknowns (module note). `Fallback` when the
 /// dense iteration cycles, does not converge within `max_steps`, or its final set changes on
@@ -528,7 +486,7 @@ impl Growth {
         for b in &mut by_gap {
             b.sort_by(|&a, &b| cand.by_key(a, b));
         }
-        let limit = (max_schur_dofs() / (2 * per * pairs)).max(1);
+        let limit = (max_schur_dofs() / (FIRST_SCHUR_SHARE * per * pairs)).max(1);
         // a held zone's band and margin are what it wants
         let some_held = held.iter().any(|&h| h);
         let take: Vec<usize> = by_gap
@@ -690,7 +648,7 @@ impl Growth {
             self.active[i as usize] = true;
         }
         for t in &mut self.take {
-            *t = (2 * *t).max(1);
+            *t = (CANDIDATE_GROWTH * *t).max(1);
         }
         self.why = format!(
             "{} node(s) beyond the candidates came into contact, so the {} nodes with the \

@@ -21,6 +21,5 @@ pub mod start;
 pub mod summary;
 
 pub use coulomb::CoulombCondensed;
-pub use frictionless::MAX_CONTACT_NODES;
 pub use outcome::{Condensed, Kept};
 pub use summary::{CondensedSummary, CoulombCondensedSummary};

@@ -557,7 +557,8 @@ pub(super) fn expand(
 mod tests {
     use super::*;
     use crate::petsc::mumps::nested_dissection;
-    use crate::signorini::dense::{coarsen, COARSEST};
+    use crate::signorini::dense::coarsen;
+    use crate::tuning::COARSEST;
 
     /// A dense problem without free modes (c = 1, unit load scale).
     fn no_modes<'a>(

@@ -5,6 +5,10 @@ use super::rows::{Directions, Springs};
 use crate::case::Reuse;
 use crate::linsolve::{self};
 use crate::petsc::{self, Ksp, SolveInfo, Vector};
+use crate::tuning::{
+    ALWAYS_BUDGET, AUTO_MARGIN, INEXACT_REDUCTION, ITERATION_PER_SOLVE, PREDICTOR_REDUCTION,
+    RATE_MIN_DECADES, RATE_MIN_ITERATIONS, REBUILD_GROWTH, REUSE_BUDGET, SOLVE_FLOP_COST,
+};
 use std::time::Instant;
 
 /// How a step's system was solved: a numeric factorisation of the new matrix (the symbolic
@@ -59,24 +63,6 @@ pub struct StepSolve {
     pub reuse: Option<ReuseStep>,
     pub amg: Option<AmgStep>,
 }
-
-/// "always": Krylov iterations a reuse may make before the step refactorises (fixed, so that
-/// runs and tests are reproducible; "auto" takes its budget from the factorisation's counts).
-pub const ALWAYS_BUDGET: usize = 30;
-
-/// "auto" reuses only if the expected Krylov solve costs at most this fraction of a
-/// factorisation step: room for the estimate of one iteration.
-pub const AUTO_MARGIN: f64 = 0.75;
-
-/// The cost of one Krylov iteration on the factorisation as this multiple of one triangular
-/// solve pair (MatSolve; plus MatMult and orthogonalisation).
-pub const ITERATION_PER_SOLVE: f64 = 1.25;
-
-/// The cost of one flop of a triangular solve pair (sparse, memory-bound, one vector) in flops
-/// of the numeric factorisation (dense fronts, BLAS 3): a fixed ratio, so that "auto"'s choice
-/// depends on the run's counts alone, never on its timings. Measured on the plain path of
-/// the Hertz disk (docs/numbers.md, "solver.reuse = auto from counts").
-pub const SOLVE_FLOP_COST: f64 = 4.0;
 
 /// What "auto" weighs, in flops of the numeric factorisation, from MUMPS' global statistics
 /// of the last factorisation (the same on every rank): the factorisation (RINFOG(1)) and one
@@ -156,37 +142,15 @@ impl Reuser {
     }
 }
 
-/// An inexact step of the iterative preset reduces the residual of its warm start by this
-/// factor (‖b − S u‖ ≤ INEXACT_REDUCTION ‖b − S u₀‖, never looser than the preset's own
-/// tolerance): while the active set still changes, a step only has to tell the next set, not
-/// the final u. Relative to the start rather than to ‖b‖: the start's residual comes from the
-/// nodes that changed, on the scale of the nodal contact forces, which shrink with the mesh
-/// while ‖b‖ does not. Measured on 3D Hertz, 2 ranks: a fixed 1e-4 ‖b‖ made the set chatter
-/// (79 k unknowns: ~150 nodes changing in every step, no convergence in 100 steps); a fixed
-/// 1e-6 ‖b‖ went through the plain path's sets at 79 k but not at 526 k (11 steps instead of
-/// 7, the last three exact after the set grew again).
-pub const INEXACT_REDUCTION: f64 = 1e-6;
-
-/// The half-space predictor's first solve (no active node) only has to give the model the
-/// normal displacements u⁰_n, a smooth field: it reduces its residual by this factor.
-/// Measured at 527 k unknowns (3D Hertz, 2 ranks): 1e-3, 1e-2, 1e-1 took 7, 5, 4 iterations
-/// and gave predicted sets of 1 579, 1 578, 1 578 nodes (final set 1 576).
-pub const PREDICTOR_REDUCTION: f64 = 1e-2;
-
-/// "auto" (iterative preset): the next step sets the preconditioner up anew (PCSetUp on its
-/// matrix) when this step needed more than this multiple of the iterations per decade of
-/// residual reduction that the solve right after the last setup needed.
-pub const REBUILD_GROWTH: f64 = 1.3;
-
-/// A solve on a reused preconditioner may make this multiple of the iterations that the rate
-/// after the last setup predicts for it before it stops and the preconditioner is set up anew.
-pub const REUSE_BUDGET: f64 = 4.0;
-
-/// A solve must reduce the residual by at least this many decades and make this many
-/// iterations before its rate (iterations per decade) is compared: a warm start that is
-/// already nearly converged says nothing about the preconditioner.
-const RATE_MIN_DECADES: f64 = 1.5;
-const RATE_MIN_ITERATIONS: usize = 4;
+// tuning::INEXACT_REDUCTION: An inexact step of the iterative preset reduces the residual of its warm start by this
+// factor (‖b − S u‖ ≤ INEXACT_REDUCTION ‖b − S u₀‖, never looser than the preset's own
+// tolerance): while the active set still changes, a step only has to tell the next set, not
+// the final u. Relative to the start rather than to ‖b‖: the start's residual comes from the
+// nodes that changed, on the scale of the nodal contact forces, which shrink with the mesh
+// while ‖b‖ does not. Measured on 3D Hertz, 2 ranks: a fixed 1e-4 ‖b‖ made the set chatter
+// (79 k unknowns: ~150 nodes changing in every step, no convergence in 100 steps); a fixed
+// 1e-6 ‖b‖ went through the plain path's sets at 79 k but not at 526 k (11 steps instead of
+// 7, the last three exact after the set grew again).
 
 /// What the iterative preset's reuse path did in one step (summary.json
 /// `newton.history[].amg`; absent with `solver.reuse = "never"` and with the direct preset).

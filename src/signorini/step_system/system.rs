@@ -2,9 +2,7 @@
 //! pattern, the right-hand side, the linear solver, and the constant rows of A at the contact
 //! nodes and the pins.
 
-use super::reuse::{
-    AmgReuser, AmgStep, ReuseCosts, ReuseStep, Reuser, SolveKind, StepSolve, INEXACT_REDUCTION,
-};
+use super::reuse::{AmgReuser, AmgStep, ReuseCosts, ReuseStep, Reuser, SolveKind, StepSolve};
 use super::rows::{
     direction_changes, spring_changes, ConstraintMap, Directions, NodeRows, Springs,
 };
@@ -21,6 +19,7 @@ use crate::petsc::{self, Matrix, PInt, SolveInfo, Vector};
 use crate::signorini::active_set::{ActiveSet, Iterate};
 use crate::signorini::boundary::ContactBoundary;
 use crate::signorini::rigid::Pin;
+use crate::tuning::INEXACT_REDUCTION;
 use std::time::Instant;
 
 /// The reduced system of one Newton step and its solver: the matrix S on A's pattern, the

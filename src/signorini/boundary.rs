@@ -10,7 +10,6 @@ use crate::mesh::Mesh;
 use crate::par::Ctx;
 use crate::partition::Layout;
 use crate::setup::{group_facets, ContactSettings};
-use crate::warnings::Warning;
 
 /// One owned contact node.
 #[derive(Clone, Debug)]
@@ -239,15 +238,15 @@ fn pair_nodes(
     (weight, pair_of, clash)
 }
 
-/// The contact boundary and the warnings of its start ([`super::warn::start_warnings`]).
-/// Collective.
-pub fn build(
+/// The contact boundary, and what `at_start` makes of its nodes before the obstacles move (the
+/// caller's start warnings). Collective (and so is `at_start`, on every rank alike).
+pub fn build<W>(
     ctx: &Ctx,
     mesh: &Mesh,
     layout: &Layout,
     settings: &ContactSettings,
-    fixed: &[f64],
-) -> Result<(ContactBoundary, Vec<Warning>), RunError> {
+    (fixed, at_start): (&[f64], impl FnOnce(&[ContactNode]) -> W),
+) -> Result<(ContactBoundary, W), RunError> {
     let dim = mesh.dim;
     let file = settings.file.as_path();
     let (weight, pair_of, clash) = pair_nodes(mesh, settings);
@@ -308,7 +307,7 @@ pub fn build(
     let ex_all = ctx.sum_usize(excluded);
     ctx.agree(bad.map_or(Ok(()), |e| Err(RunError::Input(e))))?;
     check_depth(ctx, mesh, &nodes, settings)?;
-    let warned = super::warn::start_warnings(ctx, (mesh, layout, settings), &nodes);
+    let warned = at_start(&nodes);
     move_obstacles(&mut nodes, &settings.displacements(), settings.friction());
     let b = ContactBoundary {
         n_global: counts.iter().sum::<u64>() as usize,

@@ -502,7 +502,10 @@ pub fn contact_boundary(
     layout: &Layout,
     fixed: &[f64],
 ) -> Result<(ContactBoundary, Vec<Warning>), RunError> {
-    let (b, warned) = boundary::build(ctx, mesh, layout, settings, fixed)?;
+    let start = |nodes: &[boundary::ContactNode]| {
+        warn::start_warnings(ctx, (mesh, layout, settings), nodes)
+    };
+    let (b, warned) = boundary::build(ctx, mesh, layout, settings, (fixed, start))?;
     log_boundary(ctx, &b, settings, mesh.dim);
     // the approaches' starts do not matter here: only the forces' directions
     if let Some(fc) = force::unreached(ctx, &b, &force_control(settings, None)) {

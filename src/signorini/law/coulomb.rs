@@ -8,6 +8,23 @@ use crate::contact::{self, CoulombRow, NodePoint};
 use crate::signorini::boundary::{ContactNode, NodeResult};
 use crate::signorini::force::ForceControl;
 
+/// Coulomb (generalised Newton): the residual (F3) over all contact nodes must be below this
+/// fraction of ‖λ‖₂ over all contact nodes, besides Algorithm 2's rule (no state changed,
+/// |u^ℓ − u^{ℓ−1}| / |u^ℓ| < tol_u), before the iteration stops.
+pub const COULOMB_RESIDUAL_TOL: f64 = 1e-9;
+
+/// Coulomb: a residual (F3) below this fraction of ‖λ‖₂ is round-off: with no state changed
+/// the iterate is a solution and the iteration stops at once (λ = f − A u holds by
+/// construction, so (F3) = 0 is the whole problem), without the step that tests |Δu|.
+pub const COULOMB_RESIDUAL_ZERO: f64 = 1e-12;
+
+/// Coulomb: a residual that an exact step on unchanged states and an unchanged u (below
+/// tol_u) no longer halves is what round-off leaves of (F3) — it grows with c = E/h_c and the
+/// number of nodes (the floating Hertz disk at 344 620 unknowns stalls at 1.5e-9 of ‖λ‖₂, above
+/// COULOMB_RESIDUAL_TOL, step after step with |Δu|/|u| ~ 1e-13) — and is accepted below this
+/// fraction of ‖λ‖₂.
+pub const COULOMB_RESIDUAL_STALL: f64 = 1e-6;
+
 /// Coulomb's law with each node's μ (`ContactNode::mu`: its pair's).
 pub struct Coulomb;
 

@@ -7,7 +7,7 @@
 //! A new law: one file here implementing [`FrictionLaw`], a variant of [`Law`] with its lines
 //! in `Law::rules` and `Law::of` (and its keys in the case file and setup.rs).
 
-mod coulomb;
+pub mod coulomb;
 mod none;
 mod rules;
 mod tresca;

@@ -12,25 +12,9 @@ use crate::signorini::boundary::ContactBoundary;
 use crate::signorini::cycle::{decide, CycleGuard, Decision, Seen, SetKey};
 use crate::signorini::force::{self, Approach};
 use crate::signorini::halfspace::{self, HalfSpace, PredictorStep};
+use crate::signorini::law::coulomb::{COULOMB_RESIDUAL_TOL, COULOMB_RESIDUAL_ZERO};
 use crate::signorini::rigid::{Balance, FreeModes, Motion};
 use crate::signorini::step_system::{ReducedSystem, RowChange, SolveKind, StepSolve};
-
-/// Coulomb (generalised Newton): the residual (F3) over all contact nodes must be below this
-/// fraction of ‖λ‖₂ over all contact nodes, besides Algorithm 2's rule (no state changed,
-/// |u^ℓ − u^{ℓ−1}| / |u^ℓ| < tol_u), before the iteration stops.
-pub const COULOMB_RESIDUAL_TOL: f64 = 1e-9;
-
-/// Coulomb: a residual (F3) below this fraction of ‖λ‖₂ is round-off: with no state changed
-/// the iterate is a solution and the iteration stops at once (λ = f − A u holds by
-/// construction, so (F3) = 0 is the whole problem), without the step that tests |Δu|.
-pub const COULOMB_RESIDUAL_ZERO: f64 = 1e-12;
-
-/// Coulomb: a residual that an exact step on unchanged states and an unchanged u (below
-/// tol_u) no longer halves is what round-off leaves of (F3) — it grows with c = E/h_c and the
-/// number of nodes (the floating Hertz disk at 344 620 unknowns stalls at 1.5e-9 of ‖λ‖₂, above
-/// COULOMB_RESIDUAL_TOL, step after step with |Δu|/|u| ~ 1e-13) — and is accepted below this
-/// fraction of ‖λ‖₂.
-pub const COULOMB_RESIDUAL_STALL: f64 = 1e-6;
 
 use super::problem::{ContactProblem, NewtonResult, NewtonSettings, StepInfo, WarmStart};
 use super::step::{add_motion, ensure_converged, log_step, stalled, After, StepPlan};

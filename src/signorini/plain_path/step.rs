@@ -2,7 +2,6 @@
 //! (exact or inexact, reuse, the rules the loop reads), the rigid motion added back to the
 //! solution, the stall rule of Coulomb's residual, and the step's progress lines.
 
-use super::iteration::COULOMB_RESIDUAL_STALL;
 use super::problem::{ContactProblem, StepInfo};
 use crate::error::RunError;
 use crate::par::Ctx;
@@ -10,6 +9,7 @@ use crate::petsc::{SolveInfo, Vector};
 use crate::say;
 use crate::signorini::active_set::StepTotals;
 use crate::signorini::boundary::NodeResult;
+use crate::signorini::law::coulomb::COULOMB_RESIDUAL_STALL;
 use crate::signorini::rigid::{FreeModes, Motion};
 use crate::signorini::step_system::SolveKind;
 

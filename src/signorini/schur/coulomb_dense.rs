@@ -10,7 +10,7 @@ use crate::signorini::active_set::{
 };
 use crate::signorini::boundary::{ContactBoundary, NodeResult};
 use crate::signorini::dense::coarsen;
-use crate::signorini::plain_path::iteration::{
+use crate::signorini::law::coulomb::{
     COULOMB_RESIDUAL_STALL, COULOMB_RESIDUAL_TOL, COULOMB_RESIDUAL_ZERO,
 };
 use crate::signorini::plain_path::stalled;

@@ -2,7 +2,7 @@
 //! tangential contact values, the free modes' amplitudes), the rows of each node's state, the
 //! equilibrated dense solve and the iteration with its stopping rules.
 
-use super::coulomb::{DenseCoulomb, DenseStep};
+use super::coulomb_run::{DenseCoulomb, DenseStep};
 use crate::contact::{normal_active, CoulombRow};
 use crate::petsc::lapack::DenseLu;
 use crate::signorini::active_set::{

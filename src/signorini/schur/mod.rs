@@ -12,12 +12,15 @@
 //! | `coulomb_dense` | Coulomb's generalised Newton on the dense system |
 //! | `summary` | the summaries (summary.json's `condensed`) and the dense steps' records |
 
+pub mod candidates;
 pub mod coulomb;
 pub mod coulomb_dense;
+pub mod coulomb_run;
 pub mod frictionless;
 pub mod outcome;
 pub mod round;
 pub mod start;
+pub mod stop;
 pub mod summary;
 
 pub use coulomb::CoulombCondensed;

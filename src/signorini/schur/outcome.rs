@@ -1,14 +1,15 @@
 //! How a pass of the Schur path ends: solved, factorised (kept for the next load step) or
 //! fallen back to the plain path, with the reason.
 
-use super::frictionless::{Candidates, Compliance};
-use super::round::Expanded;
+use super::candidates::{Candidates, Compliance};
+pub(super) use super::stop::Stop;
 use super::summary::CondensedSummary;
 use crate::error::RunError;
 use crate::par::Ctx;
 use crate::say;
+use crate::signorini::active_set::Iterate;
 use crate::signorini::plain_path::{add_motion, ContactProblem, NewtonResult, StepInfo};
-use crate::signorini::rigid::FreeModes;
+use crate::signorini::rigid::{FreeModes, Motion, Pin};
 use crate::signorini::step_system::ReducedSystem;
 
 /// What the condensed path returns: the solution, or the reason to run the plain path.
@@ -73,27 +74,16 @@ pub(super) fn keep_solved(
     }
 }
 
-/// Why a round of candidates stops the condensed path: the zone is too wide for the dense
-/// limits (the plain path then starts from the half-space model's set, mod.rs), or something
-/// failed.
-pub(super) struct Stop {
-    pub(super) why: String,
-    pub(super) too_wide: bool,
-}
-
-impl Stop {
-    pub(super) fn too_wide(why: String) -> Stop {
-        Stop {
-            why,
-            too_wide: true,
-        }
-    }
-    pub(super) fn failed(why: String) -> Stop {
-        Stop {
-            why,
-            too_wide: false,
-        }
-    }
+/// The expanded iterate of a round: (3.28) on w with the set, the rigid motion ρ that u = w + ρ
+/// carries, the pins of the set's free modes, and the global indices of the nodes (3.23)
+/// changes.
+pub(super) struct Expanded {
+    pub(super) it: Iterate,
+    pub(super) rho: Motion,
+    pub(super) pins: Vec<Pin>,
+    pub(super) changed: Vec<u64>,
+    /// Force control: the approach δ_j of the round per force-controlled pair.
+    pub(super) approach: Vec<f64>,
 }
 
 /// The converged condensed solve as the plain path's result: u = w + ρ (λ and the set were

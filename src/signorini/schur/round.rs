@@ -2,9 +2,10 @@
 //! the candidates, the dense Algorithm 1 on the compliance, the expansion of the iterate and the
 //! judgement of its set on the full system.
 
-use super::frictionless::{Candidates, Compliance, Growth};
-use super::outcome::{Kept, Stop};
+use super::candidates::{Candidates, Compliance, Growth};
+use super::outcome::{Expanded, Kept};
 use super::start::SolveStart;
+use super::stop::Stop;
 use super::summary::record_steps;
 use super::summary::CondensedSummary;
 use crate::error::RunError;
@@ -15,7 +16,7 @@ use crate::signorini::active_set::{ActiveSet, Iterate, Law};
 use crate::signorini::dense::{guarded, Dense, DenseRun, End, Primal};
 use crate::signorini::halfspace::{self};
 use crate::signorini::plain_path::{ContactProblem, NewtonSettings, StepInfo, WarmStart};
-use crate::signorini::rigid::{FreeModes, Motion, Pin};
+use crate::signorini::rigid::FreeModes;
 use crate::signorini::step_system::ReducedSystem;
 use nalgebra::{DMatrix, DVector};
 use std::time::Instant;
@@ -252,37 +253,6 @@ pub(super) fn reused(
     }
 }
 
-/// The dof order for MUMPS from the node order: every node's dofs together, the Schur
-/// variables (`schur`, all dofs of the candidates) last. order[i] = position of dof i.
-pub(super) fn dof_order(
-    node_perm: &[usize],
-    schur: &[usize],
-    dim: usize,
-    n_rows: usize,
-) -> Vec<usize> {
-    let mut in_schur = vec![false; n_rows];
-    for &r in schur {
-        in_schur[r] = true;
-    }
-    let mut by_position = vec![0usize; node_perm.len()];
-    for (v, &p) in node_perm.iter().enumerate() {
-        by_position[p] = v;
-    }
-    let mut order = vec![0usize; n_rows];
-    let mut pos = 0;
-    for &v in &by_position {
-        for r in (v * dim..(v + 1) * dim).filter(|&r| !in_schur[r]) {
-            order[r] = pos;
-            pos += 1;
-        }
-    }
-    for &r in schur {
-        order[r] = pos;
-        pos += 1;
-    }
-    order
-}
-
 /// Force control's approaches as free modes: each pair's direction e_j, load |F_j| and pair.
 type ForceModes = Vec<([f64; 3], f64, usize)>;
 
@@ -423,18 +393,6 @@ pub(super) fn dense_round(
     (DenseRun::unpack(&packed, ns, mz), x_s)
 }
 
-/// The expanded iterate of a round: (3.28) on w with the set, the rigid motion ρ that u = w + ρ
-/// carries, the pins of the set's free modes, and the global indices of the nodes (3.23)
-/// changes.
-pub(super) struct Expanded {
-    pub(super) it: Iterate,
-    pub(super) rho: Motion,
-    pub(super) pins: Vec<Pin>,
-    pub(super) changed: Vec<u64>,
-    /// Force control: the approach δ_j of the round per force-controlled pair.
-    pub(super) approach: Vec<f64>,
-}
-
 /// What the expansion of a round's dense result works on: the settings, the pass' free modes,
 /// compliance and candidates, f on rank 0 and this rank's number of rows.
 pub(super) struct Expansion<'a> {
@@ -558,6 +516,7 @@ mod tests {
     use super::*;
     use crate::petsc::mumps::nested_dissection;
     use crate::signorini::dense::coarsen;
+    use crate::signorini::schur::candidates::dof_order;
     use crate::tuning::COARSEST;
 
     /// A dense problem without free modes (c = 1, unit load scale).

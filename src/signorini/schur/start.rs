@@ -1,7 +1,7 @@
 //! The start of a frictionless pass: the base system, the first set and the split of the
 //! candidates into zones.
 
-use super::frictionless::{first_zone, Candidates, Sticking};
+use super::candidates::{first_zone, Candidates, Sticking};
 use crate::error::RunError;
 use crate::par::Ctx;
 use crate::signorini::active_set::{ActiveSet, Law};

@@ -1,7 +1,7 @@
 //! What the Schur path reports: the summaries of the frictionless and Coulomb passes
 //! (summary.json's `condensed` object) and the dense steps recorded into the history and log.
 
-use super::frictionless::{Candidates, Compliance};
+use super::candidates::{Candidates, Compliance};
 use crate::par::Ctx;
 use crate::say;
 use crate::signorini::dense::DenseRun;

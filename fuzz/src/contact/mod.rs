@@ -1,7 +1,7 @@
 //! The obstacle shapes of the main crate's `contact` module, compiled from its source files
 //! (the rest of `contact` is the solver's).
 
-#[path = "../../../src/contact/obstacle.rs"]
+#[path = "../../../src/contact/obstacle/mod.rs"]
 pub mod obstacle;
 
 #[path = "../../../src/contact/height.rs"]

@@ -113,14 +113,30 @@ pub fn log_factor(ctx: &Ctx, r: &FactorRecord) {
     );
 }
 
+/// The linear solver's keys of a case with their values, for the diagnoses.
+pub fn solver_keys(s: &SolverSection) -> String {
+    let mut keys = vec![format!("'solver.preset' = \"{}\"", s.preset.name())];
+    if s.preset == Preset::Iterative {
+        keys.push(format!("'solver.rtol' = {:e}", s.rtol));
+    }
+    if !s.petsc_options.trim().is_empty() {
+        keys.push(format!(
+            "'solver.petsc_options' = {:?}",
+            s.petsc_options.trim()
+        ));
+    }
+    keys.join(", ")
+}
+
 /// Sets the linear solver up (preset < case < command line, [`LinearSetup`]) and solves
-/// A u = f once.
+/// A u = f once; a solve that does not converge is an error naming the case file and its
+/// solver keys.
 pub fn linear_solve(
     ctx: &Ctx,
     mesh: &Mesh,
     layout: &Layout,
     sys: &mut System,
-    settings: &SolverSection,
+    (settings, file): (&SolverSection, &std::path::Path),
 ) -> Result<(Vector, LinearReport), RunError> {
     let t = Instant::now();
     let scale = matrix_scale(ctx, &sys.a)?;
@@ -142,8 +158,12 @@ pub fn linear_solve(
     }
     if !info.converged() {
         return Err(RunError::Failed(format!(
-            "the linear solver did not converge: {} after {} iterations ({ksp_type}/{pc_type})",
-            info.reason_name, info.iterations
+            "the linear solver did not converge: {} after {} iterations ({ksp_type}/{pc_type}); \
+             {}: it is set by {} (and PETSc options after --)",
+            info.reason_name,
+            info.iterations,
+            file.display(),
+            solver_keys(settings)
         )));
     }
     Ok((

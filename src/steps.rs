@@ -480,8 +480,13 @@ impl Stepper<'_> {
         let (ctx, case) = (self.ctx, self.case);
         match physics {
             Physics::Linear => {
-                let (u, report) =
-                    solver::linear_solve(ctx, self.mesh, self.layout, sys, &case.solver)?;
+                let (u, report) = solver::linear_solve(
+                    ctx,
+                    self.mesh,
+                    self.layout,
+                    sys,
+                    (&case.solver, &case.file),
+                )?;
                 Ok(Solved {
                     linear_u: Some(u),
                     report: SolveReport::Linear(report.summary(case.solver.preset)),

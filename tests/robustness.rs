@@ -421,3 +421,33 @@ fn a_floating_body_with_too_few_pins_is_told_which_keys_to_change() {
     }
     assert_eq!(lines[0], lines[1]);
 }
+
+#[test]
+fn a_linear_solve_that_does_not_converge_names_the_solver_keys() {
+    // The plate (a linear case) on the iterative preset with two GMRES iterations allowed:
+    // exit 1 on 1 and 2 ranks, one message naming the case file and its solver keys, nothing
+    // written.
+    let tmp = tempfile::tempdir().unwrap();
+    let case = repo("cases/plate/plate.toml");
+    for np in [1, 2] {
+        let out = tmp.path().join(format!("out{np}"));
+        let mut cmd = solver_command(np, &case, &["solver.preset=\"iterative\""], &out);
+        cmd.args(["--", "-ksp_max_it", "2"]);
+        let r = run_with_timeout(cmd, std::time::Duration::from_secs(120));
+        r.expect_code(1, &format!("{np} ranks"));
+        let line = r
+            .stderr
+            .lines()
+            .find(|l| l.starts_with("error:"))
+            .unwrap_or_else(|| panic!("no error line:\n{}", r.output()))
+            .to_string();
+        for want in [
+            "did not converge",
+            "plate.toml",
+            "'solver.preset' = \"iterative\"",
+        ] {
+            assert!(line.contains(want), "{want:?} missing: {line}");
+        }
+        assert!(!out.exists(), "nothing written");
+    }
+}

@@ -265,7 +265,7 @@ pub fn solve(
     let law = Law::of(settings);
     let friction = settings.friction();
     let (mut b, warned) = contact_boundary(ctx, settings, mesh, layout, fixed)?;
-    b.keys.solver = solver_keys(solver_section);
+    b.keys.solver = solver::solver_keys(solver_section);
     let force_control = force_control(settings, previous);
     capacity::check_friction_capacity(ctx, &b, (fixed, sys, dim), law, &force_control)?;
     let displacements = settings.displacements();
@@ -512,21 +512,6 @@ pub fn contact_boundary(
         return Err(force::never_touches(fc));
     }
     Ok((b, warned))
-}
-
-/// The linear solver's keys of a case with their values, for the diagnoses.
-fn solver_keys(s: &SolverSection) -> String {
-    let mut keys = vec![format!("'solver.preset' = \"{}\"", s.preset.name())];
-    if s.preset == Preset::Iterative {
-        keys.push(format!("'solver.rtol' = {:e}", s.rtol));
-    }
-    if !s.petsc_options.trim().is_empty() {
-        keys.push(format!(
-            "'solver.petsc_options' = {:?}",
-            s.petsc_options.trim()
-        ));
-    }
-    keys.join(", ")
 }
 
 /// Force control's result on the boundary: every force-controlled pair's obstacle where its

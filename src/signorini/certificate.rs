@@ -426,8 +426,46 @@ pub fn equilibrium(
     let mut au = sys.b.duplicate()?;
     sys.a.mult(u, &mut au)?;
     let (au, f) = (au.to_local_vec()?, sys.b.to_local_vec()?);
-    // V: K_e u_e at the Dirichlet dofs, K_e[·, D] g_D at the others, over the cells with a
-    // Dirichlet node (u at their nodes gathered)
+    let v = dirichlet_terms((mesh, layout, material), fixed, sys, u)?;
+    let (contact_row, lambdas) = contact_forces(b, &f, &au);
+    let start = layout.node_offsets[layout.rank];
+    // per component: applied, contact, reactions; then Σ|f|, Σ|λ|, Σ|R|
+    let mut local = [0.0; 12];
+    for &node in &layout.owned_nodes {
+        let row0 = (layout.node_global[node] - start) * dim;
+        for c in 0..dim {
+            let i = row0 + c;
+            if !fixed[node * dim + c].is_nan() {
+                local[6 + c] += v[i];
+                local[11] += v[i].abs();
+            } else {
+                let load = f[i] + v[i];
+                local[c] += load;
+                local[9] += load.abs();
+                if contact_row[i] {
+                    let l = f[i] - au[i];
+                    local[3 + c] -= l;
+                    local[10] += l.abs();
+                }
+            }
+        }
+    }
+    let s = ctx.sum_vec(&local);
+    let three = |o: usize| [s[o], s[o + 1], s[o + 2]];
+    let eq = balance(three(0), three(3), three(6), three(9), dim);
+    Ok((eq, lambdas))
+}
+
+/// V of [`equilibrium`]: K_e u_e at the Dirichlet dofs and K_e[·, D] g_D at the others, over
+/// the cells with a Dirichlet node (u at their nodes gathered), summed in rank order; this
+/// rank's rows. Collective.
+fn dirichlet_terms(
+    (mesh, layout, material): (&Mesh, &Layout, &Material),
+    fixed: &[f64],
+    sys: &System,
+    u: &crate::petsc::Vector,
+) -> Result<Vec<f64>, RunError> {
+    let dim = mesh.dim;
     let is_fixed = |v: usize| (0..dim).any(|c| !fixed[v * dim + c].is_nan());
     let cells: Vec<usize> = layout
         .local_cells
@@ -478,7 +516,12 @@ pub fn equilibrium(
     crate::par::add_in_rank_order(&mut v, &vi, &vv)?;
     v.assemble()?;
     let v = v.to_local_vec()?;
-    // λ = f − A u at the contact rows
+    Ok(v)
+}
+
+/// λ = f − A u (3.28) at the contact rows: which local rows are contact rows, and λ per contact
+/// node of this rank. Local.
+fn contact_forces(b: &ContactBoundary, f: &[f64], au: &[f64]) -> (Vec<bool>, Vec<[f64; 3]>) {
     let mut contact_row = vec![false; f.len()];
     let mut lambdas = Vec::with_capacity(b.nodes.len());
     for k in &b.nodes {
@@ -489,32 +532,7 @@ pub fn equilibrium(
         }
         lambdas.push(l);
     }
-    let start = layout.node_offsets[layout.rank];
-    // per component: applied, contact, reactions; then Σ|f|, Σ|λ|, Σ|R|
-    let mut local = [0.0; 12];
-    for &node in &layout.owned_nodes {
-        let row0 = (layout.node_global[node] - start) * dim;
-        for c in 0..dim {
-            let i = row0 + c;
-            if !fixed[node * dim + c].is_nan() {
-                local[6 + c] += v[i];
-                local[11] += v[i].abs();
-            } else {
-                let load = f[i] + v[i];
-                local[c] += load;
-                local[9] += load.abs();
-                if contact_row[i] {
-                    let l = f[i] - au[i];
-                    local[3 + c] -= l;
-                    local[10] += l.abs();
-                }
-            }
-        }
-    }
-    let s = ctx.sum_vec(&local);
-    let three = |o: usize| [s[o], s[o + 1], s[o + 2]];
-    let eq = balance(three(0), three(3), three(6), three(9), dim);
-    Ok((eq, lambdas))
+    (contact_row, lambdas)
 }
 
 /// The balance of each force-controlled pair: Σ_{k ∈ pair} (−λ^k)·e_j against |F_j| (`lambdas`:

@@ -151,70 +151,18 @@ pub fn partition<C: Communicator>(
     let size = world.size() as usize;
     let n_cells = mesh.n_cells();
     let node_cells = NodeCells::new(mesh);
-
-    let cell_rank: Vec<u32> = if size == 1 {
-        vec![0; n_cells]
-    } else {
-        let block = |r: usize| r * n_cells / size;
-        let (lo, hi) = (block(rank), block(rank + 1));
-        let (xadj, adjncy) = dual_graph_rows(mesh, &node_cells, lo, hi);
-        let part = if ptype == "ptscotch" && !petsc::options::has("-mat_partitioning_type")? {
-            petsc::scotch_partition(comm, &xadj, &adjncy, None, size, SCOTCH_IMBALANCE)?
-        } else {
-            petsc::partition_graph(comm, n_cells, &xadj, &adjncy, ptype)?
-        };
-        let mine: Vec<u32> = part.iter().map(|&p| p as u32).collect();
-        let counts: Vec<i32> = (0..size)
-            .map(|r| (block(r + 1) - block(r)) as i32)
-            .collect();
-        let displs: Vec<i32> = (0..size).map(|r| block(r) as i32).collect();
-        let mut all = vec![0u32; n_cells];
-        {
-            let mut buf = PartitionMut::new(&mut all[..], counts, displs);
-            world.all_gather_varcount_into(&mine[..], &mut buf);
-        }
-        all
-    };
-
-    // Owner of a node: the lowest rank among its cells.
-    let n_nodes = mesh.n_nodes();
-    let mut node_owner = vec![u32::MAX; n_nodes];
-    for (c, nodes) in mesh.cells.chunks_exact(mesh.nodes_per_cell()).enumerate() {
-        let r = cell_rank[c];
-        for &v in nodes {
-            if r < node_owner[v] {
-                node_owner[v] = r;
-            }
-        }
-    }
-    let mut counts = vec![0usize; size];
-    for &o in &node_owner {
-        counts[o as usize] += 1;
-    }
-    let mut node_offsets = vec![0usize; size + 1];
-    for r in 0..size {
-        node_offsets[r + 1] = node_offsets[r] + counts[r];
-    }
-    // Within each rank, nodes are numbered along a space-filling (Morton) curve: neighbours in
-    // the mesh get nearby numbers, so element matrices hit nearby rows (gmsh's own numbering
-    // is nearly random on large meshes, which made assembly several times slower).
-    let key = morton_keys(mesh);
-    let mut order: Vec<usize> = (0..n_nodes).collect();
-    order.sort_unstable_by_key(|&v| (node_owner[v], key[v], v));
-    let mut node_global = vec![0usize; n_nodes];
+    let cell_rank = cell_ranks(world, comm, (mesh, &node_cells), ptype)?;
+    let (node_owner, node_offsets, order) = node_order(mesh, &cell_rank, size);
+    let mut node_global = vec![0usize; mesh.n_nodes()];
     for (g, &v) in order.iter().enumerate() {
         node_global[v] = g;
     }
     let owned_nodes: Vec<usize> = order[node_offsets[rank]..node_offsets[rank + 1]].to_vec();
-
     let mut ccounts = vec![0usize; size];
     for &r in &cell_rank {
         ccounts[r as usize] += 1;
     }
-    let mut cell_offsets = vec![0usize; size + 1];
-    for r in 0..size {
-        cell_offsets[r + 1] = cell_offsets[r] + ccounts[r];
-    }
+    let cell_offsets = prefix_sums(&ccounts);
     // Local cells in the order of their lowest node number (locality of the assembly loop).
     let mut local_cells: Vec<usize> = (0..n_cells)
         .filter(|&c| cell_rank[c] as usize == rank)
@@ -229,7 +177,6 @@ pub fn partition<C: Communicator>(
             c,
         )
     });
-
     Ok(Layout {
         rank,
         size,
@@ -241,8 +188,77 @@ pub fn partition<C: Communicator>(
         local_cells,
         cell_offsets,
         node_cells,
-        node_orig: (0..n_nodes).collect(),
+        node_orig: (0..mesh.n_nodes()).collect(),
     })
+}
+
+/// The rank of every cell: the dual graph of this rank's block of cells partitioned by
+/// PT-Scotch (or PETSc's MatPartitioning of type `ptype`), all-gathered. Collective.
+fn cell_ranks<C: Communicator>(
+    world: &C,
+    comm: MPI_Comm,
+    (mesh, node_cells): (&Mesh, &NodeCells),
+    ptype: &str,
+) -> petsc::Result<Vec<u32>> {
+    let (rank, size) = (world.rank() as usize, world.size() as usize);
+    let n_cells = mesh.n_cells();
+    if size == 1 {
+        return Ok(vec![0; n_cells]);
+    }
+    let block = |r: usize| r * n_cells / size;
+    let (lo, hi) = (block(rank), block(rank + 1));
+    let (xadj, adjncy) = dual_graph_rows(mesh, node_cells, lo, hi);
+    let part = if ptype == "ptscotch" && !petsc::options::has("-mat_partitioning_type")? {
+        petsc::scotch_partition(comm, &xadj, &adjncy, None, size, SCOTCH_IMBALANCE)?
+    } else {
+        petsc::partition_graph(comm, n_cells, &xadj, &adjncy, ptype)?
+    };
+    let mine: Vec<u32> = part.iter().map(|&p| p as u32).collect();
+    let counts: Vec<i32> = (0..size)
+        .map(|r| (block(r + 1) - block(r)) as i32)
+        .collect();
+    let displs: Vec<i32> = (0..size).map(|r| block(r) as i32).collect();
+    let mut all = vec![0u32; n_cells];
+    {
+        let mut buf = PartitionMut::new(&mut all[..], counts, displs);
+        world.all_gather_varcount_into(&mine[..], &mut buf);
+    }
+    Ok(all)
+}
+
+/// The owner of every node (the lowest rank among its cells), the ranks' first global node
+/// numbers, and the nodes in global order: by owner, then within each rank along a
+/// space-filling (Morton) curve, so that neighbours in the mesh get nearby numbers and element
+/// matrices hit nearby rows (gmsh's own numbering is nearly random on large meshes, which made
+/// assembly several times slower). Local.
+fn node_order(mesh: &Mesh, cell_rank: &[u32], size: usize) -> (Vec<u32>, Vec<usize>, Vec<usize>) {
+    let n_nodes = mesh.n_nodes();
+    let mut node_owner = vec![u32::MAX; n_nodes];
+    for (c, nodes) in mesh.cells.chunks_exact(mesh.nodes_per_cell()).enumerate() {
+        let r = cell_rank[c];
+        for &v in nodes {
+            if r < node_owner[v] {
+                node_owner[v] = r;
+            }
+        }
+    }
+    let mut counts = vec![0usize; size];
+    for &o in &node_owner {
+        counts[o as usize] += 1;
+    }
+    let key = morton_keys(mesh);
+    let mut order: Vec<usize> = (0..n_nodes).collect();
+    order.sort_unstable_by_key(|&v| (node_owner[v], key[v], v));
+    (node_owner, prefix_sums(&counts), order)
+}
+
+/// [0, c0, c0 + c1, …]: the first index of each part from the parts' counts.
+fn prefix_sums(counts: &[usize]) -> Vec<usize> {
+    let mut out = vec![0usize; counts.len() + 1];
+    for (r, c) in counts.iter().enumerate() {
+        out[r + 1] = out[r] + c;
+    }
+    out
 }
 
 /// The sorted, distinct nodes of `cells` and the values of the distributed nodal vector `u`

@@ -22,18 +22,22 @@ fn a_contact_node_at_the_sphere_centre_is_refused_on_every_rank_count() {
         );
         // A hang would end in the test's time limit (code None).
         r.expect_code(2, &format!("{np} ranks"));
-        let line = r
-            .stderr
-            .lines()
-            .find(|l| l.starts_with("error:"))
-            .unwrap_or_else(|| panic!("no error line:\n{}", r.output()))
-            .to_string();
+        let line = error_line(&r);
         assert!(line.contains("centre of the sphere"), "{line}");
         assert!(line.contains("contact.obstacle"), "{line}");
         assert!(!out.exists(), "nothing written");
         messages.push(line);
     }
     assert!(messages.iter().all(|m| *m == messages[0]), "{messages:#?}");
+}
+
+/// The first `error:` line of a run's stderr (panics with the run's output if there is none).
+fn error_line(r: &Run) -> String {
+    r.stderr
+        .lines()
+        .find(|l| l.starts_with("error:"))
+        .unwrap_or_else(|| panic!("no error line:\n{}", r.output()))
+        .to_string()
 }
 
 fn files(dir: &Path) -> Vec<String> {
@@ -402,12 +406,7 @@ fn a_floating_body_with_too_few_pins_is_told_which_keys_to_change() {
         let out = tmp.path().join(format!("out{np}"));
         let r = run_solver(np, &case, &[], &out);
         r.expect_code(1, &format!("{np} ranks"));
-        let line = r
-            .stderr
-            .lines()
-            .find(|l| l.starts_with("error:"))
-            .unwrap_or_else(|| panic!("no error line:\n{}", r.output()))
-            .to_string();
+        let line = error_line(&r);
         for want in [
             "3 free rigid mode(s) but only 2 dof(s)",
             "'dirichlet'",
@@ -435,12 +434,7 @@ fn a_linear_solve_that_does_not_converge_names_the_solver_keys() {
         cmd.args(["--", "-ksp_max_it", "2"]);
         let r = run_with_timeout(cmd, std::time::Duration::from_secs(120));
         r.expect_code(1, &format!("{np} ranks"));
-        let line = r
-            .stderr
-            .lines()
-            .find(|l| l.starts_with("error:"))
-            .unwrap_or_else(|| panic!("no error line:\n{}", r.output()))
-            .to_string();
+        let line = error_line(&r);
         for want in [
             "did not converge",
             "plate.toml",

@@ -28,6 +28,7 @@ pub mod coulomb;
 pub mod frame;
 pub mod height;
 mod linalg;
+pub mod mortar;
 pub mod obstacle;
 pub mod residual;
 pub mod surface;

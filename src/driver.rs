@@ -144,6 +144,14 @@ pub fn solve(ctx: &Ctx, prepared: Prepared) -> Result<String, RunError> {
     let preset = case.solver.preset;
     let problem = setup::problem(case, &mesh, material);
     let mut sys = assembly::assemble(ctx.comm(), &layout, &problem)?;
+    let mut contact = contact;
+    let mut basis = match contact.as_mut() {
+        Some(c) => crate::mortar::set_up(ctx, &mesh, &layout, c, &problem.fixed)?,
+        None => None,
+    };
+    if let Some(b) = basis.as_mut() {
+        b.transform_matrix(&mut sys)?;
+    }
     clock.t.assembly = clock.lap();
     let assembly = check_assembly(ctx, &sys, clock.t.assembly)?;
     let out = ResultSet::begin(ctx, &case.output.dir, &case.file)?;
@@ -157,6 +165,7 @@ pub fn solve(ctx: &Ctx, prepared: Prepared) -> Result<String, RunError> {
         fixed: &problem.fixed,
         held_fixed: &problem.held_fixed,
         contact: contact.as_ref(),
+        mortar: basis.as_ref(),
         out: &out,
     };
     let stepped = stepper.run(&mut sys)?;

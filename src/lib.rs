@@ -19,6 +19,7 @@ pub mod fem;
 pub mod geom;
 pub mod linsolve;
 pub mod mesh;
+pub mod mortar;
 pub mod output;
 pub mod par;
 pub mod partition;

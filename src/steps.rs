@@ -31,6 +31,7 @@ use crate::petsc::Vector;
 use crate::post;
 use crate::say;
 use crate::setup::ContactSettings;
+use crate::mortar;
 use crate::signorini::certificate::Certificate;
 use crate::signorini::report::{FrictionCertificate, Kkt, PairSummary};
 use crate::signorini::{self, ContactReport, ContactSolution};
@@ -186,12 +187,16 @@ pub struct Stepper<'a> {
     pub held_fixed: &'a [bool],
     /// The contact settings (`None`: a linear case).
     pub contact: Option<&'a ContactSettings>,
+    /// The change of basis of the body pairs (crate::mortar): the contact solve runs on
+    /// Qᵀ A Q (A in `run`'s system is that already) and Qᵀ (f − A c); `None` without them.
+    pub mortar: Option<&'a mortar::Basis>,
     pub out: &'a ResultSet,
 }
 
 /// One solved step before it is recorded.
 struct Solved {
-    /// The displacement of a linear solve (a contact solve has its own).
+    /// The displacement of a linear solve, or of a contact solve with body pairs (u = Q w + c;
+    /// the contact solve's own is w); `None`: the contact solve's.
     linear_u: Option<Vector>,
     report: SolveReport,
     contact: Option<ContactSolution>,
@@ -200,8 +205,8 @@ struct Solved {
 impl Solved {
     fn u(&self) -> &Vector {
         match (&self.contact, &self.linear_u) {
-            (Some(c), _) => &c.u,
-            (None, Some(u)) => u,
+            (_, Some(u)) => u,
+            (Some(c), None) => &c.u,
             (None, None) => unreachable!("a solved step has a displacement"),
         }
     }
@@ -494,6 +499,12 @@ impl Stepper<'_> {
                 })
             }
             Physics::Contact(settings) => {
+                let mut in_w = (self.mortar)
+                    .map(|m| m.rhs(self.layout, &sys.b, fixed))
+                    .transpose()?;
+                if let Some((f_hat, _)) = in_w.as_mut() {
+                    std::mem::swap(&mut sys.b, f_hat);
+                }
                 let s = signorini::solve(
                     ctx,
                     settings,
@@ -503,10 +514,18 @@ impl Stepper<'_> {
                     sys,
                     &case.solver,
                     previous,
-                )?;
+                );
+                if let Some((f_hat, _)) = in_w.as_mut() {
+                    std::mem::swap(&mut sys.b, f_hat);
+                }
+                let s = s?;
+                let body_u = match (self.mortar, &in_w) {
+                    (Some(m), Some((_, c))) => Some(m.displacement(&s.u, c.as_ref())?),
+                    _ => None,
+                };
                 // the report goes to the summary, the rest stays as the next step's start
                 Ok(Solved {
-                    linear_u: None,
+                    linear_u: body_u,
                     report: SolveReport::Contact(Box::new(s.report.clone())),
                     contact: Some(s),
                 })

@@ -41,6 +41,8 @@ pub const MOTION: &[&str] = &["value", "ramp", "table"];
 /// The obstacles (`contact.obstacle`, `[[mesh.project]] shape`), by `type`.
 pub const PLANE: &[&str] = &["type", "point", "normal"];
 pub const SPHERE: &[&str] = &["type", "center", "radius"];
+/// `type = "body"`: another body of the mesh, its boundary group (dual mortar).
+pub const BODY: &[&str] = &["type", "group"];
 pub const CYLINDER: &[&str] = &["type", "point", "axis", "radius"];
 pub const CONE: &[&str] = &["type", "apex", "axis", "half_angle"];
 pub const PYRAMID: &[&str] = &["type", "apex", "axis", "half_angle", "faces", "azimuth"];
@@ -90,6 +92,7 @@ pub const SECTIONS: &[(&str, &[&str])] = &[
     ("type = \"punch\"", PUNCH),
     ("type = \"height\"", HEIGHT),
     ("type = \"surface\"", SURFACE),
+    ("type = \"body\"", BODY),
     ("law = \"none\"", FRICTION_NONE),
     ("law = \"tresca\"", FRICTION_TRESCA),
     ("law = \"coulomb\"", FRICTION_COULOMB),

@@ -67,6 +67,9 @@ pub enum ObstacleSpec {
         file: PathBuf,
         surface: Arc<TriSurface>,
     },
+    /// Another deformable body of the mesh: `group` names its boundary facets that the pair's
+    /// group may touch (the master side of dual mortar; docs/bodies.md).
+    Body { group: String },
 }
 
 impl ObstacleSpec {
@@ -81,6 +84,7 @@ impl ObstacleSpec {
             ObstacleSpec::Punch { .. } => "punch",
             ObstacleSpec::Height { .. } => "height",
             ObstacleSpec::Surface { .. } => "surface",
+            ObstacleSpec::Body { .. } => "body",
         }
     }
 
@@ -100,7 +104,9 @@ impl ObstacleSpec {
             ObstacleSpec::Punch { center, axis, .. } => {
                 vec![("center", center.len()), ("axis", axis.len())]
             }
-            ObstacleSpec::Height { .. } | ObstacleSpec::Surface { .. } => Vec::new(),
+            ObstacleSpec::Height { .. }
+            | ObstacleSpec::Surface { .. }
+            | ObstacleSpec::Body { .. } => Vec::new(),
         }
     }
 
@@ -167,6 +173,13 @@ impl ObstacleSpec {
                 }
                 Obstacle::Surface(surface.clone())
             }
+            ObstacleSpec::Body { group } => {
+                Obstacle::Body(std::sync::Arc::new(crate::contact::obstacle::BodyTarget {
+                    group: group.clone(),
+                    dim,
+                    rows: Default::default(),
+                }))
+            }
         })
     }
 }
@@ -187,6 +200,7 @@ impl Reader<'_> {
             Punch,
             Height,
             Surface,
+            Body,
         }
         let ty = self.choice(
             &tk,
@@ -200,6 +214,7 @@ impl Reader<'_> {
                 ("punch", Ty::Punch),
                 ("height", Ty::Height),
                 ("surface", Ty::Surface),
+                ("body", Ty::Body),
             ],
         )?;
         match ty {
@@ -211,6 +226,13 @@ impl Reader<'_> {
             Ty::Punch => self.punch(key, n),
             Ty::Height => self.height(key, n),
             Ty::Surface => self.surface(key, n),
+            Ty::Body => {
+                let t = self.table(key, n, keys::BODY)?;
+                let (gk, g) = self.required(&t, "group")?;
+                Ok(ObstacleSpec::Body {
+                    group: self.string(&gk, g)?.to_string(),
+                })
+            }
         }
     }
 

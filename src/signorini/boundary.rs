@@ -2,6 +2,7 @@
 //! g_h^k (3.3), lumped weight w_k = ∫_Γc φ_k ds and Tresca bound b_k = ∫_Γc g_R φ_k ds (3.18);
 //! and the per-node result record (u, λ in the node's frame) of an iterate.
 
+use crate::contact::obstacle::SlaveRow;
 use crate::contact::{Frame, Obstacle};
 use crate::error::{InputError, RunError};
 use crate::fem;
@@ -266,6 +267,16 @@ pub fn build<W>(
             excluded += 1;
             continue;
         }
+        if let Obstacle::Body(t) = &pair.obstacle {
+            // the rows dual mortar gave the pair (crate::mortar: covered nodes that are contact
+            // nodes by the rule below); an uncovered node has none
+            if let Some(r) = t.rows.get(&v) {
+                nodes.push(body_node(mesh, (v, i, lo), p, pair, r));
+            } else if prescribed {
+                excluded += 1;
+            }
+            continue;
+        }
         let proj = match pair.obstacle.project(x) {
             Ok(p) => p,
             Err(_) if prescribed => {
@@ -323,6 +334,32 @@ pub fn build<W>(
         },
     };
     Ok((b, warned))
+}
+
+/// The contact node of slave node `v` (owned, local index `i`, first global node `lo`) of a
+/// body pair from its mortar row: the frame of its normal, the gap g̃_k / D_kk, the weight D_kk.
+fn body_node(
+    mesh: &Mesh,
+    (v, i, lo): (usize, usize, usize),
+    p: usize,
+    pair: &crate::setup::PairSettings,
+    r: &SlaveRow,
+) -> ContactNode {
+    let dim = mesh.dim;
+    ContactNode {
+        node: v,
+        pair: p,
+        mu: pair.coulomb_mu,
+        tag: mesh.node_tags[v],
+        row: (lo + i) * dim,
+        local_row: i * dim,
+        x: mesh.coords[v],
+        frame: Frame::new(r.normal, dim).expect("mortar normals are unit vectors"),
+        gap: r.gap,
+        weight: r.weight,
+        bound: pair.tresca_threshold.unwrap_or(0.0) * r.weight,
+        u_t_ref: [0.0; 2],
+    }
 }
 
 /// Each pair's obstacle translated by its d (`d[pair]`; docs/obstacles.md, "Moving obstacles"): the node's

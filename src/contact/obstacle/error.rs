@@ -37,6 +37,8 @@ pub enum ObstacleError {
     BadEdgeRadius,
     /// A shape that exists in 3D only (its name) asked for in 2D.
     Only3D(&'static str),
+    /// A deformable body (`type = "body"`) asked for as a rigid shape.
+    NotRigid,
     /// Cylinder query on its axis: no defined normal.
     OnAxis,
     /// A height expression with variables other than x (2D) or x, y (3D).
@@ -81,6 +83,11 @@ impl fmt::Display for ObstacleError {
             ObstacleError::Only3D(name) => {
                 write!(f, "a {name} obstacle exists in 3D only")
             }
+            ObstacleError::NotRigid => write!(
+                f,
+                "a body (type = \"body\") is not a rigid obstacle: its contact is set up from \
+                 the mesh (dual mortar)"
+            ),
             ObstacleError::OnAxis => write!(
                 f,
                 "a contact node lies on the axis of the cylinder obstacle: no normal is defined"

@@ -23,6 +23,7 @@
 //! punch), `pyramid`, and `vec3` (the vector and axis helpers they share).
 
 mod axisymmetric;
+mod body;
 mod error;
 mod plane_sphere;
 mod projection;
@@ -36,6 +37,7 @@ mod tests;
 pub use super::height::{Height, HeightExpr};
 pub use super::surface::TriSurface;
 pub use axisymmetric::{Cone, Cylinder, Punch};
+pub use body::{BodyTarget, SlaveRow};
 pub use error::ObstacleError;
 pub use plane_sphere::{Plane, Sphere};
 pub use projection::Projection;

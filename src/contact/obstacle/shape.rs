@@ -1,6 +1,7 @@
 //! The obstacle of a contact pair ([`Obstacle`]).
 
 use super::axisymmetric::{Cone, Cylinder, Punch};
+use super::body::BodyTarget;
 use super::error::ObstacleError;
 use super::plane_sphere::{Plane, Sphere};
 use super::projection::Projection;
@@ -23,6 +24,9 @@ pub enum Obstacle {
     /// Inside a closed triangle surface (3D only; docs/obstacles.md, "surface"). The surface is
     /// read once per run and shared.
     Surface(Arc<TriSurface>),
+    /// Another deformable body (dual mortar): its rows per slave node, not a shape
+    /// ([`BodyTarget`]); [`Obstacle::project`] refuses it.
+    Body(Arc<BodyTarget>),
 }
 
 impl Obstacle {
@@ -35,6 +39,7 @@ impl Obstacle {
             Obstacle::Punch(p) => p.dim(),
             Obstacle::Height(h) => h.dim(),
             Obstacle::Surface(_) => 3,
+            Obstacle::Body(b) => b.dim,
         }
     }
     /// Closest point, normal (into the body) and initial gap g0(x) (3.3).
@@ -54,6 +59,7 @@ impl Obstacle {
                     Err(ObstacleError::NotFinite)
                 }
             }
+            Obstacle::Body(_) => Err(ObstacleError::NotRigid),
         }
     }
 }

@@ -1,0 +1,166 @@
+//! The change of basis u = Q w + c that makes the body pairs' mortar rows node-local (the
+//! module documentation): Q = I but for the free components d of every slave node k,
+//! u_kd = w_kd + Σ_j m_kj u_jd over the master nodes j whose component d is free; the
+//! couplings to Dirichlet-fixed master components form N_f, and c = N_f ū with ū the step's
+//! Dirichlet values.
+
+use super::MasterFixed;
+use crate::assembly::System;
+use crate::contact::obstacle::SlaveRow;
+use crate::error::RunError;
+use crate::mesh::Mesh;
+use crate::par::Ctx;
+use crate::partition::Layout;
+use crate::petsc::{self, Matrix, PInt, Vector};
+use std::collections::HashMap;
+
+/// The change of basis of a case with body pairs.
+pub struct Basis {
+    q: Matrix,
+    /// N_f: the couplings to fixed master components; `None` where no slave row couples to
+    /// a fixed component.
+    fixed: Option<Matrix>,
+    /// The assembled A (for A c), kept by [`Basis::transform_matrix`] with N_f only.
+    a: Option<Matrix>,
+    dim: usize,
+}
+
+/// A CSR part of the owned rows under construction.
+#[derive(Default)]
+struct Rows {
+    ptr: Vec<PInt>,
+    cols: Vec<PInt>,
+    vals: Vec<f64>,
+}
+
+impl Rows {
+    fn push_row(&mut self, mut entries: Vec<(PInt, f64)>) {
+        if self.ptr.is_empty() {
+            self.ptr.push(0);
+        }
+        entries.sort_unstable_by_key(|e| e.0);
+        for (c, v) in entries {
+            match self.cols.last() {
+                Some(&last) if last == c && self.cols.len() > *self.ptr.last().unwrap() as usize => {
+                    *self.vals.last_mut().unwrap() += v;
+                }
+                _ => {
+                    self.cols.push(c);
+                    self.vals.push(v);
+                }
+            }
+        }
+        self.ptr.push(self.cols.len() as PInt);
+    }
+}
+
+impl Basis {
+    /// Q and N_f from the slave rows of every body pair (`rows_of`: (pair, rows by mesh node))
+    /// and the fixed components of the master nodes. Collective.
+    pub(super) fn new(
+        ctx: &Ctx,
+        mesh: &Mesh,
+        layout: &Layout,
+        (rows_of, master_fixed): (&[(usize, HashMap<usize, SlaveRow>)], &MasterFixed),
+        fixed: &[f64],
+    ) -> Result<Basis, RunError> {
+        let dim = mesh.dim;
+        let rows: HashMap<usize, &SlaveRow> = rows_of
+            .iter()
+            .flat_map(|(_, r)| r.iter().map(|(v, row)| (*v, row)))
+            .collect();
+        let (lo, _) = layout.node_range();
+        let (mut q, mut nf) = (Rows::default(), Rows::default());
+        for (i, &v) in layout.owned_nodes.iter().enumerate() {
+            for d in 0..dim {
+                let r = ((lo + i) * dim + d) as PInt;
+                let mut qe = vec![(r, 1.0)];
+                let mut fe = Vec::new();
+                if let Some(row) = rows.get(&v).filter(|_| fixed[v * dim + d].is_nan()) {
+                    for &(j, m) in &row.masters {
+                        let col = (j * dim + d) as PInt;
+                        if master_fixed.get(&j).is_some_and(|f| f[d]) {
+                            fe.push((col, m));
+                        } else {
+                            qe.push((col, m));
+                        }
+                    }
+                }
+                q.push_row(qe);
+                nf.push_row(fe);
+            }
+        }
+        let comm = ctx.comm();
+        let qm = Matrix::from_csr(comm, dim, &q.ptr, &q.cols, &q.vals)?;
+        let any_fixed = ctx.sum_usize(nf.cols.len()) > 0;
+        let fixed = if any_fixed {
+            Some(Matrix::from_csr(comm, dim, &nf.ptr, &nf.cols, &nf.vals)?)
+        } else {
+            None
+        };
+        Ok(Basis {
+            q: qm,
+            fixed,
+            a: None,
+            dim,
+        })
+    }
+
+    /// Replaces A by Qᵀ A Q (keeping A where the fixed couplings need it). Collective.
+    pub fn transform_matrix(&mut self, sys: &mut System) -> petsc::Result<()> {
+        let a_hat = sys.a.ptap(&self.q)?;
+        let a = std::mem::replace(&mut sys.a, a_hat);
+        if self.fixed.is_some() {
+            self.a = Some(a);
+        }
+        Ok(())
+    }
+
+    /// The step's right-hand side in w, f̂ = Qᵀ (f − A c), and c (`None`: zero), from f (in u)
+    /// and the step's Dirichlet values per local mesh dof (`fixed`, NaN = free). Collective.
+    pub fn rhs(
+        &self,
+        layout: &Layout,
+        f: &Vector,
+        fixed: &[f64],
+    ) -> petsc::Result<(Vector, Option<Vector>)> {
+        let mut g = f.duplicate()?;
+        g.copy_from(f)?;
+        let c = match (&self.fixed, &self.a) {
+            (Some(nf), Some(a)) => {
+                let dim = self.dim;
+                let mut ubar = f.duplicate()?;
+                ubar.write(|x| {
+                    for (i, &v) in layout.owned_nodes.iter().enumerate() {
+                        for d in 0..dim {
+                            let val = fixed[v * dim + d];
+                            x[i * dim + d] = if val.is_nan() { 0.0 } else { val };
+                        }
+                    }
+                })?;
+                let mut c = f.duplicate()?;
+                nf.mult(&ubar, &mut c)?;
+                let mut ac = f.duplicate()?;
+                a.mult(&c, &mut ac)?;
+                let ac = ac.to_local_vec()?;
+                g.write(|x| x.iter_mut().zip(&ac).for_each(|(x, y)| *x -= y))?;
+                Some(c)
+            }
+            _ => None,
+        };
+        let mut out = f.duplicate()?;
+        self.q.mult_transpose(&g, &mut out)?;
+        Ok((out, c))
+    }
+
+    /// u = Q w + c. Collective.
+    pub fn displacement(&self, w: &Vector, c: Option<&Vector>) -> petsc::Result<Vector> {
+        let mut u = w.duplicate()?;
+        self.q.mult(w, &mut u)?;
+        if let Some(c) = c {
+            let c = c.to_local_vec()?;
+            u.write(|x| x.iter_mut().zip(&c).for_each(|(x, y)| *x += y))?;
+        }
+        Ok(u)
+    }
+}

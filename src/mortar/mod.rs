@@ -1,0 +1,261 @@
+//! Contact between deformable bodies by dual mortar (docs/bodies.md).
+//!
+//! A pair whose obstacle is another body (`type = "body"`) holds its (slave) nodes against
+//! the other body's (master) boundary group. The mortar integrals of
+//! [`crate::contact::mortar`] give each covered slave node k the weight D_kk, the master
+//! couplings M_kj and the weighted gap g̃_k; with m_kj = M_kj / D_kk the condition is
+//! n_k·(u_k − Σ_j m_kj u_j) + g̃_k / D_kk ≥ 0 (Hüeber & Wohlmuth, CMAME 194, 2005).
+//!
+//! The contact algorithm takes these rows by a change of basis ([`Basis`]): the slave node's
+//! unknowns become its displacement relative to the master side it faces,
+//! w_k = u_k − Σ_j m_kj u_j, every other unknown stays (w_j = u_j); u = Q w + c, c the part
+//! of Q's couplings on Dirichlet-fixed master components. In w the condition of node k reads
+//! its own unknowns only, n_k·w_k + g_k ≥ 0, as against a rigid obstacle, so Algorithms 1 and
+//! 2, their sets (3.23)/(3.33), the reduced systems (3.29)/(3.42), the Schur path and the
+//! multiplier recovery (3.28) apply unchanged to Qᵀ A Q w = Qᵀ (f − A c): the multiplier of a
+//! slave row is the contact force on its node, and the master rows receive −m_kj times it
+//! through Qᵀ. The change of basis is the contact constraint operator: a new kind of
+//! contact row is a new Q.
+//!
+//! Set-up (collective, once per run): each rank sends the master facets it is first to own
+//! (a facet goes out from the owner of its smallest-numbered node) to the ranks whose slave
+//! facets' bounding box (widened by the reach) they meet; each rank integrates its own slave
+//! facets and keeps the rows of its owned slave nodes.
+
+mod basis;
+mod exchange;
+
+pub use basis::Basis;
+
+use crate::contact::mortar::{assemble_with_normals, MortarOptions, Orientation, Surface};
+use crate::contact::obstacle::{BodyTarget, Obstacle, SlaveRow};
+use crate::error::{InputError, RunError};
+use crate::mesh::Mesh;
+use crate::par::Ctx;
+use crate::partition::Layout;
+use crate::setup::ContactSettings;
+use exchange::{MasterFacets, Reach};
+use std::collections::HashMap;
+use std::sync::Arc;
+
+/// The Dirichlet-fixed components of the master nodes this rank couples to, by global node.
+pub(crate) type MasterFixed = HashMap<usize, [bool; 3]>;
+
+/// Sets up every body pair of `settings` (their slave rows into the pairs' [`BodyTarget`])
+/// and returns the change of basis; `None` without body pairs. Input errors (exit 2) name
+/// the pair's keys. Collective.
+pub fn set_up(
+    ctx: &Ctx,
+    mesh: &Mesh,
+    layout: &Layout,
+    settings: &mut ContactSettings,
+    fixed: &[f64],
+) -> Result<Option<Basis>, RunError> {
+    let body_pairs: Vec<usize> = (settings.pairs.iter().enumerate())
+        .filter(|(_, p)| matches!(p.obstacle, Obstacle::Body(_)))
+        .map(|(i, _)| i)
+        .collect();
+    if body_pairs.is_empty() {
+        return Ok(None);
+    }
+    ctx.agree(check_pairs(mesh, settings, &body_pairs).map_err(RunError::Input))?;
+    let reach = Reach::of(ctx, mesh, layout, settings, &body_pairs);
+    let masters = MasterFacets::exchange(ctx, mesh, layout, settings, (fixed, &reach))?;
+    let friction = settings.friction();
+    let mut master_fixed = MasterFixed::new();
+    let mut rows_of = Vec::new();
+    for &p in &body_pairs {
+        let rows = ctx.agree(
+            pair_rows(mesh, layout, settings, p, (&masters, reach.radius[p]))
+                .map_err(RunError::Input),
+        )?;
+        let rows = keep_contact_nodes(mesh, rows, fixed, friction);
+        let covered = ctx.sum_usize(rows.len());
+        if covered == 0 {
+            let pair = &settings.pairs[p];
+            return Err(RunError::Input(
+                InputError::new(
+                    &settings.file,
+                    format!(
+                        "no node of the group \"{}\" faces the group \"{}\" within {:.3e} (the \
+                         size of the slave group): the two groups of a body pair must face \
+                         each other",
+                        pair.group,
+                        master_group(&pair.obstacle),
+                        reach.radius[p]
+                    ),
+                )
+                .with_key(pair.key("obstacle.group")),
+            ));
+        }
+        masters.fixed_of(p, &mut master_fixed);
+        rows_of.push((p, rows));
+    }
+    ctx.agree(
+        check_overlap(mesh, layout, settings, (&rows_of, &masters)).map_err(RunError::Input),
+    )?;
+    let basis = Basis::new(ctx, mesh, layout, (&rows_of, &master_fixed), fixed)?;
+    for (p, rows) in rows_of {
+        let Obstacle::Body(t) = &mut settings.pairs[p].obstacle else {
+            unreachable!("a body pair")
+        };
+        let mut target = BodyTarget::clone(t);
+        target.rows = rows;
+        *t = Arc::new(target);
+    }
+    Ok(Some(basis))
+}
+
+/// The master group of a body pair.
+fn master_group(o: &Obstacle) -> &str {
+    match o {
+        Obstacle::Body(t) => &t.group,
+        _ => "",
+    }
+}
+
+/// Each body pair's master group exists as a boundary group and differs from its slave
+/// group. Local (the groups are known on every rank).
+fn check_pairs(mesh: &Mesh, settings: &ContactSettings, pairs: &[usize]) -> Result<(), InputError> {
+    for &p in pairs {
+        let pair = &settings.pairs[p];
+        let master = master_group(&pair.obstacle);
+        let key = pair.key("obstacle.group");
+        let found = mesh
+            .groups
+            .iter()
+            .any(|g| g.name == master && g.dim + 1 == mesh.dim);
+        if !found {
+            return Err(InputError::new(
+                &settings.file,
+                format!(
+                    "the mesh has no boundary group \"{master}\" (of dimension {}); its groups: \
+                     {}",
+                    mesh.dim - 1,
+                    mesh.group_names().join(", ")
+                ),
+            )
+            .with_key(key));
+        }
+        if master == pair.group {
+            return Err(InputError::new(
+                &settings.file,
+                format!(
+                    "the pair's group \"{master}\" is also its obstacle's group: a body pair \
+                     joins two different boundary groups"
+                ),
+            )
+            .with_key(key));
+        }
+    }
+    Ok(())
+}
+
+/// The slave rows of pair `p` for this rank's owned slave nodes the master covers. Local.
+fn pair_rows(
+    mesh: &Mesh,
+    layout: &Layout,
+    settings: &ContactSettings,
+    p: usize,
+    (masters, radius): (&MasterFacets, f64),
+) -> Result<HashMap<usize, SlaveRow>, InputError> {
+    let pair = &settings.pairs[p];
+    let dim = mesh.dim;
+    let bad = |what: String| InputError::new(&settings.file, what).with_key(pair.key("group"));
+    let (facets, inside) = exchange::slave_facets(mesh, layout, &pair.group);
+    if facets.is_empty() {
+        return Ok(HashMap::new());
+    }
+    let slave = Surface::new(dim, &facets, Orientation::InsidePoints(&inside))
+        .map_err(|e| bad(format!("the slave group \"{}\": {e}", pair.group)))?;
+    let Some(master) = masters.surface(p, dim).map_err(|e| {
+        bad(format!(
+            "the master group \"{}\": {e}",
+            master_group(&pair.obstacle)
+        ))
+    })?
+    else {
+        return Ok(HashMap::new());
+    };
+    let opts = MortarOptions {
+        search_radius: radius,
+        max_normal_dot: Some(0.0),
+    };
+    let mortar = assemble_with_normals(&slave, &master, &slave.nodal_normals(), &opts)
+        .map_err(|e| bad(format!("mortar integrals: {e}")))?;
+    let mut rows = HashMap::new();
+    for r in mortar.rows {
+        if !layout.owns_node(r.id) || r.d <= 0.0 {
+            continue;
+        }
+        rows.insert(
+            r.id,
+            SlaveRow {
+                normal: [-r.normal[0], -r.normal[1], -r.normal[2]],
+                gap: r.gap / r.d,
+                weight: r.d,
+                masters: r.m.iter().map(|&(j, m)| (j, m / r.d)).collect(),
+            },
+        );
+    }
+    Ok(rows)
+}
+
+/// The slave rows that become contact nodes: a node with a Dirichlet-fixed component is left
+/// to its Dirichlet data with friction, and without friction unless every fixed component is
+/// orthogonal to its normal (a symmetry row) — the rule of rigid pairs (signorini::boundary).
+fn keep_contact_nodes(
+    mesh: &Mesh,
+    mut rows: HashMap<usize, SlaveRow>,
+    fixed: &[f64],
+    friction: bool,
+) -> HashMap<usize, SlaveRow> {
+    let dim = mesh.dim;
+    rows.retain(|&v, r| {
+        let fx = &fixed[v * dim..(v + 1) * dim];
+        let prescribed = fx.iter().any(|x| !x.is_nan());
+        !prescribed
+            || (!friction
+                && fx
+                    .iter()
+                    .enumerate()
+                    .all(|(d, x)| x.is_nan() || r.normal[d].abs() <= 1e-12))
+    });
+    rows
+}
+
+/// No node is a slave node of one pair and a master node of another (or of its own): the
+/// change of basis substitutes master unknowns into slave rows once. A master facet through
+/// an owned slave node lies in this rank's reach, so it was received here: the check is
+/// complete with local work. Local.
+fn check_overlap(
+    mesh: &Mesh,
+    layout: &Layout,
+    settings: &ContactSettings,
+    (rows_of, masters): (&[(usize, HashMap<usize, SlaveRow>)], &MasterFacets),
+) -> Result<(), InputError> {
+    let master_nodes = masters.node_pairs();
+    for (p, rows) in rows_of {
+        let mut mine: Vec<usize> = rows.keys().copied().collect();
+        mine.sort_unstable_by_key(|&v| layout.node_global[v]);
+        for v in mine {
+            if let Some(&q) = master_nodes.get(&layout.node_global[v]) {
+                let pair = &settings.pairs[q];
+                return Err(InputError::new(
+                    &settings.file,
+                    format!(
+                        "mesh node {} at {:?} is a node of the slave group \"{}\" and of the \
+                         master group \"{}\": a node is on one side of body contact only \
+                         (split the groups so that they share no node)",
+                        mesh.node_tags[v],
+                        &mesh.coords[v][..mesh.dim],
+                        settings.pairs[*p].group,
+                        master_group(&pair.obstacle),
+                    ),
+                )
+                .with_key(pair.key("obstacle.group")));
+            }
+        }
+    }
+    Ok(())
+}

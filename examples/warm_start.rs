@@ -77,7 +77,7 @@ fn run(ctx: &Ctx, a: &Args) -> Result<serde_json::Value, RunError> {
             &problem.fixed,
             &sys,
             &case.solver,
-            previous,
+            (previous, None),
         )
     };
     let first = solve(&first_case, None)?;

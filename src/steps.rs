@@ -24,6 +24,7 @@ use crate::case::{Case, LoadSection, OutputField};
 use crate::error::RunError;
 use crate::fem::Material;
 use crate::mesh::Mesh;
+use crate::mortar;
 use crate::output::{ContactResult, ResultSet};
 use crate::par::Ctx;
 use crate::partition::Layout;
@@ -31,7 +32,6 @@ use crate::petsc::Vector;
 use crate::post;
 use crate::say;
 use crate::setup::ContactSettings;
-use crate::mortar;
 use crate::signorini::certificate::Certificate;
 use crate::signorini::report::{FrictionCertificate, Kkt, PairSummary};
 use crate::signorini::{self, ContactReport, ContactSolution};
@@ -505,6 +505,14 @@ impl Stepper<'_> {
                 if let Some((f_hat, _)) = in_w.as_mut() {
                     std::mem::swap(&mut sys.b, f_hat);
                 }
+                let in_u = match (self.mortar, &in_w) {
+                    (Some(basis), Some((f, c))) => Some(mortar::InU {
+                        basis,
+                        f,
+                        c: c.as_ref(),
+                    }),
+                    _ => None,
+                };
                 let s = signorini::solve(
                     ctx,
                     settings,
@@ -513,8 +521,9 @@ impl Stepper<'_> {
                     fixed,
                     sys,
                     &case.solver,
-                    previous,
+                    (previous, in_u.as_ref()),
                 );
+                drop(in_u);
                 if let Some((f_hat, _)) = in_w.as_mut() {
                     std::mem::swap(&mut sys.b, f_hat);
                 }

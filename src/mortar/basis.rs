@@ -20,9 +20,28 @@ pub struct Basis {
     /// N_f: the couplings to fixed master components; `None` where no slave row couples to
     /// a fixed component.
     fixed: Option<Matrix>,
-    /// The assembled A (for A c), kept by [`Basis::transform_matrix`] with N_f only.
+    /// The assembled A (for A c and the certificate in u), kept by
+    /// [`Basis::transform_matrix`].
     a: Option<Matrix>,
+    /// This rank's rows that receive a slave node's contact force through Qᵀ (the coupled
+    /// free components of master nodes), local row order; set by [`Basis::transform_matrix`].
+    master_rows: Vec<bool>,
     dim: usize,
+}
+
+/// A contact solve's view of the problem in u while it runs in w: the basis, the step's
+/// right-hand side f in u and c (`None`: zero). The certificate judges the equilibrium in u.
+pub struct InU<'a> {
+    pub basis: &'a Basis,
+    pub f: &'a Vector,
+    pub c: Option<&'a Vector>,
+}
+
+impl InU<'_> {
+    /// u = Q w + c. Collective.
+    pub fn u(&self, w: &Vector) -> petsc::Result<Vector> {
+        self.basis.displacement(w, self.c)
+    }
 }
 
 /// A CSR part of the owned rows under construction.
@@ -41,7 +60,9 @@ impl Rows {
         entries.sort_unstable_by_key(|e| e.0);
         for (c, v) in entries {
             match self.cols.last() {
-                Some(&last) if last == c && self.cols.len() > *self.ptr.last().unwrap() as usize => {
+                Some(&last)
+                    if last == c && self.cols.len() > *self.ptr.last().unwrap() as usize =>
+                {
                     *self.vals.last_mut().unwrap() += v;
                 }
                 _ => {
@@ -102,18 +123,32 @@ impl Basis {
             q: qm,
             fixed,
             a: None,
+            master_rows: Vec::new(),
             dim,
         })
     }
 
-    /// Replaces A by Qᵀ A Q (keeping A where the fixed couplings need it). Collective.
+    /// Replaces A by Qᵀ A Q (keeping A). Collective.
     pub fn transform_matrix(&mut self, sys: &mut System) -> petsc::Result<()> {
         let a_hat = sys.a.ptap(&self.q)?;
-        let a = std::mem::replace(&mut sys.a, a_hat);
-        if self.fixed.is_some() {
-            self.a = Some(a);
-        }
+        self.a = Some(std::mem::replace(&mut sys.a, a_hat));
+        // (Q − I)ᵀ 1 is Σ_k m_kj > 0 at the coupled master rows, 0 elsewhere
+        let mut ones = sys.b.duplicate()?;
+        ones.set_all(1.0)?;
+        let mut qt = sys.b.duplicate()?;
+        self.q.mult_transpose(&ones, &mut qt)?;
+        self.master_rows = qt.read(|x| x.iter().map(|v| (v - 1.0).abs() > 1e-12).collect())?;
         Ok(())
+    }
+
+    /// The assembled A (in u), once [`Basis::transform_matrix`] ran.
+    pub fn a(&self) -> &Matrix {
+        self.a.as_ref().expect("transform_matrix ran")
+    }
+
+    /// This rank's rows that receive contact forces of slave nodes (master rows).
+    pub fn master_rows(&self) -> &[bool] {
+        &self.master_rows
     }
 
     /// The step's right-hand side in w, f̂ = Qᵀ (f − A c), and c (`None`: zero), from f (in u)

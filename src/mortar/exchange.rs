@@ -81,7 +81,11 @@ impl Reach {
                 }
             }
         }
-        let flat: Vec<f64> = mine.iter().flat_map(|(a, b)| a.iter().chain(b)).copied().collect();
+        let flat: Vec<f64> = mine
+            .iter()
+            .flat_map(|(a, b)| a.iter().chain(b))
+            .copied()
+            .collect();
         let all = ctx.all_gather_varcount(&flat);
         let boxes: Vec<Vec<([f64; 3], [f64; 3])>> = all
             .chunks_exact(6 * n)
@@ -173,7 +177,11 @@ impl MasterFacets {
                 send.extend_from_slice(&inside);
                 for &v in nodes {
                     for d in 0..dim {
-                        send.push(if fixed[v * dim + d].is_nan() { 0.0 } else { 1.0 });
+                        send.push(if fixed[v * dim + d].is_nan() {
+                            0.0
+                        } else {
+                            1.0
+                        });
                     }
                 }
             }

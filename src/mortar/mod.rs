@@ -25,7 +25,7 @@
 mod basis;
 mod exchange;
 
-pub use basis::Basis;
+pub use basis::{Basis, InU};
 
 use crate::contact::mortar::{assemble_with_normals, MortarOptions, Orientation, Surface};
 use crate::contact::obstacle::{BodyTarget, Obstacle, SlaveRow};

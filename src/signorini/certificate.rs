@@ -6,13 +6,12 @@
 
 use super::boundary::ContactBoundary;
 use super::report::{FrictionCertificate, Kkt, Scales};
-use crate::assembly::System;
 use crate::error::RunError;
 use crate::fem::{self, Material};
 use crate::mesh::Mesh;
 use crate::par::Ctx;
 use crate::partition::Layout;
-use crate::petsc::PInt;
+use crate::petsc::{Matrix, PInt, Vector};
 use serde::Serialize;
 
 /// `newton.strict`: the largest relative certificate value accepted.
@@ -410,7 +409,8 @@ pub fn balance(
 }
 
 /// The global equilibrium of the solution u (3.8), (3.28): λ = f − A u at the contact rows
-/// (A, f of `sys`, Dirichlet data eliminated), the reactions K_e u_e at the Dirichlet dofs and
+/// (A, f assembled, Dirichlet data eliminated; with body pairs also at `more_rows`, the master
+/// rows that receive the slave nodes' forces), the reactions K_e u_e at the Dirichlet dofs and
 /// the loads f + K_e[·, D] g_D at the other dofs (the elimination's lift added back), both
 /// from the element matrices of the cells that touch a Dirichlet node only. Also returns λ
 /// per contact node of this rank (global components), for the force balance. Collective.
@@ -418,16 +418,20 @@ pub fn equilibrium(
     ctx: &Ctx,
     (mesh, layout, material): (&Mesh, &Layout, &Material),
     fixed: &[f64],
-    sys: &System,
+    (a, f, more_rows): (&Matrix, &Vector, &[bool]),
     b: &ContactBoundary,
-    u: &crate::petsc::Vector,
+    u: &Vector,
 ) -> Result<(Equilibrium, Vec<[f64; 3]>), RunError> {
     let dim = mesh.dim;
-    let mut au = sys.b.duplicate()?;
-    sys.a.mult(u, &mut au)?;
-    let (au, f) = (au.to_local_vec()?, sys.b.to_local_vec()?);
-    let v = dirichlet_terms((mesh, layout, material), fixed, sys, u)?;
-    let (contact_row, lambdas) = contact_forces(b, &f, &au);
+    let mut au = f.duplicate()?;
+    a.mult(u, &mut au)?;
+    let (au, f_local) = (au.to_local_vec()?, f.to_local_vec()?);
+    let v = dirichlet_terms((mesh, layout, material), fixed, f, u)?;
+    let (mut contact_row, lambdas) = contact_forces(b, &f_local, &au);
+    for (r, &m) in contact_row.iter_mut().zip(more_rows) {
+        *r |= m;
+    }
+    let f = f_local;
     let start = layout.node_offsets[layout.rank];
     // per component: applied, contact, reactions; then Σ|f|, Σ|λ|, Σ|R|
     let mut local = [0.0; 12];
@@ -462,8 +466,8 @@ pub fn equilibrium(
 fn dirichlet_terms(
     (mesh, layout, material): (&Mesh, &Layout, &Material),
     fixed: &[f64],
-    sys: &System,
-    u: &crate::petsc::Vector,
+    f: &Vector,
+    u: &Vector,
 ) -> Result<Vec<f64>, RunError> {
     let dim = mesh.dim;
     let is_fixed = |v: usize| (0..dim).any(|c| !fixed[v * dim + c].is_nan());
@@ -511,7 +515,7 @@ fn dirichlet_terms(
             vv.push(val);
         }
     }
-    let mut v = sys.b.duplicate()?;
+    let mut v = f.duplicate()?;
     v.set_all(0.0)?;
     crate::par::add_in_rank_order(&mut v, &vi, &vv)?;
     v.assemble()?;

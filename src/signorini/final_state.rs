@@ -11,6 +11,7 @@ use super::report::{self, ContactSummary, FrictionCertificate, Kkt, Scales};
 use crate::assembly::System;
 use crate::error::RunError;
 use crate::mesh::Mesh;
+use crate::mortar::InU;
 use crate::par::Ctx;
 use crate::partition::Layout;
 use crate::petsc::Vector;
@@ -72,17 +73,19 @@ pub fn certify(
     ctx: &Ctx,
     (settings, mesh, layout, fixed, sys): (&ContactSettings, &Mesh, &Layout, &[f64], &System),
     (b, table, contact): (&ContactBoundary, &report::Table, &ContactSummary),
-    nr: &NewtonResult,
+    (nr, in_u): (&NewtonResult, Option<&InU>),
     force_control: &[force::ForceControl],
 ) -> Result<certificate::Certificate, RunError> {
-    let (equilibrium, lambdas) = certificate::equilibrium(
-        ctx,
-        (mesh, layout, &settings.material),
-        fixed,
-        sys,
-        b,
-        &nr.u,
-    )?;
+    let mat = (mesh, layout, &settings.material);
+    let (equilibrium, lambdas) = match in_u {
+        None => certificate::equilibrium(ctx, mat, fixed, (&sys.a, &sys.b, &[]), b, &nr.u)?,
+        // body pairs: the balance of the bodies in u (the slave nodes' forces reach the
+        // master rows)
+        Some(p) => {
+            let rows = (p.basis.a(), p.f, p.basis.master_rows());
+            certificate::equilibrium(ctx, mat, fixed, rows, b, &p.u(&nr.u)?)?
+        }
+    };
     let force_balance = (!force_control.is_empty())
         .then(|| certificate::force_balance(ctx, b, &lambdas, force_control));
     let cert = certificate::Certificate::new(certificate::Parts {

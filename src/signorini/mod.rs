@@ -34,6 +34,7 @@ use crate::case::{self, CoulombAlgorithm, Method, Preset, Reuse, SolverSection};
 use crate::error::RunError;
 use crate::linsolve::{LinearSetup, SolverKind};
 use crate::mesh::Mesh;
+use crate::mortar::InU;
 use crate::output::ContactResult;
 use crate::par::Ctx;
 use crate::partition::Layout;
@@ -259,7 +260,7 @@ pub fn solve(
     fixed: &[f64],
     sys: &System,
     solver_section: &SolverSection,
-    previous: Option<&ContactSolution>,
+    (previous, in_u): (Option<&ContactSolution>, Option<&InU>),
 ) -> Result<ContactSolution, RunError> {
     let dim = mesh.dim;
     let law = Law::of(settings);
@@ -335,7 +336,7 @@ pub fn solve(
         solver_section,
         b,
         solved,
-        previous,
+        (previous, in_u),
     )?;
     solution.kept = kept;
     Ok(solution)
@@ -405,7 +406,7 @@ fn report_solution(
     solver_section: &SolverSection,
     mut b: ContactBoundary,
     solved: Solved,
-    previous: Option<&ContactSolution>,
+    (previous, in_u): (Option<&ContactSolution>, Option<&InU>),
 ) -> Result<ContactSolution, RunError> {
     let (dim, friction) = (mesh.dim, settings.friction());
     let Solved {
@@ -436,7 +437,7 @@ fn report_solution(
         ctx,
         (settings, mesh, layout, fixed, sys),
         (&b, &table, &contact),
-        &nr,
+        (&nr, in_u),
         force_control,
     )?;
     let mut newton = newton_summary(settings, solver_section, c, &mut nr, outer_steps, previous);

@@ -61,6 +61,9 @@ pub fn set_up(
     ctx.agree(check_pairs(mesh, settings, &body_pairs).map_err(RunError::Input))?;
     let reach = Reach::of(ctx, mesh, layout, settings, &body_pairs);
     let masters = MasterFacets::exchange(ctx, mesh, layout, settings, (fixed, &reach))?;
+    ctx.agree(
+        check_overlap(mesh, layout, settings, (&body_pairs, &masters)).map_err(RunError::Input),
+    )?;
     let friction = settings.friction();
     let mut master_fixed = MasterFixed::new();
     let mut rows_of = Vec::new();
@@ -91,9 +94,6 @@ pub fn set_up(
         masters.fixed_of(p, &mut master_fixed);
         rows_of.push((p, rows));
     }
-    ctx.agree(
-        check_overlap(mesh, layout, settings, (&rows_of, &masters)).map_err(RunError::Input),
-    )?;
     let basis = Basis::new(ctx, mesh, layout, (&rows_of, &master_fixed), fixed)?;
     for (p, rows) in rows_of {
         let Obstacle::Body(t) = &mut settings.pairs[p].obstacle else {
@@ -225,18 +225,20 @@ fn keep_contact_nodes(
 }
 
 /// No node is a slave node of one pair and a master node of another (or of its own): the
-/// change of basis substitutes master unknowns into slave rows once. A master facet through
-/// an owned slave node lies in this rank's reach, so it was received here: the check is
-/// complete with local work. Local.
+/// change of basis substitutes master unknowns into slave rows once, and one body does not
+/// touch itself. A master facet through an owned slave node lies in this rank's reach, so it
+/// was received here: the check is complete with local work. Local.
 fn check_overlap(
     mesh: &Mesh,
     layout: &Layout,
     settings: &ContactSettings,
-    (rows_of, masters): (&[(usize, HashMap<usize, SlaveRow>)], &MasterFacets),
+    (body_pairs, masters): (&[usize], &MasterFacets),
 ) -> Result<(), InputError> {
     let master_nodes = masters.node_pairs();
-    for (p, rows) in rows_of {
-        let mut mine: Vec<usize> = rows.keys().copied().collect();
+    for &p in body_pairs {
+        let (facets, _) = exchange::slave_facets(mesh, layout, &settings.pairs[p].group);
+        let mut mine: Vec<usize> = facets.iter().flatten().map(|&(v, _)| v).collect();
+        mine.retain(|&v| layout.owns_node(v));
         mine.sort_unstable_by_key(|&v| layout.node_global[v]);
         for v in mine {
             if let Some(&q) = master_nodes.get(&layout.node_global[v]) {
@@ -249,7 +251,7 @@ fn check_overlap(
                          (split the groups so that they share no node)",
                         mesh.node_tags[v],
                         &mesh.coords[v][..mesh.dim],
-                        settings.pairs[*p].group,
+                        settings.pairs[p].group,
                         master_group(&pair.obstacle),
                     ),
                 )

@@ -60,9 +60,10 @@ pub fn line(xs: &[f64], y: f64, id0: usize, side: f64) -> Raw {
     polyline(&pts, id0, [0.0, side])
 }
 
-/// The rectangle [0, lx] × [0, ly] at height z in an n × n grid of triangles (diagonal
-/// per cell alternating with `pattern`), interior nodes moved randomly by up to `jitter`
-/// cell sizes; body on the side `side` (±1) in z; ids from `id0`.
+/// The rectangle [0, lx] × [0, ly] at height z in an n × n grid of triangles (the
+/// diagonal of each cell alternating with `pattern`), interior nodes moved randomly (seed
+/// `seed`) by up to `jitter` cell sizes (≤ 0.1 keeps every triangle valid; the larger
+/// values in the tests are for seeds checked to give the total area 1).
 pub fn square(n: usize, lx: f64, ly: f64, z: f64, jitter: f64, pattern: usize, seed: u64) -> Grid {
     let mut rng = StdRng::seed_from_u64(seed);
     let mut x = Vec::new();

@@ -210,10 +210,10 @@ fn normal_filter_skips_the_back_face() {
 
 #[test]
 fn large_surfaces_3d() {
-    let slave = square(60, 1.0, 1.0, 0.0, 0.3, 0, 8)
+    let slave = square(60, 1.0, 1.0, 0.0, 0.1, 0, 8)
         .raw(0, -1.0)
         .surface(&id);
-    let master = square(43, 1.0, 1.0, 0.0, 0.3, 1, 9)
+    let master = square(43, 1.0, 1.0, 0.0, 0.1, 1, 9)
         .raw(100_000, 1.0)
         .surface(&id);
     let mortar = couple(&slave, &master, 0.01);

@@ -278,3 +278,43 @@ fn partial_coverage_3d() {
     }
     assert!((24..36).contains(&covered), "{covered}");
 }
+
+/// A spherical cap (radius 1) above the plane z = 0, touching it at the origin.
+#[test]
+fn curved_slave_3d() {
+    let r = 1.0;
+    for n in [8, 16] {
+        let mut grid = square(n, 0.6, 0.6, 0.0, 0.0, 0, 0);
+        for x in &mut grid.x {
+            let (a, b) = (x[0] - 0.3, x[1] - 0.3);
+            *x = [a, b, r - (r * r - a * a - b * b).sqrt()];
+        }
+        let mut raw = grid.raw(0, 1.0);
+        raw.inside = vec![[0.0, 0.0, r]; raw.facets.len()];
+        let slave = raw.surface(&id);
+        let shift = |x: [f64; 3]| [x[0] - 0.5, x[1] - 0.5, x[2]];
+        let master = square(5, 1.0, 1.0, 0.0, 0.1, 1, 3)
+            .raw(1000, -1.0)
+            .surface(&shift);
+        let mortar = couple(&slave, &master, 0.5);
+        let area: f64 = (0..slave.n_facets()).map(|f| slave.measure(f)).sum();
+        let d: f64 = mortar.rows.iter().map(|r| r.d).sum();
+        assert!((mortar.covered_measure() - area).abs() < 1e-13 && (d - area).abs() < 1e-13);
+        let (mut inner, mut edge) = (0.0f64, 0.0f64);
+        for row in &mortar.rows {
+            assert!(row.gap >= -1e-15 && row.fully_covered);
+            // The distance from the node along the sphere's normal to the plane z = 0.
+            let want = row.x[2] * r / (r - row.x[2]);
+            let err = (row.gap / row.d - want).abs();
+            if row.x[0].abs().max(row.x[1].abs()) < 0.29 {
+                inner = inner.max(err);
+            } else {
+                edge = edge.max(err);
+            }
+        }
+        // First order in h = 0.6/n (area-weighted nodal normals of an unsymmetric
+        // triangulation), small inside, larger on the cap's rim.
+        let h = 0.6 / n as f64;
+        assert!(inner < 1e-3 * h && edge < 0.05 * h, "{inner} {edge}");
+    }
+}

@@ -35,7 +35,7 @@ pub fn restricted_coefficients(
     gram: &Coefficients,
     m: &[f64; 3],
 ) -> Option<Coefficients> {
-    if (0..n).any(|i| !(gram[i][i] > 0.0)) {
+    if (0..n).any(|i| gram[i][i].is_nan() || gram[i][i] <= 0.0) {
         return None;
     }
     let s: Vec<f64> = (0..n).map(|i| 1.0 / gram[i][i].sqrt()).collect();
@@ -46,7 +46,7 @@ pub fn restricted_coefficients(
         }
     }
     let (det, inv) = inverse(n, &g);
-    if !(det >= GRAM_DET_TOL) {
+    if det.is_nan() || det < GRAM_DET_TOL {
         return None;
     }
     let mut a = [[0.0; 3]; 3];

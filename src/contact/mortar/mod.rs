@@ -54,7 +54,11 @@ pub mod quad;
 pub mod search;
 pub mod surface;
 #[cfg(test)]
+mod test_util;
+#[cfg(test)]
 mod tests;
+#[cfg(test)]
+mod tests_more;
 
 pub use assemble::{assemble, assemble_with_normals, Mortar, MortarOptions, MortarRow};
 pub use surface::{MortarError, Orientation, Surface};

@@ -33,12 +33,12 @@ pub fn segment_points(
     let len = norm(t);
     let s = |p: [f64; 3]| dot(sub(p, xs[0]), t) / (len * len);
     let (s0, s1) = (s(xm[0]), s(xm[1]));
-    if !((s1 - s0).abs() > OVERLAP_TOL) {
+    if (s1 - s0).abs() <= OVERLAP_TOL {
         return 0.0;
     }
     let lo = s0.min(s1).max(0.0);
     let hi = s0.max(s1).min(1.0);
-    if !(hi - lo > OVERLAP_TOL) {
+    if hi - lo <= OVERLAP_TOL {
         return 0.0;
     }
     let g = 0.5 / 3f64.sqrt();
@@ -78,12 +78,12 @@ pub fn triangle_points(
     let st = [proj(xs[0]), proj(xs[1]), proj(xs[2])];
     let mt = [proj(xm[0]), proj(xm[1]), proj(xm[2])];
     let tol = OVERLAP_TOL * slave_area;
-    if !(0.5 * cross2(mt[0], mt[1], mt[2]).abs() > tol) || !boxes_overlap(&st, &mt) {
+    if 0.5 * cross2(mt[0], mt[1], mt[2]).abs() <= tol || !boxes_overlap(&st, &mt) {
         return 0.0;
     }
     let poly = clip(mt.to_vec(), &st);
     let area = 0.5 * polygon_area2(&poly).abs();
-    if poly.len() < 3 || !(area > tol) {
+    if poly.len() < 3 || area <= tol {
         return 0.0;
     }
     let inv = 1.0 / poly.len() as f64;

@@ -176,7 +176,7 @@ impl Surface {
             let c = self.facet_centroid(f);
             let side = dot(self.normals[f], sub(c, inside[f]));
             let reach = norm(sub(c, inside[f]));
-            if !(side.abs() > 1e-12 * reach) {
+            if side.is_nan() || side.abs() <= 1e-12 * reach {
                 return Err(MortarError::InsideOnFacet { facet: f });
             }
             if side < 0.0 {

@@ -109,9 +109,9 @@ fn full_file_round_trip() {
     let c = parse(FULL).unwrap();
     assert_eq!(c.file, Path::new(FILE));
     assert_eq!(c.mesh.file, Path::new("/cases/meshes/plate.msh"));
-    assert_eq!(c.material.young, 210.0);
-    assert_eq!(c.material.poisson, 0.25);
-    assert_eq!(c.material.model, Some(MaterialModel::PlaneStress));
+    assert_eq!(c.materials[0].young, 210.0);
+    assert_eq!(c.materials[0].poisson, 0.25);
+    assert_eq!(c.materials[0].model, Some(MaterialModel::PlaneStress));
     assert_eq!(
         c.dirichlet,
         vec![
@@ -804,7 +804,7 @@ fn overrides_apply() {
     assert_eq!(c.output.fields, vec![OutputField::Displacement]);
     assert_eq!(c.dirichlet[0].group, "clamp2");
     assert_eq!(c.dirichlet[1].value, vec![Some(0.1), Some(-0.5)]);
-    assert_eq!(c.material.model, Some(MaterialModel::PlaneStrain));
+    assert_eq!(c.materials[0].model, Some(MaterialModel::PlaneStrain));
     match &c.contacts.first().unwrap().obstacle {
         ObstacleSpec::Plane { normal, .. } => assert_eq!(normal, &vec![0.0, -1.0]),
         o => panic!("{o:?}"),

@@ -1,7 +1,7 @@
 // A block [-1,1] x [0,1] of two materials: a substrate ("substrate", y < 0.9) under a coating
 // ("coating", 0.9 < y < 1); one conforming interface at y = 0.9. Fine (h = hc) near the top
 // centre, where examples/coated_block.toml indents it.
-// gmsh -2 coated_block.geo -format msh41 -o coated_block.msh
+// gmsh -2 coated2d.geo -format msh41 -o coated2d.msh (scripts/mesh blocks)
 DefineConstant[ hc = {0.02, Name "Mesh size at the top centre"} ];
 DefineConstant[ h = {0.15, Name "Mesh size elsewhere"} ];
 

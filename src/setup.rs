@@ -215,9 +215,10 @@ fn cell_materials(
 /// contact predictor, the default Newton parameter c = E / h_c): of the materials of the
 /// cells with a node on a contact group's facets, the stiffest (largest contact modulus
 /// E / (1 − ν²), or E in plane stress); without contact cells, the stiffest of all. With one
-/// material this is that material: single-material runs are unchanged. The stiffest, as the
-/// larger modulus gives the larger c and the stiffer half-space, the conservative side of
-/// both estimates. Collective (one sum).
+/// material this is that material: single-material runs are unchanged. The materials at the
+/// contact boundary, as both estimates are about its response; the stiffest of them, so that
+/// the choice does not depend on the order of the entries and a stiff layer at the surface
+/// is not estimated by a compliant one behind it. Collective (one sum).
 fn reference_material(ctx: &Ctx, case: &Case, mesh: &Mesh, materials: &Materials) -> usize {
     let n = materials.list.len();
     if n == 1 {

@@ -317,3 +317,32 @@ fn material_and_materials_together_are_refused() {
         &["material"],
     );
 }
+
+/// examples/coated_block.toml runs on 2 ranks, every step converged and in equilibrium, and
+/// the stiff coating takes a larger force than the homogeneous block (the coating's E set to
+/// the substrate's) on a narrower contact.
+#[test]
+fn the_coated_block_example_runs() {
+    let case = repo("examples/coated_block.toml");
+    let coated = solve(2, &case, &[]);
+    let plain = solve(2, &case, &["material.0.young=1.0"]);
+    for (s, what) in [(&coated, "coated"), (&plain, "homogeneous")] {
+        assert_eq!(
+            s.summary["load"]["completed"],
+            true,
+            "{what}: {}",
+            s.run.output()
+        );
+        let eq = s.f(&["certificate", "equilibrium", "relative"]);
+        assert!(eq <= 1e-8, "{what}: equilibrium defect {eq:e}");
+    }
+    let force = |s: &Solved| s.total_force()[1].abs();
+    let active = |s: &Solved| s.active_node_ids().len();
+    assert!(
+        force(&coated) > 1.2 * force(&plain),
+        "{} vs {}",
+        force(&coated),
+        force(&plain)
+    );
+    assert!(active(&coated) < active(&plain) && active(&coated) > 0);
+}

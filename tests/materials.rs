@@ -346,3 +346,23 @@ fn the_coated_block_example_runs() {
     );
     assert!(active(&coated) < active(&plain) && active(&coated) > 0);
 }
+
+/// A nearly incompressible entry is warned about by its key (P1 locking); the others not.
+#[test]
+fn a_nearly_incompressible_material_is_named_in_the_warning() {
+    let tmp = tempfile::tempdir().unwrap();
+    let mesh = bar_mesh(tmp.path(), 2);
+    let case = bar_case(&mesh, 2).replacen("poisson = 0.3", "poisson = 0.495", 1);
+    let r = run_case(tmp.path(), &case, 1, &tmp.path().join("out"));
+    let warned: Vec<&str> = r
+        .stdout
+        .lines()
+        .filter(|l| l.contains("close to 1/2"))
+        .collect();
+    assert_eq!(warned.len(), 1, "{}", r.output());
+    assert!(
+        warned[0].contains("material[1]: poisson = 0.495"),
+        "{}",
+        warned[0]
+    );
+}

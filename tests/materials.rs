@@ -205,8 +205,23 @@ fn bar_of_two_materials_3d_is_exact() {
 /// The bar case with one edit; must be refused: exit code 2, one error line containing every
 /// `expect`, nothing but the case file in the directory.
 fn refused(np: usize, edit: impl Fn(String) -> String, expect: &[&str]) {
+    refused_on(np, false, edit, expect)
+}
+
+/// [`refused`], with `h5`: on the bar's distributed .h5 input (`signorini-mpi convert`).
+fn refused_on(np: usize, h5: bool, edit: impl Fn(String) -> String, expect: &[&str]) {
     let tmp = tempfile::tempdir().unwrap();
-    let mesh = bar_mesh(tmp.path(), 2);
+    let mut mesh = bar_mesh(tmp.path(), 2);
+    if h5 {
+        let out = mesh.with_extension("h5");
+        let args = [mesh.display().to_string(), out.display().to_string()];
+        let conv = run_with_timeout(
+            solver(0, &[vec!["convert".to_string()], args.to_vec()].concat()),
+            Duration::from_secs(60),
+        );
+        conv.expect_code(0, "convert");
+        mesh = out;
+    }
     let case_dir = tmp.path().join("case");
     std::fs::create_dir(&case_dir).unwrap();
     let text = edit(bar_case(&mesh, 2));
@@ -273,10 +288,11 @@ fn two_models_are_refused() {
 
 #[test]
 fn a_cell_without_material_is_refused_on_1_and_2_ranks() {
-    for np in [0, 2] {
+    for (np, h5) in [(0, false), (2, false), (2, true)] {
         // the hard part has no material: every one of its cells is named by count
-        refused(
+        refused_on(
             np,
+            h5,
             |s| {
                 let i = s.find("[[material]]\ngroup = \"hard\"").unwrap();
                 let j = i + s[i..].find("model").unwrap();

@@ -30,7 +30,7 @@ use mpi::traits::*;
 use serde_json::json;
 use signorini_mpi::assembly::{self, BodyForce, Problem};
 use signorini_mpi::case::SolverSection;
-use signorini_mpi::fem::{self, Material, Model};
+use signorini_mpi::fem::{self, Material, Materials, Model};
 use signorini_mpi::mesh::{self, Mesh};
 use signorini_mpi::par::Ctx;
 use signorini_mpi::partition::{self, Layout};
@@ -159,7 +159,7 @@ fn solve(
     let problem = Problem {
         mesh,
         held_fixed: Vec::new(),
-        material,
+        material: &Materials::single(material),
         fixed,
         facet_loads: Vec::new(),
         body_force,

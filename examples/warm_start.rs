@@ -63,11 +63,11 @@ fn run(ctx: &Ctx, a: &Args) -> Result<serde_json::Value, RunError> {
     let mesh = &input.mesh;
     let layout = &input.layout;
     let solve = |case: &Case, previous: Option<&ContactSolution>| {
-        let problem = setup::problem(case, mesh, input.material);
+        let problem = setup::problem(case, mesh, &input.material);
         let sys = assembly::assemble(ctx.comm(), layout, &problem)?;
         assert!(!case.contacts.is_empty(), "a contact case");
         let settings = ctx.agree(
-            setup::contact_settings(case, &case.contacts, mesh.dim).map_err(RunError::from),
+            setup::contact_settings(case, &case.contacts, &input.material).map_err(RunError::from),
         )?;
         signorini::solve(
             ctx,

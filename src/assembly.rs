@@ -20,7 +20,7 @@
 //! Zeros are stored explicitly: the pattern never changes.
 
 use crate::bigbuf::BigVec;
-use crate::fem::{self, Material};
+use crate::fem::{self, Materials};
 use crate::mesh::Mesh;
 use crate::partition::Layout;
 use crate::petsc::{self, Csr, MPI_Comm, Matrix, PInt, Vector};
@@ -55,7 +55,8 @@ pub enum BodyForce {
 /// The linear-elastic problem as assembly sees it.
 pub struct Problem<'a> {
     pub mesh: &'a Mesh,
-    pub material: Material,
+    /// The material of every cell.
+    pub material: &'a Materials,
     /// Prescribed value per mesh dof (node * dim + component); NaN = free.
     pub fixed: Vec<f64>,
     /// Per mesh dof: a prescribed value held at full value in every load step (`ramp = false`);
@@ -107,11 +108,25 @@ fn dofs_of(nodes: &[usize], layout: &Layout, dim: usize, out: &mut [PInt]) {
 struct RowCells {
     /// Mesh node indices, nodes-per-cell per cell.
     nodes: Vec<u32>,
+    /// The material index of every cell in this list; empty with one material.
+    mat: Vec<u16>,
     ptr: Vec<u32>,
     inc: Vec<u32>,
 }
 
-fn row_cells(mesh: &Mesh, layout: &Layout) -> RowCells {
+impl RowCells {
+    /// The material index of cell i of this list.
+    #[inline(always)]
+    fn material(&self, i: usize) -> usize {
+        if self.mat.is_empty() {
+            0
+        } else {
+            self.mat[i] as usize
+        }
+    }
+}
+
+fn row_cells(mesh: &Mesh, layout: &Layout, materials: &Materials) -> RowCells {
     let npc = mesh.nodes_per_cell();
     let mut cells: Vec<usize> = layout.local_cells.clone();
     if layout.size > 1 {
@@ -134,6 +149,11 @@ fn row_cells(mesh: &Mesh, layout: &Layout) -> RowCells {
     for &c in &cells {
         nodes.extend(mesh.cell(c).iter().map(|&v| v as u32));
     }
+    let mat = if materials.list.len() > 1 {
+        cells.iter().map(|&c| materials.index(c) as u16).collect()
+    } else {
+        Vec::new()
+    };
     drop(cells);
     // Per mesh node: its owned (local) number, or u32::MAX.
     let (node_lo, node_hi) = layout.node_range();
@@ -169,7 +189,12 @@ fn row_cells(mesh: &Mesh, layout: &Layout) -> RowCells {
             fill[l] += 1;
         }
     }
-    RowCells { nodes, ptr, inc }
+    RowCells {
+        nodes,
+        mat,
+        ptr,
+        inc,
+    }
 }
 
 fn csr_with_capacity(rows: usize, nnz: usize) -> Csr {
@@ -336,46 +361,109 @@ fn add_rows_with_dirichlet<const D: usize, const N: usize>(
     }
 }
 
+impl OwnedRows {
+    /// Empty CSR parts for the owned rows, with room reserved for their entries.
+    fn with_capacity(layout: &Layout, d: usize) -> OwnedRows {
+        let n_owned = layout.n_owned_nodes();
+        // A generous guess of the row lengths (nodes incl. itself: ~7 in a triangle mesh,
+        // 15-16 in a tetrahedral one; the 2.3 M-unknown Hertz ball has 15.3): the capacity is
+        // only reserved (pages are touched as the arrays fill), while a growth copies the
+        // arrays (a doubling at 2.3 M unknowns cost seconds).
+        let guess = n_owned * d * d * if d == 2 { 9 } else { 20 };
+        OwnedRows {
+            diag: csr_with_capacity(n_owned * d, guess),
+            off: csr_with_capacity(n_owned * d, if layout.size > 1 { guess / 8 } else { 0 }),
+            elim_rhs: vec![0.0f64; n_owned * d],
+            fixed_rhs: Vec::new(),
+        }
+    }
+}
+
+/// What every row of [`owned_rows`] reads besides its cells: the Dirichlet data per mesh dof
+/// (NaN: free), per node whether any of its components is fixed (one byte, cache-resident),
+/// and the Lamé constants (1.25) of every material.
+struct RowData<'a> {
+    fixed: &'a [f64],
+    has_fixed: Vec<bool>,
+    lame: &'a [(f64, f64)],
+}
+
+/// One cell's part of owned node a's D rows of (3.8) added into the row buffer: with the
+/// Dirichlet elimination ([`add_rows_with_dirichlet`]) when a node of the cell carries
+/// Dirichlet data, else the rows as they are, block by block (the numbers of
+/// `p1_stiffness_rows`, bit for bit). `(g, vol)`: the cell's gradients and signed measure.
+#[inline(always)]
+fn add_cell_rows<const D: usize, const N: usize>(
+    rd: &RowData,
+    sc: &mut RowScratch,
+    (nodes, a): (&[u32], usize),
+    (g, vol): ([[f64; D]; N], f64),
+    (lambda, mu): (f64, f64),
+    (fixed_v, elim): (&[f64; D], &mut [f64; D]),
+) {
+    let width = sc.nb.len() * D;
+    let mut s0 = [0usize; N];
+    let mut any_fixed = false;
+    for b in 0..N {
+        let w = nodes[b] as usize;
+        s0[b] = sc.slot[w] as usize * D;
+        any_fixed |= rd.has_fixed[w];
+    }
+    if any_fixed {
+        let mut k = [[0.0f64; 12]; 3];
+        fem::p1_stiffness_rows::<D, N>(&g, vol.abs(), lambda, mu, a, &mut k);
+        let mut gfix = [f64::NAN; 12];
+        for b in 0..N {
+            let w = nodes[b] as usize;
+            gfix[b * D..b * D + D].copy_from_slice(&rd.fixed[w * D..w * D + D]);
+        }
+        add_rows_with_dirichlet::<D, N>(&k, &gfix, fixed_v, a, &s0, &mut sc.buf, width, elim);
+        return;
+    }
+    let (wl, wm) = (vol.abs() * lambda, vol.abs() * mu);
+    for b in 0..N {
+        let kb = fem::p1_stiffness_block::<D>(&g[a], &g[b], wl, wm);
+        for i in 0..D {
+            let dst = &mut sc.buf[i * width + s0[b]..i * width + s0[b] + D];
+            for j in 0..D {
+                dst[j] += kb[i][j];
+            }
+        }
+    }
+}
+
 /// (3.8) row by row: every owned node sums the element rows of the cells around it (in the
-/// order of the layout's cell loop) into a small dense row buffer, with the symmetric
-/// Dirichlet elimination applied per entry (a fixed dof's row keeps only its diagonal, a
-/// fixed column moves −K_ij g_j to the right-hand side), and appends the buffer to the CSR
-/// arrays. Every value of an owned row is computed on its owner (other ranks' cells that touch
-/// it included): no entries go to other ranks, and no searches (each neighbour's position in
-/// the row sits in `slot`). Phases per node: its neighbours ([`RowScratch::gather_neighbours`]),
-/// its cells' rows (here; [`add_rows_with_dirichlet`] for cells with fixed dofs), the CSR
-/// parts ([`RowScratch::append_rows`]) and its right-hand-side entries.
+/// order of the layout's cell loop; each cell with its own material's Lamé constants) into a
+/// small dense row buffer, with the symmetric Dirichlet elimination applied per entry (a
+/// fixed dof's row keeps only its diagonal, a fixed column moves −K_ij g_j to the right-hand
+/// side), and appends the buffer to the CSR arrays. Every value of an owned row is computed
+/// on its owner (other ranks' cells that touch it included): no entries go to other ranks,
+/// and no searches (each neighbour's position in the row sits in `slot`). Phases per node:
+/// its neighbours ([`RowScratch::gather_neighbours`]), its cells' rows ([`add_cell_rows`]),
+/// the CSR parts ([`RowScratch::append_rows`]) and its right-hand-side entries.
 fn owned_rows<const D: usize, const N: usize>(
     p: &Problem,
     layout: &Layout,
     rc: &RowCells,
     gradients: impl Fn(&[u32]) -> ([[f64; D]; N], f64),
 ) -> OwnedRows {
-    let mesh = p.mesh;
-    let (lambda, mu) = p.material.lame();
-    let n_owned = layout.n_owned_nodes();
-    // A generous guess of the row lengths (nodes incl. itself: ~7 in a triangle mesh, 15-16 in
-    // a tetrahedral one; the 2.3 M-unknown Hertz ball has 15.3): the capacity is only reserved
-    // (pages are touched as the arrays fill), while a growth copies the arrays (a doubling at
-    // 2.3 M unknowns cost seconds).
-    let guess = n_owned * D * D * if D == 2 { 9 } else { 20 };
-    let mut diag = csr_with_capacity(n_owned * D, guess);
-    let mut off = csr_with_capacity(n_owned * D, if layout.size > 1 { guess / 8 } else { 0 });
-    let mut elim_rhs = vec![0.0f64; n_owned * D];
-    let mut fixed_rhs = Vec::new();
-    // Per node: does any of its components carry Dirichlet data (one byte, cache-resident).
-    let has_fixed: Vec<bool> = (0..mesh.n_nodes())
-        .map(|w| (0..D).any(|j| !p.fixed[w * D + j].is_nan()))
-        .collect();
+    let n_nodes = p.mesh.n_nodes();
+    let mut out = OwnedRows::with_capacity(layout, D);
+    let rd = RowData {
+        fixed: &p.fixed,
+        has_fixed: (0..n_nodes)
+            .map(|w| (0..D).any(|j| !p.fixed[w * D + j].is_nan()))
+            .collect(),
+        lame: p.material.lame_table(),
+    };
     let mut sc = RowScratch {
-        slot: vec![u32::MAX; mesh.n_nodes()],
+        slot: vec![u32::MAX; n_nodes],
         nb: Vec::with_capacity(64),
         buf: Vec::new(),
         cols: Default::default(),
         vals: Default::default(),
         off_slots: Vec::new(),
     };
-    let mut k = [[0.0f64; 12]; 3];
     for (la, &v) in layout.owned_nodes.iter().enumerate() {
         let inc = &rc.inc[rc.ptr[la] as usize..rc.ptr[la + 1] as usize];
         sc.gather_neighbours::<N>(layout, rc, la, inc);
@@ -385,64 +473,42 @@ fn owned_rows<const D: usize, const N: usize>(
         let fixed_v: [f64; D] = std::array::from_fn(|i| p.fixed[v * D + i]);
         let mut elim = [0.0f64; D];
         for &e in inc {
-            let (c0, a) = (e as usize / N * N, e as usize % N);
-            let nodes = &rc.nodes[c0..c0 + N];
-            let (g, vol) = gradients(nodes);
-            let mut s0 = [0usize; N];
-            let mut any_fixed = false;
-            for b in 0..N {
-                let w = nodes[b] as usize;
-                s0[b] = sc.slot[w] as usize * D;
-                any_fixed |= has_fixed[w];
-            }
-            if any_fixed {
-                fem::p1_stiffness_rows::<D, N>(&g, vol.abs(), lambda, mu, a, &mut k);
-                let mut gfix = [f64::NAN; 12];
-                for b in 0..N {
-                    let w = nodes[b] as usize;
-                    gfix[b * D..b * D + D].copy_from_slice(&p.fixed[w * D..w * D + D]);
-                }
-                add_rows_with_dirichlet::<D, N>(
-                    &k,
-                    &gfix,
-                    &fixed_v,
-                    a,
-                    &s0,
-                    &mut sc.buf,
-                    width,
-                    &mut elim,
-                );
-                continue;
-            }
-            // No fixed dof in the cell: node a's rows as they are, block by block (the
-            // numbers of p1_stiffness_rows, bit for bit).
-            let (wl, wm) = (vol.abs() * lambda, vol.abs() * mu);
-            for b in 0..N {
-                let kb = fem::p1_stiffness_block::<D>(&g[a], &g[b], wl, wm);
-                for i in 0..D {
-                    let dst = &mut sc.buf[i * width + s0[b]..i * width + s0[b] + D];
-                    for j in 0..D {
-                        dst[j] += kb[i][j];
-                    }
-                }
-            }
+            let (cell, a) = (e as usize / N, e as usize % N);
+            let nodes = &rc.nodes[cell * N..cell * N + N];
+            let lame = rd.lame[rc.material(cell)];
+            let cell_geometry = gradients(nodes);
+            let rhs = (&fixed_v, &mut elim);
+            add_cell_rows::<D, N>(&rd, &mut sc, (nodes, a), cell_geometry, lame, rhs);
         }
-        sc.append_rows::<D>(layout.node_range(), &mut diag, &mut off);
+        sc.append_rows::<D>(layout.node_range(), &mut out.diag, &mut out.off);
         let diag0 = sc.slot[v] as usize * D;
         for i in 0..D {
             if fixed_v[i].is_nan() {
-                elim_rhs[la * D + i] = elim[i];
+                out.elim_rhs[la * D + i] = elim[i];
             } else {
-                fixed_rhs.push((la * D + i, sc.buf[i * width + diag0 + i] * fixed_v[i]));
+                let a_jj = sc.buf[i * width + diag0 + i];
+                out.fixed_rhs.push((la * D + i, a_jj * fixed_v[i]));
             }
         }
         sc.clear_slots();
     }
-    OwnedRows {
-        diag,
-        off,
-        elim_rhs,
-        fixed_rhs,
+    out
+}
+
+/// [`owned_rows`] for the mesh's dimension (triangles or tetrahedra).
+fn rows_of(p: &Problem, layout: &Layout) -> OwnedRows {
+    let x = &p.mesh.coords;
+    let rc = row_cells(p.mesh, layout, p.material);
+    if p.mesh.dim == 2 {
+        owned_rows::<2, 3>(p, layout, &rc, |n| {
+            let p = |v: u32| [x[v as usize][0], x[v as usize][1]];
+            fem::tri_gradients(&[p(n[0]), p(n[1]), p(n[2])])
+        })
+    } else {
+        owned_rows::<3, 4>(p, layout, &rc, |n| {
+            let p = |v: u32| x[v as usize];
+            fem::tet_gradients(&[p(n[0]), p(n[1]), p(n[2]), p(n[3])])
+        })
     }
 }
 
@@ -482,10 +548,10 @@ pub fn outward_normal(mesh: &Mesh, facet: usize, opposite: usize) -> ([f64; 3], 
 }
 
 /// Assembles A (MPIAIJ, block size dim, exact preallocation) and f (3.8): every rank its own
-/// rows.
+/// rows. Phases: the owned rows ([`rows_of`]) handed to PETSc, the right-hand side
+/// ([`right_hand_side`]), the held parts ([`held_loads`], [`add_held_dirichlet`]).
 pub fn assemble(comm: MPI_Comm, layout: &Layout, p: &Problem) -> petsc::Result<System> {
-    let mesh = p.mesh;
-    let dim = mesh.dim;
+    let dim = p.mesh.dim;
     let t0 = Instant::now();
     let local_rows = layout.n_owned_nodes() * dim;
     let mut b = Vector::new_mpi(comm, local_rows, dim)?;
@@ -495,27 +561,13 @@ pub fn assemble(comm: MPI_Comm, layout: &Layout, p: &Problem) -> petsc::Result<S
     };
 
     let t1 = Instant::now();
-    let x = &mesh.coords;
-    let rc = row_cells(mesh, layout);
-    let rows = if dim == 2 {
-        owned_rows::<2, 3>(p, layout, &rc, |n| {
-            let p = |v: u32| [x[v as usize][0], x[v as usize][1]];
-            fem::tri_gradients(&[p(n[0]), p(n[1]), p(n[2])])
-        })
-    } else {
-        owned_rows::<3, 4>(p, layout, &rc, |n| {
-            let p = |v: u32| x[v as usize];
-            fem::tet_gradients(&[p(n[0]), p(n[1]), p(n[2]), p(n[3])])
-        })
-    };
-    drop(rc);
-    stats.rows_seconds = t1.elapsed().as_secs_f64();
     let OwnedRows {
         diag,
         off,
         elim_rhs,
         fixed_rhs,
-    } = rows;
+    } = rows_of(p, layout);
+    stats.rows_seconds = t1.elapsed().as_secs_f64();
     let t_petsc = Instant::now();
     let a = Matrix::from_split_csr(comm, dim, diag, off)?;
     stats.petsc_seconds = t_petsc.elapsed().as_secs_f64();
@@ -525,48 +577,11 @@ pub fn assemble(comm: MPI_Comm, layout: &Layout, p: &Problem) -> petsc::Result<S
     stats.nonzeros = st.nonzeros;
 
     let t2 = Instant::now();
-    b.write(|bv| bv.copy_from_slice(&elim_rhs))?;
-    let mut bidx: Vec<PInt> = Vec::new();
-    let mut bval: Vec<f64> = Vec::new();
-    load_entries(p, layout, false, &mut bidx, &mut bval);
-    crate::par::add_in_rank_order(&mut b, &bidx, &bval)?; // deterministic order: repeatable runs
-    b.assemble()?;
-    b.write(|bv| {
-        for &(i, v) in &fixed_rhs {
-            bv[i] = v;
-        }
-    })?;
+    right_hand_side(p, layout, &mut b, &elim_rhs, &fixed_rhs)?;
     let mut b_held = held_loads(p, layout, &b, &fixed_rhs)?;
     // A case-level decision (held_fixed is non-empty on every rank or on none): collective.
     if !p.held_fixed.is_empty() {
-        // The elimination terms of the held values alone: the same fixed pattern, the ramped
-        // values set to 0 (the matrix part of this pass is dropped).
-        let only_held = Problem {
-            mesh,
-            material: p.material,
-            fixed: p
-                .fixed
-                .iter()
-                .zip(&p.held_fixed)
-                .map(|(&g, &h)| if g.is_nan() || h { g } else { 0.0 })
-                .collect(),
-            held_fixed: Vec::new(),
-            facet_loads: Vec::new(),
-            body_force: BodyForce::None,
-        };
-        let rc = row_cells(mesh, layout);
-        let held = if dim == 2 {
-            owned_rows::<2, 3>(&only_held, layout, &rc, |n| {
-                let p = |v: u32| [x[v as usize][0], x[v as usize][1]];
-                fem::tri_gradients(&[p(n[0]), p(n[1]), p(n[2])])
-            })
-        } else {
-            owned_rows::<3, 4>(&only_held, layout, &rc, |n| {
-                let p = |v: u32| x[v as usize];
-                fem::tet_gradients(&[p(n[0]), p(n[1]), p(n[2]), p(n[3])])
-            })
-        };
-        let mut h = match b_held.take() {
+        let h = match b_held.take() {
             Some(h) => h,
             None => {
                 let mut h = b.duplicate()?;
@@ -574,15 +589,7 @@ pub fn assemble(comm: MPI_Comm, layout: &Layout, p: &Problem) -> petsc::Result<S
                 h
             }
         };
-        h.write(|v| {
-            for (x, e) in v.iter_mut().zip(&held.elim_rhs) {
-                *x += e;
-            }
-            for &(i, g) in &held.fixed_rhs {
-                v[i] = g;
-            }
-        })?;
-        b_held = Some(h);
+        b_held = Some(add_held_dirichlet(p, layout, h)?);
     }
     stats.load_seconds = t2.elapsed().as_secs_f64();
     Ok(System {
@@ -591,6 +598,57 @@ pub fn assemble(comm: MPI_Comm, layout: &Layout, p: &Problem) -> petsc::Result<S
         b_held,
         stats,
     })
+}
+
+/// f of (3.8) into `b`: the Dirichlet elimination's terms, the loads (summed in rank order:
+/// repeatable runs), then the fixed dofs' entries A_jj g_j. Collective.
+fn right_hand_side(
+    p: &Problem,
+    layout: &Layout,
+    b: &mut Vector,
+    elim_rhs: &[f64],
+    fixed_rhs: &[(usize, f64)],
+) -> petsc::Result<()> {
+    b.write(|bv| bv.copy_from_slice(elim_rhs))?;
+    let mut bidx: Vec<PInt> = Vec::new();
+    let mut bval: Vec<f64> = Vec::new();
+    load_entries(p, layout, false, &mut bidx, &mut bval);
+    crate::par::add_in_rank_order(b, &bidx, &bval)?; // deterministic order: repeatable runs
+    b.assemble()?;
+    b.write(|bv| {
+        for &(i, v) in fixed_rhs {
+            bv[i] = v;
+        }
+    })
+}
+
+/// The elimination terms of the Dirichlet values held at full value (`ramp = false`) added
+/// to `h`, and those values' right-hand side set: the rows assembled again with the same
+/// fixed pattern and the ramped values set to 0 (the matrix part of this pass is dropped).
+fn add_held_dirichlet(p: &Problem, layout: &Layout, mut h: Vector) -> petsc::Result<Vector> {
+    let only_held = Problem {
+        mesh: p.mesh,
+        material: p.material,
+        fixed: p
+            .fixed
+            .iter()
+            .zip(&p.held_fixed)
+            .map(|(&g, &h)| if g.is_nan() || h { g } else { 0.0 })
+            .collect(),
+        held_fixed: Vec::new(),
+        facet_loads: Vec::new(),
+        body_force: BodyForce::None,
+    };
+    let held = rows_of(&only_held, layout);
+    h.write(|v| {
+        for (x, e) in v.iter_mut().zip(&held.elim_rhs) {
+            *x += e;
+        }
+        for &(i, g) in &held.fixed_rhs {
+            v[i] = g;
+        }
+    })?;
+    Ok(h)
 }
 
 /// The right-hand side of the facet loads with `ramp = false` alone (zero on fixed dofs), if

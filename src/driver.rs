@@ -7,7 +7,7 @@ use crate::bodies::{self, Body};
 use crate::case::Preset;
 use crate::case::{Case, DenseThreads};
 use crate::error::RunError;
-use crate::fem::Material;
+use crate::fem::Materials;
 use crate::mesh::Mesh;
 use crate::output::ResultSet;
 use crate::par::Ctx;
@@ -38,7 +38,7 @@ pub struct Prepared {
     pub asked: Preset,
     pub preset_reason: String,
     pub mesh: Mesh,
-    pub material: Material,
+    pub material: Materials,
     pub layout: Layout,
     pub partition: PartitionInfo,
     /// The mesh's bodies, by their first node tags.
@@ -96,14 +96,14 @@ pub fn prepare(ctx: &Ctx, case: &Case) -> Result<Prepared, RunError> {
     }
     let mut case = case.clone();
     case.solver.preset = preset;
-    let problem = setup::problem(&case, &mesh, material);
+    let problem = setup::problem(&case, &mesh, &material);
     let bodies = check_bodies(ctx, &case, &mesh, &layout, &problem.fixed)?;
     drop(problem);
     let contact = if case.contacts.is_empty() {
         None
     } else {
         Some(ctx.agree(
-            setup::contact_settings(&case, &case.contacts, mesh.dim).map_err(RunError::from),
+            setup::contact_settings(&case, &case.contacts, &material).map_err(RunError::from),
         )?)
     };
     ResultSet::check(ctx, &case.output.dir, &case.file)?;
@@ -142,7 +142,7 @@ pub fn solve(ctx: &Ctx, prepared: Prepared) -> Result<String, RunError> {
     } = prepared;
     let case = &case;
     let preset = case.solver.preset;
-    let problem = setup::problem(case, &mesh, material);
+    let problem = setup::problem(case, &mesh, &material);
     let mut sys = assembly::assemble(ctx.comm(), &layout, &problem)?;
     let mut contact = contact;
     let mut basis = match contact.as_mut() {
@@ -225,7 +225,7 @@ pub fn solve(ctx: &Ctx, prepared: Prepared) -> Result<String, RunError> {
 pub fn check_case(ctx: &Ctx, case: &Case) -> Result<(), RunError> {
     let p = prepare(ctx, case)?;
     let (mesh, case) = (&p.mesh, &p.case);
-    let problem = setup::problem(case, mesh, p.material);
+    let problem = setup::problem(case, mesh, &p.material);
     let modes = if mesh.dim == 2 { 3 } else { 6 };
     say!(ctx, "check: bodies: {}", p.bodies.len());
     for (i, b) in p.bodies.iter().enumerate() {

@@ -2,7 +2,7 @@
 //! cells, ready for the output layer.
 
 use crate::case::{OutputField, OutputSection};
-use crate::fem::{self, Material};
+use crate::fem::{self, Materials};
 use crate::mesh::Mesh;
 use crate::output::{FieldBuf, SolutionFields};
 use crate::par::Ctx;
@@ -26,13 +26,13 @@ pub const RANK_CODES: &str = "the MPI rank (0, 1, ...) that held the cell in the
 /// The values of u at this rank's cells' nodes ([`local_cell_values`]).
 pub type CellValues = (Vec<usize>, Vec<f64>);
 
-/// Stresses, von Mises values and the owning rank of the local cells — only what `fields`
+/// Stresses (each cell's by its own material), von Mises values and the owning rank of the local cells — only what `fields`
 /// asks for, in the order stress, von_mises, von_mises_thesis, rank. `(nodes, vals)`: u at
 /// the cells' nodes ([`local_cell_values`]). Local.
 pub fn cell_fields(
     mesh: &Mesh,
     layout: &Layout,
-    material: &Material,
+    material: &Materials,
     (nodes, vals): &CellValues,
     out: &OutputSection,
 ) -> Vec<FieldBuf> {
@@ -55,7 +55,8 @@ pub fn cell_fields(
                 let p = nodes.binary_search(&v).expect("node gathered");
                 ue[a * dim..(a + 1) * dim].copy_from_slice(&vals[p * dim..(p + 1) * dim]);
             }
-            let s = fem::cell_stress(material, &x[..dim + 1], &ue[..(dim + 1) * dim]);
+            let m = material.of(c); // the cell's own material
+            let s = fem::cell_stress(m, &x[..dim + 1], &ue[..(dim + 1) * dim]);
             if want_stress {
                 stress.extend(s.iter().flatten());
             }

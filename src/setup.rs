@@ -6,18 +6,18 @@ use crate::case::{self, vec3, BodyForceSpec, Case, ContactSection, Friction, New
 use crate::contact::Obstacle;
 use crate::dist;
 use crate::error::{InputError, RunError};
-use crate::fem::{self, Material};
+use crate::fem::{self, Material, Materials};
 use crate::mesh::{self, Mesh};
 use crate::par::Ctx;
 use crate::partition::Layout;
 use crate::say;
 use std::path::Path;
 
-/// The mesh (this rank's part: local indices) with its layout, and the material of a case,
-/// checked against each other.
+/// The mesh (this rank's part: local indices) with its layout, and the materials of a case
+/// (each local cell's), checked against each other.
 pub struct Input {
     pub mesh: Mesh,
-    pub material: Material,
+    pub material: Materials,
     pub layout: Layout,
     pub read_seconds: f64,
     pub partition_seconds: f64,
@@ -33,7 +33,9 @@ pub fn read_input(ctx: &Ctx, case: &Case) -> Result<Input, RunError> {
         check: &|dim, groups| case.check_projections(dim, groups),
     };
     let d = dist::read_distributed(ctx, &case.mesh.file, &refine)?;
-    let material = ctx.agree(check(case, &d.mesh).map_err(RunError::from))?;
+    let model = ctx.agree(check(case, &d.mesh).map_err(RunError::from))?;
+    let mut material = cell_materials(ctx, case, &d.mesh, model)?;
+    material.reference = reference_material(ctx, case, &d.mesh, &material);
     ctx.agree(check_body_force(case, &d.mesh).map_err(RunError::from))?;
     let input = Input {
         mesh: d.mesh,
@@ -73,15 +75,21 @@ pub fn read_input(ctx: &Ctx, case: &Case) -> Result<Input, RunError> {
             .map(|c| (c[0], c[1]))
             .collect::<Vec<_>>()
     );
-    let nu = input.material.poisson;
-    if nu >= NEARLY_INCOMPRESSIBLE && input.material.model != fem::Model::PlaneStress {
-        say!(
-            ctx,
-            "warning: poisson = {nu} is close to 1/2: linear (P1) elements lock in the nearly \
-             incompressible limit — displacements come out too small and stresses and contact \
-             pressures too large (Hertz disk, default mesh: p_max off by 1 % at 0.45, 4 % at \
-             0.49, 26 % at 0.499, 90 % at 0.4999)"
-        );
+    for (m, section) in input.material.list.iter().zip(&case.materials) {
+        let nu = m.poisson;
+        if nu >= NEARLY_INCOMPRESSIBLE && m.model != fem::Model::PlaneStress {
+            let whose = match &section.group {
+                None => String::new(),
+                Some(_) => format!("{}: ", section.key),
+            };
+            say!(
+                ctx,
+                "warning: {whose}poisson = {nu} is close to 1/2: linear (P1) elements lock in \
+                 the nearly incompressible limit — displacements come out too small and \
+                 stresses and contact pressures too large (Hertz disk, default mesh: p_max off \
+                 by 1 % at 0.45, 4 % at 0.49, 26 % at 0.499, 90 % at 0.4999)"
+            );
+        }
     }
     Ok(input)
 }
@@ -89,7 +97,7 @@ pub fn read_input(ctx: &Ctx, case: &Case) -> Result<Input, RunError> {
 /// Poisson's ratio from which P1 locking is warned about (plane strain and 3D).
 pub const NEARLY_INCOMPRESSIBLE: f64 = 0.49;
 
-fn check(case: &Case, mesh: &Mesh) -> Result<Material, InputError> {
+fn check(case: &Case, mesh: &Mesh) -> Result<fem::Model, InputError> {
     let groups: Vec<(String, usize)> = mesh
         .groups
         .iter()
@@ -97,16 +105,153 @@ fn check(case: &Case, mesh: &Mesh) -> Result<Material, InputError> {
         .collect();
     case.check_against_mesh(mesh.dim, &groups)?;
     case.check_facet_groups(mesh)?;
-    let model = match case.model(mesh.dim)? {
+    Ok(model_of(case.model(mesh.dim)?))
+}
+
+fn model_of(m: case::MaterialModel) -> fem::Model {
+    match m {
         case::MaterialModel::PlaneStrain => fem::Model::PlaneStrain,
         case::MaterialModel::PlaneStress => fem::Model::PlaneStress,
         case::MaterialModel::ThreeD => fem::Model::Solid,
+    }
+}
+
+/// The material of every local cell: `[material]`'s for all; with `[[material]]` the entry
+/// whose volume group holds the cell (own and ghost cells: the groups of the distributed
+/// mesh hold both). A cell in the groups of two entries, or of none, is an input error that
+/// names the first such cell (the smallest Gmsh element tag over all ranks, each rank
+/// checking its own cells) and their number. Collective.
+fn cell_materials(
+    ctx: &Ctx,
+    case: &Case,
+    mesh: &Mesh,
+    model: fem::Model,
+) -> Result<Materials, RunError> {
+    let list: Vec<Material> = case
+        .materials
+        .iter()
+        .map(|m| Material {
+            young: m.young,
+            poisson: m.poisson,
+            model,
+        })
+        .collect();
+    if let [only] = &case.materials[..] {
+        if only.group.is_none() {
+            return Ok(Materials::single(list[0]));
+        }
+    }
+    const NONE: u16 = u16::MAX;
+    let mut cell = vec![NONE; mesh.n_cells()];
+    let n_own = mesh
+        .global
+        .as_ref()
+        .map_or(mesh.n_cells(), |g| g.n_own_cells);
+    // (tag, first entry, second entry) of the first own cell in two entries' groups
+    let mut twice: Option<(u64, usize, usize)> = None;
+    let mut n_twice = 0usize;
+    for (i, m) in case.materials.iter().enumerate() {
+        let name = m.group.as_deref().unwrap_or_default();
+        for g in groups_named(mesh, name).filter(|g| g.dim == mesh.dim) {
+            for &c in &g.elements {
+                let had = cell[c];
+                if had == NONE || had as usize == i {
+                    cell[c] = i as u16;
+                } else if c < n_own {
+                    n_twice += 1;
+                    let tag = mesh.cell_tags[c];
+                    if twice.is_none_or(|t| tag < t.0) {
+                        twice = Some((tag, had as usize, i));
+                    }
+                }
+            }
+        }
+    }
+    let first = ctx.min_u64(twice.map_or(u64::MAX, |t| t.0));
+    let n_twice = ctx.sum_usize(n_twice);
+    let local = match twice {
+        Some((tag, i, j)) if tag == first => {
+            let (a, b) = (&case.materials[i], &case.materials[j]);
+            Err(case.error_at(
+                &format!("{}.group", b.key),
+                format!(
+                    "the cell with Gmsh element tag {tag} ({n_twice} cell(s) in all) is in \
+                     group \"{}\" of {} and in group \"{}\" of {}: a cell has one material",
+                    a.group.as_deref().unwrap_or_default(),
+                    a.key,
+                    b.group.as_deref().unwrap_or_default(),
+                    b.key
+                ),
+            ))
+        }
+        _ => Ok(()),
     };
-    Ok(Material {
-        young: case.material.young,
-        poisson: case.material.poisson,
-        model,
-    })
+    ctx.agree(local.map_err(RunError::from))?;
+    let bare = (0..n_own).filter(|&c| cell[c] == NONE);
+    let first = ctx.min_u64(
+        bare.clone()
+            .map(|c| mesh.cell_tags[c])
+            .min()
+            .unwrap_or(u64::MAX),
+    );
+    let n_bare = ctx.sum_usize(bare.count());
+    if n_bare > 0 {
+        // every rank has the numbers: all return the same error
+        return Err(case
+            .error_at(
+                "material",
+                format!(
+                    "{n_bare} cell(s) of the mesh are in no [[material]] group (the first: Gmsh \
+                     element tag {first}): every cell needs a material (add a [[material]] \
+                     for their volume group)"
+                ),
+            )
+            .into());
+    }
+    Ok(Materials::per_cell(list, cell))
+}
+
+/// The material whose modulus the single-modulus estimates use (the half-space model of the
+/// contact predictor, the default Newton parameter c = E / h_c): of the materials of the
+/// cells with a node on a contact group's facets, the stiffest (largest contact modulus
+/// E / (1 − ν²), or E in plane stress); without contact cells, the stiffest of all. With one
+/// material this is that material: single-material runs are unchanged. The materials at the
+/// contact boundary, as both estimates are about its response; the stiffest of them, so that
+/// the choice does not depend on the order of the entries and a stiff layer at the surface
+/// is not estimated by a compliant one behind it. Collective (one sum).
+fn reference_material(ctx: &Ctx, case: &Case, mesh: &Mesh, materials: &Materials) -> usize {
+    let n = materials.list.len();
+    if n == 1 {
+        return 0;
+    }
+    let mut on_contact = vec![false; mesh.n_nodes()];
+    for c in &case.contacts {
+        for f in group_facets(mesh, &c.group) {
+            for &v in mesh.facet(f) {
+                on_contact[v] = true;
+            }
+        }
+    }
+    let n_own = mesh
+        .global
+        .as_ref()
+        .map_or(mesh.n_cells(), |g| g.n_own_cells);
+    let mut touched = vec![0.0; n];
+    for c in 0..n_own {
+        if mesh.cell(c).iter().any(|&v| on_contact[v]) {
+            touched[materials.index(c)] = 1.0;
+        }
+    }
+    let touched = ctx.sum_vec(&touched);
+    let any = touched.iter().any(|&t| t > 0.0);
+    let modulus = |i: usize| materials.list[i].contact_modulus();
+    (0..n)
+        .filter(|&i| !any || touched[i] > 0.0)
+        .fold(None, |best: Option<usize>, i| match best {
+            Some(b) if modulus(b) >= modulus(i) => Some(b),
+            _ => Some(i),
+        })
+        .unwrap_or(0)
 }
 
 /// A body force given by expressions (`body_force.expr`) is finite at every quadrature point
@@ -162,7 +307,7 @@ pub fn group_facets(mesh: &Mesh, name: &str) -> Vec<usize> {
 }
 
 /// The linear problem of a case (Dirichlet data per dof, loads).
-pub fn problem<'m>(case: &Case, mesh: &'m Mesh, material: Material) -> Problem<'m> {
+pub fn problem<'m>(case: &Case, mesh: &'m Mesh, material: &'m Materials) -> Problem<'m> {
     let dim = mesh.dim;
     let mut fixed = vec![f64::NAN; mesh.n_nodes() * dim];
     let mut held_fixed = Vec::new();
@@ -269,12 +414,13 @@ pub struct ContactSettings {
     pub coulomb: Option<(f64, case::CoulombAlgorithm)>,
     pub rigid_modes: case::RigidModeHandling,
     pub newton: NewtonSection,
-    /// Young's modulus (the default c = E / h_c).
+    /// Young's modulus (the default c = E / h_c): the reference material's
+    /// ([`Materials::reference`]: with several materials, the stiffest at the contact).
     pub young: f64,
-    /// The material (the final certificate's reactions at the Dirichlet nodes).
-    pub material: Material,
-    /// The contact modulus E* = E / (1 − ν²) (3D, plane strain) or E (plane stress): the
-    /// half-space predictor's (halfspace.rs).
+    /// The materials (the final certificate's reactions at the Dirichlet nodes).
+    pub material: Materials,
+    /// The contact modulus E* = E / (1 − ν²) (3D, plane strain) or E (plane stress) of the
+    /// reference material: the half-space predictor's (halfspace.rs).
     pub contact_modulus: f64,
 }
 
@@ -328,8 +474,9 @@ impl ContactSettings {
 pub fn contact_settings(
     case: &Case,
     contacts: &[ContactSection],
-    dim: usize,
+    materials: &Materials,
 ) -> Result<ContactSettings, InputError> {
+    let dim = materials.model.dim();
     let tresca = contacts
         .iter()
         .any(|c| matches!(c.friction, Friction::Tresca { .. }));
@@ -367,25 +514,9 @@ pub fn contact_settings(
         }),
         rigid_modes: contacts[0].rigid_modes,
         newton: case.newton.clone(),
-        young: case.material.young,
-        material: Material {
-            young: case.material.young,
-            poisson: case.material.poisson,
-            model: match case.model(dim)? {
-                case::MaterialModel::PlaneStrain => fem::Model::PlaneStrain,
-                case::MaterialModel::PlaneStress => fem::Model::PlaneStress,
-                case::MaterialModel::ThreeD => fem::Model::Solid,
-            },
-        },
-        contact_modulus: {
-            let (e, nu) = (case.material.young, case.material.poisson);
-            match case.model(dim)? {
-                case::MaterialModel::PlaneStress => e,
-                case::MaterialModel::PlaneStrain | case::MaterialModel::ThreeD => {
-                    e / (1.0 - nu * nu)
-                }
-            }
-        },
+        young: materials.reference_material().young,
+        material: materials.clone(),
+        contact_modulus: materials.reference_material().contact_modulus(),
     })
 }
 

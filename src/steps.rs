@@ -22,7 +22,7 @@
 use crate::assembly::System;
 use crate::case::{Case, LoadSection, OutputField};
 use crate::error::RunError;
-use crate::fem::Material;
+use crate::fem::Materials;
 use crate::mesh::Mesh;
 use crate::mortar;
 use crate::output::{ContactResult, ResultSet};
@@ -180,7 +180,7 @@ pub struct Stepper<'a> {
     pub case: &'a Case,
     pub mesh: &'a Mesh,
     pub layout: &'a Layout,
-    pub material: &'a Material,
+    pub material: &'a Materials,
     /// Prescribed displacements at factor 1 (NaN = free dof).
     pub fixed: &'a [f64],
     /// Per dof: held at full value in every step (`ramp = false`); empty = none held.

@@ -21,7 +21,7 @@ use std::time::Duration;
 
 use mpi::traits::*;
 use signorini_mpi::assembly::{self, BodyForce, Problem};
-use signorini_mpi::fem::{Material, Model};
+use signorini_mpi::fem::{Material, Materials, Model};
 use signorini_mpi::mesh::{self, Mesh};
 use signorini_mpi::partition::{self, Layout};
 use signorini_mpi::petsc::{MPI_Comm, Petsc, Vector};
@@ -147,7 +147,7 @@ fn linear_field_energy(
     let free = Problem {
         mesh,
         held_fixed: Vec::new(),
-        material,
+        material: &Materials::single(material),
         fixed: vec![f64::NAN; mesh.n_nodes() * dim],
         facet_loads: vec![],
         body_force: BodyForce::None,
@@ -222,7 +222,7 @@ fn check_mesh(world: &mpi::topology::SimpleCommunicator, petsc: &Petsc, path: &s
     let problem = Problem {
         mesh: &mesh,
         held_fixed: Vec::new(),
-        material,
+        material: &Materials::single(material),
         fixed: fixed.clone(),
         facet_loads: vec![],
         body_force: BodyForce::Constant(force),

@@ -10,7 +10,8 @@ use crate::mesh::Mesh;
 
 impl Case {
     /// Checks the case against the mesh: model vs dimension, vector lengths = `dim`,
-    /// group names exist, Neumann/contact groups are boundary groups (dimension `dim - 1`).
+    /// group names exist, Neumann/contact groups are boundary groups (dimension `dim - 1`),
+    /// material groups are volume groups (dimension `dim`).
     /// `groups` lists the mesh's physical groups as (name, dimension).
     pub fn check_against_mesh(
         &self,
@@ -18,6 +19,11 @@ impl Case {
         groups: &[(String, usize)],
     ) -> Result<(), InputError> {
         self.model(dim)?;
+        for m in &self.materials {
+            if let Some(g) = &m.group {
+                self.check_group(&join_key(&m.key, "group"), g, groups, Some(dim))?;
+            }
+        }
         let len = |key: String, n: usize| -> Result<(), InputError> {
             if n == dim {
                 Ok(())
@@ -205,9 +211,14 @@ impl Case {
                 return Err(self.err_at(
                     key,
                     format!(
-                        "physical group \"{name}\" has dimension {}, but a boundary group \
+                        "physical group \"{name}\" has dimension {}, but a {} group \
                          (dimension {nd}) is needed here",
-                        have.join("/")
+                        have.join("/"),
+                        if key.starts_with("material") {
+                            "volume"
+                        } else {
+                            "boundary"
+                        }
                     ),
                 ));
             }

@@ -92,8 +92,13 @@ pub struct Projection {
     pub shape: ObstacleSpec,
 }
 
+/// `[material]` (the whole mesh) or one `[[material]]` (the cells of a volume group).
 #[derive(Debug, Clone, PartialEq)]
 pub struct MaterialSection {
+    /// The table's key path: `material` or `material[i]`, named in messages.
+    pub key: String,
+    /// The volume group whose cells have this material; `None` (`[material]`): every cell.
+    pub group: Option<String>,
     pub young: f64,
     pub poisson: f64,
     /// As given; use [`Case::model`] to get the model for a mesh dimension.
@@ -218,12 +223,64 @@ impl Reader<'_> {
         })
     }
 
-    pub(super) fn material(&self, top: &Tab) -> Res<MaterialSection> {
+    /// `[material]` (one material, every cell) or `[[material]]` (one per volume group,
+    /// each with `group`; all of one model where a model is given; a group named once).
+    pub(super) fn materials(&self, top: &Tab) -> Res<Vec<MaterialSection>> {
         let (k, n) = self.required(top, "material")?;
-        let t = self.table(&k, n, keys::MATERIAL)?;
-        let (yk, y) = self.required(&t, "young")?;
+        if matches!(n.kind, Kind::Table(_)) {
+            let t = self.table(&k, n, keys::MATERIAL)?;
+            return Ok(vec![self.material(&t, None)?]);
+        }
+        let tables = self.tables(top, "material", keys::MATERIALS)?;
+        if tables.is_empty() {
+            return Err(self.err(
+                &k,
+                n.loc,
+                "is empty: give [material] (every cell) or [[material]] tables, each with a group",
+            ));
+        }
+        let mut out: Vec<MaterialSection> = Vec::new();
+        for t in &tables {
+            let (gk, g) = self.required(t, "group")?;
+            let group = self.name(&gk, g)?;
+            if let Some(o) = out.iter().find(|o| o.group.as_deref() == Some(&group)) {
+                return Err(self.err(
+                    &gk,
+                    g.loc,
+                    format!(
+                        "group \"{group}\" already has a material ({}): a cell has one",
+                        o.key
+                    ),
+                ));
+            }
+            let m = self.material(t, Some(group))?;
+            let first = out.iter().find(|o| o.model.is_some());
+            if let (Some(f), Some(model)) = (first, m.model) {
+                if f.model != Some(model) {
+                    let (mk, mn) = t.get("model").expect("the model was read");
+                    return Err(self.err(
+                        &mk,
+                        mn.loc,
+                        format!(
+                            "model \"{}\" differs from {}.model = \"{}\": every material \
+                             of a case has the same model",
+                            model.name(),
+                            f.key,
+                            f.model.map_or("", MaterialModel::name)
+                        ),
+                    ));
+                }
+            }
+            out.push(m);
+        }
+        Ok(out)
+    }
+
+    /// The keys of one material table (`group` read by the caller).
+    fn material(&self, t: &Tab, group: Option<String>) -> Res<MaterialSection> {
+        let (yk, y) = self.required(t, "young")?;
         let young = self.positive(&yk, y)?;
-        let (pk, p) = self.required(&t, "poisson")?;
+        let (pk, p) = self.required(t, "poisson")?;
         let poisson = self.num(&pk, p)?;
         if !(poisson > -1.0 && poisson < 0.5) {
             return Err(self.err(
@@ -245,6 +302,8 @@ impl Reader<'_> {
             )?),
         };
         Ok(MaterialSection {
+            key: t.key.clone(),
+            group,
             young,
             poisson,
             model,

@@ -19,7 +19,8 @@ pub struct Case {
     /// The case file as given on the command line.
     pub file: PathBuf,
     pub mesh: MeshSection,
-    pub material: MaterialSection,
+    /// `[material]` (one entry, no group) or the `[[material]]` tables, in file order.
+    pub materials: Vec<MaterialSection>,
     pub dirichlet: Vec<Dirichlet>,
     pub neumann: Vec<Neumann>,
     pub body_force: Option<BodyForceSpec>,
@@ -144,17 +145,29 @@ impl Case {
     }
 
     /// The model to use for a mesh of dimension `dim`: a 2D mesh needs `plane_strain` or
-    /// `plane_stress`, a 3D mesh needs `3d` or no model.
+    /// `plane_stress`, a 3D mesh needs `3d` or no model; every material the same (the
+    /// reader refuses two different models).
     pub fn model(&self, dim: usize) -> Result<MaterialModel, InputError> {
-        match (dim, self.material.model) {
+        let mut out = MaterialModel::ThreeD;
+        for m in &self.materials {
+            out = self.model_of(m, dim)?;
+        }
+        Ok(out)
+    }
+
+    fn model_of(&self, m: &MaterialSection, dim: usize) -> Result<MaterialModel, InputError> {
+        let key = &m.key;
+        match (dim, m.model) {
             (2, Some(m @ (MaterialModel::PlaneStrain | MaterialModel::PlaneStress))) => Ok(m),
             (2, None) => Err(self.err_at(
-                "material",
-                "the mesh is 2D: material.model is required, \"plane_strain\" or \"plane_stress\"",
+                key,
+                format!(
+                    "the mesh is 2D: {key}.model is required, \"plane_strain\" or \"plane_stress\""
+                ),
             )),
             (3, None | Some(MaterialModel::ThreeD)) => Ok(MaterialModel::ThreeD),
             (2 | 3, Some(m)) => Err(self.err_at(
-                "material.model",
+                &format!("{key}.model"),
                 format!(
                     "model \"{}\" is for {}D meshes, but the mesh is {dim}D",
                     m.name(),
@@ -219,7 +232,7 @@ impl Reader<'_> {
     pub(super) fn case(&self, root: &Node, output_dir: Option<&Path>) -> Res<Case> {
         let top = self.table("", root, keys::ROOT)?;
         let mesh = self.mesh(&top)?;
-        let material = self.material(&top)?;
+        let materials = self.materials(&top)?;
         let dirichlet = self.dirichlet(&top)?;
         let neumann = self.neumann(&top)?;
         let body_force = match top.get("body_force") {
@@ -251,7 +264,7 @@ impl Reader<'_> {
         Ok(Case {
             file: self.file.to_path_buf(),
             mesh,
-            material,
+            materials,
             dirichlet,
             neumann,
             body_force,

@@ -21,6 +21,8 @@ pub const MESH: &[&str] = &["file", "refine", "project"];
 pub const MESH_PROJECT: &[&str] = &["group", "shape"];
 /// `[material]`.
 pub const MATERIAL: &[&str] = &["young", "poisson", "model"];
+/// Each `[[material]]` (one per volume group).
+pub const MATERIALS: &[&str] = &["group", "young", "poisson", "model"];
 /// `[[dirichlet]]`.
 pub const DIRICHLET: &[&str] = &["group", "value", "ramp"];
 /// `[[neumann]]`.
@@ -79,6 +81,7 @@ pub const SECTIONS: &[(&str, &[&str])] = &[
     ("[mesh]", MESH),
     ("[[mesh.project]]", MESH_PROJECT),
     ("[material]", MATERIAL),
+    ("[[material]]", MATERIALS),
     ("[[dirichlet]]", DIRICHLET),
     ("[[neumann]]", NEUMANN),
     ("[body_force]", BODY_FORCE),

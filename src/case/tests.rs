@@ -109,9 +109,9 @@ fn full_file_round_trip() {
     let c = parse(FULL).unwrap();
     assert_eq!(c.file, Path::new(FILE));
     assert_eq!(c.mesh.file, Path::new("/cases/meshes/plate.msh"));
-    assert_eq!(c.material.young, 210.0);
-    assert_eq!(c.material.poisson, 0.25);
-    assert_eq!(c.material.model, Some(MaterialModel::PlaneStress));
+    assert_eq!(c.materials[0].young, 210.0);
+    assert_eq!(c.materials[0].poisson, 0.25);
+    assert_eq!(c.materials[0].model, Some(MaterialModel::PlaneStress));
     assert_eq!(
         c.dirichlet,
         vec![
@@ -804,7 +804,7 @@ fn overrides_apply() {
     assert_eq!(c.output.fields, vec![OutputField::Displacement]);
     assert_eq!(c.dirichlet[0].group, "clamp2");
     assert_eq!(c.dirichlet[1].value, vec![Some(0.1), Some(-0.5)]);
-    assert_eq!(c.material.model, Some(MaterialModel::PlaneStrain));
+    assert_eq!(c.materials[0].model, Some(MaterialModel::PlaneStrain));
     match &c.contacts.first().unwrap().obstacle {
         ObstacleSpec::Plane { normal, .. } => assert_eq!(normal, &vec![0.0, -1.0]),
         o => panic!("{o:?}"),
@@ -2358,4 +2358,102 @@ fn reject_bad_body_force_expressions() {
         .unwrap_err();
     assert_eq!(e.key.as_deref(), Some("body_force.expr[1]"), "{e}");
     assert!(e.message.contains("'z'") && e.message.contains("2D"), "{e}");
+}
+
+const TWO_MATERIALS: &str = r#"[mesh]
+file = "meshes/bar.msh"
+
+[[material]]
+group = "soft"
+young = 1.0
+poisson = 0.25
+model = "plane_strain"
+
+[[material]]
+group = "hard"
+young = 3.0
+poisson = 0.3
+model = "plane_strain"
+"#;
+
+#[test]
+fn materials_read_in_file_order_with_their_groups_and_keys() {
+    let c = parse(TWO_MATERIALS).unwrap();
+    let got: Vec<(&str, Option<&str>, f64)> = c
+        .materials
+        .iter()
+        .map(|m| (m.key.as_str(), m.group.as_deref(), m.young))
+        .collect();
+    assert_eq!(
+        got,
+        [
+            ("material[0]", Some("soft"), 1.0),
+            ("material[1]", Some("hard"), 3.0)
+        ]
+    );
+    assert_eq!(c.model(2).unwrap(), MaterialModel::PlaneStrain);
+    let single = parse(MINIMAL).unwrap();
+    assert_eq!(single.materials.len(), 1);
+    assert_eq!(single.materials[0].key, "material");
+    assert_eq!(single.materials[0].group, None);
+}
+
+#[test]
+fn materials_reject_a_missing_group_two_models_and_a_group_named_twice() {
+    let no_group = replace(TWO_MATERIALS, "group = \"hard\"\n", "");
+    let e = parse(&no_group).expect_err("no group");
+    assert_eq!(e.key.as_deref(), Some("material[1].group"), "{e}");
+    let models = replace(
+        TWO_MATERIALS,
+        "poisson = 0.3\nmodel = \"plane_strain\"",
+        "poisson = 0.3\nmodel = \"plane_stress\"",
+    );
+    let e = expect_err(&models, "material[1].model", "model = \"plane_stress\"");
+    assert!(e.to_string().contains("material[0].model"), "{e}");
+    let twice = replace(TWO_MATERIALS, "group = \"hard\"", "group = \"soft\"");
+    let e = parse(&twice).expect_err("a group named twice");
+    assert_eq!(e.key.as_deref(), Some("material[1].group"), "{e}");
+    assert_eq!(e.line, Some(11), "{e}");
+    // [material] has no group key; [material] and [[material]] together are a TOML error
+    let e = parse(&replace(
+        MINIMAL,
+        "young = 2.0",
+        "group = \"a\"\nyoung = 2.0",
+    ))
+    .unwrap_err();
+    assert_eq!(e.key.as_deref(), Some("material.group"), "{e}");
+    assert!(parse(&format!(
+        "{TWO_MATERIALS}\n[material]\nyoung = 1.0\npoisson = 0.2\n"
+    ))
+    .is_err());
+    // the model is required of every material of a 2D mesh, named by its key
+    let no_model = replace(
+        TWO_MATERIALS,
+        "poisson = 0.3\nmodel = \"plane_strain\"",
+        "poisson = 0.3",
+    );
+    let c = parse(&no_model).unwrap();
+    let e = c.model(2).unwrap_err();
+    assert_eq!(e.key.as_deref(), Some("material[1]"), "{e}");
+    assert!(
+        e.to_string().contains("material[1].model is required"),
+        "{e}"
+    );
+}
+
+#[test]
+fn material_groups_must_be_volume_groups_of_the_mesh() {
+    let c = parse(TWO_MATERIALS).unwrap();
+    let g = |names: &[(&str, usize)]| -> Vec<(String, usize)> {
+        names.iter().map(|(n, d)| (n.to_string(), *d)).collect()
+    };
+    c.check_against_mesh(2, &g(&[("soft", 2), ("hard", 2)]))
+        .unwrap();
+    let e = c
+        .check_against_mesh(2, &g(&[("soft", 2), ("hard", 1)]))
+        .unwrap_err();
+    assert_eq!(e.key.as_deref(), Some("material[1].group"), "{e}");
+    assert!(e.to_string().contains("volume group"), "{e}");
+    let e = c.check_against_mesh(2, &g(&[("soft", 2)])).unwrap_err();
+    assert_eq!(e.key.as_deref(), Some("material[1].group"), "{e}");
 }

@@ -190,7 +190,7 @@ pub(super) fn global_numbering(
 }
 
 /// Phase 9: the local mesh: own cells (global order), then ghosts (`cell_nodes`: their local
-/// nodes); boundary elements; groups (cell groups hold own cells only); the whole mesh's
+/// nodes); boundary elements; groups (cell groups hold own and ghost cells); the whole mesh's
 /// counts. Takes the nodes' coordinates, tags and groups out of `n` (no copies). Collective
 /// (one sum).
 pub(super) fn local_mesh(
@@ -213,8 +213,14 @@ pub(super) fn local_mesh(
             ..g.clone()
         })
         .collect();
-    for ci in 0..n_own {
-        for &g in own.groups_of(ci) {
+    // own cells first, then the ghosts (their materials are needed where they touch owned
+    // nodes); every group's elements stay ascending
+    for (ci, gs) in (0..n_own)
+        .map(|ci| own.groups_of(ci))
+        .chain((0..ghosts.len()).map(|i| ghosts.groups_of(i)))
+        .enumerate()
+    {
+        for &g in gs {
             if groups[g as usize].dim == dim {
                 groups[g as usize].elements.push(ci);
             }

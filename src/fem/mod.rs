@@ -64,6 +64,90 @@ impl Material {
         };
         (lambda, mu)
     }
+
+    /// The contact modulus E* = E / (1 − ν²) (3D, plane strain) or E (plane stress): the
+    /// half-space model's.
+    pub fn contact_modulus(&self) -> f64 {
+        let (e, nu) = (self.young, self.poisson);
+        match self.model {
+            Model::PlaneStress => e,
+            Model::PlaneStrain | Model::Solid => e / (1.0 - nu * nu),
+        }
+    }
+}
+
+/// The materials of a body: one or several (one per volume group of the mesh), all of one
+/// model, and the material of every local cell. The Lamé constants (1.25) of each material
+/// are computed once; a cell finds its own by a small index (no lookup by name).
+#[derive(Clone, Debug)]
+pub struct Materials {
+    /// At least one; every entry has the model `model`.
+    pub list: Vec<Material>,
+    pub model: Model,
+    /// Per local cell: its material's index into `list`; empty when there is one material.
+    cell: std::sync::Arc<[u16]>,
+    /// (λ, μ) of every entry of `list`.
+    lame: Vec<(f64, f64)>,
+    /// The entry whose modulus the single-modulus estimates use (the contact predictor's
+    /// half-space model, the default Newton parameter c = E / h_c).
+    pub reference: usize,
+}
+
+impl Materials {
+    /// One material for every cell.
+    pub fn single(m: Material) -> Materials {
+        Materials {
+            list: vec![m],
+            model: m.model,
+            cell: std::sync::Arc::from(Vec::new()),
+            lame: vec![m.lame()],
+            reference: 0,
+        }
+    }
+
+    /// Several materials, `cell[c]` the index of cell c's (every index < `list.len()`).
+    pub fn per_cell(list: Vec<Material>, cell: Vec<u16>) -> Materials {
+        debug_assert!(cell.iter().all(|&i| (i as usize) < list.len()));
+        Materials {
+            model: list[0].model,
+            lame: list.iter().map(Material::lame).collect(),
+            list,
+            cell: std::sync::Arc::from(cell),
+            reference: 0,
+        }
+    }
+
+    /// The index of cell c's material.
+    #[inline]
+    pub fn index(&self, c: usize) -> usize {
+        if self.cell.is_empty() {
+            0
+        } else {
+            self.cell[c] as usize
+        }
+    }
+
+    /// Cell c's material.
+    #[inline]
+    pub fn of(&self, c: usize) -> &Material {
+        &self.list[self.index(c)]
+    }
+
+    /// (1.25): cell c's Lamé constants (λ, μ).
+    #[inline]
+    pub fn lame_of(&self, c: usize) -> (f64, f64) {
+        self.lame[self.index(c)]
+    }
+
+    /// (1.25): the Lamé constants of every material, by index.
+    pub fn lame_table(&self) -> &[(f64, f64)] {
+        &self.lame
+    }
+
+    /// The material of the single-modulus estimates ([`Materials::reference`]).
+    pub fn reference_material(&self) -> &Material {
+        &self.list[self.reference]
+    }
 }
 
 /// Number of rigid-body modes in dimension `dim`: 3 in 2D, 6 in 3D (a test helper: the

@@ -7,7 +7,7 @@
 use super::boundary::ContactBoundary;
 use super::report::{FrictionCertificate, Kkt, Scales};
 use crate::error::RunError;
-use crate::fem::{self, Material};
+use crate::fem::{self, Materials};
 use crate::mesh::Mesh;
 use crate::par::Ctx;
 use crate::partition::Layout;
@@ -416,7 +416,7 @@ pub fn balance(
 /// per contact node of this rank (global components), for the force balance. Collective.
 pub fn equilibrium(
     ctx: &Ctx,
-    (mesh, layout, material): (&Mesh, &Layout, &Material),
+    (mesh, layout, material): (&Mesh, &Layout, &Materials),
     fixed: &[f64],
     (a, f, more_rows): (&Matrix, &Vector, &[bool]),
     b: &ContactBoundary,
@@ -464,7 +464,7 @@ pub fn equilibrium(
 /// the cells with a Dirichlet node (u at their nodes gathered), summed in rank order; this
 /// rank's rows. Collective.
 fn dirichlet_terms(
-    (mesh, layout, material): (&Mesh, &Layout, &Material),
+    (mesh, layout, material): (&Mesh, &Layout, &Materials),
     fixed: &[f64],
     f: &Vector,
     u: &Vector,
@@ -478,10 +478,10 @@ fn dirichlet_terms(
         .filter(|&c| mesh.cell(c).iter().any(|&v| is_fixed(v)))
         .collect();
     let (nodes, uvals) = crate::partition::values_at_cells(mesh, layout, &cells, u)?;
-    let (lambda, mu) = material.lame();
     let (mut vi, mut vv): (Vec<PInt>, Vec<f64>) = (Vec::new(), Vec::new());
     let mut ke = [0.0; 144];
     for &c in &cells {
+        let (lambda, mu) = material.lame_of(c);
         let cell = mesh.cell(c);
         let n = cell.len();
         let nd = n * dim;

@@ -97,14 +97,18 @@ impl Basis {
                 let r = ((lo + i) * dim + d) as PInt;
                 let mut qe = vec![(r, 1.0)];
                 let mut fe = Vec::new();
-                if let Some(row) = rows.get(&v).filter(|_| fixed[v * dim + d].is_nan()) {
+                if let Some(row) = rows.get(&v) {
+                    let free = fixed[v * dim + d].is_nan();
                     for &(j, m) in &row.masters {
                         let col = (j * dim + d) as PInt;
-                        if master_fixed.get(&j).is_some_and(|f| f[d]) {
+                        let master_fixed = master_fixed.get(&j).is_some_and(|f| f[d]);
+                        if free && master_fixed {
                             fe.push((col, m));
-                        } else {
-                            qe.push((col, m));
                         }
+                        // an explicit zero where the component is not coupled: every node
+                        // block of Q, and so of Qᵀ A Q, is complete (the step system reads
+                        // a node's rows in d × d blocks)
+                        qe.push((col, if free && !master_fixed { m } else { 0.0 }));
                     }
                 }
                 q.push_row(qe);

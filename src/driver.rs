@@ -4,8 +4,8 @@
 
 use crate::assembly::{self, System};
 use crate::bodies::{self, Body};
-use crate::case::Preset;
 use crate::case::{Case, DenseThreads};
+use crate::case::{Preset, SolverSection};
 use crate::error::RunError;
 use crate::fem::Material;
 use crate::mesh::Mesh;
@@ -31,9 +31,10 @@ struct SolveSections {
 
 /// A case set up up to its solve: read, partitioned and checked (the run's input errors all
 /// found), nothing assembled or written.
-pub struct Prepared {
-    /// The case with its preset resolved.
-    pub case: Case,
+pub struct Prepared<'c> {
+    pub case: &'c Case,
+    /// The case's `solver` section with its preset resolved.
+    pub solver: SolverSection,
     /// The preset the case asked for, and why the one used was chosen.
     pub asked: Preset,
     pub preset_reason: String,
@@ -58,7 +59,7 @@ pub fn run_case(ctx: &Ctx, case: &Case) -> Result<String, RunError> {
 
 /// The set-up stage of a run: mesh, partition, preset, bodies, contact settings. Collective;
 /// every rank returns the same `Ok` / `Err` kind.
-pub fn prepare(ctx: &Ctx, case: &Case) -> Result<Prepared, RunError> {
+pub fn prepare<'c>(ctx: &Ctx, case: &'c Case) -> Result<Prepared<'c>, RunError> {
     let asked = case.solver.preset;
     let mut clock = Clock::start();
     let Input {
@@ -94,21 +95,24 @@ pub fn prepare(ctx: &Ctx, case: &Case) -> Result<Prepared, RunError> {
             }
         );
     }
-    let mut case = case.clone();
-    case.solver.preset = preset;
-    let problem = setup::problem(&case, &mesh, material);
-    let bodies = check_bodies(ctx, &case, &mesh, &layout, &problem.fixed)?;
+    let solver = SolverSection {
+        preset,
+        ..case.solver.clone()
+    };
+    let problem = setup::problem(case, &mesh, material);
+    let bodies = check_bodies(ctx, case, &mesh, &layout, &problem.fixed)?;
     drop(problem);
     let contact = if case.contacts.is_empty() {
         None
     } else {
         Some(ctx.agree(
-            setup::contact_settings(&case, &case.contacts, mesh.dim).map_err(RunError::from),
+            setup::contact_settings(case, &case.contacts, mesh.dim).map_err(RunError::from),
         )?)
     };
     ResultSet::check(ctx, &case.output.dir, &case.file)?;
     Ok(Prepared {
         case,
+        solver,
         asked,
         preset_reason,
         mesh,
@@ -128,6 +132,7 @@ pub fn prepare(ctx: &Ctx, case: &Case) -> Result<Prepared, RunError> {
 pub fn solve(ctx: &Ctx, prepared: Prepared) -> Result<String, RunError> {
     let Prepared {
         case,
+        solver,
         asked,
         preset_reason,
         mesh,
@@ -140,8 +145,7 @@ pub fn solve(ctx: &Ctx, prepared: Prepared) -> Result<String, RunError> {
         dense_threads,
         mut clock,
     } = prepared;
-    let case = &case;
-    let preset = case.solver.preset;
+    let preset = solver.preset;
     let problem = setup::problem(case, &mesh, material);
     let mut sys = assembly::assemble(ctx.comm(), &layout, &problem)?;
     clock.t.assembly = clock.lap();
@@ -151,6 +155,7 @@ pub fn solve(ctx: &Ctx, prepared: Prepared) -> Result<String, RunError> {
     let stepper = Stepper {
         ctx,
         case,
+        solver: &solver,
         mesh: &mesh,
         layout: &layout,
         material: &material,
@@ -215,7 +220,7 @@ pub fn solve(ctx: &Ctx, prepared: Prepared) -> Result<String, RunError> {
 /// Solves, assembles and writes nothing. Collective.
 pub fn check_case(ctx: &Ctx, case: &Case) -> Result<(), RunError> {
     let p = prepare(ctx, case)?;
-    let (mesh, case) = (&p.mesh, &p.case);
+    let (mesh, case) = (&p.mesh, p.case);
     let problem = setup::problem(case, mesh, p.material);
     let modes = if mesh.dim == 2 { 3 } else { 6 };
     say!(ctx, "check: bodies: {}", p.bodies.len());
@@ -288,7 +293,7 @@ pub fn check_case(ctx: &Ctx, case: &Case) -> Result<(), RunError> {
     say!(
         ctx,
         "check: preset: {} (asked {}; {})",
-        case.solver.preset.name(),
+        p.solver.preset.name(),
         p.asked.name(),
         p.preset_reason
     );

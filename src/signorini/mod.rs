@@ -25,14 +25,15 @@ pub mod plain_path;
 pub mod report;
 pub mod rigid;
 pub mod schur;
+pub mod session;
 pub mod snesvi;
 pub mod step_system;
 pub mod warn;
 
 use crate::assembly::System;
-use crate::case::{self, CoulombAlgorithm, Method, Preset, Reuse, SolverSection};
+use crate::case::{self, Method, Preset, Reuse, SolverSection};
 use crate::error::RunError;
-use crate::linsolve::{LinearSetup, SolverKind};
+use crate::linsolve::SolverKind;
 use crate::mesh::Mesh;
 use crate::output::ContactResult;
 use crate::par::Ctx;
@@ -45,11 +46,11 @@ use crate::warnings::Warning;
 use active_set::{ActiveSet, Iterate, Law};
 use boundary::{ContactBoundary, NodeResult};
 use coulomb::Outcome;
-use kept::KeptFactor;
 use plain_path::{ContactProblem, NewtonResult, NewtonSettings, StepInfo, WarmStart};
 use report::{ContactSummary, Scales};
 use rigid::FreeModes;
 use serde::Serialize;
+use session::Session;
 use std::time::Instant;
 use step_system::ReducedSystem;
 
@@ -141,18 +142,8 @@ pub struct ContactSolution {
     /// Each pair's obstacle displacement d in this solve (friction in the next step acts on
     /// the slip relative to the obstacle's increment since).
     pub obstacle_displacement: Vec<[f64; 3]>,
-    /// The condensed solve's factorisation, compliance and candidates, for the next load step
-    /// (taken by it).
-    kept: KeptFactor,
     /// The warnings of this solve (docs/warnings.md; the same on every rank, not logged yet).
     pub warnings: Vec<Warning>,
-}
-
-impl ContactSolution {
-    /// Drops the factorisation kept for a next load step (none follows).
-    pub fn release_factor(&self) {
-        drop(self.kept.take());
-    }
 }
 
 /// A load step's change of the contact nodes' values (u, λ in both forms) and of this rank's
@@ -249,7 +240,9 @@ fn step_delta(
 /// `previous`: the converged solution of the previous load step on the same mesh and boundary;
 /// with it the Newton starts from its sets and iterate, and friction acts on the tangential
 /// increment u_τ − u_τ^prev (docs/friction.md, "Load steps"). `None`: one static solve.
-/// Collective; every rank returns the same `Ok` / `Err` kind.
+/// `session`: the run's linear solver and what the previous solve kept (its factorisation,
+/// taken where it holds; this solve's left in it; after a failed solve, nothing). Collective;
+/// every rank returns the same `Ok` / `Err` kind.
 #[allow(clippy::too_many_arguments)]
 pub fn solve(
     ctx: &Ctx,
@@ -259,7 +252,7 @@ pub fn solve(
     fixed: &[f64],
     sys: &System,
     solver_section: &SolverSection,
-    previous: Option<&ContactSolution>,
+    (session, previous): (&mut Session, Option<&ContactSolution>),
 ) -> Result<ContactSolution, RunError> {
     let dim = mesh.dim;
     let law = Law::of(settings);
@@ -271,13 +264,6 @@ pub fn solve(
     let displacements = settings.displacements();
     let prev_u = (previous.map(|prev| take_reference(ctx, &mut b, prev, friction, &displacements)))
         .transpose()?;
-    let setup = LinearSetup::for_section(
-        ctx,
-        (mesh, layout),
-        solver_section,
-        symmetric_rows(settings, dim),
-        solver::matrix_scale(ctx, &sys.a)?,
-    )?;
     let c = complementarity_parameter(ctx, settings, &b, dim);
     let start = warm_start(previous, prev_u.as_deref(), &b, &force_control, c);
     let warm = previous
@@ -286,16 +272,13 @@ pub fn solve(
             nodes: nodes.as_deref().unwrap_or(&prev.nodes),
             u_local: u,
         });
-    let kept = KeptFactor::taken_from(previous.map(|p| &p.kept));
-    let located = std::cell::RefCell::new(None);
+    session.located = None; // located anew in every solve
     let problem = ContactProblem {
         mesh,
         layout,
         boundary: &b,
         fixed,
         sys,
-        kept: &kept,
-        located: &located,
     };
     // the body's half-space model: the predictor's on the iterative preset (frictionless,
     // plain_path/), else the condensed path's (locating a floating body's zone; the plain path's
@@ -306,7 +289,7 @@ pub fn solve(
         length: 2.0 * mesh.extent(),
         mirrors: halfspace::mirror_planes(ctx, mesh, fixed),
     };
-    let iterative = setup.kind() == SolverKind::Iterative;
+    let iterative = session.setup().kind() == SolverKind::Iterative;
     let ns = newton_settings(settings, (c, law), (&model, iterative), &force_control);
     // a failure of a frictional body that only its contact holds says what may be the cause
     let sliding = friction && !capacity::held_anywhere(ctx, fixed);
@@ -316,10 +299,11 @@ pub fn solve(
         &problem,
         &ns,
         (settings, solver_section),
-        (&setup, warm.as_ref()),
+        (&mut *session, warm.as_ref()),
         &mut types,
     )
-    .map_err(|e| capacity::why_sliding(e, sliding))?;
+    .map_err(|e| capacity::why_sliding(e, sliding));
+    let ran = forget_on_error(session, ran)?;
     let solved = Solved {
         law,
         c,
@@ -329,16 +313,24 @@ pub fn solve(
         prev_u,
         force_control: &force_control,
     };
-    let mut solution = report_solution(
+    let solution = report_solution(
         ctx,
         (settings, mesh, layout, fixed, sys),
         solver_section,
         b,
         solved,
         previous,
-    )?;
-    solution.kept = kept;
-    Ok(solution)
+    );
+    forget_on_error(session, solution)
+}
+
+/// A solve that fails after it took the previous load step's factorisation leaves nothing
+/// kept: the retry of a cut-back step starts without one. Local.
+fn forget_on_error<T>(session: &mut Session, r: Result<T, RunError>) -> Result<T, RunError> {
+    if r.is_err() {
+        session.kept.clear();
+    }
+    r
 }
 
 /// The Newton loop's settings of a solve: the half-space `model` as the iterative preset's
@@ -397,8 +389,7 @@ struct Solved<'a> {
 
 /// The solution of a solve and its report: the final state judged (Coulomb by b_k =
 /// μ(−λ_n^k)), the obstacles placed at their approaches, the certificate, summary.json's
-/// sections, the warnings and the change since the previous load step. The factorisation to
-/// keep is left empty. Collective.
+/// sections, the warnings and the change since the previous load step. Collective.
 fn report_solution(
     ctx: &Ctx,
     (settings, mesh, layout, fixed, sys): (&ContactSettings, &Mesh, &Layout, &[f64], &System),
@@ -486,7 +477,6 @@ fn report_solution(
         delta,
         predict: 0.0,
         obstacle_displacement: displacement,
-        kept: KeptFactor::default(),
         warnings: warned,
     })
 }
@@ -606,13 +596,13 @@ fn run_method(
     problem: &ContactProblem,
     ns: &NewtonSettings,
     (settings, solver_section): (&ContactSettings, &SolverSection),
-    (setup, warm): (&LinearSetup, Option<&WarmStart>),
+    (session, warm): (&mut Session, Option<&WarmStart>),
     types: &mut Option<(String, String)>,
 ) -> Result<Ran, RunError> {
     let (sys, b, dim) = (problem.sys, problem.boundary, problem.mesh.dim);
     let (nr, outer_steps, condensed_summary) = match solver_section.method {
         Method::Newton => {
-            let mut reduced = ReducedSystem::new(ctx, sys, b, setup, dim)?;
+            let mut reduced = ReducedSystem::new(ctx, sys, b, session.setup(), dim)?;
             *types = Some(reduced.solver_types()?);
             let outcome = match settings.coulomb {
                 Some((_, algorithm)) => coulomb::solve(
@@ -621,7 +611,7 @@ fn run_method(
                     &mut reduced,
                     ns,
                     (algorithm, solver_section),
-                    warm,
+                    (session, warm),
                 )?,
                 None => normal_and_tresca(
                     ctx,
@@ -629,7 +619,7 @@ fn run_method(
                     &mut reduced,
                     (ns, settings.friction()),
                     solver_section,
-                    warm,
+                    (session, warm),
                 )?,
             };
             match outcome {
@@ -639,8 +629,9 @@ fn run_method(
         }
         Method::SnesVi => {
             let f_local = sys.b.to_local_vec()?;
-            let nr =
-                setup.scoped(|| snesvi_solve(ctx, problem, &f_local, settings.rigid_modes))??;
+            let nr = session
+                .setup()
+                .scoped(|| snesvi_solve(ctx, problem, &f_local, settings.rigid_modes))??;
             (nr, None, None)
         }
     };
@@ -669,7 +660,7 @@ fn normal_and_tresca(
     reduced: &mut ReducedSystem,
     (ns, friction): (&NewtonSettings, bool),
     solver_section: &SolverSection,
-    warm: Option<&WarmStart>,
+    (session, warm): (&mut Session, Option<&WarmStart>),
 ) -> Result<Outcome, RunError> {
     let b = problem.boundary;
     let mut condensed_summary = None;
@@ -679,7 +670,7 @@ fn normal_and_tresca(
         && b.n_global <= crate::tuning::MAX_CONTACT_NODES
         && reduced.factorises()?;
     if condense {
-        match schur::frictionless::solve(ctx, problem, reduced, ns, warm)? {
+        match schur::frictionless::solve(ctx, problem, reduced, ns, (session, warm))? {
             schur::Condensed::Solved(nr, s) => {
                 return Ok(Outcome::Checked(*nr, Some(s)));
             }
@@ -789,18 +780,6 @@ fn newton_summary(
             outer_steps,
             warm_start: previous.is_some(),
         }),
-    }
-}
-
-/// The reduced systems of the case are symmetric: frictionless (3.29) and, in 2D, Tresca's
-/// (3.42) (also the fixed point's inner Tresca solves), both applied symmetrically — a 2D slip
-/// row adds the scalar spring L̃ ≥ 0 of (3.39b) to its node's own tangential diagonal. Not
-/// Coulomb's generalised Newton (its row mix (F7)) nor 3D Tresca (a 2 × 2 L̃ that is not
-/// symmetric). The direct preset then factorises by LDLᵀ instead of LU.
-fn symmetric_rows(settings: &ContactSettings, dim: usize) -> bool {
-    match settings.coulomb {
-        Some((_, CoulombAlgorithm::Newton)) => false,
-        _ => !settings.friction() || dim == 2,
     }
 }
 

@@ -5,7 +5,7 @@
 use crate::assembly::{self, System};
 use crate::bodies::{self, Body};
 use crate::case::{Case, DenseThreads};
-use crate::case::{Preset, SolverSection};
+use crate::case::{Preset, SolverPath, SolverSection};
 use crate::error::RunError;
 use crate::fem::Material;
 use crate::mesh::Mesh;
@@ -83,6 +83,10 @@ pub fn prepare<'c>(ctx: &Ctx, case: &'c Case) -> Result<Prepared<'c>, RunError> 
         friction,
     );
     say!(ctx, "solver: preset {} ({preset_reason})", preset.name());
+    if case.solver.path == SolverPath::Schur && preset == Preset::Iterative {
+        let why = format!("needs a factorisation, not the iterative preset ({preset_reason})");
+        return Err(case.schur_path_refused(&why).into());
+    }
     let blas = crate::blas::kernels();
     let dense_threads = ctx.cores.threads(); // rank 0's is the one logged and written
     if let Some(k) = &blas {

@@ -20,7 +20,7 @@
 //! the XDMF temporal collection and a row of `history.csv`.
 
 use crate::assembly::System;
-use crate::case::{Case, LoadSection, OutputField, SolverSection};
+use crate::case::{Case, LoadSection, OutputField, SolverPath, SolverSection};
 use crate::error::RunError;
 use crate::fem::Material;
 use crate::mesh::Mesh;
@@ -297,6 +297,11 @@ impl Stepper<'_> {
             Some(c) => {
                 let lasting = (self.mesh, self.layout);
                 let session = Session::new(ctx, lasting, self.solver, c, &sys.a)?;
+                if self.solver.path == SolverPath::Schur && !session.setup().kind().factorises() {
+                    let why =
+                        "needs a factorisation: solver.petsc_options make the solver iterative";
+                    return Err(self.case.schur_path_refused(why).into());
+                }
                 Physics::Contact(Box::new(c.clone()), Box::new(session))
             }
         };

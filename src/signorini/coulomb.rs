@@ -231,7 +231,7 @@ fn coulomb_start(
         ..*ns
     };
     let b = problem.boundary;
-    let condense = solver_section.reuse == Reuse::Auto
+    let condense = solver_section.path.allows_schur()
         && b.n_global > 0
         && b.n_global <= crate::tuning::MAX_CONTACT_NODES
         && reduced.factorises()?;

@@ -31,7 +31,7 @@ pub mod step_system;
 pub mod warn;
 
 use crate::assembly::System;
-use crate::case::{self, Method, Preset, Reuse, SolverSection};
+use crate::case::{self, CoulombAlgorithm, Method, NewtonInit, Preset, SolverPath, SolverSection};
 use crate::error::RunError;
 use crate::linsolve::SolverKind;
 use crate::mesh::Mesh;
@@ -59,6 +59,10 @@ use step_system::ReducedSystem;
 pub struct NewtonSummary {
     /// "newton" (Algorithms 1/2) or "snesvi" (PETSc SNES VI).
     pub method: &'static str,
+    /// Method "newton": the path the solve took first, "schur" (the Schur path; `condensed`
+    /// says whether it fell back to the plain path) or "plain" (`solver.path`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub path: Option<&'static str>,
     /// 1 (frictionless) or 2 (Tresca).
     pub algorithm: u8,
     pub init: &'static str,
@@ -290,6 +294,7 @@ pub fn solve(
         mirrors: halfspace::mirror_planes(ctx, mesh, fixed),
     };
     let iterative = session.setup().kind() == SolverKind::Iterative;
+    let path = chosen_path(settings, solver_section, &b, session.setup().kind());
     let ns = newton_settings(settings, (c, law), (&model, iterative), &force_control);
     // a failure of a frictional body that only its contact holds says what may be the cause
     let sliding = friction && !capacity::held_anywhere(ctx, fixed);
@@ -298,7 +303,7 @@ pub fn solve(
         ctx,
         &problem,
         &ns,
-        (settings, solver_section),
+        (settings, solver_section, path),
         (&mut *session, warm.as_ref()),
         &mut types,
     )
@@ -307,6 +312,7 @@ pub fn solve(
     let solved = Solved {
         law,
         c,
+        path,
         ran,
         types,
         warned,
@@ -380,6 +386,7 @@ fn warm_start(
 struct Solved<'a> {
     law: Law,
     c: f64,
+    path: Option<SolverPath>,
     ran: Ran,
     types: Option<(String, String)>,
     warned: Vec<Warning>,
@@ -402,6 +409,7 @@ fn report_solution(
     let Solved {
         law,
         c,
+        path,
         ran: (mut nr, outer_steps, condensed_summary),
         types,
         mut warned,
@@ -431,6 +439,7 @@ fn report_solution(
         force_control,
     )?;
     let mut newton = newton_summary(settings, solver_section, c, &mut nr, outer_steps, previous);
+    newton.path = path.map(SolverPath::name);
     if let Some(cs) = condensed_summary {
         // K_p's with the Schur complement, one per round of candidates (the dense steps
         // factorise nothing sparse)
@@ -595,7 +604,7 @@ fn run_method(
     ctx: &Ctx,
     problem: &ContactProblem,
     ns: &NewtonSettings,
-    (settings, solver_section): (&ContactSettings, &SolverSection),
+    (settings, solver_section, path): (&ContactSettings, &SolverSection, Option<SolverPath>),
     (session, warm): (&mut Session, Option<&WarmStart>),
     types: &mut Option<(String, String)>,
 ) -> Result<Ran, RunError> {
@@ -617,7 +626,7 @@ fn run_method(
                     ctx,
                     problem,
                     &mut reduced,
-                    (ns, settings.friction()),
+                    (ns, settings.friction(), path == Some(SolverPath::Schur)),
                     solver_section,
                     (session, warm),
                 )?,
@@ -648,27 +657,52 @@ fn run_method(
     Ok((nr, outer_steps, condensed_summary))
 }
 
+/// The path a Newton solve takes first (`None`: SNES VI): the Schur path where `solver.path`
+/// allows it (not "plain"), the solver factorises and the contact boundary has 1 to
+/// [`MAX_CONTACT_NODES`](crate::tuning::MAX_CONTACT_NODES) nodes, for frictionless contact and
+/// Coulomb's generalised Newton from newton.init = "auto" (coulomb.rs decides the same); else
+/// the plain path (Tresca, Coulomb's fixed point). The case reader refuses `solver.path =
+/// "schur"` where the case file says it cannot run. Local.
+fn chosen_path(
+    settings: &ContactSettings,
+    section: &SolverSection,
+    b: &ContactBoundary,
+    kind: SolverKind,
+) -> Option<SolverPath> {
+    let applies = match settings.coulomb {
+        Some((_, algorithm)) => {
+            algorithm == CoulombAlgorithm::Newton && settings.newton.init == NewtonInit::Auto
+        }
+        None => !settings.friction(),
+    };
+    let schur = applies
+        && section.path.allows_schur()
+        && b.n_global > 0
+        && b.n_global <= crate::tuning::MAX_CONTACT_NODES
+        && kind.factorises();
+    match section.method {
+        Method::SnesVi => None,
+        Method::Newton if schur => Some(SolverPath::Schur),
+        Method::Newton => Some(SolverPath::Plain),
+    }
+}
+
 /// What [`run_method`] returns: the result, the fixed point's outer steps and the condensed
 /// path's record.
 type Ran = (NewtonResult, Option<usize>, Option<schur::CondensedSummary>);
 
-/// Algorithm 1 (frictionless: on the contact unknowns where the condensed path applies) or
-/// Algorithm 2 (Tresca, `friction`) on the plain path. Collective.
+/// Algorithm 1 (frictionless: on the contact unknowns where the dispatch chose the Schur
+/// path, `condense`, [`chosen_path`]) or Algorithm 2 (Tresca, `friction`) on the plain path.
+/// Collective.
 fn normal_and_tresca(
     ctx: &Ctx,
     problem: &ContactProblem,
     reduced: &mut ReducedSystem,
-    (ns, friction): (&NewtonSettings, bool),
+    (ns, friction, condense): (&NewtonSettings, bool, bool),
     solver_section: &SolverSection,
     (session, warm): (&mut Session, Option<&WarmStart>),
 ) -> Result<Outcome, RunError> {
-    let b = problem.boundary;
     let mut condensed_summary = None;
-    let condense = !friction
-        && solver_section.reuse == Reuse::Auto
-        && b.n_global > 0
-        && b.n_global <= crate::tuning::MAX_CONTACT_NODES
-        && reduced.factorises()?;
     if condense {
         match schur::frictionless::solve(ctx, problem, reduced, ns, (session, warm))? {
             schur::Condensed::Solved(nr, s) => {
@@ -759,6 +793,7 @@ fn newton_summary(
     });
     NewtonSummary {
         method: solver_section.method.name(),
+        path: None,
         algorithm: if settings.friction() { 2 } else { 1 },
         init: settings.newton.init.name(),
         c,

@@ -51,8 +51,8 @@ pub fn solve(
         say!(
             ctx,
             "newton: solver.reuse = \"always\" with Coulomb: its rows change the matrix \
-             in every step, so every Newton step factorises (\"auto\": Coulomb on the \
-             contact unknowns after one factorisation)"
+             in every step, so every Newton step of the plain path factorises (solver.path \
+             = \"schur\": Coulomb on the contact unknowns after one factorisation)"
         );
     }
     let (start, condensed_summary) = if coulomb_newton && ns.section.init == case::NewtonInit::Auto

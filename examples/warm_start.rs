@@ -1,5 +1,5 @@
 //! Two contact solves on one mesh and partition, the second warm-started from the first through
-//! `signorini::solve(.., previous = Some(first))` (friction then acts on the tangential
+//! `signorini::solve(.., (session, Some(first)))` (friction then acts on the tangential
 //! increment since the first solve). Used by tests/coulomb.rs.
 //!
 //! ```text
@@ -20,6 +20,7 @@ use signorini_mpi::error::RunError;
 use signorini_mpi::par::Ctx;
 use signorini_mpi::petsc::Petsc;
 use signorini_mpi::setup;
+use signorini_mpi::signorini::session::Session;
 use signorini_mpi::signorini::{self, ContactSolution};
 use std::path::PathBuf;
 
@@ -62,13 +63,21 @@ fn run(ctx: &Ctx, a: &Args) -> Result<serde_json::Value, RunError> {
     let input = setup::read_input(ctx, &first_case)?;
     let mesh = &input.mesh;
     let layout = &input.layout;
-    let solve = |case: &Case, previous: Option<&ContactSolution>| {
+    // one session for both solves (the linear solver and the factorisation the first keeps):
+    // the second case differs from the first in its loads only, the same stiffness
+    let mut session: Option<Session> = None;
+    let mut solve = |case: &Case, previous: Option<&ContactSolution>| {
         let problem = setup::problem(case, mesh, &input.material);
         let sys = assembly::assemble(ctx.comm(), layout, &problem)?;
         assert!(!case.contacts.is_empty(), "a contact case");
         let settings = ctx.agree(
             setup::contact_settings(case, &case.contacts, &input.material).map_err(RunError::from),
         )?;
+        if session.is_none() {
+            let lasting = (mesh, layout);
+            session = Some(Session::new(ctx, lasting, &case.solver, &settings, &sys.a)?);
+        }
+        let session = session.as_mut().expect("set up above");
         signorini::solve(
             ctx,
             &settings,
@@ -77,7 +86,7 @@ fn run(ctx: &Ctx, a: &Args) -> Result<serde_json::Value, RunError> {
             &problem.fixed,
             &sys,
             &case.solver,
-            (previous, None),
+            (session, previous, None),
         )
     };
     let first = solve(&first_case, None)?;

@@ -4,8 +4,8 @@
 
 use crate::assembly::{self, System};
 use crate::bodies::{self, Body};
-use crate::case::Preset;
 use crate::case::{Case, DenseThreads};
+use crate::case::{Preset, SolverPath, SolverSection};
 use crate::error::RunError;
 use crate::fem::Materials;
 use crate::mesh::Mesh;
@@ -31,9 +31,10 @@ struct SolveSections {
 
 /// A case set up up to its solve: read, partitioned and checked (the run's input errors all
 /// found), nothing assembled or written.
-pub struct Prepared {
-    /// The case with its preset resolved.
-    pub case: Case,
+pub struct Prepared<'c> {
+    pub case: &'c Case,
+    /// The case's `solver` section with its preset resolved.
+    pub solver: SolverSection,
     /// The preset the case asked for, and why the one used was chosen.
     pub asked: Preset,
     pub preset_reason: String,
@@ -58,7 +59,7 @@ pub fn run_case(ctx: &Ctx, case: &Case) -> Result<String, RunError> {
 
 /// The set-up stage of a run: mesh, partition, preset, bodies, contact settings. Collective;
 /// every rank returns the same `Ok` / `Err` kind.
-pub fn prepare(ctx: &Ctx, case: &Case) -> Result<Prepared, RunError> {
+pub fn prepare<'c>(ctx: &Ctx, case: &'c Case) -> Result<Prepared<'c>, RunError> {
     let asked = case.solver.preset;
     let mut clock = Clock::start();
     let Input {
@@ -82,6 +83,10 @@ pub fn prepare(ctx: &Ctx, case: &Case) -> Result<Prepared, RunError> {
         friction,
     );
     say!(ctx, "solver: preset {} ({preset_reason})", preset.name());
+    if case.solver.path == SolverPath::Schur && preset == Preset::Iterative {
+        let why = format!("needs a factorisation, not the iterative preset ({preset_reason})");
+        return Err(case.schur_path_refused(&why).into());
+    }
     let blas = crate::blas::kernels();
     let dense_threads = ctx.cores.threads(); // rank 0's is the one logged and written
     if let Some(k) = &blas {
@@ -94,21 +99,24 @@ pub fn prepare(ctx: &Ctx, case: &Case) -> Result<Prepared, RunError> {
             }
         );
     }
-    let mut case = case.clone();
-    case.solver.preset = preset;
-    let problem = setup::problem(&case, &mesh, &material);
-    let bodies = check_bodies(ctx, &case, &mesh, &layout, &problem.fixed)?;
+    let solver = SolverSection {
+        preset,
+        ..case.solver.clone()
+    };
+    let problem = setup::problem(case, &mesh, &material);
+    let bodies = check_bodies(ctx, case, &mesh, &layout, &problem.fixed)?;
     drop(problem);
     let contact = if case.contacts.is_empty() {
         None
     } else {
         Some(ctx.agree(
-            setup::contact_settings(&case, &case.contacts, &material).map_err(RunError::from),
+            setup::contact_settings(case, &case.contacts, &material).map_err(RunError::from),
         )?)
     };
     ResultSet::check(ctx, &case.output.dir, &case.file)?;
     Ok(Prepared {
         case,
+        solver,
         asked,
         preset_reason,
         mesh,
@@ -128,6 +136,7 @@ pub fn prepare(ctx: &Ctx, case: &Case) -> Result<Prepared, RunError> {
 pub fn solve(ctx: &Ctx, prepared: Prepared) -> Result<String, RunError> {
     let Prepared {
         case,
+        solver,
         asked,
         preset_reason,
         mesh,
@@ -140,8 +149,7 @@ pub fn solve(ctx: &Ctx, prepared: Prepared) -> Result<String, RunError> {
         dense_threads,
         mut clock,
     } = prepared;
-    let case = &case;
-    let preset = case.solver.preset;
+    let preset = solver.preset;
     let problem = setup::problem(case, &mesh, &material);
     let mut sys = assembly::assemble(ctx.comm(), &layout, &problem)?;
     let mut contact = contact;
@@ -159,6 +167,7 @@ pub fn solve(ctx: &Ctx, prepared: Prepared) -> Result<String, RunError> {
     let stepper = Stepper {
         ctx,
         case,
+        solver: &solver,
         mesh: &mesh,
         layout: &layout,
         material: &material,
@@ -224,7 +233,7 @@ pub fn solve(ctx: &Ctx, prepared: Prepared) -> Result<String, RunError> {
 /// Solves, assembles and writes nothing. Collective.
 pub fn check_case(ctx: &Ctx, case: &Case) -> Result<(), RunError> {
     let p = prepare(ctx, case)?;
-    let (mesh, case) = (&p.mesh, &p.case);
+    let (mesh, case) = (&p.mesh, p.case);
     let problem = setup::problem(case, mesh, &p.material);
     let modes = if mesh.dim == 2 { 3 } else { 6 };
     say!(ctx, "check: bodies: {}", p.bodies.len());
@@ -297,7 +306,7 @@ pub fn check_case(ctx: &Ctx, case: &Case) -> Result<(), RunError> {
     say!(
         ctx,
         "check: preset: {} (asked {}; {})",
-        case.solver.preset.name(),
+        p.solver.preset.name(),
         p.asked.name(),
         p.preset_reason
     );

@@ -20,7 +20,7 @@
 //! the XDMF temporal collection and a row of `history.csv`.
 
 use crate::assembly::System;
-use crate::case::{Case, LoadSection, OutputField};
+use crate::case::{Case, LoadSection, OutputField, SolverPath, SolverSection};
 use crate::error::RunError;
 use crate::fem::Materials;
 use crate::mesh::Mesh;
@@ -34,6 +34,7 @@ use crate::say;
 use crate::setup::ContactSettings;
 use crate::signorini::certificate::Certificate;
 use crate::signorini::report::{FrictionCertificate, Kkt, PairSummary};
+use crate::signorini::session::Session;
 use crate::signorini::{self, ContactReport, ContactSolution};
 use crate::solver::{self, LinearSummary};
 use crate::warnings::{self, Warning};
@@ -178,6 +179,8 @@ pub struct Stepped {
 pub struct Stepper<'a> {
     pub ctx: &'a Ctx<'a>,
     pub case: &'a Case,
+    /// The case's `solver` section with its preset resolved.
+    pub solver: &'a SolverSection,
     pub mesh: &'a Mesh,
     pub layout: &'a Layout,
     pub material: &'a Materials,
@@ -212,10 +215,11 @@ impl Solved {
     }
 }
 
-/// The solve of a linear case or of the contact algorithm at one factor.
+/// The solve of a linear case or of the contact algorithm at one factor (its settings at the
+/// factor, and the run's session).
 enum Physics {
     Linear,
-    Contact(Box<ContactSettings>),
+    Contact(Box<ContactSettings>, Box<Session>),
 }
 
 /// What a run of load steps carries from step to step.
@@ -293,7 +297,18 @@ impl Stepper<'_> {
         let plan = self.case.load.clone().unwrap_or_else(LoadSection::single);
         let mut physics = match self.contact {
             None => Physics::Linear,
-            Some(c) => Physics::Contact(Box::new(c.clone())),
+            // what the contact solves keep from one to the next: the linear solver, a condensed
+            // factorisation (the matrix is assembled once; only the right-hand side is scaled)
+            Some(c) => {
+                let lasting = (self.mesh, self.layout);
+                let session = Session::new(ctx, lasting, self.solver, c, &sys.a)?;
+                if self.solver.path == SolverPath::Schur && !session.setup().kind().factorises() {
+                    let why =
+                        "needs a factorisation: solver.petsc_options make the solver iterative";
+                    return Err(self.case.schur_path_refused(why).into());
+                }
+                Physics::Contact(Box::new(c.clone()), Box::new(session))
+            }
         };
         // f(1), kept to scale from (only with [load]: a single step solves f(1) itself).
         let b_full = if series {
@@ -312,7 +327,7 @@ impl Stepper<'_> {
             let (p, halvings) = (schedule.planned(), schedule.halvings());
             self.prepare_step(sys, b_full.as_ref(), &mut physics, &mut run, factor)?;
             let previous = run.last.as_ref().and_then(|s| s.contact.as_ref());
-            let solved = self.solve_once(&physics, &run.fixed, sys, previous);
+            let solved = self.solve_once(&mut physics, &run.fixed, sys, previous);
             run.solve_s += t0.elapsed().as_secs_f64();
             let solved = match solved {
                 Ok(s) => s,
@@ -335,8 +350,8 @@ impl Stepper<'_> {
             };
             if !series {
                 // no later load step takes the condensed factorisation: its memory goes now
-                if let Some(c) = solved.contact.as_ref() {
-                    c.release_factor();
+                if let Physics::Contact(_, session) = &mut physics {
+                    session.release_factor();
                 }
             }
             let step = run.records.len() + 1;
@@ -365,13 +380,13 @@ impl Stepper<'_> {
         if let Some(b) = b_full {
             scale(sys, b, self.fixed, self.held_fixed, &mut run.fixed, factor)?;
         }
-        if let Physics::Contact(settings) = physics {
+        if let Physics::Contact(settings, _) = physics {
             settings.at_factor(factor);
         }
         if let Some(c) = run.last.as_mut().and_then(|s| s.contact.as_mut()) {
             c.predict = predictor_ratio(&run.records, factor);
             // a corner of a motion / force table: the increments are not parallel
-            if let (Physics::Contact(settings), [.., before, done]) =
+            if let (Physics::Contact(settings, _), [.., before, done]) =
                 (&*physics, run.records.as_slice())
             {
                 if !settings.increments_parallel(before.factor, done.factor, factor, c.predict) {
@@ -474,10 +489,11 @@ impl Stepper<'_> {
         }
     }
 
-    /// One linear solve, or the contact algorithm from the previous step's state.
+    /// One linear solve, or the contact algorithm from the previous step's state (and what
+    /// the run's session keeps).
     fn solve_once(
         &self,
-        physics: &Physics,
+        physics: &mut Physics,
         fixed: &[f64],
         sys: &mut System,
         previous: Option<&ContactSolution>,
@@ -490,15 +506,15 @@ impl Stepper<'_> {
                     self.mesh,
                     self.layout,
                     sys,
-                    (&case.solver, &case.file),
+                    (self.solver, &case.file),
                 )?;
                 Ok(Solved {
                     linear_u: Some(u),
-                    report: SolveReport::Linear(report.summary(case.solver.preset)),
+                    report: SolveReport::Linear(report.summary(self.solver.preset)),
                     contact: None,
                 })
             }
-            Physics::Contact(settings) => {
+            Physics::Contact(settings, session) => {
                 let mut in_w = (self.mortar)
                     .map(|m| m.rhs(self.layout, &sys.b, fixed))
                     .transpose()?;
@@ -520,10 +536,9 @@ impl Stepper<'_> {
                     self.layout,
                     fixed,
                     sys,
-                    &case.solver,
-                    (previous, in_u.as_ref()),
+                    self.solver,
+                    (&mut **session, previous, in_u.as_ref()),
                 );
-                drop(in_u);
                 if let Some((f_hat, _)) = in_w.as_mut() {
                     std::mem::swap(&mut sys.b, f_hat);
                 }

@@ -350,3 +350,51 @@ fn auto_after_a_condensed_fallback_decides_from_counts() {
         "3D: tried {tried}, reused {reused}"
     );
 }
+
+/// `solver.path` chooses the algorithm, `solver.reuse` only how the plain path carries a
+/// factorisation: on a frictionless direct case `path = "plain"` with reuse "never" is the run
+/// that reuse "never" alone gives (it implies the plain path), `path = "plain"` alone (reuse
+/// "auto") ends in its active sets and u, and `path = "schur"` is the default's run;
+/// summary.json's `newton.path` names the path taken.
+#[test]
+fn solver_path_plain_is_reuse_never_and_schur_the_default() {
+    let (case, mesh) = hertz(3);
+    let run = |sets: &[&str]| {
+        let mut all = vec![mesh.as_str(), "solver.preset=\"direct\""];
+        all.extend_from_slice(sets);
+        let s = solve(1, &case, &all);
+        s.assert_converged(&all.join(" "));
+        s
+    };
+    let path = |s: &Solved| s.summary["newton"]["path"].as_str().map(str::to_string);
+    let never = run(&["solver.reuse=\"never\""]);
+    let plain_never = run(&["solver.path=\"plain\"", "solver.reuse=\"never\""]);
+    let plain = run(&["solver.path=\"plain\""]);
+    let default = run(&[]);
+    let schur = run(&["solver.path=\"schur\""]);
+    for s in [&never, &plain_never, &plain] {
+        assert_eq!(path(s).as_deref(), Some("plain"), "{}", s.run.output());
+        assert!(
+            s.summary["newton"]["condensed"].is_null(),
+            "no Schur path tried"
+        );
+    }
+    for s in [&default, &schur] {
+        assert_eq!(path(s).as_deref(), Some("schur"), "{}", s.run.output());
+        assert!(!s.summary["newton"]["condensed"].is_null());
+    }
+    for (a, b, what) in [
+        (&never, &plain_never, "path = plain, reuse = never"),
+        (&default, &schur, "path = schur"),
+    ] {
+        assert_eq!(a.steps(), b.steps(), "{what}");
+        assert_eq!(a.active_history(), b.active_history(), "{what}");
+        assert_eq!(a.u_rel_diff(b), 0.0, "{what}: u differs");
+    }
+    assert_eq!(never.active_node_ids(), plain.active_node_ids());
+    let d = never.u_rel_diff(&plain);
+    assert!(
+        d <= 1e-10,
+        "path = plain (reuse auto): |u - u_never| / max|u| = {d:e}"
+    );
+}

@@ -65,6 +65,7 @@ pub const SOLVER: &[&str] = &[
     "method",
     "petsc_options",
     "rtol",
+    "path",
     "reuse",
     "repeatable",
     "dense_threads",

@@ -39,5 +39,6 @@ pub use load::LoadSection;
 pub use output::{OutputField, OutputSection, DEFAULT_FIELDS};
 pub use shape::{vec3, ObstacleSpec};
 pub use solver::{
-    DenseThreads, Method, NewtonInit, NewtonSection, OnCycle, Preset, Reuse, SolverSection,
+    DenseThreads, Method, NewtonInit, NewtonSection, OnCycle, Preset, Reuse, SolverPath,
+    SolverSection,
 };

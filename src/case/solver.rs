@@ -1,8 +1,11 @@
 //! `[solver]` and `[newton]`.
 
+use super::contact::{ContactSection, CoulombAlgorithm, Friction};
+use super::file::Case;
 use super::keys;
 use super::reader::{Reader, Res, Tab};
 use super::tree::Kind;
+use crate::error::InputError;
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Preset {
@@ -43,19 +46,48 @@ impl Method {
     }
 }
 
-/// `solver.reuse`: whether a Newton step of the direct preset may solve its reduced system by
+/// `solver.path`: which algorithm solves a Newton contact case.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum SolverPath {
+    /// The Schur path where it runs (direct preset; frictionless, or Coulomb's generalised
+    /// Newton from newton.init = "auto"), else the plain path.
+    Auto,
+    /// One factorisation with MUMPS' Schur complement on the candidate contact nodes for the
+    /// whole solve, Algorithm 1 (or Coulomb's generalised Newton) on their dense system
+    /// (signorini/schur/); it falls back to the plain path by itself.
+    Schur,
+    /// Algorithms 1 / 2 (or Coulomb's generalised Newton) on the whole reduced system, solved
+    /// in every Newton step (signorini/plain_path/), carrying a factorisation or
+    /// preconditioner from step to step as `solver.reuse` says.
+    Plain,
+}
+
+impl SolverPath {
+    pub fn name(self) -> &'static str {
+        match self {
+            SolverPath::Auto => "auto",
+            SolverPath::Schur => "schur",
+            SolverPath::Plain => "plain",
+        }
+    }
+
+    /// The Schur path may run (where the solver factorises and the contact boundary fits it).
+    pub fn allows_schur(self) -> bool {
+        self != SolverPath::Plain
+    }
+}
+
+/// `solver.reuse`: how the plain path carries a factorisation or preconditioner from one Newton
+/// step to the next: whether a Newton step of the direct preset may solve its reduced system by
 /// Krylov iterations preconditioned with the last factorisation instead of refactorising; with
 /// the iterative preset, whether Newton steps share one preconditioner (GAMG hierarchy), start
 /// from the previous iterate and (frictionless) solve inexactly while the active set changes
 /// (signorini::reduced, `solve_amg`).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Reuse {
-    /// Direct, frictionless: the condensed path (Algorithm 1 on the contact unknowns, one
-    /// factorisation with MUMPS' Schur complement, signorini::condensed; the case file may
-    /// also say "condensed"); where it falls back, the plain path reuses a factorisation when
-    /// MUMPS' counts say it pays (flops of the factorisation against those of its solves,
-    /// signorini::reduced `ReuseCosts`; never timings). Direct with friction: every step
-    /// refactorises (the condensed Coulomb path aside).
+    /// Direct, frictionless: a factorisation is reused when MUMPS' counts say it pays (flops
+    /// of the factorisation against those of its solves, signorini::reduced `ReuseCosts`;
+    /// never timings). Direct with friction: every step refactorises.
     /// Iterative: warm starts, inexact early steps, the preconditioner of an earlier step, set
     /// up anew when the Krylov iterations per decade grew by more than 30 % over those after
     /// the last setup, or when a solve on it does not converge.
@@ -108,8 +140,10 @@ pub struct SolverSection {
     pub petsc_options: String,
     /// Relative tolerance of the iterative preset.
     pub rtol: f64,
-    /// Reuse of a factorisation (direct preset) or of the preconditioner, warm starts and
-    /// inexact early steps (iterative preset) across Newton steps (contact).
+    /// The algorithm: the Schur path or the plain path (contact, method = "newton").
+    pub path: SolverPath,
+    /// The plain path's reuse of a factorisation (direct preset) or of the preconditioner,
+    /// warm starts and inexact early steps (iterative preset) across Newton steps (contact).
     pub reuse: Reuse,
     /// The direct preset's MUMPS work (LU with friction, LDLᵀ on the plain path, and the
     /// condensed path's LLᵀ with the Schur complement and its solve phases) on rank 0 alone,
@@ -127,6 +161,7 @@ impl Default for SolverSection {
             method: Method::Newton,
             petsc_options: String::new(),
             rtol: 1e-10,
+            path: SolverPath::Auto,
             reuse: Reuse::Auto,
             repeatable: false,
             dense_threads: DenseThreads::Auto,
@@ -199,6 +234,18 @@ impl Default for NewtonSection {
     }
 }
 
+impl Case {
+    /// An input error at the key that asked for the Schur path (`solver.path`, or
+    /// `solver.reuse = "condensed"`), which cannot run because `why`.
+    pub fn schur_path_refused(&self, why: &str) -> InputError {
+        let key = match self.locs.contains_key("solver.path") {
+            true => "solver.path",
+            false => "solver.reuse",
+        };
+        self.err_at(key, format!("the Schur path {why}"))
+    }
+}
+
 impl Reader<'_> {
     pub(super) fn solver(&self, top: &Tab) -> Res<SolverSection> {
         let mut s = SolverSection::default();
@@ -224,18 +271,7 @@ impl Reader<'_> {
                 ],
             )?;
         }
-        if let Some((uk, u)) = t.get("reuse") {
-            s.reuse = self.choice(
-                &uk,
-                u,
-                &[
-                    ("auto", Reuse::Auto),
-                    ("never", Reuse::Never),
-                    ("always", Reuse::Always),
-                    ("condensed", Reuse::Auto), // the name of auto's direct path
-                ],
-            )?;
-        }
+        (s.path, s.reuse) = self.path_and_reuse(&t)?;
         if let Some((bk, b)) = t.get("repeatable") {
             s.repeatable = self.boolean(&bk, b)?;
         }
@@ -260,6 +296,104 @@ impl Reader<'_> {
         }
         Ok(s)
     }
+
+    /// `solver.path` and `solver.reuse`. Without `path`, `reuse = "never"` or `"always"`
+    /// imply the plain path (the Schur path keeps one factorisation for the whole solve, itself
+    /// a reuse); `reuse = "condensed"` (the former name of the default, kept so that older
+    /// case files run as they did) is `"auto"`; with `path = "schur"`, `reuse` may only be
+    /// `"auto"` (or `"condensed"`).
+    fn path_and_reuse(&self, t: &Tab) -> Res<(SolverPath, Reuse)> {
+        let paths = [
+            ("auto", SolverPath::Auto),
+            ("schur", SolverPath::Schur),
+            ("plain", SolverPath::Plain),
+        ];
+        let path = match t.get("path") {
+            Some((pk, p)) => Some(self.choice(&pk, p, &paths)?),
+            None => None,
+        };
+        let Some((uk, u)) = t.get("reuse") else {
+            return Ok((path.unwrap_or(SolverPath::Auto), Reuse::Auto));
+        };
+        let reuses = [
+            ("auto", (Reuse::Auto, false)),
+            ("never", (Reuse::Never, false)),
+            ("always", (Reuse::Always, false)),
+            ("condensed", (Reuse::Auto, true)),
+        ];
+        let (reuse, condensed) = self.choice(&uk, u, &reuses)?;
+        match path {
+            // the former name of the default: cases written with it run as they always did
+            None if condensed => Ok((SolverPath::Auto, reuse)),
+            None if reuse == Reuse::Auto => Ok((SolverPath::Auto, reuse)),
+            None => Ok((SolverPath::Plain, reuse)),
+            Some(p) if condensed && p != SolverPath::Schur => Err(self.err(
+                &uk,
+                u.loc,
+                format!(
+                    "\"condensed\" names the Schur path, which solver.path = \"{}\" does not \
+                     take: use solver.path alone",
+                    p.name()
+                ),
+            )),
+            Some(SolverPath::Schur) if reuse != Reuse::Auto => Err(self.err(
+                &uk,
+                u.loc,
+                format!(
+                    "\"{}\" is how the plain path carries a factorisation from one Newton step \
+                     to the next; solver.path = \"schur\" keeps one factorisation for the whole \
+                     solve (drop one of the two keys)",
+                    reuse.name()
+                ),
+            )),
+            Some(p) => Ok((p, reuse)),
+        }
+    }
+
+    /// `solver.path = "schur"` where the Schur path cannot run: an error at the key.
+    pub(super) fn check_schur_path(
+        &self,
+        top: &Tab,
+        solver: &SolverSection,
+        (contacts, newton): (&[ContactSection], &NewtonSection),
+    ) -> Res<()> {
+        if solver.path != SolverPath::Schur {
+            return Ok(());
+        }
+        let coulomb = |alg: CoulombAlgorithm| {
+            let of = |f: &Friction| match f {
+                Friction::Coulomb { algorithm, .. } => *algorithm == alg,
+                _ => false,
+            };
+            contacts.iter().any(|c| of(&c.friction))
+        };
+        let why = if solver.method == Method::SnesVi {
+            Some("runs the semismooth Newton method, not method = \"snesvi\"")
+        } else if solver.preset == Preset::Iterative {
+            Some("needs a factorisation: not the iterative preset")
+        } else if (contacts.iter()).any(|c| matches!(c.friction, Friction::Tresca { .. })) {
+            Some("does not solve Tresca friction (Algorithm 2 runs on the plain path)")
+        } else if coulomb(CoulombAlgorithm::FixedPoint) {
+            Some("does not run Coulomb's fixed point (its Tresca solves run on the plain path)")
+        } else if coulomb(CoulombAlgorithm::Newton) && newton.init != NewtonInit::Auto {
+            Some("starts Coulomb's generalised Newton only from newton.init = \"auto\"")
+        } else {
+            None
+        };
+        let Some(why) = why else {
+            return Ok(());
+        };
+        let (sk, sn) = top
+            .get("solver")
+            .expect("path = \"schur\" was set in [solver]");
+        let t = self.table(&sk, sn, keys::SOLVER)?;
+        let (key, node) = match (t.get("path"), t.get("reuse")) {
+            (Some(p), _) | (None, Some(p)) => p,
+            (None, None) => unreachable!("the Schur path was asked by path or reuse"),
+        };
+        Err(self.err(&key, node.loc, format!("the Schur path {why}")))
+    }
+
     pub(super) fn newton(&self, top: &Tab) -> Res<NewtonSection> {
         let mut s = NewtonSection::default();
         let Some((k, n)) = top.get("newton") else {

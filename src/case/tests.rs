@@ -2457,3 +2457,98 @@ fn material_groups_must_be_volume_groups_of_the_mesh() {
     let e = c.check_against_mesh(2, &g(&[("soft", 2)])).unwrap_err();
     assert_eq!(e.key.as_deref(), Some("material[1].group"), "{e}");
 }
+
+#[test]
+fn solver_path_values_and_what_reuse_implies_without_it() {
+    let solver = |text: &str| parse(&with(text)).unwrap().solver;
+    let s = solver("");
+    assert_eq!((s.path, s.reuse), (SolverPath::Auto, Reuse::Auto));
+    for (name, want) in [
+        ("auto", SolverPath::Auto),
+        ("schur", SolverPath::Schur),
+        ("plain", SolverPath::Plain),
+    ] {
+        let s = solver(&format!("[solver]\npath = \"{name}\"\n"));
+        assert_eq!((s.path, s.reuse), (want, Reuse::Auto));
+        assert_eq!(want.name(), name);
+    }
+    // without `path`: "never" and "always" are the plain path's, "condensed" (the former
+    // name of the default) the default
+    for (reuse, path, want) in [
+        ("auto", SolverPath::Auto, Reuse::Auto),
+        ("never", SolverPath::Plain, Reuse::Never),
+        ("always", SolverPath::Plain, Reuse::Always),
+        ("condensed", SolverPath::Auto, Reuse::Auto),
+    ] {
+        let s = solver(&format!("[solver]\nreuse = \"{reuse}\"\n"));
+        assert_eq!((s.path, s.reuse), (path, want), "reuse = {reuse}");
+    }
+    // with it, reuse says only how the plain path carries a factorisation
+    let s = solver("[solver]\npath = \"auto\"\nreuse = \"never\"\n");
+    assert_eq!((s.path, s.reuse), (SolverPath::Auto, Reuse::Never));
+    let s = solver("[solver]\npath = \"plain\"\nreuse = \"always\"\n");
+    assert_eq!((s.path, s.reuse), (SolverPath::Plain, Reuse::Always));
+    let s = solver("[solver]\npath = \"schur\"\nreuse = \"condensed\"\n");
+    assert_eq!((s.path, s.reuse), (SolverPath::Schur, Reuse::Auto));
+    let c = parse_set(MINIMAL, &["solver.path=\"plain\""]).unwrap();
+    assert_eq!(c.solver.path, SolverPath::Plain);
+    expect_err(&with("[solver]\npath = \"dense\"\n"), "solver.path", "path");
+    expect_err(&with("[solver]\npath = 1\n"), "solver.path", "path");
+}
+
+#[test]
+fn reject_schur_path_with_a_plain_reuse_or_another_path() {
+    for reuse in ["never", "always"] {
+        let text = with(&format!(
+            "[solver]\npath = \"schur\"\nreuse = \"{reuse}\"\n"
+        ));
+        let e = expect_err(&text, "solver.reuse", "reuse");
+        assert!(e.message.contains("whole solve"), "{e}");
+    }
+    for path in ["auto", "plain"] {
+        let text = with(&format!(
+            "[solver]\npath = \"{path}\"\nreuse = \"condensed\"\n"
+        ));
+        let e = expect_err(&text, "solver.reuse", "reuse");
+        assert!(e.message.contains("Schur path"), "{e}");
+    }
+}
+
+#[test]
+fn reject_schur_path_where_it_cannot_run() {
+    let contact = "[contact]\ngroup = \"c\"\nobstacle = { type = \"plane\", point = [0, 0], \
+                   normal = [0, -1] }\n";
+    let ok = with(&format!(
+        "{contact}[solver]\npath = \"schur\"\npreset = \"direct\"\n"
+    ));
+    assert_eq!(parse(&ok).unwrap().solver.path, SolverPath::Schur);
+    let coulomb = |alg: &str| {
+        format!("friction = {{ law = \"coulomb\", mu = 0.3, algorithm = \"{alg}\" }}\n")
+    };
+    let cases = [
+        ("preset = \"iterative\"\n", String::new(), "iterative"),
+        ("method = \"snesvi\"\n", String::new(), "snesvi"),
+        (
+            "",
+            "friction = { law = \"tresca\", threshold = 0.01 }\n".into(),
+            "Tresca",
+        ),
+        ("", coulomb("fixed-point"), "fixed point"),
+        (
+            "",
+            coulomb("newton") + "[newton]\ninit = \"gap\"\n",
+            "newton.init",
+        ),
+    ];
+    for (solver, extra, says) in cases {
+        let key = "path = \"schur\"";
+        let text = with(&format!("[solver]\n{key}\n{solver}{contact}{extra}"));
+        let e = expect_err(&text, "solver.path", key);
+        assert!(e.message.contains(says), "{e}");
+    }
+    let newton = with(&format!(
+        "{contact}{}[solver]\npath = \"schur\"\n",
+        coulomb("newton")
+    ));
+    assert_eq!(parse(&newton).unwrap().solver.path, SolverPath::Schur);
+}

@@ -4,7 +4,7 @@
 //! couplings to Dirichlet-fixed master components form N_f, and c = N_f ū with ū the step's
 //! Dirichlet values.
 
-use super::MasterFixed;
+use super::{MasterFixed, PairRows};
 use crate::assembly::System;
 use crate::contact::obstacle::SlaveRow;
 use crate::error::RunError;
@@ -82,7 +82,7 @@ impl Basis {
         ctx: &Ctx,
         mesh: &Mesh,
         layout: &Layout,
-        (rows_of, master_fixed): (&[(usize, HashMap<usize, SlaveRow>)], &MasterFixed),
+        (rows_of, master_fixed): (&[PairRows], &MasterFixed),
         fixed: &[f64],
     ) -> Result<Basis, RunError> {
         let dim = mesh.dim;

@@ -41,6 +41,9 @@ use std::sync::Arc;
 /// The Dirichlet-fixed components of the master nodes this rank couples to, by global node.
 pub(crate) type MasterFixed = HashMap<usize, [bool; 3]>;
 
+/// Each body pair's slave rows by mesh node: (pair index, rows).
+pub(crate) type PairRows = (usize, HashMap<usize, SlaveRow>);
+
 /// Sets up every body pair of `settings` (their slave rows into the pairs' [`BodyTarget`])
 /// and returns the change of basis; `None` without body pairs. Input errors (exit 2) name
 /// the pair's keys. Collective.

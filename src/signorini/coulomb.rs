@@ -8,11 +8,13 @@ use super::active_set::Law;
 use super::boundary::{self, ContactBoundary, NodeResult};
 use super::certificate;
 use super::force;
+use super::kept::KeptFactor;
 use super::plain_path::{self, ContactProblem, NewtonResult, NewtonSettings, StepInfo, WarmStart};
 use super::rigid::{self, FreeModes};
 use super::schur::candidates::Sticking;
 use super::schur::frictionless::solve_keeping;
 use super::schur::{self, CoulombCondensedSummary};
+use super::session::Session;
 use super::step_system::ReducedSystem;
 use crate::case::{self, CoulombAlgorithm, Reuse, SolverSection};
 use crate::error::RunError;
@@ -42,20 +44,20 @@ pub fn solve(
     reduced: &mut ReducedSystem,
     ns: &NewtonSettings,
     (algorithm, solver_section): (CoulombAlgorithm, &SolverSection),
-    warm: Option<&WarmStart>,
+    (session, warm): (&mut Session, Option<&WarmStart>),
 ) -> Result<Outcome, RunError> {
     let coulomb_newton = algorithm == CoulombAlgorithm::Newton;
     if coulomb_newton && solver_section.reuse == Reuse::Always && reduced.factorises()? {
         say!(
             ctx,
             "newton: solver.reuse = \"always\" with Coulomb: its rows change the matrix \
-             in every step, so every Newton step factorises (\"auto\": Coulomb on the \
-             contact unknowns after one factorisation)"
+             in every step, so every Newton step of the plain path factorises (solver.path \
+             = \"schur\": Coulomb on the contact unknowns after one factorisation)"
         );
     }
     let (start, condensed_summary) = if coulomb_newton && ns.section.init == case::NewtonInit::Auto
     {
-        coulomb_start(ctx, problem, reduced, ns, solver_section, warm)?
+        coulomb_start(ctx, problem, reduced, ns, solver_section, (session, warm))?
     } else {
         (Begin::Touching, None)
     };
@@ -220,7 +222,7 @@ fn coulomb_start(
     reduced: &mut ReducedSystem,
     ns: &NewtonSettings,
     solver_section: &SolverSection,
-    warm: Option<&WarmStart>,
+    (session, warm): (&mut Session, Option<&WarmStart>),
 ) -> Result<(Begin, Option<schur::CondensedSummary>), RunError> {
     let fl = NewtonSettings {
         law: Law::Frictionless,
@@ -229,7 +231,7 @@ fn coulomb_start(
         ..*ns
     };
     let b = problem.boundary;
-    let condense = solver_section.reuse == Reuse::Auto
+    let condense = solver_section.path.allows_schur()
         && b.n_global > 0
         && b.n_global <= crate::tuning::MAX_CONTACT_NODES
         && reduced.factorises()?;
@@ -268,13 +270,13 @@ fn coulomb_start(
     }
     if let Some(w) = warm {
         if forced {
-            drop(problem.kept.take()); // no Coulomb step uses a kept factorisation here
+            drop(session.kept.take()); // no Coulomb step uses a kept factorisation here
             return Ok((Begin::Touching, None));
         }
-        return coulomb_load_step(ctx, problem, reduced, (ns, &fl), w);
+        return coulomb_load_step(ctx, problem, (reduced, session), (ns, &fl), w);
     }
-    let (mut nr, summary) = match coulomb_passes(ctx, problem, reduced, (ns, &fl), (forced, from))?
-    {
+    let passes = coulomb_passes(ctx, problem, (reduced, session), (ns, &fl), (forced, from))?;
+    let (mut nr, summary) = match passes {
         Passes::Done(begin, summary) => return Ok((begin, summary)),
         Passes::Frictionless(nr, summary) => (nr, summary),
     };
@@ -308,7 +310,7 @@ enum Passes {
 fn coulomb_passes(
     ctx: &Ctx,
     problem: &ContactProblem,
-    reduced: &mut ReducedSystem,
+    (reduced, session): (&mut ReducedSystem, &mut Session),
     (ns, fl): (&NewtonSettings, &NewtonSettings),
     (forced, from): (bool, &str),
 ) -> Result<Passes, RunError> {
@@ -328,9 +330,17 @@ fn coulomb_passes(
         // too many candidates' dofs for the dense tangential compliance: the predicted zone's
         // interior held sticking, the dense steps on its edge and beyond (schur/frictionless.rs)
         let held = (per > 1).then(|| passes.start_sticking());
-        let mut tried = solve_keeping(ctx, problem, reduced, fl, None, (per, true, held));
+        let mut tried = solve_keeping(
+            ctx,
+            problem,
+            reduced,
+            fl,
+            (session, None),
+            (per, true, held),
+        );
         if let Some(last) = last.take() {
-            if let Some(done) = from_last_pass(ctx, problem, &tried, last, passes.earlier) {
+            let store = &mut session.kept;
+            if let Some(done) = from_last_pass(ctx, store, &tried, last, passes.earlier) {
                 return Ok(done);
             }
         }
@@ -340,11 +350,11 @@ fn coulomb_passes(
                 ctx,
                 "coulomb: the candidates' normal dofs alone in the Schur complement"
             );
-            tried = solve_keeping(ctx, problem, reduced, fl, None, (1, true, None));
+            tried = solve_keeping(ctx, problem, reduced, fl, (session, None), (1, true, None));
         }
         // a frictionless solve on the normal dofs alone keeps its factorisation for a next
         // load step, which no Coulomb step can use
-        drop(problem.kept.take());
+        drop(session.kept.take());
         let (mut nr, mut summary, kept) = match tried {
             Ok((schur::Condensed::Solved(nr, s), kept)) => (*nr, s, kept),
             Ok((schur::Condensed::Fallback(s), _)) | Ok((schur::Condensed::Factorised(s), _)) => {
@@ -379,12 +389,13 @@ fn coulomb_passes(
             schur::CoulombCondensed::Solved(r, cs) => {
                 summary.coulomb = Some(cs);
                 // for the next load step (a held zone's too: its rows' values are in f)
-                problem.kept.put(kept);
+                session.kept.put(kept);
                 return Ok(Passes::Done(Begin::Solved(joined(*r)), Some(summary)));
             }
             schur::CoulombCondensed::Start(r, u, cs, beyond) => {
                 if passes.goes_on(&beyond, summary.factorisations) {
-                    passes.next(ctx, problem, &mut kept, &beyond, summary.factorisations);
+                    let store = &mut session.kept;
+                    passes.next(ctx, store, &mut kept, &beyond, summary.factorisations);
                     last = Some((joined(*r), u, cs));
                     continue;
                 }
@@ -407,7 +418,7 @@ fn coulomb_passes(
 /// failed with an error every rank returns. Collective (log).
 fn from_last_pass(
     ctx: &Ctx,
-    problem: &ContactProblem,
+    store: &mut KeptFactor,
     tried: &Result<(schur::Condensed, Option<schur::Kept>), RunError>,
     (r, u, cs): (NewtonResult, Vec<f64>, CoulombCondensedSummary),
     earlier: usize,
@@ -419,7 +430,7 @@ fn from_last_pass(
         Err(RunError::Failed(_)) => schur::CondensedSummary::new(0),
         _ => return None, // solved, or an error every rank returns (the caller's)
     };
-    drop(problem.kept.take());
+    drop(store.take());
     summary.factorisations += earlier;
     summary.coulomb = Some(cs);
     say!(
@@ -504,7 +515,7 @@ fn iterative_start(
 fn coulomb_load_step(
     ctx: &Ctx,
     problem: &ContactProblem,
-    reduced: &mut ReducedSystem,
+    (reduced, session): (&mut ReducedSystem, &mut Session),
     (ns, fl): (&NewtonSettings, &NewtonSettings),
     warm: &WarmStart,
 ) -> Result<(Begin, Option<schur::CondensedSummary>), RunError> {
@@ -513,7 +524,7 @@ fn coulomb_load_step(
     let release = gathered(ctx, warm.nodes.iter().map(|r| r.active && r.slip));
     // where the step before held a zone, this step holds the warm set's (its factorisation
     // is reused where the held nodes are the same)
-    let zone: Vec<bool> = match problem.kept.holds_zone() {
+    let zone: Vec<bool> = match session.kept.holds_zone() {
         true => gathered(ctx, warm.nodes.iter().map(|r| r.active)),
         false => Vec::new(),
     };
@@ -528,7 +539,7 @@ fn coulomb_load_step(
             problem,
             reduced,
             fl,
-            Some(warm),
+            (&mut *session, Some(warm)),
             (dim, false, Some(held)),
         );
         let (mut summary, mut kept) = match tried {
@@ -552,7 +563,7 @@ fn coulomb_load_step(
         let begin = match schur::coulomb::solve(ctx, problem, reduced, ns, &mut kept, Some(warm))? {
             schur::CoulombCondensed::Solved(r, cs) => {
                 summary.coulomb = Some(cs);
-                problem.kept.put(kept); // for the next load step (a held zone's too)
+                session.kept.put(kept); // for the next load step (a held zone's too)
                 Begin::Solved(*r)
             }
             schur::CoulombCondensed::Start(r, u, cs, beyond) => {
@@ -563,7 +574,8 @@ fn coulomb_load_step(
                 let held_missed = kept.held.iter().any(|&h| h)
                     && summary.factorisations >= WARM_STICK_FACTORISATIONS;
                 if !held_missed && passes.goes_on(&beyond, summary.factorisations) {
-                    passes.next(ctx, problem, &mut kept, &beyond, summary.factorisations);
+                    let store = &mut session.kept;
+                    passes.next(ctx, store, &mut kept, &beyond, summary.factorisations);
                     last = Some((*r, u));
                     continue;
                 }
@@ -639,7 +651,7 @@ impl PassLoop {
     fn next(
         &mut self,
         ctx: &Ctx,
-        problem: &ContactProblem,
+        store: &mut KeptFactor,
         kept: &mut schur::Kept,
         beyond: &[usize],
         done: usize,
@@ -668,7 +680,7 @@ impl PassLoop {
         self.earlier = done;
         self.changed_before = beyond.len();
         self.pass += 1;
-        problem.kept.put_order(kept.comp.node_order.take());
+        store.put_order(kept.comp.node_order.take());
     }
 }
 

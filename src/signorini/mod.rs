@@ -25,14 +25,15 @@ pub mod plain_path;
 pub mod report;
 pub mod rigid;
 pub mod schur;
+pub mod session;
 pub mod snesvi;
 pub mod step_system;
 pub mod warn;
 
 use crate::assembly::System;
-use crate::case::{self, CoulombAlgorithm, Method, Preset, Reuse, SolverSection};
+use crate::case::{self, CoulombAlgorithm, Method, NewtonInit, Preset, SolverPath, SolverSection};
 use crate::error::RunError;
-use crate::linsolve::{LinearSetup, SolverKind};
+use crate::linsolve::SolverKind;
 use crate::mesh::Mesh;
 use crate::mortar::InU;
 use crate::output::ContactResult;
@@ -46,11 +47,11 @@ use crate::warnings::Warning;
 use active_set::{ActiveSet, Iterate, Law};
 use boundary::{ContactBoundary, NodeResult};
 use coulomb::Outcome;
-use kept::KeptFactor;
 use plain_path::{ContactProblem, NewtonResult, NewtonSettings, StepInfo, WarmStart};
 use report::{ContactSummary, Scales};
 use rigid::FreeModes;
 use serde::Serialize;
+use session::Session;
 use std::time::Instant;
 use step_system::ReducedSystem;
 
@@ -59,6 +60,10 @@ use step_system::ReducedSystem;
 pub struct NewtonSummary {
     /// "newton" (Algorithms 1/2) or "snesvi" (PETSc SNES VI).
     pub method: &'static str,
+    /// Method "newton": the path the solve took first, "schur" (the Schur path; `condensed`
+    /// says whether it fell back to the plain path) or "plain" (`solver.path`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub path: Option<&'static str>,
     /// 1 (frictionless) or 2 (Tresca).
     pub algorithm: u8,
     pub init: &'static str,
@@ -142,18 +147,8 @@ pub struct ContactSolution {
     /// Each pair's obstacle displacement d in this solve (friction in the next step acts on
     /// the slip relative to the obstacle's increment since).
     pub obstacle_displacement: Vec<[f64; 3]>,
-    /// The condensed solve's factorisation, compliance and candidates, for the next load step
-    /// (taken by it).
-    kept: KeptFactor,
     /// The warnings of this solve (docs/warnings.md; the same on every rank, not logged yet).
     pub warnings: Vec<Warning>,
-}
-
-impl ContactSolution {
-    /// Drops the factorisation kept for a next load step (none follows).
-    pub fn release_factor(&self) {
-        drop(self.kept.take());
-    }
 }
 
 /// A load step's change of the contact nodes' values (u, λ in both forms) and of this rank's
@@ -250,7 +245,9 @@ fn step_delta(
 /// `previous`: the converged solution of the previous load step on the same mesh and boundary;
 /// with it the Newton starts from its sets and iterate, and friction acts on the tangential
 /// increment u_τ − u_τ^prev (docs/friction.md, "Load steps"). `None`: one static solve.
-/// Collective; every rank returns the same `Ok` / `Err` kind.
+/// `session`: the run's linear solver and what the previous solve kept (its factorisation,
+/// taken where it holds; this solve's left in it; after a failed solve, nothing). Collective;
+/// every rank returns the same `Ok` / `Err` kind.
 #[allow(clippy::too_many_arguments)]
 pub fn solve(
     ctx: &Ctx,
@@ -260,7 +257,7 @@ pub fn solve(
     fixed: &[f64],
     sys: &System,
     solver_section: &SolverSection,
-    (previous, in_u): (Option<&ContactSolution>, Option<&InU>),
+    (session, previous, in_u): (&mut Session, Option<&ContactSolution>, Option<&InU>),
 ) -> Result<ContactSolution, RunError> {
     let dim = mesh.dim;
     let law = Law::of(settings);
@@ -272,13 +269,6 @@ pub fn solve(
     let displacements = settings.displacements();
     let prev_u = (previous.map(|prev| take_reference(ctx, &mut b, prev, friction, &displacements)))
         .transpose()?;
-    let setup = LinearSetup::for_section(
-        ctx,
-        (mesh, layout),
-        solver_section,
-        symmetric_rows(settings, dim),
-        solver::matrix_scale(ctx, &sys.a)?,
-    )?;
     let c = complementarity_parameter(ctx, settings, &b, dim);
     let start = warm_start(previous, prev_u.as_deref(), &b, &force_control, c);
     let warm = previous
@@ -287,16 +277,13 @@ pub fn solve(
             nodes: nodes.as_deref().unwrap_or(&prev.nodes),
             u_local: u,
         });
-    let kept = KeptFactor::taken_from(previous.map(|p| &p.kept));
-    let located = std::cell::RefCell::new(None);
+    session.located = None; // located anew in every solve
     let problem = ContactProblem {
         mesh,
         layout,
         boundary: &b,
         fixed,
         sys,
-        kept: &kept,
-        located: &located,
     };
     // the body's half-space model: the predictor's on the iterative preset (frictionless,
     // plain_path/), else the condensed path's (locating a floating body's zone; the plain path's
@@ -307,7 +294,8 @@ pub fn solve(
         length: 2.0 * mesh.extent(),
         mirrors: halfspace::mirror_planes(ctx, mesh, fixed),
     };
-    let iterative = setup.kind() == SolverKind::Iterative;
+    let iterative = session.setup().kind() == SolverKind::Iterative;
+    let path = chosen_path(settings, solver_section, &b, session.setup().kind());
     let ns = newton_settings(settings, (c, law), (&model, iterative), &force_control);
     // a failure of a frictional body that only its contact holds says what may be the cause
     let sliding = friction && !capacity::held_anywhere(ctx, fixed);
@@ -316,30 +304,40 @@ pub fn solve(
         ctx,
         &problem,
         &ns,
-        (settings, solver_section),
-        (&setup, warm.as_ref()),
+        (settings, solver_section, path),
+        (&mut *session, warm.as_ref()),
         &mut types,
     )
-    .map_err(|e| capacity::why_sliding(e, sliding))?;
+    .map_err(|e| capacity::why_sliding(e, sliding));
+    let ran = forget_on_error(session, ran)?;
     let solved = Solved {
         law,
         c,
+        path,
         ran,
         types,
         warned,
         prev_u,
         force_control: &force_control,
     };
-    let mut solution = report_solution(
+    let solution = report_solution(
         ctx,
         (settings, mesh, layout, fixed, sys),
         solver_section,
         b,
         solved,
         (previous, in_u),
-    )?;
-    solution.kept = kept;
-    Ok(solution)
+    );
+    forget_on_error(session, solution)
+}
+
+/// A solve that fails after it took the previous load step's factorisation leaves nothing
+/// kept: the retry of a cut-back step starts without one. Local.
+fn forget_on_error<T>(session: &mut Session, r: Result<T, RunError>) -> Result<T, RunError> {
+    if r.is_err() {
+        session.kept.clear();
+    }
+    r
 }
 
 /// The Newton loop's settings of a solve: the half-space `model` as the iterative preset's
@@ -389,6 +387,7 @@ fn warm_start(
 struct Solved<'a> {
     law: Law,
     c: f64,
+    path: Option<SolverPath>,
     ran: Ran,
     types: Option<(String, String)>,
     warned: Vec<Warning>,
@@ -398,8 +397,7 @@ struct Solved<'a> {
 
 /// The solution of a solve and its report: the final state judged (Coulomb by b_k =
 /// μ(−λ_n^k)), the obstacles placed at their approaches, the certificate, summary.json's
-/// sections, the warnings and the change since the previous load step. The factorisation to
-/// keep is left empty. Collective.
+/// sections, the warnings and the change since the previous load step. Collective.
 fn report_solution(
     ctx: &Ctx,
     (settings, mesh, layout, fixed, sys): (&ContactSettings, &Mesh, &Layout, &[f64], &System),
@@ -412,6 +410,7 @@ fn report_solution(
     let Solved {
         law,
         c,
+        path,
         ran: (mut nr, outer_steps, condensed_summary),
         types,
         mut warned,
@@ -441,6 +440,7 @@ fn report_solution(
         force_control,
     )?;
     let mut newton = newton_summary(settings, solver_section, c, &mut nr, outer_steps, previous);
+    newton.path = path.map(SolverPath::name);
     if let Some(cs) = condensed_summary {
         // K_p's with the Schur complement, one per round of candidates (the dense steps
         // factorise nothing sparse)
@@ -487,7 +487,6 @@ fn report_solution(
         delta,
         predict: 0.0,
         obstacle_displacement: displacement,
-        kept: KeptFactor::default(),
         warnings: warned,
     })
 }
@@ -606,14 +605,14 @@ fn run_method(
     ctx: &Ctx,
     problem: &ContactProblem,
     ns: &NewtonSettings,
-    (settings, solver_section): (&ContactSettings, &SolverSection),
-    (setup, warm): (&LinearSetup, Option<&WarmStart>),
+    (settings, solver_section, path): (&ContactSettings, &SolverSection, Option<SolverPath>),
+    (session, warm): (&mut Session, Option<&WarmStart>),
     types: &mut Option<(String, String)>,
 ) -> Result<Ran, RunError> {
     let (sys, b, dim) = (problem.sys, problem.boundary, problem.mesh.dim);
     let (nr, outer_steps, condensed_summary) = match solver_section.method {
         Method::Newton => {
-            let mut reduced = ReducedSystem::new(ctx, sys, b, setup, dim)?;
+            let mut reduced = ReducedSystem::new(ctx, sys, b, session.setup(), dim)?;
             *types = Some(reduced.solver_types()?);
             let outcome = match settings.coulomb {
                 Some((_, algorithm)) => coulomb::solve(
@@ -622,15 +621,15 @@ fn run_method(
                     &mut reduced,
                     ns,
                     (algorithm, solver_section),
-                    warm,
+                    (session, warm),
                 )?,
                 None => normal_and_tresca(
                     ctx,
                     problem,
                     &mut reduced,
-                    (ns, settings.friction()),
+                    (ns, settings.friction(), path == Some(SolverPath::Schur)),
                     solver_section,
-                    warm,
+                    (session, warm),
                 )?,
             };
             match outcome {
@@ -640,8 +639,9 @@ fn run_method(
         }
         Method::SnesVi => {
             let f_local = sys.b.to_local_vec()?;
-            let nr =
-                setup.scoped(|| snesvi_solve(ctx, problem, &f_local, settings.rigid_modes))??;
+            let nr = session
+                .setup()
+                .scoped(|| snesvi_solve(ctx, problem, &f_local, settings.rigid_modes))??;
             (nr, None, None)
         }
     };
@@ -658,29 +658,54 @@ fn run_method(
     Ok((nr, outer_steps, condensed_summary))
 }
 
+/// The path a Newton solve takes first (`None`: SNES VI): the Schur path where `solver.path`
+/// allows it (not "plain"), the solver factorises and the contact boundary has 1 to
+/// [`MAX_CONTACT_NODES`](crate::tuning::MAX_CONTACT_NODES) nodes, for frictionless contact and
+/// Coulomb's generalised Newton from newton.init = "auto" (coulomb.rs decides the same); else
+/// the plain path (Tresca, Coulomb's fixed point). The case reader refuses `solver.path =
+/// "schur"` where the case file says it cannot run. Local.
+fn chosen_path(
+    settings: &ContactSettings,
+    section: &SolverSection,
+    b: &ContactBoundary,
+    kind: SolverKind,
+) -> Option<SolverPath> {
+    let applies = match settings.coulomb {
+        Some((_, algorithm)) => {
+            algorithm == CoulombAlgorithm::Newton && settings.newton.init == NewtonInit::Auto
+        }
+        None => !settings.friction(),
+    };
+    let schur = applies
+        && section.path.allows_schur()
+        && b.n_global > 0
+        && b.n_global <= crate::tuning::MAX_CONTACT_NODES
+        && kind.factorises();
+    match section.method {
+        Method::SnesVi => None,
+        Method::Newton if schur => Some(SolverPath::Schur),
+        Method::Newton => Some(SolverPath::Plain),
+    }
+}
+
 /// What [`run_method`] returns: the result, the fixed point's outer steps and the condensed
 /// path's record.
 type Ran = (NewtonResult, Option<usize>, Option<schur::CondensedSummary>);
 
-/// Algorithm 1 (frictionless: on the contact unknowns where the condensed path applies) or
-/// Algorithm 2 (Tresca, `friction`) on the plain path. Collective.
+/// Algorithm 1 (frictionless: on the contact unknowns where the dispatch chose the Schur
+/// path, `condense`, [`chosen_path`]) or Algorithm 2 (Tresca, `friction`) on the plain path.
+/// Collective.
 fn normal_and_tresca(
     ctx: &Ctx,
     problem: &ContactProblem,
     reduced: &mut ReducedSystem,
-    (ns, friction): (&NewtonSettings, bool),
+    (ns, friction, condense): (&NewtonSettings, bool, bool),
     solver_section: &SolverSection,
-    warm: Option<&WarmStart>,
+    (session, warm): (&mut Session, Option<&WarmStart>),
 ) -> Result<Outcome, RunError> {
-    let b = problem.boundary;
     let mut condensed_summary = None;
-    let condense = !friction
-        && solver_section.reuse == Reuse::Auto
-        && b.n_global > 0
-        && b.n_global <= crate::tuning::MAX_CONTACT_NODES
-        && reduced.factorises()?;
     if condense {
-        match schur::frictionless::solve(ctx, problem, reduced, ns, warm)? {
+        match schur::frictionless::solve(ctx, problem, reduced, ns, (session, warm))? {
             schur::Condensed::Solved(nr, s) => {
                 return Ok(Outcome::Checked(*nr, Some(s)));
             }
@@ -769,6 +794,7 @@ fn newton_summary(
     });
     NewtonSummary {
         method: solver_section.method.name(),
+        path: None,
         algorithm: if settings.friction() { 2 } else { 1 },
         init: settings.newton.init.name(),
         c,
@@ -790,18 +816,6 @@ fn newton_summary(
             outer_steps,
             warm_start: previous.is_some(),
         }),
-    }
-}
-
-/// The reduced systems of the case are symmetric: frictionless (3.29) and, in 2D, Tresca's
-/// (3.42) (also the fixed point's inner Tresca solves), both applied symmetrically — a 2D slip
-/// row adds the scalar spring L̃ ≥ 0 of (3.39b) to its node's own tangential diagonal. Not
-/// Coulomb's generalised Newton (its row mix (F7)) nor 3D Tresca (a 2 × 2 L̃ that is not
-/// symmetric). The direct preset then factorises by LDLᵀ instead of LU.
-fn symmetric_rows(settings: &ContactSettings, dim: usize) -> bool {
-    match settings.coulomb {
-        Some((_, CoulombAlgorithm::Newton)) => false,
-        _ => !settings.friction() || dim == 2,
     }
 }
 

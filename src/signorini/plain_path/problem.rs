@@ -144,10 +144,4 @@ pub struct ContactProblem<'a> {
     pub boundary: &'a ContactBoundary,
     pub fixed: &'a [f64],
     pub sys: &'a System,
-    /// The previous load step's condensed Coulomb factorisation on the way in, this solve's on
-    /// the way out.
-    pub kept: &'a crate::signorini::kept::KeptFactor,
-    /// The contact zone the half-space model located in this solve (schur/round.rs `locate`),
-    /// once computed: a second condensed attempt (Coulomb's normal dofs alone) takes it again.
-    pub located: &'a std::cell::RefCell<Option<crate::signorini::halfspace::Located>>,
 }

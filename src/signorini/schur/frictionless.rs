@@ -31,7 +31,8 @@
 //! two broadcasts (S's definiteness, the dense result), one MatMult.
 
 use super::candidates::{hold, wide, Candidates, Compliance, Growth, Sticking};
-use super::outcome::{fallback, fallback_stop, finish, keep_solved, Condensed, Kept, Stop};
+use super::outcome::Stop;
+use super::outcome::{fallback, fallback_stop, finish, keep_solved, Condensed, Expanded, Kept};
 use super::round::{expand, factorise_round, judge, locate, refuse_floating_force};
 use super::round::{reused, Expansion, Judged, Pass, Shape};
 use super::start::{predicted_zone, prepare_base, splits_zones, start_set, PassPlan, SolveStart};
@@ -40,8 +41,10 @@ use crate::case::NewtonInit;
 use crate::error::RunError;
 use crate::par::Ctx;
 use crate::say;
+use crate::signorini::kept::KeptFactor;
 use crate::signorini::plain_path::{ContactProblem, NewtonSettings, StepInfo, WarmStart};
 use crate::signorini::rigid::FreeModes;
+use crate::signorini::session::Session;
 use crate::signorini::step_system::ReducedSystem;
 use crate::tuning::{BAND_FRACTION, DENSE_FLOOR_FLOPS, LOCATED_MARGIN, MAX_ROUNDS};
 use std::time::Instant;
@@ -55,15 +58,15 @@ pub fn solve(
     p: &ContactProblem,
     reduced: &mut ReducedSystem,
     s: &NewtonSettings,
-    warm: Option<&WarmStart>,
+    (session, warm): (&mut Session, Option<&WarmStart>),
 ) -> Result<Condensed, RunError> {
-    solve_keeping(ctx, p, reduced, s, warm, (1, true, None)).map(|(c, _)| c)
+    solve_keeping(ctx, p, reduced, s, (session, warm), (1, true, None)).map(|(c, _)| c)
 }
 
 /// [`solve`] with `per` Schur variables per candidate (1: the normal dof; d: every dof, for
 /// friction); with `per` > 1 a converged solve also returns what it [`Kept`] (with `per` = 1
-/// it leaves it in `p.kept` for the next load step). A load step (`warm`) starts from the
-/// previous step's factorisation where it holds ([`reused`]). Without `steps`
+/// it leaves it in `session.kept` for the next load step). A load step (`warm`) starts from
+/// the previous step's factorisation where it holds ([`reused`]). Without `steps`
 /// it stops after the first factorisation (`Factorised`; the start set and λ = 0 kept: a load
 /// step of a friction solve starts from its warm start instead). With `stick` (friction,
 /// `per` > 1) a zone too wide for every dof of its nodes has its interior held on the obstacle
@@ -74,47 +77,30 @@ pub(crate) fn solve_keeping(
     p: &ContactProblem,
     reduced: &mut ReducedSystem,
     s: &NewtonSettings,
-    warm: Option<&WarmStart>,
+    (session, warm): (&mut Session, Option<&WarmStart>),
     (per, steps, stick): (usize, bool, Option<Sticking>),
 ) -> Result<(Condensed, Option<Kept>), RunError> {
-    let fall = |c: Condensed| Ok((c, None));
     let (b, dim) = (p.boundary, p.mesh.dim);
-    let mut summary = CondensedSummary::new(b.n_global);
+    let summary = CondensedSummary::new(b.n_global);
     let free0 = FreeModes::new(ctx, p.mesh, p.layout, p.fixed, b, &reduced.f_local, s.rigid);
     refuse_floating_force(p, s, &free0)?;
     let start = start_set(p, s, &free0, warm);
-    let located = locate(ctx, p, s, &free0, warm)?;
+    let located = locate(ctx, (p, &mut session.located), s, &free0, warm)?;
     let key = located.as_ref().map(|(k, _)| k.as_slice());
     let n_rows = p.layout.node_offsets.last().copied().unwrap_or(0) * dim;
-    let shape = Shape { dim, n_rows };
-    let nested = warm.is_none() && s.section.init == NewtonInit::Auto;
-    let splits = splits_zones(p, s, warm, (per, steps, stick.is_some()));
+    let splits = splits_zones(&session.kept, s, warm, (per, steps, stick.is_some()));
     let sticking = stick.unwrap_or_default();
     // every contact node as the case starts (the zones' positions and order keys), gathered
     // once
     let all0 = splits.then(|| Candidates::gather(ctx, b, &free0, &start, key));
     // friction: a zone is held only where every dof of its nodes is too many for the dense
     // limits (below)
-    let mut zone = match per {
+    let zone = match per {
         1 => predicted_zone(all0.as_ref(), &located, per),
         _ => sticking.zone.filter(|_| splits).map(<[bool]>::to_vec),
     };
-    // a zone held sticking holds every rigid mode: no load is left for the contact to carry
-    let held_sticking = NewtonSettings {
-        carried: None,
-        ..*s
-    };
-    let given = s;
-    let mut order_kept = p.kept.take_order(); // a load step after a held zone's
-    let mut rounds = 0;
-    let mut history: Vec<StepInfo> = Vec::new();
-    'pass: loop {
-        let s = match per > 1 && zone.is_some() {
-            true => &held_sticking,
-            false => given,
-        };
-        let zoned = zone.as_deref();
-        let at = SolveStart {
+    let passes = Passes {
+        at: SolveStart {
             p,
             warm,
             free0: &free0,
@@ -122,92 +108,219 @@ pub(crate) fn solve_keeping(
             start: &start,
             located: &located,
             per,
+        },
+        given: s,
+        shape: Shape { dim, n_rows },
+        nested: warm.is_none() && s.section.init == NewtonInit::Auto,
+        splits,
+        steps,
+        sticking,
+    };
+    passes.run(ctx, (reduced, &mut session.kept), zone, summary)
+}
+
+/// What every pass of one condensed solve shares: its start, the settings asked for, the
+/// shape of the system, whether its first round runs nested, whether zones may be held, whether
+/// it runs the frictionless steps, and the sticking zone's settings.
+struct Passes<'a> {
+    at: SolveStart<'a>,
+    given: &'a NewtonSettings<'a>,
+    shape: Shape,
+    nested: bool,
+    splits: bool,
+    steps: bool,
+    sticking: Sticking<'a>,
+}
+
+/// How a pass ends.
+enum PassEnd {
+    /// The solve's outcome, with what a friction solve keeps.
+    Done(Box<(Condensed, Option<Kept>)>),
+    /// A new pass holding a zone, with the node order of the pass before.
+    Next(Vec<bool>, Option<Vec<usize>>, CondensedSummary),
+    /// No rounds left.
+    Exhausted(CondensedSummary),
+}
+
+/// How a round's dense steps end ([`Passes::dense_round`]).
+enum RoundEnd {
+    /// Another round on these candidates (the dense set asks it, or the candidates grew).
+    Again,
+    /// The condensed path stops for the plain path.
+    Stop(Stop),
+    Fall(String),
+    /// The final set, with the expanded iterate and the candidates' multipliers.
+    Settled(Box<Expanded>, Vec<f64>),
+    /// A new pass holding this zone, with the node order of this one.
+    Pass(Vec<bool>, Option<Vec<usize>>),
+}
+
+/// The rounds and the step history of a solve's passes so far.
+#[derive(Default)]
+struct Done {
+    rounds: usize,
+    history: Vec<StepInfo>,
+}
+
+impl Passes<'_> {
+    /// The passes of a solve from the predicted `zone` (or none), each begun anew (K_p with
+    /// its held zone, [`begin_pass`]) until one ends the solve. `kept`: the previous load
+    /// step's factorisation (taken where a load step starts), this solve's left for the next.
+    /// Collective.
+    fn run(
+        &self,
+        ctx: &Ctx,
+        (reduced, kept): (&mut ReducedSystem, &mut KeptFactor),
+        mut zone: Option<Vec<bool>>,
+        mut summary: CondensedSummary,
+    ) -> Result<(Condensed, Option<Kept>), RunError> {
+        // a zone held sticking holds every rigid mode: no load is left for the contact to carry
+        let held_sticking = NewtonSettings {
+            carried: None,
+            ..*self.given
         };
-        let plan = PassPlan {
-            zone: zoned,
-            order: order_kept.take(),
-            sticking,
-        };
-        let mut pass = begin_pass(ctx, &at, reduced, plan, &mut summary)?;
-        for round in 1..=MAX_ROUNDS {
-            rounds += 1;
-            if rounds > MAX_ROUNDS {
-                break 'pass;
+        let mut order = kept.take_order(); // a load step after a held zone's
+        let mut done = Done::default();
+        loop {
+            let s = match self.at.per > 1 && zone.is_some() {
+                true => &held_sticking,
+                false => self.given,
+            };
+            let plan = PassPlan {
+                zone: zone.as_deref(),
+                order: order.take(),
+                sticking: self.sticking,
+            };
+            let pass = begin_pass(ctx, &self.at, (reduced, kept), plan, &mut summary)?;
+            match self.rounds(
+                ctx,
+                (reduced, kept),
+                pass,
+                (s, zone.as_ref()),
+                &mut done,
+                summary,
+            )? {
+                PassEnd::Done(done) => return Ok(*done),
+                PassEnd::Next(z, o, sm) => (zone, order, summary) = (Some(z), o, sm),
+                PassEnd::Exhausted(sm) => {
+                    let why = format!("no final set in {MAX_ROUNDS} rounds of candidates");
+                    return Ok((fallback(ctx, sm, why), None));
+                }
             }
-            let grown = factorise_round(ctx, reduced, &mut pass, &mut summary, round, &shape);
+        }
+    }
+
+    /// The rounds of one pass: factorise (the candidates grown), then the dense steps and
+    /// their expansion ([`Passes::dense_round`]), until the pass ends. Collective.
+    fn rounds(
+        &self,
+        ctx: &Ctx,
+        (reduced, kept): (&mut ReducedSystem, &mut KeptFactor),
+        mut pass: Pass,
+        (s, zone): (&NewtonSettings, Option<&Vec<bool>>),
+        done: &mut Done,
+        mut summary: CondensedSummary,
+    ) -> Result<PassEnd, RunError> {
+        let fall = |c: Condensed| Ok(PassEnd::Done(Box::new((c, None))));
+        for round in 1..=MAX_ROUNDS {
+            done.rounds += 1;
+            if done.rounds > MAX_ROUNDS {
+                break;
+            }
+            let grown = factorise_round(ctx, reduced, &mut pass, &mut summary, round, &self.shape);
             if let Err(stop) = grown {
-                let to_hold = stop.too_wide && per > 1 && splits && zone.is_none();
+                let to_hold = stop.too_wide && self.at.per > 1 && self.splits && zone.is_none();
                 let active = &pass.growth.active;
-                let instead = || hold_instead(ctx, &stop, &at, active);
+                let instead = || hold_instead(ctx, &stop, &self.at, active);
                 if let Some(z) = to_hold.then(instead).flatten() {
-                    zone = Some(z);
-                    continue 'pass;
+                    return Ok(PassEnd::Next(z, None, summary));
                 }
                 return fall(fallback_stop(ctx, summary, stop));
             }
-            if !steps {
+            if !self.steps {
                 summary.outcome = "factorised";
                 let n = pass.cand.n;
-                let kept = pass.keep(vec![0.0; n], zone);
-                return Ok((Condensed::Factorised(summary), Some(kept)));
+                let kept = pass.keep(vec![0.0; n], zone.cloned());
+                let factorised = (Condensed::Factorised(summary), Some(kept));
+                return Ok(PassEnd::Done(Box::new(factorised)));
             }
-
-            let first = nested && rounds == 1;
-            let on = located.as_ref().map(|(_, on)| *on);
-            let on = on.filter(|_| zone.is_none());
-            let run = pass.dense(ctx, s, (first, on), (&mut summary, &mut history));
-            let (cand, comp, free, growth) =
-                (&pass.cand, &mut pass.comp, &pass.free, &mut pass.growth);
-            let lambda = growth.take_dense(comp, &run);
-            match judge(ctx, p, s, (free, comp, cand.n), growth, &run)? {
-                Judged::Expand => {}
-                Judged::Again => continue,
-                Judged::Stop(stop) => return fall(fallback_stop(ctx, summary, stop)),
-            }
-
-            let t = Instant::now();
-            let set = (lambda.as_slice(), growth.active.as_slice());
-            let expansion = Expansion {
-                s,
-                free,
-                comp,
-                cand,
-                f_root: &pass.f_root,
-                n_local: pass.rhs0.len(),
-            };
-            let ex = match expand(ctx, p, reduced, expansion, set, &run.alpha)? {
-                Ok(ex) => ex,
-                Err(why) => return fall(fallback(ctx, summary, why)),
-            };
-            summary.solves += 2;
-            summary.expansion_seconds += t.elapsed().as_secs_f64();
-            if ex.changed.is_empty() {
-                let n_active = growth.active.iter().filter(|&&a| a).count();
-                summary.log(ctx, cand.n, n_active);
-                let solved = finish(p, reduced, free, ex, history, summary)?;
-                return Ok(keep_solved(p, solved, pass.keep(lambda, zone), per));
-            }
-            if let Some(next) =
-                growth.next_pass(ctx, &ex.changed, (comp.max_flops, comp.per), splits)
-            {
-                let budget = (per > 1).then_some(sticking.factorisations);
-                if budget.is_some_and(|b| b > 0 && summary.factorisations >= b) {
-                    let n = summary.factorisations;
-                    let why = format!("the held zone's set still changes after {n} factorisations");
-                    return fall(fallback(ctx, summary, why));
+            let first = self.nested && done.rounds == 1;
+            let record = (&mut summary, &mut done.history);
+            match self.dense_round(ctx, reduced, &mut pass, (s, zone, round), first, record)? {
+                RoundEnd::Again => {}
+                RoundEnd::Stop(stop) => return fall(fallback_stop(ctx, summary, stop)),
+                RoundEnd::Fall(why) => return fall(fallback(ctx, summary, why)),
+                RoundEnd::Pass(z, order) => return Ok(PassEnd::Next(z, order, summary)),
+                RoundEnd::Settled(ex, lambda) => {
+                    let history = std::mem::take(&mut done.history);
+                    let solved = finish(self.at.p, reduced, &pass.free, *ex, history, summary)?;
+                    let keep = pass.keep(lambda, zone.cloned());
+                    let done = keep_solved(kept, solved, keep, self.at.per);
+                    return Ok(PassEnd::Done(Box::new(done)));
                 }
-                zone = Some(next);
-                order_kept = comp.node_order.take();
-                continue 'pass;
-            }
-            if let Err(why) = growth.widen(ctx, &ex.changed, comp, round) {
-                return fall(fallback(ctx, summary, why));
             }
         }
-        break;
+        Ok(PassEnd::Exhausted(summary))
     }
-    let why = format!("no final set in {MAX_ROUNDS} rounds of candidates");
-    fall(fallback(ctx, summary, why))
+
+    /// A round's dense steps on the factorised candidates (`first`: nested), their judgement,
+    /// the expansion of the iterate and what the nodes that change on it ask: another round
+    /// on more candidates, a new pass, or the plain path. Collective.
+    fn dense_round(
+        &self,
+        ctx: &Ctx,
+        reduced: &mut ReducedSystem,
+        pass: &mut Pass,
+        (s, zone, round): (&NewtonSettings, Option<&Vec<bool>>, usize),
+        first: bool,
+        (summary, history): (&mut CondensedSummary, &mut Vec<StepInfo>),
+    ) -> Result<RoundEnd, RunError> {
+        let on = self.at.located.as_ref().map(|(_, on)| *on);
+        let on = on.filter(|_| zone.is_none());
+        let run = pass.dense(ctx, s, (first, on), (&mut *summary, history));
+        let (cand, comp, free, growth) = (&pass.cand, &mut pass.comp, &pass.free, &mut pass.growth);
+        let lambda = growth.take_dense(comp, &run);
+        match judge(ctx, self.at.p, s, (free, comp, cand.n), growth, &run)? {
+            Judged::Expand => {}
+            Judged::Again => return Ok(RoundEnd::Again),
+            Judged::Stop(stop) => return Ok(RoundEnd::Stop(stop)),
+        }
+        let t = Instant::now();
+        let set = (lambda.as_slice(), growth.active.as_slice());
+        let expansion = Expansion {
+            s,
+            free,
+            comp,
+            cand,
+            f_root: &pass.f_root,
+            n_local: pass.rhs0.len(),
+        };
+        let ex = match expand(ctx, self.at.p, reduced, expansion, set, &run.alpha)? {
+            Ok(ex) => ex,
+            Err(why) => return Ok(RoundEnd::Fall(why)),
+        };
+        summary.solves += 2;
+        summary.expansion_seconds += t.elapsed().as_secs_f64();
+        if ex.changed.is_empty() {
+            let n_active = growth.active.iter().filter(|&&a| a).count();
+            summary.log(ctx, cand.n, n_active);
+            return Ok(RoundEnd::Settled(Box::new(ex), lambda));
+        }
+        let limits = (comp.max_flops, comp.per);
+        if let Some(next) = growth.next_pass(ctx, &ex.changed, limits, self.splits) {
+            let budget = (self.at.per > 1).then_some(self.sticking.factorisations);
+            if budget.is_some_and(|b| b > 0 && summary.factorisations >= b) {
+                let n = summary.factorisations;
+                let why = format!("the held zone's set still changes after {n} factorisations");
+                return Ok(RoundEnd::Fall(why));
+            }
+            return Ok(RoundEnd::Pass(next, comp.node_order.take()));
+        }
+        match growth.widen(ctx, &ex.changed, comp, round) {
+            Ok(()) => Ok(RoundEnd::Again),
+            Err(why) => Ok(RoundEnd::Fall(why)),
+        }
+    }
 }
 
 /// Friction, where every dof of the candidates is too many (`stop`): the zone to hold sticking
@@ -232,11 +345,11 @@ fn hold_instead(ctx: &Ctx, stop: &Stop, at: &SolveStart, grown: &[bool]) -> Opti
 /// written with them, its candidates (the zone's nodes not held start active; else the start
 /// set `start`), the first candidates' count (the zone's band and margin, or the located
 /// zone's margin), and a compliance on the previous load step's factorisation where it holds
-/// ([`reused`]) or a new one with the kept node order `order`. Collective.
+/// ([`reused`], taken from `kept`) or a new one with the kept node order `order`. Collective.
 fn begin_pass(
     ctx: &Ctx,
     at: &SolveStart,
-    reduced: &mut ReducedSystem,
+    (reduced, kept): (&mut ReducedSystem, &mut KeptFactor),
     plan: PassPlan,
     summary: &mut CondensedSummary,
 ) -> Result<Pass, RunError> {
@@ -298,7 +411,7 @@ fn begin_pass(
     }
     let t = Instant::now();
     let (kept, order_dropped) = match warm {
-        Some(_) => reused(ctx, at, (&free, &cand), &f_root, &held),
+        Some(_) => reused(ctx, (at, kept.take()), (&free, &cand), &f_root, &held),
         None => (None, None),
     };
     let mut comp = match kept {

@@ -8,6 +8,7 @@ use crate::error::RunError;
 use crate::par::Ctx;
 use crate::say;
 use crate::signorini::active_set::Iterate;
+use crate::signorini::kept::KeptFactor;
 use crate::signorini::plain_path::{add_motion, ContactProblem, NewtonResult, StepInfo};
 use crate::signorini::rigid::{FreeModes, Motion, Pin};
 use crate::signorini::step_system::ReducedSystem;
@@ -57,9 +58,9 @@ impl Kept {
 }
 
 /// A converged solve's result and what it keeps: with `per` > 1 the kept compliance for the
-/// friction solve; else the factorisation for the next load step (`p.kept`). Local.
+/// friction solve; else the factorisation for the next load step (`store`). Local.
 pub(super) fn keep_solved(
-    p: &ContactProblem,
+    store: &mut KeptFactor,
     solved: Condensed,
     kept: Kept,
     per: usize,
@@ -68,7 +69,7 @@ pub(super) fn keep_solved(
         true => (solved, Some(kept)),
         false => {
             // for the next load step (a held zone's too: its rows' values are in f)
-            p.kept.put(kept);
+            store.put(kept);
             (solved, None)
         }
     }

@@ -173,23 +173,23 @@ pub(super) fn judge(
 /// gaps (the body rolls where friction alone holds a part of the load, `s.carried`) and be
 /// wider than the dense limits. The clearance of this rank's contact nodes after the model's
 /// rigid motion and the nodes it puts in contact ([`halfspace::locate`]), computed once per
-/// solve (`p.located`). Collective.
+/// solve (`located`). Collective.
 pub(super) fn locate(
     ctx: &Ctx,
-    p: &ContactProblem,
+    (p, located): (&ContactProblem, &mut Option<halfspace::Located>),
     s: &NewtonSettings,
     free: &FreeModes,
     warm: Option<&WarmStart>,
 ) -> Result<Option<(Vec<f64>, usize)>, RunError> {
     match (s.model, warm) {
         (Some(hs), None) if free.floats() && free.dirichlet_free().ncols() > 0 => {
-            if let Some(done) = p.located.borrow().as_ref() {
+            if let Some(done) = located.as_ref() {
                 return Ok(done.clone()); // the same body, load and model: located once
             }
             let phi = s.carried.map_or_else(|| free.free_load(), <[f64]>::to_vec);
             let zone =
                 halfspace::locate(ctx, hs, p.boundary, free, &phi, (s.c, s.section.max_steps))?;
-            *p.located.borrow_mut() = Some(zone.clone());
+            *located = Some(zone.clone());
             Ok(zone)
         }
         _ => Ok(None),
@@ -216,7 +216,7 @@ pub(super) fn refuse_floating_force(
     Ok(())
 }
 
-/// A load step's compliance on the previous step's factorisation ([`Kept`], `p.kept`): K_p
+/// A load step's compliance on the previous step's factorisation (`kept`): K_p
 /// is the same matrix in every load step where it holds the same nodes (`held`; their rows'
 /// values, this step's references and gaps, are in f), so where the pins, `per`, the held
 /// nodes and the kept candidates' rows and frames are this step's, only d₀ is new (MUMPS'
@@ -225,13 +225,13 @@ pub(super) fn refuse_floating_force(
 /// all-gathered data: the same on every rank).
 pub(super) fn reused(
     ctx: &Ctx,
-    at: &SolveStart,
+    (at, kept): (&SolveStart, Option<Kept>),
     (free, cand): (&FreeModes, &Candidates),
     f_root: &[f64],
     held: &[bool],
 ) -> (Option<Compliance>, Option<Vec<usize>>) {
-    let (p, per) = (at.p, at.per);
-    let Some(kept) = p.kept.take() else {
+    let per = at.per;
+    let Some(kept) = kept else {
         return (None, None);
     };
     let holding = |h: &[bool]| h.iter().any(|&x| x);

@@ -6,6 +6,7 @@ use crate::error::RunError;
 use crate::par::Ctx;
 use crate::signorini::active_set::{ActiveSet, Law};
 use crate::signorini::halfspace::Located;
+use crate::signorini::kept::KeptFactor;
 use crate::signorini::plain_path::{ContactProblem, NewtonSettings, WarmStart};
 use crate::signorini::rigid::FreeModes;
 use crate::signorini::step_system::ReducedSystem;
@@ -17,12 +18,12 @@ use crate::signorini::step_system::ReducedSystem;
 /// the warm states; a zone is held there only where the candidates grow too wide); not under
 /// force control. Local.
 pub(super) fn splits_zones(
-    p: &ContactProblem,
+    kept: &KeptFactor,
     s: &NewtonSettings,
     warm: Option<&WarmStart>,
     (per, steps, stick): (usize, bool, bool),
 ) -> bool {
-    let kept_allows = warm.is_none() || p.kept.is_empty() || p.kept.holds_zone();
+    let kept_allows = warm.is_none() || kept.is_empty() || kept.holds_zone();
     s.force.is_empty()
         && if per == 1 {
             steps && kept_allows && !s.estimate && s.carried.is_none()

@@ -3,8 +3,8 @@
 //! sizes about 3 : 1), in 2D and 3D, with either side as slave, on 1, 2 and 3 ranks; and the
 //! input errors of a body pair.
 //!
-//! The patch test: the lower block stands on a roller support (u_n = 0 at its bottom), both
-//! blocks on symmetry planes, the upper block's top pushed down by δ. The exact solution is
+//! The patch test: two materials, the lower block on a roller support (u_n = 0 at its bottom),
+//! both blocks on symmetry planes, the upper block's top pushed down by δ. The exact solution is
 //! the uniaxial stress σ_nn = −p in both blocks, p = δ / (H_1/E'_1 + H_2/E'_2), a linear
 //! field that P1 elements reproduce; the dual mortar rows transmit it exactly on
 //! non-matching meshes: every slave node active with pressure p, u the linear field.
@@ -14,8 +14,9 @@ mod common;
 use common::*;
 use std::path::{Path, PathBuf};
 
-const E: f64 = 1.0;
-const NU: f64 = 0.3;
+/// (E, ν) of the lower and the upper block.
+const LOWER: (f64, f64) = (1.0, 0.45);
+const UPPER: (f64, f64) = (3.0, 0.1);
 const DELTA: f64 = 0.01;
 
 /// The mesh of tests/meshes/stack{dim}d.geo with sizes hl (lower) and hu (upper).
@@ -65,9 +66,15 @@ value = ["free", "free", -DELTA]
     let text = format!(
         r#"[mesh]
 file = {mesh}
-[material]
-young = {E:?}
-poisson = {NU:?}
+[[material]]
+group = "lower"
+young = {:?}
+poisson = {:?}
+model = "{model}"
+[[material]]
+group = "upper"
+young = {:?}
+poisson = {:?}
 model = "{model}"
 {supports}
 [contact]
@@ -78,44 +85,72 @@ friction = "none"
 dir = "out"
 fields = ["displacement", "contact"]
 "#,
+        LOWER.0,
+        LOWER.1,
+        UPPER.0,
+        UPPER.1,
         mesh = toml_path(mesh),
         supports = supports.replace("DELTA", &format!("{DELTA:?}")),
     );
     write_case(&dir.join(format!("stack{dim}d_{slave}.toml")), &text)
 }
 
-/// The exact pressure and displacement at x of the patch test (blocks of height 1 each).
-fn exact(dim: usize) -> (f64, impl Fn(&[f64]) -> Vec<f64>) {
-    // plane strain: E' = E / (1 − ν²) along y, lateral ε = ν (1 + ν) p / E; 3D: E, ν p / E
-    let (e_n, lateral) = if dim == 2 {
-        (E / (1.0 - NU * NU), NU * (1.0 + NU) / E)
-    } else {
-        (E, NU / E)
+/// The exact pressure and displacement at x of the patch test (blocks of height 1 each), x in
+/// the upper block or not.
+fn exact(dim: usize) -> (f64, impl Fn(&[f64], bool) -> Vec<f64>) {
+    // the modulus along the load and the lateral strain per unit stress: plane strain
+    // E' = E / (1 − ν²), ν (1 + ν) / E; 3D E, ν / E
+    let moduli = |(e, nu): (f64, f64)| {
+        if dim == 2 {
+            (e / (1.0 - nu * nu), nu * (1.0 + nu) / e)
+        } else {
+            (e, nu / e)
+        }
     };
-    let p = DELTA / (2.0 / e_n);
-    let u = move |x: &[f64]| {
-        let mut u: Vec<f64> = (0..dim - 1).map(|d| lateral * p * x[d]).collect();
-        u.push(-p / e_n * x[dim - 1]);
+    let (lo, up) = (moduli(LOWER), moduli(UPPER));
+    let p = DELTA / (1.0 / lo.0 + 1.0 / up.0);
+    let u = move |x: &[f64], upper: bool| {
+        let lat = if upper { up.1 } else { lo.1 };
+        let mut u: Vec<f64> = (0..dim - 1).map(|d| lat * p * x[d]).collect();
+        let h = x[dim - 1];
+        u.push(match upper {
+            false => -p / lo.0 * h,
+            true => -p / lo.0 - p / up.0 * (h - 1.0),
+        });
         u
     };
     (p, u)
 }
 
-/// Node coordinates of solution.h5 by node id.
-fn coordinates(s: &Solved) -> std::collections::BTreeMap<u64, Vec<f64>> {
+/// Node coordinates of solution.h5 by node id, with whether the node is the upper block's
+/// (a node of a cell whose centroid lies above the interface).
+fn coordinates(s: &Solved) -> std::collections::BTreeMap<u64, (Vec<f64>, bool)> {
     let v = python_json(
         r#"
-import sys, json, h5py
+import sys, json, h5py, numpy as np
 f = h5py.File(sys.argv[1], "r")
-print("RESULT " + json.dumps({"ids": f["mesh/node_id"][:].tolist(), "x": f["mesh/geometry"][:].tolist()}))
+x = f["mesh/geometry"][:]
+cells = f["mesh/topology"][:]
+dim = cells.shape[1] - 1
+upper = np.zeros(len(x), dtype=bool)
+for c in cells:
+    if x[c, dim - 1].mean() > 1.0:
+        upper[c] = True
+print("RESULT " + json.dumps({"ids": f["mesh/node_id"][:].tolist(), "x": x.tolist(), "upper": upper.tolist()}))
 "#,
         &[&s.dir.join("solution.h5")],
     );
     let ids = v["ids"].as_array().expect("ids");
     let xs = v["x"].as_array().expect("x");
+    let up = v["upper"].as_array().expect("upper");
     ids.iter()
-        .zip(xs)
-        .map(|(i, x)| (i.as_u64().expect("id"), floats(x)))
+        .zip(xs.iter().zip(up))
+        .map(|(i, (x, u))| {
+            (
+                i.as_u64().expect("id"),
+                (floats(x), u.as_bool().expect("bool")),
+            )
+        })
         .collect()
 }
 
@@ -138,8 +173,8 @@ fn check_patch(s: &Solved, dim: usize, what: &str) {
     let u = s.displacement();
     let scale = DELTA;
     let mut worst = 0.0f64;
-    for (id, xi) in &x {
-        let ue = u_exact(xi);
+    for (id, (xi, upper)) in &x {
+        let ue = u_exact(xi, *upper);
         for d in 0..dim {
             worst = worst.max((u[id][d] - ue[d]).abs() / scale);
         }

@@ -247,6 +247,14 @@ fn a_body_pair_that_cannot_be_set_up_is_refused_with_its_key() {
         "contact.obstacle.group",
         "one side of body contact only",
     );
+    // a motion of its own
+    let ok = stack_case(d, &mesh, 2, ("upper_bottom", "lower_top"));
+    let m = std::fs::read_to_string(&ok).expect("case").replace(
+        "friction = \"none\"",
+        "friction = \"none\"\nmotion = [0.0, -0.01]",
+    );
+    let moved = write_case(&d.join("moved.toml"), &m);
+    refused(1, &moved, "contact.motion", "no motion or force of its own");
     // two groups that do not face each other within the slave group's size
     let c = stack_case(d, &mesh, 2, ("lower_right", "top"));
     refused(1, &c, "contact.obstacle.group", "must face each other");

@@ -140,6 +140,15 @@ fn check_pairs(mesh: &Mesh, settings: &ContactSettings, pairs: &[usize]) -> Resu
             )
             .with_key(key));
         }
+        if pair.motion.is_some() || pair.force.is_some() {
+            let which = if pair.motion.is_some() { "motion" } else { "force" };
+            return Err(InputError::new(
+                &settings.file,
+                "a body pair has no motion or force of its own: move a body by its Dirichlet \
+                 data or its loads",
+            )
+            .with_key(pair.key(which)));
+        }
         if master == pair.group {
             return Err(InputError::new(
                 &settings.file,

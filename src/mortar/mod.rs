@@ -72,7 +72,7 @@ pub fn set_up(
     let mut rows_of = Vec::new();
     for &p in &body_pairs {
         let rows = ctx.agree(
-            pair_rows(mesh, layout, settings, p, (&masters, reach.radius[p]))
+            pair_rows(mesh, layout, settings, p, (&masters, reach.radius[p], fixed))
                 .map_err(RunError::Input),
         )?;
         let rows = keep_contact_nodes(mesh, rows, fixed, friction);
@@ -169,7 +169,7 @@ fn pair_rows(
     layout: &Layout,
     settings: &ContactSettings,
     p: usize,
-    (masters, radius): (&MasterFacets, f64),
+    (masters, radius, fixed): (&MasterFacets, f64, &[f64]),
 ) -> Result<HashMap<usize, SlaveRow>, InputError> {
     let pair = &settings.pairs[p];
     let dim = mesh.dim;
@@ -193,7 +193,8 @@ fn pair_rows(
         search_radius: radius,
         max_normal_dot: Some(0.0),
     };
-    let mortar = assemble_with_normals(&slave, &master, &slave.nodal_normals(), &opts)
+    let normals = symmetry_normals(&slave, fixed, dim);
+    let mortar = assemble_with_normals(&slave, &master, &normals, &opts)
         .map_err(|e| bad(format!("mortar integrals: {e}")))?;
     let mut rows = HashMap::new();
     for r in mortar.rows {
@@ -211,6 +212,34 @@ fn pair_rows(
         );
     }
     Ok(rows)
+}
+
+/// The slave nodal normals (averaged facet normals), those of nodes with Dirichlet-fixed
+/// components turned into the plane of their free ones: a slave group that ends on a symmetry
+/// plane has there the normal of the mirrored surface (in the plane), not its last facet's,
+/// tilted by about h / (2R) on a curved surface, so the node stays a contact node (a symmetry
+/// row, [`keep_contact_nodes`]). Local.
+fn symmetry_normals(slave: &Surface, fixed: &[f64], dim: usize) -> Vec<[f64; 3]> {
+    let mut normals = slave.nodal_normals();
+    for (n, &v) in normals.iter_mut().zip(slave.ids()) {
+        let fx = &fixed[v * dim..(v + 1) * dim];
+        if fx.iter().all(|x| x.is_nan()) {
+            continue;
+        }
+        let mut m = *n;
+        for (d, x) in fx.iter().enumerate() {
+            if !x.is_nan() {
+                m[d] = 0.0;
+            }
+        }
+        let len = m.iter().map(|x| x * x).sum::<f64>().sqrt();
+        // a node whose normal lies along its fixed components stays as it is (left to its
+        // Dirichlet data by keep_contact_nodes)
+        if len > 0.5 {
+            *n = m.map(|x| x / len);
+        }
+    }
+    normals
 }
 
 /// The slave rows that become contact nodes: a node with a Dirichlet-fixed component is left

@@ -269,6 +269,8 @@ pub fn check_case(ctx: &Ctx, case: &Case) -> Result<(), RunError> {
     }
     if let Some(settings) = &p.contact {
         let mut settings = settings.clone();
+        // the body pairs' rows (their change of basis itself is not needed here)
+        crate::mortar::set_up(ctx, mesh, &p.layout, &mut settings, &problem.fixed)?;
         let first = case.load.as_ref().and_then(|l| l.factors.first().copied());
         settings.at_factor(first.unwrap_or(1.0));
         let (b, warned) =

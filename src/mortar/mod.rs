@@ -72,8 +72,14 @@ pub fn set_up(
     let mut rows_of = Vec::new();
     for &p in &body_pairs {
         let rows = ctx.agree(
-            pair_rows(mesh, layout, settings, p, (&masters, reach.radius[p], fixed))
-                .map_err(RunError::Input),
+            pair_rows(
+                mesh,
+                layout,
+                settings,
+                p,
+                (&masters, reach.radius[p], fixed),
+            )
+            .map_err(RunError::Input),
         )?;
         let rows = keep_contact_nodes(mesh, rows, fixed, friction);
         let covered = ctx.sum_usize(rows.len());
@@ -141,7 +147,11 @@ fn check_pairs(mesh: &Mesh, settings: &ContactSettings, pairs: &[usize]) -> Resu
             .with_key(key));
         }
         if pair.motion.is_some() || pair.force.is_some() {
-            let which = if pair.motion.is_some() { "motion" } else { "force" };
+            let which = if pair.motion.is_some() {
+                "motion"
+            } else {
+                "force"
+            };
             return Err(InputError::new(
                 &settings.file,
                 "a body pair has no motion or force of its own: move a body by its Dirichlet \

@@ -278,3 +278,10 @@ impl Reader<'_> {
         })
     }
 }
+
+impl Case {
+    /// An input error at `solver.path = "schur"`, which cannot run because `why`.
+    pub fn schur_path_refused(&self, why: &str) -> InputError {
+        self.err_at("solver.path", format!("the Schur path {why}"))
+    }
+}

@@ -1,11 +1,9 @@
 //! `[solver]` and `[newton]`.
 
 use super::contact::{ContactSection, CoulombAlgorithm, Friction};
-use super::file::Case;
 use super::keys;
 use super::reader::{Reader, Res, Tab};
 use super::tree::Kind;
-use crate::error::InputError;
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Preset {
@@ -231,18 +229,6 @@ impl Default for NewtonSection {
             tol_u: 1e-10,
             strict: false,
         }
-    }
-}
-
-impl Case {
-    /// An input error at the key that asked for the Schur path (`solver.path`, or
-    /// `solver.reuse = "condensed"`), which cannot run because `why`.
-    pub fn schur_path_refused(&self, why: &str) -> InputError {
-        let key = match self.locs.contains_key("solver.path") {
-            true => "solver.path",
-            false => "solver.reuse",
-        };
-        self.err_at(key, format!("the Schur path {why}"))
     }
 }
 

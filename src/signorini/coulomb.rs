@@ -273,8 +273,13 @@ fn coulomb_start(
         }
         return coulomb_load_step(ctx, problem, reduced, (ns, &fl), w);
     }
-    let (mut nr, summary) = match coulomb_passes(ctx, problem, reduced, (ns, &fl), (forced, from))?
-    {
+    let settings = PassSettings {
+        ns,
+        fl: &fl,
+        forced,
+        from,
+    };
+    let (mut nr, summary) = match coulomb_passes(ctx, problem, reduced, &settings)? {
         Passes::Done(begin, summary) => return Ok((begin, summary)),
         Passes::Frictionless(nr, summary) => (nr, summary),
     };
@@ -297,106 +302,192 @@ enum Passes {
     Frictionless(NewtonResult, schur::CondensedSummary),
 }
 
+/// The settings of a Coulomb start's condensed passes ([`coulomb_passes`]): Coulomb's (`ns`)
+/// and the frictionless solve's (`fl`); `forced`: force control on a body that only its pairs
+/// hold (the frictionless solution alone); `from`: the start said where there is none.
+struct PassSettings<'a, 's> {
+    ns: &'a NewtonSettings<'s>,
+    fl: &'a NewtonSettings<'s>,
+    forced: bool,
+    from: &'a str,
+}
+
+/// The expanded iterate of a condensed Coulomb pass that a next pass continues: its record,
+/// this rank's rows of u and the pass' summary; the plain path's start where the next pass
+/// finds no frictionless solution.
+struct LastPass {
+    r: NewtonResult,
+    u: Vec<f64>,
+    cs: CoulombCondensedSummary,
+}
+
+/// A pass' frictionless solution with the factorisation it keeps.
+struct FrictionlessStart {
+    nr: NewtonResult,
+    summary: schur::CondensedSummary,
+    kept: Option<schur::Kept>,
+}
+
+/// How a condensed Coulomb pass ends: the passes' outcome, or a next pass from its expanded
+/// iterate.
+enum PassEnd {
+    Done(Passes),
+    Again(LastPass),
+}
+
 /// [`coulomb_start`] on the condensed path: the frictionless solution by the condensed path
 /// (`fl`; every dof of the candidates in the Schur complement, or, where the zone is too wide
 /// for that, its interior held sticking in K_p), then Coulomb's iteration on its candidates
 /// (schur::coulomb). Where a held zone's check finds nodes beyond the candidates changing
 /// state, a new pass takes them as candidates (at most [`MAX_STICK_FACTORISATIONS`]
-/// factorisations in all, while fewer change each pass). `forced`: force control on a body
-/// that only its pairs hold (the frictionless solution alone); `from`: the start said where
-/// there is none. Collective.
+/// factorisations in all, while fewer change each pass). Collective.
 fn coulomb_passes(
     ctx: &Ctx,
     problem: &ContactProblem,
     reduced: &mut ReducedSystem,
-    (ns, fl): (&NewtonSettings, &NewtonSettings),
-    (forced, from): (bool, &str),
+    s: &PassSettings,
 ) -> Result<Passes, RunError> {
-    let dim = problem.mesh.dim;
     // errors are agreed: every rank takes the same branch
     // the Coulomb iteration on the candidates needs every dof of them, the plain path none
-    let per = if forced { 1 } else { dim };
-    let too_wide = |t: &Result<_, RunError>| {
-        let fell = |s: &schur::CondensedSummary| s.factorisations == 0;
-        matches!(t, Ok((schur::Condensed::Fallback(s), _)) if fell(s))
-    };
+    let per = if s.forced { 1 } else { problem.mesh.dim };
     // where the zone is too wide for every dof of its nodes: the nodes a held zone releases
     let mut passes = PassLoop::new(Vec::new(), Vec::new());
     // the expanded iterate of the last pass: the plain path's start where the next one fails
-    let mut last: Option<(NewtonResult, Vec<f64>, CoulombCondensedSummary)> = None;
+    let mut last: Option<LastPass> = None;
     loop {
         // too many candidates' dofs for the dense tangential compliance: the predicted zone's
         // interior held sticking, the dense steps on its edge and beyond (schur/frictionless.rs)
         let held = (per > 1).then(|| passes.start_sticking());
-        let mut tried = solve_keeping(ctx, problem, reduced, fl, None, (per, true, held));
+        let tried = solve_keeping(ctx, problem, reduced, s.fl, None, (per, true, held));
         if let Some(last) = last.take() {
             if let Some(done) = from_last_pass(ctx, problem, &tried, last, passes.earlier) {
                 return Ok(done);
             }
         }
-        if per > 1 && too_wide(&tried) {
-            // no zone to hold: the candidates' normal dofs alone
-            say!(
-                ctx,
-                "coulomb: the candidates' normal dofs alone in the Schur complement"
-            );
-            tried = solve_keeping(ctx, problem, reduced, fl, None, (1, true, None));
-        }
+        let tried = normal_dofs_if_too_wide(ctx, problem, reduced, s.fl, per, tried);
         // a frictionless solve on the normal dofs alone keeps its factorisation for a next
         // load step, which no Coulomb step can use
         drop(problem.kept.take());
-        let (mut nr, mut summary, kept) = match tried {
-            Ok((schur::Condensed::Solved(nr, s), kept)) => (*nr, s, kept),
-            Ok((schur::Condensed::Fallback(s), _)) | Ok((schur::Condensed::Factorised(s), _)) => {
-                say!(ctx, "coulomb: no frictionless start; starting from {from}");
-                return Ok(Passes::Done(Begin::Touching, Some(s)));
-            }
-            Err(RunError::Failed(why)) => {
-                say!(
-                    ctx,
-                    "coulomb: no frictionless start ({why}); starting from {from}"
-                );
-                return Ok(Passes::Done(Begin::Touching, None));
-            }
-            Err(e) => return Err(e),
+        let start = match frictionless_solution(ctx, tried, s.from, passes.earlier)? {
+            Ok(start) => start,
+            Err(done) => return Ok(done),
         };
-        summary.factorisations += passes.earlier;
-        let active = ctx.sum_usize(nr.nodes.iter().filter(|r| r.active).count());
+        if s.forced || start.kept.is_none() {
+            return Ok(Passes::Frictionless(start.nr, start.summary));
+        }
+        match coulomb_pass(ctx, problem, reduced, s.ns, &mut passes, start)? {
+            PassEnd::Done(done) => return Ok(done),
+            PassEnd::Again(l) => last = Some(l),
+        }
+    }
+}
+
+/// A frictionless attempt `tried` on every dof of the candidates that found the zone too wide
+/// for them (no factorisation): the attempt again with the candidates' normal dofs alone in
+/// the Schur complement; else `tried` itself. Collective.
+fn normal_dofs_if_too_wide(
+    ctx: &Ctx,
+    problem: &ContactProblem,
+    reduced: &mut ReducedSystem,
+    fl: &NewtonSettings,
+    per: usize,
+    tried: Result<(schur::Condensed, Option<schur::Kept>), RunError>,
+) -> Result<(schur::Condensed, Option<schur::Kept>), RunError> {
+    let fell = |s: &schur::CondensedSummary| s.factorisations == 0;
+    let too_wide = matches!(&tried, Ok((schur::Condensed::Fallback(s), _)) if fell(s));
+    if per > 1 && too_wide {
+        // no zone to hold: the candidates' normal dofs alone
         say!(
             ctx,
-            "coulomb: the frictionless solution: {} steps, {active} active nodes",
-            nr.steps
+            "coulomb: the candidates' normal dofs alone in the Schur complement"
         );
-        let Some(mut kept) = kept.filter(|_| !forced) else {
-            return Ok(Passes::Frictionless(nr, summary));
-        };
-        let first = std::mem::take(&mut nr.history);
-        let joined = |mut r: NewtonResult| {
-            after(first.clone(), &mut r);
-            r
-        };
-        match schur::coulomb::solve(ctx, problem, reduced, ns, &mut kept, None)? {
-            schur::CoulombCondensed::Solved(r, cs) => {
-                summary.coulomb = Some(cs);
-                // for the next load step (a held zone's too: its rows' values are in f)
-                problem.kept.put(kept);
-                return Ok(Passes::Done(Begin::Solved(joined(*r)), Some(summary)));
+        return solve_keeping(ctx, problem, reduced, fl, None, (1, true, None));
+    }
+    tried
+}
+
+/// The frictionless solution of a pass' attempt `tried` (its factorisations counted after the
+/// `earlier` passes'), or the passes' end where there is none (the start from `from`).
+/// Collective (log).
+fn frictionless_solution(
+    ctx: &Ctx,
+    tried: Result<(schur::Condensed, Option<schur::Kept>), RunError>,
+    from: &str,
+    earlier: usize,
+) -> Result<Result<FrictionlessStart, Passes>, RunError> {
+    let (nr, mut summary, kept) = match tried {
+        Ok((schur::Condensed::Solved(nr, s), kept)) => (*nr, s, kept),
+        Ok((schur::Condensed::Fallback(s), _)) | Ok((schur::Condensed::Factorised(s), _)) => {
+            say!(ctx, "coulomb: no frictionless start; starting from {from}");
+            return Ok(Err(Passes::Done(Begin::Touching, Some(s))));
+        }
+        Err(RunError::Failed(why)) => {
+            say!(
+                ctx,
+                "coulomb: no frictionless start ({why}); starting from {from}"
+            );
+            return Ok(Err(Passes::Done(Begin::Touching, None)));
+        }
+        Err(e) => return Err(e),
+    };
+    summary.factorisations += earlier;
+    let active = ctx.sum_usize(nr.nodes.iter().filter(|r| r.active).count());
+    say!(
+        ctx,
+        "coulomb: the frictionless solution: {} steps, {active} active nodes",
+        nr.steps
+    );
+    Ok(Ok(FrictionlessStart { nr, summary, kept }))
+}
+
+/// Coulomb's condensed iteration on the candidates of a pass' frictionless solution `start`
+/// (which keeps its factorisation): solved, a start for the plain path, the frictionless
+/// solution where it gave up, or a next pass where nodes beyond the candidates change state
+/// and `passes` goes on. Collective.
+fn coulomb_pass(
+    ctx: &Ctx,
+    problem: &ContactProblem,
+    reduced: &mut ReducedSystem,
+    ns: &NewtonSettings,
+    passes: &mut PassLoop,
+    start: FrictionlessStart,
+) -> Result<PassEnd, RunError> {
+    let FrictionlessStart {
+        mut nr,
+        mut summary,
+        kept,
+    } = start;
+    let Some(mut kept) = kept else {
+        return Ok(PassEnd::Done(Passes::Frictionless(nr, summary)));
+    };
+    let first = std::mem::take(&mut nr.history);
+    let joined = |mut r: NewtonResult| {
+        after(first.clone(), &mut r);
+        r
+    };
+    match schur::coulomb::solve(ctx, problem, reduced, ns, &mut kept, None)? {
+        schur::CoulombCondensed::Solved(r, cs) => {
+            summary.coulomb = Some(cs);
+            // for the next load step (a held zone's too: its rows' values are in f)
+            problem.kept.put(kept);
+            let done = Passes::Done(Begin::Solved(joined(*r)), Some(summary));
+            Ok(PassEnd::Done(done))
+        }
+        schur::CoulombCondensed::Start(r, u, cs, beyond) => {
+            if passes.goes_on(&beyond, summary.factorisations) {
+                passes.next(ctx, problem, &mut kept, &beyond, summary.factorisations);
+                let r = joined(*r);
+                return Ok(PassEnd::Again(LastPass { r, u, cs }));
             }
-            schur::CoulombCondensed::Start(r, u, cs, beyond) => {
-                if passes.goes_on(&beyond, summary.factorisations) {
-                    passes.next(ctx, problem, &mut kept, &beyond, summary.factorisations);
-                    last = Some((joined(*r), u, cs));
-                    continue;
-                }
-                say!(ctx, "coulomb: the plain path from the expanded iterate");
-                summary.coulomb = Some(cs);
-                return Ok(Passes::Done(Begin::Start(joined(*r), u), Some(summary)));
-            }
-            schur::CoulombCondensed::Fallback(cs) => {
-                summary.coulomb = Some(cs);
-                nr.history = first;
-                return Ok(Passes::Frictionless(nr, summary));
-            }
+            say!(ctx, "coulomb: the plain path from the expanded iterate");
+            summary.coulomb = Some(cs);
+            let done = Passes::Done(Begin::Start(joined(*r), u), Some(summary));
+            Ok(PassEnd::Done(done))
+        }
+        schur::CoulombCondensed::Fallback(cs) => {
+            summary.coulomb = Some(cs);
+            nr.history = first;
+            Ok(PassEnd::Done(Passes::Frictionless(nr, summary)))
         }
     }
 }
@@ -409,9 +500,10 @@ fn from_last_pass(
     ctx: &Ctx,
     problem: &ContactProblem,
     tried: &Result<(schur::Condensed, Option<schur::Kept>), RunError>,
-    (r, u, cs): (NewtonResult, Vec<f64>, CoulombCondensedSummary),
+    last: LastPass,
     earlier: usize,
 ) -> Option<Passes> {
+    let LastPass { r, u, cs } = last;
     let mut summary = match tried {
         Ok((schur::Condensed::Fallback(s), _)) | Ok((schur::Condensed::Factorised(s), _)) => {
             s.clone()

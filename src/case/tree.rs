@@ -236,73 +236,76 @@ pub(crate) fn apply_override(root: &mut Node, spec: &str) -> Result<(), (String,
     let value = parse_override_value(raw);
     let mut cur = root;
     let mut shown = String::new();
-    let last = segs.len() - 1;
-    for (i, seg) in segs.iter().enumerate() {
-        let is_last = i == last;
-        let type_name = cur.type_name();
-        // A container created on the way is an array if the next component is an index.
-        let fresh = || match segs.get(i + 1).map(|s| s.parse::<usize>()) {
-            Some(Ok(_)) => Node::new(Kind::Array(Vec::new()), Loc::Set),
-            _ => Node::empty_table(Loc::Set),
-        };
-        cur = match &mut cur.kind {
-            Kind::Table(entries) => {
-                shown = join_key(&shown, seg);
-                let pos = match entries.iter().position(|(k, _)| k == seg) {
-                    Some(p) => p,
-                    None => {
-                        entries.push((seg.to_string(), fresh()));
-                        entries.len() - 1
-                    }
-                };
-                let slot = &mut entries[pos].1;
-                if is_last {
-                    *slot = value;
-                    return Ok(());
+    for i in 0..segs.len() {
+        cur = override_slot(cur, &segs, i, &mut shown)?;
+        if i == segs.len() - 1 {
+            *cur = value;
+            return Ok(());
+        }
+    }
+    Ok(())
+}
+
+/// The slot that component `i` of the `--set` key path `segs` names inside `cur`, created
+/// where missing (a container created on the way is an array if the next component is an
+/// index); `shown`, the key path as far as understood, takes the component. Errors return
+/// (key path as far as understood, message).
+fn override_slot<'n>(
+    cur: &'n mut Node,
+    segs: &[&str],
+    i: usize,
+    shown: &mut String,
+) -> Result<&'n mut Node, (String, String)> {
+    let seg = segs[i];
+    let type_name = cur.type_name();
+    let fresh = || match segs.get(i + 1).map(|s| s.parse::<usize>()) {
+        Some(Ok(_)) => Node::new(Kind::Array(Vec::new()), Loc::Set),
+        _ => Node::empty_table(Loc::Set),
+    };
+    match &mut cur.kind {
+        Kind::Table(entries) => {
+            *shown = join_key(shown, seg);
+            let pos = match entries.iter().position(|(k, _)| k == seg) {
+                Some(p) => p,
+                None => {
+                    entries.push((seg.to_string(), fresh()));
+                    entries.len() - 1
                 }
-                slot
-            }
-            Kind::Array(elems) => {
-                let Ok(idx) = seg.parse::<usize>() else {
-                    return Err((
-                        shown.clone(),
-                        format!("is an array; --set needs a numeric index after it, got '{seg}'"),
-                    ));
-                };
-                shown = join_index(&shown, idx);
-                if idx > elems.len() {
-                    return Err((
-                        shown.clone(),
-                        format!(
-                            "index out of range (the array has {} entries; use index {} to append)",
-                            elems.len(),
-                            elems.len()
-                        ),
-                    ));
-                }
-                if idx == elems.len() {
-                    elems.push(fresh());
-                }
-                let slot = &mut elems[idx];
-                if is_last {
-                    *slot = value;
-                    return Ok(());
-                }
-                slot
-            }
-            _ => {
+            };
+            Ok(&mut entries[pos].1)
+        }
+        Kind::Array(elems) => {
+            let Ok(idx) = seg.parse::<usize>() else {
+                return Err((
+                    shown.clone(),
+                    format!("is an array; --set needs a numeric index after it, got '{seg}'"),
+                ));
+            };
+            *shown = join_index(shown, idx);
+            if idx > elems.len() {
                 return Err((
                     shown.clone(),
                     format!(
-                        "is {}, so --set cannot set '{}' inside it",
-                        type_name,
-                        segs[i..].join(".")
+                        "index out of range (the array has {} entries; use index {} to append)",
+                        elems.len(),
+                        elems.len()
                     ),
                 ));
             }
-        };
+            if idx == elems.len() {
+                elems.push(fresh());
+            }
+            Ok(&mut elems[idx])
+        }
+        _ => Err((
+            shown.clone(),
+            format!(
+                "is {}, so --set cannot set '{}' inside it",
+                type_name,
+                segs[i..].join(".")
+            ),
+        )),
     }
-    Ok(())
 }
 
 /// Records the location of every key path in the tree.

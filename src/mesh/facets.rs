@@ -67,22 +67,31 @@ impl Mesh {
         if facets.is_empty() {
             return Ok(());
         }
+        let bad = self
+            .degenerate_facet(&facets)
+            .or_else(|| self.facet_off_boundary(&facets));
+        let Some((f, msg)) = bad else {
+            return Ok(());
+        };
         let what = if self.dim == 2 {
             "line element"
         } else {
             "triangle"
         };
-        let err = |f: usize, msg: String| {
-            InputError::new(
-                file,
-                format!(
-                    "{what} {} of group \"{name}\" (used by {used_as}) {msg}",
-                    self.facet_tags[f]
-                ),
-            )
-        };
+        Err(InputError::new(
+            file,
+            format!(
+                "{what} {} of group \"{name}\" (used by {used_as}) {msg}",
+                self.facet_tags[f]
+            ),
+        ))
+    }
+
+    /// The first of `facets` that is degenerate (zero length in 2D, zero area in 3D, relative
+    /// to the mesh size), with what is wrong with it.
+    fn degenerate_facet(&self, facets: &[usize]) -> Option<(usize, String)> {
         let extent = self.extent();
-        for &f in &facets {
+        for &f in facets {
             let (m, h) = self.facet_measure(f);
             let degenerate = if self.dim == 2 {
                 m <= DEGENERATE * extent
@@ -95,13 +104,44 @@ impl Mesh {
                 } else {
                     ("area", format!("longest edge {h:e}"))
                 };
-                return Err(err(
-                    f,
-                    format!("has zero {kind} ({m:e}, {size}): degenerate boundary facet"),
-                ));
+                let msg = format!("has zero {kind} ({m:e}, {size}): degenerate boundary facet");
+                return Some((f, msg));
             }
         }
-        // Number of body cells that have each facet of the group as a side.
+        None
+    }
+
+    /// The first of `facets` that is not a side of exactly one body cell, with what is wrong
+    /// with it.
+    fn facet_off_boundary(&self, facets: &[usize]) -> Option<(usize, String)> {
+        let sides = self.side_counts(facets);
+        for &f in facets {
+            match sides[&key(self.facet(f))] {
+                1 => {}
+                0 => {
+                    return Some((
+                        f,
+                        "is not a side of any body cell: a load or contact group must consist \
+                         of sides of the body's cells on its boundary"
+                            .into(),
+                    ))
+                }
+                n => {
+                    return Some((
+                        f,
+                        format!(
+                            "is an interior facet (a side of {n} body cells): a load or \
+                             contact group must lie on the boundary of the body"
+                        ),
+                    ))
+                }
+            }
+        }
+        None
+    }
+
+    /// Number of body cells that have each of `facets` as a side (by [`key`]).
+    fn side_counts(&self, facets: &[usize]) -> HashMap<[usize; 3], u32> {
         let mut sides: HashMap<[usize; 3], u32> =
             facets.iter().map(|&f| (key(self.facet(f)), 0)).collect();
         let nc = self.nodes_per_cell();
@@ -121,28 +161,6 @@ impl Mesh {
                 }
             }
         }
-        for &f in &facets {
-            match sides[&key(self.facet(f))] {
-                1 => {}
-                0 => {
-                    return Err(err(
-                        f,
-                        "is not a side of any body cell: a load or contact group must consist \
-                         of sides of the body's cells on its boundary"
-                            .into(),
-                    ))
-                }
-                n => {
-                    return Err(err(
-                        f,
-                        format!(
-                            "is an interior facet (a side of {n} body cells): a load or \
-                             contact group must lie on the boundary of the body"
-                        ),
-                    ))
-                }
-            }
-        }
-        Ok(())
+        sides
     }
 }

@@ -268,7 +268,19 @@ pub(crate) fn scan_header(bytes: &[u8]) -> Result<HeaderInfo, String> {
     }
     let line_start = next_line(bytes, start);
     let line_end = next_line(bytes, line_start);
-    let line = String::from_utf8_lossy(&bytes[line_start..line_end]);
+    read_format_line(&bytes[line_start..line_end], &mut info)?;
+    if info.file_type == 1 {
+        info.little_endian = binary_little_endian(bytes, line_end)?;
+    }
+    let end_fmt = find(bytes, b"$EndMeshFormat", line_end).ok_or("no $EndMeshFormat")?;
+    scan_sections(bytes, next_line(bytes, end_fmt), &mut info)?;
+    Ok(info)
+}
+
+/// The version line of `$MeshFormat` (`line`): version, file type and data size, each
+/// checked.
+fn read_format_line(line: &[u8], info: &mut HeaderInfo) -> Result<(), String> {
+    let line = String::from_utf8_lossy(line);
     let mut tok = line.split_whitespace();
     info.version = tok.next().unwrap_or("").to_string();
     info.file_type = tok.next().and_then(|t| t.parse().ok()).unwrap_or(-1);
@@ -294,23 +306,27 @@ pub(crate) fn scan_header(bytes: &[u8]) -> Result<HeaderInfo, String> {
             line.split_whitespace().nth(2).unwrap_or("")
         ));
     }
-    if info.file_type == 1 {
-        // The endianness check value: int 1 right after the version line.
-        let b = bytes
-            .get(line_end..line_end + 4)
-            .ok_or("truncated $MeshFormat section")?;
-        let le = i32::from_le_bytes([b[0], b[1], b[2], b[3]]);
-        let be = i32::from_be_bytes([b[0], b[1], b[2], b[3]]);
-        if le != 1 && be != 1 {
-            return Err("$MeshFormat: binary file without the endianness check value 1".into());
-        }
-        info.little_endian = be != 1;
+    Ok(())
+}
+
+/// A binary file's byte order, from the endianness check value (int 1) at `at`, right after
+/// the version line.
+fn binary_little_endian(bytes: &[u8], at: usize) -> Result<bool, String> {
+    let b = bytes
+        .get(at..at + 4)
+        .ok_or("truncated $MeshFormat section")?;
+    let le = i32::from_le_bytes([b[0], b[1], b[2], b[3]]);
+    let be = i32::from_be_bytes([b[0], b[1], b[2], b[3]]);
+    if le != 1 && be != 1 {
+        return Err("$MeshFormat: binary file without the endianness check value 1".into());
     }
-    let end_fmt = find(bytes, b"$EndMeshFormat", line_end).ok_or("no $EndMeshFormat")?;
-    let mut pos = next_line(bytes, end_fmt);
+    Ok(be != 1)
+}
+
+/// Walks the sections from `pos` to `$Nodes` (or `$Elements`): they are small
+/// ($PhysicalNames, $Entities, $PartitionedEntities, ...); records what `info` keeps of them.
+fn scan_sections(bytes: &[u8], mut pos: usize, info: &mut HeaderInfo) -> Result<(), String> {
     let mut entities = None;
-    // Walk the sections before $Nodes: they are small ($PhysicalNames, $Entities,
-    // $PartitionedEntities, ...).
     loop {
         pos = skip_ws(bytes, pos);
         if pos >= bytes.len() {
@@ -353,7 +369,7 @@ pub(crate) fn scan_header(bytes: &[u8]) -> Result<HeaderInfo, String> {
         pos = next_line(bytes, end);
     }
     info.entities_offset = entities;
-    Ok(info)
+    Ok(())
 }
 
 /// Parses the body of `$PhysicalNames` (always text): a count, then `dim tag "name"` lines.

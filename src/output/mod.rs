@@ -188,21 +188,14 @@ impl Piece<'_> {
             return Err(format!("dimension must be 2 or 3, got {}", self.dim));
         }
         let n = self.coords.len();
-        if self.node_ids.len() != n {
-            return Err(format!(
-                "{} node ids for {} owned nodes",
-                self.node_ids.len(),
-                n
-            ));
-        }
-        if self.node_offset + n > self.n_nodes_global {
-            return Err(format!(
-                "owned nodes {}..{} exceed the global node count {}",
-                self.node_offset,
-                self.node_offset + n,
-                self.n_nodes_global
-            ));
-        }
+        check_ids(self.node_ids.len(), "node ids", n, "owned nodes")?;
+        check_block(
+            "owned nodes",
+            self.node_offset,
+            n,
+            self.n_nodes_global,
+            "node",
+        )?;
         let m = self.cell_ids.len();
         let npe = self.dim + 1;
         if self.connectivity.len() != m * npe {
@@ -212,14 +205,13 @@ impl Piece<'_> {
                 m
             ));
         }
-        if self.cell_offset + m > self.n_cells_global {
-            return Err(format!(
-                "owned cells {}..{} exceed the global cell count {}",
-                self.cell_offset,
-                self.cell_offset + m,
-                self.n_cells_global
-            ));
-        }
+        check_block(
+            "owned cells",
+            self.cell_offset,
+            m,
+            self.n_cells_global,
+            "cell",
+        )?;
         if let Some(&bad) = self
             .connectivity
             .iter()
@@ -232,54 +224,68 @@ impl Piece<'_> {
         }
         check_fields("nodal", &self.nodal, n, &["node_id"])?;
         check_fields("cell", &self.cellwise, m, &["cell_id"])?;
-        if let Some(c) = &self.contact {
-            let k = c.coords.len();
-            if c.node_ids.len() != k {
-                return Err(format!(
-                    "{} contact node ids for {k} contact nodes",
-                    c.node_ids.len()
-                ));
-            }
-            if c.offset + k > c.n_global {
-                return Err(format!(
-                    "contact nodes {}..{} exceed the global contact count {}",
-                    c.offset,
-                    c.offset + k,
-                    c.n_global
-                ));
-            }
-            let nf = c.facet_ids.len();
-            if c.facets.len() != nf * self.dim {
-                return Err(format!(
-                    "contact facets have {} entries, expected {nf} facets × {}",
-                    c.facets.len(),
-                    self.dim
-                ));
-            }
-            if c.facet_offset + nf > c.n_facets_global {
-                return Err(format!(
-                    "contact facets {}..{} exceed the global facet count {}",
-                    c.facet_offset,
-                    c.facet_offset + nf,
-                    c.n_facets_global
-                ));
-            }
-            if let Some(&bad) = c.facets.iter().find(|&&v| v >= c.n_global) {
-                return Err(format!(
-                    "a contact facet refers to node {bad}, but the contact surface has only {} \
-                     nodes",
-                    c.n_global
-                ));
-            }
-            check_fields(
-                "contact",
-                &c.fields,
-                k,
-                &["node_id", "facet_id", "geometry", "topology"],
-            )?;
+        match &self.contact {
+            Some(c) => c.validate(self.dim),
+            None => Ok(()),
         }
-        Ok(())
     }
+}
+
+impl ContactPiece<'_> {
+    /// Local consistency of this rank's contact surface (`dim`: the mesh's).
+    fn validate(&self, dim: usize) -> Result<(), String> {
+        let k = self.coords.len();
+        check_ids(self.node_ids.len(), "contact node ids", k, "contact nodes")?;
+        check_block("contact nodes", self.offset, k, self.n_global, "contact")?;
+        let nf = self.facet_ids.len();
+        if self.facets.len() != nf * dim {
+            return Err(format!(
+                "contact facets have {} entries, expected {nf} facets × {dim}",
+                self.facets.len(),
+            ));
+        }
+        let facets = self.n_facets_global;
+        check_block("contact facets", self.facet_offset, nf, facets, "facet")?;
+        if let Some(&bad) = self.facets.iter().find(|&&v| v >= self.n_global) {
+            return Err(format!(
+                "a contact facet refers to node {bad}, but the contact surface has only {} \
+                 nodes",
+                self.n_global
+            ));
+        }
+        check_fields(
+            "contact",
+            &self.fields,
+            k,
+            &["node_id", "facet_id", "geometry", "topology"],
+        )
+    }
+}
+
+/// As many ids (`ids` of them, named `what_ids`) as items (`n`, named `what`).
+fn check_ids(ids: usize, what_ids: &str, n: usize, what: &str) -> Result<(), String> {
+    if ids != n {
+        return Err(format!("{ids} {what_ids} for {n} {what}"));
+    }
+    Ok(())
+}
+
+/// An owned block `offset .. offset + count` (of `what`) within the global count `global` (of
+/// `name`s, for the message).
+fn check_block(
+    what: &str,
+    offset: usize,
+    count: usize,
+    global: usize,
+    name: &str,
+) -> Result<(), String> {
+    if offset + count > global {
+        return Err(format!(
+            "{what} {offset}..{} exceed the global {name} count {global}",
+            offset + count
+        ));
+    }
+    Ok(())
 }
 
 /// Field names become HDF5 link names and XML attribute values: keep them plain.
@@ -795,9 +801,7 @@ where
         Ok(())
     };
     if let Err(e) = agree(comm, reserved) {
-        if comm.rank() == 0 {
-            let _ = std::fs::remove_file(reserve_path);
-        }
+        remove_reserve(comm, reserve_path);
         return Err(e);
     }
     let mut builder = hdf5::File::with_options();
@@ -847,12 +851,17 @@ where
         }
         Err(e) => {
             // Every rank returns here (MPI_File_open is collective, so it fails everywhere).
-            if comm.rank() == 0 {
-                let _ = std::fs::remove_file(reserve_path);
-            }
+            remove_reserve(comm, reserve_path);
             agree(comm, Err(e.clone()))?;
             Err(e)
         }
+    }
+}
+
+/// Rank 0 removes the reserve beside the HDF5 file (what is left of it, if anything).
+fn remove_reserve<C: Communicator>(comm: &C, reserve_path: &Path) {
+    if comm.rank() == 0 {
+        let _ = std::fs::remove_file(reserve_path);
     }
 }
 

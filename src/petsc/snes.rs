@@ -98,14 +98,25 @@ fn c_str(p: *const c_char) -> String {
     }
 }
 
+/// The solver choice and default tolerances of [`solve_linear_vi`]; the options database
+/// overrides each of them.
+#[derive(Clone, Copy, Debug)]
+pub struct ViSettings<'a> {
+    /// SNES type, e.g. "vinewtonrsls" (`-snes_type` overrides).
+    pub default_type: &'a str,
+    /// Line search used with `default_type` unless `-snes_linesearch_type` is given (e.g.
+    /// "basic"); another type keeps PETSc's own.
+    pub default_linesearch: Option<&'a str>,
+    /// Relative tolerance on the inactive-set residual (`-snes_rtol` overrides).
+    pub rtol: f64,
+    /// Iteration cap (`-snes_max_it` overrides).
+    pub max_it: usize,
+}
+
 /// Solves the box-constrained linear VI  lower ≤ x ≤ upper,  F(x) = A x − b ⟂ bounds  with SNES
-/// (type `default_type`, e.g. "vinewtonrsls"; `-snes_type` and the other `-snes_*`, `-ksp_*`,
-/// `-pc_*` options of the database override). `default_linesearch` (e.g. "basic") is used with
-/// `default_type` unless `-snes_linesearch_type` is given; another type keeps PETSc's own. `x` holds the initial guess (SNES projects it
-/// onto the bounds) and receives the solution. Default tolerances: relative `rtol` on the
-/// inactive-set residual, `max_it` iterations (both overridable by -snes_rtol / -snes_max_it).
-/// Collective on `comm`.
-#[allow(clippy::too_many_arguments)]
+/// (type `settings.default_type`; `-snes_type` and the other `-snes_*`, `-ksp_*`, `-pc_*`
+/// options of the database override; see [`ViSettings`]). `x` holds the initial guess (SNES
+/// projects it onto the bounds) and receives the solution. Collective on `comm`.
 pub fn solve_linear_vi(
     comm: MPI_Comm,
     a: &Matrix,
@@ -113,14 +124,11 @@ pub fn solve_linear_vi(
     lower: &Vector,
     upper: &Vector,
     x: &mut Vector,
-    default_type: &str,
-    default_linesearch: Option<&str>,
-    rtol: f64,
-    max_it: usize,
+    settings: &ViSettings,
 ) -> Result<ViInfo> {
     let ctx = LinearResidual { a: a.raw, b: b.raw };
     let f = b.duplicate()?;
-    let ty = cstring(default_type);
+    let ty = cstring(settings.default_type);
     let mut snes: ffi::SNES = ptr::null_mut();
     // SAFETY: `snes` is created and destroyed here; `ctx`, `a`, `b`, `f`, `lower`, `upper` and
     // `x` outlive it (SNESDestroy runs before they are dropped; SNES takes its own references
@@ -143,87 +151,137 @@ pub fn solve_linear_vi(
                 ptr::null_mut(),
             ))?;
             check(ffi::SNESVISetVariableBounds(snes, lower.raw, upper.raw))?;
-            check(ffi::SNESSetTolerances(
-                snes,
-                ffi::PETSC_DEFAULT as f64,
-                rtol,
-                ffi::PETSC_DEFAULT as f64,
-                max_it as PInt,
-                ffi::PETSC_DEFAULT as PInt,
-            ))?;
-            check(ffi::SNESSetFromOptions(snes))?;
+            let chosen = configure(snes, settings)?;
             // Only the reduced-space method leaves the Jacobian matrix alone; the others get
             // their own copy, restored from A before every step.
-            let mut tname: *const c_char = ptr::null();
-            check(ffi::SNESGetType(snes, &mut tname))?;
-            let chosen = c_str(tname);
-            if let Some(ls_type) = default_linesearch {
-                if chosen == default_type && !options::has("-snes_linesearch_type")? {
-                    let lt = cstring(ls_type);
-                    let mut ls: ffi::SNESLineSearch = ptr::null_mut();
-                    check(ffi::SNESGetLineSearch(snes, &mut ls))?;
-                    check(ffi::SNESLineSearchSetType(ls, lt.as_ptr()))?;
-                }
-            }
-            if chosen != "vinewtonrsls" {
-                // The semismooth Jacobian D_a + D_b A is not symmetric: a Cholesky preset
-                // (symmetric systems) becomes LU with the same factorisation package.
-                let mut ksp: ffi::KSP = ptr::null_mut();
-                let mut pc: ffi::PC = ptr::null_mut();
-                let mut pt: *const c_char = ptr::null();
-                check(ffi::SNESGetKSP(snes, &mut ksp))?;
-                check(ffi::KSPGetPC(ksp, &mut pc))?;
-                check(ffi::PCGetType(pc, &mut pt))?;
-                if c_str(pt) == "cholesky" {
-                    // (PCSetFromOptions would read -pc_type cholesky again: copy the package.)
-                    let mut st: *const c_char = ptr::null();
-                    check(ffi::PCFactorGetMatSolverType(pc, &mut st))?;
-                    let package = cstring(&c_str(st));
-                    check(ffi::PCSetType(pc, ffi::PCLU.as_ptr() as *const c_char))?;
-                    if !st.is_null() {
-                        check(ffi::PCFactorSetMatSolverType(pc, package.as_ptr()))?;
-                    }
-                }
-            }
             let _jac_copy = if chosen != "vinewtonrsls" {
-                let j = a.duplicate()?;
-                check(ffi::SNESSetJacobian(
-                    snes,
-                    j.raw,
-                    j.raw,
-                    Some(restored_jacobian),
-                    &ctx as *const LinearResidual as *mut c_void,
-                ))?;
-                Some(j)
+                cholesky_to_lu(snes)?;
+                Some(restored_jacobian_copy(snes, a, &ctx)?)
             } else {
                 None
             };
             check(ffi::SNESSolve(snes, ptr::null_mut(), x.raw))?;
-            let (mut its, mut lits, mut nf): (PInt, PInt, PInt) = (0, 0, 0);
-            let mut reason: ffi::SNESConvergedReason = 0;
-            let mut name: *const c_char = ptr::null();
-            let mut tname: *const c_char = ptr::null();
-            let mut fnorm: ffi::PetscReal = 0.0;
-            check(ffi::SNESGetIterationNumber(snes, &mut its))?;
-            check(ffi::SNESGetLinearSolveIterations(snes, &mut lits))?;
-            check(ffi::SNESGetNumberFunctionEvals(snes, &mut nf))?;
-            check(ffi::SNESGetConvergedReason(snes, &mut reason))?;
-            check(ffi::SNESGetConvergedReasonString(snes, &mut name))?;
-            check(ffi::SNESGetType(snes, &mut tname))?;
-            check(ffi::SNESGetFunctionNorm(snes, &mut fnorm))?;
-            Ok(ViInfo {
-                iterations: its as usize,
-                linear_iterations: lits as usize,
-                function_evals: nf as usize,
-                reason: reason as i32,
-                reason_name: c_str(name),
-                snes_type: c_str(tname),
-                fnorm,
-            })
+            vi_info(snes)
         })();
         ffi::SNESDestroy(&mut snes);
         result
     }
+}
+
+/// Tolerances and line search of `snes` from `settings` and the options database (which may
+/// also change the type); returns the SNES type chosen.
+///
+/// # Safety
+/// `snes` is a valid SNES object.
+unsafe fn configure(snes: ffi::SNES, settings: &ViSettings) -> Result<String> {
+    // SAFETY: `snes` is valid (caller); the strings outlive the calls that read them.
+    unsafe {
+        check(ffi::SNESSetTolerances(
+            snes,
+            ffi::PETSC_DEFAULT as f64,
+            settings.rtol,
+            ffi::PETSC_DEFAULT as f64,
+            settings.max_it as PInt,
+            ffi::PETSC_DEFAULT as PInt,
+        ))?;
+        check(ffi::SNESSetFromOptions(snes))?;
+        let mut tname: *const c_char = ptr::null();
+        check(ffi::SNESGetType(snes, &mut tname))?;
+        let chosen = c_str(tname);
+        if let Some(ls_type) = settings.default_linesearch {
+            if chosen == settings.default_type && !options::has("-snes_linesearch_type")? {
+                let lt = cstring(ls_type);
+                let mut ls: ffi::SNESLineSearch = ptr::null_mut();
+                check(ffi::SNESGetLineSearch(snes, &mut ls))?;
+                check(ffi::SNESLineSearchSetType(ls, lt.as_ptr()))?;
+            }
+        }
+        Ok(chosen)
+    }
+}
+
+/// The semismooth Jacobian D_a + D_b A is not symmetric: a Cholesky preset (symmetric
+/// systems) becomes LU with the same factorisation package.
+///
+/// # Safety
+/// `snes` is a valid SNES object.
+unsafe fn cholesky_to_lu(snes: ffi::SNES) -> Result<()> {
+    // SAFETY: `snes` is valid (caller); KSP and PC are its own; the package name outlives
+    // PCFactorSetMatSolverType.
+    unsafe {
+        let mut ksp: ffi::KSP = ptr::null_mut();
+        let mut pc: ffi::PC = ptr::null_mut();
+        let mut pt: *const c_char = ptr::null();
+        check(ffi::SNESGetKSP(snes, &mut ksp))?;
+        check(ffi::KSPGetPC(ksp, &mut pc))?;
+        check(ffi::PCGetType(pc, &mut pt))?;
+        if c_str(pt) == "cholesky" {
+            // (PCSetFromOptions would read -pc_type cholesky again: copy the package.)
+            let mut st: *const c_char = ptr::null();
+            check(ffi::PCFactorGetMatSolverType(pc, &mut st))?;
+            let package = cstring(&c_str(st));
+            check(ffi::PCSetType(pc, ffi::PCLU.as_ptr() as *const c_char))?;
+            if !st.is_null() {
+                check(ffi::PCFactorSetMatSolverType(pc, package.as_ptr()))?;
+            }
+        }
+        Ok(())
+    }
+}
+
+/// A copy of A as the Jacobian matrix of `snes`, restored from A before every step
+/// ([`restored_jacobian`]). The caller keeps the copy alive while `snes` is used.
+///
+/// # Safety
+/// `snes` is a valid SNES object; `ctx` outlives it.
+unsafe fn restored_jacobian_copy(
+    snes: ffi::SNES,
+    a: &Matrix,
+    ctx: &LinearResidual,
+) -> Result<Matrix> {
+    let j = a.duplicate()?;
+    // SAFETY: `snes` is valid and `ctx` outlives it (caller); SNES references `j` itself.
+    unsafe {
+        check(ffi::SNESSetJacobian(
+            snes,
+            j.raw,
+            j.raw,
+            Some(restored_jacobian),
+            ctx as *const LinearResidual as *mut c_void,
+        ))?;
+    }
+    Ok(j)
+}
+
+/// How the solve of `snes` ended.
+///
+/// # Safety
+/// `snes` is a valid SNES object after SNESSolve.
+unsafe fn vi_info(snes: ffi::SNES) -> Result<ViInfo> {
+    let (mut its, mut lits, mut nf): (PInt, PInt, PInt) = (0, 0, 0);
+    let mut reason: ffi::SNESConvergedReason = 0;
+    let mut name: *const c_char = ptr::null();
+    let mut tname: *const c_char = ptr::null();
+    let mut fnorm: ffi::PetscReal = 0.0;
+    // SAFETY: `snes` is valid (caller); every call writes one value of the given type.
+    unsafe {
+        check(ffi::SNESGetIterationNumber(snes, &mut its))?;
+        check(ffi::SNESGetLinearSolveIterations(snes, &mut lits))?;
+        check(ffi::SNESGetNumberFunctionEvals(snes, &mut nf))?;
+        check(ffi::SNESGetConvergedReason(snes, &mut reason))?;
+        check(ffi::SNESGetConvergedReasonString(snes, &mut name))?;
+        check(ffi::SNESGetType(snes, &mut tname))?;
+        check(ffi::SNESGetFunctionNorm(snes, &mut fnorm))?;
+    }
+    Ok(ViInfo {
+        iterations: its as usize,
+        linear_iterations: lits as usize,
+        function_evals: nf as usize,
+        reason: reason as i32,
+        reason_name: c_str(name),
+        snes_type: c_str(tname),
+        fnorm,
+    })
 }
 
 impl Matrix {

@@ -136,6 +136,13 @@ fn frame(normal: &[f64; 3], dim: usize) -> Option<[[f64; 3]; 3]> {
     Some([n, t1, t2])
 }
 
+/// One contact node in its frame: the node's first dof, the columns of R_k and the gap g_k.
+struct NodeFrame {
+    row: usize,
+    e: [[f64; 3]; 3],
+    gap: f64,
+}
+
 /// The rotation R = blockdiag(R_k) (owned rows in CSR): at contact node k the rows
 /// row .. row + dim hold R_k[a][j] = e_j[a] with e_0 = n, e_1 = τ₁, e_2 = τ₂; elsewhere 1.
 fn rotation(
@@ -143,13 +150,13 @@ fn rotation(
     dim: usize,
     lo: usize,
     hi: usize,
-    frames: &[(usize, [[f64; 3]; 3], f64)],
+    frames: &[NodeFrame],
 ) -> petsc::Result<Matrix> {
     let n = hi - lo;
     let mut node_of = vec![usize::MAX; n];
-    for (i, (row, _, _)) in frames.iter().enumerate() {
+    for (i, f) in frames.iter().enumerate() {
         for a in 0..dim {
-            node_of[row - lo + a] = i;
+            node_of[f.row - lo + a] = i;
         }
     }
     let mut rowptr: Vec<PInt> = Vec::with_capacity(n + 1);
@@ -163,7 +170,7 @@ fn rotation(
                 vals.push(1.0);
             }
             i => {
-                let (row, e, _) = &frames[i];
+                let NodeFrame { row, e, .. } = &frames[i];
                 let a = lo + r - row;
                 for (j, ej) in e.iter().enumerate().take(dim) {
                     cols.push((row + j) as PInt);
@@ -176,6 +183,140 @@ fn rotation(
     let mut m = Matrix::from_csr(comm, dim, &rowptr, &cols, &vals)?;
     m.assemble()?;
     Ok(m)
+}
+
+/// This rank's owned dof range and the problem's dimension.
+#[derive(Clone, Copy)]
+struct Layout {
+    dim: usize,
+    lo: usize,
+    hi: usize,
+}
+
+/// The frames of this rank's contact nodes, sorted by row, after checking that every node is
+/// a whole owned node with a finite gap and a proper normal, listed once.
+fn contact_frames(at: Layout, contact: &[SnesContactNode]) -> Result<Vec<NodeFrame>, SnesViError> {
+    let Layout { dim, lo, hi } = at;
+    let mut frames = Vec::with_capacity(contact.len());
+    for k in contact {
+        if k.row < lo || k.row + dim > hi || (k.row - lo) % dim != 0 {
+            return Err(SnesViError::Input(format!(
+                "contact node at dof {}: not a node of this rank's rows {lo}..{hi}",
+                k.row
+            )));
+        }
+        if !k.gap.is_finite() {
+            return Err(SnesViError::Input(format!(
+                "contact node at dof {}: gap {} is not finite",
+                k.row, k.gap
+            )));
+        }
+        let e = frame(&k.normal, dim).ok_or_else(|| {
+            SnesViError::Input(format!(
+                "contact node at dof {}: normal {:?} is not a direction",
+                k.row,
+                &k.normal[..dim]
+            ))
+        })?;
+        frames.push(NodeFrame {
+            row: k.row,
+            e,
+            gap: k.gap,
+        });
+    }
+    frames.sort_by_key(|f| f.row);
+    if frames.windows(2).any(|w| w[0].row == w[1].row) {
+        return Err(SnesViError::Input("a contact node is listed twice".into()));
+    }
+    Ok(frames)
+}
+
+/// The pinned dofs this rank owns, sorted and without repeats; none may be a contact node's.
+fn owned_pins(
+    at: Layout,
+    pinned_dofs: &[usize],
+    frames: &[NodeFrame],
+) -> Result<Vec<PInt>, SnesViError> {
+    let Layout { dim, lo, hi } = at;
+    let mut pins: Vec<PInt> = Vec::new();
+    for &p in pinned_dofs {
+        if p < lo || p >= hi {
+            continue;
+        }
+        let node_row = p - (p - lo) % dim;
+        if frames.binary_search_by_key(&node_row, |f| f.row).is_ok() {
+            return Err(SnesViError::Input(format!(
+                "pinned dof {p} belongs to a contact node"
+            )));
+        }
+        pins.push(p as PInt);
+    }
+    pins.sort_unstable();
+    pins.dedup();
+    Ok(pins)
+}
+
+/// The problem in the contact frames: R, A' = Rᵀ A R and f' = Rᵀ f, pins eliminated.
+struct Rotated {
+    r: Matrix,
+    a: Matrix,
+    b: Vector,
+}
+
+/// A' = Rᵀ A R, f' = Rᵀ f, then the pins eliminated symmetrically at the scale of A's
+/// diagonal (one value on every rank).
+fn rotated_system(
+    comm: MPI_Comm,
+    at: Layout,
+    a: &Matrix,
+    b: &Vector,
+    frames: &[NodeFrame],
+    pins: &[PInt],
+) -> petsc::Result<Rotated> {
+    let r = rotation(comm, at.dim, at.lo, at.hi, frames)?;
+    let mut ar = a.ptap(&r)?;
+    let mut br = b.duplicate()?;
+    r.mult_transpose(b, &mut br)?;
+    let mut d = b.duplicate()?;
+    a.diagonal(&mut d)?;
+    let dmax_local = d.read(|s| s.iter().fold(0.0f64, |m, x| m.max(x.abs())))?;
+    let dmax = all_max(comm, dmax_local)?;
+    ar.zero_rows_columns(pins, if dmax > 0.0 { dmax } else { 1.0 })?;
+    br.write(|s| {
+        for &p in pins {
+            s[p as usize - at.lo] = 0.0;
+        }
+    })?;
+    Ok(Rotated { r, a: ar, b: br })
+}
+
+/// The bounds of the SNES VI and its start.
+struct BoundsAndStart {
+    lower: Vector,
+    upper: Vector,
+    x: Vector,
+}
+
+/// The bounds x_n ≥ −g at contact nodes (free elsewhere) and the start, u = 0 projected onto
+/// them (x_n = max(0, −g)); vinewtonrsls would project it itself, vinewtonssls needs a
+/// feasible start.
+fn bounds_and_start(b: &Vector, lo: usize, frames: &[NodeFrame]) -> petsc::Result<BoundsAndStart> {
+    let mut lower = b.duplicate()?;
+    lower.set_all(-snes::INFINITY)?;
+    let mut upper = b.duplicate()?;
+    upper.set_all(snes::INFINITY)?;
+    lower.write(|s| {
+        for f in frames {
+            s[f.row - lo] = -f.gap;
+        }
+    })?;
+    let mut x = b.duplicate()?;
+    x.write(|s| {
+        for f in frames {
+            s[f.row - lo] = (-f.gap).max(0.0);
+        }
+    })?;
+    Ok(BoundsAndStart { lower, upper, x })
 }
 
 /// Solves the frictionless contact problem (3.3)/(3.14) — the problem of Algorithm 1 — on the
@@ -200,103 +341,29 @@ pub fn solve_snesvi(
         )));
     }
     let (lo, hi) = a.ownership_range()?;
-    let mut frames = Vec::with_capacity(contact.len());
-    for k in contact {
-        if k.row < lo || k.row + dim > hi || (k.row - lo) % dim != 0 {
-            return Err(SnesViError::Input(format!(
-                "contact node at dof {}: not a node of this rank's rows {lo}..{hi}",
-                k.row
-            )));
-        }
-        if !k.gap.is_finite() {
-            return Err(SnesViError::Input(format!(
-                "contact node at dof {}: gap {} is not finite",
-                k.row, k.gap
-            )));
-        }
-        let e = frame(&k.normal, dim).ok_or_else(|| {
-            SnesViError::Input(format!(
-                "contact node at dof {}: normal {:?} is not a direction",
-                k.row,
-                &k.normal[..dim]
-            ))
-        })?;
-        frames.push((k.row, e, k.gap));
-    }
-    frames.sort_by_key(|f| f.0);
-    if frames.windows(2).any(|w| w[0].0 == w[1].0) {
-        return Err(SnesViError::Input("a contact node is listed twice".into()));
-    }
-    let mut pins: Vec<PInt> = Vec::new();
-    for &p in pinned_dofs {
-        if p < lo || p >= hi {
-            continue;
-        }
-        let node_row = p - (p - lo) % dim;
-        if frames.binary_search_by_key(&node_row, |f| f.0).is_ok() {
-            return Err(SnesViError::Input(format!(
-                "pinned dof {p} belongs to a contact node"
-            )));
-        }
-        pins.push(p as PInt);
-    }
-    pins.sort_unstable();
-    pins.dedup();
-
-    // A' = Rᵀ A R, f' = Rᵀ f.
-    let r = rotation(comm, dim, lo, hi, &frames)?;
-    let mut ar = a.ptap(&r)?;
-    let mut br = b.duplicate()?;
-    r.mult_transpose(b, &mut br)?;
-    // Pins: symmetric elimination at the scale of A's diagonal (one value on every rank).
-    let mut d = b.duplicate()?;
-    a.diagonal(&mut d)?;
-    let dmax_local = d.read(|s| s.iter().fold(0.0f64, |m, x| m.max(x.abs())))?;
-    let dmax = all_max(comm, dmax_local)?;
-    ar.zero_rows_columns(&pins, if dmax > 0.0 { dmax } else { 1.0 })?;
-    br.write(|s| {
-        for &p in &pins {
-            s[p as usize - lo] = 0.0;
-        }
-    })?;
-
-    // Bounds: x_n ≥ −g at contact nodes, free elsewhere.
-    let mut lower = b.duplicate()?;
-    lower.set_all(-snes::INFINITY)?;
-    let mut upper = b.duplicate()?;
-    upper.set_all(snes::INFINITY)?;
-    lower.write(|s| {
-        for (row, _, gap) in &frames {
-            s[row - lo] = -gap;
-        }
-    })?;
-    // Start: u = 0 projected onto the bounds (x_n = max(0, −g)); vinewtonrsls would project
-    // it itself, vinewtonssls needs a feasible start.
-    let mut x = b.duplicate()?;
-    x.write(|s| {
-        for (row, _, gap) in &frames {
-            s[row - lo] = (-gap).max(0.0);
-        }
-    })?;
+    let at = Layout { dim, lo, hi };
+    let frames = contact_frames(at, contact)?;
+    let pins = owned_pins(at, pinned_dofs, &frames)?;
+    let rot = rotated_system(comm, at, a, b, &frames, &pins)?;
+    let BoundsAndStart {
+        lower,
+        upper,
+        mut x,
+    } = bounds_and_start(b, lo, &frames)?;
     let setup_seconds = t0.elapsed().as_secs_f64();
 
     let t1 = Instant::now();
-    let info = snes::solve_linear_vi(
-        comm,
-        &ar,
-        &br,
-        &lower,
-        &upper,
-        &mut x,
-        "vinewtonrsls",
-        Some(DEFAULT_LINESEARCH),
-        DEFAULT_RTOL,
-        DEFAULT_MAX_IT,
-    )?;
+    let settings = snes::ViSettings {
+        default_type: "vinewtonrsls",
+        default_linesearch: Some(DEFAULT_LINESEARCH),
+        rtol: DEFAULT_RTOL,
+        max_it: DEFAULT_MAX_IT,
+    };
+    let info = snes::solve_linear_vi(comm, &rot.a, &rot.b, &lower, &upper, &mut x, &settings)?;
     let solve_seconds = t1.elapsed().as_secs_f64();
 
     let mut u = b.duplicate()?;
-    r.mult(&x, &mut u)?;
+    rot.r.mult(&x, &mut u)?;
     Ok(SnesViResult {
         u,
         steps: info.iterations,

@@ -11,7 +11,7 @@ use crate::geom::dot;
 use crate::mesh::Mesh;
 use crate::par::Ctx;
 use crate::partition::Layout;
-use crate::setup::{group_facets, ContactSettings};
+use crate::setup::{group_facets, ContactSettings, PairSettings};
 use crate::warnings::{self, Place, Warning};
 use std::collections::HashMap;
 
@@ -248,15 +248,30 @@ pub fn start_warnings(
     let size = mesh.extent();
     let outward = outward_normals(mesh, layout, settings, nodes);
     let np = settings.pairs.len();
-    // per pair and kind (far side, any): [depth, tag, x(3)], then [inside, nodes]
-    const R: usize = 12;
-    let mut local = vec![0.0; R * np];
-    for r in local.chunks_exact_mut(R) {
+    let all = ctx.all_gather_varcount(&local_starts(nodes, &outward, np));
+    settings
+        .pairs
+        .iter()
+        .enumerate()
+        .filter_map(|(p, pair)| start_warning(pair, &pair_starts(&all, p, np), size, dim))
+        .collect()
+}
+
+/// The length of a pair's record of its start: per kind (far side, any) the deepest node's
+/// [depth, tag, x(3)], then [inside, nodes].
+const START: usize = 12;
+
+/// This rank's records of the pairs' starts (`np` pairs; `outward`: the body's outward normal
+/// at each node): per kind the deepest node (the lowest tag among equals), the nodes inside
+/// and the nodes. Local.
+fn local_starts(nodes: &[ContactNode], outward: &[[f64; 3]], np: usize) -> Vec<f64> {
+    let mut local = vec![0.0; START * np];
+    for r in local.chunks_exact_mut(START) {
         r[0] = f64::NEG_INFINITY;
         r[5] = f64::NEG_INFINITY;
     }
-    for (k, o) in nodes.iter().zip(&outward) {
-        let rec = &mut local[R * k.pair..R * (k.pair + 1)];
+    for (k, o) in nodes.iter().zip(outward) {
+        let rec = &mut local[START * k.pair..START * (k.pair + 1)];
         rec[11] += 1.0;
         if k.gap >= 0.0 {
             continue;
@@ -273,67 +288,75 @@ pub fn start_warnings(
             }
         }
     }
-    let all = ctx.all_gather_varcount(&local);
-    let mut list = Vec::new();
-    for (p, pair) in settings.pairs.iter().enumerate() {
-        let mut t = [0.0; R];
-        t[0] = f64::NEG_INFINITY;
-        t[5] = f64::NEG_INFINITY;
-        for r in all.chunks_exact(R * np).map(|r| &r[R * p..R * (p + 1)]) {
-            t[10] += r[10];
-            t[11] += r[11];
-            for b in [0, 5] {
-                if r[b] > t[b] || (r[b] == t[b] && r[b + 1] < t[b + 1]) {
-                    t[b..b + 5].copy_from_slice(&r[b..b + 5]);
-                }
+    local
+}
+
+/// Pair `p`'s start record over every rank (`all`: the ranks' [`local_starts`] of `np` pairs).
+fn pair_starts(all: &[f64], p: usize, np: usize) -> [f64; START] {
+    let mut t = [0.0; START];
+    t[0] = f64::NEG_INFINITY;
+    t[5] = f64::NEG_INFINITY;
+    for r in all
+        .chunks_exact(START * np)
+        .map(|r| &r[START * p..START * (p + 1)])
+    {
+        t[10] += r[10];
+        t[11] += r[11];
+        for b in [0, 5] {
+            if r[b] > t[b] || (r[b] == t[b] && r[b + 1] < t[b + 1]) {
+                t[b..b + 5].copy_from_slice(&r[b..b + 5]);
             }
         }
-        let (inside, total) = (t[10] as usize, t[11] as usize);
-        let (base, threshold, why) = if t[0] > CROSSED_RTOL * size {
-            (
-                0,
-                CROSSED_RTOL,
-                "on the obstacle's far side: inside it where its normal points out of the body \
-                 — does the normal point from the obstacle into the body, and is the obstacle \
-                 on the body's side?",
-            )
-        } else if t[5] > warnings::START_INSIDE_FRACTION * size {
-            (
-                5,
-                warnings::START_INSIDE_FRACTION,
-                "deeper than a small overlap — is the obstacle placed where it should be \
-                 (units, origin, the sign of a coordinate)?",
-            )
-        } else {
-            continue;
-        };
-        let (depth, tag, x) = (
-            t[base],
-            t[base + 1] as u64,
-            t[base + 2..base + 2 + dim].to_vec(),
-        );
-        list.push(Warning {
-            code: warnings::START_INSIDE,
-            message: format!(
-                "{}: the body starts {depth:.4e} inside the obstacle ({:.2} % of the body's size \
-                 {size:.4e}; contact node {tag} at {}; {inside} of {total} contact nodes inside), \
-                 {why} (key '{}')",
-                pair.key,
-                100.0 * depth / size,
-                warnings::coords(&x),
-                pair.key("obstacle")
-            ),
-            key: Some(pair.key("obstacle")),
-            pair: Some(pair.key.clone()),
-            value: depth / size,
-            threshold,
-            at: Some(Place {
-                node: Some(tag),
-                cell: None,
-                x,
-            }),
-            steps: Vec::new(),
-        });
     }
-    list
+    t
+}
+
+/// The warning of a pair's start record `t` ([`pair_starts`]; `size`: the body's), if any.
+fn start_warning(pair: &PairSettings, t: &[f64; START], size: f64, dim: usize) -> Option<Warning> {
+    let (inside, total) = (t[10] as usize, t[11] as usize);
+    let (base, threshold, why) = if t[0] > CROSSED_RTOL * size {
+        (
+            0,
+            CROSSED_RTOL,
+            "on the obstacle's far side: inside it where its normal points out of the body \
+             — does the normal point from the obstacle into the body, and is the obstacle \
+             on the body's side?",
+        )
+    } else if t[5] > warnings::START_INSIDE_FRACTION * size {
+        (
+            5,
+            warnings::START_INSIDE_FRACTION,
+            "deeper than a small overlap — is the obstacle placed where it should be \
+             (units, origin, the sign of a coordinate)?",
+        )
+    } else {
+        return None;
+    };
+    let (depth, tag, x) = (
+        t[base],
+        t[base + 1] as u64,
+        t[base + 2..base + 2 + dim].to_vec(),
+    );
+    Some(Warning {
+        code: warnings::START_INSIDE,
+        message: format!(
+            "{}: the body starts {depth:.4e} inside the obstacle ({:.2} % of the body's size \
+             {size:.4e}; contact node {tag} at {}; {inside} of {total} contact nodes inside), \
+             {why} (key '{}')",
+            pair.key,
+            100.0 * depth / size,
+            warnings::coords(&x),
+            pair.key("obstacle")
+        ),
+        key: Some(pair.key("obstacle")),
+        pair: Some(pair.key.clone()),
+        value: depth / size,
+        threshold,
+        at: Some(Place {
+            node: Some(tag),
+            cell: None,
+            x,
+        }),
+        steps: Vec::new(),
+    })
 }

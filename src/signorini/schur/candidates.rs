@@ -3,7 +3,7 @@
 
 use super::stop::Stop;
 use crate::contact::Frame;
-use crate::linsolve::NumericSchur;
+use crate::linsolve::{NumericSchur, SymbolicSchur};
 use crate::par::Ctx;
 use crate::petsc::lapack::DenseCholesky;
 use crate::petsc::mumps::NodeBases;
@@ -571,42 +571,13 @@ impl Compliance {
         (dim, n_rows): (usize, usize),
         (f_root, why): (&[f64], &str),
     ) -> Result<(), Stop> {
-        let root = ctx.rank == 0;
         let dofs = self.add_candidates(cand, new, dim);
-        let per = self.per;
         self.factor = None; // the old factorisation's memory first
         self.cmat = DMatrix::zeros(0, 0);
         self.schur = DMatrix::zeros(0, 0);
         let t = Instant::now();
-        self.ordering_seconds = 0.0; // this factorisation's ordering (none where one is kept)
-        self.order_nodes(ctx, reduced, dim, t)?;
-        let order = match &self.node_order {
-            Some(o) if root && !o.is_empty() => Some(dof_order(o, &dofs, dim, n_rows)),
-            _ => None,
-        };
-        let factor = reduced.analyse_schur(ctx, (n_rows, &dofs), (order.as_deref(), &self.bases));
-        drop(order);
-        let symbolic = ctx
-            .agree_message(factor)
-            .map_err(|e| Stop::failed(format!("MUMPS' analysis of K_p failed: {e}")))?;
-        // the same numbers on every rank: the same decision
-        let dense = (dofs.len() as f64).powi(3);
-        let speedup = if dim == 2 { DENSE_SPEEDUP_2D } else { 1.0 };
-        self.max_flops = DENSE_FLOOR_FLOPS.max(speedup * symbolic.flops());
-        // frictionless: the primal form, whose steps solve for the inactive candidates alone
-        self.primal = dense > self.max_flops && per == 1;
-        if dense > self.max_flops && !self.primal {
-            return Err(Stop::too_wide(format!(
-                "{} candidate contact nodes ({} Schur dofs; {}): the dense compliance ({:.1e} \
-                 flops) would cost more than the factorisation of K_p ({:.1e} flops); a contact zone this \
-                 wide costs less on the plain path",
-                self.list.len(),
-                dofs.len(),
-                why,
-                dense,
-                symbolic.flops()
-            )));
-        }
+        let symbolic = self.analyse(ctx, reduced, &dofs, dim, n_rows, t)?;
+        self.choose_form(dofs.len(), dim, &symbolic, why)?;
         let done = symbolic.factorise();
         self.factorisation_seconds = t.elapsed().as_secs_f64();
         let mut factor = ctx
@@ -617,47 +588,105 @@ impl Compliance {
             .map_err(|e| Stop::failed(format!("the condensation of f failed: {e}")))?;
         // S copied (primal) or inverted (dimension: the Schur dofs)
         let work = if self.primal { 0 } else { dofs.len() };
-        let inverted = ctx.on_root_wide(work, || {
-            if self.primal {
-                // S itself (its lower triangle, column-major, as LAPACK's Cholesky reads it)
-                let n = dofs.len();
-                let mut s = DMatrix::from_vec(n, n, factor.take_schur());
-                for j in 0..n {
-                    for i in 0..j {
-                        s[(i, j)] = s[(j, i)];
-                    }
-                }
-                self.schur = s;
-                self.r = r;
-                return true;
-            }
-            // S's one copy, factorised and inverted in place: C = S⁻¹; with every dof of the
-            // candidates (Coulomb) a copy of S and r too, for the primal form of its dense steps
-            let sv = factor.take_schur();
-            if per > 1 {
-                self.schur = DMatrix::from_vec(dofs.len(), dofs.len(), sv.clone());
-                self.r = r.clone();
-            }
-            let Some(ch) = DenseCholesky::factor_owned(dofs.len(), sv) else {
-                return false;
-            };
-            self.cmat = ch.inverse();
-            self.d0 = (&self.cmat * DVector::from_column_slice(&r))
-                .as_slice()
-                .to_vec();
-            true
-        });
+        let inverted = ctx.on_root_wide(work, || self.keep_schur(&mut factor, r, dofs.len()));
         let mut ok = vec![if inverted == Some(false) { 0.0 } else { 1.0 }];
         ctx.broadcast_f64s(&mut ok);
         self.factor = Some(factor);
         if ok[0] == 0.0 {
             return Err(Stop::failed(format!(
-                "the Schur complement of K_p on the {} candidates' dofs ({per} per node) is not \
+                "the Schur complement of K_p on the {} candidates' dofs ({} per node) is not \
                  positive definite",
-                self.list.len()
+                self.list.len(),
+                self.per
             )));
         }
         Ok(())
+    }
+
+    /// MUMPS' analysis of K_p with the Schur complement on `dofs`, in our node order (made
+    /// here where none is kept; the ordering's seconds from `t`). Collective.
+    fn analyse(
+        &mut self,
+        ctx: &Ctx,
+        reduced: &ReducedSystem,
+        dofs: &[usize],
+        dim: usize,
+        n_rows: usize,
+        t: Instant,
+    ) -> Result<SymbolicSchur, Stop> {
+        self.ordering_seconds = 0.0; // this factorisation's ordering (none where one is kept)
+        self.order_nodes(ctx, reduced, dim, t)?;
+        let order = match &self.node_order {
+            Some(o) if ctx.rank == 0 && !o.is_empty() => Some(dof_order(o, dofs, dim, n_rows)),
+            _ => None,
+        };
+        let factor = reduced.analyse_schur(ctx, (n_rows, dofs), (order.as_deref(), &self.bases));
+        drop(order);
+        ctx.agree_message(factor)
+            .map_err(|e| Stop::failed(format!("MUMPS' analysis of K_p failed: {e}")))
+    }
+
+    /// The dense form of the compliance for `n_dofs` Schur dofs against the factorisation's
+    /// flops (the same numbers on every rank: the same decision): the dual form C = S⁻¹, or
+    /// the primal form (frictionless, whose steps solve for the inactive candidates alone)
+    /// where C would cost more than the factorisation; `Err` where that form does not apply
+    /// either (`why`: how the set came about, for the message).
+    fn choose_form(
+        &mut self,
+        n_dofs: usize,
+        dim: usize,
+        symbolic: &SymbolicSchur,
+        why: &str,
+    ) -> Result<(), Stop> {
+        let dense = (n_dofs as f64).powi(3);
+        let speedup = if dim == 2 { DENSE_SPEEDUP_2D } else { 1.0 };
+        self.max_flops = DENSE_FLOOR_FLOPS.max(speedup * symbolic.flops());
+        self.primal = dense > self.max_flops && self.per == 1;
+        if dense > self.max_flops && !self.primal {
+            return Err(Stop::too_wide(format!(
+                "{} candidate contact nodes ({} Schur dofs; {}): the dense compliance ({:.1e} \
+                 flops) would cost more than the factorisation of K_p ({:.1e} flops); a contact zone this \
+                 wide costs less on the plain path",
+                self.list.len(),
+                n_dofs,
+                why,
+                dense,
+                symbolic.flops()
+            )));
+        }
+        Ok(())
+    }
+
+    /// Rank 0: S from `factor` (n × n) and the condensed r kept for the chosen form; `false`
+    /// where S, to be inverted, is not positive definite.
+    fn keep_schur(&mut self, factor: &mut NumericSchur, r: Vec<f64>, n: usize) -> bool {
+        if self.primal {
+            // S itself (its lower triangle, column-major, as LAPACK's Cholesky reads it)
+            let mut s = DMatrix::from_vec(n, n, factor.take_schur());
+            for j in 0..n {
+                for i in 0..j {
+                    s[(i, j)] = s[(j, i)];
+                }
+            }
+            self.schur = s;
+            self.r = r;
+            return true;
+        }
+        // S's one copy, factorised and inverted in place: C = S⁻¹; with every dof of the
+        // candidates (Coulomb) a copy of S and r too, for the primal form of its dense steps
+        let sv = factor.take_schur();
+        if self.per > 1 {
+            self.schur = DMatrix::from_vec(n, n, sv.clone());
+            self.r = r.clone();
+        }
+        let Some(ch) = DenseCholesky::factor_owned(n, sv) else {
+            return false;
+        };
+        self.cmat = ch.inverse();
+        self.d0 = (&self.cmat * DVector::from_column_slice(&r))
+            .as_slice()
+            .to_vec();
+        true
     }
 
     /// C and d₀ on the candidates' normal dofs (the frictionless model): themselves for

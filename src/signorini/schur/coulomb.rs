@@ -180,23 +180,7 @@ pub(crate) fn solve(
     summary.dense_seconds = t.elapsed().as_secs_f64();
     summary.steps = run.steps.len();
     summary.primal_steps = run.primal_steps;
-    if !run.coarse.is_empty() {
-        let levels: Vec<String> = run
-            .coarse
-            .iter()
-            .map(|(nodes, steps)| format!("{nodes} nodes {steps} steps"))
-            .collect();
-        say!(
-            ctx,
-            "coulomb: condensed: nested start on coarse subsets of the candidates: {}",
-            levels.join(", ")
-        );
-        summary.coarse_levels = run
-            .coarse
-            .iter()
-            .map(|&(nodes, steps)| CoarseLevel { nodes, steps })
-            .collect();
-    }
+    record_coarse(ctx, &run, &mut summary);
     let mut history = Vec::new();
     record_steps(
         ctx,
@@ -205,48 +189,82 @@ pub(crate) fn solve(
         ("C", "condensed Coulomb"),
         (n, 0),
     );
-    if run.f5_from > 0 || run.f5_coarse > 0 {
-        summary.f5_from = (run.f5_from > 0).then_some(run.f5_from);
-        summary.f5_coarse_levels = run.f5_coarse;
-        let mut at = Vec::new();
-        if run.f5_from > 0 {
-            at.push(format!("from dense step {} on", run.f5_from));
-        }
-        if run.f5_coarse > 0 {
-            at.push(format!(
-                "on {} coarse level(s) of the nested start",
-                run.f5_coarse
-            ));
-        }
-        say!(
-            ctx,
-            "coulomb: condensed: settled slip rows left a dense system singular (every active \
-             node slipping); the (F5) rows instead: {}",
-            at.join("; ")
-        );
-    }
+    record_f5(ctx, &run, &mut summary);
     if let Err(why) = &run.end {
         return Ok(give_up(ctx, summary, why.clone()));
     }
-    // w = K_p⁻¹ (f − Q λ): one expansion solve
     let t = Instant::now();
-    let lam = if ctx.rank == 0 {
-        run.lambda.clone()
-    } else {
-        Vec::new()
-    };
-    let w = match kept.comp.expand_u(
-        ctx,
-        &kept.cand,
-        (&kept.f_root, kept.n_local),
-        (&lam, &run.x_s),
-    ) {
+    let w = match expand_run(ctx, kept, &run) {
         Ok(w) => w,
         Err(why) => return Ok(give_up(ctx, summary, why)),
     };
     let checked = check(ctx, p, reduced, ns, kept, &run, &w)?;
     summary.expansion_seconds = t.elapsed().as_secs_f64();
     finish(ctx, reduced, (summary, history, n), checked)
+}
+
+/// The nested start's coarse levels of `run`, logged and kept in `summary`.
+fn record_coarse(ctx: &Ctx, run: &DenseCoulomb, summary: &mut CoulombCondensedSummary) {
+    if run.coarse.is_empty() {
+        return;
+    }
+    let levels: Vec<String> = run
+        .coarse
+        .iter()
+        .map(|(nodes, steps)| format!("{nodes} nodes {steps} steps"))
+        .collect();
+    say!(
+        ctx,
+        "coulomb: condensed: nested start on coarse subsets of the candidates: {}",
+        levels.join(", ")
+    );
+    summary.coarse_levels = run
+        .coarse
+        .iter()
+        .map(|&(nodes, steps)| CoarseLevel { nodes, steps })
+        .collect();
+}
+
+/// Where the (F5) rows replaced settled slip rows in `run` (a singular dense system), logged
+/// and kept in `summary`.
+fn record_f5(ctx: &Ctx, run: &DenseCoulomb, summary: &mut CoulombCondensedSummary) {
+    if run.f5_from == 0 && run.f5_coarse == 0 {
+        return;
+    }
+    summary.f5_from = (run.f5_from > 0).then_some(run.f5_from);
+    summary.f5_coarse_levels = run.f5_coarse;
+    let mut at = Vec::new();
+    if run.f5_from > 0 {
+        at.push(format!("from dense step {} on", run.f5_from));
+    }
+    if run.f5_coarse > 0 {
+        at.push(format!(
+            "on {} coarse level(s) of the nested start",
+            run.f5_coarse
+        ));
+    }
+    say!(
+        ctx,
+        "coulomb: condensed: settled slip rows left a dense system singular (every active \
+         node slipping); the (F5) rows instead: {}",
+        at.join("; ")
+    );
+}
+
+/// w = K_p⁻¹ (f − Q λ): one expansion solve with the dense run's λ (and, from its primal
+/// form, the Schur variables' part). `Err`: MUMPS' solve failed. Collective.
+fn expand_run(ctx: &Ctx, kept: &mut Kept, run: &DenseCoulomb) -> Result<Vec<f64>, String> {
+    let lam = if ctx.rank == 0 {
+        run.lambda.clone()
+    } else {
+        Vec::new()
+    };
+    kept.comp.expand_u(
+        ctx,
+        &kept.cand,
+        (&kept.f_root, kept.n_local),
+        (&lam, &run.x_s),
+    )
 }
 
 /// The dense generalised Newton on rank 0 (from the warm records of a load step, or the

@@ -6,7 +6,7 @@ use super::coulomb_run::{DenseCoulomb, DenseStep};
 use crate::contact::{normal_active, CoulombRow};
 use crate::petsc::lapack::DenseLu;
 use crate::signorini::active_set::{
-    threshold_scale_local, ActiveSet, Iterate, Law, FIXED_POINT_SLACK,
+    threshold_scale_local, ActiveSet, Iterate, Law, SetUpdate, FIXED_POINT_SLACK,
 };
 use crate::signorini::boundary::{ContactBoundary, NodeResult};
 use crate::signorini::dense::coarsen;
@@ -147,6 +147,82 @@ struct Accepted<'s> {
     f5_from: usize,
 }
 
+/// What the dense Coulomb iteration carries from step to step: the set and the records of the
+/// last iterate, the residual of the last step that changed no state, the steps taken
+/// (`primal`: of them in the primal form), the set the last iterate was solved on (for a step
+/// whose settled rows leave the system singular), whether slip rows are settled and the step
+/// from which the (F5) rows ran.
+struct Walk {
+    set: ActiveSet,
+    it: Iterate,
+    last_still: Option<f64>,
+    steps: Vec<DenseStep>,
+    primal: usize,
+    before: Option<ActiveSet>,
+    settle: bool,
+    f5_from: usize,
+}
+
+/// A step's verdict on its iterate: accepted (`stalled`: by the stall rule, above the
+/// residual tolerance), or the next step on the given system (`None`: singular).
+enum Judgement {
+    Accept { stalled: bool },
+    Continue(Option<System>),
+}
+
+/// The primal form's unknowns ([`Stiff`]): u at every candidate dof (NaN where it is an
+/// unknown), the unknowns, and the position of each node's first unknown.
+struct PrimalUnknowns {
+    known: Vec<f64>,
+    cols: Vec<Unknown>,
+    at: Vec<usize>,
+}
+
+/// What the primal form's rows are built from: S with S G and Gᵀ S G, the unknowns (`m` of
+/// them, then `mz` amplitudes α) and λ at u_F = 0, α = 0 (`base`).
+struct PrimalRows<'s, 't> {
+    st: &'s Stiff<'t>,
+    cols: &'s [Unknown],
+    base: Vec<f64>,
+    m: usize,
+    mz: usize,
+}
+
+impl PrimalRows<'_, '_> {
+    /// Row `ri` += Σ_t coef_t λ(dof_t); returns its constant part Σ_t coef_t base(dof_t)
+    /// (S symmetric: S's row `dof` is its column).
+    fn put_lam(&self, a: &mut DMatrix<f64>, ri: usize, terms: &[(usize, f64)]) -> f64 {
+        let (st, m) = (self.st, self.m);
+        let mut row = a.column_mut(ri);
+        for &(dof, f) in terms {
+            let s_row = st.s.column(dof);
+            for (jc, u) in self.cols.iter().enumerate() {
+                row[jc] -= f * s_row[u.dof];
+            }
+            for cz in 0..self.mz {
+                row[m + cz] += f * st.sg[(dof, cz)];
+            }
+        }
+        terms
+            .iter()
+            .map(|&(dof, f)| f * self.base[dof])
+            .sum::<f64>()
+    }
+}
+
+/// λ at u_F = 0, α = 0: r − S u_K (`known`: u_K, NaN at the unknowns).
+fn primal_base(st: &Stiff, known: &[f64]) -> Vec<f64> {
+    let mut base = st.r.to_vec();
+    for (j, &uj) in known.iter().enumerate() {
+        if uj.is_finite() && uj != 0.0 {
+            for (b, sij) in base.iter_mut().zip(st.s.column(j).iter()) {
+                *b -= sij * uj;
+            }
+        }
+    }
+    base
+}
+
 /// |u − u_prev| / |u| (0 for u = 0). Pure.
 fn relative_change(u: &[f64], u_prev: &[f64]) -> f64 {
     let du: f64 = u.iter().zip(u_prev).map(|(a, b)| (a - b).powi(2)).sum();
@@ -221,88 +297,52 @@ impl DenseIteration<'_> {
         let (d, n) = (self.dim, self.cb.nodes.len());
         let (law, c) = (self.law, self.c);
         let scale = threshold_scale_local(self.cb, start, law, c);
-        let mut set = ActiveSet::warm(self.cb, start, law, c, scale, d);
-        let mut it = Iterate::new(n, 0, true);
-        let mut last_still = None;
-        let mut steps = Vec::new();
-        let mut sys = self.system(&set);
-        let mut primal = 0;
-        // the set the last iterate was solved on, for a step whose settled rows leave the
-        // system singular (below); from then on the (F5) rows alone, as the plain path has them
-        let mut before: Option<ActiveSet> = None;
-        let mut settle = self.settle;
-        let mut f5_from = 0;
+        let mut w = Walk {
+            set: ActiveSet::warm(self.cb, start, law, c, scale, d),
+            it: Iterate::new(n, 0, true),
+            last_still: None,
+            steps: Vec::new(),
+            primal: 0,
+            before: None,
+            settle: self.settle,
+            f5_from: 0,
+        };
+        let mut sys = self.system(&w.set);
         for step in 1..=self.max_steps {
             let t = Instant::now();
-            let mut solved = sys.and_then(|sk| Some((solve_system(&sk)?, sk)));
-            if solved.is_none() {
-                let unsettled = before.take().map(|b| self.unsettled(b, &it));
-                if let Some(alt) = unsettled.filter(|alt| *alt != set) {
-                    settle = false;
-                    f5_from = step;
-                    set = alt;
-                    solved = self
-                        .system(&set)
-                        .and_then(|sk| Some((solve_system(&sk)?, sk)));
-                }
-            }
-            primal += solved.as_ref().is_some_and(|(_, s)| s.known.is_some()) as usize;
-            let Some((x, sys_k)) = solved else {
+            let Some((x, sys_k)) = self.solve_step(&mut w, sys, step) else {
                 let why = format!("the dense Coulomb system of step {step} is singular");
-                return self.end(
-                    &set,
-                    (vec![0.0; n * d], Vec::new()),
-                    (steps, primal),
-                    Err(why),
-                );
+                return self.failed(w, why);
             };
             let (lam, u, alpha) = self.unknowns(&sys_k, &x);
-            self.records(&set, &lam, &u, &mut it.nodes);
-            let scale = threshold_scale_local(self.cb, &it.nodes, law, c);
-            let up = set.update_with(&it, self.cb, law, c, scale, d, settle); // (3.23) / (F5)
-            let (residual, lambda_norm) = (up.residual2.sqrt(), up.lambda2.sqrt());
+            self.records(&w.set, &lam, &u, &mut w.it.nodes);
+            let scale = threshold_scale_local(self.cb, &w.it.nodes, law, c);
+            let up = w
+                .set
+                .update_with(&w.it, self.cb, law, c, scale, d, w.settle); // (3.23) / (F5)
+            let residual = up.residual2.sqrt();
             let du_rel = relative_change(&u, &u_prev);
             let seconds = t.elapsed().as_secs_f64();
-            steps.push((step, set.local_active(), up.changed, residual, seconds));
-            // The stall rule without |Δu| < tol_u: on a floating body the dense u carries the
-            // round-off of α, |Δu|/|u| stays above tol_u while the residual sits at its
-            // round-off (measured: the floating Hertz disk at 171 602 unknowns, |C| ~ 3e-11 of
-            // |λ| ~ 8e-4 for 90 steps); the expanded iterate is checked on every node anyway.
-            let unchanged = up.changed == 0;
-            let stall = stalled(unchanged, last_still, residual, lambda_norm);
-            last_still = unchanged.then_some(residual);
-            let zero = residual <= COULOMB_RESIDUAL_ZERO * lambda_norm;
-            let small = residual <= COULOMB_RESIDUAL_TOL * lambda_norm;
-            let accept = unchanged && (zero || stall || (du_rel < self.tol_u && small));
-            // The next step's system holds at this iterate as well as its own did (states
-            // unchanged, and the rows that changed hold at it to round-off): the next step would
-            // return the same iterate, so it is not taken
-            let next = if accept { None } else { self.system(&up.next) };
-            let fixed = !accept
-                && unchanged
-                && residual <= COULOMB_RESIDUAL_STALL * lambda_norm
-                && next.as_ref().is_some_and(|sn| {
-                    sn.cols == sys_k.cols
-                        && sn.known.is_some() == sys_k.known.is_some()
-                        && fixed_point(sn, &x, residual_at(&sys_k, &x))
-                });
-            if accept || fixed {
-                let stalled = residual > COULOMB_RESIDUAL_TOL * lambda_norm;
-                let (sys, u) = (&sys_k, &u[..]);
-                let at = Accepted {
-                    sys,
-                    u,
-                    lam,
-                    alpha,
-                    steps,
-                    primal,
-                    stalled,
-                    f5_from,
-                };
-                return self.accepted(&set, at);
-            }
-            let solved_on = std::mem::replace(&mut set, up.next);
-            before = settle.then_some(solved_on);
+            w.steps
+                .push((step, w.set.local_active(), up.changed, residual, seconds));
+            let next = match self.judge(&mut w.last_still, &up, &sys_k, &x, du_rel) {
+                Judgement::Accept { stalled } => {
+                    let at = Accepted {
+                        sys: &sys_k,
+                        u: &u,
+                        lam,
+                        alpha,
+                        steps: w.steps,
+                        primal: w.primal,
+                        stalled,
+                        f5_from: w.f5_from,
+                    };
+                    return self.accepted(&w.set, at);
+                }
+                Judgement::Continue(next) => next,
+            };
+            let solved_on = std::mem::replace(&mut w.set, up.next);
+            w.before = w.settle.then_some(solved_on);
             u_prev = u;
             sys = next;
         }
@@ -310,12 +350,84 @@ impl DenseIteration<'_> {
             "the dense Coulomb iteration did not converge in {} steps",
             self.max_steps
         );
+        self.failed(w, why)
+    }
+
+    /// The run ended without an accepted iterate (`why`), with the walk's set and steps.
+    fn failed(&self, w: Walk, why: String) -> DenseCoulomb {
+        let (d, n) = (self.dim, self.cb.nodes.len());
         self.end(
-            &set,
+            &w.set,
             (vec![0.0; n * d], Vec::new()),
-            (steps, primal),
+            (w.steps, w.primal),
             Err(why),
         )
+    }
+
+    /// A step's system `sys` solved, or where it is singular the system of the set the last
+    /// iterate was solved on with unsettled (F5) rows (from then on the (F5) rows alone, as
+    /// the plain path has them); the primal-form steps counted. `None`: singular.
+    fn solve_step(
+        &self,
+        w: &mut Walk,
+        sys: Option<System>,
+        step: usize,
+    ) -> Option<(Vec<f64>, System)> {
+        let mut solved = sys.and_then(|sk| Some((solve_system(&sk)?, sk)));
+        if solved.is_none() {
+            let unsettled = w.before.take().map(|b| self.unsettled(b, &w.it));
+            if let Some(alt) = unsettled.filter(|alt| *alt != w.set) {
+                w.settle = false;
+                w.f5_from = step;
+                w.set = alt;
+                solved = self
+                    .system(&w.set)
+                    .and_then(|sk| Some((solve_system(&sk)?, sk)));
+            }
+        }
+        w.primal += solved.as_ref().is_some_and(|(_, s)| s.known.is_some()) as usize;
+        solved
+    }
+
+    /// Whether the iterate x of the system `sys_k` is accepted, given the set's update `up`
+    /// at it and |Δu|/|u| (`last_still`: the residual of the last step that changed no
+    /// state, updated here); else the next step's system.
+    fn judge(
+        &self,
+        last_still: &mut Option<f64>,
+        up: &SetUpdate,
+        sys_k: &System,
+        x: &[f64],
+        du_rel: f64,
+    ) -> Judgement {
+        let (residual, lambda_norm) = (up.residual2.sqrt(), up.lambda2.sqrt());
+        // The stall rule without |Δu| < tol_u: on a floating body the dense u carries the
+        // round-off of α, |Δu|/|u| stays above tol_u while the residual sits at its
+        // round-off (measured: the floating Hertz disk at 171 602 unknowns, |C| ~ 3e-11 of
+        // |λ| ~ 8e-4 for 90 steps); the expanded iterate is checked on every node anyway.
+        let unchanged = up.changed == 0;
+        let stall = stalled(unchanged, *last_still, residual, lambda_norm);
+        *last_still = unchanged.then_some(residual);
+        let zero = residual <= COULOMB_RESIDUAL_ZERO * lambda_norm;
+        let small = residual <= COULOMB_RESIDUAL_TOL * lambda_norm;
+        let accept = unchanged && (zero || stall || (du_rel < self.tol_u && small));
+        // The next step's system holds at this iterate as well as its own did (states
+        // unchanged, and the rows that changed hold at it to round-off): the next step would
+        // return the same iterate, so it is not taken
+        let next = if accept { None } else { self.system(&up.next) };
+        let fixed = !accept
+            && unchanged
+            && residual <= COULOMB_RESIDUAL_STALL * lambda_norm
+            && next.as_ref().is_some_and(|sn| {
+                sn.cols == sys_k.cols
+                    && sn.known.is_some() == sys_k.known.is_some()
+                    && fixed_point(sn, x, residual_at(sys_k, x))
+            });
+        if accept || fixed {
+            let stalled = residual > COULOMB_RESIDUAL_TOL * lambda_norm;
+            return Judgement::Accept { stalled };
+        }
+        Judgement::Continue(next)
     }
 
     /// The set `before` updated at the iterate `it` (the last iterate: a singular step has no
@@ -494,7 +606,33 @@ impl DenseIteration<'_> {
     /// (slip), Gᵀ λ = φ, with λ = r − S (u − G α) and u = −g, u_τ^ref where the set prescribes
     /// it; rows equilibrated as the dual form's.
     fn system_primal(&self, set: &ActiveSet, rows: &[CoulombRow<2>], st: &Stiff) -> System {
-        let (d, n, mz) = (self.dim, self.cb.nodes.len(), self.g.ncols());
+        let mz = self.g.ncols();
+        let PrimalUnknowns { known, cols, at } = self.primal_unknowns(set, rows);
+        let m = cols.len();
+        let pr = PrimalRows {
+            st,
+            cols: &cols,
+            base: primal_base(st, &known),
+            m,
+            mz,
+        };
+        let mut a = DMatrix::<f64>::zeros(m + mz, m + mz);
+        let mut rhs = DVector::<f64>::zeros(m + mz);
+        self.primal_contact_rows(set, rows, &pr, &at, &mut a, &mut rhs);
+        self.primal_balance(&pr, &mut a, &mut rhs);
+        equilibrate(&mut a, &mut rhs);
+        System {
+            a,
+            rhs,
+            cols,
+            known: Some(known),
+        }
+    }
+
+    /// The primal form's unknowns: every dof of an inactive candidate, the tangential dofs of
+    /// a slipping one; u = −g, u_τ^ref where the set prescribes it.
+    fn primal_unknowns(&self, set: &ActiveSet, rows: &[CoulombRow<2>]) -> PrimalUnknowns {
+        let (d, n) = (self.dim, self.cb.nodes.len());
         let mut known = vec![f64::NAN; n * d];
         let mut cols: Vec<Unknown> = Vec::new();
         let mut at = vec![usize::MAX; n];
@@ -512,39 +650,27 @@ impl DenseIteration<'_> {
                 known[q * d + 1..q * d + d].copy_from_slice(&k.u_t_ref[..d - 1]);
             }
         }
-        let m = cols.len();
-        // λ at u_F = 0, α = 0: r − S u_K
-        let mut base = st.r.to_vec();
-        for (j, &uj) in known.iter().enumerate() {
-            if uj.is_finite() && uj != 0.0 {
-                for (b, sij) in base.iter_mut().zip(st.s.column(j).iter()) {
-                    *b -= sij * uj;
-                }
-            }
-        }
-        let mut a = DMatrix::<f64>::zeros(m + mz, m + mz);
-        let mut rhs = DVector::<f64>::zeros(m + mz);
-        // row `ri` += Σ_t coef_t λ(dof_t); returns its constant part Σ_t coef_t base(dof_t)
-        // (S symmetric: S's row `dof` is its column)
-        let put_lam = |a: &mut DMatrix<f64>, ri: usize, terms: &[(usize, f64)]| -> f64 {
-            let mut row = a.column_mut(ri);
-            for &(dof, f) in terms {
-                let s_row = st.s.column(dof);
-                for (jc, u) in cols.iter().enumerate() {
-                    row[jc] -= f * s_row[u.dof];
-                }
-                for cz in 0..mz {
-                    row[m + cz] += f * st.sg[(dof, cz)];
-                }
-            }
-            terms.iter().map(|&(dof, f)| f * base[dof]).sum::<f64>()
-        };
+        PrimalUnknowns { known, cols, at }
+    }
+
+    /// The primal form's rows of the candidates: λ = 0 (inactive) and (F6) (slip); a sticking
+    /// node has no unknown and no row.
+    fn primal_contact_rows(
+        &self,
+        set: &ActiveSet,
+        rows: &[CoulombRow<2>],
+        pr: &PrimalRows,
+        at: &[usize],
+        a: &mut DMatrix<f64>,
+        rhs: &mut DVector<f64>,
+    ) {
+        let d = self.dim;
         let mut ri = 0;
         for (q, k) in self.cb.nodes.iter().enumerate() {
             if !set.normal[q] {
                 // λ = 0
                 for b in 0..d {
-                    rhs[ri] = -put_lam(&mut a, ri, &[(q * d + b, 1.0)]);
+                    rhs[ri] = -pr.put_lam(a, ri, &[(q * d + b, 1.0)]);
                     ri += 1;
                 }
                 continue;
@@ -554,7 +680,7 @@ impl DenseIteration<'_> {
             };
             // (F6): −λ_τ − q λ_n + L̃ u_τ = r̃ (+ L̃ u_τ^ref, in r)
             for i in 0..d - 1 {
-                let c0 = put_lam(&mut a, ri, &[(q * d + 1 + i, -1.0), (q * d, -qc[i])]);
+                let c0 = pr.put_lam(a, ri, &[(q * d + 1 + i, -1.0), (q * d, -qc[i])]);
                 for j in 0..d - 1 {
                     a[(at[q] + j, ri)] += l[i][j];
                 }
@@ -562,11 +688,15 @@ impl DenseIteration<'_> {
                 ri += 1;
             }
         }
-        debug_assert_eq!(ri, m);
-        // the balance of the free modes: Gᵀ λ = φ, λ = base − S u_F + S G α
+        debug_assert_eq!(ri, pr.m);
+    }
+
+    /// The primal form's balance of the free modes: Gᵀ λ = φ, λ = base − S u_F + S G α.
+    fn primal_balance(&self, pr: &PrimalRows, a: &mut DMatrix<f64>, rhs: &mut DVector<f64>) {
+        let (st, m, mz) = (pr.st, pr.m, pr.mz);
         for cz in 0..mz {
             let mut row = a.column_mut(m + cz);
-            for (jc, u) in cols.iter().enumerate() {
+            for (jc, u) in pr.cols.iter().enumerate() {
                 row[jc] = -st.sg[(u.dof, cz)];
             }
             for c2 in 0..mz {
@@ -576,17 +706,10 @@ impl DenseIteration<'_> {
                 .g
                 .column(cz)
                 .iter()
-                .zip(&base)
+                .zip(&pr.base)
                 .map(|(g, b)| g * b)
                 .sum();
             rhs[m + cz] = self.phi[cz] - gb;
-        }
-        equilibrate(&mut a, &mut rhs);
-        System {
-            a,
-            rhs,
-            cols,
-            known: Some(known),
         }
     }
 
@@ -777,342 +900,4 @@ impl DenseIteration<'_> {
 }
 
 #[cfg(test)]
-mod tests {
-    use super::*;
-    use crate::contact::Frame;
-    use crate::signorini::boundary::ContactNode;
-
-    /// A coupled line of `n` candidates (2D) pressed onto a flat obstacle and pushed sideways:
-    /// normal and tangential compliances C_ij = exp(−|i−j| / 8) (positive definite, uncoupled
-    /// between the directions), d₀ a parabola deepest at the middle along the normal and a
-    /// uniform sideways push `push`; μ = 0.3. The middle sticks, the edges slip (Cattaneo).
-    fn pushed_line(n: usize, push: f64) -> (DMatrix<f64>, Vec<f64>, ContactBoundary) {
-        let k = |i: usize, j: usize| (-(i as f64 - j as f64).abs() / 8.0).exp();
-        let cmat = DMatrix::from_fn(2 * n, 2 * n, |r, q| {
-            if r % 2 == q % 2 {
-                k(r / 2, q / 2)
-            } else {
-                0.0
-            }
-        });
-        let mid = (n / 2) as f64;
-        let d0: Vec<f64> = (0..2 * n)
-            .map(|r| {
-                let t = ((r / 2) as f64 - mid) / mid;
-                if r % 2 == 0 {
-                    -1.0 + 2.0 * t * t
-                } else {
-                    push
-                }
-            })
-            .collect();
-        let nodes = (0..n)
-            .map(|i| ContactNode {
-                node: i,
-                pair: 0,
-                mu: 0.3,
-                tag: i as u64,
-                row: 0,
-                local_row: 0,
-                x: [i as f64, 0.0, 0.0],
-                frame: Frame::new([0.0, 1.0, 0.0], 2).expect("unit normal"),
-                gap: 0.0,
-                weight: 0.0,
-                bound: 0.0,
-                u_t_ref: [0.0; 2],
-            })
-            .collect();
-        let cb = ContactBoundary {
-            nodes,
-            n_global: n,
-            offset: 0,
-            on_contact_boundary: Vec::new(),
-            excluded_dirichlet: 0,
-            obstacles: Vec::new(),
-            keys: Default::default(),
-        };
-        (cmat, d0, cb)
-    }
-
-    /// The pushed line ([`pushed_line`]) with Cᵀ and no free modes.
-    struct Line {
-        cmat: DMatrix<f64>,
-        cmat_t: DMatrix<f64>,
-        d0: Vec<f64>,
-        g: DMatrix<f64>,
-        cb: ContactBoundary,
-    }
-
-    impl Line {
-        fn new(n: usize, push: f64) -> Line {
-            let (cmat, d0, cb) = pushed_line(n, push);
-            Line {
-                cmat_t: cmat.transpose(),
-                cmat,
-                d0,
-                g: DMatrix::zeros(2 * n, 0),
-                cb,
-            }
-        }
-
-        /// Its dense Coulomb iteration (μ = 0.3) with c, the settled rows on.
-        fn dense(&self, c: f64) -> DenseIteration<'_> {
-            DenseIteration {
-                dim: 2,
-                cmat: &self.cmat,
-                cmat_t: &self.cmat_t,
-                d0: &self.d0,
-                g: &self.g,
-                phi: &[],
-                cb: &self.cb,
-                law: Law::Coulomb,
-                c,
-                max_steps: 100,
-                tol_u: 1e-10,
-                settle: true,
-                stiff: None,
-            }
-        }
-    }
-
-    /// Runs `f` on a thread with a stack of its own: a multithreaded BLAS may take more than a
-    /// test thread's 2 MB.
-    fn on_big_stack(f: impl FnOnce() + Send + 'static) {
-        std::thread::Builder::new()
-            .stack_size(64 << 20)
-            .spawn(f)
-            .expect("thread")
-            .join()
-            .expect("the test");
-    }
-
-    #[test]
-    fn nested_coulomb_ends_in_the_plain_runs_solution_in_fewer_fine_steps() {
-        on_big_stack(nested_against_plain);
-    }
-
-    /// A 2D slip row without spring and right-hand side ties λ_τ = −q λ_n: the node keeps one
-    /// unknown and one row, and the solution still satisfies every row of the set.
-    #[test]
-    fn a_settled_slip_nodes_tangential_force_is_tied_to_its_normal_force() {
-        on_big_stack(|| {
-            let n = 9;
-            let line = Line::new(n, 0.1);
-            let (dense, cb) = (line.dense(1.0), &line.cb);
-            // the outer four nodes slip outwards (settled rows), the middle five stick
-            let coef = |q: usize| if q < 2 { -0.3 } else { 0.3 };
-            let row = |q: usize| {
-                if q < 2 || q >= n - 2 {
-                    CoulombRow::Slip {
-                        l: [[0.0; 2]; 2],
-                        q: [coef(q), 0.0],
-                        r: [0.0; 2],
-                    }
-                } else {
-                    CoulombRow::Stick
-                }
-            };
-            let set = ActiveSet {
-                normal: vec![true; n],
-                tangential: Some((0..n).map(row).collect()),
-                spring_floor: 0.0,
-                stick_active: false,
-            };
-            let sys = dense.system(&set).expect("rows");
-            assert_eq!(sys.cols.len(), 4 + 2 * 5);
-            let x = solve_system(&sys).expect("regular");
-            let (lam, u, _) = dense.unknowns(&sys, &x);
-            let (su, sl) = (
-                u.iter().fold(0.0_f64, |m, v| m.max(v.abs())),
-                lam.iter().fold(0.0_f64, |m, v| m.max(v.abs())),
-            );
-            for q in 0..n {
-                assert!(
-                    (u[2 * q] + cb.nodes[q].gap).abs() <= 1e-12 * su,
-                    "u_n of {q}"
-                );
-                if set.slip(q) {
-                    let tied = lam[2 * q + 1] + coef(q) * lam[2 * q];
-                    assert!(tied.abs() <= 1e-12 * sl, "λ_τ of {q}: {tied}");
-                    assert!(lam[2 * q + 1] != 0.0);
-                } else {
-                    assert!(u[2 * q + 1].abs() <= 1e-12 * su, "u_τ of {q}");
-                }
-            }
-        });
-    }
-
-    /// The primal form (on S = C⁻¹ itself) against the dual form on C, on the pushed line
-    /// pressed in everywhere (every node active: the primal form has the slipping nodes'
-    /// tangential displacements alone as unknowns): the same final states and λ.
-    #[test]
-    fn the_primal_form_ends_where_the_dual_form_ends() {
-        on_big_stack(|| {
-            let n = 65;
-            let mut line = Line::new(n, 0.0);
-            let mid = (n / 2) as f64;
-            for q in 0..n {
-                let t = (q as f64 - mid) / mid;
-                line.d0[2 * q] = -1.0 - 0.5 * t * t;
-                line.d0[2 * q + 1] = 0.6 * t;
-            }
-            let s = line.cmat.clone().try_inverse().expect("SPD");
-            let r = (&s * DVector::from_column_slice(&line.d0))
-                .as_slice()
-                .to_vec();
-            let sg = &s * &line.g;
-            let gsg = line.g.transpose() * &sg;
-            let st = Stiff {
-                s: &s,
-                r: &r,
-                sg,
-                gsg,
-            };
-            let dual = line.dense(100.0);
-            let primal = DenseIteration {
-                stiff: Some(&st),
-                ..dual
-            };
-            let (start, u_prev) = dual.frictionless_start(&vec![true; n], &vec![0.0; n]);
-            let a = dual.run(&start, u_prev.clone());
-            let b = primal.run(&start, u_prev);
-            assert!(a.end.is_ok() && b.end.is_ok(), "{:?} {:?}", a.end, b.end);
-            assert_eq!((a.primal_steps, b.primal_steps), (0, b.steps.len()));
-            let slips = (0..n).filter(|&q| b.active[q] && b.slip[q]).count();
-            let sticks = (0..n).filter(|&q| b.active[q] && !b.slip[q]).count();
-            assert!(slips > 5 && sticks > 5, "{slips} slip, {sticks} stick");
-            assert_eq!((a.active.clone(), a.slip.clone()), (b.active, b.slip));
-            let scale = a.lambda.iter().fold(0.0_f64, |m, x| m.max(x.abs()));
-            for (x, y) in a.lambda.iter().zip(&b.lambda) {
-                assert!((x - y).abs() <= 1e-10 * scale, "{x} {y}");
-            }
-            // the primal iterate's own u − G α: the dual's d₀ − C λ
-            let w = DVector::from_column_slice(&line.d0)
-                - &line.cmat * DVector::from_column_slice(&a.lambda);
-            let wmax = w.iter().fold(0.0_f64, |m, x| m.max(x.abs()));
-            for (x, y) in w.iter().zip(&b.x_s) {
-                assert!((x - y).abs() <= 1e-10 * wmax, "{x} {y}");
-            }
-        });
-    }
-
-    #[test]
-    fn a_system_that_holds_at_the_iterate_is_a_fixed_point() {
-        // rows as columns: [[2, 1], [0, 4]] x = [3, 4] ⇒ x = (1, 1)
-        let sys = |a: [[f64; 2]; 2], b: [f64; 2]| System {
-            a: DMatrix::from_fn(2, 2, |j, i| a[i][j]),
-            rhs: DVector::from_row_slice(&b),
-            cols: vec![Unknown { dof: 0, tied: None }],
-            known: None,
-        };
-        let own = sys([[2.0, 1.0], [0.0, 4.0]], [3.0, 4.0]);
-        let x = [1.0, 1.0 + 2.0 * f64::EPSILON];
-        let r = residual_at(&own, &x);
-        assert!(r > 0.0 && r < 1e-14, "{r}");
-        // the same rows: a fixed point; one row scaled: still (it holds at x)
-        assert!(fixed_point(&own, &x, r));
-        assert!(fixed_point(
-            &sys([[2.0, 1.0], [0.0, 8.0]], [3.0, 8.0]),
-            &x,
-            r
-        ));
-        // a row that changed beyond round-off at x: not
-        assert!(!fixed_point(
-            &sys([[2.0, 1.0], [0.0, 4.0]], [3.0, 4.0 + 1e-9]),
-            &x,
-            r
-        ));
-        assert!(!fixed_point(
-            &sys([[2.0, 1.1], [0.0, 4.0]], [3.0, 4.0]),
-            &x,
-            r
-        ));
-    }
-
-    /// The settled rows (docs/friction.md, "Settled slip") against the (F5) rows throughout, on
-    /// the pushed line with c = 100 and a push under which every active node but one slips far
-    /// beyond its threshold: the same solution, in fewer fine steps after the nested start.
-    #[test]
-    fn settled_rows_end_a_wide_slip_in_fewer_steps() {
-        on_big_stack(|| {
-            let n = 129;
-            let line = Line::new(n, 0.3);
-            let settled = line.dense(100.0);
-            let f5 = DenseIteration {
-                settle: false,
-                ..settled
-            };
-            let active: Vec<bool> = (0..n).map(|i| i == n / 2).collect();
-            let (start, u_prev) = settled.frictionless_start(&active, &vec![0.0; n]);
-            let a = settled.run_nested(&start, u_prev.clone());
-            let b = f5.run_nested(&start, u_prev);
-            assert!(a.end.is_ok() && b.end.is_ok(), "{:?} {:?}", a.end, b.end);
-            let slips = (0..n).filter(|&q| a.active[q] && a.slip[q]).count();
-            assert!(slips > 50, "{slips} slipping");
-            let scale = b.lambda.iter().fold(0.0_f64, |m, x| m.max(x.abs()));
-            // A node on its stick/slip threshold to round-off (|λ_τ| = μ|λ_n|) solves the
-            // problem in either state, so its state is decided by the BLAS kernels' round-off
-            // (measured: the middle node sticks with OpenBLAS' Prescott and Haswell kernels and
-            // slips with SkylakeX and Nehalem): its state is not compared, its λ is.
-            let at_limit = |r: &DenseCoulomb, q: usize| {
-                (r.lambda[2 * q + 1].abs() - 0.3 * r.lambda[2 * q].abs()).abs() <= 1e-8 * scale
-            };
-            for q in 0..n {
-                assert_eq!(a.active[q], b.active[q], "node {q}");
-                if !(at_limit(&a, q) && at_limit(&b, q)) {
-                    assert_eq!(a.slip[q], b.slip[q], "node {q}");
-                }
-            }
-            for (x, y) in a.lambda.iter().zip(&b.lambda) {
-                assert!((x - y).abs() <= 1e-10 * scale, "{x} {y}");
-            }
-            assert!(
-                a.steps.len() < b.steps.len(),
-                "fine steps: settled {}, (F5) rows {}",
-                a.steps.len(),
-                b.steps.len()
-            );
-        });
-    }
-
-    fn nested_against_plain() {
-        let n = 129;
-        let line = Line::new(n, 0.1);
-        let dense = line.dense(1.0);
-        // the frictionless start: the middle node touching, λ = 0
-        let active: Vec<bool> = (0..n).map(|i| i == n / 2).collect();
-        let (start, u_prev) = dense.frictionless_start(&active, &vec![0.0; n]);
-        let plain = dense.run(&start, u_prev.clone());
-        let nested = dense.run_nested(&start, u_prev);
-        assert!(
-            plain.end.is_ok() && nested.end.is_ok(),
-            "{:?} {:?}",
-            plain.end,
-            nested.end
-        );
-        let (slips, sticks) = (0..n)
-            .filter(|&q| plain.active[q])
-            .fold((0, 0), |(s, k), q| {
-                if plain.slip[q] {
-                    (s + 1, k)
-                } else {
-                    (s, k + 1)
-                }
-            });
-        assert!(
-            slips > 0 && sticks > 0,
-            "partial slip: {slips} slip, {sticks} stick"
-        );
-        let scale = plain.lambda.iter().fold(0.0_f64, |m, x| m.max(x.abs()));
-        for (a, b) in nested.lambda.iter().zip(&plain.lambda) {
-            assert!((a - b).abs() <= 1e-10 * scale, "{a} {b}");
-        }
-        assert!(!nested.coarse.is_empty());
-        assert!(
-            nested.steps.len() < plain.steps.len(),
-            "fine steps: nested {} plain {}",
-            nested.steps.len(),
-            plain.steps.len()
-        );
-    }
-}
+mod tests;

@@ -13,10 +13,11 @@ use crate::par::Ctx;
 use crate::petsc::PInt;
 use crate::say;
 use crate::signorini::active_set::{ActiveSet, Iterate, Law};
+use crate::signorini::boundary::ContactBoundary;
 use crate::signorini::dense::{guarded, Dense, DenseRun, End, Primal};
 use crate::signorini::halfspace::{self};
 use crate::signorini::plain_path::{ContactProblem, NewtonSettings, StepInfo, WarmStart};
-use crate::signorini::rigid::FreeModes;
+use crate::signorini::rigid::{FreeModes, Motion};
 use crate::signorini::step_system::ReducedSystem;
 use nalgebra::{DMatrix, DVector};
 use std::time::Instant;
@@ -427,72 +428,21 @@ pub(super) fn expand(
         f_root,
         n_local,
     } = at;
-    let (mesh, layout, b, sys) = (p.mesh, p.layout, p.boundary, p.sys);
-    let (dim, off) = (mesh.dim, b.offset);
-    // On rank 0, in the candidates' frames: Qᵀ (f − N λ_n) (λ_n vanishes off the candidates:
-    // it enters each candidate's normal dof) and the normal dofs' part d₀ − C λ_n.
-    let lam: Vec<f64> = if ctx.rank == 0 {
-        let per = comp.per;
-        let mut lam = vec![0.0; comp.list.len() * per];
-        for (q, &i) in comp.list.iter().enumerate() {
-            lam[q * per] = lambda[i];
-        }
-        lam
-    } else {
-        Vec::new()
-    };
+    let b = p.boundary;
+    let (dim, off) = (p.mesh.dim, b.offset);
+    let lam = root_multipliers(ctx, comp, lambda);
     let w = match comp.expand_u(ctx, cand, (f_root, n_local), (&lam, &[])) {
         Ok(w) => w,
         Err(why) => return Ok(Err(why)),
     };
-    // local (this rank's array): agreed before the collectives that follow
-    let set = reduced.set_solution_local(&w).map_err(RunError::from);
-    let set = set.and_then(
-        |()| match crate::fault::injected("condensed-expand", ctx.rank) {
-            Some(m) => Err(RunError::Failed(m)),
-            None => Ok(()),
-        },
-    );
-    ctx.agree(set)?;
-    let z = free.dirichlet_free();
-    let mut rho = [0.0; 6];
-    for (j, r) in rho.iter_mut().enumerate().take(free.rigid_modes().m) {
-        *r = (0..z.ncols()).map(|c| z[(j, c)] * alpha[c]).sum();
-    }
+    set_expanded(ctx, reduced, &w)?;
     let set = ActiveSet::frictionless(active[off..off + b.nodes.len()].to_vec());
-    let gram = set.summarise(ctx, b, free.modes(), dim).gram;
-    let mut fin = FreeModes::new(ctx, mesh, layout, p.fixed, b, &reduced.f_local, s.rigid);
-    fin.update(ctx, mesh, layout, &gram)?;
-    if !fin.pins().is_empty() {
-        let idx: Vec<PInt> = fin
-            .pins()
-            .iter()
-            .map(|&(v, k)| (v * dim + k) as PInt)
-            .collect();
-        let at = reduced.solution_at(&idx)?;
-        let corr = fin.motion_to_zero_pins(&at, &rho);
-        for (x, c) in rho.iter_mut().zip(corr) {
-            *x += c;
-        }
-    }
+    let (rho, fin) = pinned_motion(ctx, p, reduced, s, free, &set, alpha)?;
     let mut shifted = b.clone();
     free.shift(b, &rho, &mut shifted);
-    // force control: the gaps to the obstacles moved by δ_j e_j (δ_j the free-mode
-    // coefficients after the body's own)
-    let approach: Vec<f64> = s
-        .force
-        .iter()
-        .enumerate()
-        .map(|(j, fc)| {
-            let delta = alpha[z.ncols() + j];
-            for k in shifted.nodes.iter_mut().filter(|k| k.pair == fc.pair) {
-                k.gap -= delta * fc.weight(k);
-            }
-            delta
-        })
-        .collect();
+    let approach = force_approach(s, alpha, free.dirichlet_free().ncols(), &mut shifted);
     let mut it = Iterate::new(b.nodes.len(), n_local, false);
-    reduced.recover(sys, &shifted, &set, &mut it)?; // (3.28)
+    reduced.recover(p.sys, &shifted, &set, &mut it)?; // (3.28)
     let update = set.update(&it, &shifted, Law::Frictionless, s.c, 0.0, dim); // (3.23)
     let changed_here: Vec<u64> = set
         .normal
@@ -509,6 +459,91 @@ pub(super) fn expand(
         changed: ctx.all_gather_varcount(&changed_here),
         approach,
     }))
+}
+
+/// On rank 0, in the candidates' frames, the multipliers that enter Qᵀ (f − N λ_n) (λ_n
+/// vanishes off the candidates: it enters each candidate's normal dof) and the normal dofs'
+/// part d₀ − C λ_n; empty elsewhere.
+fn root_multipliers(ctx: &Ctx, comp: &Compliance, lambda: &[f64]) -> Vec<f64> {
+    if ctx.rank != 0 {
+        return Vec::new();
+    }
+    let per = comp.per;
+    let mut lam = vec![0.0; comp.list.len() * per];
+    for (q, &i) in comp.list.iter().enumerate() {
+        lam[q * per] = lambda[i];
+    }
+    lam
+}
+
+/// w into `reduced` (this rank's array), agreed before the collectives that follow.
+/// Collective.
+fn set_expanded(ctx: &Ctx, reduced: &mut ReducedSystem, w: &[f64]) -> Result<(), RunError> {
+    let set = reduced.set_solution_local(w).map_err(RunError::from);
+    let set = set.and_then(
+        |()| match crate::fault::injected("condensed-expand", ctx.rank) {
+            Some(m) => Err(RunError::Failed(m)),
+            None => Ok(()),
+        },
+    );
+    ctx.agree(set)
+}
+
+/// ρ = R z α, normalised at the pins the plain path chooses for `set` on the expanded w, and
+/// the free modes that chose them. Collective.
+fn pinned_motion(
+    ctx: &Ctx,
+    p: &ContactProblem,
+    reduced: &ReducedSystem,
+    s: &NewtonSettings,
+    free: &FreeModes,
+    set: &ActiveSet,
+    alpha: &[f64],
+) -> Result<(Motion, FreeModes), RunError> {
+    let (mesh, layout, b) = (p.mesh, p.layout, p.boundary);
+    let dim = mesh.dim;
+    let z = free.dirichlet_free();
+    let mut rho = [0.0; 6];
+    for (j, r) in rho.iter_mut().enumerate().take(free.rigid_modes().m) {
+        *r = (0..z.ncols()).map(|c| z[(j, c)] * alpha[c]).sum();
+    }
+    let gram = set.summarise(ctx, b, free.modes(), dim).gram;
+    let mut fin = FreeModes::new(ctx, mesh, layout, p.fixed, b, &reduced.f_local, s.rigid);
+    fin.update(ctx, mesh, layout, &gram)?;
+    if !fin.pins().is_empty() {
+        let idx: Vec<PInt> = fin
+            .pins()
+            .iter()
+            .map(|&(v, k)| (v * dim + k) as PInt)
+            .collect();
+        let at = reduced.solution_at(&idx)?;
+        let corr = fin.motion_to_zero_pins(&at, &rho);
+        for (x, c) in rho.iter_mut().zip(corr) {
+            *x += c;
+        }
+    }
+    Ok((rho, fin))
+}
+
+/// Force control: the gaps of `shifted` to the obstacles moved by δ_j e_j (δ_j the free-mode
+/// coefficients after the body's own `body` ones); returns the δ_j.
+fn force_approach(
+    s: &NewtonSettings,
+    alpha: &[f64],
+    body: usize,
+    shifted: &mut ContactBoundary,
+) -> Vec<f64> {
+    s.force
+        .iter()
+        .enumerate()
+        .map(|(j, fc)| {
+            let delta = alpha[body + j];
+            for k in shifted.nodes.iter_mut().filter(|k| k.pair == fc.pair) {
+                k.gap -= delta * fc.weight(k);
+            }
+            delta
+        })
+        .collect()
 }
 
 #[cfg(test)]

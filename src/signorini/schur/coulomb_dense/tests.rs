@@ -1,0 +1,339 @@
+//! Tests of the dense Coulomb iteration on small synthetic compliances.
+
+use super::*;
+use crate::contact::Frame;
+use crate::signorini::boundary::ContactNode;
+
+/// A coupled line of `n` candidates (2D) pressed onto a flat obstacle and pushed sideways:
+/// normal and tangential compliances C_ij = exp(−|i−j| / 8) (positive definite, uncoupled
+/// between the directions), d₀ a parabola deepest at the middle along the normal and a
+/// uniform sideways push `push`; μ = 0.3. The middle sticks, the edges slip (Cattaneo).
+fn pushed_line(n: usize, push: f64) -> (DMatrix<f64>, Vec<f64>, ContactBoundary) {
+    let k = |i: usize, j: usize| (-(i as f64 - j as f64).abs() / 8.0).exp();
+    let cmat = DMatrix::from_fn(2 * n, 2 * n, |r, q| {
+        if r % 2 == q % 2 {
+            k(r / 2, q / 2)
+        } else {
+            0.0
+        }
+    });
+    let mid = (n / 2) as f64;
+    let d0: Vec<f64> = (0..2 * n)
+        .map(|r| {
+            let t = ((r / 2) as f64 - mid) / mid;
+            if r % 2 == 0 {
+                -1.0 + 2.0 * t * t
+            } else {
+                push
+            }
+        })
+        .collect();
+    let nodes = (0..n)
+        .map(|i| ContactNode {
+            node: i,
+            pair: 0,
+            mu: 0.3,
+            tag: i as u64,
+            row: 0,
+            local_row: 0,
+            x: [i as f64, 0.0, 0.0],
+            frame: Frame::new([0.0, 1.0, 0.0], 2).expect("unit normal"),
+            gap: 0.0,
+            weight: 0.0,
+            bound: 0.0,
+            u_t_ref: [0.0; 2],
+        })
+        .collect();
+    let cb = ContactBoundary {
+        nodes,
+        n_global: n,
+        offset: 0,
+        on_contact_boundary: Vec::new(),
+        excluded_dirichlet: 0,
+        obstacles: Vec::new(),
+        keys: Default::default(),
+    };
+    (cmat, d0, cb)
+}
+
+/// The pushed line ([`pushed_line`]) with Cᵀ and no free modes.
+struct Line {
+    cmat: DMatrix<f64>,
+    cmat_t: DMatrix<f64>,
+    d0: Vec<f64>,
+    g: DMatrix<f64>,
+    cb: ContactBoundary,
+}
+
+impl Line {
+    fn new(n: usize, push: f64) -> Line {
+        let (cmat, d0, cb) = pushed_line(n, push);
+        Line {
+            cmat_t: cmat.transpose(),
+            cmat,
+            d0,
+            g: DMatrix::zeros(2 * n, 0),
+            cb,
+        }
+    }
+
+    /// Its dense Coulomb iteration (μ = 0.3) with c, the settled rows on.
+    fn dense(&self, c: f64) -> DenseIteration<'_> {
+        DenseIteration {
+            dim: 2,
+            cmat: &self.cmat,
+            cmat_t: &self.cmat_t,
+            d0: &self.d0,
+            g: &self.g,
+            phi: &[],
+            cb: &self.cb,
+            law: Law::Coulomb,
+            c,
+            max_steps: 100,
+            tol_u: 1e-10,
+            settle: true,
+            stiff: None,
+        }
+    }
+}
+
+/// Runs `f` on a thread with a stack of its own: a multithreaded BLAS may take more than a
+/// test thread's 2 MB.
+fn on_big_stack(f: impl FnOnce() + Send + 'static) {
+    std::thread::Builder::new()
+        .stack_size(64 << 20)
+        .spawn(f)
+        .expect("thread")
+        .join()
+        .expect("the test");
+}
+
+#[test]
+fn nested_coulomb_ends_in_the_plain_runs_solution_in_fewer_fine_steps() {
+    on_big_stack(nested_against_plain);
+}
+
+/// A 2D slip row without spring and right-hand side ties λ_τ = −q λ_n: the node keeps one
+/// unknown and one row, and the solution still satisfies every row of the set.
+#[test]
+fn a_settled_slip_nodes_tangential_force_is_tied_to_its_normal_force() {
+    on_big_stack(|| {
+        let n = 9;
+        let line = Line::new(n, 0.1);
+        let (dense, cb) = (line.dense(1.0), &line.cb);
+        // the outer four nodes slip outwards (settled rows), the middle five stick
+        let coef = |q: usize| if q < 2 { -0.3 } else { 0.3 };
+        let row = |q: usize| {
+            if q < 2 || q >= n - 2 {
+                CoulombRow::Slip {
+                    l: [[0.0; 2]; 2],
+                    q: [coef(q), 0.0],
+                    r: [0.0; 2],
+                }
+            } else {
+                CoulombRow::Stick
+            }
+        };
+        let set = ActiveSet {
+            normal: vec![true; n],
+            tangential: Some((0..n).map(row).collect()),
+            spring_floor: 0.0,
+            stick_active: false,
+        };
+        let sys = dense.system(&set).expect("rows");
+        assert_eq!(sys.cols.len(), 4 + 2 * 5);
+        let x = solve_system(&sys).expect("regular");
+        let (lam, u, _) = dense.unknowns(&sys, &x);
+        let (su, sl) = (
+            u.iter().fold(0.0_f64, |m, v| m.max(v.abs())),
+            lam.iter().fold(0.0_f64, |m, v| m.max(v.abs())),
+        );
+        for q in 0..n {
+            assert!(
+                (u[2 * q] + cb.nodes[q].gap).abs() <= 1e-12 * su,
+                "u_n of {q}"
+            );
+            if set.slip(q) {
+                let tied = lam[2 * q + 1] + coef(q) * lam[2 * q];
+                assert!(tied.abs() <= 1e-12 * sl, "λ_τ of {q}: {tied}");
+                assert!(lam[2 * q + 1] != 0.0);
+            } else {
+                assert!(u[2 * q + 1].abs() <= 1e-12 * su, "u_τ of {q}");
+            }
+        }
+    });
+}
+
+/// The primal form (on S = C⁻¹ itself) against the dual form on C, on the pushed line
+/// pressed in everywhere (every node active: the primal form has the slipping nodes'
+/// tangential displacements alone as unknowns): the same final states and λ.
+#[test]
+fn the_primal_form_ends_where_the_dual_form_ends() {
+    on_big_stack(|| {
+        let n = 65;
+        let mut line = Line::new(n, 0.0);
+        let mid = (n / 2) as f64;
+        for q in 0..n {
+            let t = (q as f64 - mid) / mid;
+            line.d0[2 * q] = -1.0 - 0.5 * t * t;
+            line.d0[2 * q + 1] = 0.6 * t;
+        }
+        let s = line.cmat.clone().try_inverse().expect("SPD");
+        let r = (&s * DVector::from_column_slice(&line.d0))
+            .as_slice()
+            .to_vec();
+        let sg = &s * &line.g;
+        let gsg = line.g.transpose() * &sg;
+        let st = Stiff {
+            s: &s,
+            r: &r,
+            sg,
+            gsg,
+        };
+        let dual = line.dense(100.0);
+        let primal = DenseIteration {
+            stiff: Some(&st),
+            ..dual
+        };
+        let (start, u_prev) = dual.frictionless_start(&vec![true; n], &vec![0.0; n]);
+        let a = dual.run(&start, u_prev.clone());
+        let b = primal.run(&start, u_prev);
+        assert!(a.end.is_ok() && b.end.is_ok(), "{:?} {:?}", a.end, b.end);
+        assert_eq!((a.primal_steps, b.primal_steps), (0, b.steps.len()));
+        let slips = (0..n).filter(|&q| b.active[q] && b.slip[q]).count();
+        let sticks = (0..n).filter(|&q| b.active[q] && !b.slip[q]).count();
+        assert!(slips > 5 && sticks > 5, "{slips} slip, {sticks} stick");
+        assert_eq!((a.active.clone(), a.slip.clone()), (b.active, b.slip));
+        let scale = a.lambda.iter().fold(0.0_f64, |m, x| m.max(x.abs()));
+        for (x, y) in a.lambda.iter().zip(&b.lambda) {
+            assert!((x - y).abs() <= 1e-10 * scale, "{x} {y}");
+        }
+        // the primal iterate's own u − G α: the dual's d₀ − C λ
+        let w = DVector::from_column_slice(&line.d0)
+            - &line.cmat * DVector::from_column_slice(&a.lambda);
+        let wmax = w.iter().fold(0.0_f64, |m, x| m.max(x.abs()));
+        for (x, y) in w.iter().zip(&b.x_s) {
+            assert!((x - y).abs() <= 1e-10 * wmax, "{x} {y}");
+        }
+    });
+}
+
+#[test]
+fn a_system_that_holds_at_the_iterate_is_a_fixed_point() {
+    // rows as columns: [[2, 1], [0, 4]] x = [3, 4] ⇒ x = (1, 1)
+    let sys = |a: [[f64; 2]; 2], b: [f64; 2]| System {
+        a: DMatrix::from_fn(2, 2, |j, i| a[i][j]),
+        rhs: DVector::from_row_slice(&b),
+        cols: vec![Unknown { dof: 0, tied: None }],
+        known: None,
+    };
+    let own = sys([[2.0, 1.0], [0.0, 4.0]], [3.0, 4.0]);
+    let x = [1.0, 1.0 + 2.0 * f64::EPSILON];
+    let r = residual_at(&own, &x);
+    assert!(r > 0.0 && r < 1e-14, "{r}");
+    // the same rows: a fixed point; one row scaled: still (it holds at x)
+    assert!(fixed_point(&own, &x, r));
+    assert!(fixed_point(
+        &sys([[2.0, 1.0], [0.0, 8.0]], [3.0, 8.0]),
+        &x,
+        r
+    ));
+    // a row that changed beyond round-off at x: not
+    assert!(!fixed_point(
+        &sys([[2.0, 1.0], [0.0, 4.0]], [3.0, 4.0 + 1e-9]),
+        &x,
+        r
+    ));
+    assert!(!fixed_point(
+        &sys([[2.0, 1.1], [0.0, 4.0]], [3.0, 4.0]),
+        &x,
+        r
+    ));
+}
+
+/// The settled rows (docs/friction.md, "Settled slip") against the (F5) rows throughout, on
+/// the pushed line with c = 100 and a push under which every active node but one slips far
+/// beyond its threshold: the same solution, in fewer fine steps after the nested start.
+#[test]
+fn settled_rows_end_a_wide_slip_in_fewer_steps() {
+    on_big_stack(|| {
+        let n = 129;
+        let line = Line::new(n, 0.3);
+        let settled = line.dense(100.0);
+        let f5 = DenseIteration {
+            settle: false,
+            ..settled
+        };
+        let active: Vec<bool> = (0..n).map(|i| i == n / 2).collect();
+        let (start, u_prev) = settled.frictionless_start(&active, &vec![0.0; n]);
+        let a = settled.run_nested(&start, u_prev.clone());
+        let b = f5.run_nested(&start, u_prev);
+        assert!(a.end.is_ok() && b.end.is_ok(), "{:?} {:?}", a.end, b.end);
+        let slips = (0..n).filter(|&q| a.active[q] && a.slip[q]).count();
+        assert!(slips > 50, "{slips} slipping");
+        let scale = b.lambda.iter().fold(0.0_f64, |m, x| m.max(x.abs()));
+        // A node on its stick/slip threshold to round-off (|λ_τ| = μ|λ_n|) solves the
+        // problem in either state, so its state is decided by the BLAS kernels' round-off
+        // (measured: the middle node sticks with OpenBLAS' Prescott and Haswell kernels and
+        // slips with SkylakeX and Nehalem): its state is not compared, its λ is.
+        let at_limit = |r: &DenseCoulomb, q: usize| {
+            (r.lambda[2 * q + 1].abs() - 0.3 * r.lambda[2 * q].abs()).abs() <= 1e-8 * scale
+        };
+        for q in 0..n {
+            assert_eq!(a.active[q], b.active[q], "node {q}");
+            if !(at_limit(&a, q) && at_limit(&b, q)) {
+                assert_eq!(a.slip[q], b.slip[q], "node {q}");
+            }
+        }
+        for (x, y) in a.lambda.iter().zip(&b.lambda) {
+            assert!((x - y).abs() <= 1e-10 * scale, "{x} {y}");
+        }
+        assert!(
+            a.steps.len() < b.steps.len(),
+            "fine steps: settled {}, (F5) rows {}",
+            a.steps.len(),
+            b.steps.len()
+        );
+    });
+}
+
+fn nested_against_plain() {
+    let n = 129;
+    let line = Line::new(n, 0.1);
+    let dense = line.dense(1.0);
+    // the frictionless start: the middle node touching, λ = 0
+    let active: Vec<bool> = (0..n).map(|i| i == n / 2).collect();
+    let (start, u_prev) = dense.frictionless_start(&active, &vec![0.0; n]);
+    let plain = dense.run(&start, u_prev.clone());
+    let nested = dense.run_nested(&start, u_prev);
+    assert!(
+        plain.end.is_ok() && nested.end.is_ok(),
+        "{:?} {:?}",
+        plain.end,
+        nested.end
+    );
+    let (slips, sticks) = (0..n)
+        .filter(|&q| plain.active[q])
+        .fold((0, 0), |(s, k), q| {
+            if plain.slip[q] {
+                (s + 1, k)
+            } else {
+                (s, k + 1)
+            }
+        });
+    assert!(
+        slips > 0 && sticks > 0,
+        "partial slip: {slips} slip, {sticks} stick"
+    );
+    let scale = plain.lambda.iter().fold(0.0_f64, |m, x| m.max(x.abs()));
+    for (a, b) in nested.lambda.iter().zip(&plain.lambda) {
+        assert!((a - b).abs() <= 1e-10 * scale, "{a} {b}");
+    }
+    assert!(!nested.coarse.is_empty());
+    assert!(
+        nested.steps.len() < plain.steps.len(),
+        "fine steps: nested {} plain {}",
+        nested.steps.len(),
+        plain.steps.len()
+    );
+}

@@ -222,7 +222,11 @@ fn a_curved_slave_ending_on_a_mirror_plane_keeps_its_node_there() {
         let at_origin: Vec<_> = (s.contact_rows().into_iter())
             .filter(|r| r.f("x").abs() + r.f("y").abs() < 1e-12)
             .collect();
-        assert_eq!(at_origin.len(), 1, "{what}: the mirror-plane node is a contact node");
+        assert_eq!(
+            at_origin.len(),
+            1,
+            "{what}: the mirror-plane node is a contact node"
+        );
         assert!(at_origin[0].active(), "{what}: and active");
         let p = 2.0 * s.total_force()[1].abs();
         let (_, p_h) = hertz(p);

@@ -355,20 +355,9 @@ fn coulomb_passes(
         // a frictionless solve on the normal dofs alone keeps its factorisation for a next
         // load step, which no Coulomb step can use
         drop(session.kept.take());
-        let (mut nr, mut summary, kept) = match tried {
-            Ok((schur::Condensed::Solved(nr, s), kept)) => (*nr, s, kept),
-            Ok((schur::Condensed::Fallback(s), _)) | Ok((schur::Condensed::Factorised(s), _)) => {
-                say!(ctx, "coulomb: no frictionless start; starting from {from}");
-                return Ok(Passes::Done(Begin::Touching, Some(s)));
-            }
-            Err(RunError::Failed(why)) => {
-                say!(
-                    ctx,
-                    "coulomb: no frictionless start ({why}); starting from {from}"
-                );
-                return Ok(Passes::Done(Begin::Touching, None));
-            }
-            Err(e) => return Err(e),
+        let (mut nr, mut summary, kept) = match frictionless_start(ctx, tried, from)? {
+            Ok(start) => start,
+            Err(done) => return Ok(done),
         };
         summary.factorisations += passes.earlier;
         let active = ctx.sum_usize(nr.nodes.iter().filter(|r| r.active).count());
@@ -409,6 +398,32 @@ fn coulomb_passes(
                 return Ok(Passes::Frictionless(nr, summary));
             }
         }
+    }
+}
+
+/// A frictionless attempt's solution, its summary and kept factorisation (`Ok(Ok(..))`); or,
+/// where it found none, the start from the touching nodes (`Ok(Err(..))`). Collective (log).
+#[allow(clippy::type_complexity)]
+fn frictionless_start(
+    ctx: &Ctx,
+    tried: Result<(schur::Condensed, Option<schur::Kept>), RunError>,
+    from: &str,
+) -> Result<Result<(NewtonResult, schur::CondensedSummary, Option<schur::Kept>), Passes>, RunError>
+{
+    match tried {
+        Ok((schur::Condensed::Solved(nr, s), kept)) => Ok(Ok((*nr, s, kept))),
+        Ok((schur::Condensed::Fallback(s), _)) | Ok((schur::Condensed::Factorised(s), _)) => {
+            say!(ctx, "coulomb: no frictionless start; starting from {from}");
+            Ok(Err(Passes::Done(Begin::Touching, Some(s))))
+        }
+        Err(RunError::Failed(why)) => {
+            say!(
+                ctx,
+                "coulomb: no frictionless start ({why}); starting from {from}"
+            );
+            Ok(Err(Passes::Done(Begin::Touching, None)))
+        }
+        Err(e) => Err(e),
     }
 }
 

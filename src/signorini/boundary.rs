@@ -2,7 +2,6 @@
 //! g_h^k (3.3), lumped weight w_k = ∫_Γc φ_k ds and Tresca bound b_k = ∫_Γc g_R φ_k ds (3.18);
 //! and the per-node result record (u, λ in the node's frame) of an iterate.
 
-use crate::contact::obstacle::SlaveRow;
 use crate::contact::{Frame, Obstacle};
 use crate::error::{InputError, RunError};
 use crate::fem;
@@ -271,7 +270,13 @@ pub fn build<W>(
             // the rows dual mortar gave the pair (crate::mortar: covered nodes that are contact
             // nodes by the rule below); an uncovered node has none
             if let Some(r) = t.rows.get(&v) {
-                nodes.push(body_node(mesh, (v, i, lo), p, pair, r));
+                nodes.push(contact_node(
+                    mesh,
+                    (v, i, lo),
+                    p,
+                    pair,
+                    (r.normal, r.gap, r.weight),
+                ));
             } else if prescribed {
                 excluded += 1;
             }
@@ -298,21 +303,8 @@ pub fn build<W>(
             excluded += 1;
             continue;
         }
-        let frame = Frame::new(proj.normal, dim).expect("obstacle normals are unit vectors");
-        nodes.push(ContactNode {
-            node: v,
-            pair: p,
-            mu: pair.coulomb_mu,
-            tag: mesh.node_tags[v],
-            row: (lo + i) * dim,
-            local_row: i * dim,
-            x,
-            frame,
-            gap: proj.gap,
-            weight: weight[v],
-            bound: pair.tresca_threshold.unwrap_or(0.0) * weight[v],
-            u_t_ref: [0.0; 2],
-        });
+        let at = (proj.normal, proj.gap, weight[v]);
+        nodes.push(contact_node(mesh, (v, i, lo), p, pair, at));
     }
     let counts: Vec<u64> = ctx.gather(nodes.len() as u64);
     let ex_all = ctx.sum_usize(excluded);
@@ -336,14 +328,16 @@ pub fn build<W>(
     Ok((b, warned))
 }
 
-/// The contact node of slave node `v` (owned, local index `i`, first global node `lo`) of a
-/// body pair from its mortar row: the frame of its normal, the gap g̃_k / D_kk, the weight D_kk.
-fn body_node(
+/// The contact node of mesh node `v` (owned, local index `i`, first global node `lo`) of
+/// pair `p` with its normal n (into the body; unit), gap g_h^k (3.3) and weight w_k: against a
+/// rigid obstacle its projection and ∫ φ_k; of a body pair its mortar row's normal, g̃_k / D_kk
+/// and D_kk.
+fn contact_node(
     mesh: &Mesh,
     (v, i, lo): (usize, usize, usize),
     p: usize,
     pair: &crate::setup::PairSettings,
-    r: &SlaveRow,
+    (normal, gap, weight): ([f64; 3], f64, f64),
 ) -> ContactNode {
     let dim = mesh.dim;
     ContactNode {
@@ -354,10 +348,10 @@ fn body_node(
         row: (lo + i) * dim,
         local_row: i * dim,
         x: mesh.coords[v],
-        frame: Frame::new(r.normal, dim).expect("mortar normals are unit vectors"),
-        gap: r.gap,
-        weight: r.weight,
-        bound: pair.tresca_threshold.unwrap_or(0.0) * r.weight,
+        frame: Frame::new(normal, dim).expect("contact normals are unit vectors"),
+        gap,
+        weight,
+        bound: pair.tresca_threshold.unwrap_or(0.0) * weight,
         u_t_ref: [0.0; 2],
     }
 }

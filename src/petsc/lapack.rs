@@ -7,43 +7,20 @@
 use nalgebra::{DMatrix, DVector};
 use std::os::raw::c_int;
 
-extern "C" {
-    fn dgetrf_(
-        m: *const c_int,
-        n: *const c_int,
-        a: *mut f64,
-        lda: *const c_int,
-        ipiv: *mut c_int,
-        info: *mut c_int,
-    );
-    #[allow(clippy::too_many_arguments)]
-    fn dgetrs_(
-        trans: *const u8,
-        n: *const c_int,
-        nrhs: *const c_int,
-        a: *const f64,
-        lda: *const c_int,
-        ipiv: *const c_int,
-        b: *mut f64,
-        ldb: *const c_int,
-        info: *mut c_int,
-    );
-}
+// LAPACK's Fortran interface takes every argument by reference: `In` an integer read,
+// `Out` an integer written, `Mat`/`MatMut` a column-major array, `Flag` a character code.
+type In = *const c_int;
+type Out = *mut c_int;
+type Mat = *const f64;
+type MatMut = *mut f64;
+type Flag = *const u8;
 
 extern "C" {
-    fn dpotrf_(uplo: *const u8, n: *const c_int, a: *mut f64, lda: *const c_int, info: *mut c_int);
-    fn dpotri_(uplo: *const u8, n: *const c_int, a: *mut f64, lda: *const c_int, info: *mut c_int);
-    #[allow(clippy::too_many_arguments)]
-    fn dpotrs_(
-        uplo: *const u8,
-        n: *const c_int,
-        nrhs: *const c_int,
-        a: *const f64,
-        lda: *const c_int,
-        b: *mut f64,
-        ldb: *const c_int,
-        info: *mut c_int,
-    );
+    fn dgetrf_(m: In, n: In, a: MatMut, lda: In, ipiv: Out, info: Out);
+    fn dgetrs_(tr: Flag, n: In, nrhs: In, a: Mat, lda: In, ipiv: In, b: MatMut, ldb: In, i: Out);
+    fn dpotrf_(uplo: Flag, n: In, a: MatMut, lda: In, info: Out);
+    fn dpotri_(uplo: Flag, n: In, a: MatMut, lda: In, info: Out);
+    fn dpotrs_(uplo: Flag, n: In, nrhs: In, a: Mat, lda: In, b: MatMut, ldb: In, info: Out);
 }
 
 extern "C" {

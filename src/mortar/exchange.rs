@@ -3,7 +3,6 @@
 
 use super::MasterFixed;
 use crate::contact::mortar::{MortarError, Orientation, Surface};
-use crate::error::RunError;
 use crate::mesh::Mesh;
 use crate::par::Ctx;
 use crate::partition::Layout;
@@ -13,28 +12,33 @@ use std::collections::HashMap;
 /// One facet's nodes (id, coordinates) for [`Surface::new`].
 pub(super) type FacetNodes = Vec<(usize, [f64; 3])>;
 
-/// The facets of boundary group `name` with an owned node (their cells are local: the rows of
-/// the owned slave nodes need every facet around them), as (mesh node index, coordinates),
-/// with a point inside the body per facet (the cell's vertex off the facet). Local.
-pub(super) fn slave_facets(
-    mesh: &Mesh,
-    layout: &Layout,
-    name: &str,
-) -> (Vec<FacetNodes>, Vec<[f64; 3]>) {
-    let mut facets = Vec::new();
-    let mut inside = Vec::new();
-    for f in group_facets(mesh, name) {
-        let nodes = mesh.facet(f);
-        if !nodes.iter().any(|&v| layout.owns_node(v)) {
-            continue;
+/// A rank's slave facets of one pair: those of the pair's group with an owned node (their
+/// cells are local: the rows of the owned slave nodes need every facet around them), as
+/// (mesh node index, coordinates), with a point inside the body per facet (the cell's vertex
+/// off the facet).
+pub(super) struct SlaveFacets {
+    pub facets: Vec<FacetNodes>,
+    pub inside: Vec<[f64; 3]>,
+}
+
+impl SlaveFacets {
+    /// Of boundary group `name`. Local.
+    pub fn of(mesh: &Mesh, layout: &Layout, name: &str) -> SlaveFacets {
+        let mut facets = Vec::new();
+        let mut inside = Vec::new();
+        for f in group_facets(mesh, name) {
+            let nodes = mesh.facet(f);
+            if !nodes.iter().any(|&v| layout.owns_node(v)) {
+                continue;
+            }
+            let Some(p) = inside_point(mesh, layout, nodes) else {
+                continue;
+            };
+            facets.push(nodes.iter().map(|&v| (v, mesh.coords[v])).collect());
+            inside.push(p);
         }
-        let Some(p) = inside_point(mesh, layout, nodes) else {
-            continue;
-        };
-        facets.push(nodes.iter().map(|&v| (v, mesh.coords[v])).collect());
-        inside.push(p);
+        SlaveFacets { facets, inside }
     }
-    (facets, inside)
 }
 
 /// The vertex off the facet of a local cell that contains the facet `nodes`.
@@ -63,18 +67,11 @@ const EMPTY: ([f64; 3], [f64; 3]) = ([f64::INFINITY; 3], [f64::NEG_INFINITY; 3])
 
 impl Reach {
     /// Collective.
-    pub fn of(
-        ctx: &Ctx,
-        mesh: &Mesh,
-        layout: &Layout,
-        settings: &ContactSettings,
-        body_pairs: &[usize],
-    ) -> Reach {
-        let n = settings.pairs.len();
+    pub fn of(ctx: &Ctx, n: usize, slaves: &[(usize, SlaveFacets)]) -> Reach {
         let mut mine = vec![EMPTY; n];
-        for &p in body_pairs {
-            let (facets, _) = slave_facets(mesh, layout, &settings.pairs[p].group);
-            for (_, x) in facets.iter().flatten() {
+        for (p, s) in slaves {
+            let p = *p;
+            for (_, x) in s.facets.iter().flatten() {
                 for d in 0..3 {
                     mine[p].0[d] = mine[p].0[d].min(x[d]);
                     mine[p].1[d] = mine[p].1[d].max(x[d]);
@@ -146,7 +143,7 @@ impl MasterFacets {
         layout: &Layout,
         settings: &ContactSettings,
         (fixed, reach): (&[f64], &Reach),
-    ) -> Result<MasterFacets, RunError> {
+    ) -> MasterFacets {
         let dim = mesh.dim;
         let mut send = Vec::new();
         for (p, pair) in settings.pairs.iter().enumerate() {
@@ -196,7 +193,7 @@ impl MasterFacets {
                 records.extend_from_slice(r);
             }
         }
-        Ok(MasterFacets { dim, records })
+        MasterFacets { dim, records }
     }
 
     fn of_pair(&self, p: usize) -> impl Iterator<Item = &[f64]> {

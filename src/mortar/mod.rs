@@ -34,7 +34,7 @@ use crate::mesh::Mesh;
 use crate::par::Ctx;
 use crate::partition::Layout;
 use crate::setup::ContactSettings;
-use exchange::{MasterFacets, Reach};
+use exchange::{MasterFacets, Reach, SlaveFacets};
 use std::collections::HashMap;
 use std::sync::Arc;
 
@@ -62,21 +62,22 @@ pub fn set_up(
         return Ok(None);
     }
     ctx.agree(check_pairs(mesh, settings, &body_pairs).map_err(RunError::Input))?;
-    let reach = Reach::of(ctx, mesh, layout, settings, &body_pairs);
-    let masters = MasterFacets::exchange(ctx, mesh, layout, settings, (fixed, &reach))?;
-    ctx.agree(
-        check_overlap(mesh, layout, settings, (&body_pairs, &masters)).map_err(RunError::Input),
-    )?;
+    let slaves: Vec<(usize, SlaveFacets)> = (body_pairs.iter())
+        .map(|&p| (p, SlaveFacets::of(mesh, layout, &settings.pairs[p].group)))
+        .collect();
+    let reach = Reach::of(ctx, settings.pairs.len(), &slaves);
+    let masters = MasterFacets::exchange(ctx, mesh, layout, settings, (fixed, &reach));
+    ctx.agree(check_overlap(mesh, layout, settings, (&slaves, &masters)).map_err(RunError::Input))?;
     let friction = settings.friction();
     let mut master_fixed = MasterFixed::new();
     let mut rows_of = Vec::new();
-    for &p in &body_pairs {
+    for (p, slave) in &slaves {
+        let p = *p;
         let rows = ctx.agree(
             pair_rows(
                 mesh,
                 layout,
-                settings,
-                p,
+                (settings, p, slave),
                 (&masters, reach.radius[p], fixed),
             )
             .map_err(RunError::Input),
@@ -177,18 +178,16 @@ fn check_pairs(mesh: &Mesh, settings: &ContactSettings, pairs: &[usize]) -> Resu
 fn pair_rows(
     mesh: &Mesh,
     layout: &Layout,
-    settings: &ContactSettings,
-    p: usize,
+    (settings, p, own): (&ContactSettings, usize, &SlaveFacets),
     (masters, radius, fixed): (&MasterFacets, f64, &[f64]),
 ) -> Result<HashMap<usize, SlaveRow>, InputError> {
     let pair = &settings.pairs[p];
     let dim = mesh.dim;
     let bad = |what: String| InputError::new(&settings.file, what).with_key(pair.key("group"));
-    let (facets, inside) = exchange::slave_facets(mesh, layout, &pair.group);
-    if facets.is_empty() {
+    if own.facets.is_empty() {
         return Ok(HashMap::new());
     }
-    let slave = Surface::new(dim, &facets, Orientation::InsidePoints(&inside))
+    let slave = Surface::new(dim, &own.facets, Orientation::InsidePoints(&own.inside))
         .map_err(|e| bad(format!("the slave group \"{}\": {e}", pair.group)))?;
     let Some(master) = masters.surface(p, dim).map_err(|e| {
         bad(format!(
@@ -283,12 +282,12 @@ fn check_overlap(
     mesh: &Mesh,
     layout: &Layout,
     settings: &ContactSettings,
-    (body_pairs, masters): (&[usize], &MasterFacets),
+    (slaves, masters): (&[(usize, SlaveFacets)], &MasterFacets),
 ) -> Result<(), InputError> {
     let master_nodes = masters.node_pairs();
-    for &p in body_pairs {
-        let (facets, _) = exchange::slave_facets(mesh, layout, &settings.pairs[p].group);
-        let mut mine: Vec<usize> = facets.iter().flatten().map(|&(v, _)| v).collect();
+    for (p, own) in slaves {
+        let p = *p;
+        let mut mine: Vec<usize> = own.facets.iter().flatten().map(|&(v, _)| v).collect();
         mine.retain(|&v| layout.owns_node(v));
         mine.sort_unstable_by_key(|&v| layout.node_global[v]);
         for v in mine {

@@ -1,8 +1,8 @@
 //! The separate bodies of a mesh (its connected parts, cells joined by shared nodes), counted
 //! over the distributed mesh, with those that their Dirichlet data do not hold in every rigid
-//! mode: said in the log where there are several, and written to summary.json. The contact
-//! solver computes the free rigid modes of one body (thesis 4.1), so the driver refuses a case
-//! with contact in which one of several bodies is free in a rigid mode (README, "Limitations").
+//! mode: said in the log where there are several, and written to summary.json; the body of
+//! every local node, and the rigid modes of the bodies Dirichlet data leave free, for the
+//! contact solver (signorini/rigid.rs).
 //!
 //! Every rank joins its local cells (its own and the ghost cells touching its owned nodes) by a
 //! union-find over its local nodes; a local part is named by its smallest global node number.
@@ -10,7 +10,7 @@
 //! ghost cells — go to rank 0 with the part's name, and rank 0 joins the parts that share a
 //! node: O(the partition's interfaces) on rank 0, never the mesh.
 
-use crate::mesh::{Mesh, RigidModes};
+use crate::mesh::{BodyModes, Mesh, RigidModes};
 use crate::par::Ctx;
 use crate::partition::Layout;
 use serde::Serialize;
@@ -82,95 +82,226 @@ pub fn summed(bodies: &[Body]) -> Bodies {
 /// Every body of the distributed `mesh`, by its first node tag. Collective; every rank
 /// returns the same list.
 pub fn survey(ctx: &Ctx, mesh: &Mesh, layout: &Layout, fixed: &[f64]) -> Vec<Body> {
-    let (n, dim) = (mesh.n_nodes(), mesh.dim);
-    let mut joins = Joins::new(n);
-    let mut in_ghost = vec![false; n];
-    // the local mesh has the nodes of boundary elements of other ranks' cells too: only the
-    // nodes of local cells belong to a part here
-    let mut in_cell = vec![false; n];
-    for c in 0..mesh.n_cells() {
-        let cell = mesh.cell(c);
-        let ghost = layout.cell_rank[c] as usize != layout.rank;
-        for &v in cell {
-            joins.join(cell[0], v);
-            in_ghost[v] |= ghost;
-            in_cell[v] = true;
-        }
-    }
-    // every local part's name: its smallest global node number
-    let mut name = vec![u64::MAX; n];
-    for v in (0..n).filter(|&v| in_cell[v]) {
-        let r = joins.root(v);
-        name[r] = name[r].min(layout.node_global[v] as u64);
-    }
-    // the local parts, numbered by their roots
-    let roots: Vec<usize> = (0..n)
-        .filter(|&v| in_cell[v] && joins.root(v) == v)
-        .collect();
-    let mut part = vec![usize::MAX; n];
-    for (q, &r) in roots.iter().enumerate() {
-        part[r] = q;
-    }
-    let names: Vec<u64> = roots.iter().map(|&r| name[r]).collect();
-    // per part: its smallest node tag and its owned nodes
-    let mut tags = vec![u64::MAX; roots.len()];
-    let mut owned = vec![0u64; roots.len()];
-    for v in (0..n).filter(|&v| in_cell[v]) {
-        let q = part[joins.root(v)];
-        tags[q] = tags[q].min(mesh.node_tags[v]);
-        owned[q] += u64::from(layout.owns_node(v));
-    }
-    // per part: the Gram matrix of the rigid modes' values at its Dirichlet dofs (owned nodes)
+    labelled(ctx, mesh, layout, fixed).bodies
+}
+
+/// The bodies of a mesh and the body of every local node.
+pub struct Survey {
+    /// Every body, by its first node tag (the same on every rank).
+    pub bodies: Vec<Body>,
+    /// Per local mesh node: its body's index in `bodies` (`u32::MAX`: a node of no local
+    /// cell).
+    pub body_of: Vec<u32>,
+}
+
+/// Every body of the distributed `mesh` and the body of every local node. Collective.
+pub fn labelled(ctx: &Ctx, mesh: &Mesh, layout: &Layout, fixed: &[f64]) -> Survey {
+    let mut local = LocalParts::of(mesh, layout);
+    let (grams, shared, tags, owned) = local.data(mesh, layout, fixed);
     let modes = RigidModes::new(mesh);
-    let mm = modes.m * modes.m;
-    let mut grams = vec![0.0; roots.len() * mm];
-    let mut shared: Vec<u64> = Vec::new(); // (global node, part name) pairs
-    for v in (0..n).filter(|&v| in_cell[v]) {
-        let r = joins.root(v);
-        if layout.owns_node(v) {
-            let q = part[r];
-            for a in (0..dim).filter(|&a| !fixed[v * dim + a].is_nan()) {
-                let row = modes.dof_row(&mesh.coords[v], a);
-                modes.add_outer(&mut grams[q * mm..(q + 1) * mm], &row);
-            }
-        }
-        if in_ghost[v] || !layout.owns_node(v) {
-            shared.extend_from_slice(&[layout.node_global[v] as u64, name[r]]);
-        }
-    }
-    let shared = ctx.gather_to_root(&shared);
-    let names = ctx.gather_to_root(&names);
+    let all_names = ctx.gather_to_root(&local.names);
     let grams = ctx.gather_to_root(&grams);
+    let shared = ctx.gather_to_root(&shared);
     let tags = ctx.gather_to_root(&tags);
     let owned = ctx.gather_to_root(&owned);
-    // three numbers per body (the tag as f64: exact below 2^53)
+    // the body count, three numbers per body (the tag as f64: exact below 2^53), then
+    // (part name, body) pairs
     let mut list = Vec::new();
     if ctx.rank == 0 {
-        for b in join_parts(&names, &grams, &shared, &modes, (&tags, &owned)) {
+        let (bodies, of_part) = join_parts(&all_names, &grams, &shared, &modes, (&tags, &owned));
+        list.push(bodies.len() as f64);
+        for b in bodies {
             list.extend([b.first_tag as f64, b.nodes as f64, b.free_modes as f64]);
+        }
+        for (p, b) in all_names.iter().zip(of_part) {
+            list.extend([*p as f64, b as f64]);
         }
     }
     ctx.broadcast_f64s(&mut list);
-    list.chunks_exact(3)
+    let count = list[0] as usize;
+    let bodies = list[1..1 + 3 * count]
+        .chunks_exact(3)
         .map(|c| Body {
             first_tag: c[0] as u64,
             nodes: c[1] as usize,
             free_modes: c[2] as usize,
         })
-        .collect()
+        .collect();
+    let body_of_name: HashMap<u64, u32> = list[1 + 3 * count..]
+        .chunks_exact(2)
+        .map(|c| (c[0] as u64, c[1] as u32))
+        .collect();
+    let body_of = (0..mesh.n_nodes())
+        .map(|v| match local.name_of(v) {
+            Some(p) => body_of_name[&p],
+            None => u32::MAX,
+        })
+        .collect();
+    Survey { bodies, body_of }
+}
+
+/// Per body of `survey`: whether some node of one of the boundary `groups` lies on it.
+/// Collective.
+pub fn touched(ctx: &Ctx, mesh: &Mesh, survey: &Survey, groups: &[&str]) -> Vec<bool> {
+    let mut on = vec![0.0; survey.bodies.len()];
+    for g in groups {
+        for f in crate::setup::group_facets(mesh, g) {
+            for &v in mesh.facet(f) {
+                if let Some(x) = on.get_mut(survey.body_of[v] as usize) {
+                    *x = 1.0;
+                }
+            }
+        }
+    }
+    ctx.sum_vec(&on).iter().map(|&x| x > 0.0).collect()
+}
+
+impl Survey {
+    /// The rigid modes of the bodies that Dirichlet data leave free (each body's centre and
+    /// scale its bounding box over every rank); the whole mesh's shape for a mesh of one body.
+    /// Collective.
+    pub fn modes(&self, ctx: &Ctx, mesh: &Mesh) -> BodyModes {
+        let nb = self.bodies.len();
+        if nb == 1 {
+            if self.bodies[0].free_modes > 0 {
+                return BodyModes::whole(mesh);
+            }
+            return BodyModes::new(mesh, &self.body_of, &[None]);
+        }
+        // per body: lo (3), then −hi (3): one all-gather, the minimum over the ranks
+        let mut mine = vec![f64::INFINITY; nb * 6];
+        for (v, &b) in self.body_of.iter().enumerate() {
+            let Some(r) = mine.get_mut(b as usize * 6..b as usize * 6 + 6) else {
+                continue;
+            };
+            for k in 0..3 {
+                r[k] = r[k].min(mesh.coords[v][k]);
+                r[3 + k] = r[3 + k].min(-mesh.coords[v][k]);
+            }
+        }
+        let all = ctx.all_gather_varcount(&mine);
+        let mut least = vec![f64::INFINITY; nb * 6];
+        for r in all.chunks_exact(nb * 6) {
+            for (l, x) in least.iter_mut().zip(r) {
+                *l = l.min(*x);
+            }
+        }
+        let boxes: Vec<Option<([f64; 3], [f64; 3])>> = (0..nb)
+            .map(|b| {
+                let r = &least[b * 6..b * 6 + 6];
+                (self.bodies[b].free_modes > 0).then(|| ([r[0], r[1], r[2]], [-r[3], -r[4], -r[5]]))
+            })
+            .collect();
+        BodyModes::new(mesh, &self.body_of, &boxes)
+    }
+}
+
+/// A rank's parts of the mesh: its local cells joined by shared nodes.
+struct LocalParts {
+    joins: Joins,
+    /// Nodes of local cells (the local mesh has the nodes of boundary elements of other ranks'
+    /// cells too: only the nodes of local cells belong to a part here).
+    in_cell: Vec<bool>,
+    /// Nodes of ghost cells.
+    in_ghost: Vec<bool>,
+    /// Per root: the part's name, its smallest global node number.
+    name: Vec<u64>,
+    /// Per root: the part's index.
+    part: Vec<usize>,
+    /// The parts' names, by index.
+    names: Vec<u64>,
+}
+
+impl LocalParts {
+    fn of(mesh: &Mesh, layout: &Layout) -> LocalParts {
+        let n = mesh.n_nodes();
+        let mut joins = Joins::new(n);
+        let mut in_ghost = vec![false; n];
+        let mut in_cell = vec![false; n];
+        for c in 0..mesh.n_cells() {
+            let cell = mesh.cell(c);
+            let ghost = layout.cell_rank[c] as usize != layout.rank;
+            for &v in cell {
+                joins.join(cell[0], v);
+                in_ghost[v] |= ghost;
+                in_cell[v] = true;
+            }
+        }
+        let mut name = vec![u64::MAX; n];
+        for v in (0..n).filter(|&v| in_cell[v]) {
+            let r = joins.root(v);
+            name[r] = name[r].min(layout.node_global[v] as u64);
+        }
+        let roots: Vec<usize> = (0..n)
+            .filter(|&v| in_cell[v] && joins.root(v) == v)
+            .collect();
+        let mut part = vec![usize::MAX; n];
+        for (q, &r) in roots.iter().enumerate() {
+            part[r] = q;
+        }
+        let names = roots.iter().map(|&r| name[r]).collect();
+        LocalParts {
+            joins,
+            in_cell,
+            in_ghost,
+            name,
+            part,
+            names,
+        }
+    }
+
+    /// The name of local node v's part (`None`: v is in no local cell).
+    fn name_of(&mut self, v: usize) -> Option<u64> {
+        self.in_cell[v].then(|| self.name[self.joins.root(v)])
+    }
+
+    /// Per part: the Gram matrix of the rigid modes' values at its Dirichlet dofs (owned
+    /// nodes), its smallest node tag and its owned node count; and the (global node, part
+    /// name) pairs of the nodes it may share with other ranks' parts. Local.
+    fn data(
+        &mut self,
+        mesh: &Mesh,
+        layout: &Layout,
+        fixed: &[f64],
+    ) -> (Vec<f64>, Vec<u64>, Vec<u64>, Vec<u64>) {
+        let (n, dim) = (mesh.n_nodes(), mesh.dim);
+        let parts = self.names.len();
+        let modes = RigidModes::new(mesh);
+        let mm = modes.m * modes.m;
+        let mut grams = vec![0.0; parts * mm];
+        let mut shared: Vec<u64> = Vec::new();
+        let mut tags = vec![u64::MAX; parts];
+        let mut owned = vec![0u64; parts];
+        for v in (0..n).filter(|&v| self.in_cell[v]) {
+            let r = self.joins.root(v);
+            let q = self.part[r];
+            tags[q] = tags[q].min(mesh.node_tags[v]);
+            owned[q] += u64::from(layout.owns_node(v));
+            if layout.owns_node(v) {
+                for a in (0..dim).filter(|&a| !fixed[v * dim + a].is_nan()) {
+                    let row = modes.dof_row(&mesh.coords[v], a);
+                    modes.add_outer(&mut grams[q * mm..(q + 1) * mm], &row);
+                }
+            }
+            if self.in_ghost[v] || !layout.owns_node(v) {
+                shared.extend_from_slice(&[layout.node_global[v] as u64, self.name[r]]);
+            }
+        }
+        (grams, shared, tags, owned)
+    }
 }
 
 /// Rank 0: the parts (their names and the Gram matrices of their Dirichlet rows, from every
 /// rank) joined where they share a node (pairs of global node and part name); returns the
 /// bodies (`parts`: each part's smallest tag and owned nodes), in the order of their first
-/// tags. Local.
+/// tags, and each part's body (an index into them). Local.
 fn join_parts(
     names: &[u64],
     grams: &[f64],
     shared: &[u64],
     modes: &RigidModes,
     (tags, owned): (&[u64], &[u64]),
-) -> Vec<Body> {
+) -> (Vec<Body>, Vec<usize>) {
     let mm = modes.m * modes.m;
     let mut index: HashMap<u64, usize> = HashMap::new();
     for &p in names {
@@ -197,16 +328,23 @@ fn join_parts(
         *tag = (*tag).min(tags[q]);
         *nodes += owned[q];
     }
-    let mut list: Vec<Body> = body
-        .values()
-        .map(|(g, tag, nodes)| Body {
-            first_tag: *tag,
-            nodes: *nodes as usize,
-            free_modes: modes.free_modes(g).ncols(),
+    let mut list: Vec<(usize, Body)> = body
+        .iter()
+        .map(|(&root, (g, tag, nodes))| {
+            let b = Body {
+                first_tag: *tag,
+                nodes: *nodes as usize,
+                free_modes: modes.free_modes(g).ncols(),
+            };
+            (root, b)
         })
         .collect();
-    list.sort_by_key(|b| b.first_tag);
-    list
+    list.sort_by_key(|(_, b)| b.first_tag);
+    let at: HashMap<usize, usize> = (list.iter().enumerate())
+        .map(|(i, (root, _))| (*root, i))
+        .collect();
+    let of_part = names.iter().map(|p| at[&joins.root(index[p])]).collect();
+    (list.into_iter().map(|(_, b)| b).collect(), of_part)
 }
 
 #[cfg(test)]
@@ -230,7 +368,7 @@ mod tests {
         let names = [0, 10, 3, 20];
         let parts = ([1, 11, 4, 21].as_slice(), [2, 3, 4, 5].as_slice());
         let counted = |shared: &[u64]| {
-            let list = join_parts(&names, &grams, shared, &modes, parts);
+            let (list, _) = join_parts(&names, &grams, shared, &modes, parts);
             let b = summed(&list);
             (b.count, b.not_held, list)
         };

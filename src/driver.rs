@@ -44,6 +44,8 @@ pub struct Prepared<'c> {
     pub partition: PartitionInfo,
     /// The mesh's bodies, by their first node tags.
     pub bodies: Vec<Body>,
+    /// The body of every local node (an index into `bodies`).
+    pub body_of: Vec<u32>,
     /// The contact settings (`None` without contact).
     pub contact: Option<ContactSettings>,
     blas: Option<String>,
@@ -104,15 +106,18 @@ pub fn prepare<'c>(ctx: &Ctx, case: &'c Case) -> Result<Prepared<'c>, RunError> 
         ..case.solver.clone()
     };
     let problem = setup::problem(case, &mesh, &material);
-    let bodies = check_bodies(ctx, case, &mesh, &layout, &problem.fixed)?;
+    let survey = check_bodies(ctx, case, &mesh, &layout, &problem.fixed)?;
     drop(problem);
     let contact = if case.contacts.is_empty() {
         None
     } else {
-        Some(ctx.agree(
+        let mut c = ctx.agree(
             setup::contact_settings(case, &case.contacts, &material).map_err(RunError::from),
-        )?)
+        )?;
+        c.modes = Some(std::sync::Arc::new(survey.modes(ctx, &mesh)));
+        Some(c)
     };
+    let (bodies, body_of) = (survey.bodies, survey.body_of);
     ResultSet::check(ctx, &case.output.dir, &case.file)?;
     Ok(Prepared {
         case,
@@ -124,6 +129,7 @@ pub fn prepare<'c>(ctx: &Ctx, case: &'c Case) -> Result<Prepared<'c>, RunError> 
         layout,
         partition,
         bodies,
+        body_of,
         contact,
         blas,
         dense_threads,
@@ -144,6 +150,7 @@ pub fn solve(ctx: &Ctx, prepared: Prepared) -> Result<String, RunError> {
         layout,
         partition,
         bodies,
+        body_of,
         contact,
         blas,
         dense_threads,
@@ -175,6 +182,7 @@ pub fn solve(ctx: &Ctx, prepared: Prepared) -> Result<String, RunError> {
         held_fixed: &problem.held_fixed,
         contact: contact.as_ref(),
         mortar: basis.as_ref(),
+        body_of: &body_of,
         out: &out,
     };
     let stepped = stepper.run(&mut sys)?;
@@ -340,22 +348,21 @@ fn log_partition(ctx: &Ctx, mesh: &Mesh, layout: &Layout) -> PartitionInfo {
     info
 }
 
-/// The mesh's separate bodies ([`bodies::count`]): a line where there are several. A body
-/// with a rigid motion its Dirichlet data leave free (none, or too few) beside another, in a
-/// case with contact, is refused: the contact solver takes the free rigid modes of one body
-/// (thesis 4.1), so the rigid position of such a body would be left to the factorisation's
-/// round-off (measured: frictionless, a square beside a held one, moved sideways by about
-/// 0.0038 on 1 rank and 0.0022 on 3) or its solve would fail. Collective; every rank returns
-/// the same.
+/// The mesh's separate bodies ([`bodies::labelled`]): a line where there are several. The
+/// contact solver takes the rigid modes each body's Dirichlet data leave free (thesis 4.1, per
+/// body: signorini/rigid.rs); a body free in some rigid mode beside another, in a case with
+/// contact, is refused where no contact group lies on it: nothing could hold it. Collective;
+/// every rank returns the same.
 fn check_bodies(
     ctx: &Ctx,
     case: &Case,
     mesh: &Mesh,
     layout: &Layout,
     fixed: &[f64],
-) -> Result<Vec<Body>, RunError> {
-    let list = bodies::survey(ctx, mesh, layout, fixed);
-    let b = bodies::summed(&list);
+) -> Result<bodies::Survey, RunError> {
+    let survey = bodies::labelled(ctx, mesh, layout, fixed);
+    let list = &survey.bodies;
+    let b = bodies::summed(list);
     if b.count > 1 {
         say!(
             ctx,
@@ -366,21 +373,40 @@ fn check_bodies(
         );
     }
     if b.count > 1 && b.not_held > 0 && !case.contacts.is_empty() {
-        return Err(RunError::Input(case.error_at(
-            "dirichlet",
-            format!(
-                "the mesh {} has {} separate bodies (parts that share no node), {} of them \
-                 with a rigid motion their Dirichlet data leave free: with contact the solver \
-                 takes the free rigid modes of one body, so the position of such a body would \
-                 be undetermined or its solve fail; hold every body by Dirichlet data, or solve \
-                 each body that they do not hold from a mesh of its own",
-                case.mesh.file.display(),
-                b.count,
-                b.not_held
-            ),
-        )));
+        let touched = bodies::touched(ctx, mesh, &survey, &contact_groups(case));
+        let loose = (list.iter().zip(&touched)).find(|(body, &t)| body.free_modes > 0 && !t);
+        if let Some((body, _)) = loose {
+            return Err(RunError::Input(case.error_at(
+                "dirichlet",
+                format!(
+                    "the mesh {} has {} separate bodies (parts that share no node); the body of \
+                     {} nodes from node tag {} has {} rigid mode(s) its Dirichlet data leave \
+                     free and no contact group on it (no pair's group, no body pair's obstacle \
+                     group), so nothing holds it: hold it by Dirichlet data, or name a group \
+                     of its boundary in a contact pair",
+                    case.mesh.file.display(),
+                    b.count,
+                    body.nodes,
+                    body.first_tag,
+                    body.free_modes
+                ),
+            )));
+        }
     }
-    Ok(list)
+    Ok(survey)
+}
+
+/// The boundary groups of the contact pairs: each pair's group and a body pair's obstacle
+/// group.
+fn contact_groups(case: &Case) -> Vec<&str> {
+    let mut groups = Vec::new();
+    for c in &case.contacts {
+        groups.push(c.group.as_str());
+        if let crate::case::ObstacleSpec::Body { group } = &c.obstacle {
+            groups.push(group.as_str());
+        }
+    }
+    groups
 }
 
 /// The assembly line; a malloc during assembly means a wrong preallocation (a bug).

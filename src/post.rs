@@ -26,15 +26,20 @@ pub const RANK_CODES: &str = "the MPI rank (0, 1, ...) that held the cell in the
 /// The values of u at this rank's cells' nodes ([`local_cell_values`]).
 pub type CellValues = (Vec<usize>, Vec<f64>);
 
-/// Stresses (each cell's by its own material), von Mises values and the owning rank of the local cells — only what `fields`
-/// asks for, in the order stress, von_mises, von_mises_thesis, rank. `(nodes, vals)`: u at
-/// the cells' nodes ([`local_cell_values`]). Local.
+/// What the cell field `body` holds (the `codes` attribute of /cell/body).
+pub const BODY_CODES: &str = "the body (1, 2, ...): the mesh's separate parts, in the order of \
+                              their smallest node tags (as signorini-mpi check lists them)";
+
+/// Stresses (each cell's by its own material), von Mises values, the owning rank and the body
+/// of the local cells — only what `fields` asks for, in the order stress, von_mises,
+/// von_mises_thesis, rank, body. `(nodes, vals)`: u at the cells' nodes
+/// ([`local_cell_values`]); `body_of`: the body of every local node (0, 1, ...). Local.
 pub fn cell_fields(
     mesh: &Mesh,
     layout: &Layout,
     material: &Materials,
     (nodes, vals): &CellValues,
-    out: &OutputSection,
+    (out, body_of): (&OutputSection, &[u32]),
 ) -> Vec<FieldBuf> {
     let want_stress = out.wants(OutputField::Stress);
     let want_vm = out.wants(OutputField::VonMises);
@@ -84,6 +89,15 @@ pub fn cell_fields(
             ncomp: 1,
             data: vec![layout.rank as f64; nlc],
             codes: Some(RANK_CODES),
+        });
+    }
+    if out.wants(OutputField::Body) {
+        let body = |c: usize| body_of[mesh.cell(c)[0]] as f64 + 1.0;
+        fields.push(FieldBuf {
+            name: "body",
+            ncomp: 1,
+            data: layout.local_cells.iter().map(|&c| body(c)).collect(),
+            codes: Some(BODY_CODES),
         });
     }
     fields

@@ -422,6 +422,9 @@ pub struct ContactSettings {
     /// The contact modulus E* = E / (1 − ν²) (3D, plane strain) or E (plane stress) of the
     /// reference material: the half-space predictor's (halfspace.rs).
     pub contact_modulus: f64,
+    /// The rigid modes of the bodies that Dirichlet data leave free, and the body of every
+    /// local node (the driver's body survey); `None`: the whole mesh is one body.
+    pub modes: Option<std::sync::Arc<crate::mesh::BodyModes>>,
 }
 
 impl ContactSettings {
@@ -517,6 +520,7 @@ pub fn contact_settings(
         young: materials.reference_material().young,
         material: materials.clone(),
         contact_modulus: materials.reference_material().contact_modulus(),
+        modes: None,
     })
 }
 

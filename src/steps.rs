@@ -193,6 +193,8 @@ pub struct Stepper<'a> {
     /// The change of basis of the body pairs (crate::mortar): the contact solve runs on
     /// Qᵀ A Q (A in `run`'s system is that already) and Qᵀ (f − A c); `None` without them.
     pub mortar: Option<&'a mortar::Basis>,
+    /// The body of every local node (0, 1, ... in the order of their first node tags).
+    pub body_of: &'a [u32],
     pub out: &'a ResultSet,
 }
 
@@ -410,7 +412,8 @@ impl Stepper<'_> {
         let (ctx, case) = (self.ctx, self.case);
         let t1 = Instant::now();
         let values = post::local_cell_values(self.mesh, self.layout, solved.u())?;
-        let cells = post::cell_fields(self.mesh, self.layout, self.material, &values, &case.output);
+        let want = (&case.output, self.body_of);
+        let cells = post::cell_fields(self.mesh, self.layout, self.material, &values, want);
         let mut warned = (solved.contact.as_ref())
             .map(|c| c.warnings.clone())
             .unwrap_or_default();

@@ -1,6 +1,6 @@
 //! The separate bodies of a mesh: counted the same on every rank count (summary.json's
-//! `bodies`), and a case with contact in which one of several bodies has a rigid motion that
-//! its Dirichlet data leave free is refused before the solve.
+//! `bodies`); a body that its Dirichlet data leave free in a rigid motion beside another is held
+//! by its contact, and refused before the solve where no contact group lies on it.
 
 mod common;
 use common::process::{gmsh, run_with_timeout, solver};
@@ -9,9 +9,9 @@ use std::path::Path;
 use std::time::Duration;
 
 /// The two squares of tests/meshes/two_squares.geo pressed down on their tops; `held`: the
-/// Dirichlet groups (u = 0; a group with a trailing `/x`: u_x = 0 alone); `contact`: their
-/// bottoms on the plane y = 0.
-fn case(dir: &Path, held: &[&str], contact: bool) -> std::path::PathBuf {
+/// Dirichlet groups (u = 0; a group with a trailing `/x`: u_x = 0 alone); `contact`: the group
+/// on the plane y = 0 (`bottom`: both squares' bottoms, `bottom_a`: the first square's).
+fn case(dir: &Path, held: &[&str], contact: Option<&str>) -> std::path::PathBuf {
     let mesh = dir.join("two_squares.msh");
     if !mesh.exists() {
         gmsh("two_squares.geo", 2, 0.1, &mesh);
@@ -28,14 +28,17 @@ fn case(dir: &Path, held: &[&str], contact: bool) -> std::path::PathBuf {
         };
         text += &format!("[[dirichlet]]\ngroup = \"{g}\"\nvalue = {value}\n");
     }
-    if contact {
-        text += "[contact]\ngroup = \"bottom\"\n\
-                 obstacle = { type = \"plane\", point = [0.0, 0.0], normal = [0.0, 1.0] }\n";
+    if let Some(g) = contact {
+        text += &format!(
+            "[contact]\ngroup = \"{g}\"\n\
+             obstacle = {{ type = \"plane\", point = [0.0, 0.0], normal = [0.0, 1.0] }}\n"
+        );
     }
-    text += "[output]\nfields = [\"displacement\"]\n";
+    text += "[output]\nfields = [\"displacement\", \"contact\"]\n";
     let path = dir.join(format!(
-        "two_{}_{contact}.toml",
-        held.join("_").replace('/', "")
+        "two_{}_{}.toml",
+        held.join("_").replace('/', ""),
+        contact.unwrap_or("none")
     ));
     std::fs::write(&path, text).expect("writing the case");
     path
@@ -44,7 +47,7 @@ fn case(dir: &Path, held: &[&str], contact: bool) -> std::path::PathBuf {
 #[test]
 fn two_squares_are_two_bodies_on_1_2_3_ranks() {
     let tmp = tempfile::tempdir().expect("tempdir");
-    let c = case(tmp.path(), &["left_a", "left_b"], false);
+    let c = case(tmp.path(), &["left_a", "left_b"], None);
     for np in 1..=3 {
         let s = solve(np, &c, &[]);
         assert_eq!(
@@ -80,22 +83,17 @@ fn refused(np: usize, case: &Path, dir: &Path, what: &str) -> common::process::R
 }
 
 #[test]
-fn a_body_not_held_beside_another_is_refused_with_contact() {
+fn a_body_not_held_beside_another_is_refused_where_no_contact_group_lies_on_it() {
     let tmp = tempfile::tempdir().expect("tempdir");
-    let c = case(tmp.path(), &["left_a"], true);
+    // the second square floats; the contact group is the first square's bottom alone
+    let c = case(tmp.path(), &["left_a"], Some("bottom_a"));
     for np in [1, 2] {
         let dir = tmp.path().join(format!("out{np}"));
-        let run = refused(
-            np,
-            &c,
-            &dir,
-            "two bodies, one without Dirichlet data, with contact",
-        );
+        let run = refused(np, &c, &dir, "a floating square without a contact group");
         let out = run.output();
         assert!(
-            out.contains(
-                "2 separate bodies (parts that share no node), 1 of them with a rigid motion their Dirichlet data leave free"
-            ),
+            out.contains("2 separate bodies (parts that share no node)")
+                && out.contains("no contact group on it"),
             "{out}"
         );
         assert!(
@@ -103,23 +101,38 @@ fn a_body_not_held_beside_another_is_refused_with_contact() {
             "the mesh file named: {out}"
         );
         assert!(
-            out.contains("two_left_a_true.toml") && out.contains("key 'dirichlet'"),
+            out.contains("two_left_a_bottom_a.toml") && out.contains("key 'dirichlet'"),
             "the case file and its key named: {out}"
         );
         assert!(!dir.exists(), "no output written: {}", dir.display());
     }
-    // each square held by u_x = 0 on its left side alone: their rigid motions up and down
-    // (and the rotations) are free, each its own
-    let c = case(tmp.path(), &["left_a/x", "left_b/x"], true);
-    let run = refused(2, &c, &tmp.path().join("o"), "two bodies held by u_x alone");
-    assert!(
-        run.output()
-            .contains("2 of them with a rigid motion their Dirichlet data leave free"),
-        "{}",
-        run.output()
-    );
+}
+
+#[test]
+fn bodies_that_dirichlet_data_leave_free_are_held_by_their_contact() {
+    let tmp = tempfile::tempdir().expect("tempdir");
+    // the second square floats on the plane (free sideways: pinned), the first is clamped;
+    // then each held by u_x = 0 on its left side alone (free up and down, and in rotation)
+    for (held, not_held) in [(&["left_a"][..], 1), (&["left_a/x", "left_b/x"][..], 2)] {
+        let c = case(tmp.path(), held, Some("bottom"));
+        for np in [1, 2] {
+            let what = format!("{held:?} on {np} rank(s)");
+            let s = solve(np, &c, &[]);
+            s.assert_converged(&what);
+            assert_eq!(s.summary["bodies"]["not_held"], not_held, "{what}");
+            // the loads (0.01 on a unit width each) of the squares that float vertically go
+            // through the plane; the clamped square's in part
+            let f = s.summary["contact"]["total_force"][1]
+                .as_f64()
+                .expect("total force");
+            match not_held {
+                2 => assert!((f - 0.02).abs() < 1e-12, "{what}: total force {f}"),
+                _ => assert!(f > 0.01 && f < 0.02, "{what}: total force {f}"),
+            }
+        }
+    }
     // both bodies held, with contact: solved
-    let c = case(tmp.path(), &["left_a", "left_b"], true);
+    let c = case(tmp.path(), &["left_a", "left_b"], Some("bottom"));
     let s = solve(2, &c, &[]);
     assert_eq!(s.summary["bodies"]["not_held"], 0);
 }

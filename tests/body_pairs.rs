@@ -1,23 +1,36 @@
 //! Contact between two deformable bodies (dual mortar, `obstacle = { type = "body" }`;
 //! docs/bodies.md): the contact patch test on two blocks meshed independently (interface
-//! sizes about 3 : 1), in 2D and 3D, with either side as slave, on 1, 2 and 3 ranks; and the
-//! input errors of a body pair.
+//! sizes about 3 : 1), in 2D and 3D, with either side as slave, on 1, 2 and 3 ranks, the upper
+//! block pushed down by a prescribed displacement or held by contact alone under a pressure;
+//! three blocks stacked, the upper two held by contact alone; and the input errors of a body
+//! pair.
 //!
 //! The patch test: two materials, the lower block on a roller support (u_n = 0 at its bottom),
-//! both blocks on symmetry planes, the upper block's top pushed down by δ. The exact solution is
-//! the uniaxial stress σ_nn = −p in both blocks, p = δ / (H_1/E'_1 + H_2/E'_2), a linear
-//! field that P1 elements reproduce; the dual mortar rows transmit it exactly on
-//! non-matching meshes: every slave node active with pressure p, u the linear field.
+//! both blocks on symmetry planes, the upper block's top pushed down by δ (or pressed by p). The
+//! exact solution is the uniaxial stress σ_nn = −p in both blocks, p = δ / (H_1/E'_1 +
+//! H_2/E'_2), a linear field that P1 elements reproduce; the dual mortar rows transmit it
+//! exactly on non-matching meshes: every slave node active with pressure p, u the linear field.
+//! Pressed, the upper block's rigid motion along the load is free of Dirichlet data: the
+//! contact holds it (its rigid modes, signorini/rigid.rs).
 
 mod common;
 
 use common::*;
 use std::path::{Path, PathBuf};
 
-/// (E, ν) of the lower and the upper block.
+/// (E, ν) of the lower and the upper block (and of the third block of the tower).
 const LOWER: (f64, f64) = (1.0, 0.45);
 const UPPER: (f64, f64) = (3.0, 0.1);
+const THIRD: (f64, f64) = (2.0, 0.3);
 const DELTA: f64 = 0.01;
+
+/// How the upper block is loaded: its top displaced by −δ, or pressed by the exact p (then
+/// held by contact alone along the load).
+#[derive(Clone, Copy, PartialEq)]
+enum Load {
+    Displaced,
+    Pressed,
+}
 
 /// The mesh of tests/meshes/stack{dim}d.geo with sizes hl (lower) and hu (upper).
 fn stack_mesh(dir: &Path, dim: usize, hl: f64, hu: f64) -> PathBuf {
@@ -32,8 +45,19 @@ fn stack_mesh(dir: &Path, dim: usize, hl: f64, hu: f64) -> PathBuf {
     out
 }
 
-/// The case of the patch test: `slave` against `master`.
-fn stack_case(dir: &Path, mesh: &Path, dim: usize, (slave, master): (&str, &str)) -> PathBuf {
+/// The case of the patch test: `slave` against `master`, displaced.
+fn stack_case(dir: &Path, mesh: &Path, dim: usize, pair: (&str, &str)) -> PathBuf {
+    loaded_stack_case(dir, mesh, dim, pair, Load::Displaced)
+}
+
+/// The case of the patch test: `slave` against `master`, loaded by `load`.
+fn loaded_stack_case(
+    dir: &Path,
+    mesh: &Path,
+    dim: usize,
+    (slave, master): (&str, &str),
+    load: Load,
+) -> PathBuf {
     let supports = if dim == 2 {
         r#"
 [[dirichlet]]
@@ -63,6 +87,11 @@ value = ["free", "free", -DELTA]
 "#
     };
     let model = if dim == 2 { "plane_strain" } else { "3d" };
+    let (p, _) = exact(dim, &[LOWER, UPPER]);
+    let supports = match load {
+        Load::Displaced => supports.replace("DELTA", &format!("{DELTA:?}")),
+        Load::Pressed => pressed(supports, p),
+    };
     let text = format!(
         r#"[mesh]
 file = {mesh}
@@ -90,41 +119,52 @@ fields = ["displacement", "contact"]
         UPPER.0,
         UPPER.1,
         mesh = toml_path(mesh),
-        supports = supports.replace("DELTA", &format!("{DELTA:?}")),
     );
-    write_case(&dir.join(format!("stack{dim}d_{slave}.toml")), &text)
+    let name = match load {
+        Load::Displaced => format!("stack{dim}d_{slave}.toml"),
+        Load::Pressed => format!("stack{dim}d_{slave}_pressed.toml"),
+    };
+    write_case(&dir.join(name), &text)
 }
 
-/// The exact pressure and displacement at x of the patch test (blocks of height 1 each), x in
-/// the upper block or not.
-fn exact(dim: usize) -> (f64, impl Fn(&[f64], bool) -> Vec<f64>) {
+/// The supports with the top's prescribed displacement replaced by the pressure p.
+fn pressed(supports: &str, p: f64) -> String {
+    let (held, top) = supports
+        .split_once("[[dirichlet]]\ngroup = \"top\"")
+        .expect("the top's Dirichlet data last");
+    assert!(top.contains("-DELTA"), "{top}");
+    format!("{held}[[neumann]]\ngroup = \"top\"\npressure = {p:?}\n")
+}
+
+/// The exact pressure and displacement at x of a stack of blocks of height 1 each, of the
+/// materials `layers` from the bottom up, whose top is pushed down by δ; x in the block
+/// `layer`.
+fn exact(dim: usize, layers: &[(f64, f64)]) -> (f64, impl Fn(&[f64], usize) -> Vec<f64>) {
     // the modulus along the load and the lateral strain per unit stress: plane strain
     // E' = E / (1 − ν²), ν (1 + ν) / E; 3D E, ν / E
-    let moduli = |(e, nu): (f64, f64)| {
-        if dim == 2 {
-            (e / (1.0 - nu * nu), nu * (1.0 + nu) / e)
-        } else {
-            (e, nu / e)
-        }
-    };
-    let (lo, up) = (moduli(LOWER), moduli(UPPER));
-    let p = DELTA / (1.0 / lo.0 + 1.0 / up.0);
-    let u = move |x: &[f64], upper: bool| {
-        let lat = if upper { up.1 } else { lo.1 };
+    let moduli: Vec<(f64, f64)> = (layers.iter())
+        .map(|&(e, nu)| {
+            if dim == 2 {
+                (e / (1.0 - nu * nu), nu * (1.0 + nu) / e)
+            } else {
+                (e, nu / e)
+            }
+        })
+        .collect();
+    let p = DELTA / moduli.iter().map(|m| 1.0 / m.0).sum::<f64>();
+    let u = move |x: &[f64], layer: usize| {
+        let (e, lat) = moduli[layer];
         let mut u: Vec<f64> = (0..dim - 1).map(|d| lat * p * x[d]).collect();
-        let h = x[dim - 1];
-        u.push(match upper {
-            false => -p / lo.0 * h,
-            true => -p / lo.0 - p / up.0 * (h - 1.0),
-        });
+        let below: f64 = moduli[..layer].iter().map(|m| p / m.0).sum();
+        u.push(-below - p / e * (x[dim - 1] - layer as f64));
         u
     };
     (p, u)
 }
 
-/// Node coordinates of solution.h5 by node id, with whether the node is the upper block's
-/// (a node of a cell whose centroid lies above the interface).
-fn coordinates(s: &Solved) -> std::collections::BTreeMap<u64, (Vec<f64>, bool)> {
+/// Node coordinates of solution.h5 by node id, with the block the node belongs to (that of a
+/// cell through it: the integer part of the cell's centroid height).
+fn coordinates(s: &Solved) -> std::collections::BTreeMap<u64, (Vec<f64>, usize)> {
     let v = python_json(
         r#"
 import sys, json, h5py, numpy as np
@@ -132,32 +172,34 @@ f = h5py.File(sys.argv[1], "r")
 x = f["mesh/geometry"][:]
 cells = f["mesh/topology"][:]
 dim = cells.shape[1] - 1
-upper = np.zeros(len(x), dtype=bool)
+layer = np.zeros(len(x), dtype=int)
 for c in cells:
-    if x[c, dim - 1].mean() > 1.0:
-        upper[c] = True
-print("RESULT " + json.dumps({"ids": f["mesh/node_id"][:].tolist(), "x": x.tolist(), "upper": upper.tolist()}))
+    layer[c] = int(np.floor(x[c, dim - 1].mean()))
+print("RESULT " + json.dumps({"ids": f["mesh/node_id"][:].tolist(), "x": x.tolist(), "layer": layer.tolist()}))
 "#,
         &[&s.dir.join("solution.h5")],
     );
     let ids = v["ids"].as_array().expect("ids");
     let xs = v["x"].as_array().expect("x");
-    let up = v["upper"].as_array().expect("upper");
+    let up = v["layer"].as_array().expect("layer");
     ids.iter()
         .zip(xs.iter().zip(up))
-        .map(|(i, (x, u))| {
-            (
-                i.as_u64().expect("id"),
-                (floats(x), u.as_bool().expect("bool")),
-            )
+        .map(|(i, (x, l))| {
+            let layer = l.as_u64().expect("layer") as usize;
+            (i.as_u64().expect("id"), (floats(x), layer))
         })
         .collect()
 }
 
 /// Every slave node active with the pressure p to 1e-8, u the exact field to 1e-10 of its size.
 fn check_patch(s: &Solved, dim: usize, what: &str) {
+    check_stack(s, dim, &[LOWER, UPPER], what);
+}
+
+/// [`check_patch`] for the stack of blocks of the materials `layers`.
+fn check_stack(s: &Solved, dim: usize, layers: &[(f64, f64)], what: &str) {
     s.assert_converged(what);
-    let (p, u_exact) = exact(dim);
+    let (p, u_exact) = exact(dim, layers);
     let rows = s.contact_rows();
     assert!(rows.len() > 3, "{what}: {} contact nodes", rows.len());
     for r in &rows {
@@ -173,8 +215,8 @@ fn check_patch(s: &Solved, dim: usize, what: &str) {
     let u = s.displacement();
     let scale = DELTA;
     let mut worst = 0.0f64;
-    for (id, (xi, upper)) in &x {
-        let ue = u_exact(xi, *upper);
+    for (id, (xi, layer)) in &x {
+        let ue = u_exact(xi, *layer);
         for d in 0..dim {
             worst = worst.max((u[id][d] - ue[d]).abs() / scale);
         }
@@ -206,6 +248,94 @@ fn two_boxes_meshed_apart_pass_the_patch_test_in_3d_with_either_side_slave() {
     for (case, np) in [(&upper, 2), (&lower, 1), (&lower, 3)] {
         let what = format!("{} on {np} rank(s)", case.display());
         check_patch(&solve(np, case, &[]), 3, &what);
+    }
+}
+
+#[test]
+fn a_pressed_block_held_by_contact_alone_passes_the_patch_test_in_2d_and_3d() {
+    let tmp = tempfile::tempdir().expect("tempdir");
+    for (dim, hl, hu, runs) in [
+        (2, 1.0 / 9.0, 1.0 / 3.0, [(true, 1), (true, 3), (false, 2)]),
+        (3, 0.15, 0.45, [(true, 2), (false, 1), (false, 3)]),
+    ] {
+        let dir = tmp.path().join(format!("{dim}d"));
+        std::fs::create_dir_all(&dir).expect("dir");
+        let mesh = stack_mesh(&dir, dim, hl, hu);
+        for (upper_slave, np) in runs {
+            let pair = match upper_slave {
+                true => ("upper_bottom", "lower_top"),
+                false => ("lower_top", "upper_bottom"),
+            };
+            let case = loaded_stack_case(&dir, &mesh, dim, pair, Load::Pressed);
+            let what = format!("{} on {np} rank(s)", case.display());
+            let s = solve(np, &case, &[]);
+            assert_eq!(s.summary["bodies"]["not_held"], 1, "{what}");
+            check_patch(&s, dim, &what);
+        }
+    }
+}
+
+/// Three blocks of tests/meshes/tower2d.geo (sizes 1/7, 1/3, 1/5) of three materials, the
+/// lowest on a roller support, all on the symmetry line x = 0, the top pressed by p: the
+/// middle block against the lowest and the upper one, held by contact alone.
+fn tower_case(dir: &Path, middle_slave: bool) -> PathBuf {
+    let mesh = dir.join("tower2d.msh");
+    gmsh_file(&mesh_dir().join("tower2d.geo"), 2, &[], &mesh);
+    let (p, _) = exact(2, &[LOWER, UPPER, THIRD]);
+    let pairs = match middle_slave {
+        true => [
+            ("middle_bottom", "lower_top"),
+            ("middle_top", "upper_bottom"),
+        ],
+        false => [
+            ("lower_top", "middle_bottom"),
+            ("upper_bottom", "middle_top"),
+        ],
+    };
+    let mut text = format!("[mesh]\nfile = {}\n", toml_path(&mesh));
+    for (g, (e, nu)) in ["lower", "middle", "upper"]
+        .iter()
+        .zip([LOWER, UPPER, THIRD])
+    {
+        text += &format!(
+            "[[material]]\ngroup = \"{g}\"\nyoung = {e:?}\npoisson = {nu:?}\n\
+             model = \"plane_strain\"\n"
+        );
+    }
+    text += &format!(
+        "[[dirichlet]]\ngroup = \"bottom\"\nvalue = [\"free\", 0.0]\n\
+         [[dirichlet]]\ngroup = \"left\"\nvalue = [0.0, \"free\"]\n\
+         [[neumann]]\ngroup = \"top\"\npressure = {p:?}\n"
+    );
+    for (slave, master) in pairs {
+        text += &format!(
+            "[[contact]]\ngroup = \"{slave}\"\n\
+             obstacle = {{ type = \"body\", group = \"{master}\" }}\nfriction = \"none\"\n"
+        );
+    }
+    text += "[output]\ndir = \"out\"\nfields = [\"displacement\", \"contact\"]\n";
+    write_case(&dir.join(format!("tower_{middle_slave}.toml")), &text)
+}
+
+#[test]
+fn three_stacked_blocks_held_by_contact_alone_carry_the_load() {
+    let tmp = tempfile::tempdir().expect("tempdir");
+    let (p, _) = exact(2, &[LOWER, UPPER, THIRD]);
+    for (middle_slave, np) in [(true, 1), (true, 3), (false, 2)] {
+        let case = tower_case(tmp.path(), middle_slave);
+        let what = format!("{} on {np} rank(s)", case.display());
+        let s = solve(np, &case, &[]);
+        assert_eq!(s.summary["bodies"]["not_held"], 2, "{what}");
+        check_stack(&s, 2, &[LOWER, UPPER, THIRD], &what);
+        // each interface carries the load p (unit width): the pairs' total forces
+        let pairs = s.summary["contact"]["pairs"].as_array().expect("pairs");
+        for (j, pair) in pairs.iter().enumerate() {
+            let f = floats(&pair["total_force"]);
+            assert!(
+                (f[1].abs() - p).abs() < 1e-10 * p && f[0].abs() < 1e-10 * p,
+                "{what}: pair {j} carries {f:?}, the load {p:e}"
+            );
+        }
     }
 }
 

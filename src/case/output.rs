@@ -13,16 +13,18 @@ pub enum OutputField {
     VonMises,
     VonMisesThesis,
     Rank,
+    Body,
     Contact,
 }
 
 impl OutputField {
-    pub const ALL: [OutputField; 6] = [
+    pub const ALL: [OutputField; 7] = [
         OutputField::Displacement,
         OutputField::Stress,
         OutputField::VonMises,
         OutputField::VonMisesThesis,
         OutputField::Rank,
+        OutputField::Body,
         OutputField::Contact,
     ];
 
@@ -34,6 +36,7 @@ impl OutputField {
             OutputField::VonMises => "von_mises",
             OutputField::VonMisesThesis => "von_mises_thesis",
             OutputField::Rank => "rank",
+            OutputField::Body => "body",
             OutputField::Contact => "contact",
         }
     }

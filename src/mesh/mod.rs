@@ -45,7 +45,7 @@ pub mod h5;
 mod quiet;
 mod raw;
 mod rigid_modes;
-pub use rigid_modes::RigidModes;
+pub use rigid_modes::{BodyModes, Part, RigidModes, NO_SLOT};
 #[cfg(test)]
 mod tests;
 

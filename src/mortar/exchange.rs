@@ -122,8 +122,9 @@ impl Reach {
 }
 
 /// The master facets this rank integrates against, from every rank: per facet its pair, the
-/// global node numbers, coordinates, a point inside the master body and the nodes'
-/// Dirichlet-fixed components.
+/// global node numbers, coordinates, a point inside the master body, the nodes'
+/// Dirichlet-fixed components and the slot of the master body's rigid modes
+/// ([`crate::mesh::BodyModes`]).
 pub(super) struct MasterFacets {
     dim: usize,
     records: Vec<f64>,
@@ -131,7 +132,7 @@ pub(super) struct MasterFacets {
 
 impl MasterFacets {
     fn record_len(dim: usize) -> usize {
-        1 + dim + 3 * dim + 3 + dim * dim
+        1 + dim + 3 * dim + 3 + dim * dim + 1
     }
 
     /// Each rank sends the master facets whose node of smallest global number it owns, to
@@ -181,6 +182,7 @@ impl MasterFacets {
                         });
                     }
                 }
+                send.push(settings.modes.as_ref().map_or(0, |m| m.slot_of(first)) as f64);
             }
         }
         let all = ctx.all_gather_varcount(&send);
@@ -232,6 +234,22 @@ impl MasterFacets {
                 }
             }
         }
+    }
+
+    /// Pair `p`'s master nodes (global number) with the slot of their body's rigid modes
+    /// ([`crate::mesh::NO_SLOT`]: a held body) and their coordinates.
+    pub fn nodes_of(&self, p: usize) -> HashMap<usize, (u32, [f64; 3])> {
+        let dim = self.dim;
+        let n = Self::record_len(dim);
+        let mut out = HashMap::new();
+        for r in self.of_pair(p) {
+            let slot = r[n - 1] as u32;
+            for a in 0..dim {
+                let x = [r[1 + dim + 3 * a], r[2 + dim + 3 * a], r[3 + dim + 3 * a]];
+                out.insert(r[1 + a] as usize, (slot, x));
+            }
+        }
+        out
     }
 
     /// Every received master node (global number) with its pair.

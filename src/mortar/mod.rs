@@ -30,7 +30,7 @@ pub use basis::{Basis, InU};
 use crate::contact::mortar::{assemble_with_normals, MortarOptions, Orientation, Surface};
 use crate::contact::obstacle::{BodyTarget, Obstacle, SlaveRow};
 use crate::error::{InputError, RunError};
-use crate::mesh::Mesh;
+use crate::mesh::{Mesh, Part, NO_SLOT};
 use crate::par::Ctx;
 use crate::partition::Layout;
 use crate::setup::ContactSettings;
@@ -102,6 +102,13 @@ pub fn set_up(
             ));
         }
         masters.fixed_of(p, &mut master_fixed);
+        if let Some(modes) = settings.modes.as_mut() {
+            let faces = master_sides(&rows, &masters.nodes_of(p));
+            let modes = Arc::make_mut(modes);
+            for (v, parts) in faces {
+                modes.set_faces(v, parts);
+            }
+        }
         rows_of.push((p, rows));
     }
     let basis = Basis::new(ctx, mesh, layout, (&rows_of, &master_fixed), fixed)?;
@@ -114,6 +121,44 @@ pub fn set_up(
         *t = Arc::new(target);
     }
     Ok(Some(basis))
+}
+
+/// Per slave row (mesh node): the master side it faces, per body with rigid modes
+/// ([`crate::mesh::Part`]: Σ_j m_kj and Σ_j m_kj x_j over that body's master nodes), from
+/// `nodes` (master node → slot, coordinates). Local.
+fn master_sides(
+    rows: &HashMap<usize, SlaveRow>,
+    nodes: &HashMap<usize, (u32, [f64; 3])>,
+) -> Vec<(usize, Vec<Part>)> {
+    let mut out = Vec::new();
+    for (&v, r) in rows {
+        let mut parts: Vec<Part> = Vec::new();
+        for &(j, m) in &r.masters {
+            let Some(&(slot, x)) = nodes.get(&j) else {
+                continue;
+            };
+            if slot == NO_SLOT {
+                continue;
+            }
+            let i = match parts.iter().position(|p| p.slot == slot) {
+                Some(i) => i,
+                None => {
+                    parts.push(Part {
+                        slot,
+                        weight: 0.0,
+                        moment: [0.0; 3],
+                    });
+                    parts.len() - 1
+                }
+            };
+            parts[i].weight += m;
+            for d in 0..3 {
+                parts[i].moment[d] += m * x[d];
+            }
+        }
+        out.push((v, parts));
+    }
+    out
 }
 
 /// The master group of a body pair.

@@ -2,7 +2,7 @@
 //! and the set update (3.23)/(3.33) with its one reduction per Newton step.
 
 use super::boundary::{ContactBoundary, ContactNode, NodeResult};
-use super::rigid::{Gram, RigidModes};
+use super::rigid::{BodyModes, Gram};
 use crate::case::NewtonInit;
 use crate::contact::{self, CoulombRow, NodeState};
 use crate::par::Ctx;
@@ -72,7 +72,7 @@ pub struct Prescribed {
 
 /// A set as all ranks see it: |A_n|, two fingerprints, the Gram matrix of its constraint rows
 /// against the rigid modes.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq)]
 pub struct SetSummary {
     pub n_active: usize,
     pub fingerprint: (f64, f64),
@@ -275,13 +275,14 @@ impl ActiveSet {
 
     /// Local Gram matrix of the set's constraint rows against the rigid modes: nᵀ at active
     /// nodes; with friction also τᵀ where the tangential row holds u_τ. Zero without `modes`.
-    fn gram(&self, b: &ContactBoundary, modes: Option<&RigidModes>, dim: usize) -> Gram {
-        let mut g = [0.0; 36];
+    fn gram(&self, b: &ContactBoundary, modes: Option<&BodyModes>, dim: usize) -> Gram {
         let Some(modes) = modes else {
-            return g;
+            return Vec::new();
         };
+        let mut g = modes.zero_gram();
         self.held_rows(b, dim, |i, c| {
-            modes.add_outer(&mut g, &modes.direction_row(&b.nodes[i].x, c))
+            let k = &b.nodes[i];
+            modes.add_outer(&mut g, &modes.direction_row(k.node, &k.x, c))
         });
         g
     }
@@ -314,12 +315,7 @@ impl ActiveSet {
     }
 
     /// Local part of the summary, packed: |A_n|, fingerprints, Gram.
-    fn pack_summary(
-        &self,
-        b: &ContactBoundary,
-        modes: Option<&RigidModes>,
-        dim: usize,
-    ) -> Vec<f64> {
+    fn pack_summary(&self, b: &ContactBoundary, modes: Option<&BodyModes>, dim: usize) -> Vec<f64> {
         let (h1, h2) = self.fingerprint(b);
         let mut v = vec![self.local_active() as f64, h1, h2];
         v.extend(self.gram(b, modes, dim));
@@ -331,10 +327,13 @@ impl ActiveSet {
         &self,
         ctx: &Ctx,
         b: &ContactBoundary,
-        modes: Option<&RigidModes>,
+        modes: Option<&BodyModes>,
         dim: usize,
     ) -> SetSummary {
-        unpack_summary(&ctx.sum_vec(&self.pack_summary(b, modes, dim)))
+        unpack_summary(
+            &ctx.sum_vec(&self.pack_summary(b, modes, dim)),
+            grams(modes),
+        )
     }
 
     /// (3.23) and, with friction, (3.33) (Tresca) or (F1)/(F5) (Coulomb) with the newest
@@ -413,13 +412,16 @@ impl ActiveSet {
     }
 }
 
-fn unpack_summary(v: &[f64]) -> SetSummary {
-    let mut gram = [0.0; 36];
-    gram.copy_from_slice(&v[3..3 + 36]);
+/// The Gram matrix's entries in a packed summary: M² (none without modes).
+fn grams(modes: Option<&BodyModes>) -> usize {
+    modes.map_or(0, |m| m.count() * m.count())
+}
+
+fn unpack_summary(v: &[f64], grams: usize) -> SetSummary {
     SetSummary {
         n_active: v[0] as usize,
         fingerprint: (v[1], v[2]),
-        gram,
+        gram: v[3..3 + grams].to_vec(),
     }
 }
 
@@ -556,7 +558,7 @@ fn row_residual2(row: &CoulombRow<2>, k: &ContactNode, r: &NodeResult, c: f64) -
 }
 
 /// A step's update as all ranks see it.
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Debug)]
 pub struct StepTotals {
     pub changed: usize,
     /// The next set.
@@ -582,7 +584,7 @@ impl SetUpdate {
         &self,
         ctx: &Ctx,
         b: &ContactBoundary,
-        modes: Option<&RigidModes>,
+        modes: Option<&BodyModes>,
         dim: usize,
     ) -> StepTotals {
         let mut local = vec![self.changed as f64, self.residual2, self.du2, self.uu];
@@ -602,7 +604,7 @@ impl SetUpdate {
             },
             u_norm2: g[3],
             states: [0, 1, 2, 3].map(|j| g[4 + j] as usize),
-            next: unpack_summary(&g[8..]),
+            next: unpack_summary(&g[8..], grams(modes)),
             lambda_norm: g[n - 3].sqrt(),
             rows: (g[n - 2].sqrt(), g[n - 1].sqrt()),
         }
@@ -659,6 +661,7 @@ mod tests {
             excluded_dirichlet: 0,
             obstacles: Vec::new(),
             keys: Default::default(),
+            modes: std::sync::Arc::new(crate::mesh::BodyModes::none(2)),
         };
         for stick in [false, true] {
             let set = ActiveSet::held(vec![true, false], stick);
@@ -708,6 +711,7 @@ mod tests {
                 crate::contact::Plane::new([0.0; 3], [0.0, 1.0, 0.0], 2).expect("plane"),
             )],
             keys: Default::default(),
+            modes: std::sync::Arc::new(crate::mesh::BodyModes::none(2)),
         };
         let p = set.prescribed(&b, 0, 2).expect("rewritten");
         assert_eq!(p.dirs.len(), 2);
@@ -808,6 +812,7 @@ mod tests {
                 crate::contact::Plane::new([0.0; 3], [0.0, 1.0, 0.0], 2).expect("plane"),
             )],
             keys: Default::default(),
+            modes: std::sync::Arc::new(crate::mesh::BodyModes::none(2)),
         };
         let mut it = Iterate::new(2, 4, true);
         let limit = at(0.0, -1.0, 0.1 * (1.0 + 1e-12));

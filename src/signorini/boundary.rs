@@ -6,10 +6,11 @@ use crate::contact::{Frame, Obstacle};
 use crate::error::{InputError, RunError};
 use crate::fem;
 use crate::geom::dot;
-use crate::mesh::Mesh;
+use crate::mesh::{BodyModes, Mesh};
 use crate::par::Ctx;
 use crate::partition::Layout;
 use crate::setup::{group_facets, ContactSettings};
+use std::sync::Arc;
 
 /// One owned contact node.
 #[derive(Clone, Debug)]
@@ -79,6 +80,9 @@ pub struct ContactBoundary {
     pub obstacles: Vec<Obstacle>,
     /// The case file and keys that the diagnoses of the solve name.
     pub keys: CaseKeys,
+    /// The rigid modes of the bodies Dirichlet data leave free, in the unknowns of every local
+    /// node (signorini/rigid.rs).
+    pub modes: Arc<BodyModes>,
 }
 
 /// The case file and the keys a failed solve names, so the user knows what to change.
@@ -324,6 +328,7 @@ pub fn build<W>(
             pairs: settings.pairs.iter().map(|p| p.key.clone()).collect(),
             solver: String::new(),
         },
+        modes: (settings.modes.clone()).unwrap_or_else(|| Arc::new(BodyModes::whole(mesh))),
     };
     Ok((b, warned))
 }

@@ -763,7 +763,7 @@ impl Unheld {
         // Σ_k g_k g_kᵀ over every contact node (g_k: the free modes' normal parts at k)
         let mut gram = vec![0.0; mz * mz];
         for k in &b.nodes {
-            let g = free.normal_parts(&k.x, &k.frame.n);
+            let g = free.normal_parts(k, &k.frame.n);
             for i in 0..mz {
                 for j in 0..mz {
                     gram[i * mz + j] += g[i] * g[j];
@@ -808,8 +808,9 @@ impl Unheld {
         let mz = free.dirichlet_free().ncols();
         let mut phi = free.free_load();
         // this rank's node with the smallest gap (ties: the smallest gmsh tag): gap, tag, then
-        // the free modes' motion along its tangents (2 × 6)
-        let mut mine = vec![f64::INFINITY; 14];
+        // the free modes' motion along its tangents (2 × m_z)
+        let rec = 2 + 2 * mz;
+        let mut mine = vec![f64::INFINITY; rec];
         let nearest = b
             .nodes
             .iter()
@@ -818,19 +819,19 @@ impl Unheld {
             mine[0] = k.gap;
             mine[1] = k.tag as f64;
             for (i, t) in k.frame.t.iter().enumerate() {
-                mine[2 + 6 * i..8 + 6 * i].copy_from_slice(&free.normal_parts(&k.x, t));
+                mine[2 + mz * i..2 + mz * (i + 1)].copy_from_slice(&free.normal_parts(k, t));
             }
         }
         let all = ctx.all_gather_varcount(&mine);
         // the smallest gap of all ranks (ties: the smallest tag, on every partition)
         let Some(best) = all
-            .chunks(14)
+            .chunks(rec)
             .filter(|r| r[0].is_finite())
             .min_by(|a, c| a[0].total_cmp(&c[0]).then(a[1].total_cmp(&c[1])))
         else {
             return phi;
         };
-        let tangents = nalgebra::DMatrix::from_fn(mz, 2, |c, i| best[2 + 6 * i + c]);
+        let tangents = nalgebra::DMatrix::from_fn(mz, 2, |c, i| best[2 + mz * i + c]);
         let a = self.basis.transpose() * &tangents;
         let rhs = -(self.basis.transpose() * nalgebra::DVector::from_column_slice(&phi));
         let svd = a.svd(true, true);

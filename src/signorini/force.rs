@@ -44,7 +44,7 @@
 
 use super::active_set::{ActiveSet, Iterate};
 use super::boundary::{ContactBoundary, ContactNode};
-use super::rigid::{ApproachCoupling, Pin, RigidModes};
+use super::rigid::{ApproachCoupling, BodyModes, Pin};
 use super::step_system::ReducedSystem;
 use crate::assembly::System;
 use crate::error::{InputError, RunError};
@@ -331,30 +331,32 @@ impl Approach {
         ctx: &Ctx,
         b: &ContactBoundary,
         set: &ActiveSet,
-        modes: &RigidModes,
+        modes: &BodyModes,
         dim: usize,
     ) -> Vec<ApproachCoupling> {
         let n = self.pairs.len();
-        let mut local = vec![0.0; n * 7];
+        let m = modes.count();
+        let mut local = vec![0.0; n * (m + 1)];
         set.held_rows(b, dim, |i, c| {
             if let Some(j) = self.slot[i] {
                 let w = dot(*c, self.pairs[j].dir);
-                let a = modes.direction_row(&b.nodes[i].x, c);
-                for (x, y) in local[j * 7..j * 7 + 6].iter_mut().zip(a) {
+                let k = &b.nodes[i];
+                let a = modes.direction_row(k.node, &k.x, c);
+                let at = j * (m + 1);
+                for (x, y) in local[at..at + m].iter_mut().zip(a) {
                     *x += w * y;
                 }
-                local[j * 7 + 6] += w * w;
+                local[at + m] += w * w;
             }
         });
         let all = ctx.sum_vec(&local);
         (0..n)
-            .filter(|&j| all[j * 7 + 6] > 0.0)
+            .filter(|&j| all[j * (m + 1) + m] > 0.0)
             .map(|j| {
-                let mut bj = [0.0; 6];
-                bj.copy_from_slice(&all[j * 7..j * 7 + 6]);
+                let at = j * (m + 1);
                 ApproachCoupling {
-                    b: bj,
-                    s: all[j * 7 + 6],
+                    b: all[at..at + m].to_vec(),
+                    s: all[at + m],
                     magnitude: self.pairs[j].magnitude,
                     dir: self.pairs[j].dir,
                     pair: self.pairs[j].pair,
@@ -558,6 +560,7 @@ mod tests {
             excluded_dirichlet: 0,
             obstacles: Vec::new(),
             keys: Default::default(),
+            modes: std::sync::Arc::new(crate::mesh::BodyModes::none(2)),
         };
         let fc = |pair: usize| ForceControl {
             force: [0.0, -1.0, 0.0],

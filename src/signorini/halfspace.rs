@@ -258,13 +258,14 @@ pub fn mirror_planes(ctx: &Ctx, mesh: &Mesh, fixed: &[f64]) -> Vec<(usize, f64)>
     out
 }
 
-/// Values per node record gathered on every rank: x (3), n (3), gap, w, u_n, G (6), pair,
-/// λ_n of an active node (0 off the set), the gmsh tag (exact in f64 below 2⁵³).
-const REC: usize = 18;
+/// Values per node record gathered on every rank: x (3), n (3), gap, w, u_n, pair, λ_n of an
+/// active node (0 off the set), the gmsh tag (exact in f64 below 2⁵³). The free modes' normal
+/// parts G (m_z per node) are gathered beside them.
+const REC: usize = 12;
 /// Where the pair, λ_n and the tag are in a record.
-const PAIR: usize = 15;
-const LAMBDA: usize = 16;
-const TAG: usize = 17;
+const PAIR: usize = 9;
+const LAMBDA: usize = 10;
+const TAG: usize = 11;
 
 /// Force control of one pair in the model: the direction e, |F| and the pair.
 type PairForce = ([f64; 3], f64, usize);
@@ -317,7 +318,7 @@ fn run_model(
     } else {
         0
     };
-    let all = gather_records(ctx, b, it, free, active);
+    let (all, g_all) = gather_records(ctx, b, it, free, active);
     let n = all.len() / REC;
     // Under force control nothing penetrates before the approach is known: the model grows
     // from MIN_MODEL_NODES (by MODEL_MARGIN) while its contact zone reaches its border.
@@ -341,7 +342,8 @@ fn run_model(
         let mut packed: Vec<f64> = ctx
             .on_root_wide(model.m() + mz, || {
                 super::dense::guarded("predictor-model", || {
-                    model.solve(&all, &packed_c, free, (mz, c, max_steps), (force, grow))
+                    let recs = (&all[..], &g_all[..]);
+                    model.solve(recs, &packed_c, free, (mz, c, max_steps), (force, grow))
                 })
                 .unwrap_or_else(|_| {
                     let mut failed = vec![0.0; head];
@@ -449,7 +451,7 @@ pub fn locate(
     let t = Instant::now();
     let mz = free.dirichlet_free().ncols();
     let it = Iterate::new(b.nodes.len(), 0, false);
-    let all = gather_records(ctx, b, &it, free, None);
+    let (all, g_all) = gather_records(ctx, b, &it, free, None);
     let n = all.len() / REC;
     let mut tried = Vec::new();
     let mut packed: Vec<f64> = Vec::new();
@@ -469,7 +471,7 @@ pub fn locate(
         packed = ctx
             .on_root_wide(model.m(), || {
                 super::dense::guarded("locate-model", || {
-                    model.locate(&all, &packed_c, free, phi, (c, max_steps))
+                    model.locate((&all, &g_all), &packed_c, free, phi, (c, max_steps))
                 })
                 .unwrap_or_default()
             })
@@ -500,7 +502,7 @@ pub fn locate(
         .nodes
         .iter()
         .map(|k| {
-            let g = free.normal_parts(&k.x, &k.frame.n);
+            let g = free.normal_parts(k, &k.frame.n);
             k.gap + (0..mz).map(|c| g[c] * packed[c]).sum::<f64>()
         })
         .collect();
@@ -514,28 +516,32 @@ fn head(force_pairs: usize) -> usize {
 }
 
 /// Every contact node of every rank (rank order, = the boundary's global numbering): x, n,
-/// gap, lumped weight, the first solve's u_n, the free modes' normal parts, pair, λ_n and tag
-/// ([`REC`] values). Rank order depends on the partition: decisions order by the tag.
-/// Collective.
+/// gap, lumped weight, the first solve's u_n, pair, λ_n and tag ([`REC`] values), and beside
+/// them the free modes' normal parts (m_z per node). Rank order depends on the partition:
+/// decisions order by the tag. Collective.
 fn gather_records(
     ctx: &Ctx,
     b: &ContactBoundary,
     it: &Iterate,
     free: &FreeModes,
     active: Option<&[bool]>,
-) -> Vec<f64> {
+) -> (Vec<f64>, Vec<f64>) {
     let mut mine = Vec::with_capacity(b.nodes.len() * REC);
+    let mut parts = Vec::new();
     for (i, (k, r)) in b.nodes.iter().zip(&it.nodes).enumerate() {
         mine.extend_from_slice(&k.x);
         mine.extend_from_slice(&k.frame.n);
         mine.extend_from_slice(&[k.gap, k.weight, r.u_n]);
-        mine.extend_from_slice(&free.normal_parts(&k.x, &k.frame.n));
+        parts.extend(free.normal_parts(k, &k.frame.n));
         mine.push(k.pair as f64);
         let on = active.is_some_and(|a| a[i]);
         mine.push(if on { r.lambda_n } else { 0.0 });
         mine.push(k.tag as f64);
     }
-    ctx.all_gather_varcount(&mine)
+    (
+        ctx.all_gather_varcount(&mine),
+        ctx.all_gather_varcount(&parts),
+    )
 }
 
 /// The nodes of the model, the same on every rank.
@@ -619,7 +625,7 @@ impl Model {
     /// empty.
     fn locate(
         &self,
-        all: &[f64],
+        (all, g_all): (&[f64], &[f64]),
         packed_c: &[f64],
         free: &FreeModes,
         phi: &[f64],
@@ -631,7 +637,7 @@ impl Model {
         let cmat = assemble(m, packed_c);
         let d0 = vec![0.0; m];
         let gap: Vec<f64> = self.pick.iter().map(|&i| r(i)[6]).collect();
-        let g = DMatrix::from_fn(m, mz, |q, cc| r(self.pick[q])[9 + cc]);
+        let g = DMatrix::from_fn(m, mz, |q, cc| g_all[self.pick[q] * mz + cc]);
         let (_, load_scale) = free.load();
         let dense = Dense {
             cmat: &cmat,
@@ -663,7 +669,7 @@ impl Model {
     /// represented nodes, the approach's change, flag of every contact node].
     fn solve(
         &self,
-        all: &[f64],
+        (all, g_all): (&[f64], &[f64]),
         packed_c: &[f64],
         free: &FreeModes,
         (mz, c, max_steps): (usize, f64, usize),
@@ -698,7 +704,7 @@ impl Model {
                         0.0 // another pair's obstacle stays
                     }
                 }
-                _ => r(self.pick[q])[9 + cc],
+                _ => g_all[self.pick[q] * mz + cc],
             });
             let (_, mut load_scale) = free.load();
             let mut phi = free.free_load();

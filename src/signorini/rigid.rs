@@ -1,10 +1,11 @@
 //! Rigid body modes that neither Dirichlet data nor the current sets fix (docs/method.md;
 //! thesis 4.1, where V*_h removes only the tangential translation).
 //!
-//! Mechanism: the rigid modes r_1..r_m (m = 3 in 2D, 6 in 3D) are tested against the
-//! constraint rows — every Dirichlet dof, the normal row nᵀ of every active contact node and,
+//! Mechanism: the rigid modes r_1..r_M of the bodies that Dirichlet data leave free (m = 3 in
+//! 2D, 6 in 3D per body; [`BodyModes`], in the solver's unknowns: a body pair's slave node
+//! sees a master body's mode through its mortar row) are tested against the constraint rows — every Dirichlet dof, the normal row nᵀ of every active contact node and,
 //! with friction, the tangent rows τᵀ of nodes whose tangential row holds u_τ — through the
-//! m×m Gram matrix G = Σ (C r)ᵀ (C r). Its null space is exactly the set of free modes: no
+//! M×M Gram matrix G = Σ (C r)ᵀ (C r). Its null space is exactly the set of free modes: no
 //! fewer are removed (the system would be singular) and no more (that would change the
 //! answer). Each free mode is removed by pinning one dof, eliminated symmetrically like the
 //! contact constraints (step_system/). The pinned dofs are chosen from the whole mesh by a
@@ -23,28 +24,29 @@
 //! order ε‖A‖‖u‖·√n when u carries a large rigid motion (an obstacle far below the body), or
 //! the Krylov tolerance of the iterative preset — both produced false "no support" diagnoses.
 
-use super::boundary::{CaseKeys, ContactBoundary, NodeResult};
+use super::boundary::{CaseKeys, ContactBoundary, ContactNode, NodeResult};
 use crate::case;
 use crate::error::RunError;
 use crate::mesh::Mesh;
 use crate::par::Ctx;
 use crate::partition::Layout;
 use nalgebra::{DMatrix, SymmetricEigen};
+use std::sync::Arc;
 
-/// Packed m×m Gram matrix (row-major, room for m = 6).
-pub type Gram = [f64; 36];
+/// The M×M Gram matrix of a set of rows against the modes (row-major; M = [`BodyModes::count`]).
+pub type Gram = Vec<f64>;
 
 /// One pinned dof: (global node number, component).
 pub type Pin = (usize, usize);
 
-pub use crate::mesh::RigidModes;
+pub use crate::mesh::BodyModes;
 
-impl RigidModes {
+impl BodyModes {
     /// Chooses one dof per free mode: among the owned nodes allowed by `candidate`, greedily
     /// the dof whose free-mode values are largest after removing the directions already
     /// pinned (pivoted Gram–Schmidt); each step picks the largest over the ranks (near ties:
     /// the lowest mesh-order node). Returns (global node, component) and the node's
-    /// coordinates, the same on every rank. Collective.
+    /// coordinates and body slot, the same on every rank. Collective.
     pub fn pins(
         &self,
         ctx: &Ctx,
@@ -52,12 +54,13 @@ impl RigidModes {
         layout: &Layout,
         q: &DMatrix<f64>,
         candidate: impl Fn(usize) -> bool,
-    ) -> Vec<(Pin, [f64; 3])> {
+    ) -> Vec<PinAt> {
         let mf = q.ncols();
         if mf == 0 {
             return Vec::new();
         }
         let dim = self.dim;
+        let m = self.count();
         // Values of the free modes at every owned candidate dof (mesh order).
         let mut dofs: Vec<(usize, usize)> = Vec::new();
         let mut w: Vec<f64> = Vec::new();
@@ -66,15 +69,15 @@ impl RigidModes {
                 continue;
             }
             for k in 0..dim {
-                let row = self.dof_row(&mesh.coords[v], k);
+                let row = self.dof_row(v, &mesh.coords[v], k);
                 dofs.push((v, k));
                 for c in 0..mf {
-                    w.push((0..self.m).map(|j| row[j] * q[(j, c)]).sum());
+                    w.push((0..m).map(|j| row[j] * q[(j, c)]).sum());
                 }
             }
         }
         let mut chosen = Vec::new();
-        const REC: usize = 13;
+        let rec_len = 8 + mf;
         for _ in 0..mf {
             let mut best = (0.0f64, usize::MAX);
             for i in 0..dofs.len() {
@@ -83,12 +86,12 @@ impl RigidModes {
                     best = (n2, i);
                 }
             }
-            // [n2, mesh-order node, k, global node, x, y, z, free-mode values (6)]
-            let mut rec = [0.0f64; REC];
+            // [n2, mesh-order node, k, global node, x, y, z, slot, free-mode values (mf)]
+            let mut rec = vec![0.0f64; rec_len];
             if best.1 != usize::MAX {
                 let (v, k) = dofs[best.1];
                 let x = mesh.coords[v];
-                rec[..7].copy_from_slice(&[
+                rec[..8].copy_from_slice(&[
                     best.0,
                     layout.node_orig[v] as f64,
                     k as f64,
@@ -96,13 +99,17 @@ impl RigidModes {
                     x[0],
                     x[1],
                     x[2],
+                    f64::from(self.slot_of(v)),
                 ]);
-                rec[7..7 + mf].copy_from_slice(&w[best.1 * mf..(best.1 + 1) * mf]);
+                rec[8..8 + mf].copy_from_slice(&w[best.1 * mf..(best.1 + 1) * mf]);
             }
             let all = ctx.all_gather_varcount(&rec);
-            let top = all.chunks_exact(REC).map(|r| r[0]).fold(0.0f64, f64::max);
+            let top = all
+                .chunks_exact(rec_len)
+                .map(|r| r[0])
+                .fold(0.0f64, f64::max);
             let Some(win) = all
-                .chunks_exact(REC)
+                .chunks_exact(rec_len)
                 .filter(|r| r[0] > 0.0 && r[0] * (1.0 + 1e-12) >= top)
                 .min_by(|a, b| (a[1], a[2]).partial_cmp(&(b[1], b[2])).expect("finite"))
             else {
@@ -111,9 +118,13 @@ impl RigidModes {
             if win[0] < 1e-20 {
                 break;
             }
-            chosen.push(((win[3] as usize, win[2] as usize), [win[4], win[5], win[6]]));
+            chosen.push(PinAt {
+                pin: (win[3] as usize, win[2] as usize),
+                x: [win[4], win[5], win[6]],
+                slot: win[7] as u32,
+            });
             let pn = win[0].sqrt();
-            let p: Vec<f64> = win[7..7 + mf].iter().map(|x| x / pn).collect();
+            let p: Vec<f64> = win[8..8 + mf].iter().map(|x| x / pn).collect();
             for r in 0..dofs.len() {
                 let s: f64 = (0..mf).map(|c| w[r * mf + c] * p[c]).sum();
                 for c in 0..mf {
@@ -125,8 +136,25 @@ impl RigidModes {
     }
 }
 
-/// A rigid motion Σ_j ρ_j r_j, by its mode coefficients (m entries used).
-pub type Motion = [f64; 6];
+/// A pinned dof where it is: the pin, the node's coordinates and its body's slot.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PinAt {
+    pub pin: Pin,
+    pub x: [f64; 3],
+    pub slot: u32,
+}
+
+impl PinAt {
+    /// The pin's row over the modes (a non-slave node: its own body's modes only).
+    fn row(&self, modes: &BodyModes) -> Vec<f64> {
+        let mut e = [0.0; 3];
+        e[self.pin.1] = 1.0;
+        modes.row_of_slot(self.slot, &self.x, &e)
+    }
+}
+
+/// A rigid motion Σ_j ρ_j r_j, by its mode coefficients (M entries).
+pub type Motion = Vec<f64>;
 
 /// Outcome of the load-balance test of the free rigid modes.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -143,11 +171,11 @@ pub enum Balance {
 /// (c·e_j) of the pair (c the normal of an active node or a held tangent) keeps holding under
 /// the rigid motion ρ with the approach δ_j + cᵀρ(x_k)/(c·e_j); in the least-squares sense over
 /// the pair's rows, δ_j(ρ) = bᵀρ / s with b = Σ_rows (c·e_j) a_row and s = Σ_rows (c·e_j)²,
-/// a_row the row's values on the rigid modes ([`RigidModes::direction_row`]).
+/// a_row the row's values on the rigid modes ([`FreeModes::row`]).
 #[derive(Clone, Debug)]
 pub struct ApproachCoupling {
-    /// b (m entries used).
-    pub b: [f64; 6],
+    /// b (M entries).
+    pub b: Vec<f64>,
     /// s > 0 (a pair without held rows has no coupling).
     pub s: f64,
     /// |F_j|: the load the prescribed force puts on the mode (with δ_j(ρ) as its work).
@@ -162,24 +190,24 @@ pub struct ApproachCoupling {
 /// remove them.
 #[derive(Clone)]
 pub struct FreeModes {
-    modes: RigidModes,
+    modes: Arc<BodyModes>,
     enabled: bool,
     /// Gram matrix of the Dirichlet dofs (fixed for the whole run).
     g_dirichlet: Gram,
     /// The Gram matrix the current pins were chosen for.
     key: Option<Gram>,
-    /// Basis of the free modes (m × m_f).
+    /// Basis of the free modes (M × m_f).
     q: DMatrix<f64>,
-    /// Basis of the modes Dirichlet data leave free (m × m_z): the room of the rigid motion
+    /// Basis of the modes Dirichlet data leave free (M × m_z): the room of the rigid motion
     /// taken out of the solve ([`FreeModes::fit_motion`]).
     z: DMatrix<f64>,
     pins: Vec<Pin>,
-    /// Coordinates of the pinned nodes.
-    pin_x: Vec<[f64; 3]>,
+    /// Where the pinned nodes are.
+    pin_at: Vec<PinAt>,
     /// Nodes allowed as pins: off the contact boundary, without Dirichlet data.
     candidate: Vec<bool>,
-    /// The load in every rigid mode, Rᵀ f (summed over the ranks; m entries used).
-    load: [f64; 6],
+    /// The load in every rigid mode, Rᵀ f (summed over the ranks; M entries).
+    load: Vec<f64>,
     /// Σ_i |f_i| ‖R_i‖ over all dofs i: the size of the terms that cancel in `load`, the scale
     /// of the balance test.
     load_scale: f64,
@@ -207,58 +235,58 @@ impl FreeModes {
         setting: case::RigidModeHandling,
     ) -> FreeModes {
         let dim = mesh.dim;
-        let modes = RigidModes::new(mesh);
+        let modes = b.modes.clone();
+        let mm = modes.count();
         let enabled = setting == case::RigidModeHandling::Auto;
-        let mut g_dirichlet = [0.0; 36];
-        if enabled {
+        let mut g_dirichlet = modes.zero_gram();
+        if enabled && mm > 0 {
             for &v in &layout.owned_nodes {
                 for k in 0..dim {
                     if !fixed[v * dim + k].is_nan() {
-                        modes.add_outer(&mut g_dirichlet, &modes.dof_row(&mesh.coords[v], k));
+                        let row = modes.dof_row(v, &mesh.coords[v], k);
+                        modes.add_outer(&mut g_dirichlet, &row);
                     }
                 }
             }
-            let total = ctx.sum_vec(&g_dirichlet);
-            g_dirichlet.copy_from_slice(&total);
+            g_dirichlet = ctx.sum_vec(&g_dirichlet);
         }
         // Rᵀ f and its scale over the owned rows (owned node i holds rows i·d .. i·d + d).
-        let mut local = [0.0; 7];
+        let mut local = vec![0.0; mm + 1];
         for (i, &v) in layout.owned_nodes.iter().enumerate() {
             for k in 0..dim {
                 let f = f_local[i * dim + k];
-                if f == 0.0 {
+                if f == 0.0 || mm == 0 {
                     continue;
                 }
-                let row = modes.dof_row(&mesh.coords[v], k);
-                for j in 0..modes.m {
+                let row = modes.dof_row(v, &mesh.coords[v], k);
+                for j in 0..mm {
                     local[j] += row[j] * f;
                 }
-                local[6] += f.abs() * row.iter().map(|x| x * x).sum::<f64>().sqrt();
+                local[mm] += f.abs() * row.iter().map(|x| x * x).sum::<f64>().sqrt();
             }
         }
         let total = ctx.sum_vec(&local);
-        let mut load = [0.0; 6];
-        load.copy_from_slice(&total[..6]);
+        let load = total[..mm].to_vec();
         let candidate = (0..mesh.n_nodes())
             .map(|v| !b.on_contact_boundary[v] && (0..dim).all(|k| fixed[v * dim + k].is_nan()))
             .collect();
         let z = if enabled {
             modes.free_modes(&g_dirichlet)
         } else {
-            DMatrix::zeros(modes.m, 0)
+            DMatrix::zeros(mm, 0)
         };
         FreeModes {
-            q: DMatrix::zeros(modes.m, 0),
+            q: DMatrix::zeros(mm, 0),
             z,
             modes,
             enabled,
             g_dirichlet,
             key: None,
             pins: Vec::new(),
-            pin_x: Vec::new(),
+            pin_at: Vec::new(),
             candidate,
             load,
-            load_scale: total[6],
+            load_scale: total[mm],
             coupling: Vec::new(),
             keys: b.keys.clone(),
         }
@@ -277,9 +305,9 @@ impl FreeModes {
         }
         self.z = self.modes.free_modes(&self.g_dirichlet);
         self.key = None;
-        self.q = DMatrix::zeros(self.modes.m, 0);
+        self.q = DMatrix::zeros(self.modes.count(), 0);
         self.pins.clear();
-        self.pin_x.clear();
+        self.pin_at.clear();
     }
 
     /// True when rigid-mode handling is on and Dirichlet data leave some rigid mode free.
@@ -288,48 +316,60 @@ impl FreeModes {
     }
 
     /// The modes to test sets against (`None` when rigid-mode handling is off).
-    pub fn modes(&self) -> Option<&RigidModes> {
-        self.enabled.then_some(&self.modes)
+    pub fn modes(&self) -> Option<&BodyModes> {
+        self.enabled.then_some(&*self.modes)
     }
 
     pub fn pins(&self) -> &[Pin] {
         &self.pins
     }
 
-    /// Basis of the modes Dirichlet data leave free (m × m_z, orthonormal columns; no
+    /// Basis of the modes Dirichlet data leave free (M × m_z, orthonormal columns; no
     /// columns with rigid-mode handling off).
     pub fn dirichlet_free(&self) -> &DMatrix<f64> {
         &self.z
     }
 
     /// The rigid modes (also with handling off: then nothing is free).
-    pub fn rigid_modes(&self) -> &RigidModes {
+    pub fn rigid_modes(&self) -> &BodyModes {
         &self.modes
     }
 
-    /// The load in every rigid mode, Rᵀ f (m entries used), and its scale Σ|f_i|‖R_i‖.
-    pub fn load(&self) -> ([f64; 6], f64) {
-        (self.load, self.load_scale)
+    /// The number of modes M.
+    pub fn count(&self) -> usize {
+        self.modes.count()
     }
 
-    /// The Dirichlet-free modes' normal parts at a contact node at x with normal n: the
-    /// direction row of n times Z (the first Z.ncols() entries; a row of G in the condensed
-    /// systems).
-    pub fn normal_parts(&self, x: &[f64; 3], n: &[f64; 3]) -> [f64; 6] {
-        let (z, modes) = (&self.z, &self.modes);
-        let row = modes.direction_row(x, n);
-        let mut gz = [0.0; 6];
-        for (c, g) in gz.iter_mut().enumerate().take(z.ncols()) {
-            *g = (0..modes.m).map(|j| row[j] * z[(j, c)]).sum();
-        }
-        gz
+    /// No motion (M zeros).
+    pub fn no_motion(&self) -> Motion {
+        vec![0.0; self.count()]
+    }
+
+    /// The load in every rigid mode, Rᵀ f (M entries), and its scale Σ|f_i|‖R_i‖.
+    pub fn load(&self) -> (&[f64], f64) {
+        (&self.load, self.load_scale)
+    }
+
+    /// The row cᵀ w of contact node `k` over the modes (c a normal or a tangent at k).
+    pub fn row(&self, k: &ContactNode, c: &[f64; 3]) -> Vec<f64> {
+        self.modes.direction_row(k.node, &k.x, c)
+    }
+
+    /// The Dirichlet-free modes' parts of the row cᵀ w at contact node `k` (c its normal or a
+    /// tangent): the row times Z (Z.ncols() entries; a row of G in the condensed systems).
+    pub fn normal_parts(&self, k: &ContactNode, c: &[f64; 3]) -> Vec<f64> {
+        let z = &self.z;
+        let row = self.row(k, c);
+        (0..z.ncols())
+            .map(|col| (0..row.len()).map(|j| row[j] * z[(j, col)]).sum())
+            .collect()
     }
 
     /// The load in the Dirichlet-free modes, φ = Zᵀ (Rᵀ f) (one entry per column of Z).
     pub fn free_load(&self) -> Vec<f64> {
         (0..self.z.ncols())
             .map(|c| {
-                (0..self.modes.m)
+                (0..self.count())
                     .map(|j| self.z[(j, c)] * self.load[j])
                     .sum()
             })
@@ -345,8 +385,8 @@ impl FreeModes {
     /// modes). A pair without held rows is not coupled: its δ_j alone is free, and force.rs
     /// moves it until its first node touches. Local.
     pub fn couple(&mut self, g_set: &Gram, coupling: Vec<ApproachCoupling>) -> Gram {
-        let m = self.modes.m;
-        let mut g = *g_set;
+        let m = self.count();
+        let mut g = g_set.clone();
         for c in &coupling {
             for a in 0..m {
                 for b in 0..m {
@@ -362,7 +402,7 @@ impl FreeModes {
     /// `pair`, 0 for the other pairs: δ_j(ρ) = bᵀρ / s ([`ApproachCoupling`]). Pure.
     fn approach_of(&self, coef: &[f64], pair: usize) -> Option<(f64, [f64; 3])> {
         let c = self.coupling.iter().find(|c| c.pair == pair)?;
-        let d: f64 = (0..self.modes.m).map(|j| c.b[j] * coef[j]).sum::<f64>() / c.s;
+        let d: f64 = (0..self.count()).map(|j| c.b[j] * coef[j]).sum::<f64>() / c.s;
         Some((d, c.dir))
     }
 
@@ -370,8 +410,8 @@ impl FreeModes {
     /// do the work |F_j| δ_j(ρ) on a free extended mode), and the balance test's scale, the
     /// load's Σ|f_i|‖R_i‖ plus Σ_j |F_j| ‖b_j‖ / s_j. Pure.
     fn free_mode_load(&self) -> (Vec<f64>, f64) {
-        let (m, q) = (self.modes.m, &self.q);
-        let mut load = self.load;
+        let (m, q) = (self.count(), &self.q);
+        let mut load = self.load.clone();
         let mut scale = self.load_scale;
         for c in &self.coupling {
             for (l, b) in load.iter_mut().zip(&c.b).take(m) {
@@ -397,11 +437,11 @@ impl FreeModes {
         if !self.enabled {
             return Ok(false);
         }
-        let mut g = self.g_dirichlet;
+        let mut g = self.g_dirichlet.clone();
         for (x, y) in g.iter_mut().zip(g_set) {
             *x += y;
         }
-        if self.key == Some(g) {
+        if self.key.as_ref() == Some(&g) {
             return Ok(false);
         }
         let q = self.modes.free_modes(&g);
@@ -420,7 +460,8 @@ impl FreeModes {
         }
         self.key = Some(g);
         self.q = q;
-        (self.pins, self.pin_x) = pins.into_iter().unzip();
+        self.pins = pins.iter().map(|p| p.pin).collect();
+        self.pin_at = pins;
         Ok(true)
     }
 
@@ -433,14 +474,12 @@ impl FreeModes {
         layout: &Layout,
         b: &ContactBoundary,
     ) -> Result<&[Pin], RunError> {
-        let mut g = [0.0; 36];
+        let mut g = self.modes.zero_gram();
         if self.enabled {
             for k in &b.nodes {
-                self.modes
-                    .add_outer(&mut g, &self.modes.direction_row(&k.x, &k.frame.n));
+                self.modes.add_outer(&mut g, &self.row(k, &k.frame.n));
             }
-            let total = ctx.sum_vec(&g);
-            g.copy_from_slice(&total);
+            g = ctx.sum_vec(&g);
         }
         self.update(ctx, mesh, layout, &g)?;
         Ok(&self.pins)
@@ -458,7 +497,7 @@ impl FreeModes {
         b: &ContactBoundary,
         (nodes, active): (&[NodeResult], &[bool]),
     ) -> Balance {
-        let (modes, q) = (&self.modes, &self.q);
+        let (mm, q) = (self.count(), &self.q);
         let mf = q.ncols();
         let (g, scale) = self.free_mode_load();
         let norm = g.iter().map(|x| x * x).sum::<f64>().sqrt();
@@ -466,7 +505,7 @@ impl FreeModes {
             return Balance::Balanced;
         }
         // Motion per unit α in mode coefficients: Q φ / |φ|.
-        let coef: Vec<f64> = (0..modes.m)
+        let coef: Vec<f64> = (0..mm)
             .map(|j| (0..mf).map(|c| q[(j, c)] * g[c]).sum::<f64>() / norm)
             .collect();
         let mut best = (f64::INFINITY, u64::MAX);
@@ -474,8 +513,8 @@ impl FreeModes {
             if a {
                 continue;
             }
-            let nr = modes.direction_row(&k.x, &k.frame.n);
-            let mut speed = -(0..modes.m).map(|j| nr[j] * coef[j]).sum::<f64>();
+            let nr = self.row(k, &k.frame.n);
+            let mut speed = -(0..mm).map(|j| nr[j] * coef[j]).sum::<f64>();
             if let Some((delta, e)) = self.approach_of(&coef, k.pair) {
                 // the coupled obstacle moves with the body: its gap closes by δ_j (n·e_j)
                 speed += delta * crate::geom::dot(k.frame.n, e);
@@ -517,16 +556,16 @@ impl FreeModes {
         g_set: &Gram,
         _mesh: &Mesh,
     ) -> Motion {
-        let m = self.modes.m;
-        let mut local = [0.0; 6];
+        let m = self.count();
+        let mut local = vec![0.0; m];
         for (k, _) in b.nodes.iter().zip(active).filter(|(_, &a)| a) {
-            let row = self.modes.direction_row(&k.x, &k.frame.n);
+            let row = self.row(k, &k.frame.n);
             for (l, r) in local.iter_mut().zip(row) {
                 *l -= r * k.gap;
             }
         }
         let rhs = ctx.sum_vec(&local);
-        let mut rho = [0.0; 6];
+        let mut rho = self.no_motion();
         if !self.enabled || self.z.ncols() == 0 {
             return rho;
         }
@@ -548,9 +587,9 @@ impl FreeModes {
         let r = z * c;
         rho[..m].copy_from_slice(r.as_slice());
         // Zero at the pins: ρ minus the free-mode motion with ρ's values there.
-        let at: Vec<f64> = (self.pins.iter().enumerate())
-            .map(|(a, &(_, k))| {
-                let row = self.modes.dof_row(&self.pin_x[a], k);
+        let at: Vec<f64> = (self.pin_at.iter())
+            .map(|p| {
+                let row = p.row(&self.modes);
                 (0..m).map(|j| row[j] * rho[j]).sum()
             })
             .collect();
@@ -566,13 +605,13 @@ impl FreeModes {
     /// `at` at the pins (in the order of [`FreeModes::pins`]). `None` without free modes, with
     /// a pin count other than theirs, or singular. Local.
     fn motion_with_pin_values(&self, at: &[f64]) -> Option<nalgebra::DVector<f64>> {
-        let (m, mf) = (self.modes.m, self.q.ncols());
+        let (m, mf) = (self.count(), self.q.ncols());
         if mf == 0 || self.pins.len() != mf || at.len() != mf {
             return None;
         }
         let mut p = DMatrix::zeros(mf, mf);
-        for (a, &(_, k)) in self.pins.iter().enumerate() {
-            let row = self.modes.dof_row(&self.pin_x[a], k);
+        for (a, pin) in self.pin_at.iter().enumerate() {
+            let row = pin.row(&self.modes);
             for cc in 0..mf {
                 p[(a, cc)] = (0..m).map(|j| row[j] * self.q[(j, cc)]).sum();
             }
@@ -585,9 +624,12 @@ impl FreeModes {
     /// hold `at_pins` (in the order of [`FreeModes::pins`]), makes it vanish there: the
     /// normalisation the plain path's pins give the modes that nothing fixes. Local.
     pub fn motion_to_zero_pins(&self, at_pins: &[f64], before: &Motion) -> Motion {
-        let mut rho = [0.0; 6];
-        let at: Vec<f64> = (at_pins.iter().zip(&self.pins).enumerate())
-            .map(|(a, (&u, &(_, k)))| u + self.motion_at(before, &self.pin_x[a], k))
+        let mut rho = self.no_motion();
+        let at: Vec<f64> = (at_pins.iter().zip(&self.pin_at))
+            .map(|(&u, p)| {
+                let row = p.row(&self.modes);
+                u + row.iter().zip(before).map(|(a, b)| a * b).sum::<f64>()
+            })
             .collect();
         if let Some(corr) = self.motion_with_pin_values(&at) {
             for (x, d) in rho.iter_mut().zip(corr.iter()) {
@@ -597,21 +639,17 @@ impl FreeModes {
         rho
     }
 
-    /// Component k of the rigid motion `rho` at x.
-    pub fn motion_at(&self, rho: &Motion, x: &[f64; 3], k: usize) -> f64 {
-        (0..self.modes.m)
-            .map(|j| rho[j] * self.modes.value(j, x, k))
-            .sum()
+    /// Component k of the rigid motion `rho` in the unknowns of local node v at x.
+    pub fn motion_at(&self, rho: &Motion, v: usize, x: &[f64; 3], k: usize) -> f64 {
+        self.modes.motion_at(rho, v, x, k)
     }
 
     /// The gaps after the rigid motion `rho` (g_k + nᵀρ(x_k): what (3.23) and (3.29) see for
     /// w = u − ρ) into `shifted`, a copy of `b`. Local.
     pub fn shift(&self, b: &ContactBoundary, rho: &Motion, shifted: &mut ContactBoundary) {
-        let dim = self.modes.dim;
         for (k, s) in b.nodes.iter().zip(shifted.nodes.iter_mut()) {
-            let nr: f64 = (0..dim)
-                .map(|c| k.frame.n[c] * self.motion_at(rho, &k.x, c))
-                .sum();
+            let row = self.row(k, &k.frame.n);
+            let nr: f64 = row.iter().zip(rho).map(|(a, b)| a * b).sum();
             s.gap = k.gap + nr;
         }
     }
@@ -632,21 +670,18 @@ impl FreeModes {
         layout: &Layout,
         (row_lo, n_local): (usize, usize),
     ) -> Vec<Vec<f64>> {
-        let (dim, m) = (mesh.dim, self.modes.m);
-        (0..self.q.ncols())
-            .map(|c| {
-                let mut f = vec![0.0; n_local];
-                for &v in &layout.owned_nodes {
-                    for k in 0..dim {
-                        let r = layout.node_global[v] * dim + k - row_lo;
-                        f[r] = (0..m)
-                            .map(|j| self.q[(j, c)] * self.modes.value(j, &mesh.coords[v], k))
-                            .sum();
-                    }
+        let (dim, m) = (mesh.dim, self.count());
+        let mut fields = vec![vec![0.0; n_local]; self.q.ncols()];
+        for &v in &layout.owned_nodes {
+            for k in 0..dim {
+                let r = layout.node_global[v] * dim + k - row_lo;
+                let row = self.modes.dof_row(v, &mesh.coords[v], k);
+                for (c, f) in fields.iter_mut().enumerate() {
+                    f[r] = (0..m).map(|j| self.q[(j, c)] * row[j]).sum();
                 }
-                f
-            })
-            .collect()
+            }
+        }
+        fields
     }
 
     /// Whether the contact can carry no force in the rigid modes that Dirichlet data leave
@@ -660,7 +695,7 @@ impl FreeModes {
     /// force control. Collective when Dirichlet data leave modes free (the same on every
     /// rank).
     pub fn unpressable(&self, ctx: &Ctx, b: &ContactBoundary) -> bool {
-        let (m, dim, z) = (self.modes.m, self.modes.dim, &self.z);
+        let (m, z) = (self.count(), &self.z);
         if !self.floats() || !self.coupling.is_empty() {
             return false;
         }
@@ -676,10 +711,8 @@ impl FreeModes {
         if lz > BALANCE_RTOL * self.load_scale {
             return false;
         }
-        let rows: Vec<[f64; 6]> = (b.nodes.iter())
-            .map(|k| self.modes.direction_row(&k.x, &k.frame.n))
-            .collect();
-        let mut sum = [0.0; 6];
+        let rows: Vec<Vec<f64>> = (b.nodes.iter()).map(|k| self.row(k, &k.frame.n)).collect();
+        let mut sum = vec![0.0; m];
         for r in &rows {
             for (s, x) in sum.iter_mut().zip(r) {
                 *s += x;
@@ -698,7 +731,7 @@ impl FreeModes {
                 .collect::<Vec<f64>>()
         };
         let mut translation = sum.clone();
-        translation[dim..].iter_mut().for_each(|x| *x = 0.0);
+        self.modes.keep_translations(&mut translation);
         let directions = [unit(in_z(&sum)), unit(in_z(&translation))];
         let mut worst = [f64::INFINITY; 2];
         for r in &rows {

@@ -23,4 +23,5 @@ Physical Curve("bottom") = {1, 5};
 Physical Curve("top") = {3, 7};
 Physical Curve("left_a") = {4};
 Physical Curve("left_b") = {8};
+Physical Curve("bottom_a") = {1};
 Physical Surface("body") = {1, 2};

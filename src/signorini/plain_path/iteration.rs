@@ -287,6 +287,7 @@ impl<'a> Loop<'a> {
             let g = ctx.sum_vec(&[uu, ll]);
             floors = (VANISHING * g[0].sqrt(), VANISHING * g[1].sqrt());
         }
+        let rho = free.no_motion();
         let lp = Loop {
             ctx,
             p,
@@ -296,7 +297,7 @@ impl<'a> Loop<'a> {
             free,
             guard,
             it,
-            rho: [0.0; 6],
+            rho,
             shifted: placed,
             last_still_residual: None,
             stop: crate::signorini::certificate::StopRule::ActiveSet,
@@ -317,7 +318,7 @@ impl<'a> Loop<'a> {
     fn set_gram(&mut self) -> crate::signorini::rigid::Gram {
         let (Some(ap), Some(modes), true) = (&self.approach, self.free.modes(), self.free.floats())
         else {
-            return self.summary.gram;
+            return self.summary.gram.clone();
         };
         let b = &self.p.boundary;
         let coupling = ap.couplings(self.ctx, b, &self.set, modes, self.p.mesh.dim);
@@ -477,13 +478,13 @@ impl Loop<'_> {
             .map(|&(v, k)| (v * dim + k) as crate::petsc::PInt)
             .collect();
         let at = reduced.solution_at(&idx)?;
-        let rho = self.free.motion_to_zero_pins(&at, &[0.0; 6]);
+        let rho = self.free.motion_to_zero_pins(&at, &self.free.no_motion());
         let (row_lo, n_local) = reduced.local_rows();
         let mut delta = vec![0.0; n_local];
         for &v in &layout.owned_nodes {
             for k in 0..dim {
                 delta[layout.node_global[v] * dim + k - row_lo] =
-                    self.free.motion_at(&rho, &mesh.coords[v], k);
+                    self.free.motion_at(&rho, v, &mesh.coords[v], k);
             }
         }
         reduced.add_to_solution(&delta)?;
@@ -561,7 +562,7 @@ impl Loop<'_> {
     fn floored(&self, t: &StepTotals) -> StepTotals {
         let (fu, fl) = self.floors;
         let u = t.u_norm2.sqrt();
-        let mut t = *t;
+        let mut t = t.clone();
         if u < fu {
             t.du_rel *= u / fu;
         }
@@ -590,7 +591,7 @@ impl Loop<'_> {
             // positive after a frictionless first step): the pins change with the next rows, so
             // neither the balance test nor the stop applies yet.
             self.set.tangential = next.tangential;
-            self.summary = t.next;
+            self.summary = t.next.clone();
             return Ok(false);
         }
         let still = t.changed == 0 && t.du_rel < self.s.section.tol_u;
@@ -662,7 +663,7 @@ impl Loop<'_> {
                 // A slip row may start or stop holding u_τ (L̃ ≠ 0, e.g. Coulomb's b turning
                 // positive) without a state change: the Gram matrix (the pins) follows it.
                 self.set.tangential = next.tangential;
-                self.summary = t.next;
+                self.summary = t.next.clone();
                 Ok(false)
             }
             Decision::TestBalance => unreachable!("the balance test was made above"),
@@ -692,7 +693,7 @@ impl Loop<'_> {
     ) -> Result<bool, RunError> {
         let (ctx, dim) = (self.ctx, self.p.mesh.dim);
         let b = &self.shifted;
-        let mut summary = t.next;
+        let mut summary = t.next.clone();
         let mut key = self.key(&summary, t);
         let seen = match self.guard.check(step, key) {
             Err(_) if self.s.friction() && t.du_rel < self.s.section.tol_u => {

@@ -124,14 +124,14 @@ pub(crate) fn add_motion(
     for &v in &layout.owned_nodes {
         for k in 0..dim {
             idx.push((layout.node_global[v] * dim + k) as crate::petsc::PInt);
-            vals.push(free.motion_at(rho, &mesh.coords[v], k));
+            vals.push(free.motion_at(rho, v, &mesh.coords[v], k));
         }
     }
     u.set_values(&idx, &vals, true)?;
     u.assemble()?;
     for (k, r) in p.boundary.nodes.iter().zip(nodes.iter_mut()) {
         for c in 0..dim {
-            r.u[c] += free.motion_at(rho, &k.x, c);
+            r.u[c] += free.motion_at(rho, k.node, &k.x, c);
         }
         r.u_n = k.frame.normal_part(&r.u);
         r.u_t = k.frame.tangential_part(&r.u);

@@ -349,17 +349,19 @@ impl Growth {
 }
 
 /// Every contact node of c_h (all ranks', in c_h's global order) as the dense algorithm sees
-/// it: first dof row, normal, gap, start flag, the free modes' normal parts G, position, the
-/// reference tangential displacement u_τ^ref (friction).
+/// it: first dof row, normal, gap, start flag, position, the reference tangential displacement
+/// u_τ^ref (friction), and the free modes' parts G of its rows along n, t₁ (, t₂).
 pub(crate) struct Candidates {
     all: Vec<f64>,
     pub(crate) n: usize,
     pub(super) mz: usize,
+    /// Values per record: [`HEAD`] + dim · m_z.
+    rec: usize,
 }
 
-/// Values per candidate record: row, n (3), gap, start, G (6), x (3), u_τ^ref (2), pair, μ,
-/// the order key, the gmsh tag (exact in f64 below 2⁵³).
-const REC: usize = 21;
+/// Values per candidate record before the free modes' parts: row, n (3), gap, start, x (3),
+/// u_τ^ref (2), pair, μ, the order key, the gmsh tag (exact in f64 below 2⁵³).
+const HEAD: usize = 15;
 
 impl Candidates {
     /// One all-gather. `key`: what orders this rank's nodes for the first candidates (the
@@ -373,27 +375,33 @@ impl Candidates {
         key: Option<&[f64]>,
     ) -> Candidates {
         let mz = free.dirichlet_free().ncols();
-        let mut mine = Vec::with_capacity(b.nodes.len() * REC);
+        let dim = free.rigid_modes().dim;
+        let rec = HEAD + dim * mz;
+        let mut mine = Vec::with_capacity(b.nodes.len() * rec);
         for (i, (k, &a)) in b.nodes.iter().zip(start).enumerate() {
-            let gz = free.normal_parts(&k.x, &k.frame.n);
             let n = k.frame.n;
             let flag = if a { 1.0 } else { 0.0 };
             mine.extend_from_slice(&[k.row as f64, n[0], n[1], n[2], k.gap, flag]);
-            mine.extend_from_slice(&gz);
             mine.extend_from_slice(&k.x);
             mine.extend_from_slice(&k.u_t_ref);
             mine.push(k.pair as f64);
             mine.push(k.mu);
             mine.push(key.map_or(k.gap, |key| key[i]));
             mine.push(k.tag as f64);
+            for dir in [&k.frame.n, &k.frame.t[0], &k.frame.t[1]]
+                .into_iter()
+                .take(dim)
+            {
+                mine.extend(free.normal_parts(k, dir));
+            }
         }
         let all = ctx.all_gather_varcount(&mine);
-        let n = all.len() / REC;
-        Candidates { all, n, mz }
+        let n = all.len() / rec;
+        Candidates { all, n, mz, rec }
     }
 
     fn rec(&self, i: usize) -> &[f64] {
-        &self.all[i * REC..(i + 1) * REC]
+        &self.all[i * self.rec..(i + 1) * self.rec]
     }
     pub(super) fn row(&self, i: usize) -> usize {
         self.rec(i)[0] as usize
@@ -407,8 +415,13 @@ impl Candidates {
     fn start(&self, i: usize) -> bool {
         self.rec(i)[5] != 0.0
     }
+    /// The free mode c's part of the normal row.
     pub(super) fn g(&self, i: usize, c: usize) -> f64 {
-        self.rec(i)[6 + c]
+        self.rec(i)[HEAD + c]
+    }
+    /// The free mode c's part of the row along the frame's direction a (n, t₁, t₂).
+    pub(super) fn g_along(&self, i: usize, a: usize, c: usize) -> f64 {
+        self.rec(i)[HEAD + a * self.mz + c]
     }
     /// The node frame as an orthonormal basis, normal first (columns: n, t₁, t₂).
     fn basis(&self, i: usize, dim: usize) -> [[f64; 3]; 3] {
@@ -425,32 +438,32 @@ impl Candidates {
     }
     pub(super) fn x(&self, i: usize) -> [f64; 3] {
         let r = self.rec(i);
-        [r[12], r[13], r[14]]
+        [r[6], r[7], r[8]]
     }
     pub(super) fn u_t_ref(&self, i: usize) -> [f64; 2] {
         let r = self.rec(i);
-        [r[15], r[16]]
+        [r[9], r[10]]
     }
     pub(super) fn n(&self, i: usize) -> [f64; 3] {
         [self.normal(i, 0), self.normal(i, 1), self.normal(i, 2)]
     }
     /// The candidate's contact pair.
     pub(super) fn pair(&self, i: usize) -> usize {
-        self.rec(i)[17] as usize
+        self.rec(i)[11] as usize
     }
     /// The candidate's Coulomb μ.
     pub(super) fn mu(&self, i: usize) -> f64 {
-        self.rec(i)[18]
+        self.rec(i)[12]
     }
     /// What orders the nodes for the candidates: the gap, or the clearance after a located
     /// rigid motion.
     fn key(&self, i: usize) -> f64 {
-        self.rec(i)[19]
+        self.rec(i)[13]
     }
     /// The node's gmsh tag: what breaks ties between nodes, the same on every partition (c_h's
     /// global order is rank-major).
     pub(super) fn tag(&self, i: usize) -> u64 {
-        self.rec(i)[20] as u64
+        self.rec(i)[14] as u64
     }
     /// `a` before `b` by the order key, ties by the gmsh tag. Local.
     pub(super) fn by_key(&self, a: usize, b: usize) -> std::cmp::Ordering {

@@ -120,6 +120,7 @@ fn candidate_boundary(kept: &Kept, b: &ContactBoundary, dim: usize) -> ContactBo
         excluded_dirichlet: 0,
         obstacles: b.obstacles.clone(),
         keys: b.keys.clone(),
+        modes: b.modes.clone(),
     }
 }
 
@@ -128,20 +129,22 @@ fn candidate_boundary(kept: &Kept, b: &ContactBoundary, dim: usize) -> ContactBo
 /// moved by δ_j e_j shifts the candidates' relative displacement by −δ_j (n·e_j, τ₁·e_j,
 /// τ₂·e_j) on its nodes (gaps g0 − δ_j n·e_j, references u_τ^ref + δ_j τ·e_j, as
 /// `force::Approach::place`), and its balance row is the pair's force along e_j (rank 0).
+/// The free modes' parts come with the candidates' records (a slave node of a body pair
+/// reads them through its mortar row, which only its own rank knows); `cb` is the candidate
+/// boundary of [`candidate_boundary`], in the order of `kept.comp.list`.
 fn mode_parts(
-    free: &FreeModes,
+    kept: &Kept,
     force: &[ForceControl],
     cb: &ContactBoundary,
     dim: usize,
 ) -> DMatrix<f64> {
-    let mz = free.dirichlet_free().ncols();
+    let mz = kept.free.dirichlet_free().ncols();
     let mut g = DMatrix::zeros(cb.nodes.len() * dim, mz + force.len());
-    for (q, k) in cb.nodes.iter().enumerate() {
+    for (q, (k, &i)) in cb.nodes.iter().zip(&kept.comp.list).enumerate() {
         let dirs = [k.frame.n, k.frame.t[0], k.frame.t[1]];
         for (a, dir) in dirs.iter().enumerate().take(dim) {
-            let parts = free.normal_parts(&k.x, dir);
             for cz in 0..mz {
-                g[(q * dim + a, cz)] = parts[cz];
+                g[(q * dim + a, cz)] = kept.cand.g_along(i, a, cz);
             }
             for (j, fc) in force.iter().enumerate() {
                 if k.pair == fc.pair {
@@ -283,7 +286,7 @@ fn dense_phase(
     let root = ctx.on_root_wide(n * dim + mz, || {
         let run = guarded("coulomb-dense-steps", || {
             let cb = candidate_boundary(kept, b, dim);
-            let g = mode_parts(&kept.free, ns.force, &cb, dim);
+            let g = mode_parts(kept, ns.force, &cb, dim);
             let mut phi = kept.free.free_load();
             phi.extend(ns.force.iter().map(|fc| fc.magnitude()));
             let cmat_t = kept.comp.cmat.transpose();
@@ -424,8 +427,8 @@ fn check(
                                                // u = w + ρ, ρ = R z α: the free modes' motion
     let free = &kept.free;
     let z = free.dirichlet_free();
-    let mut rho = [0.0; 6];
-    for (j, r) in rho.iter_mut().enumerate().take(free.rigid_modes().m) {
+    let mut rho = free.no_motion();
+    for (j, r) in rho.iter_mut().enumerate() {
         *r = (0..z.ncols()).map(|c| z[(j, c)] * run.alpha[c]).sum();
     }
     let mut u = reduced.solution()?;

@@ -516,6 +516,7 @@ impl DenseIteration<'_> {
                 excluded_dirichlet: 0,
                 obstacles: self.cb.obstacles.clone(),
                 keys: self.cb.keys.clone(),
+                modes: self.cb.modes.clone(),
             };
             let sub = DenseIteration {
                 cmat: &sub_c,

@@ -503,8 +503,8 @@ fn pinned_motion(
     let (mesh, layout, b) = (p.mesh, p.layout, p.boundary);
     let dim = mesh.dim;
     let z = free.dirichlet_free();
-    let mut rho = [0.0; 6];
-    for (j, r) in rho.iter_mut().enumerate().take(free.rigid_modes().m) {
+    let mut rho = free.no_motion();
+    for (j, r) in rho.iter_mut().enumerate() {
         *r = (0..z.ncols()).map(|c| z[(j, c)] * alpha[c]).sum();
     }
     let gram = set.summarise(ctx, b, free.modes(), dim).gram;

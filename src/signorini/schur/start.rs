@@ -88,7 +88,8 @@ pub(super) fn prepare_base(
         let gram = set.summarise(ctx, b, free.modes(), mesh.dim).gram;
         free.hold_also(&gram);
     }
-    free.update(ctx, mesh, layout, &[0.0; 36])?;
+    let none = free.rigid_modes().zero_gram();
+    free.update(ctx, mesh, layout, &none)?;
     reduced.set_pins(sys, layout, free.pins())?;
     reduced.write(ctx, sys, layout, b, &set, free.pins())?;
     Ok((free, reduced.rhs_local()?))

@@ -52,6 +52,7 @@ fn pushed_line(n: usize, push: f64) -> (DMatrix<f64>, Vec<f64>, ContactBoundary)
         excluded_dirichlet: 0,
         obstacles: Vec::new(),
         keys: Default::default(),
+        modes: std::sync::Arc::new(crate::mesh::BodyModes::none(2)),
     };
     (cmat, d0, cb)
 }

@@ -313,7 +313,7 @@ fn tower_case(dir: &Path, middle_slave: bool) -> PathBuf {
              obstacle = {{ type = \"body\", group = \"{master}\" }}\nfriction = \"none\"\n"
         );
     }
-    text += "[output]\ndir = \"out\"\nfields = [\"displacement\", \"contact\"]\n";
+    text += "[output]\ndir = \"out\"\nfields = [\"displacement\", \"contact\", \"body\"]\n";
     write_case(&dir.join(format!("tower_{middle_slave}.toml")), &text)
 }
 
@@ -327,6 +327,19 @@ fn three_stacked_blocks_held_by_contact_alone_carry_the_load() {
         let s = solve(np, &case, &[]);
         assert_eq!(s.summary["bodies"]["not_held"], 2, "{what}");
         check_stack(&s, 2, &[LOWER, UPPER, THIRD], &what);
+        // the cell field `body`: the blocks from the bottom up (their first node tags)
+        let v = python_json(
+            r#"
+import sys, json, h5py, numpy as np
+f = h5py.File(sys.argv[1], "r")
+x = f["mesh/geometry"][:]
+cells = f["mesh/topology"][:]
+layer = np.floor(x[cells, 1].mean(axis=1)).astype(int)
+print("RESULT " + json.dumps({"wrong": int((f["cell/body"][:] != layer + 1).sum()), "n": len(cells)}))
+"#,
+            &[&s.dir.join("solution.h5")],
+        );
+        assert_eq!(v["wrong"], 0, "{what}: cells of a wrong body in {v}");
         // each interface carries the load p (unit width): the pairs' total forces
         let pairs = s.summary["contact"]["pairs"].as_array().expect("pairs");
         for (j, pair) in pairs.iter().enumerate() {

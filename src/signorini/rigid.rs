@@ -747,17 +747,27 @@ impl FreeModes {
         n > 0 && worst.iter().any(|&w| ctx.min_f64(w) > 1e-9)
     }
 
+    /// Who has the free modes: "the body has", or with several bodies free in some rigid
+    /// mode, "the bodies free of Dirichlet data have" (mode counts are over all of them).
+    fn who(&self) -> &'static str {
+        match self.modes.slots() {
+            0 | 1 => "the body has",
+            _ => "the bodies that Dirichlet data leave free have",
+        }
+    }
+
     /// The "no support" diagnosis of a body that the contact cannot hold
     /// ([`FreeModes::unpressable`]).
     pub fn no_support_unpressed(&self) -> RunError {
         RunError::Failed(format!(
-            "{}: no support: the body has {} rigid mode(s) that no Dirichlet data fix, no load \
+            "{}: no support: {} {} rigid mode(s) that no Dirichlet data fix, no load \
              pushes it against the obstacle in them (total load {:.3e}) and the obstacle can \
              only push it from one side: the contact can carry no force, so the obstacle pushes \
              the body away and its position is undetermined (the active-set iteration cycles on \
              nodes whose force and gap are both zero) — add Dirichlet data that hold the body, \
              or a load that presses it against the obstacle",
             self.keys.named(&["dirichlet", ".obstacle"]),
+            self.who(),
             self.z.ncols(),
             self.load_scale
         ))
@@ -766,12 +776,13 @@ impl FreeModes {
     /// The "no support" diagnosis of an unbalanced load that no contact can carry.
     pub fn no_support(&self, n_active: usize, reaction: f64) -> RunError {
         RunError::Failed(format!(
-            "{}: no support: the body has {} rigid mode(s) fixed neither by Dirichlet data nor by \
+            "{}: no support: {} {} rigid mode(s) fixed neither by Dirichlet data nor by \
              contact ({} active contact node(s)), the load is not balanced in them (unbalanced \
              load {:.3e} against a total load of {:.3e}) and moving along it brings no \
              contact node closer to the obstacle: there is no equilibrium — add Dirichlet data \
              or move the obstacle into the body's way",
             self.keys.named(&["dirichlet", ".obstacle"]),
+            self.who(),
             self.pins.len(),
             n_active,
             reaction,

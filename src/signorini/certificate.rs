@@ -5,7 +5,7 @@
 //! turns a loosened acceptance or a relative value above [`STRICT_TOL`] into an error.
 
 use super::boundary::ContactBoundary;
-use super::report::{FrictionCertificate, Kkt, Scales};
+use super::report::{ratio, FrictionCertificate, Kkt, Scales};
 use crate::error::RunError;
 use crate::fem::{self, Materials};
 use crate::mesh::Mesh;
@@ -368,17 +368,6 @@ impl Certificate {
             );
         }
         s + &format!("; worst relative {:.1e} ({})", self.worst, self.worst_of)
-    }
-}
-
-/// v / scale; 0 for v = 0 and infinity for v > 0 at a zero scale.
-fn ratio(v: f64, scale: f64) -> f64 {
-    if v <= 0.0 {
-        0.0
-    } else if scale > 0.0 {
-        v / scale
-    } else {
-        f64::INFINITY
     }
 }
 

@@ -22,7 +22,7 @@ use std::process::ExitCode;
 
 use mpi::traits::*;
 use serde_json::json;
-use signorini_mpi::petsc::mumps::{nested_dissection, NodeBases, SchurFactor};
+use signorini_mpi::petsc::mumps::{nested_dissection, NodeBases, SchurFactor, SchurRequest};
 use signorini_mpi::petsc::{Matrix, PInt, Petsc};
 
 /// FNV-1a over the bits of `v`, as hex.
@@ -112,15 +112,14 @@ fn run(
         dim: 1,
         ..Default::default()
     };
-    let mut f = SchurFactor::analyse(
-        comm,
-        &mat,
-        (total, &schur),
-        order.as_deref(),
-        &bases,
-        (rank == 0, one_process),
-    )
-    .map_err(|e| e.to_string())?;
+    let request = SchurRequest {
+        n: total,
+        schur_rows: &schur,
+        order: order.as_deref(),
+        bases: &bases,
+    };
+    let mut f = SchurFactor::analyse(comm, &mat, &request, rank == 0, one_process)
+        .map_err(|e| e.to_string())?;
     f.factorise().map_err(|e| e.to_string())?;
     let s = f.take_schur();
     let b: Vec<f64> = if rank == 0 {

@@ -1,5 +1,5 @@
 //! Two contact solves on one mesh and partition, the second warm-started from the first through
-//! `signorini::solve(.., (session, Some(first)))` (friction then acts on the tangential
+//! `signorini::solve(.., session, Some(first), None)` (friction then acts on the tangential
 //! increment since the first solve). Used by tests/coulomb.rs.
 //!
 //! ```text
@@ -86,7 +86,9 @@ fn run(ctx: &Ctx, a: &Args) -> Result<serde_json::Value, RunError> {
             &problem.fixed,
             &sys,
             &case.solver,
-            (session, previous, None),
+            session,
+            previous,
+            None,
         )
     };
     let first = solve(&first_case, None)?;

@@ -270,15 +270,11 @@ impl RowScratch {
         }
     }
 
-    /// Appends the node's D rows in `buf` to the two CSR parts: the columns once per node,
-    /// an interior row's values as one slice, an interface row's values split.
+    /// Appends the node's D rows in `buf` to the two CSR parts (the columns of the owned nodes
+    /// `lo..hi` in `diag`): the columns once per node, an interior row's values as one slice,
+    /// an interface row's values split.
     #[inline(always)]
-    fn append_rows<const D: usize>(
-        &mut self,
-        (lo, hi): (usize, usize),
-        diag: &mut Csr,
-        off: &mut Csr,
-    ) {
+    fn append_rows<const D: usize>(&mut self, lo: usize, hi: usize, diag: &mut Csr, off: &mut Csr) {
         let width = self.nb.len() * D;
         let [dcols, ocols] = &mut self.cols;
         dcols.clear();
@@ -388,19 +384,38 @@ struct RowData<'a> {
     lame: &'a [(f64, f64)],
 }
 
+/// One cell around an owned node as the node's rows see it: the cell's nodes, the owned node's
+/// position `a` among them, the gradients `g` of the P1 basis, the signed measure `vol` and the
+/// Lamé constants (1.25) of the cell's material.
+struct CellOfRow<'c, const D: usize, const N: usize> {
+    nodes: &'c [u32],
+    a: usize,
+    g: [[f64; D]; N],
+    vol: f64,
+    lambda: f64,
+    mu: f64,
+}
+
 /// One cell's part of owned node a's D rows of (3.8) added into the row buffer: with the
 /// Dirichlet elimination ([`add_rows_with_dirichlet`]) when a node of the cell carries
-/// Dirichlet data, else the rows as they are, block by block (the numbers of
-/// `p1_stiffness_rows`, bit for bit). `(g, vol)`: the cell's gradients and signed measure.
+/// Dirichlet data (the node's own values `fixed_v`, its right-hand side's part `elim`), else
+/// the rows as they are, block by block (the numbers of `p1_stiffness_rows`, bit for bit).
 #[inline(always)]
 fn add_cell_rows<const D: usize, const N: usize>(
     rd: &RowData,
     sc: &mut RowScratch,
-    (nodes, a): (&[u32], usize),
-    (g, vol): ([[f64; D]; N], f64),
-    (lambda, mu): (f64, f64),
-    (fixed_v, elim): (&[f64; D], &mut [f64; D]),
+    cell: &CellOfRow<D, N>,
+    fixed_v: &[f64; D],
+    elim: &mut [f64; D],
 ) {
+    let CellOfRow {
+        nodes,
+        a,
+        g,
+        vol,
+        lambda,
+        mu,
+    } = *cell;
     let width = sc.nb.len() * D;
     let mut s0 = [0usize; N];
     let mut any_fixed = false;
@@ -475,12 +490,20 @@ fn owned_rows<const D: usize, const N: usize>(
         for &e in inc {
             let (cell, a) = (e as usize / N, e as usize % N);
             let nodes = &rc.nodes[cell * N..cell * N + N];
-            let lame = rd.lame[rc.material(cell)];
-            let cell_geometry = gradients(nodes);
-            let rhs = (&fixed_v, &mut elim);
-            add_cell_rows::<D, N>(&rd, &mut sc, (nodes, a), cell_geometry, lame, rhs);
+            let (lambda, mu) = rd.lame[rc.material(cell)];
+            let (g, vol) = gradients(nodes);
+            let cell = CellOfRow {
+                nodes,
+                a,
+                g,
+                vol,
+                lambda,
+                mu,
+            };
+            add_cell_rows::<D, N>(&rd, &mut sc, &cell, &fixed_v, &mut elim);
         }
-        sc.append_rows::<D>(layout.node_range(), &mut out.diag, &mut out.off);
+        let (lo, hi) = layout.node_range();
+        sc.append_rows::<D>(lo, hi, &mut out.diag, &mut out.off);
         let diag0 = sc.slot[v] as usize * D;
         for i in 0..D {
             if fixed_v[i].is_nan() {

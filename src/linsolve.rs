@@ -11,7 +11,7 @@ use crate::case::{Preset, SolverSection};
 use crate::mesh::Mesh;
 use crate::par::Ctx;
 use crate::partition::Layout;
-use crate::petsc::mumps::{NodeBases, SchurFactor};
+use crate::petsc::mumps::{SchurFactor, SchurRequest};
 use crate::petsc::optdb::OptionsDb;
 use crate::petsc::{self, ndfactor, Ksp, MPI_Comm, Matrix, SolveInfo, Vector};
 pub use crate::tuning::REUSE_RESTART;
@@ -226,7 +226,8 @@ impl LinearSetup {
     /// rigid-body near-null space (only an iterative kind uses them). Collective.
     pub fn for_section(
         ctx: &Ctx,
-        (mesh, layout): (&Mesh, &Layout),
+        mesh: &Mesh,
+        layout: &Layout,
         section: &SolverSection,
         symmetric: bool,
         scale: f64,
@@ -280,7 +281,7 @@ impl LinearSetup {
         }
         if self.own_order {
             let symmetric = self.kind == SolverKind::DirectSymmetric;
-            ndfactor::install_on(&ksp, comm, a, (symmetric, self.one_process))?;
+            ndfactor::install_on(&ksp, comm, a, symmetric, self.one_process)?;
         }
         Ok(LinearSolver {
             ksp,
@@ -320,17 +321,15 @@ impl LinearSolver {
 }
 
 impl LinearSolver {
-    /// The symbolic factorisation of `mat` (global size `n`, symmetric: its lower triangle)
-    /// with a Schur complement on the global rows `schur_rows` (the same list on every rank),
-    /// in the elimination order `order` (read on rank 0, `root`; `None`: MUMPS' own) and
-    /// the node frames `bases` ([`SchurFactor::analyse`]): MUMPS with this solver's settings
-    /// (`solver.repeatable`: on rank 0 alone). Only for a kind that factorises. Collective.
+    /// The symbolic factorisation of `mat` (symmetric: its lower triangle) with the Schur
+    /// complement `request` asks (the order read on rank 0, `root`;
+    /// [`SchurFactor::analyse`]): MUMPS with this solver's settings (`solver.repeatable`: on
+    /// rank 0 alone). Only for a kind that factorises. Collective.
     pub fn analyse_schur(
         &self,
         comm: MPI_Comm,
         mat: &Matrix,
-        (n, schur_rows): (usize, &[usize]),
-        (order, bases): (Option<&[usize]>, &NodeBases),
+        request: &SchurRequest,
         root: bool,
     ) -> petsc::Result<SymbolicSchur> {
         if !self.kind.factorises() {
@@ -338,14 +337,7 @@ impl LinearSolver {
                 "a Schur complement asked of a solver that does not factorise",
             ));
         }
-        let f = SchurFactor::analyse(
-            comm,
-            mat,
-            (n, schur_rows),
-            order,
-            bases,
-            (root, self.one_process),
-        )?;
+        let f = SchurFactor::analyse(comm, mat, request, root, self.one_process)?;
         Ok(SymbolicSchur(f))
     }
 }

@@ -140,7 +140,7 @@ pub fn linear_solve(
 ) -> Result<(Vector, LinearReport), RunError> {
     let t = Instant::now();
     let scale = matrix_scale(ctx, &sys.a)?;
-    let setup = LinearSetup::for_section(ctx, (mesh, layout), settings, true, scale)?;
+    let setup = LinearSetup::for_section(ctx, mesh, layout, settings, true, scale)?;
     let mut ls = setup.solver(ctx.comm(), &mut sys.a)?;
     let mut u = sys.b.duplicate()?;
     let info = ls.solve(&sys.b, &mut u)?;

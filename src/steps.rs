@@ -540,7 +540,9 @@ impl Stepper<'_> {
                     fixed,
                     sys,
                     self.solver,
-                    (&mut **session, previous, in_u.as_ref()),
+                    session,
+                    previous,
+                    in_u.as_ref(),
                 );
                 if let Some((f_hat, _)) = in_w.as_mut() {
                     std::mem::swap(&mut sys.b, f_hat);

@@ -8,7 +8,7 @@ mod common;
 
 use common::*;
 use serde_json::Value;
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 
 /// Far from round-off (measured: 1e-14 … 4e-14), far below a wrong balance.
 const SMALL: f64 = 1e-6;
@@ -179,26 +179,10 @@ fn a_load_series_has_one_per_step_and_the_worst_in_the_block() {
 /// The Hertz disk held at its top arc by Dirichlet data, Coulomb with μ = 0.3, and c = 1e7
 /// (far above E / h_c): the condensed Coulomb iteration stalls above 1e-8 ‖λ‖ and is accepted
 /// by its certificates alone — a loosened acceptance.
-fn held_disk(dir: &Path) -> PathBuf {
-    let mesh = repo("cases/hertz/meshes/hertz_refined_L4.msh");
-    write_case(
-        &dir.join("held.toml"),
-        &format!(
-            "[mesh]\nfile = {}\n[material]\nyoung = 2.0\npoisson = 0.3\nmodel = \"plane_strain\"\n\
-             [[dirichlet]]\ngroup = \"load\"\nvalue = [0.001, -0.01]\n[contact]\n\
-             group = \"contact\"\nobstacle = {{ type = \"plane\", point = [0.0, -1.0], \
-             normal = [0.0, 1.0] }}\nfriction = {{ law = \"coulomb\", mu = 0.3 }}\n\
-             [solver]\npreset = \"direct\"\n[newton]\nc = 1e7\n\
-             [output]\nfields = [\"displacement\", \"contact\"]\n",
-            toml_path(&mesh)
-        ),
-    )
-}
-
 #[test]
 fn strict_refuses_a_loosened_acceptance() {
     let tmp = tempfile::tempdir().expect("tmp");
-    let case = held_disk(tmp.path());
+    let case = held_disk(tmp.path(), "[newton]\nc = 1e7\n");
     // without newton.strict: exit 0, the rule said
     let s = solve(1, &case, &[]);
     let c = &s.summary["certificate"];

@@ -21,16 +21,6 @@ fn check(np: usize, case: &Path, dir: &Path, extra: &[&str]) -> Run {
     run_with_timeout(solver(np, &args), Duration::from_secs(120))
 }
 
-/// Files in `dir`.
-fn listing(dir: &Path) -> Vec<String> {
-    let mut v: Vec<String> = std::fs::read_dir(dir)
-        .unwrap()
-        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
-        .collect();
-    v.sort();
-    v
-}
-
 /// The 2D Hertz disk of cases/hertz on its coarsest mesh, the plane at `y`.
 fn hertz_case(y: f64, group: &str) -> String {
     format!(
@@ -104,9 +94,9 @@ fn check_says_what_hertz_would_do_and_writes_nothing() {
             r.output()
         );
         assert!(
-            listing(tmp.path()).is_empty(),
+            file_names(tmp.path()).is_empty(),
             "check wrote {:?}",
-            listing(tmp.path())
+            file_names(tmp.path())
         );
         // the same but for the output directory, a temporary one per run
         seen.push(lines[..lines.len() - 1].join("\n"));
@@ -130,7 +120,7 @@ fn check_counts_the_nodes_that_start_penetrating() {
         line.contains("start(s) penetrating the obstacle, by up to 1.000000e-2"),
         "{line}"
     );
-    assert_eq!(listing(tmp.path()), ["case.toml"]);
+    assert_eq!(file_names(tmp.path()), ["case.toml"]);
 }
 
 /// A case a run refuses: check refuses it alike, naming the file and the key, on 1 and 2
@@ -153,7 +143,7 @@ fn check_refuses_a_broken_case_naming_the_key() {
             "{}",
             r.output()
         );
-        assert_eq!(listing(tmp.path()), ["case.toml"]);
+        assert_eq!(file_names(tmp.path()), ["case.toml"]);
     }
 }
 

@@ -82,16 +82,6 @@ fn run(dir: &Path, text: &str, np: usize, extra: &[&str]) -> Run {
     run_with_timeout(solver(np, &args), Duration::from_secs(120))
 }
 
-/// Files in `dir`, sorted.
-fn listing(dir: &Path) -> Vec<String> {
-    let mut v: Vec<String> = std::fs::read_dir(dir)
-        .unwrap()
-        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
-        .collect();
-    v.sort();
-    v
-}
-
 /// The case must be rejected: exit code 2, every `expect` substring in the message, only
 /// case.toml in the directory afterwards.
 fn rejected_np(text: &str, np: usize, expect: &[&str]) -> String {
@@ -123,7 +113,7 @@ fn rejected_np(text: &str, np: usize, expect: &[&str]) -> String {
         assert!(msg.contains(e), "message lacks {e:?}: {msg}");
     }
     assert_eq!(
-        listing(tmp.path()),
+        file_names(tmp.path()),
         ["case.toml"],
         "something was written for a rejected case ({msg})"
     );
@@ -141,7 +131,7 @@ fn base_cases_are_accepted() {
         let tmp = tempfile::tempdir().unwrap();
         run(tmp.path(), &text, 0, &[]).expect_code(0, "base case");
         assert_eq!(
-            listing(&tmp.path().join("out")),
+            file_names(&tmp.path().join("out")),
             ["solution.h5", "solution.xdmf", "summary.json"]
         );
     }
@@ -178,7 +168,7 @@ fn unknown_key_from_set() {
         "{}",
         r.stderr
     );
-    assert_eq!(listing(tmp.path()), ["case.toml"]);
+    assert_eq!(file_names(tmp.path()), ["case.toml"]);
 }
 
 #[test]
@@ -321,7 +311,7 @@ fn missing_case_file() {
     let r = run_with_timeout(solver(0, &args), Duration::from_secs(60));
     r.expect_code(2, "missing case file");
     assert!(r.stderr.contains("nope.toml"), "{}", r.stderr);
-    assert!(listing(tmp.path()).is_empty());
+    assert!(file_names(tmp.path()).is_empty());
 }
 
 #[test]

@@ -172,22 +172,7 @@ const STRIP_TOP_NODES: usize = 3601;
 /// through (2, 0.02 − 0.002) with the normal `normal` (pointing down, into the strip); `extra`
 /// TOML tables appended. Returns the case file.
 fn strip_case(dir: &Path, (top, normal): (usize, &str), extra: &str) -> PathBuf {
-    let geo = dir.join("strip.geo");
-    std::fs::write(
-        &geo,
-        format!(
-            "Point(1) = {{0, 0, 0}};\nPoint(2) = {{4, 0, 0}};\nPoint(3) = {{4, 0.02, 0}};\n\
-             Point(4) = {{0, 0.02, 0}};\nLine(1) = {{1, 2}};\nLine(2) = {{2, 3}};\n\
-             Line(3) = {{3, 4}};\nLine(4) = {{4, 1}};\nCurve Loop(1) = {{1, 2, 3, 4}};\n\
-             Plane Surface(1) = {{1}};\nTransfinite Curve {{1, 3}} = {top};\n\
-             Transfinite Curve {{2, 4}} = 5;\nTransfinite Surface {{1}};\n\
-             Physical Curve(\"bottom\") = {{1}};\nPhysical Curve(\"top\") = {{3}};\n\
-             Physical Surface(\"body\") = {{1}};\n"
-        ),
-    )
-    .unwrap();
-    let mesh = dir.join("strip.msh");
-    gmsh_file(&geo, 2, &[], &mesh);
+    let mesh = strip_mesh(dir, top);
     write_case(
         &dir.join("strip.toml"),
         &format!(

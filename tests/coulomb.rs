@@ -597,24 +597,6 @@ fn proportional_history_is_predicted() {
     }
 }
 
-/// The Hertz disk (refined level 4) held at its top arc — pushed down by 0.01 and sideways by
-/// 0.001, the Cattaneo setting — on a rigid plane, Coulomb with μ = 0.3.
-fn held_disk_case(dir: &Path) -> std::path::PathBuf {
-    let mesh = repo("cases/hertz/meshes/hertz_refined_L4.msh");
-    write_case(
-        &dir.join("held.toml"),
-        &format!(
-            "[mesh]\nfile = {}\n[material]\nyoung = 2.0\npoisson = 0.3\nmodel = \"plane_strain\"\n\
-             [[dirichlet]]\ngroup = \"load\"\nvalue = [0.001, -0.01]\n[contact]\n\
-             group = \"contact\"\nobstacle = {{ type = \"plane\", point = [0.0, -1.0], \
-             normal = [0.0, 1.0] }}\nfriction = {{ law = \"coulomb\", mu = 0.3 }}\n\
-             [solver]\npreset = \"direct\"\n\
-             [output]\nfields = [\"displacement\", \"contact\"]\n",
-            toml_path(&mesh)
-        ),
-    )
-}
-
 /// The Hertz disk (refined level 4) floating, pressed onto the plane by a pressure on its top
 /// arc (and `traction` tangentially), Coulomb with μ = 0.3: Dirichlet data hold no rigid mode.
 fn floating_disk_case(dir: &Path, traction: f64) -> std::path::PathBuf {
@@ -661,7 +643,7 @@ fn the_condensed_coulomb_solve_gives_the_touching_starts_answer_in_one_factorisa
     // on 1, 2 and 3 ranks.
     let tmp = tempfile::tempdir().expect("tmp");
     let cases = [
-        (held_disk_case(tmp.path()), false),
+        (held_disk(tmp.path(), ""), false),
         (floating_disk_case(tmp.path(), 0.0), false),
         (floating_disk_case(tmp.path(), 0.001), true),
     ];
@@ -825,7 +807,7 @@ fn a_load_step_whose_zone_grows_beyond_its_candidates_takes_them_in_a_new_pass()
     // as candidates (one factorisation) instead of the plain path from the expanded iterate;
     // every step ends where the plain path from the touching node ends, on 1, 2 and 3 ranks.
     let tmp = tempfile::tempdir().expect("tmp");
-    let case = held_disk_case(tmp.path());
+    let case = held_disk(tmp.path(), "");
     let sets = ["dirichlet.0.value=[0.002, -0.12]", "load.steps=2"];
     let gap = converged(2, &case, &[&sets[..], &["newton.init=\"gap\""]].concat());
     for np in [1, 2, 3] {
@@ -851,7 +833,7 @@ fn a_stalled_dense_iterate_is_accepted_where_its_certificates_hold() {
     // and as the default c's, on 1, 2 and 3 ranks. The dense slip rows must not carry the
     // normal row's round-off times c (with the term q c (u_n + g) in them: u 2.1e-9 off).
     let tmp = tempfile::tempdir().expect("tmp");
-    let case = held_disk_case(tmp.path());
+    let case = held_disk(tmp.path(), "");
     let c = "newton.c=1e7";
     let reference = converged(1, &case, &["newton.init=\"gap\""]);
     for np in [1, 2, 3] {
@@ -894,7 +876,7 @@ fn load_steps_keep_the_condensed_factorisation() {
     // candidates; only d₀ is new) — and end where the plain path from the touching node ends,
     // step by step, on 1 and 2 ranks.
     let tmp = tempfile::tempdir().expect("tmp");
-    let case = held_disk_case(tmp.path());
+    let case = held_disk(tmp.path(), "");
     for np in [1, 2] {
         let auto = converged(np, &case, &["load.steps=4"]);
         let gap = converged(np, &case, &["load.steps=4", "newton.init=\"gap\""]);

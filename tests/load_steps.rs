@@ -480,19 +480,6 @@ fn ranks_agree() {
     }
 }
 
-fn files(dir: &Path) -> Vec<(String, Vec<u8>)> {
-    let mut v: Vec<(String, Vec<u8>)> = std::fs::read_dir(dir)
-        .unwrap()
-        .map(|e| {
-            let p = e.unwrap().path();
-            let name = p.file_name().unwrap().to_string_lossy().into_owned();
-            (name, std::fs::read(&p).unwrap_or_default())
-        })
-        .collect();
-    v.sort();
-    v
-}
-
 /// The disk fills while step 2 is appended (step 1 of the default Hertz case, ~0.9 MB, fits
 /// on 1.1 MB beside small previous results; step 2 adds ~0.3 MB): one error, exit 1, the
 /// previous results untouched, no staging left — an output failure keeps nothing.
@@ -501,7 +488,7 @@ fn a_full_disk_during_a_later_step_writes_nothing() {
     let disk = SmallDisk::mount("1100k");
     let out = disk.path.join("out");
     run_solver(1, &repo("cases/blocks/block2d.toml"), &[], &out).expect_code(0, "small run");
-    let before = files(&out);
+    let before = listing(&out);
     for np in [1, 2] {
         let r = run_solver(np, &hertz(), &["load.steps=2"], &out);
         r.expect_code(1, &format!("full disk, {np} rank(s)"));
@@ -510,26 +497,8 @@ fn a_full_disk_during_a_later_step_writes_nothing() {
             "{}",
             r.output()
         );
-        let errors: Vec<&str> = r
-            .stderr
-            .lines()
-            .filter(|l| l.starts_with("error:"))
-            .collect();
-        assert_eq!(errors.len(), 1, "one error line:\n{}", r.output());
-        assert!(
-            errors[0].contains("solution.h5") && errors[0].contains("cannot write results"),
-            "{}",
-            errors[0]
-        );
-        assert_eq!(
-            files(&out),
-            before,
-            "{np} rank(s): previous results changed"
-        );
-        let names: Vec<String> = std::fs::read_dir(&disk.path)
-            .unwrap()
-            .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
-            .collect();
-        assert_eq!(names, ["out"], "{np} rank(s): staging left behind");
+        let what = format!("{np} rank(s)");
+        let line = disk.assert_nothing_written(&r, &out, &before, &what);
+        assert!(line.contains("cannot write results"), "{line}");
     }
 }

@@ -157,18 +157,7 @@ fn bar_exact(dim: usize) {
     let tmp = tempfile::tempdir().unwrap();
     let msh = bar_mesh(tmp.path(), dim);
     let h5 = tmp.path().join(format!("bar{dim}d.h5"));
-    let conv = run_with_timeout(
-        solver(
-            0,
-            &[
-                "convert".into(),
-                msh.display().to_string(),
-                h5.display().to_string(),
-            ],
-        ),
-        Duration::from_secs(60),
-    );
-    conv.expect_code(0, "convert");
+    convert(&msh, &h5);
     for (np, mesh) in [(1, &msh), (2, &msh), (2, &h5)] {
         let out = tmp
             .path()
@@ -214,12 +203,7 @@ fn refused_on(np: usize, h5: bool, edit: impl Fn(String) -> String, expect: &[&s
     let mut mesh = bar_mesh(tmp.path(), 2);
     if h5 {
         let out = mesh.with_extension("h5");
-        let args = [mesh.display().to_string(), out.display().to_string()];
-        let conv = run_with_timeout(
-            solver(0, &[vec!["convert".to_string()], args.to_vec()].concat()),
-            Duration::from_secs(60),
-        );
-        conv.expect_code(0, "convert");
+        convert(&mesh, &out);
         mesh = out;
     }
     let case_dir = tmp.path().join("case");

@@ -339,14 +339,10 @@ impl H5Mesh {
         lo: usize,
         hi: usize,
     ) -> Result<Vec<T>, String> {
-        if lo >= hi {
-            return Ok(Vec::new());
-        }
-        self.file
-            .dataset(name)
-            .and_then(|d| d.read_slice_1d::<T, _>(s![lo..hi]))
-            .map(|a| a.into_raw_vec_and_offset().0)
-            .map_err(|e| format!("cannot read /{name}[{lo}..{hi}]: {e}"))
+        self.rows(name, lo, hi, |d| {
+            d.read_slice_1d::<T, _>(s![lo..hi])
+                .map(|a| a.into_raw_vec_and_offset().0)
+        })
     }
 
     /// Rows `lo..hi` of a 2-D dataset, flat (row-major).
@@ -356,13 +352,27 @@ impl H5Mesh {
         lo: usize,
         hi: usize,
     ) -> Result<Vec<T>, String> {
+        self.rows(name, lo, hi, |d| {
+            d.read_slice_2d::<T, _>(s![lo..hi, ..])
+                .map(|a: Array2<T>| a.as_standard_layout().iter().cloned().collect())
+        })
+    }
+
+    /// Rows `lo..hi` of the dataset `name` as `read` takes them from it (none when the range
+    /// is empty); a failure names the dataset and the rows.
+    fn rows<T>(
+        &self,
+        name: &str,
+        lo: usize,
+        hi: usize,
+        read: impl FnOnce(&hdf5::Dataset) -> hdf5::Result<Vec<T>>,
+    ) -> Result<Vec<T>, String> {
         if lo >= hi {
             return Ok(Vec::new());
         }
         self.file
             .dataset(name)
-            .and_then(|d| d.read_slice_2d::<T, _>(s![lo..hi, ..]))
-            .map(|a: Array2<T>| a.as_standard_layout().iter().cloned().collect())
+            .and_then(|d| read(&d))
             .map_err(|e| format!("cannot read /{name}[{lo}..{hi}]: {e}"))
     }
 }

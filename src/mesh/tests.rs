@@ -164,6 +164,38 @@ fn ascii_and_binary_give_the_same_mesh() {
     }
 }
 
+/// The side groups of the unit square or cube `m` (file `name`): each of the facets' dimension,
+/// not empty, its nodes on its side (to `tol`), its measure 1; every facet in one side.
+fn unit_sides(m: &Mesh, name: &str, tol: f64) {
+    let sides = [
+        ("left", 0, 0.0),
+        ("right", 0, 1.0),
+        ("bottom", 1, 0.0),
+        ("top", 1, 1.0),
+        ("front", 2, 0.0),
+        ("back", 2, 1.0),
+    ];
+    let mut in_groups = vec![0usize; m.n_facets()];
+    for (side, axis, value) in &sides[..2 * m.dim] {
+        let g = m.group(side).unwrap();
+        assert_eq!(g.dim, m.dim - 1);
+        assert!(!g.elements.is_empty());
+        let mut measure = 0.0;
+        for &f in &g.elements {
+            in_groups[f] += 1;
+            measure += facet_measure(m, f);
+        }
+        assert!(
+            (measure - 1.0).abs() < 1e-12,
+            "{name}: {side} measure {measure}"
+        );
+        for n in m.group_nodes(g) {
+            assert!((m.coords[n][*axis] - value).abs() <= tol, "{name}: {side}");
+        }
+    }
+    assert!(in_groups.iter().all(|&k| k == 1), "{name}");
+}
+
 #[test]
 fn unit_square_area_and_groups() {
     for name in [
@@ -193,30 +225,7 @@ fn unit_square_area_and_groups() {
         assert_eq!(m.group_nodes(body), (0..m.n_nodes()).collect::<Vec<_>>());
 
         // Each side: facets on the right line, total length 1.
-        let mut in_groups = vec![0usize; m.n_facets()];
-        for (side, axis, value) in [
-            ("left", 0, 0.0),
-            ("right", 0, 1.0),
-            ("bottom", 1, 0.0),
-            ("top", 1, 1.0),
-        ] {
-            let g = m.group(side).unwrap();
-            assert_eq!(g.dim, 1);
-            assert!(!g.elements.is_empty());
-            let mut len = 0.0;
-            for &f in &g.elements {
-                in_groups[f] += 1;
-                len += facet_measure(&m, f);
-                for &n in m.facet(f) {
-                    assert_eq!(m.coords[n][axis], value, "{name}: {side}");
-                }
-            }
-            assert!((len - 1.0).abs() < 1e-12, "{name}: {side} length {len}");
-            for n in m.group_nodes(g) {
-                assert_eq!(m.coords[n][axis], value);
-            }
-        }
-        assert!(in_groups.iter().all(|&k| k == 1));
+        unit_sides(&m, name, 0.0);
         // The facets are exactly the boundary edges of the cells.
         let facets: BTreeSet<(usize, usize)> = (0..m.n_facets())
             .map(|f| {
@@ -241,28 +250,7 @@ fn unit_cube_volume_and_groups() {
         let body = m.group("body").unwrap();
         assert_eq!(body.dim, 3);
         assert_eq!(body.elements.len(), m.n_cells());
-        let mut in_groups = vec![0usize; m.n_facets()];
-        for (side, axis, value) in [
-            ("left", 0, 0.0),
-            ("right", 0, 1.0),
-            ("bottom", 1, 0.0),
-            ("top", 1, 1.0),
-            ("front", 2, 0.0),
-            ("back", 2, 1.0),
-        ] {
-            let g = m.group(side).unwrap();
-            assert_eq!(g.dim, 2);
-            let mut area = 0.0;
-            for &f in &g.elements {
-                in_groups[f] += 1;
-                area += facet_measure(&m, f);
-                for &n in m.facet(f) {
-                    assert!((m.coords[n][axis] - value).abs() < 1e-12, "{name}: {side}");
-                }
-            }
-            assert!((area - 1.0).abs() < 1e-12, "{name}: {side} area {area}");
-        }
-        assert!(in_groups.iter().all(|&k| k == 1), "{name}");
+        unit_sides(&m, name, 1e-12);
         assert_eq!(m.group_names().len(), 7);
     }
 }

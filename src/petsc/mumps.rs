@@ -57,6 +57,18 @@ pub struct SchurFactor {
     flops: f64,
 }
 
+/// The factorisation a Schur complement is asked of ([`SchurFactor::analyse`]): the matrix's
+/// global size `n`, the global rows of the complement `schur_rows` (0-based, the same list on
+/// every rank), the elimination `order` (read on the host; `None`: MUMPS' own) and the node
+/// frames `bases` the matrix is read in.
+#[derive(Clone, Copy)]
+pub struct SchurRequest<'a> {
+    pub n: usize,
+    pub schur_rows: &'a [usize],
+    pub order: Option<&'a [usize]>,
+    pub bases: &'a NodeBases,
+}
+
 impl SchurFactor {
     /// Analysis (MUMPS' JOB = 1; [`SchurFactor::factorise`] follows) of the symmetric `mat`
     /// (global size `n`; its owned
@@ -74,11 +86,16 @@ impl SchurFactor {
     pub fn analyse(
         comm: MPI_Comm,
         mat: &Matrix,
-        (n, schur_rows): (usize, &[usize]),
-        order: Option<&[usize]>,
-        bases: &NodeBases,
-        (root, one_process): (bool, bool),
+        request: &SchurRequest,
+        root: bool,
+        one_process: bool,
     ) -> Result<SchurFactor> {
+        let SchurRequest {
+            n,
+            schur_rows,
+            order,
+            bases,
+        } = *request;
         if n >= i32::MAX as usize {
             return Err(own_error(format!(
                 "SchurFactor: {n} unknowns exceed MUMPS' 32-bit indices"
@@ -87,7 +104,7 @@ impl SchurFactor {
         let read = rows(comm, mat, true).and_then(|t| bases.rotate(mat, t));
         let (irn, jcn, vals) = agreed(comm, read)?;
         let (inst, (irn, jcn, vals)) = if one_process {
-            let all = gathered(comm, (irn, jcn, vals))?;
+            let all = gathered(comm, irn, jcn, vals)?;
             let inst = if root {
                 // SAFETY: reads the handle of MPI_COMM_SELF (set by MPI's initialisation).
                 Some(Instance::new(unsafe { super::ffi::RSMPI_COMM_SELF }, 1))
@@ -584,7 +601,8 @@ impl Factor {
         mat: &Matrix,
         n: usize,
         order: Option<&[usize]>,
-        (symmetric, one_process): (bool, bool),
+        symmetric: bool,
+        one_process: bool,
         root: bool,
     ) -> Result<Factor> {
         if n >= i32::MAX as usize {
@@ -596,7 +614,7 @@ impl Factor {
         let sym = if symmetric { 2 } else { 0 };
         let (inst, own_pattern, (irn, jcn, vals)) = if one_process {
             let pattern = (irn.clone(), jcn.clone());
-            let all = gathered(comm, (irn, jcn, vals))?;
+            let all = gathered(comm, irn, jcn, vals)?;
             let inst = if root {
                 // SAFETY: reads the handle of MPI_COMM_SELF (set by MPI's initialisation).
                 Some(Instance::new(unsafe { super::ffi::RSMPI_COMM_SELF }, sym))
@@ -707,7 +725,7 @@ impl Factor {
             return Ok(false);
         }
         self.vals = if self.own_pattern.is_some() {
-            gathered(self.comm, (i, j, vals))?.2
+            gathered(self.comm, i, j, vals)?.2
         } else {
             vals
         };
@@ -745,7 +763,9 @@ impl Factor {
 /// than MPI's 32-bit counts allow is an error on every rank. Collective.
 fn gathered(
     comm: MPI_Comm,
-    (irn, jcn, vals): (Vec<i32>, Vec<i32>, Vec<f64>),
+    irn: Vec<i32>,
+    jcn: Vec<i32>,
+    vals: Vec<f64>,
 ) -> Result<(Vec<i32>, Vec<i32>, Vec<f64>)> {
     use super::mpi::gather_u64;
     let total = gather_u64(comm, &[irn.len() as u64])?.map(|c| c.iter().sum::<u64>());

@@ -160,7 +160,8 @@ impl Shell {
                 &mat,
                 m as usize,
                 order,
-                (self.symmetric, self.one_process),
+                self.symmetric,
+                self.one_process,
                 self.root,
             )?;
             self.record.analysis_seconds = ta.elapsed().as_secs_f64();
@@ -307,7 +308,8 @@ pub fn install(
     ksp: &Ksp,
     comm: MPI_Comm,
     dim: usize,
-    (symmetric, one_process): (bool, bool),
+    symmetric: bool,
+    one_process: bool,
 ) -> Result<()> {
     let shell = Box::new(Shell {
         comm,
@@ -348,12 +350,13 @@ pub fn install_on(
     ksp: &Ksp,
     comm: MPI_Comm,
     mat: &Matrix,
-    (symmetric, one_process): (bool, bool),
+    symmetric: bool,
+    one_process: bool,
 ) -> Result<()> {
     let mut bs = 1;
     // SAFETY: reads the block size of a valid matrix.
     unsafe { check(ffi::MatGetBlockSize(mat.raw, &mut bs))? };
-    install(ksp, comm, bs.max(1) as usize, (symmetric, one_process))
+    install(ksp, comm, bs.max(1) as usize, symmetric, one_process)
 }
 
 /// For a PC of type "shell": `Some(symmetric)` when it is the shell of [`install`]. Local.

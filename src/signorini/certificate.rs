@@ -5,7 +5,7 @@
 //! turns a loosened acceptance or a relative value above [`STRICT_TOL`] into an error.
 
 use super::boundary::ContactBoundary;
-use super::report::{FrictionCertificate, Kkt, Scales};
+use super::report::{ratio, FrictionCertificate, Kkt, Scales};
 use crate::error::RunError;
 use crate::fem::{self, Materials};
 use crate::mesh::Mesh;
@@ -371,17 +371,6 @@ impl Certificate {
     }
 }
 
-/// v / scale; 0 for v = 0 and infinity for v > 0 at a zero scale.
-fn ratio(v: f64, scale: f64) -> f64 {
-    if v <= 0.0 {
-        0.0
-    } else if scale > 0.0 {
-        v / scale
-    } else {
-        f64::INFINITY
-    }
-}
-
 /// The global balance of forces of THEORY §2 (Σ_k (−λ^k) = the load the obstacle carries),
 /// extended by the reactions: residual = applied + contact + reactions, judged against the
 /// largest of the three magnitudes `gross` (Σ|f_i|, Σ|λ_i|, Σ|R_i|). Pure.
@@ -408,6 +397,15 @@ pub fn balance(
     }
 }
 
+/// The elastic problem an equilibrium is checked on: the mesh and its partition, the
+/// materials and the Dirichlet values per dof (NaN = free).
+pub struct Elastic<'a> {
+    pub mesh: &'a Mesh,
+    pub layout: &'a Layout,
+    pub material: &'a Materials,
+    pub fixed: &'a [f64],
+}
+
 /// The global equilibrium of the solution u (3.8), (3.28): λ = f − A u at the contact rows
 /// (A, f assembled, Dirichlet data eliminated; with body pairs also at `more_rows`, the master
 /// rows that receive the slave nodes' forces), the reactions K_e u_e at the Dirichlet dofs and
@@ -416,17 +414,18 @@ pub fn balance(
 /// per contact node of this rank (global components), for the force balance. Collective.
 pub fn equilibrium(
     ctx: &Ctx,
-    (mesh, layout, material): (&Mesh, &Layout, &Materials),
-    fixed: &[f64],
-    (a, f, more_rows): (&Matrix, &Vector, &[bool]),
+    elastic: &Elastic,
+    a: &Matrix,
+    f: &Vector,
+    more_rows: &[bool],
     b: &ContactBoundary,
     u: &Vector,
 ) -> Result<(Equilibrium, Vec<[f64; 3]>), RunError> {
-    let dim = mesh.dim;
+    let (layout, fixed, dim) = (elastic.layout, elastic.fixed, elastic.mesh.dim);
     let mut au = f.duplicate()?;
     a.mult(u, &mut au)?;
     let (au, f_local) = (au.to_local_vec()?, f.to_local_vec()?);
-    let v = dirichlet_terms((mesh, layout, material), fixed, f, u)?;
+    let v = dirichlet_terms(elastic, f, u)?;
     let (mut contact_row, lambdas) = contact_forces(b, &f_local, &au);
     for (r, &m) in contact_row.iter_mut().zip(more_rows) {
         *r |= m;
@@ -463,12 +462,13 @@ pub fn equilibrium(
 /// V of [`equilibrium`]: K_e u_e at the Dirichlet dofs and K_e[·, D] g_D at the others, over
 /// the cells with a Dirichlet node (u at their nodes gathered), summed in rank order; this
 /// rank's rows. Collective.
-fn dirichlet_terms(
-    (mesh, layout, material): (&Mesh, &Layout, &Materials),
-    fixed: &[f64],
-    f: &Vector,
-    u: &Vector,
-) -> Result<Vec<f64>, RunError> {
+fn dirichlet_terms(elastic: &Elastic, f: &Vector, u: &Vector) -> Result<Vec<f64>, RunError> {
+    let Elastic {
+        mesh,
+        layout,
+        material,
+        fixed,
+    } = *elastic;
     let dim = mesh.dim;
     let is_fixed = |v: usize| (0..dim).any(|c| !fixed[v * dim + c].is_nan());
     let cells: Vec<usize> = layout

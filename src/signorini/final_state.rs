@@ -6,18 +6,23 @@ use super::boundary::{CaseKeys, ContactBoundary, NodeResult};
 use super::certificate;
 use super::force;
 use super::law::{Coulomb, FrictionLaw};
-use super::plain_path::NewtonResult;
+use super::plain_path::{ContactProblem, NewtonResult};
 use super::report::{self, ContactSummary, FrictionCertificate, Kkt, Scales};
 use crate::assembly::System;
 use crate::error::RunError;
-use crate::mesh::Mesh;
 use crate::mortar::InU;
 use crate::par::Ctx;
-use crate::partition::Layout;
 use crate::petsc::Vector;
 use crate::say;
 use crate::setup::ContactSettings;
 use serde::Serialize;
+
+/// A solve's final state as [`final_state`] judged it: the gathered contact table and
+/// summary.json's "contact" section (with the KKT and friction certificates and the scales).
+pub struct FinalState {
+    pub contact: ContactSummary,
+    pub table: report::Table,
+}
 
 /// The final state: the contact table, the KKT and friction certificates (an error if they
 /// fail), the contact line of the log and summary.json's "contact" section. Collective.
@@ -26,9 +31,10 @@ pub fn final_state(
     sys: &System,
     b: &ContactBoundary,
     nr: &NewtonResult,
-    (friction, dim): (bool, usize),
+    friction: bool,
+    dim: usize,
     floor: Scales,
-) -> Result<(ContactSummary, report::Table), RunError> {
+) -> Result<FinalState, RunError> {
     let table = report::gather(ctx, b, &nr.nodes, dim);
     let total_force = report::total_force(ctx, &nr.nodes);
     let half_width = match b.obstacles.as_slice() {
@@ -62,28 +68,38 @@ pub fn final_state(
         friction: friction_certificate,
         scales,
     };
-    Ok((contact, table))
+    Ok(FinalState { contact, table })
 }
 
 /// The final state's certificate (certificate.rs): the stop rule, (3.14), (3.18), the global
 /// equilibrium and each force-controlled pair's balance, said in one log line; with
 /// `newton.strict` an error where the rule is loosened or a relative value above
-/// [`certificate::STRICT_TOL`]. Collective.
+/// [`certificate::STRICT_TOL`]; `problem`'s boundary the judged one, `in_u` the body pairs'
+/// view of the problem in u. Collective.
 pub fn certify(
     ctx: &Ctx,
-    (settings, mesh, layout, fixed, sys): (&ContactSettings, &Mesh, &Layout, &[f64], &System),
-    (b, table, contact): (&ContactBoundary, &report::Table, &ContactSummary),
-    (nr, in_u): (&NewtonResult, Option<&InU>),
+    settings: &ContactSettings,
+    problem: &ContactProblem,
+    state: &FinalState,
+    nr: &NewtonResult,
+    in_u: Option<&InU>,
     force_control: &[force::ForceControl],
 ) -> Result<certificate::Certificate, RunError> {
-    let mat = (mesh, layout, &settings.material);
+    let (b, sys) = (problem.boundary, problem.sys);
+    let (table, contact) = (&state.table, &state.contact);
+    let elastic = certificate::Elastic {
+        mesh: problem.mesh,
+        layout: problem.layout,
+        material: &settings.material,
+        fixed: problem.fixed,
+    };
     let (equilibrium, lambdas) = match in_u {
-        None => certificate::equilibrium(ctx, mat, fixed, (&sys.a, &sys.b, &[]), b, &nr.u)?,
+        None => certificate::equilibrium(ctx, &elastic, &sys.a, &sys.b, &[], b, &nr.u)?,
         // body pairs: the balance of the bodies in u (the slave nodes' forces reach the
         // master rows)
         Some(p) => {
-            let rows = (p.basis.a(), p.f, p.basis.master_rows());
-            certificate::equilibrium(ctx, mat, fixed, rows, b, &p.u(&nr.u)?)?
+            let (a, rows) = (p.basis.a(), p.basis.master_rows());
+            certificate::equilibrium(ctx, &elastic, a, p.f, rows, b, &p.u(&nr.u)?)?
         }
     };
     let force_balance = (!force_control.is_empty())

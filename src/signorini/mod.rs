@@ -210,7 +210,8 @@ impl ContactSolution {
 /// This solve's change since `prev` (same mesh and boundary). Local.
 fn step_delta(
     prev: &ContactSolution,
-    (nodes, displacement): (&[NodeResult], &[[f64; 3]]),
+    nodes: &[NodeResult],
+    displacement: &[[f64; 3]],
     u: &[f64],
     u_prev: &[f64],
 ) -> StepDelta {
@@ -257,7 +258,9 @@ pub fn solve(
     fixed: &[f64],
     sys: &System,
     solver_section: &SolverSection,
-    (session, previous, in_u): (&mut Session, Option<&ContactSolution>, Option<&InU>),
+    session: &mut Session,
+    previous: Option<&ContactSolution>,
+    in_u: Option<&InU>,
 ) -> Result<ContactSolution, RunError> {
     let dim = mesh.dim;
     let law = Law::of(settings);
@@ -295,8 +298,12 @@ pub fn solve(
         mirrors: halfspace::mirror_planes(ctx, mesh, fixed),
     };
     let iterative = session.setup().kind() == SolverKind::Iterative;
-    let path = chosen_path(settings, solver_section, &b, session.setup().kind());
-    let ns = newton_settings(settings, (c, law), (&model, iterative), &force_control);
+    let choice = MethodChoice {
+        settings,
+        section: solver_section,
+        path: chosen_path(settings, solver_section, &b, session.setup().kind()),
+    };
+    let ns = newton_settings(settings, c, law, &model, iterative, &force_control);
     // a failure of a frictional body that only its contact holds says what may be the cause
     let sliding = friction && !capacity::held_anywhere(ctx, fixed);
     let mut types = None;
@@ -304,8 +311,9 @@ pub fn solve(
         ctx,
         &problem,
         &ns,
-        (settings, solver_section, path),
-        (&mut *session, warm.as_ref()),
+        &choice,
+        session,
+        warm.as_ref(),
         &mut types,
     )
     .map_err(|e| capacity::why_sliding(e, sliding));
@@ -313,21 +321,15 @@ pub fn solve(
     let solved = Solved {
         law,
         c,
-        path,
         ran,
         types,
         warned,
+        previous,
         prev_u,
+        in_u,
         force_control: &force_control,
     };
-    let solution = report_solution(
-        ctx,
-        (settings, mesh, layout, fixed, sys),
-        solver_section,
-        b,
-        solved,
-        (previous, in_u),
-    );
+    let solution = report_solution(ctx, &choice, &problem, solved);
     forget_on_error(session, solution)
 }
 
@@ -344,8 +346,10 @@ fn forget_on_error<T>(session: &mut Session, r: Result<T, RunError>) -> Result<T
 /// predictor (frictionless) or, on the direct preset, as the condensed path's. Local.
 fn newton_settings<'a>(
     settings: &'a ContactSettings,
-    (c, law): (f64, Law),
-    (model, iterative): (&'a halfspace::HalfSpace, bool),
+    c: f64,
+    law: Law,
+    model: &'a halfspace::HalfSpace,
+    iterative: bool,
     force: &'a [force::ForceControl],
 ) -> NewtonSettings<'a> {
     NewtonSettings {
@@ -381,64 +385,79 @@ fn warm_start(
         .map(|(prev, u)| prev.start(at_start.as_ref().unwrap_or(b), u.to_vec(), c))
 }
 
+/// How a solve runs: the case's contact settings, its solver section (the method, the
+/// preset) and the path a Newton solve takes first ([`chosen_path`]; `None`: SNES VI).
+struct MethodChoice<'a> {
+    settings: &'a ContactSettings,
+    section: &'a SolverSection,
+    path: Option<SolverPath>,
+}
+
 /// What [`solve`] hands its report: the law, c, the method's result, the Newton steps' KSP
-/// and PC types, the warnings of the start, the previous load step's u (local rows) and force
-/// control.
+/// and PC types, the warnings of the start, the previous load step's solution and u (local
+/// rows), the body pairs' change of basis and force control.
 struct Solved<'a> {
     law: Law,
     c: f64,
-    path: Option<SolverPath>,
     ran: Ran,
     types: Option<(String, String)>,
     warned: Vec<Warning>,
+    previous: Option<&'a ContactSolution>,
     prev_u: Option<Vec<f64>>,
+    in_u: Option<&'a InU<'a>>,
     force_control: &'a [force::ForceControl],
 }
 
 /// The solution of a solve and its report: the final state judged (Coulomb by b_k =
 /// μ(−λ_n^k)), the obstacles placed at their approaches, the certificate, summary.json's
-/// sections, the warnings and the change since the previous load step. Collective.
+/// sections, the warnings and the change since the previous load step; `problem`'s boundary
+/// as the solve saw it (copied, judged and placed here). Collective.
 fn report_solution(
     ctx: &Ctx,
-    (settings, mesh, layout, fixed, sys): (&ContactSettings, &Mesh, &Layout, &[f64], &System),
-    solver_section: &SolverSection,
-    mut b: ContactBoundary,
+    choice: &MethodChoice,
+    problem: &ContactProblem,
     solved: Solved,
-    (previous, in_u): (Option<&ContactSolution>, Option<&InU>),
 ) -> Result<ContactSolution, RunError> {
+    let MethodChoice {
+        settings,
+        section: solver_section,
+        path,
+    } = *choice;
+    let (mesh, layout) = (problem.mesh, problem.layout);
     let (dim, friction) = (mesh.dim, settings.friction());
     let Solved {
         law,
         c,
-        path,
         ran: (mut nr, outer_steps, condensed_summary),
         types,
         mut warned,
+        previous,
         prev_u,
+        in_u,
         force_control,
     } = solved;
     // the certificate and the output judge Coulomb's law with b_k = μ(−λ_n^k)
+    let mut b = problem.boundary.clone();
     final_state::judged_bounds(law.rules(), &mut b, &nr.nodes);
     let (displacement, approaches) =
-        place_at_approaches(&mut b, settings, (force_control, &nr.approach), friction);
+        place_at_approaches(&mut b, settings, force_control, &nr.approach, friction);
     let floor = vanishing_floor(previous); // the step before's scales, for a vanishing step
-    let (mut contact, table) = final_state::final_state(ctx, sys, &b, &nr, (friction, dim), floor)?;
+    let mut state = final_state::final_state(ctx, problem.sys, &b, &nr, friction, dim, floor)?;
     report::per_pair(
         ctx,
         settings,
         &b,
         &nr.nodes,
-        &table,
+        &state.table,
         (&displacement, &approaches),
-        &mut contact,
+        &mut state.contact,
     );
-    let certificate = final_state::certify(
-        ctx,
-        (settings, mesh, layout, fixed, sys),
-        (&b, &table, &contact),
-        (&nr, in_u),
-        force_control,
-    )?;
+    let judged = ContactProblem {
+        boundary: &b,
+        ..*problem
+    };
+    let certificate =
+        final_state::certify(ctx, settings, &judged, &state, &nr, in_u, force_control)?;
     let mut newton = newton_summary(settings, solver_section, c, &mut nr, outer_steps, previous);
     newton.path = path.map(SolverPath::name);
     if let Some(cs) = condensed_summary {
@@ -449,7 +468,9 @@ fn report_solution(
     }
     warned.extend(warn::contact_warnings(
         ctx,
-        (mesh, layout, settings),
+        mesh,
+        layout,
+        settings,
         &b,
         &nr.nodes,
         &displacement,
@@ -457,7 +478,8 @@ fn report_solution(
     let delta = match previous.zip(prev_u) {
         Some((prev, u_prev)) => Some(step_delta(
             prev,
-            (&nr.nodes, &displacement),
+            &nr.nodes,
+            &displacement,
             &nr.u.to_local_vec()?,
             &u_prev,
         )),
@@ -470,12 +492,12 @@ fn report_solution(
             &b,
             &nr.nodes,
             friction,
-            &table,
+            &state.table,
         ),
         u: nr.u,
         report: ContactReport {
             newton,
-            contact,
+            contact: state.contact,
             linear_solver: PresetOnly {
                 preset: solver_section.preset.name(),
                 ksp_type: types.as_ref().map(|t| t.0.clone()),
@@ -502,9 +524,8 @@ pub fn contact_boundary(
     layout: &Layout,
     fixed: &[f64],
 ) -> Result<(ContactBoundary, Vec<Warning>), RunError> {
-    let start = |nodes: &[boundary::ContactNode]| {
-        warn::start_warnings(ctx, (mesh, layout, settings), nodes)
-    };
+    let start =
+        |nodes: &[boundary::ContactNode]| warn::start_warnings(ctx, mesh, layout, settings, nodes);
     let (b, warned) = boundary::build(ctx, mesh, layout, settings, (fixed, start))?;
     log_boundary(ctx, &b, settings, mesh.dim);
     // the approaches' starts do not matter here: only the forces' directions
@@ -521,7 +542,8 @@ pub fn contact_boundary(
 fn place_at_approaches(
     b: &mut ContactBoundary,
     settings: &ContactSettings,
-    (force_control, approach): (&[force::ForceControl], &[f64]),
+    force_control: &[force::ForceControl],
+    approach: &[f64],
     friction: bool,
 ) -> (Vec<[f64; 3]>, Vec<Option<f64>>) {
     let mut displacement = settings.displacements();
@@ -605,10 +627,12 @@ fn run_method(
     ctx: &Ctx,
     problem: &ContactProblem,
     ns: &NewtonSettings,
-    (settings, solver_section, path): (&ContactSettings, &SolverSection, Option<SolverPath>),
-    (session, warm): (&mut Session, Option<&WarmStart>),
+    choice: &MethodChoice,
+    session: &mut Session,
+    warm: Option<&WarmStart>,
     types: &mut Option<(String, String)>,
 ) -> Result<Ran, RunError> {
+    let (settings, solver_section) = (choice.settings, choice.section);
     let (sys, b, dim) = (problem.sys, problem.boundary, problem.mesh.dim);
     let (nr, outer_steps, condensed_summary) = match solver_section.method {
         Method::Newton => {
@@ -623,14 +647,7 @@ fn run_method(
                     (algorithm, solver_section),
                     (session, warm),
                 )?,
-                None => normal_and_tresca(
-                    ctx,
-                    problem,
-                    &mut reduced,
-                    (ns, settings.friction(), path == Some(SolverPath::Schur)),
-                    solver_section,
-                    (session, warm),
-                )?,
+                None => normal_and_tresca(ctx, problem, &mut reduced, ns, choice, session, warm)?,
             };
             match outcome {
                 Outcome::Checked(nr, cs) => return Ok((nr, None, cs)),
@@ -693,19 +710,20 @@ fn chosen_path(
 type Ran = (NewtonResult, Option<usize>, Option<schur::CondensedSummary>);
 
 /// Algorithm 1 (frictionless: on the contact unknowns where the dispatch chose the Schur
-/// path, `condense`, [`chosen_path`]) or Algorithm 2 (Tresca, `friction`) on the plain path.
-/// Collective.
+/// path, [`chosen_path`]) or Algorithm 2 (Tresca) on the plain path. Collective.
 fn normal_and_tresca(
     ctx: &Ctx,
     problem: &ContactProblem,
     reduced: &mut ReducedSystem,
-    (ns, friction, condense): (&NewtonSettings, bool, bool),
-    solver_section: &SolverSection,
-    (session, warm): (&mut Session, Option<&WarmStart>),
+    ns: &NewtonSettings,
+    choice: &MethodChoice,
+    session: &mut Session,
+    warm: Option<&WarmStart>,
 ) -> Result<Outcome, RunError> {
+    let (friction, solver_section) = (choice.settings.friction(), choice.section);
     let mut condensed_summary = None;
-    if condense {
-        match schur::frictionless::solve(ctx, problem, reduced, ns, (session, warm))? {
+    if choice.path == Some(SolverPath::Schur) {
+        match schur::frictionless::solve(ctx, problem, reduced, ns, session, warm)? {
             schur::Condensed::Solved(nr, s) => {
                 return Ok(Outcome::Checked(*nr, Some(s)));
             }

@@ -730,7 +730,7 @@ impl Kkt {
 }
 
 /// v / scale; 0 for v = 0 and infinity for v > 0 at a zero scale (as `v > rel · scale`).
-fn ratio(v: f64, scale: f64) -> f64 {
+pub fn ratio(v: f64, scale: f64) -> f64 {
     if v <= 0.0 {
         0.0
     } else if scale > 0.0 {

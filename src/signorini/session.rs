@@ -42,7 +42,8 @@ impl Session {
     ) -> Result<Session, RunError> {
         let setup = LinearSetup::for_section(
             ctx,
-            (mesh, layout),
+            mesh,
+            layout,
             section,
             symmetric_rows(settings, mesh.dim),
             crate::solver::matrix_scale(ctx, a)?,

@@ -72,7 +72,9 @@ const REC: usize = 14;
 /// solve (the gaps of `b` are g0 − d·n). Collective (one gather); the same list on every rank.
 pub fn contact_warnings(
     ctx: &Ctx,
-    (mesh, layout, settings): (&Mesh, &Layout, &ContactSettings),
+    mesh: &Mesh,
+    layout: &Layout,
+    settings: &ContactSettings,
     b: &ContactBoundary,
     res: &[NodeResult],
     displacement: &[[f64; 3]],
@@ -241,7 +243,9 @@ fn pair_warnings(
 /// prescribe its depth: no warning). Collective (one gather); the same on every rank.
 pub fn start_warnings(
     ctx: &Ctx,
-    (mesh, layout, settings): (&Mesh, &Layout, &ContactSettings),
+    mesh: &Mesh,
+    layout: &Layout,
+    settings: &ContactSettings,
     nodes: &[ContactNode],
 ) -> Vec<Warning> {
     let dim = mesh.dim;

@@ -5,7 +5,8 @@
 //! - [`solved`]: one solver run on a case file and what it wrote (`solve`, `Solved`, `get`);
 //! - [`csv`]: the rows of contact_nodes.csv (`Row`, `read_csv`, `csv_dim`, `columns`);
 //! - [`compare`]: numbers and fields by node id (`rel`, `norm`, `max_diff`, `floats`);
-//! - [`disk`]: a small tmpfs for full-disk tests (`SmallDisk`).
+//! - [`disk`]: a small tmpfs for full-disk tests (`SmallDisk`) and a directory's entries
+//!   (`file_names`, `listing`).
 //!
 //! Every test file includes it with `mod common;` + `use common::*;` and uses only part of it.
 #![allow(dead_code, unused_imports)]

@@ -218,6 +218,38 @@ pub fn unit_mesh(dir: &Path, dim: usize, h: f64) -> PathBuf {
     out
 }
 
+/// `signorini-mpi convert MSH H5` (one process); panics unless it exits with 0.
+pub fn convert(msh: &Path, h5: &Path) {
+    let args = [
+        "convert".to_string(),
+        msh.display().to_string(),
+        h5.display().to_string(),
+    ];
+    run_with_timeout(solver(0, &args), Duration::from_secs(60)).expect_code(0, "convert");
+}
+
+/// The strip [0, 4] × [0, 0.02] as a structured gmsh mesh in `dir`: `top` nodes on its top, 4
+/// layers, 8 (top − 1) triangles; the groups "bottom", "top" and "body".
+pub fn strip_mesh(dir: &Path, top: usize) -> PathBuf {
+    let geo = dir.join("strip.geo");
+    std::fs::write(
+        &geo,
+        format!(
+            "Point(1) = {{0, 0, 0}};\nPoint(2) = {{4, 0, 0}};\nPoint(3) = {{4, 0.02, 0}};\n\
+             Point(4) = {{0, 0.02, 0}};\nLine(1) = {{1, 2}};\nLine(2) = {{2, 3}};\n\
+             Line(3) = {{3, 4}};\nLine(4) = {{4, 1}};\nCurve Loop(1) = {{1, 2, 3, 4}};\n\
+             Plane Surface(1) = {{1}};\nTransfinite Curve {{1, 3}} = {top};\n\
+             Transfinite Curve {{2, 4}} = 5;\nTransfinite Surface {{1}};\n\
+             Physical Curve(\"bottom\") = {{1}};\nPhysical Curve(\"top\") = {{3}};\n\
+             Physical Surface(\"body\") = {{1}};\n"
+        ),
+    )
+    .unwrap();
+    let mesh = dir.join("strip.msh");
+    gmsh_file(&geo, 2, &[], &mesh);
+    mesh
+}
+
 /// Runs an inline Python script with /usr/bin/python3; panics with its output on failure.
 pub fn python(script: &str, args: &[String]) -> String {
     let mut cmd = Command::new(PYTHON);

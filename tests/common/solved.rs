@@ -11,7 +11,9 @@ use serde_json::Value;
 
 use super::compare::floats;
 use super::csv::{by_node_id, read_csv, Row};
-use super::process::{binary, mpirun, python_json, repo, run_with_timeout, Run};
+use super::process::{
+    binary, mpirun, python_json, repo, run_with_timeout, toml_path, write_case, Run,
+};
 
 /// Time limit of one solver run (the largest test run takes a few seconds).
 pub const LIMIT: Duration = Duration::from_secs(180);
@@ -31,6 +33,25 @@ pub fn solver_command(np: usize, case: &Path, sets: &[&str], out: &Path) -> Comm
     args.push("-o".into());
     args.push(out.display().to_string());
     mpirun(np, &binary(), &args)
+}
+
+/// The Hertz disk (refined level 4) held at its top arc by Dirichlet data — pushed down by 0.01
+/// and sideways by 0.001, the Cattaneo setting — on a rigid plane, Coulomb with μ = 0.3, the
+/// direct preset; `extra` TOML tables appended before `[output]`. Returns the case file in
+/// `dir`.
+pub fn held_disk(dir: &Path, extra: &str) -> PathBuf {
+    let mesh = repo("cases/hertz/meshes/hertz_refined_L4.msh");
+    write_case(
+        &dir.join("held.toml"),
+        &format!(
+            "[mesh]\nfile = {}\n[material]\nyoung = 2.0\npoisson = 0.3\nmodel = \"plane_strain\"\n\
+             [[dirichlet]]\ngroup = \"load\"\nvalue = [0.001, -0.01]\n[contact]\n\
+             group = \"contact\"\nobstacle = {{ type = \"plane\", point = [0.0, -1.0], \
+             normal = [0.0, 1.0] }}\nfriction = {{ law = \"coulomb\", mu = 0.3 }}\n\
+             [solver]\npreset = \"direct\"\n{extra}[output]\nfields = [\"displacement\", \"contact\"]\n",
+            toml_path(&mesh)
+        ),
+    )
 }
 
 /// Runs the solver; returns the process result whatever its exit code.

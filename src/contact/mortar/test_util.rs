@@ -122,6 +122,16 @@ impl Grid {
             inside,
         }
     }
+
+    /// The grid as a slave surface: ids from 0, the body below it.
+    pub fn slave(&self) -> Surface {
+        self.raw(0, -1.0).surface(&id)
+    }
+
+    /// The grid as a master surface: ids from `id0`, the body above it.
+    pub fn master(&self, id0: usize) -> Surface {
+        self.raw(id0, 1.0).surface(&id)
+    }
 }
 
 /// The coupling with search radius `r`.

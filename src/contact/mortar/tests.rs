@@ -115,8 +115,8 @@ fn matching_meshes_2d() {
 #[test]
 fn matching_meshes_3d() {
     let grid = square(4, 1.0, 1.0, 0.0, 0.3, 0, 7);
-    let slave = grid.raw(0, -1.0).surface(&id);
-    let master = grid.raw(1000, 1.0).surface(&id);
+    let slave = grid.slave();
+    let master = grid.master(1000);
     let mortar = couple(&slave, &master, 0.1);
     check_matching(&mortar.rows, 1000);
     assert!((mortar.covered_measure() - 1.0).abs() < 1e-14);
@@ -141,12 +141,8 @@ fn non_matching_flat_2d() {
 
 #[test]
 fn non_matching_flat_3d() {
-    let slave = square(5, 1.0, 1.0, 0.0, 0.25, 0, 1)
-        .raw(0, -1.0)
-        .surface(&id);
-    let master = square(3, 1.0, 1.0, 0.0, 0.3, 1, 2)
-        .raw(1000, 1.0)
-        .surface(&id);
+    let slave = square(5, 1.0, 1.0, 0.0, 0.25, 0, 1).slave();
+    let master = square(3, 1.0, 1.0, 0.0, 0.3, 1, 2).master(1000);
     let mortar = couple(&slave, &master, 0.1);
     assert_eq!(
         check_reproduction(&mortar, &master, &|r| r.fully_covered, 1e-13),
@@ -163,12 +159,8 @@ fn uniform_gap() {
     let slave = line(&XS7, 0.0, 0, -1.0).surface(&id);
     let master = line(&XS3, delta, 100, 1.0).surface(&id);
     let rows2 = couple(&slave, &master, 0.1).rows;
-    let slave = square(5, 1.0, 1.0, 0.0, 0.25, 0, 1)
-        .raw(0, -1.0)
-        .surface(&id);
-    let master = square(3, 1.0, 1.0, delta, 0.3, 1, 2)
-        .raw(1000, 1.0)
-        .surface(&id);
+    let slave = square(5, 1.0, 1.0, 0.0, 0.25, 0, 1).slave();
+    let master = square(3, 1.0, 1.0, delta, 0.3, 1, 2).master(1000);
     let rows3 = couple(&slave, &master, 0.1).rows;
     for row in rows2.iter().chain(&rows3) {
         assert!((row.gap - row.d * delta).abs() < 1e-14 * row.d, "{row:?}");
@@ -259,12 +251,8 @@ fn partial_coverage_2d() {
 
 #[test]
 fn partial_coverage_3d() {
-    let slave = square(5, 1.0, 1.0, 0.0, 0.2, 0, 3)
-        .raw(0, -1.0)
-        .surface(&id);
-    let master = square(3, 0.55, 1.0, 0.0, 0.3, 1, 4)
-        .raw(1000, 1.0)
-        .surface(&id);
+    let slave = square(5, 1.0, 1.0, 0.0, 0.2, 0, 3).slave();
+    let master = square(3, 0.55, 1.0, 0.0, 0.3, 1, 4).master(1000);
     let mortar = couple(&slave, &master, 0.1);
     assert!((mortar.covered_measure() - 0.55).abs() < 1e-14);
     let covered = check_reproduction(&mortar, &master, &|r| r.d > 0.0, 1e-12);

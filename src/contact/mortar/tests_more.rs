@@ -137,9 +137,7 @@ fn bad_input() {
 #[test]
 fn edge_on_touching_and_tangent_facets() {
     let x = |a: f64, b: f64, c: f64| [a, b, c];
-    let slave = square(2, 1.0, 1.0, 0.0, 0.0, 0, 0)
-        .raw(0, -1.0)
-        .surface(&id);
+    let slave = square(2, 1.0, 1.0, 0.0, 0.0, 0, 0).slave();
     let masters = [
         // Edge-on (vertical), touching at a vertex, touching along an edge, nearly tangent.
         vec![
@@ -186,9 +184,7 @@ fn edge_on_touching_and_tangent_facets() {
 
 #[test]
 fn normal_filter_skips_the_back_face() {
-    let slave = square(4, 1.0, 1.0, 0.0, 0.2, 0, 5)
-        .raw(0, -1.0)
-        .surface(&id);
+    let slave = square(4, 1.0, 1.0, 0.0, 0.2, 0, 5).slave();
     // The master body between z = 0.01 and z = 0.5: its lower face faces the slave, its
     // upper face looks away.
     let mut raw = square(3, 1.0, 1.0, 0.01, 0.2, 1, 6).raw(1000, 1.0);
@@ -210,12 +206,8 @@ fn normal_filter_skips_the_back_face() {
 
 #[test]
 fn large_surfaces_3d() {
-    let slave = square(60, 1.0, 1.0, 0.0, 0.1, 0, 8)
-        .raw(0, -1.0)
-        .surface(&id);
-    let master = square(43, 1.0, 1.0, 0.0, 0.1, 1, 9)
-        .raw(100_000, 1.0)
-        .surface(&id);
+    let slave = square(60, 1.0, 1.0, 0.0, 0.1, 0, 8).slave();
+    let master = square(43, 1.0, 1.0, 0.0, 0.1, 1, 9).master(100_000);
     let mortar = couple(&slave, &master, 0.01);
     assert!((mortar.covered_measure() - 1.0).abs() < 1e-12);
     let n = check_reproduction(&mortar, &master, &|r| r.fully_covered, 1e-12);

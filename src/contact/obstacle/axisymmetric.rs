@@ -3,7 +3,8 @@
 use super::error::ObstacleError;
 use super::projection::Projection;
 use super::vec3::{
-    add, axpy, check_axis, check_dim, finite, flat, meridian, norm, reference_direction, scale,
+    add, axpy, check_axis, check_axis_3d, finite, finite_point, half_angle_sin_cos, meridian, norm,
+    reference_direction, scale,
 };
 use crate::geom::{dot, sub};
 
@@ -25,11 +26,7 @@ impl Cylinder {
         radius: f64,
         dim: usize,
     ) -> Result<Self, ObstacleError> {
-        check_dim(dim)?;
-        if dim == 2 {
-            return Err(ObstacleError::Only3D("cylinder"));
-        }
-        let axis = check_axis(dim, &point, &axis, &[radius])?;
+        let axis = check_axis_3d("cylinder", dim, &point, &axis, &[radius])?;
         if radius <= 0.0 {
             return Err(ObstacleError::BadRadius);
         }
@@ -103,10 +100,7 @@ impl Cone {
         dim: usize,
     ) -> Result<Self, ObstacleError> {
         let axis = check_axis(dim, &apex, &axis, &[half_angle])?;
-        if !(half_angle > 0.0 && half_angle < 90.0) {
-            return Err(ObstacleError::BadHalfAngle);
-        }
-        let (sin, cos) = half_angle.to_radians().sin_cos();
+        let (sin, cos) = half_angle_sin_cos(half_angle)?;
         Ok(Cone {
             dim,
             apex,
@@ -133,28 +127,16 @@ impl Cone {
     }
     /// Closest point, normal and gap (see the type's documentation).
     pub fn project(&self, x: [f64; 3]) -> Result<Projection, ObstacleError> {
-        let x = flat(self.dim, x);
-        if !finite(&x) {
-            return Err(ObstacleError::NotFinite);
-        }
+        let x = finite_point(self.dim, x)?;
         let a = self.axis;
         let d = sub(x, self.apex);
-        let len = norm(d);
-        if len == 0.0 {
-            return Ok(Projection {
-                closest: self.apex,
-                normal: scale(-1.0, a),
-                gap: 0.0,
-            });
+        if norm(d) == 0.0 {
+            return Ok(Projection::to_apex(self.apex, a, d));
         }
         let (t, rho, e) = meridian(d, a, self.r0);
         let l = t * self.cos + rho * self.sin;
         if l < 0.0 {
-            return Ok(Projection {
-                closest: self.apex,
-                normal: scale(1.0 / len, d),
-                gap: len,
-            });
+            return Ok(Projection::to_apex(self.apex, a, d));
         }
         let generator = add(scale(self.cos, a), scale(self.sin, e));
         Ok(Projection {
@@ -229,10 +211,7 @@ impl Punch {
     }
     /// Closest point, normal and gap (see the type's documentation).
     pub fn project(&self, x: [f64; 3]) -> Result<Projection, ObstacleError> {
-        let x = flat(self.dim, x);
-        if !finite(&x) {
-            return Err(ObstacleError::NotFinite);
-        }
+        let x = finite_point(self.dim, x)?;
         let a = self.axis;
         let h = self.edge_radius;
         let (t, rho, e) = meridian(sub(x, self.center), a, self.r0);

@@ -3,7 +3,9 @@
 use super::error::ObstacleError;
 pub use super::error::{MAX_FACES, MIN_FACES};
 use super::projection::Projection;
-use super::vec3::{add, axpy, check_axis, check_dim, finite, norm, reference_direction, scale};
+use super::vec3::{
+    add, axpy, check_axis_3d, finite, half_angle_sin_cos, norm, reference_direction, scale,
+};
 use crate::geom::{cross, dot, sub};
 use std::f64::consts::{PI, TAU};
 
@@ -45,18 +47,11 @@ impl Pyramid {
         azimuth: f64,
         dim: usize,
     ) -> Result<Self, ObstacleError> {
-        check_dim(dim)?;
-        if dim == 2 {
-            return Err(ObstacleError::Only3D("pyramid"));
-        }
-        let axis = check_axis(dim, &apex, &axis, &[half_angle, azimuth])?;
-        if !(half_angle > 0.0 && half_angle < 90.0) {
-            return Err(ObstacleError::BadHalfAngle);
-        }
+        let axis = check_axis_3d("pyramid", dim, &apex, &axis, &[half_angle, azimuth])?;
+        let (sin, cos) = half_angle_sin_cos(half_angle)?;
         if !(MIN_FACES..=MAX_FACES).contains(&faces) {
             return Err(ObstacleError::BadFaces(faces));
         }
-        let (sin, cos) = half_angle.to_radians().sin_cos();
         let r0 = reference_direction(axis);
         Ok(Pyramid {
             apex,
@@ -116,13 +111,9 @@ impl Pyramid {
             return Err(ObstacleError::NotFinite);
         }
         let d = sub(x, self.apex);
-        let len = norm(d);
-        if len == 0.0 {
-            return Ok(Projection {
-                closest: self.apex,
-                normal: scale(-1.0, self.axis),
-                gap: 0.0,
-            });
+        let apex = Projection::to_apex(self.apex, self.axis, d);
+        if apex.gap == 0.0 {
+            return Ok(apex);
         }
         let nf = self.faces;
         let mut m = [[0.0; 3]; MAX_FACES];
@@ -145,11 +136,7 @@ impl Pyramid {
             });
         }
         // Outside: the nearest surface point is the apex, on an edge ray or on a face.
-        let mut best = Projection {
-            closest: self.apex,
-            normal: scale(1.0 / len, d),
-            gap: len,
-        };
+        let mut best = apex;
         for k in 0..nf {
             if s[k] > 0.0 && s[k] < best.gap {
                 let foot = axpy(d, -s[k], m[k]);

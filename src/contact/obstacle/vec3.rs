@@ -71,6 +71,41 @@ pub(super) fn check_axis(
     unit(*axis).ok_or(ObstacleError::ZeroAxis)
 }
 
+/// [`check_axis`] for a shape that exists in 3D only (`name`: the shape in the error,
+/// [`ObstacleError::Only3D`] in 2D).
+pub(super) fn check_axis_3d(
+    name: &'static str,
+    dim: usize,
+    point: &[f64; 3],
+    axis: &[f64; 3],
+    scalars: &[f64],
+) -> Result<[f64; 3], ObstacleError> {
+    check_dim(dim)?;
+    if dim == 2 {
+        return Err(ObstacleError::Only3D(name));
+    }
+    check_axis(dim, point, axis, scalars)
+}
+
+/// sin β and cos β of a half angle β given in degrees, 0 < β < 90 (else
+/// [`ObstacleError::BadHalfAngle`]).
+pub(super) fn half_angle_sin_cos(half_angle: f64) -> Result<(f64, f64), ObstacleError> {
+    if !(half_angle > 0.0 && half_angle < 90.0) {
+        return Err(ObstacleError::BadHalfAngle);
+    }
+    Ok(half_angle.to_radians().sin_cos())
+}
+
+/// `x` in the plane of a 2D shape (z = 0; [`flat`]); [`ObstacleError::NotFinite`] unless
+/// it is finite.
+pub(super) fn finite_point(dim: usize, x: [f64; 3]) -> Result<[f64; 3], ObstacleError> {
+    let x = flat(dim, x);
+    if !finite(&x) {
+        return Err(ObstacleError::NotFinite);
+    }
+    Ok(x)
+}
+
 /// The reference direction r0 of a unit axis a: a unit vector ⊥ a, the x axis projected onto
 /// the plane normal to a, or the y axis projected so when a makes an angle < 45° with x
 /// (|a_x| > 1/√2). In 2D (a in the xy plane) r0 lies in the xy plane; for a = ±z it is x.

@@ -58,7 +58,8 @@ pub fn solve(
     p: &ContactProblem,
     reduced: &mut ReducedSystem,
     s: &NewtonSettings,
-    (session, warm): (&mut Session, Option<&WarmStart>),
+    session: &mut Session,
+    warm: Option<&WarmStart>,
 ) -> Result<Condensed, RunError> {
     solve_keeping(ctx, p, reduced, s, (session, warm), (1, true, None)).map(|(c, _)| c)
 }
@@ -110,21 +111,32 @@ pub(crate) fn solve_keeping(
             per,
         },
         given: s,
+        // a zone held sticking holds every rigid mode: no load is left for the contact to carry
+        held_sticking: NewtonSettings {
+            carried: None,
+            ..*s
+        },
         shape: Shape { dim, n_rows },
         nested: warm.is_none() && s.section.init == NewtonInit::Auto,
         splits,
         steps,
         sticking,
     };
-    passes.run(ctx, (reduced, &mut session.kept), zone, summary)
+    let factors = Factors {
+        reduced,
+        kept: &mut session.kept,
+    };
+    passes.run(ctx, factors, zone, summary)
 }
 
-/// What every pass of one condensed solve shares: its start, the settings asked for, the
-/// shape of the system, whether its first round runs nested, whether zones may be held, whether
-/// it runs the frictionless steps, and the sticking zone's settings.
+/// What every pass of one condensed solve shares: its start, the settings asked for (and
+/// those of a pass that holds a zone sticking), the shape of the system, whether its first
+/// round runs nested, whether zones may be held, whether it runs the frictionless steps, and
+/// the sticking zone's settings.
 struct Passes<'a> {
     at: SolveStart<'a>,
     given: &'a NewtonSettings<'a>,
+    held_sticking: NewtonSettings<'a>,
     shape: Shape,
     nested: bool,
     splits: bool,
@@ -162,44 +174,45 @@ struct Done {
     history: Vec<StepInfo>,
 }
 
+/// The linear algebra of a solve's passes: the reduced system that K_p is written into, and
+/// the factorisation kept across load steps (the previous step's, taken where it holds; this
+/// solve's, left for the next).
+struct Factors<'s> {
+    reduced: &'s mut ReducedSystem,
+    kept: &'s mut KeptFactor,
+}
+
+/// One round of a pass as [`Passes::dense_round`] runs it: its number in the pass, whether
+/// its dense steps run nested (the solve's first round) and the zone the pass holds.
+#[derive(Clone, Copy)]
+struct Round<'z> {
+    number: usize,
+    first: bool,
+    zone: Option<&'z Vec<bool>>,
+}
+
 impl Passes<'_> {
     /// The passes of a solve from the predicted `zone` (or none), each begun anew (K_p with
-    /// its held zone, [`begin_pass`]) until one ends the solve. `kept`: the previous load
-    /// step's factorisation (taken where a load step starts), this solve's left for the next.
-    /// Collective.
+    /// its held zone, [`begin_pass`]) until one ends the solve; `factors`' kept factorisation:
+    /// the previous load step's (taken where a load step starts), this solve's left for the
+    /// next. Collective.
     fn run(
         &self,
         ctx: &Ctx,
-        (reduced, kept): (&mut ReducedSystem, &mut KeptFactor),
+        mut factors: Factors,
         mut zone: Option<Vec<bool>>,
         mut summary: CondensedSummary,
     ) -> Result<(Condensed, Option<Kept>), RunError> {
-        // a zone held sticking holds every rigid mode: no load is left for the contact to carry
-        let held_sticking = NewtonSettings {
-            carried: None,
-            ..*self.given
-        };
-        let mut order = kept.take_order(); // a load step after a held zone's
+        let mut order = factors.kept.take_order(); // a load step after a held zone's
         let mut done = Done::default();
         loop {
-            let s = match self.at.per > 1 && zone.is_some() {
-                true => &held_sticking,
-                false => self.given,
-            };
             let plan = PassPlan {
                 zone: zone.as_deref(),
                 order: order.take(),
                 sticking: self.sticking,
             };
-            let pass = begin_pass(ctx, &self.at, (reduced, kept), plan, &mut summary)?;
-            match self.rounds(
-                ctx,
-                (reduced, kept),
-                pass,
-                (s, zone.as_ref()),
-                &mut done,
-                summary,
-            )? {
+            let pass = begin_pass(ctx, &self.at, &mut factors, plan, &mut summary)?;
+            match self.rounds(ctx, &mut factors, pass, zone.as_ref(), &mut done, summary)? {
                 PassEnd::Done(done) => return Ok(*done),
                 PassEnd::Next(z, o, sm) => (zone, order, summary) = (Some(z), o, sm),
                 PassEnd::Exhausted(sm) => {
@@ -210,17 +223,28 @@ impl Passes<'_> {
         }
     }
 
-    /// The rounds of one pass: factorise (the candidates grown), then the dense steps and
-    /// their expansion ([`Passes::dense_round`]), until the pass ends. Collective.
+    /// The Newton settings of a pass that holds `zone` (or none): the held sticking zone's
+    /// where friction holds one, else those asked for.
+    fn settings_of(&self, zone: Option<&Vec<bool>>) -> &NewtonSettings<'_> {
+        match self.at.per > 1 && zone.is_some() {
+            true => &self.held_sticking,
+            false => self.given,
+        }
+    }
+
+    /// The rounds of one pass holding `zone` (or none): factorise (the candidates grown), then
+    /// the dense steps and their expansion ([`Passes::dense_round`]), until the pass ends.
+    /// Collective.
     fn rounds(
         &self,
         ctx: &Ctx,
-        (reduced, kept): (&mut ReducedSystem, &mut KeptFactor),
+        factors: &mut Factors,
         mut pass: Pass,
-        (s, zone): (&NewtonSettings, Option<&Vec<bool>>),
+        zone: Option<&Vec<bool>>,
         done: &mut Done,
         mut summary: CondensedSummary,
     ) -> Result<PassEnd, RunError> {
+        let reduced = &mut *factors.reduced;
         let fall = |c: Condensed| Ok(PassEnd::Done(Box::new((c, None))));
         for round in 1..=MAX_ROUNDS {
             done.rounds += 1;
@@ -244,9 +268,13 @@ impl Passes<'_> {
                 let factorised = (Condensed::Factorised(summary), Some(kept));
                 return Ok(PassEnd::Done(Box::new(factorised)));
             }
-            let first = self.nested && done.rounds == 1;
-            let record = (&mut summary, &mut done.history);
-            match self.dense_round(ctx, reduced, &mut pass, (s, zone, round), first, record)? {
+            let at = Round {
+                number: round,
+                first: self.nested && done.rounds == 1,
+                zone,
+            };
+            let history = &mut done.history;
+            match self.dense_round(ctx, reduced, &mut pass, at, &mut summary, history)? {
                 RoundEnd::Again => {}
                 RoundEnd::Stop(stop) => return fall(fallback_stop(ctx, summary, stop)),
                 RoundEnd::Fall(why) => return fall(fallback(ctx, summary, why)),
@@ -255,7 +283,7 @@ impl Passes<'_> {
                     let history = std::mem::take(&mut done.history);
                     let solved = finish(self.at.p, reduced, &pass.free, *ex, history, summary)?;
                     let keep = pass.keep(lambda, zone.cloned());
-                    let done = keep_solved(kept, solved, keep, self.at.per);
+                    let done = keep_solved(factors.kept, solved, keep, self.at.per);
                     return Ok(PassEnd::Done(Box::new(done)));
                 }
             }
@@ -263,18 +291,24 @@ impl Passes<'_> {
         Ok(PassEnd::Exhausted(summary))
     }
 
-    /// A round's dense steps on the factorised candidates (`first`: nested), their judgement,
-    /// the expansion of the iterate and what the nodes that change on it ask: another round
-    /// on more candidates, a new pass, or the plain path. Collective.
+    /// A round's dense steps on the factorised candidates, their judgement, the expansion of
+    /// the iterate and what the nodes that change on it ask: another round on more
+    /// candidates, a new pass, or the plain path. Collective.
     fn dense_round(
         &self,
         ctx: &Ctx,
         reduced: &mut ReducedSystem,
         pass: &mut Pass,
-        (s, zone, round): (&NewtonSettings, Option<&Vec<bool>>, usize),
-        first: bool,
-        (summary, history): (&mut CondensedSummary, &mut Vec<StepInfo>),
+        at: Round,
+        summary: &mut CondensedSummary,
+        history: &mut Vec<StepInfo>,
     ) -> Result<RoundEnd, RunError> {
+        let Round {
+            number: round,
+            first,
+            zone,
+        } = at;
+        let s = self.settings_of(zone);
         let on = self.at.located.as_ref().map(|(_, on)| *on);
         let on = on.filter(|_| zone.is_none());
         let run = pass.dense(ctx, s, (first, on), (&mut *summary, history));
@@ -349,7 +383,7 @@ fn hold_instead(ctx: &Ctx, stop: &Stop, at: &SolveStart, grown: &[bool]) -> Opti
 fn begin_pass(
     ctx: &Ctx,
     at: &SolveStart,
-    (reduced, kept): (&mut ReducedSystem, &mut KeptFactor),
+    factors: &mut Factors,
     plan: PassPlan,
     summary: &mut CondensedSummary,
 ) -> Result<Pass, RunError> {
@@ -377,7 +411,7 @@ fn begin_pass(
         }
         _ => Vec::new(),
     };
-    let (free, rhs0) = prepare_base(ctx, (p, reduced), free0, (&held, per > 1))?;
+    let (free, rhs0) = prepare_base(ctx, (p, &mut *factors.reduced), free0, (&held, per > 1))?;
     let f_root = ctx.gather_to_root(&rhs0); // f for MUMPS' solve phases, once per pass
     let pass_start: Vec<bool> = match zone {
         Some(z) => (0..b.nodes.len())
@@ -411,7 +445,13 @@ fn begin_pass(
     }
     let t = Instant::now();
     let (kept, order_dropped) = match warm {
-        Some(_) => reused(ctx, (at, kept.take()), (&free, &cand), &f_root, &held),
+        Some(_) => reused(
+            ctx,
+            (at, factors.kept.take()),
+            (&free, &cand),
+            &f_root,
+            &held,
+        ),
         None => (None, None),
     };
     let mut comp = match kept {

@@ -7,14 +7,14 @@ use super::rows::{
     direction_changes, spring_changes, ConstraintMap, Directions, NodeRows, Springs,
 };
 use super::write::{
-    rewrites, slip_block_changes, write_rows, write_unmixed, RowChange, ScaledSprings,
+    rewrites, slip_block_changes, write_rows, write_unmixed, RowChange, RowWrites, ScaledSprings,
 };
 use crate::assembly::System;
 use crate::case::Reuse;
 use crate::linsolve::{LinearSetup, LinearSolver, SolverKind, SymbolicSchur};
 use crate::par::Ctx;
 use crate::partition::Layout;
-use crate::petsc::mumps::NodeBases;
+use crate::petsc::mumps::{NodeBases, SchurRequest};
 use crate::petsc::{self, Matrix, PInt, SolveInfo, Vector};
 use crate::signorini::active_set::{ActiveSet, Iterate};
 use crate::signorini::boundary::ContactBoundary;
@@ -238,11 +238,16 @@ impl ReducedSystem {
                 .map(|(_, me, lr)| (*lr, me.projector(dim), me.known()))
                 .collect();
         }
+        let rows = RowWrites {
+            rows: &writes,
+            cmap: &cmap,
+        };
+        let f_local = Some(&self.f_local[..]);
         write_rows(
             Some(&mut self.s),
             &mut self.rhs,
-            (&writes, Some(&self.f_local)),
-            &cmap,
+            rows,
+            f_local,
             dim,
             &mut self.buf,
         )?;
@@ -251,13 +256,7 @@ impl ReducedSystem {
             && ctx.any(writes.iter().any(|(_, me, _)| me.row_mix.is_some()));
         if self.unmixed {
             let made = &mut self.amg_matrix;
-            write_unmixed(
-                made,
-                (&self.s, &self.rhs),
-                sys,
-                (&writes, &cmap),
-                (dim, &mut self.buf),
-            )?;
+            write_unmixed(made, &self.s, &self.rhs, sys, rows, dim, &mut self.buf)?;
         }
         self.rows_seconds += t.elapsed().as_secs_f64();
         Ok(())
@@ -571,9 +570,14 @@ impl ReducedSystem {
         (n, schur_rows): (usize, &[usize]),
         (order, bases): (Option<&[usize]>, &NodeBases),
     ) -> petsc::Result<SymbolicSchur> {
+        let request = SchurRequest {
+            n,
+            schur_rows,
+            order,
+            bases,
+        };
         let root = ctx.rank == 0;
-        let ls = &self.ls;
-        ls.analyse_schur(ctx.comm(), &self.s, (n, schur_rows), (order, bases), root)
+        self.ls.analyse_schur(ctx.comm(), &self.s, &request, root)
     }
 
     /// The KSP and PC types of the steps' solver
@@ -645,7 +649,11 @@ impl ReducedSystem {
         );
         let mut rhs = self.rhs.duplicate()?;
         rhs.set_all(0.0)?;
-        write_rows(None, &mut rhs, (&writes, None), &cmap, dim, &mut self.buf)?;
+        let rows = RowWrites {
+            rows: &writes,
+            cmap: &cmap,
+        };
+        write_rows(None, &mut rhs, rows, None, dim, &mut self.buf)?;
         self.rows_seconds += t.elapsed().as_secs_f64();
         if self.lifts.len() <= slot {
             self.lifts.resize_with(slot + 1, || None);

@@ -14,6 +14,14 @@ use std::collections::HashMap;
 /// A rewritten node: its rows of A, its constraint, its first local row.
 type Rewrite<'r> = (&'r NodeRows, NodeConstraint, usize);
 
+/// The rows a step writes: its rewritten nodes ([`rewrites`]) and the constraints of every
+/// node their rows couple to (the neighbours' included).
+#[derive(Clone, Copy)]
+pub(super) struct RowWrites<'w> {
+    pub rows: &'w [Rewrite<'w>],
+    pub cmap: &'w ConstraintMap,
+}
+
 /// How a friction step's matrix (3.42) differs from the previous step's: S_ℓ − S_{ℓ−1} has
 /// rank at most 2 per direction added or removed plus d − 1 per changed slip block, the cost
 /// of an exact low-rank update of the previous factorisation (summary.json
@@ -102,15 +110,16 @@ pub(super) fn rewrites<'r>(
 pub(super) fn write_rows(
     mut s: Option<&mut Matrix>,
     rhs: &mut Vector,
-    (writes, f_local): (&[Rewrite], Option<&[f64]>),
-    cmap: &ConstraintMap,
+    writes: RowWrites,
+    f_local: Option<&[f64]>,
     dim: usize,
     buf: &mut Vec<f64>,
 ) -> petsc::Result<()> {
     let zero = [0.0; 3];
+    let cmap = writes.cmap;
     let mut rhs_add: Vec<(PInt, f64)> = Vec::new();
     let mut rhs_updates: Vec<(usize, f64)> = Vec::new();
-    for (r, me, lr) in writes {
+    for (r, me, lr) in writes.rows {
         let fk = f_local.map_or(&zero[..dim], |f| &f[*lr..*lr + dim]);
         let rk = write_symmetric_constraint(
             s.as_deref_mut(),
@@ -148,10 +157,12 @@ pub(super) fn write_rows(
 /// (12 129) 1 044 against 1 305; peak memory 379 against 350 MB per rank. Collective.
 pub(super) fn write_unmixed(
     made: &mut Option<(Matrix, Vector)>,
-    (s, rhs): (&Matrix, &Vector),
+    s: &Matrix,
+    rhs: &Vector,
     sys: &System,
-    (writes, cmap): (&[Rewrite], &ConstraintMap),
-    (dim, buf): (usize, &mut Vec<f64>),
+    writes: RowWrites,
+    dim: usize,
+    buf: &mut Vec<f64>,
 ) -> petsc::Result<()> {
     if made.is_none() {
         let mut p = s.duplicate()?;
@@ -161,6 +172,7 @@ pub(super) fn write_unmixed(
     let (p, scratch) = made.as_mut().expect("made above");
     p.copy_values_from(&sys.a)?;
     let plain: Vec<Rewrite> = writes
+        .rows
         .iter()
         .map(|(r, me, lr)| {
             let mut me = me.clone();
@@ -168,7 +180,11 @@ pub(super) fn write_unmixed(
             (*r, me, *lr)
         })
         .collect();
-    write_rows(Some(p), scratch, (&plain, None), cmap, dim, buf)
+    let unmixed = RowWrites {
+        rows: &plain,
+        cmap: writes.cmap,
+    };
+    write_rows(Some(p), scratch, unmixed, None, dim, buf)
 }
 
 fn matmul3(a: &[[f64; 3]; 3], b: &[[f64; 3]; 3], dim: usize) -> [[f64; 3]; 3] {
@@ -277,7 +293,7 @@ pub fn write_symmetric_constraint<'c>(
             s.insert_values(&[(rows.row + a) as PInt], &rows.cols, row)?;
         }
     }
-    Ok(node_rhs(me, &left, (f_k, &t), sk, dim))
+    Ok(node_rhs(me, &left, f_k, &t, sk, dim))
 }
 
 /// The left factor of a constrained node's rows: P_k, plus E for a Coulomb slip row (F7).
@@ -314,11 +330,12 @@ fn add_own_terms(nb: &mut [[f64; 3]; 3], me: &NodeConstraint, sk: f64, dim: usiz
 }
 
 /// The node's right-hand side P_k (f_k − Σ_j A_kj ū_j) + s_k ū_k (plus the spring's part):
-/// `(f_k, t)` = the node's load and Σ_j A_kj ū_j, `left` its left factor.
+/// `f_k` = the node's load, `t` = Σ_j A_kj ū_j, `left` its left factor.
 fn node_rhs(
     me: &NodeConstraint,
     left: &[[f64; 3]; 3],
-    (f_k, t): (&[f64], &[f64; 3]),
+    f_k: &[f64],
+    t: &[f64; 3],
     sk: f64,
     dim: usize,
 ) -> [f64; 3] {

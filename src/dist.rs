@@ -30,7 +30,7 @@
 
 mod blocks;
 mod cells;
-mod comm;
+pub(crate) mod comm;
 mod graph;
 mod groups;
 mod nodes;

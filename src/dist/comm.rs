@@ -28,7 +28,7 @@ pub(super) fn block_of(i: usize, n: usize, size: usize) -> usize {
 /// The records of one all-to-all-v, written by the same closure in two passes: the first
 /// counts the u64 sent to every rank, the second writes them into one contiguous buffer at
 /// their rank's place. No vector per item or per rank.
-pub(super) struct Packer {
+pub(crate) struct Packer {
     pub(super) filling: bool,
     pub(super) dest: usize,
     pub(super) counts: Vec<usize>,
@@ -38,12 +38,12 @@ pub(super) struct Packer {
 
 impl Packer {
     /// The next values go to rank r.
-    pub(super) fn to(&mut self, r: usize) -> &mut Packer {
+    pub(crate) fn to(&mut self, r: usize) -> &mut Packer {
         self.dest = r;
         self
     }
 
-    pub(super) fn push(&mut self, x: u64) {
+    pub(crate) fn push(&mut self, x: u64) {
         if self.filling {
             self.buf[self.fill[self.dest]] = x;
             self.fill[self.dest] += 1;
@@ -52,7 +52,7 @@ impl Packer {
         }
     }
 
-    pub(super) fn extend(&mut self, xs: &[u64]) {
+    pub(crate) fn extend(&mut self, xs: &[u64]) {
         if self.filling {
             let f = self.fill[self.dest];
             self.buf[f..f + xs.len()].copy_from_slice(xs);
@@ -64,14 +64,14 @@ impl Packer {
 }
 
 /// What one all-to-all-v brought: every rank's records, concatenated in rank order.
-pub(super) struct Received {
-    pub(super) data: Vec<u64>,
+pub(crate) struct Received {
+    pub(crate) data: Vec<u64>,
     /// Rank r's records are data[offsets[r]..offsets[r + 1]].
-    pub(super) offsets: Vec<usize>,
+    pub(crate) offsets: Vec<usize>,
 }
 
 impl Received {
-    pub(super) fn from(&self, r: usize) -> &[u64] {
+    pub(crate) fn from(&self, r: usize) -> &[u64] {
         &self.data[self.offsets[r]..self.offsets[r + 1]]
     }
 }
@@ -79,7 +79,7 @@ impl Received {
 /// One all-to-all-v of u64 records (and one all-to-all of the counts): `pack` writes every
 /// record with its destination; it is called twice (count, fill) and must write the same
 /// records both times. Collective.
-pub(super) fn exchange(world: &SimpleCommunicator, mut pack: impl FnMut(&mut Packer)) -> Received {
+pub(crate) fn exchange(world: &SimpleCommunicator, mut pack: impl FnMut(&mut Packer)) -> Received {
     let size = world.size() as usize;
     let mut p = Packer {
         filling: false,

@@ -135,9 +135,9 @@ impl MasterFacets {
         1 + dim + 3 * dim + 3 + dim * dim + 1
     }
 
-    /// Each rank sends the master facets whose node of smallest global number it owns, to
-    /// the ranks whose reach they meet (one all-gather of those facets); each keeps the
-    /// ones in its own reach. Collective.
+    /// Each rank sends the master facets whose node of smallest global number it owns to the
+    /// ranks whose reach they meet, and to those only (one all-to-all-v); each keeps what it
+    /// receives. Collective.
     pub fn exchange(
         ctx: &Ctx,
         mesh: &Mesh,
@@ -146,7 +146,8 @@ impl MasterFacets {
         (fixed, reach): (&[f64], &Reach),
     ) -> MasterFacets {
         let dim = mesh.dim;
-        let mut send = Vec::new();
+        // every facet to send, with the ranks it goes to
+        let mut out: Vec<(Vec<f64>, Vec<usize>)> = Vec::new();
         for (p, pair) in settings.pairs.iter().enumerate() {
             let crate::contact::Obstacle::Body(t) = &pair.obstacle else {
                 continue;
@@ -161,40 +162,42 @@ impl MasterFacets {
                     continue;
                 }
                 let bb = bbox(nodes.iter().map(|&v| mesh.coords[v]));
-                if !(0..ctx.size).any(|r| reach.meets(r, p, bb)) {
+                let to: Vec<usize> = (0..ctx.size).filter(|&r| reach.meets(r, p, bb)).collect();
+                if to.is_empty() {
                     continue;
                 }
                 let Some(inside) = inside_point(mesh, layout, nodes) else {
                     continue;
                 };
-                send.push(p as f64);
-                send.extend(nodes.iter().map(|&v| layout.node_global[v] as f64));
+                let mut rec = vec![p as f64];
+                rec.extend(nodes.iter().map(|&v| layout.node_global[v] as f64));
                 for &v in nodes {
-                    send.extend_from_slice(&mesh.coords[v]);
+                    rec.extend_from_slice(&mesh.coords[v]);
                 }
-                send.extend_from_slice(&inside);
+                rec.extend_from_slice(&inside);
                 for &v in nodes {
                     for d in 0..dim {
-                        send.push(if fixed[v * dim + d].is_nan() {
+                        rec.push(if fixed[v * dim + d].is_nan() {
                             0.0
                         } else {
                             1.0
                         });
                     }
                 }
-                send.push(settings.modes.as_ref().map_or(0, |m| m.slot_of(first)) as f64);
+                rec.push(settings.modes.as_ref().map_or(0, |m| m.slot_of(first)) as f64);
+                out.push((rec, to));
             }
         }
-        let all = ctx.all_gather_varcount(&send);
-        let n = Self::record_len(dim);
-        let mut records = Vec::new();
-        for r in all.chunks_exact(n) {
-            let p = r[0] as usize;
-            let xs = (0..dim).map(|a| [r[1 + dim + 3 * a], r[2 + dim + 3 * a], r[3 + dim + 3 * a]]);
-            if reach.meets(ctx.rank, p, bbox(xs)) {
-                records.extend_from_slice(r);
+        let got = crate::dist::comm::exchange(ctx.world, |pk| {
+            for (rec, to) in &out {
+                for &r in to {
+                    for &x in rec {
+                        pk.to(r).push(x.to_bits());
+                    }
+                }
             }
-        }
+        });
+        let records = got.data.iter().map(|&b| f64::from_bits(b)).collect();
         MasterFacets { dim, records }
     }
 

@@ -130,6 +130,32 @@ impl<'a> Ctx<'a> {
     }
 
     /// One value per rank, on every rank.
+    /// The fields (this rank's rows of distributed vectors) made orthonormal by Gram–Schmidt
+    /// twice against those before, with global dot products; a field that vanishes against
+    /// them is dropped. Collective.
+    pub fn orthonormalised(&self, fields: Vec<Vec<f64>>) -> Vec<Vec<f64>> {
+        let mut done: Vec<Vec<f64>> = Vec::new();
+        for mut f in fields {
+            for _ in 0..2 {
+                let dots: Vec<f64> = done
+                    .iter()
+                    .map(|g| g.iter().zip(&f).map(|(a, b)| a * b).sum())
+                    .collect();
+                let dots = self.sum_vec(&dots);
+                for (g, d) in done.iter().zip(&dots) {
+                    f.iter_mut().zip(g).for_each(|(x, y)| *x -= d * y);
+                }
+            }
+            let norm = self.sum_f64(f.iter().map(|x| x * x).sum::<f64>()).sqrt();
+            if norm == 0.0 {
+                continue;
+            }
+            f.iter_mut().for_each(|x| *x /= norm);
+            done.push(f);
+        }
+        done
+    }
+
     pub fn gather_f64(&self, v: f64) -> Vec<f64> {
         self.gather(v)
     }

@@ -305,6 +305,26 @@ impl Matrix {
         }
     }
 
+    /// Attaches the span of `basis` (orthonormal vectors of this matrix's layout) as its
+    /// near-null space (what algebraic multigrid interpolates exactly).
+    pub fn set_near_null_space(&mut self, comm: MPI_Comm, basis: &[Vector]) -> Result<()> {
+        let raws: Vec<ffi::Vec> = basis.iter().map(|v| v.raw).collect();
+        let mut sp: ffi::MatNullSpace = ptr::null_mut();
+        // SAFETY: the vectors are valid; PETSc references them in the null space object, which
+        // the matrix references in turn; our reference is dropped at once.
+        unsafe {
+            check(ffi::MatNullSpaceCreate(
+                comm,
+                ffi::PETSC_FALSE,
+                raws.len() as PInt,
+                raws.as_ptr(),
+                &mut sp,
+            ))?;
+            check(ffi::MatSetNearNullSpace(self.raw, sp))?;
+            check(ffi::MatNullSpaceDestroy(&mut sp))
+        }
+    }
+
     /// Attaches `other`'s near-null space (if any) to this matrix too (GAMG reads it from the
     /// matrix it builds its hierarchy on).
     pub fn copy_near_null_space_from(&mut self, other: &Matrix) -> Result<()> {

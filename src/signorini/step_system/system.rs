@@ -357,28 +357,10 @@ impl ReducedSystem {
         fields: Option<Vec<Vec<f64>>>,
     ) -> petsc::Result<()> {
         let mut basis: Vec<Vector> = Vec::new();
-        let mut done: Vec<Vec<f64>> = Vec::new();
-        for mut f in fields.unwrap_or_default() {
-            // Gram–Schmidt twice against the fields before (global dot products)
-            for _ in 0..2 {
-                let dots: Vec<f64> = done
-                    .iter()
-                    .map(|g| g.iter().zip(&f).map(|(a, b)| a * b).sum())
-                    .collect();
-                let dots = ctx.sum_vec(&dots);
-                for (g, d) in done.iter().zip(&dots) {
-                    f.iter_mut().zip(g).for_each(|(x, y)| *x -= d * y);
-                }
-            }
-            let norm = ctx.sum_vec(&[f.iter().map(|x| x * x).sum::<f64>()])[0].sqrt();
-            if norm == 0.0 {
-                continue;
-            }
-            f.iter_mut().for_each(|x| *x /= norm);
+        for f in ctx.orthonormalised(fields.unwrap_or_default()) {
             let mut v = self.u.duplicate()?;
             v.write(|x| x.copy_from_slice(&f))?;
             basis.push(v);
-            done.push(f);
         }
         if let Some(amg) = &mut self.amg {
             amg.null_space = !basis.is_empty();

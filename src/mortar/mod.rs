@@ -17,6 +17,10 @@
 //! through Qᵀ. The change of basis is the contact constraint operator: a new kind of
 //! contact row is a new Q.
 //!
+//! With a friction law a slave node's frame is the common normal of the two surfaces where
+//! they face each other ([`MasterNormals`]), not the slave's own: the approach of two curved
+//! bodies then has no tangential part that a sticking node would resist.
+//!
 //! Set-up (collective, once per run): each rank sends the master facets it is first to own
 //! (a facet goes out from the owner of its smallest-numbered node) to the ranks whose slave
 //! facets' bounding box (widened by the reach) they meet; each rank integrates its own slave
@@ -27,7 +31,9 @@ mod exchange;
 
 pub use basis::{Basis, InU};
 
-use crate::contact::mortar::{assemble_with_normals, MortarOptions, Orientation, Surface};
+use crate::contact::mortar::{
+    assemble_with_normals, MortarOptions, MortarRow, Orientation, Surface,
+};
 use crate::contact::obstacle::{BodyTarget, Obstacle, SlaveRow};
 use crate::error::{InputError, RunError};
 use crate::mesh::{Mesh, Part, NO_SLOT};
@@ -250,22 +256,66 @@ fn pair_rows(
     let normals = symmetry_normals(&slave, fixed, dim);
     let mortar = assemble_with_normals(&slave, &master, &normals, &opts)
         .map_err(|e| bad(format!("mortar integrals: {e}")))?;
+    let facing = settings.friction().then(|| MasterNormals::of(&master));
     let mut rows = HashMap::new();
     for r in mortar.rows {
         if !layout.owns_node(r.id) || r.d <= 0.0 {
             continue;
         }
+        let (normal, gap) = match &facing {
+            Some(f) => f.common_normal(&r),
+            None => (r.normal, r.gap),
+        };
         rows.insert(
             r.id,
             SlaveRow {
-                normal: [-r.normal[0], -r.normal[1], -r.normal[2]],
-                gap: r.gap / r.d,
+                normal: [-normal[0], -normal[1], -normal[2]],
+                gap: gap / r.d,
                 weight: r.d,
                 masters: r.m.iter().map(|&(j, m)| (j, m / r.d)).collect(),
             },
         );
     }
     Ok(rows)
+}
+
+/// The master surface's outward nodal normals and coordinates, by mesh node.
+struct MasterNormals(HashMap<usize, ([f64; 3], [f64; 3])>);
+
+impl MasterNormals {
+    fn of(master: &Surface) -> MasterNormals {
+        let normals = master.nodal_normals();
+        MasterNormals(
+            (master.ids().iter().zip(normals).zip(master.coords()))
+                .map(|((&j, n), &x)| (j, (n, x)))
+                .collect(),
+        )
+    }
+
+    /// With friction, the frame of slave node k is the common normal of the two surfaces,
+    /// n̄_k ∝ n_k − Σ_j m_kj n_j (n_j the master's outward nodal normals, m_kj = M_kj / D_kk),
+    /// and the weighted gap along it g̃_k = n̄_k · (Σ_j M_kj x_j − D_kk x_k): the slave normal
+    /// alone turns by x/R along a curved surface, and the approach of two curved bodies (along
+    /// their common normal) would have a tangential part in it that a sticking node resists
+    /// (docs/bodies.md, "The method"). On a flat interface n̄_k = n_k. Returns (n̄_k, g̃_k),
+    /// the row's own where the two normals cancel.
+    fn common_normal(&self, r: &MortarRow) -> ([f64; 3], f64) {
+        let (mut n, mut v) = (r.normal, [0.0; 3]);
+        for &(j, m) in &r.m {
+            let (nj, xj) = self.0[&j];
+            for d in 0..3 {
+                n[d] -= m / r.d * nj[d];
+                v[d] += m * xj[d];
+            }
+        }
+        let len = n.iter().map(|x| x * x).sum::<f64>().sqrt();
+        if len <= 1e-3 {
+            return (r.normal, r.gap);
+        }
+        let n = n.map(|x| x / len);
+        let gap = (0..3).map(|d| n[d] * (v[d] - r.d * r.x[d])).sum();
+        (n, gap)
+    }
 }
 
 /// The slave nodal normals (averaged facet normals), those of nodes with Dirichlet-fixed

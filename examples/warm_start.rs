@@ -75,7 +75,14 @@ fn run(ctx: &Ctx, a: &Args) -> Result<serde_json::Value, RunError> {
         )?;
         if session.is_none() {
             let lasting = (mesh, layout);
-            session = Some(Session::new(ctx, lasting, &case.solver, &settings, &sys.a)?);
+            session = Some(Session::new(
+                ctx,
+                lasting,
+                &case.solver,
+                &settings,
+                &sys.a,
+                None,
+            )?);
         }
         let session = session.as_mut().expect("set up above");
         signorini::solve(

@@ -155,7 +155,17 @@ pub struct LinearSetup {
     own_order: bool,
     /// MUMPS' work on rank 0 alone ([`ndfactor::ONE_PROCESS_OPTION`]).
     one_process: bool,
-    coords: Option<Vector>,
+    /// AMG's near-null space (iterative kind): the rigid-body modes of the coordinates, or
+    /// given vectors (those of the contact unknowns of body pairs).
+    near_null: Option<NearNull>,
+}
+
+/// What algebraic multigrid interpolates exactly.
+enum NearNull {
+    /// The rigid-body modes of these node coordinates.
+    Coordinates(Vector),
+    /// These orthonormal vectors.
+    Vectors(Vec<Vector>),
 }
 
 impl LinearSetup {
@@ -218,7 +228,7 @@ impl LinearSetup {
             kind,
             own_order,
             one_process,
-            coords: None,
+            near_null: None,
         })
     }
 
@@ -241,19 +251,28 @@ impl LinearSetup {
             scale,
         })?;
         if setup.kind == SolverKind::Iterative {
-            setup.coords = Some(assembly::coordinate_vector(ctx.comm(), mesh, layout)?);
+            let x = assembly::coordinate_vector(ctx.comm(), mesh, layout)?;
+            setup.near_null = Some(NearNull::Coordinates(x));
         }
         Ok(setup)
+    }
+
+    /// Takes `basis` (orthonormal) as AMG's near-null space in place of the coordinates'
+    /// rigid-body modes, where the kind uses one. Local.
+    pub fn set_near_null_space(&mut self, basis: Vec<Vector>) {
+        if self.near_null.is_some() {
+            self.near_null = Some(NearNull::Vectors(basis));
+        }
+    }
+
+    /// Whether AMG gets a near-null space (the iterative kind).
+    pub fn uses_near_null_space(&self) -> bool {
+        self.near_null.is_some()
     }
 
     /// What the solves run. Local.
     pub fn kind(&self) -> SolverKind {
         self.kind
-    }
-
-    /// The coordinates for AMG's rigid-body near-null space (iterative kind).
-    pub fn coordinates(&self) -> Option<&Vector> {
-        self.coords.as_ref()
     }
 
     /// Runs `f` with the solver's options as PETSc's default (for a PETSc solver made
@@ -266,8 +285,10 @@ impl LinearSetup {
     /// uses it and, for a MUMPS factorisation, the project's nested-dissection order.
     /// Collective.
     pub fn solver(&self, comm: MPI_Comm, a: &mut Matrix) -> petsc::Result<LinearSolver> {
-        if let Some(x) = &self.coords {
-            a.set_rigid_body_near_null_space(x)?;
+        match &self.near_null {
+            Some(NearNull::Coordinates(x)) => a.set_rigid_body_near_null_space(x)?,
+            Some(NearNull::Vectors(v)) => a.set_near_null_space(comm, v)?,
+            None => {}
         }
         let mut ksp = Ksp::new(comm, self.options.clone())?;
         ksp.set_operator(a)?;

@@ -303,7 +303,7 @@ impl Stepper<'_> {
             // factorisation (the matrix is assembled once; only the right-hand side is scaled)
             Some(c) => {
                 let lasting = (self.mesh, self.layout);
-                let session = Session::new(ctx, lasting, self.solver, c, &sys.a)?;
+                let session = Session::new(ctx, lasting, self.solver, c, &sys.a, self.mortar)?;
                 if self.solver.path == SolverPath::Schur && !session.setup().kind().factorises() {
                     let why =
                         "needs a factorisation: solver.petsc_options make the solver iterative";

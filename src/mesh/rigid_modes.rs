@@ -143,6 +143,9 @@ pub struct BodyModes {
     shapes: Vec<RigidModes>,
     /// Per local mesh node: its body's slot, or [`NO_SLOT`].
     slot: Vec<u32>,
+    /// Per local mesh node: its body (`u32::MAX`: none), held or not; and the body count.
+    body: Vec<u32>,
+    bodies: usize,
     /// Per local slave node of a body pair (mesh node index): the master side it faces.
     faces: std::collections::HashMap<usize, Vec<Part>>,
 }
@@ -156,6 +159,8 @@ impl BodyModes {
             m: shape.m,
             shapes: vec![shape],
             slot: vec![0; mesh.n_nodes()],
+            body: vec![0; mesh.n_nodes()],
+            bodies: 1,
             faces: Default::default(),
         }
     }
@@ -167,6 +172,8 @@ impl BodyModes {
             m: if dim == 2 { 3 } else { 6 },
             shapes: Vec::new(),
             slot: Vec::new(),
+            body: Vec::new(),
+            bodies: 0,
             faces: Default::default(),
         }
     }
@@ -201,6 +208,8 @@ impl BodyModes {
             m: if dim == 2 { 3 } else { 6 },
             shapes,
             slot,
+            body: body_of.to_vec(),
+            bodies: boxes.len(),
             faces: Default::default(),
         }
     }
@@ -213,6 +222,16 @@ impl BodyModes {
     /// The slots (bodies with modes).
     pub fn slots(&self) -> usize {
         self.shapes.len()
+    }
+
+    /// The number of bodies (held or not).
+    pub fn bodies(&self) -> usize {
+        self.bodies
+    }
+
+    /// The body of local node v (`u32::MAX`: none).
+    pub fn body_of(&self, v: usize) -> u32 {
+        self.body.get(v).copied().unwrap_or(u32::MAX)
     }
 
     /// The slot of local node v.

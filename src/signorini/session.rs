@@ -4,7 +4,8 @@
 use crate::case::{CoulombAlgorithm, SolverSection};
 use crate::error::RunError;
 use crate::linsolve::LinearSetup;
-use crate::mesh::Mesh;
+use crate::mesh::{BodyModes, Mesh};
+use crate::mortar::Basis;
 use crate::par::Ctx;
 use crate::partition::Layout;
 use crate::petsc::Matrix;
@@ -30,17 +31,18 @@ pub struct Session {
 }
 
 impl Session {
-    /// The session of a contact run on stiffness `a` (assembled once for the run): the
-    /// linear solver set up from the case's `solver` section ([`LinearSetup::for_section`]),
-    /// nothing kept yet. Collective.
+    /// The session of a contact run on stiffness `a` (assembled once for the run; Qᵀ A Q with
+    /// body pairs, `mortar` their change of basis): the linear solver set up from the case's
+    /// `solver` section ([`LinearSetup::for_section`]), nothing kept yet. Collective.
     pub fn new(
         ctx: &Ctx,
         (mesh, layout): (&Mesh, &Layout),
         section: &SolverSection,
         settings: &ContactSettings,
         a: &Matrix,
+        mortar: Option<&Basis>,
     ) -> Result<Session, RunError> {
-        let setup = LinearSetup::for_section(
+        let mut setup = LinearSetup::for_section(
             ctx,
             mesh,
             layout,
@@ -48,6 +50,12 @@ impl Session {
             symmetric_rows(settings, mesh.dim),
             crate::solver::matrix_scale(ctx, a)?,
         )?;
+        // body pairs: AMG interpolates the bodies' rigid modes in the contact unknowns w
+        if let (Some(basis), true) = (mortar, setup.uses_near_null_space()) {
+            let whole = BodyModes::whole(mesh);
+            let modes = settings.modes.as_deref().unwrap_or(&whole);
+            setup.set_near_null_space(basis.near_null_space(ctx, mesh, layout, modes)?);
+        }
         Ok(Session {
             setup,
             kept: KeptFactor::default(),

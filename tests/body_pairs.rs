@@ -24,12 +24,14 @@ const UPPER: (f64, f64) = (3.0, 0.1);
 const THIRD: (f64, f64) = (2.0, 0.3);
 const DELTA: f64 = 0.01;
 
-/// How the upper block is loaded: its top displaced by −δ, or pressed by the exact p (then
-/// held by contact alone along the load).
+/// How the upper block is loaded: its top displaced by −δ, pressed by the exact p, or pushed
+/// down by δ by a rigid plane moving in three load steps (the last two: held by contact alone
+/// along the load).
 #[derive(Clone, Copy, PartialEq)]
 enum Load {
     Displaced,
     Pressed,
+    MovingPlane,
 }
 
 /// The mesh of tests/meshes/stack{dim}d.geo with sizes hl (lower) and hu (upper).
@@ -91,7 +93,27 @@ value = ["free", "free", -DELTA]
     let supports = match load {
         Load::Displaced => supports.replace("DELTA", &format!("{DELTA:?}")),
         Load::Pressed => pressed(supports, p),
+        Load::MovingPlane => supports
+            .split_once("[[dirichlet]]\ngroup = \"top\"")
+            .expect("the top's Dirichlet data last")
+            .0
+            .to_string(),
     };
+    // the rigid plane on the top (z or y = 2) moving down by δ
+    let plane = match load {
+        Load::MovingPlane => {
+            let (point, normal, motion) = match dim {
+                2 => ("[0.0, 2.0]", "[0.0, -1.0]", format!("[0.0, {:?}]", -DELTA)),
+                _ => ("[0.0, 0.0, 2.0]", "[0.0, 0.0, -1.0]", format!("[0.0, 0.0, {:?}]", -DELTA)),
+            };
+            format!(
+                "[[contact]]\ngroup = \"top\"\nobstacle = {{ type = \"plane\", point = {point}, \
+                 normal = {normal} }}\nmotion = {motion}\nfriction = \"none\"\n[load]\nsteps = 3\n"
+            )
+        }
+        _ => String::new(),
+    };
+    let contact = if plane.is_empty() { "[contact]" } else { "[[contact]]" };
     let text = format!(
         r#"[mesh]
 file = {mesh}
@@ -106,11 +128,11 @@ young = {:?}
 poisson = {:?}
 model = "{model}"
 {supports}
-[contact]
+{contact}
 group = "{slave}"
 obstacle = {{ type = "body", group = "{master}" }}
 friction = "none"
-[output]
+{plane}[output]
 dir = "out"
 fields = ["displacement", "contact"]
 "#,
@@ -123,6 +145,7 @@ fields = ["displacement", "contact"]
     let name = match load {
         Load::Displaced => format!("stack{dim}d_{slave}.toml"),
         Load::Pressed => format!("stack{dim}d_{slave}_pressed.toml"),
+        Load::MovingPlane => format!("stack{dim}d_{slave}_plane.toml"),
     };
     write_case(&dir.join(name), &text)
 }
@@ -198,6 +221,17 @@ fn check_patch(s: &Solved, dim: usize, what: &str) {
 
 /// [`check_patch`] for the stack of blocks of the materials `layers`.
 fn check_stack(s: &Solved, dim: usize, layers: &[(f64, f64)], what: &str) {
+    check_stack_u(s, dim, layers, &s.displacement(), what);
+}
+
+/// [`check_stack`] with the displacement `u` (by node id; a load step's).
+fn check_stack_u(
+    s: &Solved,
+    dim: usize,
+    layers: &[(f64, f64)],
+    u: &std::collections::BTreeMap<u64, Vec<f64>>,
+    what: &str,
+) {
     s.assert_converged(what);
     let (p, u_exact) = exact(dim, layers);
     let rows = s.contact_rows();
@@ -212,7 +246,6 @@ fn check_stack(s: &Solved, dim: usize, layers: &[(f64, f64)], what: &str) {
         );
     }
     let x = coordinates(s);
-    let u = s.displacement();
     let scale = DELTA;
     let mut worst = 0.0f64;
     for (id, (xi, layer)) in &x {
@@ -272,6 +305,24 @@ fn a_pressed_block_held_by_contact_alone_passes_the_patch_test_in_2d_and_3d() {
             assert_eq!(s.summary["bodies"]["not_held"], 1, "{what}");
             check_patch(&s, dim, &what);
         }
+    }
+}
+
+#[test]
+fn a_block_between_a_moving_plane_and_another_body_passes_the_patch_test_in_load_steps() {
+    let tmp = tempfile::tempdir().expect("tempdir");
+    let mesh = stack_mesh(tmp.path(), 2, 1.0 / 9.0, 1.0 / 3.0);
+    for (pair, np) in [
+        (("upper_bottom", "lower_top"), 1),
+        (("lower_top", "upper_bottom"), 2),
+    ] {
+        let case = loaded_stack_case(tmp.path(), &mesh, 2, pair, Load::MovingPlane);
+        let what = format!("{} on {np} rank(s)", case.display());
+        let s = solve(np, &case, &[]);
+        assert_eq!(s.summary["bodies"]["not_held"], 1, "{what}");
+        // the last step: the plane moved by δ, the body pair and the plane pair both at p
+        let u = step_displacement(&s.dir, 3);
+        check_stack_u(&s, 2, &[LOWER, UPPER], &u, &what);
     }
 }
 

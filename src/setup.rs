@@ -36,6 +36,7 @@ pub fn read_input(ctx: &Ctx, case: &Case) -> Result<Input, RunError> {
     let model = ctx.agree(check(case, &d.mesh).map_err(RunError::from))?;
     let mut material = cell_materials(ctx, case, &d.mesh, model)?;
     material.reference = reference_material(ctx, case, &d.mesh, &material);
+    material.half_space = pair_modulus(ctx, case, &d.mesh, &material);
     ctx.agree(check_body_force(case, &d.mesh).map_err(RunError::from))?;
     let input = Input {
         mesh: d.mesh,
@@ -254,6 +255,57 @@ fn reference_material(ctx: &Ctx, case: &Case, mesh: &Mesh, materials: &Materials
         .unwrap_or(0)
 }
 
+/// The half-space model's contact modulus where bodies touch each other: per body pair the
+/// two sides in series, 1/E* = 1/E*_slave + 1/E*_master (Hertz' combined modulus), each side
+/// the stiffest material of the cells at its group; the smallest of these and, with rigid
+/// pairs too, the reference material's (a compliant estimate predicts the wider zone).
+/// `None` without body pairs. Collective (one reduction).
+fn pair_modulus(ctx: &Ctx, case: &Case, mesh: &Mesh, materials: &Materials) -> Option<f64> {
+    let pairs: Vec<(&str, &str)> = (case.contacts.iter())
+        .filter_map(|c| match &c.obstacle {
+            crate::case::ObstacleSpec::Body { group } => Some((c.group.as_str(), group.as_str())),
+            _ => None,
+        })
+        .collect();
+    if pairs.is_empty() {
+        return None;
+    }
+    let n_own = mesh
+        .global
+        .as_ref()
+        .map_or(mesh.n_cells(), |g| g.n_own_cells);
+    // the stiffest contact modulus of the owned cells with a node on the group's facets
+    let stiffest = |group: &str| {
+        let mut on = vec![false; mesh.n_nodes()];
+        for f in group_facets(mesh, group) {
+            for &v in mesh.facet(f) {
+                on[v] = true;
+            }
+        }
+        (0..n_own)
+            .filter(|&c| mesh.cell(c).iter().any(|&v| on[v]))
+            .map(|c| materials.of(c).contact_modulus())
+            .fold(0.0f64, f64::max)
+    };
+    let mut mine = Vec::new();
+    for (slave, master) in &pairs {
+        mine.push(stiffest(slave));
+        mine.push(stiffest(master));
+    }
+    let both: Vec<f64> = (ctx.all_gather_varcount(&mine).chunks_exact(mine.len()))
+        .fold(vec![0.0; mine.len()], |acc, r| {
+            acc.iter().zip(r).map(|(a, b)| a.max(*b)).collect()
+        });
+    let series = (both.chunks_exact(2))
+        .filter(|s| s[0] > 0.0 && s[1] > 0.0)
+        .map(|s| 1.0 / (1.0 / s[0] + 1.0 / s[1]))
+        .fold(f64::INFINITY, f64::min);
+    let rigid = case.contacts.len() > pairs.len();
+    let reference = materials.reference_material().contact_modulus();
+    let e = if rigid { series.min(reference) } else { series };
+    e.is_finite().then_some(e)
+}
+
 /// A body force given by expressions (`body_force.expr`) is finite at every quadrature point
 /// of this rank's cells (the points where assembly evaluates it): else an input error naming
 /// the component and the point.
@@ -420,7 +472,8 @@ pub struct ContactSettings {
     /// The materials (the final certificate's reactions at the Dirichlet nodes).
     pub material: Materials,
     /// The contact modulus E* = E / (1 − ν²) (3D, plane strain) or E (plane stress) of the
-    /// reference material: the half-space predictor's (halfspace.rs).
+    /// reference material, or with body pairs the two sides' in series (`pair_modulus`): the
+    /// half-space predictor's (halfspace.rs).
     pub contact_modulus: f64,
     /// The rigid modes of the bodies that Dirichlet data leave free, and the body of every
     /// local node (the driver's body survey); `None`: the whole mesh is one body.
@@ -519,7 +572,8 @@ pub fn contact_settings(
         newton: case.newton.clone(),
         young: materials.reference_material().young,
         material: materials.clone(),
-        contact_modulus: materials.reference_material().contact_modulus(),
+        contact_modulus: (materials.half_space)
+            .unwrap_or_else(|| materials.reference_material().contact_modulus()),
         modes: None,
     })
 }

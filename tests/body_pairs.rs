@@ -104,7 +104,11 @@ value = ["free", "free", -DELTA]
         Load::MovingPlane => {
             let (point, normal, motion) = match dim {
                 2 => ("[0.0, 2.0]", "[0.0, -1.0]", format!("[0.0, {:?}]", -DELTA)),
-                _ => ("[0.0, 0.0, 2.0]", "[0.0, 0.0, -1.0]", format!("[0.0, 0.0, {:?}]", -DELTA)),
+                _ => (
+                    "[0.0, 0.0, 2.0]",
+                    "[0.0, 0.0, -1.0]",
+                    format!("[0.0, 0.0, {:?}]", -DELTA),
+                ),
             };
             format!(
                 "[[contact]]\ngroup = \"top\"\nobstacle = {{ type = \"plane\", point = {point}, \
@@ -113,7 +117,11 @@ value = ["free", "free", -DELTA]
         }
         _ => String::new(),
     };
-    let contact = if plane.is_empty() { "[contact]" } else { "[[contact]]" };
+    let contact = if plane.is_empty() {
+        "[contact]"
+    } else {
+        "[[contact]]"
+    };
     let text = format!(
         r#"[mesh]
 file = {mesh}

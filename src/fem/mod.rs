@@ -91,6 +91,9 @@ pub struct Materials {
     /// The entry whose modulus the single-modulus estimates use (the contact predictor's
     /// half-space model, the default Newton parameter c = E / h_c).
     pub reference: usize,
+    /// The contact modulus of the half-space model: the reference entry's, or with contact
+    /// between bodies the two sides' in series (crate::setup); `None`: the reference's.
+    pub half_space: Option<f64>,
 }
 
 impl Materials {
@@ -102,6 +105,7 @@ impl Materials {
             cell: std::sync::Arc::from(Vec::new()),
             lame: vec![m.lame()],
             reference: 0,
+            half_space: None,
         }
     }
 
@@ -114,6 +118,7 @@ impl Materials {
             list,
             cell: std::sync::Arc::from(cell),
             reference: 0,
+            half_space: None,
         }
     }
 

@@ -50,7 +50,7 @@ rtol = 1e-8
 
 [output]
 dir = "out/somewhere"
-fields = ["displacement", "stress", "von_mises", "von_mises_thesis", "rank", "contact", "stress"]
+fields = ["displacement", "stress", "von_mises", "von_mises_thesis", "rank", "body", "contact", "stress"]
 
 [contact]
 group = "contact"

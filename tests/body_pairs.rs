@@ -334,12 +334,12 @@ fn a_block_between_a_moving_plane_and_another_body_passes_the_patch_test_in_load
     }
 }
 
-/// Three blocks of tests/meshes/tower2d.geo (sizes 1/7, 1/3, 1/5) of three materials, the
+/// Three blocks of cases/blocks/tower2d.geo (sizes 1/7, 1/3, 1/5) of three materials, the
 /// lowest on a roller support, all on the symmetry line x = 0, the top pressed by p: the
 /// middle block against the lowest and the upper one, held by contact alone.
 fn tower_case(dir: &Path, middle_slave: bool) -> PathBuf {
     let mesh = dir.join("tower2d.msh");
-    gmsh_file(&mesh_dir().join("tower2d.geo"), 2, &[], &mesh);
+    gmsh_file(&repo("cases/blocks/tower2d.geo"), 2, &[], &mesh);
     let (p, _) = exact(2, &[LOWER, UPPER, THIRD]);
     let pairs = match middle_slave {
         true => [

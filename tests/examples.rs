@@ -47,6 +47,7 @@ fn the_2d_examples_run() {
         "indent_height2d.toml",
         "indent_punch2d.toml",
         "indent_wedge2d.toml",
+        "stacked_blocks.toml",
     ] {
         let s = solve(2, &repo(&format!("examples/{name}")), &[]);
         if let Some(load) = s.summary.get("load") {
@@ -64,9 +65,33 @@ fn the_2d_examples_run() {
             "indent_height2d.toml" => height2d(&s),
             "indent_punch2d.toml" => punch2d(&s),
             "indent_wedge2d.toml" => wedge2d(&s),
+            "stacked_blocks.toml" => stacked_blocks(&s),
             _ => unreachable!(),
         }
     }
+}
+
+/// stacked_blocks: the two body pairs each carry the load p = 0.005 (unit width) and the top
+/// moves down by p Σ (1 − ν_i²) / E_i, the exact uniform-stress solution, to 1e-10.
+fn stacked_blocks(s: &Solved) {
+    let p = 0.005;
+    let pairs = s.summary["contact"]["pairs"].as_array().expect("pairs");
+    assert_eq!(pairs.len(), 2);
+    for pair in pairs {
+        let f = floats(&pair["total_force"]);
+        assert!((f[1].abs() - p).abs() < 1e-10 * p, "pair force {f:?}");
+    }
+    let compliance: f64 = [(1.0, 0.45), (3.0, 0.1), (2.0, 0.3)]
+        .iter()
+        .map(|(e, nu): &(f64, f64)| (1.0 - nu * nu) / e)
+        .sum();
+    let top = -p * compliance;
+    let u = s.displacement();
+    let lowest = u.values().map(|v| v[1]).fold(f64::INFINITY, f64::min);
+    assert!(
+        (lowest - top).abs() < 1e-10 * top.abs(),
+        "the top moves by {lowest:e}, exact {top:e}"
+    );
 }
 
 /// Copies `from` (a directory of the repository) into `to`, only the files `keep` accepts.

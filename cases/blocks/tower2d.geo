@@ -1,4 +1,5 @@
-// Three blocks stacked and meshed independently (tests/body_floating.rs): [0,1]x[0,1] with
+// Three blocks stacked and meshed independently (examples/stacked_blocks.toml,
+// tests/body_pairs.rs): [0,1]x[0,1] with
 // mesh size h1, [0,1]x[1,2] with h2, [0,1]x[2,3] with h3 (gmsh -setnumber h1 .. ).
 If (!Exists(h1))
   h1 = 1/7;

@@ -308,18 +308,9 @@ impl Matrix {
     /// Attaches the span of `basis` (orthonormal vectors of this matrix's layout) as its
     /// near-null space (what algebraic multigrid interpolates exactly).
     pub fn set_near_null_space(&mut self, comm: MPI_Comm, basis: &[Vector]) -> Result<()> {
-        let raws: Vec<ffi::Vec> = basis.iter().map(|v| v.raw).collect();
-        let mut sp: ffi::MatNullSpace = ptr::null_mut();
-        // SAFETY: the vectors are valid; PETSc references them in the null space object, which
-        // the matrix references in turn; our reference is dropped at once.
+        let mut sp = null_space_of(comm, basis)?;
+        // SAFETY: the matrix takes its own reference to the null space; ours is dropped.
         unsafe {
-            check(ffi::MatNullSpaceCreate(
-                comm,
-                ffi::PETSC_FALSE,
-                raws.len() as PInt,
-                raws.as_ptr(),
-                &mut sp,
-            ))?;
             check(ffi::MatSetNearNullSpace(self.raw, sp))?;
             check(ffi::MatNullSpaceDestroy(&mut sp))
         }
@@ -343,27 +334,39 @@ impl Matrix {
     /// space and transpose null space: Krylov solves remove it from the right-hand side and
     /// from every preconditioned vector. An empty basis detaches both.
     pub fn set_null_space(&mut self, comm: MPI_Comm, basis: &[Vector]) -> Result<()> {
-        // SAFETY: the vectors are valid; PETSc references them in the null space object,
-        // which the matrix references in turn; our reference is dropped at once.
-        unsafe {
-            if basis.is_empty() {
+        if basis.is_empty() {
+            // SAFETY: a null pointer detaches the null spaces.
+            unsafe {
                 check(ffi::MatSetNullSpace(self.raw, ptr::null_mut()))?;
                 return check(ffi::MatSetTransposeNullSpace(self.raw, ptr::null_mut()));
             }
-            let raws: Vec<ffi::Vec> = basis.iter().map(|v| v.raw).collect();
-            let mut sp: ffi::MatNullSpace = ptr::null_mut();
-            check(ffi::MatNullSpaceCreate(
-                comm,
-                ffi::PETSC_FALSE,
-                raws.len() as PInt,
-                raws.as_ptr(),
-                &mut sp,
-            ))?;
+        }
+        let mut sp = null_space_of(comm, basis)?;
+        // SAFETY: the matrix takes its own references to the null space; ours is dropped.
+        unsafe {
             check(ffi::MatSetNullSpace(self.raw, sp))?;
             check(ffi::MatSetTransposeNullSpace(self.raw, sp))?;
             check(ffi::MatNullSpaceDestroy(&mut sp))
         }
     }
+}
+
+/// A PETSc null space object spanned by `basis` (orthonormal vectors; no constant added); the
+/// caller attaches it and drops this reference (MatNullSpaceDestroy).
+fn null_space_of(comm: MPI_Comm, basis: &[Vector]) -> Result<ffi::MatNullSpace> {
+    let raws: Vec<ffi::Vec> = basis.iter().map(|v| v.raw).collect();
+    let mut sp: ffi::MatNullSpace = ptr::null_mut();
+    // SAFETY: the vectors are valid; PETSc references them in the null space object.
+    unsafe {
+        check(ffi::MatNullSpaceCreate(
+            comm,
+            ffi::PETSC_FALSE,
+            raws.len() as PInt,
+            raws.as_ptr(),
+            &mut sp,
+        ))?;
+    }
+    Ok(sp)
 }
 
 impl Drop for Matrix {

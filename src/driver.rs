@@ -74,15 +74,16 @@ pub fn prepare<'c>(ctx: &Ctx, case: &'c Case) -> Result<Prepared<'c>, RunError> 
     clock.lap();
     (clock.t.read, clock.t.partition) = (read_seconds, partition_seconds);
     let partition = log_partition(ctx, &mesh, &layout);
-    let friction = case
-        .contacts
-        .iter()
-        .any(|c| c.friction != crate::case::Friction::None);
+    let contact = solver::AutoContact {
+        friction: (case.contacts.iter()).any(|c| c.friction != crate::case::Friction::None),
+        bodies: (case.contacts.iter())
+            .any(|c| matches!(c.obstacle, crate::case::ObstacleSpec::Body { .. })),
+    };
     let (preset, preset_reason) = solver::choose_preset(
         case.solver.preset,
         mesh.dim,
         mesh.n_nodes_global() * mesh.dim,
-        friction,
+        contact,
     );
     say!(ctx, "solver: preset {} ({preset_reason})", preset.name());
     if case.solver.path == SolverPath::Schur && preset == Preset::Iterative {

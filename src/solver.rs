@@ -15,18 +15,39 @@ use crate::say;
 use crate::tuning::AUTO_ITERATIVE_3D_DOFS;
 use std::time::Instant;
 
-/// The preset to use for `asked` on a mesh of dimension `dim` with `dofs` unknowns and
-/// `friction` (Tresca or Coulomb), and why (for the log and summary.json). With friction the
-/// auto preset is direct at every size: on a 3D block held and pushed into a sphere (Coulomb
-/// μ = 0.3, 2 ranks) the iterative preset takes 14 Newton steps of GMRES + GAMG, the longest
-/// 185 iterations, where the direct preset's condensed path needs one factorisation
-/// (112 890 unknowns: 17–18 s against 5.4–5.7 s; docs/numbers.md, "Coulomb on the iterative
-/// preset").
-pub fn choose_preset(asked: Preset, dim: usize, dofs: usize, friction: bool) -> (Preset, String) {
+/// What of a case's contact chooses the auto preset in 3D.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct AutoContact {
+    /// Tresca or Coulomb friction on some pair.
+    pub friction: bool,
+    /// Contact between two bodies (dual mortar) on some pair.
+    pub bodies: bool,
+}
+
+/// The preset to use for `asked` on a mesh of dimension `dim` with `dofs` unknowns and the
+/// case's `contact`, and why (for the log and summary.json). With friction the auto preset is
+/// direct at every size: on a 3D block held and pushed into a sphere (Coulomb μ = 0.3,
+/// 2 ranks) the iterative preset takes 14 Newton steps of GMRES + GAMG, the longest 185
+/// iterations, where the direct preset's condensed path needs one factorisation (112 890
+/// unknowns: 17–18 s against 5.4–5.7 s; docs/numbers.md, "Coulomb on the iterative preset").
+/// With contact between bodies likewise: GMRES + GAMG on the mortar basis QᵀAQ takes 128–270
+/// iterations per exact Newton step on a quarter ball on a block (85 374 unknowns, 2 ranks:
+/// 72.5 s against 16.9 s on the direct preset; docs/numbers.md, "Contact between deformable
+/// bodies").
+pub fn choose_preset(
+    asked: Preset,
+    dim: usize,
+    dofs: usize,
+    contact: AutoContact,
+) -> (Preset, String) {
     match asked {
-        Preset::Auto if dim == 3 && friction => (
+        Preset::Auto if dim == 3 && contact.friction => (
             Preset::Direct,
             format!("auto: 3D with friction, {dofs} unknowns"),
+        ),
+        Preset::Auto if dim == 3 && contact.bodies => (
+            Preset::Direct,
+            format!("auto: 3D with contact between bodies, {dofs} unknowns"),
         ),
         Preset::Auto if dim == 3 && dofs >= AUTO_ITERATIVE_3D_DOFS => (
             Preset::Iterative,

@@ -15,6 +15,14 @@ use nalgebra::{DMatrix, DVector, SymmetricEigen};
 use std::collections::HashSet;
 use std::time::Instant;
 
+/// The limits of a dense iteration: the complementarity parameter c > 0 and the number of
+/// steps it may take (newton.max_steps).
+#[derive(Clone, Copy, Debug)]
+pub struct DenseLimits {
+    pub c: f64,
+    pub max_steps: usize,
+}
+
 /// Algorithm 1 on the condensed system (module note): C (n × n), d₀, the gaps, the free
 /// modes' normal parts G (n × m_z), the load in them φ = zᵀ Rᵀ f and its scale, c.
 pub struct Dense<'a> {

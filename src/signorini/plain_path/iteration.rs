@@ -352,7 +352,7 @@ impl<'a> Loop<'a> {
                 .map(|p| (p.dir, p.magnitude, p.pair))
                 .collect()
         });
-        let limits = (s.c, s.section.max_steps);
+        let limits = s.dense_limits();
         let (set, rec) = halfspace::predict(
             self.ctx,
             hs,
@@ -390,9 +390,9 @@ impl<'a> Loop<'a> {
         if self.approach.is_some() || self.corrections.1 || ctx.sum_usize(update.changed) == 0 {
             return Ok(None);
         }
-        let limits = (self.s.c, self.s.section.max_steps);
-        let cur = (&self.shifted, &self.it, self.set.normal.as_slice());
-        let (set, rec) = halfspace::correct(ctx, hs, cur, &self.free, limits)?;
+        let (b, it, active) = (&self.shifted, &self.it, self.set.normal.as_slice());
+        let limits = self.s.dense_limits();
+        let (set, rec) = halfspace::correct(ctx, hs, b, it, active, &self.free, limits)?;
         if let Some(model) = set.filter(|_| !rec.truncated) {
             let next: Vec<bool> = (model.iter().zip(&self.set.normal))
                 .zip(&update.next.normal)

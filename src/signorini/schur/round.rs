@@ -188,8 +188,7 @@ pub(super) fn locate(
                 return Ok(done.clone()); // the same body, load and model: located once
             }
             let phi = s.carried.map_or_else(|| free.free_load(), <[f64]>::to_vec);
-            let zone =
-                halfspace::locate(ctx, hs, p.boundary, free, &phi, (s.c, s.section.max_steps))?;
+            let zone = halfspace::locate(ctx, hs, p.boundary, free, &phi, s.dense_limits())?;
             *located = Some(zone.clone());
             Ok(zone)
         }

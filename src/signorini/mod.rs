@@ -644,8 +644,12 @@ fn run_method(
                     problem,
                     &mut reduced,
                     ns,
-                    (algorithm, solver_section),
-                    (session, warm),
+                    coulomb::CoulombMethod {
+                        algorithm,
+                        section: solver_section,
+                    },
+                    session,
+                    warm,
                 )?,
                 None => normal_and_tresca(ctx, problem, &mut reduced, ns, choice, session, warm)?,
             };

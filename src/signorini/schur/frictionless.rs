@@ -86,7 +86,7 @@ pub(crate) fn solve_keeping(
     let free0 = FreeModes::new(ctx, p.mesh, p.layout, p.fixed, b, &reduced.f_local, s.rigid);
     refuse_floating_force(p, s, &free0)?;
     let start = start_set(p, s, &free0, warm);
-    let located = locate(ctx, (p, &mut session.located), s, &free0, warm)?;
+    let located = locate(ctx, p, &mut session.located, s, &free0, warm)?;
     let key = located.as_ref().map(|(k, _)| k.as_slice());
     let n_rows = p.layout.node_offsets.last().copied().unwrap_or(0) * dim;
     let splits = splits_zones(&session.kept, s, warm, (per, steps, stick.is_some()));
@@ -311,16 +311,16 @@ impl Passes<'_> {
         let s = self.settings_of(zone);
         let on = self.at.located.as_ref().map(|(_, on)| *on);
         let on = on.filter(|_| zone.is_none());
-        let run = pass.dense(ctx, s, (first, on), (&mut *summary, history));
-        let (cand, comp, free, growth) = (&pass.cand, &mut pass.comp, &pass.free, &mut pass.growth);
-        let lambda = growth.take_dense(comp, &run);
-        match judge(ctx, self.at.p, s, (free, comp, cand.n), growth, &run)? {
+        let run = pass.dense(ctx, s, first, on, summary, history);
+        let lambda = pass.growth.take_dense(&pass.comp, &run);
+        match judge(ctx, self.at.p, s, pass, &run)? {
             Judged::Expand => {}
             Judged::Again => return Ok(RoundEnd::Again),
             Judged::Stop(stop) => return Ok(RoundEnd::Stop(stop)),
         }
+        let (cand, comp, free, growth) = (&pass.cand, &mut pass.comp, &pass.free, &mut pass.growth);
         let t = Instant::now();
-        let set = (lambda.as_slice(), growth.active.as_slice());
+        let active = growth.active.as_slice();
         let expansion = Expansion {
             s,
             free,
@@ -329,7 +329,9 @@ impl Passes<'_> {
             f_root: &pass.f_root,
             n_local: pass.rhs0.len(),
         };
-        let ex = match expand(ctx, self.at.p, reduced, expansion, set, &run.alpha)? {
+        let ex = match expand(
+            ctx, self.at.p, reduced, expansion, &lambda, active, &run.alpha,
+        )? {
             Ok(ex) => ex,
             Err(why) => return Ok(RoundEnd::Fall(why)),
         };
@@ -445,13 +447,7 @@ fn begin_pass(
     }
     let t = Instant::now();
     let (kept, order_dropped) = match warm {
-        Some(_) => reused(
-            ctx,
-            (at, factors.kept.take()),
-            (&free, &cand),
-            &f_root,
-            &held,
-        ),
+        Some(_) => reused(ctx, at, factors.kept.take(), &free, &cand, &f_root, &held),
         None => (None, None),
     };
     let mut comp = match kept {

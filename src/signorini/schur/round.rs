@@ -43,13 +43,19 @@ impl Pass {
         &mut self,
         ctx: &Ctx,
         s: &NewtonSettings,
-        (first, located): (bool, Option<usize>),
-        (summary, history): (&mut CondensedSummary, &mut Vec<StepInfo>),
+        first: bool,
+        located: Option<usize>,
+        summary: &mut CondensedSummary,
+        history: &mut Vec<StepInfo>,
     ) -> DenseRun {
         let t = Instant::now();
         let (cand, comp, free) = (&self.cand, &mut self.comp, &self.free);
-        let active = &self.growth.active;
-        let (run, x_s) = dense_round(ctx, cand, comp, free, s, (active, first), located);
+        let from = DenseStart {
+            active: &self.growth.active,
+            nested: first,
+            located,
+        };
+        let (run, x_s) = dense_round(ctx, cand, comp, free, s, from);
         comp.x_s = x_s;
         summary.dense_seconds += t.elapsed().as_secs_f64();
         summary.record_coarse(ctx, &run);
@@ -133,17 +139,18 @@ pub(super) enum Judged {
     Stop(Stop),
 }
 
-/// A round's dense end judged: no support on a body that nothing else can hold is the
-/// case's error (force control: the obstacle never touches); a fallback of the primal form
-/// means the zone is too wide even for it. Collective (force control's check).
+/// A round's dense end judged (the round of `pass`): no support on a body that nothing else
+/// can hold is the case's error (force control: the obstacle never touches); a fallback of
+/// the primal form means the zone is too wide even for it. Collective (force control's check).
 pub(super) fn judge(
     ctx: &Ctx,
     p: &ContactProblem,
     s: &NewtonSettings,
-    (free, comp, n): (&FreeModes, &Compliance, usize),
-    growth: &mut Growth,
+    pass: &mut Pass,
     run: &DenseRun,
 ) -> Result<Judged, RunError> {
+    let (free, comp, n) = (&pass.free, &pass.comp, pass.cand.n);
+    let growth = &mut pass.growth;
     match &run.end {
         End::Converged => Ok(Judged::Expand),
         End::NoSupport(_) if comp.list.len() < n => {
@@ -177,7 +184,8 @@ pub(super) fn judge(
 /// solve (`located`). Collective.
 pub(super) fn locate(
     ctx: &Ctx,
-    (p, located): (&ContactProblem, &mut Option<halfspace::Located>),
+    p: &ContactProblem,
+    located: &mut Option<halfspace::Located>,
     s: &NewtonSettings,
     free: &FreeModes,
     warm: Option<&WarmStart>,
@@ -225,8 +233,10 @@ pub(super) fn refuse_floating_force(
 /// all-gathered data: the same on every rank).
 pub(super) fn reused(
     ctx: &Ctx,
-    (at, kept): (&SolveStart, Option<Kept>),
-    (free, cand): (&FreeModes, &Candidates),
+    at: &SolveStart,
+    kept: Option<Kept>,
+    free: &FreeModes,
+    cand: &Candidates,
     f_root: &[f64],
     held: &[bool],
 ) -> (Option<Compliance>, Option<Vec<usize>>) {
@@ -312,7 +322,15 @@ fn primal_start(
     }
 }
 
-/// Algorithm 1 on the candidates' dense system, from `active`, on rank 0; the outcome
+/// Where a round's dense iteration starts ([`dense_round`]): the set `active`, whether the
+/// nested start (coarse levels first) is taken, and the located zone's node count.
+pub(super) struct DenseStart<'a> {
+    pub(super) active: &'a [bool],
+    pub(super) nested: bool,
+    pub(super) located: Option<usize>,
+}
+
+/// Algorithm 1 on the candidates' dense system, from `from`, on rank 0; the outcome
 /// broadcast to every rank. Collective.
 pub(super) fn dense_round(
     ctx: &Ctx,
@@ -320,9 +338,13 @@ pub(super) fn dense_round(
     comp: &Compliance,
     free: &FreeModes,
     s: &NewtonSettings,
-    (active, nested): (&[bool], bool),
-    located: Option<usize>,
+    from: DenseStart,
 ) -> (DenseRun, Vec<f64>) {
+    let DenseStart {
+        active,
+        nested,
+        located,
+    } = from;
     // force control: each approach δ_j is one more free mode, its normal parts −e_j·n on its
     // pair's candidates and its load |F_j| (force.rs)
     let force: ForceModes = s
@@ -416,7 +438,8 @@ pub(super) fn expand(
     p: &ContactProblem,
     reduced: &mut ReducedSystem,
     at: Expansion,
-    (lambda, active): (&[f64], &[bool]),
+    lambda: &[f64],
+    active: &[bool],
     alpha: &[f64],
 ) -> Result<Result<Expanded, String>, RunError> {
     let Expansion {

@@ -262,12 +262,8 @@ fn expand_run(ctx: &Ctx, kept: &mut Kept, run: &DenseCoulomb) -> Result<Vec<f64>
     } else {
         Vec::new()
     };
-    kept.comp.expand_u(
-        ctx,
-        &kept.cand,
-        (&kept.f_root, kept.n_local),
-        (&lam, &run.x_s),
-    )
+    kept.comp
+        .expand_u(ctx, &kept.cand, &kept.f_root, kept.n_local, &lam, &run.x_s)
 }
 
 /// The dense generalised Newton on rank 0 (from the warm records of a load step, or the

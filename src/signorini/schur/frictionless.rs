@@ -30,11 +30,12 @@
 //! three solve phases (the right-hand sides gathered on rank 0, the solution scattered back),
 //! two broadcasts (S's definiteness, the dense result), one MatMult.
 
+use super::candidates::Shape;
 use super::candidates::{hold, wide, Candidates, Compliance, Growth, Sticking};
 use super::outcome::Stop;
 use super::outcome::{fallback, fallback_stop, finish, keep_solved, Condensed, Expanded, Kept};
 use super::round::{expand, factorise_round, judge, locate, refuse_floating_force};
-use super::round::{reused, Expansion, Judged, Pass, Shape};
+use super::round::{reused, Expansion, Judged, Pass};
 use super::start::{predicted_zone, prepare_base, splits_zones, start_set, PassPlan, SolveStart};
 use super::summary::{tag_key, CondensedSummary};
 use crate::case::NewtonInit;
@@ -342,8 +343,8 @@ impl Passes<'_> {
             summary.log(ctx, cand.n, n_active);
             return Ok(RoundEnd::Settled(Box::new(ex), lambda));
         }
-        let limits = (comp.max_flops, comp.per);
-        if let Some(next) = growth.next_pass(ctx, &ex.changed, limits, self.splits) {
+        let (max_flops, per) = (comp.max_flops, comp.per);
+        if let Some(next) = growth.next_pass(ctx, &ex.changed, max_flops, per, self.splits) {
             let budget = (self.at.per > 1).then_some(self.sticking.factorisations);
             if budget.is_some_and(|b| b > 0 && summary.factorisations >= b) {
                 let n = summary.factorisations;

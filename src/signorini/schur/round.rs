@@ -2,7 +2,7 @@
 //! the candidates, the dense Algorithm 1 on the compliance, the expansion of the iterate and the
 //! judgement of its set on the full system.
 
-use super::candidates::{Candidates, Compliance, Growth};
+use super::candidates::{Added, Candidates, Compliance, Growth, Shape};
 use super::outcome::{Expanded, Kept};
 use super::start::SolveStart;
 use super::stop::Stop;
@@ -81,12 +81,6 @@ impl Pass {
     }
 }
 
-/// The size of the system a solve condenses: the dimension and the global number of rows.
-pub(super) struct Shape {
-    pub(super) dim: usize,
-    pub(super) n_rows: usize,
-}
-
 /// A round's first phase: the nodes it adds (`Growth::next`) and K_p factorised with their
 /// Schur complement (`Compliance::grow`), or the previous load step's factorisation where it
 /// holds every candidate; recorded in `summary`. `Err`: why the condensed path stops.
@@ -108,7 +102,6 @@ pub(super) fn factorise_round(
         ..
     } = pass;
     let (cand, growth, condensation) = (&*cand, &*growth, *condensation);
-    let (dim, n_rows) = (shape.dim, shape.n_rows);
     let t = Instant::now();
     let new = growth.next(cand, comp, round)?;
     if new.is_empty() && comp.factor.is_some() {
@@ -116,14 +109,11 @@ pub(super) fn factorise_round(
         summary.record_kept(ctx, comp, cand, condensation + t.elapsed().as_secs_f64());
         return Ok(());
     }
-    comp.grow(
-        ctx,
-        reduced,
-        cand,
-        &new,
-        (dim, n_rows),
-        (&f_root[..], &growth.why),
-    )?;
+    let added = Added {
+        nodes: &new,
+        why: &growth.why,
+    };
+    comp.grow(ctx, reduced, cand, added, shape, f_root)?;
     summary.factorisation_kept = false;
     summary.primal = comp.primal;
     summary.record_factorisation(comp, cand, t.elapsed().as_secs_f64());
@@ -453,7 +443,7 @@ pub(super) fn expand(
     let b = p.boundary;
     let (dim, off) = (p.mesh.dim, b.offset);
     let lam = root_multipliers(ctx, comp, lambda);
-    let w = match comp.expand_u(ctx, cand, (f_root, n_local), (&lam, &[])) {
+    let w = match comp.expand_u(ctx, cand, f_root, n_local, &lam, &[]) {
         Ok(w) => w,
         Err(why) => return Ok(Err(why)),
     };

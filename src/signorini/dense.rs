@@ -178,16 +178,27 @@ impl DenseRun {
     }
 }
 
+/// What (3.21) and (3.23) read besides a step's u_n and λ_n, fixed over a dense iteration:
+/// the candidates' gaps and the complementarity parameter c.
+#[derive(Clone, Copy)]
+struct Complementarity<'a> {
+    gap: &'a [f64],
+    c: f64,
+}
+
 /// (3.21) and (3.23) on every candidate from a step's u_n and λ_n on the set `active`: the
 /// next set and how many nodes change; the step's record (step, |A_n|, changed, ‖C_n‖₂, the
 /// seconds since `t`) pushed onto `steps`. Local.
 fn update(
     active: &[bool],
-    (u_n, lambda): (&[f64], &[f64]),
-    (gap, c): (&[f64], f64),
-    (step, t): (usize, Instant),
+    u_n: &[f64],
+    lambda: &[f64],
+    data: Complementarity,
+    step: usize,
+    t: Instant,
     steps: &mut Vec<(usize, usize, usize, f64, f64)>,
 ) -> (Vec<bool>, usize) {
+    let Complementarity { gap, c } = data;
     let mut next = active.to_vec();
     let mut changed = 0;
     let mut res2 = 0.0;
@@ -254,9 +265,14 @@ impl Primal<'_> {
             };
             let (next, changed) = update(
                 &active,
-                (&u, &lambda),
-                (self.gap, self.c),
-                (step, t),
+                &u,
+                &lambda,
+                Complementarity {
+                    gap: self.gap,
+                    c: self.c,
+                },
+                step,
+                t,
                 &mut steps,
             );
             if changed == 0 {
@@ -402,9 +418,14 @@ impl Dense<'_> {
             };
             let (mut next, changed) = update(
                 &active,
-                (&u_n, &lambda),
-                (self.gap, self.c),
-                (step, t),
+                &u_n,
+                &lambda,
+                Complementarity {
+                    gap: self.gap,
+                    c: self.c,
+                },
+                step,
+                t,
                 &mut steps,
             );
             if changed == 0 {

@@ -90,7 +90,7 @@ pub(crate) fn solve_keeping(
     let located = locate(ctx, p, &mut session.located, s, &free0, warm)?;
     let key = located.as_ref().map(|(k, _)| k.as_slice());
     let n_rows = p.layout.node_offsets.last().copied().unwrap_or(0) * dim;
-    let splits = splits_zones(&session.kept, s, warm, (per, steps, stick.is_some()));
+    let splits = splits_zones(&session.kept, s, warm, per, steps, stick.is_some());
     let sticking = stick.unwrap_or_default();
     // every contact node as the case starts (the zones' positions and order keys), gathered
     // once
@@ -414,7 +414,7 @@ fn begin_pass(
         }
         _ => Vec::new(),
     };
-    let (free, rhs0) = prepare_base(ctx, (p, &mut *factors.reduced), free0, (&held, per > 1))?;
+    let (free, rhs0) = prepare_base(ctx, p, factors.reduced, free0, &held, per > 1)?;
     let f_root = ctx.gather_to_root(&rhs0); // f for MUMPS' solve phases, once per pass
     let pass_start: Vec<bool> = match zone {
         Some(z) => (0..b.nodes.len())

@@ -526,7 +526,7 @@ pub fn contact_boundary(
 ) -> Result<(ContactBoundary, Vec<Warning>), RunError> {
     let start =
         |nodes: &[boundary::ContactNode]| warn::start_warnings(ctx, mesh, layout, settings, nodes);
-    let (b, warned) = boundary::build(ctx, mesh, layout, settings, (fixed, start))?;
+    let (b, warned) = boundary::build(ctx, mesh, layout, settings, fixed, start)?;
     log_boundary(ctx, &b, settings, mesh.dim);
     // the approaches' starts do not matter here: only the forces' directions
     if let Some(fc) = force::unreached(ctx, &b, &force_control(settings, None)) {

@@ -12,7 +12,7 @@ use super::kept::KeptFactor;
 use super::plain_path::{self, ContactProblem, NewtonResult, NewtonSettings, StepInfo, WarmStart};
 use super::rigid::{self, FreeModes};
 use super::schur::candidates::Sticking;
-use super::schur::frictionless::solve_keeping;
+use super::schur::frictionless::{solve_keeping, Condensing};
 use super::schur::{self, CoulombCondensedSummary};
 use super::session::Session;
 use super::step_system::ReducedSystem;
@@ -361,14 +361,12 @@ fn coulomb_passes(
         // too many candidates' dofs for the dense tangential compliance: the predicted zone's
         // interior held sticking, the dense steps on its edge and beyond (schur/frictionless.rs)
         let held = (per > 1).then(|| passes.start_sticking());
-        let mut tried = solve_keeping(
-            ctx,
-            problem,
-            reduced,
-            fl,
-            (session, None),
-            (per, true, held),
-        );
+        let how = Condensing {
+            per,
+            steps: true,
+            stick: held,
+        };
+        let mut tried = solve_keeping(ctx, problem, reduced, fl, session, None, how);
         if let Some((r, u, cs)) = last.take() {
             let store = &mut session.kept;
             if let Some(done) = from_last_pass(ctx, store, &tried, r, u, cs, passes.earlier) {
@@ -381,7 +379,8 @@ fn coulomb_passes(
                 ctx,
                 "coulomb: the candidates' normal dofs alone in the Schur complement"
             );
-            tried = solve_keeping(ctx, problem, reduced, fl, (session, None), (1, true, None));
+            let how = Condensing::FRICTIONLESS;
+            tried = solve_keeping(ctx, problem, reduced, fl, session, None, how);
         }
         // a frictionless solve on the normal dofs alone keeps its factorisation for a next
         // load step, which no Coulomb step can use
@@ -584,14 +583,12 @@ fn coulomb_load_step(
     loop {
         let held = passes.sticking(0);
         // the previous step's factorisation where it holds (schur::round::reused), else a new one
-        let tried = solve_keeping(
-            ctx,
-            problem,
-            reduced,
-            fl,
-            (&mut *session, Some(warm)),
-            (dim, false, Some(held)),
-        );
+        let how = Condensing {
+            per: dim,
+            steps: false,
+            stick: Some(held),
+        };
+        let tried = solve_keeping(ctx, problem, reduced, fl, session, Some(warm), how);
         let (mut summary, mut kept) = match tried {
             Ok((schur::Condensed::Factorised(s), Some(kept))) => (s, kept),
             Ok((schur::Condensed::Fallback(mut s), _))

@@ -6,7 +6,7 @@ use crate::contact::Frame;
 use crate::linsolve::{NumericSchur, SymbolicSchur};
 use crate::par::Ctx;
 use crate::petsc::lapack::DenseCholesky;
-use crate::petsc::mumps::NodeBases;
+use crate::petsc::mumps::{NodeBases, SchurRequest};
 use crate::petsc::ndfactor::node_order;
 use crate::say;
 use crate::signorini::boundary::ContactBoundary;
@@ -649,7 +649,13 @@ impl Compliance {
             Some(o) if ctx.rank == 0 && !o.is_empty() => Some(dof_order(o, dofs, dim, n_rows)),
             _ => None,
         };
-        let factor = reduced.analyse_schur(ctx, (n_rows, dofs), (order.as_deref(), &self.bases));
+        let request = SchurRequest {
+            n: n_rows,
+            schur_rows: dofs,
+            order: order.as_deref(),
+            bases: &self.bases,
+        };
+        let factor = reduced.analyse_schur(ctx, &request);
         drop(order);
         ctx.agree_message(factor)
             .map_err(|e| Stop::failed(format!("MUMPS' analysis of K_p failed: {e}")))

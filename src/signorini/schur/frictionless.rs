@@ -62,7 +62,26 @@ pub fn solve(
     session: &mut Session,
     warm: Option<&WarmStart>,
 ) -> Result<Condensed, RunError> {
-    solve_keeping(ctx, p, reduced, s, (session, warm), (1, true, None)).map(|(c, _)| c)
+    solve_keeping(ctx, p, reduced, s, session, warm, Condensing::FRICTIONLESS).map(|(c, _)| c)
+}
+
+/// How one condensed solve runs ([`solve_keeping`]): the Schur variables per candidate (`per`:
+/// 1 the normal dofs, the dimension every dof), whether the frictionless steps run (`steps`),
+/// and where friction needs it the zone held sticking (`stick`).
+#[derive(Clone, Copy)]
+pub(crate) struct Condensing<'a> {
+    pub per: usize,
+    pub steps: bool,
+    pub stick: Option<Sticking<'a>>,
+}
+
+impl Condensing<'_> {
+    /// The candidates' normal dofs with the frictionless steps, no zone held sticking.
+    pub const FRICTIONLESS: Condensing<'static> = Condensing {
+        per: 1,
+        steps: true,
+        stick: None,
+    };
 }
 
 /// [`solve`] with `per` Schur variables per candidate (1: the normal dof; d: every dof, for
@@ -79,9 +98,11 @@ pub(crate) fn solve_keeping(
     p: &ContactProblem,
     reduced: &mut ReducedSystem,
     s: &NewtonSettings,
-    (session, warm): (&mut Session, Option<&WarmStart>),
-    (per, steps, stick): (usize, bool, Option<Sticking>),
+    session: &mut Session,
+    warm: Option<&WarmStart>,
+    how: Condensing,
 ) -> Result<(Condensed, Option<Kept>), RunError> {
+    let Condensing { per, steps, stick } = how;
     let (b, dim) = (p.boundary, p.mesh.dim);
     let summary = CondensedSummary::new(b.n_global);
     let free0 = FreeModes::new(ctx, p.mesh, p.layout, p.fixed, b, &reduced.f_local, s.rigid);

@@ -59,8 +59,16 @@ impl Pass {
         comp.x_s = x_s;
         summary.dense_seconds += t.elapsed().as_secs_f64();
         summary.record_coarse(ctx, &run);
-        let round = (comp.list.len(), free.pins().len());
-        record_steps(ctx, history, &run.steps, ("C_n", "condensed"), round);
+        let (candidates, pinned) = (comp.list.len(), free.pins().len());
+        record_steps(
+            ctx,
+            history,
+            &run.steps,
+            "C_n",
+            "condensed",
+            candidates,
+            pinned,
+        );
         run
     }
 

@@ -462,7 +462,8 @@ impl Loop<'_> {
             reduced.set_pins(self.p.sys, layout, pins)?;
         }
         if use_it != self.null_space || (use_it && modes_changed) {
-            let fields = use_it.then(|| self.free.free_fields(mesh, layout, reduced.local_rows()));
+            let (row_lo, n_local) = reduced.local_rows();
+            let fields = use_it.then(|| self.free.free_fields(mesh, layout, row_lo, n_local));
             reduced.set_free_null_space(self.ctx, fields)?;
             self.null_space = use_it;
         }
@@ -618,8 +619,7 @@ impl Loop<'_> {
             // carry no reaction). If not, the body moves along the unbalanced load until a
             // contact node touches: activate the first one to touch and go on; if no node
             // approaches the obstacle, there is no equilibrium.
-            let nodes = (&self.it.nodes[..], &self.set.normal[..]);
-            let balance = self.free.balance(ctx, b, nodes);
+            let balance = self.free.balance(ctx, b, &self.it.nodes, &self.set.normal);
             match balance {
                 Balance::Balanced => {
                     decision = decide(

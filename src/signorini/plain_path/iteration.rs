@@ -109,7 +109,7 @@ pub fn semismooth_newton(
     // (a stop there is confirmed by a factorised step, `StepPlan::after_stop`)
     let direct = reduced.kind().factorises();
     for step in 1..=s.section.max_steps {
-        let solved = lp.write_and_solve(ctx, p, reduced, s, (plan, step))?;
+        let solved = lp.write_and_solve(ctx, p, reduced, s, plan, step)?;
         let reused = solved.reuse.is_some() && solved.kind == SolveKind::Reuse;
         reduced.recover(sys, &lp.shifted, &lp.set, &mut lp.it)?; // (3.28)
         let touch = lp.bordered_step(reduced, step)?;
@@ -176,7 +176,8 @@ impl Loop<'_> {
         p: &ContactProblem,
         reduced: &mut ReducedSystem,
         s: &NewtonSettings,
-        (plan, step): (StepPlan, usize),
+        plan: StepPlan,
+        step: usize,
     ) -> Result<StepSolve, RunError> {
         let (mesh, layout, b, sys) = (p.mesh, p.layout, p.boundary, p.sys);
         let gram = self.set_gram();

@@ -761,16 +761,19 @@ impl Loop<'_> {
         };
         let deltas = ap.deltas();
         let forces = ap.forces_along(self.ctx, &self.it);
+        let moved = force::Moved {
+            boundary: &mut self.shifted,
+            approach: ap,
+            iterate: &mut self.it,
+        };
         let c = force::correct(
             self.ctx,
-            (self.p.sys, self.p.layout, self.p.mesh.dim),
+            self.p,
             reduced,
             &self.set,
             self.free.pins(),
             &forces,
-            &mut self.shifted,
-            ap,
-            &mut self.it,
+            moved,
         )?;
         let several = ap.pairs.len() > 1;
         for (j, p) in ap.pairs.iter().enumerate() {

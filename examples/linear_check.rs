@@ -165,12 +165,10 @@ fn solve(
         body_force,
     };
     let mut sys = assembly::assemble(comm, &layout, &problem).map_err(|e| e.to_string())?;
-    let settings = (
-        &SolverSection::default(),
-        std::path::Path::new("examples/linear_check.rs"),
-    );
-    let (u, _) =
-        solver::linear_solve(ctx, mesh, &layout, &mut sys, settings).map_err(|e| e.to_string())?;
+    let settings = SolverSection::default();
+    let file = std::path::Path::new("examples/linear_check.rs");
+    let (u, _) = solver::linear_solve(ctx, mesh, &layout, &mut sys, &settings, file)
+        .map_err(|e| e.to_string())?;
     Ok((layout, u))
 }
 

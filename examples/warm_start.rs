@@ -74,10 +74,10 @@ fn run(ctx: &Ctx, a: &Args) -> Result<serde_json::Value, RunError> {
             setup::contact_settings(case, &case.contacts, &input.material).map_err(RunError::from),
         )?;
         if session.is_none() {
-            let lasting = (mesh, layout);
             session = Some(Session::new(
                 ctx,
-                lasting,
+                mesh,
+                layout,
                 &case.solver,
                 &settings,
                 &sys.a,

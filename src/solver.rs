@@ -157,7 +157,8 @@ pub fn linear_solve(
     mesh: &Mesh,
     layout: &Layout,
     sys: &mut System,
-    (settings, file): (&SolverSection, &std::path::Path),
+    settings: &SolverSection,
+    file: &std::path::Path,
 ) -> Result<(Vector, LinearReport), RunError> {
     let t = Instant::now();
     let scale = matrix_scale(ctx, &sys.a)?;

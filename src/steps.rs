@@ -302,8 +302,8 @@ impl Stepper<'_> {
             // what the contact solves keep from one to the next: the linear solver, a condensed
             // factorisation (the matrix is assembled once; only the right-hand side is scaled)
             Some(c) => {
-                let lasting = (self.mesh, self.layout);
-                let session = Session::new(ctx, lasting, self.solver, c, &sys.a, self.mortar)?;
+                let (mesh, layout) = (self.mesh, self.layout);
+                let session = Session::new(ctx, mesh, layout, self.solver, c, &sys.a, self.mortar)?;
                 if self.solver.path == SolverPath::Schur && !session.setup().kind().factorises() {
                     let why =
                         "needs a factorisation: solver.petsc_options make the solver iterative";
@@ -509,7 +509,8 @@ impl Stepper<'_> {
                     self.mesh,
                     self.layout,
                     sys,
-                    (self.solver, &case.file),
+                    self.solver,
+                    &case.file,
                 )?;
                 Ok(Solved {
                     linear_u: Some(u),

@@ -73,7 +73,7 @@ pub fn set_up(
         .collect();
     let reach = Reach::of(ctx, settings.pairs.len(), &slaves);
     let masters = MasterFacets::exchange(ctx, mesh, layout, settings, (fixed, &reach));
-    ctx.agree(check_overlap(mesh, layout, settings, (&slaves, &masters)).map_err(RunError::Input))?;
+    ctx.agree(check_overlap(mesh, layout, settings, &slaves, &masters).map_err(RunError::Input))?;
     let friction = settings.friction();
     let mut master_fixed = MasterFixed::new();
     let mut rows_of = Vec::new();
@@ -83,8 +83,14 @@ pub fn set_up(
             pair_rows(
                 mesh,
                 layout,
-                (settings, p, slave),
-                (&masters, reach.radius[p], fixed),
+                settings,
+                PairSides {
+                    p,
+                    own: slave,
+                    masters: &masters,
+                    radius: reach.radius[p],
+                },
+                fixed,
             )
             .map_err(RunError::Input),
         )?;
@@ -225,13 +231,30 @@ fn check_pairs(mesh: &Mesh, settings: &ContactSettings, pairs: &[usize]) -> Resu
     Ok(())
 }
 
-/// The slave rows of pair `p` for this rank's owned slave nodes the master covers. Local.
+/// One body pair's two sides as this rank holds them: pair `p`, its owned slave facets, the
+/// master facets received and the search radius of the pair's reach.
+struct PairSides<'a> {
+    p: usize,
+    own: &'a SlaveFacets,
+    masters: &'a MasterFacets,
+    radius: f64,
+}
+
+/// The slave rows of pair `sides.p` for this rank's owned slave nodes the master covers.
+/// Local.
 fn pair_rows(
     mesh: &Mesh,
     layout: &Layout,
-    (settings, p, own): (&ContactSettings, usize, &SlaveFacets),
-    (masters, radius, fixed): (&MasterFacets, f64, &[f64]),
+    settings: &ContactSettings,
+    sides: PairSides,
+    fixed: &[f64],
 ) -> Result<HashMap<usize, SlaveRow>, InputError> {
+    let PairSides {
+        p,
+        own,
+        masters,
+        radius,
+    } = sides;
     let pair = &settings.pairs[p];
     let dim = mesh.dim;
     let bad = |what: String| InputError::new(&settings.file, what).with_key(pair.key("group"));
@@ -377,7 +400,8 @@ fn check_overlap(
     mesh: &Mesh,
     layout: &Layout,
     settings: &ContactSettings,
-    (slaves, masters): (&[(usize, SlaveFacets)], &MasterFacets),
+    slaves: &[(usize, SlaveFacets)],
+    masters: &MasterFacets,
 ) -> Result<(), InputError> {
     let master_nodes = masters.node_pairs();
     for (p, own) in slaves {

@@ -249,7 +249,8 @@ pub fn build<W>(
     mesh: &Mesh,
     layout: &Layout,
     settings: &ContactSettings,
-    (fixed, at_start): (&[f64], impl FnOnce(&[ContactNode]) -> W),
+    fixed: &[f64],
+    at_start: impl FnOnce(&[ContactNode]) -> W,
 ) -> Result<(ContactBoundary, W), RunError> {
     let dim = mesh.dim;
     let file = settings.file.as_path();
@@ -274,13 +275,12 @@ pub fn build<W>(
             // the rows dual mortar gave the pair (crate::mortar: covered nodes that are contact
             // nodes by the rule below); an uncovered node has none
             if let Some(r) = t.rows.get(&v) {
-                nodes.push(contact_node(
-                    mesh,
-                    (v, i, lo),
-                    p,
-                    pair,
-                    (r.normal, r.gap, r.weight),
-                ));
+                let at = Touch {
+                    normal: r.normal,
+                    gap: r.gap,
+                    weight: r.weight,
+                };
+                nodes.push(contact_node(mesh, v, i, lo, p, pair, at));
             } else if prescribed {
                 excluded += 1;
             }
@@ -307,8 +307,12 @@ pub fn build<W>(
             excluded += 1;
             continue;
         }
-        let at = (proj.normal, proj.gap, weight[v]);
-        nodes.push(contact_node(mesh, (v, i, lo), p, pair, at));
+        let at = Touch {
+            normal: proj.normal,
+            gap: proj.gap,
+            weight: weight[v],
+        };
+        nodes.push(contact_node(mesh, v, i, lo, p, pair, at));
     }
     let counts: Vec<u64> = ctx.gather(nodes.len() as u64);
     let ex_all = ctx.sum_usize(excluded);
@@ -333,17 +337,31 @@ pub fn build<W>(
     Ok((b, warned))
 }
 
+/// How a contact node meets its obstacle: its normal n (into the body; unit), gap g_h^k (3.3)
+/// and weight w_k — against a rigid obstacle its projection and ∫ φ_k; of a body pair its
+/// mortar row's normal, g̃_k / D_kk and D_kk.
+struct Touch {
+    normal: [f64; 3],
+    gap: f64,
+    weight: f64,
+}
+
 /// The contact node of mesh node `v` (owned, local index `i`, first global node `lo`) of
-/// pair `p` with its normal n (into the body; unit), gap g_h^k (3.3) and weight w_k: against a
-/// rigid obstacle its projection and ∫ φ_k; of a body pair its mortar row's normal, g̃_k / D_kk
-/// and D_kk.
+/// pair `p`, meeting its obstacle as `at` says.
 fn contact_node(
     mesh: &Mesh,
-    (v, i, lo): (usize, usize, usize),
+    v: usize,
+    i: usize,
+    lo: usize,
     p: usize,
     pair: &crate::setup::PairSettings,
-    (normal, gap, weight): ([f64; 3], f64, f64),
+    at: Touch,
 ) -> ContactNode {
+    let Touch {
+        normal,
+        gap,
+        weight,
+    } = at;
     let dim = mesh.dim;
     ContactNode {
         node: v,

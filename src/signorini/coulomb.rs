@@ -12,7 +12,7 @@ use super::kept::KeptFactor;
 use super::plain_path::{self, ContactProblem, NewtonResult, NewtonSettings, StepInfo, WarmStart};
 use super::rigid::{self, FreeModes};
 use super::schur::candidates::Sticking;
-use super::schur::frictionless::solve_keeping;
+use super::schur::frictionless::{solve_keeping, Condensing};
 use super::schur::{self, CoulombCondensedSummary};
 use super::session::Session;
 use super::step_system::ReducedSystem;
@@ -35,7 +35,24 @@ pub enum Outcome {
     Iterated(NewtonResult, Option<usize>, Option<schur::CondensedSummary>),
 }
 
-/// Coulomb friction by `algorithm` on the reduced system: the generalised Newton (under
+/// How the case solves Coulomb friction: the algorithm and the solver section it runs under
+/// (the linear solver's reuse and path).
+#[derive(Clone, Copy)]
+pub struct CoulombMethod<'a> {
+    pub algorithm: CoulombAlgorithm,
+    pub section: &'a SolverSection,
+}
+
+/// The settings of a condensed Coulomb start ([`coulomb_start`]): Coulomb's own and those of
+/// its frictionless estimate (the frictionless law, no half-space model, the pins carrying
+/// the load friction alone holds).
+#[derive(Clone, Copy)]
+struct StartSettings<'a> {
+    coulomb: &'a NewtonSettings<'a>,
+    frictionless: &'a NewtonSettings<'a>,
+}
+
+/// Coulomb friction by `method.algorithm` on the reduced system: the generalised Newton (under
 /// newton.init = "auto" from [`coulomb_start`]) or the [`fixed_point`] on Tresca thresholds.
 /// Collective.
 pub fn solve(
@@ -43,9 +60,11 @@ pub fn solve(
     problem: &ContactProblem,
     reduced: &mut ReducedSystem,
     ns: &NewtonSettings,
-    (algorithm, solver_section): (CoulombAlgorithm, &SolverSection),
-    (session, warm): (&mut Session, Option<&WarmStart>),
+    method: CoulombMethod,
+    session: &mut Session,
+    warm: Option<&WarmStart>,
 ) -> Result<Outcome, RunError> {
+    let (algorithm, solver_section) = (method.algorithm, method.section);
     let coulomb_newton = algorithm == CoulombAlgorithm::Newton;
     if coulomb_newton && solver_section.reuse == Reuse::Always && reduced.factorises()? {
         say!(
@@ -57,7 +76,7 @@ pub fn solve(
     }
     let (start, condensed_summary) = if coulomb_newton && ns.section.init == case::NewtonInit::Auto
     {
-        coulomb_start(ctx, problem, reduced, ns, solver_section, (session, warm))?
+        coulomb_start(ctx, problem, reduced, ns, solver_section, session, warm)?
     } else {
         (Begin::Touching, None)
     };
@@ -222,7 +241,8 @@ fn coulomb_start(
     reduced: &mut ReducedSystem,
     ns: &NewtonSettings,
     solver_section: &SolverSection,
-    (session, warm): (&mut Session, Option<&WarmStart>),
+    session: &mut Session,
+    warm: Option<&WarmStart>,
 ) -> Result<(Begin, Option<schur::CondensedSummary>), RunError> {
     let fl = NewtonSettings {
         law: Law::Frictionless,
@@ -273,9 +293,17 @@ fn coulomb_start(
             drop(session.kept.take()); // no Coulomb step uses a kept factorisation here
             return Ok((Begin::Touching, None));
         }
-        return coulomb_load_step(ctx, problem, (reduced, session), (ns, &fl), w);
+        let settings = StartSettings {
+            coulomb: ns,
+            frictionless: &fl,
+        };
+        return coulomb_load_step(ctx, problem, reduced, session, settings, w);
     }
-    let passes = coulomb_passes(ctx, problem, (reduced, session), (ns, &fl), (forced, from))?;
+    let settings = StartSettings {
+        coulomb: ns,
+        frictionless: &fl,
+    };
+    let passes = coulomb_passes(ctx, problem, reduced, session, settings, forced, from)?;
     let (mut nr, summary) = match passes {
         Passes::Done(begin, summary) => return Ok((begin, summary)),
         Passes::Frictionless(nr, summary) => (nr, summary),
@@ -310,10 +338,13 @@ enum Passes {
 fn coulomb_passes(
     ctx: &Ctx,
     problem: &ContactProblem,
-    (reduced, session): (&mut ReducedSystem, &mut Session),
-    (ns, fl): (&NewtonSettings, &NewtonSettings),
-    (forced, from): (bool, &str),
+    reduced: &mut ReducedSystem,
+    session: &mut Session,
+    settings: StartSettings,
+    forced: bool,
+    from: &str,
 ) -> Result<Passes, RunError> {
+    let (ns, fl) = (settings.coulomb, settings.frictionless);
     let dim = problem.mesh.dim;
     // errors are agreed: every rank takes the same branch
     // the Coulomb iteration on the candidates needs every dof of them, the plain path none
@@ -330,17 +361,15 @@ fn coulomb_passes(
         // too many candidates' dofs for the dense tangential compliance: the predicted zone's
         // interior held sticking, the dense steps on its edge and beyond (schur/frictionless.rs)
         let held = (per > 1).then(|| passes.start_sticking());
-        let mut tried = solve_keeping(
-            ctx,
-            problem,
-            reduced,
-            fl,
-            (session, None),
-            (per, true, held),
-        );
-        if let Some(last) = last.take() {
+        let how = Condensing {
+            per,
+            steps: true,
+            stick: held,
+        };
+        let mut tried = solve_keeping(ctx, problem, reduced, fl, session, None, how);
+        if let Some((r, u, cs)) = last.take() {
             let store = &mut session.kept;
-            if let Some(done) = from_last_pass(ctx, store, &tried, last, passes.earlier) {
+            if let Some(done) = from_last_pass(ctx, store, &tried, r, u, cs, passes.earlier) {
                 return Ok(done);
             }
         }
@@ -350,7 +379,8 @@ fn coulomb_passes(
                 ctx,
                 "coulomb: the candidates' normal dofs alone in the Schur complement"
             );
-            tried = solve_keeping(ctx, problem, reduced, fl, (session, None), (1, true, None));
+            let how = Condensing::FRICTIONLESS;
+            tried = solve_keeping(ctx, problem, reduced, fl, session, None, how);
         }
         // a frictionless solve on the normal dofs alone keeps its factorisation for a next
         // load step, which no Coulomb step can use
@@ -435,7 +465,9 @@ fn from_last_pass(
     ctx: &Ctx,
     store: &mut KeptFactor,
     tried: &Result<(schur::Condensed, Option<schur::Kept>), RunError>,
-    (r, u, cs): (NewtonResult, Vec<f64>, CoulombCondensedSummary),
+    r: NewtonResult,
+    u: Vec<f64>,
+    cs: CoulombCondensedSummary,
     earlier: usize,
 ) -> Option<Passes> {
     let mut summary = match tried {
@@ -530,10 +562,12 @@ fn iterative_start(
 fn coulomb_load_step(
     ctx: &Ctx,
     problem: &ContactProblem,
-    (reduced, session): (&mut ReducedSystem, &mut Session),
-    (ns, fl): (&NewtonSettings, &NewtonSettings),
+    reduced: &mut ReducedSystem,
+    session: &mut Session,
+    settings: StartSettings,
     warm: &WarmStart,
 ) -> Result<(Begin, Option<schur::CondensedSummary>), RunError> {
+    let (ns, fl) = (settings.coulomb, settings.frictionless);
     let dim = problem.mesh.dim;
     // the nodes that slipped in the step before are never held sticking (c_h's global order)
     let release = gathered(ctx, warm.nodes.iter().map(|r| r.active && r.slip));
@@ -549,14 +583,12 @@ fn coulomb_load_step(
     loop {
         let held = passes.sticking(0);
         // the previous step's factorisation where it holds (schur::round::reused), else a new one
-        let tried = solve_keeping(
-            ctx,
-            problem,
-            reduced,
-            fl,
-            (&mut *session, Some(warm)),
-            (dim, false, Some(held)),
-        );
+        let how = Condensing {
+            per: dim,
+            steps: false,
+            stick: Some(held),
+        };
+        let tried = solve_keeping(ctx, problem, reduced, fl, session, Some(warm), how);
         let (mut summary, mut kept) = match tried {
             Ok((schur::Condensed::Factorised(s), Some(kept))) => (s, kept),
             Ok((schur::Condensed::Fallback(mut s), _))

@@ -15,6 +15,14 @@ use nalgebra::{DMatrix, DVector, SymmetricEigen};
 use std::collections::HashSet;
 use std::time::Instant;
 
+/// The limits of a dense iteration: the complementarity parameter c > 0 and the number of
+/// steps it may take (newton.max_steps).
+#[derive(Clone, Copy, Debug)]
+pub struct DenseLimits {
+    pub c: f64,
+    pub max_steps: usize,
+}
+
 /// Algorithm 1 on the condensed system (module note): C (n × n), d₀, the gaps, the free
 /// modes' normal parts G (n × m_z), the load in them φ = zᵀ Rᵀ f and its scale, c.
 pub struct Dense<'a> {
@@ -170,16 +178,27 @@ impl DenseRun {
     }
 }
 
+/// What (3.21) and (3.23) read besides a step's u_n and λ_n, fixed over a dense iteration:
+/// the candidates' gaps and the complementarity parameter c.
+#[derive(Clone, Copy)]
+struct Complementarity<'a> {
+    gap: &'a [f64],
+    c: f64,
+}
+
 /// (3.21) and (3.23) on every candidate from a step's u_n and λ_n on the set `active`: the
 /// next set and how many nodes change; the step's record (step, |A_n|, changed, ‖C_n‖₂, the
 /// seconds since `t`) pushed onto `steps`. Local.
 fn update(
     active: &[bool],
-    (u_n, lambda): (&[f64], &[f64]),
-    (gap, c): (&[f64], f64),
-    (step, t): (usize, Instant),
+    u_n: &[f64],
+    lambda: &[f64],
+    data: Complementarity,
+    step: usize,
+    t: Instant,
     steps: &mut Vec<(usize, usize, usize, f64, f64)>,
 ) -> (Vec<bool>, usize) {
+    let Complementarity { gap, c } = data;
     let mut next = active.to_vec();
     let mut changed = 0;
     let mut res2 = 0.0;
@@ -246,9 +265,14 @@ impl Primal<'_> {
             };
             let (next, changed) = update(
                 &active,
-                (&u, &lambda),
-                (self.gap, self.c),
-                (step, t),
+                &u,
+                &lambda,
+                Complementarity {
+                    gap: self.gap,
+                    c: self.c,
+                },
+                step,
+                t,
                 &mut steps,
             );
             if changed == 0 {
@@ -394,9 +418,14 @@ impl Dense<'_> {
             };
             let (mut next, changed) = update(
                 &active,
-                (&u_n, &lambda),
-                (self.gap, self.c),
-                (step, t),
+                &u_n,
+                &lambda,
+                Complementarity {
+                    gap: self.gap,
+                    c: self.c,
+                },
+                step,
+                t,
                 &mut steps,
             );
             if changed == 0 {

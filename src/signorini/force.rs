@@ -44,13 +44,12 @@
 
 use super::active_set::{ActiveSet, Iterate};
 use super::boundary::{ContactBoundary, ContactNode};
+use super::plain_path::ContactProblem;
 use super::rigid::{ApproachCoupling, BodyModes, Pin};
 use super::step_system::ReducedSystem;
-use crate::assembly::System;
 use crate::error::{InputError, RunError};
 use crate::geom::dot;
 use crate::par::Ctx;
-use crate::partition::Layout;
 use std::path::Path;
 
 /// The prescribed force of a solve.
@@ -453,26 +452,38 @@ fn solve_small(mut k: Vec<Vec<f64>>, mut r: Vec<f64>) -> Option<Vec<f64>> {
     x.iter().all(|v| v.is_finite()).then_some(x)
 }
 
+/// What a force step ([`correct`]) moves: the contact boundary (its gaps at the obstacles'
+/// approaches), the approaches δ and the iterate.
+pub struct Moved<'a> {
+    pub boundary: &'a mut ContactBoundary,
+    pub approach: &'a mut Approach,
+    pub iterate: &'a mut Iterate,
+}
+
 /// The force step after the solve of `set` at δ_ℓ (`it` recovered from it), the bordered
 /// system [S, s; rᵀ, 0] of (3.29) with one border row and column per force-controlled pair
 /// that has an active node, solved by block elimination: the lift u¹_j of each such pair (one
 /// more solve on the same factorisation each), the k × k system Σ_j P¹_ij Δδ_j = |F_i| − P_i
 /// with P¹_ij = Σ_{k ∈ pair i} (A u¹_j)_k·e_i for the δ's, u ← u + Σ_j Δδ_j u¹_j in `reduced`,
 /// λ recovered again (3.28). A pair without an active node instead moves to the touching δ.
-/// `b` gets the gaps at the new δ's. `forces`: the iterate's contact forces along the e_j
+/// `moved.boundary` gets the gaps at the new δ's (`p` gives the system, layout and dimension;
+/// its own boundary is not read). `forces`: the iterate's contact forces along the e_j
 /// ([`Approach::forces_along`]). Collective.
-#[allow(clippy::too_many_arguments)]
 pub fn correct(
     ctx: &Ctx,
-    (sys, layout, dim): (&System, &Layout, usize),
+    p: &ContactProblem,
     reduced: &mut ReducedSystem,
     set: &ActiveSet,
     pins: &[Pin],
     forces: &[f64],
-    b: &mut ContactBoundary,
-    ap: &mut Approach,
-    it: &mut Iterate,
+    moved: Moved,
 ) -> Result<Correction, RunError> {
+    let (sys, layout, dim) = (p.sys, p.layout, p.mesh.dim);
+    let Moved {
+        boundary: b,
+        approach: ap,
+        iterate: it,
+    } = moved;
     let counts = ap.active_counts(ctx, set);
     let held: Vec<usize> = (0..ap.pairs.len()).filter(|&j| counts[j] > 0).collect();
     let mut c = Correction {

@@ -24,7 +24,7 @@
 
 use super::active_set::Iterate;
 use super::boundary::ContactBoundary;
-use super::dense::{coarsen, Dense, End};
+use super::dense::{coarsen, Dense, DenseLimits, End};
 use super::rigid::FreeModes;
 use crate::error::RunError;
 use crate::mesh::Mesh;
@@ -270,6 +270,34 @@ const TAG: usize = 11;
 /// Force control of one pair in the model: the direction e, |F| and the pair.
 type PairForce = ([f64; 3], f64, usize);
 
+/// The exact solve a model run starts from: the contact boundary as the solve saw it, its
+/// iterate, and the solve's active set for a correction ([`correct`]; `None` for a prediction,
+/// all nodes inactive).
+#[derive(Clone, Copy)]
+struct Anchor<'a> {
+    boundary: &'a ContactBoundary,
+    iterate: &'a Iterate,
+    active: Option<&'a [bool]>,
+}
+
+/// The node records gathered on every rank ([`REC`] values per contact node,
+/// [`gather_records`]) and beside them the free modes' normal parts G (m_z per node).
+#[derive(Clone, Copy)]
+struct Records<'a> {
+    all: &'a [f64],
+    g_all: &'a [f64],
+}
+
+/// What one run of the model on rank 0 solves ([`Model::solve`]): the free modes' count m_z,
+/// the dense iteration's limits, the force-controlled pairs (e, |F|, pair) and whether the
+/// model grows while its contact zone reaches its border.
+struct ModelRun<'a> {
+    mz: usize,
+    limits: DenseLimits,
+    force: &'a [PairForce],
+    grow: bool,
+}
+
 /// The predicted normal set of this rank's contact nodes after the first solve (`it`, on the
 /// boundary `b` as the solve saw it, all nodes inactive), or `None` when the model does not
 /// apply (no node penetrates, the dense iteration did not converge); and the record.
@@ -280,10 +308,15 @@ pub fn predict(
     b: &ContactBoundary,
     it: &Iterate,
     free: &FreeModes,
-    (c, max_steps): (f64, usize),
+    limits: DenseLimits,
     force: &[PairForce],
 ) -> Result<(Option<Vec<bool>>, PredictorStep), RunError> {
-    run_model(ctx, hs, (b, it, None), free, (c, max_steps), force)
+    let anchor = Anchor {
+        boundary: b,
+        iterate: it,
+        active: None,
+    };
+    run_model(ctx, hs, anchor, free, limits, force)
 }
 
 /// The model as a correction of an exact step (frictionless, no force control): after the
@@ -296,29 +329,37 @@ pub fn predict(
 pub fn correct(
     ctx: &Ctx,
     hs: &HalfSpace,
-    (b, it, active): (&ContactBoundary, &Iterate, &[bool]),
+    b: &ContactBoundary,
+    it: &Iterate,
+    active: &[bool],
     free: &FreeModes,
-    limits: (f64, usize),
+    limits: DenseLimits,
 ) -> Result<(Option<Vec<bool>>, PredictorStep), RunError> {
-    run_model(ctx, hs, (b, it, Some(active)), free, limits, &[])
+    let anchor = Anchor {
+        boundary: b,
+        iterate: it,
+        active: Some(active),
+    };
+    run_model(ctx, hs, anchor, free, limits, &[])
 }
 
 /// [`predict`] (`active` = None) or [`correct`]. Collective.
 fn run_model(
     ctx: &Ctx,
     hs: &HalfSpace,
-    (b, it, active): (&ContactBoundary, &Iterate, Option<&[bool]>),
+    anchor: Anchor,
     free: &FreeModes,
-    (c, max_steps): (f64, usize),
+    limits: DenseLimits,
     force: &[PairForce],
 ) -> Result<(Option<Vec<bool>>, PredictorStep), RunError> {
+    let (b, active) = (anchor.boundary, anchor.active);
     let t = Instant::now();
     let mz = if free.floats() {
         free.dirichlet_free().ncols()
     } else {
         0
     };
-    let (all, g_all) = gather_records(ctx, b, it, free, active);
+    let (all, g_all) = gather_records(ctx, b, anchor.iterate, free, active);
     let n = all.len() / REC;
     // Under force control nothing penetrates before the approach is known: the model grows
     // from MIN_MODEL_NODES (by MODEL_MARGIN) while its contact zone reaches its border.
@@ -342,8 +383,17 @@ fn run_model(
         let mut packed: Vec<f64> = ctx
             .on_root_wide(model.m() + mz, || {
                 super::dense::guarded("predictor-model", || {
-                    let recs = (&all[..], &g_all[..]);
-                    model.solve(recs, &packed_c, free, (mz, c, max_steps), (force, grow))
+                    let recs = Records {
+                        all: &all,
+                        g_all: &g_all,
+                    };
+                    let run = ModelRun {
+                        mz,
+                        limits,
+                        force,
+                        grow,
+                    };
+                    model.solve(recs, &packed_c, free, &run)
                 })
                 .unwrap_or_else(|_| {
                     let mut failed = vec![0.0; head];
@@ -446,7 +496,7 @@ pub fn locate(
     b: &ContactBoundary,
     free: &FreeModes,
     phi: &[f64],
-    (c, max_steps): (f64, usize),
+    limits: DenseLimits,
 ) -> Result<Option<(Vec<f64>, usize)>, RunError> {
     let t = Instant::now();
     let mz = free.dirichlet_free().ncols();
@@ -471,7 +521,11 @@ pub fn locate(
         packed = ctx
             .on_root_wide(model.m(), || {
                 super::dense::guarded("locate-model", || {
-                    model.locate((&all, &g_all), &packed_c, free, phi, (c, max_steps))
+                    let recs = Records {
+                        all: &all,
+                        g_all: &g_all,
+                    };
+                    model.locate(recs, &packed_c, free, phi, limits)
                 })
                 .unwrap_or_default()
             })
@@ -625,12 +679,14 @@ impl Model {
     /// empty.
     fn locate(
         &self,
-        (all, g_all): (&[f64], &[f64]),
+        recs: Records,
         packed_c: &[f64],
         free: &FreeModes,
         phi: &[f64],
-        (c, max_steps): (f64, usize),
+        limits: DenseLimits,
     ) -> Vec<f64> {
+        let Records { all, g_all } = recs;
+        let DenseLimits { c, max_steps } = limits;
         let m = self.m();
         let mz = phi.len();
         let r = |i: usize| &all[i * REC..(i + 1) * REC];
@@ -669,12 +725,18 @@ impl Model {
     /// represented nodes, the approach's change, flag of every contact node].
     fn solve(
         &self,
-        (all, g_all): (&[f64], &[f64]),
+        recs: Records,
         packed_c: &[f64],
         free: &FreeModes,
-        (mz, c, max_steps): (usize, f64, usize),
-        (force, grow): (&[PairForce], bool),
+        spec: &ModelRun,
     ) -> Vec<f64> {
+        let Records { all, g_all } = recs;
+        let &ModelRun {
+            mz,
+            limits: DenseLimits { c, max_steps },
+            force,
+            grow,
+        } = spec;
         let n = all.len() / REC;
         let (m, wanted) = (self.m(), self.fine.len());
         let r = |i: usize| &all[i * REC..(i + 1) * REC];

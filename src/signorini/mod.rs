@@ -439,8 +439,8 @@ fn report_solution(
     // the certificate and the output judge Coulomb's law with b_k = μ(−λ_n^k)
     let mut b = problem.boundary.clone();
     final_state::judged_bounds(law.rules(), &mut b, &nr.nodes);
-    let (displacement, approaches) =
-        place_at_approaches(&mut b, settings, force_control, &nr.approach, friction);
+    let placed = place_at_approaches(&mut b, settings, force_control, &nr.approach, friction);
+    let displacement = &placed.displacement;
     let floor = vanishing_floor(previous); // the step before's scales, for a vanishing step
     let mut state = final_state::final_state(ctx, problem.sys, &b, &nr, friction, dim, floor)?;
     report::per_pair(
@@ -449,7 +449,7 @@ fn report_solution(
         &b,
         &nr.nodes,
         &state.table,
-        (&displacement, &approaches),
+        &placed,
         &mut state.contact,
     );
     let judged = ContactProblem {
@@ -473,27 +473,20 @@ fn report_solution(
         settings,
         &b,
         &nr.nodes,
-        &displacement,
+        displacement,
     ));
     let delta = match previous.zip(prev_u) {
         Some((prev, u_prev)) => Some(step_delta(
             prev,
             &nr.nodes,
-            &displacement,
+            displacement,
             &nr.u.to_local_vec()?,
             &u_prev,
         )),
         None => None,
     };
     Ok(ContactSolution {
-        result: report::contact_result(
-            ctx,
-            (mesh, layout, settings),
-            &b,
-            &nr.nodes,
-            friction,
-            &state.table,
-        ),
+        result: report::contact_result(ctx, mesh, layout, settings, &b, &nr.nodes, &state.table),
         u: nr.u,
         report: ContactReport {
             newton,
@@ -508,7 +501,7 @@ fn report_solution(
         nodes: nr.nodes,
         delta,
         predict: 0.0,
-        obstacle_displacement: displacement,
+        obstacle_displacement: placed.displacement,
         warnings: warned,
     })
 }
@@ -526,7 +519,7 @@ pub fn contact_boundary(
 ) -> Result<(ContactBoundary, Vec<Warning>), RunError> {
     let start =
         |nodes: &[boundary::ContactNode]| warn::start_warnings(ctx, mesh, layout, settings, nodes);
-    let (b, warned) = boundary::build(ctx, mesh, layout, settings, (fixed, start))?;
+    let (b, warned) = boundary::build(ctx, mesh, layout, settings, fixed, start)?;
     log_boundary(ctx, &b, settings, mesh.dim);
     // the approaches' starts do not matter here: only the forces' directions
     if let Some(fc) = force::unreached(ctx, &b, &force_control(settings, None)) {
@@ -545,7 +538,7 @@ fn place_at_approaches(
     force_control: &[force::ForceControl],
     approach: &[f64],
     friction: bool,
-) -> (Vec<[f64; 3]>, Vec<Option<f64>>) {
+) -> report::Placement {
     let mut displacement = settings.displacements();
     let mut approaches = vec![None; settings.pairs.len()];
     for (&delta, fc) in approach.iter().zip(force_control) {
@@ -561,7 +554,10 @@ fn place_at_approaches(
             }
         }
     }
-    (displacement, approaches)
+    report::Placement {
+        displacement,
+        approach: approaches,
+    }
 }
 
 /// Force control of this solve (`contact.force`), one per force-controlled pair in pair
@@ -644,8 +640,12 @@ fn run_method(
                     problem,
                     &mut reduced,
                     ns,
-                    (algorithm, solver_section),
-                    (session, warm),
+                    coulomb::CoulombMethod {
+                        algorithm,
+                        section: solver_section,
+                    },
+                    session,
+                    warm,
                 )?,
                 None => normal_and_tresca(ctx, problem, &mut reduced, ns, choice, session, warm)?,
             };

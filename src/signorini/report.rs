@@ -201,15 +201,18 @@ pub fn fields(
 }
 
 /// The contact result of this rank for the output layer: the contact surface of the pairs'
-/// groups, the fields on its nodes, the whole table. Collective.
+/// groups, the fields on its nodes (the tangential ones with friction), the whole table.
+/// Collective.
 pub fn contact_result(
     ctx: &Ctx,
-    (mesh, layout, settings): (&Mesh, &Layout, &ContactSettings),
+    mesh: &Mesh,
+    layout: &Layout,
+    settings: &ContactSettings,
     b: &ContactBoundary,
     res: &[NodeResult],
-    friction: bool,
     table: &Table,
 ) -> ContactResult {
+    let friction = settings.friction();
     let groups: Vec<&str> = settings.pairs.iter().map(|p| p.group.as_str()).collect();
     let s = surface(ctx, mesh, layout, &groups, &b.on_contact_boundary);
     ContactResult {
@@ -605,9 +608,15 @@ pub struct PairSummary {
     pub contact_area: Option<f64>,
 }
 
+/// Every pair's obstacle where the solve left it: its displacement d and, under force
+/// control, its approach δ (`None` for the other pairs).
+pub struct Placement {
+    pub displacement: Vec<[f64; 3]>,
+    pub approach: Vec<Option<f64>>,
+}
+
 /// Fills summary.json's obstacle displacement and approach of `contact` and, with several
-/// pairs, its per-pair numbers (`displacement`: each pair's d; `approach`: each pair's δ
-/// under force control, `None` for the others). `contact.approach` is the δ of the one pair
+/// pairs, its per-pair numbers (`placed`: each pair's d and δ). `contact.approach` is the δ of the one pair
 /// under force control (with several such pairs each has its own in `pairs`). Collective.
 pub fn per_pair(
     ctx: &Ctx,
@@ -615,9 +624,10 @@ pub fn per_pair(
     b: &ContactBoundary,
     res: &[NodeResult],
     table: &Table,
-    (displacement, approach): (&[[f64; 3]], &[Option<f64>]),
+    placed: &Placement,
     contact: &mut ContactSummary,
 ) {
+    let (displacement, approach) = (&placed.displacement, &placed.approach);
     let dim = table.dim;
     let moves = |p: &crate::setup::PairSettings| p.motion.is_some() || p.force.is_some();
     contact.approach = match approach.iter().flatten().collect::<Vec<_>>().as_slice() {

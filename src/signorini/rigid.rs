@@ -495,7 +495,8 @@ impl FreeModes {
         &self,
         ctx: &Ctx,
         b: &ContactBoundary,
-        (nodes, active): (&[NodeResult], &[bool]),
+        nodes: &[NodeResult],
+        active: &[bool],
     ) -> Balance {
         let (mm, q) = (self.count(), &self.q);
         let mf = q.ncols();
@@ -668,7 +669,8 @@ impl FreeModes {
         &self,
         mesh: &Mesh,
         layout: &Layout,
-        (row_lo, n_local): (usize, usize),
+        row_lo: usize,
+        n_local: usize,
     ) -> Vec<Vec<f64>> {
         let (dim, m) = (mesh.dim, self.count());
         let mut fields = vec![vec![0.0; n_local]; self.q.ncols()];

@@ -36,7 +36,8 @@ impl Session {
     /// `solver` section ([`LinearSetup::for_section`]), nothing kept yet. Collective.
     pub fn new(
         ctx: &Ctx,
-        (mesh, layout): (&Mesh, &Layout),
+        mesh: &Mesh,
+        layout: &Layout,
         section: &SolverSection,
         settings: &ContactSettings,
         a: &Matrix,

@@ -109,7 +109,7 @@ pub fn semismooth_newton(
     // (a stop there is confirmed by a factorised step, `StepPlan::after_stop`)
     let direct = reduced.kind().factorises();
     for step in 1..=s.section.max_steps {
-        let solved = lp.write_and_solve(ctx, p, reduced, s, (plan, step))?;
+        let solved = lp.write_and_solve(ctx, p, reduced, s, plan, step)?;
         let reused = solved.reuse.is_some() && solved.kind == SolveKind::Reuse;
         reduced.recover(sys, &lp.shifted, &lp.set, &mut lp.it)?; // (3.28)
         let touch = lp.bordered_step(reduced, step)?;
@@ -176,7 +176,8 @@ impl Loop<'_> {
         p: &ContactProblem,
         reduced: &mut ReducedSystem,
         s: &NewtonSettings,
-        (plan, step): (StepPlan, usize),
+        plan: StepPlan,
+        step: usize,
     ) -> Result<StepSolve, RunError> {
         let (mesh, layout, b, sys) = (p.mesh, p.layout, p.boundary, p.sys);
         let gram = self.set_gram();
@@ -352,7 +353,7 @@ impl<'a> Loop<'a> {
                 .map(|p| (p.dir, p.magnitude, p.pair))
                 .collect()
         });
-        let limits = (s.c, s.section.max_steps);
+        let limits = s.dense_limits();
         let (set, rec) = halfspace::predict(
             self.ctx,
             hs,
@@ -390,9 +391,9 @@ impl<'a> Loop<'a> {
         if self.approach.is_some() || self.corrections.1 || ctx.sum_usize(update.changed) == 0 {
             return Ok(None);
         }
-        let limits = (self.s.c, self.s.section.max_steps);
-        let cur = (&self.shifted, &self.it, self.set.normal.as_slice());
-        let (set, rec) = halfspace::correct(ctx, hs, cur, &self.free, limits)?;
+        let (b, it, active) = (&self.shifted, &self.it, self.set.normal.as_slice());
+        let limits = self.s.dense_limits();
+        let (set, rec) = halfspace::correct(ctx, hs, b, it, active, &self.free, limits)?;
         if let Some(model) = set.filter(|_| !rec.truncated) {
             let next: Vec<bool> = (model.iter().zip(&self.set.normal))
                 .zip(&update.next.normal)
@@ -462,7 +463,8 @@ impl Loop<'_> {
             reduced.set_pins(self.p.sys, layout, pins)?;
         }
         if use_it != self.null_space || (use_it && modes_changed) {
-            let fields = use_it.then(|| self.free.free_fields(mesh, layout, reduced.local_rows()));
+            let (row_lo, n_local) = reduced.local_rows();
+            let fields = use_it.then(|| self.free.free_fields(mesh, layout, row_lo, n_local));
             reduced.set_free_null_space(self.ctx, fields)?;
             self.null_space = use_it;
         }
@@ -618,8 +620,7 @@ impl Loop<'_> {
             // carry no reaction). If not, the body moves along the unbalanced load until a
             // contact node touches: activate the first one to touch and go on; if no node
             // approaches the obstacle, there is no equilibrium.
-            let nodes = (&self.it.nodes[..], &self.set.normal[..]);
-            let balance = self.free.balance(ctx, b, nodes);
+            let balance = self.free.balance(ctx, b, &self.it.nodes, &self.set.normal);
             match balance {
                 Balance::Balanced => {
                     decision = decide(
@@ -760,16 +761,19 @@ impl Loop<'_> {
         };
         let deltas = ap.deltas();
         let forces = ap.forces_along(self.ctx, &self.it);
+        let moved = force::Moved {
+            boundary: &mut self.shifted,
+            approach: ap,
+            iterate: &mut self.it,
+        };
         let c = force::correct(
             self.ctx,
-            (self.p.sys, self.p.layout, self.p.mesh.dim),
+            self.p,
             reduced,
             &self.set,
             self.free.pins(),
             &forces,
-            &mut self.shifted,
-            ap,
-            &mut self.it,
+            moved,
         )?;
         let several = ap.pairs.len() > 1;
         for (j, p) in ap.pairs.iter().enumerate() {

@@ -9,6 +9,7 @@ use crate::partition::Layout;
 use crate::petsc::Vector;
 use crate::signorini::active_set::Law;
 use crate::signorini::boundary::{ContactBoundary, NodeResult};
+use crate::signorini::dense::DenseLimits;
 use crate::signorini::force::ForceControl;
 use crate::signorini::halfspace::{HalfSpace, PredictorStep};
 use crate::signorini::rigid::Pin;
@@ -45,6 +46,14 @@ pub struct NewtonSettings<'a> {
 impl NewtonSettings<'_> {
     pub fn friction(&self) -> bool {
         self.law.friction()
+    }
+
+    /// c and newton.max_steps as the limits of a dense iteration.
+    pub fn dense_limits(&self) -> DenseLimits {
+        DenseLimits {
+            c: self.c,
+            max_steps: self.section.max_steps,
+        }
     }
 }
 /// A warm start: the converged state of a previous solve on the same mesh and boundary

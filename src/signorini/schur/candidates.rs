@@ -6,7 +6,7 @@ use crate::contact::Frame;
 use crate::linsolve::{NumericSchur, SymbolicSchur};
 use crate::par::Ctx;
 use crate::petsc::lapack::DenseCholesky;
-use crate::petsc::mumps::NodeBases;
+use crate::petsc::mumps::{NodeBases, SchurRequest};
 use crate::petsc::ndfactor::node_order;
 use crate::say;
 use crate::signorini::boundary::ContactBoundary;
@@ -21,6 +21,20 @@ use nalgebra::{DMatrix, DVector};
 use std::borrow::Cow;
 use std::collections::HashSet;
 use std::time::Instant;
+
+/// The size of the system a solve condenses: the dimension and the global number of rows.
+pub(super) struct Shape {
+    pub(super) dim: usize,
+    pub(super) n_rows: usize,
+}
+
+/// The candidates a round adds ([`Compliance::grow`]) and how the set came about (for the
+/// log).
+#[derive(Clone, Copy)]
+pub(super) struct Added<'a> {
+    pub(super) nodes: &'a [usize],
+    pub(super) why: &'a str,
+}
 
 /// [`MAX_SCHUR_DOFS`], or the test-only limit that replaces it (`crate::fault::limit`).
 pub(super) fn max_schur_dofs() -> usize {
@@ -216,7 +230,8 @@ impl Growth {
         &self,
         ctx: &Ctx,
         changed: &[u64],
-        (max_flops, per): (f64, usize),
+        max_flops: f64,
+        per: usize,
         splits: bool,
     ) -> Option<Vec<bool>> {
         // friction holds a zone only once every dof of the candidates is too many (the
@@ -569,10 +584,9 @@ impl Compliance {
         Ok(())
     }
 
-    /// Adds the candidates `new` and factorises K_p (the reduced system's matrix, global size
-    /// `n_rows`) anew in the candidates' frames with the Schur complement on their normal dofs;
-    /// then C and d₀ (`f_root`: f on rank 0, empty elsewhere; `why`: how the set came about,
-    /// for the log). `Err` (the same on every rank): why the condensed path gives up (MUMPS
+    /// Adds the candidates `added` and factorises K_p (the reduced system's matrix, of
+    /// `shape`) anew in the candidates' frames with the Schur complement on their normal dofs;
+    /// then C and d₀ (`f_root`: f on rank 0, empty elsewhere). `Err` (the same on every rank): why the condensed path gives up (MUMPS
     /// failed, the dense work would cost more than the factorisation, S not positive
     /// definite). Collective.
     pub(super) fn grow(
@@ -580,10 +594,12 @@ impl Compliance {
         ctx: &Ctx,
         reduced: &ReducedSystem,
         cand: &Candidates,
-        new: &[usize],
-        (dim, n_rows): (usize, usize),
-        (f_root, why): (&[f64], &str),
+        added: Added,
+        shape: &Shape,
+        f_root: &[f64],
     ) -> Result<(), Stop> {
+        let (new, why) = (added.nodes, added.why);
+        let (dim, n_rows) = (shape.dim, shape.n_rows);
         let dofs = self.add_candidates(cand, new, dim);
         self.factor = None; // the old factorisation's memory first
         self.cmat = DMatrix::zeros(0, 0);
@@ -633,7 +649,13 @@ impl Compliance {
             Some(o) if ctx.rank == 0 && !o.is_empty() => Some(dof_order(o, dofs, dim, n_rows)),
             _ => None,
         };
-        let factor = reduced.analyse_schur(ctx, (n_rows, dofs), (order.as_deref(), &self.bases));
+        let request = SchurRequest {
+            n: n_rows,
+            schur_rows: dofs,
+            order: order.as_deref(),
+            bases: &self.bases,
+        };
+        let factor = reduced.analyse_schur(ctx, &request);
         drop(order);
         ctx.agree_message(factor)
             .map_err(|e| Stop::failed(format!("MUMPS' analysis of K_p failed: {e}")))
@@ -753,8 +775,10 @@ impl Compliance {
         &mut self,
         ctx: &Ctx,
         cand: &Candidates,
-        (f_root, n_local): (&[f64], usize),
-        (lam, x_s): (&[f64], &[f64]),
+        f_root: &[f64],
+        n_local: usize,
+        lam: &[f64],
+        x_s: &[f64],
     ) -> Result<Vec<f64>, String> {
         let (rhs_root, x_s) = if ctx.rank == 0 {
             let mut rhs = self.rotated(f_root);

@@ -189,8 +189,10 @@ pub(crate) fn solve(
         ctx,
         &mut history,
         &run.steps,
-        ("C", "condensed Coulomb"),
-        (n, 0),
+        "C",
+        "condensed Coulomb",
+        n,
+        0,
     );
     record_f5(ctx, &run, &mut summary);
     if let Err(why) = &run.end {
@@ -262,12 +264,8 @@ fn expand_run(ctx: &Ctx, kept: &mut Kept, run: &DenseCoulomb) -> Result<Vec<f64>
     } else {
         Vec::new()
     };
-    kept.comp.expand_u(
-        ctx,
-        &kept.cand,
-        (&kept.f_root, kept.n_local),
-        (&lam, &run.x_s),
-    )
+    kept.comp
+        .expand_u(ctx, &kept.cand, &kept.f_root, kept.n_local, &lam, &run.x_s)
 }
 
 /// The dense generalised Newton on rank 0 (from the warm records of a load step, or the
@@ -312,7 +310,7 @@ fn dense_phase(
             };
             match &warm_records {
                 Some(all) => {
-                    let (start, u_prev) = warm_start(all, &kept.comp.list, (&g, ns.force), dim);
+                    let (start, u_prev) = warm_start(all, &kept.comp.list, &g, ns.force, dim);
                     dense.run(&start, u_prev)
                 }
                 None => {
@@ -344,8 +342,8 @@ fn dense_phase(
 /// The condensed solve stops: said in the log, the plain path from the frictionless solution.
 fn give_up(ctx: &Ctx, mut summary: CoulombCondensedSummary, why: String) -> CoulombCondensed {
     let then = "the plain path from the frictionless solution";
-    let record = (&mut summary.outcome, &mut summary.reason);
-    fall_back(ctx, ("coulomb: condensed", then), record, why);
+    let (outcome, reason) = (&mut summary.outcome, &mut summary.reason);
+    fall_back(ctx, "coulomb: condensed", then, outcome, reason, why);
     CoulombCondensed::Fallback(summary)
 }
 
@@ -439,7 +437,7 @@ fn check(
     // the nodes beyond the candidates that change state: a new pass takes them as candidates
     // (gathered only where a state changed; the same on every rank)
     let beyond = match totals.changed > 0 {
-        true => changed_beyond(ctx, kept, b, (&set, &up.next)),
+        true => changed_beyond(ctx, kept, b, &set, &up.next),
         false => Vec::new(),
     };
     let loose = if z.ncols() > 0 {
@@ -486,7 +484,8 @@ fn changed_beyond(
     ctx: &Ctx,
     kept: &Kept,
     b: &ContactBoundary,
-    (set, next): (&ActiveSet, &ActiveSet),
+    set: &ActiveSet,
+    next: &ActiveSet,
 ) -> Vec<usize> {
     let mut mine = Vec::new();
     let mut inside = 0usize;
@@ -619,7 +618,8 @@ fn gather_records(ctx: &Ctx, nodes: &[NodeResult]) -> Vec<f64> {
 fn warm_start(
     all: &[f64],
     list: &[usize],
-    (g, force): (&DMatrix<f64>, &[ForceControl]),
+    g: &DMatrix<f64>,
+    force: &[ForceControl],
     dim: usize,
 ) -> (Vec<NodeResult>, Vec<f64>) {
     let mut u = vec![0.0; list.len() * dim];

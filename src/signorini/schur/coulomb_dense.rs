@@ -358,8 +358,10 @@ impl DenseIteration<'_> {
         let (d, n) = (self.dim, self.cb.nodes.len());
         self.end(
             &w.set,
-            (vec![0.0; n * d], Vec::new()),
-            (w.steps, w.primal),
+            vec![0.0; n * d],
+            Vec::new(),
+            w.steps,
+            w.primal,
             Err(why),
         )
     }
@@ -450,7 +452,7 @@ impl DenseIteration<'_> {
     /// whether it was accepted by the stall rule. Local (rank 0).
     fn accepted(&self, set: &ActiveSet, at: Accepted) -> DenseCoulomb {
         let x_s = self.primal_x_s(at.sys, at.u, &at.alpha);
-        let mut run = self.end(set, (at.lam, at.alpha), (at.steps, at.primal), Ok(()));
+        let mut run = self.end(set, at.lam, at.alpha, at.steps, at.primal, Ok(()));
         run.stalled = at.stalled;
         run.x_s = x_s;
         run.f5_from = at.f5_from;
@@ -460,8 +462,10 @@ impl DenseIteration<'_> {
     fn end(
         &self,
         set: &ActiveSet,
-        (lambda, mut alpha): (Vec<f64>, Vec<f64>),
-        (steps, primal_steps): (Vec<DenseStep>, usize),
+        lambda: Vec<f64>,
+        mut alpha: Vec<f64>,
+        steps: Vec<DenseStep>,
+        primal_steps: usize,
         end: Result<(), String>,
     ) -> DenseCoulomb {
         let n = self.cb.nodes.len();

@@ -30,11 +30,12 @@
 //! three solve phases (the right-hand sides gathered on rank 0, the solution scattered back),
 //! two broadcasts (S's definiteness, the dense result), one MatMult.
 
+use super::candidates::Shape;
 use super::candidates::{hold, wide, Candidates, Compliance, Growth, Sticking};
 use super::outcome::Stop;
 use super::outcome::{fallback, fallback_stop, finish, keep_solved, Condensed, Expanded, Kept};
 use super::round::{expand, factorise_round, judge, locate, refuse_floating_force};
-use super::round::{reused, Expansion, Judged, Pass, Shape};
+use super::round::{reused, Expansion, Judged, Pass};
 use super::start::{predicted_zone, prepare_base, splits_zones, start_set, PassPlan, SolveStart};
 use super::summary::{tag_key, CondensedSummary};
 use crate::case::NewtonInit;
@@ -61,7 +62,26 @@ pub fn solve(
     session: &mut Session,
     warm: Option<&WarmStart>,
 ) -> Result<Condensed, RunError> {
-    solve_keeping(ctx, p, reduced, s, (session, warm), (1, true, None)).map(|(c, _)| c)
+    solve_keeping(ctx, p, reduced, s, session, warm, Condensing::FRICTIONLESS).map(|(c, _)| c)
+}
+
+/// How one condensed solve runs ([`solve_keeping`]): the Schur variables per candidate (`per`:
+/// 1 the normal dofs, the dimension every dof), whether the frictionless steps run (`steps`),
+/// and where friction needs it the zone held sticking (`stick`).
+#[derive(Clone, Copy)]
+pub(crate) struct Condensing<'a> {
+    pub per: usize,
+    pub steps: bool,
+    pub stick: Option<Sticking<'a>>,
+}
+
+impl Condensing<'_> {
+    /// The candidates' normal dofs with the frictionless steps, no zone held sticking.
+    pub const FRICTIONLESS: Condensing<'static> = Condensing {
+        per: 1,
+        steps: true,
+        stick: None,
+    };
 }
 
 /// [`solve`] with `per` Schur variables per candidate (1: the normal dof; d: every dof, for
@@ -78,18 +98,20 @@ pub(crate) fn solve_keeping(
     p: &ContactProblem,
     reduced: &mut ReducedSystem,
     s: &NewtonSettings,
-    (session, warm): (&mut Session, Option<&WarmStart>),
-    (per, steps, stick): (usize, bool, Option<Sticking>),
+    session: &mut Session,
+    warm: Option<&WarmStart>,
+    how: Condensing,
 ) -> Result<(Condensed, Option<Kept>), RunError> {
+    let Condensing { per, steps, stick } = how;
     let (b, dim) = (p.boundary, p.mesh.dim);
     let summary = CondensedSummary::new(b.n_global);
     let free0 = FreeModes::new(ctx, p.mesh, p.layout, p.fixed, b, &reduced.f_local, s.rigid);
     refuse_floating_force(p, s, &free0)?;
     let start = start_set(p, s, &free0, warm);
-    let located = locate(ctx, (p, &mut session.located), s, &free0, warm)?;
+    let located = locate(ctx, p, &mut session.located, s, &free0, warm)?;
     let key = located.as_ref().map(|(k, _)| k.as_slice());
     let n_rows = p.layout.node_offsets.last().copied().unwrap_or(0) * dim;
-    let splits = splits_zones(&session.kept, s, warm, (per, steps, stick.is_some()));
+    let splits = splits_zones(&session.kept, s, warm, per, steps, stick.is_some());
     let sticking = stick.unwrap_or_default();
     // every contact node as the case starts (the zones' positions and order keys), gathered
     // once
@@ -311,16 +333,16 @@ impl Passes<'_> {
         let s = self.settings_of(zone);
         let on = self.at.located.as_ref().map(|(_, on)| *on);
         let on = on.filter(|_| zone.is_none());
-        let run = pass.dense(ctx, s, (first, on), (&mut *summary, history));
-        let (cand, comp, free, growth) = (&pass.cand, &mut pass.comp, &pass.free, &mut pass.growth);
-        let lambda = growth.take_dense(comp, &run);
-        match judge(ctx, self.at.p, s, (free, comp, cand.n), growth, &run)? {
+        let run = pass.dense(ctx, s, first, on, summary, history);
+        let lambda = pass.growth.take_dense(&pass.comp, &run);
+        match judge(ctx, self.at.p, s, pass, &run)? {
             Judged::Expand => {}
             Judged::Again => return Ok(RoundEnd::Again),
             Judged::Stop(stop) => return Ok(RoundEnd::Stop(stop)),
         }
+        let (cand, comp, free, growth) = (&pass.cand, &mut pass.comp, &pass.free, &mut pass.growth);
         let t = Instant::now();
-        let set = (lambda.as_slice(), growth.active.as_slice());
+        let active = growth.active.as_slice();
         let expansion = Expansion {
             s,
             free,
@@ -329,7 +351,9 @@ impl Passes<'_> {
             f_root: &pass.f_root,
             n_local: pass.rhs0.len(),
         };
-        let ex = match expand(ctx, self.at.p, reduced, expansion, set, &run.alpha)? {
+        let ex = match expand(
+            ctx, self.at.p, reduced, expansion, &lambda, active, &run.alpha,
+        )? {
             Ok(ex) => ex,
             Err(why) => return Ok(RoundEnd::Fall(why)),
         };
@@ -340,8 +364,8 @@ impl Passes<'_> {
             summary.log(ctx, cand.n, n_active);
             return Ok(RoundEnd::Settled(Box::new(ex), lambda));
         }
-        let limits = (comp.max_flops, comp.per);
-        if let Some(next) = growth.next_pass(ctx, &ex.changed, limits, self.splits) {
+        let (max_flops, per) = (comp.max_flops, comp.per);
+        if let Some(next) = growth.next_pass(ctx, &ex.changed, max_flops, per, self.splits) {
             let budget = (self.at.per > 1).then_some(self.sticking.factorisations);
             if budget.is_some_and(|b| b > 0 && summary.factorisations >= b) {
                 let n = summary.factorisations;
@@ -411,7 +435,7 @@ fn begin_pass(
         }
         _ => Vec::new(),
     };
-    let (free, rhs0) = prepare_base(ctx, (p, &mut *factors.reduced), free0, (&held, per > 1))?;
+    let (free, rhs0) = prepare_base(ctx, p, factors.reduced, free0, &held, per > 1)?;
     let f_root = ctx.gather_to_root(&rhs0); // f for MUMPS' solve phases, once per pass
     let pass_start: Vec<bool> = match zone {
         Some(z) => (0..b.nodes.len())
@@ -445,13 +469,7 @@ fn begin_pass(
     }
     let t = Instant::now();
     let (kept, order_dropped) = match warm {
-        Some(_) => reused(
-            ctx,
-            (at, factors.kept.take()),
-            (&free, &cand),
-            &f_root,
-            &held,
-        ),
+        Some(_) => reused(ctx, at, factors.kept.take(), &free, &cand, &f_root, &held),
         None => (None, None),
     };
     let mut comp = match kept {

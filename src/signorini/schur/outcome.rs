@@ -123,13 +123,9 @@ pub(super) fn fallback_stop(ctx: &Ctx, mut summary: CondensedSummary, stop: Stop
 
 /// The plain path takes over: said in the log and in the summary.
 pub(super) fn fallback(ctx: &Ctx, mut summary: CondensedSummary, why: String) -> Condensed {
-    let record = (&mut summary.outcome, &mut summary.fallback_reason);
-    fall_back(
-        ctx,
-        ("newton: condensed path", "solving on the plain path"),
-        record,
-        why,
-    );
+    let (outcome, reason) = (&mut summary.outcome, &mut summary.fallback_reason);
+    let (what, then) = ("newton: condensed path", "solving on the plain path");
+    fall_back(ctx, what, then, outcome, reason, why);
     Condensed::Fallback(summary)
 }
 
@@ -138,8 +134,10 @@ pub(super) fn fallback(ctx: &Ctx, mut summary: CondensedSummary, why: String) ->
 /// Collective (log).
 pub(crate) fn fall_back(
     ctx: &Ctx,
-    (what, then): (&str, &str),
-    (outcome, reason): (&mut &'static str, &mut Option<String>),
+    what: &str,
+    then: &str,
+    outcome: &mut &'static str,
+    reason: &mut Option<String>,
     why: String,
 ) {
     say!(ctx, "{what}: {why}; {then}");

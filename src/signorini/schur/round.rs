@@ -2,7 +2,7 @@
 //! the candidates, the dense Algorithm 1 on the compliance, the expansion of the iterate and the
 //! judgement of its set on the full system.
 
-use super::candidates::{Candidates, Compliance, Growth};
+use super::candidates::{Added, Candidates, Compliance, Growth, Shape};
 use super::outcome::{Expanded, Kept};
 use super::start::SolveStart;
 use super::stop::Stop;
@@ -43,18 +43,32 @@ impl Pass {
         &mut self,
         ctx: &Ctx,
         s: &NewtonSettings,
-        (first, located): (bool, Option<usize>),
-        (summary, history): (&mut CondensedSummary, &mut Vec<StepInfo>),
+        first: bool,
+        located: Option<usize>,
+        summary: &mut CondensedSummary,
+        history: &mut Vec<StepInfo>,
     ) -> DenseRun {
         let t = Instant::now();
         let (cand, comp, free) = (&self.cand, &mut self.comp, &self.free);
-        let active = &self.growth.active;
-        let (run, x_s) = dense_round(ctx, cand, comp, free, s, (active, first), located);
+        let from = DenseStart {
+            active: &self.growth.active,
+            nested: first,
+            located,
+        };
+        let (run, x_s) = dense_round(ctx, cand, comp, free, s, from);
         comp.x_s = x_s;
         summary.dense_seconds += t.elapsed().as_secs_f64();
         summary.record_coarse(ctx, &run);
-        let round = (comp.list.len(), free.pins().len());
-        record_steps(ctx, history, &run.steps, ("C_n", "condensed"), round);
+        let (candidates, pinned) = (comp.list.len(), free.pins().len());
+        record_steps(
+            ctx,
+            history,
+            &run.steps,
+            "C_n",
+            "condensed",
+            candidates,
+            pinned,
+        );
         run
     }
 
@@ -73,12 +87,6 @@ impl Pass {
             zone: zone.unwrap_or_default(),
         }
     }
-}
-
-/// The size of the system a solve condenses: the dimension and the global number of rows.
-pub(super) struct Shape {
-    pub(super) dim: usize,
-    pub(super) n_rows: usize,
 }
 
 /// A round's first phase: the nodes it adds (`Growth::next`) and K_p factorised with their
@@ -102,7 +110,6 @@ pub(super) fn factorise_round(
         ..
     } = pass;
     let (cand, growth, condensation) = (&*cand, &*growth, *condensation);
-    let (dim, n_rows) = (shape.dim, shape.n_rows);
     let t = Instant::now();
     let new = growth.next(cand, comp, round)?;
     if new.is_empty() && comp.factor.is_some() {
@@ -110,14 +117,11 @@ pub(super) fn factorise_round(
         summary.record_kept(ctx, comp, cand, condensation + t.elapsed().as_secs_f64());
         return Ok(());
     }
-    comp.grow(
-        ctx,
-        reduced,
-        cand,
-        &new,
-        (dim, n_rows),
-        (&f_root[..], &growth.why),
-    )?;
+    let added = Added {
+        nodes: &new,
+        why: &growth.why,
+    };
+    comp.grow(ctx, reduced, cand, added, shape, f_root)?;
     summary.factorisation_kept = false;
     summary.primal = comp.primal;
     summary.record_factorisation(comp, cand, t.elapsed().as_secs_f64());
@@ -133,17 +137,18 @@ pub(super) enum Judged {
     Stop(Stop),
 }
 
-/// A round's dense end judged: no support on a body that nothing else can hold is the
-/// case's error (force control: the obstacle never touches); a fallback of the primal form
-/// means the zone is too wide even for it. Collective (force control's check).
+/// A round's dense end judged (the round of `pass`): no support on a body that nothing else
+/// can hold is the case's error (force control: the obstacle never touches); a fallback of
+/// the primal form means the zone is too wide even for it. Collective (force control's check).
 pub(super) fn judge(
     ctx: &Ctx,
     p: &ContactProblem,
     s: &NewtonSettings,
-    (free, comp, n): (&FreeModes, &Compliance, usize),
-    growth: &mut Growth,
+    pass: &mut Pass,
     run: &DenseRun,
 ) -> Result<Judged, RunError> {
+    let (free, comp, n) = (&pass.free, &pass.comp, pass.cand.n);
+    let growth = &mut pass.growth;
     match &run.end {
         End::Converged => Ok(Judged::Expand),
         End::NoSupport(_) if comp.list.len() < n => {
@@ -177,7 +182,8 @@ pub(super) fn judge(
 /// solve (`located`). Collective.
 pub(super) fn locate(
     ctx: &Ctx,
-    (p, located): (&ContactProblem, &mut Option<halfspace::Located>),
+    p: &ContactProblem,
+    located: &mut Option<halfspace::Located>,
     s: &NewtonSettings,
     free: &FreeModes,
     warm: Option<&WarmStart>,
@@ -188,8 +194,7 @@ pub(super) fn locate(
                 return Ok(done.clone()); // the same body, load and model: located once
             }
             let phi = s.carried.map_or_else(|| free.free_load(), <[f64]>::to_vec);
-            let zone =
-                halfspace::locate(ctx, hs, p.boundary, free, &phi, (s.c, s.section.max_steps))?;
+            let zone = halfspace::locate(ctx, hs, p.boundary, free, &phi, s.dense_limits())?;
             *located = Some(zone.clone());
             Ok(zone)
         }
@@ -226,8 +231,10 @@ pub(super) fn refuse_floating_force(
 /// all-gathered data: the same on every rank).
 pub(super) fn reused(
     ctx: &Ctx,
-    (at, kept): (&SolveStart, Option<Kept>),
-    (free, cand): (&FreeModes, &Candidates),
+    at: &SolveStart,
+    kept: Option<Kept>,
+    free: &FreeModes,
+    cand: &Candidates,
     f_root: &[f64],
     held: &[bool],
 ) -> (Option<Compliance>, Option<Vec<usize>>) {
@@ -313,7 +320,15 @@ fn primal_start(
     }
 }
 
-/// Algorithm 1 on the candidates' dense system, from `active`, on rank 0; the outcome
+/// Where a round's dense iteration starts ([`dense_round`]): the set `active`, whether the
+/// nested start (coarse levels first) is taken, and the located zone's node count.
+pub(super) struct DenseStart<'a> {
+    pub(super) active: &'a [bool],
+    pub(super) nested: bool,
+    pub(super) located: Option<usize>,
+}
+
+/// Algorithm 1 on the candidates' dense system, from `from`, on rank 0; the outcome
 /// broadcast to every rank. Collective.
 pub(super) fn dense_round(
     ctx: &Ctx,
@@ -321,9 +336,13 @@ pub(super) fn dense_round(
     comp: &Compliance,
     free: &FreeModes,
     s: &NewtonSettings,
-    (active, nested): (&[bool], bool),
-    located: Option<usize>,
+    from: DenseStart,
 ) -> (DenseRun, Vec<f64>) {
+    let DenseStart {
+        active,
+        nested,
+        located,
+    } = from;
     // force control: each approach δ_j is one more free mode, its normal parts −e_j·n on its
     // pair's candidates and its load |F_j| (force.rs)
     let force: ForceModes = s
@@ -417,7 +436,8 @@ pub(super) fn expand(
     p: &ContactProblem,
     reduced: &mut ReducedSystem,
     at: Expansion,
-    (lambda, active): (&[f64], &[bool]),
+    lambda: &[f64],
+    active: &[bool],
     alpha: &[f64],
 ) -> Result<Result<Expanded, String>, RunError> {
     let Expansion {
@@ -431,7 +451,7 @@ pub(super) fn expand(
     let b = p.boundary;
     let (dim, off) = (p.mesh.dim, b.offset);
     let lam = root_multipliers(ctx, comp, lambda);
-    let w = match comp.expand_u(ctx, cand, (f_root, n_local), (&lam, &[])) {
+    let w = match comp.expand_u(ctx, cand, f_root, n_local, &lam, &[]) {
         Ok(w) => w,
         Err(why) => return Ok(Err(why)),
     };

@@ -21,7 +21,9 @@ pub(super) fn splits_zones(
     kept: &KeptFactor,
     s: &NewtonSettings,
     warm: Option<&WarmStart>,
-    (per, steps, stick): (usize, bool, bool),
+    per: usize,
+    steps: bool,
+    stick: bool,
 ) -> bool {
     let kept_allows = warm.is_none() || kept.is_empty() || kept.holds_zone();
     s.force.is_empty()
@@ -73,9 +75,11 @@ pub(super) struct PassPlan<'a> {
 /// modes (with K_p's pins) and this rank's rows of K_p's right-hand side. Collective.
 pub(super) fn prepare_base(
     ctx: &Ctx,
-    (p, reduced): (&ContactProblem, &mut ReducedSystem),
+    p: &ContactProblem,
+    reduced: &mut ReducedSystem,
     free0: &FreeModes,
-    (held, stick): (&[bool], bool),
+    held: &[bool],
+    stick: bool,
 ) -> Result<(FreeModes, Vec<f64>), RunError> {
     let (mesh, layout, b, sys) = (p.mesh, p.layout, p.boundary, p.sys);
     let mut free = free0.clone();

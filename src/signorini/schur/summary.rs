@@ -209,8 +209,10 @@ pub(crate) fn record_steps(
     ctx: &Ctx,
     history: &mut Vec<StepInfo>,
     steps: &[(usize, usize, usize, f64, f64)],
-    (residual, path): (&str, &str),
-    (candidates, pinned): (usize, usize),
+    residual: &str,
+    path: &str,
+    candidates: usize,
+    pinned: usize,
 ) {
     let base = history.len();
     for h in steps {

@@ -14,7 +14,7 @@ use crate::case::Reuse;
 use crate::linsolve::{LinearSetup, LinearSolver, SolverKind, SymbolicSchur};
 use crate::par::Ctx;
 use crate::partition::Layout;
-use crate::petsc::mumps::{NodeBases, SchurRequest};
+use crate::petsc::mumps::SchurRequest;
 use crate::petsc::{self, Matrix, PInt, SolveInfo, Vector};
 use crate::signorini::active_set::{ActiveSet, Iterate};
 use crate::signorini::boundary::ContactBoundary;
@@ -545,21 +545,11 @@ impl ReducedSystem {
     }
 
     /// The symbolic factorisation of the matrix written last with a Schur complement on
-    /// `schur_rows`, by the steps' solver ([`LinearSolver::analyse_schur`]). Collective.
-    pub fn analyse_schur(
-        &self,
-        ctx: &Ctx,
-        (n, schur_rows): (usize, &[usize]),
-        (order, bases): (Option<&[usize]>, &NodeBases),
-    ) -> petsc::Result<SymbolicSchur> {
-        let request = SchurRequest {
-            n,
-            schur_rows,
-            order,
-            bases,
-        };
+    /// `request.schur_rows` (in its order and node frames), by the steps' solver
+    /// ([`LinearSolver::analyse_schur`]). Collective.
+    pub fn analyse_schur(&self, ctx: &Ctx, request: &SchurRequest) -> petsc::Result<SymbolicSchur> {
         let root = ctx.rank == 0;
-        self.ls.analyse_schur(ctx.comm(), &self.s, &request, root)
+        self.ls.analyse_schur(ctx.comm(), &self.s, request, root)
     }
 
     /// The KSP and PC types of the steps' solver

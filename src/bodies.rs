@@ -108,7 +108,7 @@ pub fn labelled(ctx: &Ctx, mesh: &Mesh, layout: &Layout, fixed: &[f64]) -> Surve
     // (part name, body) pairs
     let mut list = Vec::new();
     if ctx.rank == 0 {
-        let (bodies, of_part) = join_parts(&all_names, &grams, &shared, &modes, (&tags, &owned));
+        let (bodies, of_part) = join_parts(&all_names, &grams, &shared, &modes, &tags, &owned);
         list.push(bodies.len() as f64);
         for b in bodies {
             list.extend([b.first_tag as f64, b.nodes as f64, b.free_modes as f64]);
@@ -300,7 +300,8 @@ fn join_parts(
     grams: &[f64],
     shared: &[u64],
     modes: &RigidModes,
-    (tags, owned): (&[u64], &[u64]),
+    tags: &[u64],
+    owned: &[u64],
 ) -> (Vec<Body>, Vec<usize>) {
     let mm = modes.m * modes.m;
     let mut index: HashMap<u64, usize> = HashMap::new();
@@ -368,7 +369,7 @@ mod tests {
         let names = [0, 10, 3, 20];
         let parts = ([1, 11, 4, 21].as_slice(), [2, 3, 4, 5].as_slice());
         let counted = |shared: &[u64]| {
-            let (list, _) = join_parts(&names, &grams, shared, &modes, parts);
+            let (list, _) = join_parts(&names, &grams, shared, &modes, parts.0, parts.1);
             let b = summed(&list);
             (b.count, b.not_held, list)
         };

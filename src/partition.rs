@@ -151,7 +151,7 @@ pub fn partition<C: Communicator>(
     let size = world.size() as usize;
     let n_cells = mesh.n_cells();
     let node_cells = NodeCells::new(mesh);
-    let cell_rank = cell_ranks(world, comm, (mesh, &node_cells), ptype)?;
+    let cell_rank = cell_ranks(world, comm, mesh, &node_cells, ptype)?;
     let (node_owner, node_offsets, order) = node_order(mesh, &cell_rank, size);
     let mut node_global = vec![0usize; mesh.n_nodes()];
     for (g, &v) in order.iter().enumerate() {
@@ -197,7 +197,8 @@ pub fn partition<C: Communicator>(
 fn cell_ranks<C: Communicator>(
     world: &C,
     comm: MPI_Comm,
-    (mesh, node_cells): (&Mesh, &NodeCells),
+    mesh: &Mesh,
+    node_cells: &NodeCells,
     ptype: &str,
 ) -> petsc::Result<Vec<u32>> {
     let (rank, size) = (world.rank() as usize, world.size() as usize);

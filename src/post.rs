@@ -39,7 +39,8 @@ pub fn cell_fields(
     layout: &Layout,
     material: &Materials,
     (nodes, vals): &CellValues,
-    (out, body_of): (&OutputSection, &[u32]),
+    out: &OutputSection,
+    body_of: &[u32],
 ) -> Vec<FieldBuf> {
     let want_stress = out.wants(OutputField::Stress);
     let want_vm = out.wants(OutputField::VonMises);

@@ -412,8 +412,8 @@ impl Stepper<'_> {
         let (ctx, case) = (self.ctx, self.case);
         let t1 = Instant::now();
         let values = post::local_cell_values(self.mesh, self.layout, solved.u())?;
-        let want = (&case.output, self.body_of);
-        let cells = post::cell_fields(self.mesh, self.layout, self.material, &values, want);
+        let (mesh, layout, material) = (self.mesh, self.layout, self.material);
+        let cells = post::cell_fields(mesh, layout, material, &values, &case.output, self.body_of);
         let mut warned = (solved.contact.as_ref())
             .map(|c| c.warnings.clone())
             .unwrap_or_default();

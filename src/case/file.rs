@@ -244,7 +244,7 @@ impl Reader<'_> {
         let contacts = self.contacts(&top)?;
         let newton = self.newton(&top)?;
         let load = self.load(&top)?;
-        self.check_schur_path(&top, &solver, (&contacts, &newton))?;
+        self.check_schur_path(&top, &solver, &contacts, &newton)?;
         if solver.method == Method::SnesVi {
             let why = if contacts.is_empty() {
                 Some("needs a [contact] section")

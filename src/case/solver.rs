@@ -341,7 +341,8 @@ impl Reader<'_> {
         &self,
         top: &Tab,
         solver: &SolverSection,
-        (contacts, newton): (&[ContactSection], &NewtonSection),
+        contacts: &[ContactSection],
+        newton: &NewtonSection,
     ) -> Res<()> {
         if solver.path != SolverPath::Schur {
             return Ok(());

@@ -82,7 +82,8 @@ impl Basis {
         ctx: &Ctx,
         mesh: &Mesh,
         layout: &Layout,
-        (rows_of, master_fixed): (&[PairRows], &MasterFixed),
+        rows_of: &[PairRows],
+        master_fixed: &MasterFixed,
         fixed: &[f64],
     ) -> Result<Basis, RunError> {
         let dim = mesh.dim;

@@ -143,7 +143,8 @@ impl MasterFacets {
         mesh: &Mesh,
         layout: &Layout,
         settings: &ContactSettings,
-        (fixed, reach): (&[f64], &Reach),
+        fixed: &[f64],
+        reach: &Reach,
     ) -> MasterFacets {
         let dim = mesh.dim;
         // every facet to send, with the ranks it goes to

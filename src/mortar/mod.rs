@@ -72,7 +72,7 @@ pub fn set_up(
         .map(|&p| (p, SlaveFacets::of(mesh, layout, &settings.pairs[p].group)))
         .collect();
     let reach = Reach::of(ctx, settings.pairs.len(), &slaves);
-    let masters = MasterFacets::exchange(ctx, mesh, layout, settings, (fixed, &reach));
+    let masters = MasterFacets::exchange(ctx, mesh, layout, settings, fixed, &reach);
     ctx.agree(check_overlap(mesh, layout, settings, &slaves, &masters).map_err(RunError::Input))?;
     let friction = settings.friction();
     let mut master_fixed = MasterFixed::new();
@@ -123,7 +123,7 @@ pub fn set_up(
         }
         rows_of.push((p, rows));
     }
-    let basis = Basis::new(ctx, mesh, layout, (&rows_of, &master_fixed), fixed)?;
+    let basis = Basis::new(ctx, mesh, layout, &rows_of, &master_fixed, fixed)?;
     for (p, rows) in rows_of {
         let Obstacle::Body(t) = &mut settings.pairs[p].obstacle else {
             unreachable!("a body pair")

@@ -20,7 +20,9 @@ use crate::par::Ctx;
 pub fn check_friction_capacity(
     ctx: &Ctx,
     b: &ContactBoundary,
-    (fixed, sys, dim): (&[f64], &System, usize),
+    fixed: &[f64],
+    sys: &System,
+    dim: usize,
     law: Law,
     forces: &[force::ForceControl],
 ) -> Result<(), RunError> {

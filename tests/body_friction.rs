@@ -169,6 +169,22 @@ fn zone(s: &Solved) -> Zone {
     }
 }
 
+/// The stick zone's c/a within [`TOL_C`] of Cattaneo's `cattaneo` and its centre within
+/// [`TOL_CENTRE`] of a.
+fn assert_stick_zone(z: &Zone, cattaneo: f64, slave: &str) {
+    assert!(
+        ((z.c / z.a) / cattaneo - 1.0).abs() < TOL_C,
+        "{slave}: c/a = {} against Cattaneo's {cattaneo}",
+        z.c / z.a
+    );
+    assert!(
+        z.centre.abs() < TOL_CENTRE * z.a,
+        "{slave}: the stick zone's centre at {:e}, a = {:e}",
+        z.centre,
+        z.a
+    );
+}
+
 /// Coulomb's law on the final step's nodes: |λ_t| = μ|λ_n| where a node slips, ≤ where it
 /// sticks, the force along Q everywhere in contact (a monotone drag).
 fn assert_coulomb(s: &Solved, what: &str) {
@@ -269,17 +285,7 @@ fn cattaneo_mindlin_between_two_cylinders_with_either_side_slave_on_1_and_2_rank
             z.a,
             hertz_a(z.p)
         );
-        assert!(
-            ((z.c / z.a) / cattaneo - 1.0).abs() < TOL_C,
-            "{slave}: c/a = {} against Cattaneo's {cattaneo}",
-            z.c / z.a
-        );
-        assert!(
-            z.centre.abs() < TOL_CENTRE * z.a,
-            "{slave}: the stick zone's centre at {:e}, a = {:e}",
-            z.centre,
-            z.a
-        );
+        assert_stick_zone(&z, cattaneo, slave);
         // the node states give the same zone within a node spacing, centred as well
         let half = 0.5 * (z.ends.1 - z.ends.0);
         assert!(
@@ -367,16 +373,6 @@ fn a_wide_contact_does_not_slip_under_pressing_and_its_stick_zone_stays_centred(
             "{slave} slave: {z:?}, c/a {:.4}, Cattaneo {cattaneo:.4}",
             z.c / z.a
         );
-        assert!(
-            z.centre.abs() < TOL_CENTRE * z.a,
-            "{slave}: the stick zone's centre at {:e}, a = {:e}",
-            z.centre,
-            z.a
-        );
-        assert!(
-            ((z.c / z.a) / cattaneo - 1.0).abs() < TOL_C,
-            "{slave}: c/a = {} against Cattaneo's {cattaneo}",
-            z.c / z.a
-        );
+        assert_stick_zone(&z, cattaneo, slave);
     }
 }

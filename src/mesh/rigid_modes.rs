@@ -141,11 +141,10 @@ pub struct BodyModes {
     pub m: usize,
     /// Per slot: the body's centre and scale.
     shapes: Vec<RigidModes>,
-    /// Per local mesh node: its body's slot, or [`NO_SLOT`].
-    slot: Vec<u32>,
-    /// Per local mesh node: its body (`u32::MAX`: none), held or not; and the body count.
+    /// Per body: its slot, or [`NO_SLOT`] (held by its Dirichlet data).
+    slot_of_body: Vec<u32>,
+    /// Per local mesh node: its body (`u32::MAX`: none), held or not.
     body: Vec<u32>,
-    bodies: usize,
     /// Per local slave node of a body pair (mesh node index): the master side it faces.
     faces: std::collections::HashMap<usize, Vec<Part>>,
 }
@@ -158,9 +157,8 @@ impl BodyModes {
             dim: shape.dim,
             m: shape.m,
             shapes: vec![shape],
-            slot: vec![0; mesh.n_nodes()],
+            slot_of_body: vec![0],
             body: vec![0; mesh.n_nodes()],
-            bodies: 1,
             faces: Default::default(),
         }
     }
@@ -171,9 +169,8 @@ impl BodyModes {
             dim,
             m: if dim == 2 { 3 } else { 6 },
             shapes: Vec::new(),
-            slot: Vec::new(),
+            slot_of_body: Vec::new(),
             body: Vec::new(),
-            bodies: 0,
             faces: Default::default(),
         }
     }
@@ -199,17 +196,12 @@ impl BodyModes {
                 });
             }
         }
-        let slot = body_of
-            .iter()
-            .map(|&b| slot_of_body.get(b as usize).copied().unwrap_or(NO_SLOT))
-            .collect();
         BodyModes {
             dim,
             m: if dim == 2 { 3 } else { 6 },
             shapes,
-            slot,
+            slot_of_body,
             body: body_of.to_vec(),
-            bodies: boxes.len(),
             faces: Default::default(),
         }
     }
@@ -226,7 +218,7 @@ impl BodyModes {
 
     /// The number of bodies (held or not).
     pub fn bodies(&self) -> usize {
-        self.bodies
+        self.slot_of_body.len()
     }
 
     /// The body of local node v (`u32::MAX`: none).
@@ -236,7 +228,8 @@ impl BodyModes {
 
     /// The slot of local node v.
     pub fn slot_of(&self, v: usize) -> u32 {
-        self.slot.get(v).copied().unwrap_or(NO_SLOT)
+        let body = self.body_of(v) as usize;
+        self.slot_of_body.get(body).copied().unwrap_or(NO_SLOT)
     }
 
     /// Records the master side that slave node v faces.

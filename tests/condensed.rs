@@ -10,6 +10,7 @@
 mod common;
 use common::*;
 use std::path::{Path, PathBuf};
+use std::time::Duration;
 
 fn hertz(level: usize) -> (PathBuf, String) {
     let mesh = repo(&format!("cases/hertz/meshes/hertz_refined_L{level}.msh"));
@@ -22,6 +23,16 @@ fn hertz(level: usize) -> (PathBuf, String) {
 /// Solves `case` on the plain path (1 rank) and condensed on `ranks`; checks the answer and
 /// the record; returns the condensed runs.
 fn same_as_plain(case: &Path, sets: &[&str], ranks: &[usize]) -> Vec<Solved> {
+    same_as_plain_env(case, sets, ranks, &[])
+}
+
+/// [`same_as_plain`] with the condensed runs' environment `env` (test-only limits).
+fn same_as_plain_env(
+    case: &Path,
+    sets: &[&str],
+    ranks: &[usize],
+    env: &[(&str, &str)],
+) -> Vec<Solved> {
     let with = |m: &str| {
         let mut v: Vec<String> = sets.iter().map(|s| s.to_string()).collect();
         v.push(format!("solver.reuse=\"{m}\""));
@@ -38,11 +49,14 @@ fn same_as_plain(case: &Path, sets: &[&str], ranks: &[usize]) -> Vec<Solved> {
     let mut out = Vec::new();
     for &np in ranks {
         let c_sets = with("condensed");
-        let c = solve(
-            np,
-            case,
-            &c_sets.iter().map(String::as_str).collect::<Vec<_>>(),
-        );
+        let tmp = tempfile::tempdir().expect("tempdir");
+        let dir = tmp.path().join("out");
+        let c_sets: Vec<&str> = c_sets.iter().map(String::as_str).collect();
+        let mut cmd = solver_command(np, case, &c_sets, &dir);
+        for (k, v) in env {
+            cmd.env(k, v);
+        }
+        let c = solved(run_with_timeout(cmd, Duration::from_secs(300)), tmp, dir);
         c.assert_converged("condensed");
         let cs = &c.summary["newton"]["condensed"];
         assert_eq!(cs["outcome"], "condensed", "{}", c.run.output());
@@ -87,19 +101,28 @@ fn sphere_on_clamped_block_3d_equals_the_plain_path() {
     same_as_plain(&repo("tests/cases/sphere3d.toml"), &[], &[1, 2]);
 }
 
-#[test]
-fn a_wide_contact_zone_grows_the_candidates() {
-    // The Hertz L4 disk held at its load arc and pushed down by 0.1: its contact zone (~70 of
-    // 257 nodes) is wider than the first candidate set (64 nodes with the smallest gaps; a
-    // held body's zone is not located before the factorisation), so nodes beyond it come
-    // into contact on the expanded u and the set must grow (two expansion solves at least).
+/// The Hertz L4 disk held at its load arc and pushed down by 0.1 (its contact zone: ~75 of
+/// 257 nodes).
+fn pushed_hertz() -> (PathBuf, [String; 3]) {
     let (case, mesh) = hertz(4);
     let held = [
-        mesh.as_str(),
-        "dirichlet=[{group=\"load\", value=[0.0, -0.1]}]",
-        "neumann=[]",
+        mesh,
+        "dirichlet=[{group=\"load\", value=[0.0, -0.1]}]".to_string(),
+        "neumann=[]".to_string(),
     ];
-    let runs = same_as_plain(&case, &held, &[1, 2]);
+    (case, held)
+}
+
+#[test]
+fn a_wide_contact_zone_grows_the_candidates() {
+    // The pushed disk's zone is wider than the first candidate set where the nodes within the
+    // Dirichlet data's reach are not taken (the test-only limit REACH_NODES = 0): the 64 nodes
+    // with the smallest gaps; so nodes beyond them come into contact on the expanded u and the
+    // set must grow (two expansion solves at least).
+    let (case, held) = pushed_hertz();
+    let held: Vec<&str> = held.iter().map(String::as_str).collect();
+    let env = [("SIGNORINI_TEST_LIMIT_REACH_NODES", "0")];
+    let runs = same_as_plain_env(&case, &held, &[1, 2], &env);
     for r in &runs {
         let cand = r.f(&["newton", "condensed", "candidates"]);
         let active = r.f(&["contact", "active_count"]);
@@ -117,6 +140,29 @@ fn a_wide_contact_zone_grows_the_candidates() {
             "no growth round\n{}",
             r.run.output()
         );
+    }
+}
+
+#[test]
+fn a_pushed_bodys_zone_within_the_dirichlet_reach_takes_one_factorisation() {
+    // The same disk with the nodes whose gap is within the largest prescribed displacement
+    // (0.1) taken first: every node of the zone is a candidate of the first factorisation.
+    let (case, held) = pushed_hertz();
+    let held: Vec<&str> = held.iter().map(String::as_str).collect();
+    for r in same_as_plain(&case, &held, &[1, 2]) {
+        let cand = r.f(&["newton", "condensed", "candidates"]);
+        let active = r.f(&["contact", "active_count"]);
+        assert!(
+            active > 64.0 && cand >= active,
+            "{cand} candidates, {active} active"
+        );
+        assert!(
+            r.run.stdout.contains("Dirichlet data's reach"),
+            "{}",
+            r.run.output()
+        );
+        assert!(!r.run.stdout.contains("come into contact: more candidates"));
+        assert_eq!(r.f(&["newton", "condensed", "factorisations"]), 1.0);
     }
 }
 

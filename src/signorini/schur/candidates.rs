@@ -62,6 +62,34 @@ pub(super) fn wide(zone: usize, per: usize, max_flops: f64) -> bool {
 // radius on the 3D ball; a held node that (3.23) releases, or a node beyond that comes into
 // contact, starts a new pass from the set (3.23) gives.
 
+/// The most contact nodes of `per` Schur dofs each that are not [`wide`] against the dense work
+/// always allowed ([`DENSE_FLOOR_FLOPS`]). Local.
+pub(super) fn floor_nodes(per: usize) -> usize {
+    let mut n = (DENSE_FLOOR_FLOPS.cbrt() as usize / per.max(1)).max(1);
+    while n > 1 && wide(n, per, DENSE_FLOOR_FLOPS) {
+        n -= 1;
+    }
+    n
+}
+
+/// The rigid approach the Dirichlet data impose on each contact pair (c_h's pair order),
+/// estimated by the largest prescribed displacement |u_D| of the case (an obstacle's own
+/// motion is in the gaps already). A body the Dirichlet data press onto its obstacle touches
+/// within about this reach (elastic deformation, for the usual convex shapes, only takes gap
+/// back), which the half-space model, with no load to balance, cannot locate. Between two
+/// bodies that Dirichlet data drive towards each other from both sides the approach may be up
+/// to twice this: the nodes beyond that touch are then found by the exact check and taken in
+/// a second round (every Schur variable more makes the factorisation dearer: the estimate
+/// is not doubled). Collective.
+pub(super) fn dirichlet_reach(ctx: &Ctx, fixed: &[f64], b: &ContactBoundary) -> Vec<f64> {
+    let local = fixed
+        .iter()
+        .filter(|v| v.is_finite())
+        .fold(0.0_f64, |m, v| m.max(v.abs()));
+    let d = ctx.max_f64(local);
+    vec![d; b.obstacles.len()]
+}
+
 /// A friction solve's zone held sticking in K_p where every dof of its nodes is too many for
 /// the dense limits ([`solve_keeping`]).
 #[derive(Clone, Copy, Default)]
@@ -168,6 +196,8 @@ pub(super) struct Growth {
     pub(super) held_count: usize,
     /// Why the set has the size it has (for a fallback's reason).
     pub(super) why: String,
+    /// The first candidates within the Dirichlet data's reach (all pairs).
+    pub(super) reached: usize,
 }
 
 impl Growth {
@@ -176,8 +206,17 @@ impl Growth {
     /// together at most half the Schur limit) — per pair, since the pairs' gaps are not
     /// comparable (an obstacle moved into the body has the smallest gaps, the one that holds
     /// the body may have none below them) — and every node of the start set (the thesis'
-    /// all-active start: all of them); `held` (or empty): the nodes K_p holds.
-    pub(super) fn new(cand: &Candidates, per: usize, want: Option<usize>, held: &[bool]) -> Growth {
+    /// all-active start: all of them); `held` (or empty): the nodes K_p holds. `reach` (per
+    /// pair, or empty): the rigid approach the Dirichlet data can impose at most
+    /// ([`dirichlet_reach`]); a pair's nodes whose gap is within it are taken as well, as many
+    /// as the dense work always allowed ([`DENSE_FLOOR_FLOPS`]) holds.
+    pub(super) fn new(
+        cand: &Candidates,
+        per: usize,
+        want: Option<usize>,
+        held: &[bool],
+        reach: &[f64],
+    ) -> Growth {
         let n = cand.n;
         let is_held = |i: usize| held.get(i).copied().unwrap_or(false);
         let pairs = (0..n).map(|i| cand.pair(i) + 1).max().unwrap_or(1);
@@ -191,25 +230,35 @@ impl Growth {
         let limit = (max_schur_dofs() / (FIRST_SCHUR_SHARE * per * pairs)).max(1);
         // a held zone's band and margin are what it wants
         let some_held = held.iter().any(|&h| h);
+        // the nodes within the Dirichlet data's reach, as many as the dense floor allows (the
+        // test-only limit REACH_NODES replaces that count: 0 takes none)
+        let floor = crate::fault::limit("REACH_NODES", (floor_nodes(per) / pairs).max(1));
+        let within = |pair: usize, b: &[usize]| match reach.get(pair) {
+            Some(&r) if r > 0.0 => b.iter().filter(|&&i| cand.gap(i) <= r).count().min(floor),
+            _ => 0,
+        };
         let take: Vec<usize> = by_gap
             .iter()
-            .map(|b| {
+            .enumerate()
+            .map(|(pair, b)| {
                 (if some_held {
                     0
                 } else {
                     b.len() / FIRST_FRACTION
                 })
                 .max(want.unwrap_or(0))
+                .max(within(pair, b))
                 .clamp(MIN_CANDIDATES.min(limit), limit)
                 .min(b.len())
             })
             .collect();
         let first: usize = take.iter().sum();
         let active: Vec<bool> = (0..n).map(|i| cand.start(i) || is_held(i)).collect();
-        let by = if want.is_some() {
-            "clearances after the located rigid motion"
-        } else {
-            "gaps"
+        let reached: usize = (0..pairs).map(|pair| within(pair, &by_gap[pair])).sum();
+        let by = match (want.is_some(), reached > 0) {
+            (true, _) => "clearances after the located rigid motion",
+            (false, true) => "gaps (all within the Dirichlet data's reach among them)",
+            (false, false) => "gaps",
         };
         Growth {
             by_gap,
@@ -219,6 +268,7 @@ impl Growth {
             held: (0..n).map(is_held).collect(),
             held_count: (0..n).filter(|&i| is_held(i)).count(),
             why: format!("the {first} nodes with the smallest {by} and the start set"),
+            reached,
         }
     }
 
@@ -847,4 +897,53 @@ pub(super) fn dof_order(
         pos += 1;
     }
     order
+}
+
+#[cfg(test)]
+mod tests {
+    use super::{floor_nodes, wide, Candidates, Growth, HEAD};
+    use crate::tuning::{DENSE_FLOOR_FLOPS, FIRST_FRACTION};
+
+    /// `n` contact nodes of one pair along a line, x in [−1, 1], gaps x²/2 (a unit disk over a
+    /// plane), none in the start set.
+    fn line(n: usize) -> Candidates {
+        let mut all = Vec::with_capacity(n * HEAD);
+        for i in 0..n {
+            let x = -1.0 + 2.0 * i as f64 / (n - 1) as f64;
+            let gap = 0.5 * x * x;
+            let head = [
+                i as f64, 0.0, 1.0, 0.0, gap, 0.0, x, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, gap, i as f64,
+            ];
+            all.extend_from_slice(&head);
+        }
+        Candidates {
+            all,
+            n,
+            mz: 0,
+            rec: HEAD,
+        }
+    }
+
+    #[test]
+    fn the_first_candidates_take_every_node_within_the_dirichlet_reach() {
+        let cand = line(2001);
+        // no reach: an eighth of the nodes
+        let plain = Growth::new(&cand, 1, None, &[], &[]);
+        assert_eq!(plain.take, vec![2001 / FIRST_FRACTION]);
+        // reach 0.08: |x| ≤ 0.4, about 800 nodes, more than an eighth
+        let within = (0..cand.n).filter(|&i| cand.gap(i) <= 0.08).count();
+        assert!((799..=801).contains(&within), "{within}");
+        let reached = Growth::new(&cand, 1, None, &[], &[0.08]);
+        assert_eq!(reached.take, vec![within]);
+        assert!(reached.why.contains("reach"), "{}", reached.why);
+        // a reach over every node: as many as the dense floor allows, per dof of a node
+        for per in [1, 2, 3] {
+            let all = Growth::new(&cand, per, None, &[], &[10.0]);
+            let floor = floor_nodes(per);
+            assert!(
+                !wide(floor, per, DENSE_FLOOR_FLOPS) && wide(floor + 1, per, DENSE_FLOOR_FLOPS)
+            );
+            assert_eq!(all.take, vec![floor.clamp(2001 / FIRST_FRACTION, 2001)]);
+        }
+    }
 }

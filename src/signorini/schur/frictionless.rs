@@ -31,7 +31,7 @@
 //! two broadcasts (S's definiteness, the dense result), one MatMult.
 
 use super::candidates::Shape;
-use super::candidates::{hold, wide, Candidates, Compliance, Growth, Sticking};
+use super::candidates::{dirichlet_reach, hold, wide, Candidates, Compliance, Growth, Sticking};
 use super::outcome::Stop;
 use super::outcome::{fallback, fallback_stop, finish, keep_solved, Condensed, Expanded, Kept};
 use super::round::{expand, factorise_round, judge, locate, refuse_floating_force};
@@ -451,7 +451,21 @@ fn begin_pass(
         Some(z) => Some(count(z) - count(&held) + count(z) / LOCATED_MARGIN),
         None => located.as_ref().map(|(_, on)| on + on / LOCATED_MARGIN),
     };
-    let growth = Growth::new(&cand, per, want, &held);
+    // a first solve with nothing located: the nodes the Dirichlet data may press into contact
+    let reach = match (zone, located, warm) {
+        (None, None, None) => dirichlet_reach(ctx, p.fixed, b),
+        _ => Vec::new(),
+    };
+    let growth = Growth::new(&cand, per, want, &held, &reach);
+    if growth.reached > 0 {
+        say!(
+            ctx,
+            "newton: condensed: the first candidates take the {} nodes whose gap is within the \
+             Dirichlet data's reach {:.3e} (the largest prescribed displacement)",
+            growth.reached,
+            reach.iter().fold(0.0_f64, |m, &r| m.max(r))
+        );
+    }
     summary.held_nodes = growth.held_count;
     summary.held_key = (growth.held_count > 0).then(|| {
         let held = (0..cand.n).filter(|&i| growth.held[i]);

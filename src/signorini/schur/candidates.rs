@@ -559,6 +559,8 @@ pub(crate) struct Compliance {
     pub(crate) node_order: Option<Vec<usize>>,
     /// The ordering, MUMPS' analysis and factorisation in the last `grow` [s].
     pub(super) factorisation_seconds: f64,
+    /// MUMPS' estimate of the last factorisation's flops (RINFOG(1)).
+    pub(super) factorisation_flops: f64,
     /// The nested-dissection ordering (graph gathered, Scotch) [s].
     pub(super) ordering_seconds: f64,
     /// The primal form (frictionless, where C = S⁻¹ would cost more than the factorisation):
@@ -585,6 +587,7 @@ impl Compliance {
             factor: None,
             node_order: None,
             factorisation_seconds: 0.0,
+            factorisation_flops: 0.0,
             ordering_seconds: 0.0,
             primal: false,
             schur: DMatrix::zeros(0, 0),
@@ -656,6 +659,7 @@ impl Compliance {
         self.schur = DMatrix::zeros(0, 0);
         let t = Instant::now();
         let symbolic = self.analyse(ctx, reduced, &dofs, dim, n_rows, t)?;
+        self.factorisation_flops = symbolic.flops();
         self.choose_form(dofs.len(), dim, &symbolic, why)?;
         let done = symbolic.factorise();
         self.factorisation_seconds = t.elapsed().as_secs_f64();

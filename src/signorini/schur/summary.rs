@@ -28,6 +28,8 @@ pub struct CondensedSummary {
     pub factorisation_seconds: f64,
     /// Of which the nested-dissection order of K_p's node graph (Scotch on rank 0) [s].
     pub ordering_seconds: f64,
+    /// MUMPS' estimate of the flops of those factorisations (RINFOG(1), summed).
+    pub factorisation_flops: f64,
     /// Handing K_p to MUMPS, the condensation of f, the dense factorisation of S, C and d₀ [s].
     pub schur_seconds: f64,
     /// Algorithm 1's steps on the dense system [s].
@@ -98,6 +100,7 @@ impl CondensedSummary {
             factorisations: 0,
             factorisation_seconds: 0.0,
             ordering_seconds: 0.0,
+            factorisation_flops: 0.0,
             schur_seconds: 0.0,
             dense_seconds: 0.0,
             expansion_seconds: 0.0,
@@ -124,6 +127,7 @@ impl CondensedSummary {
         self.factorisations += 1;
         self.solves += 1;
         self.factorisation_seconds += comp.factorisation_seconds;
+        self.factorisation_flops += comp.factorisation_flops;
         self.ordering_seconds = self.ordering_seconds.max(comp.ordering_seconds);
         self.schur_seconds += seconds - comp.factorisation_seconds;
         self.candidates = comp.list.len();
@@ -181,8 +185,8 @@ impl CondensedSummary {
             "the previous load step's factorisation".to_string()
         } else {
             format!(
-                "factorisation {:.3} s (ordering {:.3} s)",
-                self.factorisation_seconds, self.ordering_seconds
+                "factorisation {:.3} s (ordering {:.3} s, {:.3e} flops)",
+                self.factorisation_seconds, self.ordering_seconds, self.factorisation_flops
             )
         };
         let form = if self.primal {

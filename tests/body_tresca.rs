@@ -1,0 +1,289 @@
+//! Friction between two elastic bodies (dual mortar, `obstacle = { type = "body" }`): the
+//! Tresca patch test, a stiff master against the rigid plane with Tresca and Coulomb, and the
+//! rank independence of a Tresca body pair (docs/bodies.md, docs/numbers.md "Friction between
+//! bodies: Tresca and the stiff master").
+//!
+//! The patch test: two blocks of cases/bodies/tresca_patch{2,3}d.geo (lower E 1, ν 0.45; upper
+//! E 3, ν 0.1) meshed independently (interface sizes 0.095 against 0.3 in 2D: 11 against 4
+//! segments, no node in common but the ends; 0.15 against 0.45 in 3D), the lower one clamped
+//! at its bottom, the upper one held by contact alone under the traction (q, −p) on its top,
+//! Tresca's threshold g_R > q. The exact solution is affine in each block: the clamp makes
+//! ε_xx (= ε_yy in 3D) = 0 in the lower block, and a sticking interface carries it into the
+//! upper one, so with λ, μ each block's Lamé constants (plane strain in 2D)
+//!
+//!   ε_zz = −p/(λ + 2μ),  γ_xz = q/μ,  σ_zz = −p,  σ_xz = q,  σ_xx (= σ_yy) = λ ε_zz,
+//!   u = (γ_L z, 0, ε_L z) below,  u = (γ_L + γ_U (z − 1), 0, ε_L + ε_U (z − 1)) above
+//!
+//! (z the vertical coordinate, y in 2D): the upper block moved rigidly by the lower one's top
+//! displacement plus its own strain, the tangential jump zero (stick). The blocks' sides carry
+//! the tractions σ·n of that state. Every slave node is active and sticks, its contact force
+//! divided by its weight D_kk is (∓q, ±p) to round-off, its threshold b_k = g_R D_kk, and u is
+//! the exact field. With g_R < q nothing holds the upper block tangentially: no equilibrium.
+
+mod common;
+
+use common::*;
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+
+/// (E, ν) of the patch test's lower and upper block.
+const LOWER: (f64, f64) = (1.0, 0.45);
+const UPPER: (f64, f64) = (3.0, 0.1);
+/// The traction on the upper block's top: pressure p, shear q along x.
+const P: f64 = 0.01;
+const Q: f64 = 0.004;
+/// Tresca's threshold of the patch test: g_R > q (every node sticks).
+const G_STICK: f64 = 0.006;
+
+/// The mesh of cases/bodies/tresca_patch{dim}d.geo with sizes hl (lower) and hu (upper).
+fn patch_mesh(dir: &Path, dim: usize, hl: f64, hu: f64) -> PathBuf {
+    let out = dir.join(format!("patch{dim}d_{hl}_{hu}.msh"));
+    let (hl, hu) = (hl.to_string(), hu.to_string());
+    gmsh_file(
+        &repo(&format!("cases/bodies/tresca_patch{dim}d.geo")),
+        dim,
+        &["-setnumber", "hl", &hl, "-setnumber", "hu", &hu],
+        &out,
+    );
+    out
+}
+
+/// A vector of `dim` components from (x, y, z) with y the 3D-only component: (x, z) in 2D.
+fn vec_of(dim: usize, v: [f64; 3]) -> Vec<f64> {
+    if dim == 2 {
+        vec![v[0], v[2]]
+    } else {
+        v.to_vec()
+    }
+}
+
+/// A TOML vector.
+fn toml_vec(v: &[f64]) -> String {
+    let parts: Vec<String> = v.iter().map(|x| format!("{x:?}")).collect();
+    format!("[{}]", parts.join(", "))
+}
+
+/// Lamé's λ and μ of (E, ν) (plane strain uses the 3D constants).
+fn lame((e, nu): (f64, f64)) -> (f64, f64) {
+    (e * nu / ((1.0 + nu) * (1.0 - 2.0 * nu)), e / (2.0 * (1.0 + nu)))
+}
+
+/// The uniform state of a block of `material` under σ_zz = −p, σ_xz = q with ε_xx (= ε_yy) = 0:
+/// (ε_zz, γ_xz, σ_xx).
+fn uniform_state(material: (f64, f64), p: f64, q: f64) -> (f64, f64, f64) {
+    let (l, m) = lame(material);
+    let ez = -p / (l + 2.0 * m);
+    (ez, q / m, l * ez)
+}
+
+/// The exact displacement of the patch test at x in block `layer` (0 lower, 1 upper).
+fn exact_u(dim: usize, x: &[f64], layer: usize) -> Vec<f64> {
+    let (el, gl, _) = uniform_state(LOWER, P, Q);
+    let (eu, gu, _) = uniform_state(UPPER, P, Q);
+    let z = x[dim - 1];
+    let u = match layer {
+        0 => [gl * z, 0.0, el * z],
+        _ => [gl + gu * (z - 1.0), 0.0, el + eu * (z - 1.0)],
+    };
+    vec_of(dim, u)
+}
+
+/// The Neumann tables of the patch test: (q, −p) on the top, σ·n of the uniform state on
+/// every side of both blocks.
+fn patch_loads(dim: usize) -> String {
+    let mut text = format!(
+        "[[neumann]]\ngroup = \"top\"\ntraction = {}\n",
+        toml_vec(&vec_of(dim, [Q, 0.0, -P]))
+    );
+    for (block, material) in [("lower", LOWER), ("upper", UPPER)] {
+        let (_, _, sx) = uniform_state(material, P, Q);
+        let mut sides = vec![("x1", [sx, 0.0, Q]), ("x0", [-sx, 0.0, -Q])];
+        if dim == 3 {
+            sides.extend([("y1", [0.0, sx, 0.0]), ("y0", [0.0, -sx, 0.0])]);
+        }
+        for (side, t) in sides {
+            text += &format!(
+                "[[neumann]]\ngroup = \"{block}_{side}\"\ntraction = {}\n",
+                toml_vec(&vec_of(dim, t))
+            );
+        }
+    }
+    text
+}
+
+/// A case on `mesh`: the two blocks of `materials` (lower, upper), the lower one clamped at
+/// its bottom, the Neumann tables `loads`, the contact table `contact`.
+fn case_text(
+    mesh: &Path,
+    dim: usize,
+    materials: [(f64, f64); 2],
+    loads: &str,
+    contact: &str,
+) -> String {
+    let model = if dim == 2 { "plane_strain" } else { "3d" };
+    let mut text = format!("[mesh]\nfile = {}\n", toml_path(mesh));
+    for (group, (e, nu)) in ["lower", "upper"].iter().zip(materials) {
+        text += &format!(
+            "[[material]]\ngroup = \"{group}\"\nyoung = {e:?}\npoisson = {nu:?}\nmodel = \"{model}\"\n"
+        );
+    }
+    text += &format!(
+        "[[dirichlet]]\ngroup = \"bottom\"\nvalue = {}\n",
+        toml_vec(&vec![0.0; dim])
+    );
+    text += loads;
+    text += contact;
+    text += "[output]\ndir = \"out\"\nfields = [\"displacement\", \"contact\"]\n";
+    text
+}
+
+/// A body pair's contact table, `slave` against `master`, friction `friction`.
+fn body_pair(slave: &str, master: &str, friction: &str) -> String {
+    format!(
+        "[contact]\ngroup = \"{slave}\"\nobstacle = {{ type = \"body\", group = \"{master}\" }}\n\
+         friction = {friction}\n"
+    )
+}
+
+fn tresca(g: f64) -> String {
+    format!("{{ law = \"tresca\", threshold = {g:?} }}")
+}
+
+/// The slave side (and its master) with the upper block as slave or not.
+fn sides(upper_slave: bool) -> (&'static str, &'static str) {
+    match upper_slave {
+        true => ("upper_bottom", "lower_top"),
+        false => ("lower_top", "upper_bottom"),
+    }
+}
+
+/// The patch test's case with threshold `g`.
+fn patch_case(dir: &Path, mesh: &Path, dim: usize, upper_slave: bool, g: f64) -> PathBuf {
+    let (slave, master) = sides(upper_slave);
+    let text = case_text(
+        mesh,
+        dim,
+        [LOWER, UPPER],
+        &patch_loads(dim),
+        &body_pair(slave, master, &tresca(g)),
+    );
+    write_case(&dir.join(format!("patch{dim}d_{slave}_{g}.toml")), &text)
+}
+
+/// Node coordinates of solution.h5 by node id, with the block of the node (0 lower, 1 upper:
+/// the integer part of a cell's centroid height, of a cell through it).
+fn coordinates(s: &Solved) -> BTreeMap<u64, (Vec<f64>, usize)> {
+    let v = python_json(
+        r#"
+import sys, json, h5py, numpy as np
+f = h5py.File(sys.argv[1], "r")
+x = f["mesh/geometry"][:]
+cells = f["mesh/topology"][:]
+dim = cells.shape[1] - 1
+layer = np.zeros(len(x), dtype=int)
+layer[cells.ravel()] = np.repeat(np.floor(x[cells, dim - 1].mean(axis=1)).astype(int), dim + 1)
+print("RESULT " + json.dumps({"ids": f["mesh/node_id"][:].tolist(), "x": x.tolist(), "layer": layer.tolist()}))
+"#,
+        &[&s.dir.join("solution.h5")],
+    );
+    let ids = v["ids"].as_array().expect("ids");
+    let xs = v["x"].as_array().expect("x");
+    let up = v["layer"].as_array().expect("layer");
+    ids.iter()
+        .zip(xs.iter().zip(up))
+        .map(|(i, (x, l))| {
+            let layer = l.as_u64().expect("layer") as usize;
+            (i.as_u64().expect("id"), (floats(x), layer))
+        })
+        .collect()
+}
+
+/// The patch test's checks on a converged run (slave side `upper_slave`, threshold `g`).
+fn check_patch(s: &Solved, dim: usize, upper_slave: bool, g: f64, what: &str) {
+    s.assert_converged(what);
+    let rows = s.contact_rows_by_id();
+    assert!(rows.len() > 3, "{what}: {} contact nodes", rows.len());
+    let forces = contact_forces(s, dim);
+    assert_eq!(forces.len(), rows.len(), "{what}: forces of every contact node");
+    // the force on a slave node of the upper block: (−q, p); of the lower block: (q, −p)
+    let sign = if upper_slave { 1.0 } else { -1.0 };
+    let traction = vec_of(dim, [-sign * Q, 0.0, sign * P]);
+    for (id, r) in &rows {
+        assert!(r.active(), "{what}: node {id} inactive");
+        assert_eq!(r.tangential(), "stick", "{what}: node {id}");
+        let w = r.f("weight");
+        let t: Vec<f64> = forces[id].iter().map(|f| f / w).collect();
+        let off = t
+            .iter()
+            .zip(&traction)
+            .map(|(a, b)| (a - b).abs())
+            .fold(0.0, f64::max);
+        assert!(
+            off < 1e-8 * P,
+            "{what}: node {id} traction {t:?}, exact {traction:?}"
+        );
+        assert!(
+            rel(r.f("pressure"), P) < 1e-8,
+            "{what}: node {id} pressure {}",
+            r.f("pressure")
+        );
+        assert!(
+            rel(norm(&r.lambda_t(dim)) / w, Q) < 1e-8,
+            "{what}: node {id} |λ_τ|/D_kk = {:e}, q = {Q:e}",
+            norm(&r.lambda_t(dim)) / w
+        );
+        assert!(
+            rel(r.bound(), g * w) < 1e-12,
+            "{what}: node {id} b_k {:e}, g_R D_kk {:e}",
+            r.bound(),
+            g * w
+        );
+        // the tangential jump: zero (stick)
+        assert!(
+            norm(&r.u_t(dim)) < 1e-10 * P,
+            "{what}: node {id} jump u_τ {:?}",
+            r.u_t(dim)
+        );
+    }
+    let u = s.displacement();
+    let exact: BTreeMap<u64, Vec<f64>> = coordinates(s)
+        .into_iter()
+        .map(|(id, (x, layer))| (id, exact_u(dim, &x, layer)))
+        .collect();
+    let worst = exact
+        .iter()
+        .flat_map(|(id, ue)| ue.iter().zip(&u[id]).map(|(a, b)| (a - b).abs()))
+        .fold(0.0, f64::max);
+    let scale = exact.values().flatten().fold(0.0f64, |m, x| m.max(x.abs()));
+    assert!(
+        worst < 1e-10 * scale,
+        "{what}: u off the exact field by {:e} of its size {scale:e}",
+        worst / scale
+    );
+}
+
+#[test]
+fn tresca_between_bodies_passes_the_patch_test_in_2d_with_either_side_slave() {
+    let tmp = tempfile::tempdir().expect("tempdir");
+    let mesh = patch_mesh(tmp.path(), 2, 0.095, 0.3);
+    for (upper_slave, np) in [(true, 1), (true, 3), (false, 1), (false, 2)] {
+        let case = patch_case(tmp.path(), &mesh, 2, upper_slave, G_STICK);
+        let what = format!("{} on {np} rank(s)", case.display());
+        let s = solve(np, &case, &[]);
+        assert_eq!(s.summary["bodies"]["not_held"], 1, "{what}");
+        check_patch(&s, 2, upper_slave, G_STICK, &what);
+    }
+}
+
+#[test]
+fn tresca_between_bodies_passes_the_patch_test_in_3d_with_either_side_slave() {
+    let tmp = tempfile::tempdir().expect("tempdir");
+    let mesh = patch_mesh(tmp.path(), 3, 0.15, 0.45);
+    for (upper_slave, np) in [(true, 2), (false, 1), (false, 3)] {
+        let case = patch_case(tmp.path(), &mesh, 3, upper_slave, G_STICK);
+        let what = format!("{} on {np} rank(s)", case.display());
+        let s = solve(np, &case, &[]);
+        assert_eq!(s.summary["bodies"]["not_held"], 1, "{what}");
+        check_patch(&s, 3, upper_slave, G_STICK, &what);
+    }
+}

@@ -65,7 +65,10 @@ fn toml_vec(v: &[f64]) -> String {
 
 /// Lamé's λ and μ of (E, ν) (plane strain uses the 3D constants).
 fn lame((e, nu): (f64, f64)) -> (f64, f64) {
-    (e * nu / ((1.0 + nu) * (1.0 - 2.0 * nu)), e / (2.0 * (1.0 + nu)))
+    (
+        e * nu / ((1.0 + nu) * (1.0 - 2.0 * nu)),
+        e / (2.0 * (1.0 + nu)),
+    )
 }
 
 /// The uniform state of a block of `material` under σ_zz = −p, σ_xz = q with ε_xx (= ε_yy) = 0:
@@ -204,7 +207,11 @@ fn check_patch(s: &Solved, dim: usize, upper_slave: bool, g: f64, what: &str) {
     let rows = s.contact_rows_by_id();
     assert!(rows.len() > 3, "{what}: {} contact nodes", rows.len());
     let forces = contact_forces(s, dim);
-    assert_eq!(forces.len(), rows.len(), "{what}: forces of every contact node");
+    assert_eq!(
+        forces.len(),
+        rows.len(),
+        "{what}: forces of every contact node"
+    );
     // the force on a slave node of the upper block: (−q, p); of the lower block: (q, −p)
     let sign = if upper_slave { 1.0 } else { -1.0 };
     let traction = vec_of(dim, [-sign * Q, 0.0, sign * P]);
@@ -400,6 +407,73 @@ fn a_stiff_master_acts_as_the_rigid_plane_with_tresca_and_coulomb() {
         let mesh = patch_mesh(tmp.path(), dim, hl, hu);
         for (friction, perturbed) in [&tresca_pair, &coulomb_pair] {
             stiff_against_rigid(tmp.path(), &mesh, dim, (friction, perturbed), np);
+        }
+    }
+}
+
+/// The patch test's load with g_R < q: nothing holds the floating upper block tangentially
+/// (Σ b_k = g_R < q, the tangential load), so there is no equilibrium. The run ends with exit
+/// code 1 and writes no output: in 2D with "no support" after two Newton steps (every node
+/// slips at the limit, its spring L̃ = 0, the body's tangential motion is pinned and the load
+/// in it is unbalanced); in 3D after newton.max_steps (the slip rows at the limit keep a
+/// spring across the slip direction, so no mode is found free; docs/bodies.md, "Limitations").
+#[test]
+fn a_floating_block_beyond_its_tresca_capacity_ends_in_an_error() {
+    let tmp = tempfile::tempdir().expect("tempdir");
+    for (dim, hl, hu, words) in [
+        (2, 0.095, 0.3, "no support"),
+        (3, 0.15, 0.45, "Newton did not converge"),
+    ] {
+        let mesh = patch_mesh(tmp.path(), dim, hl, hu);
+        let case = patch_case(tmp.path(), &mesh, dim, true, 0.5 * Q);
+        for np in [1, 2] {
+            let what = format!("{} on {np} rank(s)", case.display());
+            let out = tmp.path().join(format!("out{dim}_{np}"));
+            let run = run_solver(np, &case, &[], &out);
+            run.expect_code(1, &what);
+            let text = run.output();
+            assert!(text.contains(words), "{what}: says {words:?}\n{text}");
+            assert!(!text.contains("panicked"), "{what}\n{text}");
+            assert!(!out.exists(), "{what}: no output after the error");
+        }
+    }
+}
+
+/// A Tresca body pair with stick and slip nodes: the blocks of the patch test (their lateral
+/// strains differ, so the interface shears most at its ends) under the traction (q/4, −p) on
+/// the top, sides free, the lower block as slave, g_R below the shear at the ends.
+fn mixed_case(dir: &Path, mesh: &Path, dim: usize, g: f64) -> PathBuf {
+    let loads = format!(
+        "[[neumann]]\ngroup = \"top\"\ntraction = {}\n",
+        toml_vec(&vec_of(dim, [Q / 4.0, 0.0, -P]))
+    );
+    let contact = body_pair("lower_top", "upper_bottom", &tresca(g));
+    let text = case_text(mesh, dim, [LOWER, UPPER], &loads, &contact);
+    write_case(&dir.join(format!("mixed{dim}d.toml")), &text)
+}
+
+#[test]
+fn a_tresca_body_pair_is_rank_independent() {
+    let tmp = tempfile::tempdir().expect("tempdir");
+    for (dim, hl, hu, g) in [(2, 0.05, 0.15, 0.004), (3, 0.15, 0.3, 0.004)] {
+        let mesh = patch_mesh(tmp.path(), dim, hl, hu);
+        let case = mixed_case(tmp.path(), &mesh, dim, g);
+        let one = solve(1, &case, &[]);
+        one.assert_converged("1 rank");
+        let rows = one.contact_rows();
+        let count = |s: &str| rows.iter().filter(|r| r.active() && state(r) == s).count();
+        let (stick, slip) = (count("stick"), count("slip"));
+        println!("{dim}D: {} nodes, {stick} stick, {slip} slip", rows.len());
+        assert!(stick > 0 && slip > 0, "{dim}D: {stick} stick, {slip} slip");
+        for np in [2, 3] {
+            let s = solve(np, &case, &[]);
+            let what = format!("{dim}D on {np} ranks");
+            s.assert_converged(&what);
+            let changed = state_changes(&s, &one);
+            assert!(changed.is_empty(), "{what}: states differ at {changed:?}");
+            let (df, du) = differences(&s, &one, dim);
+            println!("{what}: forces {df:.2e}, u {du:.2e} off 1 rank's");
+            assert!(df < 1e-10 && du < 1e-10, "{what}: forces {df:e}, u {du:e}");
         }
     }
 }

@@ -215,6 +215,7 @@ fn check_patch(s: &Solved, dim: usize, upper_slave: bool, g: f64, what: &str) {
     // the force on a slave node of the upper block: (−q, p); of the lower block: (q, −p)
     let sign = if upper_slave { 1.0 } else { -1.0 };
     let traction = vec_of(dim, [-sign * Q, 0.0, sign * P]);
+    let mut worst_t = 0.0f64;
     for (id, r) in &rows {
         assert!(r.active(), "{what}: node {id} inactive");
         assert_eq!(r.tangential(), "stick", "{what}: node {id}");
@@ -225,6 +226,7 @@ fn check_patch(s: &Solved, dim: usize, upper_slave: bool, g: f64, what: &str) {
             .zip(&traction)
             .map(|(a, b)| (a - b).abs())
             .fold(0.0, f64::max);
+        worst_t = worst_t.max(off / P);
         assert!(
             off < 1e-8 * P,
             "{what}: node {id} traction {t:?}, exact {traction:?}"
@@ -262,6 +264,11 @@ fn check_patch(s: &Solved, dim: usize, upper_slave: bool, g: f64, what: &str) {
         .flat_map(|(id, ue)| ue.iter().zip(&u[id]).map(|(a, b)| (a - b).abs()))
         .fold(0.0, f64::max);
     let scale = exact.values().flatten().fold(0.0f64, |m, x| m.max(x.abs()));
+    println!(
+        "{what}: {} slave nodes, traction off by {worst_t:.1e} of p, u by {:.1e} of its size",
+        rows.len(),
+        worst / scale
+    );
     assert!(
         worst < 1e-10 * scale,
         "{what}: u off the exact field by {:e} of its size {scale:e}",

@@ -386,7 +386,10 @@ fn stiff_against_rigid(
     let changed = state_changes(&stiff, &rigid);
     assert!(changed.is_empty(), "{what}: states differ at {changed:?}");
     let (df, du) = differences(&stiff, &rigid, dim);
-    println!("{what}: {stick} stick, {slip} slip; forces {df:.2e}, u {du:.2e}");
+    println!(
+        "{what}: {} slave nodes, {stick} stick, {slip} slip; forces {df:.2e}, u {du:.2e}",
+        rows.len()
+    );
     assert!(
         df < TOL_STIFF && du < TOL_STIFF,
         "{what}: forces {df:e}, u {du:e} off the rigid plane's"

@@ -80,14 +80,16 @@ pub fn check_friction_capacity(
     Ok(())
 }
 
-/// A failed iteration (`NoConvergence`) of a frictional body without Dirichlet data
-/// (`sliding`) says what may be the cause; other errors as they are.
+/// A failed iteration (`NoConvergence`) of a frictional case with a body that Dirichlet data
+/// leave free in some rigid mode (`sliding`) says what may be the cause; other errors as they
+/// are.
 pub fn why_sliding(e: RunError, sliding: bool) -> RunError {
     match e {
         RunError::NoConvergence(why) if sliding => RunError::NoConvergence(format!(
-            "{why}; the body has no Dirichlet data, so friction alone holds it tangentially: \
-             beyond the friction capacity of its contact (not known before the solve on curved \
-             or non-parallel obstacles) it has no equilibrium"
+            "{why}; a body of the mesh is free to move where its Dirichlet data do not hold \
+             it, so friction alone holds it tangentially: beyond the friction capacity of its \
+             contact (not known before the solve on curved or non-parallel obstacles, or \
+             between bodies) it has no equilibrium"
         )),
         e => e,
     }

@@ -305,7 +305,7 @@ pub fn solve(
     };
     let ns = newton_settings(settings, c, law, &model, iterative, &force_control);
     // a failure of a frictional body that only its contact holds says what may be the cause
-    let sliding = friction && !capacity::held_anywhere(ctx, fixed);
+    let sliding = friction && (b.modes.slots() > 0 || !capacity::held_anywhere(ctx, fixed));
     let mut types = None;
     let ran = run_method(
         ctx,

@@ -11,7 +11,7 @@ use crate::case::{Preset, SolverSection};
 use crate::mesh::Mesh;
 use crate::par::Ctx;
 use crate::partition::Layout;
-use crate::petsc::mumps::{SchurFactor, SchurRequest};
+use crate::petsc::mumps::{FactorStats, SchurFactor, SchurRequest};
 use crate::petsc::optdb::OptionsDb;
 use crate::petsc::{self, ndfactor, Ksp, MPI_Comm, Matrix, SolveInfo, Vector};
 pub use crate::tuning::REUSE_RESTART;
@@ -374,6 +374,11 @@ impl SymbolicSchur {
         self.0.flops()
     }
 
+    /// The analysis' statistics (flops, the estimated largest front, our order or MUMPS').
+    pub fn stats(&self) -> FactorStats {
+        self.0.stats()
+    }
+
     /// The numeric factorisation, which fills the Schur complement. Collective.
     pub fn factorise(mut self) -> petsc::Result<NumericSchur> {
         self.0.factorise()?;
@@ -389,6 +394,12 @@ impl NumericSchur {
     /// The analysis' estimate of the factorisation's flops.
     pub fn flops(&self) -> f64 {
         self.0.flops()
+    }
+
+    /// The factorisation's statistics: the analysis' flops, the factor entries and the
+    /// largest front (MUMPS' LLᵀ: `symmetric`), the same on every rank.
+    pub fn stats(&self) -> FactorStats {
+        self.0.stats()
     }
 
     /// The Schur complement S on rank 0 (column-major), empty elsewhere; handed over.

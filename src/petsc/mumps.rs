@@ -53,8 +53,8 @@ pub struct SchurFactor {
     n: usize,
     size_schur: usize,
     root: bool,
-    /// RINFOG(1) of the analysis (the same on every rank).
-    flops: f64,
+    /// The analysis' and the factorisation's statistics (the same on every rank).
+    stats: FactorStats,
 }
 
 /// The factorisation a Schur complement is asked of ([`SchurFactor::analyse`]): the matrix's
@@ -138,7 +138,10 @@ impl SchurFactor {
             n,
             size_schur,
             root,
-            flops: 0.0,
+            stats: FactorStats {
+                symmetric: true,
+                ..FactorStats::default()
+            },
         };
         let set = match f.inst.as_mut() {
             Some(inst) => {
@@ -160,13 +163,31 @@ impl SchurFactor {
             inst.set_order(root, &mut f.perm, n);
         }
         f.call(1)?; // analysis
-                    // RINFOG(1): rank 0's on every rank where MUMPS ran there alone
-        let mut flops = [f.inst.as_ref().map_or(0.0, |i| i.id.rinfog[0]).to_bits()];
-        if one_process {
-            super::mpi::broadcast_u64(comm, &mut flops)?;
+        f.stats.given_order = root && f.perm.len() == n && n > 0;
+        if let Some(inst) = f.inst.as_ref() {
+            f.stats.flops = inst.id.rinfog[0];
+            f.stats.largest_front = inst.id.infog[4] as i64; // INFOG(5), the estimate
         }
-        f.flops = f64::from_bits(flops[0]);
+        f.share_stats()?;
         Ok(f)
+    }
+
+    /// The statistics on every rank: rank 0's (where MUMPS ran there alone, or the host's
+    /// given order). Collective.
+    fn share_stats(&mut self) -> Result<()> {
+        let s = &mut self.stats;
+        let mut v = [
+            s.flops.to_bits(),
+            s.largest_front as u64,
+            s.factor_entries as u64,
+            s.given_order as u64,
+        ];
+        super::mpi::broadcast_u64(self.comm, &mut v)?;
+        s.flops = f64::from_bits(v[0]);
+        s.largest_front = v[1] as i64;
+        s.factor_entries = v[2] as i64;
+        s.given_order = v[3] != 0;
+        Ok(())
     }
 
     /// `job` on the instance: collective on every rank, or on rank 0 alone with its outcome
@@ -178,13 +199,30 @@ impl SchurFactor {
     /// RINFOG(1) of the analysis: the flops of eliminating the variables outside the Schur
     /// list (the same on every rank).
     pub fn flops(&self) -> f64 {
-        self.flops
+        self.stats.flops
+    }
+
+    /// The analysis' statistics, after [`SchurFactor::factorise`] also the factorisation's:
+    /// its factor entries (INFOG(29)) and largest front (INFOG(11)); LLᵀ, so `symmetric`
+    /// (the same on every rank).
+    pub fn stats(&self) -> FactorStats {
+        self.stats
     }
 
     /// The numeric factorisation after [`SchurFactor::analyse`], which fills the Schur
     /// complement. Collective.
     pub fn factorise(&mut self) -> Result<()> {
         self.call(2)?;
+        if let Some(inst) = self.inst.as_ref() {
+            let g = &inst.id.infog;
+            self.stats.factor_entries = if g[28] != 0 {
+                g[28] as i64
+            } else {
+                g[8] as i64
+            };
+            self.stats.largest_front = g[10] as i64; // INFOG(11)
+        }
+        self.share_stats()?;
         // MUMPS returns the lower triangle by rows for a symmetric matrix: mirrored once.
         let s = self.size_schur;
         for i in 0..if self.root { s } else { 0 } {

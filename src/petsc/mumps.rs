@@ -175,19 +175,7 @@ impl SchurFactor {
     /// The statistics on every rank: rank 0's (where MUMPS ran there alone, or the host's
     /// given order). Collective.
     fn share_stats(&mut self) -> Result<()> {
-        let s = &mut self.stats;
-        let mut v = [
-            s.flops.to_bits(),
-            s.largest_front as u64,
-            s.factor_entries as u64,
-            s.given_order as u64,
-        ];
-        super::mpi::broadcast_u64(self.comm, &mut v)?;
-        s.flops = f64::from_bits(v[0]);
-        s.largest_front = v[1] as i64;
-        s.factor_entries = v[2] as i64;
-        s.given_order = v[3] != 0;
-        Ok(())
+        self.stats.share(self.comm)
     }
 
     /// `job` on the instance: collective on every rank, or on rank 0 alone with its outcome
@@ -601,6 +589,25 @@ pub struct FactorStats {
     pub symmetric: bool,
 }
 
+impl FactorStats {
+    /// Rank 0's statistics on every rank of `comm` (the flops, fronts and entries MUMPS reports
+    /// on its host; whether the order was ours). Collective.
+    fn share(&mut self, comm: MPI_Comm) -> Result<()> {
+        let mut v = [
+            self.flops.to_bits(),
+            self.largest_front as u64,
+            self.factor_entries as u64,
+            self.given_order as u64,
+        ];
+        super::mpi::broadcast_u64(comm, &mut v)?;
+        self.flops = f64::from_bits(v[0]);
+        self.largest_front = v[1] as i64;
+        self.factor_entries = v[2] as i64;
+        self.given_order = v[3] != 0;
+        Ok(())
+    }
+}
+
 /// An LDLᵀ (symmetric, SYM = 2) or LU (SYM = 0) factorisation of a distributed matrix by MUMPS
 /// with an elimination order chosen by the caller: the analysis once per nonzero pattern, the
 /// numeric factorisation per set of values, solves with the right-hand side and the solution
@@ -716,17 +723,7 @@ impl Factor {
         if self.own_pattern.is_none() {
             return Ok(());
         }
-        let s = &mut self.stats;
-        let mut v = [
-            s.flops.to_bits(),
-            s.largest_front as u64,
-            s.factor_entries as u64,
-        ];
-        super::mpi::broadcast_u64(self.comm, &mut v)?;
-        s.flops = f64::from_bits(v[0]);
-        s.largest_front = v[1] as i64;
-        s.factor_entries = v[2] as i64;
-        Ok(())
+        self.stats.share(self.comm)
     }
 
     /// The numeric factorisation (JOB = 2) of the values read by the analysis. Collective.

@@ -401,9 +401,9 @@ fn hold_instead(ctx: &Ctx, stop: &Stop, at: &SolveStart, grown: &[bool]) -> Opti
 /// A pass begun: the held nodes of the predicted `zone` ([`hold`] on `all0`, every contact
 /// node as the case starts; none without a zone), K_p
 /// written with them, its candidates (the zone's nodes not held start active; else the start
-/// set `start`), the first candidates' count (the zone's band and margin, or the located
-/// zone's margin), and a compliance on the previous load step's factorisation where it holds
-/// ([`reused`], taken from `kept`) or a new one with the kept node order `order`. Collective.
+/// set `start`), the first candidates' count ([`first_growth`]), and a compliance on the
+/// previous load step's factorisation where it holds ([`reused`], taken from `kept`) or a new
+/// one with the kept node order `order`. Collective.
 fn begin_pass(
     ctx: &Ctx,
     at: &SolveStart,
@@ -411,52 +411,80 @@ fn begin_pass(
     plan: PassPlan,
     summary: &mut CondensedSummary,
 ) -> Result<Pass, RunError> {
-    let SolveStart {
-        p,
-        warm,
-        free0,
-        all0,
-        start,
-        located,
-        per,
-    } = *at;
-    let PassPlan {
-        zone,
-        order,
-        sticking,
-    } = plan;
-    let b = p.boundary;
-    let key = located.as_ref().map(|(k, _)| k.as_slice());
+    let (p, per) = (at.p, at.per);
+    let sticking = plan.sticking;
     let released = |i: usize| sticking.release.get(i).copied().unwrap_or(false);
-    let held = match (zone, all0) {
+    let held = match (plan.zone, at.all0) {
         (Some(z), Some(all)) => {
             let kept_on: Vec<bool> = (0..z.len()).map(|i| z[i] && !released(i)).collect();
             hold(all, &kept_on, (BAND_FRACTION >> sticking.pass).max(1))
         }
         _ => Vec::new(),
     };
-    let (free, rhs0) = prepare_base(ctx, p, factors.reduced, free0, &held, per > 1)?;
+    let (free, rhs0) = prepare_base(ctx, p, factors.reduced, at.free0, &held, per > 1)?;
     let f_root = ctx.gather_to_root(&rhs0); // f for MUMPS' solve phases, once per pass
-    let pass_start: Vec<bool> = match zone {
+    let b = p.boundary;
+    let pass_start: Vec<bool> = match plan.zone {
         Some(z) => (0..b.nodes.len())
             .map(|i| (z[b.offset + i] || released(b.offset + i)) && !held[b.offset + i])
             .collect(),
         None => (0..b.nodes.len())
-            .map(|i| start[i] || released(b.offset + i))
+            .map(|i| at.start[i] || released(b.offset + i))
             .collect(),
     };
+    let key = at.located.as_ref().map(|(k, _)| k.as_slice());
     let cand = Candidates::gather(ctx, b, &free, &pass_start, key);
+    let growth = first_growth(ctx, at, plan.zone, &cand, &held, summary);
+    let t = Instant::now();
+    let (kept, order_dropped) = match at.warm {
+        Some(_) => reused(ctx, at, factors.kept.take(), &free, &cand, &f_root, &held),
+        None => (None, None),
+    };
+    let mut comp = match kept {
+        Some(comp) => {
+            summary.factorisation_kept = true;
+            comp
+        }
+        None => Compliance::new(cand.n, per),
+    };
+    if comp.node_order.is_none() {
+        comp.node_order = plan.order.or(order_dropped);
+    }
+    Ok(Pass {
+        free,
+        rhs0,
+        f_root,
+        cand,
+        growth,
+        comp,
+        condensation: t.elapsed().as_secs_f64(),
+    })
+}
+
+/// A pass's first candidates ([`Growth::new`]): the zone's band and margin (`zone`, its
+/// `held` nodes held), or the located zone's margin, and on a first solve with nothing
+/// located the nodes within the Dirichlet data's reach ([`dirichlet_reach`]); the held nodes
+/// into `summary` and the log. Collective (the reach's reduction, the log).
+fn first_growth(
+    ctx: &Ctx,
+    at: &SolveStart,
+    zone: Option<&[bool]>,
+    cand: &Candidates,
+    held: &[bool],
+    summary: &mut CondensedSummary,
+) -> Growth {
+    let per = at.per;
     let count = |v: &[bool]| v.iter().filter(|&&a| a).count();
     let want = match zone {
-        Some(z) => Some(count(z) - count(&held) + count(z) / LOCATED_MARGIN),
-        None => located.as_ref().map(|(_, on)| on + on / LOCATED_MARGIN),
+        Some(z) => Some(count(z) - count(held) + count(z) / LOCATED_MARGIN),
+        None => at.located.as_ref().map(|(_, on)| on + on / LOCATED_MARGIN),
     };
     // a first solve with nothing located: the nodes the Dirichlet data may press into contact
-    let reach = match (zone, located, warm) {
-        (None, None, None) => dirichlet_reach(ctx, p.fixed, b),
+    let reach = match (zone, at.located, at.warm) {
+        (None, None, None) => dirichlet_reach(ctx, at.p.fixed, at.p.boundary),
         _ => Vec::new(),
     };
-    let growth = Growth::new(&cand, per, want, &held, &reach);
+    let growth = Growth::new(cand, per, want, held, &reach);
     if growth.reached > 0 {
         say!(
             ctx,
@@ -481,30 +509,7 @@ fn begin_pass(
             if per > 1 { ", sticking," } else { "" }
         );
     }
-    let t = Instant::now();
-    let (kept, order_dropped) = match warm {
-        Some(_) => reused(ctx, at, factors.kept.take(), &free, &cand, &f_root, &held),
-        None => (None, None),
-    };
-    let mut comp = match kept {
-        Some(comp) => {
-            summary.factorisation_kept = true;
-            comp
-        }
-        None => Compliance::new(cand.n, per),
-    };
-    if comp.node_order.is_none() {
-        comp.node_order = order.or(order_dropped);
-    }
-    Ok(Pass {
-        free,
-        rhs0,
-        f_root,
-        cand,
-        growth,
-        comp,
-        condensation: t.elapsed().as_secs_f64(),
-    })
+    growth
 }
 
 #[cfg(test)]

@@ -203,11 +203,7 @@ impl SchurFactor {
         self.call(2)?;
         if let Some(inst) = self.inst.as_ref() {
             let g = &inst.id.infog;
-            self.stats.factor_entries = if g[28] != 0 {
-                g[28] as i64
-            } else {
-                g[8] as i64
-            };
+            self.stats.factor_entries = factor_entries(g);
             self.stats.largest_front = g[10] as i64; // INFOG(11)
         }
         self.share_stats()?;
@@ -589,6 +585,15 @@ pub struct FactorStats {
     pub symmetric: bool,
 }
 
+/// The entries in the factors after a factorisation: INFOG(29), or INFOG(9) where that is 0.
+fn factor_entries(infog: &[i32]) -> i64 {
+    if infog[28] != 0 {
+        infog[28] as i64
+    } else {
+        infog[8] as i64
+    }
+}
+
 impl FactorStats {
     /// Rank 0's statistics on every rank of `comm` (the flops, fronts and entries MUMPS reports
     /// on its host; whether the order was ours). Collective.
@@ -735,12 +740,7 @@ impl Factor {
         agreed(self.comm, set)?;
         self.call(2)?;
         if let Some(inst) = self.inst.as_ref() {
-            let g = &inst.id.infog;
-            self.stats.factor_entries = if g[28] != 0 {
-                g[28] as i64
-            } else {
-                g[8] as i64
-            };
+            self.stats.factor_entries = factor_entries(&inst.id.infog);
         }
         self.share_stats()
     }

@@ -193,35 +193,6 @@ fn exact(dim: usize, layers: &[(f64, f64)]) -> (f64, impl Fn(&[f64], usize) -> V
     (p, u)
 }
 
-/// Node coordinates of solution.h5 by node id, with the block the node belongs to (that of a
-/// cell through it: the integer part of the cell's centroid height).
-fn coordinates(s: &Solved) -> std::collections::BTreeMap<u64, (Vec<f64>, usize)> {
-    let v = python_json(
-        r#"
-import sys, json, h5py, numpy as np
-f = h5py.File(sys.argv[1], "r")
-x = f["mesh/geometry"][:]
-cells = f["mesh/topology"][:]
-dim = cells.shape[1] - 1
-layer = np.zeros(len(x), dtype=int)
-for c in cells:
-    layer[c] = int(np.floor(x[c, dim - 1].mean()))
-print("RESULT " + json.dumps({"ids": f["mesh/node_id"][:].tolist(), "x": x.tolist(), "layer": layer.tolist()}))
-"#,
-        &[&s.dir.join("solution.h5")],
-    );
-    let ids = v["ids"].as_array().expect("ids");
-    let xs = v["x"].as_array().expect("x");
-    let up = v["layer"].as_array().expect("layer");
-    ids.iter()
-        .zip(xs.iter().zip(up))
-        .map(|(i, (x, l))| {
-            let layer = l.as_u64().expect("layer") as usize;
-            (i.as_u64().expect("id"), (floats(x), layer))
-        })
-        .collect()
-}
-
 /// Every slave node active with the pressure p to 1e-8, u the exact field to 1e-10 of its size.
 fn check_patch(s: &Solved, dim: usize, what: &str) {
     check_stack(s, dim, &[LOWER, UPPER], what);
@@ -253,7 +224,7 @@ fn check_stack_u(
             r.node_id()
         );
     }
-    let x = coordinates(s);
+    let x = s.node_layers();
     let scale = DELTA;
     let mut worst = 0.0f64;
     for (id, (xi, layer)) in &x {

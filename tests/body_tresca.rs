@@ -173,34 +173,6 @@ fn patch_case(dir: &Path, mesh: &Path, dim: usize, upper_slave: bool, g: f64) ->
     write_case(&dir.join(format!("patch{dim}d_{slave}_{g}.toml")), &text)
 }
 
-/// Node coordinates of solution.h5 by node id, with the block of the node (0 lower, 1 upper:
-/// the integer part of a cell's centroid height, of a cell through it).
-fn coordinates(s: &Solved) -> BTreeMap<u64, (Vec<f64>, usize)> {
-    let v = python_json(
-        r#"
-import sys, json, h5py, numpy as np
-f = h5py.File(sys.argv[1], "r")
-x = f["mesh/geometry"][:]
-cells = f["mesh/topology"][:]
-dim = cells.shape[1] - 1
-layer = np.zeros(len(x), dtype=int)
-layer[cells.ravel()] = np.repeat(np.floor(x[cells, dim - 1].mean(axis=1)).astype(int), dim + 1)
-print("RESULT " + json.dumps({"ids": f["mesh/node_id"][:].tolist(), "x": x.tolist(), "layer": layer.tolist()}))
-"#,
-        &[&s.dir.join("solution.h5")],
-    );
-    let ids = v["ids"].as_array().expect("ids");
-    let xs = v["x"].as_array().expect("x");
-    let up = v["layer"].as_array().expect("layer");
-    ids.iter()
-        .zip(xs.iter().zip(up))
-        .map(|(i, (x, l))| {
-            let layer = l.as_u64().expect("layer") as usize;
-            (i.as_u64().expect("id"), (floats(x), layer))
-        })
-        .collect()
-}
-
 /// The patch test's checks on a converged run (slave side `upper_slave`, threshold `g`).
 fn check_patch(s: &Solved, dim: usize, upper_slave: bool, g: f64, what: &str) {
     s.assert_converged(what);
@@ -255,7 +227,8 @@ fn check_patch(s: &Solved, dim: usize, upper_slave: bool, g: f64, what: &str) {
         );
     }
     let u = s.displacement();
-    let exact: BTreeMap<u64, Vec<f64>> = coordinates(s)
+    let exact: BTreeMap<u64, Vec<f64>> = s
+        .node_layers()
         .into_iter()
         .map(|(id, (x, layer))| (id, exact_u(dim, &x, layer)))
         .collect();

@@ -287,3 +287,35 @@ pub fn same_steps(c: &Solved, reference: &Solved, steps: usize, tol: f64, np: us
         "{np} rank(s)"
     );
 }
+
+/// The layered blocks' nodes (the body-pair patch tests).
+impl Solved {
+    /// Node coordinates of solution.h5 by node id, with the layer of the node: the integer
+    /// part of the centroid height (last coordinate) of a cell through it (blocks stacked one
+    /// unit high each: 0 the lowest).
+    pub fn node_layers(&self) -> BTreeMap<u64, (Vec<f64>, usize)> {
+        let v = python_json(
+            r#"
+import sys, json, h5py, numpy as np
+f = h5py.File(sys.argv[1], "r")
+x = f["mesh/geometry"][:]
+cells = f["mesh/topology"][:]
+dim = cells.shape[1] - 1
+layer = np.zeros(len(x), dtype=int)
+layer[cells.ravel()] = np.repeat(np.floor(x[cells, dim - 1].mean(axis=1)).astype(int), dim + 1)
+print("RESULT " + json.dumps({"ids": f["mesh/node_id"][:].tolist(), "x": x.tolist(), "layer": layer.tolist()}))
+"#,
+            &[&self.dir.join("solution.h5")],
+        );
+        let ids = v["ids"].as_array().expect("ids");
+        let xs = v["x"].as_array().expect("x");
+        let up = v["layer"].as_array().expect("layer");
+        ids.iter()
+            .zip(xs.iter().zip(up))
+            .map(|(i, (x, l))| {
+                let layer = l.as_u64().expect("layer") as usize;
+                (i.as_u64().expect("id"), (floats(x), layer))
+            })
+            .collect()
+    }
+}

@@ -374,11 +374,6 @@ impl SymbolicSchur {
         self.0.flops()
     }
 
-    /// The analysis' statistics (flops, the estimated largest front, our order or MUMPS').
-    pub fn stats(&self) -> FactorStats {
-        self.0.stats()
-    }
-
     /// The numeric factorisation, which fills the Schur complement. Collective.
     pub fn factorise(mut self) -> petsc::Result<NumericSchur> {
         self.0.factorise()?;

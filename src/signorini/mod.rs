@@ -304,8 +304,10 @@ pub fn solve(
         path: chosen_path(settings, solver_section, &b, session.setup().kind()),
     };
     let ns = newton_settings(settings, c, law, &model, iterative, &force_control);
-    // a failure of a frictional body that only its contact holds says what may be the cause
-    let sliding = friction && (b.modes.slots() > 0 || !capacity::held_anywhere(ctx, fixed));
+    // a failure of a frictional case with a body that only its contact holds in some rigid
+    // mode (a slot of the body modes: the survey gives one to each such body) says what may be
+    // the cause
+    let sliding = friction && b.modes.slots() > 0;
     let mut types = None;
     let ran = run_method(
         ctx,

@@ -6,7 +6,7 @@ use crate::contact::Frame;
 use crate::linsolve::{NumericSchur, SymbolicSchur};
 use crate::par::Ctx;
 use crate::petsc::lapack::DenseCholesky;
-use crate::petsc::mumps::{NodeBases, SchurRequest};
+use crate::petsc::mumps::{FactorStats, NodeBases, SchurRequest};
 use crate::petsc::ndfactor::node_order;
 use crate::say;
 use crate::signorini::boundary::ContactBoundary;
@@ -559,8 +559,8 @@ pub(crate) struct Compliance {
     pub(crate) node_order: Option<Vec<usize>>,
     /// The ordering, MUMPS' analysis and factorisation in the last `grow` [s].
     pub(super) factorisation_seconds: f64,
-    /// MUMPS' estimate of the last factorisation's flops (RINFOG(1)).
-    pub(super) factorisation_flops: f64,
+    /// The last factorisation's statistics (MUMPS' flops estimate, factor entries).
+    pub(super) stats: FactorStats,
     /// The nested-dissection ordering (graph gathered, Scotch) [s].
     pub(super) ordering_seconds: f64,
     /// The primal form (frictionless, where C = S⁻¹ would cost more than the factorisation):
@@ -587,7 +587,7 @@ impl Compliance {
             factor: None,
             node_order: None,
             factorisation_seconds: 0.0,
-            factorisation_flops: 0.0,
+            stats: FactorStats::default(),
             ordering_seconds: 0.0,
             primal: false,
             schur: DMatrix::zeros(0, 0),
@@ -659,13 +659,13 @@ impl Compliance {
         self.schur = DMatrix::zeros(0, 0);
         let t = Instant::now();
         let symbolic = self.analyse(ctx, reduced, &dofs, dim, n_rows, t)?;
-        self.factorisation_flops = symbolic.flops();
         self.choose_form(dofs.len(), dim, &symbolic, why)?;
         let done = symbolic.factorise();
         self.factorisation_seconds = t.elapsed().as_secs_f64();
         let mut factor = ctx
             .agree_message(done)
             .map_err(|e| Stop::failed(format!("the Schur factorisation of K_p failed: {e}")))?;
+        self.stats = factor.stats();
         let r = ctx
             .agree_message(factor.condense(&self.rotated(f_root)))
             .map_err(|e| Stop::failed(format!("the condensation of f failed: {e}")))?;

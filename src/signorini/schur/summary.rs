@@ -30,6 +30,8 @@ pub struct CondensedSummary {
     pub ordering_seconds: f64,
     /// MUMPS' estimate of the flops of those factorisations (RINFOG(1), summed).
     pub factorisation_flops: f64,
+    /// The entries in the last factorisation's factors (INFOG(29)).
+    pub factor_entries: i64,
     /// Handing K_p to MUMPS, the condensation of f, the dense factorisation of S, C and d₀ [s].
     pub schur_seconds: f64,
     /// Algorithm 1's steps on the dense system [s].
@@ -101,6 +103,7 @@ impl CondensedSummary {
             factorisation_seconds: 0.0,
             ordering_seconds: 0.0,
             factorisation_flops: 0.0,
+            factor_entries: 0,
             schur_seconds: 0.0,
             dense_seconds: 0.0,
             expansion_seconds: 0.0,
@@ -127,7 +130,8 @@ impl CondensedSummary {
         self.factorisations += 1;
         self.solves += 1;
         self.factorisation_seconds += comp.factorisation_seconds;
-        self.factorisation_flops += comp.factorisation_flops;
+        self.factorisation_flops += comp.stats.flops;
+        self.factor_entries = comp.stats.factor_entries;
         self.ordering_seconds = self.ordering_seconds.max(comp.ordering_seconds);
         self.schur_seconds += seconds - comp.factorisation_seconds;
         self.candidates = comp.list.len();
@@ -185,8 +189,11 @@ impl CondensedSummary {
             "the previous load step's factorisation".to_string()
         } else {
             format!(
-                "factorisation {:.3} s (ordering {:.3} s, {:.3e} flops)",
-                self.factorisation_seconds, self.ordering_seconds, self.factorisation_flops
+                "factorisation {:.3} s (ordering {:.3} s, {:.3e} flops, {} factor entries)",
+                self.factorisation_seconds,
+                self.ordering_seconds,
+                self.factorisation_flops,
+                self.factor_entries
             )
         };
         let form = if self.primal {

@@ -72,8 +72,8 @@ pub(super) fn floor_nodes(per: usize) -> usize {
     n
 }
 
-/// The rigid approach the Dirichlet data impose on each contact pair (c_h's pair order),
-/// estimated by the largest prescribed displacement |u_D| of the case (an obstacle's own
+/// The rigid approach the Dirichlet data impose on a contact pair, estimated by the largest
+/// prescribed displacement |u_D| of the case (the same for every pair; an obstacle's own
 /// motion is in the gaps already). A body the Dirichlet data press onto its obstacle touches
 /// within about this reach (elastic deformation, for the usual convex shapes, only takes gap
 /// back), which the half-space model, with no load to balance, cannot locate. Between two
@@ -81,13 +81,12 @@ pub(super) fn floor_nodes(per: usize) -> usize {
 /// to twice this: the nodes beyond that touch are then found by the exact check and taken in
 /// a second round (every Schur variable more makes the factorisation dearer: the estimate
 /// is not doubled). Collective.
-pub(super) fn dirichlet_reach(ctx: &Ctx, fixed: &[f64], b: &ContactBoundary) -> Vec<f64> {
+pub(super) fn dirichlet_reach(ctx: &Ctx, fixed: &[f64]) -> f64 {
     let local = fixed
         .iter()
         .filter(|v| v.is_finite())
         .fold(0.0_f64, |m, v| m.max(v.abs()));
-    let d = ctx.max_f64(local);
-    vec![d; b.obstacles.len()]
+    ctx.max_f64(local)
 }
 
 /// A friction solve's zone held sticking in K_p where every dof of its nodes is too many for
@@ -206,16 +205,16 @@ impl Growth {
     /// together at most half the Schur limit) — per pair, since the pairs' gaps are not
     /// comparable (an obstacle moved into the body has the smallest gaps, the one that holds
     /// the body may have none below them) — and every node of the start set (the thesis'
-    /// all-active start: all of them); `held` (or empty): the nodes K_p holds. `reach` (per
-    /// pair, or empty): the rigid approach the Dirichlet data can impose at most
-    /// ([`dirichlet_reach`]); a pair's nodes whose gap is within it are taken as well, as many
-    /// as the dense work always allowed ([`DENSE_FLOOR_FLOPS`]) holds.
+    /// all-active start: all of them); `held` (or empty): the nodes K_p holds. `reach` (0: none):
+    /// the rigid approach of the Dirichlet data ([`dirichlet_reach`]); a pair's nodes whose gap
+    /// is within it are taken as well, as many as the dense work always allowed
+    /// ([`DENSE_FLOOR_FLOPS`]) holds.
     pub(super) fn new(
         cand: &Candidates,
         per: usize,
         want: Option<usize>,
         held: &[bool],
-        reach: &[f64],
+        reach: f64,
     ) -> Growth {
         let n = cand.n;
         let is_held = |i: usize| held.get(i).copied().unwrap_or(false);
@@ -233,28 +232,35 @@ impl Growth {
         // the nodes within the Dirichlet data's reach, as many as the dense floor allows (the
         // test-only limit REACH_NODES replaces that count: 0 takes none)
         let floor = crate::fault::limit("REACH_NODES", (floor_nodes(per) / pairs).max(1));
-        let within = |pair: usize, b: &[usize]| match reach.get(pair) {
-            Some(&r) if r > 0.0 => b.iter().filter(|&&i| cand.gap(i) <= r).count().min(floor),
-            _ => 0,
-        };
+        // (no reach: none)
+        let reached_in = |b: &[usize]| b.iter().filter(|&&i| cand.gap(i) <= reach).count();
+        let within: Vec<usize> = (by_gap.iter())
+            .map(|b| {
+                if reach > 0.0 {
+                    reached_in(b).min(floor)
+                } else {
+                    0
+                }
+            })
+            .collect();
         let take: Vec<usize> = by_gap
             .iter()
-            .enumerate()
-            .map(|(pair, b)| {
+            .zip(&within)
+            .map(|(b, &within)| {
                 (if some_held {
                     0
                 } else {
                     b.len() / FIRST_FRACTION
                 })
                 .max(want.unwrap_or(0))
-                .max(within(pair, b))
+                .max(within)
                 .clamp(MIN_CANDIDATES.min(limit), limit)
                 .min(b.len())
             })
             .collect();
         let first: usize = take.iter().sum();
         let active: Vec<bool> = (0..n).map(|i| cand.start(i) || is_held(i)).collect();
-        let reached: usize = (0..pairs).map(|pair| within(pair, &by_gap[pair])).sum();
+        let reached: usize = within.iter().sum();
         let by = match (want.is_some(), reached > 0) {
             (true, _) => "clearances after the located rigid motion",
             (false, true) => "gaps (all within the Dirichlet data's reach among them)",
@@ -932,17 +938,17 @@ mod tests {
     fn the_first_candidates_take_every_node_within_the_dirichlet_reach() {
         let cand = line(2001);
         // no reach: an eighth of the nodes
-        let plain = Growth::new(&cand, 1, None, &[], &[]);
+        let plain = Growth::new(&cand, 1, None, &[], 0.0);
         assert_eq!(plain.take, vec![2001 / FIRST_FRACTION]);
         // reach 0.08: |x| ≤ 0.4, about 800 nodes, more than an eighth
         let within = (0..cand.n).filter(|&i| cand.gap(i) <= 0.08).count();
         assert!((799..=801).contains(&within), "{within}");
-        let reached = Growth::new(&cand, 1, None, &[], &[0.08]);
+        let reached = Growth::new(&cand, 1, None, &[], 0.08);
         assert_eq!(reached.take, vec![within]);
         assert!(reached.why.contains("reach"), "{}", reached.why);
         // a reach over every node: as many as the dense floor allows, per dof of a node
         for per in [1, 2, 3] {
-            let all = Growth::new(&cand, per, None, &[], &[10.0]);
+            let all = Growth::new(&cand, per, None, &[], 10.0);
             let floor = floor_nodes(per);
             assert!(
                 !wide(floor, per, DENSE_FLOOR_FLOPS) && wide(floor + 1, per, DENSE_FLOOR_FLOPS)

@@ -481,17 +481,16 @@ fn first_growth(
     };
     // a first solve with nothing located: the nodes the Dirichlet data may press into contact
     let reach = match (zone, at.located, at.warm) {
-        (None, None, None) => dirichlet_reach(ctx, at.p.fixed, at.p.boundary),
-        _ => Vec::new(),
+        (None, None, None) => dirichlet_reach(ctx, at.p.fixed),
+        _ => 0.0,
     };
-    let growth = Growth::new(cand, per, want, held, &reach);
+    let growth = Growth::new(cand, per, want, held, reach);
     if growth.reached > 0 {
         say!(
             ctx,
             "newton: condensed: the first candidates take the {} nodes whose gap is within the \
-             Dirichlet data's reach {:.3e} (the largest prescribed displacement)",
+             Dirichlet data's reach {reach:.3e} (the largest prescribed displacement)",
             growth.reached,
-            reach.iter().fold(0.0_f64, |m, &r| m.max(r))
         );
     }
     summary.held_nodes = growth.held_count;

@@ -145,6 +145,53 @@ fn full_ball_3d_takes_its_free_modes_as_null_space_and_ends_on_the_pinned_answer
     }
 }
 
+/// The full ball pressed by 0.01 (106 nodes in contact at the end) with the model's size
+/// lowered by the test-only limit MAX_MODEL_NODES, so that the model is coarser than the mesh
+/// (52 model nodes for 256): at 60 the refinement at the edge does not fit and the coarse
+/// model predicts alone; at 200 the nodes at the coarse prediction's edge get a model node
+/// each (more model nodes than the coarse ones, fewer than represented) and the prediction
+/// lands closer to the final set (measured: 3 nodes off against 10). Both end on the plain
+/// path's answer.
+#[test]
+fn a_coarse_model_is_refined_at_the_contact_edge() {
+    let case = repo("cases/ball3d/ball3d.toml");
+    let sets = ["neumann.0.pressure=0.01"];
+    let plain = run(2, &case, &iterative(&sets, "never"));
+    let fin = plain.active_node_ids().len() as i64;
+    let miss = |limit: &str| {
+        let tmp = tempfile::tempdir().expect("tempdir");
+        let dir = tmp.path().join("out");
+        let all = iterative(&sets, "auto");
+        let all: Vec<&str> = all.iter().map(String::as_str).collect();
+        let mut cmd = solver_command(2, &case, &all, &dir);
+        cmd.env("SIGNORINI_TEST_LIMIT_MAX_MODEL_NODES", limit);
+        let s = solved(run_with_timeout(cmd, LIMIT), tmp, dir);
+        s.assert_converged(limit);
+        assert_eq!(
+            plain.active_node_ids(),
+            s.active_node_ids(),
+            "limit {limit}"
+        );
+        let d = plain.u_rel_diff(&s);
+        assert!(d <= 1e-8, "limit {limit}: |u - u_plain| / max|u| = {d:e}");
+        let p = predictor(&s);
+        assert_eq!(p["outcome"], "predicted", "{p}");
+        let (m, n) = (
+            p["model_nodes"].as_u64().unwrap(),
+            p["represented"].as_u64().unwrap(),
+        );
+        assert!(m < n, "limit {limit}: a coarsened model: {p}");
+        (m, (p["predicted_active"].as_i64().unwrap() - fin).abs())
+    };
+    let (coarse, coarse_miss) = miss("60");
+    let (refined, refined_miss) = miss("200");
+    assert!(refined > coarse, "{refined} model nodes against {coarse}");
+    assert!(
+        refined_miss < coarse_miss,
+        "the refined model misses {refined_miss} nodes, the coarse one {coarse_miss}"
+    );
+}
+
 /// The manufactured strip (a contact zone wide against the body's height: the half-space
 /// model is rough, its first set has 24 of the final 57 nodes at level 3). From the predicted
 /// set on, every exact step whose update (3.23) changes nodes has it corrected by the model

@@ -380,7 +380,8 @@ impl<'a> Loop<'a> {
     /// under force control): when (3.23) changes nodes, the next set is the model's, except
     /// that every node (3.23) changes keeps its change (so the step counts at least those
     /// changes, and a correction never stops the iteration); the model's record, or `None`
-    /// when (3.23) changes nothing or the corrections have stopped ([`Loop::corrected`]).
+    /// when (3.23) changes nothing, the corrections have stopped ([`Loop::corrected`]) or the
+    /// model would be coarser than the mesh while the edge stays in place ([`edge_moves`]).
     /// Collective.
     fn correct(
         &mut self,
@@ -388,12 +389,23 @@ impl<'a> Loop<'a> {
         update: &mut SetUpdate,
     ) -> Result<Option<PredictorStep>, RunError> {
         let ctx = self.ctx;
-        if self.approach.is_some() || self.corrections.1 || ctx.sum_usize(update.changed) == 0 {
+        if self.approach.is_some() || self.corrections.1 {
             return Ok(None);
         }
+        let changed = ctx.sum_usize(update.changed);
+        if changed == 0 {
+            return Ok(None);
+        }
+        // a model coarser than the mesh only where the edge moves
+        let in_contact = ctx.sum_usize(self.set.normal.iter().filter(|&&a| a).count());
+        let coarse = edge_moves(changed, in_contact, self.p.mesh.dim);
         let (b, it, active) = (&self.shifted, &self.it, self.set.normal.as_slice());
         let limits = self.s.dense_limits();
-        let (set, rec) = halfspace::correct(ctx, hs, b, it, active, &self.free, limits)?;
+        let free = &self.free;
+        let Some((set, rec)) = halfspace::correct(ctx, hs, b, it, active, free, limits, coarse)?
+        else {
+            return Ok(None);
+        };
         if let Some(model) = set.filter(|_| !rec.truncated) {
             let next: Vec<bool> = (model.iter().zip(&self.set.normal))
                 .zip(&update.next.normal)
@@ -830,6 +842,25 @@ fn least_index_step(ctx: &Ctx, b: &ContactBoundary, old: &ActiveSet, next: &mut 
     }
 }
 
+/// Whether an exact step's update (3.23), `changed` nodes of a set of `active` ones, moves the
+/// contact edge by about a node or more — where a correction by a model coarser than the mesh
+/// pays: at least the nodes at the edge of a round zone of `active` nodes, 2 √(π |A|) in 3D
+/// (its perimeter over the node spacing), 2 in 2D (the two ends of a zone). An update that
+/// changes fewer leaves the edge in place but for single nodes, finer than such a model
+/// resolves (measured: the full floating ball at 396 633 unknowns, 4 439 predicted and 4 429
+/// final nodes, the first exact update changing 18: 2 exact steps without corrections, 6
+/// with corrections by a model of 2 700 nodes for 10 012, each correcting a few nodes the
+/// exact update did not change). A model of every node corrects such steps too (the ball at
+/// 126 786 unknowns, 1 851 predicted: 2 exact steps with its correction, 3 without). Local.
+fn edge_moves(changed: usize, active: usize, dim: usize) -> bool {
+    let edge = if dim == 3 {
+        2.0 * (std::f64::consts::PI * active as f64).sqrt()
+    } else {
+        2.0
+    };
+    changed > 0 && changed as f64 >= edge
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -958,6 +989,18 @@ mod tests {
             confirm.after_solve(true, 2, false, &mut last),
             After::Update(confirm)
         );
+    }
+
+    #[test]
+    fn a_coarse_model_corrects_only_an_update_that_moves_the_edge() {
+        // 3D: a round zone of 4 429 nodes has about 236 at its edge
+        assert!(!edge_moves(18, 4429, 3));
+        assert!(!edge_moves(235, 4429, 3));
+        assert!(edge_moves(236, 4429, 3));
+        // 2D: two ends
+        assert!(!edge_moves(1, 500, 2));
+        assert!(edge_moves(2, 500, 2));
+        assert!(!edge_moves(0, 0, 2));
     }
 
     #[test]

@@ -139,7 +139,7 @@ def hertz_mesh(level, refined=True, quiet=False):
 def ball_mesh(h, zone=None):
     """The ball of cases/ball3d/ball3d.geo at pole mesh size h in bench/meshes; with `zone` (a
     cap height) cut along that cap (group "zone")."""
-    name = f"ball3d_h{h}_zone.msh" if zone is not None else f"ball3d_h{h}.msh"
+    name = f"ball3d_h{h}_zone{zone:.4f}.msh" if zone is not None else f"ball3d_h{h}.msh"
     numbers = [("h", h)] + ([("zone", f"{zone:.6f}")] if zone is not None else [])
     return gmsh(ROOT / "cases" / "ball3d" / "ball3d.geo", MESHES / name, 3, numbers)
 

@@ -381,8 +381,7 @@ impl<'a> Loop<'a> {
     /// that every node (3.23) changes keeps its change (so the step counts at least those
     /// changes, and a correction never stops the iteration); the model's record, or `None`
     /// when (3.23) changes nothing, the corrections have stopped ([`Loop::corrected`]) or the
-    /// model would be coarser than the mesh while the edge stays in place ([`edge_moves`]).
-    /// Collective.
+    /// model would be coarser than the mesh ([`halfspace::correct`]). Collective.
     fn correct(
         &mut self,
         hs: &HalfSpace,
@@ -392,17 +391,12 @@ impl<'a> Loop<'a> {
         if self.approach.is_some() || self.corrections.1 {
             return Ok(None);
         }
-        let changed = ctx.sum_usize(update.changed);
-        if changed == 0 {
+        if ctx.sum_usize(update.changed) == 0 {
             return Ok(None);
         }
-        // a model coarser than the mesh only where the edge moves
-        let in_contact = ctx.sum_usize(self.set.normal.iter().filter(|&&a| a).count());
-        let coarse = edge_moves(changed, in_contact, self.p.mesh.dim);
         let (b, it, active) = (&self.shifted, &self.it, self.set.normal.as_slice());
         let limits = self.s.dense_limits();
-        let free = &self.free;
-        let Some((set, rec)) = halfspace::correct(ctx, hs, b, it, active, free, limits, coarse)?
+        let Some((set, rec)) = halfspace::correct(ctx, hs, b, it, active, &self.free, limits)?
         else {
             return Ok(None);
         };
@@ -842,25 +836,6 @@ fn least_index_step(ctx: &Ctx, b: &ContactBoundary, old: &ActiveSet, next: &mut 
     }
 }
 
-/// Whether an exact step's update (3.23), `changed` nodes of a set of `active` ones, moves the
-/// contact edge by about a node or more — where a correction by a model coarser than the mesh
-/// pays: at least the nodes at the edge of a round zone of `active` nodes, 2 √(π |A|) in 3D
-/// (its perimeter over the node spacing), 2 in 2D (the two ends of a zone). An update that
-/// changes fewer leaves the edge in place but for single nodes, finer than such a model
-/// resolves (measured: the full floating ball at 396 633 unknowns, 4 439 predicted and 4 429
-/// final nodes, the first exact update changing 18: 2 exact steps without corrections, 6
-/// with corrections by a model of 2 700 nodes for 10 012, each correcting a few nodes the
-/// exact update did not change). A model of every node corrects such steps too (the ball at
-/// 126 786 unknowns, 1 851 predicted: 2 exact steps with its correction, 3 without). Local.
-fn edge_moves(changed: usize, active: usize, dim: usize) -> bool {
-    let edge = if dim == 3 {
-        2.0 * (std::f64::consts::PI * active as f64).sqrt()
-    } else {
-        2.0
-    };
-    changed > 0 && changed as f64 >= edge
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -989,18 +964,6 @@ mod tests {
             confirm.after_solve(true, 2, false, &mut last),
             After::Update(confirm)
         );
-    }
-
-    #[test]
-    fn a_coarse_model_corrects_only_an_update_that_moves_the_edge() {
-        // 3D: a round zone of 4 429 nodes has about 236 at its edge
-        assert!(!edge_moves(18, 4429, 3));
-        assert!(!edge_moves(235, 4429, 3));
-        assert!(edge_moves(236, 4429, 3));
-        // 2D: two ends
-        assert!(!edge_moves(1, 500, 2));
-        assert!(edge_moves(2, 500, 2));
-        assert!(!edge_moves(0, 0, 2));
     }
 
     #[test]

@@ -20,6 +20,7 @@ use super::problem::{ContactProblem, NewtonResult, NewtonSettings, StepInfo, War
 use super::step::{add_motion, ensure_converged, log_step, stalled, After, StepPlan};
 /// See [`Loop::fixed_point`] (as the condensed Coulomb iteration's step not taken).
 use crate::signorini::active_set::FIXED_POINT_SLACK;
+use crate::tuning::{TIGHTEN_ON_RECURRENCE, TIGHTEST_RTOL};
 
 /// The next step's tangential rows hold at the iterate as well as this step's did: `rows` =
 /// (‖this step's rows' residuals‖, ‖the next step's‖) at the iterate, `floor` the round-off of
@@ -58,6 +59,12 @@ struct Loop<'a> {
     floors: (f64, f64),
     /// The rule of the last stop decided ([`Loop::next`]).
     stop: crate::signorini::certificate::StopRule,
+    /// Krylov solves (no factorisation): a recurring set first tightens their tolerance
+    /// ([`Loop::new_sets`]); `Some(step)` once that happened after `step`, and the solver is
+    /// to be tightened before the next solve while `tighten` is set.
+    krylov: bool,
+    tightened: Option<usize>,
+    tighten: bool,
 }
 
 /// A load step whose solution vanishes against its warm start's (the load and the obstacle's
@@ -150,7 +157,11 @@ pub fn semismooth_newton(
             After::Update(next) => next,
         };
         let totals = lp.fixed_point(totals, factorised, scale);
-        if lp.next(step, update.next, &totals)? {
+        let stopped = lp.next(step, update.next, &totals)?;
+        if std::mem::take(&mut lp.tighten) {
+            lp.tighten_solver(reduced)?;
+        }
+        if stopped {
             match done.after_stop(reused) {
                 After::Repeat(next) => {
                     plan = next;
@@ -306,6 +317,9 @@ impl<'a> Loop<'a> {
             null_space: false,
             corrections: (None, false),
             floors,
+            krylov: !reduced.kind().factorises(),
+            tightened: None,
+            tighten: false,
         };
         reduced.set_free_null_space(ctx, None)?; // none left from an earlier solve
         Ok((lp, predicting))
@@ -408,6 +422,27 @@ impl<'a> Loop<'a> {
             update.replace_normal(&self.set, next);
         }
         Ok(Some(rec))
+    }
+
+    /// A set recurred on Krylov solves ([`Loop::new_sets`]): the solver's relative tolerance
+    /// divided by [`TIGHTEN_ON_RECURRENCE`] (not below [`TIGHTEST_RTOL`]) for the steps from
+    /// here; said in the log. Collective.
+    fn tighten_solver(&mut self, reduced: &mut ReducedSystem) -> Result<(), RunError> {
+        let step = self.tightened.unwrap_or(0);
+        match reduced.tighten_krylov(TIGHTEN_ON_RECURRENCE, TIGHTEST_RTOL)? {
+            Some((from, to)) => say!(
+                self.ctx,
+                "newton: the set of step {step} recurs on Krylov solves to rtol {from:.0e}: a \
+                 node at the edge of its state may flip on the solver's error; the steps from \
+                 here solve to {to:.0e}"
+            ),
+            None => say!(
+                self.ctx,
+                "newton: the set of step {step} recurs; the Krylov solves are at their tightest \
+                 tolerance already"
+            ),
+        }
+        Ok(())
     }
 
     /// After a corrected step's update (`changed` nodes, global): the corrections stop for good
@@ -702,6 +737,16 @@ impl Loop<'_> {
         let b = &self.shifted;
         let mut summary = t.next.clone();
         let mut key = self.key(&summary, t);
+        if self.krylov && self.tightened.is_none() && self.guard.has_seen(key) {
+            // A recurring set on Krylov solves: a node at the edge of its state may flip on
+            // the solver's error alone; the next solves are tighter (the main loop), and the
+            // set is taken again before anything is called cycling
+            self.tightened = Some(step + 1);
+            self.tighten = true;
+            self.guard.record(key);
+            self.take(next, summary);
+            return Ok(false);
+        }
         let seen = match self.guard.check(step, key) {
             Err(_) if self.s.friction() && t.du_rel < self.s.section.tol_u => {
                 // A recurring set while the iterate no longer moves: the nodes that

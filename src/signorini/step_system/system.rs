@@ -386,6 +386,26 @@ impl ReducedSystem {
     }
 
     /// Whether the solver may make inexact steps (the iterative preset's reuse path).
+    /// Krylov solves (no factorisation): the relative tolerance divided by `factor`, not below
+    /// `floor`, for every solve from here; `Some((from, to))`, or `None` where the solver
+    /// factorises or is at `floor` already. Local (the same on every rank).
+    pub fn tighten_krylov(&mut self, factor: f64, floor: f64) -> petsc::Result<Option<(f64, f64)>> {
+        if self.ls.kind().factorises() {
+            return Ok(None);
+        }
+        let (rtol, _) = self.ls.ksp.tolerances()?;
+        let from = self.amg.as_ref().map_or(rtol, |a| a.rtol);
+        let to = (from / factor).max(floor);
+        if to >= from {
+            return Ok(None);
+        }
+        if let Some(a) = self.amg.as_mut() {
+            a.rtol = to;
+        }
+        self.ls.ksp.set_rtol(to)?;
+        Ok(Some((from, to)))
+    }
+
     pub fn inexact_available(&self) -> bool {
         self.amg.is_some()
     }

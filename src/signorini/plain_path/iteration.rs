@@ -65,6 +65,8 @@ struct Loop<'a> {
     krylov: bool,
     tightened: Option<usize>,
     tighten: bool,
+    /// The Krylov tolerance before it was tightened: given back when the solve ends.
+    restore_rtol: Option<f64>,
 }
 
 /// A load step whose solution vanishes against its warm start's (the load and the obstacle's
@@ -173,6 +175,9 @@ pub fn semismooth_newton(
                 }
             }
         }
+    }
+    if let Some(rtol) = lp.restore_rtol.take() {
+        reduced.set_krylov_rtol(rtol)?; // the next solve (load step, pass) at the case's
     }
     lp.finish(reduced, history, converged)
 }
@@ -320,6 +325,7 @@ impl<'a> Loop<'a> {
             krylov: !reduced.kind().factorises(),
             tightened: None,
             tighten: false,
+            restore_rtol: None,
         };
         reduced.set_free_null_space(ctx, None)?; // none left from an earlier solve
         Ok((lp, predicting))
@@ -426,16 +432,19 @@ impl<'a> Loop<'a> {
 
     /// A set recurred on Krylov solves ([`Loop::new_sets`]): the solver's relative tolerance
     /// divided by [`TIGHTEN_ON_RECURRENCE`] (not below [`TIGHTEST_RTOL`]) for the steps from
-    /// here; said in the log. Collective.
+    /// here to the end of this solve; said in the log. Collective.
     fn tighten_solver(&mut self, reduced: &mut ReducedSystem) -> Result<(), RunError> {
         let step = self.tightened.unwrap_or(0);
         match reduced.tighten_krylov(TIGHTEN_ON_RECURRENCE, TIGHTEST_RTOL)? {
-            Some((from, to)) => say!(
-                self.ctx,
-                "newton: the set of step {step} recurs on Krylov solves to rtol {from:.0e}: a \
-                 node at the edge of its state may flip on the solver's error; the steps from \
-                 here solve to {to:.0e}"
-            ),
+            Some((from, to)) => {
+                self.restore_rtol = Some(from);
+                say!(
+                    self.ctx,
+                    "newton: the set of step {step} recurs on Krylov solves to rtol {from:.0e}: \
+                     a node at the edge of its state may flip on the solver's error; the steps \
+                     from here solve to {to:.0e}"
+                )
+            }
             None => say!(
                 self.ctx,
                 "newton: the set of step {step} recurs; the Krylov solves are at their tightest \

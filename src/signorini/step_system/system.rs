@@ -399,11 +399,21 @@ impl ReducedSystem {
         if to >= from {
             return Ok(None);
         }
-        if let Some(a) = self.amg.as_mut() {
-            a.rtol = to;
-        }
-        self.ls.ksp.set_rtol(to)?;
+        self.set_krylov_rtol(to)?;
         Ok(Some((from, to)))
+    }
+
+    /// Krylov solves: the relative tolerance of every solve from here (a solve's tightened
+    /// tolerance given back at its end, [`ReducedSystem::tighten_krylov`]); nothing where the
+    /// solver factorises. Local.
+    pub fn set_krylov_rtol(&mut self, rtol: f64) -> petsc::Result<()> {
+        if self.ls.kind().factorises() {
+            return Ok(());
+        }
+        if let Some(a) = self.amg.as_mut() {
+            a.rtol = rtol;
+        }
+        self.ls.ksp.set_rtol(rtol)
     }
 
     pub fn inexact_available(&self) -> bool {

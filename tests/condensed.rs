@@ -49,14 +49,8 @@ fn same_as_plain_env(
     let mut out = Vec::new();
     for &np in ranks {
         let c_sets = with("condensed");
-        let tmp = tempfile::tempdir().expect("tempdir");
-        let dir = tmp.path().join("out");
         let c_sets: Vec<&str> = c_sets.iter().map(String::as_str).collect();
-        let mut cmd = solver_command(np, case, &c_sets, &dir);
-        for (k, v) in env {
-            cmd.env(k, v);
-        }
-        let c = solved(run_with_timeout(cmd, Duration::from_secs(300)), tmp, dir);
+        let c = solve_env(np, case, &c_sets, env, Duration::from_secs(300));
         c.assert_converged("condensed");
         let cs = &c.summary["newton"]["condensed"];
         assert_eq!(cs["outcome"], "condensed", "{}", c.run.output());

@@ -73,15 +73,8 @@ fn converged(np: usize, case: &Path, sets: &[&str]) -> Solved {
 /// [`converged`] without the first candidates the Dirichlet data's reach adds (the test-only
 /// limit REACH_NODES = 0): the condensed path's first set as it is where no reach applies.
 fn converged_without_reach(np: usize, case: &Path, sets: &[&str]) -> Solved {
-    let tmp = tempfile::tempdir().expect("tempdir");
-    let dir = tmp.path().join("out");
-    let mut cmd = solver_command(np, case, sets, &dir);
-    cmd.env("SIGNORINI_TEST_LIMIT_REACH_NODES", "0");
-    let s = solved(
-        run_with_timeout(cmd, std::time::Duration::from_secs(600)),
-        tmp,
-        dir,
-    );
+    let env = [("SIGNORINI_TEST_LIMIT_REACH_NODES", "0")];
+    let s = solve_env(np, case, sets, &env, std::time::Duration::from_secs(600));
     s.assert_converged(&format!("{} {sets:?}", case.display()));
     s
 }

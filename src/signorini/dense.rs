@@ -685,25 +685,31 @@ impl SaddleSolver {
 /// a contact line, every fourth of a contact surface, whatever the mesh. Levels stop at
 /// fewer than COARSEST points; a radius that keeps more than 3/4 of the level before (graded
 /// meshes) makes no level, the next radius is tried. Local.
+/// The points' spacing: the median distance of every (n / `samples`)-th point to its nearest
+/// other one (`samples` ≥ n: of every point). At least two points. Local.
+pub(super) fn median_spacing(x: &[[f64; 3]], samples: usize) -> f64 {
+    let n = x.len();
+    let d2 = |a: &[f64; 3], b: &[f64; 3]| (0..3).map(|k| (a[k] - b[k]).powi(2)).sum::<f64>();
+    let mut nn: Vec<f64> = (0..n)
+        .step_by((n / samples.max(1)).max(1))
+        .map(|i| {
+            (0..n)
+                .filter(|&j| j != i)
+                .map(|j| d2(&x[i], &x[j]))
+                .fold(f64::INFINITY, f64::min)
+        })
+        .collect();
+    nn.sort_by(f64::total_cmp);
+    nn[nn.len() / 2].sqrt()
+}
+
 pub(super) fn coarsen(x: &[[f64; 3]], gap: &[f64]) -> Vec<Vec<usize>> {
     let n = x.len();
     if n < 2 * COARSEST {
         return Vec::new();
     }
     let d2 = |a: &[f64; 3], b: &[f64; 3]| (0..3).map(|k| (a[k] - b[k]).powi(2)).sum::<f64>();
-    let step = (n / SPACING_SAMPLES).max(1);
-    let mut nn: Vec<f64> = (0..n)
-        .step_by(step)
-        .map(|i| {
-            (0..n)
-                .filter(|&j| j != i)
-                .map(|j| d2(&x[i], &x[j]))
-                .fold(f64::INFINITY, f64::min)
-                .sqrt()
-        })
-        .collect();
-    nn.sort_by(|a, b| a.total_cmp(b));
-    let h = nn[nn.len() / 2];
+    let h = median_spacing(x, SPACING_SAMPLES);
     if !(h > 0.0 && h.is_finite()) {
         return Vec::new();
     }

@@ -24,7 +24,7 @@
 
 use super::active_set::Iterate;
 use super::boundary::ContactBoundary;
-use super::dense::{coarsen, Dense, DenseLimits, End};
+use super::dense::{coarsen, median_spacing, Dense, DenseLimits, End};
 use super::rigid::FreeModes;
 use crate::error::RunError;
 use crate::mesh::Mesh;
@@ -32,7 +32,7 @@ use crate::par::Ctx;
 use crate::say;
 use crate::tuning::{
     FINE_MODEL_COVER, LOCATE_MODEL_NODES, MAX_MODEL_NODES, MAX_REPRESENTED, MIN_MODEL_NODES,
-    MIRROR_TILE, MODEL_BORDER_PART, MODEL_MARGIN,
+    MIRROR_TILE, MODEL_BORDER_PART, MODEL_MARGIN, SPACING_SAMPLES,
 };
 use nalgebra::{DMatrix, DVector};
 use serde::Serialize;
@@ -95,40 +95,16 @@ pub fn refine_at_edge(
         return None;
     }
     let d2 = |a: &[f64; 3], b: &[f64; 3]| (0..3).map(|k| (a[k] - b[k]).powi(2)).sum::<f64>();
-    // the coarse spacing: the median distance of a model node to its nearest other one
-    let mut nearest: Vec<f64> = (0..m)
-        .map(|o| {
-            (0..m)
-                .filter(|&p| p != o)
-                .map(|p| d2(&x[kept[o]], &x[kept[p]]))
-                .fold(f64::INFINITY, f64::min)
-        })
-        .collect();
-    nearest.sort_by(f64::total_cmp);
-    let coarse = nearest[m / 2].sqrt();
-    // the node spacing: the median distance of a sample of nodes to their nearest other one
-    let step = (n / SPACING_SAMPLE).max(1);
-    let mut gaps: Vec<f64> = (0..n)
-        .step_by(step)
-        .map(|q| {
-            (0..n)
-                .filter(|&j| j != q)
-                .map(|j| d2(&x[q], &x[j]))
-                .fold(f64::INFINITY, f64::min)
-        })
-        .collect();
-    gaps.sort_by(f64::total_cmp);
-    let spacing = gaps[gaps.len() / 2].sqrt();
+    // the spacing of the model nodes (all of them) and of the nodes (a sample)
+    let coarse = median_spacing(&kept.iter().map(|&q| x[q]).collect::<Vec<_>>(), m);
+    let spacing = median_spacing(x, SPACING_SAMPLES);
     let mut members = vec![Vec::new(); m];
     for (q, &o) in owner.iter().enumerate() {
         members[o].push(q);
     }
     // the groups near each group: their nodes are the ones a node's band may reach
-    let widest = EDGE_BAND[0] * spacing;
-    let reach = |o: usize, p: usize| {
-        let r = 2.0 * coarse + widest;
-        d2(&x[kept[o]], &x[kept[p]]) <= r * r
-    };
+    let reach2 = (2.0 * coarse + EDGE_BAND[0] * spacing).powi(2);
+    let reach = |o: usize, p: usize| d2(&x[kept[o]], &x[kept[p]]) <= reach2;
     // per node: the distance to the nearest node on the other side (within reach)
     let mut across = vec![f64::INFINITY; n];
     for o in 0..m {
@@ -143,13 +119,12 @@ pub fn refine_at_edge(
             }
         }
     }
-    let refined = EDGE_BAND.iter().find_map(|&width| {
+    let mut refined = EDGE_BAND.iter().find_map(|&width| {
         let band = (width * spacing).powi(2);
         let mut own: Vec<usize> = kept.to_vec();
         own.extend((0..n).filter(|&q| across[q] <= band && kept[owner[q]] != q));
         (own.len() <= cap && own.len() > m).then_some(own)
     })?;
-    let mut refined = refined;
     refined.sort_unstable();
     let index: std::collections::HashMap<usize, usize> =
         refined.iter().enumerate().map(|(o, &q)| (q, o)).collect();
@@ -163,10 +138,6 @@ pub fn refine_at_edge(
 /// within this many node spacings of a node on the other side, the first width that the cap
 /// allows. Not measured as values; not machine-specific.
 const EDGE_BAND: [f64; 3] = [2.5, 1.5, 1.0];
-
-/// Nodes sampled for the node spacing of [`refine_at_edge`]. Not measured; not
-/// machine-specific.
-const SPACING_SAMPLE: usize = 256;
 
 /// [`MAX_MODEL_NODES`], or the test-only limit that replaces it (`crate::fault::limit`).
 fn max_model_nodes() -> usize {
@@ -419,8 +390,8 @@ pub fn predict(
         active: None,
         coarse: true,
     };
-    let ran = run_model(ctx, hs, anchor, free, limits, force)?;
-    Ok(ran.expect("a prediction runs on any model"))
+    run_model(ctx, hs, anchor, free, limits, force)?
+        .ok_or_else(|| RunError::Failed("the half-space model did not run".into()))
 }
 
 /// The model as a correction of an exact step (frictionless, no force control): after the
@@ -486,45 +457,23 @@ fn run_model(
     // a prediction by a coarsened model: a second run with its groups at the predicted edge at
     // full resolution (`refine_at_edge`)
     let mut edge: Option<Vec<f64>> = None;
+    let recs = Records {
+        all: &all,
+        g_all: &g_all,
+    };
+    let run = ModelRun {
+        mz,
+        limits,
+        force,
+        grow,
+    };
     let packed = loop {
         let model = Model::choose(&all, wanted, max_model_nodes(), edge.as_deref());
         let coarsened = model.m() < model.fine.len();
         if coarsened && !anchor.coarse {
             return Ok(None); // the same on every rank: the records are
         }
-        // every rank builds a share of C's columns
-        let share = hs.columns(
-            &model.x,
-            &model.w,
-            column_share(model.m(), ctx.rank, ctx.size),
-        );
-        let packed_c = ctx.gather_to_root(&share);
-        // rank 0: [code, model nodes, model steps, coarse levels, represented, δ change,
-        // flags of all nodes]; a panic in the model is caught there (code 4) so that the
-        // broadcast still happens
-        let mut packed: Vec<f64> = ctx
-            .on_root_wide(model.m() + mz, || {
-                super::dense::guarded("predictor-model", || {
-                    let recs = Records {
-                        all: &all,
-                        g_all: &g_all,
-                    };
-                    let run = ModelRun {
-                        mz,
-                        limits,
-                        force,
-                        grow,
-                    };
-                    model.solve(recs, &packed_c, free, &run)
-                })
-                .unwrap_or_else(|_| {
-                    let mut failed = vec![0.0; head];
-                    failed[0] = 4.0;
-                    failed
-                })
-            })
-            .unwrap_or_default();
-        ctx.broadcast_f64s(&mut packed);
+        let packed = solve_everywhere(ctx, hs, &model, recs, free, &run);
         match wanted {
             Some(w) if packed[0] == 3.0 && w < n.min(MAX_REPRESENTED) => {
                 wanted = Some((MODEL_MARGIN * w).min(n).min(MAX_REPRESENTED));
@@ -540,6 +489,55 @@ fn run_model(
             _ => break packed,
         }
     };
+    let (mine, rec) = model_outcome(hs, b, &packed, force.len(), t);
+    log_model(ctx, hs, &rec, active.is_some());
+    Ok(Some((mine, rec)))
+}
+
+/// One run of the model: every rank builds a share of C's columns, rank 0 solves it
+/// ([`Model::solve`]; a panic there is caught as code 4, so that the broadcast still happens)
+/// and broadcasts [code, model nodes, model steps, coarse levels, represented, δ change,
+/// flags of all nodes]. Collective.
+fn solve_everywhere(
+    ctx: &Ctx,
+    hs: &HalfSpace,
+    model: &Model,
+    recs: Records,
+    free: &FreeModes,
+    run: &ModelRun,
+) -> Vec<f64> {
+    let share = hs.columns(
+        &model.x,
+        &model.w,
+        column_share(model.m(), ctx.rank, ctx.size),
+    );
+    let packed_c = ctx.gather_to_root(&share);
+    let mut packed: Vec<f64> = ctx
+        .on_root_wide(model.m() + run.mz, || {
+            super::dense::guarded("predictor-model", || {
+                model.solve(recs, &packed_c, free, run)
+            })
+            .unwrap_or_else(|_| {
+                let mut failed = vec![0.0; head(run.force.len())];
+                failed[0] = 4.0;
+                failed
+            })
+        })
+        .unwrap_or_default();
+    ctx.broadcast_f64s(&mut packed);
+    packed
+}
+
+/// A model run's broadcast result ([`solve_everywhere`]) as this rank's set (`None`: no
+/// prediction) and the record (`t`: since the run began). Local.
+fn model_outcome(
+    hs: &HalfSpace,
+    b: &ContactBoundary,
+    packed: &[f64],
+    force_pairs: usize,
+    t: Instant,
+) -> ModelSet {
+    let head = head(force_pairs);
     let code = packed[0];
     let flags_all = &packed[head..];
     let predicted = code == 0.0 || code == 3.0;
@@ -564,11 +562,10 @@ fn run_model(
         model_steps: packed[2] as usize,
         coarse_levels: packed[3] as usize,
         truncated: code == 3.0,
-        approach_change: (predicted && !force.is_empty()).then(|| packed[5..head].to_vec()),
+        approach_change: (predicted && force_pairs > 0).then(|| packed[5..head].to_vec()),
         seconds: t.elapsed().as_secs_f64(),
     };
-    log_model(ctx, hs, &rec, active.is_some());
-    Ok(Some((mine, rec)))
+    (mine, rec)
 }
 
 /// The model's progress line (`correcting`: a correction of an exact step's set update).

@@ -68,6 +68,24 @@ pub fn solve(np: usize, case: &Path, sets: &[&str]) -> Solved {
     solved(run, tmp, dir)
 }
 
+/// [`solve`] with `env` added to the solver's environment (test-only limits) and the time
+/// limit `limit`.
+pub fn solve_env(
+    np: usize,
+    case: &Path,
+    sets: &[&str],
+    env: &[(&str, &str)],
+    limit: Duration,
+) -> Solved {
+    let tmp = tempfile::tempdir().expect("tempdir");
+    let dir = tmp.path().join("out");
+    let mut cmd = solver_command(np, case, sets, &dir);
+    for (k, v) in env {
+        cmd.env(k, v);
+    }
+    solved(run_with_timeout(cmd, limit), tmp, dir)
+}
+
 /// The [`Solved`] of a finished run that wrote into `dir` (inside `tmp`); panics unless it
 /// exited with 0 and wrote a summary.
 pub fn solved(run: Run, tmp: tempfile::TempDir, dir: PathBuf) -> Solved {
@@ -120,6 +138,18 @@ impl Solved {
         assert!(scale > 0.0, "u = 0: nothing tested");
         let (diff, _) = super::compare::max_diff(&ua, &ub);
         diff / scale
+    }
+
+    /// Asserts that this run ends on `reference`'s active nodes with u within `tol` of
+    /// max |u| (`what` names the run in the messages).
+    pub fn assert_same_answer(&self, reference: &Solved, tol: f64, what: &str) {
+        assert_eq!(
+            reference.active_node_ids(),
+            self.active_node_ids(),
+            "{what}: final active sets differ"
+        );
+        let d = reference.u_rel_diff(self);
+        assert!(d <= tol, "{what}: |u - u_reference| / max|u| = {d:e}");
     }
 
     /// Node ids of the active contact nodes (contact_nodes.csv), ascending.

@@ -408,10 +408,7 @@ impl<'a> Loop<'a> {
         update: &mut SetUpdate,
     ) -> Result<Option<PredictorStep>, RunError> {
         let ctx = self.ctx;
-        if self.approach.is_some() || self.corrections.1 {
-            return Ok(None);
-        }
-        if ctx.sum_usize(update.changed) == 0 {
+        if self.approach.is_some() || self.corrections.1 || ctx.sum_usize(update.changed) == 0 {
             return Ok(None);
         }
         let (b, it, active) = (&self.shifted, &self.it, self.set.normal.as_slice());

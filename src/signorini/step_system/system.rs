@@ -385,7 +385,6 @@ impl ReducedSystem {
         self.change
     }
 
-    /// Whether the solver may make inexact steps (the iterative preset's reuse path).
     /// Krylov solves (no factorisation): the relative tolerance divided by `factor`, not below
     /// `floor`, for every solve from here; `Some((from, to))`, or `None` where the solver
     /// factorises or is at `floor` already. Local (the same on every rank).
@@ -416,6 +415,7 @@ impl ReducedSystem {
         self.ls.ksp.set_rtol(rtol)
     }
 
+    /// Whether the solver may make inexact steps (the iterative preset's reuse path).
     pub fn inexact_available(&self) -> bool {
         self.amg.is_some()
     }

@@ -183,6 +183,43 @@ fn a_coarse_model_is_refined_at_the_contact_edge() {
     );
 }
 
+/// Corrections where the model of every node would be coarser than the mesh: the committed
+/// ball pressed by 0.01 with the model's size lowered by the test-only limit MAX_MODEL_NODES
+/// to 100 (68 model nodes for 256 in the prediction). Each exact update that changes nodes is
+/// corrected by a model of its edge band alone (fewer model nodes than contact nodes, every
+/// contact node represented); the run ends on the plain path's answer in fewer steps than the
+/// plain path (measured: 4 against 7; 5 with no correction, the binary before).
+#[test]
+fn a_coarse_zone_is_corrected_on_the_edge_band_of_each_exact_update() {
+    let case = repo("cases/ball3d/ball3d.toml");
+    let sets = ["neumann.0.pressure=0.01"];
+    let plain = run(2, &case, &iterative(&sets, "never"));
+    let all = iterative(&sets, "auto");
+    let all: Vec<&str> = all.iter().map(String::as_str).collect();
+    let env = [("SIGNORINI_TEST_LIMIT_MAX_MODEL_NODES", "100")];
+    let s = solve_env(2, &case, &all, &env, LIMIT);
+    s.assert_converged("limit 100");
+    s.assert_same_answer(&plain, 1e-8, "limit 100");
+    assert!(s.run.output().contains("edge band"), "{}", s.run.output());
+    let h = get(&s.summary, &["newton", "history"]).as_array().unwrap();
+    let corrected: Vec<&Value> = h[1..]
+        .iter()
+        .filter(|st| !st["predictor"].is_null())
+        .collect();
+    assert!(!corrected.is_empty(), "{h:?}");
+    for st in corrected {
+        let p = &st["predictor"];
+        let (m, n) = (p["model_nodes"].as_u64(), p["represented"].as_u64());
+        assert!(m < n && m <= Some(100), "{p}");
+    }
+    assert!(
+        h.len() < plain.steps(),
+        "{} against {}",
+        h.len(),
+        plain.steps()
+    );
+}
+
 /// A set that recurs on Krylov solves: an edge node flips on the solver's error alone. The
 /// committed ball pressed by 0.01, on the iterative preset with the loose solver.rtol = 1e-4
 /// (measured: the set of step 5 recurs), tightens its solves 1 000 × and ends on the plain

@@ -18,14 +18,16 @@
 //! model corrects that update ([`correct`]): anchored at the step's exact solution
 //! (d₀ = u_n + C λ_n), it models only the change of λ, so its error shrinks with the change,
 //! and its Algorithm 1 also moves the nodes that change only after others have (a contact
-//! edge that moves by several nodes, which (3.23) alone moves a node per step). The nodes
-//! (3.23) changes keep their change, so a correction never ends the iteration: it still ends
-//! on an exact step whose update changes nothing.
+//! edge that moves by several nodes, which (3.23) alone moves a node per step). A model that
+//! keeps the step's set leaves (3.23)'s update, so a correction never ends the iteration: it
+//! still ends on an exact step whose update changes nothing. Where the zone needs more model
+//! nodes than the cap, the correction models the update's edge band alone and holds the rest.
 
 use super::active_set::Iterate;
 use super::boundary::ContactBoundary;
 use super::dense::{coarsen, median_spacing, Dense, DenseLimits, End};
 use super::rigid::FreeModes;
+use crate::contact::normal_active;
 use crate::error::RunError;
 use crate::mesh::Mesh;
 use crate::par::Ctx;
@@ -132,6 +134,37 @@ pub fn refine_at_edge(
         .map(|q| index.get(&q).copied().unwrap_or(index[&kept[owner[q]]]))
         .collect();
     Some((refined, new_owner))
+}
+
+/// Per point of `x`: the squared distance to the nearest point of the other `state` within
+/// `reach` (infinity beyond), by a grid of cells of that size. Local.
+fn distance_across(x: &[[f64; 3]], state: &[bool], reach: f64) -> Vec<f64> {
+    let cell =
+        |p: &[f64; 3]| -> [i64; 3] { std::array::from_fn(|k| (p[k] / reach).floor() as i64) };
+    let mut grid: std::collections::HashMap<[i64; 3], Vec<usize>> = Default::default();
+    for (q, p) in x.iter().enumerate() {
+        grid.entry(cell(p)).or_default().push(q);
+    }
+    let d2 = |a: &[f64; 3], b: &[f64; 3]| (0..3).map(|k| (a[k] - b[k]).powi(2)).sum::<f64>();
+    (0..x.len())
+        .map(|q| {
+            let c = cell(&x[q]);
+            let mut best = f64::INFINITY;
+            for o in 0..27i64 {
+                let key = [c[0] + o % 3 - 1, c[1] + (o / 3) % 3 - 1, c[2] + o / 9 - 1];
+                for &j in grid.get(&key).map_or(&[][..], Vec::as_slice) {
+                    if state[j] != state[q] {
+                        best = best.min(d2(&x[q], &x[j]));
+                    }
+                }
+            }
+            if best <= reach * reach {
+                best
+            } else {
+                f64::INFINITY
+            }
+        })
+        .collect()
 }
 
 /// The band of a coarse model refined at the contact edge ([`refine_at_edge`]): the nodes
@@ -399,13 +432,17 @@ pub fn predict(
 /// C λ_n, so that at the step's λ_n it gives the step's u_n exactly and only the change of λ
 /// is modelled — and Algorithm 1 on it gives the set that the changes of (3.23) lead to,
 /// including the nodes that change only once the others have (a contact edge that moves
-/// by more than one node). Returns the model's set of this rank's nodes as for [`predict`];
-/// `None` (nothing run, nothing logged) where the model would be coarser than the mesh
-/// ([`model_nodes`]): anchored at an exact step, such a model moves the edge by whole groups
-/// of nodes, and even refined at the edge ([`refine_at_edge`]) its coarse interior misplaces
-/// it (measured: the full floating ball, 2 ranks, 10 × its load: at 396 633 unknowns 8 steps
-/// with coarse corrections, 6 with refined ones, 3 without; at 1 213 776 unknowns 10 steps
-/// with refined corrections, 5 without). Collective.
+/// by more than one node). The iteration starts from the exact step's own update, which its
+/// first dense step reproduces. Where the model of every represented node would be coarser
+/// than the mesh ([`model_nodes`]), the model is the update's edge band alone, at full
+/// resolution, every other node held in its updated state at its λ_n ([`Model::edge_band`]):
+/// a coarse model moves the edge by whole groups of nodes, and even refined at the edge
+/// ([`refine_at_edge`]) its coarse interior misplaces it (measured: the full floating ball,
+/// 2 ranks, 10 × its load: at 396 633 unknowns 8 steps with coarse corrections, 6 with refined
+/// ones, 3 without; at 1 213 776 unknowns 10 steps with refined corrections, 5 without, 4
+/// with the band). Returns the model's set of this rank's nodes as for [`predict`]; `None`
+/// (nothing run, nothing logged) where not even the band fits [`MAX_MODEL_NODES`].
+/// Collective.
 pub fn correct(
     ctx: &Ctx,
     hs: &HalfSpace,
@@ -467,13 +504,21 @@ fn run_model(
         force,
         grow,
     };
+    // a correction starts from the exact step's own update (3.23)
+    let updated = active.map(|_| exact_update(&all, limits.c));
     let packed = loop {
-        let model = Model::choose(&all, wanted, max_model_nodes(), edge.as_deref());
+        let mut model = Model::choose(&all, wanted, max_model_nodes(), edge.as_deref());
         let coarsened = model.m() < model.fine.len();
         if coarsened && !anchor.coarse {
-            return Ok(None); // the same on every rank: the records are
+            // the same on every rank: the records are
+            let band = updated.as_deref().and_then(|u| model.edge_band(&all, u));
+            let Some(band) = band else {
+                return Ok(None);
+            };
+            model = band;
         }
-        let packed = solve_everywhere(ctx, hs, &model, recs, free, &run);
+        let from = updated.as_deref().or(edge.as_deref());
+        let packed = solve_everywhere(ctx, hs, (&model, from), recs, free, &run);
         match wanted {
             Some(w) if packed[0] == 3.0 && w < n.min(MAX_REPRESENTED) => {
                 wanted = Some((MODEL_MARGIN * w).min(n).min(MAX_REPRESENTED));
@@ -501,7 +546,7 @@ fn run_model(
 fn solve_everywhere(
     ctx: &Ctx,
     hs: &HalfSpace,
-    model: &Model,
+    (model, from): (&Model, Option<&[f64]>),
     recs: Records,
     free: &FreeModes,
     run: &ModelRun,
@@ -515,7 +560,7 @@ fn solve_everywhere(
     let mut packed: Vec<f64> = ctx
         .on_root_wide(model.m() + run.mz, || {
             super::dense::guarded("predictor-model", || {
-                model.solve(recs, &packed_c, free, run)
+                model.solve(recs, (&packed_c, from), free, run)
             })
             .unwrap_or_else(|_| {
                 let mut failed = vec![0.0; head(run.force.len())];
@@ -573,7 +618,7 @@ fn model_outcome(
 fn log_model(ctx: &Ctx, hs: &HalfSpace, rec: &PredictorStep, correcting: bool) {
     say!(
         ctx,
-        "predictor{}: half-space model (E* = {:.4e}, {} mirror plane(s)) on {} nodes for {} contact nodes: {}{} ({} active, {} steps, {} coarse levels, {:.3} s){}",
+        "predictor{}: half-space model (E* = {:.4e}, {} mirror plane(s)) on {} nodes{} for {} contact nodes: {}{} ({} active, {} steps, {} coarse levels, {:.3} s){}",
         if correcting {
             " (correcting the set update of the exact step)"
         } else {
@@ -582,6 +627,12 @@ fn log_model(ctx: &Ctx, hs: &HalfSpace, rec: &PredictorStep, correcting: bool) {
         hs.modulus,
         rec.mirror_planes,
         rec.model_nodes,
+        // a correction never runs a coarsened model: fewer nodes are its edge band
+        if correcting && rec.model_nodes < rec.represented {
+            " (the exact update's edge band; the other nodes held)"
+        } else {
+            ""
+        },
         rec.represented,
         rec.outcome,
         if rec.truncated {
@@ -725,6 +776,15 @@ fn gather_records(
     )
 }
 
+/// The set (3.23) of the exact step a correction is anchored at, on every contact node of
+/// the records (1 in contact): the set its model iteration starts from, whose first dense step
+/// reproduces the exact step's update. Local.
+fn exact_update(all: &[f64], c: f64) -> Vec<f64> {
+    all.chunks_exact(REC)
+        .map(|r| f64::from(u8::from(normal_active(r[8], r[LAMBDA], r[6], c))))
+        .collect()
+}
+
 /// The nodes of the model, the same on every rank.
 struct Model {
     /// Contact nodes that penetrate after the first solve.
@@ -737,6 +797,9 @@ struct Model {
     pick: Vec<usize>,
     x: Vec<[f64; 3]>,
     w: Vec<f64>,
+    /// A correction's edge band ([`Model::edge_band`]): the nodes it does not represent keep
+    /// their state and λ_n.
+    band: bool,
 }
 
 impl Model {
@@ -803,7 +866,60 @@ impl Model {
             fine,
             owner,
             w,
+            band: false,
         }
+    }
+
+    /// A correction's model where the model of every represented node would be coarser than
+    /// the mesh: the represented nodes within [`EDGE_BAND`] node spacings of a node on the other
+    /// side of the exact update's edge (`updated`, every contact node), or that the update
+    /// changes, each a model node of its own (the widest band the cap allows); every other node
+    /// keeps its updated state and its λ_n (the load it carries is taken from the free modes'
+    /// load). In Hertzian contact the pressure vanishes at the edge, so moving the edge moves
+    /// little load: the held interior's λ_n stay nearly right. `None` where there is no edge or
+    /// even the narrowest band exceeds the cap. Local (the same on every rank).
+    fn edge_band(&self, all: &[f64], updated: &[f64]) -> Option<Model> {
+        let r = |i: usize| &all[i * REC..(i + 1) * REC];
+        let x: Vec<[f64; 3]> = self
+            .fine
+            .iter()
+            .map(|&i| [r(i)[0], r(i)[1], r(i)[2]])
+            .collect();
+        let state: Vec<bool> = self.fine.iter().map(|&i| updated[i] != 0.0).collect();
+        let changed: Vec<bool> = (self.fine.iter().zip(&state))
+            .map(|(&i, &s)| s != (r(i)[LAMBDA] != 0.0))
+            .collect();
+        let spacing = median_spacing(&x, SPACING_SAMPLES);
+        if !(spacing > 0.0 && spacing.is_finite()) {
+            return None;
+        }
+        let across = distance_across(&x, &state, EDGE_BAND[0] * spacing);
+        let band = EDGE_BAND.iter().find_map(|&width| {
+            let reach = (width * spacing).powi(2);
+            let band: Vec<usize> = (0..x.len())
+                .filter(|&q| changed[q] || across[q] <= reach)
+                .collect();
+            (!band.is_empty() && band.len() <= max_model_nodes()).then_some(band)
+        })?;
+        Some(Model {
+            pen: self.pen,
+            pick: band.iter().map(|&q| self.fine[q]).collect(),
+            x: band.iter().map(|&q| x[q]).collect(),
+            w: band.iter().map(|&q| r(self.fine[q])[7]).collect(),
+            owner: (0..band.len()).collect(),
+            fine: band.iter().map(|&q| self.fine[q]).collect(),
+            band: true,
+        })
+    }
+
+    /// The model nodes' start set from a set of every contact node (`flags`, nonzero in
+    /// contact): a model node is in contact where one of the nodes it represents is. Local.
+    fn start_set(&self, flags: &[f64]) -> Vec<bool> {
+        let mut set = vec![false; self.m()];
+        for (q, &i) in self.fine.iter().enumerate() {
+            set[self.owner[q]] |= flags[i] != 0.0;
+        }
+        set
     }
 
     fn m(&self) -> usize {
@@ -861,7 +977,7 @@ impl Model {
     fn solve(
         &self,
         recs: Records,
-        packed_c: &[f64],
+        (packed_c, from): (&[f64], Option<&[f64]>),
         free: &FreeModes,
         spec: &ModelRun,
     ) -> Vec<f64> {
@@ -875,7 +991,11 @@ impl Model {
         let n = all.len() / REC;
         let (m, wanted) = (self.m(), self.fine.len());
         let r = |i: usize| &all[i * REC..(i + 1) * REC];
-        let mut flags = vec![0.0; n];
+        // an edge band's model: the nodes beyond it keep the state it starts from
+        let mut flags = match (self.band, from) {
+            (true, Some(f)) => f.to_vec(),
+            _ => vec![0.0; n],
+        };
         let mut approach = vec![0.0; force.len().max(1)];
         let (code, steps, levels) = if self.pen == 0 && !grow {
             (1.0, 0, 0)
@@ -906,6 +1026,16 @@ impl Model {
             let (_, mut load_scale) = free.load();
             let mut phi = free.free_load();
             phi.truncate(mz);
+            if self.band {
+                // the load the nodes beyond the band carry at their λ_n stays theirs
+                let mut inside = vec![false; n];
+                self.fine.iter().for_each(|&i| inside[i] = true);
+                for i in (0..n).filter(|&i| !inside[i] && r(i)[LAMBDA] != 0.0) {
+                    for (cz, p) in phi.iter_mut().enumerate() {
+                        *p -= g_all[i * mz + cz] * r(i)[LAMBDA];
+                    }
+                }
+            }
             for &(_, magnitude, _) in force {
                 phi.push(magnitude);
                 load_scale = load_scale.max(magnitude);
@@ -921,18 +1051,21 @@ impl Model {
                 max_steps,
                 pins_carry: 0,
             };
-            let run = dense.run_nested(vec![false; m], &self.x);
+            let run = match from {
+                Some(flags) => dense.run(self.start_set(flags)),
+                None => dense.run_nested(vec![false; m], &self.x),
+            };
             if run.end == End::Converged {
                 for (j, a) in approach.iter_mut().enumerate() {
                     *a = run.alpha.get(mz + j).copied().unwrap_or(0.0);
                 }
                 for (q, &i) in self.fine.iter().enumerate() {
-                    if run.active[self.owner[q]] {
-                        flags[i] = 1.0;
-                    }
+                    flags[i] = f64::from(u8::from(run.active[self.owner[q]]));
                 }
                 let border = wanted - wanted / MODEL_BORDER_PART;
-                let truncated = wanted < n && self.fine[border..].iter().any(|&i| flags[i] != 0.0);
+                let truncated = !self.band
+                    && wanted < n
+                    && self.fine[border..].iter().any(|&i| flags[i] != 0.0);
                 (
                     if truncated { 3.0 } else { 0.0 },
                     run.steps.len(),
@@ -942,7 +1075,15 @@ impl Model {
                 (2.0, run.steps.len(), run.coarse.len())
             }
         };
-        let mut packed = vec![code, m as f64, steps as f64, levels as f64, wanted as f64];
+        // an edge band represents every contact node (it holds the others)
+        let represented = if self.band { n } else { wanted };
+        let mut packed = vec![
+            code,
+            m as f64,
+            steps as f64,
+            levels as f64,
+            represented as f64,
+        ];
         packed.extend_from_slice(&approach);
         packed.extend_from_slice(&flags);
         packed
@@ -1073,6 +1214,62 @@ mod tests {
         assert!(refine_at_edge(&x, &kept, &owner, &state, kept.len()).is_none());
         let none = vec![false; x.len()];
         assert!(refine_at_edge(&x, &kept, &owner, &none, 3000).is_none());
+    }
+
+    #[test]
+    fn a_correction_by_a_coarse_model_runs_on_the_edge_band_alone() {
+        let k = 60; // 3 600 records on a grid of spacing 0.01
+        let centre = |i: usize| {
+            let p = [(i % k) as f64 * 0.01, (i / k) as f64 * 0.01];
+            ((p[0] - 0.3).powi(2) + (p[1] - 0.3).powi(2)).sqrt()
+        };
+        // the exact step's set: the disc r < 0.16 (λ_n ≠ 0); its update: r < 0.15
+        let mut all = Vec::new();
+        for i in 0..k * k {
+            let lam = if centre(i) < 0.16 { -1.0 } else { 0.0 };
+            let x = [(i % k) as f64 * 0.01, (i / k) as f64 * 0.01, 0.0];
+            all.extend_from_slice(&x);
+            all.extend_from_slice(&[0.0, 0.0, 1.0, 0.0, 1e-4, centre(i) - 0.15, 0.0, lam]);
+            all.push(i as f64);
+        }
+        let updated: Vec<f64> = (0..k * k)
+            .map(|i| f64::from(u8::from(centre(i) < 0.15)))
+            .collect();
+        let full = Model::choose(&all, Some(k * k), 1000, None);
+        assert!(full.m() < full.fine.len(), "coarsened: {}", full.m());
+        let band = full.edge_band(&all, &updated).expect("a band fits");
+        assert!(band.band && band.m() == band.fine.len() && band.m() <= MAX_MODEL_NODES);
+        assert_eq!(band.owner, (0..band.m()).collect::<Vec<_>>());
+        let inside: std::collections::HashSet<usize> = band.fine.iter().copied().collect();
+        for i in 0..k * k {
+            let r = centre(i);
+            // every node the update changes and every node within 2.5 spacings of its edge
+            // (one spacing either side of r = 0.15, at least) is in the band; none far off
+            if (0.15..0.16).contains(&r) || (r - 0.15).abs() <= 0.01 {
+                assert!(inside.contains(&i), "node {i} at r = {r}");
+            }
+            if (r - 0.15).abs() > 0.04 {
+                assert!(!inside.contains(&i), "node {i} at r = {r}");
+            }
+        }
+        // a start without an edge has no band
+        let none = vec![0.0; k * k];
+        let lifted: Vec<f64> = (0..all.len())
+            .map(|j| if j % REC == LAMBDA { 0.0 } else { all[j] })
+            .collect();
+        assert!(full.edge_band(&lifted, &none).is_none());
+    }
+
+    #[test]
+    fn distances_across_a_state_edge_within_reach() {
+        let x: Vec<[f64; 3]> = (0..10).map(|i| [i as f64, 0.0, 0.0]).collect();
+        let state: Vec<bool> = (0..10).map(|i| i < 4).collect();
+        let d = distance_across(&x, &state, 2.5);
+        assert_eq!(d[3], 1.0);
+        assert_eq!(d[4], 1.0);
+        assert_eq!(d[2], 4.0);
+        assert_eq!(d[5], 4.0);
+        assert!(d[0].is_infinite() && d[9].is_infinite() && d[7].is_infinite());
     }
 
     #[test]

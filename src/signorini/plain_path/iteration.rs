@@ -397,11 +397,15 @@ impl<'a> Loop<'a> {
     }
 
     /// The model's correction of an exact step's set update ([`halfspace::correct`]; not
-    /// under force control): when (3.23) changes nodes, the next set is the model's, except
-    /// that every node (3.23) changes keeps its change (so the step counts at least those
-    /// changes, and a correction never stops the iteration); the model's record, or `None`
-    /// when (3.23) changes nothing, the corrections have stopped ([`Loop::corrected`]) or the
-    /// model would be coarser than the mesh ([`halfspace::correct`]). Collective.
+    /// under force control): when (3.23) changes nodes, the next set is the model's, unless the
+    /// model keeps the step's own set, where (3.23)'s update stays (so a correction never stops
+    /// the iteration, which ends on an exact step whose update changes nothing). A node that
+    /// (3.23) changes but the model does not is left to the next exact step: (3.23) from a set
+    /// short of the final one also takes nodes that the growing zone lifts off again (measured:
+    /// the full ball at 396 k unknowns pressed by 0.02: keeping every such change took 5 steps,
+    /// changes 124, 19, 1, 0; the model's set 4, changes 107, 7, 0). The model's record, or
+    /// `None` when (3.23) changes nothing, the corrections have stopped ([`Loop::corrected`]) or
+    /// not even the model's edge band fits ([`halfspace::correct`]). Collective.
     fn correct(
         &mut self,
         hs: &HalfSpace,
@@ -418,11 +422,13 @@ impl<'a> Loop<'a> {
             return Ok(None);
         };
         if let Some(model) = set.filter(|_| !rec.truncated) {
-            let next: Vec<bool> = (model.iter().zip(&self.set.normal))
-                .zip(&update.next.normal)
-                .map(|((&m, &now), &plain)| if plain != now { plain } else { m })
-                .collect();
-            update.replace_normal(&self.set, next);
+            let moved = model
+                .iter()
+                .zip(&self.set.normal)
+                .filter(|(m, now)| m != now);
+            if ctx.sum_usize(moved.count()) > 0 {
+                update.replace_normal(&self.set, model);
+            }
         }
         Ok(Some(rec))
     }

@@ -67,6 +67,9 @@ struct Loop<'a> {
     tighten: bool,
     /// The Krylov tolerance before it was tightened: given back when the solve ends.
     restore_rtol: Option<f64>,
+    /// The model kept the step's set where (3.23) changed nodes, on Krylov solves not yet
+    /// tightened ([`Loop::correct`]): the same set is solved once more, tighter.
+    resolve: bool,
 }
 
 /// A load step whose solution vanishes against its warm start's (the load and the obstacle's
@@ -146,6 +149,11 @@ pub fn semismooth_newton(
         history.push(lp.step_info(step, &totals, solved, reduced.change()));
         history.last_mut().expect("pushed").predictor = predicted;
         log_step(ctx, history.last().expect("pushed"), &totals);
+        if std::mem::take(&mut lp.resolve) {
+            lp.tightened = Some(step);
+            lp.tighten_solver(reduced, "is kept by the model where (3.23) changes it")?;
+            continue; // the same sets, solved tighter
+        }
         let done = plan;
         let exact_now = exact_from_prediction.unwrap_or(done.exact);
         // Identical on every rank: `totals` and the guard's keys are global.
@@ -161,7 +169,7 @@ pub fn semismooth_newton(
         let totals = lp.fixed_point(totals, factorised, scale);
         let stopped = lp.next(step, update.next, &totals)?;
         if std::mem::take(&mut lp.tighten) {
-            lp.tighten_solver(reduced)?;
+            lp.tighten_solver(reduced, "recurs")?;
         }
         if stopped {
             match done.after_stop(reused) {
@@ -326,6 +334,7 @@ impl<'a> Loop<'a> {
             tightened: None,
             tighten: false,
             restore_rtol: None,
+            resolve: false,
         };
         reduced.set_free_null_space(ctx, None)?; // none left from an earlier solve
         Ok((lp, predicting))
@@ -428,29 +437,34 @@ impl<'a> Loop<'a> {
                 .filter(|(m, now)| m != now);
             if ctx.sum_usize(moved.count()) > 0 {
                 update.replace_normal(&self.set, model);
+            } else if self.krylov && self.tightened.is_none() {
+                // the model and (3.23) disagree on nodes at the edge of their state: the
+                // solver's error may decide them
+                self.resolve = true;
             }
         }
         Ok(Some(rec))
     }
 
-    /// A set recurred on Krylov solves ([`Loop::new_sets`]): the solver's relative tolerance
+    /// A set recurred on Krylov solves ([`Loop::new_sets`]), or the model kept a set that
+    /// (3.23) changes ([`Loop::correct`]; `what` says which): the solver's relative tolerance
     /// divided by [`TIGHTEN_ON_RECURRENCE`] (not below [`TIGHTEST_RTOL`]) for the steps from
     /// here to the end of this solve; said in the log. Collective.
-    fn tighten_solver(&mut self, reduced: &mut ReducedSystem) -> Result<(), RunError> {
+    fn tighten_solver(&mut self, reduced: &mut ReducedSystem, what: &str) -> Result<(), RunError> {
         let step = self.tightened.unwrap_or(0);
         match reduced.tighten_krylov(TIGHTEN_ON_RECURRENCE, TIGHTEST_RTOL)? {
             Some((from, to)) => {
                 self.restore_rtol = Some(from);
                 say!(
                     self.ctx,
-                    "newton: the set of step {step} recurs on Krylov solves to rtol {from:.0e}: \
+                    "newton: the set of step {step} {what} on Krylov solves to rtol {from:.0e}: \
                      a node at the edge of its state may flip on the solver's error; the steps \
                      from here solve to {to:.0e}"
                 )
             }
             None => say!(
                 self.ctx,
-                "newton: the set of step {step} recurs; the Krylov solves are at their tightest \
+                "newton: the set of step {step} {what}; the Krylov solves are at their tightest \
                  tolerance already"
             ),
         }

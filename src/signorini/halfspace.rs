@@ -449,7 +449,7 @@ pub fn predict(
 /// 2 ranks, 10 × its load: at 396 633 unknowns 8 steps with coarse corrections, 6 with refined
 /// ones, 3 without; at 1 213 776 unknowns 10 steps with refined corrections, 5 without, 4
 /// with the band). Returns the model's set of this rank's nodes as for [`predict`]; `None`
-/// (nothing run, nothing logged) where not even the band fits [`MAX_MODEL_NODES`].
+/// (nothing run, nothing logged) where the band exceeds [`MAX_MODEL_NODES`].
 /// Collective.
 pub fn correct(
     ctx: &Ctx,
@@ -881,9 +881,8 @@ impl Model {
     /// A correction's model where the model of every represented node would be coarser than
     /// the mesh: the represented nodes within [`CORRECTION_BAND`] node spacings of a node on the
     /// other side of the exact update's edge (`updated`, every contact node), or that the update
-    /// changes, each a model node of its own; every other node
-    /// keeps its updated state and its λ_n (the load it carries is taken from the free modes'
-    /// load). In Hertzian contact the pressure vanishes at the edge, so moving the edge moves
+    /// changes, each a model node of its own; every other node keeps its updated state and its
+    /// λ_n (the load it carries is taken from the free modes' load). In Hertzian contact the pressure vanishes at the edge, so moving the edge moves
     /// little load: the held interior's λ_n stay nearly right. `None` where there is no edge or
     /// the band exceeds the cap. Local (the same on every rank).
     fn edge_band(&self, all: &[f64], updated: &[f64]) -> Option<Model> {
@@ -918,6 +917,42 @@ impl Model {
             fine: band.iter().map(|&q| self.fine[q]).collect(),
             band: true,
         })
+    }
+
+    /// G of the model nodes: the free modes' normal parts (`mz` columns), then under force
+    /// control one column per force-controlled pair (its nodes' −e·n). Local.
+    fn mode_columns(&self, recs: Records, mz: usize, force: &[PairForce]) -> DMatrix<f64> {
+        let r = |i: usize| &recs.all[i * REC..(i + 1) * REC];
+        let (m, mzf) = (self.m(), mz + force.len());
+        DMatrix::from_fn(m, mzf, |q, cc| match force.get(cc.wrapping_sub(mz)) {
+            Some(&(e, _, pair)) if cc >= mz => {
+                let x = r(self.pick[q]);
+                if x[PAIR] == pair as f64 {
+                    -(x[3] * e[0] + x[4] * e[1] + x[5] * e[2])
+                } else {
+                    0.0 // another pair's obstacle stays
+                }
+            }
+            _ => recs.g_all[self.pick[q] * mz + cc],
+        })
+    }
+
+    /// An edge band's balance: the load in the free modes that the nodes beyond the band carry
+    /// at their λ_n stays theirs, so the band balances `phi` less it (m_z entries). Nothing for
+    /// another model. Local.
+    fn take_held_load(&self, recs: Records, phi: &mut [f64]) {
+        if !self.band {
+            return;
+        }
+        let (all, g_all) = (recs.all, recs.g_all);
+        let (n, mz) = (all.len() / REC, phi.len());
+        let mut inside = vec![false; n];
+        self.fine.iter().for_each(|&i| inside[i] = true);
+        for i in (0..n).filter(|&i| !inside[i] && all[i * REC + LAMBDA] != 0.0) {
+            for (cz, p) in phi.iter_mut().enumerate() {
+                *p -= g_all[i * mz + cz] * all[i * REC + LAMBDA];
+            }
+        }
     }
 
     /// The model nodes' start set from a set of every contact node (`flags`, nonzero in
@@ -989,7 +1024,7 @@ impl Model {
         free: &FreeModes,
         spec: &ModelRun,
     ) -> Vec<f64> {
-        let Records { all, g_all } = recs;
+        let all = recs.all;
         let &ModelRun {
             mz,
             limits: DenseLimits { c, max_steps },
@@ -1019,31 +1054,11 @@ impl Model {
                 .map(|(q, &i)| r(i)[8] + clam[q])
                 .collect();
             let gap: Vec<f64> = self.pick.iter().map(|&i| r(i)[6]).collect();
-            let mzf = mz + force.len();
-            let g = DMatrix::from_fn(m, mzf, |q, cc| match force.get(cc.wrapping_sub(mz)) {
-                Some(&(e, _, pair)) if cc >= mz => {
-                    let x = r(self.pick[q]);
-                    if x[PAIR] == pair as f64 {
-                        -(x[3] * e[0] + x[4] * e[1] + x[5] * e[2])
-                    } else {
-                        0.0 // another pair's obstacle stays
-                    }
-                }
-                _ => g_all[self.pick[q] * mz + cc],
-            });
+            let g = self.mode_columns(recs, mz, force);
             let (_, mut load_scale) = free.load();
             let mut phi = free.free_load();
             phi.truncate(mz);
-            if self.band {
-                // the load the nodes beyond the band carry at their λ_n stays theirs
-                let mut inside = vec![false; n];
-                self.fine.iter().for_each(|&i| inside[i] = true);
-                for i in (0..n).filter(|&i| !inside[i] && r(i)[LAMBDA] != 0.0) {
-                    for (cz, p) in phi.iter_mut().enumerate() {
-                        *p -= g_all[i * mz + cz] * r(i)[LAMBDA];
-                    }
-                }
-            }
+            self.take_held_load(recs, &mut phi);
             for &(_, magnitude, _) in force {
                 phi.push(magnitude);
                 load_scale = load_scale.max(magnitude);

@@ -559,16 +559,16 @@ fn solve_everywhere(
     free: &FreeModes,
     run: &ModelRun,
 ) -> Vec<f64> {
-    let share = hs.columns(
+    // this rank's share is dropped once gathered, rank 0's gathered triangle once assembled
+    let packed_c = ctx.gather_to_root(&hs.columns(
         &model.x,
         &model.w,
         column_share(model.m(), ctx.rank, ctx.size),
-    );
-    let packed_c = ctx.gather_to_root(&share);
+    ));
     let mut packed: Vec<f64> = ctx
-        .on_root_wide(model.m() + run.mz, || {
-            super::dense::guarded("predictor-model", || {
-                model.solve(recs, (&packed_c, from), free, run)
+        .on_root_wide(model.m() + run.mz, move || {
+            super::dense::guarded("predictor-model", move || {
+                model.solve(recs, (packed_c, from), free, run)
             })
             .unwrap_or_else(|_| {
                 let mut failed = vec![0.0; head(run.force.len())];
@@ -1020,7 +1020,7 @@ impl Model {
     fn solve(
         &self,
         recs: Records,
-        (packed_c, from): (&[f64], Option<&[f64]>),
+        (packed_c, from): (Vec<f64>, Option<&[f64]>),
         free: &FreeModes,
         spec: &ModelRun,
     ) -> Vec<f64> {
@@ -1043,8 +1043,9 @@ impl Model {
         let (code, steps, levels) = if self.pen == 0 && !grow {
             (1.0, 0, 0)
         } else {
-            let cmat = assemble(m, packed_c);
-            // a correction: d₀ = u_n + C λ_n, λ_n of a model node the sum of its nodes'
+            let cmat = assemble(m, &packed_c);
+            drop(packed_c); // the model's largest matrices: only one of them at a time
+                            // a correction: d₀ = u_n + C λ_n, λ_n of a model node the sum of its nodes'
             let mut lam = DVector::<f64>::zeros(m);
             for (q, &i) in self.fine.iter().enumerate() {
                 lam[self.owner[q]] += r(i)[LAMBDA];

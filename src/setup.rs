@@ -473,7 +473,7 @@ pub struct ContactSettings {
     pub material: Materials,
     /// The contact modulus E* = E / (1 − ν²) (3D, plane strain) or E (plane stress) of the
     /// reference material, or with body pairs the two sides' in series (`pair_modulus`): the
-    /// half-space predictor's (halfspace.rs).
+    /// half-space predictor's (halfspace/).
     pub contact_modulus: f64,
     /// The rigid modes of the bodies that Dirichlet data leave free, and the body of every
     /// local node (the driver's body survey); `None`: the whole mesh is one body.

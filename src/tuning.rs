@@ -219,7 +219,7 @@ pub const MAX_MODEL_NODES: usize = 3000;
 /// final set of 3D Hertz is 1.2 × it), at least MIN_MODEL_NODES, at most MAX_MODEL_NODES
 /// while these cover FINE_MODEL_COVER of them, else at most MAX_REPRESENTED by a coarser
 /// subset. Measured: 3D Hertz, 527 k unknowns: 4 steps from a coarse model of 3 840 nodes,
-/// 3 from the fine one of 3 000 (halfspace.rs). The 2-core AMD EPYC. Not machine-specific.
+/// 3 from the fine one of 3 000 (halfspace/). The 2-core AMD EPYC. Not machine-specific.
 pub const MODEL_MARGIN: usize = 3;
 /// See [`MODEL_MARGIN`]. Not measured.
 pub const MIN_MODEL_NODES: usize = 256;
@@ -227,12 +227,12 @@ pub const MIN_MODEL_NODES: usize = 256;
 pub const MAX_REPRESENTED: usize = 24_000;
 
 /// The fine model is used while FINE_MODEL_COVER[0] / FINE_MODEL_COVER[1] × the penetrating
-/// nodes fit in MAX_MODEL_NODES (halfspace.rs). Not
+/// nodes fit in MAX_MODEL_NODES (halfspace/). Not
 /// measured; not machine-specific.
 pub const FINE_MODEL_COVER: [usize; 2] = [3, 2];
 
 /// The model's solution counts as truncated where a node of the last 1/MODEL_BORDER_PART
-/// of its nodes (by clearance) comes into contact (halfspace.rs).
+/// of its nodes (by clearance) comes into contact (halfspace/).
 /// Not measured; not machine-specific.
 pub const MODEL_BORDER_PART: usize = 10;
 
@@ -242,8 +242,8 @@ pub const MODEL_BORDER_PART: usize = 10;
 /// wide). The 2-core AMD EPYC. Not machine-specific (counts).
 pub const LOCATE_MODEL_NODES: [usize; 2] = [512, MAX_MODEL_NODES];
 
-/// The dense compliance's lower triangle is mirrored in tiles of this size (halfspace.rs
-/// `assemble`). Not measured; cache-dependent, so machine-specific in principle.
+/// The dense compliance's lower triangle is mirrored in tiles of this size
+/// (halfspace/kernel.rs `assemble`). Not measured; cache-dependent, so machine-specific in principle.
 pub const MIRROR_TILE: usize = 64;
 
 // ---------------------------------------------------------------------------------------------

@@ -1,5 +1,5 @@
 //! The half-space predictor of the iterative preset's reuse path (issue 9, item 3;
-//! src/signorini/halfspace.rs): after a first solve without active nodes, Algorithm 1 on a
+//! src/signorini/halfspace/): after a first solve without active nodes, Algorithm 1 on a
 //! dense half-space model (Boussinesq / Flamant, mirrored in the symmetry planes) gives the set
 //! the second Newton step starts from. The final iterate stays Algorithm 1's: the same final
 //! active nodes as the plain path and u within 1e-8 of max |u|; summary.json records the

@@ -1,6 +1,6 @@
 //! Algorithm 1 on a dense model of the contact unknowns, shared by the condensed path
 //! (schur/frictionless.rs: the exact compliance from MUMPS' Schur complement) and the half-space
-//! predictor (halfspace.rs: a modelled compliance): the dense active-set iteration with the free
+//! predictor (halfspace/: a modelled compliance): the dense active-set iteration with the free
 //! rigid modes' balance (`Dense`), its primal form on the Schur complement itself for zones too
 //! wide for the compliance (`Primal`), their result and how it ended (`DenseRun`, `End`), the
 //! saddle solver of one step, and the coarsening of the nested start.

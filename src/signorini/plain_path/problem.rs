@@ -23,7 +23,7 @@ pub struct NewtonSettings<'a> {
     pub law: Law,
     pub rigid: case::RigidModeHandling,
     /// The half-space model of the body for the first set of the iterative preset's reuse
-    /// path (halfspace.rs); `None`: no prediction.
+    /// path (halfspace/); `None`: no prediction.
     pub halfspace: Option<&'a HalfSpace>,
     /// A frictionless estimate for a start (condensed path): the pins carry the load in the
     /// body's own modes the set leaves free instead of the balance test (never the prescribed

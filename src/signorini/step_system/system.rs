@@ -428,7 +428,7 @@ impl ReducedSystem {
         }
     }
 
-    /// The half-space predictor's first solve (halfspace.rs): the next solve, inexact, stops
+    /// The half-space predictor's first solve (halfspace/): the next solve, inexact, stops
     /// at [`PREDICTOR_REDUCTION`](super::reuse::PREDICTOR_REDUCTION) of its start's residual, and
     /// ("auto") the solve after it sets the preconditioner up on its own matrix (the first matrix
     /// has no active node, a poor preconditioner for the predicted set's: 30 instead of 13

@@ -414,7 +414,7 @@ impl<'a> Loop<'a> {
     /// the full ball at 396 k unknowns pressed by 0.02: keeping every such change took 5 steps,
     /// changes 124, 19, 1, 0; the model's set 4, changes 107, 7, 0). The model's record, or
     /// `None` when (3.23) changes nothing, the corrections have stopped ([`Loop::corrected`]) or
-    /// not even the model's edge band fits ([`halfspace::correct`]). Collective.
+    /// the model's edge band does not fit ([`halfspace::correct`]). Collective.
     fn correct(
         &mut self,
         hs: &HalfSpace,

@@ -23,10 +23,86 @@ pub struct DenseLimits {
     pub max_steps: usize,
 }
 
+/// The compliance C (n × n, symmetric) of a dense iteration: a full matrix (the condensed
+/// path's S⁻¹), or its upper triangle packed column by column — column j's entries i = 0..=j
+/// one after the other, the half-space model's column shares gathered
+/// (`halfspace::kernel::HalfSpace::columns`) — in half the memory.
+#[derive(Clone, Copy)]
+pub enum CMatrix<'a> {
+    Full(&'a DMatrix<f64>),
+    Upper { n: usize, packed: &'a [f64] },
+}
+
+impl CMatrix<'_> {
+    /// C_ij. Local.
+    pub fn at(&self, i: usize, j: usize) -> f64 {
+        match self {
+            CMatrix::Full(c) => c[(i, j)],
+            CMatrix::Upper { packed, .. } => {
+                let (i, j) = if i <= j { (i, j) } else { (j, i) };
+                packed[j * (j + 1) / 2 + i]
+            }
+        }
+    }
+
+    /// C x. Local.
+    pub fn times(&self, x: &DVector<f64>) -> DVector<f64> {
+        match self {
+            CMatrix::Full(c) => *c * x,
+            CMatrix::Upper { n, packed } => {
+                let mut y = DVector::<f64>::zeros(*n);
+                let (ys, xs) = (y.as_mut_slice(), x.as_slice());
+                let mut p = 0;
+                for j in 0..*n {
+                    let col = &packed[p..p + j + 1];
+                    let xj = xs[j];
+                    let mut dot = 0.0;
+                    for ((yi, ci), xi) in ys[..j].iter_mut().zip(&col[..j]).zip(&xs[..j]) {
+                        *yi += ci * xj;
+                        dot += ci * xi;
+                    }
+                    ys[j] += col[j] * xj + dot;
+                    p += j + 1;
+                }
+                y
+            }
+        }
+    }
+
+    /// The block C_II of the indices `idx`. Local.
+    pub fn block(&self, idx: &[usize]) -> DMatrix<f64> {
+        DMatrix::from_fn(idx.len(), idx.len(), |r, q| self.at(idx[r], idx[q]))
+    }
+
+    /// C_II x for the indices `idx` (x: one value per index). Local.
+    fn block_times(&self, idx: &[usize], x: &[f64]) -> DVector<f64> {
+        match self {
+            CMatrix::Full(c) => {
+                let mut y = DVector::<f64>::zeros(idx.len());
+                for (&j, &xj) in idx.iter().zip(x) {
+                    let col = c.column(j);
+                    for (yr, &i) in y.iter_mut().zip(idx) {
+                        *yr += col[i] * xj;
+                    }
+                }
+                y
+            }
+            CMatrix::Upper { n, .. } => {
+                let mut full = DVector::<f64>::zeros(*n);
+                for (&i, &xi) in idx.iter().zip(x) {
+                    full[i] = xi;
+                }
+                let cx = self.times(&full);
+                DVector::from_iterator(idx.len(), idx.iter().map(|&i| cx[i]))
+            }
+        }
+    }
+}
+
 /// Algorithm 1 on the condensed system (module note): C (n × n), d₀, the gaps, the free
 /// modes' normal parts G (n × m_z), the load in them φ = zᵀ Rᵀ f and its scale, c.
 pub struct Dense<'a> {
-    pub cmat: &'a DMatrix<f64>,
+    pub cmat: CMatrix<'a>,
     pub d0: &'a [f64],
     pub gap: &'a [f64],
     pub g: &'a DMatrix<f64>,
@@ -470,12 +546,12 @@ impl Dense<'_> {
         let mut active = start;
         let mut coarse = Vec::new();
         for idx in levels.iter().rev() {
-            let sub_c = DMatrix::from_fn(idx.len(), idx.len(), |r, q| self.cmat[(idx[r], idx[q])]);
+            let sub_c = self.cmat.block(idx);
             let sub_g = DMatrix::from_fn(idx.len(), self.g.ncols(), |r, c| self.g[(idx[r], c)]);
             let pick = |v: &[f64]| idx.iter().map(|&i| v[i]).collect::<Vec<f64>>();
             let (d0, gap) = (pick(self.d0), pick(self.gap));
             let sub = Dense {
-                cmat: &sub_c,
+                cmat: CMatrix::Full(&sub_c),
                 d0: &d0,
                 gap: &gap,
                 g: &sub_g,
@@ -491,7 +567,8 @@ impl Dense<'_> {
                 lambda[i] = run.lambda[r];
             }
             let alpha = DVector::from_column_slice(&run.alpha);
-            let un = DVector::from_column_slice(self.d0) - self.cmat * &lambda + self.g * alpha;
+            let un =
+                DVector::from_column_slice(self.d0) - self.cmat.times(&lambda) + self.g * alpha;
             active = (0..self.d0.len())
                 .map(|i| normal_active(un[i], lambda[i], self.gap[i], self.c)) // (3.23)
                 .collect();
@@ -515,7 +592,6 @@ impl Dense<'_> {
         let nf = vf.ncols();
         let h = &ga * &vf;
         let dimn = na + nf;
-        let caa = DMatrix::from_fn(na, na, |r, q| self.cmat[(idx[r], idx[q])]);
         let mut rhs = DVector::<f64>::zeros(dimn);
         for (r, &i) in idx.iter().enumerate() {
             rhs[r] = self.gap[i] + self.d0[i];
@@ -529,14 +605,16 @@ impl Dense<'_> {
         let apply = |x: &DVector<f64>| {
             let (l, b) = (x.rows(0, na), x.rows(na, nf));
             let mut y = DVector::zeros(dimn);
-            y.rows_mut(0, na).copy_from(&(&caa * l - &h * b));
+            y.rows_mut(0, na)
+                .copy_from(&(self.cmat.block_times(&idx, l.as_slice()) - &h * b));
             y.rows_mut(na, nf).copy_from(&(-(h.transpose() * l)));
             y
         };
         let x = if dimn == 0 {
             DVector::zeros(0)
         } else {
-            let solve = SaddleSolver::new(&caa, &h)?;
+            // C_AA is factorised in place (the half-space model's largest matrix after C)
+            let solve = SaddleSolver::new(|| self.cmat.block(&idx), &h)?;
             let mut x = solve.solve(&rhs);
             // Two steps of iterative refinement: the balance rows' residual (the load the
             // pins would carry, i.e. the total contact force) to round-off of their own
@@ -558,7 +636,7 @@ impl Dense<'_> {
         let beta = DVector::from_iterator(nf, (0..nf).map(|c| x[na + c]));
         let alpha = &vf * beta;
         let la = DVector::from_column_slice(&lambda);
-        let un = DVector::from_column_slice(self.d0) - self.cmat * la + self.g * &alpha;
+        let un = DVector::from_column_slice(self.d0) - self.cmat.times(&la) + self.g * &alpha;
         Some((
             lambda,
             alpha.as_slice().to_vec(),
@@ -632,9 +710,11 @@ enum SaddleSolver {
 }
 
 impl SaddleSolver {
-    fn new(c: &DMatrix<f64>, h: &DMatrix<f64>) -> Option<SaddleSolver> {
-        let (n, m) = (c.nrows(), h.ncols());
-        if let Some(chol) = DenseCholesky::factor(c) {
+    /// The solver of C = `c()` (formed once for the Cholesky, factorised in place, and once
+    /// more for the LU where that fails) and `h`.
+    fn new(c: impl Fn() -> DMatrix<f64>, h: &DMatrix<f64>) -> Option<SaddleSolver> {
+        let (n, m) = (h.nrows(), h.ncols());
+        if let Some(chol) = DenseCholesky::factor_owned(n, c().data.into()) {
             let ch = chol.solve(h);
             let t = (h.transpose() * &ch).lu();
             if m == 0 || t.is_invertible() {
@@ -647,7 +727,7 @@ impl SaddleSolver {
             }
         }
         let mut full = DMatrix::zeros(n + m, n + m);
-        full.view_mut((0, 0), (n, n)).copy_from(c);
+        full.view_mut((0, 0), (n, n)).copy_from(&c());
         full.view_mut((0, n), (n, m)).copy_from(&(-h));
         full.view_mut((n, 0), (m, n)).copy_from(&(-h.transpose()));
         DenseLu::factor(&full).map(SaddleSolver::Lu)
@@ -756,4 +836,88 @@ fn split_modes(gram: &DMatrix<f64>, mz: usize) -> (DMatrix<f64>, DMatrix<f64>) {
         q
     };
     (pick(&fixed), pick(&loose))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A symmetric positive definite n × n compliance (decaying with the distance of points
+    /// on a line) and its upper triangle packed column by column.
+    fn compliance(n: usize) -> (DMatrix<f64>, Vec<f64>) {
+        let c = DMatrix::from_fn(n, n, |i, j| {
+            let d = (i as f64 - j as f64).abs();
+            1.0 / (1.0 + d) + if i == j { 1.0 } else { 0.0 }
+        });
+        let packed = (0..n).flat_map(|j| (0..=j).map(move |i| (i, j)));
+        let packed = packed.map(|(i, j)| c[(i, j)]).collect();
+        (c, packed)
+    }
+
+    /// The packed upper triangle reads as the full matrix: entries, products, blocks.
+    #[test]
+    fn a_packed_compliance_reads_as_the_full_matrix() {
+        let n = 37;
+        let (c, packed) = compliance(n);
+        let (full, upper) = (CMatrix::Full(&c), CMatrix::Upper { n, packed: &packed });
+        for i in 0..n {
+            for j in 0..n {
+                assert_eq!(full.at(i, j), upper.at(i, j), "({i}, {j})");
+            }
+        }
+        let x = DVector::from_fn(n, |i, _| (i as f64 * 0.7).sin());
+        let (yf, yu) = (full.times(&x), upper.times(&x));
+        assert!((&yf - &yu).amax() <= 1e-13 * yf.amax(), "C x");
+        assert!(
+            (&yf - &c * &x).amax() <= 1e-13 * yf.amax(),
+            "C x by nalgebra"
+        );
+        let idx = [30, 2, 17, 5, 36];
+        assert_eq!(full.block(&idx), upper.block(&idx));
+        let xi = [1.0, -2.0, 0.5, 3.0, -1.5];
+        let by_block = full.block(&idx) * DVector::from_column_slice(&xi);
+        for cm in [full, upper] {
+            let y = cm.block_times(&idx, &xi);
+            assert!((&y - &by_block).amax() <= 1e-13 * by_block.amax(), "C_II x");
+        }
+    }
+
+    /// Algorithm 1 on either storage of the same compliance: the same set and λ_n.
+    #[test]
+    fn algorithm_1_on_a_packed_compliance_is_the_full_one() {
+        let n = 60;
+        let (c, packed) = compliance(n);
+        let gap: Vec<f64> = (0..n).map(|i| 0.01 * (i as f64 - 29.5).powi(2)).collect();
+        let d0 = vec![-2.0; n];
+        let g = DMatrix::zeros(n, 0);
+        let run = |cmat| {
+            Dense {
+                cmat,
+                d0: &d0,
+                gap: &gap,
+                g: &g,
+                phi: &[],
+                load_scale: 1.0,
+                c: 1.0,
+                max_steps: 50,
+                pins_carry: 0,
+            }
+            .run(vec![false; n])
+        };
+        let (a, b) = (
+            run(CMatrix::Full(&c)),
+            run(CMatrix::Upper { n, packed: &packed }),
+        );
+        assert_eq!(a.end, End::Converged);
+        assert_eq!(a.active, b.active);
+        let active = a.active.iter().filter(|&&x| x).count();
+        assert!(
+            active > 2 && active < n,
+            "{active} active: a set with an edge"
+        );
+        let scale = a.lambda.iter().fold(0.0f64, |m, l| m.max(l.abs()));
+        for (la, lb) in a.lambda.iter().zip(&b.lambda) {
+            assert!((la - lb).abs() <= 1e-12 * scale, "{la} {lb}");
+        }
+    }
 }

@@ -169,7 +169,7 @@ pub fn mirror_planes(ctx: &Ctx, mesh: &Mesh, fixed: &[f64]) -> Vec<(usize, f64)>
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::signorini::dense::{Dense, End};
+    use crate::signorini::dense::{CMatrix, Dense, End};
 
     fn hs3(mirrors: Vec<(usize, f64)>) -> HalfSpace {
         HalfSpace {
@@ -287,7 +287,7 @@ mod tests {
         // one free mode (translation towards the plane: u_n = +α), the load F/4 on it
         let g = DMatrix::from_element(n, 1, -1.0);
         let dense = Dense {
-            cmat: &cmat,
+            cmat: CMatrix::Full(&cmat),
             d0: &vec![0.0; n],
             gap: &gap,
             g: &g,

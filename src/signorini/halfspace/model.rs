@@ -1,9 +1,8 @@
 //! The model's nodes (all of them, a coarser subset, refined at a predicted edge, or a
 //! correction's edge band) and Algorithm 1 on the model (rank 0).
 
-use super::kernel::assemble;
 use super::{ModelRun, PairForce, Records, LAMBDA, PAIR, REC, TAG};
-use crate::signorini::dense::{coarsen, median_spacing, Dense, DenseLimits, End};
+use crate::signorini::dense::{coarsen, median_spacing, CMatrix, Dense, DenseLimits, End};
 use crate::signorini::rigid::FreeModes;
 use crate::tuning::{
     FINE_MODEL_COVER, MAX_MODEL_NODES, MAX_REPRESENTED, MIN_MODEL_NODES, MODEL_BORDER_PART,
@@ -351,13 +350,16 @@ impl Model {
         let m = self.m();
         let mz = phi.len();
         let r = |i: usize| &all[i * REC..(i + 1) * REC];
-        let cmat = assemble(m, packed_c);
+        let cmat = CMatrix::Upper {
+            n: m,
+            packed: packed_c,
+        };
         let d0 = vec![0.0; m];
         let gap: Vec<f64> = self.pick.iter().map(|&i| r(i)[6]).collect();
         let g = DMatrix::from_fn(m, mz, |q, cc| g_all[self.pick[q] * mz + cc]);
         let (_, load_scale) = free.load();
         let dense = Dense {
-            cmat: &cmat,
+            cmat,
             d0: &d0,
             gap: &gap,
             g: &g,
@@ -410,14 +412,17 @@ impl Model {
         let (code, steps, levels) = if self.pen == 0 && !grow {
             (1.0, 0, 0)
         } else {
-            let cmat = assemble(m, &packed_c);
-            drop(packed_c); // the model's largest matrices: only one of them at a time
-                            // a correction: d₀ = u_n + C λ_n, λ_n of a model node the sum of its nodes'
+            // C stays packed (its upper triangle: half the memory of the full matrix)
+            let cmat = CMatrix::Upper {
+                n: m,
+                packed: &packed_c,
+            };
+            // a correction: d₀ = u_n + C λ_n, λ_n of a model node the sum of its nodes'
             let mut lam = DVector::<f64>::zeros(m);
             for (q, &i) in self.fine.iter().enumerate() {
                 lam[self.owner[q]] += r(i)[LAMBDA];
             }
-            let clam = &cmat * &lam;
+            let clam = cmat.times(&lam);
             let d0: Vec<f64> = (self.pick.iter().enumerate())
                 .map(|(q, &i)| r(i)[8] + clam[q])
                 .collect();
@@ -432,7 +437,7 @@ impl Model {
                 load_scale = load_scale.max(magnitude);
             }
             let dense = Dense {
-                cmat: &cmat,
+                cmat,
                 d0: &d0,
                 gap: &gap,
                 g: &g,

@@ -14,7 +14,7 @@ use crate::petsc::PInt;
 use crate::say;
 use crate::signorini::active_set::{ActiveSet, Iterate, Law};
 use crate::signorini::boundary::ContactBoundary;
-use crate::signorini::dense::{guarded, Dense, DenseRun, End, Primal};
+use crate::signorini::dense::{guarded, CMatrix, Dense, DenseRun, End, Primal};
 use crate::signorini::halfspace::{self};
 use crate::signorini::plain_path::{ContactProblem, NewtonSettings, StepInfo, WarmStart};
 use crate::signorini::rigid::{FreeModes, Motion};
@@ -386,7 +386,7 @@ pub(super) fn dense_round(
             let d0 = &d0[..];
             let start: Vec<bool> = list.iter().map(|&i| active[i]).collect();
             let dense = Dense {
-                cmat: &cmat,
+                cmat: CMatrix::Full(&cmat),
                 d0,
                 gap: &gap,
                 g: &g,
@@ -583,7 +583,7 @@ mod tests {
         max_steps: usize,
     ) -> Dense<'a> {
         Dense {
-            cmat,
+            cmat: CMatrix::Full(cmat),
             d0,
             gap,
             g,
@@ -623,7 +623,7 @@ mod tests {
         let cmat = DMatrix::<f64>::identity(2, 2);
         let g = DMatrix::from_row_slice(2, 1, &[1.0, 1.0]);
         let dense = Dense {
-            cmat: &cmat,
+            cmat: CMatrix::Full(&cmat),
             d0: &[0.0, 0.0],
             gap: &gap,
             g: &g,
@@ -693,7 +693,7 @@ mod tests {
             let phi = vec![-0.4; mz];
             let d0 = (&cmat * DVector::from_column_slice(&r)).as_slice().to_vec();
             let dual = Dense {
-                cmat: &cmat,
+                cmat: CMatrix::Full(&cmat),
                 d0: &d0,
                 gap: &gap,
                 g: &g,
@@ -736,7 +736,7 @@ mod tests {
         let cmat = DMatrix::<f64>::identity(1, 1);
         let g = DMatrix::from_row_slice(1, 1, &[1.0]);
         let dense = Dense {
-            cmat: &cmat,
+            cmat: CMatrix::Full(&cmat),
             d0: &[0.0],
             gap: &[0.0],
             g: &g,

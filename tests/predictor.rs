@@ -136,6 +136,18 @@ fn full_ball_3d_takes_its_free_modes_as_null_space_and_ends_on_the_pinned_answer
             assert_eq!(st["pinned"].as_u64(), Some(3), "{st}");
             assert_eq!(st["amg"]["null_space"], Value::Bool(true), "{st}");
         }
+        // the first step from the predicted set is solved loosely, every later one exactly
+        // (the last, which ends the iteration, above all)
+        assert_eq!(
+            steps[1]["amg"]["inexact"],
+            Value::Bool(true),
+            "{}",
+            steps[1]
+        );
+        assert!(steps.len() > 2, "a loose step is never the last");
+        for st in &steps[2..] {
+            assert_eq!(st["amg"]["inexact"], Value::Bool(false), "{st}");
+        }
         for st in get(&plain.summary, &["newton", "history"])
             .as_array()
             .unwrap()

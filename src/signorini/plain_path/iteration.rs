@@ -110,11 +110,14 @@ pub fn semismooth_newton(
     let (mut lp, predicting) = Loop::begin(ctx, p, reduced, s, warm)?;
     let mut history = Vec::new();
     let mut converged = false;
+    // inexact solves: the iterative preset's reuse path, frictionless
+    let can_loosen = reduced.inexact_available() && s.law == Law::Frictionless;
     let mut plan = StepPlan {
-        exact: !(reduced.inexact_available() && s.law == Law::Frictionless),
+        exact: !can_loosen,
         predict: s.halfspace.is_some() && predicting,
         confirm: false,
         correct: false,
+        loose: false,
     };
     let mut last_changed = usize::MAX;
     // GMRES on an earlier step's factorisation counts as factorised for the step not taken
@@ -150,6 +153,11 @@ pub fn semismooth_newton(
         history.last_mut().expect("pushed").predictor = predicted;
         log_step(ctx, history.last().expect("pushed"), &totals);
         if std::mem::take(&mut lp.resolve) {
+            if plan.loose {
+                // the loose solve's error may decide the edge: the same sets, solved exactly
+                plan.loose = false;
+                continue;
+            }
             lp.tightened = Some(step);
             lp.tighten_solver(reduced, "is kept by the model where (3.23) changes it")?;
             continue; // the same sets, solved tighter
@@ -166,6 +174,7 @@ pub fn semismooth_newton(
             }
             After::Update(next) => next,
         };
+        plan.loose &= can_loosen;
         let totals = lp.fixed_point(totals, factorised, scale);
         let stopped = lp.next(step, update.next, &totals)?;
         if std::mem::take(&mut lp.tighten) {
@@ -225,7 +234,7 @@ impl Loop<'_> {
             self.free.pins()
         };
         reduced.write(ctx, sys, layout, bs, &self.set, pins)?; // (3.29) / (3.42)
-        reduced.set_inexact(!plan.exact);
+        reduced.set_inexact(!plan.exact || plan.loose);
         if plan.predict {
             // a floating body: the model predicts from the gaps alone (no first solve)
             reduced.set_predictor_solve(self.free.floats() && self.approach.is_none());
@@ -911,11 +920,12 @@ fn least_index_step(ctx: &Ctx, b: &ContactBoundary, old: &ActiveSet, next: &mut 
 mod tests {
     use super::*;
 
-    const LOOSE: StepPlan = StepPlan {
+    const INEXACT: StepPlan = StepPlan {
         exact: false,
         predict: false,
         confirm: false,
         correct: false,
+        loose: false,
     };
 
     #[test]
@@ -923,25 +933,25 @@ mod tests {
         let mut last = usize::MAX;
         // changes 10, then 4: still loose
         assert_eq!(
-            LOOSE.after_solve(false, 10, false, &mut last),
-            After::Update(LOOSE)
+            INEXACT.after_solve(false, 10, false, &mut last),
+            After::Update(INEXACT)
         );
         assert_eq!(
-            LOOSE.after_solve(false, 4, false, &mut last),
-            After::Update(LOOSE)
+            INEXACT.after_solve(false, 4, false, &mut last),
+            After::Update(INEXACT)
         );
         // nothing changes: the same sets once more, exactly
         let exact = StepPlan {
             exact: true,
-            ..LOOSE
+            ..INEXACT
         };
         assert_eq!(
-            LOOSE.after_solve(false, 0, false, &mut last),
+            INEXACT.after_solve(false, 0, false, &mut last),
             After::Repeat(exact)
         );
         // a recurring set likewise
         assert_eq!(
-            LOOSE.after_solve(false, 3, true, &mut last),
+            INEXACT.after_solve(false, 3, true, &mut last),
             After::Repeat(exact)
         );
         // exact stays exact
@@ -955,15 +965,15 @@ mod tests {
     fn a_loose_step_without_progress_makes_the_rest_exact() {
         let mut last = usize::MAX;
         assert_eq!(
-            LOOSE.after_solve(false, 6, false, &mut last),
-            After::Update(LOOSE)
+            INEXACT.after_solve(false, 6, false, &mut last),
+            After::Update(INEXACT)
         );
         let exact = StepPlan {
             exact: true,
-            ..LOOSE
+            ..INEXACT
         };
         assert_eq!(
-            LOOSE.after_solve(false, 6, false, &mut last),
+            INEXACT.after_solve(false, 6, false, &mut last),
             After::Update(exact)
         );
     }
@@ -972,15 +982,16 @@ mod tests {
     fn the_prediction_decides_and_predicts_once() {
         let first = StepPlan {
             predict: true,
-            ..LOOSE
+            ..INEXACT
         };
         let mut last = usize::MAX;
-        // a set predicted inside the model: exact from here, no second prediction (the
-        // model corrects the updates instead)
+        // a set predicted inside the model: exact from here (the first step's solve loose),
+        // no second prediction (the model corrects the updates instead)
         let exact = StepPlan {
             exact: true,
             correct: true,
-            ..LOOSE
+            loose: true,
+            ..INEXACT
         };
         assert_eq!(
             first.after_solve(true, 40, false, &mut last),
@@ -989,7 +1000,41 @@ mod tests {
         // truncated at the model's border: loose steps first
         assert_eq!(
             first.after_solve(false, 40, false, &mut last),
-            After::Update(LOOSE)
+            After::Update(INEXACT)
+        );
+    }
+
+    /// The first step from a predicted set is solved loosely; it is never the last one: where
+    /// it changes nothing (or its set recurs) the same sets are solved once more exactly, and
+    /// every step after it is exact.
+    #[test]
+    fn a_loose_first_step_from_a_prediction_is_followed_by_exact_ones() {
+        let loose = StepPlan {
+            exact: true,
+            correct: true,
+            loose: true,
+            ..INEXACT
+        };
+        let exact = StepPlan {
+            loose: false,
+            ..loose
+        };
+        let mut last = usize::MAX;
+        assert_eq!(
+            loose.after_solve(true, 0, false, &mut last),
+            After::Repeat(exact)
+        );
+        assert_eq!(
+            loose.after_solve(true, 2, true, &mut last),
+            After::Repeat(exact)
+        );
+        assert_eq!(
+            loose.after_solve(true, 24, false, &mut last),
+            After::Update(exact)
+        );
+        assert_eq!(
+            exact.after_solve(true, 0, false, &mut last),
+            After::Update(exact)
         );
     }
 
@@ -1020,7 +1065,7 @@ mod tests {
     fn a_stop_on_a_reused_step_is_confirmed_once_by_a_factorisation() {
         let exact = StepPlan {
             exact: true,
-            ..LOOSE
+            ..INEXACT
         };
         let confirm = StepPlan {
             confirm: true,
@@ -1041,7 +1086,7 @@ mod tests {
     fn the_model_corrects_the_exact_steps_from_a_predicted_set_on_only() {
         let predict = StepPlan {
             predict: true,
-            ..LOOSE
+            ..INEXACT
         };
         let mut last = usize::MAX;
         // the prediction accepted (exact from then on): the next steps are corrected
@@ -1049,9 +1094,13 @@ mod tests {
             panic!("a prediction is followed by an update");
         };
         assert!(next.correct && next.exact && !next.predict);
+        let exact_corrected = StepPlan {
+            loose: false,
+            ..next
+        };
         assert_eq!(
             next.after_solve(true, 3, false, &mut last),
-            After::Update(next)
+            After::Update(exact_corrected)
         );
         // a prediction not accepted (inexact steps follow): no correction
         let After::Update(loose) = predict.after_solve(false, 40, false, &mut last) else {
@@ -1061,7 +1110,7 @@ mod tests {
         // without a prediction, nothing is corrected
         let exact = StepPlan {
             exact: true,
-            ..LOOSE
+            ..INEXACT
         };
         let After::Update(e) = exact.after_solve(true, 3, false, &mut last) else {
             panic!("an exact step is followed by an update");

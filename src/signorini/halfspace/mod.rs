@@ -258,7 +258,7 @@ fn solve_everywhere(
     free: &FreeModes,
     run: &ModelRun,
 ) -> Vec<f64> {
-    // this rank's share is dropped once gathered, rank 0's gathered triangle once assembled
+    // this rank's share is dropped once gathered; rank 0 runs on the gathered triangle itself
     let packed_c = ctx.gather_to_root(&hs.columns(
         &model.x,
         &model.w,

@@ -700,8 +700,16 @@ fn cube_between_two_plates() {
         let (f0, f1) = (pair_force(&s, 0), pair_force(&s, 1));
         assert!(rel(f0[1], e_d) <= 1e-8, "{np} {sets:?}: {f0:?}");
         assert!(rel(f1[1], -e_d) <= 1e-8, "{np} {sets:?}: {f1:?}");
+        // no tangential force: to round-off on a factorisation; the iterative run's reactions
+        // carry its Krylov tolerance (rtol 1e-10 of ‖b‖, met from a warm start just below it:
+        // measured 3.9e-12 against E d = 0.02)
+        let iterative = sets.iter().any(|s| s.contains("iterative"));
+        let tangential = if iterative { 1e-8 } else { 1e-10 };
         for (i, f) in [f0, f1].iter().enumerate() {
-            assert!(f[0].abs() + f[2].abs() <= 1e-10 * e_d, "pair {i}: {f:?}");
+            assert!(
+                f[0].abs() + f[2].abs() <= tangential * e_d,
+                "{np} {sets:?} pair {i}: {f:?}"
+            );
         }
         let nodes = |i: usize| pair(&s, i)["nodes"].as_u64().expect("nodes");
         assert_eq!(

@@ -242,10 +242,6 @@ pub const MODEL_BORDER_PART: usize = 10;
 /// wide). The 2-core AMD EPYC. Not machine-specific (counts).
 pub const LOCATE_MODEL_NODES: [usize; 2] = [512, MAX_MODEL_NODES];
 
-/// The dense compliance's lower triangle is mirrored in tiles of this size
-/// (halfspace/kernel.rs `assemble`). Not measured; cache-dependent, so machine-specific in principle.
-pub const MIRROR_TILE: usize = 64;
-
 // ---------------------------------------------------------------------------------------------
 // Coulomb's passes with a held sticking zone
 // ---------------------------------------------------------------------------------------------

@@ -3,8 +3,6 @@
 
 use crate::mesh::Mesh;
 use crate::par::Ctx;
-use crate::tuning::MIRROR_TILE;
-use nalgebra::DMatrix;
 use std::f64::consts::PI;
 
 /// The centre displacement of a uniformly loaded square of side s on a half-space is
@@ -59,17 +57,13 @@ impl HalfSpace {
         out
     }
 
-    /// The model's compliance C (n × n, symmetric) of nodes at `x` with lumped weights `w`:
-    /// the displacement at node i per unit force at node j and at j's images. Images that
-    /// fall on the node itself (a node on a symmetry plane) merge with it: m coincident copies
-    /// make one node of weight m w and force m.
-    pub fn compliance(&self, x: &[[f64; 3]], w: &[f64]) -> DMatrix<f64> {
-        assemble(x.len(), &self.columns(x, w, 0..x.len()))
-    }
-
-    /// Columns `cols` of the upper triangle of [`HalfSpace::compliance`], packed: for each
-    /// column j the entries i = 0..=j (C is symmetric: |x_i − image(x_j)| = |image(x_i) − x_j|
-    /// in mirror planes).
+    /// Columns `cols` of the upper triangle of the model's compliance C (n × n, symmetric) of
+    /// nodes at `x` with lumped weights `w`, packed: for each column j the entries i = 0..=j (C
+    /// is symmetric: |x_i − image(x_j)| = |image(x_i) − x_j| in mirror planes), the
+    /// displacement at node i per unit force at node j and at j's images. Images that fall on
+    /// the node itself (a node on a symmetry plane) merge with it: m coincident copies make one
+    /// node of weight m w and force m. Dense iterations read it as it is
+    /// ([`CMatrix::Upper`](crate::signorini::dense::CMatrix)).
     pub fn columns(&self, x: &[[f64; 3]], w: &[f64], cols: std::ops::Range<usize>) -> Vec<f64> {
         let scale = x
             .iter()
@@ -101,29 +95,6 @@ impl HalfSpace {
         }
         out
     }
-}
-
-/// The symmetric n × n matrix of the packed upper-triangle columns 0..n ([`HalfSpace::columns`]):
-/// the upper triangle column by column, the lower one mirrored in 64 × 64 tiles.
-pub fn assemble(n: usize, packed: &[f64]) -> DMatrix<f64> {
-    let mut c = DMatrix::zeros(n, n);
-    let mut p = 0;
-    for j in 0..n {
-        c.view_mut((0, j), (j + 1, 1))
-            .copy_from_slice(&packed[p..p + j + 1]);
-        p += j + 1;
-    }
-    const T: usize = MIRROR_TILE;
-    for bj in (0..n).step_by(T) {
-        for bi in (bj..n).step_by(T) {
-            for j in bj..(bj + T).min(n) {
-                for i in bi.max(j + 1)..(bi + T).min(n) {
-                    c[(i, j)] = c[(j, i)];
-                }
-            }
-        }
-    }
-    c
 }
 
 /// Rank `rank` of `size` builds the columns lo..hi of an n × n triangle: about equal shares
@@ -170,6 +141,12 @@ pub fn mirror_planes(ctx: &Ctx, mesh: &Mesh, fixed: &[f64]) -> Vec<(usize, f64)>
 mod tests {
     use super::*;
     use crate::signorini::dense::{CMatrix, Dense, End};
+    use nalgebra::DMatrix;
+
+    /// Every column of the model's packed triangle for nodes `x`, weights `w`.
+    fn triangle(h: &HalfSpace, x: &[[f64; 3]], w: &[f64]) -> Vec<f64> {
+        h.columns(x, w, 0..x.len())
+    }
 
     fn hs3(mirrors: Vec<(usize, f64)>) -> HalfSpace {
         HalfSpace {
@@ -184,31 +161,59 @@ mod tests {
     fn boussinesq_kernel_and_symmetry() {
         let h = hs3(vec![]);
         let x = vec![[0.0, 0.0, 0.0], [0.1, 0.0, 0.0], [0.0, 0.2, 0.0]];
-        let c = h.compliance(&x, &[0.01, 0.01, 0.01]);
-        assert!((c[(0, 1)] - 1.0 / (PI * 2.0 * 0.1)).abs() < 1e-12);
-        assert!((c[(1, 2)] - c[(2, 1)]).abs() == 0.0);
+        let w = [0.01, 0.01, 0.01];
+        let packed = triangle(&h, &x, &w);
+        let c = CMatrix::Upper {
+            n: 3,
+            packed: &packed,
+        };
+        assert!((c.at(0, 1) - 1.0 / (PI * 2.0 * 0.1)).abs() < 1e-12);
+        // symmetric: the nodes in the reverse order give the same entry from the other side
+        let xr: Vec<[f64; 3]> = x.iter().rev().copied().collect();
+        let packed_r = triangle(&h, &xr, &w);
+        let cr = CMatrix::Upper {
+            n: 3,
+            packed: &packed_r,
+        };
+        assert!((c.at(1, 2) - cr.at(0, 1)).abs() <= 1e-15 * c.at(1, 2));
         // own term: the square of side 0.1
-        assert!((c[(0, 0)] - SQUARE_SELF / (PI * 2.0 * 0.1)).abs() < 1e-12);
-        assert!(c[(0, 0)] > c[(0, 1)], "the own displacement is the largest");
+        assert!((c.at(0, 0) - SQUARE_SELF / (PI * 2.0 * 0.1)).abs() < 1e-12);
+        assert!(
+            c.at(0, 0) > c.at(0, 1),
+            "the own displacement is the largest"
+        );
     }
 
     #[test]
     fn a_mirror_plane_adds_the_image_and_merges_nodes_on_it() {
         let h = hs3(vec![(0, 0.0)]);
         let x = vec![[0.1, 0.0, 0.0], [0.0, 0.3, 0.0]];
-        let c = h.compliance(&x, &[0.01, 0.005]);
+        let w = [0.01, 0.005];
+        let packed = triangle(&h, &x, &w);
+        let c = CMatrix::Upper {
+            n: 2,
+            packed: &packed,
+        };
         // node 0 and its image at (-0.1, 0, 0)
         let own0 = SQUARE_SELF / (PI * 2.0 * 0.1) + 1.0 / (PI * 2.0 * 0.2);
-        assert!((c[(0, 0)] - own0).abs() < 1e-12);
+        assert!((c.at(0, 0) - own0).abs() < 1e-12);
         // node 1 lies on the plane: one node of twice the weight carrying twice the force
         let own1 = 2.0 * SQUARE_SELF / (PI * 2.0 * (0.01f64).sqrt());
-        assert!((c[(1, 1)] - own1).abs() < 1e-12);
+        assert!((c.at(1, 1) - own1).abs() < 1e-12);
         let r = (0.1f64 * 0.1 + 0.09).sqrt();
-        assert!((c[(0, 1)] - 2.0 / (PI * 2.0 * r)).abs() < 1e-12);
+        assert!((c.at(0, 1) - 2.0 / (PI * 2.0 * r)).abs() < 1e-12);
+        // symmetric across the plane: node 1's column seen from node 0 and the reverse
+        let xr = [x[1], x[0]];
+        let packed_r = triangle(&h, &xr, &[w[1], w[0]]);
+        let cr = CMatrix::Upper {
+            n: 2,
+            packed: &packed_r,
+        };
+        assert!((c.at(0, 1) - cr.at(0, 1)).abs() <= 1e-15 * c.at(0, 1));
     }
 
     #[test]
-    fn column_shares_cover_the_triangle_once_and_assemble_to_the_matrix() {
+    fn column_shares_cover_the_triangle_once() {
         let h = hs3(vec![(0, 0.0)]);
         let x: Vec<[f64; 3]> = (0..23)
             .map(|i| [0.01 * i as f64, 0.003 * i as f64, 0.0])
@@ -224,7 +229,7 @@ mod tests {
                 packed.extend(h.columns(&x, &w, cols));
             }
             assert_eq!(next, 23);
-            assert_eq!(assemble(23, &packed), h.compliance(&x, &w));
+            assert_eq!(packed, triangle(&h, &x, &w));
         }
     }
 
@@ -237,11 +242,15 @@ mod tests {
             mirrors: vec![],
         };
         let x: Vec<[f64; 3]> = (0..5).map(|i| [0.1 * i as f64, 0.0, 0.0]).collect();
-        let c = h.compliance(&x, &[0.1; 5]);
+        let packed = triangle(&h, &x, &[0.1; 5]);
+        let c = CMatrix::Upper {
+            n: 5,
+            packed: &packed,
+        };
         for j in 1..4 {
-            assert!(c[(0, j)] > c[(0, j + 1)] && c[(0, j + 1)] > 0.0);
+            assert!(c.at(0, j) > c.at(0, j + 1) && c.at(0, j + 1) > 0.0);
         }
-        assert!(c[(0, 0)] > c[(0, 1)]);
+        assert!(c.at(0, 0) > c.at(0, 1));
     }
 
     /// The model reproduces Hertz: a paraboloid gap g = r² / (2R) on a half-space pressed by a
@@ -278,7 +287,7 @@ mod tests {
             })
             .collect();
         let model = hs3(vec![(0, 0.0), (1, 0.0)]);
-        let cmat = model.compliance(&x, &w);
+        let packed = triangle(&model, &x, &w);
         let gap: Vec<f64> = x
             .iter()
             .map(|p| (p[0] * p[0] + p[1] * p[1]) / (2.0 * rr))
@@ -287,7 +296,7 @@ mod tests {
         // one free mode (translation towards the plane: u_n = +α), the load F/4 on it
         let g = DMatrix::from_element(n, 1, -1.0);
         let dense = Dense {
-            cmat: CMatrix::Full(&cmat),
+            cmat: CMatrix::Upper { n, packed: &packed },
             d0: &vec![0.0; n],
             gap: &gap,
             g: &g,

@@ -39,7 +39,7 @@ mod kernel;
 mod model;
 
 use kernel::column_share;
-pub use kernel::{assemble, mirror_planes, HalfSpace};
+pub use kernel::{mirror_planes, HalfSpace};
 use model::{max_model_nodes, Model};
 pub use model::{model_nodes, refine_at_edge};
 

@@ -110,10 +110,8 @@ pub fn semismooth_newton(
     let (mut lp, predicting) = Loop::begin(ctx, p, reduced, s, warm)?;
     let mut history = Vec::new();
     let mut converged = false;
-    // inexact solves: the iterative preset's reuse path, frictionless
-    let can_loosen = reduced.inexact_available() && s.law == Law::Frictionless;
     let mut plan = StepPlan {
-        exact: !can_loosen,
+        exact: !(reduced.inexact_available() && s.law == Law::Frictionless),
         predict: s.halfspace.is_some() && predicting,
         confirm: false,
         correct: false,
@@ -174,7 +172,6 @@ pub fn semismooth_newton(
             }
             After::Update(next) => next,
         };
-        plan.loose &= can_loosen;
         let totals = lp.fixed_point(totals, factorised, scale);
         let stopped = lp.next(step, update.next, &totals)?;
         if std::mem::take(&mut lp.tighten) {
@@ -1001,6 +998,18 @@ mod tests {
         assert_eq!(
             first.after_solve(false, 40, false, &mut last),
             After::Update(INEXACT)
+        );
+        // where every solve is exact (a factorisation), no step is loosened
+        let first_exact = StepPlan {
+            exact: true,
+            ..first
+        };
+        assert_eq!(
+            first_exact.after_solve(true, 40, false, &mut last),
+            After::Update(StepPlan {
+                loose: false,
+                ..exact
+            })
         );
     }
 

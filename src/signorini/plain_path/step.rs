@@ -37,7 +37,7 @@ pub(super) struct StepPlan {
     /// the exact steps from a predicted set on.
     pub(super) correct: bool,
     /// An exact step whose solve stops at `INEXACT_REDUCTION` of its start's residual all the
-    /// same: the first step from a predicted set. Its update is the model's to correct and an
+    /// same: the first step from a predicted set, where inexact solves exist. Its update is the model's to correct and an
     /// exact solve follows it (the same sets where it changes no node); the half-space model's
     /// corrections are what the earlier inexact steps from a predicted set lacked (they flipped
     /// edge nodes, `after_solve`). Measured (2 ranks, one run each, the same changes per step
@@ -81,7 +81,9 @@ impl StepPlan {
             confirm: self.confirm,
             // the exact steps from a predicted set on
             correct: (self.predict || self.correct) && exact,
-            loose: self.predict && exact,
+            // the prediction's own step is inexact exactly where inexact solves exist (the
+            // iterative preset's reuse path, frictionless); elsewhere every solve is exact
+            loose: self.predict && exact && !self.exact,
         };
         if self.loose && (changed == 0 || recurs) {
             // a loose solve is no final iterate: the same sets once more, solved exactly

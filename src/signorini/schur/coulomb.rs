@@ -287,7 +287,6 @@ fn dense_phase(
             let g = mode_parts(kept, ns.force, &cb, dim);
             let mut phi = kept.free.free_load();
             phi.extend(ns.force.iter().map(|fc| fc.magnitude()));
-            let cmat_t = kept.comp.cmat.transpose();
             let stiff = kept.comp.stiffness().map(|(s, r)| {
                 let sg = s * &g;
                 let gsg = g.transpose() * &sg;
@@ -296,7 +295,6 @@ fn dense_phase(
             let dense = DenseIteration {
                 dim,
                 cmat: &kept.comp.cmat,
-                cmat_t: &cmat_t,
                 d0: &kept.comp.d0,
                 g: &g,
                 phi: &phi,

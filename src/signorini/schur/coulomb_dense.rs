@@ -237,9 +237,9 @@ fn relative_change(u: &[f64], u_prev: &[f64]) -> f64 {
 /// The generalised Newton of docs/friction.md on the candidates' dense system (module note).
 pub(super) struct DenseIteration<'a> {
     pub(super) dim: usize,
+    /// C, symmetric (mirrored by its inverse, `DenseCholesky::inverse`): its column `dof` is
+    /// its row `dof`, read contiguously for the rows of the dense system.
     pub(super) cmat: &'a DMatrix<f64>,
-    /// Cᵀ (C's rows as contiguous columns, for the rows of the dense system).
-    pub(super) cmat_t: &'a DMatrix<f64>,
     pub(super) d0: &'a [f64],
     /// The free modes' parts at the candidates (d rows per node, frame components; mz columns)
     /// and the load in them, φ = zᵀ Rᵀ f: u = d₀ − C λ + G α, Gᵀ λ = φ.
@@ -508,7 +508,6 @@ impl DenseIteration<'_> {
                 .collect();
             let sub_c =
                 DMatrix::from_fn(dofs.len(), dofs.len(), |r, q| self.cmat[(dofs[r], dofs[q])]);
-            let sub_ct = sub_c.transpose();
             let sub_g = DMatrix::from_fn(dofs.len(), self.g.ncols(), |r, c| self.g[(dofs[r], c)]);
             let pick = |v: &[f64]| dofs.iter().map(|&i| v[i]).collect::<Vec<f64>>();
             let d0 = pick(self.d0);
@@ -524,7 +523,6 @@ impl DenseIteration<'_> {
             };
             let sub = DenseIteration {
                 cmat: &sub_c,
-                cmat_t: &sub_ct,
                 d0: &d0,
                 g: &sub_g,
                 cb: &cb,
@@ -723,7 +721,7 @@ impl DenseIteration<'_> {
     /// equilibrated. `None` without tangential rows.
     fn system_dual(&self, set: &ActiveSet) -> Option<System> {
         let (d, n, mz) = (self.dim, self.cb.nodes.len(), self.g.ncols());
-        let (cmt, g, w) = (self.cmat_t, self.g, self.d0);
+        let (cmat, g, w) = (self.cmat, self.g, self.d0);
         let rows = set.tangential.as_ref()?;
         // the unknowns: per active node λ_n, then λ_τ unless its row ties it to λ_n; `at`: the
         // position of each active node's λ_n
@@ -741,8 +739,8 @@ impl DenseIteration<'_> {
             }
         }
         let m = cols.len();
-        // built as its transpose: row ri of the system is column ri here (contiguous, as Cᵀ's
-        // column dof is C's row dof; measured on the floating Hertz disk at 344 620 unknowns,
+        // built as its transpose: row ri of the system is column ri here (contiguous, as C's
+        // column dof is its row dof; measured on the floating Hertz disk at 344 620 unknowns,
         // 1 875 dense unknowns: 0.15 s a step against 0.18 s built row by row)
         let mut a = DMatrix::<f64>::zeros(m + mz, m + mz);
         let mut rhs = DVector::<f64>::zeros(m + mz);
@@ -750,7 +748,7 @@ impl DenseIteration<'_> {
         let put_u = |a: &mut DMatrix<f64>, ri: usize, terms: &[(usize, f64)]| -> f64 {
             let mut row = a.column_mut(ri);
             for &(dof, f) in terms {
-                let c_row = cmt.column(dof);
+                let c_row = cmat.column(dof); // C's row `dof` (C symmetric)
                 for (jc, u) in cols.iter().enumerate() {
                     row[jc] -= f * u.of(|col| c_row[col]);
                 }

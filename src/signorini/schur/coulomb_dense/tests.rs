@@ -57,10 +57,9 @@ fn pushed_line(n: usize, push: f64) -> (DMatrix<f64>, Vec<f64>, ContactBoundary)
     (cmat, d0, cb)
 }
 
-/// The pushed line ([`pushed_line`]) with Cᵀ and no free modes.
+/// The pushed line ([`pushed_line`]) with no free modes.
 struct Line {
     cmat: DMatrix<f64>,
-    cmat_t: DMatrix<f64>,
     d0: Vec<f64>,
     g: DMatrix<f64>,
     cb: ContactBoundary,
@@ -70,7 +69,6 @@ impl Line {
     fn new(n: usize, push: f64) -> Line {
         let (cmat, d0, cb) = pushed_line(n, push);
         Line {
-            cmat_t: cmat.transpose(),
             cmat,
             d0,
             g: DMatrix::zeros(2 * n, 0),
@@ -83,7 +81,6 @@ impl Line {
         DenseIteration {
             dim: 2,
             cmat: &self.cmat,
-            cmat_t: &self.cmat_t,
             d0: &self.d0,
             g: &self.g,
             phi: &[],

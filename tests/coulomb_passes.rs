@@ -8,7 +8,7 @@
 mod common;
 
 use common::process::{gmsh_file, mesh_dir, repo};
-use common::solved::{solve, Solved};
+use common::solved::{solve, solve_env, Solved};
 use std::path::Path;
 
 /// tests/meshes/ellipse_contact.geo (8 916 unknowns), floating: pressed onto the plane y = 0 by
@@ -140,6 +140,44 @@ fn a_singular_dense_step_on_settled_slip_rows_is_taken_on_the_f5_rows() {
         );
         assert_eq!(f, 1.0, "{np} rank(s): one factorisation");
         assert!(!plain.slip_node_ids().is_empty());
+        assert_eq!(s.active_node_ids(), plain.active_node_ids(), "{np} rank(s)");
+        assert_eq!(s.slip_node_ids(), plain.slip_node_ids(), "{np} rank(s)");
+        let du = s.u_rel_diff(&plain);
+        println!("{np} rank(s): u against the plain path {du:.1e}");
+        assert!(du <= 1e-9, "{np} rank(s): u differs by {du:.1e}");
+    }
+}
+
+#[test]
+fn a_second_pass_of_the_first_solve_starts_from_the_first_pass_states() {
+    // The rolling disk of [`rolling_disk_case`] with the Schur limit lowered to 120 dofs (the
+    // test-only limit MAX_SCHUR_DOFS): its first candidates are capped at 30 nodes, as the
+    // floating disk at 698 352 unknowns is capped at 2 000 where its located zone asks for
+    // 2 232 (docs/numbers.md). The frictionless solution (29 nodes) fits, Coulomb's (31) does
+    // not: the check on the expanded u finds nodes beyond the candidates and a second pass
+    // takes them. Its dense iteration starts from the first pass' expanded iterate (no
+    // frictionless start, no nested start) and ends where the plain path from the touching node
+    // ends, on 1, 2 and 3 ranks.
+    let tmp = tempfile::tempdir().expect("tempdir");
+    let case = rolling_disk_case(tmp.path());
+    let plain = solve(1, &case, &["newton.init=\"gap\""]);
+    plain.assert_converged("plain path");
+    let env = [("SIGNORINI_TEST_LIMIT_MAX_SCHUR_DOFS", "120")];
+    for np in [1, 2, 3] {
+        let s = solve_env(np, &case, &[], &env, std::time::Duration::from_secs(300));
+        s.assert_converged("default, capped");
+        let log = &s.run.stdout;
+        assert!(
+            log.contains("a new pass with them as candidates"),
+            "{np} rank(s): the case needs a second pass\n{}",
+            s.run.output()
+        );
+        assert!(!log.contains("plain path"), "{np} rank(s): {}", s.run.output());
+        // the frictionless solve of each pass, Coulomb's nested start in the first pass only
+        let nested = log.matches("coulomb: condensed: nested start").count();
+        let passes = log.matches("coulomb: the frictionless solution").count();
+        assert_eq!((nested, passes), (1, 2), "{np} rank(s): {}", s.run.output());
+        assert_eq!(s.f(&["newton", "factorisations"]), 2.0, "{np} rank(s)");
         assert_eq!(s.active_node_ids(), plain.active_node_ids(), "{np} rank(s)");
         assert_eq!(s.slip_node_ids(), plain.slip_node_ids(), "{np} rank(s)");
         let du = s.u_rel_diff(&plain);

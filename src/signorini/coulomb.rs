@@ -332,7 +332,8 @@ enum Passes {
 /// for that, its interior held sticking in K_p), then Coulomb's iteration on its candidates
 /// (schur::coulomb). Where a held zone's check finds nodes beyond the candidates changing
 /// state, a new pass takes them as candidates (at most [`MAX_STICK_FACTORISATIONS`]
-/// factorisations in all, while fewer change each pass). `forced`: force control on a body
+/// factorisations in all, while fewer change each pass), its dense iteration started from the
+/// states of the pass before's expanded iterate. `forced`: force control on a body
 /// that only its pairs hold (the frictionless solution alone); `from`: the start said where
 /// there is none. Collective.
 fn coulomb_passes(
@@ -357,6 +358,10 @@ fn coulomb_passes(
     let mut passes = PassLoop::new(Vec::new(), Vec::new());
     // the expanded iterate of the last pass: the plain path's start where the next one fails
     let mut last: Option<(NewtonResult, Vec<f64>, CoulombCondensedSummary)> = None;
+    // the same iterate's records and rows: the next pass's dense iteration starts from its
+    // states (not from the frictionless solution and its nested start); not under force
+    // control, whose approaches a pass finds anew
+    let mut prior: Option<(Vec<NodeResult>, Vec<f64>)> = None;
     loop {
         // too many candidates' dofs for the dense tangential compliance: the predicted zone's
         // interior held sticking, the dense steps on its edge and beyond (schur/frictionless.rs)
@@ -368,6 +373,7 @@ fn coulomb_passes(
         };
         let mut tried = solve_keeping(ctx, problem, reduced, fl, session, None, how);
         if let Some((r, u, cs)) = last.take() {
+            prior = ns.force.is_empty().then(|| (r.nodes.clone(), u.clone()));
             let store = &mut session.kept;
             if let Some(done) = from_last_pass(ctx, store, &tried, r, u, cs, passes.earlier) {
                 return Ok(done);
@@ -404,7 +410,10 @@ fn coulomb_passes(
             after(first.clone(), &mut r);
             r
         };
-        match schur::coulomb::solve(ctx, problem, reduced, ns, &mut kept, None)? {
+        let warm = prior
+            .as_ref()
+            .map(|(nodes, u)| WarmStart { nodes, u_local: u });
+        match schur::coulomb::solve(ctx, problem, reduced, ns, &mut kept, warm.as_ref())? {
             schur::CoulombCondensed::Solved(r, cs) => {
                 summary.coulomb = Some(cs);
                 // for the next load step (a held zone's too: its rows' values are in f)

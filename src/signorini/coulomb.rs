@@ -358,9 +358,9 @@ fn coulomb_passes(
     let mut passes = PassLoop::new(Vec::new(), Vec::new());
     // the expanded iterate of the last pass: the plain path's start where the next one fails
     let mut last: Option<(NewtonResult, Vec<f64>, CoulombCondensedSummary)> = None;
-    // the same iterate's records and rows: the next pass's dense iteration starts from its
-    // states (not from the frictionless solution and its nested start); not under force
-    // control, whose approaches a pass finds anew
+    // the same iterate's records and rows: the next pass factorises K_p alone and its dense
+    // iteration starts from these states (no frictionless steps, no nested start); not under
+    // force control, whose approaches a pass finds anew
     let mut prior: Option<(Vec<NodeResult>, Vec<f64>)> = None;
     loop {
         // too many candidates' dofs for the dense tangential compliance: the predicted zone's
@@ -368,12 +368,31 @@ fn coulomb_passes(
         let held = (per > 1).then(|| passes.start_sticking());
         let how = Condensing {
             per,
-            steps: true,
+            steps: prior.is_none(),
             stick: held,
         };
         let mut tried = solve_keeping(ctx, problem, reduced, fl, session, None, how);
         if let Some((r, u, cs)) = last.take() {
-            prior = ns.force.is_empty().then(|| (r.nodes.clone(), u.clone()));
+            if let Some(warm) = prior.take().filter(|_| factorised(&tried)) {
+                // the pass factorised K_p alone: Coulomb from the last pass' states
+                let Ok((schur::Condensed::Factorised(mut summary), Some(kept))) = tried else {
+                    unreachable!("a factorised pass keeps its factorisation")
+                };
+                summary.factorisations += passes.earlier;
+                let run = PassRun {
+                    kept,
+                    summary,
+                    warm: Some(&warm),
+                    first: Vec::new(),
+                };
+                // where the Coulomb iteration gives up: the plain path from the last iterate
+                let back = |summary| Passes::Done(Begin::Start(r, u), Some(summary));
+                match coulomb_pass(ctx, problem, reduced, session, ns, &mut passes, run, back)? {
+                    PassStep::Done(done) => return Ok(done),
+                    PassStep::Next(next, w) => (last, prior) = (Some(next), w),
+                }
+                continue;
+            }
             let store = &mut session.kept;
             if let Some(done) = from_last_pass(ctx, store, &tried, r, u, cs, passes.earlier) {
                 return Ok(done);
@@ -402,40 +421,107 @@ fn coulomb_passes(
             "coulomb: the frictionless solution: {} steps, {active} active nodes",
             nr.steps
         );
-        let Some(mut kept) = kept.filter(|_| !forced) else {
+        let Some(kept) = kept.filter(|_| !forced) else {
             return Ok(Passes::Frictionless(nr, summary));
         };
         let first = std::mem::take(&mut nr.history);
-        let joined = |mut r: NewtonResult| {
-            after(first.clone(), &mut r);
-            r
+        let run = PassRun {
+            kept,
+            summary,
+            warm: None,
+            first: first.clone(),
         };
-        let warm = prior
-            .as_ref()
-            .map(|(nodes, u)| WarmStart { nodes, u_local: u });
-        match schur::coulomb::solve(ctx, problem, reduced, ns, &mut kept, warm.as_ref())? {
-            schur::CoulombCondensed::Solved(r, cs) => {
-                summary.coulomb = Some(cs);
-                // for the next load step (a held zone's too: its rows' values are in f)
-                session.kept.put(kept);
-                return Ok(Passes::Done(Begin::Solved(joined(*r)), Some(summary)));
+        // where the Coulomb iteration gives up: the plain path from the frictionless solution
+        let back = |summary| {
+            nr.history = first;
+            Passes::Frictionless(nr, summary)
+        };
+        match coulomb_pass(ctx, problem, reduced, session, ns, &mut passes, run, back)? {
+            PassStep::Done(done) => return Ok(done),
+            PassStep::Next(next, w) => (last, prior) = (Some(next), w),
+        }
+    }
+}
+
+/// A pass of [`coulomb_passes`] that factorised K_p alone (its frictionless steps not run: a
+/// warm pass). Pure.
+fn factorised(tried: &Result<(schur::Condensed, Option<schur::Kept>), RunError>) -> bool {
+    matches!(tried, Ok((schur::Condensed::Factorised(_), Some(_))))
+}
+
+/// One pass' Coulomb iteration as [`coulomb_pass`] runs it: the pass' factorisation and
+/// summary, its warm start (the pass before's states; `None`: from the frictionless solution)
+/// and the frictionless steps that came before it (the history's first steps).
+struct PassRun<'w> {
+    kept: schur::Kept,
+    summary: schur::CondensedSummary,
+    warm: Option<&'w (Vec<NodeResult>, Vec<f64>)>,
+    first: Vec<StepInfo>,
+}
+
+/// How a pass' Coulomb iteration ends: the passes' outcome, or a next pass from its expanded
+/// iterate (with the states it starts from, `None` under force control).
+enum PassStep {
+    Done(Passes),
+    Next(
+        (NewtonResult, Vec<f64>, CoulombCondensedSummary),
+        Option<(Vec<NodeResult>, Vec<f64>)>,
+    ),
+}
+
+/// The Coulomb iteration of one pass of [`coulomb_passes`] on its factorisation: solved (the
+/// factorisation kept for the next load step), a next pass where nodes beyond the candidates
+/// change state ([`PassLoop::goes_on`]), else the plain path from the expanded iterate; `back`:
+/// the passes' outcome where the iteration gives up. Collective.
+#[allow(clippy::too_many_arguments)]
+fn coulomb_pass(
+    ctx: &Ctx,
+    problem: &ContactProblem,
+    reduced: &mut ReducedSystem,
+    session: &mut Session,
+    ns: &NewtonSettings,
+    passes: &mut PassLoop,
+    run: PassRun,
+    back: impl FnOnce(schur::CondensedSummary) -> Passes,
+) -> Result<PassStep, RunError> {
+    let PassRun {
+        mut kept,
+        mut summary,
+        warm,
+        first,
+    } = run;
+    let joined = |mut r: NewtonResult| {
+        after(first.clone(), &mut r);
+        r
+    };
+    let warm = warm.map(|(nodes, u)| WarmStart { nodes, u_local: u });
+    match schur::coulomb::solve(ctx, problem, reduced, ns, &mut kept, warm.as_ref())? {
+        schur::CoulombCondensed::Solved(r, cs) => {
+            summary.coulomb = Some(cs);
+            // for the next load step (a held zone's too: its rows' values are in f)
+            session.kept.put(kept);
+            Ok(PassStep::Done(Passes::Done(
+                Begin::Solved(joined(*r)),
+                Some(summary),
+            )))
+        }
+        schur::CoulombCondensed::Start(r, u, cs, beyond) => {
+            if passes.goes_on(&beyond, summary.factorisations) {
+                let store = &mut session.kept;
+                passes.next(ctx, store, &mut kept, &beyond, summary.factorisations);
+                let states = ns.force.is_empty().then(|| (r.nodes.clone(), u.clone()));
+                return Ok(PassStep::Next((joined(*r), u, cs), states));
             }
-            schur::CoulombCondensed::Start(r, u, cs, beyond) => {
-                if passes.goes_on(&beyond, summary.factorisations) {
-                    let store = &mut session.kept;
-                    passes.next(ctx, store, &mut kept, &beyond, summary.factorisations);
-                    last = Some((joined(*r), u, cs));
-                    continue;
-                }
-                say!(ctx, "coulomb: the plain path from the expanded iterate");
-                summary.coulomb = Some(cs);
-                return Ok(Passes::Done(Begin::Start(joined(*r), u), Some(summary)));
-            }
-            schur::CoulombCondensed::Fallback(cs) => {
-                summary.coulomb = Some(cs);
-                nr.history = first;
-                return Ok(Passes::Frictionless(nr, summary));
-            }
+            say!(ctx, "coulomb: the plain path from the expanded iterate");
+            summary.coulomb = Some(cs);
+            Ok(PassStep::Done(Passes::Done(
+                Begin::Start(joined(*r), u),
+                Some(summary),
+            )))
+        }
+        schur::CoulombCondensed::Fallback(cs) => {
+            summary.coulomb = Some(cs);
+            Ok(PassStep::Done(back(summary)))
         }
     }
 }

@@ -185,17 +185,7 @@ impl CondensedSummary {
 
     /// The closing log line of a converged condensed solve (`n` contact nodes).
     pub(super) fn log(&self, ctx: &Ctx, n: usize, active: usize) {
-        let factorisation = if self.factorisation_kept {
-            "the previous load step's factorisation".to_string()
-        } else {
-            format!(
-                "factorisation {:.3} s (ordering {:.3} s, {:.3e} flops, {} factor entries)",
-                self.factorisation_seconds,
-                self.ordering_seconds,
-                self.factorisation_flops,
-                self.factor_entries
-            )
-        };
+        let factorisation = self.factorisation_said();
         let form = if self.primal {
             " (primal form on S)"
         } else {
@@ -210,6 +200,34 @@ impl CondensedSummary {
             self.dense_seconds,
             self.expansion_seconds
         );
+    }
+
+    /// The log line of a solve that stops after its factorisation (no frictionless steps: a
+    /// friction solve's warm pass or load step goes on from its own start; `n` contact nodes).
+    pub(super) fn log_factorised(&self, ctx: &Ctx, n: usize) {
+        say!(
+            ctx,
+            "newton: condensed: {} of {n} contact nodes as candidates, {}, Schur complement \
+             {:.3} s; the friction iteration from its warm states",
+            self.candidates,
+            self.factorisation_said(),
+            self.schur_seconds
+        );
+    }
+
+    /// The factorisation as the log lines say it.
+    fn factorisation_said(&self) -> String {
+        if self.factorisation_kept {
+            "the previous load step's factorisation".to_string()
+        } else {
+            format!(
+                "factorisation {:.3} s (ordering {:.3} s, {:.3e} flops, {} factor entries)",
+                self.factorisation_seconds,
+                self.ordering_seconds,
+                self.factorisation_flops,
+                self.factor_entries
+            )
+        }
     }
 }
 

@@ -286,7 +286,10 @@ impl Passes<'_> {
             if !self.steps {
                 summary.outcome = "factorised";
                 let n = pass.cand.n;
-                summary.log_factorised(ctx, n);
+                if !summary.factorisation_kept {
+                    // (a kept one is said by the round)
+                    summary.log_factorised(ctx, n);
+                }
                 let kept = pass.keep(vec![0.0; n], zone.cloned());
                 let factorised = (Condensed::Factorised(summary), Some(kept));
                 return Ok(PassEnd::Done(Box::new(factorised)));

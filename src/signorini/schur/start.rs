@@ -14,9 +14,9 @@ use crate::signorini::step_system::ReducedSystem;
 /// Whether a wide zone's interior may be held on the obstacle in the factorised matrix:
 /// frictionless (with the frictionless steps; a load step only where the step before kept no
 /// factorisation or one with a held zone), or for friction (`per` > 1) sticking as well where
-/// `stick` asks (a load step without the frictionless steps: its dense iteration starts from
-/// the warm states; a zone is held there only where the candidates grow too wide); not under
-/// force control. Local.
+/// `stick` asks (a load step or a later pass of a start without the frictionless steps: its
+/// dense iteration starts from the warm states or the pass before's; a zone is held there only
+/// where the candidates grow too wide); not under force control. Local.
 pub(super) fn splits_zones(
     kept: &KeptFactor,
     s: &NewtonSettings,
@@ -30,7 +30,7 @@ pub(super) fn splits_zones(
         && if per == 1 {
             steps && kept_allows && !s.estimate && s.carried.is_none()
         } else {
-            stick && (steps || warm.is_some())
+            stick
         }
 }
 

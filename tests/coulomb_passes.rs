@@ -172,12 +172,18 @@ fn a_second_pass_of_the_first_solve_starts_from_the_first_pass_states() {
             "{np} rank(s): the case needs a second pass\n{}",
             s.run.output()
         );
-        assert!(!log.contains("plain path"), "{np} rank(s): {}", s.run.output());
+        assert!(
+            !log.contains("plain path"),
+            "{np} rank(s): {}",
+            s.run.output()
+        );
         // the frictionless steps and Coulomb's nested start in the first pass only; the second
         // factorises K_p alone
         let nested = log.matches("coulomb: condensed: nested start").count();
         let frictionless = log.matches("coulomb: the frictionless solution").count();
-        let warm = log.matches("the friction iteration from its warm states").count();
+        let warm = log
+            .matches("the friction iteration from its warm states")
+            .count();
         let counts = (nested, frictionless, warm);
         assert_eq!(counts, (1, 1, 1), "{np} rank(s): {}", s.run.output());
         assert_eq!(s.f(&["newton", "factorisations"]), 2.0, "{np} rank(s)");

@@ -15,6 +15,15 @@ pub const START_INSIDE: &str = "start_inside_obstacle";
 pub const PULLING_FORCE: &str = "pulling_contact_force";
 /// A strain beyond small deformations (post.rs).
 pub const LARGE_DEFORMATION: &str = "large_deformation";
+/// A final state that violates (3.14) or (3.18) beyond round-off but within the acceptance
+/// tolerance: the linear solves were inexact (signorini/final_state.rs).
+pub const INEXACT_FINAL_STATE: &str = "inexact_final_state";
+
+/// The worst violation of the final state's certificates, relative to the problem's scales,
+/// above which [`INEXACT_FINAL_STATE`] is raised: about what the round-off of a direct solve
+/// leaves (the default runs end at 1e-16–1e-10, docs/numbers.md), far below what an iterative
+/// solve at `solver.rtol` = 1e-7 leaves (1e-7 on the 2D Hertz case, tests/warnings.rs).
+pub const CERTIFICATE_ROUND_OFF: f64 = 1e-8;
 
 /// Contact nodes starting deeper inside the obstacle than this fraction of the body's size
 /// (the largest side of its bounding box) are warned about (deeper than

@@ -367,3 +367,47 @@ fn force_control_ends_in_contact_and_warns_of_a_pulling_force() {
     );
     assert!(r.stderr.contains("'contact.force'"), "{}", r.output());
 }
+
+#[test]
+fn an_inexact_final_state_is_warned_about_and_names_the_solver_keys() {
+    // cases/hertz/hertz.toml on the iterative preset: at solver.rtol = 1e-7 the final state's
+    // worst certificate violation is 0.9–1.7e-7 of the problem's scales (1, 2, 3 ranks), above
+    // round-off (1e-8) and below the acceptance tolerance (1e-6): a warning with the
+    // equation it violates and the solver keys, in the log and in summary.json; at the
+    // preset's own rtol (1e-10: 0.7–1.9e-10) none. The value is the Krylov solve's, so it is
+    // judged by its range, not compared between rank counts.
+    let case = repo("cases/hertz/hertz.toml");
+    for np in [1, 2, 3] {
+        let s = solve(
+            np,
+            &case,
+            &["solver.preset=\"iterative\"", "solver.rtol=1e-7"],
+        );
+        s.assert_converged("rtol 1e-7");
+        let list = warnings(&s);
+        let codes: Vec<&str> = list.iter().map(|w| text(w, "code")).collect();
+        assert_eq!(codes, ["inexact_final_state"], "{np} ranks: {list:#?}");
+        let w = &list[0];
+        let (value, threshold) = (
+            w["value"].as_f64().unwrap(),
+            w["threshold"].as_f64().unwrap(),
+        );
+        assert_eq!(threshold, 1e-8, "{w:#?}");
+        assert!(value > threshold && value < 1e-6, "{np} ranks: {w:#?}");
+        let message = text(w, "message");
+        for part in ["violates (3.14)", "'solver.rtol' = 1e-7", "inexact"] {
+            assert!(message.contains(part), "{np} ranks: {message}");
+        }
+        let lines: Vec<&str> = (s.run.stdout.lines())
+            .filter(|l| l.starts_with("warning:"))
+            .collect();
+        assert_eq!(lines, [format!("warning: {message}")], "{}", s.run.output());
+        let tight = solve(np, &case, &["solver.preset=\"iterative\""]);
+        tight.assert_converged("the preset's rtol");
+        assert!(
+            warnings(&tight).is_empty(),
+            "{np} ranks: {}",
+            tight.run.output()
+        );
+    }
+}

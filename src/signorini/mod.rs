@@ -468,6 +468,7 @@ fn report_solution(
         newton.factorisations += cs.factorisations;
         newton.condensed = Some(cs);
     }
+    warned.extend(state.warning.take());
     warned.extend(warn::contact_warnings(
         ctx,
         mesh,

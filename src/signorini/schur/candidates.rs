@@ -10,7 +10,7 @@ use crate::petsc::mumps::{FactorStats, NodeBases, SchurRequest};
 use crate::petsc::ndfactor::node_order;
 use crate::say;
 use crate::signorini::boundary::ContactBoundary;
-use crate::signorini::dense::DenseRun;
+use crate::signorini::dense::{pack_upper, CMatrix, DenseRun};
 use crate::signorini::rigid::FreeModes;
 use crate::signorini::step_system::ReducedSystem;
 use crate::tuning::{
@@ -544,6 +544,18 @@ impl Candidates {
     }
 }
 
+/// The upper triangle of the symmetric n × n matrix whose lower triangle `lower` holds
+/// (column-major, MUMPS' Schur complement), packed column by column ([`CMatrix::Upper`]) into
+/// a new buffer of n (n + 1) / 2. Local.
+fn pack_lower_copy(lower: &[f64], n: usize) -> Vec<f64> {
+    let mut packed = Vec::with_capacity(n * (n + 1) / 2);
+    for j in 0..n {
+        // column j of the upper triangle is row j of the lower one
+        packed.extend((0..=j).map(|i| lower[i * n + j]));
+    }
+    packed
+}
+
 /// The compliance C = Nᵀ K_p⁻¹ N of a growing candidate set and d₀ = Nᵀ K_p⁻¹ f there. In the
 /// candidates' node frames (Q, normal first) N becomes the unit columns of their normal dofs,
 /// so with S the Schur complement of Qᵀ K_p Q on those dofs: C = S⁻¹ and d₀ = S⁻¹ r, r = f̃_s −
@@ -555,7 +567,8 @@ pub(crate) struct Compliance {
     pub(super) in_s: Vec<bool>,
     /// The candidates in the order of C's rows and columns (`per` rows each).
     pub(crate) list: Vec<usize>,
-    pub(super) cmat: DMatrix<f64>,
+    /// C = S⁻¹, its upper triangle packed ([`Compliance::c`]; rank 0).
+    cmat: Vec<f64>,
     pub(super) d0: Vec<f64>,
     /// The candidates' node frames (normal first): K_p is factorised as Qᵀ K_p Q.
     bases: NodeBases,
@@ -575,6 +588,9 @@ pub(crate) struct Compliance {
     /// iteration's own (`x_s`).
     pub(super) primal: bool,
     pub(super) schur: DMatrix<f64>,
+    /// S itself next to C where every dof of the candidates is a Schur variable (Coulomb's
+    /// primal form), its upper triangle packed ([`Compliance::stiffness`]; rank 0).
+    stiff: Vec<f64>,
     pub(super) r: Vec<f64>,
     pub(super) x_s: Vec<f64>,
     /// The dense work that pays (flops): the dense compliance's or a primal step's bound.
@@ -587,7 +603,7 @@ impl Compliance {
             per,
             in_s: vec![false; n],
             list: Vec::new(),
-            cmat: DMatrix::zeros(0, 0),
+            cmat: Vec::new(),
             d0: Vec::new(),
             bases: NodeBases::default(),
             factor: None,
@@ -597,6 +613,7 @@ impl Compliance {
             ordering_seconds: 0.0,
             primal: false,
             schur: DMatrix::zeros(0, 0),
+            stiff: Vec::new(),
             r: Vec::new(),
             x_s: Vec::new(),
             max_flops: 0.0,
@@ -661,8 +678,9 @@ impl Compliance {
         let (dim, n_rows) = (shape.dim, shape.n_rows);
         let dofs = self.add_candidates(cand, new, dim);
         self.factor = None; // the old factorisation's memory first
-        self.cmat = DMatrix::zeros(0, 0);
+        self.cmat = Vec::new();
         self.schur = DMatrix::zeros(0, 0);
+        self.stiff = Vec::new();
         let t = Instant::now();
         let symbolic = self.analyse(ctx, reduced, &dofs, dim, n_rows, t)?;
         self.choose_form(dofs.len(), dim, &symbolic, why)?;
@@ -767,34 +785,47 @@ impl Compliance {
             self.r = r;
             return true;
         }
-        // S's one copy, factorised and inverted in place: C = S⁻¹; with every dof of the
-        // candidates (Coulomb) a copy of S and r too, for the primal form of its dense steps
+        // S's one copy, factorised and inverted in place: C = S⁻¹, kept packed (its upper
+        // triangle, in the same memory); with every dof of the candidates (Coulomb) S packed
+        // and r too, for the primal form of its dense steps. Rank 0 holds at most 1.5 n²
+        // doubles here and n² after (measured: docs/numbers.md, "Coulomb: C and S packed")
         let sv = factor.take_schur();
         if self.per > 1 {
-            self.schur = DMatrix::from_vec(n, n, sv.clone());
+            self.stiff = pack_lower_copy(&sv, n);
             self.r = r.clone();
         }
         let Some(ch) = DenseCholesky::factor_owned(n, sv) else {
             return false;
         };
-        self.cmat = ch.inverse();
-        self.d0 = (&self.cmat * DVector::from_column_slice(&r))
+        self.cmat = pack_upper(ch.inverse().data.into(), n, true);
+        self.d0 = self
+            .c()
+            .times(&DVector::from_column_slice(&r))
             .as_slice()
             .to_vec();
         true
     }
 
+    /// C = S⁻¹ on the candidates' dofs (rank 0). Local.
+    pub(super) fn c(&self) -> CMatrix<'_> {
+        CMatrix::Upper {
+            n: self.list.len() * self.per,
+            packed: &self.cmat,
+        }
+    }
+
     /// C and d₀ on the candidates' normal dofs (the frictionless model): themselves for
-    /// `per` = 1, else every `per`-th row and column (the compliance of the normal dofs with
-    /// the tangential forces zero). Rank 0.
-    pub(super) fn normal_part(&self) -> (Cow<'_, DMatrix<f64>>, Cow<'_, [f64]>) {
+    /// `per` = 1 (`None`: [`Compliance::c`]), else every `per`-th row and column (the
+    /// compliance of the normal dofs with the tangential forces zero). Rank 0.
+    pub(super) fn normal_part(&self) -> (Option<DMatrix<f64>>, Cow<'_, [f64]>) {
         let (n, per) = (self.list.len(), self.per);
         if per == 1 {
-            return (Cow::Borrowed(&self.cmat), Cow::Borrowed(&self.d0[..]));
+            return (None, Cow::Borrowed(&self.d0[..]));
         }
-        let c = DMatrix::from_fn(n, n, |i, j| self.cmat[(i * per, j * per)]);
+        let c = self.c();
+        let block = DMatrix::from_fn(n, n, |i, j| c.at(i * per, j * per));
         let d = (0..n).map(|i| self.d0[i * per]).collect::<Vec<f64>>();
-        (Cow::Owned(c), Cow::Owned(d))
+        (Some(block), Cow::Owned(d))
     }
 
     /// d₀ = C r for a new f on the kept factorisation (`f_root`: f on rank 0), r MUMPS'
@@ -806,7 +837,9 @@ impl Compliance {
             .agree_message(factor.condense(&rhs))
             .map_err(|e| format!("the condensation of f failed: {e}"))?;
         if ctx.rank == 0 {
-            self.d0 = (&self.cmat * DVector::from_column_slice(&r))
+            self.d0 = self
+                .c()
+                .times(&DVector::from_column_slice(&r))
                 .as_slice()
                 .to_vec();
             if self.stiffness().is_some() {
@@ -819,10 +852,15 @@ impl Compliance {
     /// S itself and r (λ = r − S (u − G α) on the candidates' dofs) next to C = S⁻¹, where every
     /// dof of the candidates is a Schur variable (Coulomb; rank 0): the primal form of the
     /// dense Coulomb steps (schur/coulomb.rs). `None` elsewhere.
-    pub(super) fn stiffness(&self) -> Option<(&DMatrix<f64>, &[f64])> {
+    pub(super) fn stiffness(&self) -> Option<(CMatrix<'_>, &[f64])> {
         let n = self.list.len() * self.per;
-        (!self.primal && self.per > 1 && n > 0 && self.schur.nrows() == n)
-            .then(|| (&self.schur, &self.r[..]))
+        (!self.primal && self.per > 1 && n > 0 && self.stiff.len() == n * (n + 1) / 2).then(|| {
+            let s = CMatrix::Upper {
+                n,
+                packed: &self.stiff,
+            };
+            (s, &self.r[..])
+        })
     }
 
     /// w = K_p⁻¹ (f − N λ), this rank's rows (`n_local`), from MUMPS' condensation and
@@ -853,7 +891,7 @@ impl Compliance {
                 self.x_s.clone()
             } else {
                 let d0 = DVector::from_column_slice(&self.d0);
-                (d0 - &self.cmat * DVector::from_column_slice(lam))
+                (d0 - self.c().times(&DVector::from_column_slice(lam)))
                     .as_slice()
                     .to_vec()
             };

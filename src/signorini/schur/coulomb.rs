@@ -288,13 +288,13 @@ fn dense_phase(
             let mut phi = kept.free.free_load();
             phi.extend(ns.force.iter().map(|fc| fc.magnitude()));
             let stiff = kept.comp.stiffness().map(|(s, r)| {
-                let sg = s * &g;
+                let sg = s.times_columns(&g);
                 let gsg = g.transpose() * &sg;
                 Stiff { s, r, sg, gsg }
             });
             let dense = DenseIteration {
                 dim,
-                cmat: &kept.comp.cmat,
+                cmat: kept.comp.c(),
                 d0: &kept.comp.d0,
                 g: &g,
                 phi: &phi,

@@ -9,7 +9,7 @@ use crate::signorini::active_set::{
     threshold_scale_local, ActiveSet, Iterate, Law, SetUpdate, FIXED_POINT_SLACK,
 };
 use crate::signorini::boundary::{ContactBoundary, NodeResult};
-use crate::signorini::dense::coarsen;
+use crate::signorini::dense::{coarsen, CMatrix};
 use crate::signorini::law::coulomb::{
     COULOMB_RESIDUAL_STALL, COULOMB_RESIDUAL_TOL, COULOMB_RESIDUAL_ZERO,
 };
@@ -37,7 +37,7 @@ struct System {
 /// (module note), and the balance Gᵀ λ = φ: where the zone fills the candidates that is far
 /// fewer unknowns than the dual form's λ of every active node.
 pub(super) struct Stiff<'a> {
-    pub(super) s: &'a DMatrix<f64>,
+    pub(super) s: CMatrix<'a>,
     pub(super) r: &'a [f64],
     pub(super) sg: DMatrix<f64>,
     pub(super) gsg: DMatrix<f64>,
@@ -194,8 +194,9 @@ impl PrimalRows<'_, '_> {
     fn put_lam(&self, a: &mut DMatrix<f64>, ri: usize, terms: &[(usize, f64)]) -> f64 {
         let (st, m) = (self.st, self.m);
         let mut row = a.column_mut(ri);
+        let mut s_row = vec![0.0; st.s.n()];
         for &(dof, f) in terms {
-            let s_row = st.s.column(dof);
+            st.s.column_into(dof, &mut s_row);
             for (jc, u) in self.cols.iter().enumerate() {
                 row[jc] -= f * s_row[u.dof];
             }
@@ -212,15 +213,11 @@ impl PrimalRows<'_, '_> {
 
 /// λ at u_F = 0, α = 0: r − S u_K (`known`: u_K, NaN at the unknowns).
 fn primal_base(st: &Stiff, known: &[f64]) -> Vec<f64> {
-    let mut base = st.r.to_vec();
-    for (j, &uj) in known.iter().enumerate() {
-        if uj.is_finite() && uj != 0.0 {
-            for (b, sij) in base.iter_mut().zip(st.s.column(j).iter()) {
-                *b -= sij * uj;
-            }
-        }
-    }
-    base
+    let u_k = known
+        .iter()
+        .map(|&uj| if uj.is_finite() { uj } else { 0.0 });
+    let su = st.s.times(&DVector::from_iterator(known.len(), u_k));
+    st.r.iter().zip(su.iter()).map(|(r, s)| r - s).collect()
 }
 
 /// |u − u_prev| / |u| (0 for u = 0). Pure.
@@ -237,9 +234,8 @@ fn relative_change(u: &[f64], u_prev: &[f64]) -> f64 {
 /// The generalised Newton of docs/friction.md on the candidates' dense system (module note).
 pub(super) struct DenseIteration<'a> {
     pub(super) dim: usize,
-    /// C, symmetric (mirrored by its inverse, `DenseCholesky::inverse`): its column `dof` is
-    /// its row `dof`, read contiguously for the rows of the dense system.
-    pub(super) cmat: &'a DMatrix<f64>,
+    /// C, symmetric: its column `dof` is its row `dof`, read for the rows of the dense system.
+    pub(super) cmat: CMatrix<'a>,
     pub(super) d0: &'a [f64],
     /// The free modes' parts at the candidates (d rows per node, frame components; mz columns)
     /// and the load in them, φ = zᵀ Rᵀ f: u = d₀ − C λ + G α, Gᵀ λ = φ.
@@ -266,14 +262,12 @@ impl DenseIteration<'_> {
         lambda_n: &[f64],
     ) -> (Vec<NodeResult>, Vec<f64>) {
         let (d, n) = (self.dim, self.cb.nodes.len());
-        let mut u_prev = self.d0.to_vec();
+        let mut lam = vec![0.0; self.d0.len()];
         for (q, &l) in lambda_n.iter().enumerate() {
-            if l != 0.0 {
-                for (ui, ci) in u_prev.iter_mut().zip(self.cmat.column(q * d).iter()) {
-                    *ui -= ci * l;
-                }
-            }
+            lam[q * d] = l;
         }
+        let cl = self.cmat.times(&DVector::from_vec(lam));
+        let u_prev: Vec<f64> = self.d0.iter().zip(cl.iter()).map(|(w, c)| w - c).collect();
         // u_n = −g on the frictionless set (its rigid motion G α is not in u_prev), never a
         // penetration off it: b of (F1) is μ(−λ_n) on the set and 0 elsewhere
         let start: Vec<NodeResult> = (0..n)
@@ -506,8 +500,7 @@ impl DenseIteration<'_> {
                 .iter()
                 .flat_map(|&q| (0..d).map(move |a| q * d + a))
                 .collect();
-            let sub_c =
-                DMatrix::from_fn(dofs.len(), dofs.len(), |r, q| self.cmat[(dofs[r], dofs[q])]);
+            let sub_c = self.cmat.block(&dofs);
             let sub_g = DMatrix::from_fn(dofs.len(), self.g.ncols(), |r, c| self.g[(dofs[r], c)]);
             let pick = |v: &[f64]| dofs.iter().map(|&i| v[i]).collect::<Vec<f64>>();
             let d0 = pick(self.d0);
@@ -522,7 +515,7 @@ impl DenseIteration<'_> {
                 modes: self.cb.modes.clone(),
             };
             let sub = DenseIteration {
-                cmat: &sub_c,
+                cmat: CMatrix::Full(&sub_c),
                 d0: &d0,
                 g: &sub_g,
                 cb: &cb,
@@ -561,14 +554,8 @@ impl DenseIteration<'_> {
 
     /// u = d₀ − C λ + G α at every candidate (d per node).
     fn u_of(&self, lam: &[f64], alpha: &[f64]) -> Vec<f64> {
-        let mut u = self.d0.to_vec();
-        for (col, &l) in lam.iter().enumerate() {
-            if l != 0.0 {
-                for (ui, ci) in u.iter_mut().zip(self.cmat.column(col).iter()) {
-                    *ui -= ci * l;
-                }
-            }
-        }
+        let cl = self.cmat.times(&DVector::from_column_slice(lam));
+        let mut u: Vec<f64> = self.d0.iter().zip(cl.iter()).map(|(w, c)| w - c).collect();
         for (cz, &al) in alpha.iter().enumerate() {
             for (ui, gi) in u.iter_mut().zip(self.g.column(cz).iter()) {
                 *ui += gi * al;
@@ -739,16 +726,17 @@ impl DenseIteration<'_> {
             }
         }
         let m = cols.len();
-        // built as its transpose: row ri of the system is column ri here (contiguous, as C's
-        // column dof is its row dof; measured on the floating Hertz disk at 344 620 unknowns,
-        // 1 875 dense unknowns: 0.15 s a step against 0.18 s built row by row)
+        // built as its transpose: row ri of the system is column ri here (contiguous; measured
+        // on the floating Hertz disk at 344 620 unknowns, 1 875 dense unknowns: 0.15 s a step
+        // against 0.18 s built row by row)
         let mut a = DMatrix::<f64>::zeros(m + mz, m + mz);
         let mut rhs = DVector::<f64>::zeros(m + mz);
         // row `ri` := Σ_j coef_j · u_(dof_j) (+ constants on the right): u = w − C λ + G α
-        let put_u = |a: &mut DMatrix<f64>, ri: usize, terms: &[(usize, f64)]| -> f64 {
+        let mut c_row = vec![0.0; cmat.n()];
+        let mut put_u = |a: &mut DMatrix<f64>, ri: usize, terms: &[(usize, f64)]| -> f64 {
             let mut row = a.column_mut(ri);
             for &(dof, f) in terms {
-                let c_row = cmat.column(dof); // C's row `dof` (C symmetric)
+                cmat.column_into(dof, &mut c_row); // C's row `dof` (C symmetric)
                 for (jc, u) in cols.iter().enumerate() {
                     row[jc] -= f * u.of(|col| c_row[col]);
                 }
@@ -857,7 +845,7 @@ impl DenseIteration<'_> {
         }
         let alpha: Vec<f64> = x[m..].to_vec();
         let w = DVector::from_column_slice(&u) - self.g * DVector::from_column_slice(&alpha);
-        let mut lam = (DVector::from_column_slice(st.r) - st.s * w)
+        let mut lam = (DVector::from_column_slice(st.r) - st.s.times(&w))
             .as_slice()
             .to_vec();
         for (q, l) in lam.chunks_mut(d).enumerate() {

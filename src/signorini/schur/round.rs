@@ -382,11 +382,15 @@ pub(super) fn dense_round(
                 }
                 return run;
             }
-            let (cmat, d0) = comp.normal_part();
+            let (block, d0) = comp.normal_part();
             let d0 = &d0[..];
+            let cmat = match &block {
+                Some(b) => CMatrix::Full(b),
+                None => comp.c(),
+            };
             let start: Vec<bool> = list.iter().map(|&i| active[i]).collect();
             let dense = Dense {
-                cmat: CMatrix::Full(&cmat),
+                cmat,
                 d0,
                 gap: &gap,
                 g: &g,

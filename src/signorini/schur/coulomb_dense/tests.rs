@@ -3,6 +3,7 @@
 use super::*;
 use crate::contact::Frame;
 use crate::signorini::boundary::ContactNode;
+use crate::signorini::dense::pack_upper;
 
 /// A coupled line of `n` candidates (2D) pressed onto a flat obstacle and pushed sideways:
 /// normal and tangential compliances C_ij = exp(−|i−j| / 8) (positive definite, uncoupled
@@ -80,7 +81,7 @@ impl Line {
     fn dense(&self, c: f64) -> DenseIteration<'_> {
         DenseIteration {
             dim: 2,
-            cmat: &self.cmat,
+            cmat: CMatrix::Full(&self.cmat),
             d0: &self.d0,
             g: &self.g,
             phi: &[],
@@ -164,7 +165,8 @@ fn a_settled_slip_nodes_tangential_force_is_tied_to_its_normal_force() {
 
 /// The primal form (on S = C⁻¹ itself) against the dual form on C, on the pushed line
 /// pressed in everywhere (every node active: the primal form has the slipping nodes'
-/// tangential displacements alone as unknowns): the same final states and λ.
+/// tangential displacements alone as unknowns): the same final states and λ; S and C packed
+/// as the condensed path keeps them, and the dual form on the packed C as on the full one.
 #[test]
 fn the_primal_form_ends_where_the_dual_form_ends() {
     on_big_stack(|| {
@@ -182,20 +184,45 @@ fn the_primal_form_ends_where_the_dual_form_ends() {
             .to_vec();
         let sg = &s * &line.g;
         let gsg = line.g.transpose() * &sg;
+        // S and C as the condensed path keeps them: their upper triangles packed
+        let dim = 2 * n;
+        let s_packed = pack_upper(s.as_slice().to_vec(), dim, true);
+        let c_packed = pack_upper(line.cmat.as_slice().to_vec(), dim, true);
         let st = Stiff {
-            s: &s,
+            s: CMatrix::Upper {
+                n: dim,
+                packed: &s_packed,
+            },
             r: &r,
             sg,
             gsg,
         };
         let dual = line.dense(100.0);
         let primal = DenseIteration {
+            cmat: CMatrix::Upper {
+                n: dim,
+                packed: &c_packed,
+            },
             stiff: Some(&st),
             ..dual
         };
+        let dual_packed = DenseIteration {
+            stiff: None,
+            ..primal
+        };
         let (start, u_prev) = dual.frictionless_start(&vec![true; n], &vec![0.0; n]);
         let a = dual.run(&start, u_prev.clone());
-        let b = primal.run(&start, u_prev);
+        let b = primal.run(&start, u_prev.clone());
+        let c = dual_packed.run(&start, u_prev);
+        assert!(c.end.is_ok(), "{:?}", c.end);
+        assert_eq!(
+            (c.active.clone(), c.slip.clone()),
+            (a.active.clone(), a.slip.clone())
+        );
+        let scale = a.lambda.iter().fold(0.0_f64, |m, x| m.max(x.abs()));
+        for (x, y) in a.lambda.iter().zip(&c.lambda) {
+            assert!((x - y).abs() <= 1e-12 * scale, "the packed C: {x} {y}");
+        }
         assert!(a.end.is_ok() && b.end.is_ok(), "{:?} {:?}", a.end, b.end);
         assert_eq!((a.primal_steps, b.primal_steps), (0, b.steps.len()));
         let slips = (0..n).filter(|&q| b.active[q] && b.slip[q]).count();

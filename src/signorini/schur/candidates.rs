@@ -788,7 +788,8 @@ impl Compliance {
         // S's one copy, factorised and inverted in place: C = S⁻¹, kept packed (its upper
         // triangle, in the same memory); with every dof of the candidates (Coulomb) S packed
         // and r too, for the primal form of its dense steps. Rank 0 holds at most 1.5 n²
-        // doubles here and n² after (measured: docs/numbers.md, "Coulomb: C and S packed")
+        // doubles here and n² after (docs/numbers.md, "Coulomb: later passes from the pass before; C
+        // and S packed")
         let sv = factor.take_schur();
         if self.per > 1 {
             self.stiff = pack_lower_copy(&sv, n);

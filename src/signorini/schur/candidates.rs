@@ -788,8 +788,8 @@ impl Compliance {
         // S's one copy, factorised and inverted in place: C = S⁻¹, kept packed (its upper
         // triangle, in the same memory); with every dof of the candidates (Coulomb) S packed
         // and r too, for the primal form of its dense steps. Rank 0 holds at most 1.5 n²
-        // doubles here and n² after (docs/numbers.md, "Coulomb: later passes from the pass before; C
-        // and S packed")
+        // doubles here and n² after (docs/numbers.md, "Coulomb: later passes from the pass
+        // before; C and S packed")
         let sv = factor.take_schur();
         if self.per > 1 {
             self.stiff = pack_lower_copy(&sv, n);
@@ -823,8 +823,8 @@ impl Compliance {
         if per == 1 {
             return (None, Cow::Borrowed(&self.d0[..]));
         }
-        let c = self.c();
-        let block = DMatrix::from_fn(n, n, |i, j| c.at(i * per, j * per));
+        let normal: Vec<usize> = (0..n).map(|i| i * per).collect();
+        let block = self.c().block(&normal);
         let d = (0..n).map(|i| self.d0[i * per]).collect::<Vec<f64>>();
         (Some(block), Cow::Owned(d))
     }

@@ -375,19 +375,12 @@ fn coulomb_passes(
         if let Some((r, u, cs)) = last.take() {
             if let Some(warm) = prior.take().filter(|_| factorised(&tried)) {
                 // the pass factorised K_p alone: Coulomb from the last pass' states
-                let Ok((schur::Condensed::Factorised(mut summary), Some(kept))) = tried else {
-                    unreachable!("a factorised pass keeps its factorisation")
+                let at = WarmPass {
+                    tried,
+                    warm,
+                    last: (r, u),
                 };
-                summary.factorisations += passes.earlier;
-                let run = PassRun {
-                    kept,
-                    summary,
-                    warm: Some(&warm),
-                    first: Vec::new(),
-                };
-                // where the Coulomb iteration gives up: the plain path from the last iterate
-                let back = |summary| Passes::Done(Begin::Start(r, u), Some(summary));
-                match coulomb_pass(ctx, problem, reduced, session, ns, &mut passes, run, back)? {
+                match warm_pass(ctx, problem, reduced, session, ns, &mut passes, at)? {
                     PassStep::Done(done) => return Ok(done),
                     PassStep::Next(next, w) => (last, prior) = (Some(next), w),
                 }
@@ -441,6 +434,40 @@ fn coulomb_passes(
             PassStep::Next(next, w) => (last, prior) = (Some(next), w),
         }
     }
+}
+
+/// A warm pass of [`coulomb_passes`]: its factorisation (`tried`, [`factorised`]), the states
+/// it starts from and the pass before's expanded iterate (u's rows with it).
+struct WarmPass {
+    tried: Result<(schur::Condensed, Option<schur::Kept>), RunError>,
+    warm: (Vec<NodeResult>, Vec<f64>),
+    last: (NewtonResult, Vec<f64>),
+}
+
+/// The Coulomb iteration of a warm pass ([`coulomb_pass`] from the pass before's states);
+/// where it gives up, the plain path from the pass before's expanded iterate. Collective.
+fn warm_pass(
+    ctx: &Ctx,
+    problem: &ContactProblem,
+    reduced: &mut ReducedSystem,
+    session: &mut Session,
+    ns: &NewtonSettings,
+    passes: &mut PassLoop,
+    at: WarmPass,
+) -> Result<PassStep, RunError> {
+    let WarmPass { tried, warm, last } = at;
+    let Ok((schur::Condensed::Factorised(mut summary), Some(kept))) = tried else {
+        unreachable!("a factorised pass keeps its factorisation")
+    };
+    summary.factorisations += passes.earlier;
+    let run = PassRun {
+        kept,
+        summary,
+        warm: Some(&warm),
+        first: Vec::new(),
+    };
+    let back = |summary| Passes::Done(Begin::Start(last.0, last.1), Some(summary));
+    coulomb_pass(ctx, problem, reduced, session, ns, passes, run, back)
 }
 
 /// A pass of [`coulomb_passes`] that factorised K_p alone (its frictionless steps not run: a

@@ -130,8 +130,8 @@ impl CMatrix<'_> {
             return DMatrix::from_fn(idx.len(), idx.len(), |r, q| self.at(idx[r], idx[q]));
         };
         // each packed column j of idx read once, front to back, its entries i ≤ j of idx
-        // placed at (i, j) and (j, i) (a strided read of the entries i > j costs a cache miss
-        // each: the dense Coulomb phase at 4 000 Schur dofs took 0.16 s longer so)
+        // placed at (i, j) and (j, i) (entry by entry, the entries i > j would be read with a
+        // stride that grows with i)
         let mut pos = vec![usize::MAX; *n];
         for (r, &i) in idx.iter().enumerate() {
             if pos[i] != usize::MAX {

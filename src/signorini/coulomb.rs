@@ -358,31 +358,27 @@ fn coulomb_passes(
     let mut passes = PassLoop::new(Vec::new(), Vec::new());
     // the expanded iterate of the last pass: the plain path's start where the next one fails
     let mut last: Option<(NewtonResult, Vec<f64>, CoulombCondensedSummary)> = None;
-    // the same iterate's records and rows: the next pass factorises K_p alone and its dense
-    // iteration starts from these states (no frictionless steps, no nested start); not under
-    // force control, whose approaches a pass finds anew
-    let mut prior: Option<(Vec<NodeResult>, Vec<f64>)> = None;
     loop {
         // too many candidates' dofs for the dense tangential compliance: the predicted zone's
         // interior held sticking, the dense steps on its edge and beyond (schur/frictionless.rs)
         let held = (per > 1).then(|| passes.start_sticking());
+        // a later pass factorises K_p alone, its dense iteration from the states of `last` (no
+        // frictionless steps or nested start); not under force control (approaches found anew)
+        let warm = ns.force.is_empty() && last.is_some();
         let how = Condensing {
             per,
-            steps: prior.is_none(),
+            steps: !warm,
             stick: held,
         };
         let mut tried = solve_keeping(ctx, problem, reduced, fl, session, None, how);
         if let Some((r, u, cs)) = last.take() {
-            if let Some(warm) = prior.take().filter(|_| factorised(&tried)) {
-                // the pass factorised K_p alone: Coulomb from the last pass' states
-                let at = WarmPass {
-                    tried,
-                    warm,
-                    last: (r, u),
-                };
-                match warm_pass(ctx, problem, reduced, session, ns, &mut passes, at)? {
+            if warm && factorised(&tried) {
+                // Coulomb from the last pass' states, where it gives up the plain path from it
+                let run = warm_run(tried, passes.earlier, (&r.nodes, &u));
+                match coulomb_pass(ctx, problem, reduced, session, ns, &mut passes, run)? {
                     PassStep::Done(done) => return Ok(done),
-                    PassStep::Next(next, w) => (last, prior) = (Some(next), w),
+                    PassStep::Next(next) => last = Some(next),
+                    PassStep::GaveUp(s) => return Ok(Passes::Done(Begin::Start(r, u), Some(s))),
                 }
                 continue;
             }
@@ -424,50 +420,36 @@ fn coulomb_passes(
             warm: None,
             first: first.clone(),
         };
-        // where the Coulomb iteration gives up: the plain path from the frictionless solution
-        let back = |summary| {
-            nr.history = first;
-            Passes::Frictionless(nr, summary)
-        };
-        match coulomb_pass(ctx, problem, reduced, session, ns, &mut passes, run, back)? {
+        match coulomb_pass(ctx, problem, reduced, session, ns, &mut passes, run)? {
             PassStep::Done(done) => return Ok(done),
-            PassStep::Next(next, w) => (last, prior) = (Some(next), w),
+            PassStep::Next(next) => last = Some(next),
+            PassStep::GaveUp(summary) => {
+                // the plain path from the frictionless solution
+                nr.history = first;
+                return Ok(Passes::Frictionless(nr, summary));
+            }
         }
     }
 }
 
-/// A warm pass of [`coulomb_passes`]: its factorisation (`tried`, [`factorised`]), the states
-/// it starts from and the pass before's expanded iterate (u's rows with it).
-struct WarmPass {
+/// The run of a warm pass' Coulomb iteration: its factorisation (`tried`, [`factorised`]),
+/// counted after the `earlier` passes', from the pass before's states (its contact records
+/// and this rank's rows of u). Local.
+fn warm_run<'w>(
     tried: Result<(schur::Condensed, Option<schur::Kept>), RunError>,
-    warm: (Vec<NodeResult>, Vec<f64>),
-    last: (NewtonResult, Vec<f64>),
-}
-
-/// The Coulomb iteration of a warm pass ([`coulomb_pass`] from the pass before's states);
-/// where it gives up, the plain path from the pass before's expanded iterate. Collective.
-fn warm_pass(
-    ctx: &Ctx,
-    problem: &ContactProblem,
-    reduced: &mut ReducedSystem,
-    session: &mut Session,
-    ns: &NewtonSettings,
-    passes: &mut PassLoop,
-    at: WarmPass,
-) -> Result<PassStep, RunError> {
-    let WarmPass { tried, warm, last } = at;
+    earlier: usize,
+    (nodes, u_local): (&'w [NodeResult], &'w [f64]),
+) -> PassRun<'w> {
     let Ok((schur::Condensed::Factorised(mut summary), Some(kept))) = tried else {
         unreachable!("a factorised pass keeps its factorisation")
     };
-    summary.factorisations += passes.earlier;
-    let run = PassRun {
+    summary.factorisations += earlier;
+    PassRun {
         kept,
         summary,
-        warm: Some(&warm),
+        warm: Some(WarmStart { nodes, u_local }),
         first: Vec::new(),
-    };
-    let back = |summary| Passes::Done(Begin::Start(last.0, last.1), Some(summary));
-    coulomb_pass(ctx, problem, reduced, session, ns, passes, run, back)
+    }
 }
 
 /// A pass of [`coulomb_passes`] that factorised K_p alone (its frictionless steps not run: a
@@ -482,25 +464,22 @@ fn factorised(tried: &Result<(schur::Condensed, Option<schur::Kept>), RunError>)
 struct PassRun<'w> {
     kept: schur::Kept,
     summary: schur::CondensedSummary,
-    warm: Option<&'w (Vec<NodeResult>, Vec<f64>)>,
+    warm: Option<WarmStart<'w>>,
     first: Vec<StepInfo>,
 }
 
-/// How a pass' Coulomb iteration ends: the passes' outcome, or a next pass from its expanded
-/// iterate (with the states it starts from, `None` under force control).
+/// How a pass' Coulomb iteration ends: the passes' outcome, a next pass from its expanded
+/// iterate, or given up (the caller's start for the plain path, with the summary).
 enum PassStep {
     Done(Passes),
-    Next(
-        (NewtonResult, Vec<f64>, CoulombCondensedSummary),
-        Option<(Vec<NodeResult>, Vec<f64>)>,
-    ),
+    Next((NewtonResult, Vec<f64>, CoulombCondensedSummary)),
+    GaveUp(schur::CondensedSummary),
 }
 
 /// The Coulomb iteration of one pass of [`coulomb_passes`] on its factorisation: solved (the
 /// factorisation kept for the next load step), a next pass where nodes beyond the candidates
-/// change state ([`PassLoop::goes_on`]), else the plain path from the expanded iterate; `back`:
-/// the passes' outcome where the iteration gives up. Collective.
-#[allow(clippy::too_many_arguments)]
+/// change state ([`PassLoop::goes_on`]), else the plain path from the expanded iterate; given
+/// up where the iteration gives up. Collective.
 fn coulomb_pass(
     ctx: &Ctx,
     problem: &ContactProblem,
@@ -509,7 +488,6 @@ fn coulomb_pass(
     ns: &NewtonSettings,
     passes: &mut PassLoop,
     run: PassRun,
-    back: impl FnOnce(schur::CondensedSummary) -> Passes,
 ) -> Result<PassStep, RunError> {
     let PassRun {
         mut kept,
@@ -521,7 +499,6 @@ fn coulomb_pass(
         after(first.clone(), &mut r);
         r
     };
-    let warm = warm.map(|(nodes, u)| WarmStart { nodes, u_local: u });
     match schur::coulomb::solve(ctx, problem, reduced, ns, &mut kept, warm.as_ref())? {
         schur::CoulombCondensed::Solved(r, cs) => {
             summary.coulomb = Some(cs);
@@ -536,8 +513,7 @@ fn coulomb_pass(
             if passes.goes_on(&beyond, summary.factorisations) {
                 let store = &mut session.kept;
                 passes.next(ctx, store, &mut kept, &beyond, summary.factorisations);
-                let states = ns.force.is_empty().then(|| (r.nodes.clone(), u.clone()));
-                return Ok(PassStep::Next((joined(*r), u, cs), states));
+                return Ok(PassStep::Next((joined(*r), u, cs)));
             }
             say!(ctx, "coulomb: the plain path from the expanded iterate");
             summary.coulomb = Some(cs);
@@ -548,7 +524,7 @@ fn coulomb_pass(
         }
         schur::CoulombCondensed::Fallback(cs) => {
             summary.coulomb = Some(cs);
-            Ok(PassStep::Done(back(summary)))
+            Ok(PassStep::GaveUp(summary))
         }
     }
 }

@@ -220,20 +220,25 @@ pub struct DenseRun {
     pub coarse: Vec<(usize, usize)>,
 }
 
-/// The upper triangle of the symmetric n × n matrix `full` (column-major; its upper triangle
-/// `upper`, else its lower one, holds the values) packed column by column ([`CMatrix::Upper`])
-/// in `full`'s own memory, which shrinks to it: half of n² is returned to the allocator
-/// without a second n × n buffer. Local.
-pub fn pack_upper(mut full: Vec<f64>, n: usize, upper: bool) -> Vec<f64> {
-    assert_eq!(full.len(), n * n, "an n × n matrix");
-    if !upper {
-        // the lower triangle mirrored into the upper one, column by column
-        for j in 0..n {
-            for i in 0..j {
-                full[j * n + i] = full[i * n + j];
-            }
-        }
+/// The upper triangle of the symmetric n × n matrix whose lower triangle `lower` holds
+/// (column-major, as MUMPS returns a Schur complement), packed column by column
+/// ([`CMatrix::Upper`]) into a new buffer of n (n + 1) / 2. Local.
+pub fn pack_upper_of_lower(lower: &[f64], n: usize) -> Vec<f64> {
+    assert_eq!(lower.len(), n * n, "an n × n matrix");
+    let mut packed = Vec::with_capacity(n * (n + 1) / 2);
+    for j in 0..n {
+        // column j of the upper triangle is row j of the lower one
+        packed.extend((0..=j).map(|i| lower[i * n + j]));
     }
+    packed
+}
+
+/// The upper triangle of the symmetric n × n matrix `full` (column-major, its upper triangle
+/// holding the values) packed column by column ([`CMatrix::Upper`]) in `full`'s own memory,
+/// which shrinks to it: half of n² is returned to the allocator without a second n × n
+/// buffer. Local.
+pub fn pack_upper(mut full: Vec<f64>, n: usize) -> Vec<f64> {
+    assert_eq!(full.len(), n * n, "an n × n matrix");
     // column j's entries 0..=j move to j (j + 1) / 2 ≤ j n: forward, never over an entry
     // still to be read
     let mut at = 0;
@@ -1011,20 +1016,21 @@ mod tests {
     }
 
     #[test]
-    fn pack_upper_packs_either_triangle_in_place() {
+    fn pack_upper_packs_either_triangle() {
         let n = 23;
         let (c, packed) = compliance(n);
-        // the full matrix, and one with only its lower triangle (the upper one garbage)
+        // the full matrix in place, and a copy from one with only its lower triangle (the
+        // upper one garbage)
         let mut lower = c.as_slice().to_vec();
         for j in 0..n {
             for i in 0..j {
                 lower[j * n + i] = f64::NAN;
             }
         }
-        assert_eq!(pack_upper(c.as_slice().to_vec(), n, true), packed);
-        let from_lower = pack_upper(lower, n, false);
-        assert_eq!(from_lower, packed);
-        assert!(from_lower.capacity() < n * n, "shrunk to the triangle");
+        let in_place = pack_upper(c.as_slice().to_vec(), n);
+        assert_eq!(in_place, packed);
+        assert!(in_place.capacity() < n * n, "shrunk to the triangle");
+        assert_eq!(pack_upper_of_lower(&lower, n), packed);
     }
 
     /// Algorithm 1 on either storage of the same compliance: the same set and λ_n.

@@ -10,7 +10,7 @@ use crate::petsc::mumps::{FactorStats, NodeBases, SchurRequest};
 use crate::petsc::ndfactor::node_order;
 use crate::say;
 use crate::signorini::boundary::ContactBoundary;
-use crate::signorini::dense::{pack_upper, CMatrix, DenseRun};
+use crate::signorini::dense::{pack_upper, pack_upper_of_lower, CMatrix, DenseRun};
 use crate::signorini::rigid::FreeModes;
 use crate::signorini::step_system::ReducedSystem;
 use crate::tuning::{
@@ -544,18 +544,6 @@ impl Candidates {
     }
 }
 
-/// The upper triangle of the symmetric n × n matrix whose lower triangle `lower` holds
-/// (column-major, MUMPS' Schur complement), packed column by column ([`CMatrix::Upper`]) into
-/// a new buffer of n (n + 1) / 2. Local.
-fn pack_lower_copy(lower: &[f64], n: usize) -> Vec<f64> {
-    let mut packed = Vec::with_capacity(n * (n + 1) / 2);
-    for j in 0..n {
-        // column j of the upper triangle is row j of the lower one
-        packed.extend((0..=j).map(|i| lower[i * n + j]));
-    }
-    packed
-}
-
 /// The compliance C = Nᵀ K_p⁻¹ N of a growing candidate set and d₀ = Nᵀ K_p⁻¹ f there. In the
 /// candidates' node frames (Q, normal first) N becomes the unit columns of their normal dofs,
 /// so with S the Schur complement of Qᵀ K_p Q on those dofs: C = S⁻¹ and d₀ = S⁻¹ r, r = f̃_s −
@@ -792,13 +780,13 @@ impl Compliance {
         // before; C and S packed")
         let sv = factor.take_schur();
         if self.per > 1 {
-            self.stiff = pack_lower_copy(&sv, n);
+            self.stiff = pack_upper_of_lower(&sv, n);
             self.r = r.clone();
         }
         let Some(ch) = DenseCholesky::factor_owned(n, sv) else {
             return false;
         };
-        self.cmat = pack_upper(ch.inverse().data.into(), n, true);
+        self.cmat = pack_upper(ch.inverse().data.into(), n);
         self.d0 = self
             .c()
             .times(&DVector::from_column_slice(&r))

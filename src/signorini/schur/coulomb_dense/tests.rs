@@ -186,8 +186,8 @@ fn the_primal_form_ends_where_the_dual_form_ends() {
         let gsg = line.g.transpose() * &sg;
         // S and C as the condensed path keeps them: their upper triangles packed
         let dim = 2 * n;
-        let s_packed = pack_upper(s.as_slice().to_vec(), dim, true);
-        let c_packed = pack_upper(line.cmat.as_slice().to_vec(), dim, true);
+        let s_packed = pack_upper(s.as_slice().to_vec(), dim);
+        let c_packed = pack_upper(line.cmat.as_slice().to_vec(), dim);
         let st = Stiff {
             s: CMatrix::Upper {
                 n: dim,

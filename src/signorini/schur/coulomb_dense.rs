@@ -179,24 +179,26 @@ struct PrimalUnknowns {
 }
 
 /// What the primal form's rows are built from: S with S G and Gᵀ S G, the unknowns (`m` of
-/// them, then `mz` amplitudes α) and λ at u_F = 0, α = 0 (`base`).
+/// them, then `mz` amplitudes α) and λ at u_F = 0, α = 0 (`base`); `s_row`: room for one row
+/// of S, the system's for all its rows.
 struct PrimalRows<'s, 't> {
     st: &'s Stiff<'t>,
     cols: &'s [Unknown],
     base: Vec<f64>,
     m: usize,
     mz: usize,
+    s_row: Vec<f64>,
 }
 
 impl PrimalRows<'_, '_> {
     /// Row `ri` += Σ_t coef_t λ(dof_t); returns its constant part Σ_t coef_t base(dof_t)
     /// (S symmetric: S's row `dof` is its column).
-    fn put_lam(&self, a: &mut DMatrix<f64>, ri: usize, terms: &[(usize, f64)]) -> f64 {
+    fn put_lam(&mut self, a: &mut DMatrix<f64>, ri: usize, terms: &[(usize, f64)]) -> f64 {
         let (st, m) = (self.st, self.m);
         let mut row = a.column_mut(ri);
-        let mut s_row = vec![0.0; st.s.n()];
+        let s_row = &mut self.s_row;
         for &(dof, f) in terms {
-            st.s.column_into(dof, &mut s_row);
+            st.s.column_into(dof, s_row);
             for (jc, u) in self.cols.iter().enumerate() {
                 row[jc] -= f * s_row[u.dof];
             }
@@ -599,16 +601,17 @@ impl DenseIteration<'_> {
         let mz = self.g.ncols();
         let PrimalUnknowns { known, cols, at } = self.primal_unknowns(set, rows);
         let m = cols.len();
-        let pr = PrimalRows {
+        let mut pr = PrimalRows {
             st,
             cols: &cols,
             base: primal_base(st, &known),
             m,
             mz,
+            s_row: vec![0.0; st.s.n()],
         };
         let mut a = DMatrix::<f64>::zeros(m + mz, m + mz);
         let mut rhs = DVector::<f64>::zeros(m + mz);
-        self.primal_contact_rows(set, rows, &pr, &at, &mut a, &mut rhs);
+        self.primal_contact_rows(set, rows, &mut pr, &at, &mut a, &mut rhs);
         self.primal_balance(&pr, &mut a, &mut rhs);
         equilibrate(&mut a, &mut rhs);
         System {
@@ -649,7 +652,7 @@ impl DenseIteration<'_> {
         &self,
         set: &ActiveSet,
         rows: &[CoulombRow<2>],
-        pr: &PrimalRows,
+        pr: &mut PrimalRows,
         at: &[usize],
         a: &mut DMatrix<f64>,
         rhs: &mut DVector<f64>,

@@ -75,6 +75,16 @@ fn a_new_pass_keeps_the_candidates_of_the_pass_before() {
     }
 }
 
+/// `s` (on `np` ranks) ends where `plain` ends: the same active and slipping nodes, u within
+/// 1e-9 of its largest component.
+fn ends_where(s: &Solved, plain: &Solved, np: usize) {
+    assert_eq!(s.active_node_ids(), plain.active_node_ids(), "{np} rank(s)");
+    assert_eq!(s.slip_node_ids(), plain.slip_node_ids(), "{np} rank(s)");
+    let du = s.u_rel_diff(plain);
+    println!("{np} rank(s): u against the plain path {du:.1e}");
+    assert!(du <= 1e-9, "{np} rank(s): u differs by {du:.1e}");
+}
+
 /// The Hertz disk of the refined family (cases/hertz/meshes/hertz_refined_L4.msh, 12 618
 /// unknowns) floating under the pressure 0.02 and a tangential traction of 0.004 that friction
 /// alone holds (μ = 0.5): at the solution 30 of its 31 contact nodes slip. On the way an
@@ -140,11 +150,7 @@ fn a_singular_dense_step_on_settled_slip_rows_is_taken_on_the_f5_rows() {
         );
         assert_eq!(f, 1.0, "{np} rank(s): one factorisation");
         assert!(!plain.slip_node_ids().is_empty());
-        assert_eq!(s.active_node_ids(), plain.active_node_ids(), "{np} rank(s)");
-        assert_eq!(s.slip_node_ids(), plain.slip_node_ids(), "{np} rank(s)");
-        let du = s.u_rel_diff(&plain);
-        println!("{np} rank(s): u against the plain path {du:.1e}");
-        assert!(du <= 1e-9, "{np} rank(s): u differs by {du:.1e}");
+        ends_where(&s, &plain, np);
     }
 }
 
@@ -187,10 +193,6 @@ fn a_second_pass_of_the_first_solve_starts_from_the_first_pass_states() {
         let counts = (nested, frictionless, warm);
         assert_eq!(counts, (1, 1, 1), "{np} rank(s): {}", s.run.output());
         assert_eq!(s.f(&["newton", "factorisations"]), 2.0, "{np} rank(s)");
-        assert_eq!(s.active_node_ids(), plain.active_node_ids(), "{np} rank(s)");
-        assert_eq!(s.slip_node_ids(), plain.slip_node_ids(), "{np} rank(s)");
-        let du = s.u_rel_diff(&plain);
-        println!("{np} rank(s): u against the plain path {du:.1e}");
-        assert!(du <= 1e-9, "{np} rank(s): u differs by {du:.1e}");
+        ends_where(&s, &plain, np);
     }
 }

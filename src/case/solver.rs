@@ -358,8 +358,10 @@ impl Reader<'_> {
             Some("runs the semismooth Newton method, not method = \"snesvi\"")
         } else if solver.preset == Preset::Iterative {
             Some("needs a factorisation: not the iterative preset")
-        } else if (contacts.iter()).any(|c| matches!(c.friction, Friction::Tresca { .. })) {
-            Some("does not solve Tresca friction (Algorithm 2 runs on the plain path)")
+        } else if (contacts.iter()).any(|c| matches!(c.friction, Friction::Tresca { .. }))
+            && newton.init != NewtonInit::Auto
+        {
+            Some("starts Tresca's Algorithm 2 only from newton.init = \"auto\"")
         } else if coulomb(CoulombAlgorithm::FixedPoint) {
             Some("does not run Coulomb's fixed point (its Tresca solves run on the plain path)")
         } else if coulomb(CoulombAlgorithm::Newton) && newton.init != NewtonInit::Auto {

@@ -637,6 +637,9 @@ fn run_method(
         Method::Newton => {
             let mut reduced = ReducedSystem::new(ctx, sys, b, session.setup(), dim)?;
             *types = Some(reduced.solver_types()?);
+            // Tresca on the Schur path: Coulomb's iteration on the contact unknowns with the
+            // thresholds b_k fixed (docs/friction.md)
+            let tresca_condensed = settings.tresca && choice.path == Some(SolverPath::Schur);
             let outcome = match settings.coulomb {
                 Some((_, algorithm)) => coulomb::solve(
                     ctx,
@@ -645,6 +648,18 @@ fn run_method(
                     ns,
                     coulomb::CoulombMethod {
                         algorithm,
+                        section: solver_section,
+                    },
+                    session,
+                    warm,
+                )?,
+                None if tresca_condensed => coulomb::solve(
+                    ctx,
+                    problem,
+                    &mut reduced,
+                    ns,
+                    coulomb::CoulombMethod {
+                        algorithm: CoulombAlgorithm::Newton,
                         section: solver_section,
                     },
                     session,
@@ -694,7 +709,8 @@ fn chosen_path(
         Some((_, algorithm)) => {
             algorithm == CoulombAlgorithm::Newton && settings.newton.init == NewtonInit::Auto
         }
-        None => !settings.friction(),
+        None if settings.tresca => settings.newton.init == NewtonInit::Auto,
+        None => true,
     };
     let schur = applies
         && section.path.allows_schur()

@@ -25,6 +25,44 @@ impl FrictionLaw for Tresca {
         ct[0] * ct[0] + ct[1] * ct[1]
     }
 
+    /// The row for the next step from the (3.39) row `row` of node `k` at `r` and the row `prev`
+    /// it was solved with, in 2D (docs/friction.md, "Settled slip"; `row` itself in 3D), as
+    /// Coulomb's: a node that slipped and slips on in the same direction (its last row's
+    /// −r̃ and v = λ_τ + c Δu_τ of one sign) takes λ_τ' = b_k sign v, the (3.39) row at a slip
+    /// solution (F̃ = 1, M̃ = 0, L̃ = 0), exact in 2D, so that the condensed iteration is
+    /// piecewise linear there; one whose increment now opposes its force (λ_τ Δu_τ < 0 with
+    /// |λ_τ| ≤ b_k) sticks. Local.
+    fn settled(
+        &self,
+        prev: Option<CoulombRow<2>>,
+        row: CoulombRow<2>,
+        k: &ContactNode,
+        r: &NodeResult,
+        c: f64,
+        dim: usize,
+    ) -> CoulombRow<2> {
+        let (Some(CoulombRow::Slip { r: r0, .. }), CoulombRow::Slip { .. }) = (prev, row) else {
+            return row;
+        };
+        let b = k.bound;
+        if dim != 2 || !(b > 0.0 && r0[0] != 0.0) {
+            return row;
+        }
+        let du = increment(r, k)[0];
+        if r.lambda_t[0] * du < 0.0 && r.lambda_t[0].abs() <= b {
+            return CoulombRow::Stick;
+        }
+        let v = r.lambda_t[0] + c * du;
+        if v == 0.0 || v.signum() != (-r0[0]).signum() {
+            return row;
+        }
+        CoulombRow::Slip {
+            l: [[0.0; 2]; 2],
+            q: [0.0; 2],
+            r: [-b * v.signum(), 0.0],
+        }
+    }
+
     /// Σ b_k over the contact boundary (3.18); `None` for b = 0 (frictionless: the balance
     /// test of the free modes decides).
     fn capacity(&self, load: &FloatingLoad) -> Option<(f64, String)> {

@@ -269,7 +269,11 @@ impl Growth {
         Growth {
             by_gap,
             take,
-            forced: (0..n).filter(|&i| active[i] && !is_held(i)).collect(),
+            // Tresca's thresholds act on every node that has one, in contact or not (3.18):
+            // with every dof in the Schur complement (friction), each such node is a candidate
+            forced: (0..n)
+                .filter(|&i| (active[i] || (per > 1 && cand.bound(i) > 0.0)) && !is_held(i))
+                .collect(),
             active,
             held: (0..n).map(is_held).collect(),
             held_count: (0..n).filter(|&i| is_held(i)).count(),
@@ -431,8 +435,8 @@ pub(crate) struct Candidates {
 }
 
 /// Values per candidate record before the free modes' parts: row, n (3), gap, start, x (3),
-/// u_τ^ref (2), pair, μ, the order key, the gmsh tag (exact in f64 below 2⁵³).
-const HEAD: usize = 15;
+/// u_τ^ref (2), pair, μ, the order key, the gmsh tag (exact in f64 below 2⁵³), Tresca's b_k.
+const HEAD: usize = 16;
 
 impl Candidates {
     /// One all-gather. `key`: what orders this rank's nodes for the first candidates (the
@@ -459,6 +463,7 @@ impl Candidates {
             mine.push(k.mu);
             mine.push(key.map_or(k.gap, |key| key[i]));
             mine.push(k.tag as f64);
+            mine.push(k.bound);
             for dir in [&k.frame.n, &k.frame.t[0], &k.frame.t[1]]
                 .into_iter()
                 .take(dim)
@@ -535,6 +540,10 @@ impl Candidates {
     /// global order is rank-major).
     pub(super) fn tag(&self, i: usize) -> u64 {
         self.rec(i)[14] as u64
+    }
+    /// The node's Tresca threshold b_k (3.18) (0: none).
+    pub(super) fn bound(&self, i: usize) -> f64 {
+        self.rec(i)[15]
     }
     /// `a` before `b` by the order key, ties by the gmsh tag. Local.
     pub(super) fn by_key(&self, a: usize, b: usize) -> std::cmp::Ordering {
@@ -950,6 +959,7 @@ mod tests {
             let gap = 0.5 * x * x;
             let head = [
                 i as f64, 0.0, 1.0, 0.0, gap, 0.0, x, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, gap, i as f64,
+                0.0,
             ];
             all.extend_from_slice(&head);
         }

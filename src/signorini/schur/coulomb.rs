@@ -44,7 +44,7 @@ use crate::error::RunError;
 use crate::geom::dot;
 use crate::par::Ctx;
 use crate::say;
-use crate::signorini::active_set::{threshold_scale, ActiveSet, Iterate, StepTotals};
+use crate::signorini::active_set::{threshold_scale, ActiveSet, Iterate, Law, StepTotals};
 use crate::signorini::boundary::{ContactBoundary, ContactNode, NodeResult};
 use crate::signorini::dense::guarded;
 use crate::signorini::force::{self, ForceControl};
@@ -107,7 +107,7 @@ fn candidate_boundary(kept: &Kept, b: &ContactBoundary, dim: usize) -> ContactBo
                 frame: Frame::new(n, dim).expect("obstacle normals are unit vectors"),
                 gap: kept.cand.gap(i),
                 weight: 0.0,
-                bound: 0.0,
+                bound: kept.cand.bound(i),
                 u_t_ref: kept.cand.u_t_ref(i),
             }
         })
@@ -318,8 +318,10 @@ fn dense_phase(
                     let (start, u_prev) = dense.frictionless_start(&active, &lambda_n);
                     // nested in 2D only: on surfaces (every fourth node a coarse one) it took
                     // as many fine steps or more (docs/numbers.md: the 3D block, 12 against 7
-                    // and 8 against 8; the hemisphere, 14 against 13)
-                    if dim == 2 {
+                    // and 8 against 8; the hemisphere, 14 against 13); not for Tresca, whose
+                    // thresholds on a coarse subset need not hold the load (a floating disk's
+                    // coarse levels ran to their step limit, docs/numbers.md)
+                    if dim == 2 && ns.law == Law::Coulomb {
                         dense.run_nested(&start, u_prev)
                     } else {
                         dense.run(&start, u_prev)
@@ -346,8 +348,9 @@ fn give_up(ctx: &Ctx, mut summary: CoulombCondensedSummary, why: String) -> Coul
 }
 
 /// The dense states on this rank's contact nodes, K_p's held nodes in contact and sticking (the
-/// others inactive, λ = 0). Local.
-fn local_set(kept: &Kept, b: &ContactBoundary, run: &DenseCoulomb) -> ActiveSet {
+/// others inactive, λ = 0; a candidate that sticks out of contact, under Tresca, sticks).
+/// Local.
+fn local_set(kept: &Kept, b: &ContactBoundary, run: &DenseCoulomb, law: Law) -> ActiveSet {
     let mut pos = vec![usize::MAX; kept.cand.n];
     for (q, &i) in kept.comp.list.iter().enumerate() {
         pos[i] = q;
@@ -357,10 +360,8 @@ fn local_set(kept: &Kept, b: &ContactBoundary, run: &DenseCoulomb) -> ActiveSet 
         q: [0.0; 2],
         r: [0.0; 2],
     };
-    let on = |i: usize| {
-        let q = pos[b.offset + i];
-        (q != usize::MAX && run.active[q]).then_some(q)
-    };
+    let candidate = |i: usize| Some(pos[b.offset + i]).filter(|&q| q != usize::MAX);
+    let on = |i: usize| candidate(i).filter(|&q| run.active[q]);
     // K_p's held nodes: in contact and sticking
     let held = |i: usize| kept.held.get(b.offset + i).copied().unwrap_or(false);
     ActiveSet {
@@ -369,8 +370,10 @@ fn local_set(kept: &Kept, b: &ContactBoundary, run: &DenseCoulomb) -> ActiveSet 
             .collect(),
         tangential: Some(
             (0..b.nodes.len())
-                .map(|i| match on(i) {
-                    Some(q) if !run.slip[q] => CoulombRow::Stick,
+                .map(|i| match candidate(i) {
+                    Some(q) if !run.slip[q] && (run.active[q] || law == Law::Tresca) => {
+                        CoulombRow::Stick
+                    }
                     None if held(i) => CoulombRow::Stick,
                     _ => zero,
                 })
@@ -417,7 +420,7 @@ fn check(
     let placed = force::placed(p.boundary, &force::starting_at(ns.force, &approach));
     let b = &placed;
     ctx.agree(reduced.set_solution_local(w).map_err(RunError::from))?;
-    let set = local_set(kept, b, run);
+    let set = local_set(kept, b, run, ns.law);
     let mut it = Iterate::new(b.nodes.len(), w.len(), true);
     reduced.recover(p.sys, b, &set, &mut it)?; // (3.28) on w (A ρ = 0)
                                                // u = w + ρ, ρ = R z α: the free modes' motion

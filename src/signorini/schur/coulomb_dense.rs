@@ -28,6 +28,11 @@ struct System {
     /// The primal form ([`Stiff`]): u at every candidate dof, NaN where it is an unknown;
     /// `None`: the dual form.
     known: Option<Vec<f64>>,
+    /// The primal form: the dofs whose λ is 0 by their rows (inactive nodes: λ_n, and λ_τ
+    /// without friction).
+    zero: Vec<usize>,
+    /// The dual form: the λ that the rows give as values (Tresca's settled slip), no unknowns.
+    given: Vec<(usize, f64)>,
 }
 
 /// S itself next to C = S⁻¹ (rank 0; frictionless.rs `Compliance::stiffness`): λ = r − S (u − G α)
@@ -67,6 +72,26 @@ fn tie(row: CoulombRow<2>, dof_n: usize, d: usize) -> Option<(usize, f64)> {
             if d == 2 && l == [[0.0; 2]; 2] && r == [0.0; 2] && q[0] != 0.0 =>
         {
             Some((dof_n + 1, -q[0]))
+        }
+        _ => None,
+    }
+}
+
+/// A slip row that makes λ_τ = 0 (no friction: an inactive node under Coulomb, a node without
+/// a Tresca threshold). Pure.
+fn frictionless_row(row: CoulombRow<2>) -> bool {
+    matches!(row, CoulombRow::Slip { l, q, r }
+        if l == [[0.0; 2]; 2] && q == [0.0; 2] && r == [0.0; 2])
+}
+
+/// The value λ_τ = −r̃ that a slip row without spring and coupling gives (Tresca's settled slip
+/// row λ_τ' = b_k ν, 2D), or `None`. Pure.
+fn given(row: CoulombRow<2>) -> Option<f64> {
+    match row {
+        CoulombRow::Slip { l, q, r }
+            if l == [[0.0; 2]; 2] && q == [0.0; 2] && r[0] != 0.0 && r[1] == 0.0 =>
+        {
+            Some(-r[0])
         }
         _ => None,
     }
@@ -124,6 +149,31 @@ fn solve_system(sys: &System) -> Option<Vec<f64>> {
     Some(x.as_slice().to_vec())
 }
 
+/// The system `sys` solved with its free modes' amplitudes α fixed at `alpha` (its last
+/// columns moved to the right-hand side, its balance rows dropped); the solution with α
+/// appended. `None`: singular still.
+fn solve_pinned(sys: &System, alpha: &[f64]) -> Option<Vec<f64>> {
+    let m = sys.rhs.len() - alpha.len();
+    let a = sys.a.view((0, 0), (m, m)).into_owned();
+    let rhs = DVector::from_fn(m, |i, _| {
+        sys.rhs[i]
+            - (alpha.iter().enumerate())
+                .map(|(cz, al)| sys.a[(m + cz, i)] * al)
+                .sum::<f64>()
+    });
+    let pinned = System {
+        a,
+        rhs,
+        cols: Vec::new(),
+        known: None,
+        zero: Vec::new(),
+        given: Vec::new(),
+    };
+    let mut x = solve_system(&pinned)?;
+    x.extend_from_slice(alpha);
+    Some(x)
+}
+
 /// The system `next` holds at `x` to the round-off of the solve that gave x (`own`: its
 /// residual in its own system, [`residual_at`]): within FIXED_POINT_SLACK × max(own, ε |b|∞).
 /// Measured on the Hertz disks of 42 k–345 k unknowns: at a fixed point the next residual
@@ -161,6 +211,10 @@ struct Walk {
     before: Option<ActiveSet>,
     settle: bool,
     f5_from: usize,
+    /// α of the last iterate (the free modes' amplitudes; 0 at the start).
+    alpha: Vec<f64>,
+    /// The last step was taken with α pinned ([`solve_pinned`]).
+    pinned: bool,
 }
 
 /// A step's verdict on its iterate: accepted (`stalled`: by the stall rule, above the
@@ -176,6 +230,7 @@ struct PrimalUnknowns {
     known: Vec<f64>,
     cols: Vec<Unknown>,
     at: Vec<usize>,
+    zero: Vec<usize>,
 }
 
 /// What the primal form's rows are built from: S with S G and Gᵀ S G, the unknowns (`m` of
@@ -302,6 +357,8 @@ impl DenseIteration<'_> {
             before: None,
             settle: self.settle,
             f5_from: 0,
+            alpha: vec![0.0; self.g.ncols()],
+            pinned: false,
         };
         let mut sys = self.system(&w.set);
         for step in 1..=self.max_steps {
@@ -311,6 +368,7 @@ impl DenseIteration<'_> {
                 return self.failed(w, why);
             };
             let (lam, u, alpha) = self.unknowns(&sys_k, &x);
+            w.alpha.clone_from(&alpha);
             self.records(&w.set, &lam, &u, &mut w.it.nodes);
             let scale = threshold_scale_local(self.cb, &w.it.nodes, law, c);
             let up = w
@@ -321,7 +379,15 @@ impl DenseIteration<'_> {
             let seconds = t.elapsed().as_secs_f64();
             w.steps
                 .push((step, w.set.local_active(), up.changed, residual, seconds));
-            let next = match self.judge(&mut w.last_still, &up, &sys_k, &x, du_rel) {
+            // a pinned step balances no free mode: never accepted, the next step frees α
+            let verdict = match w.pinned {
+                true => {
+                    w.last_still = None;
+                    Judgement::Continue(self.system(&up.next))
+                }
+                false => self.judge(&mut w.last_still, &up, &sys_k, &x, du_rel),
+            };
+            let next = match verdict {
                 Judgement::Accept { stalled } => {
                     let at = Accepted {
                         sys: &sys_k,
@@ -372,6 +438,7 @@ impl DenseIteration<'_> {
         step: usize,
     ) -> Option<(Vec<f64>, System)> {
         let mut solved = sys.and_then(|sk| Some((solve_system(&sk)?, sk)));
+        w.pinned = false;
         if solved.is_none() {
             let unsettled = w.before.take().map(|b| self.unsettled(b, &w.it));
             if let Some(alt) = unsettled.filter(|alt| *alt != w.set) {
@@ -383,8 +450,24 @@ impl DenseIteration<'_> {
                     .and_then(|sk| Some((solve_system(&sk)?, sk)));
             }
         }
+        // where the (F5) rows leave it singular as well (a set that holds a free mode by no
+        // row: Tresca with every node slipping at its bound, where (3.39) has no spring
+        // either): the step with α pinned at its last value, as the plain path pins such a
+        // mode for a step (tried before the (F5) rows instead, Tresca's settled rows cycled
+        // through four sets on the floating Hertz disk at 16 770 unknowns on 2 ranks)
+        if solved.is_none() && !w.alpha.is_empty() {
+            w.pinned = true;
+            solved = self.pinned_step(w);
+        }
         w.primal += solved.as_ref().is_some_and(|(_, s)| s.known.is_some()) as usize;
         solved
+    }
+
+    /// The step on the set of `w` with α pinned at `w.alpha` ([`solve_pinned`]). `None`:
+    /// singular still.
+    fn pinned_step(&self, w: &Walk) -> Option<(Vec<f64>, System)> {
+        let sk = self.system(&w.set)?;
+        Some((solve_pinned(&sk, &w.alpha)?, sk))
     }
 
     /// Whether the iterate x of the system `sys_k` is accepted, given the set's update `up`
@@ -566,11 +649,30 @@ impl DenseIteration<'_> {
         u
     }
 
+    /// The tangential rows the dense system takes from `set`: an inactive node's λ is 0 but
+    /// under Tresca, whose thresholds act out of contact too (3.18) (Coulomb's b of (F1) is 0
+    /// there, also where a warm start's record has a node penetrating that its set leaves
+    /// inactive). `None` without tangential rows.
+    fn rows_of(&self, set: &ActiveSet) -> Option<Vec<CoulombRow<2>>> {
+        let rows = set.tangential.as_ref()?;
+        let none = CoulombRow::Slip {
+            l: [[0.0; 2]; 2],
+            q: [0.0; 2],
+            r: [0.0; 2],
+        };
+        let out_of_contact = self.law == Law::Tresca;
+        Some(
+            (rows.iter().zip(&set.normal))
+                .map(|(&row, &on)| if on || out_of_contact { row } else { none })
+                .collect(),
+        )
+    }
+
     /// The step's dense system in the form with fewer unknowns: the dual form
     /// ([`DenseIteration::system_dual`]) or, with S at hand, the primal one ([`DenseIteration::system_primal`]).
     /// Both give the same Newton step. `None` without tangential rows.
     fn system(&self, set: &ActiveSet) -> Option<System> {
-        let rows = set.tangential.as_ref()?;
+        let rows = &self.rows_of(set)?;
         let Some(st) = self.stiff else {
             return self.system_dual(set);
         };
@@ -578,9 +680,18 @@ impl DenseIteration<'_> {
         let (mut dual, mut primal) = (0, 0);
         for (q, row) in rows.iter().enumerate() {
             if !set.normal[q] {
-                primal += d;
+                // λ_n = 0; the tangential dofs free (no friction, or a slip row), or held
+                // (Tresca: a node that sticks out of contact), each with a λ_τ under friction
+                let friction = !frictionless_row(*row) && given(*row).is_none();
+                primal += if matches!(row, CoulombRow::Stick) {
+                    1
+                } else {
+                    d
+                };
+                dual += if friction { d - 1 } else { 0 };
             } else {
-                dual += if tie(*row, q * d, d).is_some() { 1 } else { d };
+                let one = tie(*row, q * d, d).is_some() || given(*row).is_some();
+                dual += if one { 1 } else { d };
                 if row.is_slip() {
                     primal += d - 1;
                 }
@@ -599,7 +710,12 @@ impl DenseIteration<'_> {
     /// it; rows equilibrated as the dual form's.
     fn system_primal(&self, set: &ActiveSet, rows: &[CoulombRow<2>], st: &Stiff) -> System {
         let mz = self.g.ncols();
-        let PrimalUnknowns { known, cols, at } = self.primal_unknowns(set, rows);
+        let PrimalUnknowns {
+            known,
+            cols,
+            at,
+            zero,
+        } = self.primal_unknowns(set, rows);
         let m = cols.len();
         let mut pr = PrimalRows {
             st,
@@ -619,21 +735,37 @@ impl DenseIteration<'_> {
             rhs,
             cols,
             known: Some(known),
+            zero,
+            given: Vec::new(),
         }
     }
 
-    /// The primal form's unknowns: every dof of an inactive candidate, the tangential dofs of
-    /// a slipping one; u = −g, u_τ^ref where the set prescribes it.
+    /// The primal form's unknowns: every dof of an inactive candidate (but the tangential
+    /// ones of a node that sticks out of contact, Tresca), the tangential dofs of a slipping
+    /// one; u = −g, u_τ^ref where the set prescribes it. `zero`: the dofs whose λ is 0.
     fn primal_unknowns(&self, set: &ActiveSet, rows: &[CoulombRow<2>]) -> PrimalUnknowns {
         let (d, n) = (self.dim, self.cb.nodes.len());
         let mut known = vec![f64::NAN; n * d];
         let mut cols: Vec<Unknown> = Vec::new();
         let mut at = vec![usize::MAX; n];
+        let mut zero = Vec::new();
         let free = |dof: usize| Unknown { dof, tied: None };
         for (q, k) in self.cb.nodes.iter().enumerate() {
             at[q] = cols.len();
             if !set.normal[q] {
-                cols.extend((0..d).map(|a| free(q * d + a)));
+                cols.push(free(q * d));
+                zero.push(q * d);
+                match rows[q] {
+                    CoulombRow::Stick => {
+                        known[q * d + 1..q * d + d].copy_from_slice(&k.u_t_ref[..d - 1])
+                    }
+                    row => {
+                        cols.extend((1..d).map(|a| free(q * d + a)));
+                        if frictionless_row(row) {
+                            zero.extend((1..d).map(|a| q * d + a));
+                        }
+                    }
+                }
                 continue;
             }
             known[q * d] = -k.gap;
@@ -643,11 +775,17 @@ impl DenseIteration<'_> {
                 known[q * d + 1..q * d + d].copy_from_slice(&k.u_t_ref[..d - 1]);
             }
         }
-        PrimalUnknowns { known, cols, at }
+        PrimalUnknowns {
+            known,
+            cols,
+            at,
+            zero,
+        }
     }
 
-    /// The primal form's rows of the candidates: λ = 0 (inactive) and (F6) (slip); a sticking
-    /// node has no unknown and no row.
+    /// The primal form's rows of the candidates: λ = 0 (inactive; λ_n alone where the node has
+    /// friction out of contact, Tresca) and (F6) (slip); a sticking node's tangential dofs have
+    /// no unknown and no row.
     fn primal_contact_rows(
         &self,
         set: &ActiveSet,
@@ -660,7 +798,8 @@ impl DenseIteration<'_> {
         let d = self.dim;
         let mut ri = 0;
         for (q, k) in self.cb.nodes.iter().enumerate() {
-            if !set.normal[q] {
+            let inactive = !set.normal[q];
+            if inactive && frictionless_row(rows[q]) {
                 // λ = 0
                 for b in 0..d {
                     rhs[ri] = -pr.put_lam(a, ri, &[(q * d + b, 1.0)]);
@@ -668,14 +807,21 @@ impl DenseIteration<'_> {
                 }
                 continue;
             }
+            if inactive {
+                // λ_n = 0, the tangential rows of the node's friction below
+                rhs[ri] = -pr.put_lam(a, ri, &[(q * d, 1.0)]);
+                ri += 1;
+            }
             let CoulombRow::Slip { l, q: qc, r } = rows[q].with_reference(&k.u_t_ref) else {
                 continue; // stick: no unknown, no row
             };
-            // (F6): −λ_τ − q λ_n + L̃ u_τ = r̃ (+ L̃ u_τ^ref, in r)
+            // (F6): −λ_τ − q λ_n + L̃ u_τ = r̃ (+ L̃ u_τ^ref, in r); out of contact q = 0
+            // (Tresca's rows (3.39a)), u_τ's unknowns after u_n's
+            let t0 = at[q] + usize::from(inactive);
             for i in 0..d - 1 {
                 let c0 = pr.put_lam(a, ri, &[(q * d + 1 + i, -1.0), (q * d, -qc[i])]);
                 for j in 0..d - 1 {
-                    a[(at[q] + j, ri)] += l[i][j];
+                    a[(t0 + j, ri)] += l[i][j];
                 }
                 rhs[ri] = r[i] - c0;
                 ri += 1;
@@ -712,22 +858,53 @@ impl DenseIteration<'_> {
     fn system_dual(&self, set: &ActiveSet) -> Option<System> {
         let (d, n, mz) = (self.dim, self.cb.nodes.len(), self.g.ncols());
         let (cmat, g, w) = (self.cmat, self.g, self.d0);
-        let rows = set.tangential.as_ref()?;
-        // the unknowns: per active node λ_n, then λ_τ unless its row ties it to λ_n; `at`: the
-        // position of each active node's λ_n
+        let rows = &self.rows_of(set)?;
+        // the unknowns: per active node λ_n, then λ_τ unless its row ties it to λ_n; per
+        // inactive node with friction (Tresca) λ_τ; `at`: the position of each node's first
         let mut cols: Vec<Unknown> = Vec::new();
         let mut at = vec![usize::MAX; n];
-        for q in (0..n).filter(|&q| set.normal[q]) {
-            at[q] = cols.len();
-            let tied = tie(rows[q], q * d, d);
-            cols.push(Unknown { dof: q * d, tied });
-            if tied.is_none() {
-                cols.extend((1..d).map(|b| Unknown {
-                    dof: q * d + b,
-                    tied: None,
-                }));
+        let tangents = |q: usize| {
+            (1..d).map(move |b| Unknown {
+                dof: q * d + b,
+                tied: None,
+            })
+        };
+        // λ_τ given by its row (Tresca's settled slip): a value, not an unknown
+        let mut values: Vec<(usize, f64)> = Vec::new();
+        for q in 0..n {
+            let value = given(rows[q]);
+            if let Some(v) = value {
+                values.push((q * d + 1, v));
+            }
+            if set.normal[q] {
+                at[q] = cols.len();
+                let tied = tie(rows[q], q * d, d);
+                cols.push(Unknown { dof: q * d, tied });
+                if tied.is_none() && value.is_none() {
+                    cols.extend(tangents(q));
+                }
+            } else if !frictionless_row(rows[q]) && value.is_none() {
+                at[q] = cols.len();
+                cols.extend(tangents(q));
             }
         }
+        // u = d₀ − C λ_given − C λ + G α, and Gᵀ λ = φ − Gᵀ λ_given
+        let mut phi = self.phi.to_vec();
+        let shifted: Vec<f64>;
+        let w = if values.is_empty() {
+            w
+        } else {
+            let mut lam_given = vec![0.0; w.len()];
+            for &(dof, v) in &values {
+                lam_given[dof] = v;
+            }
+            let cl = cmat.times(&DVector::from_column_slice(&lam_given));
+            shifted = w.iter().zip(cl.iter()).map(|(a, b)| a - b).collect();
+            for (cz, p) in phi.iter_mut().enumerate() {
+                *p -= values.iter().map(|&(dof, v)| g[(dof, cz)] * v).sum::<f64>();
+            }
+            &shifted[..]
+        };
         let m = cols.len();
         // built as its transpose: row ri of the system is column ri here (contiguous; measured
         // on the floating Hertz disk at 344 620 unknowns, 1 875 dense unknowns: 0.15 s a step
@@ -749,18 +926,26 @@ impl DenseIteration<'_> {
             }
             terms.iter().map(|&(dof, f)| f * w[dof]).sum::<f64>()
         };
-        for p in (0..n).filter(|&q| set.normal[q]) {
+        for p in (0..n).filter(|&q| at[q] != usize::MAX) {
             let k = &self.cb.nodes[p];
             let (r0, pn) = (at[p], p * d);
-            // u_n = −g
-            rhs[r0] = -k.gap - put_u(&mut a, r0, &[(pn, 1.0)]);
+            // the node's λ_n (active) and the first λ_τ's position
+            let (n0, t0) = match set.normal[p] {
+                true => (Some(r0), r0 + 1),
+                false => (None, r0),
+            };
+            if n0.is_some() {
+                // u_n = −g
+                rhs[r0] = -k.gap - put_u(&mut a, r0, &[(pn, 1.0)]);
+            }
             match rows[p] {
-                _ if cols[r0].tied.is_some() => {} // λ_τ = −q λ_n: its row is the tie
+                _ if n0.is_some() && cols[r0].tied.is_some() => {} // λ_τ = −q λ_n: the tie
+                row if given(row).is_some() => {}                  // λ_τ given: no row
                 CoulombRow::Stick => {
                     // u_τ = u_τ^ref (3.34a)
                     for i in 0..d - 1 {
-                        let wi = put_u(&mut a, r0 + 1 + i, &[(pn + 1 + i, 1.0)]);
-                        rhs[r0 + 1 + i] = k.u_t_ref[i] - wi;
+                        let wi = put_u(&mut a, t0 + i, &[(pn + 1 + i, 1.0)]);
+                        rhs[t0 + i] = k.u_t_ref[i] - wi;
                     }
                 }
                 row => {
@@ -772,12 +957,15 @@ impl DenseIteration<'_> {
                         unreachable!("a slip row stays a slip row")
                     };
                     for i in 0..d - 1 {
-                        let ri = r0 + 1 + i;
+                        let ri = t0 + i;
                         let terms: Vec<(usize, f64)> =
                             (0..d - 1).map(|j| (pn + 1 + j, l[i][j])).collect();
                         let wi = put_u(&mut a, ri, &terms);
-                        a[(r0 + 1 + i, ri)] -= 1.0;
-                        a[(r0, ri)] -= q[i];
+                        a[(ri, ri)] -= 1.0;
+                        // out of contact q = 0 (Tresca's rows (3.39a)): no λ_n to couple
+                        if let Some(n0) = n0 {
+                            a[(n0, ri)] -= q[i];
+                        }
                         rhs[ri] = r[i] - wi;
                     }
                 }
@@ -788,7 +976,7 @@ impl DenseIteration<'_> {
             for (jc, u) in cols.iter().enumerate() {
                 a[(jc, m + cz)] = u.of(|col| g[(col, cz)]);
             }
-            rhs[m + cz] = self.phi[cz];
+            rhs[m + cz] = phi[cz];
         }
         equilibrate(&mut a, &mut rhs);
         Some(System {
@@ -796,6 +984,8 @@ impl DenseIteration<'_> {
             rhs,
             cols,
             known: None,
+            zero: Vec::new(),
+            given: values,
         })
     }
 
@@ -807,6 +997,9 @@ impl DenseIteration<'_> {
         }
         let (d, n, m) = (self.dim, self.cb.nodes.len(), sys.cols.len());
         let mut lam = vec![0.0; n * d];
+        for &(dof, v) in &sys.given {
+            lam[dof] = v;
+        }
         for (u, &xj) in sys.cols.iter().zip(x) {
             lam[u.dof] = xj;
             if let Some((t, f)) = u.tied {
@@ -841,7 +1034,7 @@ impl DenseIteration<'_> {
         st: &Stiff,
         x: &[f64],
     ) -> (Vec<f64>, Vec<f64>, Vec<f64>) {
-        let (d, m) = (self.dim, sys.cols.len());
+        let m = sys.cols.len();
         let mut u = known.to_vec();
         for (c, &xj) in sys.cols.iter().zip(x) {
             u[c.dof] = xj;
@@ -851,10 +1044,8 @@ impl DenseIteration<'_> {
         let mut lam = (DVector::from_column_slice(st.r) - st.s.times(&w))
             .as_slice()
             .to_vec();
-        for (q, l) in lam.chunks_mut(d).enumerate() {
-            if known[q * d].is_nan() {
-                l.fill(0.0);
-            }
+        for &dof in &sys.zero {
+            lam[dof] = 0.0;
         }
         (lam, u, alpha)
     }

@@ -251,6 +251,8 @@ fn a_system_that_holds_at_the_iterate_is_a_fixed_point() {
         rhs: DVector::from_row_slice(&b),
         cols: vec![Unknown { dof: 0, tied: None }],
         known: None,
+        zero: Vec::new(),
+        given: Vec::new(),
     };
     let own = sys([[2.0, 1.0], [0.0, 4.0]], [3.0, 4.0]);
     let x = [1.0, 1.0 + 2.0 * f64::EPSILON];
@@ -361,4 +363,98 @@ fn nested_against_plain() {
         nested.steps.len(),
         plain.steps.len()
     );
+}
+
+/// Tresca (3.18) on the line: every node has the threshold b_k = 0.05, in contact or not. The
+/// middle is pressed (d₀ < 0), the ends lift off (d₀ > 0) and are pushed sideways both ways, so
+/// nodes out of contact stick (S1) and slip (S2) with λ_τ ≠ 0. The dual and the primal form, with
+/// and without the settled rows, end in the same states and λ, and the end holds Tresca's law
+/// node by node.
+#[test]
+fn tresca_out_of_contact_ends_in_the_same_state_in_every_form() {
+    on_big_stack(|| {
+        let n = 41;
+        let b = 0.05;
+        let mut line = Line::new(n, 0.0);
+        let mid = (n / 2) as f64;
+        for q in 0..n {
+            let t = (q as f64 - mid) / mid;
+            line.d0[2 * q] = -0.5 + 1.5 * t * t;
+            line.d0[2 * q + 1] = 0.4 * t * t * t;
+            line.cb.nodes[q].bound = b;
+        }
+        let s = line.cmat.clone().try_inverse().expect("SPD");
+        let r = (&s * DVector::from_column_slice(&line.d0))
+            .as_slice()
+            .to_vec();
+        let sg = &s * &line.g;
+        let gsg = line.g.transpose() * &sg;
+        let dim = 2 * n;
+        let s_packed = pack_upper(s.as_slice().to_vec(), dim);
+        let st = Stiff {
+            s: CMatrix::Upper {
+                n: dim,
+                packed: &s_packed,
+            },
+            r: &r,
+            sg,
+            gsg,
+        };
+        let base = || DenseIteration {
+            law: Law::Tresca,
+            ..line.dense(1.0)
+        };
+        let runs = [
+            base(),
+            DenseIteration {
+                stiff: Some(&st),
+                ..base()
+            },
+            DenseIteration {
+                settle: false,
+                ..base()
+            },
+        ];
+        let (start, u_prev) = base().frictionless_start(&vec![true; n], &vec![0.0; n]);
+        let ends: Vec<DenseCoulomb> = runs.iter().map(|d| d.run(&start, u_prev.clone())).collect();
+        for e in &ends {
+            assert!(e.end.is_ok(), "{:?}", e.end);
+        }
+        let a = &ends[0];
+        let out_stick = (0..n).filter(|&q| !a.active[q] && !a.slip[q]).count();
+        let out_slip = (0..n).filter(|&q| !a.active[q] && a.slip[q]).count();
+        let in_contact = (0..n).filter(|&q| a.active[q]).count();
+        assert!(
+            out_stick > 0 && out_slip > 0 && in_contact > 0,
+            "{in_contact} in contact, {out_stick} S1, {out_slip} S2"
+        );
+        let scale = a.lambda.iter().fold(0.0_f64, |m, x| m.max(x.abs()));
+        for e in &ends[1..] {
+            assert_eq!((&e.active, &e.slip), (&a.active, &a.slip));
+            for (x, y) in a.lambda.iter().zip(&e.lambda) {
+                assert!((x - y).abs() <= 1e-10 * scale, "{x} {y}");
+            }
+        }
+        // Tresca's law at the end: u = d₀ − C λ
+        let u = DVector::from_column_slice(&line.d0)
+            - &line.cmat * DVector::from_column_slice(&a.lambda);
+        let umax = u.iter().fold(0.0_f64, |m, x| m.max(x.abs()));
+        for q in 0..n {
+            let (un, ut, ln, lt) = (u[2 * q], u[2 * q + 1], a.lambda[2 * q], a.lambda[2 * q + 1]);
+            if a.active[q] {
+                assert!(un.abs() <= 1e-12 * umax && ln <= 1e-12 * scale, "node {q}");
+            } else {
+                assert!(un >= -1e-12 * umax && ln == 0.0, "node {q}: {un} {ln}");
+            }
+            assert!(lt.abs() <= b * (1.0 + 1e-10), "node {q}: |λ_τ| {lt}");
+            if a.slip[q] {
+                assert!(
+                    (lt - b * ut.signum()).abs() <= 1e-10 * b,
+                    "node {q}: {lt} {ut}"
+                );
+            } else {
+                assert!(ut.abs() <= 1e-12 * umax, "node {q}: u_τ {ut}");
+            }
+        }
+    });
 }

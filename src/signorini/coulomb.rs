@@ -269,8 +269,9 @@ fn coulomb_start(
     let carried = Unheld::of(ctx, b, &free).map(|un| {
         say!(
             ctx,
-            "coulomb: {}; the frictionless estimate carries it by a tangential force at the \
+            "{}: {}; the frictionless estimate carries it by a tangential force at the \
              contact",
+            ns.law.name(),
             un.why()
         );
         un.carried_at_contact(ctx, b, &free)
@@ -285,7 +286,8 @@ fn coulomb_start(
     if forced {
         say!(
             ctx,
-            "coulomb: force control on a body that only its pairs hold: the plain path"
+            "{}: force control on a body that only its pairs hold: the plain path",
+            ns.law.name()
         );
     }
     if let Some(w) = warm {
@@ -310,7 +312,8 @@ fn coulomb_start(
     };
     say!(
         ctx,
-        "coulomb: start from the frictionless solution, every active node sticking"
+        "{}: start from the frictionless solution, every active node sticking",
+        ns.law.name()
     );
     let u = nr.u.to_local_vec()?;
     // under force control the references where the frictionless approaches put the obstacles
@@ -391,7 +394,8 @@ fn coulomb_passes(
             // no zone to hold: the candidates' normal dofs alone
             say!(
                 ctx,
-                "coulomb: the candidates' normal dofs alone in the Schur complement"
+                "{}: the candidates' normal dofs alone in the Schur complement",
+                ns.law.name()
             );
             let how = Condensing::FRICTIONLESS;
             tried = solve_keeping(ctx, problem, reduced, fl, session, None, how);
@@ -399,7 +403,7 @@ fn coulomb_passes(
         // a frictionless solve on the normal dofs alone keeps its factorisation for a next
         // load step, which no Coulomb step can use
         drop(session.kept.take());
-        let (mut nr, mut summary, kept) = match frictionless_start(ctx, tried, from)? {
+        let (mut nr, mut summary, kept) = match frictionless_start(ctx, ns.law, tried, from)? {
             Ok(start) => start,
             Err(done) => return Ok(done),
         };
@@ -407,7 +411,8 @@ fn coulomb_passes(
         let active = ctx.sum_usize(nr.nodes.iter().filter(|r| r.active).count());
         say!(
             ctx,
-            "coulomb: the frictionless solution: {} steps, {active} active nodes",
+            "{}: the frictionless solution: {} steps, {active} active nodes",
+            ns.law.name(),
             nr.steps
         );
         let Some(kept) = kept.filter(|_| !forced) else {
@@ -512,10 +517,21 @@ fn coulomb_pass(
         schur::CoulombCondensed::Start(r, u, cs, beyond) => {
             if passes.goes_on(&beyond, summary.factorisations) {
                 let store = &mut session.kept;
-                passes.next(ctx, store, &mut kept, &beyond, summary.factorisations);
+                passes.next(
+                    ctx,
+                    ns.law,
+                    store,
+                    &mut kept,
+                    &beyond,
+                    summary.factorisations,
+                );
                 return Ok(PassStep::Next((joined(*r), u, cs)));
             }
-            say!(ctx, "coulomb: the plain path from the expanded iterate");
+            say!(
+                ctx,
+                "{}: the plain path from the expanded iterate",
+                ns.law.name()
+            );
             summary.coulomb = Some(cs);
             Ok(PassStep::Done(Passes::Done(
                 Begin::Start(joined(*r), u),
@@ -534,6 +550,7 @@ fn coulomb_pass(
 #[allow(clippy::type_complexity)]
 fn frictionless_start(
     ctx: &Ctx,
+    law: Law,
     tried: Result<(schur::Condensed, Option<schur::Kept>), RunError>,
     from: &str,
 ) -> Result<Result<(NewtonResult, schur::CondensedSummary, Option<schur::Kept>), Passes>, RunError>
@@ -541,13 +558,18 @@ fn frictionless_start(
     match tried {
         Ok((schur::Condensed::Solved(nr, s), kept)) => Ok(Ok((*nr, s, kept))),
         Ok((schur::Condensed::Fallback(s), _)) | Ok((schur::Condensed::Factorised(s), _)) => {
-            say!(ctx, "coulomb: no frictionless start; starting from {from}");
+            say!(
+                ctx,
+                "{}: no frictionless start; starting from {from}",
+                law.name()
+            );
             Ok(Err(Passes::Done(Begin::Touching, Some(s))))
         }
         Err(RunError::Failed(why)) => {
             say!(
                 ctx,
-                "coulomb: no frictionless start ({why}); starting from {from}"
+                "{}: no frictionless start ({why}); starting from {from}",
+                law.name()
             );
             Ok(Err(Passes::Done(Begin::Touching, None)))
         }
@@ -568,6 +590,7 @@ fn from_last_pass(
     cs: CoulombCondensedSummary,
     earlier: usize,
 ) -> Option<Passes> {
+    let law = cs.law;
     let mut summary = match tried {
         Ok((schur::Condensed::Fallback(s), _)) | Ok((schur::Condensed::Factorised(s), _)) => {
             s.clone()
@@ -580,7 +603,8 @@ fn from_last_pass(
     summary.coulomb = Some(cs);
     say!(
         ctx,
-        "coulomb: the plain path from the last pass' expanded iterate"
+        "{}: the plain path from the last pass' expanded iterate",
+        law
     );
     Some(Passes::Done(Begin::Start(r, u), Some(summary)))
 }
@@ -629,7 +653,8 @@ fn iterative_start(
         Err(RunError::Failed(why)) => {
             say!(
                 ctx,
-                "coulomb: no frictionless start ({why}); starting from the touching nodes"
+                "{}: no frictionless start ({why}); starting from the touching nodes",
+                ns.law.name()
             );
             return Ok((Begin::Touching, None));
         }
@@ -638,8 +663,9 @@ fn iterative_start(
     let active = ctx.sum_usize(nr.nodes.iter().filter(|r| r.active).count());
     say!(
         ctx,
-        "coulomb: the frictionless solution: {} steps, {active} active nodes; every active \
+        "{}: the frictionless solution: {} steps, {active} active nodes; every active \
          node starts sticking",
+        ns.law.name(),
         nr.steps
     );
     let u = nr.u.to_local_vec()?;
@@ -693,14 +719,15 @@ fn coulomb_load_step(
             | Ok((schur::Condensed::Factorised(mut s), None))
             | Ok((schur::Condensed::Solved(_, mut s), _)) => {
                 s.factorisations += passes.earlier;
-                return Ok((begin_from(ctx, last), Some(s)));
+                return Ok((begin_from(ctx, ns.law, last), Some(s)));
             }
             Err(RunError::Failed(why)) => {
                 say!(
                     ctx,
-                    "coulomb: not condensed ({why}); starting from the previous load step"
+                    "{}: not condensed ({why}); starting from the previous load step",
+                    ns.law.name()
                 );
-                return Ok((begin_from(ctx, last), None));
+                return Ok((begin_from(ctx, ns.law, last), None));
             }
             Err(e) => return Err(e),
         };
@@ -720,16 +747,27 @@ fn coulomb_load_step(
                     && summary.factorisations >= WARM_STICK_FACTORISATIONS;
                 if !held_missed && passes.goes_on(&beyond, summary.factorisations) {
                     let store = &mut session.kept;
-                    passes.next(ctx, store, &mut kept, &beyond, summary.factorisations);
+                    passes.next(
+                        ctx,
+                        ns.law,
+                        store,
+                        &mut kept,
+                        &beyond,
+                        summary.factorisations,
+                    );
                     last = Some((*r, u));
                     continue;
                 }
-                say!(ctx, "coulomb: the plain path from the expanded iterate");
+                say!(
+                    ctx,
+                    "{}: the plain path from the expanded iterate",
+                    ns.law.name()
+                );
                 Begin::Start(*r, u)
             }
             schur::CoulombCondensed::Fallback(cs) => {
                 summary.coulomb = Some(cs);
-                begin_from(ctx, last)
+                begin_from(ctx, ns.law, last)
             }
         };
         return Ok((begin, Some(summary)));
@@ -796,6 +834,7 @@ impl PassLoop {
     fn next(
         &mut self,
         ctx: &Ctx,
+        law: Law,
         store: &mut KeptFactor,
         kept: &mut schur::Kept,
         beyond: &[usize],
@@ -804,8 +843,9 @@ impl PassLoop {
         let held = beyond.iter().filter(|&&g| kept.held.get(g) == Some(&true));
         say!(
             ctx,
-            "coulomb: condensed: {} node(s) beyond the candidates change state on the expanded \
+            "{}: condensed: {} node(s) beyond the candidates change state on the expanded \
              u, {} of them held: a new pass with them as candidates",
+            law.name(),
             beyond.len(),
             held.count()
         );
@@ -838,12 +878,13 @@ fn gathered(ctx: &Ctx, mine: impl Iterator<Item = bool>) -> Vec<bool> {
 
 /// Where a load step's condensed pass gives up: the plain path from the last pass' expanded
 /// iterate, or from the warm start where there was none. Collective (log).
-fn begin_from(ctx: &Ctx, last: Option<(NewtonResult, Vec<f64>)>) -> Begin {
+fn begin_from(ctx: &Ctx, law: Law, last: Option<(NewtonResult, Vec<f64>)>) -> Begin {
     match last {
         Some((r, u)) => {
             say!(
                 ctx,
-                "coulomb: the plain path from the last pass' expanded iterate"
+                "{}: the plain path from the last pass' expanded iterate",
+                law.name()
             );
             Begin::Start(r, u)
         }

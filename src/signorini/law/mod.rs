@@ -41,6 +41,15 @@ impl Law {
         }
     }
 
+    /// The law's name as the log's lines of a friction solve begin ("tresca: …").
+    pub fn name(self) -> &'static str {
+        match self {
+            Law::Frictionless => "frictionless",
+            Law::Tresca => "tresca",
+            Law::Coulomb => "coulomb",
+        }
+    }
+
     /// The law has tangential states (rows, thresholds).
     pub fn friction(self) -> bool {
         self.rules().friction()

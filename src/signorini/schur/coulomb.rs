@@ -168,6 +168,7 @@ pub(crate) fn solve(
 ) -> Result<CoulombCondensed, RunError> {
     let n = kept.comp.list.len();
     let mut summary = CoulombCondensedSummary {
+        law: ns.law.name(),
         outcome: "condensed",
         reason: None,
         steps: 0,
@@ -185,15 +186,11 @@ pub(crate) fn solve(
     summary.primal_steps = run.primal_steps;
     record_coarse(ctx, &run, &mut summary);
     let mut history = Vec::new();
-    record_steps(
-        ctx,
-        &mut history,
-        &run.steps,
-        "C",
-        "condensed Coulomb",
-        n,
-        0,
-    );
+    let path = match ns.law {
+        Law::Tresca => "condensed Tresca",
+        _ => "condensed Coulomb",
+    };
+    record_steps(ctx, &mut history, &run.steps, "C", path, n, 0);
     record_f5(ctx, &run, &mut summary);
     if let Err(why) = &run.end {
         return Ok(give_up(ctx, summary, why.clone()));
@@ -220,7 +217,8 @@ fn record_coarse(ctx: &Ctx, run: &DenseCoulomb, summary: &mut CoulombCondensedSu
         .collect();
     say!(
         ctx,
-        "coulomb: condensed: nested start on coarse subsets of the candidates: {}",
+        "{}: condensed: nested start on coarse subsets of the candidates: {}",
+        summary.law,
         levels.join(", ")
     );
     summary.coarse_levels = run
@@ -250,8 +248,9 @@ fn record_f5(ctx: &Ctx, run: &DenseCoulomb, summary: &mut CoulombCondensedSummar
     }
     say!(
         ctx,
-        "coulomb: condensed: settled slip rows left a dense system singular (every active \
+        "{}: condensed: settled slip rows left a dense system singular (every active \
          node slipping); the (F5) rows instead: {}",
+        summary.law,
         at.join("; ")
     );
 }
@@ -342,8 +341,9 @@ fn dense_phase(
 /// The condensed solve stops: said in the log, the plain path from the frictionless solution.
 fn give_up(ctx: &Ctx, mut summary: CoulombCondensedSummary, why: String) -> CoulombCondensed {
     let then = "the plain path from the frictionless solution";
+    let what = format!("{}: condensed", summary.law);
     let (outcome, reason) = (&mut summary.outcome, &mut summary.reason);
-    fall_back(ctx, "coulomb: condensed", then, outcome, reason, why);
+    fall_back(ctx, &what, then, outcome, reason, why);
     CoulombCondensed::Fallback(summary)
 }
 
@@ -561,8 +561,9 @@ fn finish(
         });
         say!(
             ctx,
-            "coulomb: condensed: {} dense steps ({} in the primal form) on {n} candidates \
+            "{}: condensed: {} dense steps ({} in the primal form) on {n} candidates \
              ({:.3} s), expansion and check {:.3} s: |C| = {:.3e} of |λ| = {:.3e}{stalled}",
+            summary.law,
             summary.steps,
             summary.primal_steps,
             summary.dense_seconds,
@@ -587,7 +588,7 @@ fn finish(
             totals.changed, totals.residual, totals.lambda_norm
         )
     };
-    say!(ctx, "coulomb: condensed: {why}");
+    say!(ctx, "{}: condensed: {why}", summary.law);
     summary.outcome = "start";
     summary.reason = Some(why);
     Ok(CoulombCondensed::Start(

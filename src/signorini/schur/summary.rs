@@ -233,7 +233,8 @@ impl CondensedSummary {
 
 /// The dense steps of one round (`steps`: number, |A_n|, changed, residual, seconds) into the
 /// history (numbered on) and the log, which names the residual and the path (`residual`,
-/// `path`: "C_n", "condensed"; "C", "condensed Coulomb"). Collective (log).
+/// `path`: "C_n", "condensed"; "C", "condensed Coulomb" or "condensed Tresca"). Collective
+/// (log).
 pub(crate) fn record_steps(
     ctx: &Ctx,
     history: &mut Vec<StepInfo>,
@@ -278,6 +279,8 @@ pub(crate) fn record_steps(
 /// summary.json's `newton.condensed.coulomb`: what the dense Coulomb iteration did.
 #[derive(Debug, Clone, Serialize)]
 pub struct CoulombCondensedSummary {
+    /// The law iterated ("coulomb", or "tresca": Algorithm 2 with b_k fixed).
+    pub law: &'static str,
     /// "condensed": the expanded iterate passed the check; "start": it became the plain
     /// path's start (`reason` says why); "fallback": the dense iteration gave up (`reason`).
     pub outcome: &'static str,

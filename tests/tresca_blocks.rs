@@ -85,7 +85,7 @@ fn all_slip(case_file: &str, dim: usize, drag_toml: &str, drag: &[f64]) {
         );
         check_slip_row(*id, r, dim);
     }
-    assert_eq!(s.state_history().last().expect("history"), &[0, 0, 0, n]);
+    assert_eq!(s.final_states(), [0, 0, 0, n]);
     assert_eq!(s.f(&["contact", "friction", "slip_count"]) as usize, n);
 
     // b_k = g_R w_k and Σ w_k = area of the bottom.
@@ -208,7 +208,7 @@ fn inner_stick(case_file: &str, dim: usize, drag_toml: &str) {
     assert!(stick > 0, "no node sticks under the small drag");
     assert!(stick < rows.len(), "no node slips under the small drag");
     assert!(sum_lt < sum_b);
-    let last = s.state_history().last().copied().expect("history");
+    let last = s.final_states();
     assert_eq!(last, [0, 0, stick, rows.len() - stick]);
     assert_eq!(s.f(&["contact", "friction", "stick_count"]) as usize, stick);
     if dim == 2 {

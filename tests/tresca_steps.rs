@@ -12,7 +12,8 @@ use common::*;
 use serde_json::Value;
 
 /// The Hertz disk (refined level 4) held at its top arc, pushed down by 0.01 and sideways by
-/// 0.001, Tresca with g_R = 0.005 on the whole contact boundary (the bench's held case).
+/// 0.001, Tresca with g_R = 0.005 on the whole contact boundary (the bench's held case), on the
+/// plain path (by default it is solved on the contact unknowns, tests/tresca_condensed.rs).
 fn held_tresca(dir: &std::path::Path) -> std::path::PathBuf {
     let mesh = repo("cases/hertz/meshes/hertz_refined_L4.msh");
     write_case(
@@ -22,7 +23,7 @@ fn held_tresca(dir: &std::path::Path) -> std::path::PathBuf {
              [[dirichlet]]\ngroup = \"load\"\nvalue = [0.001, -0.01]\n[contact]\n\
              group = \"contact\"\nobstacle = {{ type = \"plane\", point = [0.0, -1.0], \
              normal = [0.0, 1.0] }}\nfriction = {{ law = \"tresca\", threshold = 0.005 }}\n\
-             [solver]\npreset = \"direct\"\n\
+             [solver]\npreset = \"direct\"\npath = \"plain\"\n\
              [output]\nfields = [\"displacement\"]\n",
             toml_path(&mesh)
         ),

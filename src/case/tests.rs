@@ -2530,7 +2530,8 @@ fn reject_schur_path_where_it_cannot_run() {
         ("method = \"snesvi\"\n", String::new(), "snesvi"),
         (
             "",
-            "friction = { law = \"tresca\", threshold = 0.01 }\n".into(),
+            "friction = { law = \"tresca\", threshold = 0.01 }\n[newton]\ninit = \"all_inactive\"\n"
+                .into(),
             "Tresca",
         ),
         ("", coulomb("fixed-point"), "fixed point"),
@@ -2551,4 +2552,9 @@ fn reject_schur_path_where_it_cannot_run() {
         coulomb("newton")
     ));
     assert_eq!(parse(&newton).unwrap().solver.path, SolverPath::Schur);
+    // Tresca from newton.init = "auto" (the default): on the contact unknowns
+    let tresca = with(&format!(
+        "{contact}friction = {{ law = \"tresca\", threshold = 0.01 }}\n[solver]\npath = \"schur\"\n"
+    ));
+    assert_eq!(parse(&tresca).unwrap().solver.path, SolverPath::Schur);
 }

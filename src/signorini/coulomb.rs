@@ -308,6 +308,10 @@ fn coulomb_start(
     let passes = coulomb_passes(ctx, problem, reduced, session, settings, forced, from)?;
     let (mut nr, summary) = match passes {
         Passes::Done(begin, summary) => return Ok((begin, summary)),
+        // Tresca: the plain path from its own start where the condensed iteration gave up
+        Passes::Frictionless(_, summary) if ns.law == Law::Tresca => {
+            return Ok((Begin::Touching, Some(summary)))
+        }
         Passes::Frictionless(nr, summary) => (nr, summary),
     };
     say!(
@@ -389,6 +393,20 @@ fn coulomb_passes(
             if let Some(done) = from_last_pass(ctx, store, &tried, r, u, cs, passes.earlier) {
                 return Ok(done);
             }
+        }
+        if per > 1 && too_wide(&tried) && ns.law == Law::Tresca {
+            // Tresca needs every node with a threshold condensed: the plain path from its
+            // own start (a frictionless start costs Tresca more steps, docs/friction.md)
+            drop(session.kept.take());
+            let summary = match tried {
+                Ok((schur::Condensed::Fallback(s), _)) => Some(s),
+                _ => None,
+            };
+            say!(
+                ctx,
+                "tresca: the nodes with a threshold exceed the dense limits: the plain path"
+            );
+            return Ok(Passes::Done(Begin::Touching, summary));
         }
         if per > 1 && too_wide(&tried) {
             // no zone to hold: the candidates' normal dofs alone

@@ -200,6 +200,18 @@ impl Solved {
             .collect()
     }
 
+    /// [S1, S2, S3, S4] of the final state, counted node by node from contact_nodes.csv (a
+    /// path's history need not have per-step counts: the condensed path's dense steps have
+    /// none).
+    pub fn final_states(&self) -> [usize; 4] {
+        let mut states = [0; 4];
+        for r in self.contact_rows_by_id().values() {
+            let slip = r.tangential() == "slip";
+            states[2 * usize::from(r.active()) + usize::from(slip)] += 1;
+        }
+        states
+    }
+
     /// [S1, S2, S3, S4] of every Newton step.
     pub fn state_history(&self) -> Vec<[usize; 4]> {
         get(&self.summary, &["newton", "history"])

@@ -489,7 +489,9 @@ impl DenseIteration<'_> {
         let unchanged = up.changed == 0;
         let stall = stalled(unchanged, *last_still, residual, lambda_norm);
         *last_still = unchanged.then_some(residual);
-        let zero = residual <= COULOMB_RESIDUAL_ZERO * lambda_norm;
+        // (not Tresca's: with a small c its C_τ (3.31) measures λ_τ against itself and is at
+        // round-off before λ_τ is parallel to u_τ, docs/friction.md; Algorithm 2's rule then)
+        let zero = residual <= COULOMB_RESIDUAL_ZERO * lambda_norm && self.law != Law::Tresca;
         let small = residual <= COULOMB_RESIDUAL_TOL * lambda_norm;
         let accept = unchanged && (zero || stall || (du_rel < self.tol_u && small));
         // The next step's system holds at this iterate as well as its own did (states

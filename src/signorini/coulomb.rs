@@ -362,7 +362,7 @@ fn coulomb_passes(
         matches!(t, Ok((schur::Condensed::Fallback(s), _)) if fell(s))
     };
     // where the zone is too wide for every dof of its nodes: the nodes a held zone releases
-    let mut passes = PassLoop::new(Vec::new(), Vec::new());
+    let mut passes = PassLoop::new(ns.law, Vec::new(), Vec::new());
     // the expanded iterate of the last pass: the plain path's start where the next one fails
     let mut last: Option<(NewtonResult, Vec<f64>, CoulombCondensedSummary)> = None;
     loop {
@@ -395,18 +395,7 @@ fn coulomb_passes(
             }
         }
         if per > 1 && too_wide(&tried) && ns.law == Law::Tresca {
-            // Tresca needs every node with a threshold condensed: the plain path from its
-            // own start (a frictionless start costs Tresca more steps, docs/friction.md)
-            drop(session.kept.take());
-            let summary = match tried {
-                Ok((schur::Condensed::Fallback(s), _)) => Some(s),
-                _ => None,
-            };
-            say!(
-                ctx,
-                "tresca: the nodes with a threshold exceed the dense limits: the plain path"
-            );
-            return Ok(Passes::Done(Begin::Touching, summary));
+            return Ok(tresca_too_wide(ctx, &mut session.kept, tried));
         }
         if per > 1 && too_wide(&tried) {
             // no zone to hold: the candidates' normal dofs alone
@@ -453,6 +442,27 @@ fn coulomb_passes(
             }
         }
     }
+}
+
+/// Tresca, whose every node with a threshold must be condensed, where those nodes' dofs
+/// exceed the dense limits (`tried`: the attempt that said so): the plain path from its own
+/// start, not from a frictionless solution (which costs Tresca more steps, docs/friction.md).
+/// Collective (log).
+fn tresca_too_wide(
+    ctx: &Ctx,
+    store: &mut KeptFactor,
+    tried: Result<(schur::Condensed, Option<schur::Kept>), RunError>,
+) -> Passes {
+    drop(store.take());
+    let summary = match tried {
+        Ok((schur::Condensed::Fallback(s), _)) => Some(s),
+        _ => None,
+    };
+    say!(
+        ctx,
+        "tresca: the nodes with a threshold exceed the dense limits: the plain path"
+    );
+    Passes::Done(Begin::Touching, summary)
 }
 
 /// The run of a warm pass' Coulomb iteration: its factorisation (`tried`, [`factorised`]),
@@ -535,14 +545,7 @@ fn coulomb_pass(
         schur::CoulombCondensed::Start(r, u, cs, beyond) => {
             if passes.goes_on(&beyond, summary.factorisations) {
                 let store = &mut session.kept;
-                passes.next(
-                    ctx,
-                    ns.law,
-                    store,
-                    &mut kept,
-                    &beyond,
-                    summary.factorisations,
-                );
+                passes.next(ctx, store, &mut kept, &beyond, summary.factorisations);
                 return Ok(PassStep::Next((joined(*r), u, cs)));
             }
             say!(
@@ -719,7 +722,7 @@ fn coulomb_load_step(
         true => gathered(ctx, warm.nodes.iter().map(|r| r.active)),
         false => Vec::new(),
     };
-    let mut passes = PassLoop::new(zone, release);
+    let mut passes = PassLoop::new(ns.law, zone, release);
     // the expanded iterate of the last pass: the plain path's start where the next one fails
     let mut last: Option<(NewtonResult, Vec<f64>)> = None;
     loop {
@@ -765,14 +768,7 @@ fn coulomb_load_step(
                     && summary.factorisations >= WARM_STICK_FACTORISATIONS;
                 if !held_missed && passes.goes_on(&beyond, summary.factorisations) {
                     let store = &mut session.kept;
-                    passes.next(
-                        ctx,
-                        ns.law,
-                        store,
-                        &mut kept,
-                        &beyond,
-                        summary.factorisations,
-                    );
+                    passes.next(ctx, store, &mut kept, &beyond, summary.factorisations);
                     last = Some((*r, u));
                     continue;
                 }
@@ -794,8 +790,10 @@ fn coulomb_load_step(
 
 /// The state of a Coulomb solve's condensed passes ([`coulomb_passes`], [`coulomb_load_step`]):
 /// the held zone and the released nodes (c_h's global order; empty: none), the pass, the
-/// factorisations of the passes before and the count of nodes that changed in the last one.
+/// factorisations of the passes before and the count of nodes that changed in the last one;
+/// the law iterated (for the log).
 struct PassLoop {
+    law: Law,
     zone: Vec<bool>,
     release: Vec<bool>,
     pass: u32,
@@ -804,8 +802,9 @@ struct PassLoop {
 }
 
 impl PassLoop {
-    fn new(zone: Vec<bool>, release: Vec<bool>) -> PassLoop {
+    fn new(law: Law, zone: Vec<bool>, release: Vec<bool>) -> PassLoop {
         PassLoop {
+            law,
             zone,
             release,
             pass: 0,
@@ -852,7 +851,6 @@ impl PassLoop {
     fn next(
         &mut self,
         ctx: &Ctx,
-        law: Law,
         store: &mut KeptFactor,
         kept: &mut schur::Kept,
         beyond: &[usize],
@@ -863,7 +861,7 @@ impl PassLoop {
             ctx,
             "{}: condensed: {} node(s) beyond the candidates change state on the expanded \
              u, {} of them held: a new pass with them as candidates",
-            law.name(),
+            self.law.name(),
             beyond.len(),
             held.count()
         );

@@ -454,7 +454,7 @@ impl DenseIteration<'_> {
         // row: Tresca with every node slipping at its bound, where (3.39) has no spring
         // either): the step with α pinned at its last value, as the plain path pins such a
         // mode for a step (tried before the (F5) rows instead, Tresca's settled rows cycled
-        // through four sets on the floating Hertz disk at 16 770 unknowns on 2 ranks)
+        // through four sets on the floating Hertz disk at 4 764 unknowns on 2 ranks)
         if solved.is_none() && !w.alpha.is_empty() {
             w.pinned = true;
             solved = self.pinned_step(w);
@@ -854,15 +854,17 @@ impl DenseIteration<'_> {
         }
     }
 
-    /// The step's dense system in the active nodes' λ and the free modes' α (module note;
-    /// bordered by the balance Gᵀ λ = φ where Dirichlet data leave rigid modes free), its rows
-    /// equilibrated. `None` without tangential rows.
-    fn system_dual(&self, set: &ActiveSet) -> Option<System> {
-        let (d, n, mz) = (self.dim, self.cb.nodes.len(), self.g.ncols());
-        let (cmat, g, w) = (self.cmat, self.g, self.d0);
-        let rows = &self.rows_of(set)?;
-        // the unknowns: per active node λ_n, then λ_τ unless its row ties it to λ_n; per
-        // inactive node with friction (Tresca) λ_τ; `at`: the position of each node's first
+    /// The dual form's unknowns: per active node λ_n, then λ_τ unless its row ties it to λ_n
+    /// or gives it; per inactive node with friction (Tresca) λ_τ unless given. Also `at`, the
+    /// position of each node's first unknown (`usize::MAX`: none), and the λ_τ that the rows
+    /// give as values (Tresca's settled slip, [`given`]).
+    #[allow(clippy::type_complexity)]
+    fn dual_unknowns(
+        &self,
+        set: &ActiveSet,
+        rows: &[CoulombRow<2>],
+    ) -> (Vec<Unknown>, Vec<usize>, Vec<(usize, f64)>) {
+        let (d, n) = (self.dim, self.cb.nodes.len());
         let mut cols: Vec<Unknown> = Vec::new();
         let mut at = vec![usize::MAX; n];
         let tangents = |q: usize| {
@@ -871,7 +873,6 @@ impl DenseIteration<'_> {
                 tied: None,
             })
         };
-        // λ_τ given by its row (Tresca's settled slip): a value, not an unknown
         let mut values: Vec<(usize, f64)> = Vec::new();
         for q in 0..n {
             let value = given(rows[q]);
@@ -890,23 +891,41 @@ impl DenseIteration<'_> {
                 cols.extend(tangents(q));
             }
         }
-        // u = d₀ − C λ_given − C λ + G α, and Gᵀ λ = φ − Gᵀ λ_given
+        (cols, at, values)
+    }
+
+    /// d₀ − C λ_given and φ − Gᵀ λ_given: the λ that the rows give (`values`) moved to the
+    /// right-hand side of u = d₀ − C λ + G α and Gᵀ λ = φ (d₀ and φ where none is given).
+    fn shifted_by(&self, values: &[(usize, f64)]) -> (std::borrow::Cow<'_, [f64]>, Vec<f64>) {
         let mut phi = self.phi.to_vec();
-        let shifted: Vec<f64>;
-        let w = if values.is_empty() {
-            w
-        } else {
-            let mut lam_given = vec![0.0; w.len()];
-            for &(dof, v) in &values {
-                lam_given[dof] = v;
-            }
-            let cl = cmat.times(&DVector::from_column_slice(&lam_given));
-            shifted = w.iter().zip(cl.iter()).map(|(a, b)| a - b).collect();
-            for (cz, p) in phi.iter_mut().enumerate() {
-                *p -= values.iter().map(|&(dof, v)| g[(dof, cz)] * v).sum::<f64>();
-            }
-            &shifted[..]
-        };
+        if values.is_empty() {
+            return (std::borrow::Cow::Borrowed(self.d0), phi);
+        }
+        let mut lam_given = vec![0.0; self.d0.len()];
+        for &(dof, v) in values {
+            lam_given[dof] = v;
+        }
+        let cl = self.cmat.times(&DVector::from_column_slice(&lam_given));
+        let shifted = self.d0.iter().zip(cl.iter()).map(|(a, b)| a - b).collect();
+        for (cz, p) in phi.iter_mut().enumerate() {
+            *p -= values
+                .iter()
+                .map(|&(dof, v)| self.g[(dof, cz)] * v)
+                .sum::<f64>();
+        }
+        (std::borrow::Cow::Owned(shifted), phi)
+    }
+
+    /// The step's dense system in the active nodes' λ and the free modes' α (module note;
+    /// bordered by the balance Gᵀ λ = φ where Dirichlet data leave rigid modes free), its rows
+    /// equilibrated. `None` without tangential rows.
+    fn system_dual(&self, set: &ActiveSet) -> Option<System> {
+        let (d, n, mz) = (self.dim, self.cb.nodes.len(), self.g.ncols());
+        let (cmat, g) = (self.cmat, self.g);
+        let rows = &self.rows_of(set)?;
+        let (cols, at, values) = self.dual_unknowns(set, rows);
+        let (w, phi) = self.shifted_by(&values);
+        let w = &w[..];
         let m = cols.len();
         // built as its transpose: row ri of the system is column ri here (contiguous; measured
         // on the floating Hertz disk at 344 620 unknowns, 1 875 dense unknowns: 0.15 s a step

@@ -258,6 +258,9 @@ fn coulomb_start(
     if !condense {
         return iterative_start(ctx, problem, reduced, ns, warm);
     }
+    if ns.law == Law::Tresca && !tresca_fits(ctx, b, problem.mesh.dim) {
+        return Ok((Begin::Touching, None));
+    }
     let from = if warm.is_some() {
         "the previous load step"
     } else {
@@ -442,6 +445,40 @@ fn coulomb_passes(
             }
         }
     }
+}
+
+/// Whether Tresca's condensed attempt is made: every node with a threshold b_k > 0 is a
+/// candidate with its d dofs, and their dense compliance, n³ flops for n dofs, must stay within
+/// the dense work the condensed path allows whatever K_p's factorisation costs: the dense floor,
+/// in 2D times the factor by which the dense work may exceed that factorisation
+/// ([`DENSE_FLOOR_FLOPS`](crate::tuning::DENSE_FLOOR_FLOPS),
+/// [`DENSE_SPEEDUP_2D`](crate::tuning::DENSE_SPEEDUP_2D)). Beyond it the attempt's ordering and
+/// analysis (for the factorisation's flops, against which the dense limits are checked) were
+/// measured at 12 % of the plain path's whole solve, and on every mesh measured the check then
+/// failed (docs/numbers.md, "Tresca on the contact unknowns"): the plain path at once, said in
+/// the log. Collective (one reduction).
+fn tresca_fits(ctx: &Ctx, b: &ContactBoundary, dim: usize) -> bool {
+    let nodes = ctx.sum_usize(b.nodes.iter().filter(|k| k.bound > 0.0).count());
+    let dofs = (nodes * dim) as f64;
+    // (the test-only limit DENSE_SPEEDUP_2D replaces the 2D factor, as in the check itself)
+    let speedup = match dim {
+        2 => {
+            crate::fault::limit("DENSE_SPEEDUP_2D", crate::tuning::DENSE_SPEEDUP_2D as usize) as f64
+        }
+        _ => 1.0,
+    };
+    let most = speedup * crate::tuning::DENSE_FLOOR_FLOPS;
+    let fits = dofs.powi(3) <= most;
+    if !fits {
+        say!(
+            ctx,
+            "tresca: {nodes} nodes with a threshold, {dofs} dofs in the Schur complement: their \
+             dense compliance ({:.1e} flops) exceeds the {most:.1e} flops a condensed attempt is \
+             made for; the plain path",
+            dofs.powi(3)
+        );
+    }
+    fits
 }
 
 /// Tresca, whose every node with a threshold must be condensed, where those nodes' dofs

@@ -312,6 +312,7 @@ fn coulomb_start(
     let (mut nr, summary) = match passes {
         Passes::Done(begin, summary) => return Ok((begin, summary)),
         // Tresca: the plain path from its own start where the condensed iteration gave up
+        // (not from the frictionless solution: no fewer steps, docs/friction.md)
         Passes::Frictionless(_, summary) if ns.law == Law::Tresca => {
             return Ok((Begin::Touching, Some(summary)))
         }
@@ -483,7 +484,7 @@ fn tresca_fits(ctx: &Ctx, b: &ContactBoundary, dim: usize) -> bool {
 
 /// Tresca, whose every node with a threshold must be condensed, where those nodes' dofs
 /// exceed the dense limits (`tried`: the attempt that said so): the plain path from its own
-/// start, not from a frictionless solution (which costs Tresca more steps, docs/friction.md).
+/// start, not from a frictionless solution (no fewer steps for Tresca, docs/friction.md).
 /// Collective (log).
 fn tresca_too_wide(
     ctx: &Ctx,

@@ -695,9 +695,10 @@ fn run_method(
 
 /// The path a Newton solve takes first (`None`: SNES VI): the Schur path where `solver.path`
 /// allows it (not "plain"), the solver factorises and the contact boundary has 1 to
-/// [`MAX_CONTACT_NODES`](crate::tuning::MAX_CONTACT_NODES) nodes, for frictionless contact and
-/// Coulomb's generalised Newton from newton.init = "auto" (coulomb.rs decides the same); else
-/// the plain path (Tresca, Coulomb's fixed point). The case reader refuses `solver.path =
+/// [`MAX_CONTACT_NODES`](crate::tuning::MAX_CONTACT_NODES) nodes, for frictionless contact,
+/// Coulomb's generalised Newton and Tresca from newton.init = "auto" (coulomb.rs decides the
+/// same, and sends Tresca beyond the dense limits to the plain path); else the plain path
+/// (Coulomb's fixed point, another newton.init). The case reader refuses `solver.path =
 /// "schur"` where the case file says it cannot run. Local.
 fn chosen_path(
     settings: &ContactSettings,
@@ -729,7 +730,8 @@ fn chosen_path(
 type Ran = (NewtonResult, Option<usize>, Option<schur::CondensedSummary>);
 
 /// Algorithm 1 (frictionless: on the contact unknowns where the dispatch chose the Schur
-/// path, [`chosen_path`]) or Algorithm 2 (Tresca) on the plain path. Collective.
+/// path, [`chosen_path`]) or Algorithm 2 (Tresca) on the plain path (where the dispatch did
+/// not choose the Schur path for it: that one runs in coulomb.rs). Collective.
 fn normal_and_tresca(
     ctx: &Ctx,
     problem: &ContactProblem,

@@ -205,7 +205,9 @@ impl Growth {
     /// together at most half the Schur limit) — per pair, since the pairs' gaps are not
     /// comparable (an obstacle moved into the body has the smallest gaps, the one that holds
     /// the body may have none below them) — and every node of the start set (the thesis'
-    /// all-active start: all of them); `held` (or empty): the nodes K_p holds. `reach` (0: none):
+    /// all-active start: all of them) and, with every dof of the candidates condensed
+    /// (friction), every node with a Tresca threshold b_k > 0 (it acts in contact or not,
+    /// (3.18)); `held` (or empty): the nodes K_p holds. `reach` (0: none):
     /// the rigid approach of the Dirichlet data ([`dirichlet_reach`]); a pair's nodes whose gap
     /// is within it are taken as well, as many as the dense work always allowed
     /// ([`DENSE_FLOOR_FLOPS`]) holds.

@@ -14,6 +14,11 @@
 //!   k ∉ A_n (S2):       λ_k = 0
 //! ```
 //!
+//! Tresca (Algorithm 2, b_k fixed) runs the same way with its rows (3.33)/(3.39): every node with
+//! a threshold is a candidate, and a node out of contact has λ_n = 0 and its stick row
+//! (S1: u_τ = u_τ^ref) or slip row (S2: (3.39a)) (docs/friction.md, "Tresca on the contact
+//! unknowns").
+//!
 //! (or the same step in the primal form on S = C⁻¹ itself where that has fewer unknowns,
 //! [`Stiff`]) with the rows of `contact::coulomb_row_dyn` and the set update (3.23)/(F5) of the
 //! plain path (`ActiveSet::update`, its stick band included), stopped by the same rule, first on

@@ -637,29 +637,21 @@ fn run_method(
         Method::Newton => {
             let mut reduced = ReducedSystem::new(ctx, sys, b, session.setup(), dim)?;
             *types = Some(reduced.solver_types()?);
-            // Tresca on the Schur path: Coulomb's iteration on the contact unknowns with the
-            // thresholds b_k fixed (docs/friction.md)
+            // Tresca on the Schur path: Coulomb's generalised Newton on the contact unknowns
+            // with the thresholds b_k fixed (docs/friction.md)
             let tresca_condensed = settings.tresca && choice.path == Some(SolverPath::Schur);
-            let outcome = match settings.coulomb {
-                Some((_, algorithm)) => coulomb::solve(
+            let coulomb_algorithm = match settings.coulomb {
+                Some((_, algorithm)) => Some(algorithm),
+                None => tresca_condensed.then_some(CoulombAlgorithm::Newton),
+            };
+            let outcome = match coulomb_algorithm {
+                Some(algorithm) => coulomb::solve(
                     ctx,
                     problem,
                     &mut reduced,
                     ns,
                     coulomb::CoulombMethod {
                         algorithm,
-                        section: solver_section,
-                    },
-                    session,
-                    warm,
-                )?,
-                None if tresca_condensed => coulomb::solve(
-                    ctx,
-                    problem,
-                    &mut reduced,
-                    ns,
-                    coulomb::CoulombMethod {
-                        algorithm: CoulombAlgorithm::Newton,
                         section: solver_section,
                     },
                     session,

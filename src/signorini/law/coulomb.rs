@@ -3,7 +3,7 @@
 //! natural residual of (F3), the certificate's b_k = μ(−λ_n^k) and the capacity Σ_j μ_j N_j.
 //! The pointwise law is `contact::coulomb`; the strategy of a solve is signorini/coulomb.rs.
 
-use super::rules::{increment, FloatingLoad, FrictionLaw};
+use super::rules::{increment, slips_back, FloatingLoad, FrictionLaw};
 use crate::contact::{self, CoulombRow, NodePoint};
 use crate::signorini::boundary::{ContactNode, NodeResult};
 use crate::signorini::force::ForceControl;
@@ -77,10 +77,10 @@ impl FrictionLaw for Coulomb {
         if dim != 2 || !(b > 0.0 && q0[0] != 0.0 && q1[0] != 0.0) {
             return row;
         }
-        let du = increment(r, k)[0];
-        if r.lambda_t[0] * du < 0.0 && r.lambda_t[0].abs() <= b {
+        if slips_back(r, k, b) {
             return CoulombRow::Stick;
         }
+        let du = increment(r, k)[0];
         if q0[0] * q1[0] < 0.0 {
             return row;
         }

@@ -82,6 +82,13 @@ pub struct FloatingLoad<'a> {
 /// at the warning level of the friction certificate (1e-8 of the problem's scales) at most.
 pub const STICK_TOL: f64 = 1e-8;
 
+/// A 2D node that slipped and whose increment now opposes its force: λ_τ Δu_τ < 0 with
+/// |λ_τ| ≤ b (at a slip solution λ_τ = b sign Δu_τ); the laws' settled rows make it stick.
+pub fn slips_back(r: &NodeResult, k: &ContactNode, b: f64) -> bool {
+    let du = increment(r, k)[0];
+    r.lambda_t[0] * du < 0.0 && r.lambda_t[0].abs() <= b
+}
+
 /// u_τ − u_ref: the tangential increment friction acts on (u_τ itself for u_ref = 0).
 pub fn increment(r: &NodeResult, k: &ContactNode) -> [f64; 2] {
     if k.u_t_ref == [0.0; 2] {

@@ -1,7 +1,7 @@
 //! Tresca friction (Algorithm 2): the nodal thresholds b_k of the contact boundary (3.18),
 //! the rows (3.33)/(3.39) and the residual (3.31). The pointwise law is `contact::tresca`.
 
-use super::rules::{increment, FloatingLoad, FrictionLaw};
+use super::rules::{increment, slips_back, FloatingLoad, FrictionLaw};
 use crate::contact::{self, CoulombRow};
 use crate::signorini::boundary::{ContactNode, NodeResult};
 
@@ -48,11 +48,10 @@ impl FrictionLaw for Tresca {
         if dim != 2 || !(b > 0.0 && r0[0] != 0.0) {
             return row;
         }
-        let du = increment(r, k)[0];
-        if r.lambda_t[0] * du < 0.0 && r.lambda_t[0].abs() <= b {
+        if slips_back(r, k, b) {
             return CoulombRow::Stick;
         }
-        let v = r.lambda_t[0] + c * du;
+        let v = r.lambda_t[0] + c * increment(r, k)[0];
         if v == 0.0 || v.signum() != (-r0[0]).signum() {
             return row;
         }

@@ -149,6 +149,29 @@ fn solve_system(sys: &System) -> Option<Vec<f64>> {
     Some(x.as_slice().to_vec())
 }
 
+/// A step's system solved, or given back where it is singular (`None`: there was none).
+enum Attempt {
+    Solved(Vec<f64>, System),
+    Singular(Option<System>),
+}
+
+/// `sys` solved by [`solve_system`].
+fn attempt(sys: Option<System>) -> Attempt {
+    let Some(sk) = sys else {
+        return Attempt::Singular(None);
+    };
+    match solve_system(&sk) {
+        Some(x) => Attempt::Solved(x, sk),
+        None => Attempt::Singular(Some(sk)),
+    }
+}
+
+/// A solved step, counted in `w.primal` where its system is in the primal form.
+fn primal_counted(w: &mut Walk, done: (Vec<f64>, System)) -> (Vec<f64>, System) {
+    w.primal += usize::from(done.1.known.is_some());
+    done
+}
+
 /// The system `sys` solved with its free modes' amplitudes α fixed at `alpha` (its last
 /// columns moved to the right-hand side, its balance rows dropped); the solution with α
 /// appended. `None`: singular still.
@@ -437,37 +460,33 @@ impl DenseIteration<'_> {
         sys: Option<System>,
         step: usize,
     ) -> Option<(Vec<f64>, System)> {
-        let mut solved = sys.and_then(|sk| Some((solve_system(&sk)?, sk)));
         w.pinned = false;
-        if solved.is_none() {
-            let unsettled = w.before.take().map(|b| self.unsettled(b, &w.it));
-            if let Some(alt) = unsettled.filter(|alt| *alt != w.set) {
-                w.settle = false;
-                w.f5_from = step;
-                w.set = alt;
-                solved = self
-                    .system(&w.set)
-                    .and_then(|sk| Some((solve_system(&sk)?, sk)));
-            }
+        let mut last = match attempt(sys) {
+            Attempt::Solved(x, sk) => return Some(primal_counted(w, (x, sk))),
+            Attempt::Singular(last) => last,
+        };
+        let unsettled = w.before.take().map(|b| self.unsettled(b, &w.it));
+        if let Some(alt) = unsettled.filter(|alt| *alt != w.set) {
+            w.settle = false;
+            w.f5_from = step;
+            w.set = alt;
+            last = match attempt(self.system(&w.set)) {
+                Attempt::Solved(x, sk) => return Some(primal_counted(w, (x, sk))),
+                Attempt::Singular(last) => last,
+            };
         }
         // where the (F5) rows leave it singular as well (a set that holds a free mode by no
         // row: Tresca with every node slipping at its bound, where (3.39) has no spring
         // either): the step with α pinned at its last value, as the plain path pins such a
         // mode for a step (tried before the (F5) rows instead, Tresca's settled rows cycled
         // through four sets on the floating Hertz disk at 4 764 unknowns on 2 ranks)
-        if solved.is_none() && !w.alpha.is_empty() {
-            w.pinned = true;
-            solved = self.pinned_step(w);
+        if w.alpha.is_empty() {
+            return None;
         }
-        w.primal += solved.as_ref().is_some_and(|(_, s)| s.known.is_some()) as usize;
-        solved
-    }
-
-    /// The step on the set of `w` with α pinned at `w.alpha` ([`solve_pinned`]). `None`:
-    /// singular still.
-    fn pinned_step(&self, w: &Walk) -> Option<(Vec<f64>, System)> {
-        let sk = self.system(&w.set)?;
-        Some((solve_pinned(&sk, &w.alpha)?, sk))
+        let sk = last?;
+        w.pinned = true;
+        let x = solve_pinned(&sk, &w.alpha)?;
+        Some(primal_counted(w, (x, sk)))
     }
 
     /// Whether the iterate x of the system `sys_k` is accepted, given the set's update `up`
@@ -676,7 +695,7 @@ impl DenseIteration<'_> {
     fn system(&self, set: &ActiveSet) -> Option<System> {
         let rows = &self.rows_of(set)?;
         let Some(st) = self.stiff else {
-            return self.system_dual(set);
+            return Some(self.system_dual(set, rows));
         };
         let d = self.dim;
         let (mut dual, mut primal) = (0, 0);
@@ -702,7 +721,7 @@ impl DenseIteration<'_> {
         if primal < dual {
             Some(self.system_primal(set, rows, st))
         } else {
-            self.system_dual(set)
+            Some(self.system_dual(set, rows))
         }
     }
 
@@ -918,11 +937,10 @@ impl DenseIteration<'_> {
 
     /// The step's dense system in the active nodes' λ and the free modes' α (module note;
     /// bordered by the balance Gᵀ λ = φ where Dirichlet data leave rigid modes free), its rows
-    /// equilibrated. `None` without tangential rows.
-    fn system_dual(&self, set: &ActiveSet) -> Option<System> {
+    /// equilibrated; `rows`: the set's rows as [`DenseIteration::rows_of`] gives them.
+    fn system_dual(&self, set: &ActiveSet, rows: &[CoulombRow<2>]) -> System {
         let (d, n, mz) = (self.dim, self.cb.nodes.len(), self.g.ncols());
         let (cmat, g) = (self.cmat, self.g);
-        let rows = &self.rows_of(set)?;
         let (cols, at, values) = self.dual_unknowns(set, rows);
         let (w, phi) = self.shifted_by(&values);
         let w = &w[..];
@@ -1000,14 +1018,14 @@ impl DenseIteration<'_> {
             rhs[m + cz] = phi[cz];
         }
         equilibrate(&mut a, &mut rhs);
-        Some(System {
+        System {
             a,
             rhs,
             cols,
             known: None,
             zero: Vec::new(),
             given: values,
-        })
+        }
     }
 
     /// λ (every candidate, d per node), u = d₀ − C λ + G α and α from a system's solution.

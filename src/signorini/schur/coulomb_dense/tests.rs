@@ -96,6 +96,45 @@ impl Line {
     }
 }
 
+/// S = C⁻¹ of a [`Line`] as the condensed path keeps it (its upper triangle packed), r = S d₀,
+/// S G and Gᵀ S G: what a [`Stiff`] borrows.
+struct StiffParts {
+    s_packed: Vec<f64>,
+    r: Vec<f64>,
+    sg: DMatrix<f64>,
+    gsg: DMatrix<f64>,
+}
+
+impl StiffParts {
+    fn of(line: &Line) -> StiffParts {
+        let s = line.cmat.clone().try_inverse().expect("SPD");
+        let r = (&s * DVector::from_column_slice(&line.d0))
+            .as_slice()
+            .to_vec();
+        let sg = &s * &line.g;
+        let gsg = line.g.transpose() * &sg;
+        let s_packed = pack_upper(s.as_slice().to_vec(), line.cmat.nrows());
+        StiffParts {
+            s_packed,
+            r,
+            sg,
+            gsg,
+        }
+    }
+
+    fn stiff(&self) -> Stiff<'_> {
+        Stiff {
+            s: CMatrix::Upper {
+                n: self.r.len(),
+                packed: &self.s_packed,
+            },
+            r: &self.r,
+            sg: self.sg.clone(),
+            gsg: self.gsg.clone(),
+        }
+    }
+}
+
 /// Runs `f` on a thread with a stack of its own: a multithreaded BLAS may take more than a
 /// test thread's 2 MB.
 fn on_big_stack(f: impl FnOnce() + Send + 'static) {
@@ -178,25 +217,11 @@ fn the_primal_form_ends_where_the_dual_form_ends() {
             line.d0[2 * q] = -1.0 - 0.5 * t * t;
             line.d0[2 * q + 1] = 0.6 * t;
         }
-        let s = line.cmat.clone().try_inverse().expect("SPD");
-        let r = (&s * DVector::from_column_slice(&line.d0))
-            .as_slice()
-            .to_vec();
-        let sg = &s * &line.g;
-        let gsg = line.g.transpose() * &sg;
         // S and C as the condensed path keeps them: their upper triangles packed
         let dim = 2 * n;
-        let s_packed = pack_upper(s.as_slice().to_vec(), dim);
+        let parts = StiffParts::of(&line);
+        let st = parts.stiff();
         let c_packed = pack_upper(line.cmat.as_slice().to_vec(), dim);
-        let st = Stiff {
-            s: CMatrix::Upper {
-                n: dim,
-                packed: &s_packed,
-            },
-            r: &r,
-            sg,
-            gsg,
-        };
         let dual = line.dense(100.0);
         let primal = DenseIteration {
             cmat: CMatrix::Upper {
@@ -383,23 +408,8 @@ fn tresca_out_of_contact_ends_in_the_same_state_in_every_form() {
             line.d0[2 * q + 1] = 0.4 * t * t * t;
             line.cb.nodes[q].bound = b;
         }
-        let s = line.cmat.clone().try_inverse().expect("SPD");
-        let r = (&s * DVector::from_column_slice(&line.d0))
-            .as_slice()
-            .to_vec();
-        let sg = &s * &line.g;
-        let gsg = line.g.transpose() * &sg;
-        let dim = 2 * n;
-        let s_packed = pack_upper(s.as_slice().to_vec(), dim);
-        let st = Stiff {
-            s: CMatrix::Upper {
-                n: dim,
-                packed: &s_packed,
-            },
-            r: &r,
-            sg,
-            gsg,
-        };
+        let parts = StiffParts::of(&line);
+        let st = parts.stiff();
         let base = || DenseIteration {
             law: Law::Tresca,
             ..line.dense(1.0)

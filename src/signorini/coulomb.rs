@@ -460,7 +460,30 @@ fn coulomb_passes(
 /// the log. Collective (one reduction).
 fn tresca_fits(ctx: &Ctx, b: &ContactBoundary, dim: usize) -> bool {
     let nodes = ctx.sum_usize(b.nodes.iter().filter(|k| k.bound > 0.0).count());
-    let dofs = (nodes * dim) as f64;
+    let fits = tresca_condensed_fits(nodes, dim);
+    if !fits {
+        let dofs = (nodes * dim) as f64;
+        say!(
+            ctx,
+            "tresca: {nodes} nodes with a threshold, {dofs} dofs in the Schur complement: their \
+             dense compliance ({:.1e} flops) exceeds the {:.1e} flops a condensed attempt is \
+             made for; the plain path",
+            dofs.powi(3),
+            tresca_dense_flops(dim)
+        );
+    }
+    fits
+}
+
+/// Whether Tresca's condensed attempt is made for `nodes` nodes with a threshold in a mesh of
+/// dimension `dim` (their d dofs each in the Schur complement; [`tresca_fits`]). Also the auto
+/// preset's test (`crate::solver::choose_preset`). Pure.
+pub(crate) fn tresca_condensed_fits(nodes: usize, dim: usize) -> bool {
+    ((nodes * dim) as f64).powi(3) <= tresca_dense_flops(dim)
+}
+
+/// The dense work (flops) Tresca's condensed attempt is made for ([`tresca_fits`]).
+fn tresca_dense_flops(dim: usize) -> f64 {
     // (the test-only limit DENSE_SPEEDUP_2D replaces the 2D factor, as in the check itself)
     let speedup = match dim {
         2 => {
@@ -468,18 +491,7 @@ fn tresca_fits(ctx: &Ctx, b: &ContactBoundary, dim: usize) -> bool {
         }
         _ => 1.0,
     };
-    let most = speedup * crate::tuning::DENSE_FLOOR_FLOPS;
-    let fits = dofs.powi(3) <= most;
-    if !fits {
-        say!(
-            ctx,
-            "tresca: {nodes} nodes with a threshold, {dofs} dofs in the Schur complement: their \
-             dense compliance ({:.1e} flops) exceeds the {most:.1e} flops a condensed attempt is \
-             made for; the plain path",
-            dofs.powi(3)
-        );
-    }
-    fits
+    speedup * crate::tuning::DENSE_FLOOR_FLOPS
 }
 
 /// Tresca, whose every node with a threshold must be condensed, where those nodes' dofs

@@ -86,3 +86,36 @@ fn a_floating_disk_ends_where_the_plain_path_ends() {
 fn a_dragged_block_ends_where_the_plain_path_ends() {
     condensed_against_plain("tests/cases/tresca/block2d_tresca.toml", &[]);
 }
+
+/// A 3D block held at its bottom and pushed sideways into a rigid sphere, Tresca's threshold on
+/// every node of its top (several hundred: more than the condensed path takes with every dof of
+/// each): the candidates by their gaps, the nodes beyond them carrying their friction as a
+/// load, found in rounds on the one factorisation (schur/coulomb.rs `Far`).
+#[test]
+fn a_3d_block_with_far_nodes_ends_where_the_plain_path_ends() {
+    let tmp = tempfile::tempdir().expect("tempdir");
+    let mesh = tmp.path().join("block.msh");
+    common::process::gmsh_file(
+        &repo("cases/blocks/block3d.geo"),
+        3,
+        &["-setnumber", "h", "0.1"],
+        &mesh,
+    );
+    let file = format!("mesh.file=\"{}\"", mesh.display());
+    let tresca = "contact.friction={law=\"tresca\", threshold=2.5e-4}";
+    let sets = [file.as_str(), tresca, CONTACT_OUT];
+    condensed_against_plain("cases/bench/friction_block_held.toml", &sets);
+    let s = solve(2, &repo("cases/bench/friction_block_held.toml"), &sets);
+    let coulomb = &s.summary["newton"]["condensed"]["coulomb"];
+    let far = coulomb["far_nodes"].as_u64().unwrap_or(0);
+    let candidates = s.f(&["newton", "condensed", "candidates"]) as u64;
+    assert!(far > 0, "nodes beyond the candidates expected: {coulomb}");
+    assert!(
+        far > candidates,
+        "most of the top beyond the candidates: {far} against {candidates}"
+    );
+    assert!(
+        coulomb["far_rounds"].as_u64().unwrap_or(0) >= 2,
+        "{coulomb}"
+    );
+}

@@ -50,6 +50,9 @@ pub struct CoulombMethod<'a> {
 struct StartSettings<'a> {
     coulomb: &'a NewtonSettings<'a>,
     frictionless: &'a NewtonSettings<'a>,
+    /// Every node with a Tresca threshold a candidate (else those beyond the candidates carry
+    /// their friction as a load: [`tresca_fits`]).
+    thresholds: bool,
 }
 
 /// Coulomb friction by `method.algorithm` on the reduced system: the generalised Newton (under
@@ -258,16 +261,32 @@ fn coulomb_start(
     if !condense {
         return iterative_start(ctx, problem, reduced, ns, warm);
     }
-    if ns.law == Law::Tresca && !tresca_fits(ctx, b, problem.mesh.dim) {
-        return Ok((Begin::Touching, None));
-    }
+    let thresholds = ns.law != Law::Tresca || tresca_fits(ctx, b, problem.mesh.dim);
     let from = if warm.is_some() {
         "the previous load step"
     } else {
         "the touching nodes"
     };
-    // the body's free modes (one construction: both tests below read them)
+    // the body's free modes (one construction: the tests below read them)
     let free = free_modes(ctx, problem, reduced, ns);
+    // Tresca with more nodes than its condensed path takes: on a 3D body that Dirichlet data
+    // hold (no force control) the nodes beyond the candidates carry their friction as a load
+    // (schur::coulomb); else the plain path at once (docs/friction.md, "Tresca's far nodes")
+    if !thresholds {
+        let plain = match (problem.mesh.dim, free.floats() || !ns.force.is_empty()) {
+            (3, false) => None,
+            (3, true) => Some("a body that its contacts hold, or force control"),
+            _ => Some("in 2D"),
+        };
+        if let Some(why) = plain {
+            say!(ctx, "tresca: {why}: the plain path");
+            return Ok((Begin::Touching, None));
+        }
+        say!(
+            ctx,
+            "tresca: the nodes beyond the candidates carry their friction as a load"
+        );
+    }
     // a load that friction alone holds: the frictionless estimate carries it at the contact
     let carried = Unheld::of(ctx, b, &free).map(|un| {
         say!(
@@ -301,12 +320,14 @@ fn coulomb_start(
         let settings = StartSettings {
             coulomb: ns,
             frictionless: &fl,
+            thresholds,
         };
         return coulomb_load_step(ctx, problem, reduced, session, settings, w);
     }
     let settings = StartSettings {
         coulomb: ns,
         frictionless: &fl,
+        thresholds,
     };
     let passes = coulomb_passes(ctx, problem, reduced, session, settings, forced, from)?;
     let (mut nr, summary) = match passes {
@@ -380,6 +401,7 @@ fn coulomb_passes(
             per,
             steps: !warm,
             stick: held,
+            thresholds: settings.thresholds,
         };
         let mut tried = solve_keeping(ctx, problem, reduced, fl, session, None, how);
         if let Some((r, u, cs)) = last.take() {
@@ -466,8 +488,8 @@ fn tresca_fits(ctx: &Ctx, b: &ContactBoundary, dim: usize) -> bool {
         say!(
             ctx,
             "tresca: {nodes} nodes with a threshold, {dofs} dofs in the Schur complement: their \
-             dense compliance ({:.1e} flops) exceeds the {:.1e} flops a condensed attempt is \
-             made for; the plain path",
+             dense compliance ({:.1e} flops) exceeds the {:.1e} flops a condensed attempt with \
+             all of them is made for",
             dofs.powi(3),
             tresca_dense_flops(dim)
         );
@@ -782,6 +804,7 @@ fn coulomb_load_step(
             per: dim,
             steps: false,
             stick: Some(held),
+            thresholds: settings.thresholds,
         };
         let tried = solve_keeping(ctx, problem, reduced, fl, session, Some(warm), how);
         let (mut summary, mut kept) = match tried {

@@ -206,8 +206,8 @@ impl Growth {
     /// comparable (an obstacle moved into the body has the smallest gaps, the one that holds
     /// the body may have none below them) — and every node of the start set (the thesis'
     /// all-active start: all of them) and, with every dof of the candidates condensed
-    /// (friction), every node with a Tresca threshold b_k > 0 (it acts in contact or not,
-    /// (3.18)); `held` (or empty): the nodes K_p holds. `reach` (0: none):
+    /// (friction) and `thresholds`, every node with a Tresca threshold b_k > 0 (it acts in
+    /// contact or not, (3.18)); `held` (or empty): the nodes K_p holds. `reach` (0: none):
     /// the rigid approach of the Dirichlet data ([`dirichlet_reach`]); a pair's nodes whose gap
     /// is within it are taken as well, as many as the dense work always allowed
     /// ([`DENSE_FLOOR_FLOPS`]) holds.
@@ -217,6 +217,7 @@ impl Growth {
         want: Option<usize>,
         held: &[bool],
         reach: f64,
+        thresholds: bool,
     ) -> Growth {
         let n = cand.n;
         let is_held = |i: usize| held.get(i).copied().unwrap_or(false);
@@ -272,9 +273,13 @@ impl Growth {
             by_gap,
             take,
             // Tresca's thresholds act on every node that has one, in contact or not (3.18):
-            // with every dof in the Schur complement (friction), each such node is a candidate
+            // with every dof in the Schur complement (friction) and `thresholds`, each such
+            // node is a candidate
             forced: (0..n)
-                .filter(|&i| (active[i] || (per > 1 && cand.bound(i) > 0.0)) && !is_held(i))
+                .filter(|&i| {
+                    let threshold = per > 1 && thresholds && cand.bound(i) > 0.0;
+                    (active[i] || threshold) && !is_held(i)
+                })
                 .collect(),
             active,
             held: (0..n).map(is_held).collect(),
@@ -502,7 +507,7 @@ impl Candidates {
         self.rec(i)[HEAD + a * self.mz + c]
     }
     /// The node frame as an orthonormal basis, normal first (columns: n, t₁, t₂).
-    fn basis(&self, i: usize, dim: usize) -> [[f64; 3]; 3] {
+    pub(super) fn basis(&self, i: usize, dim: usize) -> [[f64; 3]; 3] {
         let n = [self.normal(i, 0), self.normal(i, 1), self.normal(i, 2)];
         let mut q = [[0.0; 3]; 3];
         let Some(f) = Frame::new(n, dim) else {
@@ -982,17 +987,17 @@ mod tests {
     fn the_first_candidates_take_every_node_within_the_dirichlet_reach() {
         let cand = line(2001);
         // no reach: an eighth of the nodes
-        let plain = Growth::new(&cand, 1, None, &[], 0.0);
+        let plain = Growth::new(&cand, 1, None, &[], 0.0, false);
         assert_eq!(plain.take, vec![2001 / FIRST_FRACTION]);
         // reach 0.08: |x| ≤ 0.4, about 800 nodes, more than an eighth
         let within = (0..cand.n).filter(|&i| cand.gap(i) <= 0.08).count();
         assert!((799..=801).contains(&within), "{within}");
-        let reached = Growth::new(&cand, 1, None, &[], 0.08);
+        let reached = Growth::new(&cand, 1, None, &[], 0.08, false);
         assert_eq!(reached.take, vec![within]);
         assert!(reached.why.contains("reach"), "{}", reached.why);
         // a reach over every node: as many as the dense floor allows, per dof of a node
         for per in [1, 2, 3] {
-            let all = Growth::new(&cand, per, None, &[], 10.0);
+            let all = Growth::new(&cand, per, None, &[], 10.0, false);
             let floor = floor_nodes(per);
             assert!(
                 !wide(floor, per, DENSE_FLOOR_FLOPS) && wide(floor + 1, per, DENSE_FLOOR_FLOPS)

@@ -67,12 +67,15 @@ pub fn solve(
 
 /// How one condensed solve runs ([`solve_keeping`]): the Schur variables per candidate (`per`:
 /// 1 the normal dofs, the dimension every dof), whether the frictionless steps run (`steps`),
-/// and where friction needs it the zone held sticking (`stick`).
+/// where friction needs it the zone held sticking (`stick`), and whether every node with a
+/// Tresca threshold is a candidate (`thresholds`; else the nodes beyond the candidates carry
+/// their friction as a load, schur/coulomb.rs).
 #[derive(Clone, Copy)]
 pub(crate) struct Condensing<'a> {
     pub per: usize,
     pub steps: bool,
     pub stick: Option<Sticking<'a>>,
+    pub thresholds: bool,
 }
 
 impl Condensing<'_> {
@@ -81,6 +84,7 @@ impl Condensing<'_> {
         per: 1,
         steps: true,
         stick: None,
+        thresholds: false,
     };
 }
 
@@ -102,7 +106,12 @@ pub(crate) fn solve_keeping(
     warm: Option<&WarmStart>,
     how: Condensing,
 ) -> Result<(Condensed, Option<Kept>), RunError> {
-    let Condensing { per, steps, stick } = how;
+    let Condensing {
+        per,
+        steps,
+        stick,
+        thresholds,
+    } = how;
     let (b, dim) = (p.boundary, p.mesh.dim);
     let summary = CondensedSummary::new(b.n_global);
     let free0 = FreeModes::new(ctx, p.mesh, p.layout, p.fixed, b, &reduced.f_local, s.rigid);
@@ -131,6 +140,7 @@ pub(crate) fn solve_keeping(
             start: &start,
             located: &located,
             per,
+            thresholds,
         },
         given: s,
         // a zone held sticking holds every rigid mode: no load is left for the contact to carry
@@ -488,7 +498,7 @@ fn first_growth(
         (None, None, None) => dirichlet_reach(ctx, at.p.fixed),
         _ => 0.0,
     };
-    let growth = Growth::new(cand, per, want, held, reach);
+    let growth = Growth::new(cand, per, want, held, reach, at.thresholds);
     if growth.reached > 0 {
         say!(
             ctx,

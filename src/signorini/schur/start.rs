@@ -56,6 +56,8 @@ pub(super) struct SolveStart<'a> {
     pub(super) start: &'a [bool],
     pub(super) located: &'a Located,
     pub(super) per: usize,
+    /// Every node with a Tresca threshold a candidate ([`super::frictionless::Condensing`]).
+    pub(super) thresholds: bool,
 }
 
 /// What one pass is asked to hold: the predicted `zone` (or none), the node order kept from a

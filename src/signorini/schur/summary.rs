@@ -304,4 +304,12 @@ pub struct CoulombCondensedSummary {
     /// The nested start's coarse levels on which the same happened.
     #[serde(skip_serializing_if = "is_zero")]
     pub f5_coarse_levels: usize,
+    /// Tresca's nodes with a threshold beyond the candidates, whose friction was a load
+    /// (docs/friction.md, "Tresca's far nodes"); absent where there were none.
+    #[serde(skip_serializing_if = "is_zero")]
+    pub far_nodes: usize,
+    /// The rounds of the dense iteration that found their friction (each one condensation and
+    /// one expansion solve on the kept factorisation).
+    #[serde(skip_serializing_if = "is_zero")]
+    pub far_rounds: usize,
 }

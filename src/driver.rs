@@ -74,10 +74,11 @@ pub fn prepare<'c>(ctx: &Ctx, case: &'c Case) -> Result<Prepared<'c>, RunError> 
     clock.lap();
     (clock.t.read, clock.t.partition) = (read_seconds, partition_seconds);
     let partition = log_partition(ctx, &mesh, &layout);
-    let problem = setup::problem(case, &mesh, &material);
-    let survey = check_bodies(ctx, case, &mesh, &layout, &problem.fixed)?;
-    drop(problem);
-    let contact = auto_contact(ctx, case, &mesh, &survey);
+    let contact = solver::AutoContact {
+        friction: (case.contacts.iter()).any(|c| c.friction != crate::case::Friction::None),
+        bodies: (case.contacts.iter())
+            .any(|c| matches!(c.obstacle, crate::case::ObstacleSpec::Body { .. })),
+    };
     let (preset, preset_reason) = solver::choose_preset(
         case.solver.preset,
         mesh.dim,
@@ -105,6 +106,9 @@ pub fn prepare<'c>(ctx: &Ctx, case: &'c Case) -> Result<Prepared<'c>, RunError> 
         preset,
         ..case.solver.clone()
     };
+    let problem = setup::problem(case, &mesh, &material);
+    let survey = check_bodies(ctx, case, &mesh, &layout, &problem.fixed)?;
+    drop(problem);
     let contact = if case.contacts.is_empty() {
         None
     } else {
@@ -350,47 +354,6 @@ fn log_partition(ctx: &Ctx, mesh: &Mesh, layout: &Layout) -> PartitionInfo {
 /// body: signorini/rigid.rs); a body free in some rigid mode beside another, in a case with
 /// contact, is refused where no contact group lies on it: nothing could hold it. Collective;
 /// every rank returns the same.
-/// What of the case's contact the auto preset reads ([`solver::AutoContact`]); Tresca's nodes
-/// with a threshold counted as its pairs' group nodes (each once, whichever ranks hold it: the
-/// choice does not depend on the rank count). Collective.
-fn auto_contact(
-    ctx: &Ctx,
-    case: &Case,
-    mesh: &Mesh,
-    survey: &bodies::Survey,
-) -> solver::AutoContact {
-    use crate::case::{Friction, ObstacleSpec};
-    let friction = |c: &&crate::case::ContactSection| c.friction != Friction::None;
-    let tresca = |c: &&crate::case::ContactSection| matches!(c.friction, Friction::Tresca { .. });
-    // held: by Dirichlet data alone (no body that its contacts hold, no force-controlled pair)
-    let contacts = &case.contacts;
-    let held = survey.bodies.iter().all(|b| b.free_modes == 0)
-        && contacts.iter().all(|c| c.force.is_none());
-    let tresca_alone =
-        contacts.iter().any(|c| tresca(&c)) && contacts.iter().filter(friction).all(|c| tresca(&c));
-    let bodies = contacts
-        .iter()
-        .any(|c| matches!(c.obstacle, ObstacleSpec::Body { .. }));
-    let mut wide = false;
-    if tresca_alone && held && case.solver.path != SolverPath::Schur && mesh.dim == 3 {
-        let mut tags: Vec<u64> = Vec::new();
-        for c in contacts.iter().filter(tresca) {
-            if let Some(g) = mesh.group(&c.group) {
-                tags.extend(mesh.group_nodes(g).iter().map(|&v| mesh.node_tags[v]));
-            }
-        }
-        let mut all = ctx.all_gather_varcount(&tags);
-        all.sort_unstable();
-        all.dedup();
-        wide = !crate::signorini::coulomb::tresca_condensed_fits(all.len(), mesh.dim);
-    }
-    solver::AutoContact {
-        friction: contacts.iter().any(|c| friction(&c)),
-        bodies,
-        tresca_wide_held: wide,
-    }
-}
-
 fn check_bodies(
     ctx: &Ctx,
     case: &Case,

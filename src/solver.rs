@@ -22,11 +22,6 @@ pub struct AutoContact {
     pub friction: bool,
     /// Contact between two bodies (dual mortar) on some pair.
     pub bodies: bool,
-    /// Tresca alone (no Coulomb pair), every body held by its Dirichlet data, no Schur path
-    /// asked for, and more nodes with a threshold than Tresca's condensed path takes in 3D
-    /// ([`crate::signorini::coulomb::tresca_condensed_fits`]): the plain path's every Newton step is a
-    /// linear solve, which the iterative preset makes cheaper.
-    pub tresca_wide_held: bool,
 }
 
 /// The preset to use for `asked` on a mesh of dimension `dim` with `dofs` unknowns and the
@@ -39,27 +34,14 @@ pub struct AutoContact {
 /// iterations per exact Newton step on a quarter ball on a block (85 374 unknowns, 2 ranks:
 /// 72.5 s, where the direct preset's condensed path takes 5.6–5.8 s with one factorisation;
 /// docs/numbers.md, "Body pairs against one linear solve, the plain path and SNES VI in the
-/// same run"). Tresca where its condensed path does not apply (`tresca_wide_held`) is the
-/// exception from the auto preset's iterative size on: its plain path factorises in every
-/// Newton step, where GMRES + GAMG solves each (the 3D block held and pushed into a sphere,
-/// 112 890 unknowns, 3 775 nodes with a threshold, 2 ranks: 7 steps, 8.8 s against 38 s;
-/// docs/numbers.md, "3D Tresca on the iterative preset"). Not on a body that only its
-/// contacts hold: there GMRES diverged (a floating ball, 56 k unknowns).
+/// same run").
 pub fn choose_preset(
     asked: Preset,
     dim: usize,
     dofs: usize,
     contact: AutoContact,
 ) -> (Preset, String) {
-    let iterative = dofs >= AUTO_ITERATIVE_3D_DOFS;
     match asked {
-        Preset::Auto if dim == 3 && contact.friction && contact.tresca_wide_held && iterative => (
-            Preset::Iterative,
-            format!(
-                "auto: 3D Tresca on held bodies, more nodes with a threshold than its condensed \
-                 path takes, {dofs} unknowns >= {AUTO_ITERATIVE_3D_DOFS}"
-            ),
-        ),
         Preset::Auto if dim == 3 && contact.friction => (
             Preset::Direct,
             format!("auto: 3D with friction, {dofs} unknowns"),
@@ -68,7 +50,7 @@ pub fn choose_preset(
             Preset::Direct,
             format!("auto: 3D with contact between bodies, {dofs} unknowns"),
         ),
-        Preset::Auto if dim == 3 && iterative => (
+        Preset::Auto if dim == 3 && dofs >= AUTO_ITERATIVE_3D_DOFS => (
             Preset::Iterative,
             format!("auto: 3D, {dofs} unknowns >= {AUTO_ITERATIVE_3D_DOFS}"),
         ),
@@ -216,37 +198,4 @@ pub fn linear_solve(
             factor,
         },
     ))
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    fn chosen(dim: usize, dofs: usize, contact: AutoContact) -> Preset {
-        choose_preset(Preset::Auto, dim, dofs, contact).0
-    }
-
-    #[test]
-    fn friction_in_3d_is_direct_but_for_wide_tresca_on_held_bodies() {
-        let coulomb = AutoContact {
-            friction: true,
-            ..AutoContact::default()
-        };
-        let wide = AutoContact {
-            tresca_wide_held: true,
-            ..coulomb
-        };
-        assert_eq!(chosen(3, 200_000, coulomb), Preset::Direct);
-        assert_eq!(chosen(3, 200_000, wide), Preset::Iterative);
-        // below the iterative size, in 2D and where asked for: as before
-        assert_eq!(chosen(3, AUTO_ITERATIVE_3D_DOFS - 1, wide), Preset::Direct);
-        assert_eq!(chosen(2, 200_000, wide), Preset::Direct);
-        let asked = choose_preset(Preset::Direct, 3, 200_000, wide).0;
-        assert_eq!(asked, Preset::Direct);
-        // without contact: iterative from the size on
-        assert_eq!(
-            chosen(3, 200_000, AutoContact::default()),
-            Preset::Iterative
-        );
-    }
 }

@@ -497,10 +497,10 @@ fn tresca_fits(ctx: &Ctx, b: &ContactBoundary, dim: usize) -> bool {
     fits
 }
 
-/// Whether Tresca's condensed attempt is made for `nodes` nodes with a threshold in a mesh of
-/// dimension `dim` (their d dofs each in the Schur complement; [`tresca_fits`]). Also the auto
-/// preset's test (`crate::solver::choose_preset`). Pure.
-pub(crate) fn tresca_condensed_fits(nodes: usize, dim: usize) -> bool {
+/// Whether Tresca's condensed attempt with every node that has a threshold is made for `nodes`
+/// such nodes in a mesh of dimension `dim` (their d dofs each in the Schur complement;
+/// [`tresca_fits`]). Pure.
+fn tresca_condensed_fits(nodes: usize, dim: usize) -> bool {
     ((nodes * dim) as f64).powi(3) <= tresca_dense_flops(dim)
 }
 

@@ -189,9 +189,15 @@ pub(crate) fn solve(
         far_nodes: 0,
         far_rounds: 0,
     };
-    let mut far = Far::of(ctx, p.boundary, kept, ns.law, warm, p.mesh.dim);
+    let mut far = Far::of(ctx, p.boundary, kept, ns.law, warm);
+    // f on rank 0: each round's load replaces it for the round's solves, restored after
     let f0 = kept.f_root.clone();
-    let ended = rounds(ctx, p, reduced, ns, kept, warm, &mut far, &mut summary);
+    let at = Rounds {
+        warm,
+        f0: &f0,
+        summary: &mut summary,
+    };
+    let ended = rounds(ctx, p, reduced, ns, kept, &mut far, at);
     kept.f_root = f0;
     let (history, checked) = match ended? {
         Ok(done) => done,
@@ -200,50 +206,50 @@ pub(crate) fn solve(
     finish(ctx, reduced, (summary, history, n), checked)
 }
 
+/// What [`rounds`] starts from and records into: the warm start (a load step's), f on rank 0
+/// (`f0`), the summary.
+struct Rounds<'a> {
+    warm: Option<&'a WarmStart<'a>>,
+    f0: &'a [f64],
+    summary: &'a mut CoulombCondensedSummary,
+}
+
 /// The dense iteration, its expansion and check: once, or with Tresca's far nodes ([`Far`])
 /// round after round with their friction as a load (`kept.f_root` holds the load of the
 /// round; the caller restores it). The inner `Err`: why the condensed solve gives up.
 /// Collective.
-#[allow(clippy::too_many_arguments)]
 fn rounds(
     ctx: &Ctx,
     p: &ContactProblem,
     reduced: &mut ReducedSystem,
     ns: &NewtonSettings,
     kept: &mut Kept,
-    warm: Option<&WarmStart>,
     far: &mut Option<Far>,
-    summary: &mut CoulombCondensedSummary,
+    at: Rounds,
 ) -> Result<Result<(Vec<StepInfo>, Checked), String>, RunError> {
+    let Rounds { warm, f0, summary } = at;
     let (n, dim) = (kept.comp.list.len(), p.mesh.dim);
     let path = match ns.law {
         Law::Tresca => "condensed Tresca",
         _ => "condensed Coulomb",
     };
-    let f0 = kept.f_root.clone();
     let mut history = Vec::new();
     // the round before's iterate: the next round's start
     let mut before: Option<(Vec<NodeResult>, Vec<f64>)> = None;
     for round in 1.. {
-        let far_phi = match far.as_ref() {
-            Some(fr) => {
-                let (f, phi) = fr.loads(ctx, kept, &f0, dim);
-                kept.f_root = f;
-                let f_root = std::mem::take(&mut kept.f_root);
-                let recondensed = kept.comp.recondense(ctx, &f_root);
-                kept.f_root = f_root;
-                if let Err(why) = recondensed {
-                    return Ok(Err(why));
-                }
-                phi
+        if let Some(fr) = far.as_ref() {
+            let f = fr.loads(ctx, kept, f0, dim);
+            let recondensed = kept.comp.recondense(ctx, &f);
+            kept.f_root = f;
+            if let Err(why) = recondensed {
+                return Ok(Err(why));
             }
-            None => Vec::new(),
-        };
+        }
         let start = before
             .as_ref()
             .map(|(nodes, u)| WarmStart { nodes, u_local: u });
         let t = Instant::now();
-        let run = dense_phase(ctx, p, ns, kept, start.as_ref().or(warm), &far_phi);
+        let run = dense_phase(ctx, p, ns, kept, start.as_ref().or(warm));
         summary.dense_seconds += t.elapsed().as_secs_f64();
         summary.steps += run.steps.len();
         summary.primal_steps += run.primal_steps;
@@ -306,9 +312,10 @@ fn rounds(
 
 /// The rounds of the dense iteration with Tresca's far nodes' friction as a load at most
 /// ([`rounds`]): each costs two solves with the kept factorisation (condensation and
-/// expansion) and the dense steps from the round before's states. In 2D the far nodes' slip
-/// directions are signs and settle in a few rounds; in 3D they converge linearly. Beyond it
-/// the plain path continues from the last expanded iterate.
+/// expansion) and the dense steps from the round before's states. The far nodes' slip
+/// directions converge linearly: 0.01–0.03 per round on the 3D block at g = 2.5e-4, 0.66 at
+/// g = 5e-3, where the limit ends the rounds, the check accepting (docs/numbers.md, "Tresca's
+/// far nodes"). Unaccepted at the limit the condensed solve gives up (the plain path).
 const MAX_FAR_ROUNDS: usize = 30;
 
 /// The far nodes' friction is settled where a round moves it by at most this part of the
@@ -318,10 +325,10 @@ const MAX_FAR_ROUNDS: usize = 30;
 /// bound (1e-8 of ‖λ‖) passed in round 4 with u 1.6e-10 off.
 const FAR_ROUND_OFF: f64 = 1e-9;
 
-/// From this round on a far node below its threshold (sticking) ends the rounds: it needs its
-/// stick row, which only a candidate has. The first rounds start from λ_τ = 0 at the far nodes
-/// (or the step before's), where a node may sit below its threshold only until its neighbours'
-/// friction is found.
+/// From this round on a far node below its threshold or turned back (sticking) ends the rounds:
+/// it needs its stick row, which only a candidate has. The first round starts from λ_τ = 0 at
+/// the far nodes (or the load step before's), where a node may sit below its threshold only
+/// until its neighbours' friction is found.
 const FAR_STICK_ROUNDS: usize = 3;
 
 /// Tresca's nodes with a threshold beyond the candidates (neither Schur variables nor held):
@@ -348,16 +355,17 @@ struct Moved {
 
 impl Far {
     /// The far nodes of `b` under Tresca (`None`: none, or another law), λ_τ from the warm
-    /// start where there is one, else 0. Collective (one reduction).
+    /// start where there is one, else 0. Collective (two reductions).
     fn of(
         ctx: &Ctx,
         b: &ContactBoundary,
         kept: &Kept,
         law: Law,
         warm: Option<&WarmStart>,
-        dim: usize,
     ) -> Option<Far> {
-        if law != Law::Tresca {
+        // a body with free modes (its load in them would need the far friction's part, and
+        // its few stick nodes are far: docs/friction.md) keeps the plain path
+        if law != Law::Tresca || kept.free.dirichlet_free().ncols() > 0 {
             return None;
         }
         let held = |g: usize| kept.held.get(g).copied().unwrap_or(false);
@@ -371,27 +379,9 @@ impl Far {
         if count == 0 {
             return None;
         }
-        // without a warm start: at the threshold along the rigid motion that the load in the
-        // free modes φ asks for (a body that only its contacts hold slides that way where
-        // it slips), 0 where no mode is free
-        let phi = kept.free.free_load();
-        let along = |g: usize, k: &ContactNode| {
-            let mut t = [0.0; 2];
-            for (j, tj) in t.iter_mut().enumerate().take(dim - 1) {
-                *tj = (phi.iter().enumerate())
-                    .map(|(c, p)| kept.cand.g_along(g, j + 1, c) * p)
-                    .sum();
-            }
-            let norm = t[0].hypot(t[1]);
-            match norm > 0.0 {
-                true => [k.bound * t[0] / norm, k.bound * t[1] / norm],
-                false => [0.0; 2],
-            }
-        };
         let lambda = (far.iter().enumerate())
             .map(|(i, &f)| match (f, warm) {
                 (true, Some(w)) => w.nodes[i].lambda_t,
-                (true, None) => along(b.offset + i, &b.nodes[i]),
                 _ => [0.0; 2],
             })
             .collect();
@@ -408,9 +398,9 @@ impl Far {
     }
 
     /// The far nodes' friction as a load: f − N_τ λ_τ on rank 0 (global coordinates at their
-    /// rows; `f0` is f there) and its part in the free modes, −Σ Gᵀ λ_τ (added to the modes'
-    /// load φ); empty elsewhere. Collective (one gather).
-    fn loads(&self, ctx: &Ctx, kept: &Kept, f0: &[f64], dim: usize) -> (Vec<f64>, Vec<f64>) {
+    /// rows; `f0` is f there), empty elsewhere. (No free mode: [`Far::of`].) Collective (one
+    /// gather).
+    fn loads(&self, ctx: &Ctx, kept: &Kept, f0: &[f64], dim: usize) -> Vec<f64> {
         let mut mine = Vec::new();
         for (i, (&f, l)) in self.far.iter().zip(&self.lambda).enumerate() {
             if f {
@@ -419,24 +409,17 @@ impl Far {
         }
         let all = ctx.gather_to_root(&mine);
         if ctx.rank != 0 {
-            return (Vec::new(), Vec::new());
+            return Vec::new();
         }
         let mut f = f0.to_vec();
-        let mz = kept.free.dirichlet_free().ncols();
-        let mut phi = vec![0.0; mz];
         for e in all.chunks_exact(3) {
             let (i, l) = (e[0] as usize, [e[1], e[2]]);
             let (q, row) = (kept.cand.basis(i, dim), kept.cand.row(i));
             for a in 0..dim {
                 f[row + a] -= (1..dim).map(|j| q[a][j] * l[j - 1]).sum::<f64>();
             }
-            for (c, p) in phi.iter_mut().enumerate() {
-                *p -= (1..dim)
-                    .map(|j| kept.cand.g_along(i, j, c) * l[j - 1])
-                    .sum::<f64>();
-            }
         }
-        (f, phi)
+        f
     }
 
     /// λ_τ ← b v/|v| where |v| > b, else v (v = λ_τ + c Δu_τ on the expanded iterate `nodes`,
@@ -538,7 +521,6 @@ fn dense_phase(
     ns: &NewtonSettings,
     kept: &Kept,
     warm: Option<&WarmStart>,
-    far_phi: &[f64],
 ) -> DenseCoulomb {
     let (b, dim) = (p.boundary, p.mesh.dim);
     let n = kept.comp.list.len();
@@ -548,11 +530,7 @@ fn dense_phase(
         let run = guarded("coulomb-dense-steps", || {
             let cb = candidate_boundary(kept, b, dim);
             let g = mode_parts(kept, ns.force, &cb, dim);
-            // the free modes' load, with Tresca's far nodes' friction (rank 0; or none)
             let mut phi = kept.free.free_load();
-            for (p, d) in phi.iter_mut().zip(far_phi) {
-                *p += d;
-            }
             phi.extend(ns.force.iter().map(|fc| fc.magnitude()));
             let stiff = kept.comp.stiffness().map(|(s, r)| {
                 let sg = s.times_columns(&g);

@@ -87,6 +87,19 @@ fn a_dragged_block_ends_where_the_plain_path_ends() {
     condensed_against_plain("tests/cases/tresca/block2d_tresca.toml", &[]);
 }
 
+/// The 3D block of `cases/blocks/block3d.geo` with tetrahedra of size 0.1 (441 nodes on its
+/// top), made in `dir`.
+fn block_mesh(dir: &std::path::Path) -> std::path::PathBuf {
+    let mesh = dir.join("block.msh");
+    common::process::gmsh_file(
+        &repo("cases/blocks/block3d.geo"),
+        3,
+        &["-setnumber", "h", "0.1"],
+        &mesh,
+    );
+    mesh
+}
+
 /// A 3D block held at its bottom and pushed sideways into a rigid sphere, Tresca's threshold on
 /// every node of its top (several hundred: more than the condensed path takes with every dof of
 /// each): the candidates by their gaps, the nodes beyond them carrying their friction as a
@@ -94,13 +107,7 @@ fn a_dragged_block_ends_where_the_plain_path_ends() {
 #[test]
 fn a_3d_block_with_far_nodes_ends_where_the_plain_path_ends() {
     let tmp = tempfile::tempdir().expect("tempdir");
-    let mesh = tmp.path().join("block.msh");
-    common::process::gmsh_file(
-        &repo("cases/blocks/block3d.geo"),
-        3,
-        &["-setnumber", "h", "0.1"],
-        &mesh,
-    );
+    let mesh = block_mesh(tmp.path());
     let file = format!("mesh.file=\"{}\"", mesh.display());
     let tresca = "contact.friction={law=\"tresca\", threshold=2.5e-4}";
     let sets = [file.as_str(), tresca, CONTACT_OUT];
@@ -118,4 +125,33 @@ fn a_3d_block_with_far_nodes_ends_where_the_plain_path_ends() {
         coulomb["far_rounds"].as_u64().unwrap_or(0) >= 2,
         "{coulomb}"
     );
+}
+
+/// The same block with a threshold 80 × larger: many nodes beyond the candidates stick, which
+/// their friction as a load cannot hold. The condensed solve says so and gives up; the plain
+/// path from its own start ends where the plain path alone ends.
+#[test]
+fn far_nodes_that_stick_leave_the_3d_block_to_the_plain_path() {
+    let tmp = tempfile::tempdir().expect("tempdir");
+    let mesh = block_mesh(tmp.path());
+    let file = format!("mesh.file=\"{}\"", mesh.display());
+    let tresca = "contact.friction={law=\"tresca\", threshold=2e-2}";
+    let case = repo("cases/bench/friction_block_held.toml");
+    let sets = [file.as_str(), tresca, CONTACT_OUT];
+    let s = solve(2, &case, &sets);
+    s.assert_converged("far nodes that stick");
+    let coulomb = &s.summary["newton"]["condensed"]["coulomb"];
+    assert_eq!(coulomb["outcome"], "fallback", "{coulomb}");
+    let why = coulomb["reason"].as_str().unwrap_or("");
+    assert!(why.contains("stick"), "{why}");
+    let mut plain_sets = sets.to_vec();
+    plain_sets.push("solver.path=\"plain\"");
+    let plain = solve(2, &case, &plain_sets);
+    plain.assert_converged("plain path");
+    let stick = plain.final_states();
+    assert!(
+        stick[0] > 0,
+        "nodes that stick out of contact expected: {stick:?}"
+    );
+    ends_where(&s, &plain, "far nodes that stick");
 }

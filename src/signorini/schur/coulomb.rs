@@ -586,7 +586,11 @@ fn dense_phase(
 
 /// The condensed solve stops: said in the log, the plain path from the frictionless solution.
 fn give_up(ctx: &Ctx, mut summary: CoulombCondensedSummary, why: String) -> CoulombCondensed {
-    let then = "the plain path from the frictionless solution";
+    // (Tresca's plain path starts from its own start: coulomb.rs `coulomb_start`)
+    let then = match summary.law == Law::Tresca.name() {
+        true => "the plain path from its own start",
+        false => "the plain path from the frictionless solution",
+    };
     let what = format!("{}: condensed", summary.law);
     let (outcome, reason) = (&mut summary.outcome, &mut summary.reason);
     fall_back(ctx, &what, then, outcome, reason, why);

@@ -269,23 +269,8 @@ fn coulomb_start(
     };
     // the body's free modes (one construction: the tests below read them)
     let free = free_modes(ctx, problem, reduced, ns);
-    // Tresca with more nodes than its condensed path takes: on a 3D body that Dirichlet data
-    // hold (no force control) the nodes beyond the candidates carry their friction as a load
-    // (schur::coulomb); else the plain path at once (docs/friction.md, "Tresca's far nodes")
-    if !thresholds {
-        let plain = match (problem.mesh.dim, free.floats() || !ns.force.is_empty()) {
-            (3, false) => None,
-            (3, true) => Some("a body that its contacts hold, or force control"),
-            _ => Some("in 2D"),
-        };
-        if let Some(why) = plain {
-            say!(ctx, "tresca: {why}: the plain path");
-            return Ok((Begin::Touching, None));
-        }
-        say!(
-            ctx,
-            "tresca: the nodes beyond the candidates carry their friction as a load"
-        );
+    if !thresholds && !far_nodes_apply(ctx, problem, ns, &free) {
+        return Ok((Begin::Touching, None));
     }
     // a load that friction alone holds: the frictionless estimate carries it at the contact
     let carried = Unheld::of(ctx, b, &free).map(|un| {
@@ -312,28 +297,58 @@ fn coulomb_start(
             ns.law.name()
         );
     }
-    if let Some(w) = warm {
-        if forced {
-            drop(session.kept.take()); // no Coulomb step uses a kept factorisation here
-            return Ok((Begin::Touching, None));
-        }
-        let settings = StartSettings {
-            coulomb: ns,
-            frictionless: &fl,
-            thresholds,
-        };
-        return coulomb_load_step(ctx, problem, reduced, session, settings, w);
-    }
     let settings = StartSettings {
         coulomb: ns,
         frictionless: &fl,
         thresholds,
     };
+    if let Some(w) = warm {
+        if forced {
+            drop(session.kept.take()); // no Coulomb step uses a kept factorisation here
+            return Ok((Begin::Touching, None));
+        }
+        return coulomb_load_step(ctx, problem, reduced, session, settings, w);
+    }
     let passes = coulomb_passes(ctx, problem, reduced, session, settings, forced, from)?;
+    begin_after_passes(ctx, ns, b, passes)
+}
+
+/// Tresca with more nodes than its condensed path takes ([`tresca_fits`]): on a 3D body that
+/// Dirichlet data hold (`free` leaves no mode free, no force control) the nodes beyond the
+/// candidates carry their friction as a load (schur::coulomb); else (false) the plain path at
+/// once (docs/friction.md, "Tresca's far nodes"), said in the log. Collective (log).
+fn far_nodes_apply(
+    ctx: &Ctx,
+    problem: &ContactProblem,
+    ns: &NewtonSettings,
+    free: &FreeModes,
+) -> bool {
+    let plain = match (problem.mesh.dim, free.floats() || !ns.force.is_empty()) {
+        (3, false) => None,
+        (3, true) => Some("a body that its contacts hold, or force control"),
+        _ => Some("in 2D"),
+    };
+    match plain {
+        Some(why) => say!(ctx, "tresca: {why}: the plain path"),
+        None => say!(
+            ctx,
+            "tresca: the nodes beyond the candidates carry their friction as a load"
+        ),
+    }
+    plain.is_none()
+}
+
+/// The beginning [`coulomb_start`] takes from its condensed passes: their outcome, or from the
+/// frictionless solution every active node sticking (Tresca: its own start, not the
+/// frictionless solution: no fewer steps, docs/friction.md). Collective (log).
+fn begin_after_passes(
+    ctx: &Ctx,
+    ns: &NewtonSettings,
+    b: &ContactBoundary,
+    passes: Passes,
+) -> Result<(Begin, Option<schur::CondensedSummary>), RunError> {
     let (mut nr, summary) = match passes {
         Passes::Done(begin, summary) => return Ok((begin, summary)),
-        // Tresca: the plain path from its own start where the condensed iteration gave up
-        // (not from the frictionless solution: no fewer steps, docs/friction.md)
         Passes::Frictionless(_, summary) if ns.law == Law::Tresca => {
             return Ok((Begin::Touching, Some(summary)))
         }
@@ -382,10 +397,6 @@ fn coulomb_passes(
     // errors are agreed: every rank takes the same branch
     // the Coulomb iteration on the candidates needs every dof of them, the plain path none
     let per = if forced { 1 } else { dim };
-    let too_wide = |t: &Result<_, RunError>| {
-        let fell = |s: &schur::CondensedSummary| s.factorisations == 0;
-        matches!(t, Ok((schur::Condensed::Fallback(s), _)) if fell(s))
-    };
     // where the zone is too wide for every dof of its nodes: the nodes a held zone releases
     let mut passes = PassLoop::new(ns.law, Vec::new(), Vec::new());
     // the expanded iterate of the last pass: the plain path's start where the next one fails
@@ -420,18 +431,11 @@ fn coulomb_passes(
                 return Ok(done);
             }
         }
-        if per > 1 && too_wide(&tried) && ns.law == Law::Tresca {
-            return Ok(tresca_too_wide(ctx, &mut session.kept, tried));
-        }
         if per > 1 && too_wide(&tried) {
-            // no zone to hold: the candidates' normal dofs alone
-            say!(
-                ctx,
-                "{}: the candidates' normal dofs alone in the Schur complement",
-                ns.law.name()
-            );
-            let how = Condensing::FRICTIONLESS;
-            tried = solve_keeping(ctx, problem, reduced, fl, session, None, how);
+            tried = match narrower(ctx, problem, reduced, session, settings, tried) {
+                Ok(narrower) => narrower,
+                Err(done) => return Ok(*done),
+            };
         }
         // a frictionless solve on the normal dofs alone keeps its factorisation for a next
         // load step, which no Coulomb step can use
@@ -468,6 +472,41 @@ fn coulomb_passes(
             }
         }
     }
+}
+
+/// A condensed solve's outcome with what it kept ([`solve_keeping`]).
+type Tried = Result<(schur::Condensed, Option<schur::Kept>), RunError>;
+
+/// A condensed attempt that factorised nothing: its candidates' dofs too many for the dense
+/// limits (the same on every rank: errors are agreed).
+fn too_wide(tried: &Tried) -> bool {
+    let fell = |s: &schur::CondensedSummary| s.factorisations == 0;
+    matches!(tried, Ok((schur::Condensed::Fallback(s), _)) if fell(s))
+}
+
+/// After an attempt too wide for every dof of its candidates with no zone to hold
+/// ([`too_wide`]): Tresca's plain path ([`tresca_too_wide`], `Err`), else the frictionless
+/// solve with the candidates' normal dofs alone in the Schur complement. Collective.
+fn narrower(
+    ctx: &Ctx,
+    problem: &ContactProblem,
+    reduced: &mut ReducedSystem,
+    session: &mut Session,
+    settings: StartSettings,
+    tried: Tried,
+) -> Result<Tried, Box<Passes>> {
+    let ns = settings.coulomb;
+    if ns.law == Law::Tresca {
+        return Err(Box::new(tresca_too_wide(ctx, &mut session.kept, tried)));
+    }
+    say!(
+        ctx,
+        "{}: the candidates' normal dofs alone in the Schur complement",
+        ns.law.name()
+    );
+    let how = Condensing::FRICTIONLESS;
+    let fl = settings.frictionless;
+    Ok(solve_keeping(ctx, problem, reduced, fl, session, None, how))
 }
 
 /// Whether Tresca's condensed attempt is made: every node with a threshold b_k > 0 is a
@@ -520,11 +559,7 @@ fn tresca_dense_flops(dim: usize) -> f64 {
 /// exceed the dense limits (`tried`: the attempt that said so): the plain path from its own
 /// start, not from a frictionless solution (no fewer steps for Tresca, docs/friction.md).
 /// Collective (log).
-fn tresca_too_wide(
-    ctx: &Ctx,
-    store: &mut KeptFactor,
-    tried: Result<(schur::Condensed, Option<schur::Kept>), RunError>,
-) -> Passes {
+fn tresca_too_wide(ctx: &Ctx, store: &mut KeptFactor, tried: Tried) -> Passes {
     drop(store.take());
     let summary = match tried {
         Ok((schur::Condensed::Fallback(s), _)) => Some(s),
@@ -541,7 +576,7 @@ fn tresca_too_wide(
 /// counted after the `earlier` passes', from the pass before's states (its contact records
 /// and this rank's rows of u). Local.
 fn warm_run<'w>(
-    tried: Result<(schur::Condensed, Option<schur::Kept>), RunError>,
+    tried: Tried,
     earlier: usize,
     (nodes, u_local): (&'w [NodeResult], &'w [f64]),
 ) -> PassRun<'w> {
@@ -559,7 +594,7 @@ fn warm_run<'w>(
 
 /// A pass of [`coulomb_passes`] that factorised K_p alone (its frictionless steps not run: a
 /// warm pass). Pure.
-fn factorised(tried: &Result<(schur::Condensed, Option<schur::Kept>), RunError>) -> bool {
+fn factorised(tried: &Tried) -> bool {
     matches!(tried, Ok((schur::Condensed::Factorised(_), Some(_))))
 }
 
@@ -644,7 +679,7 @@ fn coulomb_pass(
 fn frictionless_start(
     ctx: &Ctx,
     law: Law,
-    tried: Result<(schur::Condensed, Option<schur::Kept>), RunError>,
+    tried: Tried,
     from: &str,
 ) -> Result<Result<(NewtonResult, schur::CondensedSummary, Option<schur::Kept>), Passes>, RunError>
 {
@@ -677,7 +712,7 @@ fn frictionless_start(
 fn from_last_pass(
     ctx: &Ctx,
     store: &mut KeptFactor,
-    tried: &Result<(schur::Condensed, Option<schur::Kept>), RunError>,
+    tried: &Tried,
     r: NewtonResult,
     u: Vec<f64>,
     cs: CoulombCondensedSummary,

@@ -21,8 +21,9 @@ fn ends_where(s: &Solved, plain: &Solved, what: &str) {
 }
 
 /// The case on the Schur path (one factorisation, the dense iteration accepted) on 1, 2 and 3
-/// ranks against the plain path on one, which takes more than one factorisation.
-fn condensed_against_plain(case: &str, sets: &[&str]) {
+/// ranks against the plain path on one, which takes more than one factorisation; the run on
+/// 3 ranks.
+fn condensed_against_plain(case: &str, sets: &[&str]) -> Solved {
     let case = repo(case);
     let mut plain_sets = sets.to_vec();
     plain_sets.push("solver.path=\"plain\"");
@@ -34,6 +35,7 @@ fn condensed_against_plain(case: &str, sets: &[&str]) {
         !plain.slip_node_ids().is_empty(),
         "the case should have slipping nodes"
     );
+    let mut last = None;
     for np in [1, 2, 3] {
         let what = format!("{} on {np} rank(s)", case.display());
         let s = solve(np, &case, sets);
@@ -47,7 +49,9 @@ fn condensed_against_plain(case: &str, sets: &[&str]) {
             condensed["coulomb"]["steps"]
         );
         ends_where(&s, &plain, &what);
+        last = Some(s);
     }
+    last.expect("three runs")
 }
 
 const TRESCA: &str = "contact.friction={law=\"tresca\", threshold=5e-3}";
@@ -87,9 +91,13 @@ fn a_dragged_block_ends_where_the_plain_path_ends() {
     condensed_against_plain("tests/cases/tresca/block2d_tresca.toml", &[]);
 }
 
-/// The 3D block of `cases/blocks/block3d.geo` with tetrahedra of size 0.1 (441 nodes on its
-/// top), made in `dir`.
-fn block_mesh(dir: &std::path::Path) -> std::path::PathBuf {
+/// The 3D block held at its bottom and pushed sideways into a rigid sphere.
+const BLOCK: &str = "cases/bench/friction_block_held.toml";
+
+/// The settings of [`BLOCK`] on the block of `cases/blocks/block3d.geo` with tetrahedra of size
+/// 0.1 (441 nodes on its top, made in `dir`), Tresca's `threshold` on its top, the contact
+/// output.
+fn block_sets(dir: &std::path::Path, threshold: f64) -> Vec<String> {
     let mesh = dir.join("block.msh");
     common::process::gmsh_file(
         &repo("cases/blocks/block3d.geo"),
@@ -97,22 +105,23 @@ fn block_mesh(dir: &std::path::Path) -> std::path::PathBuf {
         &["-setnumber", "h", "0.1"],
         &mesh,
     );
-    mesh
+    vec![
+        format!("mesh.file=\"{}\"", mesh.display()),
+        format!("contact.friction={{law=\"tresca\", threshold={threshold:e}}}"),
+        CONTACT_OUT.to_string(),
+    ]
 }
 
-/// A 3D block held at its bottom and pushed sideways into a rigid sphere, Tresca's threshold on
-/// every node of its top (several hundred: more than the condensed path takes with every dof of
-/// each): the candidates by their gaps, the nodes beyond them carrying their friction as a
-/// load, found in rounds on the one factorisation (schur/coulomb.rs `Far`).
+/// [`BLOCK`] with Tresca's threshold on every node of its top (several hundred: more than the
+/// condensed path takes with every dof of each): the candidates by their gaps, the nodes
+/// beyond them carrying their friction as a load, found in rounds on the one factorisation
+/// (schur/coulomb.rs `Far`).
 #[test]
 fn a_3d_block_with_far_nodes_ends_where_the_plain_path_ends() {
     let tmp = tempfile::tempdir().expect("tempdir");
-    let mesh = block_mesh(tmp.path());
-    let file = format!("mesh.file=\"{}\"", mesh.display());
-    let tresca = "contact.friction={law=\"tresca\", threshold=2.5e-4}";
-    let sets = [file.as_str(), tresca, CONTACT_OUT];
-    condensed_against_plain("cases/bench/friction_block_held.toml", &sets);
-    let s = solve(2, &repo("cases/bench/friction_block_held.toml"), &sets);
+    let owned = block_sets(tmp.path(), 2.5e-4);
+    let sets: Vec<&str> = owned.iter().map(String::as_str).collect();
+    let s = condensed_against_plain(BLOCK, &sets);
     let coulomb = &s.summary["newton"]["condensed"]["coulomb"];
     let far = coulomb["far_nodes"].as_u64().unwrap_or(0);
     let candidates = s.f(&["newton", "condensed", "candidates"]) as u64;
@@ -133,11 +142,9 @@ fn a_3d_block_with_far_nodes_ends_where_the_plain_path_ends() {
 #[test]
 fn far_nodes_that_stick_leave_the_3d_block_to_the_plain_path() {
     let tmp = tempfile::tempdir().expect("tempdir");
-    let mesh = block_mesh(tmp.path());
-    let file = format!("mesh.file=\"{}\"", mesh.display());
-    let tresca = "contact.friction={law=\"tresca\", threshold=2e-2}";
-    let case = repo("cases/bench/friction_block_held.toml");
-    let sets = [file.as_str(), tresca, CONTACT_OUT];
+    let owned = block_sets(tmp.path(), 2e-2);
+    let sets: Vec<&str> = owned.iter().map(String::as_str).collect();
+    let case = repo(BLOCK);
     let s = solve(2, &case, &sets);
     s.assert_converged("far nodes that stick");
     let coulomb = &s.summary["newton"]["condensed"]["coulomb"];

@@ -190,15 +190,21 @@ pub(crate) fn solve(
         far_rounds: 0,
     };
     let mut far = Far::of(ctx, p.boundary, kept, ns.law, warm);
-    // f on rank 0: each round's load replaces it for the round's solves, restored after
-    let f0 = kept.f_root.clone();
+    // f on rank 0: with far nodes each round's load replaces it for the round's solves, and it
+    // is put back after
+    let f0 = match far {
+        Some(_) => std::mem::take(&mut kept.f_root),
+        None => Vec::new(),
+    };
     let at = Rounds {
         warm,
         f0: &f0,
         summary: &mut summary,
     };
     let ended = rounds(ctx, p, reduced, ns, kept, &mut far, at);
-    kept.f_root = f0;
+    if far.is_some() {
+        kept.f_root = f0;
+    }
     let (history, checked) = match ended? {
         Ok(done) => done,
         Err(why) => return Ok(give_up(ctx, summary, why)),
@@ -207,7 +213,7 @@ pub(crate) fn solve(
 }
 
 /// What [`rounds`] starts from and records into: the warm start (a load step's), f on rank 0
-/// (`f0`), the summary.
+/// where there are far nodes (`f0`; `kept.f_root` holds each round's load), the summary.
 struct Rounds<'a> {
     warm: Option<&'a WarmStart<'a>>,
     f0: &'a [f64],
@@ -305,7 +311,8 @@ fn rounds(
             let why = format!("the far nodes' friction not settled in {MAX_FAR_ROUNDS} rounds");
             return Ok(Err(why));
         }
-        before = Some((checked.it.nodes.clone(), checked.u.to_local_vec()?));
+        let u = checked.u.to_local_vec()?;
+        before = Some((checked.it.nodes, u));
     }
     unreachable!("the rounds end by return")
 }
@@ -363,8 +370,8 @@ impl Far {
         law: Law,
         warm: Option<&WarmStart>,
     ) -> Option<Far> {
-        // a body with free modes (its load in them would need the far friction's part, and
-        // its few stick nodes are far: docs/friction.md) keeps the plain path
+        // a body with free modes keeps the plain path (its load in them would need the far
+        // friction's part; the rounds diverged on floating bodies: docs/friction.md)
         if law != Law::Tresca || kept.free.dirichlet_free().ncols() > 0 {
             return None;
         }

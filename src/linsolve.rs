@@ -189,6 +189,16 @@ impl LinearSetup {
         if iterative && req.scale > 0.0 {
             let zero = format!("{:e}", SVD_ZERO_RELATIVE * req.scale);
             db.set("-mg_coarse_pc_svd_zero_sing", &zero)?;
+            db.set("-mortar_mg_coarse_pc_svd_zero_sing", &zero)?;
+        }
+        if iterative {
+            for (name, value) in split_options(
+                "-mortar_ksp_type preonly -mortar_pc_type gamg -mortar_pc_gamg_sym_graph true \
+                 -mortar_mg_levels_ksp_type chebyshev -mortar_mg_levels_pc_type jacobi \
+                 -mortar_mg_coarse_pc_type svd",
+            ) {
+                db.set(&name, &value)?;
+            }
         }
         // Repeatable runs: on 3 or more ranks GAMG's Galerkin products PᵀAP by the all-at-once
         // algorithm, whose off-process sums do not depend on message arrival (the default adds

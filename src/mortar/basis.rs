@@ -13,16 +13,19 @@ use crate::par::Ctx;
 use crate::partition::Layout;
 use crate::petsc::{self, Matrix, PInt, Vector};
 use std::collections::HashMap;
+use std::rc::Rc;
 
 /// The change of basis of a case with body pairs.
 pub struct Basis {
     q: Matrix,
+    /// Q⁻¹ = 2 I − Q (M² = 0): the iterative preset's preconditioner maps between w and u.
+    q_inv: Rc<Matrix>,
     /// N_f: the couplings to fixed master components; `None` where no slave row couples to
     /// a fixed component.
     fixed: Option<Matrix>,
     /// The assembled A (for A c and the certificate in u), kept by
     /// [`Basis::transform_matrix`].
-    a: Option<Matrix>,
+    a: Option<Rc<Matrix>>,
     /// This rank's rows that receive a slave node's contact force through Qᵀ (the coupled
     /// free components of master nodes), local row order; set by [`Basis::transform_matrix`].
     master_rows: Vec<bool>,
@@ -92,11 +95,12 @@ impl Basis {
             .flat_map(|(_, r)| r.iter().map(|(v, row)| (*v, row)))
             .collect();
         let (lo, _) = layout.node_range();
-        let (mut q, mut nf) = (Rows::default(), Rows::default());
+        let (mut q, mut qi, mut nf) = (Rows::default(), Rows::default(), Rows::default());
         for (i, &v) in layout.owned_nodes.iter().enumerate() {
             for d in 0..dim {
                 let r = ((lo + i) * dim + d) as PInt;
                 let mut qe = vec![(r, 1.0)];
+                let mut qie = vec![(r, 1.0)];
                 let mut fe = Vec::new();
                 if let Some(row) = rows.get(&v) {
                     let free = fixed[v * dim + d].is_nan();
@@ -109,15 +113,19 @@ impl Basis {
                         // an explicit zero where the component is not coupled: every node
                         // block of Q, and so of Qᵀ A Q, is complete (the step system reads
                         // a node's rows in d × d blocks)
-                        qe.push((col, if free && !master_fixed { m } else { 0.0 }));
+                        let mq = if free && !master_fixed { m } else { 0.0 };
+                        qe.push((col, mq));
+                        qie.push((col, -mq));
                     }
                 }
                 q.push_row(qe);
+                qi.push_row(qie);
                 nf.push_row(fe);
             }
         }
         let comm = ctx.comm();
         let qm = Matrix::from_csr(comm, dim, &q.ptr, &q.cols, &q.vals)?;
+        let q_inv = Rc::new(Matrix::from_csr(comm, dim, &qi.ptr, &qi.cols, &qi.vals)?);
         let any_fixed = ctx.sum_usize(nf.cols.len()) > 0;
         let fixed = if any_fixed {
             Some(Matrix::from_csr(comm, dim, &nf.ptr, &nf.cols, &nf.vals)?)
@@ -126,6 +134,7 @@ impl Basis {
         };
         Ok(Basis {
             q: qm,
+            q_inv,
             fixed,
             a: None,
             master_rows: Vec::new(),
@@ -136,7 +145,7 @@ impl Basis {
     /// Replaces A by Qᵀ A Q (keeping A). Collective.
     pub fn transform_matrix(&mut self, sys: &mut System) -> petsc::Result<()> {
         let a_hat = sys.a.ptap(&self.q)?;
-        self.a = Some(std::mem::replace(&mut sys.a, a_hat));
+        self.a = Some(Rc::new(std::mem::replace(&mut sys.a, a_hat)));
         // (Q − I)ᵀ 1 is Σ_k m_kj > 0 at the coupled master rows, 0 elsewhere
         let mut ones = sys.b.duplicate()?;
         ones.set_all(1.0)?;
@@ -149,6 +158,12 @@ impl Basis {
     /// The assembled A (in u), once [`Basis::transform_matrix`] ran.
     pub fn a(&self) -> &Matrix {
         self.a.as_ref().expect("transform_matrix ran")
+    }
+
+    /// A (in u) and Q⁻¹, shared: the iterative preset's preconditioner keeps them.
+    pub fn shared(&self) -> (Rc<Matrix>, Rc<Matrix>) {
+        let a = self.a.clone().expect("transform_matrix ran");
+        (a, self.q_inv.clone())
     }
 
     /// This rank's rows that receive contact forces of slave nodes (master rows).

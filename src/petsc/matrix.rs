@@ -295,7 +295,7 @@ impl Matrix {
 
     /// Attaches the rigid-body modes built from nodal coordinates (block size = dim) as the
     /// near-null space (used by GAMG).
-    pub fn set_rigid_body_near_null_space(&mut self, coords: &Vector) -> Result<()> {
+    pub fn set_rigid_body_near_null_space(&self, coords: &Vector) -> Result<()> {
         let mut sp: ffi::MatNullSpace = ptr::null_mut();
         // SAFETY: coords has block size dim; the null space is referenced by the matrix.
         unsafe {

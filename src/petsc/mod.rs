@@ -13,6 +13,7 @@ mod mpi;
 pub mod mumps;
 pub mod ndfactor;
 pub mod optdb;
+pub mod shellpc;
 pub mod options;
 pub mod snes;
 pub mod vector;

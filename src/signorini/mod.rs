@@ -636,6 +636,9 @@ fn run_method(
     let (nr, outer_steps, condensed_summary) = match solver_section.method {
         Method::Newton => {
             let mut reduced = ReducedSystem::new(ctx, sys, b, session.setup(), dim)?;
+            if let Some(parts) = &session.mortar_pc {
+                reduced.use_mortar_pc(ctx, parts)?;
+            }
             *types = Some(reduced.solver_types()?);
             // Tresca on the Schur path: Coulomb's generalised Newton on the contact unknowns
             // with the thresholds b_k fixed (docs/friction.md)

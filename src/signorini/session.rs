@@ -4,7 +4,7 @@
 use crate::case::{CoulombAlgorithm, SolverSection};
 use crate::error::RunError;
 use crate::linsolve::LinearSetup;
-use crate::mesh::{BodyModes, Mesh};
+use crate::mesh::Mesh;
 use crate::mortar::Basis;
 use crate::par::Ctx;
 use crate::partition::Layout;
@@ -12,6 +12,7 @@ use crate::petsc::Matrix;
 use crate::setup::ContactSettings;
 use crate::signorini::halfspace::Located;
 use crate::signorini::kept::KeptFactor;
+use crate::signorini::step_system::mortar_pc::MortarParts;
 
 /// The run's lasting state: the linear solver's set-up, the factorisation a condensed solve
 /// keeps for the next load step (with its node order) and the contact zone the half-space
@@ -28,6 +29,8 @@ pub struct Session {
     /// `locate`), once computed: a second condensed attempt (Coulomb's normal dofs alone)
     /// takes it again. Cleared at the start of every solve (the zone of another load).
     pub(crate) located: Option<Located>,
+    /// Body pairs on the iterative preset: what their preconditioner keeps (AMG in u).
+    pub(crate) mortar_pc: Option<MortarParts>,
 }
 
 impl Session {
@@ -43,7 +46,7 @@ impl Session {
         a: &Matrix,
         mortar: Option<&Basis>,
     ) -> Result<Session, RunError> {
-        let mut setup = LinearSetup::for_section(
+        let setup = LinearSetup::for_section(
             ctx,
             mesh,
             layout,
@@ -51,16 +54,21 @@ impl Session {
             symmetric_rows(settings, mesh.dim),
             crate::solver::matrix_scale(ctx, a)?,
         )?;
-        // body pairs: AMG interpolates the bodies' rigid modes in the contact unknowns w
-        if let (Some(basis), true) = (mortar, setup.uses_near_null_space()) {
-            let whole = BodyModes::whole(mesh);
-            let modes = settings.modes.as_deref().unwrap_or(&whole);
-            setup.set_near_null_space(basis.near_null_space(ctx, mesh, layout, modes)?);
-        }
+        // body pairs on the iterative preset: AMG on A in u, the held rows projected
+        // (step_system/mortar_pc.rs)
+        let mortar_pc = match (mortar, setup.uses_near_null_space()) {
+            (Some(basis), true) => {
+                let (a, q_inv) = basis.shared();
+                let coords = crate::assembly::coordinate_vector(ctx.comm(), mesh, layout)?;
+                Some(MortarParts { a, q_inv, coords })
+            }
+            _ => None,
+        };
         Ok(Session {
             setup,
             kept: KeptFactor::default(),
             located: None,
+            mortar_pc,
         })
     }
 

@@ -13,7 +13,9 @@
 //! | `write` | the symmetric elimination of the prescribed directions, the row changes |
 //! | `system` | [`ReducedSystem`]: the matrix, right-hand side and solver of one step |
 //! | `reuse` | how a step was solved and the reuse of factorisations / preconditioners |
+//! | `mortar_pc` | the iterative preset's preconditioner for body pairs (AMG in u) |
 
+pub mod mortar_pc;
 pub mod reuse;
 pub mod rows;
 pub mod system;

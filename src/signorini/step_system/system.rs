@@ -15,11 +15,15 @@ use crate::linsolve::{LinearSetup, LinearSolver, SolverKind, SymbolicSchur};
 use crate::par::Ctx;
 use crate::partition::Layout;
 use crate::petsc::mumps::SchurRequest;
+use crate::petsc::ksp::Ksp;
 use crate::petsc::{self, Matrix, PInt, SolveInfo, Vector};
 use crate::signorini::active_set::{ActiveSet, Iterate};
 use crate::signorini::boundary::ContactBoundary;
 use crate::signorini::rigid::Pin;
 use crate::tuning::INEXACT_REDUCTION;
+use super::mortar_pc::{Held, HeldNodes, MortarParts, MortarPc, PREFIX, SHELL_NAME};
+use std::cell::RefCell;
+use std::rc::Rc;
 use std::time::Instant;
 
 /// The reduced system of one Newton step and its solver: the matrix S on A's pattern, the
@@ -60,6 +64,8 @@ pub struct ReducedSystem {
     /// the row mix E (a scratch right-hand side with it), and whether this step uses it.
     amg_matrix: Option<(Matrix, Vector)>,
     unmixed: bool,
+    /// Body pairs on the iterative preset: the held nodes that [`MortarPc`] reads.
+    held: Option<HeldNodes>,
 }
 
 impl ReducedSystem {
@@ -102,7 +108,27 @@ impl ReducedSystem {
             change: None,
             amg_matrix: None,
             unmixed: false,
+            held: None,
         })
+    }
+
+    /// Body pairs on the iterative preset: the preconditioner becomes AMG in u
+    /// ([`MortarPc`]) instead of AMG on Qᵀ A Q. Collective.
+    pub fn use_mortar_pc(
+        &mut self,
+        ctx: &Ctx,
+        parts: &MortarParts,
+    ) -> petsc::Result<()> {
+        let options = self.ls.ksp.options();
+        let mut inner = Ksp::new(ctx.comm(), options)?;
+        inner.set_options_prefix(PREFIX)?;
+        inner.set_from_options()?;
+        let held: HeldNodes = Rc::new(RefCell::new(Vec::new()));
+        let shared = (parts.a.clone(), parts.q_inv.clone());
+        let pc = MortarPc::new(shared, &parts.coords, held.clone(), inner, self.dim)?;
+        petsc::shellpc::install(&self.ls.ksp, SHELL_NAME, Box::new(pc))?;
+        self.held = Some(held);
+        Ok(())
     }
 
     /// Enables the reuse of factorisations across steps (`solver.reuse`): only if the solver
@@ -230,6 +256,17 @@ impl ReducedSystem {
                 None => None,
             };
             self.previous = Some((dirs, springs));
+        }
+        if let Some(held) = &self.held {
+            *held.borrow_mut() = writes
+                .iter()
+                .filter(|(_, me, _)| !me.dirs.is_empty())
+                .map(|(r, me, lr)| Held {
+                    lr: *lr,
+                    dirs: me.dirs.iter().map(|(c, _)| *c).collect(),
+                    s: (0..dim).map(|j| r.diag(j)).sum::<f64>() / dim as f64,
+                })
+                .collect();
         }
         if let Some(amg) = &mut self.amg {
             amg.prescribed = writes

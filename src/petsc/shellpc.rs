@@ -1,0 +1,118 @@
+//! A preconditioner written in Rust behind PETSc's PCSHELL: its set-up and apply are the
+//! methods of a [`Preconditioner`], which the PC owns and drops with itself.
+
+use super::error::{check, cstring, Result};
+use super::ffi;
+use super::ksp::Ksp;
+use super::vector::Vector;
+use std::mem::ManuallyDrop;
+use std::os::raw::c_void;
+use std::ptr;
+
+/// What a shell preconditioner does.
+pub trait Preconditioner {
+    /// Builds the preconditioner for the KSP's current operators (PCSetUp).
+    fn set_up(&mut self) -> Result<()>;
+    /// y = P⁻¹ x.
+    fn apply(&mut self, x: &Vector, y: &mut Vector) -> Result<()>;
+}
+
+/// The PC's context: the preconditioner and the message of its last failure (PETSc sees an
+/// error code only).
+struct Shell {
+    pc: Box<dyn Preconditioner>,
+    error: Option<String>,
+}
+
+/// PETSC_ERR_LIB: the code a callback returns on a failure.
+const ERR_LIB: ffi::PetscErrorCode = 76;
+
+/// The shell's context.
+///
+/// # Safety
+/// `pc` must be a PC made by [`install`] and not yet destroyed.
+unsafe fn shell_of<'a>(pc: ffi::PC) -> Option<&'a mut Shell> {
+    let mut p: *mut c_void = ptr::null_mut();
+    if ffi::PCShellGetContext(pc, &mut p as *mut *mut c_void as *mut c_void) != 0 || p.is_null() {
+        return None;
+    }
+    Some(&mut *(p as *mut Shell))
+}
+
+fn code_of(shell: &mut Shell, r: Result<()>) -> ffi::PetscErrorCode {
+    match r {
+        Ok(()) => 0,
+        Err(e) => {
+            shell.error = Some(e.message);
+            ERR_LIB
+        }
+    }
+}
+
+unsafe extern "C" fn shell_set_up(pc: ffi::PC) -> ffi::PetscErrorCode {
+    let Some(shell) = shell_of(pc) else {
+        return ERR_LIB;
+    };
+    let r = shell.pc.set_up();
+    code_of(shell, r)
+}
+
+unsafe extern "C" fn shell_apply(pc: ffi::PC, x: ffi::Vec, y: ffi::Vec) -> ffi::PetscErrorCode {
+    let Some(shell) = shell_of(pc) else {
+        return ERR_LIB;
+    };
+    // Non-owning views: the PC's vectors are PETSc's.
+    let xv = ManuallyDrop::new(Vector { raw: x });
+    let mut yv = ManuallyDrop::new(Vector { raw: y });
+    let r = shell.pc.apply(&xv, &mut yv);
+    code_of(shell, r)
+}
+
+unsafe extern "C" fn shell_destroy(pc: ffi::PC) -> ffi::PetscErrorCode {
+    let mut p: *mut c_void = ptr::null_mut();
+    if ffi::PCShellGetContext(pc, &mut p as *mut *mut c_void as *mut c_void) == 0 && !p.is_null() {
+        drop(Box::from_raw(p as *mut Shell));
+        ffi::PCShellSetContext(pc, ptr::null_mut());
+    }
+    0
+}
+
+/// Makes the PC of `ksp` the shell named `name` that runs `pc`. Collective.
+pub fn install(ksp: &Ksp, name: &str, pc: Box<dyn Preconditioner>) -> Result<()> {
+    let shell = Box::new(Shell { pc, error: None });
+    let name = cstring(name);
+    // SAFETY: the PC takes the boxed shell as its context and frees it in its destroy
+    // callback; PETSc copies the name.
+    unsafe {
+        let mut raw_pc: ffi::PC = ptr::null_mut();
+        check(ffi::KSPGetPC(ksp.raw, &mut raw_pc))?;
+        check(ffi::PCSetType(raw_pc, ffi::PCSHELL.as_ptr() as *const _))?;
+        let raw = Box::into_raw(shell);
+        check(ffi::PCShellSetContext(raw_pc, raw as *mut c_void))?;
+        check(ffi::PCShellSetDestroy(raw_pc, Some(shell_destroy)))?;
+        check(ffi::PCShellSetSetUp(raw_pc, Some(shell_set_up)))?;
+        check(ffi::PCShellSetApply(raw_pc, Some(shell_apply)))?;
+        check(ffi::PCShellSetName(raw_pc, name.as_ptr()))?;
+    }
+    Ok(())
+}
+
+/// The message of the last failure of the shell of `ksp` named `name` (taken), if any. Local.
+pub fn last_error(ksp: &Ksp, name: &str) -> Result<Option<String>> {
+    // SAFETY: a shell with our name has a live Shell as its context.
+    unsafe {
+        let mut pc: ffi::PC = ptr::null_mut();
+        check(ffi::KSPGetPC(ksp.raw, &mut pc))?;
+        let mut t: *const std::os::raw::c_char = ptr::null();
+        check(ffi::PCGetType(pc, &mut t))?;
+        if t.is_null() || std::ffi::CStr::from_ptr(t).to_bytes() != b"shell" {
+            return Ok(None);
+        }
+        let mut n: *const std::os::raw::c_char = ptr::null();
+        check(ffi::PCShellGetName(pc, &mut n))?;
+        if n.is_null() || std::ffi::CStr::from_ptr(n).to_bytes() != name.as_bytes() {
+            return Ok(None);
+        }
+        Ok(shell_of(pc).and_then(|s| s.error.take()))
+    }
+}

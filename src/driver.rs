@@ -76,8 +76,6 @@ pub fn prepare<'c>(ctx: &Ctx, case: &'c Case) -> Result<Prepared<'c>, RunError> 
     let partition = log_partition(ctx, &mesh, &layout);
     let contact = solver::AutoContact {
         friction: (case.contacts.iter()).any(|c| c.friction != crate::case::Friction::None),
-        bodies: (case.contacts.iter())
-            .any(|c| matches!(c.obstacle, crate::case::ObstacleSpec::Body { .. })),
     };
     let (preset, preset_reason) = solver::choose_preset(
         case.solver.preset,

@@ -155,17 +155,8 @@ pub struct LinearSetup {
     own_order: bool,
     /// MUMPS' work on rank 0 alone ([`ndfactor::ONE_PROCESS_OPTION`]).
     one_process: bool,
-    /// AMG's near-null space (iterative kind): the rigid-body modes of the coordinates, or
-    /// given vectors (those of the contact unknowns of body pairs).
-    near_null: Option<NearNull>,
-}
-
-/// What algebraic multigrid interpolates exactly.
-enum NearNull {
-    /// The rigid-body modes of these node coordinates.
-    Coordinates(Vector),
-    /// These orthonormal vectors.
-    Vectors(Vec<Vector>),
+    /// AMG's near-null space (iterative kind): the rigid-body modes of these coordinates.
+    near_null: Option<Vector>,
 }
 
 impl LinearSetup {
@@ -262,22 +253,9 @@ impl LinearSetup {
         })?;
         if setup.kind == SolverKind::Iterative {
             let x = assembly::coordinate_vector(ctx.comm(), mesh, layout)?;
-            setup.near_null = Some(NearNull::Coordinates(x));
+            setup.near_null = Some(x);
         }
         Ok(setup)
-    }
-
-    /// Takes `basis` (orthonormal) as AMG's near-null space in place of the coordinates'
-    /// rigid-body modes, where the kind uses one. Local.
-    pub fn set_near_null_space(&mut self, basis: Vec<Vector>) {
-        if self.near_null.is_some() {
-            self.near_null = Some(NearNull::Vectors(basis));
-        }
-    }
-
-    /// Whether AMG gets a near-null space (the iterative kind).
-    pub fn uses_near_null_space(&self) -> bool {
-        self.near_null.is_some()
     }
 
     /// What the solves run. Local.
@@ -295,10 +273,8 @@ impl LinearSetup {
     /// uses it and, for a MUMPS factorisation, the project's nested-dissection order.
     /// Collective.
     pub fn solver(&self, comm: MPI_Comm, a: &mut Matrix) -> petsc::Result<LinearSolver> {
-        match &self.near_null {
-            Some(NearNull::Coordinates(x)) => a.set_rigid_body_near_null_space(x)?,
-            Some(NearNull::Vectors(v)) => a.set_near_null_space(comm, v)?,
-            None => {}
+        if let Some(x) = &self.near_null {
+            a.set_rigid_body_near_null_space(x)?;
         }
         let mut ksp = Ksp::new(comm, self.options.clone())?;
         ksp.set_operator(a)?;

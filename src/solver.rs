@@ -20,8 +20,6 @@ use std::time::Instant;
 pub struct AutoContact {
     /// Tresca or Coulomb friction on some pair.
     pub friction: bool,
-    /// Contact between two bodies (dual mortar) on some pair.
-    pub bodies: bool,
 }
 
 /// The preset to use for `asked` on a mesh of dimension `dim` with `dofs` unknowns and the
@@ -30,11 +28,10 @@ pub struct AutoContact {
 /// 2 ranks) the iterative preset takes 14 Newton steps of GMRES + GAMG, the longest 185
 /// iterations, where the direct preset's condensed path needs one factorisation (112 890
 /// unknowns: 17–18 s against 5.4–5.7 s; docs/numbers.md, "Coulomb on the iterative preset").
-/// With contact between bodies likewise: GMRES + GAMG on the mortar basis QᵀAQ takes 128–270
-/// iterations per exact Newton step on a quarter ball on a block (85 374 unknowns, 2 ranks:
-/// 72.5 s, where the direct preset's condensed path takes 5.6–5.8 s with one factorisation;
-/// docs/numbers.md, "Body pairs against one linear solve, the plain path and SNES VI in the
-/// same run").
+/// Frictionless contact between bodies takes the single body's rule: its iterative solves
+/// precondition in u (step_system/mortar_pc.rs; a quarter ball on a block at 85 374
+/// unknowns, 2 ranks: 2.4 s against 5.8 s on the direct preset's condensed path,
+/// docs/numbers.md, "3D body pairs on the iterative preset").
 pub fn choose_preset(
     asked: Preset,
     dim: usize,
@@ -45,10 +42,6 @@ pub fn choose_preset(
         Preset::Auto if dim == 3 && contact.friction => (
             Preset::Direct,
             format!("auto: 3D with friction, {dofs} unknowns"),
-        ),
-        Preset::Auto if dim == 3 && contact.bodies => (
-            Preset::Direct,
-            format!("auto: 3D with contact between bodies, {dofs} unknowns"),
         ),
         Preset::Auto if dim == 3 && dofs >= AUTO_ITERATIVE_3D_DOFS => (
             Preset::Iterative,

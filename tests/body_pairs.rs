@@ -432,3 +432,24 @@ fn a_body_pair_that_cannot_be_set_up_is_refused_with_its_key() {
     let c = stack_case(d, &mesh, 2, ("lower_right", "top"));
     refused(1, &c, "contact.obstacle.group", "must face each other");
 }
+
+#[test]
+fn the_3d_patch_tests_hold_on_the_iterative_preset() {
+    // the body pair's preconditioner in u (step_system/mortar_pc.rs): pushed down and held
+    // by contact alone, either side as slave
+    let tmp = tempfile::tempdir().expect("tempdir");
+    let mesh = stack_mesh(tmp.path(), 3, 0.15, 0.45);
+    let iterative = ["solver.preset=iterative", "solver.rtol=1e-12"];
+    for (load, pair, np) in [
+        (Load::Displaced, ("upper_bottom", "lower_top"), 1),
+        (Load::Displaced, ("lower_top", "upper_bottom"), 3),
+        (Load::Pressed, ("upper_bottom", "lower_top"), 2),
+        (Load::Pressed, ("lower_top", "upper_bottom"), 3),
+    ] {
+        let case = loaded_stack_case(tmp.path(), &mesh, 3, pair, load);
+        let what = format!("{} on {np} rank(s), iterative", case.display());
+        let s = solve(np, &case, &iterative);
+        assert_eq!(s.summary["linear_solver"]["pc_type"], "shell", "{what}");
+        check_patch(&s, 3, &what);
+    }
+}

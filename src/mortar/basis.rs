@@ -8,7 +8,7 @@ use super::{MasterFixed, PairRows};
 use crate::assembly::System;
 use crate::contact::obstacle::SlaveRow;
 use crate::error::RunError;
-use crate::mesh::{BodyModes, Mesh, RigidModes};
+use crate::mesh::Mesh;
 use crate::par::Ctx;
 use crate::partition::Layout;
 use crate::petsc::{self, Matrix, PInt, Vector};
@@ -206,49 +206,6 @@ impl Basis {
         let mut out = f.duplicate()?;
         self.q.mult_transpose(&g, &mut out)?;
         Ok((out, c))
-    }
-
-    /// The rigid modes of every body in w, orthonormalised: the near-null space of Qᵀ A Q for
-    /// algebraic multigrid (A's rigid modes are those of u). Per body and mode, r in u (the
-    /// body's rigid motion, zero on the other bodies; `modes` labels the nodes) and
-    /// w = Q⁻¹ r = 2 r − Q r (Q = I + M, M from master to slave rows, so M² = 0): at a slave
-    /// node the body's motion minus the master side's. Collective.
-    pub fn near_null_space(
-        &self,
-        ctx: &Ctx,
-        mesh: &Mesh,
-        layout: &Layout,
-        modes: &BodyModes,
-    ) -> petsc::Result<Vec<Vector>> {
-        let dim = mesh.dim;
-        let shape = RigidModes::new(mesh);
-        let n_local = layout.owned_nodes.len() * dim;
-        let mut x = Vector::new_mpi(ctx.comm(), n_local, dim)?;
-        let mut y = x.duplicate()?;
-        let mut fields = Vec::new();
-        for b in 0..modes.bodies() {
-            for j in 0..shape.m {
-                let mut r = vec![0.0; n_local];
-                for (i, &v) in layout.owned_nodes.iter().enumerate() {
-                    if modes.body_of(v) == b as u32 {
-                        for k in 0..dim {
-                            r[i * dim + k] = shape.value(j, &mesh.coords[v], k);
-                        }
-                    }
-                }
-                x.write(|s| s.copy_from_slice(&r))?;
-                self.q.mult(&x, &mut y)?;
-                let qr = y.to_local_vec()?;
-                fields.push(r.iter().zip(&qr).map(|(a, q)| 2.0 * a - q).collect());
-            }
-        }
-        let mut basis = Vec::new();
-        for f in ctx.orthonormalised(fields) {
-            let mut v = x.duplicate()?;
-            v.write(|s| s.copy_from_slice(&f))?;
-            basis.push(v);
-        }
-        Ok(basis)
     }
 
     /// u = Q w + c. Collective.

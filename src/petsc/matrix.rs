@@ -305,17 +305,6 @@ impl Matrix {
         }
     }
 
-    /// Attaches the span of `basis` (orthonormal vectors of this matrix's layout) as its
-    /// near-null space (what algebraic multigrid interpolates exactly).
-    pub fn set_near_null_space(&mut self, comm: MPI_Comm, basis: &[Vector]) -> Result<()> {
-        let mut sp = null_space_of(comm, basis)?;
-        // SAFETY: the matrix takes its own reference to the null space; ours is dropped.
-        unsafe {
-            check(ffi::MatSetNearNullSpace(self.raw, sp))?;
-            check(ffi::MatNullSpaceDestroy(&mut sp))
-        }
-    }
-
     /// Attaches `other`'s near-null space (if any) to this matrix too (GAMG reads it from the
     /// matrix it builds its hierarchy on).
     pub fn copy_near_null_space_from(&mut self, other: &Matrix) -> Result<()> {

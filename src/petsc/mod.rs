@@ -13,8 +13,8 @@ mod mpi;
 pub mod mumps;
 pub mod ndfactor;
 pub mod optdb;
-pub mod shellpc;
 pub mod options;
+pub mod shellpc;
 pub mod snes;
 pub mod vector;
 

@@ -3,7 +3,7 @@
 
 use crate::case::{CoulombAlgorithm, SolverSection};
 use crate::error::RunError;
-use crate::linsolve::LinearSetup;
+use crate::linsolve::{LinearSetup, SolverKind};
 use crate::mesh::Mesh;
 use crate::mortar::Basis;
 use crate::par::Ctx;
@@ -56,7 +56,7 @@ impl Session {
         )?;
         // body pairs on the iterative preset: AMG on A in u, the held rows projected
         // (step_system/mortar_pc.rs)
-        let mortar_pc = match (mortar, setup.uses_near_null_space()) {
+        let mortar_pc = match (mortar, setup.kind() == SolverKind::Iterative) {
             (Some(basis), true) => {
                 let (a, q_inv) = basis.shared();
                 let coords = crate::assembly::coordinate_vector(ctx.comm(), mesh, layout)?;

@@ -135,4 +135,3 @@ impl Preconditioner for MortarPc {
         y.write(|s| s.copy_from_slice(&yl))
     }
 }
-

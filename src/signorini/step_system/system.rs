@@ -2,6 +2,7 @@
 //! pattern, the right-hand side, the linear solver, and the constant rows of A at the contact
 //! nodes and the pins.
 
+use super::mortar_pc::{Held, HeldNodes, MortarParts, MortarPc, PREFIX, SHELL_NAME};
 use super::reuse::{AmgReuser, AmgStep, ReuseCosts, ReuseStep, Reuser, SolveKind, StepSolve};
 use super::rows::{
     direction_changes, spring_changes, ConstraintMap, Directions, NodeRows, Springs,
@@ -14,14 +15,13 @@ use crate::case::Reuse;
 use crate::linsolve::{LinearSetup, LinearSolver, SolverKind, SymbolicSchur};
 use crate::par::Ctx;
 use crate::partition::Layout;
-use crate::petsc::mumps::SchurRequest;
 use crate::petsc::ksp::Ksp;
+use crate::petsc::mumps::SchurRequest;
 use crate::petsc::{self, Matrix, PInt, SolveInfo, Vector};
 use crate::signorini::active_set::{ActiveSet, Iterate};
 use crate::signorini::boundary::ContactBoundary;
 use crate::signorini::rigid::Pin;
 use crate::tuning::INEXACT_REDUCTION;
-use super::mortar_pc::{Held, HeldNodes, MortarParts, MortarPc, PREFIX, SHELL_NAME};
 use std::cell::RefCell;
 use std::rc::Rc;
 use std::time::Instant;
@@ -114,11 +114,7 @@ impl ReducedSystem {
 
     /// Body pairs on the iterative preset: the preconditioner becomes AMG in u
     /// ([`MortarPc`]) instead of AMG on Qᵀ A Q. Collective.
-    pub fn use_mortar_pc(
-        &mut self,
-        ctx: &Ctx,
-        parts: &MortarParts,
-    ) -> petsc::Result<()> {
+    pub fn use_mortar_pc(&mut self, ctx: &Ctx, parts: &MortarParts) -> petsc::Result<()> {
         let options = self.ls.ksp.options();
         let mut inner = Ksp::new(ctx.comm(), options)?;
         inner.set_options_prefix(PREFIX)?;

@@ -109,10 +109,14 @@ impl Ksp {
             .map_err(|e| self.explain(e))
     }
 
-    /// A failure inside our MUMPS preconditioner reaches PETSc as an error code only: its
-    /// message replaces PETSc's generic one.
+    /// A failure inside one of our preconditioners (MUMPS, a shell of shellpc.rs) reaches
+    /// PETSc as an error code only: its message replaces PETSc's generic one.
     fn explain(&self, mut e: PetscError) -> PetscError {
-        if let Ok(Some((_, Some(m)))) = ndfactor::record(self) {
+        let ours = match ndfactor::record(self) {
+            Ok(Some((_, Some(m)))) => Some(m),
+            _ => super::shellpc::last_error(self).ok().flatten(),
+        };
+        if let Some(m) = ours {
             crate::abort::reworded(&m);
             e.message = m;
         }

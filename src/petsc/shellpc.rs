@@ -77,10 +77,15 @@ unsafe extern "C" fn shell_destroy(pc: ffi::PC) -> ffi::PetscErrorCode {
     0
 }
 
-/// Makes the PC of `ksp` the shell named `name` that runs `pc`. Collective.
+/// The prefix of every name this module gives its shells (PCShellSetName): how
+/// [`last_error`] tells them from other shells (ndfactor.rs), whose contexts are of another type.
+const NAME_PREFIX: &str = "rust: ";
+
+/// Makes the PC of `ksp` the shell named `name` (after [`NAME_PREFIX`]) that runs `pc`.
+/// Collective.
 pub fn install(ksp: &Ksp, name: &str, pc: Box<dyn Preconditioner>) -> Result<()> {
     let shell = Box::new(Shell { pc, error: None });
-    let name = cstring(name);
+    let name = cstring(&format!("{NAME_PREFIX}{name}"));
     // SAFETY: the PC takes the boxed shell as its context and frees it in its destroy
     // callback; PETSc copies the name.
     unsafe {
@@ -97,9 +102,10 @@ pub fn install(ksp: &Ksp, name: &str, pc: Box<dyn Preconditioner>) -> Result<()>
     Ok(())
 }
 
-/// The message of the last failure of the shell of `ksp` named `name` (taken), if any. Local.
-pub fn last_error(ksp: &Ksp, name: &str) -> Result<Option<String>> {
-    // SAFETY: a shell with our name has a live Shell as its context.
+/// The message of the last failure of the shell of `ksp` (taken), if its PC is one of this
+/// module's shells and it failed. Local.
+pub fn last_error(ksp: &Ksp) -> Result<Option<String>> {
+    // SAFETY: a shell whose name has our prefix has a live Shell as its context.
     unsafe {
         let mut pc: ffi::PC = ptr::null_mut();
         check(ffi::KSPGetPC(ksp.raw, &mut pc))?;
@@ -110,7 +116,11 @@ pub fn last_error(ksp: &Ksp, name: &str) -> Result<Option<String>> {
         }
         let mut n: *const std::os::raw::c_char = ptr::null();
         check(ffi::PCShellGetName(pc, &mut n))?;
-        if n.is_null() || std::ffi::CStr::from_ptr(n).to_bytes() != name.as_bytes() {
+        if n.is_null()
+            || !std::ffi::CStr::from_ptr(n)
+                .to_bytes()
+                .starts_with(NAME_PREFIX.as_bytes())
+        {
             return Ok(None);
         }
         Ok(shell_of(pc).and_then(|s| s.error.take()))

@@ -60,7 +60,7 @@ impl Session {
             (Some(basis), true) => {
                 let (a, q_inv) = basis.shared();
                 let coords = crate::assembly::coordinate_vector(ctx.comm(), mesh, layout)?;
-                Some(MortarParts { a, q_inv, coords })
+                Some(MortarParts::new((a, q_inv), coords)?)
             }
             _ => None,
         };

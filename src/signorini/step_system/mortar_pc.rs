@@ -8,12 +8,13 @@
 //! which the step's matrix is A itself; so P⁻¹ = Π Q⁻¹ M⁻¹ Q⁻ᵀ Π on the free directions,
 //! M⁻¹ one AMG cycle on A (the linear solve's hierarchy: the two bodies apart), and the held
 //! rows' own inverse 1/s_k on the held directions (their rows are s_k c cᵀ alone,
-//! step_system/write.rs). A does not change during a run, so the hierarchy is built once; the
-//! held set enters through Π alone. (AMG on A plus a penalty ρ c cᵀ on the held rows, rebuilt
+//! step_system/write.rs). A does not change during a run, so the hierarchy is built once for
+//! the run (every Newton and load step); the held set enters through Π alone. (AMG on A plus a penalty ρ c cᵀ on the held rows, rebuilt
 //! when the set changes, took fewer iterations per step but cost more in its set-ups:
 //! docs/numbers.md, "3D body pairs on the iterative preset".)
 
 use crate::petsc::ksp::Ksp;
+use crate::petsc::optdb::OptionsDb;
 use crate::petsc::shellpc::Preconditioner;
 use crate::petsc::{self, Matrix, Vector};
 use std::cell::RefCell;
@@ -38,11 +39,70 @@ pub struct Held {
 /// and the preconditioner (which reads them at its set-up and apply).
 pub type HeldNodes = Rc<RefCell<Vec<Held>>>;
 
-/// What the run keeps for it: A (in u), Q⁻¹ and the nodes' coordinates (AMG's rigid modes).
+/// The AMG cycle on A: a KSP with [`PREFIX`] (preonly + GAMG) and whether its hierarchy is
+/// built. A does not change during a run, so the session keeps it for every solve and load
+/// step.
+pub struct InnerAmg {
+    ksp: Ksp,
+    built: bool,
+}
+
+/// What the run keeps for the preconditioner: A (in u, AMG's near-null space the coordinates'
+/// rigid modes), Q⁻¹ and the AMG cycle on A, made by the first solve that uses it.
 pub struct MortarParts {
-    pub a: Rc<Matrix>,
-    pub q_inv: Rc<Matrix>,
-    pub coords: Vector,
+    a: Rc<Matrix>,
+    q_inv: Rc<Matrix>,
+    amg: RefCell<Option<Rc<RefCell<InnerAmg>>>>,
+    /// A vector of A's row layout (the coordinates).
+    template: Vector,
+}
+
+impl MortarParts {
+    /// The parts of A and Q⁻¹ (`shared`) with AMG's coordinates (block size dim). Collective.
+    pub fn new((a, q_inv): (Rc<Matrix>, Rc<Matrix>), coords: Vector) -> petsc::Result<Self> {
+        a.set_rigid_body_near_null_space(&coords)?;
+        Ok(MortarParts {
+            a,
+            q_inv,
+            amg: RefCell::new(None),
+            template: coords,
+        })
+    }
+
+    /// The preconditioner of a step system whose solver reads `options` and whose held nodes
+    /// are `held`; the AMG cycle on A made here the first time. Collective.
+    pub fn preconditioner(
+        &self,
+        comm: petsc::ffi::MPI_Comm,
+        options: Rc<OptionsDb>,
+        held: HeldNodes,
+        dim: usize,
+    ) -> petsc::Result<MortarPc> {
+        let mut slot = self.amg.borrow_mut();
+        let amg = match &*slot {
+            Some(amg) => amg.clone(),
+            None => {
+                let mut ksp = Ksp::new(comm, options)?;
+                ksp.set_options_prefix(PREFIX)?;
+                ksp.set_from_options()?;
+                let amg = Rc::new(RefCell::new(InnerAmg { ksp, built: false }));
+                *slot = Some(amg.clone());
+                amg
+            }
+        };
+        let t1 = self.template.duplicate()?;
+        Ok(MortarPc {
+            t2: t1.duplicate()?,
+            t3: t1.duplicate()?,
+            t4: t1.duplicate()?,
+            t1,
+            a: self.a.clone(),
+            q_inv: self.q_inv.clone(),
+            held,
+            amg,
+            dim,
+        })
+    }
 }
 
 /// The shell's state.
@@ -50,8 +110,7 @@ pub struct MortarPc {
     a: Rc<Matrix>,
     q_inv: Rc<Matrix>,
     held: HeldNodes,
-    inner: Ksp,
-    built: bool,
+    amg: Rc<RefCell<InnerAmg>>,
     dim: usize,
     t1: Vector,
     t2: Vector,
@@ -59,40 +118,13 @@ pub struct MortarPc {
     t4: Vector,
 }
 
-impl MortarPc {
-    /// The preconditioner of A (in u) and Q⁻¹, AMG's coordinates (block size dim) and the
-    /// held nodes the step system writes; `inner` a KSP with [`PREFIX`] (preonly + GAMG).
-    /// Collective.
-    pub fn new(
-        (a, q_inv): (Rc<Matrix>, Rc<Matrix>),
-        coords: &Vector,
-        held: HeldNodes,
-        inner: Ksp,
-        dim: usize,
-    ) -> petsc::Result<MortarPc> {
-        a.set_rigid_body_near_null_space(coords)?;
-        let t1 = coords.duplicate()?;
-        Ok(MortarPc {
-            t2: t1.duplicate()?,
-            t3: t1.duplicate()?,
-            t4: t1.duplicate()?,
-            t1,
-            a,
-            q_inv,
-            held,
-            inner,
-            built: false,
-            dim,
-        })
-    }
-}
-
 impl Preconditioner for MortarPc {
     fn set_up(&mut self) -> petsc::Result<()> {
-        if !self.built {
-            self.inner.set_operator(&self.a)?;
-            self.inner.set_up()?;
-            self.built = true;
+        let mut amg = self.amg.borrow_mut();
+        if !amg.built {
+            amg.ksp.set_operator(&self.a)?;
+            amg.ksp.set_up()?;
+            amg.built = true;
         }
         Ok(())
     }
@@ -115,7 +147,7 @@ impl Preconditioner for MortarPc {
         }
         self.t1.write(|s| s.copy_from_slice(&xl))?;
         self.q_inv.mult_transpose(&self.t1, &mut self.t2)?;
-        self.inner.solve(&self.t2, &mut self.t3)?;
+        self.amg.borrow_mut().ksp.solve(&self.t2, &mut self.t3)?;
         self.q_inv.mult(&self.t3, &mut self.t4)?;
         let mut yl = self.t4.to_local_vec()?;
         {

@@ -2,7 +2,7 @@
 //! pattern, the right-hand side, the linear solver, and the constant rows of A at the contact
 //! nodes and the pins.
 
-use super::mortar_pc::{Held, HeldNodes, MortarParts, MortarPc, PREFIX, SHELL_NAME};
+use super::mortar_pc::{Held, HeldNodes, MortarParts, SHELL_NAME};
 use super::reuse::{AmgReuser, AmgStep, ReuseCosts, ReuseStep, Reuser, SolveKind, StepSolve};
 use super::rows::{
     direction_changes, spring_changes, ConstraintMap, Directions, NodeRows, Springs,
@@ -15,7 +15,6 @@ use crate::case::Reuse;
 use crate::linsolve::{LinearSetup, LinearSolver, SolverKind, SymbolicSchur};
 use crate::par::Ctx;
 use crate::partition::Layout;
-use crate::petsc::ksp::Ksp;
 use crate::petsc::mumps::SchurRequest;
 use crate::petsc::{self, Matrix, PInt, SolveInfo, Vector};
 use crate::signorini::active_set::{ActiveSet, Iterate};
@@ -115,13 +114,9 @@ impl ReducedSystem {
     /// Body pairs on the iterative preset: the preconditioner becomes AMG in u
     /// ([`MortarPc`]) instead of AMG on Qᵀ A Q. Collective.
     pub fn use_mortar_pc(&mut self, ctx: &Ctx, parts: &MortarParts) -> petsc::Result<()> {
-        let options = self.ls.ksp.options();
-        let mut inner = Ksp::new(ctx.comm(), options)?;
-        inner.set_options_prefix(PREFIX)?;
-        inner.set_from_options()?;
         let held: HeldNodes = Rc::new(RefCell::new(Vec::new()));
-        let shared = (parts.a.clone(), parts.q_inv.clone());
-        let pc = MortarPc::new(shared, &parts.coords, held.clone(), inner, self.dim)?;
+        let options = self.ls.ksp.options();
+        let pc = parts.preconditioner(ctx.comm(), options, held.clone(), self.dim)?;
         petsc::shellpc::install(&self.ls.ksp, SHELL_NAME, Box::new(pc))?;
         self.held = Some(held);
         Ok(())

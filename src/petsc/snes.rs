@@ -304,6 +304,34 @@ impl Matrix {
         })
     }
 
+    /// C = Pᵀ A P by the all-at-once algorithm (MatProduct PtAP "allatonce", MPI matrices
+    /// only): no intermediate A P is stored, so the product's peak memory stays near C's own.
+    /// Collective.
+    pub fn ptap_all_at_once(&self, p: &Matrix) -> Result<Matrix> {
+        let mut c: ffi::Mat = ptr::null_mut();
+        let algorithm = super::error::cstring("allatonce");
+        // SAFETY: both matrices are assembled; the product is a new matrix we own (destroyed
+        // with the wrapper, also when a later call fails); PETSc copies the algorithm's name.
+        unsafe {
+            check(ffi::MatProductCreate(
+                self.raw,
+                p.raw,
+                ptr::null_mut(),
+                &mut c,
+            ))?;
+            let out = Matrix {
+                raw: c,
+                _arrays: None,
+            };
+            check(ffi::MatProductSetType(c, ffi::MATPRODUCT_PtAP))?;
+            check(ffi::MatProductSetAlgorithm(c, algorithm.as_ptr() as _))?;
+            check(ffi::MatProductSetFromOptions(c))?;
+            check(ffi::MatProductSymbolic(c))?;
+            check(ffi::MatProductNumeric(c))?;
+            Ok(out)
+        }
+    }
+
     /// y = Aᵀ x
     pub fn mult_transpose(&self, x: &Vector, y: &mut Vector) -> Result<()> {
         // SAFETY: layouts checked by PETSc.

@@ -30,7 +30,7 @@ pub struct AutoContact {
 /// unknowns: 17–18 s against 5.4–5.7 s; docs/numbers.md, "Coulomb on the iterative preset").
 /// Frictionless contact between bodies takes the single body's rule: its iterative solves
 /// precondition in u (step_system/mortar_pc.rs; a quarter ball on a block at 85 374
-/// unknowns, 2 ranks: 2.4 s against 5.8 s on the direct preset's condensed path,
+/// unknowns, 2 ranks: 2.2–2.9 s against 6.4–7.0 s on the direct preset's condensed path,
 /// docs/numbers.md, "3D body pairs on the iterative preset").
 pub fn choose_preset(
     asked: Preset,

@@ -8,10 +8,12 @@
 //! which the step's matrix is A itself; so P⁻¹ = Π Q⁻¹ M⁻¹ Q⁻ᵀ Π on the free directions,
 //! M⁻¹ one AMG cycle on A (the linear solve's hierarchy: the two bodies apart), and the held
 //! rows' own inverse 1/s_k on the held directions (their rows are s_k c cᵀ alone,
-//! step_system/write.rs). A does not change during a run, so the hierarchy is built once for
-//! the run (every Newton and load step); the held set enters through Π alone. (AMG on A plus a penalty ρ c cᵀ on the held rows, rebuilt
-//! when the set changes, took fewer iterations per step but cost more in its set-ups:
-//! docs/numbers.md, "3D body pairs on the iterative preset".)
+//! step_system/write.rs). A slip row's spring (3.39) and Coulomb's row mix (F7) are left to
+//! the Krylov iterations. A does not change during a run, so the hierarchy is built once for
+//! the run (every Newton and load step); the held set enters through Π alone. (AMG on A plus
+//! a penalty ρ c cᵀ on the held rows, rebuilt when the set changes, took fewer iterations per
+//! step but cost more in its set-ups: docs/numbers.md, "3D body pairs on the iterative
+//! preset".)
 
 use crate::petsc::ksp::Ksp;
 use crate::petsc::optdb::OptionsDb;
@@ -129,41 +131,37 @@ impl Preconditioner for MortarPc {
         Ok(())
     }
 
+    /// y = P⁻¹ x: Π Q⁻¹ M⁻¹ Q⁻ᵀ Π x on the free directions, x_c / s_k on the held ones.
     fn apply(&mut self, x: &Vector, y: &mut Vector) -> petsc::Result<()> {
         let dim = self.dim;
         let mut xl = x.to_local_vec()?;
         let mut own = vec![0.0; xl.len()];
-        {
-            let held = self.held.borrow();
-            for h in held.iter() {
-                for c in &h.dirs {
-                    let p: f64 = (0..dim).map(|a| c[a] * xl[h.lr + a]).sum();
-                    for a in 0..dim {
-                        xl[h.lr + a] -= p * c[a];
-                        own[h.lr + a] += p * c[a] / h.s;
-                    }
-                }
-            }
-        }
+        project_off(&self.held.borrow(), &mut xl, dim, |i, part, s| {
+            own[i] += part / s
+        });
         self.t1.write(|s| s.copy_from_slice(&xl))?;
         self.q_inv.mult_transpose(&self.t1, &mut self.t2)?;
         self.amg.borrow_mut().ksp.solve(&self.t2, &mut self.t3)?;
         self.q_inv.mult(&self.t3, &mut self.t4)?;
         let mut yl = self.t4.to_local_vec()?;
-        {
-            let held = self.held.borrow();
-            for h in held.iter() {
-                for c in &h.dirs {
-                    let p: f64 = (0..dim).map(|a| c[a] * yl[h.lr + a]).sum();
-                    for a in 0..dim {
-                        yl[h.lr + a] -= p * c[a];
-                    }
-                }
-            }
-        }
+        project_off(&self.held.borrow(), &mut yl, dim, |_, _, _| {});
         for (v, o) in yl.iter_mut().zip(&own) {
             *v += o;
         }
         y.write(|s| s.copy_from_slice(&yl))
+    }
+}
+
+/// v ← Π v: every held direction c of a held node taken out of its block of `v` (this rank's
+/// rows); `removed(row, part, s_k)` sees each component of the removed part (c · v) c.
+fn project_off(held: &[Held], v: &mut [f64], dim: usize, mut removed: impl FnMut(usize, f64, f64)) {
+    for h in held {
+        for c in &h.dirs {
+            let p: f64 = (0..dim).map(|a| c[a] * v[h.lr + a]).sum();
+            for a in 0..dim {
+                v[h.lr + a] -= p * c[a];
+                removed(h.lr + a, p * c[a], h.s);
+            }
+        }
     }
 }

@@ -63,7 +63,8 @@ pub struct ReducedSystem {
     /// the row mix E (a scratch right-hand side with it), and whether this step uses it.
     amg_matrix: Option<(Matrix, Vector)>,
     unmixed: bool,
-    /// Body pairs on the iterative preset: the held nodes that [`MortarPc`] reads.
+    /// Body pairs on the iterative preset: the held nodes that the preconditioner
+    /// ([`super::mortar_pc::MortarPc`]) reads.
     held: Option<HeldNodes>,
 }
 

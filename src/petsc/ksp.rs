@@ -6,6 +6,7 @@ use super::ffi::{self, MPI_Comm, PInt};
 use super::matrix::Matrix;
 use super::ndfactor;
 use super::optdb::OptionsDb;
+use super::shellpc::{self, Preconditioner};
 use super::vector::Vector;
 use std::ffi::CStr;
 use std::os::raw::c_char;
@@ -114,13 +115,22 @@ impl Ksp {
     fn explain(&self, mut e: PetscError) -> PetscError {
         let ours = match ndfactor::record(self) {
             Ok(Some((_, Some(m)))) => Some(m),
-            _ => super::shellpc::last_error(self).ok().flatten(),
+            _ => shellpc::last_error(self.raw).ok().flatten(),
         };
         if let Some(m) = ours {
             crate::abort::reworded(&m);
             e.message = m;
         }
         e
+    }
+
+    /// Makes this KSP's PC the shell named `name` that runs `pc` (shellpc.rs). Collective.
+    pub fn set_shell_preconditioner(
+        &mut self,
+        name: &str,
+        pc: Box<dyn Preconditioner>,
+    ) -> Result<()> {
+        shellpc::install(self.raw, name, pc)
     }
 
     /// The prefix of this KSP's options (call before `set_from_options`).

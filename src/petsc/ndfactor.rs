@@ -16,6 +16,7 @@ use std::time::Instant;
 
 use super::mpi::{all_true, first_message, gather_u64, rank_of, say_root};
 use super::mumps::{nested_dissection, Factor, FactorStats};
+use super::shellpc::{code_of, context, drop_context, ERR_LIB};
 use super::{agreed_error, check, cstring, ffi, own_error, Ksp, MPI_Comm, Matrix, Result};
 
 /// The name of the preconditioner (PCShellSetName), by which [`is_ours`] knows it.
@@ -245,29 +246,12 @@ impl Drop for Shell {
     }
 }
 
-/// The shell's context pointer.
+/// The shell's context.
 ///
 /// # Safety
 /// `pc` must be a PC made by [`install`] and not yet destroyed.
 unsafe fn shell_of<'a>(pc: ffi::PC) -> Option<&'a mut Shell> {
-    let mut p: *mut c_void = ptr::null_mut();
-    if ffi::PCShellGetContext(pc, &mut p as *mut *mut c_void as *mut c_void) != 0 || p.is_null() {
-        return None;
-    }
-    Some(&mut *(p as *mut Shell))
-}
-
-/// PETSC_ERR_LIB: the code a callback returns on a failure (its message kept in the shell).
-const ERR_LIB: ffi::PetscErrorCode = 76;
-
-fn code_of(shell: &mut Shell, r: Result<()>) -> ffi::PetscErrorCode {
-    match r {
-        Ok(()) => 0,
-        Err(e) => {
-            shell.error = Some(e.message);
-            ERR_LIB
-        }
-    }
+    context::<Shell>(pc)
 }
 
 unsafe extern "C" fn shell_set_up(pc: ffi::PC) -> ffi::PetscErrorCode {
@@ -277,7 +261,7 @@ unsafe extern "C" fn shell_set_up(pc: ffi::PC) -> ffi::PetscErrorCode {
     let (mut amat, mut pmat): (ffi::Mat, ffi::Mat) = (ptr::null_mut(), ptr::null_mut());
     let got = check(ffi::PCGetOperators(pc, &mut amat, &mut pmat));
     let r = got.and_then(|_| shell.set_up(pmat));
-    code_of(shell, r)
+    code_of(&mut shell.error, r)
 }
 
 unsafe extern "C" fn shell_apply(pc: ffi::PC, x: ffi::Vec, y: ffi::Vec) -> ffi::PetscErrorCode {
@@ -285,16 +269,11 @@ unsafe extern "C" fn shell_apply(pc: ffi::PC, x: ffi::Vec, y: ffi::Vec) -> ffi::
         return ERR_LIB;
     };
     let r = shell.apply(x, y);
-    code_of(shell, r)
+    code_of(&mut shell.error, r)
 }
 
 unsafe extern "C" fn shell_destroy(pc: ffi::PC) -> ffi::PetscErrorCode {
-    let mut p: *mut c_void = ptr::null_mut();
-    if ffi::PCShellGetContext(pc, &mut p as *mut *mut c_void as *mut c_void) == 0 && !p.is_null() {
-        drop(Box::from_raw(p as *mut Shell));
-        ffi::PCShellSetContext(pc, ptr::null_mut());
-    }
-    0
+    drop_context::<Shell>(pc)
 }
 
 /// The option (in the database) that puts the factorisation on rank 0 alone, repeatable bit for

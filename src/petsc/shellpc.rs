@@ -3,7 +3,6 @@
 
 use super::error::{check, cstring, Result};
 use super::ffi;
-use super::ksp::Ksp;
 use super::vector::Vector;
 use std::mem::ManuallyDrop;
 use std::os::raw::c_void;
@@ -24,73 +23,83 @@ struct Shell {
     error: Option<String>,
 }
 
-/// PETSC_ERR_LIB: the code a callback returns on a failure.
-const ERR_LIB: ffi::PetscErrorCode = 76;
+/// PETSC_ERR_LIB: the code a shell's callback returns on a failure (its message kept in the
+/// shell's context). Also the MUMPS shell's (ndfactor.rs).
+pub(super) const ERR_LIB: ffi::PetscErrorCode = 76;
 
-/// The shell's context.
+/// A shell's context, as the `T` it was installed with.
 ///
 /// # Safety
-/// `pc` must be a PC made by [`install`] and not yet destroyed.
-unsafe fn shell_of<'a>(pc: ffi::PC) -> Option<&'a mut Shell> {
+/// `pc` must be a live PCSHELL whose context is a boxed `T` (or null).
+pub(super) unsafe fn context<'a, T>(pc: ffi::PC) -> Option<&'a mut T> {
     let mut p: *mut c_void = ptr::null_mut();
     if ffi::PCShellGetContext(pc, &mut p as *mut *mut c_void as *mut c_void) != 0 || p.is_null() {
         return None;
     }
-    Some(&mut *(p as *mut Shell))
+    Some(&mut *(p as *mut T))
 }
 
-fn code_of(shell: &mut Shell, r: Result<()>) -> ffi::PetscErrorCode {
+/// Drops a shell's boxed `T` context and detaches it (a destroy callback's work).
+///
+/// # Safety
+/// As [`context`]; the context is not used afterwards.
+pub(super) unsafe fn drop_context<T>(pc: ffi::PC) -> ffi::PetscErrorCode {
+    let mut p: *mut c_void = ptr::null_mut();
+    if ffi::PCShellGetContext(pc, &mut p as *mut *mut c_void as *mut c_void) == 0 && !p.is_null() {
+        drop(Box::from_raw(p as *mut T));
+        ffi::PCShellSetContext(pc, ptr::null_mut());
+    }
+    0
+}
+
+/// A callback's result as PETSc's error code, its message kept in `error`.
+pub(super) fn code_of(error: &mut Option<String>, r: Result<()>) -> ffi::PetscErrorCode {
     match r {
         Ok(()) => 0,
         Err(e) => {
-            shell.error = Some(e.message);
+            *error = Some(e.message);
             ERR_LIB
         }
     }
 }
 
 unsafe extern "C" fn shell_set_up(pc: ffi::PC) -> ffi::PetscErrorCode {
-    let Some(shell) = shell_of(pc) else {
+    let Some(shell) = context::<Shell>(pc) else {
         return ERR_LIB;
     };
     let r = shell.pc.set_up();
-    code_of(shell, r)
+    code_of(&mut shell.error, r)
 }
 
 unsafe extern "C" fn shell_apply(pc: ffi::PC, x: ffi::Vec, y: ffi::Vec) -> ffi::PetscErrorCode {
-    let Some(shell) = shell_of(pc) else {
+    let Some(shell) = context::<Shell>(pc) else {
         return ERR_LIB;
     };
     // Non-owning views: the PC's vectors are PETSc's.
     let xv = ManuallyDrop::new(Vector { raw: x });
     let mut yv = ManuallyDrop::new(Vector { raw: y });
     let r = shell.pc.apply(&xv, &mut yv);
-    code_of(shell, r)
+    code_of(&mut shell.error, r)
 }
 
 unsafe extern "C" fn shell_destroy(pc: ffi::PC) -> ffi::PetscErrorCode {
-    let mut p: *mut c_void = ptr::null_mut();
-    if ffi::PCShellGetContext(pc, &mut p as *mut *mut c_void as *mut c_void) == 0 && !p.is_null() {
-        drop(Box::from_raw(p as *mut Shell));
-        ffi::PCShellSetContext(pc, ptr::null_mut());
-    }
-    0
+    drop_context::<Shell>(pc)
 }
 
 /// The prefix of every name this module gives its shells (PCShellSetName): how
 /// [`last_error`] tells them from other shells (ndfactor.rs), whose contexts are of another type.
 const NAME_PREFIX: &str = "rust: ";
 
-/// Makes the PC of `ksp` the shell named `name` (after [`NAME_PREFIX`]) that runs `pc`.
-/// Collective.
-pub fn install(ksp: &Ksp, name: &str, pc: Box<dyn Preconditioner>) -> Result<()> {
+/// Makes the PC of `ksp` the shell named `name` (after [`NAME_PREFIX`]) that runs `pc`
+/// (`Ksp::set_shell_preconditioner`). Collective.
+pub(super) fn install(ksp: ffi::KSP, name: &str, pc: Box<dyn Preconditioner>) -> Result<()> {
     let shell = Box::new(Shell { pc, error: None });
     let name = cstring(&format!("{NAME_PREFIX}{name}"));
     // SAFETY: the PC takes the boxed shell as its context and frees it in its destroy
     // callback; PETSc copies the name.
     unsafe {
         let mut raw_pc: ffi::PC = ptr::null_mut();
-        check(ffi::KSPGetPC(ksp.raw, &mut raw_pc))?;
+        check(ffi::KSPGetPC(ksp, &mut raw_pc))?;
         check(ffi::PCSetType(raw_pc, ffi::PCSHELL.as_ptr() as *const _))?;
         let raw = Box::into_raw(shell);
         check(ffi::PCShellSetContext(raw_pc, raw as *mut c_void))?;
@@ -104,11 +113,11 @@ pub fn install(ksp: &Ksp, name: &str, pc: Box<dyn Preconditioner>) -> Result<()>
 
 /// The message of the last failure of the shell of `ksp` (taken), if its PC is one of this
 /// module's shells and it failed. Local.
-pub fn last_error(ksp: &Ksp) -> Result<Option<String>> {
+pub(super) fn last_error(ksp: ffi::KSP) -> Result<Option<String>> {
     // SAFETY: a shell whose name has our prefix has a live Shell as its context.
     unsafe {
         let mut pc: ffi::PC = ptr::null_mut();
-        check(ffi::KSPGetPC(ksp.raw, &mut pc))?;
+        check(ffi::KSPGetPC(ksp, &mut pc))?;
         let mut t: *const std::os::raw::c_char = ptr::null();
         check(ffi::PCGetType(pc, &mut t))?;
         if t.is_null() || std::ffi::CStr::from_ptr(t).to_bytes() != b"shell" {
@@ -123,6 +132,6 @@ pub fn last_error(ksp: &Ksp) -> Result<Option<String>> {
         {
             return Ok(None);
         }
-        Ok(shell_of(pc).and_then(|s| s.error.take()))
+        Ok(context::<Shell>(pc).and_then(|s| s.error.take()))
     }
 }

@@ -118,7 +118,9 @@ impl ReducedSystem {
         let held: HeldNodes = Rc::new(RefCell::new(Vec::new()));
         let options = self.ls.ksp.options();
         let pc = parts.preconditioner(ctx.comm(), options, held.clone(), self.dim)?;
-        petsc::shellpc::install(&self.ls.ksp, SHELL_NAME, Box::new(pc))?;
+        self.ls
+            .ksp
+            .set_shell_preconditioner(SHELL_NAME, Box::new(pc))?;
         self.held = Some(held);
         Ok(())
     }

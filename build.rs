@@ -79,7 +79,7 @@ fn main() {
         .layout_tests(false)
         .generate_comments(false)
         .allowlist_function("PETSC_VIEWER_STDOUT_")
-        .allowlist_function("Petsc(Initialize|Finalize|Initialized|ErrorMessage|Options.*|ObjectSetOptions|MemoryGetCurrentUsage|MemoryGetMaximumUsage|MemorySetGetMaximumUsage|LogDefaultBegin|LogView|ViewerASCIIGetStdout|PopErrorHandler|MallocA|FreeA|PushErrorHandler|ReturnErrorHandler|GetVersion)")
+        .allowlist_function("Petsc(Initialize|Finalize|Initialized|ErrorMessage|Options.*|ObjectSetOptions|ObjectReference|MemoryGetCurrentUsage|MemoryGetMaximumUsage|MemorySetGetMaximumUsage|LogDefaultBegin|LogView|ViewerASCIIGetStdout|PopErrorHandler|MallocA|FreeA|PushErrorHandler|ReturnErrorHandler|GetVersion)")
         .allowlist_function("(Vec|Mat|KSP|PC|IS|MatPartitioning|MatNullSpace|PetscViewer)[A-Z].*")
         // SNES VI (src/snesvi.rs): only what the linear variational inequality needs.
         .allowlist_function("SNES(Create|Destroy|SetType|GetType|SetFunction|SetJacobian|SetFromOptions|SetTolerances|Solve|GetIterationNumber|GetLinearSolveIterations|GetConvergedReason|GetConvergedReasonString|GetNumberFunctionEvals|VISetVariableBounds|GetFunctionNorm|GetLineSearch|LineSearchSetType|GetKSP)")

@@ -453,3 +453,40 @@ fn the_3d_patch_tests_hold_on_the_iterative_preset() {
         check_patch(&s, 3, &what);
     }
 }
+
+#[test]
+fn the_step_operator_gives_the_assembled_step_matrix_answer() {
+    // body pairs on the iterative preset solve with S = L A P + D as an operator
+    // (step_system/matrix_free.rs); the test-only limit MATRIX_FREE = 0 writes S into a matrix
+    // as every other path does: the same states and u, with Coulomb's row mix and slip
+    // springs and with Tresca's, on 2 and 3 ranks; in two load steps, whose second holds the
+    // sticking nodes at the first's u_τ (held rows with known values)
+    let tmp = tempfile::tempdir().expect("tempdir");
+    let mesh = stack_mesh(tmp.path(), 3, 0.15, 0.45);
+    let case = stack_case(tmp.path(), &mesh, 3, ("upper_bottom", "lower_top"));
+    let limit = std::time::Duration::from_secs(300);
+    for (friction, np) in [
+        ("contact.friction={law=\"coulomb\", mu=0.3}", 2),
+        ("contact.friction={law=\"tresca\", threshold=2e-3}", 3),
+    ] {
+        let sets = [
+            "solver.preset=iterative",
+            "solver.rtol=1e-12",
+            "load.steps=2",
+            friction,
+        ];
+        let what = format!("{friction} on {np} ranks");
+        let free = solve_env(np, &case, &sets, &[], limit);
+        let env = [("SIGNORINI_TEST_LIMIT_MATRIX_FREE", "0")];
+        let assembled = solve_env(np, &case, &sets, &env, limit);
+        free.assert_converged(&what);
+        assert_eq!(free.summary["linear_solver"]["pc_type"], "shell", "{what}");
+        let slip = free.slip_node_ids();
+        assert!(
+            !slip.is_empty(),
+            "{what}: no node slips, the slip rows untested"
+        );
+        assert_eq!(slip, assembled.slip_node_ids(), "{what}: slip nodes");
+        same_steps(&free, &assembled, 2, 1e-9, np);
+    }
+}

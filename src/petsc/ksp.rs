@@ -6,6 +6,7 @@ use super::ffi::{self, MPI_Comm, PInt};
 use super::matrix::Matrix;
 use super::ndfactor;
 use super::optdb::OptionsDb;
+use super::shellmat;
 use super::shellpc::{self, Preconditioner};
 use super::vector::Vector;
 use std::ffi::CStr;
@@ -115,7 +116,10 @@ impl Ksp {
     fn explain(&self, mut e: PetscError) -> PetscError {
         let ours = match ndfactor::record(self) {
             Ok(Some((_, Some(m)))) => Some(m),
-            _ => shellpc::last_error(self.raw).ok().flatten(),
+            _ => shellpc::last_error(self.raw)
+                .ok()
+                .flatten()
+                .or_else(|| shellmat::last_error(self.raw)),
         };
         if let Some(m) = ours {
             crate::abort::reworded(&m);

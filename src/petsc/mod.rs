@@ -14,6 +14,7 @@ pub mod mumps;
 pub mod ndfactor;
 pub mod optdb;
 pub mod options;
+pub mod shellmat;
 pub mod shellpc;
 pub mod snes;
 pub mod vector;

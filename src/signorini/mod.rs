@@ -635,10 +635,8 @@ fn run_method(
     let (sys, b, dim) = (problem.sys, problem.boundary, problem.mesh.dim);
     let (nr, outer_steps, condensed_summary) = match solver_section.method {
         Method::Newton => {
-            let mut reduced = ReducedSystem::new(ctx, sys, b, session.setup(), dim)?;
-            if let Some(parts) = &session.mortar_pc {
-                reduced.use_mortar_pc(ctx, parts)?;
-            }
+            let mortar = session.mortar_pc.as_ref();
+            let mut reduced = ReducedSystem::new(ctx, sys, b, session.setup(), dim, mortar)?;
             *types = Some(reduced.solver_types()?);
             // Tresca on the Schur path: Coulomb's generalised Newton on the contact unknowns
             // with the thresholds b_k fixed (docs/friction.md)

@@ -14,7 +14,9 @@
 //! | `system` | [`ReducedSystem`]: the matrix, right-hand side and solver of one step |
 //! | `reuse` | how a step was solved and the reuse of factorisations / preconditioners |
 //! | `mortar_pc` | the iterative preset's preconditioner for body pairs (AMG in u) |
+//! | `matrix_free` | the step system as an operator S = L A P + D (body pairs, iterative) |
 
+pub mod matrix_free;
 pub mod mortar_pc;
 pub mod reuse;
 pub mod rows;

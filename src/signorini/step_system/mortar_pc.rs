@@ -28,17 +28,21 @@ pub const SHELL_NAME: &str = "amg in u for body pairs";
 /// The options prefix of the inner AMG (its options are the iterative preset's GAMG options).
 pub const PREFIX: &str = "mortar_";
 
-/// One node whose directions the step holds: its first local row, the held unit directions
-/// and the node's mean diagonal s_k (the held rows' diagonal).
+/// One node whose rows the step rewrote: its first local row, the held unit directions (none
+/// for a slip row alone), the node's mean diagonal s_k (the held rows' diagonal), and its
+/// factors in S = L A P + D (matrix_free.rs): P_k, left_k and its own block D_k.
 #[derive(Clone, Debug)]
 pub struct Held {
     pub lr: usize,
     pub dirs: Vec<[f64; 3]>,
     pub s: f64,
+    pub proj: [[f64; 3]; 3],
+    pub left: [[f64; 3]; 3],
+    pub own: [[f64; 3]; 3],
 }
 
-/// The held nodes of the step written last, shared by the step system (which writes them)
-/// and the preconditioner (which reads them at its set-up and apply).
+/// The rewritten nodes of the step written last, shared by the step system (which writes them)
+/// and the preconditioner and operator (which read them).
 pub type HeldNodes = Rc<RefCell<Vec<Held>>>;
 
 /// The AMG cycle on A: a KSP with [`PREFIX`] (preonly + GAMG) and whether its hierarchy is

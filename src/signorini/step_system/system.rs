@@ -2,13 +2,15 @@
 //! pattern, the right-hand side, the linear solver, and the constant rows of A at the contact
 //! nodes and the pins.
 
+use super::matrix_free::StepOperator;
 use super::mortar_pc::{Held, HeldNodes, MortarParts, SHELL_NAME};
 use super::reuse::{AmgReuser, AmgStep, ReuseCosts, ReuseStep, Reuser, SolveKind, StepSolve};
 use super::rows::{
     direction_changes, spring_changes, ConstraintMap, Directions, NodeRows, Springs,
 };
 use super::write::{
-    rewrites, slip_block_changes, write_rows, write_unmixed, RowChange, RowWrites, ScaledSprings,
+    add_own_terms, left_factor, rewrites, slip_block_changes, write_rows, write_unmixed, RowChange,
+    RowWrites, ScaledSprings,
 };
 use crate::assembly::System;
 use crate::case::Reuse;
@@ -66,16 +68,22 @@ pub struct ReducedSystem {
     /// Body pairs on the iterative preset: the held nodes that the preconditioner
     /// ([`super::mortar_pc::MortarPc`]) reads.
     held: Option<HeldNodes>,
+    /// S is the operator of `held` (matrix_free.rs), not a matrix.
+    matrix_free: bool,
 }
 
 impl ReducedSystem {
     /// The symbolic part, made once: S with A's pattern, its KSP, the contact nodes' rows of A.
+    /// Body pairs on the iterative preset (`mortar`: the run's parts of AMG in u): S is the
+    /// operator L A P + D (matrix_free.rs), not stored, and the preconditioner AMG in u
+    /// ([`MortarPc`](super::mortar_pc::MortarPc)) instead of AMG on Qᵀ A Q. Collective.
     pub fn new(
         ctx: &Ctx,
         sys: &System,
         b: &ContactBoundary,
         setup: &LinearSetup,
         dim: usize,
+        mortar: Option<&MortarParts>,
     ) -> petsc::Result<ReducedSystem> {
         let contact_rows = b
             .nodes
@@ -83,8 +91,22 @@ impl ReducedSystem {
             .map(|k| NodeRows::read(&sys.a, k.row, dim))
             .collect::<Result<_, _>>()?;
         let f_local = sys.b.to_local_vec()?;
-        let mut s = sys.a.duplicate()?;
-        let ls = setup.solver(ctx.comm(), &mut s)?;
+        let held: Option<HeldNodes> = mortar.map(|_| Rc::new(RefCell::new(Vec::new())));
+        // the assembled S instead, for the tests that compare both (a test-only limit)
+        let matrix_free = held.is_some() && crate::fault::limit("MATRIX_FREE", 1) > 0;
+        let mut s = match held.as_ref().filter(|_| matrix_free) {
+            Some(rows) => {
+                let op = StepOperator::new(sys.a.handle()?, &sys.b, rows.clone(), dim)?;
+                Matrix::shell(ctx.comm(), f_local.len(), Box::new(op))?
+            }
+            None => sys.a.duplicate()?,
+        };
+        let mut ls = setup.solver(ctx.comm(), &mut s)?;
+        if let (Some(parts), Some(rows)) = (mortar, &held) {
+            let options = ls.ksp.options();
+            let pc = parts.preconditioner(ctx.comm(), options, rows.clone(), dim)?;
+            ls.ksp.set_shell_preconditioner(SHELL_NAME, Box::new(pc))?;
+        }
         let (row_lo, _) = sys.a.ownership_range()?;
         Ok(ReducedSystem {
             s,
@@ -108,21 +130,9 @@ impl ReducedSystem {
             change: None,
             amg_matrix: None,
             unmixed: false,
-            held: None,
+            held,
+            matrix_free,
         })
-    }
-
-    /// Body pairs on the iterative preset: the preconditioner becomes AMG in u
-    /// ([`MortarPc`]) instead of AMG on Qᵀ A Q. Collective.
-    pub fn use_mortar_pc(&mut self, ctx: &Ctx, parts: &MortarParts) -> petsc::Result<()> {
-        let held: HeldNodes = Rc::new(RefCell::new(Vec::new()));
-        let options = self.ls.ksp.options();
-        let pc = parts.preconditioner(ctx.comm(), options, held.clone(), self.dim)?;
-        self.ls
-            .ksp
-            .set_shell_preconditioner(SHELL_NAME, Box::new(pc))?;
-        self.held = Some(held);
-        Ok(())
     }
 
     /// Enables the reuse of factorisations across steps (`solver.reuse`): only if the solver
@@ -207,7 +217,11 @@ impl ReducedSystem {
     ) -> petsc::Result<()> {
         let t = Instant::now();
         let dim = self.dim;
-        self.s.copy_values_from(&sys.a)?;
+        // matrix-free (body pairs, iterative): S is the operator of `held`, only rhs is written
+        let matrix_free = self.matrix_free;
+        if !matrix_free {
+            self.s.copy_values_from(&sys.a)?;
+        }
         self.rhs.copy_from(&sys.b)?;
         let cmap = ConstraintMap::gather(ctx, layout, b, set, pins, dim);
         let writes = rewrites(
@@ -254,11 +268,19 @@ impl ReducedSystem {
         if let Some(held) = &self.held {
             *held.borrow_mut() = writes
                 .iter()
-                .filter(|(_, me, _)| !me.dirs.is_empty())
-                .map(|(r, me, lr)| Held {
-                    lr: *lr,
-                    dirs: me.dirs.iter().map(|(c, _)| *c).collect(),
-                    s: (0..dim).map(|j| r.diag(j)).sum::<f64>() / dim as f64,
+                .map(|(r, me, lr)| {
+                    let s = (0..dim).map(|j| r.diag(j)).sum::<f64>() / dim as f64;
+                    let proj = me.projector(dim);
+                    let mut own = [[0.0; 3]; 3];
+                    add_own_terms(&mut own, me, s, dim);
+                    Held {
+                        lr: *lr,
+                        dirs: me.dirs.iter().map(|(c, _)| *c).collect(),
+                        s,
+                        proj,
+                        left: left_factor(me, proj, dim),
+                        own,
+                    }
                 })
                 .collect();
         }
@@ -274,16 +296,12 @@ impl ReducedSystem {
             cmap: &cmap,
         };
         let f_local = Some(&self.f_local[..]);
-        write_rows(
-            Some(&mut self.s),
-            &mut self.rhs,
-            rows,
-            f_local,
-            dim,
-            &mut self.buf,
-        )?;
-        // the same solver on every rank: the reduction only on the iterative preset
+        let s = (!matrix_free).then_some(&mut self.s);
+        write_rows(s, &mut self.rhs, rows, f_local, dim, &mut self.buf)?;
+        // the same solver on every rank: the reduction only on the iterative preset, and not
+        // for the preconditioner in u (which reads no matrix of the step)
         self.unmixed = !self.ls.kind().factorises()
+            && !matrix_free
             && ctx.any(writes.iter().any(|(_, me, _)| me.row_mix.is_some()));
         if self.unmixed {
             let made = &mut self.amg_matrix;

@@ -297,7 +297,7 @@ pub fn write_symmetric_constraint<'c>(
 }
 
 /// The left factor of a constrained node's rows: P_k, plus E for a Coulomb slip row (F7).
-fn left_factor(me: &NodeConstraint, pk: [[f64; 3]; 3], dim: usize) -> [[f64; 3]; 3] {
+pub(super) fn left_factor(me: &NodeConstraint, pk: [[f64; 3]; 3], dim: usize) -> [[f64; 3]; 3] {
     match me.row_mix {
         None => pk,
         Some(e) => {
@@ -314,7 +314,7 @@ fn left_factor(me: &NodeConstraint, pk: [[f64; 3]; 3], dim: usize) -> [[f64; 3];
 
 /// The node's own block of (3.29) / (3.42): s_k Σ c cᵀ over its prescribed directions and its
 /// spring (a Tresca or Coulomb slip block), added to P_k A_kk P_k in `nb`.
-fn add_own_terms(nb: &mut [[f64; 3]; 3], me: &NodeConstraint, sk: f64, dim: usize) {
+pub(super) fn add_own_terms(nb: &mut [[f64; 3]; 3], me: &NodeConstraint, sk: f64, dim: usize) {
     for (cvec, _) in &me.dirs {
         for a in 0..dim {
             for b in 0..dim {

@@ -263,6 +263,20 @@ impl LinearSetup {
         self.kind
     }
 
+    /// What the solves of `section` will run (its options resolved as [`Self::for_section`]
+    /// resolves them), before any matrix exists. Local.
+    pub fn kind_of(section: &SolverSection) -> petsc::Result<SolverKind> {
+        let setup = LinearSetup::new(&SolverRequest {
+            preset: section.preset,
+            rtol: section.rtol,
+            symmetric: true,
+            case_options: &section.petsc_options,
+            repeatable: section.repeatable,
+            scale: 0.0,
+        })?;
+        Ok(setup.kind)
+    }
+
     /// Runs `f` with the solver's options as PETSc's default (for a PETSc solver made
     /// elsewhere, SNES VI). Local.
     pub fn scoped<R>(&self, f: impl FnOnce() -> R) -> petsc::Result<R> {

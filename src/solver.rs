@@ -20,6 +20,8 @@ use std::time::Instant;
 pub struct AutoContact {
     /// Tresca or Coulomb friction on some pair.
     pub friction: bool,
+    /// `solver.method = "snesvi"`.
+    pub snesvi: bool,
 }
 
 /// The preset to use for `asked` on a mesh of dimension `dim` with `dofs` unknowns and the
@@ -31,7 +33,11 @@ pub struct AutoContact {
 /// Frictionless contact between bodies takes the single body's rule: its iterative solves
 /// precondition in u (step_system/mortar_pc.rs; a quarter ball on a block at 85 374
 /// unknowns, 2 ranks: 2.2–2.9 s against 6.4–7.0 s on the direct preset's condensed path,
-/// docs/numbers.md, "3D body pairs on the iterative preset").
+/// docs/numbers.md, "3D body pairs on the iterative preset"). SNES VI takes the direct preset
+/// at every size: GMRES + GAMG does not converge on its reduced systems (sub-matrices of the
+/// system rotated into the contact frames, whose rigid modes are not the coordinates'; 2D
+/// Hertz: 2 000 iterations in its first step; 3D: sub-matrices whose size is no multiple of
+/// the block size).
 pub fn choose_preset(
     asked: Preset,
     dim: usize,
@@ -39,6 +45,10 @@ pub fn choose_preset(
     contact: AutoContact,
 ) -> (Preset, String) {
     match asked {
+        Preset::Auto if contact.snesvi => (
+            Preset::Direct,
+            format!("auto: SNES VI, {dofs} unknowns (its reduced systems need a factorisation)"),
+        ),
         Preset::Auto if dim == 3 && contact.friction => (
             Preset::Direct,
             format!("auto: 3D with friction, {dofs} unknowns"),
@@ -191,4 +201,34 @@ pub fn linear_solve(
             factor,
         },
     ))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn snesvi_takes_the_direct_preset_at_every_size() {
+        let snesvi = AutoContact {
+            friction: false,
+            snesvi: true,
+        };
+        for (dim, dofs) in [(2, 1_000_000), (3, 10 * AUTO_ITERATIVE_3D_DOFS), (3, 100)] {
+            assert_eq!(
+                choose_preset(Preset::Auto, dim, dofs, snesvi).0,
+                Preset::Direct
+            );
+        }
+        let newton = AutoContact::default();
+        let big = 10 * AUTO_ITERATIVE_3D_DOFS;
+        assert_eq!(
+            choose_preset(Preset::Auto, 3, big, newton).0,
+            Preset::Iterative
+        );
+        // an explicit preset is kept (the case reader refuses SNES VI on the iterative one)
+        assert_eq!(
+            choose_preset(Preset::Iterative, 3, 100, snesvi).0,
+            Preset::Iterative
+        );
+    }
 }

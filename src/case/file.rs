@@ -9,7 +9,7 @@ use super::keys;
 use super::load::LoadSection;
 use super::output::OutputSection;
 use super::reader::{Reader, Res};
-use super::solver::{Method, NewtonSection, SolverSection};
+use super::solver::{Method, NewtonSection, Preset, SolverSection};
 use super::tree::{self, Loc, Node};
 use crate::error::InputError;
 
@@ -252,6 +252,12 @@ impl Reader<'_> {
                 Some("solves frictionless contact only (use method = \"newton\" with friction)")
             } else if contacts.iter().any(|c| c.force.is_some()) {
                 Some("has no force control (contact.force): use method = \"newton\"")
+            } else if solver.preset == Preset::Iterative {
+                Some(
+                    "needs a factorisation of its reduced systems, not preset = \"iterative\" \
+                     (GMRES + GAMG does not converge on them): use preset = \"direct\" or \
+                     \"auto\"",
+                )
             } else {
                 None
             };

@@ -11,13 +11,14 @@ use crate::error::RunError;
 use crate::mesh::Mesh;
 use crate::par::Ctx;
 use crate::partition::Layout;
+use crate::petsc::shellmat::Operator;
 use crate::petsc::{self, Matrix, PInt, Vector};
 use std::collections::HashMap;
 use std::rc::Rc;
 
 /// The change of basis of a case with body pairs.
 pub struct Basis {
-    q: Matrix,
+    q: Rc<Matrix>,
     /// Q⁻¹ = 2 I − Q (M² = 0): the iterative preset's preconditioner maps between w and u.
     q_inv: Rc<Matrix>,
     /// N_f: the couplings to fixed master components; `None` where no slave row couples to
@@ -30,6 +31,36 @@ pub struct Basis {
     /// free components of master nodes), local row order; set by [`Basis::transform_matrix`].
     master_rows: Vec<bool>,
     dim: usize,
+}
+
+/// Qᵀ A Q as an operator: y = Qᵀ (A (Q x)), Qᵀ a matrix of its own (a forward product: the
+/// same sums on every run).
+struct Galerkin {
+    a: Rc<Matrix>,
+    q: Rc<Matrix>,
+    qt: Matrix,
+    qx: Vector,
+    aqx: Vector,
+}
+
+impl Operator for Galerkin {
+    fn mult(&mut self, x: &Vector, y: &mut Vector) -> petsc::Result<()> {
+        self.q.mult(x, &mut self.qx)?;
+        self.a.mult(&self.qx, &mut self.aqx)?;
+        self.qt.mult(&self.aqx, y)
+    }
+}
+
+/// The operator of a matrix between its two values in [`Basis::transform_matrix`] (never
+/// applied).
+struct Unset;
+
+impl Operator for Unset {
+    fn mult(&mut self, _: &Vector, _: &mut Vector) -> petsc::Result<()> {
+        Err(petsc::raised_error(
+            "internal: Qᵀ A Q applied before it was set",
+        ))
+    }
 }
 
 /// A contact solve's view of the problem in u while it runs in w: the basis, the step's
@@ -124,7 +155,7 @@ impl Basis {
             }
         }
         let comm = ctx.comm();
-        let qm = Matrix::from_csr(comm, dim, &q.ptr, &q.cols, &q.vals)?;
+        let qm = Rc::new(Matrix::from_csr(comm, dim, &q.ptr, &q.cols, &q.vals)?);
         let q_inv = Rc::new(Matrix::from_csr(comm, dim, &qi.ptr, &qi.cols, &qi.vals)?);
         let any_fixed = ctx.sum_usize(nf.cols.len()) > 0;
         let fixed = if any_fixed {
@@ -142,17 +173,41 @@ impl Basis {
         })
     }
 
-    /// Replaces A by Qᵀ A Q (keeping A). Collective.
-    pub fn transform_matrix(&mut self, sys: &mut System) -> petsc::Result<()> {
-        // On several ranks all at once: the default product holds A Q besides the result, and
-        // its peak set the run's (3D body pair at 85 374 unknowns, 2 ranks: 363 against
-        // 249 MB per rank with every product all at once; docs/numbers.md).
-        let a_hat = if crate::par::world_size() > 1 {
-            sys.a.ptap_all_at_once(&self.q)?
+    /// Replaces A by Qᵀ A Q (keeping A): assembled (`assembled`: a factorisation, SNES VI or
+    /// GAMG on it needs its entries), or else as the operator x ↦ Qᵀ (A (Q x)) (the iterative
+    /// preset's Newton steps: their preconditioner works on A in u and their step system is an
+    /// operator too, step_system/matrix_free.rs), which stores nothing besides A, Q and Qᵀ and
+    /// spends no time on the product. Collective.
+    pub fn transform_matrix(
+        &mut self,
+        ctx: &Ctx,
+        sys: &mut System,
+        assembled: bool,
+    ) -> petsc::Result<()> {
+        if assembled {
+            // On several ranks all at once: the default product holds A Q besides the result,
+            // and its peak set the run's (3D body pair at 85 374 unknowns, 2 ranks: 363 against
+            // 249 MB per rank with every product all at once; docs/numbers.md).
+            let a_hat = if crate::par::world_size() > 1 {
+                sys.a.ptap_all_at_once(&self.q)?
+            } else {
+                sys.a.ptap(&self.q)?
+            };
+            self.a = Some(Rc::new(std::mem::replace(&mut sys.a, a_hat)));
         } else {
-            sys.a.ptap(&self.q)?
-        };
-        self.a = Some(Rc::new(std::mem::replace(&mut sys.a, a_hat)));
+            let (comm, local) = (ctx.comm(), sys.b.local_len()?);
+            let none = Matrix::shell(comm, local, Box::new(Unset))?;
+            let a = Rc::new(std::mem::replace(&mut sys.a, none));
+            let op = Galerkin {
+                a: a.clone(),
+                q: self.q.clone(),
+                qt: self.q.transposed()?,
+                qx: sys.b.duplicate()?,
+                aqx: sys.b.duplicate()?,
+            };
+            sys.a = Matrix::shell(comm, local, Box::new(op))?;
+            self.a = Some(a);
+        }
         // (Q − I)ᵀ 1 is Σ_k m_kj > 0 at the coupled master rows, 0 elsewhere
         let mut ones = sys.b.duplicate()?;
         ones.set_all(1.0)?;

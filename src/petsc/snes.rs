@@ -333,6 +333,20 @@ impl Matrix {
     }
 
     /// y = Aᵀ x
+    /// Aᵀ as a matrix of its own (MatTranspose): its products are forward ones, whose sums
+    /// do not depend on the order in which other ranks' parts arrive. Collective.
+    pub fn transposed(&self) -> Result<Matrix> {
+        let mut t: ffi::Mat = ptr::null_mut();
+        // SAFETY: an assembled matrix; the transpose is a new matrix we own.
+        unsafe {
+            check(ffi::MatTranspose(self.raw, ffi::MAT_INITIAL_MATRIX, &mut t))?;
+        }
+        Ok(Matrix {
+            raw: t,
+            _arrays: None,
+        })
+    }
+
     pub fn mult_transpose(&self, x: &Vector, y: &mut Vector) -> Result<()> {
         // SAFETY: layouts checked by PETSc.
         unsafe { check(ffi::MatMultTranspose(self.raw, x.raw, y.raw)) }

@@ -52,7 +52,9 @@ impl Session {
             layout,
             section,
             symmetric_rows(settings, mesh.dim),
-            crate::solver::matrix_scale(ctx, a)?,
+            // body pairs: A's own scale (Qᵀ A Q may be an operator without entries; the
+            // iterative preset's AMG works on A)
+            crate::solver::matrix_scale(ctx, mortar.map_or(a, |m| m.a()))?,
         )?;
         // body pairs on the iterative preset: AMG on A in u, the held rows projected
         // (step_system/mortar_pc.rs)

@@ -75,6 +75,11 @@ impl MortarParts {
         })
     }
 
+    /// A in u (the stiffness before the change of basis).
+    pub fn a(&self) -> Rc<Matrix> {
+        self.a.clone()
+    }
+
     /// The preconditioner of a step system whose solver reads `options` and whose held nodes
     /// are `held`; the AMG cycle on A made here the first time. Collective.
     pub fn preconditioner(

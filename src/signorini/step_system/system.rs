@@ -9,8 +9,8 @@ use super::rows::{
     direction_changes, spring_changes, ConstraintMap, Directions, NodeRows, Springs,
 };
 use super::write::{
-    add_own_terms, left_factor, rewrites, slip_block_changes, write_rows, write_unmixed, RowChange,
-    RowWrites, ScaledSprings,
+    add_own_terms, left_factor, rewrites, rhs_by_operator, slip_block_changes, write_rows,
+    write_unmixed, RowChange, RowWrites, ScaledSprings,
 };
 use crate::assembly::System;
 use crate::case::Reuse;
@@ -68,8 +68,14 @@ pub struct ReducedSystem {
     /// Body pairs on the iterative preset: the held nodes that the preconditioner
     /// ([`super::mortar_pc::MortarPc`]) reads.
     held: Option<HeldNodes>,
-    /// S is the operator of `held` (matrix_free.rs), not a matrix.
+    /// S is the operator of `held` (matrix_free.rs), not a matrix; its right-hand sides come
+    /// from products with A ([`rhs_by_operator`]).
     matrix_free: bool,
+    /// Matrix-free: A in u, whose rows give the held rows' diagonals (Qᵀ A Q may be an
+    /// operator without rows).
+    rows_in_u: Option<Rc<Matrix>>,
+    /// A scratch vector of the prescribed values (matrix-free right-hand sides).
+    ubar: Vector,
 }
 
 impl ReducedSystem {
@@ -85,15 +91,20 @@ impl ReducedSystem {
         dim: usize,
         mortar: Option<&MortarParts>,
     ) -> petsc::Result<ReducedSystem> {
-        let contact_rows = b
-            .nodes
-            .iter()
-            .map(|k| NodeRows::read(&sys.a, k.row, dim))
-            .collect::<Result<_, _>>()?;
-        let f_local = sys.b.to_local_vec()?;
         let held: Option<HeldNodes> = mortar.map(|_| Rc::new(RefCell::new(Vec::new())));
         // the assembled S instead, for the tests that compare both (a test-only limit)
         let matrix_free = held.is_some() && crate::fault::limit("MATRIX_FREE", 1) > 0;
+        // the rows' diagonals (the held rows' s_k) from A in u where Qᵀ A Q may be an operator:
+        // at a slave node the same (its column of Q is e_k); the right-hand sides then come
+        // from products ([`rhs_by_operator`])
+        let rows_in_u = mortar.filter(|_| matrix_free).map(|parts| parts.a());
+        let rows_of = rows_in_u.as_deref().unwrap_or(&sys.a);
+        let contact_rows = b
+            .nodes
+            .iter()
+            .map(|k| NodeRows::read(rows_of, k.row, dim))
+            .collect::<Result<_, _>>()?;
+        let f_local = sys.b.to_local_vec()?;
         let mut s = match held.as_ref().filter(|_| matrix_free) {
             Some(rows) => {
                 let op = StepOperator::new(sys.a.handle()?, &sys.b, rows.clone(), dim)?;
@@ -132,6 +143,8 @@ impl ReducedSystem {
             unmixed: false,
             held,
             matrix_free,
+            rows_in_u,
+            ubar: sys.b.duplicate()?,
         })
     }
 
@@ -197,8 +210,9 @@ impl ReducedSystem {
         owned.sort_unstable();
         owned.dedup();
         self.pin_rows.clear();
+        let rows_of = self.rows_in_u.as_deref().unwrap_or(&sys.a);
         for v in owned {
-            let r = NodeRows::read(&sys.a, v * dim, dim)?;
+            let r = NodeRows::read(rows_of, v * dim, dim)?;
             self.pin_rows.push((v, r));
         }
         Ok(())
@@ -296,8 +310,19 @@ impl ReducedSystem {
             cmap: &cmap,
         };
         let f_local = Some(&self.f_local[..]);
-        let s = (!matrix_free).then_some(&mut self.s);
-        write_rows(s, &mut self.rhs, rows, f_local, dim, &mut self.buf)?;
+        if matrix_free {
+            let scratch = (&mut self.ubar, &mut self.au);
+            rhs_by_operator(&sys.a, &writes, f_local, dim, scratch, &mut self.rhs)?;
+        } else {
+            write_rows(
+                Some(&mut self.s),
+                &mut self.rhs,
+                rows,
+                f_local,
+                dim,
+                &mut self.buf,
+            )?;
+        }
         // the same solver on every rank: the reduction only on the iterative preset, and not
         // for the preconditioner in u (which reads no matrix of the step)
         self.unmixed = !self.ls.kind().factorises()
@@ -700,11 +725,16 @@ impl ReducedSystem {
         );
         let mut rhs = self.rhs.duplicate()?;
         rhs.set_all(0.0)?;
-        let rows = RowWrites {
-            rows: &writes,
-            cmap: &cmap,
-        };
-        write_rows(None, &mut rhs, rows, None, dim, &mut self.buf)?;
+        if self.matrix_free {
+            let scratch = (&mut self.ubar, &mut self.au);
+            rhs_by_operator(&sys.a, &writes, None, dim, scratch, &mut rhs)?;
+        } else {
+            let rows = RowWrites {
+                rows: &writes,
+                cmap: &cmap,
+            };
+            write_rows(None, &mut rhs, rows, None, dim, &mut self.buf)?;
+        }
         self.rows_seconds += t.elapsed().as_secs_f64();
         if self.lifts.len() <= slot {
             self.lifts.resize_with(slot + 1, || None);

@@ -148,6 +148,47 @@ pub(super) fn write_rows(
     })
 }
 
+/// The right-hand side of the rows `writes` (as [`write_rows`] writes it) from one product
+/// with A instead of A's rows: with ū the prescribed values (zero off the rewritten nodes),
+/// out = f − A ū, and on a rewritten node k left_k (f_k − (A ū)_k) + s_k ū_k + r̃_k — the same
+/// P_k (f_k − Σ_j A_kj ū_j) + s_k ū_k of [`write_symmetric_constraint`], and f_i − Σ_k A_ik ū_k
+/// on every other row. For A as an operator (the step system of matrix_free.rs); f = 0 where
+/// `f_local` is `None`. `ubar` and `au` are scratch vectors of A's layout. Collective.
+pub(super) fn rhs_by_operator(
+    a: &Matrix,
+    writes: &[Rewrite],
+    f_local: Option<&[f64]>,
+    dim: usize,
+    (ubar, au): (&mut Vector, &mut Vector),
+    out: &mut Vector,
+) -> petsc::Result<()> {
+    ubar.write(|x| {
+        x.fill(0.0);
+        for (_, me, lr) in writes {
+            x[*lr..*lr + dim].copy_from_slice(&me.known()[..dim]);
+        }
+    })?;
+    a.mult(ubar, au)?;
+    let aub = au.to_local_vec()?;
+    out.write(|x| {
+        for (i, v) in x.iter_mut().enumerate() {
+            *v = f_local.map_or(0.0, |f| f[i]) - aub[i];
+        }
+        for (r, me, lr) in writes {
+            let sk = (0..dim).map(|j| r.diag(j)).sum::<f64>() / dim as f64;
+            let left = left_factor(me, me.projector(dim), dim);
+            let mut ft = [0.0; 3];
+            ft[..dim].copy_from_slice(&x[*lr..*lr + dim]);
+            let uk = me.known();
+            for a in 0..dim {
+                x[lr + a] = (0..dim).map(|b| left[a][b] * ft[b]).sum::<f64>()
+                    + sk * uk[a]
+                    + me.spring_rhs[a];
+            }
+        }
+    })
+}
+
 /// The matrix GAMG is built from on the iterative preset with Coulomb's (F7) rows: S with
 /// the slip nodes' rows P_k A_kj P_j (Tresca's form, symmetric up to the slip springs)
 /// instead of (P_k + E) A_kj P_j. S differs from it by one row per slip node (rank ≤ |slip|),

@@ -78,6 +78,7 @@ pub fn prepare<'c>(ctx: &Ctx, case: &'c Case) -> Result<Prepared<'c>, RunError> 
     let contact = solver::AutoContact {
         friction: (case.contacts.iter()).any(|c| c.friction != crate::case::Friction::None),
         snesvi: case.solver.method == Method::SnesVi,
+        slave_over_master: material.slave_over_master.unwrap_or(0.0),
     };
     let (preset, preset_reason) = solver::choose_preset(
         case.solver.preset,

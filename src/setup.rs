@@ -36,7 +36,7 @@ pub fn read_input(ctx: &Ctx, case: &Case) -> Result<Input, RunError> {
     let model = ctx.agree(check(case, &d.mesh).map_err(RunError::from))?;
     let mut material = cell_materials(ctx, case, &d.mesh, model)?;
     material.reference = reference_material(ctx, case, &d.mesh, &material);
-    material.half_space = pair_modulus(ctx, case, &d.mesh, &material);
+    (material.half_space, material.slave_over_master) = pair_modulus(ctx, case, &d.mesh, &material);
     ctx.agree(check_body_force(case, &d.mesh).map_err(RunError::from))?;
     let input = Input {
         mesh: d.mesh,
@@ -259,8 +259,15 @@ fn reference_material(ctx: &Ctx, case: &Case, mesh: &Mesh, materials: &Materials
 /// two sides in series, 1/E* = 1/E*_slave + 1/E*_master (Hertz' combined modulus), each side
 /// the stiffest material of the cells at its group; the smallest of these and, with rigid
 /// pairs too, the reference material's (a compliant estimate predicts the wider zone).
-/// `None` without body pairs. Collective (one reduction).
-fn pair_modulus(ctx: &Ctx, case: &Case, mesh: &Mesh, materials: &Materials) -> Option<f64> {
+/// `None` without body pairs. Beside it the largest ratio of a pair's slave side to its master
+/// side (the iterative preset's preconditioner pays for a stiff slave: solver.rs
+/// `choose_preset`). Collective (one reduction).
+fn pair_modulus(
+    ctx: &Ctx,
+    case: &Case,
+    mesh: &Mesh,
+    materials: &Materials,
+) -> (Option<f64>, Option<f64>) {
     let pairs: Vec<(&str, &str)> = (case.contacts.iter())
         .filter_map(|c| match &c.obstacle {
             crate::case::ObstacleSpec::Body { group } => Some((c.group.as_str(), group.as_str())),
@@ -268,7 +275,7 @@ fn pair_modulus(ctx: &Ctx, case: &Case, mesh: &Mesh, materials: &Materials) -> O
         })
         .collect();
     if pairs.is_empty() {
-        return None;
+        return (None, None);
     }
     let n_own = mesh
         .global
@@ -296,14 +303,15 @@ fn pair_modulus(ctx: &Ctx, case: &Case, mesh: &Mesh, materials: &Materials) -> O
         .fold(vec![0.0; mine.len()], |acc, r| {
             acc.iter().zip(r).map(|(a, b)| a.max(*b)).collect()
         });
-    let series = (both.chunks_exact(2))
-        .filter(|s| s[0] > 0.0 && s[1] > 0.0)
+    let sides = (both.chunks_exact(2)).filter(|s| s[0] > 0.0 && s[1] > 0.0);
+    let series = (sides.clone())
         .map(|s| 1.0 / (1.0 / s[0] + 1.0 / s[1]))
         .fold(f64::INFINITY, f64::min);
+    let ratio = sides.map(|s| s[0] / s[1]).fold(0.0f64, f64::max);
     let rigid = case.contacts.len() > pairs.len();
     let reference = materials.reference_material().contact_modulus();
     let e = if rigid { series.min(reference) } else { series };
-    e.is_finite().then_some(e)
+    (e.is_finite().then_some(e), (ratio > 0.0).then_some(ratio))
 }
 
 /// A body force given by expressions (`body_force.expr`) is finite at every quadrature point

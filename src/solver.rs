@@ -12,7 +12,7 @@ use crate::partition::Layout;
 use crate::petsc::ndfactor::FactorRecord;
 use crate::petsc::{self, Matrix, SolveInfo, Vector};
 use crate::say;
-use crate::tuning::AUTO_ITERATIVE_3D_DOFS;
+use crate::tuning::{AUTO_ITERATIVE_3D_DOFS, STIFF_SLAVE_RATIO};
 use std::time::Instant;
 
 /// What of a case's contact chooses the auto preset in 3D.
@@ -22,6 +22,9 @@ pub struct AutoContact {
     pub friction: bool,
     /// `solver.method = "snesvi"`.
     pub snesvi: bool,
+    /// The largest ratio of a body pair's slave-side to master-side contact modulus (0
+    /// without body pairs).
+    pub slave_over_master: f64,
 }
 
 /// The preset to use for `asked` on a mesh of dimension `dim` with `dofs` unknowns and the
@@ -37,7 +40,10 @@ pub struct AutoContact {
 /// at every size: GMRES + GAMG does not converge on its reduced systems (sub-matrices of the
 /// system rotated into the contact frames, whose rigid modes are not the coordinates'; 2D
 /// Hertz: 2 000 iterations in its first step; 3D: sub-matrices whose size is no multiple of
-/// the block size).
+/// the block size). A body pair whose slave side is [`STIFF_SLAVE_RATIO`] or more times as
+/// stiff as its master takes the direct preset too: the preconditioner in u corrects a held
+/// slave node on the slave side (step_system/mortar_pc.rs), which costs more the stiffer that
+/// side is (docs/numbers.md, "The slave side's stiffness on the iterative preset").
 pub fn choose_preset(
     asked: Preset,
     dim: usize,
@@ -52,6 +58,13 @@ pub fn choose_preset(
         Preset::Auto if dim == 3 && contact.friction => (
             Preset::Direct,
             format!("auto: 3D with friction, {dofs} unknowns"),
+        ),
+        Preset::Auto if dim == 3 && contact.slave_over_master >= STIFF_SLAVE_RATIO => (
+            Preset::Direct,
+            format!(
+                "auto: 3D, a body pair's slave side {:.3e} × as stiff as its master",
+                contact.slave_over_master
+            ),
         ),
         Preset::Auto if dim == 3 && dofs >= AUTO_ITERATIVE_3D_DOFS => (
             Preset::Iterative,
@@ -210,8 +223,8 @@ mod tests {
     #[test]
     fn snesvi_takes_the_direct_preset_at_every_size() {
         let snesvi = AutoContact {
-            friction: false,
             snesvi: true,
+            ..AutoContact::default()
         };
         for (dim, dofs) in [(2, 1_000_000), (3, 10 * AUTO_ITERATIVE_3D_DOFS), (3, 100)] {
             assert_eq!(

@@ -32,6 +32,18 @@
 /// --ball ...` and the dofs where the two columns cross.
 pub const AUTO_ITERATIVE_3D_DOFS: usize = 10_000;
 
+/// The auto preset solves a 3D body pair whose slave side is this many times as stiff as its
+/// master (contact moduli E / (1 − ν²)) directly: the iterative preset's preconditioner
+/// corrects the held slave nodes on the slave side. Measured on the quarter ball on a block of
+/// cases/bodies/hertz_bodies3d.toml at 16 647 unknowns, 2 ranks, the block (ν 0.2) as slave,
+/// its E varied against the ball's 1 (ν 0.3): GMRES iterations in the exact steps 88 / 188 /
+/// 275 / 499 at E = 3 / 30 / 300 / 3 000, and a breakdown at 3e6; the ball as slave 36–41 at
+/// every E. By those counts the iterative run costs about what the direct preset's does from a
+/// ratio of a few hundred (at 85 374 unknowns and E = 3: 2.3–2.9 × T_linear iterative against
+/// 6.7–9.2 × direct, ~90 iterations; an estimate, not a measured crossover). Not
+/// machine-specific (iteration counts).
+pub const STIFF_SLAVE_RATIO: f64 = 100.0;
+
 /// Per cent of workspace over MUMPS' estimate (ICNTL(14)): the direct preset's option string
 /// (linsolve.rs writes the same 40) and petsc/mumps.rs's own MUMPS instances. Measured: one 2-rank
 /// 3D Cholesky of 396 k unknowns failed with DIVERGED_PC_FAILED at the default and passed

@@ -490,3 +490,24 @@ fn the_step_operator_gives_the_assembled_step_matrix_answer() {
         same_steps(&free, &assembled, 2, 1e-9, np);
     }
 }
+
+#[test]
+fn a_slave_side_far_stiffer_than_its_master_takes_the_direct_preset() {
+    // the iterative preset's preconditioner corrects held slave nodes on the slave side: a
+    // slave side STIFF_SLAVE_RATIO × as stiff as its master or more goes to the direct preset
+    // (solver.rs choose_preset); the other side as slave keeps the size rule
+    let tmp = tempfile::tempdir().expect("tempdir");
+    let mesh = stack_mesh(tmp.path(), 3, 0.15, 0.45);
+    let stiff_upper = "material.1.young=1e4";
+    for (pair, used, why) in [
+        (("upper_bottom", "lower_top"), "direct", "slave side"),
+        (("lower_top", "upper_bottom"), "direct", "unknowns <"),
+    ] {
+        let case = stack_case(tmp.path(), &mesh, 3, pair);
+        let s = solve(2, &case, &[stiff_upper]);
+        s.assert_converged(pair.0);
+        let reason = s.summary["preset"]["reason"].as_str().expect("a reason");
+        assert_eq!(s.summary["preset"]["used"], used, "{pair:?}: {reason}");
+        assert!(reason.contains(why), "{pair:?}: {reason}");
+    }
+}

@@ -94,6 +94,9 @@ pub struct Materials {
     /// The contact modulus of the half-space model: the reference entry's, or with contact
     /// between bodies the two sides' in series (crate::setup); `None`: the reference's.
     pub half_space: Option<f64>,
+    /// With contact between bodies: the largest ratio of a pair's slave-side to master-side
+    /// contact modulus (crate::setup); `None` without body pairs.
+    pub slave_over_master: Option<f64>,
 }
 
 impl Materials {
@@ -106,6 +109,7 @@ impl Materials {
             lame: vec![m.lame()],
             reference: 0,
             half_space: None,
+            slave_over_master: None,
         }
     }
 
@@ -119,6 +123,7 @@ impl Materials {
             cell: std::sync::Arc::from(cell),
             reference: 0,
             half_space: None,
+            slave_over_master: None,
         }
     }
 

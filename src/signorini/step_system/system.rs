@@ -74,8 +74,8 @@ pub struct ReducedSystem {
     /// Matrix-free: A in u, whose rows give the held rows' diagonals (Qᵀ A Q may be an
     /// operator without rows).
     rows_in_u: Option<Rc<Matrix>>,
-    /// A scratch vector of the prescribed values (matrix-free right-hand sides).
-    ubar: Vector,
+    /// Matrix-free: a scratch vector of the prescribed values (the right-hand sides).
+    ubar: Option<Vector>,
 }
 
 impl ReducedSystem {
@@ -144,7 +144,7 @@ impl ReducedSystem {
             held,
             matrix_free,
             rows_in_u,
-            ubar: sys.b.duplicate()?,
+            ubar: matrix_free.then(|| sys.b.duplicate()).transpose()?,
         })
     }
 
@@ -310,8 +310,8 @@ impl ReducedSystem {
             cmap: &cmap,
         };
         let f_local = Some(&self.f_local[..]);
-        if matrix_free {
-            let scratch = (&mut self.ubar, &mut self.au);
+        if let Some(ubar) = self.ubar.as_mut() {
+            let scratch = (ubar, &mut self.au);
             rhs_by_operator(&sys.a, &writes, f_local, dim, scratch, &mut self.rhs)?;
         } else {
             write_rows(
@@ -725,8 +725,8 @@ impl ReducedSystem {
         );
         let mut rhs = self.rhs.duplicate()?;
         rhs.set_all(0.0)?;
-        if self.matrix_free {
-            let scratch = (&mut self.ubar, &mut self.au);
+        if let Some(ubar) = self.ubar.as_mut() {
+            let scratch = (ubar, &mut self.au);
             rhs_by_operator(&sys.a, &writes, None, dim, scratch, &mut rhs)?;
         } else {
             let rows = RowWrites {

@@ -148,7 +148,7 @@ pub(super) fn write_rows(
     })
 }
 
-/// The right-hand side of the rows `writes` (as [`write_rows`] writes it) from one product
+/// The right-hand side of (3.29) / (3.42) for the rows `writes` (as [`write_rows`] writes it) from one product
 /// with A instead of A's rows: with ū the prescribed values (zero off the rewritten nodes),
 /// out = f − A ū, and on a rewritten node k left_k (f_k − (A ū)_k) + s_k ū_k + r̃_k — the same
 /// P_k (f_k − Σ_j A_kj ū_j) + s_k ū_k of [`write_symmetric_constraint`], and f_i − Σ_k A_ik ū_k

@@ -160,20 +160,8 @@ pub fn solve(ctx: &Ctx, prepared: Prepared) -> Result<String, RunError> {
     } = prepared;
     let preset = solver.preset;
     let problem = setup::problem(case, &mesh, &material);
-    let mut sys = assembly::assemble(ctx.comm(), &layout, &problem)?;
     let mut contact = contact;
-    let mut basis = match contact.as_mut() {
-        Some(c) => crate::mortar::set_up(ctx, &mesh, &layout, c, &problem.fixed)?,
-        None => None,
-    };
-    if let Some(b) = basis.as_mut() {
-        // the iterative preset's Newton steps apply Qᵀ A Q, never factorise it (the
-        // test-only limit MATRIX_FREE = 0 assembles it for the tests that compare both)
-        let operator = solver.method == Method::Newton
-            && LinearSetup::kind_of(&solver)? == SolverKind::Iterative
-            && crate::fault::limit("MATRIX_FREE", 1) > 0;
-        b.transform_matrix(ctx, &mut sys, !operator)?;
-    }
+    let (mut sys, basis) = assemble(ctx, &solver, (&mesh, &layout), &problem, &mut contact)?;
     clock.t.assembly = clock.lap();
     let assembly = check_assembly(ctx, &sys, clock.t.assembly)?;
     let out = ResultSet::begin(ctx, &case.output.dir, &case.file)?;
@@ -241,6 +229,31 @@ pub fn solve(ctx: &Ctx, prepared: Prepared) -> Result<String, RunError> {
             case.output.dir.display()
         ))),
     }
+}
+
+/// The system of a run: A and f assembled, and with body pairs the change of basis u = Q w + c
+/// set up and A replaced by Qᵀ A Q — as an operator where the Newton steps are iterative
+/// (their preconditioner works in u and never factorises it; the test-only limit
+/// MATRIX_FREE = 0 assembles it for the tests that compare both). Collective.
+fn assemble(
+    ctx: &Ctx,
+    solver: &SolverSection,
+    (mesh, layout): (&Mesh, &Layout),
+    problem: &assembly::Problem,
+    contact: &mut Option<ContactSettings>,
+) -> Result<(System, Option<crate::mortar::Basis>), RunError> {
+    let mut sys = assembly::assemble(ctx.comm(), layout, problem)?;
+    let mut basis = match contact.as_mut() {
+        Some(c) => crate::mortar::set_up(ctx, mesh, layout, c, &problem.fixed)?,
+        None => None,
+    };
+    if let Some(b) = basis.as_mut() {
+        let operator = solver.method == Method::Newton
+            && LinearSetup::kind_of(solver)? == SolverKind::Iterative
+            && crate::fault::limit("MATRIX_FREE", 1) > 0;
+        b.transform_matrix(ctx, &mut sys, !operator)?;
+    }
+    Ok((sys, basis))
 }
 
 /// `signorini-mpi check`: the set-up stage of a run and its contact boundary (every input

@@ -38,28 +38,34 @@ impl Operator for StepOperator {
     fn mult(&mut self, x: &Vector, y: &mut Vector) -> petsc::Result<()> {
         let dim = self.dim;
         let rows = self.rows.borrow();
-        let xl = x.to_local_vec()?;
-        self.px.write(|v| {
-            v.copy_from_slice(&xl);
-            for h in rows.iter() {
-                let xk = &xl[h.lr..h.lr + dim];
-                for a in 0..dim {
-                    v[h.lr + a] = (0..dim).map(|b| h.proj[a][b] * xk[b]).sum();
+        let px = &mut self.px;
+        x.read(|xl| {
+            px.write(|v| {
+                v.copy_from_slice(xl);
+                for h in rows.iter() {
+                    let xk = &xl[h.lr..h.lr + dim];
+                    for a in 0..dim {
+                        v[h.lr + a] = (0..dim).map(|b| h.proj[a][b] * xk[b]).sum();
+                    }
                 }
-            }
-        })?;
+            })
+        })??;
         self.a.mult(&self.px, &mut self.apx)?;
-        let apx = self.apx.to_local_vec()?;
-        y.write(|v| {
-            v.copy_from_slice(&apx);
-            for h in rows.iter() {
-                let (xk, tk) = (&xl[h.lr..h.lr + dim], &apx[h.lr..h.lr + dim]);
-                for a in 0..dim {
-                    v[h.lr + a] = (0..dim)
-                        .map(|b| h.left[a][b] * tk[b] + h.own[a][b] * xk[b])
-                        .sum();
-                }
-            }
-        })
+        x.read(|xl| {
+            self.apx.read(|apx| {
+                y.write(|v| {
+                    v.copy_from_slice(apx);
+                    for h in rows.iter() {
+                        let (xk, tk) = (&xl[h.lr..h.lr + dim], &apx[h.lr..h.lr + dim]);
+                        for a in 0..dim {
+                            v[h.lr + a] = (0..dim)
+                                .map(|b| h.left[a][b] * tk[b] + h.own[a][b] * xk[b])
+                                .sum();
+                        }
+                    }
+                })
+            })
+        })???;
+        Ok(())
     }
 }

@@ -107,6 +107,8 @@ impl MortarParts {
             t3: t1.duplicate()?,
             t4: t1.duplicate()?,
             t1,
+            scratch: Vec::new(),
+            own: Vec::new(),
             a: self.a.clone(),
             q_inv: self.q_inv.clone(),
             held,
@@ -127,6 +129,10 @@ pub struct MortarPc {
     t2: Vector,
     t3: Vector,
     t4: Vector,
+    /// This rank's rows of the vector being preconditioned, and the held rows' own part
+    /// (kept between applications: no allocation per GMRES iteration).
+    scratch: Vec<f64>,
+    own: Vec<f64>,
 }
 
 impl Preconditioner for MortarPc {
@@ -143,21 +149,26 @@ impl Preconditioner for MortarPc {
     /// y = P⁻¹ x: Π Q⁻¹ M⁻¹ Q⁻ᵀ Π x on the free directions, x_c / s_k on the held ones.
     fn apply(&mut self, x: &Vector, y: &mut Vector) -> petsc::Result<()> {
         let dim = self.dim;
-        let mut xl = x.to_local_vec()?;
-        let mut own = vec![0.0; xl.len()];
-        project_off(&self.held.borrow(), &mut xl, dim, |i, part, s| {
-            own[i] += part / s
-        });
-        self.t1.write(|s| s.copy_from_slice(&xl))?;
+        let held = self.held.borrow();
+        let (v, own) = (&mut self.scratch, &mut self.own);
+        x.read(|xl| {
+            v.clear();
+            v.extend_from_slice(xl);
+        })?;
+        own.clear();
+        own.resize(v.len(), 0.0);
+        project_off(&held, v, dim, |i, part, s| own[i] += part / s);
+        self.t1.write(|s| s.copy_from_slice(v))?;
         self.q_inv.mult_transpose(&self.t1, &mut self.t2)?;
         self.amg.borrow_mut().ksp.solve(&self.t2, &mut self.t3)?;
         self.q_inv.mult(&self.t3, &mut self.t4)?;
-        let mut yl = self.t4.to_local_vec()?;
-        project_off(&self.held.borrow(), &mut yl, dim, |_, _, _| {});
-        for (v, o) in yl.iter_mut().zip(&own) {
-            *v += o;
-        }
-        y.write(|s| s.copy_from_slice(&yl))
+        self.t4.read(|yl| v.copy_from_slice(yl))?;
+        project_off(&held, v, dim, |_, _, _| {});
+        y.write(|s| {
+            for ((s, v), o) in s.iter_mut().zip(v.iter()).zip(own.iter()) {
+                *s = v + o;
+            }
+        })
     }
 }
 

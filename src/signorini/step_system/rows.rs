@@ -61,6 +61,11 @@ impl NodeRows {
     pub fn diag(&self, j: usize) -> f64 {
         self.vals[j][self.own[j]]
     }
+
+    /// The node's mean diagonal entry s_k (the scale of its held rows, (3.29)).
+    pub fn mean_diag(&self, dim: usize) -> f64 {
+        (0..dim).map(|j| self.diag(j)).sum::<f64>() / dim as f64
+    }
 }
 
 /// Prescribed components of one node: orthonormal directions c with cᵀ u = value (an active

@@ -10,7 +10,7 @@ use super::rows::{
 };
 use super::write::{
     add_own_terms, left_factor, rewrites, rhs_by_operator, slip_block_changes, write_rows,
-    write_unmixed, RowChange, RowWrites, ScaledSprings,
+    write_unmixed, Rewrite, RowChange, RowWrites, ScaledSprings,
 };
 use crate::assembly::System;
 use crate::case::Reuse;
@@ -35,8 +35,10 @@ pub struct ReducedSystem {
     u: Vector,
     au: Vector,
     ls: LinearSolver,
-    contact_rows: Vec<NodeRows>,
-    pin_rows: Vec<(usize, NodeRows)>,
+    /// Shared with the rewrites of a step (which borrow them while the step's phases change
+    /// the rest of the system).
+    contact_rows: Rc<[NodeRows]>,
+    pin_rows: Rc<[(usize, NodeRows)]>,
     /// This rank's rows of f.
     pub f_local: Vec<f64>,
     /// First global row of this rank.
@@ -68,14 +70,16 @@ pub struct ReducedSystem {
     /// Body pairs on the iterative preset: the held nodes that the preconditioner
     /// ([`super::mortar_pc::MortarPc`]) reads.
     held: Option<HeldNodes>,
-    /// S is the operator of `held` (matrix_free.rs), not a matrix; its right-hand sides come
-    /// from products with A ([`rhs_by_operator`]).
-    matrix_free: bool,
-    /// Matrix-free: A in u, whose rows give the held rows' diagonals (Qᵀ A Q may be an
-    /// operator without rows).
-    rows_in_u: Option<Rc<Matrix>>,
-    /// Matrix-free: a scratch vector of the prescribed values (the right-hand sides).
-    ubar: Option<Vector>,
+    /// S is the operator of `held` (matrix_free.rs), not a matrix.
+    matrix_free: Option<MatrixFree>,
+}
+
+/// What a matrix-free step system keeps: A in u, whose rows give the held rows' diagonals
+/// (Qᵀ A Q may be an operator without rows), and a scratch vector of the prescribed values
+/// for the right-hand sides, which come from products with A ([`rhs_by_operator`]).
+struct MatrixFree {
+    rows_in_u: Rc<Matrix>,
+    ubar: Vector,
 }
 
 impl ReducedSystem {
@@ -93,19 +97,24 @@ impl ReducedSystem {
     ) -> petsc::Result<ReducedSystem> {
         let held: Option<HeldNodes> = mortar.map(|_| Rc::new(RefCell::new(Vec::new())));
         // the assembled S instead, for the tests that compare both (a test-only limit)
-        let matrix_free = held.is_some() && crate::fault::limit("MATRIX_FREE", 1) > 0;
         // the rows' diagonals (the held rows' s_k) from A in u where Qᵀ A Q may be an operator:
         // at a slave node the same (its column of Q is e_k); the right-hand sides then come
         // from products ([`rhs_by_operator`])
-        let rows_in_u = mortar.filter(|_| matrix_free).map(|parts| parts.a());
-        let rows_of = rows_in_u.as_deref().unwrap_or(&sys.a);
+        let matrix_free = match mortar {
+            Some(parts) if crate::fault::limit("MATRIX_FREE", 1) > 0 => Some(MatrixFree {
+                rows_in_u: parts.a(),
+                ubar: sys.b.duplicate()?,
+            }),
+            _ => None,
+        };
+        let rows_of = matrix_free.as_ref().map_or(&sys.a, |m| &*m.rows_in_u);
         let contact_rows = b
             .nodes
             .iter()
             .map(|k| NodeRows::read(rows_of, k.row, dim))
-            .collect::<Result<_, _>>()?;
+            .collect::<Result<Rc<[_]>, _>>()?;
         let f_local = sys.b.to_local_vec()?;
-        let mut s = match held.as_ref().filter(|_| matrix_free) {
+        let mut s = match held.as_ref().filter(|_| matrix_free.is_some()) {
             Some(rows) => {
                 let op = StepOperator::new(sys.a.handle()?, &sys.b, rows.clone(), dim)?;
                 Matrix::shell(ctx.comm(), f_local.len(), Box::new(op))?
@@ -126,7 +135,7 @@ impl ReducedSystem {
             au: sys.b.duplicate()?,
             ls,
             contact_rows,
-            pin_rows: Vec::new(),
+            pin_rows: Rc::from(Vec::new()),
             f_local,
             row_lo,
             buf: Vec::new(),
@@ -143,8 +152,6 @@ impl ReducedSystem {
             unmixed: false,
             held,
             matrix_free,
-            rows_in_u,
-            ubar: matrix_free.then(|| sys.b.duplicate()).transpose()?,
         })
     }
 
@@ -209,12 +216,11 @@ impl ReducedSystem {
             .collect();
         owned.sort_unstable();
         owned.dedup();
-        self.pin_rows.clear();
-        let rows_of = self.rows_in_u.as_deref().unwrap_or(&sys.a);
-        for v in owned {
-            let r = NodeRows::read(rows_of, v * dim, dim)?;
-            self.pin_rows.push((v, r));
-        }
+        let rows_of = self.matrix_free.as_ref().map_or(&sys.a, |m| &*m.rows_in_u);
+        self.pin_rows = owned
+            .into_iter()
+            .map(|v| Ok((v, NodeRows::read(rows_of, v * dim, dim)?)))
+            .collect::<petsc::Result<Rc<[_]>>>()?;
         Ok(())
     }
 
@@ -231,23 +237,40 @@ impl ReducedSystem {
     ) -> petsc::Result<()> {
         let t = Instant::now();
         let dim = self.dim;
-        // matrix-free (body pairs, iterative): S is the operator of `held`, only rhs is written
-        let matrix_free = self.matrix_free;
-        if !matrix_free {
-            self.s.copy_values_from(&sys.a)?;
-        }
-        self.rhs.copy_from(&sys.b)?;
         let cmap = ConstraintMap::gather(ctx, layout, b, set, pins, dim);
+        let (contact_rows, pin_rows) = (self.contact_rows.clone(), self.pin_rows.clone());
         let writes = rewrites(
-            (&self.contact_rows, &self.pin_rows, self.row_lo),
+            (&contact_rows, &pin_rows, self.row_lo),
             layout,
             b,
             set,
             &cmap,
             dim,
         );
+        self.record_changes(ctx, &cmap, &writes, set.tangential.is_some());
+        self.share_rewritten(&writes);
+        let rows = RowWrites {
+            rows: &writes,
+            cmap: &cmap,
+        };
+        self.write_values(ctx, sys, rows)?;
+        self.rows_seconds += t.elapsed().as_secs_f64();
+        Ok(())
+    }
+
+    /// What the reuse path and the friction record need of the rows written: the directions
+    /// and slip blocks of this step (`friction`: with tangential rows), and how they differ
+    /// from the step before ([`RowChange`]). Collective with friction.
+    fn record_changes(
+        &mut self,
+        ctx: &Ctx,
+        cmap: &ConstraintMap,
+        writes: &[Rewrite],
+        friction: bool,
+    ) {
+        let dim = self.dim;
+        let zero = [[0.0; 3]; 3];
         if let Some(re) = &mut self.reuser {
-            let zero = [[0.0; 3]; 3];
             let springs = writes
                 .iter()
                 .filter(|(_, me, _)| me.spring != zero)
@@ -255,35 +278,43 @@ impl ReducedSystem {
                 .collect();
             re.current = (cmap.directions(), springs);
         }
-        if set.tangential.is_some() {
-            let dirs = cmap.directions();
-            let springs: ScaledSprings = writes
-                .iter()
-                .filter(|(_, me, _)| me.spring != [[0.0; 3]; 3])
-                .map(|(r, me, lr)| {
-                    let scale = (0..dim).map(|j| r.diag(j).abs()).sum::<f64>() / dim as f64;
-                    (*lr, (me.spring, scale))
-                })
-                .collect();
-            self.change = match &self.previous {
-                Some((d0, s0)) => {
-                    let (real, roundoff) = slip_block_changes(s0, &springs);
-                    let g = ctx.sum_vec(&[real as f64, roundoff as f64]);
-                    Some(RowChange {
-                        directions: direction_changes(d0, &dirs),
-                        slip_blocks: g[0].round() as usize,
-                        slip_blocks_roundoff: g[1].round() as usize,
-                    })
-                }
-                None => None,
-            };
-            self.previous = Some((dirs, springs));
+        if !friction {
+            return;
         }
+        let dirs = cmap.directions();
+        let springs: ScaledSprings = writes
+            .iter()
+            .filter(|(_, me, _)| me.spring != zero)
+            .map(|(r, me, lr)| {
+                let scale = (0..dim).map(|j| r.diag(j).abs()).sum::<f64>() / dim as f64;
+                (*lr, (me.spring, scale))
+            })
+            .collect();
+        self.change = match &self.previous {
+            Some((d0, s0)) => {
+                let (real, roundoff) = slip_block_changes(s0, &springs);
+                let g = ctx.sum_vec(&[real as f64, roundoff as f64]);
+                Some(RowChange {
+                    directions: direction_changes(d0, &dirs),
+                    slip_blocks: g[0].round() as usize,
+                    slip_blocks_roundoff: g[1].round() as usize,
+                })
+            }
+            None => None,
+        };
+        self.previous = Some((dirs, springs));
+    }
+
+    /// The rewritten nodes as the solvers read them: the preconditioner in u and the
+    /// matrix-free operator ([`Held`]), the iterative reuse path's warm start (projector and
+    /// prescribed part of every node with a held direction). Local.
+    fn share_rewritten(&mut self, writes: &[Rewrite]) {
+        let dim = self.dim;
         if let Some(held) = &self.held {
             *held.borrow_mut() = writes
                 .iter()
                 .map(|(r, me, lr)| {
-                    let s = (0..dim).map(|j| r.diag(j)).sum::<f64>() / dim as f64;
+                    let s = r.mean_diag(dim);
                     let proj = me.projector(dim);
                     let mut own = [[0.0; 3]; 3];
                     add_own_terms(&mut own, me, s, dim);
@@ -305,15 +336,19 @@ impl ReducedSystem {
                 .map(|(_, me, lr)| (*lr, me.projector(dim), me.known()))
                 .collect();
         }
-        let rows = RowWrites {
-            rows: &writes,
-            cmap: &cmap,
-        };
+    }
+
+    /// S (unless it is an operator) and the right-hand side of the rows `rows`, and with
+    /// Coulomb's row mix on the iterative preset the matrix GAMG is built from. Collective.
+    fn write_values(&mut self, ctx: &Ctx, sys: &System, rows: RowWrites) -> petsc::Result<()> {
+        let dim = self.dim;
         let f_local = Some(&self.f_local[..]);
-        if let Some(ubar) = self.ubar.as_mut() {
-            let scratch = (ubar, &mut self.au);
-            rhs_by_operator(&sys.a, &writes, f_local, dim, scratch, &mut self.rhs)?;
+        if let Some(m) = self.matrix_free.as_mut() {
+            let scratch = (&mut m.ubar, &mut self.au);
+            rhs_by_operator(&sys.a, rows.rows, f_local, dim, scratch, &mut self.rhs)?;
         } else {
+            self.s.copy_values_from(&sys.a)?;
+            self.rhs.copy_from(&sys.b)?;
             write_rows(
                 Some(&mut self.s),
                 &mut self.rhs,
@@ -326,13 +361,12 @@ impl ReducedSystem {
         // the same solver on every rank: the reduction only on the iterative preset, and not
         // for the preconditioner in u (which reads no matrix of the step)
         self.unmixed = !self.ls.kind().factorises()
-            && !matrix_free
-            && ctx.any(writes.iter().any(|(_, me, _)| me.row_mix.is_some()));
+            && self.matrix_free.is_none()
+            && ctx.any(rows.rows.iter().any(|(_, me, _)| me.row_mix.is_some()));
         if self.unmixed {
             let made = &mut self.amg_matrix;
             write_unmixed(made, &self.s, &self.rhs, sys, rows, dim, &mut self.buf)?;
         }
-        self.rows_seconds += t.elapsed().as_secs_f64();
         Ok(())
     }
 
@@ -725,8 +759,8 @@ impl ReducedSystem {
         );
         let mut rhs = self.rhs.duplicate()?;
         rhs.set_all(0.0)?;
-        if let Some(ubar) = self.ubar.as_mut() {
-            let scratch = (ubar, &mut self.au);
+        if let Some(m) = self.matrix_free.as_mut() {
+            let scratch = (&mut m.ubar, &mut self.au);
             rhs_by_operator(&sys.a, &writes, None, dim, scratch, &mut rhs)?;
         } else {
             let rows = RowWrites {

@@ -12,7 +12,7 @@ use crate::signorini::boundary::ContactBoundary;
 use std::collections::HashMap;
 
 /// A rewritten node: its rows of A, its constraint, its first local row.
-type Rewrite<'r> = (&'r NodeRows, NodeConstraint, usize);
+pub(super) type Rewrite<'r> = (&'r NodeRows, NodeConstraint, usize);
 
 /// The rows a step writes: its rewritten nodes ([`rewrites`]) and the constraints of every
 /// node their rows couple to (the neighbours' included).
@@ -175,7 +175,7 @@ pub(super) fn rhs_by_operator(
             *v = f_local.map_or(0.0, |f| f[i]) - aub[i];
         }
         for (r, me, lr) in writes {
-            let sk = (0..dim).map(|j| r.diag(j)).sum::<f64>() / dim as f64;
+            let sk = r.mean_diag(dim);
             let left = left_factor(me, me.projector(dim), dim);
             let mut ft = [0.0; 3];
             ft[..dim].copy_from_slice(&x[*lr..*lr + dim]);
@@ -263,7 +263,7 @@ pub fn write_symmetric_constraint<'c>(
     let pk = me.projector(dim);
     let left = left_factor(me, pk, dim);
     let uk = me.known();
-    let sk = (0..dim).map(|j| rows.diag(j)).sum::<f64>() / dim as f64;
+    let sk = rows.mean_diag(dim);
     let mut new_rows = vec![vec![0.0; n]; dim];
     let mut t = [0.0; 3]; // Σ_j A_kj ū_j
     let mut mirror_cols: [PInt; 3] = [0; 3];

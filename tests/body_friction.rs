@@ -376,3 +376,67 @@ fn a_wide_contact_does_not_slip_under_pressing_and_its_stick_zone_stays_centred(
         assert_stick_zone(&z, cattaneo, slave);
     }
 }
+
+/// The ball of tests/meshes/ball_on_block.geo resting under its weight on the block, whose
+/// whole top is the slave side: its nodes beside the ball's silhouette are covered by the
+/// master only in part, and their frame must be the slave's own normal (a "common normal"
+/// from those couplings put such a node 1.6 deep inside the ball: the case was refused as a
+/// misplaced obstacle). `friction` the [contact] friction value.
+fn ball_on_block(dir: &Path, mesh: &Path, friction: &str) -> PathBuf {
+    let case = dir.join(format!("ball_on_block_{}.toml", friction.len()));
+    let text = format!(
+        "[mesh]\nfile = {}\n\
+         [[material]]\ngroup = \"ball\"\nyoung = 1.0\npoisson = 0.3\nmodel = \"3d\"\n\
+         [[material]]\ngroup = \"block\"\nyoung = 5.0\npoisson = 0.25\nmodel = \"3d\"\n\
+         [body_force]\nvalue = [0.0, 0.0, -0.01]\n\
+         [[dirichlet]]\ngroup = \"block_bottom\"\nvalue = [0.0, 0.0, 0.0]\n\
+         [contact]\ngroup = \"block_top\"\nobstacle = {{ type = \"body\", group = \"ball_surf\" }}\n\
+         friction = {friction}\n\
+         [output]\nfields = [\"displacement\", \"contact\"]\n",
+        toml_path(mesh)
+    );
+    std::fs::write(&case, text).expect("case file");
+    case
+}
+
+#[test]
+fn a_slave_side_reaching_beyond_the_masters_silhouette_takes_friction() {
+    let tmp = tempfile::tempdir().expect("tempdir");
+    let mesh = tmp.path().join("ball_on_block.msh");
+    gmsh("ball_on_block.geo", 3, 0.1, &mesh);
+    let frictionless = solve(2, &ball_on_block(tmp.path(), &mesh, "\"none\""), &[]);
+    frictionless.assert_converged("frictionless");
+    let gaps0 = columns(&frictionless.contact_rows_by_id(), &["gap0"]);
+    let weight = frictionless.total_force()[2];
+    assert!(
+        weight < 0.0,
+        "the ball's weight {weight:e} on the block top"
+    );
+    for (law, np) in [
+        ("{ law = \"coulomb\", mu = 0.3 }", 2),
+        ("{ law = \"coulomb\", mu = 0.3 }", 3),
+        ("{ law = \"tresca\", threshold = 1e-4 }", 2),
+    ] {
+        let what = format!("{law} on {np} ranks");
+        let s = solve(np, &ball_on_block(tmp.path(), &mesh, law), &[]);
+        s.assert_converged(&what);
+        let rows = s.contact_rows_by_id();
+        assert_eq!(rows.len(), gaps0.len(), "{what}: slave nodes");
+        // the ball rests on its pole: no slave node starts inside it
+        for (id, r) in &rows {
+            let g = r.f("gap0");
+            assert!(
+                g >= -1e-12,
+                "{what}: node {id} starts {g:e} inside (frictionless {:e})",
+                gaps0[id][0]
+            );
+        }
+        let f = s.total_force();
+        assert!(
+            (f[2] - weight).abs() <= 1e-10 * weight.abs()
+                && f[0].abs() + f[1].abs() <= 1e-10 * weight.abs(),
+            "{what}: total force {f:?} against the weight {weight:e}"
+        );
+        assert!(s.active_node_ids().len() > 3, "{what}: active nodes");
+    }
+}

@@ -321,8 +321,16 @@ impl MasterNormals {
     /// alone turns by x/R along a curved surface, and the approach of two curved bodies (along
     /// their common normal) would have a tangential part in it that a sticking node resists
     /// (docs/bodies.md, "The method"). On a flat interface n̄_k = n_k. Returns (n̄_k, g̃_k),
-    /// the row's own where the two normals cancel.
+    /// the row's own where the two normals cancel, and where the master covers the slave
+    /// facets around k only in part (at the end of the master group): there Σ_j m_kj ≠ 1
+    /// (M_kj integrates the dual ψ_k, which changes sign, over the covered part only, D_kk the
+    /// positive φ_k), so Σ_j m_kj n_j is no mean of the master's normals and n̄_k no common
+    /// normal — a slave node beside a ball's silhouette started 1.6 deep inside the ball
+    /// along it (docs/bodies.md, "The method").
     fn common_normal(&self, r: &MortarRow) -> ([f64; 3], f64) {
+        if !r.fully_covered {
+            return (r.normal, r.gap);
+        }
         let (mut n, mut v) = (r.normal, [0.0; 3]);
         for &(j, m) in &r.m {
             let (nj, xj) = self.0[&j];

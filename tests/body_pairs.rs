@@ -511,3 +511,102 @@ fn a_slave_side_far_stiffer_than_its_master_takes_the_direct_preset() {
         assert!(reason.contains(why), "{pair:?}: {reason}");
     }
 }
+
+/// The two disks of tests/meshes/disk_stack2d.geo on the block under their weight (a body
+/// force), disk 1 against the block and disk 2 against disk 1: two bodies held by contact
+/// alone (frictionless: their sideways motion and rotation free, with no load in them).
+/// `shared`: the geo's option that makes d1_top share d1_bottom's end nodes.
+fn disk_stack_case(dir: &Path, shared: bool) -> PathBuf {
+    let mesh = dir.join(format!("disk_stack2d_{shared}.msh"));
+    let flag = if shared { "1" } else { "0" };
+    gmsh_file(
+        &mesh_dir().join("disk_stack2d.geo"),
+        2,
+        &["-setnumber", "shared", flag],
+        &mesh,
+    );
+    let mut text = format!("[mesh]\nfile = {}\n", toml_path(&mesh));
+    for (g, (e, nu)) in
+        ["block", "disk1", "disk2"]
+            .iter()
+            .zip([(10.0, 0.3), (1.0, 0.3), (2.0, 0.25)])
+    {
+        text += &format!(
+            "[[material]]\ngroup = \"{g}\"\nyoung = {e:?}\npoisson = {nu:?}\n\
+             model = \"plane_strain\"\n"
+        );
+    }
+    text += "[body_force]\nvalue = [0.0, -0.01]\n\
+             [[dirichlet]]\ngroup = \"block_bottom\"\nvalue = [0.0, 0.0]\n";
+    for (slave, master) in [("d1_bottom", "block_top"), ("d2_bottom", "d1_top")] {
+        text += &format!(
+            "[[contact]]\ngroup = \"{slave}\"\n\
+             obstacle = {{ type = \"body\", group = \"{master}\" }}\nfriction = \"none\"\n"
+        );
+    }
+    text += "[output]\nfields = [\"displacement\", \"contact\"]\n";
+    write_case(&dir.join(format!("disk_stack_{shared}.toml")), &text)
+}
+
+#[test]
+fn two_disks_stacked_on_a_block_carry_their_weight_and_a_shared_node_is_refused_on_every_rank_count(
+) {
+    let tmp = tempfile::tempdir().expect("tempdir");
+    let case = disk_stack_case(tmp.path(), false);
+    let mut first: Option<(Vec<u64>, Vec<Vec<f64>>)> = None;
+    for np in [1, 2, 3] {
+        let what = format!("the disk stack on {np} rank(s)");
+        let s = solve(np, &case, &[]);
+        s.assert_converged(&what);
+        assert_eq!(s.summary["bodies"]["not_held"], 2, "{what}");
+        let pairs = s.summary["contact"]["pairs"].as_array().expect("pairs");
+        let forces: Vec<Vec<f64>> = pairs.iter().map(|p| floats(&p["total_force"])).collect();
+        // the block carries both disks, disk 1 carries disk 2: equal disks of equal weight
+        let (lower, upper) = (forces[0][1], forces[1][1]);
+        assert!(upper > 0.0, "{what}: disk 2 rests on disk 1 with {upper:e}");
+        assert!(
+            (lower / upper - 2.0).abs() < 1e-2,
+            "{what}: the block carries {lower:e}, disk 1 carries {upper:e}"
+        );
+        for f in &forces {
+            assert!(f[0].abs() < 1e-9 * lower, "{what}: a sideways force {f:?}");
+        }
+        let active = s.active_node_ids();
+        match &first {
+            None => first = Some((active, forces)),
+            Some((a, f)) => {
+                assert_eq!(&active, a, "{what}: the active nodes of 1 rank");
+                for (x, y) in forces.iter().zip(f) {
+                    assert!(
+                        (x[1] - y[1]).abs() < 1e-10 * lower,
+                        "{what}: {x:?} against {y:?} on 1 rank"
+                    );
+                }
+            }
+        }
+    }
+    // d1_top sharing d1_bottom's end nodes: the same node named on every rank count (the
+    // check looked at the master facets a rank received, which come within each pair's
+    // reach only: it passed on some rank counts)
+    let shared = disk_stack_case(tmp.path(), true);
+    let mut said: Option<String> = None;
+    for np in [1, 2, 3] {
+        let out = tmp.path().join(format!("refused{np}"));
+        let run = run_solver(np, &shared, &[], &out);
+        run.expect_code(2, &format!("the shared node on {np} rank(s)"));
+        let text = run.output();
+        let line = (text.lines())
+            .find(|l| l.contains("one side of body contact only"))
+            .unwrap_or_else(|| panic!("{np} rank(s): no overlap message:\n{text}"))
+            .to_string();
+        assert!(
+            line.contains("contact[1].obstacle.group"),
+            "{np} rank(s): {line}"
+        );
+        assert!(!out.join("summary.json").exists(), "no output");
+        match &said {
+            None => said = Some(line),
+            Some(l) => assert_eq!(&line, l, "{np} rank(s) against 1 rank"),
+        }
+    }
+}

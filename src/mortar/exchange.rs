@@ -255,18 +255,6 @@ impl MasterFacets {
         }
         out
     }
-
-    /// Every received master node (global number) with its pair.
-    pub fn node_pairs(&self) -> HashMap<usize, usize> {
-        let n = Self::record_len(self.dim);
-        let mut out = HashMap::new();
-        for r in self.records.chunks_exact(n) {
-            for a in 0..self.dim {
-                out.insert(r[1 + a] as usize, r[0] as usize);
-            }
-        }
-        out
-    }
 }
 
 /// The bounding box of points.

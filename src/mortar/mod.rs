@@ -73,7 +73,7 @@ pub fn set_up(
         .collect();
     let reach = Reach::of(ctx, settings.pairs.len(), &slaves);
     let masters = MasterFacets::exchange(ctx, mesh, layout, settings, fixed, &reach);
-    ctx.agree(check_overlap(mesh, layout, settings, &slaves, &masters).map_err(RunError::Input))?;
+    ctx.agree(check_overlap(ctx, mesh, layout, settings, &slaves).map_err(RunError::Input))?;
     let friction = settings.friction();
     let mut master_fixed = MasterFixed::new();
     let mut rows_of = Vec::new();
@@ -402,39 +402,61 @@ fn keep_contact_nodes(
 
 /// No node is a slave node of one pair and a master node of another (or of its own): the
 /// change of basis substitutes master unknowns into slave rows once, and one body does not
-/// touch itself. A master facet through an owned slave node lies in this rank's reach, so it
-/// was received here: the check is complete with local work. Local.
+/// touch itself. Each rank looks at the nodes it owns, whose every boundary facet is local
+/// (their cells are), in the groups themselves — not in the master facets it received, which
+/// come within each pair's own reach only, so that a node shared with another pair's master
+/// group went unseen on some rank counts. The error names the offending node of smallest Gmsh
+/// tag on every rank count. Collective (one reduction).
 fn check_overlap(
+    ctx: &Ctx,
     mesh: &Mesh,
     layout: &Layout,
     settings: &ContactSettings,
     slaves: &[(usize, SlaveFacets)],
-    masters: &MasterFacets,
 ) -> Result<(), InputError> {
-    let master_nodes = masters.node_pairs();
-    for (p, own) in slaves {
-        let p = *p;
-        let mut mine: Vec<usize> = own.facets.iter().flatten().map(|&(v, _)| v).collect();
-        mine.retain(|&v| layout.owns_node(v));
-        mine.sort_unstable_by_key(|&v| layout.node_global[v]);
-        for v in mine {
-            if let Some(&q) = master_nodes.get(&layout.node_global[v]) {
-                let pair = &settings.pairs[q];
-                return Err(InputError::new(
-                    &settings.file,
-                    format!(
-                        "mesh node {} at {:?} is a node of the slave group \"{}\" and of the \
-                         master group \"{}\": a node is on one side of body contact only \
-                         (split the groups so that they share no node)",
-                        mesh.node_tags[v],
-                        &mesh.coords[v][..mesh.dim],
-                        settings.pairs[p].group,
-                        master_group(&pair.obstacle),
-                    ),
-                )
-                .with_key(pair.key("obstacle.group")));
+    // the owned nodes of every body pair's master group, with the first such pair
+    let mut master_of: HashMap<usize, usize> = HashMap::new();
+    for (q, pair) in settings.pairs.iter().enumerate() {
+        let Obstacle::Body(t) = &pair.obstacle else {
+            continue;
+        };
+        for f in crate::setup::group_facets(mesh, &t.group) {
+            for &v in mesh.facet(f) {
+                if layout.owns_node(v) {
+                    master_of.entry(v).or_insert(q);
+                }
             }
         }
     }
-    Ok(())
+    // this rank's offending node of smallest tag: (tag, node, slave pair, master pair)
+    let mut worst: Option<(u64, usize, usize, usize)> = None;
+    for (p, own) in slaves {
+        for &(v, _) in own.facets.iter().flatten() {
+            let Some(&q) = master_of.get(&v) else {
+                continue;
+            };
+            let tag = mesh.node_tags[v] as u64;
+            if worst.is_none_or(|w| tag < w.0) {
+                worst = Some((tag, v, *p, q));
+            }
+        }
+    }
+    let smallest = ctx.min_u64(worst.map_or(u64::MAX, |w| w.0));
+    let Some((_, v, p, q)) = worst.filter(|w| w.0 == smallest) else {
+        return Ok(());
+    };
+    let pair = &settings.pairs[q];
+    Err(InputError::new(
+        &settings.file,
+        format!(
+            "mesh node {} at {:?} is a node of the slave group \"{}\" and of the master group \
+             \"{}\": a node is on one side of body contact only (split the groups so that they \
+             share no node)",
+            mesh.node_tags[v],
+            &mesh.coords[v][..mesh.dim],
+            settings.pairs[p].group,
+            master_group(&pair.obstacle),
+        ),
+    )
+    .with_key(pair.key("obstacle.group")))
 }

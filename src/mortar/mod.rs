@@ -435,7 +435,7 @@ fn check_overlap(
             let Some(&q) = master_of.get(&v) else {
                 continue;
             };
-            let tag = mesh.node_tags[v] as u64;
+            let tag = mesh.node_tags[v];
             if worst.is_none_or(|w| tag < w.0) {
                 worst = Some((tag, v, *p, q));
             }

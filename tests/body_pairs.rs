@@ -515,8 +515,9 @@ fn a_slave_side_far_stiffer_than_its_master_takes_the_direct_preset() {
 /// The two disks of tests/meshes/disk_stack2d.geo on the block under their weight (a body
 /// force), disk 1 against the block and disk 2 against disk 1: two bodies held by contact
 /// alone (frictionless: their sideways motion and rotation free, with no load in them).
-/// `shared`: the geo's option that makes d1_top share d1_bottom's end nodes.
-fn disk_stack_case(dir: &Path, shared: bool) -> PathBuf {
+/// `shared`: the geo's option that makes d1_top share d1_bottom's end nodes; `friction` both
+/// pairs' friction value.
+fn disk_stack_case(dir: &Path, shared: bool, friction: &str) -> PathBuf {
     let mesh = dir.join(format!("disk_stack2d_{shared}.msh"));
     let flag = if shared { "1" } else { "0" };
     gmsh_file(
@@ -541,18 +542,19 @@ fn disk_stack_case(dir: &Path, shared: bool) -> PathBuf {
     for (slave, master) in [("d1_bottom", "block_top"), ("d2_bottom", "d1_top")] {
         text += &format!(
             "[[contact]]\ngroup = \"{slave}\"\n\
-             obstacle = {{ type = \"body\", group = \"{master}\" }}\nfriction = \"none\"\n"
+             obstacle = {{ type = \"body\", group = \"{master}\" }}\nfriction = {friction}\n"
         );
     }
     text += "[output]\nfields = [\"displacement\", \"contact\"]\n";
-    write_case(&dir.join(format!("disk_stack_{shared}.toml")), &text)
+    let name = format!("disk_stack_{shared}_{}.toml", friction.len());
+    write_case(&dir.join(name), &text)
 }
 
 #[test]
 fn two_disks_stacked_on_a_block_carry_their_weight_and_a_shared_node_is_refused_on_every_rank_count(
 ) {
     let tmp = tempfile::tempdir().expect("tempdir");
-    let case = disk_stack_case(tmp.path(), false);
+    let case = disk_stack_case(tmp.path(), false, "\"none\"");
     let mut first: Option<(Vec<u64>, Vec<Vec<f64>>)> = None;
     for np in [1, 2, 3] {
         let what = format!("the disk stack on {np} rank(s)");
@@ -588,7 +590,7 @@ fn two_disks_stacked_on_a_block_carry_their_weight_and_a_shared_node_is_refused_
     // d1_top sharing d1_bottom's end nodes: the same node named on every rank count (the
     // check looked at the master facets a rank received, which come within each pair's
     // reach only: it passed on some rank counts)
-    let shared = disk_stack_case(tmp.path(), true);
+    let shared = disk_stack_case(tmp.path(), true, "\"none\"");
     let mut said: Option<String> = None;
     for np in [1, 2, 3] {
         let out = tmp.path().join(format!("refused{np}"));
@@ -607,6 +609,58 @@ fn two_disks_stacked_on_a_block_carry_their_weight_and_a_shared_node_is_refused_
         match &said {
             None => said = Some(line),
             Some(l) => assert_eq!(&line, l, "{np} rank(s) against 1 rank"),
+        }
+    }
+}
+
+/// The states (active, tangential) of every slave node by node id.
+fn node_states(s: &Solved) -> Vec<(u64, bool, String)> {
+    let mut v: Vec<(u64, bool, String)> = (s.contact_rows().iter())
+        .map(|r| (r.node_id(), r.active(), r.tangential().to_string()))
+        .collect();
+    v.sort();
+    v
+}
+
+#[test]
+fn two_stacked_disks_with_friction_are_solved_on_one_factorisation() {
+    // Coulomb's and Tresca's start on the contact unknowns is a frictionless estimate whose
+    // pins carry the load that only friction holds; they carried the upper disk's weight as
+    // well (disk 1 touching the block sufficed), so that the upper disk touched nothing and
+    // the dense iteration held its motion by no row: 100 steps, then the plain path
+    let tmp = tempfile::tempdir().expect("tempdir");
+    for (law, ranks) in [
+        ("{ law = \"coulomb\", mu = 0.3 }", &[1, 2, 3][..]),
+        ("{ law = \"tresca\", threshold = 1e-3 }", &[2][..]),
+    ] {
+        let case = disk_stack_case(tmp.path(), false, law);
+        let plain = solve(2, &case, &["solver.path=\"plain\""]);
+        plain.assert_converged(&format!("{law}, the plain path"));
+        let scale = plain.total_force()[1];
+        for &np in ranks {
+            let what = format!("{law} on {np} rank(s)");
+            let s = solve(np, &case, &[]);
+            s.assert_converged(&what);
+            let condensed = &s.summary["newton"]["condensed"]["coulomb"];
+            assert_eq!(
+                condensed["outcome"],
+                "condensed",
+                "{what}: {condensed}\n{}",
+                s.run.output()
+            );
+            assert_eq!(s.summary["newton"]["factorisations"], 1, "{what}");
+            assert_eq!(
+                node_states(&s),
+                node_states(&plain),
+                "{what}: the plain path's states"
+            );
+            let (a, b) = (s.contact_rows_by_id(), plain.contact_rows_by_id());
+            for (id, r) in &a {
+                for key in ["lambda_n", "lambda_t1"] {
+                    let d = (r.f(key) - b[id].f(key)).abs();
+                    assert!(d < 1e-9 * scale, "{what}: node {id} {key} off by {d:e}");
+                }
+            }
         }
     }
 }

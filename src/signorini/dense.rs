@@ -195,7 +195,64 @@ pub struct Dense<'a> {
     /// (Coulomb's, where friction holds a tangential load), not a solution of the frictionless
     /// problem. The modes after them (force control's approaches) are always balanced.
     pub pins_carry: usize,
+    /// Every direction's part of those modes at each candidate (`dim` rows per candidate):
+    /// with it the pins carry only the load in the motions that move a node in contact (a
+    /// body the set does not touch yet, e.g. the upper of two disks stacked on a block, is not
+    /// hung on its pins); without it all of it.
+    pub moves: Option<Moves<'a>>,
 }
+
+/// The free modes' parts at the candidates in every direction ([`Dense::moves`]): rows
+/// `dim` i … `dim` i + `dim` − 1 for candidate i, one column per mode.
+#[derive(Clone, Copy)]
+pub struct Moves<'a> {
+    pub parts: &'a DMatrix<f64>,
+    pub dim: usize,
+}
+
+impl Moves<'_> {
+    /// The rows of the candidates `idx` (a coarse level's subset).
+    pub fn subset(&self, idx: &[usize]) -> DMatrix<f64> {
+        let d = self.dim;
+        DMatrix::from_fn(idx.len() * d, self.parts.ncols(), |r, c| {
+            self.parts[(idx[r / d] * d + r % d, c)]
+        })
+    }
+
+    /// φ (its first `m` entries) with the load the pins carry taken out: its part in the
+    /// motions of those modes that move an `active` node, leaving the part in the motions
+    /// that move none (the orthogonal complement, the Gram matrix of the active rows'
+    /// eigenvectors of relative eigenvalue ≤ [`UNTOUCHED_RTOL`]). Local.
+    fn uncarried(&self, active: &[bool], m: usize, phi: &mut DVector<f64>) {
+        let d = self.dim;
+        let mut gram = DMatrix::<f64>::zeros(m, m);
+        for i in (0..active.len()).filter(|&i| active[i]) {
+            for a in 0..d {
+                let row = self.parts.view((i * d + a, 0), (1, m));
+                gram += row.transpose() * row;
+            }
+        }
+        let eig = nalgebra::SymmetricEigen::new(gram);
+        let top = eig.eigenvalues.iter().fold(0.0_f64, |t, &e| t.max(e));
+        let head = DVector::from_iterator(m, phi.iter().take(m).copied());
+        let mut kept = DVector::<f64>::zeros(m);
+        for (k, &e) in eig.eigenvalues.iter().enumerate() {
+            if e <= UNTOUCHED_RTOL * top {
+                let v = eig.eigenvectors.column(k);
+                kept += v * v.dot(&head);
+            }
+        }
+        for (x, k) in phi.iter_mut().zip(kept.iter()) {
+            *x = *k;
+        }
+    }
+}
+
+/// A motion whose squared displacement at the active nodes is at most this part of the
+/// largest such (the eigenvalues of their Gram matrix) moves none of them: round-off of the
+/// modes' parts (each O(1) per unit amplitude, or the lever arm), far below any motion that
+/// does move a node. Not measured as a value.
+const UNTOUCHED_RTOL: f64 = 1e-12;
 
 /// How the dense iteration ended.
 #[derive(Debug, Clone, PartialEq)]
@@ -661,11 +718,15 @@ impl Dense<'_> {
             let sub_g = DMatrix::from_fn(idx.len(), self.g.ncols(), |r, c| self.g[(idx[r], c)]);
             let pick = |v: &[f64]| idx.iter().map(|&i| v[i]).collect::<Vec<f64>>();
             let (d0, gap) = (pick(self.d0), pick(self.gap));
+            let sub_moves = self.moves.map(|m| (m.subset(idx), m.dim));
             let sub = Dense {
                 cmat: CMatrix::Full(&sub_c),
                 d0: &d0,
                 gap: &gap,
                 g: &sub_g,
+                moves: sub_moves
+                    .as_ref()
+                    .map(|(parts, dim)| Moves { parts, dim: *dim }),
                 ..*self
             };
             let run = sub.run(idx.iter().map(|&i| active[i]).collect());
@@ -775,8 +836,9 @@ impl Dense<'_> {
         // of the nested start penetrated). Where no node approaches, they still carry it.
         let empty = !active.iter().any(|&a| a);
         let carry = if empty { 0 } else { self.pins_carry };
-        for x in phi.iter_mut().take(carry) {
-            *x = 0.0;
+        match self.moves {
+            Some(m) if carry > 0 => m.uncarried(active, carry, &mut phi),
+            _ => phi.iter_mut().take(carry).for_each(|x| *x = 0.0),
         }
         let pu = vu.transpose() * phi;
         let norm = pu.norm();
@@ -1052,6 +1114,7 @@ mod tests {
                 c: 1.0,
                 max_steps: 50,
                 pins_carry: 0,
+                moves: None,
             }
             .run(vec![false; n])
         };

@@ -368,6 +368,7 @@ impl Model {
             c,
             max_steps,
             pins_carry: 0,
+            moves: None,
         };
         let run = dense.run_nested(vec![false; m], &self.x);
         if run.end != End::Converged {
@@ -446,6 +447,7 @@ impl Model {
                 c,
                 max_steps,
                 pins_carry: 0,
+                moves: None,
             };
             let run = match from {
                 Some(flags) => dense.run(self.start_set(flags)),

@@ -238,7 +238,16 @@ struct Walk {
     alpha: Vec<f64>,
     /// The last step was taken with α pinned ([`solve_pinned`]).
     pinned: bool,
+    /// Pinned steps in a row that changed no state ([`STUCK_PINNED`]).
+    pinned_still: usize,
 }
+
+/// Pinned steps in a row that change no state end the dense iteration: the next step is the
+/// same singular system with the same α, so the iteration would repeat that iterate to its
+/// step limit (a start in which a floating body touches nothing, e.g. the upper of two disks
+/// stacked on a block whose frictionless estimate hung it on its pins: 100 dense steps on each
+/// coarse level and on the candidates before the plain path: docs/friction.md).
+const STUCK_PINNED: usize = 2;
 
 /// A step's verdict on its iterate: accepted (`stalled`: by the stall rule, above the
 /// residual tolerance), or the next step on the given system (`None`: singular).
@@ -382,6 +391,7 @@ impl DenseIteration<'_> {
             f5_from: 0,
             alpha: vec![0.0; self.g.ncols()],
             pinned: false,
+            pinned_still: 0,
         };
         let mut sys = self.system(&w.set);
         for step in 1..=self.max_steps {
@@ -402,6 +412,18 @@ impl DenseIteration<'_> {
             let seconds = t.elapsed().as_secs_f64();
             w.steps
                 .push((step, w.set.local_active(), up.changed, residual, seconds));
+            w.pinned_still = match w.pinned && up.changed == 0 {
+                true => w.pinned_still + 1,
+                false => 0,
+            };
+            if w.pinned_still >= STUCK_PINNED {
+                let why = format!(
+                    "the dense Coulomb steps from step {} on hold a free rigid mode by no row \
+                     and change no state",
+                    step + 1 - w.pinned_still
+                );
+                return self.failed(w, why);
+            }
             // a pinned step balances no free mode: never accepted, the next step frees α
             let verdict = match w.pinned {
                 true => {

@@ -14,7 +14,7 @@ use crate::petsc::PInt;
 use crate::say;
 use crate::signorini::active_set::{ActiveSet, Iterate, Law};
 use crate::signorini::boundary::ContactBoundary;
-use crate::signorini::dense::{guarded, CMatrix, Dense, DenseRun, End, Primal};
+use crate::signorini::dense::{guarded, CMatrix, Dense, DenseRun, End, Moves, Primal};
 use crate::signorini::halfspace::{self};
 use crate::signorini::plain_path::{ContactProblem, NewtonSettings, StepInfo, WarmStart};
 use crate::signorini::rigid::{FreeModes, Motion};
@@ -389,6 +389,13 @@ pub(super) fn dense_round(
                 None => comp.c(),
             };
             let start: Vec<bool> = list.iter().map(|&i| active[i]).collect();
+            // an estimate's pins carry a body's load only beside its nodes in contact
+            let dim = free.rigid_modes().dim;
+            let parts = s.estimate.then(|| {
+                DMatrix::from_fn(ns * dim, cand.mz, |r, c| {
+                    cand.g_along(list[r / dim], r % dim, c)
+                })
+            });
             let dense = Dense {
                 cmat,
                 d0,
@@ -399,6 +406,7 @@ pub(super) fn dense_round(
                 c: s.c,
                 max_steps: s.section.max_steps,
                 pins_carry: if s.estimate { cand.mz } else { 0 },
+                moves: parts.as_ref().map(|parts| Moves { parts, dim }),
             };
             if nested {
                 let x: Vec<[f64; 3]> = list.iter().map(|&i| cand.x(i)).collect();
@@ -596,6 +604,7 @@ mod tests {
             c: 1.0,
             max_steps,
             pins_carry: 0,
+            moves: None,
         }
     }
 
@@ -636,6 +645,7 @@ mod tests {
             c: 1.0,
             max_steps: 20,
             pins_carry,
+            moves: None,
         };
         dense.run(vec![false; 2])
     }
@@ -706,6 +716,7 @@ mod tests {
                 c: 1.0,
                 max_steps: 50,
                 pins_carry: 0,
+                moves: None,
             }
             .run(vec![false; n]);
             let primal = Primal {
@@ -749,6 +760,7 @@ mod tests {
             c: 1.0,
             max_steps: 20,
             pins_carry: 0,
+            moves: None,
         };
         let run = dense.run(vec![false]);
         assert!(matches!(run.end, End::NoSupport(_)), "{run:?}");

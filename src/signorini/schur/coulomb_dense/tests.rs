@@ -468,3 +468,33 @@ fn tresca_out_of_contact_ends_in_the_same_state_in_every_form() {
         }
     });
 }
+
+#[test]
+fn steps_that_hold_a_free_mode_by_no_row_and_change_nothing_end_the_run_at_once() {
+    on_big_stack(|| {
+        // the line lifted off the obstacle (d₀ = 0.5 along every normal), free to move along
+        // the normal (one free mode, normal part 1 at every node) and pushed onto it by a
+        // load in that mode: from a start with nothing in contact no row holds the mode, each
+        // step is solved with α pinned at 0, so u stays d₀ and no node comes into contact
+        let n = 9;
+        let mut line = Line::new(n, 0.0);
+        for r in (0..2 * n).step_by(2) {
+            line.d0[r] = 0.5;
+        }
+        line.g = DMatrix::from_fn(2 * n, 1, |r, _| if r % 2 == 0 { 1.0 } else { 0.0 });
+        let phi = [1.0];
+        let dense = DenseIteration {
+            phi: &phi,
+            ..line.dense(1.0)
+        };
+        let (start, u_prev) = dense.frictionless_start(&vec![false; n], &vec![0.0; n]);
+        let run = dense.run(&start, u_prev);
+        let why = run.end.clone().expect_err("no accepted iterate");
+        assert!(why.contains("by no row"), "{why}");
+        assert!(
+            run.steps.len() <= STUCK_PINNED + 1,
+            "{} steps: {why}",
+            run.steps.len()
+        );
+    });
+}

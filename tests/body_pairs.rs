@@ -664,3 +664,24 @@ fn two_stacked_disks_with_friction_are_solved_on_one_factorisation() {
         }
     }
 }
+
+#[test]
+fn a_sideways_load_on_frictionless_stacked_disks_names_its_likely_cause() {
+    // frictionless, a sideways body force has no equilibrium on the block's flat top: every
+    // balance step brings another node into contact and the sets recur; the cycling error
+    // says what that likely means and which keys to look at
+    let tmp = tempfile::tempdir().expect("tempdir");
+    let case = disk_stack_case(tmp.path(), false, "\"none\"");
+    let out = tmp.path().join("sideways");
+    let run = run_solver(2, &case, &["body_force.value=[0.002, -0.01]"], &out);
+    run.expect_code(1, "a sideways load on frictionless stacked disks");
+    let text = run.output();
+    for words in [
+        "Newton cycling",
+        "may have no equilibrium",
+        "'contact[1].obstacle'",
+    ] {
+        assert!(text.contains(words), "the message says {words:?}:\n{text}");
+    }
+    assert!(!out.join("summary.json").exists(), "no output");
+}

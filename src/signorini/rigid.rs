@@ -758,6 +758,29 @@ impl FreeModes {
         }
     }
 
+    /// What a frictionless cycle of a body that its contacts alone hold likely means, for the
+    /// cycling error: the load in its free modes that the contact normals cannot balance in
+    /// any set (a sideways load on a body resting on a flat face, on two disks stacked on a
+    /// block: every balance step brings another node into contact and the sets recur).
+    /// `None` where Dirichlet data leave no mode free or the load has no part in the free
+    /// modes. Local (the same on every rank).
+    pub fn cycle_hint(&self) -> Option<String> {
+        if !self.floats() {
+            return None;
+        }
+        let lz = self.free_load().iter().map(|x| x * x).sum::<f64>().sqrt();
+        (lz > BALANCE_RTOL * self.load_scale).then(|| {
+            format!(
+                "; {} rigid mode(s) that no Dirichlet data fix and a load in them: frictionless \
+                 contact may have no equilibrium for it (a sideways load on a body that rests \
+                 on a flat or nearly flat face) — check the loads, or add friction or \
+                 Dirichlet data that hold the body ({})",
+                self.who(),
+                self.keys.named(&["dirichlet", ".obstacle"]),
+            )
+        })
+    }
+
     /// The "no support" diagnosis of a body that the contact cannot hold
     /// ([`FreeModes::unpressable`]).
     pub fn no_support_unpressed(&self) -> RunError {

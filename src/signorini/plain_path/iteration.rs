@@ -828,7 +828,12 @@ impl Loop<'_> {
         if !self.s.friction() && self.free.unpressable(self.ctx, self.p.boundary) {
             return self.free.no_support_unpressed();
         }
-        e
+        match (&e, self.s.friction(), self.free.cycle_hint()) {
+            (RunError::NoConvergence(m), false, Some(hint)) => {
+                RunError::NoConvergence(format!("{m}{hint}"))
+            }
+            _ => e,
+        }
     }
 
     /// Force control: the step's δ's from the force balance (force.rs), u and λ moved with

@@ -612,3 +612,33 @@ fn body_force_expression_variable_not_in_2d() {
     let t = case_2d(&square()) + "\n[body_force]\nexpr = [\"z\", \"0\"]\n";
     rejected(&t, &["body_force.expr[0]", "'z'", "2D"]);
 }
+
+/// Two contact groups of interior facets at the two ends of a strip
+/// (tests/meshes/strip_cuts.geo): the message names the first group of the case and its
+/// facet on every rank count (each rank checks its own facets; the lowest failing rank's
+/// message named the second group from 2 ranks on).
+#[test]
+fn the_first_faulty_group_is_named_on_every_rank_count() {
+    let tmp = tempfile::tempdir().unwrap();
+    let mesh = tmp.path().join("strip_cuts.msh");
+    gmsh("strip_cuts.geo", 2, 0.1, &mesh);
+    let mut t = case_2d(&mesh);
+    for g in ["cut1", "cut3"] {
+        t += &format!(
+            "[[contact]]\ngroup = \"{g}\"\nobstacle = {{ type = \"plane\", point = [0.0, -1.0], \
+             normal = [0.0, 1.0] }}\n"
+        );
+    }
+    let mut first: Option<String> = None;
+    for np in [1, 2, 3, 4] {
+        let msg = rejected_np(&t, np, &["\"cut1\"", "contact[0].group", "interior facet"]);
+        // (each run has its own directory, which the message names)
+        let (head, tail) = msg.split_once(" at ").expect("the case file's line");
+        let tail = tail.rsplit_once("case.toml").expect("case.toml").1;
+        let msg = format!("{head} {tail}");
+        match &first {
+            None => first = Some(msg),
+            Some(m) => assert_eq!(&msg, m, "{np} ranks against 1"),
+        }
+    }
+}

@@ -154,6 +154,16 @@ impl Case {
     /// condition: no degenerate facet, every facet on the boundary of the body (see
     /// [`Mesh::check_boundary_group`]). Call after [`Case::check_against_mesh`].
     pub fn check_facet_groups(&self, mesh: &Mesh) -> Result<(), InputError> {
+        match self.facet_group_fault(mesh) {
+            None => Ok(()),
+            Some((_, _, e)) => Err(e),
+        }
+    }
+
+    /// The first group (in the case's order: `neumann`, then `contact`) with a faulty facet
+    /// ([`Mesh::boundary_group_fault`], among this rank's facets on a distributed mesh): its
+    /// position in that order, the facet's gmsh tag and the error. Local.
+    pub fn facet_group_fault(&self, mesh: &Mesh) -> Option<(usize, u64, InputError)> {
         let mut used: Vec<(String, &str)> = self
             .neumann
             .iter()
@@ -168,14 +178,15 @@ impl Case {
         for c in &self.contacts {
             used.push((join_key(&c.key, "group"), c.group.as_str()));
         }
-        for (key, group) in used {
-            let at = match self.line_of(&key) {
+        used.iter().enumerate().find_map(|(i, (key, group))| {
+            let (tag, msg) = mesh.boundary_group_fault(group)?;
+            let at = match self.line_of(key) {
                 Some(l) => format!("{key} at {}:{l}", self.file.display()),
                 None => format!("{key} of {}", self.file.display()),
             };
-            mesh.check_boundary_group(&self.mesh.file, group, &at)?;
-        }
-        Ok(())
+            let e = mesh.facet_error(&self.mesh.file, group, &at, tag, &msg);
+            Some((i, tag, e))
+        })
     }
 
     fn check_group(

@@ -49,14 +49,24 @@ impl Mesh {
     /// Checks that the facets of the group(s) `name` of dimension `dim − 1` can carry a load
     /// or the contact condition: none is degenerate (zero length in 2D, zero area in 3D,
     /// relative to the mesh size) and each is a side of exactly one body cell (it lies on the
-    /// boundary). The error names the mesh `file`, the facet's gmsh tag and the group;
-    /// `used_as` says where the case uses the group (e.g. "contact.group").
+    /// boundary). The error names the mesh `file`, the group and, of its faulty facets (this
+    /// rank's on a distributed mesh), the one of smallest gmsh tag; `used_as` says where the
+    /// case uses the group (e.g. "contact.group").
     pub fn check_boundary_group(
         &self,
         file: &Path,
         name: &str,
         used_as: &str,
     ) -> Result<(), InputError> {
+        match self.boundary_group_fault(name) {
+            None => Ok(()),
+            Some((tag, msg)) => Err(self.facet_error(file, name, used_as, tag, &msg)),
+        }
+    }
+
+    /// The faulty facet of smallest gmsh tag of the group(s) `name` ([`Mesh::check_boundary_group`];
+    /// on a distributed mesh among this rank's facets) with what is wrong with it. Local.
+    pub fn boundary_group_fault(&self, name: &str) -> Option<(u64, String)> {
         let facets: Vec<usize> = self
             .groups
             .iter()
@@ -65,79 +75,62 @@ impl Mesh {
             .filter(|&f| self.global.as_ref().is_none_or(|g| g.facet_checked[f]))
             .collect();
         if facets.is_empty() {
-            return Ok(());
+            return None;
         }
-        let bad = self
-            .degenerate_facet(&facets)
-            .or_else(|| self.facet_off_boundary(&facets));
-        let Some((f, msg)) = bad else {
-            return Ok(());
-        };
+        let sides = self.side_counts(&facets);
+        facets
+            .iter()
+            .filter_map(|&f| {
+                let why = self
+                    .degenerate_facet(f)
+                    .or_else(|| off_boundary(sides[&key(self.facet(f))]))?;
+                Some((self.facet_tags[f], why))
+            })
+            .min_by_key(|(tag, _)| *tag)
+    }
+
+    /// The input error of facet `tag` of group `name` (used by `used_as`): `msg` is what is
+    /// wrong with it.
+    pub fn facet_error(
+        &self,
+        file: &Path,
+        name: &str,
+        used_as: &str,
+        tag: u64,
+        msg: &str,
+    ) -> InputError {
         let what = if self.dim == 2 {
             "line element"
         } else {
             "triangle"
         };
-        Err(InputError::new(
+        InputError::new(
             file,
-            format!(
-                "{what} {} of group \"{name}\" (used by {used_as}) {msg}",
-                self.facet_tags[f]
-            ),
-        ))
+            format!("{what} {tag} of group \"{name}\" (used by {used_as}) {msg}"),
+        )
     }
 
-    /// The first of `facets` that is degenerate (zero length in 2D, zero area in 3D, relative
-    /// to the mesh size), with what is wrong with it.
-    fn degenerate_facet(&self, facets: &[usize]) -> Option<(usize, String)> {
+    /// What makes facet `f` degenerate (zero length in 2D, zero area in 3D, relative to the
+    /// mesh size), if it is.
+    fn degenerate_facet(&self, f: usize) -> Option<String> {
         let extent = self.extent();
-        for &f in facets {
-            let (m, h) = self.facet_measure(f);
-            let degenerate = if self.dim == 2 {
-                m <= DEGENERATE * extent
-            } else {
-                m <= DEGENERATE * h * h
-            };
-            if degenerate || m.is_nan() {
-                let (kind, size) = if self.dim == 2 {
-                    ("length", format!("mesh size {extent:e}"))
-                } else {
-                    ("area", format!("longest edge {h:e}"))
-                };
-                let msg = format!("has zero {kind} ({m:e}, {size}): degenerate boundary facet");
-                return Some((f, msg));
-            }
+        let (m, h) = self.facet_measure(f);
+        let degenerate = if self.dim == 2 {
+            m <= DEGENERATE * extent
+        } else {
+            m <= DEGENERATE * h * h
+        };
+        if !(degenerate || m.is_nan()) {
+            return None;
         }
-        None
-    }
-
-    /// The first of `facets` that is not a side of exactly one body cell, with what is wrong
-    /// with it.
-    fn facet_off_boundary(&self, facets: &[usize]) -> Option<(usize, String)> {
-        let sides = self.side_counts(facets);
-        for &f in facets {
-            match sides[&key(self.facet(f))] {
-                1 => {}
-                0 => {
-                    return Some((
-                        f,
-                        "is not a side of any body cell: a load or contact group must consist \
-                         of sides of the body's cells on its boundary"
-                            .into(),
-                    ))
-                }
-                n => {
-                    return Some((
-                        f,
-                        format!(
-                            "is an interior facet (a side of {n} body cells): a load or \
-                             contact group must lie on the boundary of the body"
-                        ),
-                    ))
-                }
-            }
-        }
-        None
+        let (kind, size) = if self.dim == 2 {
+            ("length", format!("mesh size {extent:e}"))
+        } else {
+            ("area", format!("longest edge {h:e}"))
+        };
+        Some(format!(
+            "has zero {kind} ({m:e}, {size}): degenerate boundary facet"
+        ))
     }
 
     /// Number of body cells that have each of `facets` as a side (by [`key`]).
@@ -162,5 +155,21 @@ impl Mesh {
             }
         }
         sides
+    }
+}
+
+/// What is wrong with a facet that is a side of `n` body cells (not exactly one), if anything.
+fn off_boundary(n: u32) -> Option<String> {
+    match n {
+        1 => None,
+        0 => Some(
+            "is not a side of any body cell: a load or contact group must consist of sides of \
+             the body's cells on its boundary"
+                .into(),
+        ),
+        n => Some(format!(
+            "is an interior facet (a side of {n} body cells): a load or contact group must lie \
+             on the boundary of the body"
+        )),
     }
 }

@@ -266,6 +266,17 @@ impl<'a> Ctx<'a> {
         self.agree_counted(local, true)
     }
 
+    /// [`Ctx::agree`] on the error of smallest `key` over all ranks (the Gmsh tag of the node
+    /// or element it names): each rank checks its own part of the mesh, and the message must
+    /// not depend on how the mesh is partitioned. Collective.
+    pub fn agree_smallest(&self, local: Option<(u64, RunError)>) -> Result<(), RunError> {
+        let smallest = self.min_u64(local.as_ref().map_or(u64::MAX, |l| l.0));
+        self.agree(match local {
+            Some((key, e)) if key == smallest => Err(e),
+            _ => Ok(()),
+        })
+    }
+
     /// [`Ctx::agree`]; `inject`: a test-only fault may strike here (`crate::fault`).
     fn agree_counted<T>(&self, local: Result<T, RunError>, inject: bool) -> Result<T, RunError> {
         let fault = if inject {

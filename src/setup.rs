@@ -34,7 +34,7 @@ pub fn read_input(ctx: &Ctx, case: &Case) -> Result<Input, RunError> {
     };
     let d = dist::read_distributed(ctx, &case.mesh.file, &refine)?;
     let model = ctx.agree(check(case, &d.mesh).map_err(RunError::from))?;
-    ctx.agree(facet_groups(ctx, case, &d.mesh).map_err(RunError::from))?;
+    facet_groups(ctx, case, &d.mesh)?;
     let mut material = cell_materials(ctx, case, &d.mesh, model)?;
     material.reference = reference_material(ctx, case, &d.mesh, &material);
     (material.half_space, material.slave_over_master) = pair_modulus(ctx, case, &d.mesh, &material);
@@ -111,19 +111,12 @@ fn check(case: &Case, mesh: &Mesh) -> Result<fem::Model, InputError> {
 
 /// The facets of the load and contact groups ([`Case::facet_group_fault`]), each rank checking
 /// its own: the error names the first such group in the case's order and its faulty facet of
-/// smallest gmsh tag over all ranks, the same on every rank count. Collective (two
-/// reductions).
-fn facet_groups(ctx: &Ctx, case: &Case, mesh: &Mesh) -> Result<(), InputError> {
+/// smallest gmsh tag over all ranks, the same on every rank count. Collective.
+fn facet_groups(ctx: &Ctx, case: &Case, mesh: &Mesh) -> Result<(), RunError> {
     let fault = case.facet_group_fault(mesh);
     let first = ctx.min_u64(fault.as_ref().map_or(u64::MAX, |f| f.0 as u64));
-    let tag = ctx.min_u64(match &fault {
-        Some((i, tag, _)) if *i as u64 == first => *tag,
-        _ => u64::MAX,
-    });
-    match fault {
-        Some((i, t, e)) if i as u64 == first && t == tag => Err(e),
-        _ => Ok(()),
-    }
+    let fault = fault.filter(|f| f.0 as u64 == first);
+    ctx.agree_smallest(fault.map(|(_, tag, e)| (tag, RunError::Input(e))))
 }
 
 fn model_of(m: case::MaterialModel) -> fem::Model {

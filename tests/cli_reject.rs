@@ -642,3 +642,33 @@ fn the_first_faulty_group_is_named_on_every_rank_count() {
         }
     }
 }
+
+/// Three contact pairs on the strip's right, bottom and left sides: the bottom shares a corner
+/// node with each of the others; the message names the shared node of smallest Gmsh tag on
+/// every rank count (each rank names its own first one otherwise).
+#[test]
+fn a_node_on_two_pairs_groups_is_named_by_its_smallest_tag() {
+    let tmp = tempfile::tempdir().unwrap();
+    let mesh = tmp.path().join("strip_cuts.msh");
+    gmsh("strip_cuts.geo", 2, 0.1, &mesh);
+    let mut t = edit(&case_2d(&mesh), "group = \"right\"", "group = \"top\"");
+    for (g, point, normal) in [
+        ("right", "[5.0, 0.0]", "[-1.0, 0.0]"),
+        ("bottom", "[0.0, -1.0]", "[0.0, 1.0]"),
+        ("left", "[-1.0, 0.0]", "[1.0, 0.0]"),
+    ] {
+        t += &format!(
+            "[[contact]]\ngroup = \"{g}\"\nobstacle = {{ type = \"plane\", point = {point}, \
+             normal = {normal} }}\n"
+        );
+    }
+    // (the Dirichlet data on "left" would take its nodes out of the contact: on "top")
+    let t = edit(&t, "group = \"left\"\nvalue", "group = \"top\"\nvalue");
+    for np in [1, 2, 3, 4] {
+        rejected_np(
+            &t,
+            np,
+            &["mesh node 1 at [0.0, 0.0]", "contact[2].group", "two pairs"],
+        );
+    }
+}

@@ -73,7 +73,7 @@ pub fn set_up(
         .collect();
     let reach = Reach::of(ctx, settings.pairs.len(), &slaves);
     let masters = MasterFacets::exchange(ctx, mesh, layout, settings, fixed, &reach);
-    ctx.agree(check_overlap(ctx, mesh, layout, settings, &slaves).map_err(RunError::Input))?;
+    check_overlap(ctx, mesh, layout, settings, &slaves)?;
     let friction = settings.friction();
     let mut master_fixed = MasterFixed::new();
     let mut rows_of = Vec::new();
@@ -406,14 +406,14 @@ fn keep_contact_nodes(
 /// (their cells are), in the groups themselves — not in the master facets it received, which
 /// come within each pair's own reach only, so that a node shared with another pair's master
 /// group went unseen on some rank counts. The error names the offending node of smallest Gmsh
-/// tag on every rank count. Collective (one reduction).
+/// tag on every rank count. Collective.
 fn check_overlap(
     ctx: &Ctx,
     mesh: &Mesh,
     layout: &Layout,
     settings: &ContactSettings,
     slaves: &[(usize, SlaveFacets)],
-) -> Result<(), InputError> {
+) -> Result<(), RunError> {
     // the owned nodes of every body pair's master group, with the first such pair
     let mut master_of: HashMap<usize, usize> = HashMap::new();
     for (q, pair) in settings.pairs.iter().enumerate() {
@@ -441,12 +441,11 @@ fn check_overlap(
             }
         }
     }
-    let smallest = ctx.min_u64(worst.map_or(u64::MAX, |w| w.0));
-    let Some((_, v, p, q)) = worst.filter(|w| w.0 == smallest) else {
-        return Ok(());
+    let Some((tag, v, p, q)) = worst else {
+        return ctx.agree_smallest(None);
     };
     let pair = &settings.pairs[q];
-    Err(InputError::new(
+    let e = InputError::new(
         &settings.file,
         format!(
             "mesh node {} at {:?} is a node of the slave group \"{}\" and of the master group \
@@ -458,5 +457,6 @@ fn check_overlap(
             master_group(&pair.obstacle),
         ),
     )
-    .with_key(pair.key("obstacle.group")))
+    .with_key(pair.key("obstacle.group"));
+    ctx.agree_smallest(Some((tag, RunError::Input(e))))
 }

@@ -198,7 +198,7 @@ fn check_depth(
 fn pair_nodes(
     mesh: &Mesh,
     settings: &ContactSettings,
-) -> (Vec<f64>, Vec<Option<usize>>, Option<InputError>) {
+) -> (Vec<f64>, Vec<Option<usize>>, Option<(u64, InputError)>) {
     let dim = mesh.dim;
     let mut weight = vec![0.0f64; mesh.n_nodes()];
     let mut pair_of: Vec<Option<usize>> = vec![None; mesh.n_nodes()];
@@ -214,7 +214,11 @@ fn pair_nodes(
                 weight[v] += m / dim as f64;
                 match pair_of[v] {
                     Some(q) if q != p => {
-                        clash.get_or_insert_with(|| {
+                        let tag = mesh.node_tags[v];
+                        if clash.as_ref().is_some_and(|(t, _)| *t <= tag) {
+                            continue;
+                        }
+                        clash = Some((tag, {
                             let other = &settings.pairs[q];
                             InputError::new(
                                 &settings.file,
@@ -232,7 +236,7 @@ fn pair_nodes(
                                 ),
                             )
                             .with_key(pair.key("group"))
-                        });
+                        }));
                     }
                     _ => pair_of[v] = Some(p),
                 }
@@ -255,11 +259,12 @@ pub fn build<W>(
     let dim = mesh.dim;
     let file = settings.file.as_path();
     let (weight, pair_of, clash) = pair_nodes(mesh, settings);
-    ctx.agree(clash.map_or(Ok(()), |e| Err(RunError::Input(e))))?;
+    ctx.agree_smallest(clash.map(|(tag, e)| (tag, RunError::Input(e))))?;
     let (lo, _) = layout.node_range();
     let mut nodes = Vec::new();
     let mut excluded = 0usize;
-    let mut bad: Option<InputError> = None;
+    // the unprojectable node of smallest tag
+    let mut bad: Option<(u64, InputError)> = None;
     for (i, &v) in layout.owned_nodes.iter().enumerate() {
         let Some(p) = pair_of[v] else {
             continue;
@@ -293,13 +298,12 @@ pub fn build<W>(
                 continue;
             }
             Err(e) => {
-                bad.get_or_insert(
-                    InputError::new(
-                        file,
-                        format!("contact node {} at {:?}: {e}", mesh.node_tags[v], &x[..dim]),
-                    )
-                    .with_key(pair.key(e.key_in_pair())),
-                );
+                let tag = mesh.node_tags[v];
+                if bad.as_ref().is_none_or(|(t, _)| tag < *t) {
+                    let what = format!("contact node {tag} at {:?}: {e}", &x[..dim]);
+                    let error = InputError::new(file, what).with_key(pair.key(e.key_in_pair()));
+                    bad = Some((tag, error));
+                }
                 continue;
             }
         };
@@ -316,7 +320,7 @@ pub fn build<W>(
     }
     let counts: Vec<u64> = ctx.gather(nodes.len() as u64);
     let ex_all = ctx.sum_usize(excluded);
-    ctx.agree(bad.map_or(Ok(()), |e| Err(RunError::Input(e))))?;
+    ctx.agree_smallest(bad.map(|(tag, e)| (tag, RunError::Input(e))))?;
     check_depth(ctx, mesh, &nodes, settings)?;
     let warned = at_start(&nodes);
     move_obstacles(&mut nodes, &settings.displacements(), settings.friction());

@@ -193,12 +193,16 @@ fn check_depth(
     Ok(())
 }
 
+/// An input error with the Gmsh tag of the node it names.
+type Tagged = (u64, InputError);
+
 /// The contact boundary of every pair: per mesh node its lumped weight w_k and its pair; a
-/// node on the facets of two pairs' groups is an input error naming both.
+/// node on the facets of two pairs' groups is an input error naming both (the one of smallest
+/// tag).
 fn pair_nodes(
     mesh: &Mesh,
     settings: &ContactSettings,
-) -> (Vec<f64>, Vec<Option<usize>>, Option<(u64, InputError)>) {
+) -> (Vec<f64>, Vec<Option<usize>>, Option<Tagged>) {
     let dim = mesh.dim;
     let mut weight = vec![0.0f64; mesh.n_nodes()];
     let mut pair_of: Vec<Option<usize>> = vec![None; mesh.n_nodes()];
@@ -264,7 +268,7 @@ pub fn build<W>(
     let mut nodes = Vec::new();
     let mut excluded = 0usize;
     // the unprojectable node of smallest tag
-    let mut bad: Option<(u64, InputError)> = None;
+    let mut bad: Option<Tagged> = None;
     for (i, &v) in layout.owned_nodes.iter().enumerate() {
         let Some(p) = pair_of[v] else {
             continue;

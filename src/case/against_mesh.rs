@@ -150,19 +150,11 @@ impl Case {
         Ok(())
     }
 
-    /// Checks the facets of every group that carries a load (`neumann`) or the contact
-    /// condition: no degenerate facet, every facet on the boundary of the body (see
-    /// [`Mesh::check_boundary_group`]). Call after [`Case::check_against_mesh`].
-    pub fn check_facet_groups(&self, mesh: &Mesh) -> Result<(), InputError> {
-        match self.facet_group_fault(mesh) {
-            None => Ok(()),
-            Some((_, _, e)) => Err(e),
-        }
-    }
-
-    /// The first group (in the case's order: `neumann`, then `contact`) with a faulty facet
-    /// ([`Mesh::boundary_group_fault`], among this rank's facets on a distributed mesh): its
-    /// position in that order, the facet's gmsh tag and the error. Local.
+    /// The first group that carries a load or the contact condition (in the case's order:
+    /// `neumann`, then `contact`) with a faulty facet — degenerate, or not on the boundary of
+    /// the body ([`Mesh::boundary_group_fault`], among this rank's facets on a distributed
+    /// mesh): its position in that order, the facet's gmsh tag and the error. Call after
+    /// [`Case::check_against_mesh`]. Local.
     pub fn facet_group_fault(&self, mesh: &Mesh) -> Option<(usize, u64, InputError)> {
         let mut used: Vec<(String, &str)> = self
             .neumann

@@ -211,6 +211,11 @@ impl BodyModes {
         self.m * self.shapes.len()
     }
 
+    /// The rigid modes of one body (3 in 2D, 6 in 3D).
+    pub fn per_body(&self) -> usize {
+        self.m
+    }
+
     /// The slots (bodies with modes).
     pub fn slots(&self) -> usize {
         self.shapes.len()

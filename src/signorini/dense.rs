@@ -190,20 +190,18 @@ pub struct Dense<'a> {
     pub load_scale: f64,
     pub c: f64,
     pub max_steps: usize,
-    /// The pins carry the load in the first `pins_carry` modes (the body's own) where a set
-    /// leaves them free (no balance test there): an estimate of the contact zone for a start
-    /// (Coulomb's, where friction holds a tangential load), not a solution of the frictionless
-    /// problem. The modes after them (force control's approaches) are always balanced.
-    pub pins_carry: usize,
-    /// Every direction's part of those modes at each candidate (`dim` rows per candidate):
-    /// with it the pins carry only the load in the motions that move a node in contact (a
-    /// body the set does not touch yet, e.g. the upper of two disks stacked on a block, is not
-    /// hung on its pins); without it all of it.
-    pub moves: Option<Moves<'a>>,
+    /// An estimate of the contact zone for a start (Coulomb's, where friction holds a
+    /// tangential load), not a solution of the frictionless problem: the pins carry the load in
+    /// the first modes (the body's own, the columns of these parts) where a set leaves them
+    /// free, but only in the motions that move a node in contact (a body the set does not
+    /// touch yet, e.g. the upper of two disks stacked on a block, is not hung on its pins).
+    /// The modes after them (force control's approaches) are always balanced. `None`: the
+    /// balance test on every mode.
+    pub pins: Option<Moves<'a>>,
 }
 
-/// The free modes' parts at the candidates in every direction ([`Dense::moves`]): rows
-/// `dim` i … `dim` i + `dim` − 1 for candidate i, one column per mode.
+/// The parts of the modes the pins may carry at the candidates in every direction
+/// ([`Dense::pins`]): rows `dim` i … `dim` i + `dim` − 1 for candidate i, one column per mode.
 #[derive(Clone, Copy)]
 pub struct Moves<'a> {
     pub parts: &'a DMatrix<f64>,
@@ -219,12 +217,12 @@ impl Moves<'_> {
         })
     }
 
-    /// φ (its first `m` entries) with the load the pins carry taken out: its part in the
-    /// motions of those modes that move an `active` node, leaving the part in the motions
-    /// that move none (the orthogonal complement, the Gram matrix of the active rows'
-    /// eigenvectors of relative eigenvalue ≤ [`UNTOUCHED_RTOL`]). Local.
-    fn uncarried(&self, active: &[bool], m: usize, phi: &mut DVector<f64>) {
-        let d = self.dim;
+    /// φ (its first entries, one per column of the parts) with the load the pins carry taken
+    /// out: its part in the motions of those modes that move an `active` node, leaving the
+    /// part in the motions that move none (the orthogonal complement, the Gram matrix of the
+    /// active rows' eigenvectors of relative eigenvalue ≤ [`UNTOUCHED_RTOL`]). Local.
+    fn uncarried(&self, active: &[bool], phi: &mut DVector<f64>) {
+        let (d, m) = (self.dim, self.parts.ncols());
         let mut gram = DMatrix::<f64>::zeros(m, m);
         for i in (0..active.len()).filter(|&i| active[i]) {
             for a in 0..d {
@@ -718,13 +716,13 @@ impl Dense<'_> {
             let sub_g = DMatrix::from_fn(idx.len(), self.g.ncols(), |r, c| self.g[(idx[r], c)]);
             let pick = |v: &[f64]| idx.iter().map(|&i| v[i]).collect::<Vec<f64>>();
             let (d0, gap) = (pick(self.d0), pick(self.gap));
-            let sub_moves = self.moves.map(|m| (m.subset(idx), m.dim));
+            let sub_pins = self.pins.map(|m| (m.subset(idx), m.dim));
             let sub = Dense {
                 cmat: CMatrix::Full(&sub_c),
                 d0: &d0,
                 gap: &gap,
                 g: &sub_g,
-                moves: sub_moves
+                pins: sub_pins
                     .as_ref()
                     .map(|(parts, dim)| Moves { parts, dim: *dim }),
                 ..*self
@@ -835,10 +833,8 @@ impl Dense<'_> {
         // (measured: the floating ball at 56 k unknowns, Coulomb's start, when no coarse node
         // of the nested start penetrated). Where no node approaches, they still carry it.
         let empty = !active.iter().any(|&a| a);
-        let carry = if empty { 0 } else { self.pins_carry };
-        match self.moves {
-            Some(m) if carry > 0 => m.uncarried(active, carry, &mut phi),
-            _ => phi.iter_mut().take(carry).for_each(|x| *x = 0.0),
+        if let Some(pins) = self.pins.filter(|_| !empty) {
+            pins.uncarried(active, &mut phi);
         }
         let pu = vu.transpose() * phi;
         let norm = pu.norm();
@@ -862,7 +858,7 @@ impl Dense<'_> {
         }
         match best {
             Some((_, i)) => Some(Ok(i)),
-            None if empty && self.pins_carry > 0 => None,
+            None if empty && self.pins.is_some() => None,
             None => Some(Err(norm)),
         }
     }
@@ -1113,8 +1109,7 @@ mod tests {
                 load_scale: 1.0,
                 c: 1.0,
                 max_steps: 50,
-                pins_carry: 0,
-                moves: None,
+                pins: None,
             }
             .run(vec![false; n])
         };

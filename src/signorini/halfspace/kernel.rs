@@ -304,8 +304,7 @@ mod tests {
             load_scale: f,
             c: 1.0,
             max_steps: 100,
-            pins_carry: 0,
-            moves: None,
+            pins: None,
         };
         let run = dense.run_nested(vec![false; n], &x);
         assert_eq!(run.end, End::Converged);

@@ -367,8 +367,7 @@ impl Model {
             load_scale,
             c,
             max_steps,
-            pins_carry: 0,
-            moves: None,
+            pins: None,
         };
         let run = dense.run_nested(vec![false; m], &self.x);
         if run.end != End::Converged {
@@ -446,8 +445,7 @@ impl Model {
                 load_scale,
                 c,
                 max_steps,
-                pins_carry: 0,
-                moves: None,
+                pins: None,
             };
             let run = match from {
                 Some(flags) => dense.run(self.start_set(flags)),

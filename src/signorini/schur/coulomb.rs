@@ -576,7 +576,8 @@ fn dense_phase(
                     // than one body's rigid modes are free: a coarse subset holds a body that
                     // has few nodes in it by too few rows (two disks stacked on a block: both
                     // levels diverged, 36–40 steps each, residuals up to 1e32; docs/friction.md)
-                    let one_body = kept.free.dirichlet_free().ncols() <= dim * (dim + 1) / 2;
+                    let free = &kept.free;
+                    let one_body = free.dirichlet_free().ncols() <= free.rigid_modes().per_body();
                     if dim == 2 && ns.law == Law::Coulomb && one_body {
                         dense.run_nested(&start, u_prev)
                     } else {

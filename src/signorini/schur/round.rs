@@ -391,7 +391,7 @@ pub(super) fn dense_round(
             let start: Vec<bool> = list.iter().map(|&i| active[i]).collect();
             // an estimate's pins carry a body's load only beside its nodes in contact
             let dim = free.rigid_modes().dim;
-            let parts = s.estimate.then(|| {
+            let parts = (s.estimate && cand.mz > 0).then(|| {
                 DMatrix::from_fn(ns * dim, cand.mz, |r, c| {
                     cand.g_along(list[r / dim], r % dim, c)
                 })
@@ -405,8 +405,7 @@ pub(super) fn dense_round(
                 load_scale,
                 c: s.c,
                 max_steps: s.section.max_steps,
-                pins_carry: if s.estimate { cand.mz } else { 0 },
-                moves: parts.as_ref().map(|parts| Moves { parts, dim }),
+                pins: parts.as_ref().map(|parts| Moves { parts, dim }),
             };
             if nested {
                 let x: Vec<[f64; 3]> = list.iter().map(|&i| cand.x(i)).collect();
@@ -603,8 +602,7 @@ mod tests {
             load_scale: 1.0,
             c: 1.0,
             max_steps,
-            pins_carry: 0,
-            moves: None,
+            pins: None,
         }
     }
 
@@ -630,11 +628,12 @@ mod tests {
 
     /// A floating "body" of two uncoupled nodes (C = I, d₀ = 0) with one free translation along
     /// the normal, which moves both normal displacements equally, pressed by a load of 1
-    /// (Gᵀ λ = φ = −1): the dense iteration from the empty set, the pins carrying the load in
-    /// the first `pins_carry` modes.
-    fn pressed_pair(gap: [f64; 2], pins_carry: usize) -> DenseRun {
+    /// (Gᵀ λ = φ = −1): the dense iteration from the empty set; `estimate`: the pins carry
+    /// the load where the translation moves a node in contact (its parts: the normal ones).
+    fn pressed_pair(gap: [f64; 2], estimate: bool) -> DenseRun {
         let cmat = DMatrix::<f64>::identity(2, 2);
         let g = DMatrix::from_row_slice(2, 1, &[1.0, 1.0]);
+        let pins = estimate.then_some(Moves { parts: &g, dim: 1 });
         let dense = Dense {
             cmat: CMatrix::Full(&cmat),
             d0: &[0.0, 0.0],
@@ -644,8 +643,7 @@ mod tests {
             load_scale: 1.0,
             c: 1.0,
             max_steps: 20,
-            pins_carry,
-            moves: None,
+            pins,
         };
         dense.run(vec![false; 2])
     }
@@ -656,7 +654,7 @@ mod tests {
     #[test]
     fn dense_algorithm1_floating_translation() {
         let gap = [0.0, 0.5];
-        let run = pressed_pair(gap, 0);
+        let run = pressed_pair(gap, false);
         assert_eq!(run.end, End::Converged, "{run:?}");
         // node 0 alone carries λ = −1, u_n,0 = 0 = −λ + α → α = −1; node 1: u_n = α = −1 < −0.5
         // penetrates → both active: λ0 + λ1 = −1, −λ0 + α = 0, −λ1 + α = −0.5 → α = −0.75
@@ -673,7 +671,7 @@ mod tests {
     /// instead of the pins carrying all of it with nothing in contact.
     #[test]
     fn an_estimate_from_the_empty_set_brings_the_pressed_body_into_contact() {
-        let run = pressed_pair([0.1, 0.5], 1);
+        let run = pressed_pair([0.1, 0.5], true);
         assert_eq!(run.end, End::Converged, "{run:?}");
         assert_eq!(run.active, vec![true, true], "{run:?}");
         let s: f64 = run.lambda.iter().sum();
@@ -715,8 +713,7 @@ mod tests {
                 load_scale: 1.0,
                 c: 1.0,
                 max_steps: 50,
-                pins_carry: 0,
-                moves: None,
+                pins: None,
             }
             .run(vec![false; n]);
             let primal = Primal {
@@ -759,8 +756,7 @@ mod tests {
             load_scale: 1.0,
             c: 1.0,
             max_steps: 20,
-            pins_carry: 0,
-            moves: None,
+            pins: None,
         };
         let run = dense.run(vec![false]);
         assert!(matches!(run.end, End::NoSupport(_)), "{run:?}");

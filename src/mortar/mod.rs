@@ -74,7 +74,6 @@ pub fn set_up(
     let reach = Reach::of(ctx, settings.pairs.len(), &slaves);
     let masters = MasterFacets::exchange(ctx, mesh, layout, settings, fixed, &reach);
     check_overlap(ctx, mesh, layout, settings, &slaves)?;
-    let friction = settings.friction();
     let mut master_fixed = MasterFixed::new();
     let mut rows_of = Vec::new();
     for (p, slave) in &slaves {
@@ -94,7 +93,7 @@ pub fn set_up(
             )
             .map_err(RunError::Input),
         )?;
-        let rows = keep_contact_nodes(mesh, rows, fixed, friction);
+        let rows = keep_contact_nodes(mesh, rows, fixed);
         let covered = ctx.sum_usize(rows.len());
         if covered == 0 {
             let pair = &settings.pairs[p];
@@ -279,14 +278,19 @@ fn pair_rows(
     let normals = symmetry_normals(&slave, fixed, dim);
     let mortar = assemble_with_normals(&slave, &master, &normals, &opts)
         .map_err(|e| bad(format!("mortar integrals: {e}")))?;
-    let facing = settings.friction().then(|| MasterNormals::of(&master));
+    let facing = settings.friction().then(|| {
+        let mut held = MasterFixed::new();
+        masters.fixed_of(p, &mut held);
+        MasterNormals::of(&master, &held)
+    });
     let mut rows = HashMap::new();
     for r in mortar.rows {
         if !layout.owns_node(r.id) || r.d <= 0.0 {
             continue;
         }
+        let fx = &fixed[r.id * dim..(r.id + 1) * dim];
         let (normal, gap) = match &facing {
-            Some(f) => f.common_normal(&r),
+            Some(f) => f.common_normal(&r, fx),
             None => (r.normal, r.gap),
         };
         rows.insert(
@@ -306,11 +310,20 @@ fn pair_rows(
 struct MasterNormals(HashMap<usize, ([f64; 3], [f64; 3])>);
 
 impl MasterNormals {
-    fn of(master: &Surface) -> MasterNormals {
+    /// The nodal normals of `master`, those of nodes with Dirichlet-fixed components (`held`)
+    /// turned into the plane of their free ones as the slave's are ([`symmetry_normals`]):
+    /// on a mirror plane the master's facets lie on one side, and its normal there is the
+    /// mirrored surface's.
+    fn of(master: &Surface, held: &MasterFixed) -> MasterNormals {
         let normals = master.nodal_normals();
         MasterNormals(
             (master.ids().iter().zip(normals).zip(master.coords()))
-                .map(|((&j, n), &x)| (j, (n, x)))
+                .map(|((&j, mut n), &x)| {
+                    if let Some(f) = held.get(&j) {
+                        n = in_free_plane(n, f);
+                    }
+                    (j, (n, x))
+                })
                 .collect(),
         )
     }
@@ -326,8 +339,11 @@ impl MasterNormals {
     /// (M_kj integrates the dual ψ_k, which changes sign, over the covered part only, D_kk the
     /// positive φ_k), so Σ_j m_kj n_j is no mean of the master's normals and n̄_k no common
     /// normal — a slave node beside a ball's silhouette started 1.6 deep inside the ball
-    /// along it (docs/bodies.md, "The method").
-    fn common_normal(&self, r: &MortarRow) -> ([f64; 3], f64) {
+    /// along it (docs/bodies.md, "The method"). `fx`: the node's Dirichlet values per
+    /// component (NaN = free); a prescribed component is taken out of n̄_k, as out of the
+    /// slave normal ([`symmetry_normals`]): on a mirror plane the master's nodal normals lean
+    /// out of it (their facets lie on one side), and the node stays a symmetry row.
+    fn common_normal(&self, r: &MortarRow, fx: &[f64]) -> ([f64; 3], f64) {
         if !r.fully_covered {
             return (r.normal, r.gap);
         }
@@ -337,6 +353,11 @@ impl MasterNormals {
             for d in 0..3 {
                 n[d] -= m / r.d * nj[d];
                 v[d] += m * xj[d];
+            }
+        }
+        for (d, x) in fx.iter().enumerate() {
+            if !x.is_nan() {
+                n[d] = 0.0;
             }
         }
         let len = n.iter().map(|x| x * x).sum::<f64>().sqrt();
@@ -358,44 +379,50 @@ fn symmetry_normals(slave: &Surface, fixed: &[f64], dim: usize) -> Vec<[f64; 3]>
     let mut normals = slave.nodal_normals();
     for (n, &v) in normals.iter_mut().zip(slave.ids()) {
         let fx = &fixed[v * dim..(v + 1) * dim];
-        if fx.iter().all(|x| x.is_nan()) {
-            continue;
-        }
-        let mut m = *n;
+        let mut held = [false; 3];
         for (d, x) in fx.iter().enumerate() {
-            if !x.is_nan() {
-                m[d] = 0.0;
-            }
+            held[d] = !x.is_nan();
         }
-        let len = m.iter().map(|x| x * x).sum::<f64>().sqrt();
-        // a node whose normal lies along its fixed components stays as it is (left to its
-        // Dirichlet data by keep_contact_nodes)
-        if len > 0.5 {
-            *n = m.map(|x| x / len);
-        }
+        *n = in_free_plane(*n, &held);
     }
     normals
 }
 
+/// The unit normal `n` with its `held` components taken out; `n` itself where that leaves
+/// less than half of it (a normal along its fixed components: such a slave node is left to
+/// its Dirichlet data by [`keep_contact_nodes`]).
+fn in_free_plane(n: [f64; 3], held: &[bool; 3]) -> [f64; 3] {
+    if !held.iter().any(|&h| h) {
+        return n;
+    }
+    let mut m = n;
+    for (d, &h) in held.iter().enumerate() {
+        if h {
+            m[d] = 0.0;
+        }
+    }
+    let len = m.iter().map(|x| x * x).sum::<f64>().sqrt();
+    if len > 0.5 {
+        m.map(|x| x / len)
+    } else {
+        n
+    }
+}
+
 /// The slave rows that become contact nodes: a node with a Dirichlet-fixed component is left
-/// to its Dirichlet data with friction, and without friction unless every fixed component is
-/// orthogonal to its normal (a symmetry row) — the rule of rigid pairs (signorini::boundary).
+/// to its Dirichlet data unless every fixed component is orthogonal to its normal (a symmetry
+/// row), with or without friction — the rule of rigid pairs (signorini::boundary).
 fn keep_contact_nodes(
     mesh: &Mesh,
     mut rows: HashMap<usize, SlaveRow>,
     fixed: &[f64],
-    friction: bool,
 ) -> HashMap<usize, SlaveRow> {
     let dim = mesh.dim;
     rows.retain(|&v, r| {
         let fx = &fixed[v * dim..(v + 1) * dim];
-        let prescribed = fx.iter().any(|x| !x.is_nan());
-        !prescribed
-            || (!friction
-                && fx
-                    .iter()
-                    .enumerate()
-                    .all(|(d, x)| x.is_nan() || r.normal[d].abs() <= 1e-12))
+        fx.iter()
+            .enumerate()
+            .all(|(d, x)| x.is_nan() || r.normal[d].abs() <= 1e-12)
     });
     rows
 }

@@ -118,10 +118,12 @@ impl ContactBoundary {
 }
 
 /// Builds the owned contact nodes. `fixed` holds the Dirichlet value per mesh dof (NaN = free):
-/// a node with a prescribed component is left to its Dirichlet data — unless, without
-/// friction, every prescribed component is orthogonal to the obstacle's normal at the node
-/// (a symmetry row: u_x = 0 on the plane x = 0 of a body pressed along z), where both hold:
-/// the contact row constrains nᵀu only, which the Dirichlet rows do not touch.
+/// a node with a prescribed component is left to its Dirichlet data — unless every prescribed
+/// component is orthogonal to the obstacle's normal at the node (a symmetry row: u_x = 0 on
+/// the plane x = 0 of a body pressed along z), where both hold: the contact row constrains
+/// nᵀu only, which the Dirichlet rows do not touch, and with friction λ (3.28) has no part
+/// along a prescribed component (its row of A is the diagonal alone), so the law acts on the
+/// free tangential part (docs/method.md, "Symmetry rows on the contact boundary").
 /// A node that cannot be projected onto the obstacle is an input error; every rank returns the
 /// same result (the collectives run on every path first). Collective.
 /// True when every prescribed component d (`fixed_k[d]` not NaN) of a node has n_d = 0: the
@@ -276,10 +278,6 @@ pub fn build<W>(
         let pair = &settings.pairs[p];
         let x = mesh.coords[v];
         let prescribed = (0..dim).any(|k| !fixed[v * dim + k].is_nan());
-        if prescribed && settings.friction() {
-            excluded += 1;
-            continue;
-        }
         if let Obstacle::Body(t) = &pair.obstacle {
             // the rows dual mortar gave the pair (crate::mortar: covered nodes that are contact
             // nodes by the rule below); an uncovered node has none

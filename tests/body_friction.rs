@@ -478,9 +478,9 @@ fn half_disc_edge(rows: &[(f64, f64, bool, bool)]) -> f64 {
 /// 0 of its geometry: a lens of radius 10 on a block, half-symmetric, 15 411 unknowns): pressed
 /// alone, the zone sticks but for its rim; dragged to Q/(μP) ≈ 0.81, the contact radius a is
 /// Hertz' and the stick zone a centred disc of Mindlin's radius c = a (1 − Q/(μP))^(1/3).
-/// Measured here: a −0.4 % from Hertz, c/a −1.6 % from Mindlin, the stick centre 0.02 c off
-/// the axis; 6 of 109 nodes slip under the pressing (docs/numbers.md, "Mindlin between two
-/// bodies": −1.6 % on the finest level).
+/// Measured here: a −0.5 % from Hertz, c/a −2.3 % from Mindlin, the stick centre 0.01 c off
+/// the axis; 7 of 124 nodes slip under the pressing (docs/numbers.md, "Mindlin between two
+/// bodies").
 #[test]
 fn a_lens_dragged_on_a_block_has_mindlins_stick_zone() {
     let tmp = tempfile::tempdir().expect("tempdir");

@@ -1,0 +1,198 @@
+//! Bad output paths, options and command lines are input errors found before the solve (exit
+//! code 2, one message naming the case file and the key, the same on 1, 2 and 3 ranks, nothing
+//! written) — in `signorini-mpi check` too; an existing output directory is replaced only if it
+//! holds this program's results (docs/output.md, "The output directory"). Also `convert`'s
+//! output paths (docs/mesh-h5.md), the warning of a nearly incompressible material in
+//! summary.json (docs/warnings.md) and clap's errors under mpirun.
+
+mod common;
+
+use common::*;
+use std::path::{Path, PathBuf};
+use std::time::Duration;
+
+/// The contact case of these tests (a block pressed onto a plane; a second or so).
+fn block() -> PathBuf {
+    repo("cases/blocks/block2d.toml")
+}
+
+/// `signorini-mpi [check] CASE [args]` on `np` ranks (0: without mpirun), in `cwd`.
+fn run_in(cwd: &Path, np: usize, check: bool, case: &Path, args: &[&str]) -> Run {
+    let mut all: Vec<String> = Vec::new();
+    if check {
+        all.push("check".into());
+    }
+    all.push(case.display().to_string());
+    all.extend(args.iter().map(|s| s.to_string()));
+    let mut cmd = solver(np, &all);
+    cmd.current_dir(cwd);
+    run_with_timeout(cmd, Duration::from_secs(180))
+}
+
+/// The one `error` line of a run that must be refused with exit code 2 before the solve;
+/// panics unless there is exactly one and it holds every `expect`.
+fn refused(r: &Run, expect: &[&str]) -> String {
+    r.expect_code(2, "refused");
+    let errors: Vec<&str> = r
+        .stderr
+        .lines()
+        .filter(|l| l.starts_with("error"))
+        .collect();
+    assert_eq!(errors.len(), 1, "one error line:\n{}", r.output());
+    assert!(
+        !r.stdout.contains("newton"),
+        "refused before the solve:\n{}",
+        r.output()
+    );
+    for e in expect {
+        assert!(errors[0].contains(e), "{e:?} not in {}", errors[0]);
+    }
+    errors[0].to_string()
+}
+
+/// `check` and a run on 1, 2 and 3 ranks of `case` with `args` are refused alike, naming
+/// `expect`; returns the message.
+fn refused_everywhere(cwd: &Path, case: &Path, args: &[&str], expect: &[&str]) -> String {
+    let m = refused(&run_in(cwd, 0, true, case, args), expect);
+    let mut messages = Vec::new();
+    for np in [1, 2, 3] {
+        messages.push(refused(&run_in(cwd, np, false, case, args), expect));
+    }
+    assert!(messages.iter().all(|x| *x == messages[0]), "{messages:#?}");
+    m
+}
+
+/// A user's own directory with result-file names is neither checked as valid nor replaced.
+#[test]
+fn a_directory_with_a_summary_of_its_own_is_refused_and_kept() {
+    let tmp = tempfile::tempdir().unwrap();
+    let out = tmp.path().join("r_look");
+    std::fs::create_dir(&out).unwrap();
+    std::fs::write(out.join("summary.json"), "{\"my\": \"precious data\"}\n").unwrap();
+    std::fs::write(out.join("history.csv"), "a,b\n").unwrap();
+    let before = listing(&out);
+    let o = out.display().to_string();
+    let m = refused_everywhere(
+        tmp.path(),
+        &block(),
+        &["-o", &o],
+        &["block2d.toml", "output.dir", "did not write"],
+    );
+    println!("{m}");
+    assert_eq!(listing(&out), before, "the user's files are kept");
+    assert_eq!(file_names(tmp.path()), ["r_look"]);
+    // history.csv alone, without a summary of this program
+    std::fs::remove_file(out.join("summary.json")).unwrap();
+    refused(
+        &run_in(tmp.path(), 1, false, &block(), &["-o", &o]),
+        &["output.dir", "history.csv"],
+    );
+    assert_eq!(file_names(&out), ["history.csv"]);
+}
+
+#[test]
+fn a_directory_named_like_a_result_file_is_refused_and_kept() {
+    let tmp = tempfile::tempdir().unwrap();
+    let out = tmp.path().join("r_sub");
+    std::fs::create_dir_all(out.join("solution.h5")).unwrap();
+    std::fs::write(out.join("solution.h5/mine.txt"), "user file\n").unwrap();
+    let o = out.display().to_string();
+    refused_everywhere(
+        tmp.path(),
+        &block(),
+        &["-o", &o],
+        &["output.dir", "solution.h5", "not a regular file"],
+    );
+    assert_eq!(
+        std::fs::read_to_string(out.join("solution.h5/mine.txt")).unwrap(),
+        "user file\n"
+    );
+}
+
+/// Results of this program, also of an earlier version (its summary.json with the keys every
+/// version wrote), are replaced; the new results are recognised as well.
+#[test]
+fn results_of_this_program_and_of_earlier_versions_are_replaced() {
+    let tmp = tempfile::tempdir().unwrap();
+    let out = tmp.path().join("old");
+    std::fs::create_dir(&out).unwrap();
+    let first_version = r#"{"case": "cases/plate/plate.toml", "mesh": "plate.msh",
+        "dimension": 2, "model": "PlaneStress", "cells": 10, "nodes": 8, "dofs": 16,
+        "ranks": 1, "partition": {"cells_per_rank": [10]}, "timings": {"total": 1.0},
+        "peak_memory_bytes_per_rank": [1.0]}"#;
+    std::fs::write(out.join("summary.json"), first_version).unwrap();
+    std::fs::write(out.join("solution.h5"), "old data").unwrap();
+    std::fs::write(out.join("solution.xdmf"), "old grid").unwrap();
+    let o = out.display().to_string();
+    run_in(tmp.path(), 0, true, &block(), &["-o", &o]).expect_code(0, "check");
+    run_in(tmp.path(), 2, false, &block(), &["-o", &o]).expect_code(0, "first run");
+    assert!(out.join("contact_nodes.csv").exists());
+    run_in(tmp.path(), 1, false, &block(), &["-o", &o]).expect_code(0, "second run");
+    assert_eq!(file_names(tmp.path()), ["old"], "nothing left beside it");
+}
+
+/// `DIR/.` is DIR (missing or an existing results directory), in `-o` and in output.dir.
+#[test]
+fn an_output_path_ending_in_dot_is_its_directory() {
+    let tmp = tempfile::tempdir().unwrap();
+    let cwd = tmp.path();
+    for args in [
+        vec!["-o", "od/fresh/."],
+        vec!["--set", "output.dir=\"od2/fresh2/.\""],
+        vec!["-o", "od/fresh/."], // now an existing results directory
+    ] {
+        run_in(cwd, 0, true, &block(), &args).expect_code(0, "check");
+        let r = run_in(cwd, 2, false, &block(), &args);
+        r.expect_code(0, &format!("{args:?}"));
+    }
+    assert!(cwd.join("od/fresh/summary.json").exists());
+    assert!(cwd.join("od2/fresh2/summary.json").exists());
+    assert_eq!(file_names(&cwd.join("od")), ["fresh"]);
+}
+
+/// Paths that cannot be a results directory are refused before the solve, in `check` too.
+#[test]
+fn a_dangling_link_or_a_path_without_a_name_is_refused() {
+    let tmp = tempfile::tempdir().unwrap();
+    let cwd = tmp.path();
+    std::os::unix::fs::symlink("/proc/nonexist", cwd.join("dangling")).unwrap();
+    refused_everywhere(
+        cwd,
+        &block(),
+        &["-o", "dangling"],
+        &["output.dir", "symbolic link", "/proc/nonexist"],
+    );
+    std::fs::write(cwd.join("afile"), "x").unwrap();
+    std::os::unix::fs::symlink("afile", cwd.join("flink")).unwrap();
+    refused(
+        &run_in(cwd, 1, false, &block(), &["-o", "flink"]),
+        &["output.dir", "not a directory"],
+    );
+    for bad in [".", "sub/..", "/"] {
+        refused(
+            &run_in(cwd, 1, false, &block(), &["-o", bad]),
+            &["output.dir", "no directory of its own"],
+        );
+    }
+    let mut names = file_names(cwd);
+    names.sort();
+    assert_eq!(names, ["afile", "dangling", "flink"], "nothing written");
+}
+
+/// A link to a results directory: the results go there and the link stays.
+#[test]
+fn a_link_to_a_results_directory_is_followed() {
+    let tmp = tempfile::tempdir().unwrap();
+    let cwd = tmp.path();
+    std::fs::create_dir(cwd.join("real")).unwrap();
+    std::os::unix::fs::symlink("real", cwd.join("link")).unwrap();
+    for np in [1, 2] {
+        run_in(cwd, np, false, &block(), &["-o", "link"]).expect_code(0, "through a link");
+        assert!(std::fs::symlink_metadata(cwd.join("link"))
+            .unwrap()
+            .file_type()
+            .is_symlink());
+        assert!(cwd.join("real/summary.json").exists());
+    }
+    assert_eq!(file_names(cwd), ["link", "real"]);
+}

@@ -196,3 +196,39 @@ fn a_link_to_a_results_directory_is_followed() {
     }
     assert_eq!(file_names(cwd), ["link", "real"]);
 }
+
+/// `convert`: an output that is the input, a directory, an .xdmf name or an unwritable place
+/// is exit code 2 and writes nothing.
+#[test]
+fn convert_refuses_bad_outputs() {
+    let tmp = tempfile::tempdir().unwrap();
+    let d = tmp.path();
+    let msh = d.join("in.msh");
+    std::fs::copy(mesh_dir().join("square_h0.25.msh"), &msh).unwrap();
+    let original = std::fs::read(&msh).unwrap();
+    std::os::unix::fs::symlink("in.msh", d.join("alias.h5")).unwrap();
+    std::fs::create_dir(d.join("adir")).unwrap();
+    let convert = |out: &Path| {
+        let mut cmd = std::process::Command::new(binary());
+        cmd.arg("convert").arg(&msh).arg(out).current_dir(d);
+        run_with_timeout(cmd, Duration::from_secs(60))
+    };
+    for (out, expect) in [
+        (msh.clone(), "input mesh"),
+        (d.join("./in.msh"), "input mesh"),
+        (d.join("alias.h5"), "input mesh"),
+        (d.join("adir"), "is a directory"),
+        (d.join("mesh.xdmf"), ".xdmf"),
+        (PathBuf::from("/proc/x.h5"), "not writable"),
+        (d.join("missing/x.h5"), "not an existing directory"),
+    ] {
+        let r = convert(&out);
+        r.expect_code(2, &format!("convert to {}", out.display()));
+        assert_eq!(r.stderr.trim().lines().count(), 1, "{}", r.output());
+        assert!(r.stderr.contains(expect), "{expect:?}: {}", r.output());
+    }
+    assert_eq!(std::fs::read(&msh).unwrap(), original, "the input is kept");
+    assert_eq!(file_names(d), ["adir", "alias.h5", "in.msh"]);
+    assert!(file_names(&d.join("adir")).is_empty());
+    convert(&d.join("out.h5")).expect_code(0, "a good output");
+}

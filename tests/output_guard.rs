@@ -232,3 +232,28 @@ fn convert_refuses_bad_outputs() {
     assert!(file_names(&d.join("adir")).is_empty());
     convert(&d.join("out.h5")).expect_code(0, "a good output");
 }
+
+/// Every `warning:` line has its summary entry: the nearly incompressible material too; each
+/// load step's list is there, empty where the step raised none.
+#[test]
+fn a_nearly_incompressible_material_is_in_the_summary_warnings() {
+    let nu = "material.poisson=0.4999";
+    for np in [1, 2] {
+        let s = solve(np, &block(), &[nu, "load.steps=2"]);
+        let lines: Vec<&str> = (s.run.stdout.lines())
+            .filter(|l| l.starts_with("warning:"))
+            .collect();
+        let list = get(&s.summary, &["warnings"]).as_array().unwrap();
+        assert_eq!(lines.len(), 1, "{}", s.run.output());
+        assert_eq!(list.len(), 1, "{list:#?}");
+        let w = &list[0];
+        assert_eq!(w["code"], "nearly_incompressible");
+        assert_eq!(w["key"], "material.poisson");
+        assert_eq!(w["value"].as_f64(), Some(0.4999));
+        assert_eq!(w["threshold"].as_f64(), Some(0.49));
+        assert!(lines[0].ends_with(w["message"].as_str().unwrap()));
+        for st in get(&s.summary, &["load", "steps"]).as_array().unwrap() {
+            assert_eq!(st["warnings"], serde_json::json!([]), "{st:#?}");
+        }
+    }
+}

@@ -111,6 +111,7 @@ pub fn prepare<'c>(ctx: &Ctx, case: &'c Case) -> Result<Prepared<'c>, RunError> 
         preset,
         ..case.solver.clone()
     };
+    crate::linsolve::check_options(ctx, &case.file, &solver)?;
     let problem = setup::problem(case, &mesh, &material);
     let survey = check_bodies(ctx, case, &mesh, &layout, &problem.fixed)?;
     drop(problem);

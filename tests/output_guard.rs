@@ -257,3 +257,36 @@ fn a_nearly_incompressible_material_is_in_the_summary_warnings() {
         }
     }
 }
+
+/// Options PETSc refuses, in the case or after `--`: exit code 2 before the solve, one message
+/// naming the key (or the command line), the same on every rank count; `check` finds it.
+#[test]
+fn refused_petsc_options_are_an_input_error() {
+    let tmp = tempfile::tempdir().unwrap();
+    let o = tmp.path().join("out").display().to_string();
+    let set = "solver.petsc_options=\"-ksp_type nonsense\"";
+    let m = refused_everywhere(
+        tmp.path(),
+        &block(),
+        &["--set", set, "-o", &o],
+        &["block2d.toml", "solver.petsc_options", "nonsense"],
+    );
+    println!("{m}");
+    let m = refused_everywhere(
+        tmp.path(),
+        &block(),
+        &["-o", &o, "--", "-ksp_type", "nonsense"],
+        &["block2d.toml", "after --", "nonsense"],
+    );
+    println!("{m}");
+    assert!(file_names(tmp.path()).is_empty(), "nothing written");
+    // the command line wins over the case: a good one there makes the case's harmless
+    run_in(
+        tmp.path(),
+        1,
+        false,
+        &block(),
+        &["--set", set, "-o", &o, "--", "-ksp_type", "preonly"],
+    )
+    .expect_code(0, "overridden");
+}

@@ -161,8 +161,28 @@ fn convert(src: &Path, dst: &Path) -> i32 {
     }
 }
 
+/// This process' rank as the MPI launcher tells it in the environment (before MPI is
+/// initialised); `None` when not started by a launcher.
+fn launcher_rank() -> Option<u32> {
+    [
+        "OMPI_COMM_WORLD_RANK",
+        "PMIX_RANK",
+        "PMI_RANK",
+        "SLURM_PROCID",
+    ]
+    .iter()
+    .find_map(|k| std::env::var(k).ok()?.parse().ok())
+}
+
 fn main() {
-    let cli = Cli::parse();
+    // Under mpirun every rank parses the same command line: rank 0 alone prints its errors
+    // (and --help, --version); every rank exits with clap's code (2 for an error).
+    let cli = Cli::try_parse().unwrap_or_else(|e| {
+        if launcher_rank().unwrap_or(0) == 0 {
+            let _ = e.print();
+        }
+        std::process::exit(e.exit_code())
+    });
     if let Some(Command::Convert { msh, h5 }) = &cli.command {
         std::process::exit(convert(msh, h5));
     }

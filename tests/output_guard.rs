@@ -290,3 +290,17 @@ fn refused_petsc_options_are_an_input_error() {
     )
     .expect_code(0, "overridden");
 }
+
+/// clap's errors (and help) under mpirun: printed by rank 0 alone, every rank exits 2.
+#[test]
+fn command_line_errors_are_printed_once_under_mpirun() {
+    let tmp = tempfile::tempdir().unwrap();
+    let case = block();
+    for np in [2, 3] {
+        let r = run_in(tmp.path(), np, false, &case, &["--bogus"]);
+        r.expect_code(2, "--bogus");
+        let errors = r.stderr.matches("unexpected argument '--bogus'").count();
+        assert_eq!(errors, 1, "{}", r.output());
+        assert_eq!(r.stderr.matches("Usage:").count(), 1, "{}", r.output());
+    }
+}

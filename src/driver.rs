@@ -19,6 +19,7 @@ use crate::setup::{self, Input};
 use crate::solver;
 use crate::steps::{LoadReport, SolveReport, Stepper};
 use crate::summary::{self, AssemblyInfo, Clock, PartitionInfo, PresetChoice, Summary};
+use crate::warnings::Warning;
 use serde::Serialize;
 
 /// The solve's sections of summary.json: the last step's report, and the load history.
@@ -52,6 +53,8 @@ pub struct Prepared<'c> {
     blas: Option<String>,
     dense_threads: usize,
     clock: Clock,
+    /// The input's warnings (logged already), first in summary.json's `warnings`.
+    warnings: Vec<Warning>,
 }
 
 /// Runs a whole case. Returns summary.json's text (the same on every rank).
@@ -71,6 +74,7 @@ pub fn prepare<'c>(ctx: &Ctx, case: &'c Case) -> Result<Prepared<'c>, RunError> 
         layout,
         read_seconds,
         partition_seconds,
+        warnings,
     } = setup::read_input(ctx, case)?;
     clock.lap();
     (clock.t.read, clock.t.partition) = (read_seconds, partition_seconds);
@@ -107,6 +111,7 @@ pub fn prepare<'c>(ctx: &Ctx, case: &'c Case) -> Result<Prepared<'c>, RunError> 
         preset,
         ..case.solver.clone()
     };
+    crate::linsolve::check_options(ctx, &case.file, &solver)?;
     let problem = setup::problem(case, &mesh, &material);
     let survey = check_bodies(ctx, case, &mesh, &layout, &problem.fixed)?;
     drop(problem);
@@ -136,6 +141,7 @@ pub fn prepare<'c>(ctx: &Ctx, case: &'c Case) -> Result<Prepared<'c>, RunError> 
         blas,
         dense_threads,
         clock,
+        warnings,
     })
 }
 
@@ -157,6 +163,7 @@ pub fn solve(ctx: &Ctx, prepared: Prepared) -> Result<String, RunError> {
         blas,
         dense_threads,
         mut clock,
+        warnings: input_warnings,
     } = prepared;
     let preset = solver.preset;
     let problem = setup::problem(case, &mesh, &material);
@@ -211,7 +218,7 @@ pub fn solve(ctx: &Ctx, prepared: Prepared) -> Result<String, RunError> {
         assembly,
         peak_memory_bytes_per_rank: summary::peak_memory_and_log(ctx, &timings),
         timings,
-        warnings: stepped.warnings,
+        warnings: [input_warnings, stepped.warnings].concat(),
         solve: SolveSections {
             solve: stepped.report,
             load: stepped.load,

@@ -8,12 +8,13 @@
 
 use crate::assembly;
 use crate::case::{Preset, SolverSection};
+use crate::error::{InputError, RunError};
 use crate::mesh::Mesh;
 use crate::par::Ctx;
 use crate::partition::Layout;
 use crate::petsc::mumps::{FactorStats, SchurFactor, SchurRequest};
 use crate::petsc::optdb::OptionsDb;
-use crate::petsc::{self, ndfactor, Ksp, MPI_Comm, Matrix, SolveInfo, Vector};
+use crate::petsc::{self, ndfactor, Ksp, MPI_Comm, Matrix, PInt, SolveInfo, Vector};
 pub use crate::tuning::REUSE_RESTART;
 use crate::tuning::{ALLATONCE_MIN_RANKS, ITERATIVE_MAX_IT, ITERATIVE_RESTART, WORKSPACE_PERCENT};
 use std::rc::Rc;
@@ -311,6 +312,72 @@ impl LinearSetup {
             one_process: self.one_process,
         })
     }
+}
+
+/// Whether PETSc takes the solver options of `section` (its preset resolved), before anything
+/// is assembled: a KSP and the reuse solver on a matrix of one row per rank read them
+/// (KSPSetFromOptions refuses e.g. an unknown type or an integer it cannot read), first the preset's
+/// and the command line's (after `--`) alone, then with the case's `solver.petsc_options`. A
+/// refusal is an input error of the case naming the command line or the key. Collective.
+pub fn check_options(
+    ctx: &Ctx,
+    case_file: &std::path::Path,
+    section: &SolverSection,
+) -> Result<(), RunError> {
+    options_taken(ctx, section, "", &|why| {
+        InputError::new(
+            case_file,
+            format!("the PETSc options after -- (or in PETSC_OPTIONS) are refused by PETSc: {why}"),
+        )
+    })?;
+    options_taken(ctx, section, &section.petsc_options, &|why| {
+        InputError::new(
+            case_file,
+            format!(
+                "{:?} is refused by PETSc: {why}",
+                section.petsc_options.trim()
+            ),
+        )
+        .with_key("solver.petsc_options")
+    })
+}
+
+/// One pass of [`check_options`] with `case_options` in place of the case's: `blame` makes the
+/// input error of a refusal (from PETSc's message). Collective; every rank returns the same.
+fn options_taken(
+    ctx: &Ctx,
+    section: &SolverSection,
+    case_options: &str,
+    blame: &dyn Fn(String) -> InputError,
+) -> Result<(), RunError> {
+    let setup = LinearSetup::new(&SolverRequest {
+        preset: section.preset,
+        rtol: section.rtol,
+        symmetric: true,
+        case_options,
+        repeatable: section.repeatable,
+        scale: 0.0,
+    })?;
+    let a = Matrix::from_csr(ctx.comm(), 1, &[0, 1], &[ctx.rank as PInt], &[1.0])?;
+    let mut ksp = Ksp::new(ctx.comm(), setup.options.clone())?;
+    ksp.set_operator(&a)?;
+    let mut reuse = Ksp::new(ctx.comm(), setup.options.clone())?;
+    reuse.set_options_prefix(REUSE_PREFIX)?;
+    reuse.set_operator(&a)?;
+    let read = ksp
+        .set_from_options()
+        .and_then(|()| reuse.set_from_options());
+    let local = read.map_err(|e| {
+        if e.code > 0 {
+            // PETSc's own refusal (our layer's errors have code -1)
+            let detail = petsc::last_detail();
+            RunError::Input(blame(if detail.is_empty() { e.message } else { detail }))
+        } else {
+            RunError::Petsc(e)
+        }
+    });
+    // agreed while the objects live: their collective destroys follow on every rank
+    ctx.agree(local)
 }
 
 /// A configured KSP on one operator, and what it runs.

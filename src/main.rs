@@ -10,7 +10,7 @@ use signorini_mpi::driver;
 use signorini_mpi::error::RunError;
 use signorini_mpi::par::Ctx;
 use signorini_mpi::petsc::Petsc;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 /// Static contact of linear-elastic bodies with a rigid obstacle (semismooth Newton, MPI + PETSc).
 #[derive(Parser, Debug)]
@@ -70,8 +70,54 @@ impl Cli {
     }
 }
 
+/// Why `convert` cannot write `out` (the HDF5 mesh or its .xdmf) for the input `src`, if it
+/// cannot: `out` is `src` itself (by another path or a link too), a directory, or in a
+/// directory that is missing or not writable. Writes nothing that stays.
+fn convert_target_fault(src: &Path, out: &Path) -> Option<String> {
+    use std::os::unix::fs::MetadataExt;
+    let same =
+        |a: &std::fs::Metadata, b: &std::fs::Metadata| a.dev() == b.dev() && a.ino() == b.ino();
+    if let (Ok(a), Ok(b)) = (std::fs::metadata(src), std::fs::metadata(out)) {
+        if same(&a, &b) {
+            return Some(format!(
+                "{} is the input mesh {}: it would be overwritten; give another output file",
+                out.display(),
+                src.display()
+            ));
+        }
+        if b.is_dir() {
+            return Some(format!(
+                "{} is a directory: give the HDF5 file to write, e.g. mesh.h5",
+                out.display()
+            ));
+        }
+    }
+    let parent = match out.parent() {
+        Some(p) if !p.as_os_str().is_empty() => p,
+        _ => Path::new("."),
+    };
+    if !parent.is_dir() {
+        return Some(format!(
+            "cannot write {}: {} is not an existing directory",
+            out.display(),
+            parent.display()
+        ));
+    }
+    let probe = parent.join(format!(".signorini-probe-{}", std::process::id()));
+    let writable = std::fs::File::create(&probe).and_then(|_| std::fs::remove_file(&probe));
+    match writable {
+        Ok(()) => None,
+        Err(e) => Some(format!(
+            "cannot write {}: {} is not writable ({e})",
+            out.display(),
+            parent.display()
+        )),
+    }
+}
+
 /// `signorini-mpi convert MESH.msh MESH.h5`: the MSH file as an HDF5 mesh (+ .xdmf), serial.
-fn convert(src: &std::path::Path, dst: &std::path::Path) -> i32 {
+/// A bad input or output path is exit code 2, before anything is written.
+fn convert(src: &Path, dst: &Path) -> i32 {
     let mesh = match signorini_mpi::mesh::read_msh(src) {
         Ok(m) => m,
         Err(e) => {
@@ -79,6 +125,22 @@ fn convert(src: &std::path::Path, dst: &std::path::Path) -> i32 {
             return 2;
         }
     };
+    let xdmf = dst.with_extension("xdmf");
+    if xdmf == dst {
+        eprintln!(
+            "error: convert: {} ends in .xdmf, the name of the mesh's XDMF file written beside \
+             it: give the HDF5 file to write, e.g. mesh.h5",
+            dst.display()
+        );
+        return 2;
+    }
+    if let Some(why) = [dst, xdmf.as_path()]
+        .iter()
+        .find_map(|out| convert_target_fault(src, out))
+    {
+        eprintln!("error: convert: {why}");
+        return 2;
+    }
     match signorini_mpi::mesh::h5::write_h5(&mesh, dst) {
         Ok(()) => {
             println!(
@@ -99,8 +161,28 @@ fn convert(src: &std::path::Path, dst: &std::path::Path) -> i32 {
     }
 }
 
+/// This process' rank as the MPI launcher tells it in the environment (before MPI is
+/// initialised); `None` when not started by a launcher.
+fn launcher_rank() -> Option<u32> {
+    [
+        "OMPI_COMM_WORLD_RANK",
+        "PMIX_RANK",
+        "PMI_RANK",
+        "SLURM_PROCID",
+    ]
+    .iter()
+    .find_map(|k| std::env::var(k).ok()?.parse().ok())
+}
+
 fn main() {
-    let cli = Cli::parse();
+    // Under mpirun every rank parses the same command line: rank 0 alone prints its errors
+    // (and --help, --version); every rank exits with clap's code (2 for an error).
+    let cli = Cli::try_parse().unwrap_or_else(|e| {
+        if launcher_rank().unwrap_or(0) == 0 {
+            let _ = e.print();
+        }
+        std::process::exit(e.exit_code())
+    });
     if let Some(Command::Convert { msh, h5 }) = &cli.command {
         std::process::exit(convert(msh, h5));
     }

@@ -243,6 +243,19 @@ impl<'a> Ctx<'a> {
         root.broadcast_into(&mut v[..]);
     }
 
+    /// Rank 0's path on every rank (its bytes, as they are). Collective.
+    pub fn broadcast_path(&self, p: &mut std::path::PathBuf) {
+        use std::os::unix::ffi::{OsStrExt, OsStringExt};
+        crate::abort::before_collective();
+        let root = self.world.process_at_rank(0);
+        let mut bytes = p.as_os_str().as_bytes().to_vec();
+        let mut len = bytes.len() as u64;
+        root.broadcast_into(&mut len);
+        bytes.resize(len as usize, 0);
+        root.broadcast_into(&mut bytes[..]);
+        *p = std::ffi::OsString::from_vec(bytes).into();
+    }
+
     /// Every rank gets `Err` (the lowest failing rank's message) if any rank has one: the
     /// agreement that must come before a local failure turns into a fallback. Collective.
     pub fn agree_message<T, E: std::fmt::Display>(&self, local: Result<T, E>) -> Result<T, String> {

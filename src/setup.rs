@@ -11,6 +11,7 @@ use crate::mesh::{self, Mesh};
 use crate::par::Ctx;
 use crate::partition::Layout;
 use crate::say;
+use crate::warnings::{self, Warning};
 use std::path::Path;
 
 /// The mesh (this rank's part: local indices) with its layout, and the materials of a case
@@ -21,6 +22,8 @@ pub struct Input {
     pub layout: Layout,
     pub read_seconds: f64,
     pub partition_seconds: f64,
+    /// The warnings of the input ([`locking_warnings`]), logged; for summary.json.
+    pub warnings: Vec<Warning>,
 }
 
 /// The ranks read the case's mesh distributed (`crate::dist`: each rank keeps its part),
@@ -45,6 +48,7 @@ pub fn read_input(ctx: &Ctx, case: &Case) -> Result<Input, RunError> {
         layout: d.layout,
         read_seconds: d.read_seconds,
         partition_seconds: d.partition_seconds,
+        warnings: Vec::new(),
     };
     let mesh = &input.mesh;
     let dim = mesh.dim;
@@ -77,27 +81,45 @@ pub fn read_input(ctx: &Ctx, case: &Case) -> Result<Input, RunError> {
             .map(|c| (c[0], c[1]))
             .collect::<Vec<_>>()
     );
-    for (m, section) in input.material.list.iter().zip(&case.materials) {
+    let mut input = input;
+    input.warnings = locking_warnings(case, &input.material);
+    warnings::log(ctx, &input.warnings, "");
+    Ok(input)
+}
+
+/// Poisson's ratio from which P1 locking is warned about (plane strain and 3D).
+pub const NEARLY_INCOMPRESSIBLE: f64 = 0.49;
+
+/// The warnings of materials whose Poisson's ratio is at least [`NEARLY_INCOMPRESSIBLE`]
+/// (plane strain and 3D), one per material: P1 elements lock there. Pure.
+fn locking_warnings(case: &Case, material: &Materials) -> Vec<Warning> {
+    let mut list = Vec::new();
+    for (m, section) in material.list.iter().zip(&case.materials) {
         let nu = m.poisson;
         if nu >= NEARLY_INCOMPRESSIBLE && m.model != fem::Model::PlaneStress {
             let whose = match &section.group {
                 None => String::new(),
                 Some(_) => format!("{}: ", section.key),
             };
-            say!(
-                ctx,
-                "warning: {whose}poisson = {nu} is close to 1/2: linear (P1) elements lock in \
-                 the nearly incompressible limit — displacements come out too small and \
-                 stresses and contact pressures too large (Hertz disk, default mesh: p_max off \
-                 by 1 % at 0.45, 4 % at 0.49, 26 % at 0.499, 90 % at 0.4999)"
-            );
+            list.push(Warning {
+                code: warnings::NEARLY_INCOMPRESSIBLE,
+                message: format!(
+                    "{whose}poisson = {nu} is close to 1/2: linear (P1) elements lock in \
+                     the nearly incompressible limit — displacements come out too small and \
+                     stresses and contact pressures too large (Hertz disk, default mesh: p_max \
+                     off by 1 % at 0.45, 4 % at 0.49, 26 % at 0.499, 90 % at 0.4999)"
+                ),
+                key: Some(format!("{}.poisson", section.key)),
+                pair: None,
+                value: nu,
+                threshold: NEARLY_INCOMPRESSIBLE,
+                at: None,
+                steps: Vec::new(),
+            });
         }
     }
-    Ok(input)
+    list
 }
-
-/// Poisson's ratio from which P1 locking is warned about (plane strain and 3D).
-pub const NEARLY_INCOMPRESSIBLE: f64 = 0.49;
 
 fn check(case: &Case, mesh: &Mesh) -> Result<fem::Model, InputError> {
     let groups: Vec<(String, usize)> = mesh

@@ -103,8 +103,7 @@ pub struct StepRecord {
     /// equilibrium and force balance.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub certificate: Option<Certificate>,
-    /// The step's warnings (docs/warnings.md).
-    #[serde(skip_serializing_if = "Vec::is_empty")]
+    /// The step's warnings (docs/warnings.md; `[]` for a step without any).
     pub warnings: Vec<Warning>,
     /// Seconds of the step (solve, post-processing, output).
     pub seconds: f64,

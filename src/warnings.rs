@@ -19,6 +19,9 @@ pub const LARGE_DEFORMATION: &str = "large_deformation";
 /// tolerance: the linear solves were inexact (signorini/final_state.rs).
 pub const INEXACT_FINAL_STATE: &str = "inexact_final_state";
 
+/// A material whose Poisson's ratio is close to 1/2: P1 elements lock (setup.rs).
+pub const NEARLY_INCOMPRESSIBLE: &str = "nearly_incompressible";
+
 /// The worst violation of the final state's certificates, relative to the problem's scales,
 /// above which [`INEXACT_FINAL_STATE`] is raised: about what the round-off of a direct solve
 /// leaves (the default runs end at 1e-16–1e-10, docs/numbers.md), far below what an iterative

@@ -99,7 +99,10 @@ impl SolutionFields {
 
 /// An output directory being written.
 pub struct ResultSet {
+    /// The output directory as the case gives it (for messages).
     dir: PathBuf,
+    /// The directory the results go to ([`target_dir`]).
+    target: PathBuf,
     staging: PathBuf,
     committed: bool,
     rank: usize,
@@ -134,8 +137,96 @@ fn existing_ancestor(p: &Path) -> PathBuf {
     }
 }
 
-/// Can a directory be made where `dir`'s staging directory will go? Creates and removes a
-/// probe directory in the nearest existing ancestor; writes nothing that stays.
+/// The keys that every summary.json this program has written holds (since its first version):
+/// a result directory of this program, of this version or an earlier one, is recognised by them.
+const SUMMARY_KEYS: &[&str] = &["case", "mesh", "dimension", "ranks", "partition", "timings"];
+
+/// The directory that results given the path `dir` really go to: `dir` without its "."
+/// components (`out/.` is `out`), or, for a symbolic link, the directory it points to (the
+/// link itself stays). An error for a path that names no directory of its own (the current
+/// directory, a root, one ending in "..") and for a link to nothing or to a non-directory.
+pub fn target_dir(dir: &Path) -> Result<PathBuf, String> {
+    use std::path::Component;
+    let plain: PathBuf = dir
+        .components()
+        .filter(|c| *c != Component::CurDir)
+        .collect();
+    let own_name = |p: &Path| matches!(p.components().next_back(), Some(Component::Normal(_)));
+    if !own_name(&plain) {
+        return Err(format!(
+            "cannot write results to {}: it names no directory of its own (the current \
+             directory, a root, or a path ending in '..'), and the results directory is \
+             replaced as a whole: give it a name of its own, e.g. out/run1",
+            dir.display()
+        ));
+    }
+    let is_link = std::fs::symlink_metadata(&plain).is_ok_and(|m| m.file_type().is_symlink());
+    if !is_link {
+        return Ok(plain);
+    }
+    let to = std::fs::read_link(&plain).unwrap_or_default();
+    match std::fs::canonicalize(&plain) {
+        Ok(t) if t.is_dir() && own_name(&t) => Ok(t),
+        Ok(_) => Err(format!(
+            "cannot write results to {}: it is a symbolic link to {}, which is not a directory",
+            dir.display(),
+            to.display()
+        )),
+        Err(e) => Err(format!(
+            "cannot write results to {}: it is a symbolic link to {}, which cannot be reached \
+             ({e})",
+            dir.display(),
+            to.display()
+        )),
+    }
+}
+
+/// Why the existing directory `dir` is not one this program may replace, if it is not: it
+/// may be empty, or hold regular files with the names of result files only, among them a
+/// summary.json that this program wrote (a JSON object with [`SUMMARY_KEYS`]).
+fn foreign_content(dir: &Path) -> Result<(), String> {
+    let mut names = Vec::new();
+    for e in std::fs::read_dir(dir).map_err(|e| format!("cannot be read ({e})"))? {
+        let e = e.map_err(|e| format!("cannot be read ({e})"))?;
+        let n = e.file_name().to_string_lossy().into_owned();
+        if !RESULT_FILES.contains(&n.as_str()) {
+            return Err(format!(
+                "holds '{n}', which is not a result file of this program"
+            ));
+        }
+        if !e.file_type().is_ok_and(|t| t.is_file()) {
+            return Err(format!(
+                "holds '{n}', which is not a regular file (a directory or a link): not a \
+                 result file of this program"
+            ));
+        }
+        names.push(n);
+    }
+    if names.is_empty() {
+        return Ok(());
+    }
+    let summary = std::fs::read_to_string(dir.join(SUMMARY_FILE)).unwrap_or_default();
+    let ours = serde_json::from_str::<serde_json::Value>(&summary)
+        .ok()
+        .and_then(|v| v.as_object().cloned())
+        .is_some_and(|o| SUMMARY_KEYS.iter().all(|k| o.contains_key(*k)));
+    if ours {
+        Ok(())
+    } else if names.iter().any(|n| n == SUMMARY_FILE) {
+        Err(format!(
+            "holds a {SUMMARY_FILE} that this program did not write"
+        ))
+    } else {
+        Err(format!(
+            "holds '{}' but no {SUMMARY_FILE} of this program: not a result directory of it",
+            names[0]
+        ))
+    }
+}
+
+/// Can a directory be made where `dir`'s staging directory will go, and may `dir` (an
+/// existing directory) be replaced? `dir` is a [`target_dir`]. Creates and removes a probe
+/// directory in the nearest existing ancestor; writes nothing that stays.
 fn check_writable(dir: &Path) -> Result<(), String> {
     let staging = staging_dir(dir);
     let parent = staging.parent().unwrap_or(Path::new("."));
@@ -147,16 +238,10 @@ fn check_writable(dir: &Path) -> Result<(), String> {
     }
     if dir.is_dir() {
         // The directory is replaced as a whole: refuse to delete what this program did not write.
-        let foreign = std::fs::read_dir(dir)
-            .map_err(|e| format!("cannot read {}: {e}", dir.display()))?
-            .filter_map(|e| e.ok())
-            .map(|e| e.file_name().to_string_lossy().into_owned())
-            .find(|n| !RESULT_FILES.contains(&n.as_str()));
-        if let Some(n) = foreign {
+        if let Err(why) = foreign_content(dir) {
             return Err(format!(
-                "the output directory {} holds '{n}', which is not a result file of this \
-                 program; the directory is replaced as a whole by each run: choose another \
-                 output.dir (or -o) or remove it",
+                "the output directory {} {why}; the directory is replaced as a whole by each \
+                 run: choose another output.dir (or -o) or remove it",
                 dir.display()
             ));
         }
@@ -185,25 +270,29 @@ impl ResultSet {
     /// Checks (before the solve) that the output directory can be written; a directory that
     /// cannot is an input error of the case's `output.dir`. Collective.
     pub fn begin(ctx: &Ctx, dir: &Path, case_file: &Path) -> Result<ResultSet, RunError> {
-        Self::check(ctx, dir, case_file)?;
+        let target = Self::check(ctx, dir, case_file)?;
         Ok(ResultSet {
             dir: dir.to_path_buf(),
-            staging: staging_dir(dir),
+            staging: staging_dir(&target),
+            target,
             committed: false,
             rank: ctx.rank,
         })
     }
 
     /// Whether results could go to `dir` (an input error naming `output.dir` if not), writing
-    /// nothing. Collective.
-    pub fn check(ctx: &Ctx, dir: &Path, case_file: &Path) -> Result<(), RunError> {
+    /// nothing; the directory they would really go to ([`target_dir`]). Collective.
+    pub fn check(ctx: &Ctx, dir: &Path, case_file: &Path) -> Result<PathBuf, RunError> {
         let local = if ctx.rank == 0 {
-            check_writable(dir)
+            target_dir(dir)
+                .and_then(|t| check_writable(&t).map(|()| t))
                 .map_err(|m| RunError::Input(InputError::new(case_file, m).with_key("output.dir")))
         } else {
-            Ok(())
+            Ok(PathBuf::new())
         };
-        ctx.agree(local)
+        let mut target = ctx.agree(local)?;
+        ctx.broadcast_path(&mut target);
+        Ok(target)
     }
 
     /// The directory the results go to.
@@ -304,20 +393,20 @@ impl ResultSet {
         if let Some(h) = history_csv {
             std::fs::write(self.staging.join(HISTORY_CSV), h)?;
         }
-        if let Some(p) = self.dir.parent() {
+        if let Some(p) = self.target.parent() {
             if !p.as_os_str().is_empty() {
                 std::fs::create_dir_all(p)?;
             }
         }
-        if !self.dir.exists() {
-            return std::fs::rename(&self.staging, &self.dir);
+        if !self.target.exists() {
+            return std::fs::rename(&self.staging, &self.target);
         }
-        let aside = sibling(&self.dir, "old");
+        let aside = sibling(&self.target, "old");
         let _ = std::fs::remove_dir_all(&aside);
-        std::fs::rename(&self.dir, &aside)?;
-        if let Err(e) = std::fs::rename(&self.staging, &self.dir) {
+        std::fs::rename(&self.target, &aside)?;
+        if let Err(e) = std::fs::rename(&self.staging, &self.target) {
             // Put the previous results back.
-            let _ = std::fs::rename(&aside, &self.dir);
+            let _ = std::fs::rename(&aside, &self.target);
             return Err(e);
         }
         std::fs::remove_dir_all(&aside)
@@ -347,6 +436,51 @@ mod tests {
             sibling(Path::new("out/hertz"), "old"),
             PathBuf::from("out/.hertz.old")
         );
+    }
+
+    #[test]
+    fn the_target_of_an_output_path() {
+        assert_eq!(
+            target_dir(Path::new("out/a/.")).unwrap(),
+            Path::new("out/a")
+        );
+        assert_eq!(
+            target_dir(Path::new("./out/./a/")).unwrap(),
+            Path::new("out/a")
+        );
+        for bad in [".", "./", "out/..", "/", ""] {
+            assert!(target_dir(Path::new(bad)).is_err(), "{bad:?}");
+        }
+        let t = tempfile::tempdir().unwrap();
+        let dangling = t.path().join("dangling");
+        std::os::unix::fs::symlink("/proc/nonexist", &dangling).unwrap();
+        assert!(target_dir(&dangling).unwrap_err().contains("symbolic link"));
+        let real = t.path().join("real");
+        std::fs::create_dir(&real).unwrap();
+        std::os::unix::fs::symlink(&real, t.path().join("link")).unwrap();
+        assert_eq!(
+            target_dir(&t.path().join("link")).unwrap(),
+            real.canonicalize().unwrap()
+        );
+    }
+
+    #[test]
+    fn only_a_directory_of_its_own_results_is_replaced() {
+        let t = tempfile::tempdir().unwrap();
+        let d = t.path();
+        assert!(foreign_content(d).is_ok(), "empty");
+        std::fs::write(d.join(HISTORY_CSV), "a,b\n").unwrap();
+        assert!(foreign_content(d).unwrap_err().contains("no summary.json"));
+        std::fs::write(d.join(SUMMARY_FILE), "{\"my\": \"precious data\"}").unwrap();
+        assert!(foreign_content(d).unwrap_err().contains("did not write"));
+        let ours = r#"{"case": "c.toml", "mesh": "m.msh", "dimension": 2, "ranks": 1,
+            "partition": {}, "timings": {}}"#;
+        std::fs::write(d.join(SUMMARY_FILE), ours).unwrap();
+        assert!(foreign_content(d).is_ok());
+        std::fs::create_dir(d.join(super::super::H5_FILE)).unwrap();
+        assert!(foreign_content(d)
+            .unwrap_err()
+            .contains("not a regular file"));
     }
 
     #[test]

@@ -61,6 +61,24 @@ pub(super) fn check(code: ffi::PetscErrorCode) -> Result<()> {
     })
 }
 
+/// PETSc's own text of the last error a PETSc call raised on this rank (what its SETERRQ
+/// said, e.g. "Unknown KSP type given: nonsense"), trimmed; empty if there is none. Local.
+pub fn last_detail() -> String {
+    let mut specific: *mut c_char = ptr::null_mut();
+    // SAFETY: PetscErrorMessage points `specific` at PETSc's static buffer of the last message.
+    unsafe {
+        ffi::PetscErrorMessage(0, ptr::null_mut(), &mut specific);
+        if specific.is_null() {
+            String::new()
+        } else {
+            CStr::from_ptr(specific)
+                .to_string_lossy()
+                .trim()
+                .to_string()
+        }
+    }
+}
+
 /// An error raised by our own checks in this layer (not by a PETSc call), on this rank alone
 /// until an agreement covers it ([`crate::abort::raised`]).
 #[track_caller]

@@ -29,7 +29,7 @@ pub use matrix::{Csr, MatStats, Matrix};
 pub use vector::Vector;
 
 use error::{agreed_error, check, cstring, own_error};
-pub use error::{raised_error, PetscError, Result};
+pub use error::{last_detail, raised_error, PetscError, Result};
 
 /// The PETSc library, initialised once per process after MPI (rsmpi) and finalised on drop,
 /// before the rsmpi `Universe` is dropped. Owns the argv strings PETSc keeps pointers to.

@@ -1,0 +1,107 @@
+//! Bad input refused before anything is solved or written: exit code 2, one message naming the
+//! file and the key (or the mesh node, element or group), the same message on 1, 2 and 3
+//! ranks. One section per kind of input.
+
+mod common;
+
+use common::*;
+use std::path::Path;
+use std::time::Duration;
+
+/// Runs `text` as `dir/case.toml` on 1, 2 and 3 ranks: each run exits with 2, prints one
+/// error line holding every `expect` substring, the same line on every rank count, and writes
+/// nothing (the directory as before). Returns the message.
+fn refused_everywhere(dir: &Path, text: &str, expect: &[&str]) -> String {
+    let case = write_case(&dir.join("case.toml"), text);
+    let before = file_names(dir);
+    let out = dir.join("out");
+    let args = [
+        case.display().to_string(),
+        "-o".into(),
+        out.display().to_string(),
+    ];
+    let mut first: Option<String> = None;
+    for np in [1, 2, 3] {
+        let r = run_with_timeout(solver(np, &args), Duration::from_secs(120));
+        r.expect_code(2, &format!("bad input on {np} rank(s)"));
+        let errors: Vec<&str> = (r.stderr.lines())
+            .filter(|l| l.starts_with("error"))
+            .collect();
+        assert_eq!(errors.len(), 1, "one error message:\n{}", r.output());
+        let msg = errors[0].to_string();
+        println!("refused ({np} ranks): {msg}");
+        for e in expect {
+            assert!(msg.contains(e), "message lacks {e:?}: {msg}");
+        }
+        assert!(!msg.contains("panick"), "{msg}");
+        assert_eq!(file_names(dir), before, "something was written ({msg})");
+        match &first {
+            None => first = Some(msg),
+            Some(m) => assert_eq!(&msg, m, "{np} ranks against 1"),
+        }
+    }
+    first.expect("a message")
+}
+
+// ---- A: a body that nothing holds ----
+
+/// A single body with no Dirichlet data and no contact pair (a pressure on its top) is free
+/// in all its rigid modes: refused before the solve (it was solved, |u| ~ 1e13).
+#[test]
+fn a_free_body_without_contact_pairs_is_refused() {
+    let tmp = tempfile::tempdir().unwrap();
+    let mesh = mesh_dir().join("square_h0.25.msh");
+    let text = format!(
+        "[mesh]\nfile = {}\n[material]\nyoung = 1.0\npoisson = 0.3\nmodel = \"plane_strain\"\n\
+         [[neumann]]\ngroup = \"top\"\npressure = 0.1\n",
+        toml_path(&mesh)
+    );
+    refused_everywhere(
+        tmp.path(),
+        &text,
+        &[
+            "square_h0.25.msh",
+            "key 'dirichlet'",
+            "3 rigid mode(s)",
+            "the case has no contact pair",
+            "nothing holds it",
+        ],
+    );
+    // one rigid mode left free (u_y held on the bottom alone: x free) is refused as well
+    let text = text + "[[dirichlet]]\ngroup = \"bottom\"\nvalue = [\"free\", 0.0]\n";
+    refused_everywhere(tmp.path(), &text, &["1 rigid mode(s)", "nothing holds it"]);
+}
+
+/// Two squares (tests/meshes/two_squares.geo), the first clamped, the second free, no contact
+/// pair: refused naming the free body by its smallest node tag (it was solved).
+#[test]
+fn a_free_body_beside_a_held_one_without_contact_pairs_is_refused() {
+    let tmp = tempfile::tempdir().unwrap();
+    let mesh = tmp.path().join("two_squares.msh");
+    gmsh("two_squares.geo", 2, 0.1, &mesh);
+    let text = format!(
+        "[mesh]\nfile = {}\n[material]\nyoung = 1.0\npoisson = 0.3\nmodel = \"plane_strain\"\n\
+         [[dirichlet]]\ngroup = \"left_a\"\nvalue = [0.0, 0.0]\n\
+         [[neumann]]\ngroup = \"top\"\npressure = 0.01\n",
+        toml_path(&mesh)
+    );
+    refused_everywhere(
+        tmp.path(),
+        &text,
+        &[
+            "2 separate bodies",
+            "from node tag",
+            "the case has no contact pair",
+            "nothing holds it",
+        ],
+    );
+    // both held: solved
+    let held = text + "[[dirichlet]]\ngroup = \"left_b\"\nvalue = [0.0, 0.0]\n";
+    let case = write_case(&tmp.path().join("held.toml"), &held);
+    let args = [
+        case.display().to_string(),
+        "-o".into(),
+        tmp.path().join("out").display().to_string(),
+    ];
+    run_with_timeout(solver(2, &args), Duration::from_secs(120)).expect_code(0, "both held");
+}

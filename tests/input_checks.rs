@@ -8,6 +8,16 @@ use common::*;
 use std::path::Path;
 use std::time::Duration;
 
+/// A 2D case on `mesh`: clamped on `left`, a traction on `right`, then `extra`.
+fn case_on(mesh: &Path, extra: &str) -> String {
+    format!(
+        "[mesh]\nfile = {}\n\n[material]\nyoung = 1.0\npoisson = 0.3\nmodel = \"plane_strain\"\n\n\
+         [[dirichlet]]\ngroup = \"left\"\nvalue = [0.0, 0.0]\n\n\
+         [[neumann]]\ngroup = \"right\"\ntraction = [1.0, 0.0]\n{extra}",
+        toml_path(mesh)
+    )
+}
+
 /// Runs `text` as `dir/case.toml` on 1, 2 and 3 ranks: each run exits with 2, prints one
 /// error line holding every `expect` substring, the same line on every rank count, and writes
 /// nothing (the directory as before). Returns the message.
@@ -104,4 +114,46 @@ fn a_free_body_beside_a_held_one_without_contact_pairs_is_refused() {
         tmp.path().join("out").display().to_string(),
     ];
     run_with_timeout(solver(2, &args), Duration::from_secs(120)).expect_code(0, "both held");
+}
+
+// ---- F: force control with a zero force at a load factor ----
+
+/// A ramped vector force is zero at the load factor 0: a history that solves there is refused
+/// up front, as the same history as a table is (it ran two steps and failed with exit code 1).
+#[test]
+fn a_ramped_vector_force_at_the_load_factor_0_is_refused() {
+    let tmp = tempfile::tempdir().unwrap();
+    let mesh = mesh_dir().join("square_h0.5.msh");
+    let pair = |force: &str| {
+        format!(
+            "[contact]\ngroup = \"bottom\"\n\
+             obstacle = {{ type = \"plane\", point = [0.0, -0.1], normal = [0.0, 1.0] }}\n\
+             force = {force}\n[load]\nfactors = [0.5, 1.0, 0.0]\n"
+        )
+    };
+    for force in [
+        "[0.001, 0.003]",
+        "{ value = [0.001, 0.003] }",
+        "{ table = [[0.0, 0.0, 0.0], [1.0, 0.001, 0.003]] }",
+    ] {
+        refused_everywhere(
+            tmp.path(),
+            &case_on(&mesh, &pair(force)),
+            &[
+                "contact.force",
+                "gives a zero force at the load factor 0 of the run",
+                "needs a direction",
+            ],
+        );
+    }
+    // held at F in every step: accepted by the case reader
+    let held = case_on(&mesh, &pair("{ value = [0.001, 0.003], ramp = false }"));
+    let case = write_case(&tmp.path().join("held.toml"), &held);
+    let args = ["check".to_string(), case.display().to_string()];
+    let r = run_with_timeout(solver(0, &args), Duration::from_secs(120));
+    assert!(
+        !r.stderr.contains("zero force"),
+        "a held force is refused:\n{}",
+        r.output()
+    );
 }

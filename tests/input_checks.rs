@@ -116,6 +116,67 @@ fn a_free_body_beside_a_held_one_without_contact_pairs_is_refused() {
     run_with_timeout(solver(2, &args), Duration::from_secs(120)).expect_code(0, "both held");
 }
 
+// ---- D: a body force that is not finite ----
+
+/// The smallest triangle tag of an ASCII MSH 4.1 file (its element blocks of type 2).
+fn smallest_triangle_tag(msh: &str) -> u64 {
+    let body = msh.split("$Elements\n").nth(1).expect("$Elements");
+    let mut lines = body.lines().skip(1);
+    let mut least = u64::MAX;
+    while let Some(header) = lines.next() {
+        if header.starts_with("$End") {
+            break;
+        }
+        let h: Vec<usize> = header
+            .split_whitespace()
+            .map(|x| x.parse().unwrap())
+            .collect();
+        for _ in 0..h[3] {
+            let tag: u64 = lines
+                .next()
+                .unwrap()
+                .split_whitespace()
+                .next()
+                .unwrap()
+                .parse()
+                .unwrap();
+            if h[2] == 2 {
+                least = least.min(tag);
+            }
+        }
+    }
+    least
+}
+
+/// A body force that is not finite in every cell (1/(x − x)) or in part of the body
+/// (sqrt(0.5 − x), ln(x − 0.3)): the message names the faulty cell of smallest tag on every rank
+/// count (each rank named its own first cell).
+#[test]
+fn a_body_force_that_is_not_finite_is_named_by_its_smallest_cell() {
+    let tmp = tempfile::tempdir().unwrap();
+    let mesh = tmp.path().join("square.msh");
+    gmsh("square.geo", 2, 0.1, &mesh);
+    let all = smallest_triangle_tag(&std::fs::read_to_string(&mesh).unwrap());
+    let expr = "[body_force]\nexpr = [\"0\", \"1/(x - x)\"]\n";
+    refused_everywhere(
+        tmp.path(),
+        &case_on(&mesh, expr),
+        &[
+            "body_force.expr[1]",
+            "not a finite number",
+            &format!("a quadrature point of cell {all})"),
+        ],
+    );
+    for expr in ["[\"sqrt(0.5 - x)\", \"0\"]", "[\"0\", \"ln(x - 0.3)\"]"] {
+        let msg = refused_everywhere(
+            tmp.path(),
+            &case_on(&mesh, &format!("[body_force]\nexpr = {expr}\n")),
+            &["body_force.expr[", "not a finite number", "of cell "],
+        );
+        println!("{msg}");
+    }
+}
+
 // ---- F: force control with a zero force at a load factor ----
 
 /// A ramped vector force is zero at the load factor 0: a history that solves there is refused

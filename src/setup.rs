@@ -106,6 +106,10 @@ fn check(case: &Case, mesh: &Mesh) -> Result<fem::Model, InputError> {
         .map(|g| (g.name.clone(), g.dim))
         .collect();
     case.check_against_mesh(mesh.dim, &groups)?;
+    let sized: Vec<(String, usize, usize)> = (groups.into_iter().enumerate())
+        .map(|(i, (name, dim))| (name, dim, mesh.group_size_global(i)))
+        .collect();
+    case.check_groups_used(mesh.dim, &sized)?;
     Ok(model_of(case.model(mesh.dim)?))
 }
 

@@ -5,8 +5,20 @@
 mod common;
 
 use common::*;
-use std::path::Path;
+use std::path::{Path, PathBuf};
 use std::time::Duration;
+
+/// The unit square of tests/meshes/square_h0.5.msh (nodes 1–12, lines 1–8, triangles 9–22;
+/// groups bottom, right, top, left, body) as text.
+fn square_text() -> String {
+    std::fs::read_to_string(mesh_dir().join("square_h0.5.msh")).expect("square_h0.5.msh")
+}
+
+/// Replaces `from` (which must occur) by `to`, once.
+fn edit(text: &str, from: &str, to: &str) -> String {
+    assert!(text.contains(from), "{from:?} not in the text");
+    text.replacen(from, to, 1)
+}
 
 /// A 2D case on `mesh`: clamped on `left`, a traction on `right`, then `extra`.
 fn case_on(mesh: &Path, extra: &str) -> String {
@@ -51,6 +63,13 @@ fn refused_everywhere(dir: &Path, text: &str, expect: &[&str]) -> String {
         }
     }
     first.expect("a message")
+}
+
+/// Writes `text` as `dir/name`.
+fn mesh_file(dir: &Path, name: &str, text: &str) -> PathBuf {
+    let p = dir.join(name);
+    std::fs::write(&p, text).expect("write the mesh");
+    p
 }
 
 // ---- A: a body that nothing holds ----
@@ -114,6 +133,62 @@ fn a_free_body_beside_a_held_one_without_contact_pairs_is_refused() {
         tmp.path().join("out").display().to_string(),
     ];
     run_with_timeout(solver(2, &args), Duration::from_secs(120)).expect_code(0, "both held");
+}
+
+// ---- C: empty and ambiguous groups ----
+
+/// A group named in $PhysicalNames without elements, as Dirichlet, Neumann or contact group:
+/// refused naming the key and the group (it was accepted and did nothing).
+#[test]
+fn an_empty_group_is_refused_where_a_case_uses_it() {
+    let tmp = tempfile::tempdir().unwrap();
+    let text = edit(
+        &square_text(),
+        "5\n1 1 \"bottom\"",
+        "6\n1 6 \"ghost\"\n1 1 \"bottom\"",
+    );
+    let mesh = mesh_file(tmp.path(), "empty_group.msh", &text);
+    let contact = "[contact]\ngroup = \"ghost\"\n\
+                   obstacle = { type = \"plane\", point = [0.0, -0.1], normal = [0.0, 1.0] }\n";
+    let dirichlet = "[[dirichlet]]\ngroup = \"ghost\"\nvalue = [0.0, 0.0]\n";
+    let neumann = "[[neumann]]\ngroup = \"ghost\"\npressure = 0.1\n";
+    for (extra, key, what) in [
+        (contact, "contact.group", "has no facets"),
+        (dirichlet, "dirichlet[1].group", "has no elements"),
+        (neumann, "neumann[1].group", "has no facets"),
+    ] {
+        refused_everywhere(
+            tmp.path(),
+            &case_on(&mesh, extra),
+            &["case.toml", key, "\"ghost\"", what],
+        );
+    }
+}
+
+/// The name "body" given to the surface group and to a curve group (the top): a Dirichlet,
+/// Neumann or contact group of that name is refused as ambiguous (Dirichlet data held both).
+#[test]
+fn a_group_name_of_two_dimensions_is_refused_where_a_case_uses_it() {
+    let tmp = tempfile::tempdir().unwrap();
+    let text = edit(&square_text(), "1 3 \"top\"", "1 3 \"body\"");
+    let mesh = mesh_file(tmp.path(), "two_dims.msh", &text);
+    let dirichlet = "[[dirichlet]]\ngroup = \"body\"\nvalue = [0.0, -0.01]\n";
+    let neumann = "[[neumann]]\ngroup = \"body\"\npressure = 0.1\n";
+    for (extra, key) in [
+        (dirichlet, "dirichlet[1].group"),
+        (neumann, "neumann[1].group"),
+    ] {
+        refused_everywhere(
+            tmp.path(),
+            &case_on(&mesh, extra),
+            &[
+                key,
+                "\"body\"",
+                "a curve group (1D) and a surface group (2D)",
+                "ambiguous",
+            ],
+        );
+    }
 }
 
 // ---- D: a body force that is not finite ----

@@ -72,6 +72,30 @@ fn mesh_file(dir: &Path, name: &str, text: &str) -> PathBuf {
     p
 }
 
+/// `signorini-mpi convert` of the unit square of mesh size 0.1 into `dir/ok.h5`, copied to
+/// `dir/name` with `edit` (Python; `f`: the file open for writing, `out`: a dict printed as
+/// RESULT) applied. Returns the copy and RESULT.
+fn h5_edited(dir: &Path, name: &str, edit: &str) -> (PathBuf, serde_json::Value) {
+    let h5 = dir.join("ok.h5");
+    if !h5.exists() {
+        let msh = unit_mesh(dir, 2, 0.1);
+        convert(&msh, &h5);
+    }
+    let dst = dir.join(name);
+    let script = format!(
+        "import h5py, json, shutil, sys\n\
+         import numpy as np\n\
+         shutil.copy(sys.argv[1], sys.argv[2])\n\
+         f = h5py.File(sys.argv[2], 'r+')\n\
+         out = {{}}\n\
+         {edit}\n\
+         f.close()\n\
+         print('RESULT ' + json.dumps(out))\n"
+    );
+    let out = python_json(&script, &[&h5, &dst]);
+    (dst, out)
+}
+
 // ---- A: a body that nothing holds ----
 
 /// A single body with no Dirichlet data and no contact pair (a pressure on its top) is free
@@ -133,6 +157,81 @@ fn a_free_body_beside_a_held_one_without_contact_pairs_is_refused() {
         tmp.path().join("out").display().to_string(),
     ];
     run_with_timeout(solver(2, &args), Duration::from_secs(120)).expect_code(0, "both held");
+}
+
+// ---- B: tags defined twice ----
+
+/// Node 12 defined a second time (another block of $Nodes), and the square's triangle 21
+/// written with the tag 20 of another triangle, or its line 8 with the tag 9 of a triangle:
+/// refused naming the file and the tag, by the run and by `convert` (last definition won).
+#[test]
+fn msh_tags_defined_twice_are_refused() {
+    let tmp = tempfile::tempdir().unwrap();
+    let sq = square_text();
+    let twice = edit(&sq, "9 12 1 12\n", "10 13 1 12\n");
+    let twice = edit(&twice, "$EndNodes", "2 1 0 1\n12\n0.9 0.9 0\n$EndNodes");
+    let nodes = mesh_file(tmp.path(), "dup_node.msh", &twice);
+    let tri = mesh_file(
+        tmp.path(),
+        "dup_cell.msh",
+        &edit(&sq, "21 11 10 12 \n", "20 11 10 12 \n"),
+    );
+    let line = mesh_file(
+        tmp.path(),
+        "dup_line.msh",
+        &edit(&sq, "8 8 1 \n", "9 8 1 \n"),
+    );
+    for (mesh, expect) in [
+        (&nodes, "node tag 12 is defined more than once in $Nodes"),
+        (
+            &tri,
+            "element tag 20 is defined more than once in $Elements",
+        ),
+        (
+            &line,
+            "element tag 9 is defined more than once in $Elements",
+        ),
+    ] {
+        let name = mesh.file_name().unwrap().to_str().unwrap();
+        refused_everywhere(tmp.path(), &case_on(mesh, ""), &[name, expect]);
+        let args = [
+            "convert".to_string(),
+            mesh.display().to_string(),
+            tmp.path().join("x.h5").display().to_string(),
+        ];
+        let r = run_with_timeout(solver(0, &args), Duration::from_secs(60));
+        r.expect_code(2, "convert of a mesh with a tag twice");
+        assert!(r.stderr.contains(expect), "{}", r.output());
+        assert!(!tmp.path().join("x.h5").exists());
+    }
+}
+
+/// An HDF5 mesh (read in blocks, one per rank) with two node tags, or two cell tags, each
+/// defined twice, the copies far apart in the file (on different ranks' blocks): the smaller
+/// duplicated tag is named on every rank count.
+#[test]
+fn h5_tags_defined_twice_are_refused() {
+    let tmp = tempfile::tempdir().unwrap();
+    for (name, dataset, what) in [
+        ("dup_node.h5", "node_tags", "node"),
+        ("dup_cell.h5", "cell_tags", "element"),
+    ] {
+        let (h5, out) = h5_edited(
+            tmp.path(),
+            name,
+            &format!(
+                "t = f['{dataset}'][:]\n\
+                 n = len(t)\n\
+                 t[n - 1] = t[1]\n\
+                 t[n - 2] = t[n // 2]\n\
+                 f['{dataset}'][:] = t\n\
+                 out['tag'] = int(min(t[1], t[n // 2]))"
+            ),
+        );
+        let tag = out["tag"].as_u64().expect("the tag");
+        let expect = format!("{what} tag {tag} is defined more than once in /");
+        refused_everywhere(tmp.path(), &case_on(&h5, ""), &[name, &expect]);
+    }
 }
 
 // ---- C: empty and ambiguous groups ----

@@ -351,6 +351,51 @@ fn a_body_force_that_is_not_finite_is_named_by_its_smallest_cell() {
     }
 }
 
+// ---- E: a node coordinate that is not a number ----
+
+/// A node with a NaN coordinate (MSH, and the HDF5 form, read in blocks): the node is named,
+/// not a degenerate cell.
+#[test]
+fn a_node_coordinate_that_is_not_finite_names_the_node() {
+    let tmp = tempfile::tempdir().unwrap();
+    let text = edit(
+        &square_text(),
+        "0.7187499999993462 0.2812499999995109 0",
+        "nan 0.2812499999995109 0",
+    );
+    let mesh = mesh_file(tmp.path(), "nan_node.msh", &text);
+    let msg = refused_everywhere(
+        tmp.path(),
+        &case_on(&mesh, ""),
+        &[
+            "nan_node.msh",
+            "node 12 has a coordinate that is not a finite number",
+        ],
+    );
+    assert!(!msg.contains("degenerate"), "{msg}");
+    let (h5, out) = h5_edited(
+        tmp.path(),
+        "nan_node.h5",
+        "c = f['coordinates'][:]\n\
+         n = len(c)\n\
+         c[n - 1, 1] = np.nan\n\
+         c[n // 3, 0] = np.inf\n\
+         f['coordinates'][:] = c\n\
+         t = f['node_tags'][:]\n\
+         out['tag'] = int(min(t[n - 1], t[n // 3]))",
+    );
+    let tag = out["tag"].as_u64().expect("the tag");
+    let msg = refused_everywhere(
+        tmp.path(),
+        &case_on(&h5, ""),
+        &[
+            "nan_node.h5",
+            &format!("node {tag} has a coordinate that is not a finite number"),
+        ],
+    );
+    assert!(!msg.contains("degenerate"), "{msg}");
+}
+
 // ---- F: force control with a zero force at a load factor ----
 
 /// A ramped vector force is zero at the load factor 0: a history that solves there is refused

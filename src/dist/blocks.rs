@@ -282,6 +282,7 @@ pub(super) fn read_blocks(ctx: &Ctx, path: &Path) -> Result<Blocks, RunError> {
             .map_err(err);
         let b = ctx.agree(b)?;
         check_tags(ctx, path, &b)?;
+        check_coordinates(ctx, path, &b)?;
         Ok(b)
     } else {
         let whole = if rank == 0 {
@@ -327,4 +328,15 @@ fn check_tags(ctx: &Ctx, path: &Path, b: &Blocks) -> Result<(), RunError> {
         ctx.agree_smallest(dup)?;
     }
     Ok(())
+}
+
+/// Every node coordinate of this rank's block of an HDF5 mesh is finite: else an input error
+/// naming the node of smallest tag over all ranks. Collective.
+fn check_coordinates(ctx: &Ctx, path: &Path, b: &Blocks) -> Result<(), RunError> {
+    let coords = b.coords.chunks_exact(3).map(|c| [c[0], c[1], c[2]]);
+    let nodes: Vec<(u64, [f64; 3])> = (b.node_tags.iter().copied().zip(coords))
+        .filter(|(_, x)| x.iter().any(|v| !v.is_finite()))
+        .collect();
+    let bad = mesh::non_finite_node(nodes.iter().map(|(t, x)| (*t, x)));
+    ctx.agree_smallest(bad.map(|(t, m)| (t, RunError::Input(InputError::new(path, m)))))
 }

@@ -382,7 +382,7 @@ pub(crate) const H5_NODE_TAGS: &str = "/node_tags";
 pub(crate) const H5_ELEMENT_TAGS: &str = "/cell_tags, /facet_tags, /edge_tags and /point_tags";
 
 /// Reads a whole HDF5 mesh on one process (the checks of [`Mesh::validate_indices`], every
-/// tag once).
+/// tag once, every coordinate finite).
 pub fn read_h5(path: &Path) -> Result<Mesh, InputError> {
     let err = |m: String| InputError::new(path, m);
     let h = H5Mesh::open(path).map_err(err)?;
@@ -423,6 +423,10 @@ pub fn read_h5(path: &Path) -> Result<Mesh, InputError> {
     .concat();
     if let Some(t) = super::smallest_duplicate(&element_tags) {
         return Err(err(super::duplicate_tag("element", t, H5_ELEMENT_TAGS)));
+    }
+    let nodes = mesh.node_tags.iter().copied().zip(mesh.coords.iter());
+    if let Some((_, m)) = super::non_finite_node(nodes) {
+        return Err(err(m));
     }
     super::orient_cells(dim, &mut mesh.cells, &mesh.cell_tags, &mesh.coords).map_err(err)?;
     Ok(mesh)

@@ -423,6 +423,9 @@ fn build(
     let (mut cells, cell_tags, used) =
         body_cells(elements, dim, &phys, &tag_index, all_tags.len())?;
     let (mut coords, node_tags, new_index) = compact(&used, &all_coords, &all_tags, &mut cells);
+    if let Some((_, m)) = non_finite_node(node_tags.iter().copied().zip(coords.iter())) {
+        return Err(m);
+    }
     if dim == 2 {
         flatten_2d(&mut coords)?;
     }
@@ -472,6 +475,23 @@ pub(crate) fn smallest_duplicate(tags: &[u64]) -> Option<u64> {
 /// The message for a `what` ("node" or "element") tag defined more than once in `place`.
 pub(crate) fn duplicate_tag(what: &str, tag: u64, place: &str) -> String {
     format!("{what} tag {tag} is defined more than once in {place}: every {what} needs its own tag")
+}
+
+/// Of the nodes (tag, coordinates) with a coordinate that is not a finite number (NaN or
+/// infinite), the one of smallest tag: (tag, message naming it).
+pub(crate) fn non_finite_node<'a>(
+    nodes: impl Iterator<Item = (u64, &'a [f64; 3])>,
+) -> Option<(u64, String)> {
+    let (tag, x) = nodes
+        .filter(|(_, x)| x.iter().any(|v| !v.is_finite()))
+        .min_by_key(|(t, _)| *t)?;
+    Some((
+        tag,
+        format!(
+            "node {tag} has a coordinate that is not a finite number: ({}, {}, {})",
+            x[0], x[1], x[2]
+        ),
+    ))
 }
 
 /// Physical tags by (dimension, entity tag).

@@ -161,9 +161,10 @@ fn a_free_body_beside_a_held_one_without_contact_pairs_is_refused() {
 
 // ---- B: tags defined twice ----
 
-/// Node 12 defined a second time (another block of $Nodes), and the square's triangle 21
-/// written with the tag 20 of another triangle, or its line 8 with the tag 9 of a triangle:
-/// refused naming the file and the tag, by the run and by `convert` (last definition won).
+/// Node 12 defined a second time (another block of $Nodes, or node 12 written as 11 in the
+/// same block), and the square's triangle 21 written with the tag 20 of another triangle, or
+/// its line 8 with the tag 9 of a triangle: refused naming the file and the tag, by the run and
+/// by `convert` (last definition won).
 #[test]
 fn msh_tags_defined_twice_are_refused() {
     let tmp = tempfile::tempdir().unwrap();
@@ -171,6 +172,10 @@ fn msh_tags_defined_twice_are_refused() {
     let twice = edit(&sq, "9 12 1 12\n", "10 13 1 12\n");
     let twice = edit(&twice, "$EndNodes", "2 1 0 1\n12\n0.9 0.9 0\n$EndNodes");
     let nodes = mesh_file(tmp.path(), "dup_node.msh", &twice);
+    // twice in one block, its tags sparse (the largest tag 13): node 12 written as 11
+    let one_block = edit(&sq, "9 12 1 12\n", "9 12 1 13\n");
+    let one_block = edit(&one_block, "11\n12\n0.29", "11\n11\n0.29");
+    let in_block = mesh_file(tmp.path(), "dup_in_block.msh", &one_block);
     let tri = mesh_file(
         tmp.path(),
         "dup_cell.msh",
@@ -183,6 +188,7 @@ fn msh_tags_defined_twice_are_refused() {
     );
     for (mesh, expect) in [
         (&nodes, "node tag 12 is defined more than once in $Nodes"),
+        (&in_block, "node tag 11 is defined more than once in $Nodes"),
         (
             &tri,
             "element tag 20 is defined more than once in $Elements",

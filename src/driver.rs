@@ -377,9 +377,9 @@ fn log_partition(ctx: &Ctx, mesh: &Mesh, layout: &Layout) -> PartitionInfo {
 
 /// The mesh's separate bodies ([`bodies::labelled`]): a line where there are several. The
 /// contact solver takes the rigid modes each body's Dirichlet data leave free (thesis 4.1, per
-/// body: signorini/rigid.rs); a body free in some rigid mode beside another, in a case with
-/// contact, is refused where no contact group lies on it: nothing could hold it. Collective;
-/// every rank returns the same.
+/// body: signorini/rigid.rs); a body free in some rigid mode is refused where no contact group
+/// lies on it (beside another body, or in a case without contact pairs): nothing could hold
+/// it. Collective; every rank returns the same.
 fn check_bodies(
     ctx: &Ctx,
     case: &Case,
@@ -399,22 +399,42 @@ fn check_bodies(
             b.not_held
         );
     }
-    if b.count > 1 && b.not_held > 0 && !case.contacts.is_empty() {
-        let touched = bodies::touched(ctx, mesh, &survey, &contact_groups(case));
+    let no_pairs = case.contacts.is_empty();
+    if b.not_held > 0 && (b.count > 1 || no_pairs) {
+        let touched = if no_pairs {
+            vec![false; list.len()]
+        } else {
+            bodies::touched(ctx, mesh, &survey, &contact_groups(case))
+        };
         let loose = (list.iter().zip(&touched)).find(|(body, &t)| body.free_modes > 0 && !t);
         if let Some((body, _)) = loose {
-            return Err(RunError::Input(case.error_at(
-                "dirichlet",
+            let which = if b.count > 1 {
                 format!(
                     "the mesh {} has {} separate bodies (parts that share no node); the body of \
-                     {} nodes from node tag {} has {} rigid mode(s) its Dirichlet data leave \
-                     free and no contact group on it (no pair's group, no body pair's obstacle \
-                     group), so nothing holds it: hold it by Dirichlet data, or name a group \
-                     of its boundary in a contact pair",
+                     {} nodes from node tag {}",
                     case.mesh.file.display(),
                     b.count,
                     body.nodes,
-                    body.first_tag,
+                    body.first_tag
+                )
+            } else {
+                format!(
+                    "the body of the mesh {} ({} nodes)",
+                    case.mesh.file.display(),
+                    body.nodes
+                )
+            };
+            let none_on_it = if no_pairs {
+                "the case has no contact pair"
+            } else {
+                "no pair's group, no body pair's obstacle group"
+            };
+            return Err(RunError::Input(case.error_at(
+                "dirichlet",
+                format!(
+                    "{which} has {} rigid mode(s) its Dirichlet data leave free and no contact \
+                     group on it ({none_on_it}), so nothing holds it: hold it by Dirichlet \
+                     data, or name a group of its boundary in a contact pair",
                     body.free_modes
                 ),
             )));

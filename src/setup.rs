@@ -41,7 +41,7 @@ pub fn read_input(ctx: &Ctx, case: &Case) -> Result<Input, RunError> {
     let mut material = cell_materials(ctx, case, &d.mesh, model)?;
     material.reference = reference_material(ctx, case, &d.mesh, &material);
     (material.half_space, material.slave_over_master) = pair_modulus(ctx, case, &d.mesh, &material);
-    ctx.agree(check_body_force(case, &d.mesh).map_err(RunError::from))?;
+    ctx.agree_smallest(check_body_force(case, &d.mesh).map(|(t, e)| (t, e.into())))?;
     let input = Input {
         mesh: d.mesh,
         material,
@@ -128,6 +128,10 @@ fn check(case: &Case, mesh: &Mesh) -> Result<fem::Model, InputError> {
         .map(|g| (g.name.clone(), g.dim))
         .collect();
     case.check_against_mesh(mesh.dim, &groups)?;
+    let sized: Vec<(String, usize, usize)> = (groups.into_iter().enumerate())
+        .map(|(i, (name, dim))| (name, dim, mesh.group_size_global(i)))
+        .collect();
+    case.check_groups_used(mesh.dim, &sized)?;
     Ok(model_of(case.model(mesh.dim)?))
 }
 
@@ -347,11 +351,12 @@ fn pair_modulus(
 }
 
 /// A body force given by expressions (`body_force.expr`) is finite at every quadrature point
-/// of this rank's cells (the points where assembly evaluates it): else an input error naming
-/// the component and the point.
-fn check_body_force(case: &Case, mesh: &Mesh) -> Result<(), InputError> {
+/// of this rank's own cells (the points where assembly evaluates it): else an input error
+/// naming the component and the point, of the faulty cell of smallest Gmsh tag on this rank
+/// (that tag is the key for [`Ctx::agree_smallest`]). Local.
+fn check_body_force(case: &Case, mesh: &Mesh) -> Option<(u64, InputError)> {
     let Some(BodyForceSpec::Expr(es)) = &case.body_force else {
-        return Ok(());
+        return None;
     };
     let dim = mesh.dim;
     let bad = std::cell::Cell::new(None);
@@ -363,25 +368,39 @@ fn check_body_force(case: &Case, mesh: &Mesh) -> Result<(), InputError> {
         }
         [0.0; 3]
     };
+    let n_own = mesh
+        .global
+        .as_ref()
+        .map_or(mesh.n_cells(), |g| g.n_own_cells);
     let mut xs: Vec<[f64; 3]> = Vec::with_capacity(4);
     let mut out = [0.0; 12];
-    for c in 0..mesh.n_cells() {
+    // (tag, component, point) of the faulty cell of smallest tag
+    let mut first: Option<(u64, usize, [f64; 3])> = None;
+    for c in 0..n_own {
+        let tag = mesh.cell_tags[c];
+        if first.is_some_and(|f| f.0 < tag) {
+            continue;
+        }
         xs.clear();
         xs.extend(mesh.cell(c).iter().map(|&v| mesh.coords[v]));
+        bad.set(None);
         fem::cell_load_quadrature(&xs, dim, &probe, &mut out[..xs.len() * dim]);
         if let Some((i, p)) = bad.get() {
-            return Err(case.error_at(
-                &format!("body_force.expr[{i}]"),
-                format!(
-                    "\"{}\" is not a finite number at {:?} (a quadrature point of cell {})",
-                    es[i].text(),
-                    &p[..dim],
-                    mesh.cell_tags[c]
-                ),
-            ));
+            first = Some((tag, i, p));
         }
     }
-    Ok(())
+    let (tag, i, p) = first?;
+    Some((
+        tag,
+        case.error_at(
+            &format!("body_force.expr[{i}]"),
+            format!(
+                "\"{}\" is not a finite number at {:?} (a quadrature point of cell {tag})",
+                es[i].text(),
+                &p[..dim],
+            ),
+        ),
+    ))
 }
 
 /// All groups with this name (a name may label groups of several dimensions).

@@ -92,6 +92,77 @@ impl Case {
         Ok(())
     }
 
+    /// The groups that hold Dirichlet data, a load or a contact pair (`dirichlet`, `neumann`,
+    /// `contact`, a body pair's `obstacle.group`, in this order): each name labels groups of
+    /// one dimension only (else which is meant is ambiguous), and has elements in the whole
+    /// mesh (a boundary group facets); a name the mesh does not have is left to the check of
+    /// its key (a body pair's group: the mortar set-up). `groups` lists the mesh's physical groups as (name,
+    /// dimension, number of elements in the whole mesh). Call after
+    /// [`Case::check_against_mesh`].
+    pub fn check_groups_used(
+        &self,
+        dim: usize,
+        groups: &[(String, usize, usize)],
+    ) -> Result<(), InputError> {
+        // (key, group, a boundary group: facets needed)
+        let mut used: Vec<(String, &str, bool)> = Vec::new();
+        for (i, d) in self.dirichlet.iter().enumerate() {
+            used.push((
+                join_key(&join_index("dirichlet", i), "group"),
+                &d.group,
+                false,
+            ));
+        }
+        for (i, n) in self.neumann.iter().enumerate() {
+            used.push((join_key(&join_index("neumann", i), "group"), &n.group, true));
+        }
+        for c in &self.contacts {
+            used.push((join_key(&c.key, "group"), &c.group, true));
+            if let ObstacleSpec::Body { group } = &c.obstacle {
+                used.push((join_key(&c.key, "obstacle.group"), group, true));
+            }
+        }
+        const WORDS: [&str; 4] = ["point", "curve", "surface", "volume"];
+        for (key, name, boundary) in used {
+            let mut dims: Vec<usize> = (groups.iter())
+                .filter(|(g, _, _)| g == name)
+                .map(|(_, d, _)| *d)
+                .collect();
+            dims.dedup();
+            if dims.is_empty() {
+                continue; // not in the mesh: the key's own check names it
+            }
+            if dims.len() > 1 {
+                let list: Vec<String> = (dims.iter())
+                    .map(|&d| format!("a {} group ({d}D)", WORDS[d.min(3)]))
+                    .collect();
+                return Err(self.err_at(
+                    &key,
+                    format!(
+                        "physical group name \"{name}\" labels {} of the mesh: which is meant \
+                         is ambiguous; give the groups different names",
+                        list.join(" and ")
+                    ),
+                ));
+            }
+            let n: usize = (groups.iter())
+                .filter(|(g, d, _)| g == name && (!boundary || *d + 1 == dim))
+                .map(|(_, _, n)| n)
+                .sum();
+            if n == 0 {
+                return Err(self.err_at(
+                    &key,
+                    format!(
+                        "physical group \"{name}\" has no {}: the mesh names it, but no \
+                         element belongs to it",
+                        if boundary { "facets" } else { "elements" }
+                    ),
+                ));
+            }
+        }
+        Ok(())
+    }
+
     /// A 3D-only shape needs a 3D mesh; every vector of the shape needs `dim` components.
     fn check_shape(&self, key: &str, shape: &ObstacleSpec, dim: usize) -> Result<(), InputError> {
         if let (2, Some(instead)) = (dim, shape.in_2d_use()) {

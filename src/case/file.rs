@@ -183,8 +183,8 @@ impl Case {
 
     /// Every table of `contact.motion` / `contact.force` covers every load factor of the run
     /// (the largest of `load.factors`, 1 without `[load]`): a table is not extrapolated. A
-    /// force table gives a nonzero force at every planned factor (force control needs a
-    /// direction).
+    /// force (a table, or a ramped vector: zero at factor 0) gives a nonzero force at every
+    /// planned factor (force control needs a direction).
     fn check_histories(&self) -> Result<(), InputError> {
         let factors = self
             .load
@@ -211,13 +211,18 @@ impl Case {
                     ));
                 }
             }
-            if let Some(f) = c.force.as_ref().filter(|f| !f.table.is_empty()) {
+            if let Some(f) = &c.force {
                 if let Some(t) = factors.iter().find(|&&t| f.at(t).iter().all(|&x| x == 0.0)) {
+                    let ramped = if f.table.is_empty() {
+                        " (a ramped force is t·F; `ramp = false` holds F in every step)"
+                    } else {
+                        ""
+                    };
                     return Err(self.err_at(
                         &f.key,
                         format!(
-                            "gives a zero force at the load factor {t} of the run: force \
-                             control needs a direction (a nonzero force) in every step"
+                            "gives a zero force at the load factor {t} of the run{ramped}: \
+                             force control needs a direction (a nonzero force) in every step"
                         ),
                     ));
                 }

@@ -1,7 +1,7 @@
 //! This rank's blocks of the mesh file, read (HDF5 hyperslabs, or MSH on rank 0 and sent
 //! out), packed and checked.
 
-use super::comm::blk;
+use super::comm::{blk, exchange};
 use crate::error::{InputError, RunError};
 use crate::mesh;
 use crate::mesh::h5::H5Mesh;
@@ -280,7 +280,10 @@ pub(super) fn read_blocks(ctx: &Ctx, path: &Path) -> Result<Blocks, RunError> {
             .and_then(|h| Blocks::of_h5(&h, size, rank))
             .and_then(|b| b.validate().map(|()| b))
             .map_err(err);
-        ctx.agree(b)
+        let b = ctx.agree(b)?;
+        check_tags(ctx, path, &b)?;
+        check_coordinates(ctx, path, &b)?;
+        Ok(b)
     } else {
         let whole = if rank == 0 {
             mesh::read_msh(path).map(Some).map_err(RunError::Input)
@@ -299,4 +302,41 @@ pub(super) fn read_blocks(ctx: &Ctx, path: &Path) -> Result<Blocks, RunError> {
             Ok(Blocks::unpack(&buf))
         }
     }
+}
+
+/// The tags of an HDF5 mesh, a check that spans the blocks of all ranks (the MSH reader makes
+/// it on the whole file): every node tag and every element tag (cells, facets, edges, points)
+/// defined once. Each tag goes to rank `tag % size`, which so sees every definition of it (one
+/// all-to-all-v of the node tags, one of the element tags); the smallest tag defined twice is
+/// named, the same on every rank count. Collective.
+fn check_tags(ctx: &Ctx, path: &Path, b: &Blocks) -> Result<(), RunError> {
+    let size = ctx.size as u64;
+    let element_tags = [&b.cell_tags, &b.bnd_tags[0], &b.bnd_tags[1], &b.bnd_tags[2]];
+    for (what, place, tags) in [
+        ("node", mesh::h5::H5_NODE_TAGS, [&b.node_tags][..].iter()),
+        ("element", mesh::h5::H5_ELEMENT_TAGS, element_tags.iter()),
+    ] {
+        let homes = exchange(ctx.world, |p| {
+            for &t in tags.clone().copied().flatten() {
+                p.to((t % size) as usize).push(t);
+            }
+        });
+        let dup = mesh::smallest_duplicate(&homes.data).map(|t| {
+            let m = mesh::duplicate_tag(what, t, place);
+            (t, RunError::Input(InputError::new(path, m)))
+        });
+        ctx.agree_smallest(dup)?;
+    }
+    Ok(())
+}
+
+/// Every node coordinate of this rank's block of an HDF5 mesh is finite: else an input error
+/// naming the node of smallest tag over all ranks. Collective.
+fn check_coordinates(ctx: &Ctx, path: &Path, b: &Blocks) -> Result<(), RunError> {
+    let coords = b.coords.chunks_exact(3).map(|c| [c[0], c[1], c[2]]);
+    let nodes: Vec<(u64, [f64; 3])> = (b.node_tags.iter().copied().zip(coords))
+        .filter(|(_, x)| x.iter().any(|v| !v.is_finite()))
+        .collect();
+    let bad = mesh::non_finite_node(nodes.iter().map(|(t, x)| (*t, x)));
+    ctx.agree_smallest(bad.map(|(t, m)| (t, RunError::Input(InputError::new(path, m)))))
 }

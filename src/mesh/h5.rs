@@ -377,7 +377,12 @@ impl H5Mesh {
     }
 }
 
-/// Reads a whole HDF5 mesh on one process (the checks of [`Mesh::validate_indices`]).
+/// Where an HDF5 mesh holds its node tags, and its element tags (in messages).
+pub(crate) const H5_NODE_TAGS: &str = "/node_tags";
+pub(crate) const H5_ELEMENT_TAGS: &str = "/cell_tags, /facet_tags, /edge_tags and /point_tags";
+
+/// Reads a whole HDF5 mesh on one process (the checks of [`Mesh::validate_indices`], every
+/// tag once, every coordinate finite).
 pub fn read_h5(path: &Path) -> Result<Mesh, InputError> {
     let err = |m: String| InputError::new(path, m);
     let h = H5Mesh::open(path).map_err(err)?;
@@ -406,6 +411,23 @@ pub fn read_h5(path: &Path) -> Result<Mesh, InputError> {
         gr.elements = us(members[h.group_offsets[g]..h.group_offsets[g + 1]].to_vec());
     }
     mesh.validate_indices().map_err(err)?;
+    if let Some(t) = super::smallest_duplicate(&mesh.node_tags) {
+        return Err(err(super::duplicate_tag("node", t, H5_NODE_TAGS)));
+    }
+    let element_tags = [
+        &mesh.cell_tags[..],
+        &mesh.facet_tags,
+        &mesh.edge_tags,
+        &mesh.point_tags,
+    ]
+    .concat();
+    if let Some(t) = super::smallest_duplicate(&element_tags) {
+        return Err(err(super::duplicate_tag("element", t, H5_ELEMENT_TAGS)));
+    }
+    let nodes = mesh.node_tags.iter().copied().zip(mesh.coords.iter());
+    if let Some((_, m)) = super::non_finite_node(nodes) {
+        return Err(err(m));
+    }
     super::orient_cells(dim, &mut mesh.cells, &mesh.cell_tags, &mesh.coords).map_err(err)?;
     Ok(mesh)
 }

@@ -407,12 +407,25 @@ fn build(
         .as_ref()
         .ok_or("the file has no $Elements section")?;
     let (all_coords, all_tags) = file_nodes(bytes, info, nodes, elements)?;
+    if let Some(t) = smallest_duplicate(&all_tags) {
+        return Err(duplicate_tag("node", t, "$Nodes"));
+    }
+    let element_tags: Vec<u64> = (elements.element_blocks.iter())
+        .flat_map(|b| b.elements.iter().map(|e| e.element_tag))
+        .collect();
+    if let Some(t) = smallest_duplicate(&element_tags) {
+        return Err(duplicate_tag("element", t, "$Elements"));
+    }
+    drop(element_tags);
     let tag_index = TagIndex::new(&all_tags);
     let phys = entity_physical_tags(msh);
     let (dim, counts) = mesh_dimension(elements)?;
     let (mut cells, cell_tags, used) =
         body_cells(elements, dim, &phys, &tag_index, all_tags.len())?;
     let (mut coords, node_tags, new_index) = compact(&used, &all_coords, &all_tags, &mut cells);
+    if let Some((_, m)) = non_finite_node(node_tags.iter().copied().zip(coords.iter())) {
+        return Err(m);
+    }
     if dim == 2 {
         flatten_2d(&mut coords)?;
     }
@@ -430,6 +443,55 @@ fn build(
     let members = boundary_elements(&mut mesh, elements, &phys, &tag_index, &new_index)?;
     mesh.groups = groups(members, info, dim);
     Ok(mesh)
+}
+
+/// The smallest tag that occurs more than once in `tags`: a bitmap over their span where it
+/// needs at most one word per tag (Gmsh's usual dense numbering), else a sorted copy.
+pub(crate) fn smallest_duplicate(tags: &[u64]) -> Option<u64> {
+    let (lo, hi) = (tags.iter()).fold((u64::MAX, 0), |(l, h), &t| (l.min(t), h.max(t)));
+    if tags.len() < 2 {
+        return None;
+    }
+    let words = (hi - lo) / 64 + 1;
+    if words > tags.len() as u64 {
+        let mut sorted = tags.to_vec();
+        sorted.sort_unstable();
+        return sorted.windows(2).find(|w| w[0] == w[1]).map(|w| w[0]);
+    }
+    let mut seen = vec![0u64; words as usize];
+    let mut dup: Option<u64> = None;
+    for &t in tags {
+        let k = t - lo;
+        let (w, bit) = ((k / 64) as usize, 1u64 << (k % 64));
+        if seen[w] & bit == 0 {
+            seen[w] |= bit;
+        } else if dup.is_none_or(|d| t < d) {
+            dup = Some(t);
+        }
+    }
+    dup
+}
+
+/// The message for a `what` ("node" or "element") tag defined more than once in `place`.
+pub(crate) fn duplicate_tag(what: &str, tag: u64, place: &str) -> String {
+    format!("{what} tag {tag} is defined more than once in {place}: every {what} needs its own tag")
+}
+
+/// Of the nodes (tag, coordinates) with a coordinate that is not a finite number (NaN or
+/// infinite), the one of smallest tag: (tag, message naming it).
+pub(crate) fn non_finite_node<'a>(
+    nodes: impl Iterator<Item = (u64, &'a [f64; 3])>,
+) -> Option<(u64, String)> {
+    let (tag, x) = nodes
+        .filter(|(_, x)| x.iter().any(|v| !v.is_finite()))
+        .min_by_key(|(t, _)| *t)?;
+    Some((
+        tag,
+        format!(
+            "node {tag} has a coordinate that is not a finite number: ({}, {}, {})",
+            x[0], x[1], x[2]
+        ),
+    ))
 }
 
 /// Physical tags by (dimension, entity tag).
@@ -476,12 +538,13 @@ fn file_nodes(
         let off = all_coords.len();
         all_coords.extend(b.nodes.iter().map(|n| [n.x, n.y, n.z]));
         match &b.node_tags {
-            Some(map) => {
+            // (a tag twice in one block leaves the map short: read the tags as written)
+            Some(map) if map.len() == b.nodes.len() => {
                 for (&t, &i) in map {
                     all_tags[off + i] = t;
                 }
             }
-            None => have_all_tags = false,
+            _ => have_all_tags = false,
         }
     }
     if !have_all_tags {

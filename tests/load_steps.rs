@@ -502,3 +502,44 @@ fn a_full_disk_during_a_later_step_writes_nothing() {
         assert!(line.contains("cannot write results"), "{line}");
     }
 }
+
+/// A Tresca history whose obstacle lifts off in its last step (tests/meshes/mirror_block2d.geo,
+/// the circle pressed in and taken back beyond the start): that step's forces vanish against
+/// the steps before, and its final check judges it by their scales. On the iterative preset
+/// (solves whose residual falls by rtol relative to the warm start's, of the step before's
+/// size) the check took the vanishing step's own scale, and the run ended in "the final state
+/// is not a solution" (λ_n = 1e-13 against a force scale of 1e-10, exit 1).
+#[test]
+fn an_obstacle_lifted_off_in_the_last_step_ends_the_history_on_either_preset() {
+    let tmp = tempfile::tempdir().expect("tempdir");
+    let mesh = tmp.path().join("half.msh");
+    gmsh("mirror_block2d.geo", 2, 0.08, &mesh);
+    let case = write_case(
+        &tmp.path().join("lift.toml"),
+        &format!(
+            "[mesh]\nfile = {}\n[material]\nyoung = 1.0\npoisson = 0.3\nmodel = \"plane_strain\"\n\
+             [[dirichlet]]\ngroup = \"bottom\"\nvalue = [0.0, 0.0]\n\
+             [[dirichlet]]\ngroup = \"sym\"\nvalue = [0.0, \"free\"]\n\
+             [contact]\ngroup = \"top\"\n\
+             obstacle = {{ type = \"sphere\", center = [0.0, 2.0], radius = 1.0 }}\n\
+             motion = {{ table = [[0.0, 0.0, 0.0], [1.0, 0.0, -0.006], [2.0, 0.0, 0.001]] }}\n\
+             friction = {{ law = \"tresca\", threshold = 0.004 }}\n\
+             [load]\nfactors = [0.5, 1.0, 1.5, 2.0]\n\
+             [output]\nfields = [\"displacement\", \"contact\"]\n",
+            toml_path(&mesh)
+        ),
+    );
+    for preset in ["iterative", "direct"] {
+        let set = format!("solver.preset=\"{preset}\"");
+        let s = solve(2, &case, &[&set]);
+        s.assert_converged(preset);
+        let steps = s.summary["load"]["steps"].as_array().expect("load.steps");
+        assert_eq!(steps.len(), 4, "{preset}: load steps");
+        let active = |k: usize| steps[k]["active"].as_u64().expect("active");
+        assert!(
+            active(1) > 0,
+            "{preset}: nothing in contact at the deepest step"
+        );
+        assert_eq!(active(3), 0, "{preset}: the lifted obstacle still touches");
+    }
+}

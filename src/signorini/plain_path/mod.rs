@@ -23,8 +23,8 @@ pub mod problem;
 pub mod reuse;
 pub mod step;
 
+pub(crate) use iteration::auto_start;
 pub use iteration::semismooth_newton;
-pub(crate) use iteration::{auto_start, VANISHING};
 pub use problem::{default_c, ContactProblem, NewtonResult, NewtonSettings, StepInfo, WarmStart};
 pub use reuse::enable_reuse;
 pub(crate) use step::{add_motion, stalled};

@@ -16,7 +16,8 @@ use crate::par::Ctx;
 /// known where the pair is under a force along its normal (N_j = |F_j|) or is the one pair left
 /// to balance the load's normal resultant. Said before the solve instead of after a long (or
 /// cycling) Newton run; other settings (tilted planes, curved obstacles, slanted forces, two
-/// pairs with unknown normal forces) are left to the iteration. Collective.
+/// pairs with unknown normal forces) are left to the iteration. Returns whether the load was
+/// found within the capacity (an equilibrium of the rigid motion exists). Collective.
 pub fn check_friction_capacity(
     ctx: &Ctx,
     b: &ContactBoundary,
@@ -25,12 +26,12 @@ pub fn check_friction_capacity(
     dim: usize,
     law: Law,
     forces: &[force::ForceControl],
-) -> Result<(), RunError> {
+) -> Result<bool, RunError> {
     let Some(planes) = parallel_planes(&b.obstacles) else {
-        return Ok(());
+        return Ok(false);
     };
     if !law.friction() || held_anywhere(ctx, fixed) {
-        return Ok(());
+        return Ok(false);
     }
     let np = planes.len();
     // per pair: max μ (Coulomb) and Σ b_k (Tresca) over its nodes
@@ -68,7 +69,7 @@ pub fn check_friction_capacity(
         bounds: &bounds,
     };
     let Some((capacity, what)) = law.rules().capacity(&load) else {
-        return Ok(()); // not known before the solve: the balance test and the iteration decide
+        return Ok(false); // not known before the solve: the balance test and the iteration decide
     };
     if rt > capacity * (1.0 + 1e-9) + 1e-14 * r.iter().map(|x| x.abs()).sum::<f64>() {
         return Err(RunError::Failed(format!(
@@ -77,14 +78,22 @@ pub fn check_friction_capacity(
              ({what}): it would slide away"
         )));
     }
-    Ok(())
+    Ok(true)
 }
 
 /// A failed iteration (`NoConvergence`) of a frictional case with a body that Dirichlet data
-/// leave free in some rigid mode (`sliding`) says what may be the cause; other errors as they
-/// are.
-pub fn why_sliding(e: RunError, sliding: bool) -> RunError {
+/// leave free in some rigid mode (`sliding`) says what may be the cause; `within`: its load
+/// was found within the friction capacity before the solve ([`check_friction_capacity`]),
+/// so an equilibrium exists and the iteration fell short of it. Other errors as they are.
+pub fn why_sliding(e: RunError, sliding: bool, within: bool) -> RunError {
     match e {
+        RunError::NoConvergence(why) if sliding && within => RunError::NoConvergence(format!(
+            "{why}; a body of the mesh is free to move where its Dirichlet data do not hold \
+             it and friction alone holds it tangentially, with its load within the friction \
+             capacity of its contact (checked before the solve): an equilibrium exists, the \
+             iteration did not reach it (more steps: newton.max_steps; the condensed path: \
+             solver.path = \"auto\" on the direct preset)"
+        )),
         RunError::NoConvergence(why) if sliding => RunError::NoConvergence(format!(
             "{why}; a body of the mesh is free to move where its Dirichlet data do not hold \
              it, so friction alone holds it tangentially: beyond the friction capacity of its \

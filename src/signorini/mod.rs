@@ -268,7 +268,7 @@ pub fn solve(
     let (mut b, warned) = contact_boundary(ctx, settings, mesh, layout, fixed)?;
     b.keys.solver = solver::solver_keys(solver_section);
     let force_control = force_control(settings, previous);
-    capacity::check_friction_capacity(ctx, &b, fixed, sys, dim, law, &force_control)?;
+    let within = capacity::check_friction_capacity(ctx, &b, fixed, sys, dim, law, &force_control)?;
     let displacements = settings.displacements();
     let prev_u = (previous.map(|prev| take_reference(ctx, &mut b, prev, friction, &displacements)))
         .transpose()?;
@@ -318,7 +318,7 @@ pub fn solve(
         warm.as_ref(),
         &mut types,
     )
-    .map_err(|e| capacity::why_sliding(e, sliding));
+    .map_err(|e| capacity::why_sliding(e, sliding, within));
     let ran = forget_on_error(session, ran)?;
     let solved = Solved {
         law,

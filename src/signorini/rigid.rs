@@ -774,7 +774,10 @@ impl FreeModes {
                 "; {} rigid mode(s) that no Dirichlet data fix and a load in them: frictionless \
                  contact may have no equilibrium for it (a sideways load on a body that rests \
                  on a flat or nearly flat face) — check the loads, or add friction or \
-                 Dirichlet data that hold the body ({})",
+                 Dirichlet data that hold the body ({}); where it has one (a body that starts \
+                 apart from its support), the plain path's steps may cycle on the way to it \
+                 while the condensed path (solver.path = \"auto\", direct preset) or the \
+                 iterative preset reaches it",
                 self.who(),
                 self.keys.named(&["dirichlet", ".obstacle"]),
             )

@@ -159,8 +159,9 @@ fn tresca(dim: usize) -> PathBuf {
     repo(&format!("tests/cases/tresca/block{dim}d_tresca.toml"))
 }
 
-/// block2d_tresca with the left side's x displacement prescribed too (the bottom-left corner
-/// is then no contact node: friction leaves a node with Dirichlet data to its data).
+/// block2d_tresca with the left side's displacement prescribed too, across the contact normal
+/// as well (the bottom-left corner is then no contact node: a node whose Dirichlet data fix
+/// its normal direction is left to its data).
 fn tresca_with_held_corner(dir: &Path) -> PathBuf {
     let text = std::fs::read_to_string(tresca(2)).expect("case");
     let mesh = repo("cases/blocks/block2d.msh");
@@ -168,7 +169,7 @@ fn tresca_with_held_corner(dir: &Path) -> PathBuf {
         "file = \"../../../cases/blocks/block2d.msh\"",
         &format!("file = {}", toml_path(&mesh)),
     );
-    let text = format!("{text}\n[[dirichlet]]\ngroup = \"left\"\nvalue = [0.05, \"free\"]\n");
+    let text = format!("{text}\n[[dirichlet]]\ngroup = \"left\"\nvalue = [0.05, 0.0]\n");
     write_case(&dir.join("held_corner.toml"), &text)
 }
 

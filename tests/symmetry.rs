@@ -244,3 +244,49 @@ fn a_half_lens_dragged_on_a_half_block_is_the_whole_pairs_half() {
         "a body pair with Coulomb",
     );
 }
+
+/// A contact node whose tangential displacement Dirichlet data prescribe to a value other
+/// than 0 (the bottom-left corner of tests/cases/tresca/block2d_tresca.toml with the left
+/// side's x prescribed to 0.05): its friction would contradict its data (the slip row's force
+/// in the Dirichlet row moved the corner to x = 0.0497, the equilibrium residual 0.1 of the
+/// load), so it keeps its normal condition without friction; its data hold exactly.
+#[test]
+fn a_contact_node_with_a_prescribed_tangential_value_keeps_it() {
+    let tmp = tempfile::tempdir().expect("tempdir");
+    let text =
+        std::fs::read_to_string(repo("tests/cases/tresca/block2d_tresca.toml")).expect("case");
+    let text = text.replace(
+        "file = \"../../../cases/blocks/block2d.msh\"",
+        &format!("file = {}", toml_path(&repo("cases/blocks/block2d.msh"))),
+    );
+    let case = write_case(
+        &tmp.path().join("corner.toml"),
+        &format!("{text}\n[[dirichlet]]\ngroup = \"left\"\nvalue = [0.05, \"free\"]\n"),
+    );
+    for np in [1, 2] {
+        let s = solve(np, &case, &[]);
+        s.assert_converged("the block with its left side moved");
+        let rows = s.contact_rows();
+        let corner = (rows.iter())
+            .min_by(|a, b| a.f("x").total_cmp(&b.f("x")))
+            .expect("contact nodes");
+        assert!(
+            corner.active(),
+            "{np} rank(s): the corner is not in contact"
+        );
+        assert!(
+            (corner.f("u_t1").abs() - 0.05).abs() < 1e-12,
+            "{np} rank(s): the corner's tangential displacement {} against its prescribed 0.05",
+            corner.f("u_t1")
+        );
+        assert_eq!(
+            corner.f("lambda_t1"),
+            0.0,
+            "{np} rank(s): friction at the corner"
+        );
+        let worst = get(&s.summary, &["certificate", "worst"])
+            .as_f64()
+            .expect("certificate.worst");
+        assert!(worst < 1e-10, "{np} rank(s): certificate {worst:e}");
+    }
+}

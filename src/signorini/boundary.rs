@@ -126,6 +126,20 @@ impl ContactBoundary {
 /// free tangential part (docs/method.md, "Symmetry rows on the contact boundary").
 /// A node that cannot be projected onto the obstacle is an input error; every rank returns the
 /// same result (the collectives run on every path first). Collective.
+/// A symmetry-row contact node (`fixed_k`: its Dirichlet values, NaN = free) whose friction
+/// would contradict its Dirichlet data, so that it keeps its normal condition without friction
+/// (μ = 0, b = 0: λ_τ = 0) in this load step: a prescribed value other than 0, or the pair's
+/// obstacle moved or pressed along a prescribed component. On a mirror plane (the value 0, the
+/// obstacle symmetric about it) the prescribed tangential part stays 0 and λ (3.28) has none
+/// there, so the law holds on the free part; with u_τ prescribed to a value the slip row's
+/// force would go into the Dirichlet row and move the node off its value (a block whose
+/// side's x was prescribed to 0.05: its corner at 0.0497). Local.
+fn friction_inert(pair: &crate::setup::PairSettings, fixed_k: &[f64]) -> bool {
+    (fixed_k.iter().enumerate()).any(|(d, v)| {
+        !v.is_nan() && (*v != 0.0 || pair.displacement[d] != 0.0 || pair.force_now[d] != 0.0)
+    })
+}
+
 /// True when every prescribed component d (`fixed_k[d]` not NaN) of a node has n_d = 0: the
 /// Dirichlet rows and the contact row (3.29) constrain orthogonal directions.
 fn symmetry_row(normal: &[f64; 3], fixed_k: &[f64]) -> bool {
@@ -278,6 +292,7 @@ pub fn build<W>(
         let pair = &settings.pairs[p];
         let x = mesh.coords[v];
         let prescribed = (0..dim).any(|k| !fixed[v * dim + k].is_nan());
+        let inert = prescribed && friction_inert(pair, &fixed[v * dim..(v + 1) * dim]);
         if let Obstacle::Body(t) = &pair.obstacle {
             // the rows dual mortar gave the pair (crate::mortar: covered nodes that are contact
             // nodes by the rule below); an uncovered node has none
@@ -287,7 +302,7 @@ pub fn build<W>(
                     gap: r.gap,
                     weight: r.weight,
                 };
-                nodes.push(contact_node(mesh, v, i, lo, p, pair, at));
+                nodes.push(contact_node(mesh, v, i, lo, p, pair, at, inert));
             } else if prescribed {
                 excluded += 1;
             }
@@ -318,7 +333,7 @@ pub fn build<W>(
             gap: proj.gap,
             weight: weight[v],
         };
-        nodes.push(contact_node(mesh, v, i, lo, p, pair, at));
+        nodes.push(contact_node(mesh, v, i, lo, p, pair, at, inert));
     }
     let counts: Vec<u64> = ctx.gather(nodes.len() as u64);
     let ex_all = ctx.sum_usize(excluded);
@@ -354,6 +369,7 @@ struct Touch {
 
 /// The contact node of mesh node `v` (owned, local index `i`, first global node `lo`) of
 /// pair `p`, meeting its obstacle as `at` says.
+#[allow(clippy::too_many_arguments)]
 fn contact_node(
     mesh: &Mesh,
     v: usize,
@@ -362,6 +378,7 @@ fn contact_node(
     p: usize,
     pair: &crate::setup::PairSettings,
     at: Touch,
+    inert: bool,
 ) -> ContactNode {
     let Touch {
         normal,
@@ -372,7 +389,7 @@ fn contact_node(
     ContactNode {
         node: v,
         pair: p,
-        mu: pair.coulomb_mu,
+        mu: if inert { 0.0 } else { pair.coulomb_mu },
         tag: mesh.node_tags[v],
         row: (lo + i) * dim,
         local_row: i * dim,
@@ -380,7 +397,11 @@ fn contact_node(
         frame: Frame::new(normal, dim).expect("contact normals are unit vectors"),
         gap,
         weight,
-        bound: pair.tresca_threshold.unwrap_or(0.0) * weight,
+        bound: if inert {
+            0.0
+        } else {
+            pair.tresca_threshold.unwrap_or(0.0) * weight
+        },
         u_t_ref: [0.0; 2],
     }
 }

@@ -43,12 +43,12 @@ pub fn read_input(ctx: &Ctx, case: &Case) -> Result<Input, RunError> {
     (material.half_space, material.slave_over_master) = pair_modulus(ctx, case, &d.mesh, &material);
     ctx.agree_smallest(check_body_force(case, &d.mesh).map(|(t, e)| (t, e.into())))?;
     let input = Input {
+        warnings: locking_warnings(case, &material),
         mesh: d.mesh,
         material,
         layout: d.layout,
         read_seconds: d.read_seconds,
         partition_seconds: d.partition_seconds,
-        warnings: Vec::new(),
     };
     let mesh = &input.mesh;
     let dim = mesh.dim;
@@ -81,8 +81,6 @@ pub fn read_input(ctx: &Ctx, case: &Case) -> Result<Input, RunError> {
             .map(|c| (c[0], c[1]))
             .collect::<Vec<_>>()
     );
-    let mut input = input;
-    input.warnings = locking_warnings(case, &input.material);
     warnings::log(ctx, &input.warnings, "");
     Ok(input)
 }

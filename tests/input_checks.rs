@@ -45,12 +45,9 @@ fn refused_everywhere(dir: &Path, text: &str, expect: &[&str]) -> String {
     let mut first: Option<String> = None;
     for np in [1, 2, 3] {
         let r = run_with_timeout(solver(np, &args), Duration::from_secs(120));
-        r.expect_code(2, &format!("bad input on {np} rank(s)"));
-        let errors: Vec<&str> = (r.stderr.lines())
-            .filter(|l| l.starts_with("error"))
-            .collect();
-        assert_eq!(errors.len(), 1, "one error message:\n{}", r.output());
-        let msg = errors[0].to_string();
+        let msg = r
+            .the_error_line(&format!("bad input on {np} rank(s)"))
+            .to_string();
         println!("refused ({np} ranks): {msg}");
         for e in expect {
             assert!(msg.contains(e), "message lacks {e:?}: {msg}");

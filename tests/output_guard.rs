@@ -32,22 +32,16 @@ fn run_in(cwd: &Path, np: usize, check: bool, case: &Path, args: &[&str]) -> Run
 /// The one `error` line of a run that must be refused with exit code 2 before the solve;
 /// panics unless there is exactly one and it holds every `expect`.
 fn refused(r: &Run, expect: &[&str]) -> String {
-    r.expect_code(2, "refused");
-    let errors: Vec<&str> = r
-        .stderr
-        .lines()
-        .filter(|l| l.starts_with("error"))
-        .collect();
-    assert_eq!(errors.len(), 1, "one error line:\n{}", r.output());
+    let error = r.the_error_line("refused");
     assert!(
         !r.stdout.contains("newton"),
         "refused before the solve:\n{}",
         r.output()
     );
     for e in expect {
-        assert!(errors[0].contains(e), "{e:?} not in {}", errors[0]);
+        assert!(error.contains(e), "{e:?} not in {}", error);
     }
-    errors[0].to_string()
+    error.to_string()
 }
 
 /// `check` and a run on 1, 2 and 3 ranks of `case` with `args` are refused alike, naming

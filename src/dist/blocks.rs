@@ -333,10 +333,9 @@ fn check_tags(ctx: &Ctx, path: &Path, b: &Blocks) -> Result<(), RunError> {
 /// Every node coordinate of this rank's block of an HDF5 mesh is finite: else an input error
 /// naming the node of smallest tag over all ranks. Collective.
 fn check_coordinates(ctx: &Ctx, path: &Path, b: &Blocks) -> Result<(), RunError> {
-    let coords = b.coords.chunks_exact(3).map(|c| [c[0], c[1], c[2]]);
-    let nodes: Vec<(u64, [f64; 3])> = (b.node_tags.iter().copied().zip(coords))
-        .filter(|(_, x)| x.iter().any(|v| !v.is_finite()))
+    let coords: Vec<[f64; 3]> = (b.coords.chunks_exact(3))
+        .map(|c| [c[0], c[1], c[2]])
         .collect();
-    let bad = mesh::non_finite_node(nodes.iter().map(|(t, x)| (*t, x)));
+    let bad = mesh::non_finite_node(b.node_tags.iter().copied().zip(coords.iter()));
     ctx.agree_smallest(bad.map(|(t, m)| (t, RunError::Input(InputError::new(path, m)))))
 }

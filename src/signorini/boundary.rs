@@ -117,15 +117,6 @@ impl ContactBoundary {
     }
 }
 
-/// Builds the owned contact nodes. `fixed` holds the Dirichlet value per mesh dof (NaN = free):
-/// a node with a prescribed component is left to its Dirichlet data — unless every prescribed
-/// component is orthogonal to the obstacle's normal at the node (a symmetry row: u_x = 0 on
-/// the plane x = 0 of a body pressed along z), where both hold: the contact row constrains
-/// nᵀu only, which the Dirichlet rows do not touch, and with friction λ (3.28) has no part
-/// along a prescribed component (its row of A is the diagonal alone), so the law acts on the
-/// free tangential part (docs/method.md, "Symmetry rows on the contact boundary").
-/// A node that cannot be projected onto the obstacle is an input error; every rank returns the
-/// same result (the collectives run on every path first). Collective.
 /// A symmetry-row contact node (`fixed_k`: its Dirichlet values, NaN = free) whose friction
 /// would contradict its Dirichlet data, so that it keeps its normal condition without friction
 /// (μ = 0, b = 0: λ_τ = 0) in this load step: a prescribed value other than 0, or the pair's
@@ -266,8 +257,17 @@ fn pair_nodes(
     (weight, pair_of, clash)
 }
 
-/// The contact boundary, and what `at_start` makes of its nodes before the obstacles move (the
-/// caller's start warnings). Collective (and so is `at_start`, on every rank alike).
+/// Builds the owned contact nodes. `fixed` holds the Dirichlet value per mesh dof (NaN = free):
+/// a node with a prescribed component is left to its Dirichlet data — unless every prescribed
+/// component is orthogonal to the obstacle's normal at the node (a symmetry row: u_x = 0 on
+/// the plane x = 0 of a body pressed along z), where both hold: the contact row constrains
+/// nᵀu only, which the Dirichlet rows do not touch, and with friction λ (3.28) has no part
+/// along a prescribed component (its row of A is the diagonal alone), so the law acts on the
+/// free tangential part (docs/method.md, "Symmetry rows on the contact boundary").
+/// A node that cannot be projected onto the obstacle is an input error; every rank returns the
+/// same result (the collectives run on every path first). Collective.
+/// Returns the contact boundary, and what `at_start` makes of its nodes before the obstacles
+/// move (the caller's start warnings); `at_start` is collective too, on every rank alike.
 pub fn build<W>(
     ctx: &Ctx,
     mesh: &Mesh,
@@ -301,8 +301,9 @@ pub fn build<W>(
                     normal: r.normal,
                     gap: r.gap,
                     weight: r.weight,
+                    frictionless: inert,
                 };
-                nodes.push(contact_node(mesh, v, i, lo, p, pair, at, inert));
+                nodes.push(contact_node(mesh, v, i, lo, p, pair, at));
             } else if prescribed {
                 excluded += 1;
             }
@@ -332,8 +333,9 @@ pub fn build<W>(
             normal: proj.normal,
             gap: proj.gap,
             weight: weight[v],
+            frictionless: inert,
         };
-        nodes.push(contact_node(mesh, v, i, lo, p, pair, at, inert));
+        nodes.push(contact_node(mesh, v, i, lo, p, pair, at));
     }
     let counts: Vec<u64> = ctx.gather(nodes.len() as u64);
     let ex_all = ctx.sum_usize(excluded);
@@ -360,16 +362,17 @@ pub fn build<W>(
 
 /// How a contact node meets its obstacle: its normal n (into the body; unit), gap g_h^k (3.3)
 /// and weight w_k — against a rigid obstacle its projection and ∫ φ_k; of a body pair its
-/// mortar row's normal, g̃_k / D_kk and D_kk.
+/// mortar row's normal, g̃_k / D_kk and D_kk; `frictionless`: the node keeps its normal
+/// condition without friction ([`friction_inert`]).
 struct Touch {
     normal: [f64; 3],
     gap: f64,
     weight: f64,
+    frictionless: bool,
 }
 
 /// The contact node of mesh node `v` (owned, local index `i`, first global node `lo`) of
 /// pair `p`, meeting its obstacle as `at` says.
-#[allow(clippy::too_many_arguments)]
 fn contact_node(
     mesh: &Mesh,
     v: usize,
@@ -378,18 +381,18 @@ fn contact_node(
     p: usize,
     pair: &crate::setup::PairSettings,
     at: Touch,
-    inert: bool,
 ) -> ContactNode {
     let Touch {
         normal,
         gap,
         weight,
+        frictionless,
     } = at;
     let dim = mesh.dim;
     ContactNode {
         node: v,
         pair: p,
-        mu: if inert { 0.0 } else { pair.coulomb_mu },
+        mu: if frictionless { 0.0 } else { pair.coulomb_mu },
         tag: mesh.node_tags[v],
         row: (lo + i) * dim,
         local_row: i * dim,
@@ -397,7 +400,7 @@ fn contact_node(
         frame: Frame::new(normal, dim).expect("contact normals are unit vectors"),
         gap,
         weight,
-        bound: if inert {
+        bound: if frictionless {
             0.0
         } else {
             pair.tresca_threshold.unwrap_or(0.0) * weight

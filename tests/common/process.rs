@@ -44,6 +44,22 @@ impl Run {
         )
     }
 
+    /// The one `error` line on stderr of a refused run (exit code 2); panics with both streams
+    /// unless the run exited with 2 and printed exactly one.
+    pub fn the_error_line(&self, what: &str) -> &str {
+        self.expect_code(2, what);
+        let errors: Vec<&str> = (self.stderr.lines())
+            .filter(|l| l.starts_with("error"))
+            .collect();
+        assert_eq!(
+            errors.len(),
+            1,
+            "{what}: one error line:\n{}",
+            self.output()
+        );
+        errors[0]
+    }
+
     /// Panics with both streams if the exit code is not `code`.
     pub fn expect_code(&self, code: i32, what: &str) -> &Self {
         assert_eq!(

@@ -34,7 +34,10 @@ pub mod residual;
 pub mod surface;
 pub mod tresca;
 
-pub use complementarity::{c_n, c_tau, classify, normal_active, tangential_slip, NodeState};
+pub use complementarity::{
+    c_n, c_tau, classify, inf_norm, normal_active, normal_active_or_tie, tangential_slip, ties,
+    NodeState,
+};
 pub use coulomb::{
     c_tau_coulomb, c_tau_coulomb_derivative, coulomb_block, coulomb_classify,
     coulomb_conditions_hold, coulomb_residual, coulomb_row, coulomb_row_dyn, coulomb_row_projected,

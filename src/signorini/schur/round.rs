@@ -8,11 +8,12 @@ use super::start::SolveStart;
 use super::stop::Stop;
 use super::summary::record_steps;
 use super::summary::CondensedSummary;
+use crate::contact::{normal_active_or_tie, ties};
 use crate::error::RunError;
 use crate::par::Ctx;
 use crate::petsc::PInt;
 use crate::say;
-use crate::signorini::active_set::{ActiveSet, Iterate, Law};
+use crate::signorini::active_set::{ActiveSet, Iterate};
 use crate::signorini::boundary::ContactBoundary;
 use crate::signorini::dense::{guarded, CMatrix, Dense, DenseRun, End, Moves, Primal};
 use crate::signorini::halfspace::{self};
@@ -460,7 +461,7 @@ pub(super) fn expand(
         n_local,
     } = at;
     let b = p.boundary;
-    let (dim, off) = (p.mesh.dim, b.offset);
+    let off = b.offset;
     let lam = root_multipliers(ctx, comp, lambda);
     let w = match comp.expand_u(ctx, cand, f_root, n_local, &lam, &[]) {
         Ok(w) => w,
@@ -474,13 +475,18 @@ pub(super) fn expand(
     let approach = force_approach(s, alpha, free.dirichlet_free().ncols(), &mut shifted);
     let mut it = Iterate::new(b.nodes.len(), n_local, false);
     reduced.recover(p.sys, &shifted, &set, &mut it)?; // (3.28)
-    let update = set.update(&it, &shifted, Law::Frictionless, s.c, 0.0, dim); // (3.23)
-    let changed_here: Vec<u64> = set
-        .normal
-        .iter()
-        .zip(&update.next.normal)
-        .enumerate()
-        .filter(|(_, (a, b))| a != b)
+                                                      // (3.23) on every contact node, ties keeping their state as in the dense iteration
+    let nodes = shifted.nodes.iter().zip(&it.nodes);
+    let (mut lambda_inf, mut length_inf) = (0.0f64, 0.0f64);
+    for (k, r) in nodes.clone() {
+        lambda_inf = lambda_inf.max(r.lambda_n.abs());
+        length_inf = length_inf.max(r.u_n.abs()).max(k.gap.abs());
+    }
+    let tie = ties(ctx.max_f64(lambda_inf), ctx.max_f64(length_inf), s.c);
+    let changed_here: Vec<u64> = (nodes.zip(&set.normal).enumerate())
+        .filter(|(_, ((k, r), &was))| {
+            normal_active_or_tie(r.u_n, r.lambda_n, k.gap, s.c, tie, was) != was
+        })
         .map(|(i, _)| (off + i) as u64)
         .collect();
     Ok(Ok(Expanded {

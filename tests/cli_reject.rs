@@ -478,6 +478,38 @@ fn msh_counts_beyond_the_file_size() {
     }
 }
 
+/// A damaged MSH 4.1 file names the line where the parser stopped and shows it (the message
+/// once gave the parser's hex dump, no line, and told the user to save the file as MSH 4.1,
+/// which it already was); a file cut short says so.
+#[test]
+fn a_damaged_msh_file_names_the_line() {
+    let meshes = tempfile::tempdir().unwrap();
+    let ascii = std::fs::read(mesh_dir().join("square_h0.5.msh")).unwrap();
+    let text = String::from_utf8(ascii.clone()).unwrap();
+    // the header of the second node block, and the line it sits on
+    let at = text.find("$Nodes\n").unwrap();
+    let line = text[..at].lines().count() + 6;
+    let block = text.lines().nth(line - 1).unwrap().to_string();
+    assert_eq!(block.split_whitespace().count(), 4, "{block}");
+    let damaged = patched(&ascii, format!("\n{block}\n").as_bytes(), b"\n1 zz 0\n");
+    let m = rejected(
+        &case_on(meshes.path(), "damaged.msh", &damaged),
+        &["damaged.msh", &format!("line {line} (\"1 zz 0\")"), "node"],
+    );
+    assert!(
+        !m.contains("save the mesh as MSH 4.1"),
+        "misleading hint: {m}"
+    );
+    assert!(!m.contains("Hex dump"), "{m}");
+    // cut short inside $Nodes (after its 9th block's header: enough bytes for its counts)
+    let lines: Vec<&str> = text.split_inclusive('\n').collect();
+    let cut = lines[..line + 21].concat().into_bytes();
+    rejected(
+        &case_on(meshes.path(), "cut.msh", &cut),
+        &["cut.msh", "the end of the file", "cut short"],
+    );
+}
+
 /// A binary header with a data size mshio has no reader for made mshio panic: caught, but a
 /// panic message and a backtrace (RUST_BACKTRACE=1) came before the clean message.
 #[test]

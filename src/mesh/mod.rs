@@ -363,12 +363,7 @@ pub fn read_msh_bytes(bytes: &[u8], path: &Path) -> Result<Mesh, InputError> {
 
     raw::check_section_counts(bytes, &info).map_err(err)?;
 
-    let parse = || {
-        mshio::parse_msh_bytes(bytes).map_err(|e| {
-            let s = e.to_string();
-            s.lines().take(6).collect::<Vec<_>>().join(" / ")
-        })
-    };
+    let parse = || mshio::parse_msh_bytes(bytes).map_err(|e| parse_error(bytes, &info, &e));
     let parsed = if CATCH_PARSER_PANICS.load(Ordering::Relaxed) {
         quiet::catch_unwind_silently(parse)
     } else {
@@ -376,11 +371,7 @@ pub fn read_msh_bytes(bytes: &[u8], path: &Path) -> Result<Mesh, InputError> {
     };
     let msh = match parsed {
         Ok(Ok(m)) => m,
-        Ok(Err(m)) => {
-            return Err(err(format!(
-                "cannot parse as Gmsh MSH 4.1: {m}; {HINT_MSH41}"
-            )))
-        }
+        Ok(Err(m)) => return Err(err(m)),
         Err(_) => {
             return Err(err(format!(
                 "cannot parse as Gmsh MSH 4.1 (the parser failed); {HINT_MSH41}"
@@ -389,6 +380,57 @@ pub fn read_msh_bytes(bytes: &[u8], path: &Path) -> Result<Mesh, InputError> {
     };
 
     build(bytes, &info, &msh).map_err(err)
+}
+
+/// The parser's error as one line: where (line and byte of the file, from the position the
+/// parser reports), in which section and block, what, and the line as it reads (ASCII files);
+/// the hint to save as MSH 4.1 only where the file says another version.
+fn parse_error(bytes: &[u8], info: &raw::HeaderInfo, e: &mshio::MshParserError<&[u8]>) -> String {
+    let trace = e.filtered_backtrace();
+    let what = trace.first().map_or_else(
+        || "the parser failed".to_string(),
+        |(_, kind)| kind.to_string(),
+    );
+    let within: Vec<String> = (trace.iter().skip(1).rev())
+        .map(|(_, kind)| {
+            kind.context()
+                .map_or_else(|| kind.to_string(), str::to_string)
+        })
+        .collect();
+    let within = if within.is_empty() {
+        String::new()
+    } else {
+        format!(" (in {})", within.join(", in "))
+    };
+    // the position: the input the parser was at, a slice of `bytes`
+    let at = (trace.first())
+        .map(|(rest, _)| bytes.len().saturating_sub(rest.len()))
+        .filter(|&at| at <= bytes.len());
+    let place = match at {
+        Some(at) if at == bytes.len() => {
+            let line = bytes.iter().filter(|&&b| b == b'\n').count() + 1;
+            format!("the end of the file (line {line}: the file is cut short)")
+        }
+        Some(at) if info.file_type == 0 => {
+            let line = bytes[..at].iter().filter(|&&b| b == b'\n').count() + 1;
+            let start = bytes[..at]
+                .iter()
+                .rposition(|&b| b == b'\n')
+                .map_or(0, |p| p + 1);
+            let end =
+                (bytes[at..].iter().position(|&b| b == b'\n')).map_or(bytes.len(), |p| at + p);
+            let text = String::from_utf8_lossy(&bytes[start..end.min(start + 80)]);
+            format!("line {line} (\"{}\")", text.trim_end())
+        }
+        Some(at) => format!("byte {at}"),
+        None => "an unknown place".to_string(),
+    };
+    let hint = if info.version == "4.1" {
+        "the file is damaged or was not written by gmsh".to_string()
+    } else {
+        HINT_MSH41.to_string()
+    };
+    format!("cannot parse as Gmsh MSH 4.1 at {place}: {what}{within}; {hint}")
 }
 
 fn build(

@@ -1018,6 +1018,39 @@ mod tests {
         );
     }
 
+    /// The prediction's own step, solved inexactly or not at all (a floating body's skipped
+    /// first solve), is never the last one: where the model keeps its set, the same sets are
+    /// solved once more exactly (tests/predictor.rs, three blocks pressed by Dirichlet data).
+    #[test]
+    fn a_prediction_that_changes_nothing_after_an_inexact_solve_is_solved_again() {
+        let first = StepPlan {
+            predict: true,
+            ..INEXACT
+        };
+        let mut last = usize::MAX;
+        assert_eq!(
+            first.after_solve(true, 0, false, &mut last),
+            After::Repeat(StepPlan {
+                exact: true,
+                correct: true,
+                ..INEXACT
+            })
+        );
+        // after an exact solve (a factorisation) the update decides as ever
+        let first_exact = StepPlan {
+            exact: true,
+            ..first
+        };
+        assert_eq!(
+            first_exact.after_solve(true, 0, false, &mut last),
+            After::Update(StepPlan {
+                exact: true,
+                correct: true,
+                ..INEXACT
+            })
+        );
+    }
+
     /// The first step from a predicted set is solved loosely; it is never the last one: where
     /// it changes nothing (or its set recurs) the same sets are solved once more exactly, and
     /// every step after it is exact.

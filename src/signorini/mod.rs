@@ -458,6 +458,8 @@ fn report_solution(
         boundary: &b,
         ..*problem
     };
+    // the step before's equilibrium reference, as its scales (`vanishing_floor`)
+    state.equilibrium_floor = previous.map_or(0.0, |p| p.report.certificate.equilibrium.reference);
     let certificate =
         final_state::certify(ctx, settings, &judged, &state, &nr, in_u, force_control)?;
     let mut newton = newton_summary(settings, solver_section, c, &mut nr, outer_steps, previous);

@@ -313,6 +313,7 @@ impl<'a> Loop<'a> {
         // Algorithm 2's stopping rule (friction) reads ‖u‖, ‖u − u_prev‖ and ‖λ‖; without
         // friction the iteration ends when no state changes, and these are not measured
         if let Some(w) = warm.filter(|_| s.friction()) {
+            let w = w.floors_from.unwrap_or(w);
             let uu: f64 = w.u_local.iter().map(|x| x * x).sum();
             let ll: f64 = (w.nodes.iter()).flat_map(|r| r.lambda).map(|x| x * x).sum();
             let g = ctx.sum_vec(&[uu, ll]);

@@ -543,3 +543,70 @@ fn an_obstacle_lifted_off_in_the_last_step_ends_the_history_on_either_preset() {
         assert_eq!(active(3), 0, "{preset}: the lifted obstacle still touches");
     }
 }
+
+/// Three bodies of tests/meshes/stack3_sym.geo (a half model) on a rigid plane, Coulomb on
+/// every pair, the disk's top pressed down and then taken back, without cutbacks: the last
+/// step's solution vanishes. Its equilibrium is judged against the step before's reference as
+/// its other scales (before, with the factors [1, 0] on 2 and 3 ranks: a residual of 2e-29
+/// against its own reference of 1e-28, relative 0.023 and 0.098, the certificate's worst
+/// value; with [0.5, 1, 0.5, 0] on 3 ranks 0.098). On 2 ranks with [0.5, 1, 0.5, 0] the
+/// condensed Coulomb iteration handed an expanded iterate of 1e-12 to the plain path, whose
+/// stopping rule took its floors from that start instead of the load step's warm start: 100
+/// Newton steps on a residual of 7e-30, then "Newton did not converge" (exit 1); with that
+/// fixed, the last step warned of a contact force pulling at 62 % among forces of 1e-29.
+#[test]
+fn a_stack_with_friction_taken_back_to_no_load_certifies_its_vanishing_step() {
+    let tmp = tempfile::tempdir().expect("tempdir");
+    let mesh = tmp.path().join("stack3.msh");
+    gmsh_file(&mesh_dir().join("stack3_sym.geo"), 2, &[], &mesh);
+    let mut text = format!("[mesh]\nfile = {}\n", toml_path(&mesh));
+    for (g, e, nu) in [
+        ("block", 3.0, 0.25),
+        ("plate", 10.0, 0.3),
+        ("disk", 1.0, 0.4),
+    ] {
+        text += &format!(
+            "[[material]]\ngroup = \"{g}\"\nyoung = {e:?}\npoisson = {nu:?}\n\
+             model = \"plane_strain\"\n"
+        );
+    }
+    text += "[[dirichlet]]\ngroup = \"sym\"\nvalue = [0.0, \"free\"]\n\
+             [[dirichlet]]\ngroup = \"disk_top\"\nvalue = [\"free\", -0.005]\n\
+             [[contact]]\ngroup = \"block_bottom\"\n\
+             obstacle = { type = \"plane\", point = [0.0, 0.0], normal = [0.0, 1.0] }\n\
+             friction = { law = \"coulomb\", mu = 0.6 }\n\
+             [[contact]]\ngroup = \"plate_bottom\"\n\
+             obstacle = { type = \"body\", group = \"block_top\" }\n\
+             friction = { law = \"coulomb\", mu = 0.4 }\n\
+             [[contact]]\ngroup = \"disk_arc\"\n\
+             obstacle = { type = \"body\", group = \"plate_top\" }\n\
+             friction = { law = \"coulomb\", mu = 0.3 }\n\
+             [load]\nfactors = [0.5, 1.0, 0.5, 0.0]\nmax_cutbacks = 0\n\
+             [output]\nfields = [\"displacement\", \"contact\"]\n";
+    let case = write_case(&tmp.path().join("stack_back.toml"), &text);
+    for ranks in [2, 3] {
+        let s = solve(ranks, &case, &[]);
+        s.assert_converged(&format!("{ranks} ranks"));
+        let h = history(&s.dir);
+        assert_eq!(h.len(), 4, "{ranks} ranks: {} steps", h.len());
+        let steps = num(&h[3], "newton_steps");
+        assert!(
+            steps <= 40.0,
+            "{ranks} ranks: {steps} Newton steps back to no load"
+        );
+        let worst = s.f(&["certificate", "worst"]);
+        assert!(
+            worst < 1e-6,
+            "{ranks} ranks: the certificate's worst value {worst:e} ({})",
+            get(&s.summary, &["certificate", "worst_of"])
+        );
+        // the vanishing step's forces are round-off: no warning reads their signs
+        let warnings = s.summary["warnings"].as_array().expect("warnings");
+        assert!(
+            !warnings
+                .iter()
+                .any(|w| w["code"] == "pulling_contact_force"),
+            "{ranks} ranks: {warnings:?}"
+        );
+    }
+}

@@ -346,3 +346,46 @@ fn only_the_iterative_reuse_path_without_friction_predicts() {
     assert!(predictor(&s).is_null(), "Tresca: {}", predictor(&s));
     assert!(!s.run.output().contains("predictor:"), "Tresca");
 }
+
+/// The three blocks of cases/blocks/tower2d.msh, the top pressed down by Dirichlet data and the
+/// middle block held by contact alone: the predictor's first solve is skipped (a floating
+/// body, u⁰ = 0), nothing penetrates in u⁰ and the model keeps the empty set. That iterate is
+/// no answer; before, the run stopped on it (0 active nodes, equilibrium residual 0.94 of its
+/// scale, exit 0).
+#[test]
+fn a_skipped_first_solve_whose_prediction_changes_nothing_is_no_answer() {
+    let tmp = tempfile::tempdir().unwrap();
+    let mut text = format!(
+        "[mesh]\nfile = {}\n",
+        toml_path(&repo("cases/blocks/tower2d.msh"))
+    );
+    for (g, e, nu) in [
+        ("lower", 1.0, 0.45),
+        ("middle", 3.0, 0.1),
+        ("upper", 2.0, 0.3),
+    ] {
+        text += &format!(
+            "[[material]]\ngroup = \"{g}\"\nyoung = {e:?}\npoisson = {nu:?}\n\
+             model = \"plane_strain\"\n"
+        );
+    }
+    text += "[[dirichlet]]\ngroup = \"bottom\"\nvalue = [\"free\", 0.0]\n\
+             [[dirichlet]]\ngroup = \"left\"\nvalue = [0.0, \"free\"]\n\
+             [[dirichlet]]\ngroup = \"top\"\nvalue = [\"free\", -0.005]\n\
+             [[contact]]\ngroup = \"middle_bottom\"\n\
+             obstacle = { type = \"body\", group = \"lower_top\" }\n\
+             [[contact]]\ngroup = \"middle_top\"\n\
+             obstacle = { type = \"body\", group = \"upper_bottom\" }\n\
+             [output]\ndir = \"out\"\n";
+    let case = write_case(&tmp.path().join("tower_pressed.toml"), &text);
+    let direct = run(2, &case, &[]);
+    assert_eq!(direct.active_node_ids().len(), 8, "{}", direct.run.output());
+    for np in [1, 2] {
+        let it = run(np, &case, &iterative(&[], "auto"));
+        let h0 = &get(&it.summary, &["newton", "history"])[0];
+        assert_eq!(h0["amg"]["skipped"], Value::Bool(true), "{h0}");
+        let worst = it.f(&["certificate", "worst"]);
+        assert!(worst < 1e-6, "{np} rank(s): certificate {worst:e}");
+        it.assert_same_answer(&direct, 1e-8, &format!("iterative on {np} rank(s)"));
+    }
+}

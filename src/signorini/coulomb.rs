@@ -96,6 +96,7 @@ pub fn solve(
             let w = WarmStart {
                 nodes: &first.nodes,
                 u_local: &u,
+                floors_from: warm,
             };
             // under force control from the start's approaches
             let force = force::starting_at(ns.force, &first.approach);
@@ -146,9 +147,11 @@ fn fixed_point(
     let mut stop = certificate::StopRule::ActiveSet;
     for outer in 1..=ns.section.max_steps {
         let pm = ContactProblem { boundary: &b, ..*p };
-        let start = state
-            .as_ref()
-            .map(|(nodes, u)| WarmStart { nodes, u_local: u });
+        let start = state.as_ref().map(|(nodes, u)| WarmStart {
+            nodes,
+            u_local: u,
+            floors_from: None,
+        });
         let tresca = NewtonSettings {
             law: Law::Tresca,
             force: &force,
@@ -587,7 +590,11 @@ fn warm_run<'w>(
     PassRun {
         kept,
         summary,
-        warm: Some(WarmStart { nodes, u_local }),
+        warm: Some(WarmStart {
+            nodes,
+            u_local,
+            floors_from: None,
+        }),
         first: Vec::new(),
     }
 }

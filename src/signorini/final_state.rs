@@ -26,6 +26,9 @@ pub struct FinalState {
     /// [`warnings::INEXACT_FINAL_STATE`] where the certificates exceed round-off (not logged
     /// yet).
     pub warning: Option<Warning>,
+    /// The least reference the certificate judges the equilibrium by: a load step's, the step
+    /// before's ([`certificate::Equilibrium::floored`]); 0 for a single solve.
+    pub equilibrium_floor: f64,
 }
 
 /// The final state: the contact table, the KKT and friction certificates (an error if they
@@ -76,6 +79,7 @@ pub fn final_state(
         contact,
         table,
         warning,
+        equilibrium_floor: 0.0,
     })
 }
 
@@ -110,6 +114,7 @@ pub fn certify(
             certificate::equilibrium(ctx, &elastic, a, p.f, rows, b, &p.u(&nr.u)?)?
         }
     };
+    let equilibrium = equilibrium.floored(state.equilibrium_floor);
     let force_balance = (!force_control.is_empty())
         .then(|| certificate::force_balance(ctx, b, &lambdas, force_control));
     let cert = certificate::Certificate::new(certificate::Parts {

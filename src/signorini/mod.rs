@@ -279,6 +279,7 @@ pub fn solve(
         .map(|(prev, (nodes, u))| WarmStart {
             nodes: nodes.as_deref().unwrap_or(&prev.nodes),
             u_local: u,
+            floors_from: None,
         });
     session.located = None; // located anew in every solve
     let problem = ContactProblem {
@@ -458,6 +459,8 @@ fn report_solution(
         boundary: &b,
         ..*problem
     };
+    // the step before's equilibrium reference, as its scales (`vanishing_floor`)
+    state.equilibrium_floor = previous.map_or(0.0, |p| p.report.certificate.equilibrium.reference);
     let certificate =
         final_state::certify(ctx, settings, &judged, &state, &nr, in_u, force_control)?;
     let mut newton = newton_summary(settings, solver_section, c, &mut nr, outer_steps, previous);
@@ -469,15 +472,15 @@ fn report_solution(
         newton.condensed = Some(cs);
     }
     warned.extend(state.warning.take());
-    warned.extend(warn::contact_warnings(
-        ctx,
-        mesh,
-        layout,
-        settings,
-        &b,
-        &nr.nodes,
-        displacement,
-    ));
+    let mut contact_warnings =
+        warn::contact_warnings(ctx, mesh, layout, settings, &b, &nr.nodes, displacement);
+    if nr.stop == certificate::StopRule::Vanishing {
+        // a vanishing step's forces are round-off, and so are their signs: a stack with
+        // Coulomb taken back to no load warned of a pull of 62 % among forces of 1e-29
+        // (tests/load_steps.rs)
+        contact_warnings.retain(|w| w.code != crate::warnings::PULLING_FORCE);
+    }
+    warned.extend(contact_warnings);
     let delta = match previous.zip(prev_u) {
         Some((prev, u_prev)) => Some(step_delta(
             prev,

@@ -61,6 +61,13 @@ impl NewtonSettings<'_> {
 pub struct WarmStart<'a> {
     pub nodes: &'a [NodeResult],
     pub u_local: &'a [f64],
+    /// A start within a load step other than the step's own warm start (the condensed Coulomb
+    /// iteration's expanded iterate): the load step's, whose ‖u‖ and ‖λ‖ floor Algorithm 2's
+    /// stopping rule ([`VANISHING`](super::iteration::VANISHING)); `None`: this start's own.
+    /// Measured with the start's own: a stack of three bodies with Coulomb on every pair taken
+    /// back to no load, on 2 ranks, started from an expanded iterate of 1e-12 and ran
+    /// newton.max_steps = 100 steps on a residual of 7e-30 (tests/load_steps.rs).
+    pub floors_from: Option<&'a WarmStart<'a>>,
 }
 
 /// One Newton step, for the history.

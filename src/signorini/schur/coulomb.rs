@@ -251,9 +251,11 @@ fn rounds(
                 return Ok(Err(why));
             }
         }
-        let start = before
-            .as_ref()
-            .map(|(nodes, u)| WarmStart { nodes, u_local: u });
+        let start = before.as_ref().map(|(nodes, u)| WarmStart {
+            nodes,
+            u_local: u,
+            floors_from: None,
+        });
         let t = Instant::now();
         let run = dense_phase(ctx, p, ns, kept, start.as_ref().or(warm));
         summary.dense_seconds += t.elapsed().as_secs_f64();

@@ -412,7 +412,8 @@ def free_force(case):
 
 
 def c_default(case):
-    """E / h_c of the reference run (h_c from the contact weights, as the solver does)."""
+    """E / h_c of the reference run, the unit of the c family's factors (h_c from the contact
+    weights, as the solver computes it; the solver's default c is 100 E h_c^(d-2))."""
     rr = ref(case)
     if rr.csv is None:
         return None

@@ -75,10 +75,13 @@ pub fn preset_options(preset: Preset, rtol: f64, symmetric: bool) -> String {
         // solved by a pseudo-inverse (SVD): a hierarchy built on a matrix with a null space
         // (a floating body's free rigid modes, step_system/) has a singular coarse matrix, on
         // which LU breaks GMRES down (2D Hertz at ν = 0.4999); on a regular one it is LU's
-        // solve.
+        // solve. No absolute tolerance: PETSc's default 1e-50 is a residual in the case's unit
+        // of force, and ended the solves of the 3D block in a unit of force 2^150 times the
+        // case's (residuals ~1e-47) at once, with a final state that was not a solution.
         Preset::Iterative => format!(
             "-ksp_type gmres -ksp_pc_side right -ksp_gmres_restart {ITERATIVE_RESTART} \
-             -ksp_rtol {rtol:e} -ksp_max_it {ITERATIVE_MAX_IT} -pc_type gamg -pc_gamg_sym_graph true \
+             -ksp_rtol {rtol:e} -ksp_atol 0 -ksp_max_it {ITERATIVE_MAX_IT} -pc_type gamg \
+             -pc_gamg_sym_graph true \
              -mg_levels_ksp_type chebyshev -mg_levels_pc_type jacobi -mg_coarse_pc_type svd \
              -ksp_gmres_cgs_refinement_type refine_ifneeded"
         ),
@@ -120,12 +123,13 @@ pub const REUSE_RTOL: f64 = 1e-13;
 
 /// The reuse solver's defaults (the case's `petsc_options` and the command line, with the
 /// prefix, override them): GMRES, left preconditioning (the preconditioned residual is
-/// tested), classical Gram–Schmidt refined when needed.
+/// tested), classical Gram–Schmidt refined when needed, no absolute tolerance (a residual in
+/// the case's unit of force: the iterative preset's note).
 pub fn reuse_options() -> String {
     let p = REUSE_PREFIX;
     format!(
         "-{p}ksp_type gmres -{p}ksp_pc_side left -{p}ksp_norm_type preconditioned \
-         -{p}ksp_rtol {REUSE_RTOL:e} -{p}ksp_gmres_restart {REUSE_RESTART} \
+         -{p}ksp_rtol {REUSE_RTOL:e} -{p}ksp_atol 0 -{p}ksp_gmres_restart {REUSE_RESTART} \
          -{p}ksp_gmres_cgs_refinement_type refine_ifneeded"
     )
 }

@@ -35,8 +35,19 @@ pub fn read_input(ctx: &Ctx, case: &Case) -> Result<Input, RunError> {
         project: &case.mesh.project,
         check: &|dim, groups| case.check_projections(dim, groups),
     };
-    let d = dist::read_distributed(ctx, &case.mesh.file, &refine)?;
+    // the unknowns after the refinement: each level splits a cell into 2^dim, about as many
+    // more nodes
+    let levels = case.mesh.refine.min(10);
+    let lengths = |dim: usize, extent, far, nodes: usize| {
+        case.check_mesh_lengths(dim, extent, far, (nodes * dim) << (dim * levels))
+    };
+    let d = dist::read_distributed(ctx, &case.mesh.file, &refine, &lengths)?;
     let model = ctx.agree(check(case, &d.mesh).map_err(RunError::from))?;
+    let unknowns = d.mesh.n_nodes_global() * d.mesh.dim;
+    ctx.agree(
+        case.check_magnitudes(d.mesh.dim, d.mesh.extent(), unknowns)
+            .map_err(RunError::from),
+    )?;
     facet_groups(ctx, case, &d.mesh)?;
     let mut material = cell_materials(ctx, case, &d.mesh, model)?;
     material.reference = reference_material(ctx, case, &d.mesh, &material);
@@ -247,7 +258,7 @@ fn cell_materials(
 }
 
 /// The material whose modulus the single-modulus estimates use (the half-space model of the
-/// contact predictor, the default Newton parameter c = E / h_c): of the materials of the
+/// contact predictor, the default Newton parameter c = 100 E h_c^(d−2)): of the materials of the
 /// cells with a node on a contact group's facets, the stiffest (largest contact modulus
 /// E / (1 − ν²), or E in plane stress); without contact cells, the stiffest of all. With one
 /// material this is that material: single-material runs are unchanged. The materials at the
@@ -523,7 +534,7 @@ pub struct ContactSettings {
     pub coulomb: Option<(f64, case::CoulombAlgorithm)>,
     pub rigid_modes: case::RigidModeHandling,
     pub newton: NewtonSection,
-    /// Young's modulus (the default c = E / h_c): the reference material's
+    /// Young's modulus (the default c = 100 E h_c^(d−2)): the reference material's
     /// ([`Materials::reference`]: with several materials, the stiffest at the contact).
     pub young: f64,
     /// The materials (the final certificate's reactions at the Dirichlet nodes).

@@ -177,8 +177,8 @@ fn a_load_series_has_one_per_step_and_the_worst_in_the_block() {
 }
 
 /// The Hertz disk held at its top arc by Dirichlet data, Coulomb with μ = 0.3, and c = 1e7
-/// (far above E / h_c): the condensed Coulomb iteration stalls above 1e-8 ‖λ‖ and is accepted
-/// by its certificates alone — a loosened acceptance.
+/// (far above the default 100 E): the condensed Coulomb iteration stalls above 1e-8 ‖λ‖ and is
+/// accepted by its certificates alone — a loosened acceptance.
 #[test]
 fn strict_refuses_a_loosened_acceptance() {
     let tmp = tempfile::tempdir().expect("tmp");

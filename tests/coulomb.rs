@@ -835,9 +835,10 @@ fn a_load_step_whose_zone_grows_beyond_its_candidates_takes_them_in_a_new_pass()
 
 #[test]
 fn a_stalled_dense_iterate_is_accepted_where_its_certificates_hold() {
-    // A complementarity parameter c far above E / h_c (newton.c = 1e7 here against 327) raises
-    // what round-off leaves of the residual (F3), which weighs u by c, far above 1e-8 ‖λ‖₂ (as
-    // a fine mesh does at c = E / h_c: the Hertz disk at 344 620 unknowns), while c does not
+    // A complementarity parameter c far above the default (newton.c = 1e7 here against 200)
+    // raises what round-off leaves of the residual (F3), which weighs u by c, far above 1e-8
+    // ‖λ‖₂ (as a fine mesh did at the former default E / h_c: the Hertz disk at 344 620
+    // unknowns), while c does not
     // change the answer. The stalled dense iterate is accepted where its certificates hold to
     // 1e-8 of the problem's scales: one factorisation, and the same state as the plain path's
     // and as the default c's, on 1, 2 and 3 ranks. The dense slip rows must not carry the

@@ -18,6 +18,7 @@ mod contact;
 mod file;
 pub mod keys;
 mod load;
+mod magnitude;
 mod output;
 mod reader;
 mod shape;

@@ -209,8 +209,8 @@ pub struct NewtonSection {
     pub init: NewtonInit,
     /// Reaction to a recurring active set.
     pub on_cycle: OnCycle,
-    /// Complementarity parameter c > 0; None: c = E / h_c (h_c the mean contact mesh size),
-    /// the middle of the range that converged on every case of scripts/bench-tresca-c.
+    /// Complementarity parameter c > 0 (a nodal force per length); None: c = 100 E h_c^(d−2)
+    /// (h_c the mean contact mesh size; tuning::DEFAULT_C_FACTOR).
     pub c: Option<f64>,
     pub max_steps: usize,
     pub tol_u: f64,

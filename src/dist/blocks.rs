@@ -272,7 +272,11 @@ impl Blocks {
 
 /// Reads this rank's blocks: HDF5 by hyperslabs on every rank, MSH on rank 0 (sent out).
 /// Errors are agreed (every rank gets the same).
-pub(super) fn read_blocks(ctx: &Ctx, path: &Path) -> Result<Blocks, RunError> {
+pub(super) fn read_blocks(
+    ctx: &Ctx,
+    path: &Path,
+    lengths: &mesh::LengthCheck,
+) -> Result<Blocks, RunError> {
     let (rank, size) = (ctx.rank, ctx.size);
     let err = |m: String| RunError::Input(InputError::new(path, m));
     if mesh::h5::is_h5(path) {
@@ -283,10 +287,16 @@ pub(super) fn read_blocks(ctx: &Ctx, path: &Path) -> Result<Blocks, RunError> {
         let b = ctx.agree(b)?;
         check_tags(ctx, path, &b)?;
         check_coordinates(ctx, path, &b)?;
+        // the cells are measured after the migration (crate::dist::read)
+        let (lo, hi) = super::nodes::global_bbox(ctx.world, &b);
+        let (extent, far) = mesh::lengths(b.dim, &[lo, hi]);
+        ctx.agree(lengths(b.dim, extent, far, b.n_nodes).map_err(RunError::from))?;
         Ok(b)
     } else {
         let whole = if rank == 0 {
-            mesh::read_msh(path).map(Some).map_err(RunError::Input)
+            mesh::read_msh_checked(path, lengths)
+                .map(Some)
+                .map_err(RunError::Input)
         } else {
             Ok(None)
         };

@@ -27,13 +27,19 @@ pub struct Distributed {
     pub partition_seconds: f64,
 }
 
-/// Reads the mesh file distributed over the ranks of `world`, refines it as `refine` asks,
-/// partitions and migrates it. Collective; an input error is the same on every rank.
-pub fn read_distributed(ctx: &Ctx, path: &Path, refine: &Refine) -> Result<Distributed, RunError> {
+/// Reads the mesh file distributed over the ranks of `world` (its lengths asked of `lengths`
+/// before any cell is measured), refines it as `refine` asks, partitions and migrates it. Collective; an input error is the
+/// same on every rank.
+pub fn read_distributed(
+    ctx: &Ctx,
+    path: &Path,
+    refine: &Refine,
+    lengths: &mesh::LengthCheck,
+) -> Result<Distributed, RunError> {
     let (world, comm) = (ctx.world, ctx.comm());
     let t0 = std::time::Instant::now();
     let mut phases = Phases::start(world);
-    let b = read_blocks(ctx, path)?;
+    let b = read_blocks(ctx, path, lengths)?;
     let b = refine::refine_blocks(ctx, path, b, refine)?;
     let read_seconds = t0.elapsed().as_secs_f64();
     phases.lap("read");

@@ -295,10 +295,17 @@ fn det(x: &[[f64; 3]]) -> f64 {
     }
 }
 
+/// Diagonals of a tetrahedron's octahedron whose squared lengths differ by less than this many
+/// ε · max|x| · |v| (|v| the longest) are equal ([`tet_children`]): the rounding of the
+/// coordinates moves each squared length by up to about 16 of them (four coordinates of
+/// rounding ε max|x| each, before and after a change of units). Not measured; not
+/// machine-specific.
+const TIE_ROUNDING: f64 = 64.0;
+
 /// The 8 children of tetrahedron (v0, v1, v2, v3) as local indices 0..10 into
 /// [v0, v1, v2, v3, m01, m02, m03, m12, m13, m23]: Bey's four corner tetrahedra and the
-/// octahedron cut into four along its shortest diagonal (the first of equal ones), from the
-/// vertex coordinates only.
+/// octahedron cut into four along its shortest diagonal (the first of those equal within the
+/// coordinates' rounding, [`TIE_ROUNDING`]), from the vertex coordinates only.
 fn tet_children(x: &[[f64; 3]; 4]) -> [[usize; 4]; 8] {
     let len2 = |s: [f64; 4]| {
         (0..3)
@@ -314,9 +321,16 @@ fn tet_children(x: &[[f64; 3]; 4]) -> [[usize; 4]; 8] {
         len2([1.0, -1.0, 1.0, -1.0]),
         len2([1.0, -1.0, -1.0, 1.0]),
     ];
+    // Lengths within the rounding of the coordinates are equal: the coordinates carry a
+    // relative rounding of ε (a mesh written in other units carries another), which moves
+    // |v|² by up to ~16 ε max|x| |v|; decided by that rounding, a tie (any regular
+    // tetrahedron's children) would cut a mesh in mm other than the same mesh in m.
+    let big = x.iter().flatten().fold(0.0f64, |m, v| m.max(v.abs()));
+    let longest = l.iter().fold(0.0f64, |m, &v| m.max(v));
+    let slack = TIE_ROUNDING * f64::EPSILON * big * longest.sqrt();
     let mut pick = 0;
     for i in 1..3 {
-        if l[i] < l[pick] {
+        if l[i] < l[pick] - slack {
             pick = i;
         }
     }

@@ -89,7 +89,7 @@ pub struct Materials {
     /// (λ, μ) of every entry of `list`.
     lame: Vec<(f64, f64)>,
     /// The entry whose modulus the single-modulus estimates use (the contact predictor's
-    /// half-space model, the default Newton parameter c = E / h_c).
+    /// half-space model, the default Newton parameter c = 100 E h_c^(d−2)).
     pub reference: usize,
     /// The contact modulus of the half-space model: the reference entry's, or with contact
     /// between bodies the two sides' in series (crate::setup); `None`: the reference's.

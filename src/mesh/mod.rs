@@ -343,14 +343,68 @@ pub fn read_mesh(path: &Path) -> Result<Mesh, InputError> {
 /// Reads a Gmsh MSH 4.1 file (ASCII or binary). All problems with the file are
 /// `InputError`s naming the file.
 pub fn read_msh(path: &Path) -> Result<Mesh, InputError> {
+    read_msh_checked(path, &|_, _, _, _| Ok(()))
+}
+
+/// A check of a mesh's lengths before its cells are measured: (dimension, extent — the
+/// largest side of the bounding box —, largest |coordinate|, nodes) → `Err` to refuse it
+/// (a case's admissible range, `Case::check_mesh_lengths`).
+pub type LengthCheck<'a> = dyn Fn(usize, f64, f64, usize) -> Result<(), InputError> + 'a;
+
+/// As [`read_msh`], with `lengths` asked about the mesh's lengths before any cell is measured
+/// (a mesh whose coordinates leave double precision's range for its cell measures is refused
+/// by `lengths`, not as degenerate).
+pub fn read_msh_checked(path: &Path, lengths: &LengthCheck) -> Result<Mesh, InputError> {
     let bytes = std::fs::read(path)
         .map_err(|e| InputError::new(path, format!("cannot read mesh file: {e}")))?;
-    read_msh_bytes(&bytes, path)
+    read_msh_bytes_checked(&bytes, path, lengths)
 }
 
 /// As [`read_msh`], from the bytes of the file already in memory; `path` only names the file
 /// in messages.
 pub fn read_msh_bytes(bytes: &[u8], path: &Path) -> Result<Mesh, InputError> {
+    read_msh_bytes_checked(bytes, path, &|_, _, _, _| Ok(()))
+}
+
+/// The extent (the largest side of the bounding box) and the largest |coordinate| of the
+/// first `dim` coordinates of `coords` (0 for none). Pure.
+pub fn lengths(dim: usize, coords: &[[f64; 3]]) -> (f64, f64) {
+    let (lo, hi) = bounding_box(coords);
+    let extent = (0..dim).map(|k| hi[k] - lo[k]).fold(0.0f64, f64::max);
+    let far = (0..dim)
+        .map(|k| lo[k].abs().max(hi[k].abs()))
+        .fold(0.0f64, f64::max);
+    if coords.is_empty() {
+        (0.0, 0.0)
+    } else {
+        (extent, far)
+    }
+}
+
+/// A failure of [`build`]: a message about the file, or the length check's own error.
+enum BuildError {
+    Msg(String),
+    Lengths(InputError),
+}
+
+impl From<String> for BuildError {
+    fn from(m: String) -> Self {
+        BuildError::Msg(m)
+    }
+}
+
+impl From<&str> for BuildError {
+    fn from(m: &str) -> Self {
+        BuildError::Msg(m.to_string())
+    }
+}
+
+/// As [`read_msh_bytes`], with the check `lengths` of [`read_msh_checked`].
+fn read_msh_bytes_checked(
+    bytes: &[u8],
+    path: &Path,
+    lengths: &LengthCheck,
+) -> Result<Mesh, InputError> {
     let err = |m: String| InputError::new(path, m);
     let info = raw::scan_header(bytes).map_err(err)?;
     if info.partitioned {
@@ -379,7 +433,10 @@ pub fn read_msh_bytes(bytes: &[u8], path: &Path) -> Result<Mesh, InputError> {
         }
     };
 
-    build(bytes, &info, &msh).map_err(err)
+    build(bytes, &info, &msh, lengths).map_err(|e| match e {
+        BuildError::Msg(m) => err(m),
+        BuildError::Lengths(e) => e,
+    })
 }
 
 /// The parser's error as one line: where (line and byte of the file, from the position the
@@ -437,7 +494,8 @@ fn build(
     bytes: &[u8],
     info: &raw::HeaderInfo,
     msh: &mshio::MshFile<u64, i32, f64>,
-) -> Result<Mesh, String> {
+    check_lengths: &LengthCheck,
+) -> Result<Mesh, BuildError> {
     let nodes = msh
         .data
         .nodes
@@ -450,13 +508,13 @@ fn build(
         .ok_or("the file has no $Elements section")?;
     let (all_coords, all_tags) = file_nodes(bytes, info, nodes, elements)?;
     if let Some(t) = smallest_duplicate(&all_tags) {
-        return Err(duplicate_tag("node", t, "$Nodes"));
+        return Err(duplicate_tag("node", t, "$Nodes").into());
     }
     let element_tags: Vec<u64> = (elements.element_blocks.iter())
         .flat_map(|b| b.elements.iter().map(|e| e.element_tag))
         .collect();
     if let Some(t) = smallest_duplicate(&element_tags) {
-        return Err(duplicate_tag("element", t, "$Elements"));
+        return Err(duplicate_tag("element", t, "$Elements").into());
     }
     drop(element_tags);
     let tag_index = TagIndex::new(&all_tags);
@@ -466,11 +524,13 @@ fn build(
         body_cells(elements, dim, &phys, &tag_index, all_tags.len())?;
     let (mut coords, node_tags, new_index) = compact(&used, &all_coords, &all_tags, &mut cells);
     if let Some((_, m)) = non_finite_node(node_tags.iter().copied().zip(coords.iter())) {
-        return Err(m);
+        return Err(m.into());
     }
     if dim == 2 {
         flatten_2d(&mut coords)?;
     }
+    let (extent, far) = lengths(dim, &coords);
+    check_lengths(dim, extent, far, coords.len()).map_err(BuildError::Lengths)?;
     orient_cells(dim, &mut cells, &cell_tags, &coords)?;
     let mut mesh = Mesh {
         dim,

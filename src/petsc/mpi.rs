@@ -1,6 +1,6 @@
 //! The few raw MPI calls of the binding layer that run inside PETSc callbacks or next to MUMPS,
-//! where no `Ctx` is at hand: agreement on a flag or on the first failing rank's message, a
-//! gather of integers to rank 0 and their broadcast from it.
+//! where no `Ctx` is at hand: agreement on a flag, on a maximum or on the first failing rank's
+//! message, a gather of integers to rank 0 and their broadcast from it.
 
 use std::ffi::c_void;
 use std::os::raw::c_int;
@@ -23,6 +23,24 @@ fn min_i32(comm: MPI_Comm, v: i32) -> Result<i32> {
             1,
             ffi::RSMPI_INT32_T,
             ffi::RSMPI_MIN,
+            comm,
+        )
+    };
+    mpi_ok(rc, "MPI_Allreduce")?;
+    Ok(out)
+}
+
+/// The maximum of `v` over the ranks of `comm` (one Allreduce).
+pub(super) fn max_i32(comm: MPI_Comm, v: i32) -> Result<i32> {
+    let mut out: i32 = 0;
+    // SAFETY: one int in, one out, on a valid communicator.
+    let rc = unsafe {
+        ffi::MPI_Allreduce(
+            &v as *const i32 as *const c_void,
+            &mut out as *mut i32 as *mut c_void,
+            1,
+            ffi::RSMPI_INT32_T,
+            ffi::RSMPI_MAX,
             comm,
         )
     };

@@ -53,6 +53,9 @@ pub struct SchurFactor {
     n: usize,
     size_schur: usize,
     root: bool,
+    /// The power of two σ by which MUMPS is handed σ A ([`unit_scale`]); S, the condensed
+    /// right-hand side and the expansion are A's.
+    scale: f64,
     /// The analysis' and the factorisation's statistics (the same on every rank).
     stats: FactorStats,
 }
@@ -102,7 +105,11 @@ impl SchurFactor {
             )));
         }
         let read = rows(comm, mat, true).and_then(|t| bases.rotate(mat, t));
-        let (irn, jcn, vals) = agreed(comm, read)?;
+        let (irn, jcn, mut vals) = agreed(comm, read)?;
+        let scale = unit_scale(comm, &vals)?;
+        for v in &mut vals {
+            *v *= scale;
+        }
         let (inst, (irn, jcn, vals)) = if one_process {
             let all = gathered(comm, irn, jcn, vals)?;
             let inst = if root {
@@ -138,6 +145,7 @@ impl SchurFactor {
             n,
             size_schur,
             root,
+            scale,
             stats: FactorStats {
                 symmetric: true,
                 ..FactorStats::default()
@@ -236,7 +244,11 @@ impl SchurFactor {
         if let Some(inst) = self.inst.as_mut() {
             inst.id.schur = std::ptr::null_mut();
         }
-        std::mem::take(&mut self.schur)
+        let mut s = std::mem::take(&mut self.schur);
+        for v in &mut s {
+            *v /= self.scale;
+        }
+        s
     }
 
     /// Condensation (ICNTL(26) = 1): the right-hand side `rhs` (global size, on the host;
@@ -245,8 +257,9 @@ impl SchurFactor {
     pub fn condense(&mut self, rhs: &[f64]) -> Result<Vec<f64>> {
         self.prepare_solve(rhs, None, 1);
         self.call(3)?;
+        // σ b condensed on σ A: σ (b_s − A_sr A_rr⁻¹ b_r)
         Ok(if self.root {
-            self.redrhs.clone()
+            self.redrhs.iter().map(|v| v / self.scale).collect()
         } else {
             Vec::new()
         })
@@ -280,7 +293,8 @@ impl SchurFactor {
         inst.id.icntl[25] = phase;
         if self.root {
             debug_assert!(rhs.len() == self.n && x_s.is_none_or(|x| x.len() == self.size_schur));
-            self.rhs = rhs.to_vec();
+            // σ b for σ A: the expansion (σ A_rr)⁻¹ (σ b_r − σ A_rs x_s) is A's
+            self.rhs = rhs.iter().map(|v| v * self.scale).collect();
             self.rhs.resize(self.n, 0.0);
             self.redrhs = x_s.map(<[f64]>::to_vec).unwrap_or_default();
             self.redrhs.resize(self.size_schur, 0.0);
@@ -291,6 +305,34 @@ impl SchurFactor {
         }
         inst.centralised_solve();
     }
+}
+
+/// The power of two σ that brings the largest |entry| of a matrix (every rank's `vals`) into
+/// [1, 2): MUMPS is handed σ A. Exact in floating point, so that σ A's factors, Schur
+/// complement and solves are σ times A's to the last bit wherever MUMPS is exact in scale;
+/// and MUMPS' LLᵀ is not at every scale: with entries near 1e-18 (a Young's modulus of
+/// 1.7e-18, the same block as at 2, 2 ranks) its Schur complement on the candidates came back
+/// wrong in its second digit (S_22 1.24e-18 where 0.915e-18 is A's) while A itself was 2⁻⁶⁰
+/// times the one at E = 2 to the last bit. Collective (one Allreduce).
+fn unit_scale(comm: MPI_Comm, vals: &[f64]) -> Result<f64> {
+    let largest = vals
+        .iter()
+        .filter(|v| v.is_finite())
+        .fold(0.0f64, |m, v| m.max(v.abs()));
+    // the binary exponent of the largest entry (i32::MIN: none)
+    let local = if largest > 0.0 {
+        largest.log2().floor() as i32
+    } else {
+        i32::MIN
+    };
+    let e = super::mpi::max_i32(comm, local)?;
+    Ok(if e == i32::MIN {
+        1.0
+    } else {
+        // 2^−e in two factors: each a normal power of two for any finite entry
+        let half = -e / 2;
+        2f64.powi(half) * 2f64.powi(-e - half)
+    })
 }
 
 /// One MUMPS instance (DMUMPS_STRUC_C), initialised by JOB = −1 and released by JOB = −2 on

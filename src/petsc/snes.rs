@@ -176,9 +176,11 @@ pub fn solve_linear_vi(
 unsafe fn configure(snes: ffi::SNES, settings: &ViSettings) -> Result<String> {
     // SAFETY: `snes` is valid (caller); the strings outlive the calls that read them.
     unsafe {
+        // no absolute tolerance: PETSc's default 1e-50 is a residual in the case's unit of
+        // force (crate::linsolve's iterative preset has none either)
         check(ffi::SNESSetTolerances(
             snes,
-            ffi::PETSC_DEFAULT as f64,
+            0.0,
             settings.rtol,
             ffi::PETSC_DEFAULT as f64,
             settings.max_it as PInt,

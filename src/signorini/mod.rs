@@ -43,6 +43,7 @@ use crate::petsc::Vector;
 use crate::say;
 use crate::setup::ContactSettings;
 use crate::solver;
+use crate::tuning::DEFAULT_C_FACTOR;
 use crate::warnings::Warning;
 use active_set::{ActiveSet, Iterate, Law};
 use boundary::{ContactBoundary, NodeResult};
@@ -598,7 +599,8 @@ fn force_control(
         .collect()
 }
 
-/// The complementarity parameter c: the case's, or E / h_c; said in the log. Collective.
+/// The complementarity parameter c: the case's, or κ E h_c^(d−2) ([`plain_path::default_c`]);
+/// said in the log. Collective.
 fn complementarity_parameter(
     ctx: &Ctx,
     settings: &ContactSettings,
@@ -612,10 +614,10 @@ fn complementarity_parameter(
     say!(
         ctx,
         "newton: c = {c:.6e}{}",
-        if settings.newton.c.is_none() {
-            " (E / h_c)"
-        } else {
-            ""
+        match (settings.newton.c, dim) {
+            (Some(_), _) => String::new(),
+            (None, 2) => format!(" ({DEFAULT_C_FACTOR} E)"),
+            (None, _) => format!(" ({DEFAULT_C_FACTOR} E h_c)"),
         }
     );
     c

@@ -19,7 +19,7 @@ pub const COULOMB_RESIDUAL_TOL: f64 = 1e-9;
 pub const COULOMB_RESIDUAL_ZERO: f64 = 1e-12;
 
 /// Coulomb: a residual that an exact step on unchanged states and an unchanged u (below
-/// tol_u) no longer halves is what round-off leaves of (F3) — it grows with c = E/h_c and the
+/// tol_u) no longer halves is what round-off leaves of (F3) — it grows with c and the
 /// number of nodes (the floating Hertz disk at 344 620 unknowns stalls at 1.5e-9 of ‖λ‖₂, above
 /// COULOMB_RESIDUAL_TOL, step after step with |Δu|/|u| ~ 1e-13) — and is accepted below this
 /// fraction of ‖λ‖₂.

@@ -19,10 +19,13 @@ impl FrictionLaw for Tresca {
         k.bound
     }
 
-    /// ‖C_τ‖² (3.31).
+    /// The natural residual of (3.18), |λ_τ − P_b(λ_τ + c Δu_τ)|², squared: (3.31)'s C_τ
+    /// divided by max(b_k, |λ_τ + c Δu_τ|). C_τ itself is a force squared, and its sum with
+    /// C_n (a force) compared with ‖λ‖ would weigh the two by the unit of force (the condensed
+    /// Tresca iteration's checks accepted a block's iterate in N and refused it in GN); the
+    /// natural residual is a force, zero exactly where C_τ is (Satz 3.7).
     fn residual2(&self, k: &ContactNode, r: &NodeResult, c: f64) -> f64 {
-        let ct = contact::c_tau(&increment(r, k), &r.lambda_t, k.bound, c);
-        ct[0] * ct[0] + ct[1] * ct[1]
+        contact::tresca_natural_residual(&increment(r, k), &r.lambda_t, k.bound, c).powi(2)
     }
 
     /// The row for the next step from the (3.39) row `row` of node `k` at `r` and the row `prev`

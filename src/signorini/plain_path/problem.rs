@@ -14,6 +14,7 @@ use crate::signorini::force::ForceControl;
 use crate::signorini::halfspace::{HalfSpace, PredictorStep};
 use crate::signorini::rigid::Pin;
 use crate::signorini::step_system::{AmgStep, ReuseStep, RowChange, SolveKind};
+use crate::tuning::DEFAULT_C_FACTOR;
 
 /// What the loop needs from the case.
 pub struct NewtonSettings<'a> {
@@ -136,8 +137,11 @@ pub struct NewtonResult {
     pub stop: crate::signorini::certificate::StopRule,
 }
 
-/// Default c = E / h_c with h_c the mean contact mesh size (w_k^(1/(d−1)) over all contact
-/// nodes): c u then has the size of a nodal force, as λ (measured in bench/results/tresca_c.md).
+/// Default c = κ E h_c^(d−2) (κ = [`DEFAULT_C_FACTOR`], h_c the mean contact mesh size, the mean of
+/// w_k^(1/(d−1)) over all contact nodes): a nodal stiffness (2D: κ E; 3D: κ E h_c), so that c u
+/// in (3.23) and (3.33) has the unit of the nodal force λ it is added to, in every unit system.
+/// (The former E / h_c is a stress per length: c u then weighed against λ with the unit of
+/// length to the power d − 1, and a ball given in µm instead of m did not converge.)
 pub fn default_c(ctx: &Ctx, b: &ContactBoundary, dim: usize, young: f64) -> f64 {
     let local: f64 = b
         .nodes
@@ -145,11 +149,13 @@ pub fn default_c(ctx: &Ctx, b: &ContactBoundary, dim: usize, young: f64) -> f64 
         .map(|k| k.weight.powf(1.0 / (dim - 1) as f64))
         .sum();
     let out = ctx.sum_vec(&[local, b.nodes.len() as f64]);
-    if out[1] > 0.0 && out[0] > 0.0 {
-        young / (out[0] / out[1])
+    let stiffness = if out[1] > 0.0 && out[0] > 0.0 {
+        young * (out[0] / out[1]).powi(dim as i32 - 2)
     } else {
+        // no contact node (every one held by Dirichlet data): c is never read
         young
-    }
+    };
+    DEFAULT_C_FACTOR * stiffness
 }
 
 /// The data of a contact solve: the mesh and its partition, the contact boundary, the

@@ -3,6 +3,7 @@
 //! equilibrated dense solve and the iteration with its stopping rules.
 
 use super::coulomb_run::{DenseCoulomb, DenseStep};
+use crate::case::NewtonInit;
 use crate::contact::{normal_active, CoulombRow};
 use crate::petsc::lapack::DenseLu;
 use crate::signorini::active_set::{
@@ -380,8 +381,12 @@ impl DenseIteration<'_> {
         let (d, n) = (self.dim, self.cb.nodes.len());
         let (law, c) = (self.law, self.c);
         let scale = threshold_scale_local(self.cb, start, law, c);
+        let warm = ActiveSet::warm(self.cb, start, law, c, scale, d);
+        if let Some(run) = self.no_load(&warm) {
+            return run;
+        }
         let mut w = Walk {
-            set: ActiveSet::warm(self.cb, start, law, c, scale, d),
+            set: warm,
             it: Iterate::new(n, 0, true),
             last_still: None,
             steps: Vec::new(),
@@ -458,6 +463,36 @@ impl DenseIteration<'_> {
             self.max_steps
         );
         self.failed(w, why)
+    }
+
+    /// Coulomb with no load at the candidates (d₀ = 0 — in the primal form r = 0 —, φ = 0) and
+    /// no candidate inside its obstacle: u = 0, λ = 0 is the solution (b = μ(−λ_n) of (F1) is 0
+    /// where nothing presses), in one step with every candidate open (S2), `warm` the set it
+    /// starts from. A load step taken back to no load otherwise iterates on round-off: its
+    /// states flip from step to step until every value is exactly 0 (measured:
+    /// tests/cases/punch_back.toml's last step, 5–9 dense steps by rank count and c). `None`
+    /// where there is a load or a penetration, or for Tresca, whose thresholds hold a
+    /// displacement without a load. Local (rank 0).
+    fn no_load(&self, warm: &ActiveSet) -> Option<DenseCoulomb> {
+        let zero = |v: &[f64]| v.iter().all(|&x| x == 0.0);
+        let load = match self.stiff {
+            Some(st) => zero(st.r),
+            None => zero(self.d0),
+        };
+        let open = self.cb.nodes.iter().all(|k| k.gap >= 0.0);
+        if self.law != Law::Coulomb || !load || !zero(self.phi) || !open {
+            return None;
+        }
+        let t = Instant::now();
+        let (d, n) = (self.dim, self.cb.nodes.len());
+        let set = ActiveSet::initial(self.cb, NewtonInit::AllInactive, self.law, self.c, 0.0, d);
+        let changed = (0..n).filter(|&q| set.state(q) != warm.state(q)).count();
+        let steps = vec![(1, 0, changed, 0.0, t.elapsed().as_secs_f64())];
+        let mut run = self.end(&set, vec![0.0; n * d], Vec::new(), steps, 0, Ok(()));
+        if self.stiff.is_some() {
+            run.x_s = vec![0.0; n * d];
+        }
+        Some(run)
     }
 
     /// The run ended without an accepted iterate (`why`), with the walk's set and steps.

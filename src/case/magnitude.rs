@@ -88,6 +88,17 @@ struct Scale<'a> {
     power: i32,
 }
 
+/// The softest material: its key, E and E L^(d−2).
+type Softest = (String, f64, f64);
+
+/// One load as a nodal force: the case's key and value, the force and what it is.
+struct NodalLoad {
+    key: String,
+    value: f64,
+    force: f64,
+    what: &'static str,
+}
+
 impl Case {
     /// The mesh's lengths against their range ([`admissible`] with p = 2d, `n` unknowns):
     /// its extent (the largest side of its bounding box) and its largest |coordinate|.
@@ -128,12 +139,38 @@ impl Case {
     /// force), each prescribed displacement (Dirichlet values, motions), the obstacles'
     /// lengths, a given `newton.c` (a stiffness), and the displacement the largest load
     /// causes in the softest material, F / (E L^(d−2)). Zeros are not scales. The first scale
-    /// out of its range is an error naming its key. Pure.
+    /// out of its range is an error naming its key (in that order). Pure.
     pub fn check_magnitudes(&self, dim: usize, extent: f64, n: usize) -> Result<(), InputError> {
         let d = dim as i32;
-        let l = extent;
-        let mut scales: Vec<Scale> = Vec::new();
-        let mut softest: Option<(String, f64, f64)> = None;
+        let (mut scales, softest) = self.material_scales(d, extent);
+        scales.extend(self.displacement_scales(d));
+        let loads = self.nodal_loads(d, extent);
+        scales.extend(loads.iter().map(|f| Scale {
+            key: f.key.clone(),
+            value: f.value,
+            what: f.what,
+            scale: f.force,
+            power: 2,
+        }));
+        if let Some(c) = self.newton.c {
+            scales.push(Scale {
+                key: "newton.c".into(),
+                value: c,
+                what: "the complementarity parameter (a stiffness)",
+                scale: c,
+                power: 2,
+            });
+        }
+        for s in &scales {
+            self.check_scale(s, dim, n)?;
+        }
+        self.check_displacement(&loads, softest, extent, n)
+    }
+
+    /// Each material's stiffness E L^(d−2), and the softest one (key, E, E L^(d−2)). Pure.
+    fn material_scales(&self, d: i32, l: f64) -> (Vec<Scale<'static>>, Option<Softest>) {
+        let mut scales = Vec::new();
+        let mut softest: Option<Softest> = None;
         for m in &self.materials {
             let k = m.young * l.powi(d - 2);
             if softest.as_ref().is_none_or(|s| k < s.2) {
@@ -147,6 +184,13 @@ impl Case {
                 power: 2,
             });
         }
+        (scales, softest)
+    }
+
+    /// The prescribed displacements (Dirichlet values), then each contact pair's obstacle
+    /// lengths and motion. Pure.
+    fn displacement_scales(&self, d: i32) -> Vec<Scale<'static>> {
+        let mut scales = Vec::new();
         for (i, dr) in self.dirichlet.iter().enumerate() {
             let v = dr
                 .value
@@ -160,29 +204,6 @@ impl Case {
                 scale: v,
                 power: 2,
             });
-        }
-        // (key, value, nodal force, what)
-        let mut loads: Vec<(String, f64, f64, &str)> = Vec::new();
-        for (i, nm) in self.neumann.iter().enumerate() {
-            let (name, v) = match &nm.load {
-                Load::Pressure(p) => ("pressure", p.abs()),
-                Load::Traction(t) => ("traction", largest(t)),
-            };
-            loads.push((
-                join_key(&join_index("neumann", i), name),
-                v,
-                v * l.powi(d - 1),
-                "a nodal force (the traction times L^(d−1))",
-            ));
-        }
-        if let Some(BodyForceSpec::Constant(v)) = &self.body_force {
-            let b = largest(v);
-            loads.push((
-                "body_force.value".into(),
-                b,
-                b * l.powi(d),
-                "a nodal force (the force per volume times L^d)",
-            ));
         }
         for c in &self.contacts {
             for (name, x) in shape_lengths(&c.obstacle) {
@@ -204,58 +225,84 @@ impl Case {
                     power: 2,
                 });
             }
+        }
+        scales
+    }
+
+    /// Each load as a nodal force: Neumann data, a constant body force, each pair's
+    /// prescribed force and Tresca threshold. Pure.
+    fn nodal_loads(&self, d: i32, l: f64) -> Vec<NodalLoad> {
+        let mut loads = Vec::new();
+        for (i, nm) in self.neumann.iter().enumerate() {
+            let (name, v) = match &nm.load {
+                Load::Pressure(p) => ("pressure", p.abs()),
+                Load::Traction(t) => ("traction", largest(t)),
+            };
+            loads.push(NodalLoad {
+                key: join_key(&join_index("neumann", i), name),
+                value: v,
+                force: v * l.powi(d - 1),
+                what: "a nodal force (the traction times L^(d−1))",
+            });
+        }
+        if let Some(BodyForceSpec::Constant(v)) = &self.body_force {
+            let b = largest(v);
+            loads.push(NodalLoad {
+                key: "body_force.value".into(),
+                value: b,
+                force: b * l.powi(d),
+                what: "a nodal force (the force per volume times L^d)",
+            });
+        }
+        for c in &self.contacts {
             if let Some(f) = &c.force {
                 let v = motion_size(f);
-                loads.push((f.key.clone(), v, v, "a force"));
+                loads.push(NodalLoad {
+                    key: f.key.clone(),
+                    value: v,
+                    force: v,
+                    what: "a force",
+                });
             }
             if let Friction::Tresca { threshold } = c.friction {
-                let key = join_key(&join_key(&c.key, "friction"), "threshold");
-                loads.push((
-                    key,
-                    threshold,
-                    threshold * l.powi(d - 1),
-                    "a nodal threshold (the threshold times L^(d−1))",
-                ));
+                loads.push(NodalLoad {
+                    key: join_key(&join_key(&c.key, "friction"), "threshold"),
+                    value: threshold,
+                    force: threshold * l.powi(d - 1),
+                    what: "a nodal threshold (the threshold times L^(d−1))",
+                });
             }
         }
-        for (key, value, f, what) in &loads {
-            scales.push(Scale {
-                key: key.clone(),
-                value: *value,
-                what,
-                scale: *f,
-                power: 2,
-            });
-        }
-        if let Some(c) = self.newton.c {
-            scales.push(Scale {
-                key: "newton.c".into(),
-                value: c,
-                what: "the complementarity parameter (a stiffness)",
-                scale: c,
-                power: 2,
-            });
-        }
-        for s in &scales {
-            self.check_scale(s, dim, n)?;
-        }
-        // the displacement the largest load causes in the softest material
-        let heaviest = loads.iter().max_by(|a, b| a.2.total_cmp(&b.2));
-        if let (Some((lk, lv, f, _)), Some((ek, ev, k))) = (heaviest, softest) {
-            let u = f / k;
-            let (lo, hi) = admissible(2, n);
-            if u > 0.0 && !(lo..=hi).contains(&u) {
-                return Err(self.err_at(
-                    lk,
-                    format!(
-                        "{lv:e} with {ek} = {ev:e} gives displacements of about {u:.3e} \
-                         (F / (E L^(d−2)), L = {l:.3e} the mesh's extent), outside the range \
-                         this solver can represent: {lo:.1e} … {hi:.1e} (the square of a scale, \
-                         summed over the {n} unknowns, must be a normal double); give the case \
-                         in other units (docs/case-file.md, \"Units\")"
-                    ),
-                ));
-            }
+        loads
+    }
+
+    /// The displacement the largest load causes in the softest material, F / (E L^(d−2)),
+    /// against its range. Pure.
+    fn check_displacement(
+        &self,
+        loads: &[NodalLoad],
+        softest: Option<Softest>,
+        l: f64,
+        n: usize,
+    ) -> Result<(), InputError> {
+        let heaviest = loads.iter().max_by(|a, b| a.force.total_cmp(&b.force));
+        let (Some(load), Some((ek, ev, k))) = (heaviest, softest) else {
+            return Ok(());
+        };
+        let (lk, lv) = (&load.key, load.value);
+        let u = load.force / k;
+        let (lo, hi) = admissible(2, n);
+        if u > 0.0 && !(lo..=hi).contains(&u) {
+            return Err(self.err_at(
+                lk,
+                format!(
+                    "{lv:e} with {ek} = {ev:e} gives displacements of about {u:.3e} \
+                     (F / (E L^(d−2)), L = {l:.3e} the mesh's extent), outside the range \
+                     this solver can represent: {lo:.1e} … {hi:.1e} (the square of a scale, \
+                     summed over the {n} unknowns, must be a normal double); give the case \
+                     in other units (docs/case-file.md, \"Units\")"
+                ),
+            ));
         }
         Ok(())
     }

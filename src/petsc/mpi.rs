@@ -14,33 +14,26 @@ pub(super) fn all_true(comm: MPI_Comm, flag: bool) -> Result<bool> {
 
 /// The minimum of `v` over the ranks of `comm` (one Allreduce).
 fn min_i32(comm: MPI_Comm, v: i32) -> Result<i32> {
-    let mut out: i32 = 0;
-    // SAFETY: one int in, one out, on a valid communicator.
-    let rc = unsafe {
-        ffi::MPI_Allreduce(
-            &v as *const i32 as *const c_void,
-            &mut out as *mut i32 as *mut c_void,
-            1,
-            ffi::RSMPI_INT32_T,
-            ffi::RSMPI_MIN,
-            comm,
-        )
-    };
-    mpi_ok(rc, "MPI_Allreduce")?;
-    Ok(out)
+    allreduce_i32(comm, v, false)
 }
 
 /// The maximum of `v` over the ranks of `comm` (one Allreduce).
 pub(super) fn max_i32(comm: MPI_Comm, v: i32) -> Result<i32> {
+    allreduce_i32(comm, v, true)
+}
+
+/// The maximum (`max`) or minimum of `v` over the ranks of `comm` (one Allreduce).
+fn allreduce_i32(comm: MPI_Comm, v: i32, max: bool) -> Result<i32> {
     let mut out: i32 = 0;
-    // SAFETY: one int in, one out, on a valid communicator.
+    // SAFETY: one int in, one out, on a valid communicator; the ops are MPI's predefined ones.
     let rc = unsafe {
+        let op = if max { ffi::RSMPI_MAX } else { ffi::RSMPI_MIN };
         ffi::MPI_Allreduce(
             &v as *const i32 as *const c_void,
             &mut out as *mut i32 as *mut c_void,
             1,
             ffi::RSMPI_INT32_T,
-            ffi::RSMPI_MAX,
+            op,
             comm,
         )
     };

@@ -426,6 +426,18 @@ impl DenseRun {
 struct Complementarity<'a> {
     gap: &'a [f64],
     c: f64,
+    /// ‖g‖∞ (for the tie width; the gaps do not change over the iteration).
+    gap_inf: f64,
+}
+
+impl<'a> Complementarity<'a> {
+    fn new(gap: &'a [f64], c: f64) -> Self {
+        Complementarity {
+            gap,
+            c,
+            gap_inf: inf_norm(gap),
+        }
+    }
 }
 
 /// (3.21) and (3.23) on every candidate from a step's u_n and λ_n on the set `active`: the
@@ -441,8 +453,8 @@ fn update(
     t: Instant,
     steps: &mut Vec<(usize, usize, usize, f64, f64)>,
 ) -> (Vec<bool>, usize) {
-    let Complementarity { gap, c } = data;
-    let tie = ties(inf_norm(lambda), inf_norm(u_n).max(inf_norm(gap)), c);
+    let Complementarity { gap, c, gap_inf } = data;
+    let tie = ties(inf_norm(lambda), inf_norm(u_n).max(gap_inf), c);
     let mut next = active.to_vec();
     let mut changed = 0;
     let mut res2 = 0.0;
@@ -490,6 +502,7 @@ impl Primal<'_> {
         let mut seen: HashSet<Vec<bool>> = HashSet::new();
         seen.insert(active.clone());
         let mut steps = Vec::new();
+        let data = Complementarity::new(self.gap, self.c);
         for step in 1..=self.max_steps {
             let t = Instant::now();
             let ni = active.iter().filter(|&&a| !a).count();
@@ -507,18 +520,7 @@ impl Primal<'_> {
                 );
                 return DenseRun::unsolved(active, mz, steps, why);
             };
-            let (next, changed) = update(
-                &active,
-                &u,
-                &lambda,
-                Complementarity {
-                    gap: self.gap,
-                    c: self.c,
-                },
-                step,
-                t,
-                &mut steps,
-            );
+            let (next, changed) = update(&active, &u, &lambda, data, step, t, &mut steps);
             if changed == 0 {
                 return DenseRun {
                     active,
@@ -651,6 +653,7 @@ impl Dense<'_> {
             end,
             coarse: Vec::new(),
         };
+        let data = Complementarity::new(self.gap, self.c);
         for step in 1..=self.max_steps {
             let t = Instant::now();
             let (lambda, alpha, u_n, free_dirs) = match self.solve_set(&active) {
@@ -660,18 +663,7 @@ impl Dense<'_> {
                     return DenseRun::unsolved(active, mz, steps, why);
                 }
             };
-            let (mut next, changed) = update(
-                &active,
-                &u_n,
-                &lambda,
-                Complementarity {
-                    gap: self.gap,
-                    c: self.c,
-                },
-                step,
-                t,
-                &mut steps,
-            );
+            let (mut next, changed) = update(&active, &u_n, &lambda, data, step, t, &mut steps);
             if changed == 0 {
                 match self.balance(&active, &u_n, &free_dirs) {
                     None => return out(active, lambda, alpha, u_n, steps, End::Converged),
@@ -1025,6 +1017,26 @@ mod tests {
         (c, packed)
     }
 
+    /// A dense iteration on `cmat` without free modes, c = 1, at most 50 steps.
+    fn plain<'a>(
+        cmat: CMatrix<'a>,
+        d0: &'a [f64],
+        gap: &'a [f64],
+        g: &'a DMatrix<f64>,
+    ) -> Dense<'a> {
+        Dense {
+            cmat,
+            d0,
+            gap,
+            g,
+            phi: &[],
+            load_scale: 1.0,
+            c: 1.0,
+            max_steps: 50,
+            pins: None,
+        }
+    }
+
     /// The packed upper triangle reads as the full matrix: entries, products, blocks.
     #[test]
     fn a_packed_compliance_reads_as_the_full_matrix() {
@@ -1101,20 +1113,7 @@ mod tests {
         let gap: Vec<f64> = (0..n).map(|i| 0.01 * (i as f64 - 29.5).powi(2)).collect();
         let d0 = vec![-2.0; n];
         let g = DMatrix::zeros(n, 0);
-        let run = |cmat| {
-            Dense {
-                cmat,
-                d0: &d0,
-                gap: &gap,
-                g: &g,
-                phi: &[],
-                load_scale: 1.0,
-                c: 1.0,
-                max_steps: 50,
-                pins: None,
-            }
-            .run(vec![false; n])
-        };
+        let run = |cmat| plain(cmat, &d0, &gap, &g).run(vec![false; n]);
         let (a, b) = (
             run(CMatrix::Full(&c)),
             run(CMatrix::Upper { n, packed: &packed }),
@@ -1143,20 +1142,7 @@ mod tests {
         let mut gap: Vec<f64> = (0..n).map(|i| 0.01 * (i as f64 - 19.5).powi(2)).collect();
         let d0 = vec![-2.0; n];
         let g = DMatrix::zeros(n, 0);
-        let run = |gap: &[f64]| {
-            Dense {
-                cmat: CMatrix::Full(&c),
-                d0: &d0,
-                gap,
-                g: &g,
-                phi: &[],
-                load_scale: 1.0,
-                c: 1.0,
-                max_steps: 50,
-                pins: None,
-            }
-            .run(vec![false; n])
-        };
+        let run = |gap: &[f64]| plain(CMatrix::Full(&c), &d0, gap, &g).run(vec![false; n]);
         let first = run(&gap);
         assert_eq!(first.end, End::Converged);
         // the first inactive node beside the zone, moved to touch with no force

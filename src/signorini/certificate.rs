@@ -90,7 +90,10 @@ pub struct Equilibrium {
     /// |residual| (force).
     pub residual_norm: f64,
     /// The largest of the sums of magnitudes Σ|f_i|, Σ|λ_i|, Σ|R_i| over the dofs of each
-    /// kind (force): the force that flows through the body.
+    /// kind (force): the force that flows through the body; at least the largest nodal force
+    /// that λ and R are differences of (max |A_ii| max|u| over the contact rows, max Σ_j
+    /// |K_e,ij u_j| over the Dirichlet rows), below whose round-off a residual cannot be told
+    /// (a body moved by its Dirichlet data alone carries forces of 1e-17).
     pub reference: f64,
     /// residual_norm / reference (0 where both are 0).
     pub relative: f64,
@@ -441,7 +444,13 @@ pub fn equilibrium(
     let mut au = f.duplicate()?;
     a.mult(u, &mut au)?;
     let (au, f_local) = (au.to_local_vec()?, f.to_local_vec()?);
-    let v = dirichlet_terms(elastic, f, u)?;
+    let (v, products) = dirichlet_terms(elastic, f, u)?;
+    let mut diagonal = f.duplicate()?;
+    a.diagonal(&mut diagonal)?;
+    let diagonal = diagonal.to_local_vec()?;
+    let inf = |v: &[f64]| v.iter().fold(0.0f64, |m, x| m.max(x.abs()));
+    let u_inf = ctx.max_f64(inf(&u.to_local_vec()?));
+    let mut diagonal_max = 0.0f64;
     let (mut contact_row, lambdas) = contact_forces(b, &f_local, &au);
     for (r, &m) in contact_row.iter_mut().zip(more_rows) {
         *r |= m;
@@ -465,20 +474,23 @@ pub fn equilibrium(
                     let l = f[i] - au[i];
                     local[3 + c] -= l;
                     local[10] += l.abs();
+                    diagonal_max = diagonal_max.max(diagonal[i].abs());
                 }
             }
         }
     }
     let s = ctx.sum_vec(&local);
     let three = |o: usize| [s[o], s[o + 1], s[o + 2]];
-    let eq = balance(three(0), three(3), three(6), three(9), dim);
+    let round_off = (ctx.max_f64(diagonal_max) * u_inf).max(ctx.max_f64(products));
+    let eq = balance(three(0), three(3), three(6), three(9), dim).floored(round_off);
     Ok((eq, lambdas))
 }
 
 /// V of [`equilibrium`]: K_e u_e at the Dirichlet dofs and K_e[·, D] g_D at the others, over
 /// the cells with a Dirichlet node (u at their nodes gathered), summed in rank order; this
-/// rank's rows. Collective.
-fn dirichlet_terms(elastic: &Elastic, f: &Vector, u: &Vector) -> Result<Vec<f64>, RunError> {
+/// rank's rows; with the largest Σ_j |K_e,ij u_j| of this rank's cells' Dirichlet rows (the
+/// magnitude a reaction is a difference of). Collective.
+fn dirichlet_terms(elastic: &Elastic, f: &Vector, u: &Vector) -> Result<(Vec<f64>, f64), RunError> {
     let Elastic {
         mesh,
         layout,
@@ -496,6 +508,7 @@ fn dirichlet_terms(elastic: &Elastic, f: &Vector, u: &Vector) -> Result<Vec<f64>
     let (nodes, uvals) = crate::partition::values_at_cells(mesh, layout, &cells, u)?;
     let (mut vi, mut vv): (Vec<PInt>, Vec<f64>) = (Vec::new(), Vec::new());
     let mut ke = [0.0; 144];
+    let mut products = 0.0f64;
     for &c in &cells {
         let (lambda, mu) = material.lame_of(c);
         let cell = mesh.cell(c);
@@ -527,6 +540,9 @@ fn dirichlet_terms(elastic: &Elastic, f: &Vector, u: &Vector) -> Result<Vec<f64>
                 .filter(|&j| fx[r] || fx[j])
                 .map(|j| row[j] * ue[j])
                 .sum();
+            if fx[r] {
+                products = products.max((0..nd).map(|j| (row[j] * ue[j]).abs()).sum::<f64>());
+            }
             vi.push((layout.node_global[cell[r / dim]] * dim + r % dim) as PInt);
             vv.push(val);
         }
@@ -536,7 +552,7 @@ fn dirichlet_terms(elastic: &Elastic, f: &Vector, u: &Vector) -> Result<Vec<f64>
     crate::par::add_in_rank_order(&mut v, &vi, &vv)?;
     v.assemble()?;
     let v = v.to_local_vec()?;
-    Ok(v)
+    Ok((v, products))
 }
 
 /// λ = f − A u (3.28) at the contact rows: which local rows are contact rows, and λ per contact

@@ -263,6 +263,51 @@ fn check_certificates(
     }))
 }
 
+/// The final state's global equilibrium and force-controlled pairs' balances: beyond
+/// [`warnings::CERTIFICATE_ROUND_OFF`] of their references a warning, beyond
+/// [`report::CERTIFICATE_TOL`] an error. (3.14) and (3.18) can hold at nodes whose forces (3.28)
+/// are wrong: the Tresca block of tests/cases/tresca with `newton.c = 1e12` (10¹⁰ × the nodal
+/// stiffness: the regularised rows (3.39) lose ten digits) ended at an unbalanced tangential
+/// force of 2.7e-3 of the load, exit 0. `c`: the complementarity parameter of (3.23) the solve
+/// ran with. Pure.
+pub fn check_balance(
+    cert: &certificate::Certificate,
+    keys: &CaseKeys,
+    c: f64,
+) -> Result<Option<Warning>, RunError> {
+    let (which, worst) = match cert.relative.force_balance {
+        Some(f) if f > cert.relative.equilibrium => ("a force-controlled pair's balance", f),
+        _ => ("the global equilibrium", cert.relative.equilibrium),
+    };
+    if worst > report::CERTIFICATE_TOL {
+        return Err(RunError::Failed(format!(
+            "the final state is not a solution: {which} fails by {worst:.3e} of the forces \
+             it sums (beyond {:e}; the certificate line has each term): the linear solves \
+             were inexact ({}) or the regularisation newton.c too large for double precision \
+             (c = {c:.3e})",
+            report::CERTIFICATE_TOL,
+            keys.solver,
+        )));
+    }
+    let limit = warnings::CERTIFICATE_ROUND_OFF;
+    Ok((worst > limit).then(|| Warning {
+        code: warnings::INEXACT_FINAL_STATE,
+        message: format!(
+            "the final state's forces do not balance: {which} fails by {worst:.1e} of the \
+             forces it sums (the certificate line has each term), beyond round-off ({limit:e}): \
+             the linear solves were inexact ({}) or newton.c too large; a tighter tolerance or \
+             the default c sharpens it",
+            keys.solver
+        ),
+        key: None,
+        pair: None,
+        value: worst,
+        threshold: limit,
+        at: None,
+        steps: Vec::new(),
+    }))
+}
+
 /// Compact JSON of a certificate (sorted keys).
 fn json<T: Serialize>(v: &T) -> String {
     serde_json::to_value(v).expect("plain data").to_string()

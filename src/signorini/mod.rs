@@ -464,6 +464,9 @@ fn report_solution(
     state.equilibrium_floor = previous.map_or(0.0, |p| p.report.certificate.equilibrium.reference);
     let certificate =
         final_state::certify(ctx, settings, &judged, &state, &nr, in_u, force_control)?;
+    // forces that do not balance: an error, or a warning if (3.14)/(3.18) raised none
+    let unbalanced = final_state::check_balance(&certificate, &b.keys, c)?;
+    state.warning = state.warning.or(unbalanced);
     let mut newton = newton_summary(settings, solver_section, c, &mut nr, outer_steps, previous);
     newton.path = path.map(SolverPath::name);
     if let Some(cs) = condensed_summary {

@@ -312,3 +312,63 @@ pub fn check_balance(
 fn json<T: Serialize>(v: &T) -> String {
     serde_json::to_value(v).expect("plain data").to_string()
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use certificate::{balance, pair_balance, Certificate, Parts, StopRule};
+
+    /// A certificate whose every measure holds but the equilibrium (`residual` of a load of 1)
+    /// and, with `pair`, a force-controlled pair that carries 1 + `pair` of |F| = 1.
+    fn judged(residual: f64, pair: Option<f64>) -> Result<Option<Warning>, RunError> {
+        let kkt = Kkt {
+            max_penetration: 0.0,
+            max_positive_lambda_n: 0.0,
+            max_complementarity: 0.0,
+            force_scale: 1.0,
+            length_scale: 0.1,
+            max_abs_lambda_t: Some(0.0),
+        };
+        let eq = balance(
+            [0.0, -1.0, 0.0],
+            [0.0, 1.0 - residual, 0.0],
+            [0.0; 3],
+            [1.0; 3],
+            2,
+        );
+        let cert = Certificate::new(Parts {
+            stop: StopRule::ActiveSet,
+            strict: false,
+            kkt: &kkt,
+            friction: None,
+            scales: &Scales {
+                force: 1.0,
+                length: 0.1,
+            },
+            mesh_size: 0.01,
+            equilibrium: eq,
+            force_balance: pair.map(|p| vec![pair_balance("contact".into(), 1.0, 1.0 + p)]),
+        });
+        check_balance(&cert, &CaseKeys::default(), 2.5e3)
+    }
+
+    #[test]
+    fn forces_that_do_not_balance_warn_beyond_round_off_and_fail_beyond_the_tolerance() {
+        assert!(judged(1e-12, None).unwrap().is_none());
+        let w = judged(1e-7, None).unwrap().expect("beyond 1e-8");
+        assert_eq!(w.code, warnings::INEXACT_FINAL_STATE);
+        assert!(w.message.contains("global equilibrium"), "{}", w.message);
+        assert!((w.value - 1e-7).abs() < 1e-12, "{}", w.value);
+        let Err(RunError::Failed(why)) = judged(1e-3, None) else {
+            panic!("an equilibrium 1e-3 off is no solution");
+        };
+        assert!(
+            why.contains("not a solution") && why.contains("c = 2.500e3"),
+            "{why}"
+        );
+        // a force-controlled pair's balance is judged alike, and named
+        let w = judged(0.0, Some(5e-8)).unwrap().expect("beyond 1e-8");
+        assert!(w.message.contains("force-controlled pair"), "{}", w.message);
+        assert!(matches!(judged(0.0, Some(1e-5)), Err(RunError::Failed(_))));
+    }
+}

@@ -283,3 +283,26 @@ fn iterative_preset_matches_direct_with_friction() {
         );
     }
 }
+
+/// c far beyond its default changes nothing but round-off: the Tresca block of
+/// tests/cases/tresca (c = 1 in the case, E = 2) with c = 1e12. Its slip rows' springs
+/// L̃ ≈ b/|Δu_τ| ≈ 6e-3 were below 1e-10 c = 100, so the free tangential mode (y) was pinned,
+/// and the pin kept a load of 2.7e-3 of the applied one: exit 0 with forces that did not
+/// balance. The floor is now relative to the body's stiffness (`active_set::spring_floor`); the
+/// final state's equilibrium is judged as well (final_state.rs `check_balance`).
+#[test]
+fn a_complementarity_parameter_far_above_its_default_gives_the_same_answer() {
+    let case = repo("tests/cases/tresca/block3d_tresca.toml");
+    for np in [1, 2] {
+        let reference = solve(np, &case, &[]);
+        reference.assert_converged("c = 1");
+        for c in ["newton.c=1e12", "newton.c=1e8"] {
+            let s = solve(np, &case, &[c]);
+            s.assert_converged(c);
+            s.assert_same_answer(&reference, 1e-9, c);
+            assert_eq!(s.slip_node_ids(), reference.slip_node_ids(), "{c}");
+            let eq = s.f(&["certificate", "relative", "equilibrium"]);
+            assert!(eq <= 1e-12, "{np} ranks, {c}: equilibrium {eq:e}");
+        }
+    }
+}

@@ -41,8 +41,23 @@ pub fn threshold_scale_local(b: &ContactBoundary, nodes: &[NodeResult], law: Law
 /// L̃ ≈ c b/|v| of a node slipping far beyond its threshold rounds to 1e-16 c (measured on the
 /// Tresca Hertz disk, every node slipping in step 4), and a mode held by such springs alone
 /// makes the system singular to round-off: the pins take it instead. The spring stays in the
-/// row (the Newton linearisation is unchanged).
+/// row (the Newton linearisation is unchanged). Against the body's stiffness, not against a c
+/// larger than the default ([`spring_floor`]).
 pub const SPRING_TOL: f64 = 1e-10;
+
+/// The springs up to which a slip row holds no rigid mode: [`SPRING_TOL`] × c, c at most the
+/// default c of the boundary's nodal stiffness (the system's scale: a spring is round-off
+/// against the matrix, not against c). With c = 1e10 on the Tresca block of
+/// tests/cases/tresca (E = 2; 10¹⁰ × its default) the floor 1e-10 c = 1 exceeded the slip
+/// rows' springs L̃ ≈ b/|Δu_τ| ≈ 6e-3, the free tangential mode was pinned and kept a load
+/// of 2.7e-3 of the applied one. Pure.
+pub fn spring_floor(b: &ContactBoundary, c: f64) -> f64 {
+    let scale = match b.stiffness > 0.0 {
+        true => c.min(crate::tuning::DEFAULT_C_FACTOR * b.stiffness),
+        false => c,
+    };
+    SPRING_TOL * scale
+}
 
 /// A_n (and, with friction, the tangential row of every node: stick, or slip with L̃, r̃ (3.39)
 /// and, for Coulomb, the λ_n coupling q (F6)) on this rank's contact nodes.
@@ -137,7 +152,7 @@ impl ActiveSet {
         ActiveSet {
             normal,
             tangential,
-            spring_floor: SPRING_TOL * c,
+            spring_floor: spring_floor(b, c),
             stick_active: false,
         }
     }
@@ -192,7 +207,7 @@ impl ActiveSet {
         ActiveSet {
             normal: nodes.iter().map(|r| r.active).collect(),
             tangential,
-            spring_floor: SPRING_TOL * c,
+            spring_floor: spring_floor(b, c),
             stick_active: false,
         }
     }
@@ -662,6 +677,7 @@ mod tests {
             obstacles: Vec::new(),
             keys: Default::default(),
             modes: std::sync::Arc::new(crate::mesh::BodyModes::none(2)),
+            stiffness: 0.0,
         };
         for stick in [false, true] {
             let set = ActiveSet::held(vec![true, false], stick);
@@ -712,6 +728,7 @@ mod tests {
             )],
             keys: Default::default(),
             modes: std::sync::Arc::new(crate::mesh::BodyModes::none(2)),
+            stiffness: 0.0,
         };
         let p = set.prescribed(&b, 0, 2).expect("rewritten");
         assert_eq!(p.dirs.len(), 2);
@@ -813,6 +830,7 @@ mod tests {
             )],
             keys: Default::default(),
             modes: std::sync::Arc::new(crate::mesh::BodyModes::none(2)),
+            stiffness: 0.0,
         };
         let mut it = Iterate::new(2, 4, true);
         let limit = at(0.0, -1.0, 0.1 * (1.0 + 1e-12));

@@ -83,6 +83,10 @@ pub struct ContactBoundary {
     /// The rigid modes of the bodies Dirichlet data leave free, in the unknowns of every local
     /// node (signorini/rigid.rs).
     pub modes: Arc<BodyModes>,
+    /// The nodal stiffness E h_c^(d−2) of the contact boundary (the default c is
+    /// [`DEFAULT_C_FACTOR`](crate::tuning::DEFAULT_C_FACTOR) times it), once the solve set it;
+    /// 0 before.
+    pub stiffness: f64,
 }
 
 /// The case file and the keys a failed solve names, so the user knows what to change.
@@ -356,6 +360,7 @@ pub fn build<W>(
             solver: String::new(),
         },
         modes: (settings.modes.clone()).unwrap_or_else(|| Arc::new(BodyModes::whole(mesh))),
+        stiffness: 0.0,
     };
     Ok((b, warned))
 }

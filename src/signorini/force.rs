@@ -572,6 +572,7 @@ mod tests {
             obstacles: Vec::new(),
             keys: Default::default(),
             modes: std::sync::Arc::new(crate::mesh::BodyModes::none(2)),
+            stiffness: 0.0,
         };
         let fc = |pair: usize| ForceControl {
             force: [0.0, -1.0, 0.0],

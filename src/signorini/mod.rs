@@ -273,6 +273,7 @@ pub fn solve(
     let displacements = settings.displacements();
     let prev_u = (previous.map(|prev| take_reference(ctx, &mut b, prev, friction, &displacements)))
         .transpose()?;
+    b.stiffness = plain_path::nodal_stiffness(ctx, &b, dim, settings.young);
     let c = complementarity_parameter(ctx, settings, &b, dim);
     let start = warm_start(previous, prev_u.as_deref(), &b, &force_control, c);
     let warm = previous
@@ -602,8 +603,8 @@ fn force_control(
         .collect()
 }
 
-/// The complementarity parameter c: the case's, or κ E h_c^(d−2) ([`plain_path::default_c`]);
-/// said in the log. Collective.
+/// The complementarity parameter c: the case's, or κ E h_c^(d−2) (κ = [`DEFAULT_C_FACTOR`],
+/// `b.stiffness` from [`plain_path::nodal_stiffness`]); said in the log.
 fn complementarity_parameter(
     ctx: &Ctx,
     settings: &ContactSettings,
@@ -612,7 +613,7 @@ fn complementarity_parameter(
 ) -> f64 {
     let c = match settings.newton.c {
         Some(c) => c,
-        None => plain_path::default_c(ctx, b, dim, settings.young),
+        None => DEFAULT_C_FACTOR * b.stiffness,
     };
     say!(
         ctx,

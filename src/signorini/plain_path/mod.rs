@@ -25,6 +25,8 @@ pub mod step;
 
 pub(crate) use iteration::auto_start;
 pub use iteration::semismooth_newton;
-pub use problem::{default_c, ContactProblem, NewtonResult, NewtonSettings, StepInfo, WarmStart};
+pub use problem::{
+    nodal_stiffness, ContactProblem, NewtonResult, NewtonSettings, StepInfo, WarmStart,
+};
 pub use reuse::enable_reuse;
 pub(crate) use step::{add_motion, stalled};

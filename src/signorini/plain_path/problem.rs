@@ -14,6 +14,7 @@ use crate::signorini::force::ForceControl;
 use crate::signorini::halfspace::{HalfSpace, PredictorStep};
 use crate::signorini::rigid::Pin;
 use crate::signorini::step_system::{AmgStep, ReuseStep, RowChange, SolveKind};
+#[cfg(doc)]
 use crate::tuning::DEFAULT_C_FACTOR;
 
 /// What the loop needs from the case.
@@ -141,21 +142,21 @@ pub struct NewtonResult {
 /// w_k^(1/(d−1)) over all contact nodes): a nodal stiffness (2D: κ E; 3D: κ E h_c), so that c u
 /// in (3.23) and (3.33) has the unit of the nodal force λ it is added to, in every unit system.
 /// (The former E / h_c is a stress per length: c u then weighed against λ with the unit of
-/// length to the power d − 1, and a ball given in µm instead of m did not converge.)
-pub fn default_c(ctx: &Ctx, b: &ContactBoundary, dim: usize, young: f64) -> f64 {
+/// length to the power d − 1, and a ball given in µm instead of m did not converge.) Returns
+/// the nodal stiffness E h_c^(d−2) itself. Collective (one reduction).
+pub fn nodal_stiffness(ctx: &Ctx, b: &ContactBoundary, dim: usize, young: f64) -> f64 {
     let local: f64 = b
         .nodes
         .iter()
         .map(|k| k.weight.powf(1.0 / (dim - 1) as f64))
         .sum();
     let out = ctx.sum_vec(&[local, b.nodes.len() as f64]);
-    let stiffness = if out[1] > 0.0 && out[0] > 0.0 {
+    if out[1] > 0.0 && out[0] > 0.0 {
         young * (out[0] / out[1]).powi(dim as i32 - 2)
     } else {
         // no contact node (every one held by Dirichlet data): c is never read
         young
-    };
-    DEFAULT_C_FACTOR * stiffness
+    }
 }
 
 /// The data of a contact solve: the mesh and its partition, the contact boundary, the

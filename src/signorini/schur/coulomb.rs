@@ -126,6 +126,7 @@ fn candidate_boundary(kept: &Kept, b: &ContactBoundary, dim: usize) -> ContactBo
         obstacles: b.obstacles.clone(),
         keys: b.keys.clone(),
         modes: b.modes.clone(),
+        stiffness: b.stiffness,
     }
 }
 

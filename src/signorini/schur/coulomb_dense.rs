@@ -676,6 +676,7 @@ impl DenseIteration<'_> {
                 obstacles: self.cb.obstacles.clone(),
                 keys: self.cb.keys.clone(),
                 modes: self.cb.modes.clone(),
+                stiffness: self.cb.stiffness,
             };
             let sub = DenseIteration {
                 cmat: CMatrix::Full(&sub_c),

@@ -54,6 +54,7 @@ fn pushed_line(n: usize, push: f64) -> (DMatrix<f64>, Vec<f64>, ContactBoundary)
         obstacles: Vec::new(),
         keys: Default::default(),
         modes: std::sync::Arc::new(crate::mesh::BodyModes::none(2)),
+        stiffness: 0.0,
     };
     (cmat, d0, cb)
 }

@@ -176,10 +176,20 @@ fn launcher_rank() -> Option<u32> {
 
 fn main() {
     // Under mpirun every rank parses the same command line: rank 0 alone prints its errors
-    // (and --help, --version); every rank exits with clap's code (2 for an error).
+    // (and --help, --version); every rank exits with clap's code (2 for an error) once rank 0
+    // has printed. A rank that exits first makes mpirun end the job, and rank 0 may not have
+    // written its message yet: under load, tests/output_guard.rs saw a run on 3 ranks end
+    // with exit code 2 and no message.
     let cli = Cli::try_parse().unwrap_or_else(|e| {
-        if launcher_rank().unwrap_or(0) == 0 {
+        let launched = launcher_rank();
+        if launched.unwrap_or(0) == 0 {
             let _ = e.print();
+            let _ = std::io::Write::flush(&mut std::io::stdout());
+        }
+        if launched.is_some() {
+            if let Some(universe) = mpi::initialize() {
+                universe.world().barrier();
+            }
         }
         std::process::exit(e.exit_code())
     });

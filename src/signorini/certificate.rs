@@ -552,12 +552,13 @@ fn dirichlet_terms(elastic: &Elastic, f: &Vector, u: &Vector) -> Result<(Vec<f64
         }
         for r in 0..nd {
             let row = &ke[r * nd..(r + 1) * nd];
-            let val: f64 = (0..nd)
+            // the row's value and the sum of the magnitudes it is made of, in one pass
+            let (val, size) = (0..nd)
                 .filter(|&j| fx[r] || fx[j])
                 .map(|j| row[j] * ue[j])
-                .sum();
+                .fold((0.0, 0.0), |(v, m): (f64, f64), t| (v + t, m + t.abs()));
             if fx[r] {
-                products = products.max((0..nd).map(|j| (row[j] * ue[j]).abs()).sum::<f64>());
+                products = products.max(size);
             }
             vi.push((layout.node_global[cell[r / dim]] * dim + r % dim) as PInt);
             vv.push(val);
@@ -621,6 +622,38 @@ pub fn pair_balance(key: String, force: f64, carried: f64) -> PairBalance {
     }
 }
 
+/// A certificate for tests: (3.14) held to 1e-11 of the scales (force 1, length 0.1, mesh
+/// size 0.01), frictionless, with the equilibrium `eq` and the pairs' balances `force_balance`.
+#[cfg(test)]
+pub(crate) fn sample(
+    stop: StopRule,
+    strict: bool,
+    eq: Equilibrium,
+    force_balance: Option<Vec<PairBalance>>,
+) -> Certificate {
+    let kkt = Kkt {
+        max_penetration: 1e-12,
+        max_positive_lambda_n: 0.0,
+        max_complementarity: 1e-15,
+        force_scale: 1.0,
+        length_scale: 0.1,
+        max_abs_lambda_t: Some(0.0),
+    };
+    Certificate::new(Parts {
+        stop,
+        strict,
+        kkt: &kkt,
+        friction: None,
+        scales: &Scales {
+            force: 1.0,
+            length: 0.1,
+        },
+        mesh_size: 0.01,
+        equilibrium: eq,
+        force_balance,
+    })
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -673,27 +706,8 @@ mod tests {
     }
 
     fn certificate(stop: StopRule, eq: Equilibrium) -> Certificate {
-        let kkt = Kkt {
-            max_penetration: 1e-12,
-            max_positive_lambda_n: 0.0,
-            max_complementarity: 1e-15,
-            force_scale: 1.0,
-            length_scale: 0.1,
-            max_abs_lambda_t: Some(0.0),
-        };
-        Certificate::new(Parts {
-            stop,
-            strict: true,
-            kkt: &kkt,
-            friction: None,
-            scales: &Scales {
-                force: 1.0,
-                length: 0.1,
-            },
-            mesh_size: 0.01,
-            equilibrium: eq,
-            force_balance: Some(vec![pair_balance("contact[1]".into(), 2.0, 2.0 + 1e-6)]),
-        })
+        let pair = pair_balance("contact[1]".into(), 2.0, 2.0 + 1e-6);
+        sample(stop, true, eq, Some(vec![pair]))
     }
 
     #[test]

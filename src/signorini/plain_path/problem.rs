@@ -138,12 +138,12 @@ pub struct NewtonResult {
     pub stop: crate::signorini::certificate::StopRule,
 }
 
-/// Default c = κ E h_c^(d−2) (κ = [`DEFAULT_C_FACTOR`], h_c the mean contact mesh size, the mean of
-/// w_k^(1/(d−1)) over all contact nodes): a nodal stiffness (2D: κ E; 3D: κ E h_c), so that c u
-/// in (3.23) and (3.33) has the unit of the nodal force λ it is added to, in every unit system.
-/// (The former E / h_c is a stress per length: c u then weighed against λ with the unit of
-/// length to the power d − 1, and a ball given in µm instead of m did not converge.) Returns
-/// the nodal stiffness E h_c^(d−2) itself. Collective (one reduction).
+/// The nodal stiffness E h_c^(d−2) of the contact boundary (h_c the mean contact mesh size, the
+/// mean of w_k^(1/(d−1)) over all contact nodes). The default c is κ times it
+/// (κ = [`DEFAULT_C_FACTOR`]; 2D: κ E, 3D: κ E h_c), so that c u in (3.23) and (3.33) has the
+/// unit of the nodal force λ it is added to, in every unit system. (The former E / h_c is a
+/// stress per length: c u then weighed against λ with the unit of length to the power d − 1,
+/// and a ball given in µm instead of m did not converge.) Collective (one reduction).
 pub fn nodal_stiffness(ctx: &Ctx, b: &ContactBoundary, dim: usize, young: f64) -> f64 {
     let local: f64 = b
         .nodes

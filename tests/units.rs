@@ -30,10 +30,14 @@ const OWN: Units = Units { s: 1.0, f: 1.0 };
 const TOL: f64 = 1e-8;
 
 /// `mesh` re-saved by gmsh (binary MSH 4.1) with its coordinates times `s` as `out`; the case's
-/// own units go the same way (s = 1), so that both runs read files written alike.
+/// own units go the same way (s = 1), so that both runs read files written alike. gmsh parses
+/// `-string` through the file $HOME/.gmsh-tmp, which tests running at once shared: a mesh asked
+/// for in the case's units came out scaled by another test's 1e-200. Each call has its own
+/// HOME (the output's directory).
 fn scaled_mesh(mesh: &Path, s: f64, out: &Path) -> PathBuf {
     let mut cmd = Command::new("gmsh");
-    cmd.arg(mesh)
+    cmd.env("HOME", out.parent().expect("a file in a directory"))
+        .arg(mesh)
         .args(["-save", "-format", "msh41", "-bin", "-string"])
         .arg(format!("Mesh.ScalingFactor={s:e};"))
         .arg("-o")

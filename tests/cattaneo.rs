@@ -213,3 +213,29 @@ fn cattaneo_stick_zone_on_a_fine_mesh() {
     check("0.49", -0.06..=0.06, -0.08..=0.08);
     check("0.45", -0.08..=-0.02, -0.30..=-0.15);
 }
+
+/// Coulomb with c far above its default (1e7 × the example's, whose default is 100 E): the
+/// residual (F3) of a fixed iterate then sits at the rounding of c u, above 1e-6 ‖λ‖₂, where the
+/// stall rule used to stop accepting; every load step failed after its cutbacks (exit 1). Both
+/// the condensed path and the plain path now end every load step where the default c does,
+/// with the same slipping nodes.
+#[test]
+fn coulomb_with_a_complementarity_parameter_far_above_its_default_converges_to_the_same_answer() {
+    let case = repo("examples/cattaneo_mindlin.toml");
+    let reference = solve(2, &case, &[]);
+    assert_eq!(reference.summary["load"]["completed"], true);
+    let steps = reference.summary["load"]["steps"].as_array().unwrap().len();
+    for path in ["solver.path=\"auto\"", "solver.path=\"plain\""] {
+        let s = solve(2, &case, &["newton.c=1e9", path]);
+        assert_eq!(
+            s.summary["load"]["completed"],
+            true,
+            "{path}: {}",
+            s.run.output()
+        );
+        same_steps(&s, &reference, steps, 1e-10, 2);
+        assert_eq!(s.slip_node_ids(), reference.slip_node_ids(), "{path}");
+        let worst = s.f(&["certificate", "worst"]);
+        assert!(worst <= 1e-10, "{path}: the certificates' worst {worst:e}");
+    }
+}

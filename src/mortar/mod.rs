@@ -36,7 +36,7 @@ use crate::contact::mortar::{
 };
 use crate::contact::obstacle::{BodyTarget, Obstacle, SlaveRow};
 use crate::error::{InputError, RunError};
-use crate::mesh::{Mesh, Part, NO_SLOT};
+use crate::mesh::{BodyModes, Mesh, Part, NO_SLOT};
 use crate::par::Ctx;
 use crate::partition::Layout;
 use crate::setup::ContactSettings;
@@ -93,6 +93,7 @@ pub fn set_up(
             )
             .map_err(RunError::Input),
         )?;
+        check_through(ctx, mesh, layout, settings, p, &rows)?;
         let rows = keep_contact_nodes(mesh, rows, fixed);
         let covered = ctx.sum_usize(rows.len());
         if covered == 0 {
@@ -425,6 +426,72 @@ fn keep_contact_nodes(
             .all(|(d, x)| x.is_nan() || r.normal[d].abs() <= 1e-12)
     });
     rows
+}
+
+/// The bodies (of the driver's body survey, `modes`) that the facets of boundary group `name`
+/// touch, a flag per body, every rank's; `None` for `modes`: the whole mesh is one body.
+/// Collective.
+fn group_bodies(ctx: &Ctx, mesh: &Mesh, modes: Option<&BodyModes>, name: &str) -> Vec<bool> {
+    let Some(modes) = modes else {
+        return vec![true];
+    };
+    let mut flags = vec![0.0; modes.bodies()];
+    for f in crate::setup::group_facets(mesh, name) {
+        for &v in mesh.facet(f) {
+            if let Some(x) = flags.get_mut(modes.body_of(v) as usize) {
+                *x = 1.0;
+            }
+        }
+    }
+    ctx.sum_vec(&flags).iter().map(|&x| x > 0.0).collect()
+}
+
+/// A slave node whose master group lies on its own body and which faces that group through
+/// the material — its gap below minus its mesh size (weight^(1/(d−1))), as the two faces of
+/// a plate do — is refused: one body touches itself only across a gap, where its two groups
+/// face each other from outside (a C-shaped body's arms). Such a pair was solved as if the
+/// plate's thickness were a penetration: every node in contact, strains of 1.6, exit 0. The
+/// error names the node of smallest Gmsh tag on every rank count. Collective.
+fn check_through(
+    ctx: &Ctx,
+    mesh: &Mesh,
+    layout: &Layout,
+    settings: &ContactSettings,
+    p: usize,
+    rows: &HashMap<usize, SlaveRow>,
+) -> Result<(), RunError> {
+    let pair = &settings.pairs[p];
+    let modes = settings.modes.as_deref();
+    let master = group_bodies(ctx, mesh, modes, master_group(&pair.obstacle));
+    let own_body = |v: usize| modes.map_or(0, |m| m.body_of(v) as usize);
+    let dim = mesh.dim;
+    let mut worst: Option<(u64, usize, f64, f64)> = None;
+    for (&v, r) in rows {
+        if !layout.owns_node(v) || !master.get(own_body(v)).copied().unwrap_or(false) {
+            continue;
+        }
+        let h = r.weight.powf(1.0 / (dim as f64 - 1.0));
+        let tag = mesh.node_tags[v];
+        if r.gap < -h && worst.is_none_or(|w| tag < w.0) {
+            worst = Some((tag, v, r.gap, h));
+        }
+    }
+    let Some((tag, v, gap, h)) = worst else {
+        return ctx.agree_smallest(None);
+    };
+    let e = InputError::new(
+        &settings.file,
+        format!(
+            "mesh node {tag} at {:?} of the slave group \"{}\" faces the master group \"{}\" \
+             of its own body through the material (its gap {gap:.4e}, its mesh size {h:.4e}): \
+             a body touches itself only where its two groups face each other across a gap",
+            &mesh.coords[v][..dim],
+            pair.group,
+            master_group(&pair.obstacle),
+        ),
+    )
+    .with_key(pair.key("obstacle.group"));
+    ctx.agree_smallest(Some((tag, RunError::Input(e))))
 }
 
 /// No node is a slave node of one pair and a master node of another (or of its own): the

@@ -384,6 +384,7 @@ impl ActiveSet {
         let mut changed = 0usize;
         let mut residual2 = 0.0;
         let mut lambda2 = 0.0;
+        let mut u2 = 0.0;
         let mut states = [0usize; 4];
         let mut rows2 = [0.0; 2];
         let rules = law.rules();
@@ -409,6 +410,7 @@ impl ActiveSet {
                 }
                 residual2 += rules.residual2(k, r, c);
                 lambda2 += r.lambda.iter().map(|x| x * x).sum::<f64>();
+                u2 += r.u.iter().map(|x| x * x).sum::<f64>();
             }
             if flip {
                 changed += 1;
@@ -419,6 +421,7 @@ impl ActiveSet {
             changed,
             residual2,
             lambda2,
+            u2,
             states,
             du2: it.du2,
             uu: it.uu,
@@ -527,6 +530,8 @@ pub struct SetUpdate {
     pub residual2: f64,
     /// ‖λ‖² on the contact nodes (friction: the scale of the residual).
     pub lambda2: f64,
+    /// ‖u‖² on the contact nodes (friction: c times its round-off is the residual's floor).
+    pub u2: f64,
     /// Nodes in S1..S4 in the solve of this step.
     pub states: [usize; 4],
     pub du2: f64,
@@ -582,6 +587,8 @@ pub struct StepTotals {
     pub residual: f64,
     /// ‖λ^ℓ‖₂ over all contact nodes (friction; 0 without).
     pub lambda_norm: f64,
+    /// ‖u^ℓ‖₂ over all contact nodes (friction; 0 without).
+    pub contact_u: f64,
     pub states: [usize; 4],
     /// |u^ℓ − u^{ℓ−1}| / |u^ℓ| (friction; 0 when u = 0).
     pub du_rel: f64,
@@ -606,6 +613,7 @@ impl SetUpdate {
         local.extend(self.states.map(|s| s as f64));
         local.extend(self.next.pack_summary(b, modes, dim));
         local.push(self.lambda2);
+        local.push(self.u2);
         local.extend(self.rows2);
         let g = ctx.sum_vec(&local);
         let n = g.len();
@@ -620,7 +628,8 @@ impl SetUpdate {
             u_norm2: g[3],
             states: [0, 1, 2, 3].map(|j| g[4 + j] as usize),
             next: unpack_summary(&g[8..], grams(modes)),
-            lambda_norm: g[n - 3].sqrt(),
+            lambda_norm: g[n - 4].sqrt(),
+            contact_u: g[n - 3].sqrt(),
             rows: (g[n - 2].sqrt(), g[n - 1].sqrt()),
         }
     }

@@ -26,8 +26,8 @@ pub enum StopRule {
     ActiveSet,
     /// PETSc SNES VI's own convergence test (`solver.method = "snesvi"`).
     SnesVi,
-    /// Loosened: Coulomb's residual stalled between 1e-9 and 1e-6 of ‖λ‖ (plain_path/iteration.rs
-    /// `COULOMB_RESIDUAL_STALL`).
+    /// Loosened: Coulomb's residual stalled above 1e-9 of ‖λ‖, below 1e-6 of it or below the
+    /// round-off that c puts into it (plain_path/step.rs `stalled`).
     CoulombStall,
     /// Loosened: a friction set recurred while |Δu|/|u| < tol_u (nodes on the stick/slip
     /// threshold to round-off).
@@ -52,7 +52,7 @@ impl StopRule {
             StopRule::ActiveSet => "the exact active-set criterion",
             StopRule::SnesVi => "SNES VI's convergence test",
             StopRule::CoulombStall => {
-                "a stalled Coulomb residual (above 1e-9, below 1e-6 of |lambda|)"
+                "a stalled Coulomb residual (above 1e-9 of |lambda|, below 1e-6 of it or below 10 eps c |u|)"
             }
             StopRule::RecurringSet => "a recurring friction set with |du|/|u| < newton.tol_u",
             StopRule::CondensedCoulombStall => {

@@ -321,7 +321,8 @@ pub fn solve(
         warm.as_ref(),
         &mut types,
     )
-    .map_err(|e| capacity::why_sliding(e, sliding, within));
+    .map_err(|e| capacity::why_sliding(e, sliding, within))
+    .map_err(|e| capacity::why_stiff_slave(e, settings.material.slave_over_master));
     let ran = forget_on_error(session, ran)?;
     let solved = Solved {
         law,

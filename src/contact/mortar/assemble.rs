@@ -55,14 +55,16 @@ pub struct MortarRow {
 #[derive(Debug, Clone, PartialEq)]
 pub struct Mortar {
     /// One row per slave node, in the slave surface's local node order. Nodes no master
-    /// facet covers have d = 0, an empty m, gap 0 and no master facets.
+    /// facet covers (or only a sliver of their support, [`SLIVER_COVERAGE`]) have d = 0, an
+    /// empty m, gap 0 and no master facets.
     pub rows: Vec<MortarRow>,
     /// The covered measure of each slave facet (0 when dropped).
     pub facet_covered: Vec<f64>,
 }
 
 impl Mortar {
-    /// The total covered measure Σ_f |covered part of f| (= Σ_k D_kk).
+    /// The total covered measure Σ_f |covered part of f| (= Σ_k D_kk but for the rows of
+    /// nodes covered by a sliver, [`SLIVER_COVERAGE`]).
     pub fn covered_measure(&self) -> f64 {
         self.facet_covered.iter().sum()
     }
@@ -232,16 +234,37 @@ fn add_facet(
     true
 }
 
-/// Merges repeated master ids in M, sorts and dedups the master facets, and marks the
-/// fully covered nodes.
+/// A slave node whose covered weight D_kk is below this part of its whole weight
+/// ∫ φ_k (over every slave facet around it) faces the master by round-off of the meshes'
+/// coordinates, not by geometry: its row is dropped (d = 0, the node no contact node). Such a
+/// sliver — two meshes' corners that meet to 1e-12, one facet reaching 1e-12 over the master's
+/// edge — gives D_kk of 1e-28…1e-24 against ∫ φ_k of 1e-3, and M_kj / D_kk, the node's
+/// projection onto the master, is then a ratio of two roundings: it changed with the rank
+/// count (u 5e-3 of max |u| apart between 1 and 2 ranks on a 3D pair, no warning), and the
+/// node carried a full contact force at a pressure of 1e23. A row above this part holds
+/// M_kj / D_kk to ε / 1e-6 ≈ 2e-10 relative.
+pub const SLIVER_COVERAGE: f64 = 1e-6;
+
+/// Merges repeated master ids in M, sorts and dedups the master facets, marks the
+/// fully covered nodes and drops the rows of nodes covered by a sliver ([`SLIVER_COVERAGE`]).
 fn finish_rows(slave: &Surface, facet_covered: &[f64], rows: &mut [MortarRow]) {
     let full: Vec<bool> = facet_covered
         .iter()
         .enumerate()
         .map(|(f, &c)| c >= (1.0 - 1e-12) * slave.measure(f))
         .collect();
+    let per_node = slave.dim() as f64; // the nodes of a facet: ∫ φ_k = |f| / n on each
     for (k, fs) in slave.node_facets().iter().enumerate() {
         let row = &mut rows[k];
+        let whole: f64 = fs.iter().map(|&f| slave.measure(f) / per_node).sum();
+        if row.d > 0.0 && row.d < SLIVER_COVERAGE * whole {
+            row.d = 0.0;
+            row.gap = 0.0;
+            row.m.clear();
+            row.master_facets.clear();
+            row.fully_covered = false;
+            continue;
+        }
         row.m.sort_by_key(|e| e.0);
         let mut merged: Vec<(usize, f64)> = Vec::with_capacity(row.m.len());
         for &(j, v) in &row.m {

@@ -215,3 +215,27 @@ fn large_surfaces_3d() {
     let most = mortar.rows.iter().map(|r| r.master_facets.len()).max();
     assert!(most.unwrap() <= 30);
 }
+
+#[test]
+fn a_node_covered_by_a_sliver_is_no_contact_node() {
+    // the slave 0 — 0.5 — 1 under a master from 1 − δ on: δ = 1e-12 covers the nodes at 0.5
+    // and 1 by round-off of their coordinates (D_kk ≈ δ² and δ against ∫ φ_k = 0.5 and
+    // 0.25): no rows; δ = 0.01 is geometry: rows whose master part reproduces the node's x
+    let slave = line(&[0.0, 0.5, 1.0], 0.0, 0, -1.0).surface(&id);
+    for (delta, kept) in [(1e-12, false), (1e-2, true)] {
+        let master = line(&[1.0 - delta, 2.0], 0.0, 100, 1.0).surface(&id);
+        let mortar = couple(&slave, &master, 0.1);
+        assert_eq!(mortar.rows[0].d, 0.0, "δ = {delta:e}");
+        for row in &mortar.rows[1..] {
+            assert_eq!(row.d > 0.0, kept, "δ = {delta:e}: {row:?}");
+            assert_eq!(row.m.is_empty(), !kept, "δ = {delta:e}: {row:?}");
+            assert_eq!(
+                row.master_facets.is_empty(),
+                !kept,
+                "δ = {delta:e}: {row:?}"
+            );
+        }
+        // the sliver's measure itself is still counted as covered
+        assert!(mortar.covered_measure() > 0.0, "δ = {delta:e}");
+    }
+}

@@ -25,6 +25,23 @@ pub const COULOMB_RESIDUAL_ZERO: f64 = 1e-12;
 /// fraction of ‖λ‖₂.
 pub const COULOMB_RESIDUAL_STALL: f64 = 1e-6;
 
+/// [`residual_floor`]: a residual (F3) within this many times ε c ‖u‖₂ (u on the contact
+/// nodes) is round-off, however large c is. The arguments of (F3), λ_τ + c Δu_τ and the
+/// threshold's c (u_n + g), carry c times u's rounding, about ε |u| per node: with c far above
+/// its default that exceeds COULOMB_RESIDUAL_STALL · ‖λ‖₂. Measured: examples/cattaneo_mindlin.toml
+/// at c = 1e9 (1e7 × its default) repeated one iterate with |Δu| = 0 and the residual at
+/// 2.2e-10 (1.1e-6 ‖λ‖₂) for 100 steps, every load step failing after its cutbacks, though
+/// its certificates held to 1e-13; the stalled residuals there and in tests/cases/punch_back.toml
+/// at c = 1e12 (1.7e-3 ‖λ‖₂) are 0.25–0.49 ε c ‖u‖₂.
+pub const COULOMB_ROUND_OFF_FACTOR: f64 = 10.0;
+
+/// The residual (F3) that round-off alone leaves at an iterate whose contact nodes' ‖u‖₂ is
+/// `contact_u`, with the complementarity parameter c: [`COULOMB_ROUND_OFF_FACTOR`] · ε c ‖u‖₂.
+/// Pure.
+pub fn residual_floor(c: f64, contact_u: f64) -> f64 {
+    COULOMB_ROUND_OFF_FACTOR * f64::EPSILON * c * contact_u
+}
+
 /// Coulomb's law with each node's μ (`ContactNode::mu`: its pair's).
 pub struct Coulomb;
 

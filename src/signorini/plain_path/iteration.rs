@@ -12,7 +12,7 @@ use crate::signorini::boundary::ContactBoundary;
 use crate::signorini::cycle::{decide, CycleGuard, Decision, Seen, SetKey};
 use crate::signorini::force::{self, Approach};
 use crate::signorini::halfspace::{self, HalfSpace, PredictorStep};
-use crate::signorini::law::coulomb::{COULOMB_RESIDUAL_TOL, COULOMB_RESIDUAL_ZERO};
+use crate::signorini::law::coulomb::{residual_floor, COULOMB_RESIDUAL_TOL, COULOMB_RESIDUAL_ZERO};
 use crate::signorini::rigid::{Balance, FreeModes, Motion};
 use crate::signorini::step_system::{ReducedSystem, RowChange, SolveKind, StepSolve};
 
@@ -671,7 +671,14 @@ impl Loop<'_> {
             return Ok(false);
         }
         let still = t.changed == 0 && t.du_rel < self.s.section.tol_u;
-        let stalled = stalled(still, self.last_still_residual, t.residual, t.lambda_norm);
+        let floor = residual_floor(self.s.c, t.contact_u);
+        let stalled = stalled(
+            still,
+            self.last_still_residual,
+            t.residual,
+            t.lambda_norm,
+            floor,
+        );
         self.last_still_residual = still.then_some(t.residual);
         let (residual_ok, residual_zero) = match self.s.law {
             Law::Coulomb => (
@@ -1098,15 +1105,20 @@ mod tests {
     #[test]
     fn a_residual_is_round_off_only_when_still_steps_stop_reducing_it() {
         // two still steps, the residual not halved, small against ‖λ‖: round-off
-        assert!(stalled(true, Some(9e-13), 8.9e-13, 6e-4));
+        assert!(stalled(true, Some(9e-13), 8.9e-13, 6e-4, 0.0));
         // the first still step: no verdict yet
-        assert!(!stalled(true, None, 8.9e-13, 6e-4));
+        assert!(!stalled(true, None, 8.9e-13, 6e-4, 0.0));
         // still decreasing: Newton is still working
-        assert!(!stalled(true, Some(9e-12), 8.9e-13, 6e-4));
+        assert!(!stalled(true, Some(9e-12), 8.9e-13, 6e-4, 0.0));
         // states or u still move
-        assert!(!stalled(false, Some(9e-13), 8.9e-13, 6e-4));
+        assert!(!stalled(false, Some(9e-13), 8.9e-13, 6e-4, 0.0));
         // stalled, but far from small: not a solution
-        assert!(!stalled(true, Some(1e-3), 1e-3, 6e-4));
+        assert!(!stalled(true, Some(1e-3), 1e-3, 6e-4, 0.0));
+        // ... unless c's rounding explains it: c = 1e12, ‖u‖₂ = 1 on the contact nodes
+        let floor = residual_floor(1e12, 1.0);
+        assert!(floor > 1e-3 && floor < 1e-2, "{floor:e}");
+        assert!(stalled(true, Some(1e-3), 1e-3, 6e-4, floor));
+        assert!(!stalled(true, Some(3e-3), 3e-3, 6e-4, floor));
     }
 
     #[test]

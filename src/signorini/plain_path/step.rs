@@ -15,11 +15,18 @@ use crate::signorini::step_system::SolveKind;
 
 /// [`COULOMB_RESIDUAL_STALL`]: this step changed no state and left u unchanged (`still`), so did
 /// the step before it (`last`: its residual), the residual did not halve, and it is below
-/// COULOMB_RESIDUAL_STALL · ‖λ‖₂. Pure.
-pub(crate) fn stalled(still: bool, last: Option<f64>, residual: f64, lambda_norm: f64) -> bool {
+/// COULOMB_RESIDUAL_STALL · ‖λ‖₂ or below `floor`, the round-off that c puts into the residual
+/// ([`residual_floor`](crate::signorini::law::coulomb::residual_floor)). Pure.
+pub(crate) fn stalled(
+    still: bool,
+    last: Option<f64>,
+    residual: f64,
+    lambda_norm: f64,
+    floor: f64,
+) -> bool {
     still
         && last.is_some_and(|r| residual >= 0.5 * r)
-        && residual <= COULOMB_RESIDUAL_STALL * lambda_norm
+        && residual <= (COULOMB_RESIDUAL_STALL * lambda_norm).max(floor)
 }
 
 /// What a Newton step is, decided before it runs: the per-step record the loop's rules read.

@@ -12,7 +12,7 @@ use crate::signorini::active_set::{
 use crate::signorini::boundary::{ContactBoundary, NodeResult};
 use crate::signorini::dense::{coarsen, CMatrix};
 use crate::signorini::law::coulomb::{
-    COULOMB_RESIDUAL_STALL, COULOMB_RESIDUAL_TOL, COULOMB_RESIDUAL_ZERO,
+    residual_floor, COULOMB_RESIDUAL_STALL, COULOMB_RESIDUAL_TOL, COULOMB_RESIDUAL_ZERO,
 };
 use crate::signorini::plain_path::stalled;
 use nalgebra::{DMatrix, DVector};
@@ -563,7 +563,8 @@ impl DenseIteration<'_> {
         // round-off (measured: the floating Hertz disk at 171 602 unknowns, |C| ~ 3e-11 of
         // |λ| ~ 8e-4 for 90 steps); the expanded iterate is checked on every node anyway.
         let unchanged = up.changed == 0;
-        let stall = stalled(unchanged, *last_still, residual, lambda_norm);
+        let floor = residual_floor(self.c, up.u2.sqrt());
+        let stall = stalled(unchanged, *last_still, residual, lambda_norm, floor);
         *last_still = unchanged.then_some(residual);
         // (not Tresca's: with a small c its C_τ (3.31) measures λ_τ against itself and is at
         // round-off before λ_τ is parallel to u_τ, docs/friction.md; Algorithm 2's rule then)

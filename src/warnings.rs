@@ -19,6 +19,10 @@ pub const LARGE_DEFORMATION: &str = "large_deformation";
 /// tolerance: the linear solves were inexact (signorini/final_state.rs).
 pub const INEXACT_FINAL_STATE: &str = "inexact_final_state";
 
+/// `contact.rigid_modes = "none"` on a body that its Dirichlet data leave free in some rigid
+/// mode (driver.rs): where its contact does not hold that mode, round-off decides it.
+pub const RIGID_MODES_UNHANDLED: &str = "rigid_modes_unhandled";
+
 /// A material whose Poisson's ratio is close to 1/2: P1 elements lock (setup.rs).
 pub const NEARLY_INCOMPRESSIBLE: &str = "nearly_incompressible";
 

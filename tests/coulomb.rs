@@ -1049,3 +1049,61 @@ fn coulomb_on_the_iterative_preset_in_3d_agrees_with_the_direct_one() {
         );
     }
 }
+
+/// A load step that releases the contact, on the fixed point: each Tresca solve leaves a
+/// friction force in proportion to its thresholds, so they decayed geometrically and met the
+/// relative stopping test only at underflow (45 Tresca steps here, forces of 1e-323; on a
+/// graded mesh not in 100 outer steps, the step cut back on 2 ranks and not on 1 or 3). The
+/// thresholds are now small against the step's starting ones: a few outer steps, the same
+/// on every rank count, the answer of the generalised Newton.
+#[test]
+fn a_step_that_releases_the_contact_ends_the_fixed_point_at_once() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let mesh = repo("cases/blocks/indent2d.msh");
+    let text = format!(
+        r#"[mesh]
+file = {}
+[material]
+young = 2.0
+poisson = 0.3
+model = "plane_strain"
+[[dirichlet]]
+group = "bottom"
+value = [0.0, 0.0]
+[contact]
+group = "top"
+obstacle = {{ type = "sphere", center = [0.0, 1.3], radius = 0.3 }}
+motion = {{ table = [[0, 0, 0], [0.3, 0, -0.006], [0.7, 0.004, -0.006], [1.0, 0.004, 0.0]] }}
+friction = {{ law = "coulomb", mu = 1.0, algorithm = "fixed-point" }}
+[load]
+factors = [0.3, 0.7, 1.0]
+"#,
+        toml_path(&mesh)
+    );
+    let case = write_case(&dir.path().join("release.toml"), &text);
+    let newton = converged(2, &case, &["contact.friction.algorithm=\"newton\""]);
+    for np in [1, 2] {
+        let s = converged(np, &case, &[]);
+        let steps = s.summary["load"]["steps"].as_array().expect("load steps");
+        assert_eq!(steps.len(), 3, "{np} rank(s): {}", s.run.output());
+        let last = &steps[2];
+        assert_eq!(last["cutbacks"], 0, "{np} rank(s)");
+        assert_eq!(last["active"], 0, "{np} rank(s)");
+        let tresca_steps = last["newton_steps"].as_u64().expect("newton_steps");
+        assert!(
+            tresca_steps <= 20,
+            "{np} rank(s): {tresca_steps} Tresca steps"
+        );
+        same_steps(&s, &newton, 2, 1e-8, np);
+        // released: u = 0 (the generalised Newton's exactly), the fixed point's to round-off
+        let max = |step: usize| {
+            let u = step_displacement(&s.dir, step);
+            u.values().flatten().fold(0.0_f64, |m, x| m.max(x.abs()))
+        };
+        let (held, released) = (max(2), max(3));
+        assert!(
+            released <= 1e-10 * held,
+            "{np} rank(s): |u| {released:e} of {held:e}"
+        );
+    }
+}

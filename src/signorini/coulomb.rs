@@ -117,7 +117,11 @@ pub fn solve(
 /// Coulomb by the fixed point on Tresca thresholds (docs/friction.md (a)):
 /// b^{m+1}_k = μ max(0, −λ_n^{k,m}), every outer step a Tresca solve (Algorithm 2) warm-started
 /// from the previous one (b^0 from the warm start's λ_n, else ‖f‖₁: all stick); stop when
-/// max_k |b^{m+1} − b^m| ≤ [`FIXED_POINT_TOL`] · max_k b^{m+1}. Under force control every
+/// max_k |b^{m+1} − b^m| ≤ [`FIXED_POINT_TOL`] · max_k b^{m+1}, or · max_k b^0 where the
+/// thresholds vanish (a load step that releases the contact: each Tresca solve then leaves a
+/// friction force proportional to its thresholds, b^m decays geometrically, to 1e-323 in 100
+/// outer steps without ever meeting the relative test — a failed step, cut back on some rank
+/// counts and not on others). Under force control every
 /// Tresca solve is force-controlled (force.rs), from the previous one's approaches. Returns
 /// the last Tresca result with the history and step count of all outer steps, and the number
 /// of outer steps. Collective.
@@ -143,6 +147,7 @@ fn fixed_point(
             .as_ref()
             .map_or(stick_all, |(n, _)| threshold(&*k, &n[i]));
     }
+    let start_scale = ctx.max_f64(b.nodes.iter().fold(0.0_f64, |m, k| m.max(k.bound)));
     let mut history: Vec<StepInfo> = Vec::new();
     let mut stop = certificate::StopRule::ActiveSet;
     for outer in 1..=ns.section.max_steps {
@@ -182,7 +187,7 @@ fn fixed_point(
              (max b = {scale:.3e})",
             nr.steps
         );
-        let done = change <= FIXED_POINT_TOL * scale;
+        let done = change <= FIXED_POINT_TOL * scale.max(start_scale);
         if !nr.converged || done {
             nr.converged &= done;
             nr.steps = history.len();

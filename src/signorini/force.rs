@@ -211,9 +211,10 @@ pub fn unreached<'f>(
     reach.iter().position(|&r| r == 0.0).map(|j| &fcs[j])
 }
 
-const NEVER_TOUCHES: &str = "the obstacle, moving along the force, never reaches the body: every \
-     contact node's normal points against the force (the force must push the obstacle onto the \
-     body: along the normals n, from the obstacle into the body)";
+const NEVER_TOUCHES: &str = "the obstacle, moving along the force, never reaches the body: no \
+     contact node's normal has a part along the force (each points against it or lies \
+     across it; the force must push the obstacle onto the body: along the normals n, from the \
+     obstacle into the body)";
 
 /// What a force step did to the approaches.
 pub struct Correction {

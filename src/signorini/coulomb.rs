@@ -117,8 +117,8 @@ pub fn solve(
 /// Coulomb by the fixed point on Tresca thresholds (docs/friction.md (a)):
 /// b^{m+1}_k = μ max(0, −λ_n^{k,m}), every outer step a Tresca solve (Algorithm 2) warm-started
 /// from the previous one (b^0 from the warm start's λ_n, else ‖f‖₁: all stick); stop when
-/// max_k |b^{m+1} − b^m| ≤ [`FIXED_POINT_TOL`] · max_k b^{m+1}, or · max_k b^0 where the
-/// thresholds vanish (a load step that releases the contact: each Tresca solve then leaves a
+/// max_k |b^{m+1} − b^m| ≤ [`FIXED_POINT_TOL`] · max_k b^{m+1}, or · max_k b^0 of a warm
+/// start where the thresholds vanish (a load step that releases the contact: each Tresca solve then leaves a
 /// friction force proportional to its thresholds, b^m decays geometrically, to 1e-323 in 100
 /// outer steps without ever meeting the relative test — a failed step, cut back on some rank
 /// counts and not on others). Under force control every
@@ -147,7 +147,11 @@ fn fixed_point(
             .as_ref()
             .map_or(stick_all, |(n, _)| threshold(&*k, &n[i]));
     }
-    let start_scale = ctx.max_f64(b.nodes.iter().fold(0.0_f64, |m, k| m.max(k.bound)));
+    // the previous load step's thresholds (none without a warm start: ‖f‖₁ is no threshold)
+    let start_scale = match warm {
+        Some(_) => ctx.max_f64(b.nodes.iter().fold(0.0_f64, |m, k| m.max(k.bound))),
+        None => 0.0,
+    };
     let mut history: Vec<StepInfo> = Vec::new();
     let mut stop = certificate::StopRule::ActiveSet;
     for outer in 1..=ns.section.max_steps {

@@ -589,10 +589,15 @@ fn a_stack_with_friction_taken_back_to_no_load_certifies_its_vanishing_step() {
         s.assert_converged(&format!("{ranks} ranks"));
         let h = history(&s.dir);
         assert_eq!(h.len(), 4, "{ranks} ranks: {} steps", h.len());
-        let steps = num(&h[3], "newton_steps");
-        assert!(
-            steps <= 40.0,
-            "{ranks} ranks: {steps} Newton steps back to no load"
+        // the last step ends by the vanishing rule (not after 100 plain steps, exit 1). Its
+        // Newton step count is no measure: the dense Coulomb iteration on its round-off forces
+        // either stalls and is accepted (its steps, 72 in one run on 3 ranks, counted) or runs
+        // to its limit and hands over to the plain path (4 steps counted), as the round-off of
+        // MUMPS' parallel factorisation falls
+        let rule = &s.summary["load"]["steps"][3]["certificate"]["stop_rule"];
+        assert_eq!(
+            rule, "vanishing",
+            "{ranks} ranks: the last step's stop rule"
         );
         let worst = s.f(&["certificate", "worst"]);
         assert!(

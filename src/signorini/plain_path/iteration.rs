@@ -658,8 +658,6 @@ impl Loop<'_> {
             return Ok(true);
         }
         let t = &self.floored(t);
-        let (ctx, dim) = (self.ctx, self.p.mesh.dim);
-        let b = &self.shifted;
         let pins = !self.free.pins().is_empty();
         let rows_move = t.changed == 0 && self.s.friction() && t.du_rel >= self.s.section.tol_u;
         if pins && rows_move && t.next.gram != self.summary.gram {
@@ -670,69 +668,12 @@ impl Loop<'_> {
             self.summary = t.next.clone();
             return Ok(false);
         }
-        let still = t.changed == 0 && t.du_rel < self.s.section.tol_u;
-        let floor = residual_floor(self.s.c, t.contact_u);
-        let stalled = stalled(
-            still,
-            self.last_still_residual,
-            t.residual,
-            t.lambda_norm,
-            floor,
-        );
-        self.last_still_residual = still.then_some(t.residual);
-        let (residual_ok, residual_zero) = match self.s.law {
-            Law::Coulomb => (
-                t.residual <= COULOMB_RESIDUAL_TOL * t.lambda_norm || stalled,
-                t.residual <= COULOMB_RESIDUAL_ZERO * t.lambda_norm,
-            ),
-            _ => (true, false),
-        };
-        let mut decision = decide(
-            t.changed,
-            pins,
-            self.s.friction(),
-            t.du_rel,
-            self.s.section.tol_u,
-            residual_ok,
-            residual_zero,
-        );
+        let residual = self.residual_acceptance(t);
+        let mut decision = self.decision(t, pins, residual);
         if decision == Decision::TestBalance {
-            // A free rigid mode is harmless only if the load is balanced in it (the pins then
-            // carry no reaction). If not, the body moves along the unbalanced load until a
-            // contact node touches: activate the first one to touch and go on; if no node
-            // approaches the obstacle, there is no equilibrium.
-            let balance = self.free.balance(ctx, b, &self.it.nodes, &self.set.normal);
-            match balance {
-                Balance::Balanced => {
-                    decision = decide(
-                        t.changed,
-                        false,
-                        self.s.friction(),
-                        t.du_rel,
-                        self.s.section.tol_u,
-                        residual_ok,
-                        residual_zero,
-                    );
-                }
-                Balance::Touch(tag) => {
-                    for (k, a) in b.nodes.iter().zip(next.normal.iter_mut()) {
-                        if k.tag == tag {
-                            *a = true;
-                        }
-                    }
-                    say!(
-                        ctx,
-                        "newton: the load is not balanced in a free rigid mode: the body moves \
-                         until contact node {tag} touches (activated)"
-                    );
-                    let summary = next.summarise(ctx, b, self.free.modes(), dim);
-                    self.guard.record(self.key(&summary, t));
-                    self.take(next, summary);
-                    return Ok(false);
-                }
-                Balance::NoSupport(reaction) => {
-                    return Err(self.free.no_support(self.summary.n_active, reaction));
-                }
+            match self.balance_test(next, t, residual)? {
+                Ok((balanced, kept)) => (decision, next) = (balanced, kept),
+                Err(done) => return Ok(done),
             }
         }
         match decision {
@@ -750,6 +691,80 @@ impl Loop<'_> {
             }
             Decision::TestBalance => unreachable!("the balance test was made above"),
             Decision::NewSets => self.new_sets(step, next, t),
+        }
+    }
+
+    /// Whether Coulomb's residual lets the iteration stop (its tolerance, or a stall at
+    /// round-off: [`stalled`]) and whether it is round-off at once; (true, false) for the other
+    /// laws. Records this step's residual for the next step's stall test. Local.
+    fn residual_acceptance(&mut self, t: &StepTotals) -> (bool, bool) {
+        let still = t.changed == 0 && t.du_rel < self.s.section.tol_u;
+        let floor = residual_floor(self.s.c, t.contact_u);
+        let stalled = stalled(
+            still,
+            self.last_still_residual,
+            t.residual,
+            t.lambda_norm,
+            floor,
+        );
+        self.last_still_residual = still.then_some(t.residual);
+        match self.s.law {
+            Law::Coulomb => (
+                t.residual <= COULOMB_RESIDUAL_TOL * t.lambda_norm || stalled,
+                t.residual <= COULOMB_RESIDUAL_ZERO * t.lambda_norm,
+            ),
+            _ => (true, false),
+        }
+    }
+
+    /// Algorithm 1/2's decision after a step ([`decide`]) with `pins` free rigid modes pinned
+    /// and the residual's acceptance `residual` ([`Loop::residual_acceptance`]). Local.
+    fn decision(&self, t: &StepTotals, pins: bool, residual: (bool, bool)) -> Decision {
+        decide(
+            t.changed,
+            pins,
+            self.s.friction(),
+            t.du_rel,
+            self.s.section.tol_u,
+            residual.0,
+            residual.1,
+        )
+    }
+
+    /// The balance test of the free rigid modes: a free mode is harmless only if the load is
+    /// balanced in it (the pins then carry no reaction). Balanced: `Ok(Ok)` with the decision
+    /// without pins and `next` as it was. If not, the body moves along the unbalanced load
+    /// until a contact node touches: that node is activated and the next sets taken
+    /// (`Ok(Err(false))`: not converged); where no node approaches the obstacle there is no
+    /// equilibrium (the error). Collective where the load is unbalanced.
+    fn balance_test(
+        &mut self,
+        mut next: ActiveSet,
+        t: &StepTotals,
+        residual: (bool, bool),
+    ) -> Result<Result<(Decision, ActiveSet), bool>, RunError> {
+        let (ctx, dim, b) = (self.ctx, self.p.mesh.dim, &self.shifted);
+        match self.free.balance(ctx, b, &self.it.nodes, &self.set.normal) {
+            Balance::Balanced => Ok(Ok((self.decision(t, false, residual), next))),
+            Balance::Touch(tag) => {
+                for (k, a) in b.nodes.iter().zip(next.normal.iter_mut()) {
+                    if k.tag == tag {
+                        *a = true;
+                    }
+                }
+                say!(
+                    ctx,
+                    "newton: the load is not balanced in a free rigid mode: the body moves \
+                     until contact node {tag} touches (activated)"
+                );
+                let summary = next.summarise(ctx, b, self.free.modes(), dim);
+                self.guard.record(self.key(&summary, t));
+                self.take(next, summary);
+                Ok(Err(false))
+            }
+            Balance::NoSupport(reaction) => {
+                Err(self.free.no_support(self.summary.n_active, reaction))
+            }
         }
     }
 

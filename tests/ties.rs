@@ -4,7 +4,8 @@
 //! dense iteration dropped it in 2 of 8 runs on 3 ranks (its λ_n was −3.8e-15), the plate's
 //! rotation about the edge was then free, and the run failed after the plain path's 100
 //! steps. (The mechanism itself, deterministically: the unit test
-//! `a_node_at_a_tie_keeps_its_state_whatever_the_sign_of_round_off` in src/signorini/dense.rs.)
+//! `a_node_at_a_tie_keeps_its_state_whatever_the_sign_of_round_off` in src/signorini/dense.rs;
+//! the plain path decides ties alike, plain_path/iteration.rs `tie_width`.)
 
 mod common;
 use common::*;
@@ -43,6 +44,15 @@ obstacle = {{ type = "plane", point = [0.0, 0.0, 0.0], normal = [0.0, 0.0, 1.0] 
         active > 3 && active < 100,
         "{active} nodes in contact: not a plate tipped onto an edge"
     );
+    // the plain path: the same ties in its update of the sets (the stop's confirming step
+    // dropped an edge node by round-off, the rotation about the edge was then free, and the
+    // run failed after its 100 steps on 1 and 2 ranks)
+    for np in [1, 2] {
+        let what = format!("plain path, {np} rank(s)");
+        let s = solve(np, &case, &["solver.path=\"plain\""]);
+        s.assert_converged(&what);
+        s.assert_same_answer(&one, 1e-9, &what);
+    }
     for np in [1, 2, 3] {
         // several runs: the failure was one of round-off, not of the rank count alone
         for run in 0..2 {

@@ -363,12 +363,13 @@ impl ActiveSet {
         scale: f64,
         dim: usize,
     ) -> SetUpdate {
-        self.update_with(it, b, law, c, scale, dim, false)
+        self.update_with(it, b, law, c, scale, dim, false, 0.0)
     }
 
     /// [`ActiveSet::update`], with `settle` the rows of settled slip (the law's `settled`, 2D
-    /// Coulomb): the condensed Coulomb iteration's update (docs/friction.md, "Settled slip").
-    /// Local.
+    /// Coulomb): the condensed Coulomb iteration's update (docs/friction.md, "Settled slip");
+    /// and `tie` > 0 the width within which a node's (3.23) test is a tie and keeps its state
+    /// ([`contact::ties`]; 0: the test's sign alone). Local.
     #[allow(clippy::too_many_arguments)]
     pub fn update_with(
         &self,
@@ -379,6 +380,7 @@ impl ActiveSet {
         scale: f64,
         dim: usize,
         settle: bool,
+        tie: f64,
     ) -> SetUpdate {
         let mut next = self.clone();
         let mut changed = 0usize;
@@ -390,7 +392,11 @@ impl ActiveSet {
         let rules = law.rules();
         for (i, (k, r)) in b.nodes.iter().zip(&it.nodes).enumerate() {
             states[self.state(i).number() as usize - 1] += 1;
-            next.normal[i] = contact::normal_active(r.u_n, r.lambda_n, k.gap, c);
+            next.normal[i] = if tie > 0.0 {
+                contact::normal_active_or_tie(r.u_n, r.lambda_n, k.gap, c, tie, self.normal[i])
+            } else {
+                contact::normal_active(r.u_n, r.lambda_n, k.gap, c)
+            };
             let mut flip = next.normal[i] != self.normal[i];
             let cn = contact::c_n(r.u_n, r.lambda_n, k.gap, c);
             residual2 += cn * cn;

@@ -8,7 +8,7 @@ use crate::say;
 use crate::signorini::active_set::{
     threshold_scale, ActiveSet, Iterate, Law, SetSummary, SetUpdate, StepTotals,
 };
-use crate::signorini::boundary::ContactBoundary;
+use crate::signorini::boundary::{ContactBoundary, NodeResult};
 use crate::signorini::cycle::{decide, CycleGuard, Decision, Seen, SetKey};
 use crate::signorini::force::{self, Approach};
 use crate::signorini::halfspace::{self, HalfSpace, PredictorStep};
@@ -128,7 +128,10 @@ pub fn semismooth_newton(
         let touch = lp.bordered_step(reduced, step)?;
         let bs = &lp.shifted;
         let scale = threshold_scale(ctx, bs, &lp.it.nodes, s.law, s.c);
-        let mut update = lp.set.update(&lp.it, bs, s.law, s.c, scale, dim); // (3.23) / (3.33) / (F5)
+        let tie = tie_width(ctx, bs, &lp.it.nodes, s.c);
+        let mut update = lp
+            .set
+            .update_with(&lp.it, bs, s.law, s.c, scale, dim, false, tie); // (3.23) / (3.33) / (F5)
         for tag in touch {
             lp.touch(tag, &mut update);
         }
@@ -939,6 +942,27 @@ fn least_index_step(ctx: &Ctx, b: &ContactBoundary, old: &ActiveSet, next: &mut 
     for ((k, a), n) in b.nodes.iter().zip(&old.normal).zip(next.normal.iter_mut()) {
         *n = if k.tag == tag { !*a } else { *a };
     }
+}
+
+/// The width within which a node's (3.23) test is a tie ([`crate::contact::ties`]) over every
+/// contact node: such a node carries no force at zero gap to round-off and keeps its state, as
+/// in the dense iteration. Without it a floating plate tipped onto an edge of 9 nodes dropped
+/// one of them by the sign of round-off (|C_n| 2.9e-11) in the step that confirmed the stop,
+/// the plate's rotation about the edge was free in the next, every node came back into contact
+/// and the plain path failed after its 100 steps (tests/ties.rs). Collective (two reductions).
+fn tie_width(ctx: &Ctx, b: &ContactBoundary, nodes: &[NodeResult], c: f64) -> f64 {
+    let (mut lambda, mut length) = (0.0_f64, 0.0_f64);
+    for (k, r) in b.nodes.iter().zip(nodes) {
+        lambda = lambda.max(r.lambda_n.abs());
+        length = length.max(r.u_n.abs()).max(k.gap.abs());
+    }
+    let (lambda, length) = (ctx.max_f64(lambda), ctx.max_f64(length));
+    if lambda <= crate::contact::complementarity::SET_ROUND_OFF * c * length {
+        // every force is itself round-off (a body that nothing holds, an unloaded step):
+        // no node carries a force to keep, and the test's sign decides as written
+        return 0.0;
+    }
+    crate::contact::ties(lambda, length, c)
 }
 
 #[cfg(test)]

@@ -411,7 +411,7 @@ impl DenseIteration<'_> {
             let scale = threshold_scale_local(self.cb, &w.it.nodes, law, c);
             let up = w
                 .set
-                .update_with(&w.it, self.cb, law, c, scale, d, w.settle); // (3.23) / (F5)
+                .update_with(&w.it, self.cb, law, c, scale, d, w.settle, 0.0); // (3.23) / (F5)
             let residual = up.residual2.sqrt();
             let du_rel = relative_change(&u, &u_prev);
             let seconds = t.elapsed().as_secs_f64();
@@ -602,7 +602,7 @@ impl DenseIteration<'_> {
         let (d, law, c) = (self.dim, self.law, self.c);
         let scale = threshold_scale_local(self.cb, &it.nodes, law, c);
         before
-            .update_with(it, self.cb, law, c, scale, d, false)
+            .update_with(it, self.cb, law, c, scale, d, false, 0.0)
             .next
     }
 

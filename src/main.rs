@@ -239,9 +239,12 @@ fn run(cli: &Cli, world: &mpi::topology::SimpleCommunicator, petsc: &Petsc) -> i
     let case_file = args.case.as_deref().expect("clap requires the case");
     let result = ctx
         .agree(Case::load(case_file, &args.set, args.output.as_deref()).map_err(RunError::from))
-        .and_then(|case| match check {
-            false => driver::run_case(&ctx, &case).map(drop),
-            true => driver::check_case(&ctx, &case),
+        .and_then(|case| {
+            match check {
+                false => driver::run_case(&ctx, &case).map(drop),
+                true => driver::check_case(&ctx, &case),
+            }
+            .map_err(|e| case.locate(e))
         });
     match result {
         Ok(_) => 0,

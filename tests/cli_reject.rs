@@ -638,6 +638,34 @@ fn body_force_expression_not_finite() {
     run(tmp.path(), &ok, 0, &[]).expect_code(0, "finite body force");
 }
 
+/// An error found once the mesh is read (here a body force expression that is not finite in
+/// the body) names the line of its key in the case file, and says "(from --set)" where the key
+/// came from the command line (before, such errors named neither).
+#[test]
+fn a_late_error_names_its_keys_line_or_its_set() {
+    let t = case_2d(&square()) + "\n[body_force]\nexpr = [\"0\", \"ln(x - 0.5)\"]\n";
+    let line = 1 + t.lines().position(|l| l.starts_with("expr = ")).unwrap();
+    let message = rejected(&t, &["not a finite number"]);
+    assert!(
+        message.contains(&format!("case.toml:{line}: key 'body_force.expr[1]'")),
+        "no line {line}: {message}"
+    );
+    let ok = case_2d(&square()) + "\n[body_force]\nexpr = [\"0\", \"0\"]\n";
+    let tmp = tempfile::tempdir().unwrap();
+    let r = run(
+        tmp.path(),
+        &ok,
+        0,
+        &["--set", "body_force.expr=[\"0\", \"ln(x - 0.5)\"]"],
+    );
+    r.expect_code(2, "a body force from --set that is not finite");
+    assert!(
+        r.stderr.contains("not a finite number") && r.stderr.contains("(from --set)"),
+        "{}",
+        r.stderr
+    );
+}
+
 /// A body force expression in z on a 2D mesh: exit 2 naming the component.
 #[test]
 fn body_force_expression_variable_not_in_2d() {

@@ -11,7 +11,7 @@ use super::output::OutputSection;
 use super::reader::{Reader, Res};
 use super::solver::{Method, NewtonSection, Preset, SolverSection};
 use super::tree::{self, Loc, Node};
-use crate::error::InputError;
+use crate::error::{InputError, RunError};
 
 /// A validated case: defaults filled in, paths resolved.
 #[derive(Debug, Clone, PartialEq)]
@@ -131,6 +131,27 @@ impl Case {
         match self.locs.get(key) {
             Some(Loc::Line(l)) => Some(*l),
             _ => None,
+        }
+    }
+
+    /// An input error found after the case was read (against the mesh, in the contact set-up,
+    /// ...) that names a key of this case but no line: placed as [`Case::error_at`] places
+    /// one — at the key's line in the file, or said to come from `--set`. Other errors as
+    /// they are. Pure.
+    pub fn locate(&self, e: RunError) -> RunError {
+        match e {
+            RunError::Input(i) if i.line.is_none() && i.file == self.file => {
+                let line = i.key.as_deref().and_then(|k| self.locs.get(k).copied());
+                RunError::Input(match line {
+                    Some(Loc::Line(l)) => i.with_line(Some(l)),
+                    Some(Loc::Set) if !i.message.contains("(from --set)") => InputError {
+                        message: format!("{} (from --set)", i.message),
+                        ..i
+                    },
+                    _ => i,
+                })
+            }
+            e => e,
         }
     }
 

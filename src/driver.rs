@@ -216,7 +216,8 @@ pub fn solve(ctx: &Ctx, prepared: Prepared) -> Result<String, RunError> {
     };
     let (mut solver, mut preset_reason) = (solver, preset_reason);
     let mut attempt = on.attempt(ctx, &solver, contact.clone(), &mut clock);
-    if falls_back(asked, &solver, &attempt) {
+    // a failure that this rank raised alone is not retried: main ends every rank with it
+    if falls_back(asked, &solver, &attempt) && crate::abort::pending().is_none() {
         let why = match &attempt {
             Err(e) => e.to_string(),
             Ok(a) => a

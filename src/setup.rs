@@ -49,6 +49,7 @@ pub fn read_input(ctx: &Ctx, case: &Case) -> Result<Input, RunError> {
             .map_err(RunError::from),
     )?;
     facet_groups(ctx, case, &d.mesh)?;
+    ctx.agree_smallest(dirichlet_conflict(case, &d.mesh).map(|(t, e)| (t, e.into())))?;
     let mut material = cell_materials(ctx, case, &d.mesh, model)?;
     material.reference = reference_material(ctx, case, &d.mesh, &material);
     (material.half_space, material.slave_over_master) = pair_modulus(ctx, case, &d.mesh, &material);
@@ -152,6 +153,69 @@ fn facet_groups(ctx: &Ctx, case: &Case, mesh: &Mesh) -> Result<(), RunError> {
     let first = ctx.min_u64(fault.as_ref().map_or(u64::MAX, |f| f.0 as u64));
     let fault = fault.filter(|f| f.0 as u64 == first);
     ctx.agree_smallest(fault.map(|(_, tag, e)| (tag, RunError::Input(e))))
+}
+
+/// A node whose component two `[[dirichlet]]` entries prescribe differently — other values,
+/// or one ramped with the load and one held (`ramp`) at a value that is not zero — among this
+/// rank's nodes: its gmsh tag and the error naming the later entry, the earlier one, the node
+/// and both values (before, the later entry won silently: a corner shared by `top` = [0,
+/// −0.01] and `right` = [0.02, "free"] moved by [0.02, −0.01] at exit 0). Entries that agree
+/// on a shared node (a clamped bottom and a symmetry side at a corner) are fine. Local.
+fn dirichlet_conflict(case: &Case, mesh: &Mesh) -> Option<(u64, InputError)> {
+    let dim = mesh.dim;
+    // per local node and component: the first entry that prescribes it
+    let mut by: Vec<Option<usize>> = vec![None; mesh.n_nodes() * dim];
+    let mut worst: Option<(u64, usize, usize, usize)> = None; // (tag, earlier, later, component)
+    for (j, d) in case.dirichlet.iter().enumerate() {
+        for g in groups_named(mesh, &d.group) {
+            for &v in mesh.group_nodes(g).iter() {
+                for (k, val) in d.value.iter().enumerate().take(dim) {
+                    let Some(x) = val else { continue };
+                    let slot = &mut by[v * dim + k];
+                    match *slot {
+                        None => *slot = Some(j),
+                        Some(i) if i != j => {
+                            let e = &case.dirichlet[i];
+                            let y = e.value[k].unwrap_or(f64::NAN);
+                            let same = *x == y && (e.ramp == d.ramp || *x == 0.0);
+                            let tag = mesh.node_tags[v];
+                            if !same && worst.is_none_or(|w| tag < w.0) {
+                                worst = Some((tag, i, j, k));
+                            }
+                        }
+                        Some(_) => {}
+                    }
+                }
+            }
+        }
+    }
+    let (tag, i, j, k) = worst?;
+    let v = (0..mesh.n_nodes()).find(|&v| mesh.node_tags[v] == tag)?;
+    let (a, b) = (&case.dirichlet[i], &case.dirichlet[j]);
+    let shown = |d: &case::Dirichlet| {
+        let x = d.value[k].unwrap_or(f64::NAN);
+        if d.ramp {
+            format!("{x}")
+        } else {
+            format!("{x} held (ramp = false)")
+        }
+    };
+    let x = &mesh.coords[v][..dim];
+    Some((
+        tag,
+        case.error_at(
+            &format!("dirichlet[{j}].value"),
+            format!(
+                "node {tag} at {x:?} is in group \"{}\" of dirichlet[{j}] and in group \"{}\" of \
+                 dirichlet[{i}], which prescribe its component {k} differently ({} against {}): \
+                 one value per component and node",
+                b.group,
+                a.group,
+                shown(b),
+                shown(a)
+            ),
+        ),
+    ))
 }
 
 fn model_of(m: case::MaterialModel) -> fem::Model {

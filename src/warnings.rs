@@ -13,6 +13,9 @@ pub const PRESSED_WITHOUT_CONTACT: &str = "pressed_without_contact";
 pub const START_INSIDE: &str = "start_inside_obstacle";
 /// A contact force that pulls the body's surface outward (signorini/warn.rs).
 pub const PULLING_FORCE: &str = "pulling_contact_force";
+/// Boundary nodes outside a pair's contact group (or left to their Dirichlet data) that end
+/// beyond its rigid obstacle's surface, having started on the body's side (signorini/warn.rs).
+pub const THROUGH_OBSTACLE: &str = "boundary_through_obstacle";
 /// A strain beyond small deformations (post.rs).
 pub const LARGE_DEFORMATION: &str = "large_deformation";
 /// A final state that violates (3.14) or (3.18) beyond round-off but within the acceptance

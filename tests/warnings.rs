@@ -86,6 +86,70 @@ fn a_pressed_plate_that_touches_nothing_is_warned_about() {
     }
 }
 
+/// A block pressed down onto a plane with its left side as the contact group: the side's
+/// corner touches, the bottom goes through the plane unseen (0.0118 deep on the block of
+/// cases/blocks) — `boundary_through_obstacle`, the same on 1, 2 and 3 ranks and on the plain
+/// path. Before, no warning of it, and a `pulling_contact_force` on the corner decided by the
+/// sign of round-off (on 2 ranks, not on 1 or 3; on the plain path on 1 and 2). Held at the
+/// bottom by Dirichlet data that push it into the plane: the same warning, naming them; with
+/// the bottom as the group: none.
+#[test]
+fn boundary_nodes_outside_the_group_that_go_through_the_obstacle_are_warned_about() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let case = write_case(
+        &dir.path().join("block.toml"),
+        &format!(
+            r#"[mesh]
+file = {}
+[material]
+young = 1.0
+poisson = 0.3
+model = "plane_strain"
+[[dirichlet]]
+group = "top"
+value = [0.0, -0.01]
+[contact]
+group = "bottom"
+obstacle = {{ type = "plane", point = [0.0, 0.0], normal = [0.0, 1.0] }}
+"#,
+            toml_path(&repo("cases/blocks/block2d.msh"))
+        ),
+    );
+    let side = "contact.group=\"left\"";
+    for path in ["solver.path=\"auto\"", "solver.path=\"plain\""] {
+        let seen = warned_alike(
+            &case,
+            &[side, path],
+            &["boundary_through_obstacle"],
+            Some("contact.group"),
+        );
+        for w in &seen {
+            // a node of the bottom, which starts on the plane
+            let x = w["at"]["x"].as_array().unwrap();
+            assert_eq!(x[1].as_f64(), Some(0.0), "{w:#?}");
+            assert!(text(w, "message").contains("in no contact group"), "{w:#?}");
+        }
+    }
+    let held = warned_alike(
+        &case,
+        &["dirichlet.0.group=\"bottom\""],
+        &["boundary_through_obstacle"],
+        Some("contact.group"),
+    );
+    for w in &held {
+        assert!(
+            text(w, "message").contains("held by Dirichlet data"),
+            "{w:#?}"
+        );
+        assert!(
+            (w["value"].as_f64().unwrap() - 0.005).abs() < 1e-12,
+            "{w:#?}"
+        );
+    }
+    let quiet = solve(1, &case, &[]);
+    assert!(warnings(&quiet).is_empty(), "{}", quiet.run.output());
+}
+
 #[test]
 fn a_contact_force_that_lifts_the_surface_is_warned_about() {
     let seen = warned_alike(

@@ -487,14 +487,19 @@ fn report_solution(
         contact_warnings.retain(|w| w.code != crate::warnings::PULLING_FORCE);
     }
     warned.extend(contact_warnings);
+    let u_local = nr.u.to_local_vec()?;
+    warned.extend(warn::through_obstacles(
+        ctx,
+        mesh,
+        layout,
+        settings,
+        &b,
+        &u_local,
+        displacement,
+        problem.fixed,
+    ));
     let delta = match previous.zip(prev_u) {
-        Some((prev, u_prev)) => Some(step_delta(
-            prev,
-            &nr.nodes,
-            displacement,
-            &nr.u.to_local_vec()?,
-            &u_prev,
-        )),
+        Some((prev, u_prev)) => Some(step_delta(prev, &nr.nodes, displacement, &u_local, &u_prev)),
         None => None,
     };
     Ok(ContactSolution {

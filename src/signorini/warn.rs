@@ -114,6 +114,12 @@ fn local_records(
         let along = dot(k.frame.n, *o);
         if r.active {
             rec[0] += 1.0;
+        }
+        // judged where the obstacle faces the body's surface (|n·o| ≥ 1/2), as the pressed
+        // warning judges: where its normal lies along the surface (a corner node of a side
+        // group on a plane that the side stands on) the force's part along o is round-off, and
+        // its sign — which changed with the rank count and the path — decided the warning
+        if r.active && along.abs() >= FACING {
             // the contact force on the body, −λ, along the body's outward normal
             let f_out = -dot(r.lambda, *o);
             rec[6] += f_out.max(0.0);
@@ -233,6 +239,153 @@ fn pair_warnings(
             &t[11..14],
         ));
     }
+}
+
+/// One pair's record of [`through_obstacles`]: [count, deepest, its tag, x(3), Dirichlet].
+const THROUGH: usize = 7;
+
+/// [`warnings::THROUGH_OBSTACLE`]: per pair with a rigid obstacle, the nodes of the mesh's
+/// boundary elements (its facet groups) that are not that pair's contact nodes — outside its
+/// group, or in it but left to their Dirichlet data —, whose surface faces the obstacle (the
+/// body's outward normal o there against the obstacle's n: n·o ≤ −1/2), that start on the body's side of
+/// the obstacle (g0 ≥ −[`CROSSED_RTOL`] × size) but end beyond its surface by more than
+/// [`CROSSED_RTOL`] × size (first-order gaps, g0 − d·n + u·n, as the contact nodes'; a node
+/// that its Dirichlet data hold along n by g0 + u·n, its own prescribed motion): the
+/// obstacle holds only the group's nodes, and the rest of the body went through it unseen (a
+/// block pressed down at its top with its side as the contact group ended with its bottom
+/// 0.0118 inside the plane it stands on, at exit 0). Not for body pairs (their u is in the
+/// mortar basis). `u`: the owned nodes' rows of u. Collective (one gather).
+#[allow(clippy::too_many_arguments)]
+pub fn through_obstacles(
+    ctx: &Ctx,
+    mesh: &Mesh,
+    layout: &Layout,
+    settings: &ContactSettings,
+    b: &ContactBoundary,
+    u: &[f64],
+    displacement: &[[f64; 3]],
+    fixed: &[f64],
+) -> Vec<Warning> {
+    let (dim, np) = (mesh.dim, settings.pairs.len());
+    let size = mesh.extent();
+    if (settings.pairs.iter()).any(|p| matches!(p.obstacle, crate::contact::Obstacle::Body(_))) {
+        return Vec::new();
+    }
+    // the body's outward normal at every node of a boundary element (zero elsewhere)
+    let mut outward = vec![[0.0; 3]; mesh.n_nodes()];
+    for f in 0..mesh.n_facets() {
+        let Some((_, opp)) = facet_cell(mesh, layout, f) else {
+            continue;
+        };
+        let (n, m) = outward_normal(mesh, f, opp);
+        for &v in mesh.facet(f) {
+            for c in 0..3 {
+                outward[v][c] += m * n[c];
+            }
+        }
+    }
+    let mut pair_of: HashMap<usize, usize> = HashMap::new();
+    for k in &b.nodes {
+        pair_of.insert(k.node, k.pair);
+    }
+    let tol = CROSSED_RTOL * size;
+    let mut local = vec![0.0; THROUGH * np];
+    for r in local.chunks_exact_mut(THROUGH) {
+        r[1] = f64::NEG_INFINITY;
+    }
+    for (i, &v) in layout.owned_nodes.iter().enumerate() {
+        let o = outward[v];
+        let len = dot(o, o).sqrt();
+        if len == 0.0 {
+            continue;
+        }
+        let x = mesh.coords[v];
+        for (p, pair) in settings.pairs.iter().enumerate() {
+            if pair_of.get(&v) == Some(&p) {
+                continue;
+            }
+            let Ok(proj) = pair.obstacle.project(x) else {
+                continue;
+            };
+            let n = proj.normal;
+            if proj.gap < -tol || dot(n, o) > -FACING * len {
+                // started inside (the start's own warning, or the case's intent), or a surface
+                // that does not face the obstacle (a block squashed beyond its own height by a
+                // load 5 × E moves its top below the plane it stands on: large_deformation's)
+                continue;
+            }
+            let un: f64 = (0..dim).map(|c| u[i * dim + c] * n[c]).sum();
+            // held along n by its Dirichlet data: judged by its own prescribed motion alone,
+            // not by the obstacle's (a plate pressed onto a block whose corners are clamped
+            // passes the clamped corners as intended)
+            let free2: f64 = (0..dim)
+                .filter(|&c| fixed[v * dim + c].is_nan())
+                .map(|c| n[c] * n[c])
+                .sum();
+            let held = free2 < FACING * FACING;
+            let moved = if held { 0.0 } else { dot(displacement[p], n) };
+            let depth = -(proj.gap - moved + un);
+            let rec = &mut local[THROUGH * p..THROUGH * (p + 1)];
+            let tag = mesh.node_tags[v] as f64;
+            if depth > tol {
+                rec[0] += 1.0;
+                if depth > rec[1] || (depth == rec[1] && tag < rec[2]) {
+                    rec[1] = depth;
+                    rec[2] = tag;
+                    rec[3..6].copy_from_slice(&x);
+                    rec[6] = if held { 1.0 } else { 0.0 };
+                }
+            }
+        }
+    }
+    let all = ctx.all_gather_varcount(&local);
+    let mut list = Vec::new();
+    for (p, pair) in settings.pairs.iter().enumerate() {
+        let mut t = [0.0; THROUGH];
+        t[1] = f64::NEG_INFINITY;
+        for r in all.chunks_exact(THROUGH * np) {
+            let r = &r[THROUGH * p..THROUGH * (p + 1)];
+            t[0] += r[0];
+            if r[1] > t[1] || (r[1] == t[1] && r[2] < t[2]) {
+                t[1..].copy_from_slice(&r[1..]);
+            }
+        }
+        if t[0] == 0.0 {
+            continue;
+        }
+        let group = pair.key("group");
+        let why = if t[6] > 0.0 {
+            "held by Dirichlet data that move it there"
+        } else {
+            "in no contact group of this pair"
+        };
+        let message = format!(
+            "{}: {} boundary node(s) that are not its contact nodes end beyond its obstacle's \
+             surface, up to {:.4e} (node {} at {}, {why}): the obstacle holds only the \
+             nodes of its contact group, and the rest of the body went through it unseen — \
+             should the group (key '{group}') hold them, or the Dirichlet data let them go?",
+            pair.key,
+            t[0] as u64,
+            t[1],
+            t[2] as u64,
+            warnings::coords(&t[3..3 + dim])
+        );
+        list.push(Warning {
+            code: warnings::THROUGH_OBSTACLE,
+            message,
+            key: Some(group),
+            pair: Some(pair.key.clone()),
+            value: t[1] / size,
+            threshold: CROSSED_RTOL,
+            at: Some(Place {
+                node: Some(t[2] as u64),
+                cell: None,
+                x: t[3..3 + dim].to_vec(),
+            }),
+            steps: Vec::new(),
+        });
+    }
+    list
 }
 
 /// The warnings of a pair's start ([`warnings::START_INSIDE`]), from the gaps g0 of `nodes`

@@ -4,8 +4,8 @@
 //! surface and its table arrive as plain grid, fields and text.
 
 use super::{
-    write_step_xdmf_hdf5, write_xdmf_hdf5, ContactPiece, Field, FieldBuf, Piece, CONTACT_XDMF_FILE,
-    XDMF_FILE,
+    write_series_xdmf, write_step_hdf5, write_xdmf_hdf5, ContactPiece, Field, FieldBuf, Meta,
+    Piece, CONTACT_XDMF_FILE, XDMF_FILE,
 };
 use crate::error::{InputError, RunError};
 use crate::par::Ctx;
@@ -106,6 +106,8 @@ pub struct ResultSet {
     staging: PathBuf,
     committed: bool,
     rank: usize,
+    /// A load history's description and times so far: its XDMF files, written at the commit.
+    series: std::cell::RefCell<Option<(Meta, Vec<f64>)>>,
 }
 
 /// The staging directory next to `dir` (hidden, same parent, so the final rename is atomic).
@@ -277,6 +279,7 @@ impl ResultSet {
             target,
             committed: false,
             rank: ctx.rank,
+            series: std::cell::RefCell::new(None),
         })
     }
 
@@ -309,9 +312,9 @@ impl ResultSet {
         Ok(t.elapsed().as_secs_f64())
     }
 
-    /// Adds step `index` (1, 2, …) of a load history to solution.h5 in the staging directory
-    /// and rewrites solution.xdmf as the temporal collection of `times` (one per step so far,
-    /// the load factors). Collective. Returns the seconds it took.
+    /// Adds step `index` (1, 2, …) of a load history to solution.h5 in the staging directory;
+    /// solution.xdmf (the temporal collection of `times`, one per step so far, the load
+    /// factors) is written at the commit. Collective. Returns the seconds it took.
     pub fn write_step(
         &self,
         ctx: &Ctx,
@@ -323,8 +326,9 @@ impl ResultSet {
         if index == 1 {
             self.fresh_staging(ctx)?;
         }
-        write_step_xdmf_hdf5(ctx.world, &self.staging, piece, index, times)
+        let meta = write_step_hdf5(ctx.world, &self.staging, piece, index)
             .map_err(|e| self.cannot(e))?;
+        *self.series.borrow_mut() = Some((meta, times.to_vec()));
         Ok(t.elapsed().as_secs_f64())
     }
 
@@ -386,6 +390,9 @@ impl ResultSet {
         csv: Option<&str>,
         history_csv: Option<&str>,
     ) -> std::io::Result<()> {
+        if let Some((meta, times)) = self.series.borrow().as_ref() {
+            write_series_xdmf(&self.staging, meta, times)?;
+        }
         std::fs::write(self.staging.join(SUMMARY_FILE), summary_json)?;
         if let Some(c) = csv {
             std::fs::write(self.staging.join(CONTACT_CSV), c)?;

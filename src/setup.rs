@@ -49,13 +49,13 @@ pub fn read_input(ctx: &Ctx, case: &Case) -> Result<Input, RunError> {
             .map_err(RunError::from),
     )?;
     facet_groups(ctx, case, &d.mesh)?;
-    ctx.agree_smallest(dirichlet_conflict(case, &d.mesh).map(|(t, e)| (t, e.into())))?;
     let mut material = cell_materials(ctx, case, &d.mesh, model)?;
     material.reference = reference_material(ctx, case, &d.mesh, &material);
     (material.half_space, material.slave_over_master) = pair_modulus(ctx, case, &d.mesh, &material);
     ctx.agree_smallest(check_body_force(case, &d.mesh).map(|(t, e)| (t, e.into())))?;
+    let overridden = dirichlet_overridden(ctx, case, &d.mesh, &d.layout);
     let input = Input {
-        warnings: locking_warnings(case, &material),
+        warnings: [locking_warnings(case, &material), overridden].concat(),
         mesh: d.mesh,
         material,
         layout: d.layout,
@@ -155,42 +155,58 @@ fn facet_groups(ctx: &Ctx, case: &Case, mesh: &Mesh) -> Result<(), RunError> {
     ctx.agree_smallest(fault.map(|(_, tag, e)| (tag, RunError::Input(e))))
 }
 
-/// A node whose component two `[[dirichlet]]` entries prescribe differently — other values,
-/// or one ramped with the load and one held (`ramp`) at a value that is not zero — among this
-/// rank's nodes: its gmsh tag and the error naming the later entry, the earlier one, the node
-/// and both values (before, the later entry won silently: a corner shared by `top` = [0,
-/// −0.01] and `right` = [0.02, "free"] moved by [0.02, −0.01] at exit 0). Entries that agree
-/// on a shared node (a clamped bottom and a symmetry side at a corner) are fine. Local.
-fn dirichlet_conflict(case: &Case, mesh: &Mesh) -> Option<(u64, InputError)> {
+/// [`warnings::DIRICHLET_OVERRIDDEN`]: nodes whose component two `[[dirichlet]]` entries on
+/// different groups prescribe differently — other values, or one ramped with the load and one
+/// held (`ramp = false`) at a value that is not zero: the later entry's value holds (a corner
+/// shared by `top` = [0, −0.01] and `right` = [0.02, "free"] moves by [0.02, −0.01]). A later
+/// entry on the same group overrides on purpose (examples/sphere_drag.toml holds `bottom` at
+/// 0, then moves its x by 0.004): no warning. Entries that agree on a shared node (a clamped
+/// bottom and a symmetry side at a corner) are fine. Named by the node of smallest tag, the
+/// same on every rank count. Collective (one gather).
+fn dirichlet_overridden(ctx: &Ctx, case: &Case, mesh: &Mesh, layout: &Layout) -> Vec<Warning> {
     let dim = mesh.dim;
-    // per local node and component: the first entry that prescribes it
+    // per local node and component: the entry whose value holds so far
     let mut by: Vec<Option<usize>> = vec![None; mesh.n_nodes() * dim];
-    let mut worst: Option<(u64, usize, usize, usize)> = None; // (tag, earlier, later, component)
+    // (count, tag, earlier, later, component) of the owned nodes
+    let (mut count, mut first) = (0usize, None::<(u64, usize, usize, usize, usize)>);
+    let owned: std::collections::HashSet<usize> = layout.owned_nodes.iter().copied().collect();
     for (j, d) in case.dirichlet.iter().enumerate() {
         for g in groups_named(mesh, &d.group) {
             for &v in mesh.group_nodes(g).iter() {
                 for (k, val) in d.value.iter().enumerate().take(dim) {
                     let Some(x) = val else { continue };
                     let slot = &mut by[v * dim + k];
-                    match *slot {
-                        None => *slot = Some(j),
-                        Some(i) if i != j => {
-                            let e = &case.dirichlet[i];
-                            let y = e.value[k].unwrap_or(f64::NAN);
-                            let same = *x == y && (e.ramp == d.ramp || *x == 0.0);
+                    if let Some(i) = *slot {
+                        let e = &case.dirichlet[i];
+                        let y = e.value[k].unwrap_or(f64::NAN);
+                        let same = *x == y && (e.ramp == d.ramp || *x == 0.0);
+                        if !same && e.group != d.group && owned.contains(&v) {
+                            count += 1;
                             let tag = mesh.node_tags[v];
-                            if !same && worst.is_none_or(|w| tag < w.0) {
-                                worst = Some((tag, i, j, k));
+                            if first.is_none_or(|f| tag < f.0) {
+                                first = Some((tag, i, j, k, v));
                             }
                         }
-                        Some(_) => {}
                     }
+                    *slot = Some(j);
                 }
             }
         }
     }
-    let (tag, i, j, k) = worst?;
-    let v = (0..mesh.n_nodes()).find(|&v| mesh.node_tags[v] == tag)?;
+    // every rank's first (each node counted by the rank that owns it)
+    let mine: Vec<f64> = match first {
+        Some((tag, i, j, k, v)) => {
+            let x = mesh.coords[v];
+            vec![tag as f64, i as f64, j as f64, k as f64, x[0], x[1], x[2]]
+        }
+        None => Vec::new(),
+    };
+    let total = ctx.sum_usize(count);
+    let all = ctx.all_gather_varcount(&mine);
+    let Some(r) = all.chunks_exact(7).min_by(|a, b| a[0].total_cmp(&b[0])) else {
+        return Vec::new();
+    };
+    let (tag, i, j, k) = (r[0] as u64, r[1] as usize, r[2] as usize, r[3] as usize);
     let (a, b) = (&case.dirichlet[i], &case.dirichlet[j]);
     let shown = |d: &case::Dirichlet| {
         let x = d.value[k].unwrap_or(f64::NAN);
@@ -200,22 +216,30 @@ fn dirichlet_conflict(case: &Case, mesh: &Mesh) -> Option<(u64, InputError)> {
             format!("{x} held (ramp = false)")
         }
     };
-    let x = &mesh.coords[v][..dim];
-    Some((
-        tag,
-        case.error_at(
-            &format!("dirichlet[{j}].value"),
-            format!(
-                "node {tag} at {x:?} is in group \"{}\" of dirichlet[{j}] and in group \"{}\" of \
-                 dirichlet[{i}], which prescribe its component {k} differently ({} against {}): \
-                 one value per component and node",
-                b.group,
-                a.group,
-                shown(b),
-                shown(a)
-            ),
+    let x = &r[4..4 + dim];
+    vec![Warning {
+        code: warnings::DIRICHLET_OVERRIDDEN,
+        message: format!(
+            "dirichlet[{j}] (group \"{}\") overrides dirichlet[{i}] (group \"{}\") at {total} \
+             node component(s) they share, e.g. component {k} of node {tag} at {}: {} instead \
+             of {} — the later entry's value holds; is that the intent?",
+            b.group,
+            a.group,
+            warnings::coords(x),
+            shown(b),
+            shown(a)
         ),
-    ))
+        key: Some(format!("dirichlet[{j}].value")),
+        pair: None,
+        value: total as f64,
+        threshold: 0.0,
+        at: Some(warnings::Place {
+            node: Some(tag),
+            cell: None,
+            x: x.to_vec(),
+        }),
+        steps: Vec::new(),
+    }]
 }
 
 fn model_of(m: case::MaterialModel) -> fem::Model {

@@ -26,6 +26,10 @@ pub const INEXACT_FINAL_STATE: &str = "inexact_final_state";
 /// mode (driver.rs): where its contact does not hold that mode, round-off decides it.
 pub const RIGID_MODES_UNHANDLED: &str = "rigid_modes_unhandled";
 
+/// Two `[[dirichlet]]` entries on different groups that prescribe a shared node's component
+/// differently: the later one's value holds (setup.rs).
+pub const DIRICHLET_OVERRIDDEN: &str = "dirichlet_overridden";
+
 /// A material whose Poisson's ratio is close to 1/2: P1 elements lock (setup.rs).
 pub const NEARLY_INCOMPRESSIBLE: &str = "nearly_incompressible";
 

@@ -666,44 +666,6 @@ fn a_late_error_names_its_keys_line_or_its_set() {
     );
 }
 
-/// Two `[[dirichlet]]` entries that prescribe one component of a shared node differently (the
-/// corners of `left` and `bottom`): exit 2 naming both entries and the node, on 1 and 2 ranks
-/// (before, the later entry won silently). Entries that agree there, or that hold different
-/// components, run.
-#[test]
-fn dirichlet_entries_that_disagree_at_a_shared_node() {
-    let base = case_2d(&square());
-    let bad = base.clone() + "\n[[dirichlet]]\ngroup = \"bottom\"\nvalue = [0.01, \"free\"]\n";
-    for np in [0, 2] {
-        rejected_np(
-            &bad,
-            np,
-            &[
-                "dirichlet[1].value",
-                "case.toml:",
-                "group \"bottom\" of dirichlet[1]",
-                "group \"left\" of dirichlet[0]",
-                "component 0",
-                "0.01 against 0",
-            ],
-        );
-    }
-    // held (ramp = false) against ramped at a value that is not zero: two histories (at the
-    // corner of `top` and `right`; `left` holds only y here)
-    let held = edit(&base, "value = [0.0, 0.0]", "value = [\"free\", 0.0]")
-        + "\n[[dirichlet]]\ngroup = \"top\"\nvalue = [0.02, \"free\"]\nramp = false\n\
-           [[dirichlet]]\ngroup = \"right\"\nvalue = [0.02, \"free\"]\n";
-    rejected(&held, &["dirichlet[2].value", "held (ramp = false)"]);
-    for ok in [
-        base.clone() + "\n[[dirichlet]]\ngroup = \"bottom\"\nvalue = [0.0, \"free\"]\n",
-        base.clone()
-            + "\n[[dirichlet]]\ngroup = \"bottom\"\nvalue = [\"free\", 0.0]\nramp = false\n",
-    ] {
-        let tmp = tempfile::tempdir().unwrap();
-        run(tmp.path(), &ok, 0, &[]).expect_code(0, "entries that agree at the corner");
-    }
-}
-
 /// A body force expression in z on a 2D mesh: exit 2 naming the component.
 #[test]
 fn body_force_expression_variable_not_in_2d() {

@@ -150,6 +150,78 @@ obstacle = {{ type = "plane", point = [0.0, 0.0], normal = [0.0, 1.0] }}
     assert!(warnings(&quiet).is_empty(), "{}", quiet.run.output());
 }
 
+/// Two `[[dirichlet]]` entries on different groups that prescribe a shared node's component
+/// differently (the corner of `left` = [0, 0] and `bottom` = [0.01, 0]): the later entry's
+/// value holds, and `dirichlet_overridden` says so (before: silently), on 1, 2 and 3 ranks. A
+/// later entry on the same group overrides on purpose (examples/sphere_drag.toml): no warning;
+/// nor where the entries agree at the corner.
+#[test]
+fn a_dirichlet_entry_that_overrides_another_at_a_shared_node_is_warned_about() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let case = |name: &str, entries: &[(&str, &str)]| {
+        let mut text = format!(
+            "[mesh]\nfile = {}\n[material]\nyoung = 1.0\npoisson = 0.3\n\
+             model = \"plane_strain\"\n",
+            toml_path(&repo("cases/blocks/block2d.msh"))
+        );
+        for (group, rest) in entries {
+            text += &format!("[[dirichlet]]\ngroup = \"{group}\"\n{rest}\n");
+        }
+        write_case(&dir.path().join(name), &text)
+    };
+    let clamped = ("left", "value = [0.0, 0.0]");
+    let over = case("over.toml", &[clamped, ("bottom", "value = [0.001, 0.0]")]);
+    let seen = warned_alike(
+        &over,
+        &[],
+        &["dirichlet_overridden"],
+        Some("dirichlet[1].value"),
+    );
+    for w in &seen {
+        // the corner (−1, 0), once
+        assert_eq!(w["value"].as_f64(), Some(1.0), "{w:#?}");
+        let x = w["at"]["x"].as_array().unwrap();
+        assert_eq!(
+            (x[0].as_f64(), x[1].as_f64()),
+            (Some(-1.0), Some(0.0)),
+            "{w:#?}"
+        );
+        assert!(text(w, "message").contains("0.001 instead of 0"), "{w:#?}");
+    }
+    // the same value, held at the right side and ramped on the top: two histories
+    let held = case(
+        "held.toml",
+        &[
+            ("left", "value = [\"free\", 0.0]"),
+            ("right", "value = [0.001, \"free\"]\nramp = false"),
+            ("top", "value = [0.001, \"free\"]"),
+        ],
+    );
+    let seen = warned_alike(
+        &held,
+        &[],
+        &["dirichlet_overridden"],
+        Some("dirichlet[2].value"),
+    );
+    assert!(
+        text(&seen[0], "message").contains("0.001 instead of 0.001 held (ramp = false)"),
+        "{seen:#?}"
+    );
+    for quiet in [
+        case(
+            "same_group.toml",
+            &[clamped, ("left", "value = [0.001, \"free\"]")],
+        ),
+        case(
+            "agree.toml",
+            &[clamped, ("bottom", "value = [\"free\", 0.0]")],
+        ),
+    ] {
+        let s = solve(1, &quiet, &[]);
+        assert!(warnings(&s).is_empty(), "{}", s.run.output());
+    }
+}
+
 #[test]
 fn a_contact_force_that_lifts_the_surface_is_warned_about() {
     let seen = warned_alike(

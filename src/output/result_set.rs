@@ -326,8 +326,8 @@ impl ResultSet {
         if index == 1 {
             self.fresh_staging(ctx)?;
         }
-        let meta = write_step_hdf5(ctx.world, &self.staging, piece, index)
-            .map_err(|e| self.cannot(e))?;
+        let meta =
+            write_step_hdf5(ctx.world, &self.staging, piece, index).map_err(|e| self.cannot(e))?;
         *self.series.borrow_mut() = Some((meta, times.to_vec()));
         Ok(t.elapsed().as_secs_f64())
     }

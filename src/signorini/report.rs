@@ -12,7 +12,7 @@ use crate::setup::{self, ContactSettings};
 use serde::Serialize;
 
 /// Columns of one gathered contact-node row.
-const NCOL: usize = 20;
+const NCOL: usize = 21;
 
 /// Per owned node: the pressure p^k = −λ_n^k / w_k (THEORY §2).
 pub fn pressure(lambda_n: f64, weight: f64) -> f64 {
@@ -253,6 +253,16 @@ const SLIP: usize = 16;
 const DUT: usize = 17;
 /// The node's contact pair.
 const PAIR: usize = 19;
+/// Coulomb's μ of the node (0 without Coulomb friction).
+const MU: usize = 20;
+
+/// Whether friction acts on a row's node: in contact, or out of contact where a threshold acts
+/// (Tresca's b_k acts on every contact node, (3.18)); a Coulomb node out of contact has b_k = 0
+/// and no tangential state, whatever threshold an algorithm's last inner solve left there (the
+/// fixed point's). It counted as slip: 69 "slip" nodes where 6 were in contact.
+fn rubs(r: &[f64; NCOL]) -> bool {
+    r[STATE] > 0.5 || (r[BOUND] > 0.0 && r[MU] == 0.0)
+}
 
 /// Gathers the contact nodes of all ranks (the contact boundary is small).
 pub fn gather(ctx: &Ctx, cs: &ContactBoundary, res: &[NodeResult], dim: usize) -> Table {
@@ -280,6 +290,7 @@ pub fn gather(ctx: &Ctx, cs: &ContactBoundary, res: &[NodeResult], dim: usize) -
             du_t[0],
             du_t[1],
             k.pair as f64,
+            k.mu,
         ];
         mine.extend_from_slice(&row);
     }
@@ -352,9 +363,9 @@ impl Table {
             v.push(if r[STATE] > 0.5 { "active" } else { "inactive" }.into());
             v.push(format!("{:.17e}", r[BOUND]));
             v.push(
-                if r[SLIP] > 0.5 {
+                if r[SLIP] > 0.5 && rubs(r) {
                     "slip"
-                } else if r[BOUND] > 0.0 {
+                } else if r[BOUND] > 0.0 && rubs(r) {
                     "stick"
                 } else {
                     "-"
@@ -492,6 +503,9 @@ impl Table {
             stick = stick.max(res.stick_motion);
             align = align.max(res.slip_alignment);
             bmax = bmax.max(r[BOUND]);
+            if !rubs(r) {
+                continue;
+            }
             if slip {
                 n_slip += 1;
             } else {
@@ -821,6 +835,19 @@ mod tests {
         assert_eq!(c.max_stick_motion, 0.0);
         assert!(c.max_slip_alignment_defect <= 1e-15, "{c:?}");
         assert_eq!((c.stick_count, c.slip_count), (1, 2));
+        // a Coulomb node out of contact is neither (whatever its threshold); a Tresca node out
+        // of contact with a threshold is counted
+        let mut open = row(0.0, 0.0, 0.0, 1e-3, true);
+        open[STATE] = 0.0;
+        open[MU] = 0.3;
+        let mut tresca = row(0.0, 0.0, 0.0, 1e-3, false);
+        tresca[STATE] = 0.0;
+        let t = Table {
+            rows: vec![row(0.5, 1e-17, 0.1, 0.1, true), open, tresca],
+            dim: 2,
+        };
+        let c = t.friction_certificate();
+        assert_eq!((c.stick_count, c.slip_count), (1, 1));
         // a stick node with an increment, a slip node against its increment: violations
         let t = Table {
             rows: vec![

@@ -338,6 +338,51 @@ fn coulomb_load_steps_in_binary_millimetres() {
     same_in("Cattaneo", &mesh, text, units, 2);
 }
 
+/// Stresses and forces times 2^36 (lengths alike): u repeats bit for bit, with the same states
+/// and steps, on a 3D block pushed by a force-controlled sphere with Coulomb friction — the
+/// condensed path's dual form then has the obstacle's approach α among its unknowns. Before,
+/// its rows mixed the units of C and of G, their equilibration took the largest entry of
+/// either as the unit system decided, and u differed (4.7e-15 of max |u| at 2^26, 1.4e-10 and
+/// one dense step fewer at 2^26 on the finer block of an earlier sweep); now the unknown is
+/// c α. (A power of four: MUMPS' scaling of the matrix takes square roots.)
+#[test]
+fn force_controlled_coulomb_times_a_power_of_four_repeats_bit_for_bit() {
+    let tmp = tempfile::tempdir().expect("tempdir");
+    let mut runs = Vec::new();
+    for (tag, f) in [("own", 1.0), ("scaled", 2f64.powi(36))] {
+        let case = write_case(
+            &tmp.path().join(format!("{tag}.toml")),
+            &format!(
+                "[mesh]\nfile = {}\n[material]\nyoung = {}\npoisson = 0.3\n\
+                 [[dirichlet]]\ngroup = \"bottom\"\nvalue = [0.0, 0.0, 0.0]\n\
+                 [contact]\ngroup = \"top\"\n\
+                 obstacle = {{ type = \"sphere\", center = [0.2, -0.1, 1.1], radius = 0.5 }}\n\
+                 force = [{}, 0.0, {}]\nfriction = {{ law = \"coulomb\", mu = 0.5 }}\n\
+                 [output]\nfields = [\"displacement\", \"contact\"]\n",
+                toml_path(&repo("cases/blocks/block3d.msh")),
+                num(2.0 * f),
+                num(0.002 * f),
+                num(-0.05 * f),
+            ),
+        );
+        let out = tmp.path().join(format!("out_{tag}"));
+        run_solver(1, &case, &[], &out).expect_code(0, tag);
+        runs.push(steps(&out));
+    }
+    let (a, b) = (&runs[0][0], &runs[1][0]);
+    assert_eq!(a.newton, b.newton, "Newton steps and factorisations");
+    assert_eq!(
+        (&a.states, &a.slip),
+        (&b.states, &b.slip),
+        "contact and slip states"
+    );
+    assert!(
+        a.u.iter().flatten().any(|x| *x != 0.0),
+        "u = 0: nothing compared"
+    );
+    assert!(a.u == b.u, "u differs between the units");
+}
+
 /// Magnitudes whose squares leave double precision's range are refused before the solve
 /// (exit code 2, one line naming the key; docs/case-file.md, "Units"): Young's moduli of 1e308
 /// (MUMPS failed, exit 1) and 1e-300 (the run ended with exit 0 and infinite strains), and a

@@ -34,6 +34,12 @@ struct System {
     zero: Vec<usize>,
     /// The dual form: the λ that the rows give as values (Tresca's settled slip), no unknowns.
     given: Vec<(usize, f64)>,
+    /// The last unknowns are `alpha_scale` × α: the dual form's are c α, a force as its λ are,
+    /// so that each row has one unit and [`equilibrate`] scales it alike in every unit system
+    /// (with α itself, a row's largest entry was C's (a length per force) or G's (none) as the
+    /// stresses' unit decided: a force-controlled Coulomb block scaled by 2^26 took 5 dense
+    /// steps instead of 6 and ended 1.4e-10 of max |u| away); 1 in the primal form.
+    alpha_scale: f64,
 }
 
 /// S itself next to C = S⁻¹ (rank 0; frictionless.rs `Compliance::stiffness`): λ = r − S (u − G α)
@@ -179,9 +185,10 @@ fn primal_counted(w: &mut Walk, done: (Vec<f64>, System)) -> (Vec<f64>, System) 
 fn solve_pinned(sys: &System, alpha: &[f64]) -> Option<Vec<f64>> {
     let m = sys.rhs.len() - alpha.len();
     let a = sys.a.view((0, 0), (m, m)).into_owned();
+    let scaled: Vec<f64> = alpha.iter().map(|al| al * sys.alpha_scale).collect();
     let rhs = DVector::from_fn(m, |i, _| {
         sys.rhs[i]
-            - (alpha.iter().enumerate())
+            - (scaled.iter().enumerate())
                 .map(|(cz, al)| sys.a[(m + cz, i)] * al)
                 .sum::<f64>()
     });
@@ -192,9 +199,10 @@ fn solve_pinned(sys: &System, alpha: &[f64]) -> Option<Vec<f64>> {
         known: None,
         zero: Vec::new(),
         given: Vec::new(),
+        alpha_scale: 1.0,
     };
     let mut x = solve_system(&pinned)?;
-    x.extend_from_slice(alpha);
+    x.extend_from_slice(&scaled);
     Some(x)
 }
 
@@ -817,6 +825,7 @@ impl DenseIteration<'_> {
             known: Some(known),
             zero,
             given: Vec::new(),
+            alpha_scale: 1.0,
         }
     }
 
@@ -998,7 +1007,7 @@ impl DenseIteration<'_> {
     /// bordered by the balance Gᵀ λ = φ where Dirichlet data leave rigid modes free), its rows
     /// equilibrated; `rows`: the set's rows as [`DenseIteration::rows_of`] gives them.
     fn system_dual(&self, set: &ActiveSet, rows: &[CoulombRow<2>]) -> System {
-        let (d, n, mz) = (self.dim, self.cb.nodes.len(), self.g.ncols());
+        let (d, n, mz, c) = (self.dim, self.cb.nodes.len(), self.g.ncols(), self.c);
         let (cmat, g) = (self.cmat, self.g);
         let (cols, at, values) = self.dual_unknowns(set, rows);
         let (w, phi) = self.shifted_by(&values);
@@ -1019,7 +1028,7 @@ impl DenseIteration<'_> {
                     row[jc] -= f * u.of(|col| c_row[col]);
                 }
                 for cz in 0..mz {
-                    row[m + cz] += f * g[(dof, cz)];
+                    row[m + cz] += f * g[(dof, cz)] / c; // the unknown c α
                 }
             }
             terms.iter().map(|&(dof, f)| f * w[dof]).sum::<f64>()
@@ -1084,6 +1093,7 @@ impl DenseIteration<'_> {
             known: None,
             zero: Vec::new(),
             given: values,
+            alpha_scale: c,
         }
     }
 
@@ -1104,7 +1114,7 @@ impl DenseIteration<'_> {
                 lam[t] = f * xj;
             }
         }
-        let alpha: Vec<f64> = x[m..].to_vec();
+        let alpha: Vec<f64> = x[m..].iter().map(|b| b / sys.alpha_scale).collect();
         let u = self.u_of(&lam, &alpha);
         (lam, u, alpha)
     }

@@ -279,6 +279,7 @@ fn a_system_that_holds_at_the_iterate_is_a_fixed_point() {
         known: None,
         zero: Vec::new(),
         given: Vec::new(),
+        alpha_scale: 1.0,
     };
     let own = sys([[2.0, 1.0], [0.0, 4.0]], [3.0, 4.0]);
     let x = [1.0, 1.0 + 2.0 * f64::EPSILON];

@@ -12,7 +12,7 @@ use signorini_mpi::par::Ctx;
 use signorini_mpi::petsc::Petsc;
 use std::path::{Path, PathBuf};
 
-/// Static contact of linear-elastic bodies with a rigid obstacle (semismooth Newton, MPI + PETSc).
+/// Static contact of linear-elastic bodies with rigid obstacles and with each other (semismooth Newton, MPI + PETSc).
 #[derive(Parser, Debug)]
 #[command(
     name = "signorini-mpi",

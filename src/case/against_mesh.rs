@@ -69,6 +69,11 @@ impl Case {
         }
         for c in &self.contacts {
             self.check_group(&join_key(&c.key, "group"), &c.group, groups, Some(dim - 1))?;
+            if let ObstacleSpec::Body { group } = &c.obstacle {
+                // a volume group named here said "has no facets", which is not the fault
+                let key = join_key(&c.key, "obstacle.group");
+                self.check_group(&key, group, groups, Some(dim - 1))?;
+            }
             self.check_shape(&join_key(&c.key, "obstacle"), &c.obstacle, dim)?;
             for m in [&c.motion, &c.force].into_iter().flatten() {
                 if m.table.is_empty() {

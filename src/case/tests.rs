@@ -913,6 +913,28 @@ fn check_against_mesh_accepts_matching_mesh() {
     c.check_against_mesh(2, &g).unwrap();
 }
 
+/// A body pair's master group given as a volume group: named as such, not as "no facets".
+#[test]
+fn check_against_mesh_refuses_a_volume_as_a_body_pairs_master() {
+    let text = FULL.replace(
+        r#"obstacle = { type = "plane", point = [0.0, -1.0], normal = [3.0, 4.0] }"#,
+        r#"obstacle = { type = "body", group = "body" }"#,
+    );
+    assert_ne!(text, FULL);
+    let c = parse(&text).unwrap();
+    let g = groups(&[
+        ("clamp", 1),
+        ("roller", 0),
+        ("load", 1),
+        ("side", 1),
+        ("contact", 1),
+        ("body", 2),
+    ]);
+    let e = c.check_against_mesh(2, &g).unwrap_err();
+    assert_eq!(e.key.as_deref(), Some("contact.obstacle.group"), "{e}");
+    assert!(e.message.contains("boundary group (dimension 1)"), "{e}");
+}
+
 #[test]
 fn check_against_mesh_unknown_group_lists_names() {
     let c = parse(FULL).unwrap();

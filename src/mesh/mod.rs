@@ -708,7 +708,9 @@ fn mesh_dimension(elements: &mshio::Elements<u64, i32>) -> Result<(usize, [usize
     }
     if dim < 2 || counts[dim] == 0 {
         return Err(
-            "the mesh has no triangles or tetrahedra (body cells); mesh it with gmsh -2 or -3"
+            "the mesh has no triangles or tetrahedra (body cells); mesh it with gmsh -2 or -3, \
+             and give the body a Physical Surface (2D) or Physical Volume (3D): with physical \
+             groups defined, gmsh writes only the elements that belong to one"
                 .into(),
         );
     }

@@ -691,9 +691,22 @@ fn run_method(
     if !nr.converged {
         return Err(RunError::NoConvergence(match solver_section.method {
             Method::Newton => format!(
-                "Newton did not converge in newton.max_steps = {} steps ({})",
+                "Newton did not converge in newton.max_steps = {} steps ({}){}",
                 settings.newton.max_steps,
-                last_step_state(nr.history.last(), settings.newton.tol_u)
+                last_step_state(nr.history.last(), settings.newton.tol_u),
+                if solver_section.preset == crate::case::Preset::Iterative {
+                    // a Tresca strip at c = 1e9 on the iterative preset: the sets kept changing
+                    // for 100 steps where the direct preset (and solver.rtol = 1e-13) converged
+                    // in 8
+                    format!(
+                        "; the iterative preset's inexact steps can keep the sets from settling \
+                         (solver.rtol = {:e}): a tighter solver.rtol or solver.preset = \
+                         \"direct\" may converge",
+                        solver_section.rtol
+                    )
+                } else {
+                    String::new()
+                }
             ),
             Method::SnesVi => format!("SNES VI did not converge in {} steps", nr.steps),
         }));

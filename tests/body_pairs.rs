@@ -407,7 +407,7 @@ fn a_body_pair_that_cannot_be_set_up_is_refused_with_its_key() {
         2,
         &c,
         "contact.obstacle.group",
-        "no boundary group \"nowhere\"",
+        "physical group \"nowhere\" is not in the mesh",
     );
     // the pair's own group
     let c = stack_case(d, &mesh, 2, ("upper_bottom", "upper_bottom"));

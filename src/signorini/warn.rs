@@ -33,31 +33,39 @@ pub fn outward_normals(
     settings: &ContactSettings,
     nodes: &[ContactNode],
 ) -> Vec<[f64; 3]> {
-    let index: HashMap<usize, usize> = nodes.iter().enumerate().map(|(i, k)| (k.node, i)).collect();
-    let mut out = vec![[0.0; 3]; nodes.len()];
-    for pair in &settings.pairs {
-        for f in group_facets(mesh, &pair.group) {
-            let nodes = mesh.facet(f);
-            if !nodes.iter().any(|v| index.contains_key(v)) {
-                continue;
+    let facets = (settings.pairs.iter()).flat_map(|pair| group_facets(mesh, &pair.group));
+    let summed = summed_normals(mesh, layout, facets);
+    nodes
+        .iter()
+        .map(|k| {
+            let o = summed[k.node];
+            let len = dot(o, o).sqrt();
+            if len > 0.0 {
+                o.map(|x| x / len)
+            } else {
+                o
             }
-            let Some((_, opp)) = facet_cell(mesh, layout, f) else {
-                continue;
-            };
-            let (n, m) = outward_normal(mesh, f, opp);
-            for v in nodes {
-                if let Some(&i) = index.get(v) {
-                    for c in 0..3 {
-                        out[i][c] += m * n[c];
-                    }
-                }
+        })
+        .collect()
+}
+
+/// At every local node, the sum of the measure-weighted outward normals of those of `facets`
+/// it belongs to (zero off them; not normalised). Local.
+fn summed_normals(
+    mesh: &Mesh,
+    layout: &Layout,
+    facets: impl IntoIterator<Item = usize>,
+) -> Vec<[f64; 3]> {
+    let mut out = vec![[0.0; 3]; mesh.n_nodes()];
+    for f in facets {
+        let Some((_, opp)) = facet_cell(mesh, layout, f) else {
+            continue;
+        };
+        let (n, m) = outward_normal(mesh, f, opp);
+        for &v in mesh.facet(f) {
+            for c in 0..3 {
+                out[v][c] += m * n[c];
             }
-        }
-    }
-    for o in &mut out {
-        let len = dot(*o, *o).sqrt();
-        if len > 0.0 {
-            o.iter_mut().for_each(|x| *x /= len);
         }
     }
     out
@@ -266,65 +274,69 @@ pub fn through_obstacles(
     displacement: &[[f64; 3]],
     fixed: &[f64],
 ) -> Vec<Warning> {
-    let (dim, np) = (mesh.dim, settings.pairs.len());
-    let size = mesh.extent();
     if (settings.pairs.iter()).any(|p| matches!(p.obstacle, crate::contact::Obstacle::Body(_))) {
         return Vec::new();
     }
-    // the body's outward normal at every node of a boundary element (zero elsewhere)
-    let mut outward = vec![[0.0; 3]; mesh.n_nodes()];
-    for f in 0..mesh.n_facets() {
-        let Some((_, opp)) = facet_cell(mesh, layout, f) else {
-            continue;
-        };
-        let (n, m) = outward_normal(mesh, f, opp);
-        for &v in mesh.facet(f) {
-            for c in 0..3 {
-                outward[v][c] += m * n[c];
+    let solved = Solved {
+        u,
+        displacement,
+        fixed,
+    };
+    let local = through_records(mesh, layout, settings, b, &solved);
+    let all = ctx.all_gather_varcount(&local);
+    let np = settings.pairs.len();
+    (settings.pairs.iter().enumerate())
+        .filter_map(|(p, pair)| {
+            let mut t = [0.0; THROUGH];
+            t[1] = f64::NEG_INFINITY;
+            for r in all.chunks_exact(THROUGH * np) {
+                let r = &r[THROUGH * p..THROUGH * (p + 1)];
+                t[0] += r[0];
+                if r[1] > t[1] || (r[1] == t[1] && r[2] < t[2]) {
+                    t[1..].copy_from_slice(&r[1..]);
+                }
             }
-        }
-    }
-    let mut pair_of: HashMap<usize, usize> = HashMap::new();
-    for k in &b.nodes {
-        pair_of.insert(k.node, k.pair);
-    }
-    let tol = CROSSED_RTOL * size;
+            through_warning(pair, &t, mesh.dim, mesh.extent())
+        })
+        .collect()
+}
+
+/// What [`through_obstacles`] judges a node by: u's owned rows, each pair's obstacle
+/// displacement, the Dirichlet values (NaN: free).
+struct Solved<'a> {
+    u: &'a [f64],
+    displacement: &'a [[f64; 3]],
+    fixed: &'a [f64],
+}
+
+/// This rank's [`THROUGH`] records of [`through_obstacles`], one per pair: its owned nodes of
+/// the boundary elements, each projected onto every pair's obstacle but its own. Local.
+fn through_records(
+    mesh: &Mesh,
+    layout: &Layout,
+    settings: &ContactSettings,
+    b: &ContactBoundary,
+    s: &Solved,
+) -> Vec<f64> {
+    let np = settings.pairs.len();
+    let tol = CROSSED_RTOL * mesh.extent();
+    let outward = summed_normals(mesh, layout, 0..mesh.n_facets());
+    let pair_of: HashMap<usize, usize> = b.nodes.iter().map(|k| (k.node, k.pair)).collect();
     let mut local = vec![0.0; THROUGH * np];
     for r in local.chunks_exact_mut(THROUGH) {
         r[1] = f64::NEG_INFINITY;
     }
     for (i, &v) in layout.owned_nodes.iter().enumerate() {
-        let o = outward[v];
-        let len = dot(o, o).sqrt();
-        if len == 0.0 {
-            continue;
+        if outward[v] == [0.0; 3] {
+            continue; // on no boundary element
         }
-        let x = mesh.coords[v];
         for (p, pair) in settings.pairs.iter().enumerate() {
             if pair_of.get(&v) == Some(&p) {
                 continue;
             }
-            let Ok(proj) = pair.obstacle.project(x) else {
+            let Some((depth, held)) = depth_beyond(mesh, pair, p, (i, v), outward[v], s) else {
                 continue;
             };
-            let n = proj.normal;
-            if proj.gap < -tol || dot(n, o) > -FACING * len {
-                // started inside (the start's own warning, or the case's intent), or a surface
-                // that does not face the obstacle (a block squashed beyond its own height by a
-                // load 5 × E moves its top below the plane it stands on: large_deformation's)
-                continue;
-            }
-            let un: f64 = (0..dim).map(|c| u[i * dim + c] * n[c]).sum();
-            // held along n by its Dirichlet data: judged by its own prescribed motion alone,
-            // not by the obstacle's (a plate pressed onto a block whose corners are clamped
-            // passes the clamped corners as intended)
-            let free2: f64 = (0..dim)
-                .filter(|&c| fixed[v * dim + c].is_nan())
-                .map(|c| n[c] * n[c])
-                .sum();
-            let held = free2 < FACING * FACING;
-            let moved = if held { 0.0 } else { dot(displacement[p], n) };
-            let depth = -(proj.gap - moved + un);
             let rec = &mut local[THROUGH * p..THROUGH * (p + 1)];
             let tag = mesh.node_tags[v] as f64;
             if depth > tol {
@@ -332,60 +344,90 @@ pub fn through_obstacles(
                 if depth > rec[1] || (depth == rec[1] && tag < rec[2]) {
                     rec[1] = depth;
                     rec[2] = tag;
-                    rec[3..6].copy_from_slice(&x);
+                    rec[3..6].copy_from_slice(&mesh.coords[v]);
                     rec[6] = if held { 1.0 } else { 0.0 };
                 }
             }
         }
     }
-    let all = ctx.all_gather_varcount(&local);
-    let mut list = Vec::new();
-    for (p, pair) in settings.pairs.iter().enumerate() {
-        let mut t = [0.0; THROUGH];
-        t[1] = f64::NEG_INFINITY;
-        for r in all.chunks_exact(THROUGH * np) {
-            let r = &r[THROUGH * p..THROUGH * (p + 1)];
-            t[0] += r[0];
-            if r[1] > t[1] || (r[1] == t[1] && r[2] < t[2]) {
-                t[1..].copy_from_slice(&r[1..]);
-            }
-        }
-        if t[0] == 0.0 {
-            continue;
-        }
-        let group = pair.key("group");
-        let why = if t[6] > 0.0 {
-            "held by Dirichlet data that move it there"
-        } else {
-            "in no contact group of this pair"
-        };
-        let message = format!(
-            "{}: {} boundary node(s) that are not its contact nodes end beyond its obstacle's \
-             surface, up to {:.4e} (node {} at {}, {why}): the obstacle holds only the \
-             nodes of its contact group, and the rest of the body went through it unseen — \
-             should the group (key '{group}') hold them, or the Dirichlet data let them go?",
-            pair.key,
-            t[0] as u64,
-            t[1],
-            t[2] as u64,
-            warnings::coords(&t[3..3 + dim])
-        );
-        list.push(Warning {
-            code: warnings::THROUGH_OBSTACLE,
-            message,
-            key: Some(group),
-            pair: Some(pair.key.clone()),
-            value: t[1] / size,
-            threshold: CROSSED_RTOL,
-            at: Some(Place {
-                node: Some(t[2] as u64),
-                cell: None,
-                x: t[3..3 + dim].to_vec(),
-            }),
-            steps: Vec::new(),
-        });
+    local
+}
+
+/// How far the node `v` (owned index `i`, the summed outward normal `o` of its boundary
+/// elements) ends beyond pair `p`'s obstacle (first-order, g0 − d·n + u·n; by g0 + u·n where
+/// its Dirichlet data hold it along n), and whether they do; `None` where it is not judged:
+/// not projectable, started inside (the start's own warning, or the case's intent), or on a
+/// surface that does not face the obstacle (a block squashed beyond its own height by a load
+/// of 5 × E moves its top below the plane it stands on: large_deformation's). Local.
+fn depth_beyond(
+    mesh: &Mesh,
+    pair: &PairSettings,
+    p: usize,
+    (i, v): (usize, usize),
+    o: [f64; 3],
+    s: &Solved,
+) -> Option<(f64, bool)> {
+    let dim = mesh.dim;
+    let proj = pair.obstacle.project(mesh.coords[v]).ok()?;
+    let n = proj.normal;
+    let tol = CROSSED_RTOL * mesh.extent();
+    if proj.gap < -tol || dot(n, o) > -FACING * dot(o, o).sqrt() {
+        return None;
     }
-    list
+    let un: f64 = (0..dim).map(|c| s.u[i * dim + c] * n[c]).sum();
+    // held along n: judged by its own prescribed motion alone, not by the obstacle's (a plate
+    // pressed onto a block whose corners are clamped passes the clamped corners as intended)
+    let free2: f64 = (0..dim)
+        .filter(|&c| s.fixed[v * dim + c].is_nan())
+        .map(|c| n[c] * n[c])
+        .sum();
+    let held = free2 < FACING * FACING;
+    let moved = if held { 0.0 } else { dot(s.displacement[p], n) };
+    Some((-(proj.gap - moved + un), held))
+}
+
+/// The warning of one pair's combined record `t` of [`through_obstacles`] (`size`: the body's
+/// extent); `None` where no node went through. Pure.
+fn through_warning(
+    pair: &PairSettings,
+    t: &[f64; THROUGH],
+    dim: usize,
+    size: f64,
+) -> Option<Warning> {
+    if t[0] == 0.0 {
+        return None;
+    }
+    let group = pair.key("group");
+    let why = if t[6] > 0.0 {
+        "held by Dirichlet data that move it there"
+    } else {
+        "in no contact group of this pair"
+    };
+    let message = format!(
+        "{}: {} boundary node(s) that are not its contact nodes end beyond its obstacle's \
+         surface, up to {:.4e} (node {} at {}, {why}): the obstacle holds only the nodes of \
+         its contact group, and the rest of the body went through it unseen — should the \
+         group (key '{group}') hold them, or the Dirichlet data let them go?",
+        pair.key,
+        t[0] as u64,
+        t[1],
+        t[2] as u64,
+        warnings::coords(&t[3..3 + dim])
+    );
+    Some(Warning {
+        code: warnings::THROUGH_OBSTACLE,
+        message,
+        key: Some(group),
+        pair: Some(pair.key.clone()),
+        value: t[1] / size,
+        threshold: CROSSED_RTOL,
+        at: Some(Place {
+            node: Some(t[2] as u64),
+            cell: None,
+            x: t[3..3 + dim].to_vec(),
+        }),
+        steps: Vec::new(),
+    })
 }
 
 /// The warnings of a pair's start ([`warnings::START_INSIDE`]), from the gaps g0 of `nodes`

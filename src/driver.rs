@@ -214,35 +214,8 @@ pub fn solve(ctx: &Ctx, prepared: Prepared) -> Result<String, RunError> {
         problem: &problem,
         body_of: &body_of,
     };
-    let (mut solver, mut preset_reason) = (solver, preset_reason);
-    let mut attempt = on.attempt(ctx, &solver, contact.clone(), &mut clock);
-    // a failure that this rank raised alone is not retried: main ends every rank with it
-    if falls_back(asked, &solver, &attempt) && crate::abort::pending().is_none() {
-        let why = match &attempt {
-            Err(e) => e.to_string(),
-            Ok(a) => a
-                .stepped
-                .failure
-                .as_ref()
-                .map(|e| e.to_string())
-                .unwrap_or_default(),
-        };
-        drop(attempt); // its staging directory removed: nothing of it is written
-        say!(
-            ctx,
-            "solver: the iterative preset failed ({}); the auto preset solves the case again \
-             on the direct preset",
-            first_sentence(&why)
-        );
-        solver.preset = Preset::Direct;
-        preset_reason = format!(
-            "{preset_reason}; the iterative preset failed ({}), then direct",
-            first_sentence(&why)
-        );
-        crate::linsolve::check_options(ctx, &case.file, &solver)?;
-        clock.lap();
-        attempt = on.attempt(ctx, &solver, contact, &mut clock);
-    }
+    let (solver, preset_reason, attempt) =
+        on.attempt_or_direct(ctx, asked, (solver, preset_reason), contact, &mut clock)?;
     let Attempt {
         assembly,
         out,
@@ -357,6 +330,41 @@ struct Attempt {
 }
 
 impl Discretised<'_, '_> {
+    /// [`Discretised::attempt`] on `solver`'s preset and, where [`falls_back`] says so, once
+    /// more on the direct preset (the first attempt's staging directory removed: nothing of it
+    /// is written); the preset's section and reason as they end, and the attempt. A failure
+    /// that this rank raised alone is not retried: main ends every rank with it. Collective.
+    fn attempt_or_direct(
+        &self,
+        ctx: &Ctx,
+        asked: Preset,
+        (mut solver, mut reason): (SolverSection, String),
+        contact: Option<ContactSettings>,
+        clock: &mut Clock,
+    ) -> Result<(SolverSection, String, Result<Attempt, RunError>), RunError> {
+        let attempt = self.attempt(ctx, &solver, contact.clone(), clock);
+        if !falls_back(asked, &solver, &attempt) || crate::abort::pending().is_some() {
+            return Ok((solver, reason, attempt));
+        }
+        let why = match &attempt {
+            Err(e) => e.to_string(),
+            Ok(a) => (a.stepped.failure.as_ref()).map_or_else(String::new, |e| e.to_string()),
+        };
+        let why = first_sentence(&why);
+        drop(attempt);
+        say!(
+            ctx,
+            "solver: the iterative preset failed ({why}); the auto preset solves the case again \
+             on the direct preset"
+        );
+        solver.preset = Preset::Direct;
+        reason = format!("{reason}; the iterative preset failed ({why}), then direct");
+        crate::linsolve::check_options(ctx, &self.case.file, &solver)?;
+        clock.lap();
+        let attempt = self.attempt(ctx, &solver, contact, clock);
+        Ok((solver, reason, attempt))
+    }
+
     /// Assembly and the load steps on the preset of `solver`, the results staged (not yet
     /// committed). Collective.
     fn attempt(

@@ -478,25 +478,15 @@ fn report_solution(
         newton.condensed = Some(cs);
     }
     warned.extend(state.warning.take());
-    let mut contact_warnings =
-        warn::contact_warnings(ctx, mesh, layout, settings, &b, &nr.nodes, displacement);
-    if nr.stop == certificate::StopRule::Vanishing {
-        // a vanishing step's forces are round-off, and so are their signs: a stack with
-        // Coulomb taken back to no load warned of a pull of 62 % among forces of 1e-29
-        // (tests/load_steps.rs)
-        contact_warnings.retain(|w| w.code != crate::warnings::PULLING_FORCE);
-    }
-    warned.extend(contact_warnings);
     let u_local = nr.u.to_local_vec()?;
-    warned.extend(warn::through_obstacles(
+    let vanishing = nr.stop == certificate::StopRule::Vanishing;
+    warned.extend(warn::solution_warnings(
         ctx,
-        mesh,
-        layout,
+        &judged,
         settings,
-        &b,
-        &u_local,
+        (&nr.nodes, &u_local),
         displacement,
-        problem.fixed,
+        vanishing,
     ));
     let delta = match previous.zip(prev_u) {
         Some((prev, u_prev)) => Some(step_delta(prev, &nr.nodes, displacement, &u_local, &u_prev)),

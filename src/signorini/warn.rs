@@ -6,6 +6,7 @@
 //! One pass over the contact facets and one gather of a few numbers per pair and rank.
 
 use super::boundary::{ContactBoundary, ContactNode, NodeResult};
+use super::plain_path::ContactProblem;
 use crate::assembly::{facet_cell, outward_normal};
 use crate::geom::dot;
 use crate::mesh::Mesh;
@@ -96,6 +97,37 @@ pub fn contact_warnings(
         let t = combined(&all, p, np);
         pair_warnings(pair, &t, mesh.dim, mesh.extent(), &mut list);
     }
+    list
+}
+
+/// The warnings the solution's geometry raises ([`contact_warnings`], [`through_obstacles`])
+/// on `problem`'s judged boundary, with the solution's contact nodes and u's owned rows
+/// `solution`; a vanishing step (`vanishing`) raises no pulling force: its forces, and their
+/// signs, are round-off (a stack with Coulomb taken back to no load warned of a pull of 62 %
+/// among forces of 1e-29, tests/load_steps.rs). Collective.
+pub fn solution_warnings(
+    ctx: &Ctx,
+    problem: &ContactProblem,
+    settings: &ContactSettings,
+    (nodes, u): (&[NodeResult], &[f64]),
+    displacement: &[[f64; 3]],
+    vanishing: bool,
+) -> Vec<Warning> {
+    let (mesh, layout, b) = (problem.mesh, problem.layout, problem.boundary);
+    let mut list = contact_warnings(ctx, mesh, layout, settings, b, nodes, displacement);
+    if vanishing {
+        list.retain(|w| w.code != warnings::PULLING_FORCE);
+    }
+    list.extend(through_obstacles(
+        ctx,
+        mesh,
+        layout,
+        settings,
+        b,
+        u,
+        displacement,
+        problem.fixed,
+    ));
     list
 }
 

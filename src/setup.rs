@@ -169,7 +169,10 @@ fn dirichlet_overridden(ctx: &Ctx, case: &Case, mesh: &Mesh, layout: &Layout) ->
     let mut by: Vec<Option<usize>> = vec![None; mesh.n_nodes() * dim];
     // (count, tag, earlier, later, component) of the owned nodes
     let (mut count, mut first) = (0usize, None::<(u64, usize, usize, usize, usize)>);
-    let owned: std::collections::HashSet<usize> = layout.owned_nodes.iter().copied().collect();
+    let mut owned = vec![false; mesh.n_nodes()];
+    for &v in &layout.owned_nodes {
+        owned[v] = true;
+    }
     for (j, d) in case.dirichlet.iter().enumerate() {
         for g in groups_named(mesh, &d.group) {
             for &v in mesh.group_nodes(g).iter() {
@@ -180,7 +183,7 @@ fn dirichlet_overridden(ctx: &Ctx, case: &Case, mesh: &Mesh, layout: &Layout) ->
                         let e = &case.dirichlet[i];
                         let y = e.value[k].unwrap_or(f64::NAN);
                         let same = *x == y && (e.ramp == d.ramp || *x == 0.0);
-                        if !same && e.group != d.group && owned.contains(&v) {
+                        if !same && e.group != d.group && owned[v] {
                             count += 1;
                             let tag = mesh.node_tags[v];
                             if first.is_none_or(|f| tag < f.0) {

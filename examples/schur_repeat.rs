@@ -22,7 +22,9 @@ use std::process::ExitCode;
 
 use mpi::traits::*;
 use serde_json::json;
-use signorini_mpi::petsc::mumps::{nested_dissection, NodeBases, SchurFactor, SchurRequest};
+use signorini_mpi::petsc::mumps::{
+    nested_dissection, NodeBases, SchurFactor, SchurRequest, Settings,
+};
 use signorini_mpi::petsc::{Matrix, PInt, Petsc};
 
 /// FNV-1a over the bits of `v`, as hex.
@@ -118,8 +120,17 @@ fn run(
         order: order.as_deref(),
         bases: &bases,
     };
-    let mut f = SchurFactor::analyse(comm, &mat, &request, rank == 0, one_process)
-        .map_err(|e| e.to_string())?;
+    let mut f = SchurFactor::analyse(
+        comm,
+        &mat,
+        &request,
+        rank == 0,
+        &Settings {
+            one_process,
+            controls: Default::default(),
+        },
+    )
+    .map_err(|e| e.to_string())?;
     f.factorise().map_err(|e| e.to_string())?;
     let s = f.take_schur();
     let b: Vec<f64> = if rank == 0 {

@@ -222,6 +222,11 @@ pub fn solve(ctx: &Ctx, prepared: Prepared) -> Result<String, RunError> {
         stepped,
     } = attempt?;
     let preset = solver.preset;
+    let mut warnings = [input_warnings, stepped.warnings].concat();
+    if let Some(w) = crate::linsolve::unused_options_warning(ctx, &solver)? {
+        warnings::log(ctx, std::slice::from_ref(&w), "");
+        warnings.push(w);
+    }
     (clock.t.solve, clock.t.post, clock.t.output) = (
         stepped.solve_seconds,
         stepped.post_seconds,
@@ -251,7 +256,7 @@ pub fn solve(ctx: &Ctx, prepared: Prepared) -> Result<String, RunError> {
         assembly,
         peak_memory_bytes_per_rank: summary::peak_memory_and_log(ctx, &timings),
         timings,
-        warnings: [input_warnings, stepped.warnings].concat(),
+        warnings,
         solve: SolveSections {
             solve: stepped.report,
             load: stepped.load,

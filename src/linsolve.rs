@@ -12,11 +12,14 @@ use crate::error::{InputError, RunError};
 use crate::mesh::Mesh;
 use crate::par::Ctx;
 use crate::partition::Layout;
-use crate::petsc::mumps::{FactorStats, SchurFactor, SchurRequest};
-use crate::petsc::optdb::OptionsDb;
+use crate::petsc::mumps::{
+    Controls, FactorStats, SchurFactor, SchurRequest, Settings, USER_CNTL, USER_ICNTL,
+};
+use crate::petsc::optdb::{self, OptionsDb};
 use crate::petsc::{self, ndfactor, Ksp, MPI_Comm, Matrix, PInt, SolveInfo, Vector};
 pub use crate::tuning::REUSE_RESTART;
 use crate::tuning::{ALLATONCE_MIN_RANKS, ITERATIVE_MAX_IT, ITERATIVE_RESTART, WORKSPACE_PERCENT};
+use crate::warnings::{self, Warning};
 use std::rc::Rc;
 
 /// What the linear solves run, as the solver's options resolve it.
@@ -134,6 +137,36 @@ pub fn reuse_options() -> String {
     )
 }
 
+/// The user's MUMPS controls in `db` (`-mat_mumps_icntl_K`, `-mat_mumps_cntl_K` for the K of
+/// [`USER_ICNTL`] and [`USER_CNTL`]); a value that is not a number is refused, naming the
+/// option. Local.
+fn mumps_controls(db: &OptionsDb) -> petsc::Result<Controls> {
+    let mut out = Controls::default();
+    for &(k, _) in USER_ICNTL {
+        let name = format!("-mat_mumps_icntl_{k}");
+        if let Some(v) = db.value(&name)? {
+            let v = v
+                .trim()
+                .parse::<i32>()
+                .map_err(|_| petsc::raised_error(format!("{name} {v:?}: not an integer")))?;
+            out.icntl.push((k, v));
+        }
+    }
+    for &(k, _) in USER_CNTL {
+        let name = format!("-mat_mumps_cntl_{k}");
+        if let Some(v) = db.value(&name)? {
+            let v = v
+                .trim()
+                .parse::<f64>()
+                .ok()
+                .filter(|v| v.is_finite())
+                .ok_or_else(|| petsc::raised_error(format!("{name} {v:?}: not a number")))?;
+            out.cntl.push((k, v));
+        }
+    }
+    Ok(out)
+}
+
 /// What a [`LinearSetup`] is built from.
 #[derive(Clone, Copy, Debug)]
 pub struct SolverRequest<'a> {
@@ -161,6 +194,8 @@ pub struct LinearSetup {
     own_order: bool,
     /// MUMPS' work on rank 0 alone ([`ndfactor::ONE_PROCESS_OPTION`]).
     one_process: bool,
+    /// The user's MUMPS controls for the project's own MUMPS instances.
+    controls: Controls,
     /// AMG's near-null space (iterative kind): the rigid-body modes of these coordinates.
     near_null: Option<Vector>,
 }
@@ -216,6 +251,7 @@ impl LinearSetup {
         }
         for (name, value) in split_options(req.case_options) {
             db.set(&name, &value)?;
+            db.watch(&name);
         }
         db.insert_global()?;
         Self::resolved(db)
@@ -230,11 +266,18 @@ impl LinearSetup {
             && package.as_deref() == Some("mumps")
             && !db.has("-mat_mumps_icntl_7")?;
         let one_process = db.has(ndfactor::ONE_PROCESS_OPTION)?;
+        // read only where the project's instances factorise (elsewhere PETSc reads them)
+        let controls = if own_order {
+            mumps_controls(&db)?
+        } else {
+            Controls::default()
+        };
         Ok(LinearSetup {
             options: Rc::new(db),
             kind,
             own_order,
             one_process,
+            controls,
             near_null: None,
         })
     }
@@ -308,12 +351,13 @@ impl LinearSetup {
         }
         if self.own_order {
             let symmetric = self.kind == SolverKind::DirectSymmetric;
-            ndfactor::install_on(&ksp, comm, a, symmetric, self.one_process)?;
+            ndfactor::install_on(&ksp, comm, a, symmetric, self.one_process, &self.controls)?;
         }
         Ok(LinearSolver {
             ksp,
             kind: self.kind,
             one_process: self.one_process,
+            controls: self.controls.clone(),
         })
     }
 }
@@ -346,6 +390,76 @@ pub fn check_options(
     })
 }
 
+/// [`warnings::UNUSED_PETSC_OPTIONS`]: the options of the case's `solver.petsc_options` and of
+/// the command line (after `--`, PETSC_OPTIONS) that nothing in the run read — misspelt, or
+/// meant for a solver the run did not use (`-pc_gamg_threshold` on the direct preset,
+/// `-mat_mumps_icntl_14` on the iterative one). PETSc itself takes such an option without a
+/// word. An option counts as read where any rank read it. Call it once the run's solvers are
+/// dropped. Collective.
+pub fn unused_options_warning(
+    ctx: &Ctx,
+    section: &SolverSection,
+) -> Result<Option<Warning>, RunError> {
+    let case: Vec<String> = split_options(&section.petsc_options)
+        .into_iter()
+        .map(|(name, _)| name)
+        .collect();
+    let global = ctx.agree(optdb::global_names().map_err(RunError::Petsc))?;
+    let local: Result<Vec<f64>, RunError> = case
+        .iter()
+        .map(|n| Ok(optdb::used_watched(n)))
+        .chain(
+            global
+                .iter()
+                .map(|n| optdb::used_global(n).map_err(RunError::Petsc)),
+        )
+        .map(|used| used.map(|u| f64::from(u8::from(u))))
+        .collect();
+    let used = ctx.sum_vec(&ctx.agree(local)?);
+    let unread = |names: &[String], used: &[f64]| -> Vec<String> {
+        let mut out: Vec<String> = names
+            .iter()
+            .zip(used)
+            .filter(|(_, &u)| u == 0.0)
+            .map(|(n, _)| n.clone())
+            .collect();
+        out.dedup();
+        out
+    };
+    let (in_case, on_line) = (
+        unread(&case, &used[..case.len()]),
+        unread(&global, &used[case.len()..]),
+    );
+    if in_case.is_empty() && on_line.is_empty() {
+        return Ok(None);
+    }
+    let mut parts = Vec::new();
+    if !in_case.is_empty() {
+        parts.push(format!("{} (solver.petsc_options)", in_case.join(" ")));
+    }
+    if !on_line.is_empty() {
+        parts.push(format!(
+            "{} (the command line or PETSC_OPTIONS)",
+            on_line.join(" ")
+        ));
+    }
+    Ok(Some(Warning {
+        code: warnings::UNUSED_PETSC_OPTIONS,
+        message: format!(
+            "PETSc options that nothing in this run read: {}; misspelt, or meant for a solver \
+             this run did not use (preset {})",
+            parts.join(", "),
+            section.preset.name()
+        ),
+        key: (!in_case.is_empty()).then(|| "solver.petsc_options".to_string()),
+        pair: None,
+        value: (in_case.len() + on_line.len()) as f64,
+        threshold: 0.0,
+        at: None,
+        steps: Vec::new(),
+    }))
+}
+
 /// One pass of [`check_options`] with `case_options` in place of the case's: `blame` makes the
 /// input error of a refusal (from PETSc's message). Collective; every rank returns the same.
 fn options_taken(
@@ -354,14 +468,17 @@ fn options_taken(
     case_options: &str,
     blame: &dyn Fn(String) -> InputError,
 ) -> Result<(), RunError> {
-    let setup = LinearSetup::new(&SolverRequest {
-        preset: section.preset,
-        rtol: section.rtol,
-        symmetric: true,
-        case_options,
-        repeatable: section.repeatable,
-        scale: 0.0,
-    })?;
+    let setup = ctx.agree(
+        LinearSetup::new(&SolverRequest {
+            preset: section.preset,
+            rtol: section.rtol,
+            symmetric: true,
+            case_options,
+            repeatable: section.repeatable,
+            scale: 0.0,
+        })
+        .map_err(|e| RunError::Input(blame(e.message))),
+    )?;
     let a = Matrix::from_csr(ctx.comm(), 1, &[0, 1], &[ctx.rank as PInt], &[1.0])?;
     let mut ksp = Ksp::new(ctx.comm(), setup.options.clone())?;
     ksp.set_operator(&a)?;
@@ -389,6 +506,7 @@ pub struct LinearSolver {
     pub ksp: Ksp,
     kind: SolverKind,
     one_process: bool,
+    controls: Controls,
 }
 
 impl LinearSolver {
@@ -430,7 +548,16 @@ impl LinearSolver {
                 "a Schur complement asked of a solver that does not factorise",
             ));
         }
-        let f = SchurFactor::analyse(comm, mat, request, root, self.one_process)?;
+        let f = SchurFactor::analyse(
+            comm,
+            mat,
+            request,
+            root,
+            &Settings {
+                one_process: self.one_process,
+                controls: self.controls.clone(),
+            },
+        )?;
         Ok(SymbolicSchur(f))
     }
 }

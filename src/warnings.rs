@@ -30,6 +30,9 @@ pub const RIGID_MODES_UNHANDLED: &str = "rigid_modes_unhandled";
 /// differently: the later one's value holds (setup.rs).
 pub const DIRICHLET_OVERRIDDEN: &str = "dirichlet_overridden";
 
+/// PETSc options (case file or command line) that nothing in the run read (linsolve.rs).
+pub const UNUSED_PETSC_OPTIONS: &str = "unused_petsc_options";
+
 /// A material whose Poisson's ratio is close to 1/2: P1 elements lock (setup.rs).
 pub const NEARLY_INCOMPRESSIBLE: &str = "nearly_incompressible";
 

@@ -83,3 +83,82 @@ fn the_global_options_database_holds_the_command_line_alone() {
     assert!(out.contains("There are no unused options."), "{out}");
     assert!(!out.contains("Option left"), "{out}");
 }
+
+/// The warnings of `code` in summary.json.
+fn warned<'a>(s: &'a Solved, code: &str) -> Vec<&'a serde_json::Value> {
+    let list = get(&s.summary, &["warnings"]).as_array().expect("a list");
+    list.iter().filter(|w| w["code"] == code).collect()
+}
+
+/// An option that nothing reads — misspelt in the case file or on the command line, or meant
+/// for a solver the run does not use — is one warning naming it and where it came from; the
+/// options the run read are not named. PETSc itself takes such options without a word.
+#[test]
+fn petsc_options_that_nothing_reads_are_warned_about() {
+    let s = run(
+        &[
+            L0,
+            "solver.petsc_options=\"-ksp_rtoll 1e-8 -ksp_type preonly -pc_gamg_threshold 0.1\"",
+        ],
+        &["-ksp_monitorr", "-pc_type", "cholesky"],
+    );
+    let out = s.run.output();
+    let w = warned(&s, "unused_petsc_options");
+    assert_eq!(w.len(), 1, "{out}");
+    let message = w[0]["message"].as_str().unwrap();
+    assert!(out.contains(&format!("warning: {message}")), "{out}");
+    for named in ["-ksp_rtoll", "-pc_gamg_threshold", "-ksp_monitorr"] {
+        assert!(message.contains(named), "{message}");
+    }
+    for read in ["-ksp_type", "-pc_type"] {
+        assert!(!message.contains(read), "{message}");
+    }
+    assert_eq!(w[0]["key"], "solver.petsc_options");
+    assert_eq!(w[0]["value"].as_f64(), Some(3.0));
+    // options that are all read: no warning
+    let quiet = run(
+        &[L0, "solver.petsc_options=\"-ksp_type preonly\""],
+        &["-pc_type", "cholesky"],
+    );
+    assert!(
+        warned(&quiet, "unused_petsc_options").is_empty(),
+        "{}",
+        quiet.run.output()
+    );
+}
+
+/// The user's MUMPS controls reach the project's own MUMPS instances (the condensed path's
+/// Schur factorisation and the plain path's factorisations), as PETSc's MUMPS interface takes
+/// them: MUMPS' own output (ICNTL(1–4)) appears in the log on both paths; a control that is not
+/// a number is refused as input.
+#[test]
+fn mumps_controls_reach_the_projects_own_factorisations() {
+    let verbose = "solver.petsc_options=\"-mat_mumps_icntl_1 6 -mat_mumps_icntl_2 6 \
+                   -mat_mumps_icntl_3 6 -mat_mumps_icntl_4 2\"";
+    for path in ["\"schur\"", "\"plain\""] {
+        let set = format!("solver.path={path}");
+        let quiet = run(&[L0, &set], &[]);
+        assert!(
+            !quiet.run.stdout.contains("Entering DMUMPS"),
+            "{}",
+            quiet.run.output()
+        );
+        let s = run(&[L0, &set, verbose], &[]);
+        let out = s.run.output();
+        assert!(s.run.stdout.contains("Entering DMUMPS"), "{path}: {out}");
+        assert!(
+            warned(&s, "unused_petsc_options").is_empty(),
+            "{path}: {out}"
+        );
+    }
+    let tmp = tempfile::tempdir().expect("tempdir");
+    let sets = [L0, "solver.petsc_options=\"-mat_mumps_icntl_14 5x\""];
+    let cmd = solver_command(2, &hertz(), &sets, &tmp.path().join("out"));
+    let r = run_with_timeout(cmd, LIMIT);
+    let out = r.output();
+    assert_eq!(r.code, Some(2), "{out}");
+    assert!(
+        out.contains("solver.petsc_options") && out.contains("-mat_mumps_icntl_14"),
+        "{out}"
+    );
+}

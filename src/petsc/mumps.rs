@@ -26,6 +26,77 @@ use crate::tuning::WORKSPACE_PERCENT;
 /// Scotch's integer type.
 type Num = ffi::SCOTCH_Num;
 
+/// MUMPS controls the user gave (`-mat_mumps_icntl_K v`, `-mat_mumps_cntl_K v` in the solver's
+/// options, read by `linsolve`), which the project's own instances ([`Factor`], [`SchurFactor`])
+/// take over their defaults, as PETSc's MUMPS interface takes them: the workspace (ICNTL(14)),
+/// memory (ICNTL(23)), output (ICNTL(1–4)), block low-rank (ICNTL(35–38), CNTL(7)), pivoting
+/// thresholds, null pivots and scaling where the factorisation allows them ([`USER_ICNTL`],
+/// [`USER_CNTL`]). The controls that the project's calls depend on (matrix format, Schur
+/// complement, right-hand sides, order) are not taken.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Controls {
+    /// (K, value) of ICNTL(K).
+    pub icntl: Vec<(usize, i32)>,
+    /// (K, value) of CNTL(K).
+    pub cntl: Vec<(usize, f64)>,
+}
+
+/// How the project's MUMPS instances run: on rank 0 alone (`one_process`: the case's
+/// `solver.repeatable`, [`super::ndfactor::ONE_PROCESS_OPTION`]) and with the user's controls.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Settings {
+    pub one_process: bool,
+    pub controls: Controls,
+}
+
+/// The ICNTL(K) a user may set on the project's instances (1-based), and whether an instance
+/// with a Schur complement takes it too (scaling, pivoting and null-pivot controls are left to
+/// [`Factor`]: the Schur complement's entries would depend on them).
+pub const USER_ICNTL: &[(usize, bool)] = &[
+    (1, true),
+    (2, true),
+    (3, true),
+    (4, true),
+    (6, false),
+    (8, false),
+    (12, false),
+    (13, true),
+    (14, true),
+    (16, true),
+    (22, true),
+    (23, true),
+    (24, false),
+    (28, true),
+    (29, true),
+    (35, true),
+    (36, true),
+    (37, true),
+    (38, true),
+];
+
+/// The CNTL(K) a user may set (1-based), as [`USER_ICNTL`].
+pub const USER_CNTL: &[(usize, bool)] =
+    &[(1, false), (3, false), (4, false), (5, false), (7, true)];
+
+impl Controls {
+    /// Writes the controls into `id` (those an instance with a Schur complement takes, where
+    /// `schur`). Local.
+    fn apply(&self, id: &mut raw::DMUMPS_STRUC_C, schur: bool) {
+        let takes =
+            |list: &[(usize, bool)], k: usize| list.iter().any(|&(j, s)| j == k && (s || !schur));
+        for &(k, v) in &self.icntl {
+            if takes(USER_ICNTL, k) {
+                id.icntl[k - 1] = v;
+            }
+        }
+        for &(k, v) in &self.cntl {
+            if takes(USER_CNTL, k) {
+                id.cntl[k - 1] = v;
+            }
+        }
+    }
+}
+
 /// A MUMPS instance holding the LLᵀ factorisation (SYM = 1: the matrix must be symmetric
 /// positive definite; no pivoting, whose choices under MUMPS' dynamic scheduling with SYM = 2
 /// varied between runs) of a matrix whose Schur complement on a list of variables was
@@ -91,8 +162,9 @@ impl SchurFactor {
         mat: &Matrix,
         request: &SchurRequest,
         root: bool,
-        one_process: bool,
+        settings: &Settings,
     ) -> Result<SchurFactor> {
+        let (one_process, controls) = (settings.one_process, &settings.controls);
         let SchurRequest {
             n,
             schur_rows,
@@ -114,13 +186,21 @@ impl SchurFactor {
             let all = gathered(comm, irn, jcn, vals)?;
             let inst = if root {
                 // SAFETY: reads the handle of MPI_COMM_SELF (set by MPI's initialisation).
-                Some(Instance::new(unsafe { super::ffi::RSMPI_COMM_SELF }, 1))
+                Some(Instance::new(
+                    unsafe { super::ffi::RSMPI_COMM_SELF },
+                    1,
+                    controls,
+                    true,
+                ))
             } else {
                 None
             };
             (agreed(comm, inst.transpose())?, all)
         } else {
-            (Some(Instance::new(comm, 1)?), (irn, jcn, vals))
+            (
+                Some(Instance::new(comm, 1, controls, true)?),
+                (irn, jcn, vals),
+            )
         };
         let size_schur = schur_rows.len();
         let mut f = SchurFactor {
@@ -344,8 +424,10 @@ struct Instance {
 }
 
 impl Instance {
-    /// JOB = −1 on `comm` with SYM = `sym` (0: unsymmetric, 2: general symmetric). Collective.
-    fn new(comm: MPI_Comm, sym: i32) -> Result<Instance> {
+    /// JOB = −1 on `comm` with SYM = `sym` (0: unsymmetric, 1: positive definite, 2: general
+    /// symmetric), the user's `controls` over the defaults (those of an instance with a Schur
+    /// complement where `schur`). Collective.
+    fn new(comm: MPI_Comm, sym: i32, controls: &Controls, schur: bool) -> Result<Instance> {
         let mut inst = Instance {
             // SAFETY: DMUMPS_STRUC_C is plain data (integers, reals, raw pointers, char
             // arrays); all-zero is MUMPS' "nothing set" state, filled by JOB = −1.
@@ -365,6 +447,7 @@ impl Instance {
         icntl[3] = 0;
         icntl[13] = WORKSPACE_PERCENT; // ICNTL(14)
         icntl[17] = 3; // ICNTL(18): distributed assembled matrix
+        controls.apply(&mut inst.id, schur);
         Ok(inst)
     }
 
@@ -414,10 +497,29 @@ impl Instance {
         let (i1, i2) = (self.id.infog[0], self.id.infog[1]);
         if i1 < 0 {
             return Err(agreed_error(format!(
-                "MUMPS (JOB = {job}) failed: INFOG(1) = {i1}, INFOG(2) = {i2}"
+                "MUMPS (JOB = {job}) failed: INFOG(1) = {i1}, INFOG(2) = {i2}{}",
+                failure_hint(i1)
             )));
         }
         Ok(())
+    }
+}
+
+/// What MUMPS' error code `infog1` (INFOG(1) < 0) means for a user, and the option that
+/// mends it where one does (MUMPS' user guide, "Error diagnostics"). Pure.
+fn failure_hint(infog1: i32) -> &'static str {
+    match infog1 {
+        -8 | -9 | -11 | -12 | -14 | -15 => {
+            " (MUMPS' workspace too small: raise its slack, e.g. solver.petsc_options = \
+             \"-mat_mumps_icntl_14 100\")"
+        }
+        -13 => " (an allocation failed: out of memory; more ranks or a coarser mesh)",
+        -19 => {
+            " (the memory limit -mat_mumps_icntl_23 is too small for this factorisation; \
+             raise it or leave it out)"
+        }
+        -10 => " (the matrix is numerically singular)",
+        _ => "",
     }
 }
 
@@ -686,7 +788,7 @@ pub struct Factor {
 impl Factor {
     /// The analysis (JOB = 1) of `mat` (global size `n`, this rank's rows read here) with the
     /// elimination order `order` (order[i] = 0-based position of variable i; read on the host
-    /// only, `None` or empty there: MUMPS' own choice); `one_process`: see [`Factor`].
+    /// only, `None` or empty there: MUMPS' own choice); `settings.one_process`: see [`Factor`].
     /// Collective; MUMPS' errors are global.
     pub fn analyse(
         comm: MPI_Comm,
@@ -694,9 +796,10 @@ impl Factor {
         n: usize,
         order: Option<&[usize]>,
         symmetric: bool,
-        one_process: bool,
         root: bool,
+        settings: &Settings,
     ) -> Result<Factor> {
+        let (one_process, controls) = (settings.one_process, &settings.controls);
         if n >= i32::MAX as usize {
             return Err(own_error(format!(
                 "MUMPS: {n} unknowns exceed its 32-bit indices"
@@ -709,14 +812,23 @@ impl Factor {
             let all = gathered(comm, irn, jcn, vals)?;
             let inst = if root {
                 // SAFETY: reads the handle of MPI_COMM_SELF (set by MPI's initialisation).
-                Some(Instance::new(unsafe { super::ffi::RSMPI_COMM_SELF }, sym))
+                Some(Instance::new(
+                    unsafe { super::ffi::RSMPI_COMM_SELF },
+                    sym,
+                    controls,
+                    false,
+                ))
             } else {
                 None
             };
             let inst = agreed(comm, inst.transpose())?;
             (inst, Some(pattern), all)
         } else {
-            (Some(Instance::new(comm, sym)?), None, (irn, jcn, vals))
+            (
+                Some(Instance::new(comm, sym, controls, false)?),
+                None,
+                (irn, jcn, vals),
+            )
         };
         let mut f = Factor {
             inst,

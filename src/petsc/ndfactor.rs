@@ -15,7 +15,7 @@ use std::ptr;
 use std::time::Instant;
 
 use super::mpi::{all_true, first_message, gather_u64, rank_of, say_root};
-use super::mumps::{nested_dissection, Factor, FactorStats};
+use super::mumps::{nested_dissection, Controls, Factor, FactorStats, Settings};
 use super::shellpc::{code_of, context, drop_context, ERR_LIB};
 use super::{agreed_error, check, cstring, ffi, own_error, Ksp, MPI_Comm, Matrix, Result};
 
@@ -123,6 +123,8 @@ struct Shell {
     symmetric: bool,
     /// MUMPS on rank 0 alone ([`Factor`]): the same bits on every run.
     one_process: bool,
+    /// The user's MUMPS controls.
+    controls: Controls,
     root: bool,
     factor: Option<Factor>,
     record: FactorRecord,
@@ -162,8 +164,11 @@ impl Shell {
                 m as usize,
                 order,
                 self.symmetric,
-                self.one_process,
                 self.root,
+                &Settings {
+                    one_process: self.one_process,
+                    controls: self.controls.clone(),
+                },
             )?;
             self.record.analysis_seconds = ta.elapsed().as_secs_f64();
             self.record.analyses += 1;
@@ -282,19 +287,21 @@ pub const ONE_PROCESS_OPTION: &str = "-ndfactor_one_process";
 
 /// Makes the PC of `ksp` the MUMPS factorisation with the project's nested-dissection order
 /// (LDLᵀ when `symmetric`, else LU) on matrices of block size `dim`; `one_process`: MUMPS on
-/// rank 0 alone ([`Factor`]). Collective.
+/// rank 0 alone ([`Factor`]), with the user's MUMPS `controls`. Collective.
 pub fn install(
     ksp: &Ksp,
     comm: MPI_Comm,
     dim: usize,
     symmetric: bool,
     one_process: bool,
+    controls: &Controls,
 ) -> Result<()> {
     let shell = Box::new(Shell {
         comm,
         dim: dim.max(1),
         symmetric,
         one_process,
+        controls: controls.clone(),
         root: rank_of(comm)? == 0,
         factor: None,
         record: FactorRecord::default(),
@@ -324,18 +331,26 @@ pub fn install(
 /// (PCCHOLESKY or PCLU with the solver type "mumps") and no MUMPS ordering
 /// (`-mat_mumps_icntl_7`): the PC of `ksp` becomes the shell of [`install`] with the operator
 /// `mat`'s block size, `symmetric` (Cholesky), on rank 0 alone with `one_process`
-/// ([`ONE_PROCESS_OPTION`]). Collective.
+/// ([`ONE_PROCESS_OPTION`]), with the user's MUMPS `controls`. Collective.
 pub fn install_on(
     ksp: &Ksp,
     comm: MPI_Comm,
     mat: &Matrix,
     symmetric: bool,
     one_process: bool,
+    controls: &Controls,
 ) -> Result<()> {
     let mut bs = 1;
     // SAFETY: reads the block size of a valid matrix.
     unsafe { check(ffi::MatGetBlockSize(mat.raw, &mut bs))? };
-    install(ksp, comm, bs.max(1) as usize, symmetric, one_process)
+    install(
+        ksp,
+        comm,
+        bs.max(1) as usize,
+        symmetric,
+        one_process,
+        controls,
+    )
 }
 
 /// For a PC of type "shell": `Some(symmetric)` when it is the shell of [`install`]. Local.

@@ -9,7 +9,8 @@
 //! private database PETSc's default (PetscOptionsPush) for the calls that set a solver up or
 //! run it, and restores the global one after them (PetscOptionsPop).
 
-use std::cell::Cell;
+use std::cell::{Cell, RefCell};
+use std::collections::BTreeSet;
 use std::ffi::{c_void, CStr};
 use std::os::raw::{c_char, c_int};
 use std::ptr;
@@ -22,11 +23,53 @@ pub struct OptionsDb {
     raw: ffi::PetscOptions,
     /// The names copied from the global database ([`OptionsDb::insert_global`]).
     copied: Vec<String>,
+    /// The names whose use [`used_watched`] reports ([`OptionsDb::watch`]).
+    watched: Vec<String>,
 }
 
 thread_local! {
     /// The database [`OptionsDb::scoped`] has made PETSc's default (null: the global one).
     static PUSHED: Cell<ffi::PetscOptions> = const { Cell::new(ptr::null_mut()) };
+    /// The watched names that a dropped database had used ([`OptionsDb::watch`]).
+    static USED: RefCell<BTreeSet<String>> = const { RefCell::new(BTreeSet::new()) };
+}
+
+/// Whether a database watching `name` ([`OptionsDb::watch`]) was dropped having used it
+/// (some PETSc object or the project's own code read it). Local.
+pub fn used_watched(name: &str) -> bool {
+    USED.with(|u| u.borrow().contains(name))
+}
+
+/// Whether the global database's option `name` (with its '-') has been used: read by PETSc
+/// at its start, or by a private database that copied it ([`OptionsDb::insert_global`]) and
+/// has been dropped. Local.
+pub fn used_global(name: &str) -> Result<bool> {
+    let bare = cstring(name.trim_start_matches('-'));
+    let mut used: ffi::PetscBool = ffi::PETSC_FALSE;
+    // SAFETY: a query of the global database; writes one PetscBool.
+    unsafe {
+        check(ffi::PetscOptionsUsed(
+            ptr::null_mut(),
+            bare.as_ptr(),
+            &mut used,
+        ))?
+    };
+    Ok(used == ffi::PETSC_TRUE)
+}
+
+/// The names (with their '-') of the global database's options: the command line after
+/// `--`, PETSC_OPTIONS and options files. Local; not while a private database is pushed.
+pub fn global_names() -> Result<Vec<String>> {
+    Ok(option_names(&OptionsDb::global_text()?))
+}
+
+/// The option names (tokens "-x" that are not numbers) of command-line text. Pure.
+fn option_names(text: &str) -> Vec<String> {
+    let is_name = |t: &&str| t.starts_with('-') && t[1..].starts_with(char::is_alphabetic);
+    text.split_whitespace()
+        .filter(is_name)
+        .map(str::to_string)
+        .collect()
 }
 
 impl OptionsDb {
@@ -38,6 +81,7 @@ impl OptionsDb {
         Ok(OptionsDb {
             raw,
             copied: Vec::new(),
+            watched: Vec::new(),
         })
     }
 
@@ -119,13 +163,14 @@ impl OptionsDb {
     pub fn insert_global(&mut self) -> Result<()> {
         let text = Self::global_text()?;
         self.insert(&text)?;
-        let is_name = |t: &&str| t.starts_with('-') && t[1..].starts_with(char::is_alphabetic);
-        self.copied = text
-            .split_whitespace()
-            .filter(is_name)
-            .map(str::to_string)
-            .collect();
+        self.copied = option_names(&text);
         Ok(())
+    }
+
+    /// Watches `name` (with its '-'): when this database is dropped having used it,
+    /// [`used_watched`] says so. Local.
+    pub fn watch(&mut self, name: &str) {
+        self.watched.push(name.to_string());
     }
 
     /// The global database's options as command-line text (PetscOptionsGetAll). Local.
@@ -194,6 +239,14 @@ impl Drop for OptionsDb {
                 ffi::PetscOptionsUsed(self.raw, bare.as_ptr(), &mut used);
                 if used == ffi::PETSC_TRUE {
                     ffi::PetscOptionsHasName(ptr::null_mut(), ptr::null(), n.as_ptr(), &mut set);
+                }
+            }
+            for name in &self.watched {
+                let bare = cstring(name.trim_start_matches('-'));
+                let mut used: ffi::PetscBool = ffi::PETSC_FALSE;
+                ffi::PetscOptionsUsed(self.raw, bare.as_ptr(), &mut used);
+                if used == ffi::PETSC_TRUE {
+                    USED.with(|u| u.borrow_mut().insert(name.clone()));
                 }
             }
             ffi::PetscOptionsDestroy(&mut self.raw);

@@ -6,6 +6,7 @@ use crate::assembly::{self, System};
 use crate::bodies::{self, Body};
 use crate::case::{Case, DenseThreads};
 use crate::case::{Method, Preset, SolverPath, SolverSection};
+use crate::coincident;
 use crate::error::RunError;
 use crate::fem::Materials;
 use crate::linsolve::{LinearSetup, SolverKind};
@@ -113,7 +114,7 @@ pub fn prepare<'c>(ctx: &Ctx, case: &'c Case) -> Result<Prepared<'c>, RunError> 
     };
     crate::linsolve::check_options(ctx, &case.file, &solver)?;
     let problem = setup::problem(case, &mesh, &material);
-    let survey = check_bodies(ctx, case, &mesh, &layout, &problem.fixed)?;
+    let (survey, unjoined) = check_bodies(ctx, case, &mesh, &layout, &problem.fixed)?;
     drop(problem);
     let contact = if case.contacts.is_empty() {
         None
@@ -125,6 +126,10 @@ pub fn prepare<'c>(ctx: &Ctx, case: &'c Case) -> Result<Prepared<'c>, RunError> 
         Some(c)
     };
     let mut warnings = warnings;
+    if let Some(w) = unjoined {
+        warnings::log(ctx, std::slice::from_ref(&w), "");
+        warnings.push(w);
+    }
     if let Some(w) = contact
         .as_ref()
         .and_then(|c| unhandled_modes(c, &survey.bodies))
@@ -564,8 +569,9 @@ fn check_bodies(
     mesh: &Mesh,
     layout: &Layout,
     fixed: &[f64],
-) -> Result<bodies::Survey, RunError> {
+) -> Result<(bodies::Survey, Option<Warning>), RunError> {
     let survey = bodies::labelled(ctx, mesh, layout, fixed);
+    let unjoined = unjoined_warning(ctx, case, mesh, layout, &survey);
     let list = &survey.bodies;
     let b = bodies::summed(list);
     if b.count > 1 {
@@ -612,13 +618,78 @@ fn check_bodies(
                 format!(
                     "{which} has {} rigid mode(s) its Dirichlet data leave free and no contact \
                      group on it ({none_on_it}), so nothing holds it: hold it by Dirichlet \
-                     data, or name a group of its boundary in a contact pair",
-                    body.free_modes
+                     data, or name a group of its boundary in a contact pair{}",
+                    body.free_modes,
+                    match &unjoined {
+                        Some(w) => format!(" (besides, {})", w.message),
+                        None => String::new(),
+                    }
                 ),
             )));
         }
     }
-    Ok(survey)
+    Ok((survey, unjoined))
+}
+
+/// [`warnings::UNJOINED_NODES`]: surface nodes of the mesh that lie on another node
+/// ([`coincident::unjoined`]) and are not both in a contact pair's groups. Collective.
+fn unjoined_warning(
+    ctx: &Ctx,
+    case: &Case,
+    mesh: &Mesh,
+    layout: &Layout,
+    survey: &bodies::Survey,
+) -> Option<Warning> {
+    let mut in_pair = vec![false; mesh.n_nodes()];
+    for g in contact_groups(case) {
+        for f in setup::group_facets(mesh, g) {
+            for &v in mesh.facet(f) {
+                in_pair[v] = true;
+            }
+        }
+    }
+    let u = coincident::unjoined(ctx, mesh, layout, survey, &in_pair)?;
+    let body = |b: usize| survey.bodies.get(b).map_or(0, |b| b.first_tag);
+    let (a, b) = u.bodies;
+    let between = if a == b {
+        format!(
+            "both of the body from node tag {}: a crack through it",
+            body(a)
+        )
+    } else {
+        format!(
+            "of the bodies from node tags {} and {}, which are thus separate",
+            body(a),
+            body(b)
+        )
+    };
+    let dim = mesh.dim;
+    let x: Vec<String> = u.at[..dim].iter().map(|c| format!("{c}")).collect();
+    Some(Warning {
+        code: warnings::UNJOINED_NODES,
+        message: format!(
+            "{} pair(s) of surface nodes of the mesh {} lie at one point without being one node, \
+             and no contact pair joins them, e.g. node tags {} and {} at ({}), {between}: the \
+             parts were meshed apart and never joined. If they are one body, make the mesh \
+             conformal (Gmsh: BooleanFragments, or Coherence in a .geo); if they touch, name the \
+             two surfaces as a body pair",
+            u.pairs,
+            case.mesh.file.display(),
+            u.first.0,
+            u.first.1,
+            x.join(", ")
+        ),
+        key: Some("mesh.file".to_string()),
+        pair: None,
+        value: u.pairs as f64,
+        threshold: 0.0,
+        at: Some(warnings::Place {
+            node: Some(u.first.0),
+            cell: None,
+            x: u.at[..dim].to_vec(),
+        }),
+        steps: Vec::new(),
+    })
 }
 
 /// The boundary groups of the contact pairs: each pair's group and a body pair's obstacle

@@ -9,6 +9,7 @@ pub mod bigbuf;
 pub mod blas;
 pub mod bodies;
 pub mod case;
+pub mod coincident;
 pub mod contact;
 pub mod dist;
 pub mod driver;

@@ -33,6 +33,10 @@ pub const DIRICHLET_OVERRIDDEN: &str = "dirichlet_overridden";
 /// PETSc options (case file or command line) that nothing in the run read (linsolve.rs).
 pub const UNUSED_PETSC_OPTIONS: &str = "unused_petsc_options";
 
+/// Surface nodes of the mesh at one point without being one node, not joined by a contact pair:
+/// parts meshed apart and never joined (driver.rs, coincident.rs).
+pub const UNJOINED_NODES: &str = "unjoined_nodes";
+
 /// A material whose Poisson's ratio is close to 1/2: P1 elements lock (setup.rs).
 pub const NEARLY_INCOMPRESSIBLE: &str = "nearly_incompressible";
 

@@ -547,3 +547,74 @@ fn an_inexact_final_state_is_warned_about_and_names_the_solver_keys() {
         );
     }
 }
+
+/// Two squares (cubes) side by side, meshed apart and never joined, both held at their bottom:
+/// two bodies where the picture shows one. The warning `unjoined_nodes` names the mesh, the
+/// number of coincident pairs and the first pair by Gmsh tags, the same on 1, 2 and 3 ranks; the
+/// same geometry made conformal (`joined = 1`) gives none.
+#[test]
+fn parts_meshed_apart_and_never_joined_are_warned_about() {
+    let tmp = tempfile::tempdir().expect("tempdir");
+    for dim in [2usize, 3] {
+        let geo = mesh_dir().join(format!("unjoined{dim}d.geo"));
+        let (h, bottom, load) = if dim == 2 {
+            ("0.1", "[0.0, 0.0]", "[0.001, -0.001]")
+        } else {
+            ("0.25", "[0.0, 0.0, 0.0]", "[0.001, 0.0, -0.001]")
+        };
+        let mut seen = Vec::new();
+        for joined in [0, 1] {
+            let msh = tmp.path().join(format!("u{dim}_{joined}.msh"));
+            let j = joined.to_string();
+            gmsh_file(
+                &geo,
+                dim,
+                &["-setnumber", "h", h, "-setnumber", "joined", &j],
+                &msh,
+            );
+            let case = tmp.path().join(format!("u{dim}_{joined}.toml"));
+            let model = if dim == 2 {
+                "model = \"plane_strain\"\n"
+            } else {
+                ""
+            };
+            std::fs::write(
+                &case,
+                format!(
+                    "[mesh]\nfile = \"{}\"\n[material]\nyoung = 1.0\npoisson = 0.3\n{model}\
+                     [[dirichlet]]\ngroup = \"bottom\"\nvalue = {bottom}\n\
+                     [[neumann]]\ngroup = \"top\"\ntraction = {load}\n",
+                    msh.file_name().unwrap().to_str().unwrap()
+                ),
+            )
+            .unwrap();
+            for np in [1, 2, 3] {
+                let s = solve(np, &case, &[]);
+                let list = warnings(&s);
+                let unjoined: Vec<&Value> = list
+                    .iter()
+                    .filter(|w| text(w, "code") == "unjoined_nodes")
+                    .collect();
+                if joined == 1 {
+                    assert!(unjoined.is_empty(), "{dim}D joined, {np} ranks: {list:#?}");
+                    assert_eq!(get(&s.summary, &["bodies"])["count"], 1);
+                    continue;
+                }
+                assert_eq!(unjoined.len(), 1, "{dim}D, {np} ranks: {list:#?}");
+                let w = unjoined[0];
+                let message = text(w, "message");
+                assert!(s.run.stdout.contains(&format!("warning: {message}")));
+                assert!(message.contains("never joined") && message.contains(".msh"));
+                assert_eq!(text(w, "key"), "mesh.file");
+                assert_eq!(get(&s.summary, &["bodies"])["count"], 2);
+                // at least the shared side's corners, at most its nodes on either part
+                let pairs = w["value"].as_f64().unwrap();
+                assert!(pairs >= f64::from(1 << (dim - 1)), "{w:#?}");
+                let x = w["at"]["x"].as_array().unwrap();
+                assert_eq!(x[0].as_f64(), Some(1.0), "{w:#?}");
+                seen.push((pairs, w["at"].clone(), message.to_string()));
+            }
+        }
+        assert!(seen.windows(2).all(|p| p[0] == p[1]), "{dim}D: {seen:#?}");
+    }
+}

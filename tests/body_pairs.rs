@@ -431,6 +431,16 @@ fn a_body_pair_that_cannot_be_set_up_is_refused_with_its_key() {
     // two groups that do not face each other within the slave group's size
     let c = stack_case(d, &mesh, 2, ("lower_right", "top"));
     refused(1, &c, "contact.obstacle.group", "must face each other");
+    // facing, but every slave node held along the normal by Dirichlet data: that is the reason
+    let held = std::fs::read_to_string(&ok).expect("case")
+        + "\n[[dirichlet]]\ngroup = \"upper_bottom\"\nvalue = [0.0, 0.0]\n";
+    let held = write_case(&d.join("held.toml"), &held);
+    refused(
+        3,
+        &held,
+        "contact.group",
+        "held along the contact normal by Dirichlet data",
+    );
 }
 
 #[test]

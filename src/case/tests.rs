@@ -815,6 +815,19 @@ fn overrides_apply() {
     assert_eq!(c.line_of("newton.max_steps"), Some(line(FULL, "max_steps")));
 }
 
+/// The messages' form of an entry's key, `dirichlet[1].value`, is a `--set` key too.
+#[test]
+fn overrides_take_the_bracketed_index_of_the_messages() {
+    let c = parse_set(
+        FULL,
+        &["dirichlet[0].group=clamp2", "dirichlet[1].value[0] = 0.1"],
+    )
+    .unwrap();
+    assert_eq!(c.dirichlet[0].group, "clamp2");
+    assert_eq!(c.dirichlet[1].value, vec![Some(0.1), Some(-0.5)]);
+    assert!(parse_set(FULL, &["dirichlet[x].group=a"]).is_err());
+}
+
 #[test]
 fn overrides_create_sections_and_entries() {
     let c = parse_set(

@@ -215,7 +215,8 @@ pub(crate) fn apply_override(root: &mut Node, spec: &str) -> Result<(), (String,
             format!("--set '{spec}': expected key.path=value"),
         ));
     };
-    let path = path.trim();
+    let path = bracket_indices(path.trim());
+    let path = path.as_str();
     let segs: Vec<&str> = path.split('.').map(str::trim).collect();
     if segs.len() > MAX_KEY_DEPTH {
         let head: String = path.chars().take(40).collect();
@@ -244,6 +245,28 @@ pub(crate) fn apply_override(root: &mut Node, spec: &str) -> Result<(), (String,
         }
     }
     Ok(())
+}
+
+/// A key path with its array indices written as the messages write them, `contact[0].group`,
+/// in the dotted form `contact.0.group` (only digits between the brackets). Pure.
+fn bracket_indices(path: &str) -> String {
+    let mut out = String::with_capacity(path.len());
+    let mut rest = path;
+    while let Some(open) = rest.find('[') {
+        let Some(len) = rest[open..].find(']') else {
+            break;
+        };
+        let inner = &rest[open + 1..open + len];
+        if inner.is_empty() || !inner.bytes().all(|b| b.is_ascii_digit()) {
+            break;
+        }
+        out.push_str(&rest[..open]);
+        out.push('.');
+        out.push_str(inner);
+        rest = &rest[open + len + 1..];
+    }
+    out.push_str(rest);
+    out
 }
 
 /// The slot that component `i` of the `--set` key path `segs` names inside `cur`, created

@@ -94,8 +94,27 @@ pub fn set_up(
             .map_err(RunError::Input),
         )?;
         check_through(ctx, mesh, layout, settings, p, &rows)?;
+        let facing = ctx.sum_usize(rows.len());
         let rows = keep_contact_nodes(mesh, rows, fixed);
         let covered = ctx.sum_usize(rows.len());
+        if covered == 0 && facing > 0 {
+            let pair = &settings.pairs[p];
+            return Err(RunError::Input(
+                InputError::new(
+                    &settings.file,
+                    format!(
+                        "the {facing} node(s) of the group \"{}\" that face the group \"{}\" \
+                         are all held along the contact normal by Dirichlet data: no slave \
+                         node is left to the contact; free the slave group's normal \
+                         component, or make \"{}\" the slave side",
+                        pair.group,
+                        master_group(&pair.obstacle),
+                        master_group(&pair.obstacle),
+                    ),
+                )
+                .with_key(pair.key("group")),
+            ));
+        }
         if covered == 0 {
             let pair = &settings.pairs[p];
             return Err(RunError::Input(

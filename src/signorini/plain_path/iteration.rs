@@ -854,11 +854,22 @@ impl Loop<'_> {
         if !self.s.friction() && self.free.unpressable(self.ctx, self.p.boundary) {
             return self.free.no_support_unpressed();
         }
-        match (&e, self.s.friction(), self.free.cycle_hint()) {
+        let e = match (&e, self.s.friction(), self.free.cycle_hint()) {
             (RunError::NoConvergence(m), false, Some(hint)) => {
                 RunError::NoConvergence(format!("{m}{hint}"))
             }
             _ => e,
+        };
+        match e {
+            // Krylov steps are inexact (solver.rtol, tightened on a recurrence): their sets
+            // can cycle where exact ones do not (floating blocks stacked on each other, body
+            // pairs, 2 and 3 ranks: a balanced load the direct preset solves exactly)
+            RunError::NoConvergence(m) if self.krylov => RunError::NoConvergence(format!(
+                "{m}; the steps' linear solves were iterative (GMRES to solver.rtol), whose \
+                 inexact steps can cycle where exact ones converge: try solver.preset = \
+                 \"direct\""
+            )),
+            e => e,
         }
     }
 
